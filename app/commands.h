@@ -1,0 +1,10 @@
+#pragma once
+// Each tolver command registers its options and its action on the CLI11 application.
+#include <CLI/CLI.hpp>
+
+namespace tolver::app {
+
+// The command sets *exit_code when it finishes (0 by default).
+void registerPredict(CLI::App& app, int* exit_code);
+
+}  // namespace tolver::app

@@ -1,0 +1,158 @@
+// tolver predict: CL_predicted of a part program on a machine with errors (thesis 5.5.1-5.5.3).
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "app/commands.h"
+#include "core/tool_path_prediction.h"
+#include "geometry/cutter.h"
+#include "io/apt_reader.h"
+#include "io/apt_writer.h"
+#include "io/io_error.h"
+#include "io/machine_file.h"
+#include "io/point_table.h"
+#include "io/setup_file.h"
+
+namespace tolver::app {
+namespace {
+
+struct PredictOptions {
+  std::string machine, cl, setup, output, table;
+  std::vector<double> part_zero;
+  double part_rotation_deg = NAN;
+  double gauge_length = NAN;
+  double chordal_tolerance = 0.001;
+};
+
+std::string defaultTablePath(const std::string& output) {
+  std::filesystem::path p(output);
+  p.replace_extension(".csv");
+  if (p == std::filesystem::path(output)) p += ".points.csv";
+  return p.string();
+}
+
+void checkOutputDir(const std::string& path, const char* option) {
+  const auto dir = std::filesystem::path(path).parent_path();
+  if (!dir.empty() && !std::filesystem::is_directory(dir))
+    throw InputError(path, 0, 0, option, "directory " + dir.string() + " does not exist");
+}
+
+void runPredict(const PredictOptions& o, int* exit_code) {
+  Machine machine = readMachineFile(o.machine);
+  Setup setup;
+  if (!o.setup.empty()) setup = readSetupFile(o.setup);
+  if (!o.part_zero.empty()) {
+    if (o.part_zero.size() != 3)
+      throw InputError("--part-zero", 0, 0, "part zero", "expected x,y,z in mm");
+    setup.part_zero_table = Eigen::Vector3d(o.part_zero[0], o.part_zero[1], o.part_zero[2]);
+  }
+  if (!std::isnan(o.part_rotation_deg)) setup.part_rotation = o.part_rotation_deg * M_PI / 180.0;
+  if (!std::isnan(o.gauge_length)) setup.gauge_length = o.gauge_length;
+  machine.model.setup = setup;
+
+  AptReadOptions ro;
+  ro.chordal_tolerance_mm = o.chordal_tolerance;
+  const ClProgram program = readAptFile(o.cl, ro);
+  if (program.path.empty())
+    throw InputError(o.cl, 0, 0, "GOTO", "the program has no tool positions");
+  const std::string table = o.table.empty() ? defaultTablePath(o.output) : o.table;
+  checkOutputDir(o.output, "-o");
+  checkOutputDir(table, "--errors");
+
+  const PredictionResult r = predictToolPath(machine.model, machine.params, program.path);
+  if (!r.ok()) {
+    const PredictionFailure& f = r.failures.front();
+    std::string more;
+    if (r.failures.size() > 1)
+      more = " (and " + std::to_string(r.failures.size() - 1) +
+             (r.failures.size() >= 20 ? " or more" : "") + " other points)";
+    throw InputError(o.cl, f.line, 0, "unreachable", f.message + more);
+  }
+
+  std::vector<ClPoint> predicted(program.path.size());
+  std::vector<PredictedPoint> pts = r.points;
+  for (size_t i = 0; i < predicted.size(); ++i) {
+    predicted[i] = program.path[i];
+    predicted[i].p_w = pts[i].p_pred_w;
+    predicted[i].u_w = pts[i].u_pred_w;
+  }
+  const std::vector<std::string> header = {
+      "tolver predicted CL: " + program.file + " on " + machine.model.name + " (" + o.machine +
+          ")",
+      "each GOTO is the tool position the machine will really reach, in the program's frame"};
+  writeFileAtomically(o.output, formatPredictedApt(program, predicted, header));
+  writeFileAtomically(table, formatPointTable(machine.model, program.path, pts));
+
+  // Summary.
+  const PredictionSummary& s = r.summary;
+  int nonzero = 0;
+  for (int i = 0; i < machine.params.size(); ++i) nonzero += machine.params[i] != 0.0;
+  std::printf("tolver predict\n");
+  std::printf("  machine    %s (%s): %zu axes, %d error parameters, %d non-zero\n",
+              machine.model.name.c_str(), o.machine.c_str(), machine.model.axes.size(),
+              machine.model.parameterCount(), nonzero);
+  std::printf("  program    %s: %d tool positions (%d arcs expanded), units %s\n",
+              program.file.c_str(), s.points, program.arcs_expanded, program.units.c_str());
+  Cutter cutter;
+  if (!program.cutters.empty() &&
+      cutterFromApt(program.cutters.back().source, program.cutters.back().values, &cutter))
+    std::printf("  tool       %s (line %d)\n", cutter.describe().c_str(),
+                program.cutters.back().line);
+  std::printf("  set-up     part zero (%.4f, %.4f, %.4f) mm in the table frame, rotation %.4f deg, "
+              "gauge length %.4f mm\n",
+              setup.part_zero_table.x(), setup.part_zero_table.y(), setup.part_zero_table.z(),
+              setup.part_rotation * 180.0 / M_PI, setup.gauge_length);
+  const PredictedPoint& worst = pts[s.max_index];
+  std::printf("  deviation  max %.3f um at point %d (line %d), RMS %.3f um\n",
+              s.max_deviation * 1e3, s.max_index, program.path[s.max_index].line,
+              s.rms_deviation * 1e3);
+  std::printf("             at the max: (%.3f, %.3f, %.3f) um in the part frame, %.3f um along the "
+              "tool axis, %.3f um across\n",
+              worst.deviation_w.x() * 1e3, worst.deviation_w.y() * 1e3,
+              worst.deviation_w.z() * 1e3, worst.along_axis * 1e3, worst.across_axis * 1e3);
+  std::printf("  tool axis  max %.3f urad, RMS %.3f urad\n", s.max_axis_angle * 1e6,
+              s.rms_axis_angle * 1e6);
+  if (s.singular_points > 0)
+    std::printf("  note       %d points have the tool axis along a rotary axis (first at line %d); "
+                "the free angle was kept from the previous point\n",
+                s.singular_points, s.first_singular_line);
+  if (program.unknown_count > 0) {
+    std::string names;
+    for (const auto& n : program.unknown_names) names += (names.empty() ? "" : ", ") + n;
+    std::fprintf(stderr, "tolver: warning: %s: skipped %d unknown statements (%s)\n",
+                 program.file.c_str(), program.unknown_count, names.c_str());
+  }
+  std::printf("  wrote      %s (predicted CL), %s (per-point table)\n", o.output.c_str(),
+              table.c_str());
+  *exit_code = 0;
+}
+
+}  // namespace
+
+void registerPredict(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<PredictOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "predict",
+      "Predict the real tool path of a CL program on a machine with errors: inverse kinematics "
+      "on the nominal machine, forward kinematics with the errors (CL_predicted).");
+  cmd->add_option("--machine", o->machine, "machine file (XML)")->required();
+  cmd->add_option("--cl", o->cl, "CL program (APT/CLDATA: .apt, .cls, .clsf, .ncl)")->required();
+  cmd->add_option("--setup", o->setup, "set-up file (part zero, part rotation, gauge length)");
+  cmd->add_option("--part-zero", o->part_zero, "part zero in the table frame, mm (x,y,z)")
+      ->delimiter(',')
+      ->expected(3);
+  cmd->add_option("--part-rotation-deg", o->part_rotation_deg,
+                  "rotation of the part about the table z axis, deg");
+  cmd->add_option("--gauge-length", o->gauge_length, "tool gauge length, mm");
+  cmd->add_option("-o,--output", o->output, "predicted CL file to write (APT)")->required();
+  cmd->add_option("--errors", o->table,
+                  "per-point table to write (CSV; default: the output path with .csv)");
+  cmd->add_option("--chordal-tol", o->chordal_tolerance,
+                  "chordal tolerance for expanding arcs, mm (default 0.001)")
+      ->check(CLI::PositiveNumber);
+  cmd->callback([o, exit_code] { runPredict(*o, exit_code); });
+}
+
+}  // namespace tolver::app

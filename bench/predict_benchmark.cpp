@@ -1,0 +1,83 @@
+// Predicted CL points per second on one core: Matsuura MC-760VX with cubic motion errors on
+// every component of every axis and every link and set-up error non-zero.
+//   ./build/bench/predict_benchmark
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/forward_kinematics.h"
+#include "core/inverse_kinematics.h"
+#include "core/tool_path_prediction.h"
+#include "io/machine_file.h"
+
+namespace {
+
+tolver::Machine machineWithErrors() {
+  tolver::Machine m =
+      tolver::readMachineFile(std::string(TOLVER_SOURCE_DIR) + "/resources/machines/matsuura_mc760vx.xml");
+  std::mt19937 rng(1);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int i = 0; i < m.model.parameterCount(); ++i)
+    m.params[i] = n(rng) * (m.model.parameters[i].angular ? 20e-6 : 0.005);
+  m.model.setup.gauge_length = 100;
+  m.model.setup.part_zero_table = Eigen::Vector3d(0, 0, 50);
+  return m;
+}
+
+// A five-axis path: a spiral on a hemisphere with the tool normal to it.
+std::vector<tolver::ClPoint> path(size_t n) {
+  std::vector<tolver::ClPoint> out(n);
+  for (size_t i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) / n;
+    const double polar = 0.05 + 0.9 * t * M_PI / 3, az = 40.0 * M_PI * t;
+    const Eigen::Vector3d u(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az),
+                            std::cos(polar));
+    out[i].p_w = 60.0 * u;
+    out[i].u_w = u;
+  }
+  return out;
+}
+
+void BM_PredictToolPath(benchmark::State& state) {
+  const tolver::Machine m = machineWithErrors();
+  const auto p = path(static_cast<size_t>(state.range(0)));
+  for (auto _ : state) {
+    auto r = tolver::predictToolPath(m.model, m.params, p);
+    benchmark::DoNotOptimize(r.summary.max_deviation);
+  }
+  state.SetItemsProcessed(state.iterations() * state.range(0));
+}
+BENCHMARK(BM_PredictToolPath)->Arg(100000)->Unit(benchmark::kMillisecond);
+
+void BM_ForwardKinematicsWithErrors(benchmark::State& state) {
+  const tolver::Machine m = machineWithErrors();
+  const tolver::ForwardKinematics fk(m.model, m.params);
+  tolver::JointVector q(5);
+  q << 100, -50, 80, -0.5, 1.0;
+  for (auto _ : state) {
+    q[4] += 1e-6;
+    benchmark::DoNotOptimize(fk.w_T_t(q));
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_ForwardKinematicsWithErrors);
+
+void BM_InverseKinematics(benchmark::State& state) {
+  const tolver::Machine m = machineWithErrors();
+  const tolver::InverseKinematics ik(m.model);
+  const auto p = path(1000);
+  size_t i = 0;
+  tolver::JointVector prev = ik.solve(p[0].p_w, p[0].u_w, nullptr).q;
+  for (auto _ : state) {
+    const auto s = ik.solve(p[i].p_w, p[i].u_w, &prev);
+    benchmark::DoNotOptimize(s.q);
+    i = (i + 1) % p.size();
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_InverseKinematics);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,18 @@
+#pragma once
+// Expansion of circular arcs (APT CIRCLE / MOVARC) into points within a chordal tolerance.
+#include <Eigen/Core>
+#include <vector>
+
+namespace tolver {
+
+// Points along the arc from `start` to `end` about the circle centre `centre` and unit `axis`,
+// traversed counter-clockwise about `axis` (right-hand rule, the APT convention), excluding
+// `start` and including `end`. The sagitta between consecutive points is at most
+// chordal_tolerance (mm). Returns false when start and end are not on one circle about the
+// axis (radius or height differ by more than radius_tolerance), leaving `out` unchanged.
+bool interpolateArc(const Eigen::Vector3d& start, const Eigen::Vector3d& end,
+                    const Eigen::Vector3d& centre, const Eigen::Vector3d& axis,
+                    double chordal_tolerance, double radius_tolerance,
+                    std::vector<Eigen::Vector3d>& out);
+
+}  // namespace tolver

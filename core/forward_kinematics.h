@@ -1,0 +1,47 @@
+#pragma once
+// Forward kinematics of the machine with its errors (thesis eq. 27, 45-53, 82-89):
+//   w_T_t = (F_T_w)^-1 * F_T_t,
+//   F_T_w = D_1 ... D_n * table_T_w * E_w,   F_T_t = D_1 ... D_m * spindle_T_t * E_t,
+// each joint D_S = D1_S * L_S * D2_S(s) * E_S(s), all exact HTMs (no small-angle shortcut).
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/machine_model.h"
+
+namespace tolver {
+
+// A workspace bound to one model and one parameter vector: the position-independent parts
+// (nominal link times link errors, set-up frames) are composed once at construction, so each
+// evaluation costs one motion and one motion-error HTM per axis.
+class ForwardKinematics {
+ public:
+  // params: parameterCount() values (mm, rad), laid out as model.blocks say.
+  ForwardKinematics(const MachineModel& model, const Eigen::VectorXd& params);
+
+  // Pose of the tool frame t seen from the workpiece frame w at joint values q.
+  Eigen::Isometry3d w_T_t(const JointVector& q) const;
+  // Pose of the workpiece (tool) frame seen from the foundation.
+  Eigen::Isometry3d F_T_w(const JointVector& q) const;
+  Eigen::Isometry3d F_T_t(const JointVector& q) const;
+  // D_S of axis a at joint value s (parent joint frame -> this joint frame).
+  Eigen::Isometry3d jointTransform(int a, double s) const;
+  // The six motion-error values [ex ey ez gx gy gz] of axis a at joint value s (mm, rad).
+  Vector6d motionErrors(int a, double s) const;
+
+  const MachineModel& model() const { return *model_; }
+
+ private:
+  struct AxisTerms {
+    Eigen::Isometry3d fixed;     // D1 * L (nominal link with link errors)
+    std::array<int, 6> offset;   // motion-error coefficient offsets, -1 if none
+    std::array<int, 6> degree;
+    int max_degree = -1;         // -1: no motion errors on this axis
+  };
+  const MachineModel* model_;
+  Eigen::VectorXd params_;
+  std::vector<AxisTerms> axis_;
+  Eigen::Isometry3d table_T_w_err_;     // nominal set-up times workpiece set-up errors
+  Eigen::Isometry3d spindle_T_t_err_;   // nominal tool frame times tool set-up errors
+};
+
+}  // namespace tolver

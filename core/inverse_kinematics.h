@@ -1,0 +1,69 @@
+#pragma once
+// Inverse kinematics on the nominal model (no errors): from a CL point (tool tip p_w and tool
+// axis u_w, both in the workpiece frame w; u_w points from the tip towards the spindle) to joint
+// values, for any serial topology with up to two rotary axes and three prismatic axes.
+//
+// Method: the tool-axis direction depends only on the rotary joints. Writing the orientation
+// chain from w to t as  w_R_t = C0 Rot(a1, s1 q1) C1 Rot(a2, s2 q2) C2  (s = -1 for joints on the
+// workpiece branch, which enter inverted), u_w = w_R_t k is the Paden-Kahan sub-problem 2
+//   Rot(a1, phi1) Rot(C1 a2, phi2) (C1 C2 k) = C0^T u_w,
+// solved in closed form (two solutions); one rotary axis is sub-problem 1. With the rotary
+// angles fixed, the tool tip is affine in the prismatic joints, so three nominal forward
+// evaluations give the exact 3x3 linear system for them.
+//
+// Singular orientations (the tool axis along a rotary axis, which leaves that angle free) keep
+// the previous value of the free angle (0 at the start of a path) and are flagged.
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/forward_kinematics.h"
+#include "core/machine_model.h"
+
+namespace tolver {
+
+enum class IkStatus {
+  Ok,
+  UnreachableOrientation,  // no rotary angles give this tool axis
+  OutOfTravel,             // solutions exist but none inside every axis's travel
+  UnsupportedTopology,     // > 2 rotary axes, parallel rotary axes, or not 3 prismatic axes
+};
+
+struct IkSolution {
+  IkStatus status = IkStatus::Ok;
+  JointVector q;              // joint values (mm, rad), model axis order
+  bool singular = false;      // a rotary angle was free and kept from the previous point
+  int violated_axis = -1;     // with OutOfTravel: the first axis outside its travel
+  double violated_value = 0;  // and the value it would need
+};
+
+class InverseKinematics {
+ public:
+  explicit InverseKinematics(const MachineModel& model);
+
+  // Solves for (p_w, u_w). previous: the joint values of the previous point on the path, or
+  // nullptr at the start. Among the candidate solutions inside travel it returns the one closest
+  // to previous in the rotary angles (continuity; each angle unwrapped by 2 pi to the nearest
+  // representative inside travel), or closest to zero at the start.
+  IkSolution solve(const Eigen::Vector3d& p_w, const Eigen::Vector3d& u_w,
+                   const JointVector* previous) const;
+
+  // The rotary-angle candidates for the tool axis u_w (before travel checks and unwrapping),
+  // at most two; each holds the rotary angles in the order of rotaryAxes(), NaN for an angle
+  // left free by a singular orientation. Returns how many were written to out.
+  int rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vector2d out[2], bool* singular) const;
+  const std::vector<int>& rotaryAxes() const { return rotary_; }
+
+ private:
+  bool solvePrismatic(const Eigen::Vector3d& p_w, JointVector& q) const;
+
+  const MachineModel* model_;
+  ForwardKinematics nominal_;
+  std::vector<int> rotary_;     // rotary axis indices in w->t chain order
+  std::vector<int> prismatic_;  // prismatic axis indices
+  Eigen::Matrix3d C0_, C1_, C2_;
+  Eigen::Vector3d a_[2];        // rotary directions in the sub-problem frames
+  double sign_[2] = {1, 1};     // -1 for workpiece-branch joints
+  bool parallel_rotaries_ = false;
+};
+
+}  // namespace tolver

@@ -1,0 +1,131 @@
+#pragma once
+// The machine model: topology, nominal geometry and the layout of the error parameters
+// (thesis chapters 3-5; Pinocchio-style: an immutable description, evaluated by free functions
+// and small workspaces elsewhere).
+//
+// Frames:
+//  F  foundation (machine bed) frame;
+//  S  the frame of joint S, carried by the body that joint S moves;
+//  table  the frame on the last body of the workpiece branch where parts are clamped;
+//  w  the workpiece (part, program) frame: CL points are given in w;
+//  spindle  the spindle gauge frame on the last body of the tool branch, z along the spindle
+//           axis pointing from the tool tip towards the spindle;
+//  t  the tool frame: origin at the tool tip, axes parallel to the spindle frame.
+//
+// Each joint contributes D_S = D1 (nominal link) * L (link errors, eq. 22) * D2(s) (nominal
+// motion, eq. 23/48) * E(s) (motion errors, eq. 49/87). A joint value s displaces the joint's
+// moving body by s (mm or rad) along (about) its direction in its parent's frame.
+//
+// Error parameters form one flat vector of named blocks (lengths in mm, angles in rad):
+//  * LinkError        per axis, 6 values [ex ey ez gx gy gz] (thesis e_x,S ... gamma_z,S; ISO 230-1
+//                      location errors XOS YOS ZOS AOS BOS COS);
+//  * MotionError      per axis and component, the Chebyshev coefficients c_0..c_d of that
+//                      component as a function of the normalised joint coordinate (eq. 59);
+//                      ISO 230-1 motion errors EXS EYS EZS EAS EBS ECS;
+//  * WorkpieceSetup   6 values, error of w in table (thesis e_x,w ...);
+//  * ToolSetup        6 values, error of t in spindle (thesis e_x,t ...).
+// Later capabilities append new block kinds; code that walks the vector uses the blocks.
+#include <Eigen/Geometry>
+#include <array>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/rigid_transform.h"
+
+namespace tolver {
+
+constexpr int kMaxAxes = 9;
+// Joint values in the order of MachineModel::axes (mm for prismatic, rad for rotary).
+using JointVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxAxes, 1>;
+
+enum class JointType { Prismatic, Rotary };
+enum class Branch { Workpiece, Tool };
+
+// Error components of a twist, in order. Names as in the thesis (e, gamma) and ISO 230-1 letters.
+constexpr std::array<const char*, 6> kComponentNames = {"ex", "ey", "ez", "gx", "gy", "gz"};
+constexpr std::array<char, 6> kComponentIsoLetters = {'X', 'Y', 'Z', 'A', 'B', 'C'};
+inline bool isAngularComponent(int component) { return component >= 3; }
+
+struct Axis {
+  std::string name;                 // "X", "C", ...
+  JointType type = JointType::Prismatic;
+  Branch branch = Branch::Workpiece;
+  Eigen::Vector3d direction = Eigen::Vector3d::UnitX();  // unit, in the joint frame at s = 0
+  Eigen::Isometry3d parent_T_joint = Eigen::Isometry3d::Identity();  // nominal link D1
+  double travel_min = 0.0;          // mm or rad
+  double travel_max = 0.0;
+  int nc_sign = 1;                  // NC axis command = nc_sign * joint value (ISO 841)
+  bool isRotary() const { return type == JointType::Rotary; }
+};
+
+enum class BlockKind { LinkError, MotionError, WorkpieceSetup, ToolSetup };
+
+struct ParameterBlock {
+  BlockKind kind = BlockKind::LinkError;
+  int axis = -1;       // index into MachineModel::axes; -1 for set-up blocks
+  int component = -1;  // 0..5 for MotionError, -1 for six-value blocks
+  int degree = 0;      // Chebyshev degree of a MotionError block
+  int offset = 0;      // first index in the flat parameter vector
+  int size = 0;
+};
+
+struct ParameterInfo {
+  std::string thesis_name;  // e.g. "gamma_z,X", "e_y(X).c2", "e_x,w"
+  std::string iso_code;     // e.g. "COX", "EYX.c2", "part.X"
+  bool angular = false;     // rad if true, mm otherwise
+  int block = 0;            // index into MachineModel::blocks
+};
+
+// Another name for a parameter, e.g. the names of a paper's error table ("dx_x" for EXX.c0).
+struct ParameterAlias {
+  std::string name;
+  int parameter = 0;
+  std::string description;
+};
+
+// Part and tool placement chosen by the process planner.
+struct Setup {
+  Eigen::Vector3d part_zero_table = Eigen::Vector3d::Zero();  // part zero in the table frame, mm
+  double part_rotation = 0.0;   // rotation of w about the table z axis, rad
+  double gauge_length = 0.0;    // tool tip to spindle gauge point along the spindle axis, mm
+};
+
+class MachineModel {
+ public:
+  std::string name;
+  std::vector<Axis> axes;            // joint-vector order
+  std::vector<int> workpiece_chain;  // axis indices, foundation -> table
+  std::vector<int> tool_chain;       // axis indices, foundation -> spindle
+  Eigen::Isometry3d last_T_table = Eigen::Isometry3d::Identity();    // table in last wp joint
+  Eigen::Isometry3d last_T_spindle = Eigen::Isometry3d::Identity();  // spindle in last tool joint
+  Setup setup;
+
+  std::vector<ParameterBlock> blocks;
+  std::vector<ParameterInfo> parameters;  // one per entry of the flat parameter vector
+  std::vector<ParameterAlias> aliases;
+
+  // Builds blocks and parameters: link errors for each axis, motion errors of the given
+  // Chebyshev degree per axis and component, then workpiece and tool set-up errors.
+  // motion_degree[a][c] < 0 means that component has no motion-error block.
+  void buildParameterLayout(const std::vector<std::array<int, 6>>& motion_degree);
+
+  int parameterCount() const { return static_cast<int>(parameters.size()); }
+  int axisIndex(std::string_view axis_name) const;  // -1 if absent (case-insensitive)
+  // Index of a parameter by thesis name, ISO code or alias (case-sensitive), -1 if absent.
+  int findParameter(std::string_view name) const;
+  // Index of the motion-error block of (axis, component), -1 if absent.
+  int motionBlock(int axis, int component) const;
+
+  // Nominal w in table and t in spindle, from the set-up (no errors).
+  Eigen::Isometry3d table_T_w() const;
+  Eigen::Isometry3d spindle_T_t() const;
+};
+
+// A machine: its model and the values of its error parameters (mm, rad).
+struct Machine {
+  MachineModel model;
+  Eigen::VectorXd params;  // model.parameterCount() values
+};
+
+}  // namespace tolver

@@ -1,0 +1,84 @@
+#include "core/tool_path_prediction.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include "core/forward_kinematics.h"
+
+namespace tolver {
+
+std::string describeIkFailure(const MachineModel& model, const IkSolution& sol) {
+  char buf[256];
+  switch (sol.status) {
+    case IkStatus::Ok:
+      return "ok";
+    case IkStatus::UnreachableOrientation:
+      return "tool axis cannot be reached by the rotary axes of this machine";
+    case IkStatus::UnsupportedTopology:
+      return "inverse kinematics needs three prismatic and at most two rotary axes";
+    case IkStatus::OutOfTravel: {
+      const Axis& ax = model.axes[sol.violated_axis];
+      const bool rot = ax.isRotary();
+      const double k = rot ? 180.0 / M_PI : 1.0;
+      std::snprintf(buf, sizeof buf, "axis %s would need %.4f %s, outside its travel [%.4f, %.4f]",
+                    ax.name.c_str(), sol.violated_value * k, rot ? "deg" : "mm",
+                    ax.travel_min * k, ax.travel_max * k);
+      return buf;
+    }
+  }
+  return "unknown";
+}
+
+PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
+                                 const std::vector<ClPoint>& path, int max_failures) {
+  PredictionResult result;
+  const InverseKinematics ik(model);
+  const ForwardKinematics actual(model, params);
+  result.points.resize(path.size());
+  PredictionSummary& s = result.summary;
+  s.points = static_cast<int>(path.size());
+  double sum2 = 0.0, sum2_angle = 0.0;
+  const JointVector* previous = nullptr;
+  for (size_t i = 0; i < path.size(); ++i) {
+    const ClPoint& cl = path[i];
+    const IkSolution sol = ik.solve(cl.p_w, cl.u_w, previous);
+    if (sol.status != IkStatus::Ok) {
+      if (static_cast<int>(result.failures.size()) < max_failures)
+        result.failures.push_back(
+            {static_cast<int>(i), cl.line, sol.status, describeIkFailure(model, sol)});
+      previous = nullptr;
+      continue;
+    }
+    PredictedPoint& out = result.points[i];
+    out.q = sol.q;
+    out.singular = sol.singular;
+    if (sol.singular) {
+      if (s.singular_points == 0) s.first_singular_line = cl.line;
+      ++s.singular_points;
+    }
+    const Eigen::Isometry3d w_T_t = actual.w_T_t(sol.q);
+    const Eigen::Vector3d u = cl.u_w.normalized();
+    out.p_pred_w = w_T_t.translation();
+    out.u_pred_w = w_T_t.linear().col(2);
+    out.deviation_w = out.p_pred_w - cl.p_w;
+    out.along_axis = out.deviation_w.dot(u);
+    out.across_axis = (out.deviation_w - out.along_axis * u).norm();
+    out.axis_angle = std::atan2(u.cross(out.u_pred_w).norm(), u.dot(out.u_pred_w));
+    const double d = out.deviation_w.norm();
+    sum2 += d * d;
+    sum2_angle += out.axis_angle * out.axis_angle;
+    if (d > s.max_deviation || s.max_index < 0) {
+      s.max_deviation = d;
+      s.max_index = static_cast<int>(i);
+    }
+    if (out.axis_angle > s.max_axis_angle) s.max_axis_angle = out.axis_angle;
+    previous = &out.q;
+  }
+  if (!path.empty()) {
+    s.rms_deviation = std::sqrt(sum2 / path.size());
+    s.rms_axis_angle = std::sqrt(sum2_angle / path.size());
+  }
+  return result;
+}
+
+}  // namespace tolver

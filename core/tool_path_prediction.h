@@ -1,0 +1,66 @@
+#pragma once
+// CL_predicted (thesis 5.5.1-5.5.3): for each CL point, joint values by inverse kinematics on
+// the nominal machine, then the actual tool pose from the forward model with the machine's
+// errors. Deviations are expressed in the workpiece frame w.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/inverse_kinematics.h"
+#include "core/machine_model.h"
+
+namespace tolver {
+
+// A cutter-location point: tool tip p_w (mm) and unit tool axis u_w (tip -> spindle), in w.
+struct ClPoint {
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
+  Eigen::Vector3d u_w = Eigen::Vector3d::UnitZ();
+  int line = 0;  // source line in the CL file (1-based), for messages
+  bool rapid = false;  // a positioning move (APT RAPID), not a cutting move
+};
+
+struct PredictedPoint {
+  JointVector q;                       // joint values from nominal IK (mm, rad)
+  Eigen::Vector3d p_pred_w;            // predicted tool tip (mm)
+  Eigen::Vector3d u_pred_w;            // predicted unit tool axis
+  Eigen::Vector3d deviation_w;         // p_pred_w - p_w (mm)
+  double along_axis = 0.0;             // deviation . u_w (mm)
+  double across_axis = 0.0;            // |deviation - along u_w| (mm)
+  double axis_angle = 0.0;             // angle between u_w and u_pred_w (rad)
+  bool singular = false;
+};
+
+struct PredictionFailure {
+  int index = 0;       // CL point index
+  int line = 0;        // CL file line
+  IkStatus status = IkStatus::Ok;
+  std::string message;
+};
+
+struct PredictionSummary {
+  int points = 0;
+  int singular_points = 0;
+  int first_singular_line = 0;
+  double max_deviation = 0.0;   // mm, |deviation_w|
+  double rms_deviation = 0.0;   // mm
+  int max_index = -1;           // point with the largest deviation
+  double max_axis_angle = 0.0;  // rad
+  double rms_axis_angle = 0.0;  // rad
+};
+
+struct PredictionResult {
+  std::vector<PredictedPoint> points;     // one per CL point when failures is empty
+  std::vector<PredictionFailure> failures;
+  PredictionSummary summary;
+  bool ok() const { return failures.empty(); }
+};
+
+// Predicts the path; params are the machine's error parameters (model.parameterCount()).
+// Stops collecting failures after max_failures.
+PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
+                                 const std::vector<ClPoint>& path, int max_failures = 20);
+
+// One-line description of an IK failure (axis names and values in mm or deg).
+std::string describeIkFailure(const MachineModel& model, const IkSolution& sol);
+
+}  // namespace tolver

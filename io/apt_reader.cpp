@@ -1,0 +1,428 @@
+#include "io/apt_reader.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <optional>
+#include <set>
+
+#include "core/arc_interpolation.h"
+#include "io/io_error.h"
+#include "io/text_util.h"
+
+namespace tolver {
+namespace {
+
+// A logical statement assembled from one or more physical lines, with the source position of
+// every character so that errors can name line and column.
+struct Logical {
+  std::string text;
+  std::vector<std::pair<int, int>> pos;  // (line, column), 1-based, per character
+};
+
+struct Arg {
+  std::string text;  // trimmed
+  int line = 0;
+  int column = 0;
+};
+
+const std::set<std::string>& noOpStatements() {
+  static const std::set<std::string> s = {
+      "SPINDL", "LOADTL", "LOAD",  "SELECT", "PPRINT",  "INSERT", "COOLNT",    "TOOL PATH",
+      "END-OF-PATH", "END", "PAINT", "CUTCOM", "CYCLE", "MACHIN", "TRNTYP",  "DELAY",
+      "OPSTOP", "STOP", "CLRSRF", "FEATNO", "MFGNO", "OPERATION", "DISPLY", "AUTOPS", "PLABEL"};
+  return s;
+}
+
+class Parser {
+ public:
+  Parser(const std::string& text, const std::string& file, const AptReadOptions& opt)
+      : opt_(opt) {
+    prog_.file = file;
+    prog_.lines = splitLines(text);
+    prog_.frames.push_back(ClFrame{});
+  }
+
+  ClProgram run() {
+    const auto& L = prog_.lines;
+    bool any = false;
+    for (const auto& l : L) any = any || !trim(l).empty();
+    if (!any) fail(0, 0, "", "empty file: no statements");
+    size_t i = 0;
+    bool finished = false;
+    while (i < L.size()) {
+      const size_t start = i;
+      const std::string_view t = trim(L[i]);
+      AptStatement st;
+      st.first_line = static_cast<int>(i) + 1;
+      if (finished || t.empty()) {
+        ++i;
+      } else if (t.rfind("$$*CATIA0", 0) == 0) {
+        i = catiaFrame(i);
+        st.major = "$$*CATIA0";
+      } else if (t.rfind("$$->", 0) == 0) {
+        Logical lg = gather(i, 4 + (t.data() - L[i].data()), /*pseudo=*/true);
+        st.major = statement(lg, /*pseudo=*/true, st);
+        st.major.clear();  // Creo pseudo-comments are copied verbatim, never rewritten
+      } else if (t.rfind("$$", 0) == 0 || t[0] == '$') {
+        ++i;
+      } else {
+        Logical lg = gather(i, 0, /*pseudo=*/false);
+        st.major = statement(lg, /*pseudo=*/false, st);
+        if (st.major == "FINI") finished = true;
+      }
+      st.last_line = static_cast<int>(std::max(i, start + 1));
+      prog_.statements.push_back(st);
+    }
+    return std::move(prog_);
+  }
+
+ private:
+  [[noreturn]] void fail(int line, int column, const std::string& field, const std::string& msg) {
+    throw InputError(prog_.file, line, column, field, msg);
+  }
+
+  // Collects a statement from line i on, following `$` continuations; strips `$$` comments.
+  Logical gather(size_t& i, size_t skip, bool pseudo) {
+    Logical lg;
+    const size_t first = i;
+    while (true) {
+      if (i >= prog_.lines.size())
+        fail(static_cast<int>(first) + 1, 0, "", "statement continues past the end of the file");
+      std::string_view raw = prog_.lines[i];
+      size_t from = (i == first) ? skip : 0;
+      std::string_view body = raw.substr(std::min(from, raw.size()));
+      if (!pseudo || i != first) {
+        const size_t c = body.find("$$");
+        if (c != std::string_view::npos) body = body.substr(0, c);
+      }
+      // Trailing `$` (after trimming) continues the statement on the next line.
+      size_t end = body.size();
+      while (end > 0 && std::isspace(static_cast<unsigned char>(body[end - 1]))) --end;
+      const bool cont = end > 0 && body[end - 1] == '$';
+      if (cont) --end;
+      for (size_t k = 0; k < end; ++k) {
+        lg.text += body[k];
+        lg.pos.emplace_back(static_cast<int>(i) + 1,
+                            static_cast<int>(k + (body.data() - raw.data())) + 1);
+      }
+      ++i;
+      if (!cont) break;
+      lg.text += ' ';
+      lg.pos.emplace_back(static_cast<int>(i), static_cast<int>(raw.size()) + 1);
+    }
+    return lg;
+  }
+
+  size_t catiaFrame(size_t i) {
+    // $$*CATIA0, an optional name line, then three rows "$$*  r1 r2 r3 t".
+    const int head = static_cast<int>(i) + 1;
+    ++i;
+    std::vector<double> m;
+    while (i < prog_.lines.size() && m.size() < 12) {
+      std::string_view t = trim(prog_.lines[i]);
+      if (t.rfind("$$", 0) != 0) break;
+      t.remove_prefix(2);
+      if (!t.empty() && t[0] == '*') t.remove_prefix(1);
+      std::vector<double> row;
+      bool numeric = true;
+      size_t p = 0;
+      std::string s(t);
+      for (char& c : s)
+        if (c == ',') c = ' ';
+      while (p < s.size()) {
+        while (p < s.size() && std::isspace(static_cast<unsigned char>(s[p]))) ++p;
+        size_t q = p;
+        while (q < s.size() && !std::isspace(static_cast<unsigned char>(s[q]))) ++q;
+        if (q > p) {
+          auto v = parseNumber(std::string_view(s).substr(p, q - p));
+          if (!v) numeric = false;
+          else row.push_back(*v);
+        }
+        p = q;
+      }
+      ++i;
+      if (!numeric || row.empty()) {
+        if (!m.empty()) fail(static_cast<int>(i), 0, "$$*CATIA0", "malformed matrix row");
+        continue;  // the name line
+      }
+      if (row.size() != 4)
+        fail(static_cast<int>(i), 0, "$$*CATIA0", "a matrix row needs 4 numbers");
+      m.insert(m.end(), row.begin(), row.end());
+    }
+    if (m.size() != 12) fail(head, 0, "$$*CATIA0", "expected three matrix rows of 4 numbers");
+    setFrameFromRows(m, head, "$$*CATIA0");
+    return i;
+  }
+
+  void setFrameFromRows(const std::vector<double>& m, int line, const std::string& field) {
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) R(r, c) = m[4 * r + c];
+      t[r] = m[4 * r + 3];
+    }
+    if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-4 || R.determinant() < 0)
+      fail(line, 0, field, "the rotation part is not a proper orthonormal matrix");
+    ClFrame f = prog_.frames.back();
+    f.T.linear() = R;
+    f.T.translation() = t;
+    pushFrame(f);
+  }
+
+  void pushFrame(const ClFrame& f) {
+    prog_.frames.push_back(f);
+    frame_ = static_cast<int>(prog_.frames.size()) - 1;
+  }
+
+  static std::vector<Arg> splitArgs(const Logical& lg, size_t from) {
+    std::vector<Arg> args;
+    size_t p = from;
+    while (true) {
+      size_t q = lg.text.find(',', p);
+      if (q == std::string::npos) q = lg.text.size();
+      size_t b = p, e = q;
+      while (b < e && std::isspace(static_cast<unsigned char>(lg.text[b]))) ++b;
+      while (e > b && std::isspace(static_cast<unsigned char>(lg.text[e - 1]))) --e;
+      Arg a;
+      a.text = lg.text.substr(b, e - b);
+      const size_t at = b < lg.pos.size() ? b : (lg.pos.empty() ? 0 : lg.pos.size() - 1);
+      if (!lg.pos.empty()) {
+        a.line = lg.pos[at].first;
+        a.column = lg.pos[at].second + (b >= lg.pos.size() ? 1 : 0);
+      }
+      args.push_back(a);
+      if (q == lg.text.size()) break;
+      p = q + 1;
+    }
+    if (args.size() == 1 && args[0].text.empty()) args.clear();
+    return args;
+  }
+
+  static bool looksNumeric(const std::string& s) {
+    return !s.empty() && (std::isdigit(static_cast<unsigned char>(s[0])) || s[0] == '.' ||
+                          s[0] == '-' || s[0] == '+');
+  }
+
+  // All arguments as numbers; words are allowed only where `words_ok`, and are skipped.
+  std::vector<double> numbers(const std::vector<Arg>& args, const std::string& field,
+                              bool words_ok, std::vector<std::string>* words = nullptr) {
+    std::vector<double> v;
+    for (const Arg& a : args) {
+      if (a.text.empty()) fail(a.line, a.column, field, "missing value");
+      if (looksNumeric(a.text)) {
+        auto x = parseNumber(a.text);
+        if (!x) fail(a.line, a.column, field, "malformed number '" + a.text + "'");
+        v.push_back(*x);
+      } else if (words_ok) {
+        if (words) words->push_back(toUpper(a.text));
+      } else {
+        fail(a.line, a.column, field, "expected a number, found '" + a.text + "'");
+      }
+    }
+    return v;
+  }
+
+  // Parses and applies one logical statement; returns its major word.
+  std::string statement(const Logical& lg, bool pseudo, AptStatement& st) {
+    const size_t slash = lg.text.find('/');
+    std::string major;
+    {
+      std::string m = toUpper(trim(std::string_view(lg.text).substr(0, slash)));
+      // Collapse inner spaces ("TOOL  PATH" -> "TOOL PATH").
+      for (char c : m) {
+        if (std::isspace(static_cast<unsigned char>(c))) {
+          if (!major.empty() && major.back() != ' ') major += ' ';
+        } else {
+          major += c;
+        }
+      }
+    }
+    const int line = lg.pos.empty() ? 0 : lg.pos.front().first;
+    const std::vector<Arg> args =
+        slash == std::string::npos ? std::vector<Arg>{} : splitArgs(lg, slash + 1);
+    if (pseudo) {
+      if (major == "CUTTER" || major == "CSYS") apply(major, args, line, st);
+      return major;  // other Creo pseudo-comments are comments
+    }
+    apply(major, args, line, st);
+    return major;
+  }
+
+  void apply(const std::string& major, const std::vector<Arg>& args, int line, AptStatement& st) {
+    if (major == "GOTO" || major == "FROM") {
+      const auto v = numbers(args, major, false);
+      if (v.size() != 3 && v.size() != 6)
+        fail(line, 0, major,
+             "takes 3 values (x,y,z) or 6 (x,y,z,i,j,k), found " + std::to_string(v.size()));
+      Eigen::Vector3d p(v[0], v[1], v[2]);
+      if (v.size() == 6) {
+        setAxis(Eigen::Vector3d(v[3], v[4], v[5]), line, args[3].column, major);
+        prog_.multiax = true;
+      }
+      addMotion(p, line, st);
+    } else if (major == "GODLTA") {
+      const auto v = numbers(args, major, false);
+      if (!have_point_) fail(line, 0, major, "incremental move before any position");
+      Eigen::Vector3d p = last_local_;
+      if (v.size() == 3) p += Eigen::Vector3d(v[0], v[1], v[2]);
+      else if (v.size() == 1) p += v[0] * axis_local_;
+      else fail(line, 0, major, "takes 1 or 3 values, found " + std::to_string(v.size()));
+      addMotion(p, line, st);
+    } else if (major == "TLAXIS") {
+      std::vector<std::string> words;
+      const auto v = numbers(args, major, true, &words);
+      if (v.size() < 3) fail(line, 0, major, "only TLAXIS/i,j,k is supported");
+      setAxis(Eigen::Vector3d(v[0], v[1], v[2]), line, args.empty() ? 0 : args[0].column, major);
+    } else if (major == "MULTAX") {
+      prog_.multiax = args.empty() || toUpper(args[0].text) != "OFF";
+    } else if (major == "CIRCLE" || major == "MOVARC") {
+      std::vector<std::string> words;
+      const auto v = numbers(args, major, true, &words);
+      if (v.size() < 6)
+        fail(line, 0, major, "needs the centre and axis (6 values), found " +
+                                 std::to_string(v.size()));
+      if (!have_point_) fail(line, 0, major, "arc before any position");
+      const ClFrame& f = prog_.frames[frame_];
+      Eigen::Vector3d axis(v[3], v[4], v[5]);
+      if (axis.norm() < 1e-12) fail(line, 0, major, "zero-length circle axis");
+      arc_centre_w_ = f.scale * (f.T * Eigen::Vector3d(v[0], v[1], v[2]));
+      arc_axis_w_ = f.T.linear() * axis.normalized();
+      arc_line_ = line;
+      arc_pending_ = true;
+    } else if (major == "UNITS" || major == "UNIT") {
+      const std::string u = args.empty() ? "" : toUpper(args[0].text);
+      double scale;
+      if (u == "MM" || u == "MILLIMETERS" || u == "MILLIMETRES") {
+        scale = 1.0;
+        prog_.units = "MM";
+      } else if (u == "INCH" || u == "INCHES" || u == "IN") {
+        scale = 25.4;
+        prog_.units = "INCH";
+      } else {
+        fail(line, args.empty() ? 0 : args[0].column, major,
+             "unknown unit '" + (args.empty() ? std::string() : args[0].text) +
+                 "' (expected MM or INCHES)");
+      }
+      ClFrame f = prog_.frames[frame_];
+      f.scale = scale;
+      pushFrame(f);
+    } else if (major == "FEDRAT") {
+      std::vector<std::string> words;
+      const auto v = numbers(args, major, true, &words);
+      if (v.empty()) fail(line, 0, major, "no feed rate value");
+    } else if (major == "RAPID") {
+      rapid_next_ = true;
+    } else if (major == "CUTTER") {
+      const auto v = numbers(args, major, false);
+      if (v.empty() || v.size() > 7)
+        fail(line, 0, major, "takes 1 to 7 values, found " + std::to_string(v.size()));
+      CutterSpec c{"CUTTER", "", v, line};
+      const double s = prog_.frames[frame_].scale;
+      for (size_t k = 0; k < c.values.size(); ++k)
+        if (k != 4 && k != 5) c.values[k] *= s;  // alpha, beta are angles
+      prog_.cutters.push_back(c);
+    } else if (major == "TLDATA") {
+      std::vector<std::string> words;
+      const auto v = numbers(args, major, true, &words);
+      CutterSpec c{"TLDATA", words.empty() ? "" : words[0], v, line};
+      const double s = prog_.frames[frame_].scale;
+      for (size_t k = 0; k < c.values.size() && k < 3; ++k) c.values[k] *= s;
+      prog_.cutters.push_back(c);
+    } else if (major == "CSYS") {
+      const auto v = numbers(args, major, false);
+      if (v.size() != 12) fail(line, 0, major, "takes 12 values, found " + std::to_string(v.size()));
+      setFrameFromRows(v, line, major);
+    } else if (major == "MSYS") {
+      const auto v = numbers(args, major, false);
+      if (v.size() != 9) fail(line, 0, major, "takes 9 values, found " + std::to_string(v.size()));
+      Eigen::Vector3d x(v[3], v[4], v[5]), y(v[6], v[7], v[8]);
+      if (x.norm() < 1e-9 || y.norm() < 1e-9 || std::abs(x.normalized().dot(y.normalized())) > 1e-4)
+        fail(line, 0, major, "the x and y axes must be non-zero and perpendicular");
+      x.normalize();
+      y = (y - x * x.dot(y)).normalized();
+      std::vector<double> rows = {x[0], y[0], x.cross(y)[0], v[0], x[1], y[1],
+                                  x.cross(y)[1], v[1], x[2], y[2], x.cross(y)[2], v[2]};
+      setFrameFromRows(rows, line, major);
+    } else if (major == "PARTNO") {
+      prog_.part_name = args.empty() ? "" : args[0].text;
+    } else if (major == "NURBS" || major == "KNOT" || major == "CNTRL") {
+      fail(line, 0, major,
+           "NURBS motion is not supported; post the operation with linear (GOTO) output "
+           "(in NX: Output Contour Type = Linear)");
+    } else if (major == "FINI" || noOpStatements().count(major) ||
+               major.rfind("CSI_", 0) == 0) {
+      // recognised; nothing to do for the tool positions
+    } else {
+      ++prog_.unknown_count;
+      const std::string name = major.empty() ? "(blank)" : major;
+      if (std::find(prog_.unknown_names.begin(), prog_.unknown_names.end(), name) ==
+          prog_.unknown_names.end())
+        prog_.unknown_names.push_back(name);
+    }
+  }
+
+  void setAxis(const Eigen::Vector3d& u, int line, int column, const std::string& field) {
+    if (u.norm() < 1e-9) fail(line, column, field, "zero-length tool axis");
+    axis_local_ = u.normalized();
+  }
+
+  void addMotion(const Eigen::Vector3d& p_file, int line, AptStatement& st) {
+    const ClFrame& f = prog_.frames[frame_];
+    ClPoint cl;
+    cl.p_w = f.scale * (f.T * p_file);
+    cl.u_w = f.T.linear() * axis_local_;
+    cl.line = line;
+    cl.rapid = rapid_next_;
+    rapid_next_ = false;
+    st.first_point = static_cast<int>(prog_.path.size());
+    if (arc_pending_) {
+      std::vector<Eigen::Vector3d> pts;
+      const Eigen::Vector3d start = prog_.path.back().p_w;
+      const double r = ((start - arc_centre_w_) -
+                        arc_axis_w_ * arc_axis_w_.dot(start - arc_centre_w_)).norm();
+      if (!interpolateArc(start, cl.p_w, arc_centre_w_, arc_axis_w_, opt_.chordal_tolerance_mm,
+                          std::max(0.005, 1e-4 * r), pts))
+        fail(arc_line_, 0, "CIRCLE",
+             "the arc's start and end points (lines " + std::to_string(prog_.path.back().line) +
+                 " and " + std::to_string(line) + ") are not on one circle about its centre");
+      for (size_t k = 0; k + 1 < pts.size(); ++k) {
+        ClPoint a = cl;
+        a.p_w = pts[k];
+        prog_.path.push_back(a);
+        prog_.point_frame.push_back(frame_);
+      }
+      arc_pending_ = false;
+      ++prog_.arcs_expanded;
+    }
+    prog_.path.push_back(cl);
+    prog_.point_frame.push_back(frame_);
+    st.point_count = static_cast<int>(prog_.path.size()) - st.first_point;
+    last_local_ = p_file;
+    have_point_ = true;
+  }
+
+  const AptReadOptions& opt_;
+  ClProgram prog_;
+  int frame_ = 0;
+  Eigen::Vector3d axis_local_ = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d last_local_ = Eigen::Vector3d::Zero();
+  bool have_point_ = false;
+  bool rapid_next_ = false;
+  bool arc_pending_ = false;
+  int arc_line_ = 0;
+  Eigen::Vector3d arc_centre_w_, arc_axis_w_;
+};
+
+}  // namespace
+
+ClProgram parseApt(const std::string& text, const std::string& file_name,
+                   const AptReadOptions& options) {
+  return Parser(text, file_name, options).run();
+}
+
+ClProgram readAptFile(const std::string& path, const AptReadOptions& options) {
+  return parseApt(readFile(path), path, options);
+}
+
+}  // namespace tolver

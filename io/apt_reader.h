@@ -1,0 +1,72 @@
+#pragma once
+// Reader of APT / CLDATA cutter-location files as real CAM systems write them (Siemens NX CLSF,
+// SolidWorks CAM, PTC Creo, CATIA, generic APT).
+//
+// Recognised: GOTO (3 or 6 values; the tool axis is modal), FROM, GODLTA, MULTAX, TLAXIS,
+// CUTTER (1-7 values), TLDATA, UNITS and UNIT, FEDRAT (unit before or after the value), RAPID,
+// SPINDL, LOADTL, LOAD/TOOL, SELECT, PARTNO, PPRINT, INSERT, COOLNT, CIRCLE and MOVARC (expanded
+// into points within a chordal tolerance, counter-clockwise about the circle axis), MSYS, CSYS
+// and $$*CATIA0 (coordinate systems applied to the points that follow), TOOL PATH, END-OF-PATH,
+// END, FINI; `$` continuation lines; `$$` comments (Creo's `$$->` lines carry CUTTER and CSYS).
+// Any case and spacing. Unknown statements are skipped and counted; NURBS blocks are refused.
+//
+// Points are returned in the workpiece frame w in mm: p_w = s * (R p_file + t), u_w = R u_file,
+// with s the unit scale (25.4 for inches) and (R, t) the coordinate system in force.
+#include <Eigen/Geometry>
+#include <string>
+#include <vector>
+
+#include "core/tool_path_prediction.h"
+
+namespace tolver {
+
+// A cutter as the file gives it, lengths converted to mm.
+struct CutterSpec {
+  std::string source;           // "CUTTER" or "TLDATA"
+  std::string kind;             // TLDATA's first word (MILL, DRILL...), empty for CUTTER
+  std::vector<double> values;   // CUTTER: d, r, e, f, alpha, beta, h (as many as given);
+                                // TLDATA/MILL: d, r, length, taper, tip angle (angles in deg)
+  int line = 0;
+};
+
+// One statement of the file: its physical lines and the points it produced.
+struct AptStatement {
+  int first_line = 0;  // 1-based, inclusive
+  int last_line = 0;
+  std::string major;   // upper case ("GOTO", "CIRCLE"); empty for comments and blank lines
+  int first_point = -1;
+  int point_count = 0;
+};
+
+// The coordinate system in force for a point: p_w = scale * (T * p_file).
+struct ClFrame {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  double scale = 1.0;
+};
+
+struct ClProgram {
+  std::string file;
+  std::vector<std::string> lines;        // the file's physical lines, as read
+  std::vector<AptStatement> statements;  // covering every line in order
+  std::vector<ClPoint> path;             // tool positions in w, mm
+  std::vector<int> point_frame;          // per point, index into frames
+  std::vector<ClFrame> frames;
+  std::vector<CutterSpec> cutters;
+  std::string part_name;
+  std::string units = "MM";              // as the file declares: MM or INCH
+  bool multiax = false;                  // MULTAX/ON seen, or GOTO with six values
+  int arcs_expanded = 0;
+  int unknown_count = 0;                 // statements skipped as unknown
+  std::vector<std::string> unknown_names;  // their major words, each once
+};
+
+struct AptReadOptions {
+  double chordal_tolerance_mm = 0.001;  // for CIRCLE / MOVARC expansion
+};
+
+// Throws InputError naming file:line:column and the field on malformed input.
+ClProgram readAptFile(const std::string& path, const AptReadOptions& options = {});
+ClProgram parseApt(const std::string& text, const std::string& file_name,
+                   const AptReadOptions& options = {});
+
+}  // namespace tolver

@@ -1,0 +1,41 @@
+#include "io/apt_writer.h"
+
+#include <cassert>
+#include <cstdio>
+
+namespace tolver {
+
+std::string formatPredictedApt(const ClProgram& program, const std::vector<ClPoint>& predicted,
+                               const std::vector<std::string>& header) {
+  assert(predicted.size() == program.path.size());
+  std::string out;
+  out.reserve(program.path.size() * 80 + 4096);
+  for (const std::string& h : header) out += "$$ " + h + "\n";
+  if (!program.multiax) out += "MULTAX/ON\n";
+  char buf[256];
+  const bool inch = program.units == "INCH";
+  for (const AptStatement& st : program.statements) {
+    if (st.point_count > 0) {
+      const char* word = st.major == "FROM" ? "FROM" : "GOTO";
+      for (int k = st.first_point; k < st.first_point + st.point_count; ++k) {
+        const ClFrame& f = program.frames[program.point_frame[k]];
+        const Eigen::Vector3d p = f.T.inverse(Eigen::Isometry) * (predicted[k].p_w / f.scale);
+        const Eigen::Vector3d u = f.T.linear().transpose() * predicted[k].u_w.normalized();
+        std::snprintf(buf, sizeof buf, inch ? "%s/%.8f,%.8f,%.8f,%.9f,%.9f,%.9f\n"
+                                            : "%s/%.6f,%.6f,%.6f,%.9f,%.9f,%.9f\n",
+                      word, p.x(), p.y(), p.z(), u.x(), u.y(), u.z());
+        out += buf;
+      }
+      continue;
+    }
+    if (st.major == "CIRCLE" || st.major == "MOVARC") {
+      out += "$$ tolver: " + st.major + " of line " + std::to_string(st.first_line) +
+             " expanded into the GOTO points that follow\n";
+      continue;
+    }
+    for (int l = st.first_line; l <= st.last_line; ++l) out += program.lines[l - 1] + "\n";
+  }
+  return out;
+}
+
+}  // namespace tolver

@@ -1,0 +1,17 @@
+#pragma once
+// Writer of a predicted CL file: the source program with every tool position replaced by its
+// predicted one, in the source's units and coordinate system, so that this reader and a CAM
+// system read it back. Arcs (CIRCLE, MOVARC) become the points they were expanded into.
+#include <string>
+#include <vector>
+
+#include "io/apt_reader.h"
+
+namespace tolver {
+
+// predicted: one point per program.path entry (positions and unit axes in w, mm).
+// header: comment lines (without the leading "$$ ") written at the top.
+std::string formatPredictedApt(const ClProgram& program, const std::vector<ClPoint>& predicted,
+                               const std::vector<std::string>& header);
+
+}  // namespace tolver

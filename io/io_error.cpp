@@ -1,0 +1,57 @@
+#include "io/io_error.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace tolver {
+namespace {
+std::string format(const std::string& file, int line, int column, const std::string& field,
+                   const std::string& message) {
+  std::string s = file;
+  if (line > 0) s += ":" + std::to_string(line);
+  if (column > 0) s += ":" + std::to_string(column);
+  s += ": ";
+  if (!field.empty()) s += field + ": ";
+  return s + message;
+}
+}  // namespace
+
+InputError::InputError(const std::string& file, int line, int column, const std::string& field,
+                       const std::string& message)
+    : std::runtime_error(format(file, line, column, field, message)),
+      file_(file),
+      line_(line),
+      column_(column),
+      field_(field) {}
+
+void writeFileAtomically(const std::string& path, const std::string& content) {
+  const std::string tmp = path + ".tmp-tolver";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(path, 0, 0, "output", std::string("cannot write: ") + std::strerror(errno));
+    out << content;
+    out.flush();
+    if (!out) {
+      std::remove(tmp.c_str());
+      throw InputError(path, 0, 0, "output", "write failed");
+    }
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(tmp.c_str());
+    throw InputError(path, 0, 0, "output", "cannot replace file: " + why);
+  }
+}
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, 0, "", std::string("cannot open: ") + std::strerror(errno));
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace tolver

@@ -1,0 +1,33 @@
+#pragma once
+// Errors in files and options: thrown at the io boundary, caught once by the CLI, which prints
+// what() as one line and exits with code 2.
+#include <stdexcept>
+#include <string>
+
+namespace tolver {
+
+class InputError : public std::runtime_error {
+ public:
+  // file: path as given; line, column: 1-based, 0 when unknown; field: what was being read.
+  InputError(const std::string& file, int line, int column, const std::string& field,
+             const std::string& message);
+  const std::string& file() const { return file_; }
+  int line() const { return line_; }
+  int column() const { return column_; }
+  const std::string& field() const { return field_; }
+
+ private:
+  std::string file_;
+  int line_;
+  int column_;
+  std::string field_;
+};
+
+// Writes content to path atomically: a temporary file beside it, then rename. Throws InputError
+// (field "output") when the directory cannot be written.
+void writeFileAtomically(const std::string& path, const std::string& content);
+
+// Reads a whole file; throws InputError when it cannot be opened.
+std::string readFile(const std::string& path);
+
+}  // namespace tolver

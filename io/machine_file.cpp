@@ -1,0 +1,276 @@
+#include "io/machine_file.h"
+
+#include <tinyxml2.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+#include "io/io_error.h"
+#include "io/text_util.h"
+
+namespace tolver {
+namespace {
+
+using tinyxml2::XMLElement;
+
+class Reader {
+ public:
+  explicit Reader(std::string file) : file_(std::move(file)) {}
+
+  [[noreturn]] void fail(const XMLElement* e, const std::string& field, const std::string& msg) {
+    throw InputError(file_, e ? e->GetLineNum() : 0, 0, field, msg);
+  }
+
+  std::string attr(const XMLElement* e, const char* name, bool required = true,
+                   const char* def = "") {
+    const char* v = e->Attribute(name);
+    if (!v) {
+      if (required) fail(e, std::string(e->Name()) + "." + name, "missing attribute");
+      return def;
+    }
+    return v;
+  }
+
+  std::vector<double> numbers(const XMLElement* e, const char* name, size_t count,
+                              bool required = true) {
+    const std::string text = attr(e, name, required, "");
+    std::vector<double> v;
+    std::string s = text;
+    for (char& c : s)
+      if (c == ',') c = ' ';
+    std::istringstream in(s);
+    std::string tok;
+    while (in >> tok) {
+      auto x = parseNumber(tok);
+      if (!x) fail(e, std::string(e->Name()) + "." + name, "malformed number '" + tok + "'");
+      v.push_back(*x);
+    }
+    if (!required && text.empty()) return std::vector<double>(count, 0.0);
+    if (count > 0 && v.size() != count)
+      fail(e, std::string(e->Name()) + "." + name,
+           "expected " + std::to_string(count) + " numbers, found " + std::to_string(v.size()));
+    return v;
+  }
+
+  double number(const XMLElement* e, const char* name) { return numbers(e, name, 1)[0]; }
+
+  Eigen::Isometry3d frame(const XMLElement* e, double angle_scale) {
+    if (!e) return Eigen::Isometry3d::Identity();
+    const auto t = numbers(e, "translation", 3, false);
+    const auto r = numbers(e, "rotation", 3, false);
+    Vector6d v;
+    v << t[0] * length_scale_, t[1] * length_scale_, t[2] * length_scale_, r[0] * angle_scale,
+        r[1] * angle_scale, r[2] * angle_scale;
+    return linkTransform(v);
+  }
+
+  static double angleUnit(const std::string& u, bool* ok) {
+    *ok = true;
+    if (u == "rad") return 1.0;
+    if (u == "deg") return M_PI / 180.0;
+    if (u == "urad") return 1e-6;
+    if (u == "mrad") return 1e-3;
+    if (u == "arcsec") return M_PI / (180.0 * 3600.0);
+    *ok = false;
+    return 0;
+  }
+  static double lengthUnit(const std::string& u, bool* ok) {
+    *ok = true;
+    if (u == "mm") return 1.0;
+    if (u == "um") return 1e-3;
+    if (u == "inch") return 25.4;
+    *ok = false;
+    return 0;
+  }
+
+  int component(const XMLElement* e) {
+    const std::string c = attr(e, "component");
+    for (int k = 0; k < 6; ++k)
+      if (c == kComponentNames[k]) return k;
+    fail(e, std::string(e->Name()) + ".component",
+         "unknown component '" + c + "' (expected ex, ey, ez, gx, gy or gz)");
+  }
+
+  int axisRef(const XMLElement* e, const MachineModel& m) {
+    const std::string n = attr(e, "axis");
+    const int a = m.axisIndex(n);
+    if (a < 0) fail(e, std::string(e->Name()) + ".axis", "no axis named '" + n + "'");
+    return a;
+  }
+
+  Machine read(const std::string& xml) {
+    tinyxml2::XMLDocument doc;
+    if (doc.Parse(xml.data(), xml.size()) != tinyxml2::XML_SUCCESS)
+      throw InputError(file_, doc.ErrorLineNum(), 0, "xml", doc.ErrorStr() ? doc.ErrorStr() : "");
+    const XMLElement* root = doc.RootElement();
+    if (!root || std::string(root->Name()) != "machine")
+      fail(root, "machine", "the root element must be <machine>");
+    Machine out;
+    MachineModel& m = out.model;
+    m.name = attr(root, "name");
+    bool ok;
+    length_scale_ = lengthUnit(attr(root, "length_unit", false, "mm"), &ok);
+    if (!ok || length_scale_ == 1e-3) fail(root, "machine.length_unit", "expected mm or inch");
+    const double angle = angleUnit(attr(root, "angle_unit", false, "deg"), &ok);
+    if (!ok) fail(root, "machine.angle_unit", "expected deg or rad");
+
+    struct Pending {
+      Axis axis;
+      double order;
+      int index;
+    };
+    std::vector<Pending> pending;
+    for (const XMLElement* e = root->FirstChildElement("axis"); e;
+         e = e->NextSiblingElement("axis")) {
+      Axis ax;
+      ax.name = attr(e, "name");
+      if (ax.name.empty()) fail(e, "axis.name", "empty name");
+      for (const auto& p : pending)
+        if (toUpper(p.axis.name) == toUpper(ax.name)) fail(e, "axis.name", "duplicate axis " + ax.name);
+      const std::string type = attr(e, "type");
+      if (type == "prismatic") ax.type = JointType::Prismatic;
+      else if (type == "rotary") ax.type = JointType::Rotary;
+      else fail(e, "axis.type", "expected prismatic or rotary, found '" + type + "'");
+      const std::string branch = attr(e, "branch");
+      if (branch == "workpiece") ax.branch = Branch::Workpiece;
+      else if (branch == "tool") ax.branch = Branch::Tool;
+      else fail(e, "axis.branch", "expected workpiece or tool, found '" + branch + "'");
+      const auto d = numbers(e, "direction", 3);
+      Eigen::Vector3d dir(d[0], d[1], d[2]);
+      if (dir.norm() < 1e-9) fail(e, "axis.direction", "zero vector");
+      ax.direction = dir.normalized();
+      const double k = ax.isRotary() ? angle : length_scale_;
+      ax.travel_min = number(e, "min") * k;
+      ax.travel_max = number(e, "max") * k;
+      if (!(ax.travel_min < ax.travel_max)) fail(e, "axis.max", "max must exceed min");
+      const std::string sign = attr(e, "nc_sign", false, "1");
+      if (sign == "1" || sign == "+1") ax.nc_sign = 1;
+      else if (sign == "-1") ax.nc_sign = -1;
+      else fail(e, "axis.nc_sign", "expected +1 or -1");
+      ax.parent_T_joint = frame(e->FirstChildElement("link"), angle);
+      double order = static_cast<double>(pending.size());
+      if (e->Attribute("order")) order = number(e, "order");
+      pending.push_back({ax, order, static_cast<int>(pending.size())});
+      if (pending.size() > static_cast<size_t>(kMaxAxes)) fail(e, "axis", "too many axes");
+    }
+    if (pending.empty()) fail(root, "axis", "the machine has no axes");
+    for (const auto& p : pending) m.axes.push_back(p.axis);
+    std::vector<Pending> sorted = pending;
+    std::stable_sort(sorted.begin(), sorted.end(),
+                     [](const Pending& a, const Pending& b) { return a.order < b.order; });
+    for (const auto& p : sorted)
+      (p.axis.branch == Branch::Workpiece ? m.workpiece_chain : m.tool_chain).push_back(p.index);
+    m.last_T_table = frame(root->FirstChildElement("table"), angle);
+    m.last_T_spindle = frame(root->FirstChildElement("spindle"), angle);
+
+    // Error model.
+    const XMLElement* errs = root->FirstChildElement("errors");
+    int default_degree = 3;
+    double e_len = 1.0, e_ang = 1.0;
+    if (errs) {
+      e_len = lengthUnit(attr(errs, "length_unit", false, "mm"), &ok);
+      if (!ok) fail(errs, "errors.length_unit", "expected mm, um or inch");
+      e_ang = angleUnit(attr(errs, "angle_unit", false, "rad"), &ok);
+      if (!ok) fail(errs, "errors.angle_unit", "expected rad, urad, mrad, deg or arcsec");
+      if (errs->Attribute("default_degree")) {
+        const double d = number(errs, "default_degree");
+        if (d < 0 || d > 20 || d != std::floor(d))
+          fail(errs, "errors.default_degree", "expected an integer from 0 to 20");
+        default_degree = static_cast<int>(d);
+      }
+    }
+    std::vector<std::array<int, 6>> degrees(m.axes.size());
+    for (auto& d : degrees) d.fill(default_degree);
+    struct Value {
+      const XMLElement* e;
+      int axis, component;
+      std::vector<double> v;
+    };
+    std::vector<Value> links, motions, setups;
+    std::vector<std::pair<const XMLElement*, double>> named;
+    if (errs) {
+      for (const XMLElement* e = errs->FirstChildElement(); e; e = e->NextSiblingElement()) {
+        const std::string tag = e->Name();
+        if (tag == "link") {
+          links.push_back({e, axisRef(e, m), component(e), {number(e, "value")}});
+        } else if (tag == "motion") {
+          Value v{e, axisRef(e, m), component(e), numbers(e, "coefficients", 0)};
+          int deg = std::max<int>(default_degree, static_cast<int>(v.v.size()) - 1);
+          if (e->Attribute("degree")) {
+            const double d = number(e, "degree");
+            if (d < 0 || d > 20 || d != std::floor(d))
+              fail(e, "motion.degree", "expected an integer from 0 to 20");
+            deg = static_cast<int>(d);
+            if (static_cast<int>(v.v.size()) > deg + 1)
+              fail(e, "motion.coefficients", "more coefficients than degree + 1");
+          }
+          degrees[v.axis][v.component] = deg;
+          motions.push_back(v);
+        } else if (tag == "setup") {
+          const std::string f = attr(e, "frame");
+          if (f != "workpiece" && f != "tool")
+            fail(e, "setup.frame", "expected workpiece or tool, found '" + f + "'");
+          setups.push_back({e, f == "workpiece" ? 0 : 1, component(e), {number(e, "value")}});
+        } else if (tag == "param") {
+          named.emplace_back(e, number(e, "value"));
+        } else {
+          fail(e, "errors", "unknown element <" + tag + ">");
+        }
+      }
+    }
+    m.buildParameterLayout(degrees);
+    out.params = Eigen::VectorXd::Zero(m.parameterCount());
+    if (const XMLElement* al = root->FirstChildElement("aliases")) {
+      for (const XMLElement* e = al->FirstChildElement("alias"); e;
+           e = e->NextSiblingElement("alias")) {
+        const std::string name = attr(e, "name"), target = attr(e, "parameter");
+        const int p = m.findParameter(target);
+        if (p < 0) fail(e, "alias.parameter", "no parameter named '" + target + "'");
+        if (m.findParameter(name) >= 0) fail(e, "alias.name", "'" + name + "' is already a name");
+        m.aliases.push_back({name, p, attr(e, "description", false, "")});
+      }
+    }
+    auto scaleOf = [&](int c) { return isAngularComponent(c) ? e_ang : e_len; };
+    for (const Value& v : links) {
+      const int b = std::find_if(m.blocks.begin(), m.blocks.end(), [&](const ParameterBlock& x) {
+                      return x.kind == BlockKind::LinkError && x.axis == v.axis;
+                    }) - m.blocks.begin();
+      out.params[m.blocks[b].offset + v.component] = v.v[0] * scaleOf(v.component);
+    }
+    for (const Value& v : motions) {
+      const ParameterBlock& b = m.blocks[m.motionBlock(v.axis, v.component)];
+      for (size_t k = 0; k < v.v.size(); ++k)
+        out.params[b.offset + k] = v.v[k] * scaleOf(v.component);
+    }
+    for (const auto& [e, value] : named) {
+      const std::string name = attr(e, "name");
+      const int p = m.findParameter(name);
+      if (p < 0) fail(e, "param.name", "no parameter named '" + name + "'");
+      out.params[p] = value * (m.parameters[p].angular ? e_ang : e_len);
+    }
+    for (const Value& v : setups) {
+      const BlockKind kind = v.axis == 0 ? BlockKind::WorkpieceSetup : BlockKind::ToolSetup;
+      for (const ParameterBlock& b : m.blocks)
+        if (b.kind == kind) out.params[b.offset + v.component] = v.v[0] * scaleOf(v.component);
+    }
+    return out;
+  }
+
+ private:
+  std::string file_;
+  double length_scale_ = 1.0;
+};
+
+}  // namespace
+
+Machine parseMachineXml(const std::string& xml, const std::string& file_name) {
+  return Reader(file_name).read(xml);
+}
+
+Machine readMachineFile(const std::string& path) {
+  return parseMachineXml(readFile(path), path);
+}
+
+}  // namespace tolver

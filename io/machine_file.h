@@ -1,0 +1,31 @@
+#pragma once
+// Machine description files (XML). Format (see README, "Machine file"):
+//
+// <machine name="..." length_unit="mm|inch" angle_unit="deg|rad">
+//   <axis name="X" type="prismatic|rotary" branch="workpiece|tool" direction="1 0 0"
+//         min="-380" max="380" nc_sign="-1" [order="2"]>
+//     <link translation="0 0 0" rotation="0 0 0"/>   <!-- nominal D1: trans, then rot z,y,x -->
+//   </axis>
+//   <table translation=".." rotation=".."/>     <!-- table frame in the last workpiece joint -->
+//   <spindle translation=".." rotation=".."/>   <!-- spindle gauge frame in the last tool joint -->
+//   <errors length_unit="mm|um|inch" angle_unit="rad|urad|deg|arcsec" default_degree="3">
+//     <link axis="X" component="gz" value="12"/>
+//     <motion axis="X" component="ey" [degree="3"] coefficients="0 1.5 -0.3 0.1"/>
+//     <setup frame="workpiece|tool" component="ex" value="5"/>
+//   </errors>
+// </machine>
+//
+// Axes are listed from the foundation outwards in each branch (or sorted by `order`).
+// Rotations in link/table/spindle are (rx ry rz) in angle_unit, applied as rot(k,rz) rot(j,ry)
+// rot(i,rx) after the translation (thesis eq. 21). Components: ex ey ez gx gy gz.
+#include <string>
+
+#include "core/machine_model.h"
+
+namespace tolver {
+
+// Throws InputError (file, line, field) on a malformed file.
+Machine readMachineFile(const std::string& path);
+Machine parseMachineXml(const std::string& xml, const std::string& file_name);
+
+}  // namespace tolver

@@ -1,0 +1,45 @@
+#include "io/point_table.h"
+
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+
+namespace tolver {
+
+std::string formatPointTable(const MachineModel& model, const std::vector<ClPoint>& nominal,
+                             const std::vector<PredictedPoint>& predicted) {
+  std::string out =
+      "index,line,rapid,nominal_x_mm,nominal_y_mm,nominal_z_mm,nominal_i,nominal_j,nominal_k";
+  for (const Axis& ax : model.axes) {
+    std::string n = ax.name;
+    for (char& c : n) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    out += "," + n + (ax.isRotary() ? "_deg" : "_mm");
+  }
+  out +=
+      ",predicted_x_mm,predicted_y_mm,predicted_z_mm,predicted_i,predicted_j,predicted_k,"
+      "dev_x_um,dev_y_um,dev_z_um,dev_um,along_axis_um,across_axis_um,axis_angle_urad,singular\n";
+  char buf[512];
+  for (size_t i = 0; i < nominal.size(); ++i) {
+    const ClPoint& c = nominal[i];
+    const PredictedPoint& p = predicted[i];
+    std::snprintf(buf, sizeof buf, "%zu,%d,%d,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f", i, c.line,
+                  c.rapid ? 1 : 0, c.p_w.x(), c.p_w.y(), c.p_w.z(), c.u_w.x(), c.u_w.y(),
+                  c.u_w.z());
+    out += buf;
+    for (size_t a = 0; a < model.axes.size(); ++a) {
+      const double v = model.axes[a].isRotary() ? p.q[a] * 180.0 / M_PI : p.q[a];
+      std::snprintf(buf, sizeof buf, ",%.6f", v);
+      out += buf;
+    }
+    const Eigen::Vector3d d = p.deviation_w * 1e3;
+    std::snprintf(buf, sizeof buf,
+                  ",%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d\n",
+                  p.p_pred_w.x(), p.p_pred_w.y(), p.p_pred_w.z(), p.u_pred_w.x(), p.u_pred_w.y(),
+                  p.u_pred_w.z(), d.x(), d.y(), d.z(), d.norm(), p.along_axis * 1e3,
+                  p.across_axis * 1e3, p.axis_angle * 1e6, p.singular ? 1 : 0);
+    out += buf;
+  }
+  return out;
+}
+
+}  // namespace tolver

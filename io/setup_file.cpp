@@ -1,0 +1,63 @@
+#include "io/setup_file.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "io/io_error.h"
+#include "io/text_util.h"
+
+namespace tolver {
+
+Setup parseSetup(const std::string& text, const std::string& file_name, Setup s) {
+  const auto lines = splitLines(text);
+  for (size_t i = 0; i < lines.size(); ++i) {
+    std::string_view l = lines[i];
+    const size_t hash = l.find('#');
+    if (hash != std::string_view::npos) l = l.substr(0, hash);
+    l = trim(l);
+    if (l.empty()) continue;
+    const int line = static_cast<int>(i) + 1;
+    const size_t eq = l.find('=');
+    if (eq == std::string_view::npos)
+      throw InputError(file_name, line, 0, "", "expected 'key = value'");
+    const std::string key(trim(l.substr(0, eq)));
+    std::string value(trim(l.substr(eq + 1)));
+    for (char& c : value)
+      if (c == ',') c = ' ';
+    std::vector<double> v;
+    std::istringstream in(value);
+    std::string tok;
+    while (in >> tok) {
+      auto x = parseNumber(tok);
+      if (!x) throw InputError(file_name, line, 0, key, "malformed number '" + tok + "'");
+      v.push_back(*x);
+    }
+    auto need = [&](size_t n) {
+      if (v.size() != n)
+        throw InputError(file_name, line, 0, key,
+                         "expected " + std::to_string(n) + " value(s), found " +
+                             std::to_string(v.size()));
+    };
+    if (key == "part_zero_mm") {
+      need(3);
+      s.part_zero_table = Eigen::Vector3d(v[0], v[1], v[2]);
+    } else if (key == "part_rotation_deg") {
+      need(1);
+      s.part_rotation = v[0] * M_PI / 180.0;
+    } else if (key == "gauge_length_mm") {
+      need(1);
+      if (v[0] < 0) throw InputError(file_name, line, 0, key, "must not be negative");
+      s.gauge_length = v[0];
+    } else {
+      throw InputError(file_name, line, 0, key,
+                       "unknown key (expected part_zero_mm, part_rotation_deg, gauge_length_mm)");
+    }
+  }
+  return s;
+}
+
+Setup readSetupFile(const std::string& path, Setup base) {
+  return parseSetup(readFile(path), path, base);
+}
+
+}  // namespace tolver

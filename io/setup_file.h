@@ -1,0 +1,17 @@
+#pragma once
+// Set-up files: how the part and the tool sit on the machine. Plain text, one `key = value` per
+// line, `#` starts a comment. Keys (all optional):
+//   part_zero_mm      = x, y, z     # part zero (origin of w) in the table frame, mm
+//   part_rotation_deg = c           # rotation of w about the table z axis, degrees
+//   gauge_length_mm   = L           # tool tip to spindle gauge point, mm
+#include <string>
+
+#include "core/machine_model.h"
+
+namespace tolver {
+
+// Reads a set-up file on top of `base` (values not given are kept). Throws InputError.
+Setup readSetupFile(const std::string& path, Setup base = {});
+Setup parseSetup(const std::string& text, const std::string& file_name, Setup base = {});
+
+}  // namespace tolver

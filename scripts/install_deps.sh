@@ -1,0 +1,23 @@
+#!/usr/bin/env bash
+# Installs tolver's build and test dependencies from Debian 12 packages.
+# Idempotent: installs only what is missing; runs apt-get update only then.
+set -euo pipefail
+packages=(
+  build-essential cmake pkg-config
+  libeigen3-dev libcgal-dev libopenmesh-dev libassimp-dev libvtk9-dev
+  libtinyxml2-dev libcli11-dev nlohmann-json3-dev libtbb-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libpagmo-dev xvfb
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+echo "tolver: installing ${missing[*]}" >&2
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

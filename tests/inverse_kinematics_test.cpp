@@ -1,0 +1,123 @@
+#include "core/inverse_kinematics.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "io/machine_file.h"
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+JointVector randomJoints(const MachineModel& m, std::mt19937& rng) {
+  JointVector q(m.axes.size());
+  for (size_t a = 0; a < m.axes.size(); ++a) {
+    std::uniform_real_distribution<double> u(m.axes[a].travel_min, m.axes[a].travel_max);
+    q[a] = u(rng);
+  }
+  return q;
+}
+
+double angleBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+class EveryMachine : public ::testing::TestWithParam<const char*> {};
+
+// FK(IK(p, u)) = (p, u) over thousands of random reachable points.
+TEST_P(EveryMachine, ForwardAfterInverseIsTheIdentity) {
+  Machine m = readMachineFile(test::sourcePath(GetParam()));
+  m.model.setup.part_zero_table = Eigen::Vector3d(10, -20, 30);
+  m.model.setup.gauge_length = 100;
+  const ForwardKinematics fk(m.model, Eigen::VectorXd::Zero(m.model.parameterCount()));
+  const InverseKinematics ik(m.model);
+  std::mt19937 rng(42);
+  int solved = 0;
+  for (int n = 0; n < 5000; ++n) {
+    const Eigen::Isometry3d T = fk.w_T_t(randomJoints(m.model, rng));
+    const Eigen::Vector3d p = T.translation(), u = T.linear().col(2);
+    const IkSolution s = ik.solve(p, u, nullptr);
+    ASSERT_EQ(s.status, IkStatus::Ok) << GetParam() << " point " << n;
+    const Eigen::Isometry3d back = fk.w_T_t(s.q);
+    EXPECT_LT((back.translation() - p).norm(), 1e-9);
+    EXPECT_LT(angleBetween(back.linear().col(2), u), 1e-12);
+    ++solved;
+  }
+  EXPECT_EQ(solved, 5000);
+}
+
+// Along a smooth path, the solution that keeps the rotary motion continuous is the one the
+// path was made from.
+TEST_P(EveryMachine, ContinuityRecoversTheGeneratingJointsAlongAPath) {
+  Machine m = readMachineFile(test::sourcePath(GetParam()));
+  const ForwardKinematics fk(m.model, Eigen::VectorXd::Zero(m.model.parameterCount()));
+  const InverseKinematics ik(m.model);
+  std::mt19937 rng(5);
+  JointVector q = randomJoints(m.model, rng);
+  for (size_t a = 0; a < m.model.axes.size(); ++a)  // start well inside travel
+    q[a] = 0.5 * (q[a] + 0.5 * (m.model.axes[a].travel_min + m.model.axes[a].travel_max));
+  JointVector prev = q;
+  std::normal_distribution<double> step(0.0, 1.0);
+  for (int n = 0; n < 2000; ++n) {
+    JointVector next = q;
+    for (size_t a = 0; a < m.model.axes.size(); ++a) {
+      const Axis& ax = m.model.axes[a];
+      const double span = ax.travel_max - ax.travel_min;
+      next[a] = std::clamp(q[a] + 0.002 * span * step(rng), ax.travel_min + 0.01 * span,
+                           ax.travel_max - 0.01 * span);
+    }
+    q = next;
+    const Eigen::Isometry3d T = fk.w_T_t(q);
+    const IkSolution s = ik.solve(T.translation(), T.linear().col(2), n == 0 ? nullptr : &prev);
+    ASSERT_EQ(s.status, IkStatus::Ok);
+    if (n > 0 && !s.singular) EXPECT_LT((s.q - q).cwiseAbs().maxCoeff(), 1e-7) << n;
+    prev = s.q;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Shipped, EveryMachine, ::testing::ValuesIn(test::shippedMachines()));
+
+TEST(InverseKinematics, ToolAxisBeyondTheTiltRangeIsOutOfTravel) {
+  const Machine m = readMachineFile(test::sourcePath(test::shippedMachines()[0]));
+  const InverseKinematics ik(m.model);
+  // Matsuura: A in [-120, 30] deg; a tool axis tilted 150 deg from vertical needs |a| = 150.
+  const Eigen::Vector3d u(0, std::sin(150 * M_PI / 180), std::cos(150 * M_PI / 180));
+  const IkSolution s = ik.solve(Eigen::Vector3d::Zero(), u, nullptr);
+  EXPECT_EQ(s.status, IkStatus::OutOfTravel);
+  EXPECT_EQ(m.model.axes[s.violated_axis].name, "A");
+}
+
+TEST(InverseKinematics, PointBeyondTheStrokeNamesTheAxis) {
+  const Machine m = readMachineFile(test::sourcePath(test::shippedMachines()[0]));
+  const InverseKinematics ik(m.model);
+  const IkSolution s = ik.solve(Eigen::Vector3d(500, 0, 0), Eigen::Vector3d::UnitZ(), nullptr);
+  EXPECT_EQ(s.status, IkStatus::OutOfTravel);
+  EXPECT_EQ(m.model.axes[s.violated_axis].name, "X");
+  EXPECT_NEAR(s.violated_value, -500.0, 1e-9);  // the table moves -x to bring the tool to +x
+}
+
+TEST(InverseKinematics, ToolAxisAlongTheRotaryAxisKeepsTheFreeAngle) {
+  const Machine m = readMachineFile(test::sourcePath(test::shippedMachines()[0]));
+  const InverseKinematics ik(m.model);
+  JointVector prev(5);
+  prev << 0, 0, 0, 0, 0.7;
+  const IkSolution s = ik.solve(Eigen::Vector3d(10, 20, 5), Eigen::Vector3d::UnitZ(), &prev);
+  ASSERT_EQ(s.status, IkStatus::Ok);
+  EXPECT_TRUE(s.singular);
+  EXPECT_NEAR(s.q[4], 0.7, 1e-12);  // C kept
+  EXPECT_NEAR(s.q[3], 0.0, 1e-12);  // A vertical
+}
+
+TEST(InverseKinematics, XKH800CannotTiltTheToolBeyondItsHeadRange) {
+  const Machine m = readMachineFile(test::sourcePath(test::shippedMachines()[1]));
+  const InverseKinematics ik(m.model);
+  // Only A (head, +-45 deg about x) gives the tool axis a y component; B turns about y.
+  const Eigen::Vector3d u = Eigen::Vector3d(0, std::sin(1.0), std::cos(1.0));
+  const IkSolution s = ik.solve(Eigen::Vector3d::Zero(), u, nullptr);
+  EXPECT_EQ(s.status, IkStatus::OutOfTravel);
+}
+
+}  // namespace
+}  // namespace tolver

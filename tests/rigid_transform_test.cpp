@@ -1,0 +1,47 @@
+#include "core/rigid_transform.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace tolver {
+namespace {
+
+TEST(RigidTransform, LinkTransformIsTheProductOfEquation22) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-2.0, 2.0);
+  for (int n = 0; n < 100; ++n) {
+    Vector6d v;
+    for (int k = 0; k < 6; ++k) v[k] = u(rng);
+    const Eigen::Isometry3d expect =
+        translation(Eigen::Vector3d::UnitX(), v[0]) * translation(Eigen::Vector3d::UnitY(), v[1]) *
+        translation(Eigen::Vector3d::UnitZ(), v[2]) * rotation(Eigen::Vector3d::UnitZ(), v[5]) *
+        rotation(Eigen::Vector3d::UnitY(), v[4]) * rotation(Eigen::Vector3d::UnitX(), v[3]);
+    EXPECT_TRUE(linkTransform(v).isApprox(expect, 1e-14));
+  }
+}
+
+// A small twist at frame A, seen from a frame B rigidly attached to A: B' = A_T_B^-1 E(dA) A_T_B
+// must equal E(C dA) to first order (thesis eq. 28-29).
+TEST(RigidTransform, TransportMatrixPropagatesSmallTwists) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int n = 0; n < 50; ++n) {
+    Vector6d pose;
+    for (int k = 0; k < 6; ++k) pose[k] = u(rng) * (k < 3 ? 300.0 : 3.0);
+    const Eigen::Isometry3d a_T_b = linkTransform(pose);
+    Vector6d dA;
+    for (int k = 0; k < 6; ++k) dA[k] = u(rng) * 1e-7;
+    const Eigen::Isometry3d M = a_T_b.inverse() * linkTransform(dA) * a_T_b;
+    Vector6d dB;
+    dB.head<3>() = M.translation();
+    dB[3] = M.linear()(2, 1);
+    dB[4] = M.linear()(0, 2);
+    dB[5] = M.linear()(1, 0);
+    const Vector6d predicted = transportMatrix(a_T_b) * dA;
+    EXPECT_LT((predicted - dB).norm(), 1e-11) << n;
+  }
+}
+
+}  // namespace
+}  // namespace tolver
