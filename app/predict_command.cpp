@@ -41,7 +41,7 @@ void checkOutputDir(const std::string& path, const char* option) {
 
 void runPredict(const PredictOptions& o, int* exit_code) {
   Machine machine = readMachineFile(o.machine);
-  Setup setup;
+  PartSetup setup;
   if (!o.setup.empty()) setup = readSetupFile(o.setup);
   if (!o.part_zero.empty()) {
     if (o.part_zero.size() != 3)

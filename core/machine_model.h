@@ -85,7 +85,7 @@ struct ParameterAlias {
 };
 
 // Part and tool placement chosen by the process planner.
-struct Setup {
+struct PartSetup {
   Eigen::Vector3d part_zero_table = Eigen::Vector3d::Zero();  // part zero in the table frame, mm
   double part_rotation = 0.0;   // rotation of w about the table z axis, rad
   double gauge_length = 0.0;    // tool tip to spindle gauge point along the spindle axis, mm
@@ -99,7 +99,7 @@ class MachineModel {
   std::vector<int> tool_chain;       // axis indices, foundation -> spindle
   Eigen::Isometry3d last_T_table = Eigen::Isometry3d::Identity();    // table in last wp joint
   Eigen::Isometry3d last_T_spindle = Eigen::Isometry3d::Identity();  // spindle in last tool joint
-  Setup setup;
+  PartSetup setup;
 
   std::vector<ParameterBlock> blocks;
   std::vector<ParameterInfo> parameters;  // one per entry of the flat parameter vector

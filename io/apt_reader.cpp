@@ -29,7 +29,7 @@ struct Arg {
 const std::set<std::string>& noOpStatements() {
   static const std::set<std::string> s = {
       "SPINDL", "LOADTL", "LOAD",  "SELECT", "PPRINT",  "INSERT", "COOLNT",    "TOOL PATH",
-      "END-OF-PATH", "END", "PAINT", "CUTCOM", "CYCLE", "MACHIN", "TRNTYP",  "DELAY",
+      "END-OF-PATH", "END", "PAINT", "CUTCOM", "CYCLE", "MACHIN", "DELAY",
       "OPSTOP", "STOP", "CLRSRF", "FEATNO", "MFGNO", "OPERATION", "DISPLY", "AUTOPS", "PLABEL"};
   return s;
 }
@@ -329,9 +329,17 @@ class Parser {
       const double s = prog_.frames[frame_].scale;
       for (size_t k = 0; k < c.values.size() && k < 3; ++k) c.values[k] *= s;
       prog_.cutters.push_back(c);
+    } else if (major == "TRNTYP") {
+      trntyp_world_ = !args.empty() && toUpper(args[0].text) == "WORLD";
     } else if (major == "CSYS") {
       const auto v = numbers(args, major, false);
       if (v.size() != 12) fail(line, 0, major, "takes 12 values, found " + std::to_string(v.size()));
+      if (trntyp_world_) {
+        // SolidWorks CAM: after TRNTYP/WORLD the points stay in world coordinates and CSYS only
+        // names the tool plane (a 3+2 orientation); recorded, not applied.
+        ++prog_.tool_planes;
+        return;
+      }
       setFrameFromRows(v, line, major);
     } else if (major == "MSYS") {
       const auto v = numbers(args, major, false);
@@ -409,6 +417,7 @@ class Parser {
   Eigen::Vector3d last_local_ = Eigen::Vector3d::Zero();
   bool have_point_ = false;
   bool rapid_next_ = false;
+  bool trntyp_world_ = false;
   bool arc_pending_ = false;
   int arc_line_ = 0;
   Eigen::Vector3d arc_centre_w_, arc_axis_w_;

@@ -6,7 +6,9 @@
 // CUTTER (1-7 values), TLDATA, UNITS and UNIT, FEDRAT (unit before or after the value), RAPID,
 // SPINDL, LOADTL, LOAD/TOOL, SELECT, PARTNO, PPRINT, INSERT, COOLNT, CIRCLE and MOVARC (expanded
 // into points within a chordal tolerance, counter-clockwise about the circle axis), MSYS, CSYS
-// and $$*CATIA0 (coordinate systems applied to the points that follow), TOOL PATH, END-OF-PATH,
+// and $$*CATIA0 (coordinate systems applied to the points that follow; a CSYS after
+// TRNTYP/WORLD, as SolidWorks CAM writes it, only names the tool plane of points that are already
+// in world coordinates, and is not applied), TOOL PATH, END-OF-PATH,
 // END, FINI; `$` continuation lines; `$$` comments (Creo's `$$->` lines carry CUTTER and CSYS).
 // Any case and spacing. Unknown statements are skipped and counted; NURBS blocks are refused.
 //
@@ -56,6 +58,7 @@ struct ClProgram {
   std::string units = "MM";              // as the file declares: MM or INCH
   bool multiax = false;                  // MULTAX/ON seen, or GOTO with six values
   int arcs_expanded = 0;
+  int tool_planes = 0;                   // CSYS statements after TRNTYP/WORLD (not applied)
   int unknown_count = 0;                 // statements skipped as unknown
   std::vector<std::string> unknown_names;  // their major words, each once
 };

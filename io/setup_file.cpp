@@ -8,7 +8,7 @@
 
 namespace tolver {
 
-Setup parseSetup(const std::string& text, const std::string& file_name, Setup s) {
+PartSetup parseSetup(const std::string& text, const std::string& file_name, PartSetup s) {
   const auto lines = splitLines(text);
   for (size_t i = 0; i < lines.size(); ++i) {
     std::string_view l = lines[i];
@@ -56,7 +56,7 @@ Setup parseSetup(const std::string& text, const std::string& file_name, Setup s)
   return s;
 }
 
-Setup readSetupFile(const std::string& path, Setup base) {
+PartSetup readSetupFile(const std::string& path, PartSetup base) {
   return parseSetup(readFile(path), path, base);
 }
 

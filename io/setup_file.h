@@ -11,7 +11,7 @@
 namespace tolver {
 
 // Reads a set-up file on top of `base` (values not given are kept). Throws InputError.
-Setup readSetupFile(const std::string& path, Setup base = {});
-Setup parseSetup(const std::string& text, const std::string& file_name, Setup base = {});
+PartSetup readSetupFile(const std::string& path, PartSetup base = {});
+PartSetup parseSetup(const std::string& text, const std::string& file_name, PartSetup base = {});
 
 }  // namespace tolver

@@ -1,2 +1,222 @@
+#include "io/apt_reader.h"
+
 #include <gtest/gtest.h>
-TEST(Placeholder, Todo) { GTEST_SKIP(); }
+
+#include <cmath>
+
+#include "geometry/cutter.h"
+#include "io/io_error.h"
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+ClProgram fixture(const std::string& name) {
+  return readAptFile(test::sourcePath("tests/fixtures/cl/" + name));
+}
+
+// Points that a GOTO/FROM statement itself gave (the last point of each motion statement).
+std::vector<ClPoint> statementEndPoints(const ClProgram& p) {
+  std::vector<ClPoint> out;
+  for (const AptStatement& s : p.statements)
+    if (s.point_count > 0) out.push_back(p.path[s.first_point + s.point_count - 1]);
+  return out;
+}
+
+void expectNear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double tol = 1e-9) {
+  EXPECT_LT((a - b).norm(), tol) << a.transpose() << " vs " << b.transpose();
+}
+
+TEST(AptReader, SiemensNxVariableContourWithMsysAndModalToolAxis) {
+  const ClProgram p = fixture("nx_ust_a.cls");
+  EXPECT_EQ(p.path.size(), 546u);  // 546 GOTO, no arcs
+  EXPECT_TRUE(p.multiax);
+  // MSYS: origin (-120.2591, -1196.5, 142.5), x axis = j, y axis = i, so z = -k.
+  expectNear(p.path.front().p_w, Eigen::Vector3d(-120.2591 + 222.6719, -1196.5, 142.5 + 177.5));
+  expectNear(p.path.front().u_w, Eigen::Vector3d(0, 0, 1));
+  EXPECT_EQ(p.path.front().line, 11);
+  EXPECT_TRUE(p.path.front().rapid);
+  EXPECT_FALSE(p.path[3].rapid);
+  // The tool axis is modal: line 12's GOTO has three values and keeps line 11's axis.
+  expectNear(p.path[1].u_w, p.path[0].u_w);
+  // Last: GOTO/784.0000,3.6875,-97.5000 with the axis of the last six-value GOTO.
+  expectNear(p.path.back().p_w, Eigen::Vector3d(-120.2591 + 3.6875, -1196.5 + 784.0, 142.5 + 97.5));
+  ASSERT_EQ(p.cutters.size(), 1u);
+  Cutter c;
+  ASSERT_TRUE(cutterFromApt(p.cutters[0].source, p.cutters[0].values, &c));
+  EXPECT_EQ(c.type, CutterType::BullNose);
+  EXPECT_DOUBLE_EQ(c.diameter, 32.0);
+  EXPECT_DOUBLE_EQ(c.corner_radius, 5.0);
+  EXPECT_EQ(p.unknown_count, 0);
+}
+
+TEST(AptReader, SiemensNxCircleRecordsAreExpandedWithinTheChordalTolerance) {
+  AptReadOptions opt;
+  opt.chordal_tolerance_mm = 0.001;
+  const ClProgram p = readAptFile(test::sourcePath("tests/fixtures/cl/nx_cutcom.clsf"), opt);
+  EXPECT_EQ(p.arcs_expanded, 140);
+  EXPECT_EQ(statementEndPoints(p).size(), 566u);
+  EXPECT_GT(p.path.size(), 566u);
+  // Every point of the first arc (centre 5.3162, 23, 70 in MSYS, radius 12.5) lies on it.
+  const AptStatement* arcEnd = nullptr;
+  for (const auto& s : p.statements)
+    if (s.first_line == 20) arcEnd = &s;
+  ASSERT_NE(arcEnd, nullptr);
+  ASSERT_GT(arcEnd->point_count, 10);
+  const Eigen::Vector3d o(-255.9551, 15.9993, 77.0124);
+  const Eigen::Vector3d x(0.9975352, -0.0701679, 0), y(-0.0701679, -0.9975352, 0);
+  const Eigen::Vector3d centre = o + 5.3162 * x.normalized() + 23.0 * y.normalized() +
+                                 70.0 * x.normalized().cross(y.normalized());
+  for (int k = arcEnd->first_point; k < arcEnd->first_point + arcEnd->point_count; ++k) {
+    const Eigen::Vector3d d = p.path[k].p_w - centre;
+    EXPECT_NEAR(std::hypot(d.x(), d.y()), 12.5, 2e-4);
+  }
+  // Sagitta between consecutive points within the tolerance: chord <= 2 sqrt(2 r tol).
+  for (int k = arcEnd->first_point; k < arcEnd->first_point + arcEnd->point_count; ++k)
+    EXPECT_LE((p.path[k].p_w - p.path[k - 1].p_w).norm(), 2 * std::sqrt(2 * 12.5 * 0.001) + 1e-6);
+}
+
+TEST(AptReader, SolidWorksCamUnitCutterCsysAndFeedAfterValue) {
+  const ClProgram p = fixture("swcam_Teste-Metrologia.apt");
+  EXPECT_EQ(p.units, "MM");
+  EXPECT_EQ(statementEndPoints(p).size(), 454u);
+  EXPECT_EQ(p.arcs_expanded, 65);
+  expectNear(p.path.front().p_w, Eigen::Vector3d(-8.856356, -17.5, 25.0));
+  Cutter c;
+  ASSERT_TRUE(cutterFromApt(p.cutters[0].source, p.cutters[0].values, &c));
+  EXPECT_EQ(c.type, CutterType::FlatEnd);
+  EXPECT_DOUBLE_EQ(c.diameter, 14.0);
+  EXPECT_DOUBLE_EQ(c.length, 84.0);
+  // Line 276 turns the tool plane (CSYS after TRNTYP/WORLD); the GOTOs that follow stay in
+  // world coordinates: line 278 GOTO/250.,35.8375,-12.1625,1.,0,0 approaches the +x face.
+  EXPECT_TRUE(p.multiax);
+  EXPECT_EQ(p.tool_planes, 4);
+  EXPECT_EQ(p.frames.size(), 2u);  // initial and UNIT: no CSYS applied
+  bool seen = false;
+  for (const ClPoint& c : p.path) {
+    if (c.line != 278) continue;
+    seen = true;
+    expectNear(c.p_w, Eigen::Vector3d(250, 35.8375, -12.1625));
+    expectNear(c.u_w, Eigen::Vector3d(1, 0, 0));
+  }
+  EXPECT_TRUE(seen);
+  EXPECT_TRUE(p.path[1].u_w.isApprox(Eigen::Vector3d(0, 0, 1)));
+}
+
+TEST(AptReader, SolidWorksLongProgramAndThreePlusTwo) {
+  const ClProgram glue = fixture("swcam_Interface-glue.apt");
+  EXPECT_EQ(statementEndPoints(glue).size(), 6311u);
+  EXPECT_EQ(glue.arcs_expanded, 50);
+  EXPECT_EQ(glue.cutters.size(), 4u);
+  const ClProgram rot = fixture("swcam_RotateThick.apt");
+  EXPECT_EQ(statementEndPoints(rot).size(), 482u);
+  EXPECT_EQ(rot.arcs_expanded, 108);
+}
+
+TEST(AptReader, CreoPseudoCommentsContinuationsAndSpacesAroundSlash) {
+  const ClProgram p = fixture("creo_profile_milling.ncl");
+  EXPECT_EQ(statementEndPoints(p).size(), 52u);
+  EXPECT_EQ(p.arcs_expanded, 20);
+  ASSERT_EQ(p.cutters.size(), 1u);  // from "$$-> CUTTER / 3.000000"
+  EXPECT_DOUBLE_EQ(p.cutters[0].values[0], 3.0);
+  EXPECT_EQ(p.frames.size(), 3u);  // initial, UNITS, $$-> CSYS
+  expectNear(p.path.front().p_w, Eigen::Vector3d(0, 1.5, 2.0));
+  expectNear(p.path.back().p_w, statementEndPoints(p).back().p_w);
+  const ClProgram d = fixture("creo_drilling.ncl");
+  EXPECT_EQ(d.path.size(), 4u);  // the CYCLE statement continues with `$`
+  expectNear(d.path.back().p_w, Eigen::Vector3d(-16.7803891180, -23.0, 2.0));
+}
+
+TEST(AptReader, ShortNxPathWithTldataAndEndOfPath) {
+  const ClProgram p = fixture("nx_TORETC_250_BOK.cls");
+  EXPECT_EQ(p.path.size(), 10u);
+  Cutter c;
+  ASSERT_TRUE(cutterFromApt(p.cutters[0].source, p.cutters[0].values, &c));
+  EXPECT_DOUBLE_EQ(c.diameter, 250.0);
+}
+
+TEST(AptReader, NurbsBlocksAreRefusedWithTheirLine) {
+  try {
+    fixture("nx_nurbs.clsf");
+    FAIL() << "NURBS accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 13);
+    EXPECT_NE(std::string(e.what()).find("NURBS"), std::string::npos);
+  }
+}
+
+TEST(AptReader, InchesAreConvertedToMillimetres) {
+  const ClProgram p = parseApt("UNITS/INCHES\nGOTO/1,2,3\nCUTTER/0.5\n", "inch.apt");
+  expectNear(p.path[0].p_w, Eigen::Vector3d(25.4, 50.8, 76.2));
+  EXPECT_DOUBLE_EQ(p.cutters[0].values[0], 12.7);
+  EXPECT_EQ(p.units, "INCH");
+}
+
+TEST(AptReader, CatiaMatrixAppliesToTheFollowingPoints) {
+  const std::string text =
+      "$$*CATIA0\n$$*Manufacturing Program.1\n"
+      "$$*   0.00000   -1.00000   0.00000   10.00000\n"
+      "$$*   1.00000    0.00000   0.00000   20.00000\n"
+      "$$*   0.00000    0.00000   1.00000   30.00000\n"
+      "MULTAX\nGOTO/1,0,0,1,0,0\n";
+  const ClProgram p = parseApt(text, "catia.aptsource");
+  expectNear(p.path[0].p_w, Eigen::Vector3d(10, 21, 30));
+  expectNear(p.path[0].u_w, Eigen::Vector3d(0, 1, 0));
+}
+
+TEST(AptReader, CsysWithoutTrntypWorldIsApplied) {
+  const ClProgram p = parseApt("CSYS/0,-1,0,5,1,0,0,0,0,0,1,0\nGOTO/1,0,0\n", "c.apt");
+  expectNear(p.path[0].p_w, Eigen::Vector3d(5, 1, 0));
+}
+
+TEST(AptReader, CaseSpacingGodltaFromAndTlaxis) {
+  const ClProgram p = parseApt(
+      "  from / 0 , 0 , 10\ntlaxis/0,0,2\ngoto/1,2,3\nGODLTA/1,1,1\nGodlta/-4\n", "mixed.apt");
+  ASSERT_EQ(p.path.size(), 4u);
+  expectNear(p.path[2].p_w, Eigen::Vector3d(2, 3, 4));
+  expectNear(p.path[3].p_w, Eigen::Vector3d(2, 3, 0));
+  expectNear(p.path[3].u_w, Eigen::Vector3d(0, 0, 1));
+}
+
+TEST(AptReader, UnknownStatementsAreCountedNotFatal) {
+  const ClProgram p = parseApt("FOO/1,2\nGOTO/1,2,3\nBAR\nFOO/3\n", "u.apt");
+  EXPECT_EQ(p.path.size(), 1u);
+  EXPECT_EQ(p.unknown_count, 3);
+  EXPECT_EQ(p.unknown_names, (std::vector<std::string>{"FOO", "BAR"}));
+}
+
+struct BadCase {
+  const char* text;
+  int line;
+  int column;
+  const char* needle;
+};
+
+TEST(AptReader, BadInputNamesFileLineAndColumn) {
+  const BadCase cases[] = {
+      {"GOTO/1.0,2.0,\n", 1, 14, "missing value"},             // truncated line
+      {"GOTO/1,2,3\nGOTO/1.0,2.x5,3\n", 2, 10, "malformed number"},  // letters in a number
+      {"", 0, 0, "empty file"},
+      {"  \n\n", 0, 0, "empty file"},
+      {"UNITS/FURLONG\nGOTO/1,2,3\n", 1, 7, "unknown unit"},
+      {"GOTO/1,2,3,0,0\n", 1, 0, "3 values"},
+      {"GOTO/1,2,3,0,0,0\n", 1, 12, "zero-length"},
+      {"GOTO/1,2, $\n", 1, 0, "past the end"},
+      {"GOTO/1,2,3\nCIRCLE/0,0,0,0,0,1,1\nGOTO/5,0,0\n", 2, 0, "not on one circle"},
+      {"CSYS/1,0,0,0,0,2,0,0,0,0,1,0\n", 1, 0, "orthonormal"},
+  };
+  for (const BadCase& c : cases) {
+    try {
+      parseApt(c.text, "bad.apt");
+      ADD_FAILURE() << "accepted: " << c.text;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.file(), "bad.apt");
+      EXPECT_EQ(e.line(), c.line) << e.what();
+      if (c.column) EXPECT_EQ(e.column(), c.column) << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.needle), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace tolver

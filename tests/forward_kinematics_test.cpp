@@ -21,7 +21,7 @@ JointVector joints(double x, double y, double z, double a, double c) {
 
 // Nominal ZFYXAC chain written out by hand: F_T_w = trans(y) trans(x) rot_x(a) rot_z(c) T_w,
 // F_T_t = trans(z) trans(-L k).
-Eigen::Isometry3d handNominal(const JointVector& q, const Setup& s) {
+Eigen::Isometry3d handNominal(const JointVector& q, const PartSetup& s) {
   const Eigen::Vector3d i = Eigen::Vector3d::UnitX(), j = Eigen::Vector3d::UnitY(),
                         k = Eigen::Vector3d::UnitZ();
   Eigen::Isometry3d Tw = Eigen::Isometry3d::Identity();

@@ -1,2 +1,95 @@
+#include "io/machine_file.h"
+
 #include <gtest/gtest.h>
-TEST(Placeholder, Todo) { GTEST_SKIP(); }
+
+#include "io/io_error.h"
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+TEST(MachineFile, MatsuuraTopologyAndParameterCount) {
+  const Machine m = readMachineFile(test::sourcePath(test::shippedMachines()[0]));
+  ASSERT_EQ(m.model.axes.size(), 5u);
+  std::vector<std::string> wp, tool;
+  for (int a : m.model.workpiece_chain) wp.push_back(m.model.axes[a].name);
+  for (int a : m.model.tool_chain) tool.push_back(m.model.axes[a].name);
+  EXPECT_EQ(wp, (std::vector<std::string>{"Y", "X", "A", "C"}));
+  EXPECT_EQ(tool, (std::vector<std::string>{"Z"}));
+  // 5 x 6 link errors + 5 x 6 cubic series (4 coefficients) + 6 part + 6 tool.
+  EXPECT_EQ(m.model.parameterCount(), 30 + 120 + 12);
+  EXPECT_NEAR(m.model.axes[3].travel_min, -120 * M_PI / 180, 1e-15);
+  EXPECT_EQ(m.model.axes[0].nc_sign, -1);
+  EXPECT_EQ(m.model.parameters[m.model.findParameter("EYX.c2")].thesis_name, "e_y(X).c2");
+  EXPECT_EQ(m.model.parameters[m.model.findParameter("gamma_z,X")].iso_code, "COX");
+  EXPECT_TRUE(m.model.parameters[m.model.findParameter("BOC")].angular);
+  EXPECT_EQ(m.model.findParameter("e_x,w"), m.model.findParameter("part.X"));
+  EXPECT_TRUE(m.params.isZero());
+}
+
+TEST(MachineFile, Xkh800HasThe37TermsOfTable1) {
+  const Machine m = readMachineFile(test::sourcePath(test::shippedMachines()[1]));
+  EXPECT_EQ(m.model.aliases.size(), 37u);
+  for (const auto& a : m.model.aliases) EXPECT_GE(a.parameter, 0);
+  EXPECT_EQ(m.model.parameters[m.model.findParameter("dg_xy")].iso_code, "COY");
+  EXPECT_EQ(m.model.blocks[m.model.parameters[m.model.findParameter("dx_x")].block].degree, 0);
+}
+
+TEST(MachineFile, ErrorValuesInTheirUnits) {
+  const std::string xml = R"(<machine name="t" angle_unit="deg">
+    <axis name="X" type="prismatic" branch="workpiece" direction="1 0 0" min="-100" max="100"/>
+    <axis name="Y" type="prismatic" branch="workpiece" direction="0 1 0" min="-100" max="100"/>
+    <axis name="Z" type="prismatic" branch="tool" direction="0 0 1" min="-100" max="100"/>
+    <errors length_unit="um" angle_unit="urad" default_degree="2">
+      <link axis="X" component="gz" value="12"/>
+      <motion axis="Y" component="ex" coefficients="1 2 3 4 5"/>
+      <setup frame="tool" component="ez" value="-7"/>
+      <param name="EZX.c1" value="3"/>
+    </errors></machine>)";
+  const Machine m = parseMachineXml(xml, "t.xml");
+  EXPECT_DOUBLE_EQ(m.params[m.model.findParameter("COX")], 12e-6);
+  EXPECT_DOUBLE_EQ(m.params[m.model.findParameter("EXY.c4")], 5e-3);  // degree raised to 4
+  EXPECT_EQ(m.model.findParameter("EYY.c3"), -1);                     // default degree 2
+  EXPECT_DOUBLE_EQ(m.params[m.model.findParameter("tool.Z")], -7e-3);
+  EXPECT_DOUBLE_EQ(m.params[m.model.findParameter("EZX.c1")], 3e-3);
+}
+
+TEST(MachineFile, MalformedFilesNameLineAndField) {
+  struct Case {
+    const char* xml;
+    int line;
+    const char* field;
+  };
+  const Case cases[] = {
+      {"<machine name='m'>\n<axis name='X' type='linear' branch='tool' direction='1 0 0' "
+       "min='0' max='1'/></machine>",
+       2, "axis.type"},
+      {"<machine name='m'>\n\n<axis name='X' type='prismatic' branch='tool' direction='1 x 0' "
+       "min='0' max='1'/></machine>",
+       3, "axis.direction"},
+      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
+       "min='5' max='1'/></machine>",
+       2, "axis.max"},
+      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
+       "min='0' max='1'/>\n<errors><link axis='Q' component='ex' value='1'/></errors></machine>",
+       3, "link.axis"},
+      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
+       "min='0' max='1'/>\n<errors><link axis='X' component='ew' value='1'/></errors></machine>",
+       3, "link.component"},
+      {"<machine name='m'>\n<axis name='X'", 2, "xml"},
+      {"<machine name='m'></machine>", 1, "axis"},
+  };
+  for (const Case& c : cases) {
+    try {
+      parseMachineXml(c.xml, "m.xml");
+      ADD_FAILURE() << "accepted " << c.xml;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.line(), c.line) << e.what();
+      EXPECT_EQ(e.field(), c.field) << e.what();
+      EXPECT_EQ(e.file(), "m.xml");
+    }
+  }
+}
+
+}  // namespace
+}  // namespace tolver

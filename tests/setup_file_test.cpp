@@ -1,2 +1,36 @@
+#include "io/setup_file.h"
+
 #include <gtest/gtest.h>
-TEST(Placeholder, Todo) { GTEST_SKIP(); }
+
+#include "io/io_error.h"
+
+namespace tolver {
+namespace {
+
+TEST(SetupFile, ReadsKeysAndKeepsDefaults) {
+  PartSetup base;
+  base.gauge_length = 99;
+  const PartSetup s = parseSetup("# part on the table\npart_zero_mm = 1, 2.5, -3\n"
+                             "part_rotation_deg = 90  # turned\n",
+                             "s.txt", base);
+  EXPECT_EQ(s.part_zero_table, Eigen::Vector3d(1, 2.5, -3));
+  EXPECT_NEAR(s.part_rotation, M_PI / 2, 1e-15);
+  EXPECT_EQ(s.gauge_length, 99);
+}
+
+TEST(SetupFile, BadLinesAreNamed) {
+  const char* bad[] = {"part_zero_mm = 1, 2\n", "gauge_length_mm = 1O0\n", "tool = 3\n",
+                       "\n\nnonsense\n", "gauge_length_mm = -5\n"};
+  const int lines[] = {1, 1, 1, 3, 1};
+  for (int i = 0; i < 5; ++i) {
+    try {
+      parseSetup(bad[i], "s.txt");
+      ADD_FAILURE() << bad[i];
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.line(), lines[i]) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace tolver
