@@ -39,6 +39,9 @@ void checkOutputDir(const std::string& path, const char* option) {
     throw InputError(path, 0, 0, option, "directory " + dir.string() + " does not exist");
 }
 
+// Rounds away "-0.000" in printed figures.
+double clean(double v) { return std::abs(v) < 5e-7 ? 0.0 : v; }
+
 void runPredict(const PredictOptions& o, int* exit_code) {
   Machine machine = readMachineFile(o.machine);
   PartSetup setup;
@@ -110,8 +113,9 @@ void runPredict(const PredictOptions& o, int* exit_code) {
               s.rms_deviation * 1e3);
   std::printf("             at the max: (%.3f, %.3f, %.3f) um in the part frame, %.3f um along the "
               "tool axis, %.3f um across\n",
-              worst.deviation_w.x() * 1e3, worst.deviation_w.y() * 1e3,
-              worst.deviation_w.z() * 1e3, worst.along_axis * 1e3, worst.across_axis * 1e3);
+              clean(worst.deviation_w.x() * 1e3), clean(worst.deviation_w.y() * 1e3),
+              clean(worst.deviation_w.z() * 1e3), clean(worst.along_axis * 1e3),
+              clean(worst.across_axis * 1e3));
   std::printf("  tool axis  max %.3f urad, RMS %.3f urad\n", s.max_axis_angle * 1e6,
               s.rms_axis_angle * 1e6);
   if (s.singular_points > 0)
