@@ -63,6 +63,22 @@ void BM_ForwardKinematicsWithErrors(benchmark::State& state) {
 }
 BENCHMARK(BM_ForwardKinematicsWithErrors);
 
+void BM_TipAndAxisWithErrors(benchmark::State& state) {
+  const tolver::Machine m = machineWithErrors();
+  const tolver::ForwardKinematics fk(m.model, m.params);
+  tolver::JointVector q(5);
+  q << 100, -50, 80, -0.5, 1.0;
+  Eigen::Vector3d p, u;
+  for (auto _ : state) {
+    q[4] += 1e-6;
+    fk.tipAndAxis(q, &p, &u);
+    benchmark::DoNotOptimize(p);
+    benchmark::DoNotOptimize(u);
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_TipAndAxisWithErrors);
+
 void BM_InverseKinematics(benchmark::State& state) {
   const tolver::Machine m = machineWithErrors();
   const tolver::InverseKinematics ik(m.model);

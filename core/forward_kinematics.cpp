@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 
-#include "core/chebyshev.h"
 
 namespace tolver {
 
@@ -13,6 +13,10 @@ ForwardKinematics::ForwardKinematics(const MachineModel& model, const Eigen::Vec
   for (size_t a = 0; a < axis_.size(); ++a) {
     axis_[a].fixed = model.axes[a].parent_T_joint;
     axis_[a].offset.fill(-1);
+    axis_[a].mid = 0.5 * (model.axes[a].travel_min + model.axes[a].travel_max);
+    axis_[a].inv_half_range = 2.0 / (model.axes[a].travel_max - model.axes[a].travel_min);
+    for (int k = 0; k < 3; ++k)
+      if (model.axes[a].direction[k] == 1.0) axis_[a].principal = k;
     axis_[a].degree.fill(-1);
   }
   table_T_w_err_ = model.table_T_w();
@@ -38,54 +42,222 @@ ForwardKinematics::ForwardKinematics(const MachineModel& model, const Eigen::Vec
         break;
     }
   }
+  for (AxisTerms& t : axis_) {
+    t.coef = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, std::max(t.max_degree + 1, 1));
+    for (int c = 0; c < 6; ++c)
+      for (int k = 0; k <= t.degree[c]; ++k) t.coef(c, k) = params[t.offset[c] + k];
+  }
+  w_end_ = model.last_T_table * table_T_w_err_;
+  t_end_ = model.last_T_spindle * spindle_T_t_err_;
 }
 
 Vector6d ForwardKinematics::motionErrors(int a, double s) const {
   const AxisTerms& t = axis_[a];
-  Vector6d e = Vector6d::Zero();
-  if (t.max_degree < 0) return e;
-  const Axis& ax = model_->axes[a];
-  const double x = normalisedCoordinate(s, ax.travel_min, ax.travel_max);
-  constexpr int kMaxDegree = 31;
-  double T[kMaxDegree + 1];
-  chebyshevBasis(x, std::min(t.max_degree, kMaxDegree), T);
-  for (int c = 0; c < 6; ++c) {
-    if (t.offset[c] < 0) continue;
-    const double* coef = params_.data() + t.offset[c];
-    double v = 0.0;
-    for (int k = 0; k <= t.degree[c]; ++k) v += coef[k] * T[k];
-    e[c] = v;
+  if (t.max_degree < 0) return Vector6d::Zero();
+  const double x = (s - t.mid) * t.inv_half_range;  // eq. 58
+  // e = sum_k C_k T_k(x), the six components at once, T_k by the recurrence of eq. 57.
+  Vector6d e = t.coef.col(0);
+  if (t.max_degree >= 1) e += x * t.coef.col(1);
+  double t_prev = 1.0, t_cur = x;
+  for (int k = 2; k <= t.max_degree; ++k) {
+    const double t_next = 2.0 * x * t_cur - t_prev;
+    e += t_next * t.coef.col(k);
+    t_prev = t_cur;
+    t_cur = t_next;
   }
   return e;
 }
 
-Eigen::Isometry3d ForwardKinematics::jointTransform(int a, double s) const {
+void ForwardKinematics::composeJoint(int a, double s, Pose& T) const {
   const Axis& ax = model_->axes[a];
   const AxisTerms& t = axis_[a];
-  Eigen::Isometry3d D = t.fixed;
+  // T * fixed
+  T.p += T.R * t.fixed.translation();
+  T.R = T.R * t.fixed.linear();
+  // * D2(s): nominal motion
   if (ax.type == JointType::Prismatic) {
-    D.translation() += D.linear() * (ax.direction * s);
+    T.p += T.R * (ax.direction * s);
+  } else if (t.principal >= 0) {
+    // Rotation about a coordinate axis: only the two other columns of R change.
+    const int i = (t.principal + 1) % 3, j = (t.principal + 2) % 3;
+    const double c = std::cos(s), sn = std::sin(s);
+    const Eigen::Vector3d ci = T.R.col(i), cj = T.R.col(j);
+    T.R.col(i) = c * ci + sn * cj;
+    T.R.col(j) = c * cj - sn * ci;
   } else {
-    D.linear() = D.linear() * Eigen::AngleAxisd(s, ax.direction).toRotationMatrix();
+    T.R = T.R * Eigen::AngleAxisd(s, ax.direction).toRotationMatrix();
   }
-  if (t.max_degree >= 0) D = D * linkTransform(motionErrors(a, s));
+  // * E(s): motion errors
+  if (t.max_degree >= 0) {
+    const Vector6d e = motionErrors(a, s);
+    T.p += T.R * e.head<3>();
+    T.R = T.R * rotationZYX(e[3], e[4], e[5]);
+  }
+}
+
+ForwardKinematics::Pose ForwardKinematics::chain(const std::vector<int>& axes,
+                                                 const JointVector& q) const {
+  Pose T{Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
+  for (int a : axes) composeJoint(a, q[a], T);
+  return T;
+}
+
+Eigen::Isometry3d ForwardKinematics::jointTransform(int a, double s) const {
+  Pose T{Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
+  composeJoint(a, s, T);
+  Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
+  D.linear() = T.R;
+  D.translation() = T.p;
   return D;
 }
 
 Eigen::Isometry3d ForwardKinematics::F_T_w(const JointVector& q) const {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  for (int a : model_->workpiece_chain) T = T * jointTransform(a, q[a]);
-  return T * model_->last_T_table * table_T_w_err_;
+  const Pose T = chain(model_->workpiece_chain, q);
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = T.R * w_end_.linear();
+  out.translation() = T.p + T.R * w_end_.translation();
+  return out;
 }
 
 Eigen::Isometry3d ForwardKinematics::F_T_t(const JointVector& q) const {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  for (int a : model_->tool_chain) T = T * jointTransform(a, q[a]);
-  return T * model_->last_T_spindle * spindle_T_t_err_;
+  const Pose T = chain(model_->tool_chain, q);
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = T.R * t_end_.linear();
+  out.translation() = T.p + T.R * t_end_.translation();
+  return out;
+}
+
+namespace {
+
+// v <- Rot(e_k, angle) v for a coordinate axis k, given c = cos, s = sin of the angle.
+inline void rotatePrincipal(int k, double c, double s, Eigen::Vector3d& v) {
+  const int i = (k + 1) % 3, j = (k + 2) % 3;
+  const double vi = v[i], vj = v[j];
+  v[i] = c * vi - s * vj;
+  v[j] = s * vi + c * vj;
+}
+
+// Small-angle sin/cos exact to rounding (see rigid_transform.cpp), library otherwise.
+inline void sinCosSmall(double x, double* s, double* c) {
+  if (std::abs(x) < 1e-3) {
+    constexpr double k6 = 1.0 / 6.0, k20 = 1.0 / 20.0, k12 = 1.0 / 12.0, k30 = 1.0 / 30.0;
+    const double x2 = x * x;
+    *s = x * (1.0 - x2 * k6 * (1.0 - x2 * k20));
+    *c = 1.0 - 0.5 * x2 * (1.0 - x2 * k12 * (1.0 - x2 * k30));
+  } else {
+    *s = std::sin(x);
+    *c = std::cos(x);
+  }
+}
+
+// v <- Rz(rz) Ry(ry) Rx(rx) v (eq. 22's rotation), or its transpose when inverse.
+inline void rotateZYX(const Vector6d& e, bool inverse, Eigen::Vector3d& p, Eigen::Vector3d& u) {
+  double c[3], s[3];
+  for (int k = 0; k < 3; ++k) sinCosSmall(e[3 + k], &s[k], &c[k]);
+  if (!inverse) {
+    for (int k = 0; k < 3; ++k) {
+      rotatePrincipal(k, c[k], s[k], p);
+      rotatePrincipal(k, c[k], s[k], u);
+    }
+  } else {
+    for (int k = 2; k >= 0; --k) {
+      rotatePrincipal(k, c[k], -s[k], p);
+      rotatePrincipal(k, c[k], -s[k], u);
+    }
+  }
+}
+
+}  // namespace
+
+void ForwardKinematics::applyJoint(int a, double s, double c, double sn, Eigen::Vector3d& p,
+                                   Eigen::Vector3d& u) const {
+  const Axis& ax = model_->axes[a];
+  const AxisTerms& t = axis_[a];
+  if (t.max_degree >= 0) {  // E(s)
+    const Vector6d e = motionErrors(a, s);
+    rotateZYX(e, false, p, u);
+    p += e.head<3>();
+  }
+  if (ax.type == JointType::Prismatic) {  // D2(s)
+    p += ax.direction * s;
+  } else if (t.principal >= 0) {
+    rotatePrincipal(t.principal, c, sn, p);
+    rotatePrincipal(t.principal, c, sn, u);
+  } else {
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(s, ax.direction).toRotationMatrix();
+    p = R * p;
+    u = R * u;
+  }
+  p = t.fixed.linear() * p + t.fixed.translation();  // D1 L
+  u = t.fixed.linear() * u;
+}
+
+void ForwardKinematics::applyJointInverse(int a, double s, double c, double sn,
+                                          Eigen::Vector3d& p, Eigen::Vector3d& u) const {
+  const Axis& ax = model_->axes[a];
+  const AxisTerms& t = axis_[a];
+  p = t.fixed.linear().transpose() * (p - t.fixed.translation());
+  u = t.fixed.linear().transpose() * u;
+  if (ax.type == JointType::Prismatic) {
+    p -= ax.direction * s;
+  } else if (t.principal >= 0) {
+    rotatePrincipal(t.principal, c, -sn, p);
+    rotatePrincipal(t.principal, c, -sn, u);
+  } else {
+    const Eigen::Matrix3d R = Eigen::AngleAxisd(-s, ax.direction).toRotationMatrix();
+    p = R * p;
+    u = R * u;
+  }
+  if (t.max_degree >= 0) {
+    const Vector6d e = motionErrors(a, s);
+    p -= e.head<3>();
+    rotateZYX(e, true, p, u);
+  }
+}
+
+void ForwardKinematics::tipAndAxis(const JointVector& q, Eigen::Vector3d* p_w,
+                                   Eigen::Vector3d* u_w, const double* cos_q,
+                                   const double* sin_q) const {
+  auto trig = [&](int a, double* c, double* s) {
+    if (!model_->axes[a].isRotary()) return;
+    if (cos_q) {
+      *c = cos_q[a];
+      *s = sin_q[a];
+    } else {
+      *c = std::cos(q[a]);
+      *s = std::sin(q[a]);
+    }
+  };
+  double c = 1.0, s = 0.0;
+  // F_p_t = D_1 ... D_m t_end 0: apply from the last tool joint back to the foundation.
+  Eigen::Vector3d p = t_end_.translation();
+  Eigen::Vector3d u = t_end_.linear().col(2);
+  const auto& tool = model_->tool_chain;
+  for (auto it = tool.rbegin(); it != tool.rend(); ++it) {
+    trig(*it, &c, &s);
+    applyJoint(*it, q[*it], c, s, p, u);
+  }
+  // w_p = w_end^-1 D_n^-1 ... D_1^-1 F_p.
+  for (int a : model_->workpiece_chain) {
+    trig(a, &c, &s);
+    applyJointInverse(a, q[a], c, s, p, u);
+  }
+  *p_w = w_end_.linear().transpose() * (p - w_end_.translation());
+  *u_w = w_end_.linear().transpose() * u;
 }
 
 Eigen::Isometry3d ForwardKinematics::w_T_t(const JointVector& q) const {
-  return F_T_w(q).inverse(Eigen::Isometry) * F_T_t(q);
+  const Pose W = chain(model_->workpiece_chain, q);
+  const Pose T = chain(model_->tool_chain, q);
+  // w_T_t = (W * w_end)^-1 * (T * t_end)
+  const Eigen::Matrix3d Rw = W.R * w_end_.linear();
+  const Eigen::Vector3d pw = W.p + W.R * w_end_.translation();
+  const Eigen::Matrix3d Rt = T.R * t_end_.linear();
+  const Eigen::Vector3d pt = T.p + T.R * t_end_.translation();
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Rw.transpose() * Rt;
+  out.translation() = Rw.transpose() * (pt - pw);
+  return out;
 }
 
 }  // namespace tolver

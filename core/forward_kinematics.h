@@ -20,6 +20,13 @@ class ForwardKinematics {
 
   // Pose of the tool frame t seen from the workpiece frame w at joint values q.
   Eigen::Isometry3d w_T_t(const JointVector& q) const;
+  // The tool tip (origin of t, mm) and the unit tool axis (z of t) in w: the same as
+  // w_T_t(q).translation() and .linear().col(2), computed by carrying the two vectors through
+  // the chains (matrix-vector products only): the hot path of prediction.
+  // cos_q, sin_q: optional cos and sin of the rotary joint values (by axis index), when the
+  // caller has them already (inverse kinematics does).
+  void tipAndAxis(const JointVector& q, Eigen::Vector3d* p_w, Eigen::Vector3d* u_w,
+                  const double* cos_q = nullptr, const double* sin_q = nullptr) const;
   // Pose of the workpiece (tool) frame seen from the foundation.
   Eigen::Isometry3d F_T_w(const JointVector& q) const;
   Eigen::Isometry3d F_T_t(const JointVector& q) const;
@@ -31,17 +38,38 @@ class ForwardKinematics {
   const MachineModel& model() const { return *model_; }
 
  private:
+  // A rigid pose as rotation and translation: cheaper to compose than Isometry3d in the hot loop.
+  struct Pose {
+    Eigen::Matrix3d R;
+    Eigen::Vector3d p;
+  };
+  // this = this * D_S(s), composed in place.
+  void composeJoint(int a, double s, Pose& T) const;
+  Pose chain(const std::vector<int>& axes, const JointVector& q) const;
+  // p <- D_S(s) p, u <- R_S(s) u, and the inverse.
+  // c, sn: cos and sin of s for rotary joints.
+  void applyJoint(int a, double s, double c, double sn, Eigen::Vector3d& p,
+                  Eigen::Vector3d& u) const;
+  void applyJointInverse(int a, double s, double c, double sn, Eigen::Vector3d& p,
+                         Eigen::Vector3d& u) const;
+
   struct AxisTerms {
     Eigen::Isometry3d fixed;     // D1 * L (nominal link with link errors)
     std::array<int, 6> offset;   // motion-error coefficient offsets, -1 if none
     std::array<int, 6> degree;
     int max_degree = -1;         // -1: no motion errors on this axis
+    int principal = -1;          // 0/1/2 when the joint direction is +x/+y/+z
+    double mid = 0.0;            // travel midpoint and 2 / travel range, for eq. 58
+    double inv_half_range = 1.0;
+    Eigen::Matrix<double, 6, Eigen::Dynamic> coef;  // column k: c_k of the six components
   };
   const MachineModel* model_;
   Eigen::VectorXd params_;
   std::vector<AxisTerms> axis_;
   Eigen::Isometry3d table_T_w_err_;     // nominal set-up times workpiece set-up errors
   Eigen::Isometry3d spindle_T_t_err_;   // nominal tool frame times tool set-up errors
+  Eigen::Isometry3d w_end_;             // last workpiece joint -> w (table, set-up, errors)
+  Eigen::Isometry3d t_end_;             // last tool joint -> t
 };
 
 }  // namespace tolver

@@ -16,7 +16,8 @@ bool subproblem1(const Eigen::Vector3d& w, const Eigen::Vector3d& p, const Eigen
                  double* theta) {
   const Eigen::Vector3d pp = p - w * w.dot(p);
   const Eigen::Vector3d qp = q - w * w.dot(q);
-  if (pp.norm() < kSingularEps || qp.norm() < kSingularEps) return false;
+  constexpr double kEps2 = kSingularEps * kSingularEps;
+  if (pp.squaredNorm() < kEps2 || qp.squaredNorm() < kEps2) return false;
   *theta = std::atan2(w.dot(pp.cross(qp)), pp.dot(qp));
   return true;
 }
@@ -40,7 +41,7 @@ double unwrapInto(double angle, double lo, double hi, double ref) {
 }  // namespace
 
 InverseKinematics::InverseKinematics(const MachineModel& model)
-    : model_(&model), nominal_(model, Eigen::VectorXd::Zero(model.parameterCount())) {
+    : model_(&model) {
   // Orientation factors from w to t: table_T_w^T, then the workpiece chain backwards (each
   // joint inverted), then the tool chain forwards, then spindle_T_t.
   struct Factor {
@@ -83,6 +84,20 @@ InverseKinematics::InverseKinematics(const MachineModel& model)
   C2_ = C[2];
   for (int a = 0; a < static_cast<int>(model.axes.size()); ++a)
     if (!model.axes[a].isRotary()) prismatic_.push_back(a);
+  w_end_ = model.last_T_table * model.table_T_w();
+  t_end_ = model.last_T_spindle * model.spindle_T_t();
+  for (int b = 0; b < 2; ++b) {
+    for (int a : b == 0 ? model.workpiece_chain : model.tool_chain) {
+      ChainLink l;
+      l.axis = a;
+      l.link_R = model.axes[a].parent_T_joint.linear();
+      l.link_p = model.axes[a].parent_T_joint.translation();
+      l.identity_link = model.axes[a].parent_T_joint.isApprox(Eigen::Isometry3d::Identity(), 0.0);
+      for (int c = 0; c < 3; ++c)
+        if (model.axes[a].direction[c] == 1.0) l.principal = c;
+      chains_[b].push_back(l);
+    }
+  }
   // Two parallel rotary axes cannot orient the tool independently (sub-problem 2 degenerates).
   parallel_rotaries_ =
       rotary_.size() == 2 && std::abs(a_[0].dot(C1_ * a_[1])) > 1.0 - 1e-12;
@@ -130,9 +145,10 @@ int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vecto
     bool free2 = !subproblem1(w2, p, z, &phi2);
     if (free1 || free2) *singular = true;
     // A free angle is marked NaN; solve() fills it from the previous point.
-    if (!free1 && !free2) {
-      // The closed form loses accuracy where gamma is small (sqrt of a difference); two
-      // Gauss-Newton steps on Rot(w1, phi1) Rot(w2, phi2) p = q restore it to rounding level.
+    if (!free1 && !free2 && g < 1e-2) {
+      // The closed form loses accuracy where gamma is small (the square root of a difference
+      // amplifies rounding); two Gauss-Newton steps on Rot(w1, phi1) Rot(w2, phi2) p = q
+      // restore it to rounding level.
       for (int it = 0; it < 2; ++it) {
         const Eigen::Matrix3d R1 = Eigen::AngleAxisd(phi1, w1).toRotationMatrix();
         const Eigen::Vector3d r2p = Eigen::AngleAxisd(phi2, w2) * p;
@@ -155,18 +171,54 @@ int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vecto
   return count;
 }
 
-bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& q) const {
-  // The tip is affine in the prismatic joints once the rotary angles are fixed.
-  for (int a : prismatic_) q[a] = 0.0;
-  const Eigen::Vector3d p0 = nominal_.w_T_t(q).translation();
-  Eigen::Matrix3d G;
-  for (int i = 0; i < 3; ++i) {
-    q[prismatic_[i]] = 1.0;
-    G.col(i) = nominal_.w_T_t(q).translation() - p0;
-    q[prismatic_[i]] = 0.0;
+bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& q,
+                                       IkSolution* trig) const {
+  // With the rotary angles fixed the tip is affine in the prismatic joints: p_w = p0 + G s.
+  // One nominal pass with s = 0 gives p0 and each prismatic joint's direction in F; a joint on
+  // the workpiece branch moves the part, so the tip moves by -g in w, a tool-branch joint by +g.
+  Eigen::Vector3d g_F[3];
+  int k = 0;
+  Eigen::Matrix3d R[2];
+  Eigen::Vector3d p[2];
+  for (int b = 0; b < 2; ++b) {
+    R[b].setIdentity();
+    p[b].setZero();
+    for (const ChainLink& l : chains_[b]) {
+      if (!l.identity_link) {
+        p[b] += R[b] * l.link_p;
+        R[b] = R[b] * l.link_R;
+      }
+      const Axis& ax = model_->axes[l.axis];
+      if (!ax.isRotary()) {
+        g_F[k++] = (b == 0 ? -1.0 : 1.0) * (R[b] * ax.direction);
+        continue;
+      }
+      const double c = std::cos(q[l.axis]), sn = std::sin(q[l.axis]);
+      trig->cos_q[l.axis] = c;
+      trig->sin_q[l.axis] = sn;
+      if (l.principal >= 0) {
+        const int i = (l.principal + 1) % 3, j = (l.principal + 2) % 3;
+        const Eigen::Vector3d ci = R[b].col(i), cj = R[b].col(j);
+        R[b].col(i) = c * ci + sn * cj;
+        R[b].col(j) = c * cj - sn * ci;
+      } else {
+        R[b] = R[b] * Eigen::AngleAxisd(q[l.axis], ax.direction).toRotationMatrix();
+      }
+    }
   }
-  const Eigen::Vector3d s = G.partialPivLu().solve(p_w - p0);
-  for (int i = 0; i < 3; ++i) q[prismatic_[i]] = s[i];
+  const Eigen::Matrix3d Rw = R[0] * w_end_.linear();
+  const Eigen::Vector3d pw = p[0] + R[0] * w_end_.translation();
+  const Eigen::Vector3d pt = p[1] + R[1] * t_end_.translation();
+  const Eigen::Vector3d p0 = Rw.transpose() * (pt - pw);
+  Eigen::Matrix3d G;
+  for (int i = 0; i < 3; ++i) G.col(i) = Rw.transpose() * g_F[i];
+  if (!(std::abs(G.determinant()) > 1e-12)) return false;
+  const Eigen::Vector3d s = G.inverse() * (p_w - p0);
+  // Prismatic joints in chain order (workpiece branch first), as g_F was filled.
+  k = 0;
+  for (int b = 0; b < 2; ++b)
+    for (const ChainLink& l : chains_[b])
+      if (!model_->axes[l.axis].isRotary()) q[l.axis] = s[k++];
   return s.allFinite();
 }
 
@@ -187,26 +239,26 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
     return sol;
   }
   const int nr = static_cast<int>(std::min<size_t>(rotary_.size(), 2));
-  double best_cost = std::numeric_limits<double>::infinity();
-  JointVector best_q;
-  bool best_singular = false;
   auto violation = [&](int axis, double value) {
     if (sol.violated_axis < 0) {
       sol.violated_axis = axis;
       sol.violated_value = value;
     }
   };
-  // Each rotary candidate is completed with its prismatic solution and checked against every
-  // axis's travel; among the feasible ones the rotary motion from `previous` is smallest.
+  // Rotary candidates in order of rotary motion from `previous` (continuity; each angle
+  // unwrapped by 2 pi into travel); the first whose prismatic solution is inside every axis's
+  // travel wins.
+  JointVector cq[2];
+  double ccost[2] = {std::numeric_limits<double>::infinity(),
+                     std::numeric_limits<double>::infinity()};
   for (int ci = 0; ci < ncand; ++ci) {
-    const Eigen::Vector2d& cand = candidates[ci];
     JointVector q = JointVector::Zero(n);
     bool ok = true;
     double cost = 0.0;
     for (int r = 0; r < nr && ok; ++r) {
       const Axis& ax = model_->axes[rotary_[r]];
       const double ref = previous ? (*previous)[rotary_[r]] : 0.0;
-      double angle = cand[r];
+      double angle = candidates[ci][r];
       if (std::isnan(angle)) angle = ref;  // free angle: keep the previous value
       const double v = unwrapInto(angle, ax.travel_min, ax.travel_max, ref);
       if (std::isnan(v)) {
@@ -217,8 +269,17 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
         cost += std::abs(v - ref);
       }
     }
-    if (!ok || cost >= best_cost) continue;
-    if (!solvePrismatic(p_w, q)) continue;
+    if (ok) {
+      cq[ci] = q;
+      ccost[ci] = cost;
+    }
+  }
+  const int order[2] = {ccost[1] < ccost[0] ? 1 : 0, ccost[1] < ccost[0] ? 0 : 1};
+  for (int ci : order) {
+    if (ci >= ncand || !std::isfinite(ccost[ci])) continue;
+    JointVector q = cq[ci];
+    if (!solvePrismatic(p_w, q, &sol)) continue;
+    bool ok = true;
     for (int a : prismatic_) {
       const Axis& ax = model_->axes[a];
       if (q[a] < ax.travel_min - kTravelEps || q[a] > ax.travel_max + kTravelEps) {
@@ -228,17 +289,12 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
       }
     }
     if (!ok) continue;
-    best_cost = cost;
-    best_q = q;
-    best_singular = singular;
-  }
-  if (!std::isfinite(best_cost)) {
-    sol.status = IkStatus::OutOfTravel;
+    sol.q = q;
+    sol.singular = singular;
+    sol.violated_axis = -1;
     return sol;
   }
-  sol.q = best_q;
-  sol.singular = best_singular;
-  sol.violated_axis = -1;
+  sol.status = IkStatus::OutOfTravel;
   return sol;
 }
 

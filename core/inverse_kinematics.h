@@ -8,12 +8,13 @@
 // workpiece branch, which enter inverted), u_w = w_R_t k is the Paden-Kahan sub-problem 2
 //   Rot(a1, phi1) Rot(C1 a2, phi2) (C1 C2 k) = C0^T u_w,
 // solved in closed form (two solutions); one rotary axis is sub-problem 1. With the rotary
-// angles fixed, the tool tip is affine in the prismatic joints, so three nominal forward
-// evaluations give the exact 3x3 linear system for them.
+// angles fixed, the tool tip is affine in the prismatic joints, so one nominal pass along the
+// chains gives the exact 3x3 linear system for them.
 //
 // Singular orientations (the tool axis along a rotary axis, which leaves that angle free) keep
 // the previous value of the free angle (0 at the start of a path) and are flagged.
 #include <Eigen/Core>
+#include <array>
 #include <vector>
 
 #include "core/forward_kinematics.h"
@@ -34,6 +35,8 @@ struct IkSolution {
   bool singular = false;      // a rotary angle was free and kept from the previous point
   int violated_axis = -1;     // with OutOfTravel: the first axis outside its travel
   double violated_value = 0;  // and the value it would need
+  // cos and sin of each rotary joint value (for reuse by the forward model), by axis index.
+  std::array<double, kMaxAxes> cos_q{}, sin_q{};
 };
 
 class InverseKinematics {
@@ -54,16 +57,25 @@ class InverseKinematics {
   const std::vector<int>& rotaryAxes() const { return rotary_; }
 
  private:
-  bool solvePrismatic(const Eigen::Vector3d& p_w, JointVector& q) const;
+  bool solvePrismatic(const Eigen::Vector3d& p_w, JointVector& q, IkSolution* trig) const;
 
   const MachineModel* model_;
-  ForwardKinematics nominal_;
   std::vector<int> rotary_;     // rotary axis indices in w->t chain order
   std::vector<int> prismatic_;  // prismatic axis indices
   Eigen::Matrix3d C0_, C1_, C2_;
   Eigen::Vector3d a_[2];        // rotary directions in the sub-problem frames
   double sign_[2] = {1, 1};     // -1 for workpiece-branch joints
   bool parallel_rotaries_ = false;
+  // The nominal chains, precomputed for the prismatic solve (workpiece branch, tool branch).
+  struct ChainLink {
+    int axis = 0;
+    Eigen::Matrix3d link_R;
+    Eigen::Vector3d link_p;
+    bool identity_link = false;
+    int principal = -1;  // 0/1/2 when the joint direction is +x/+y/+z
+  };
+  std::vector<ChainLink> chains_[2];
+  Eigen::Isometry3d w_end_, t_end_;  // last joint -> w, last joint -> t (nominal)
 };
 
 }  // namespace tolver

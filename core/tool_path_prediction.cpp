@@ -56,10 +56,8 @@ PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorX
       if (s.singular_points == 0) s.first_singular_line = cl.line;
       ++s.singular_points;
     }
-    const Eigen::Isometry3d w_T_t = actual.w_T_t(sol.q);
+    actual.tipAndAxis(sol.q, &out.p_pred_w, &out.u_pred_w, sol.cos_q.data(), sol.sin_q.data());
     const Eigen::Vector3d u = cl.u_w.normalized();
-    out.p_pred_w = w_T_t.translation();
-    out.u_pred_w = w_T_t.linear().col(2);
     out.deviation_w = out.p_pred_w - cl.p_w;
     out.along_axis = out.deviation_w.dot(u);
     out.across_axis = (out.deviation_w - out.along_axis * u).norm();
