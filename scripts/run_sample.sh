@@ -7,8 +7,8 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$here"
 mkdir -p out
 ./build/app/tolver predict \
-  --machine resources/machines/matsuura_mc760vx.xml \
-  --cl samples/matsuura_nas979_cone.apt \
+  --machine samples/machines/matsuura_mc760vx_measured.xml \
+  --cl samples/nas979_cone.apt \
   --setup samples/matsuura_setup.txt \
   --errors out/predicted_points.csv \
   -o out/predicted.apt
