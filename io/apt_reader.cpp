@@ -213,6 +213,7 @@ class Parser {
       if (looksNumeric(a.text)) {
         auto x = parseNumber(a.text);
         if (!x) fail(a.line, a.column, field, "malformed number '" + a.text + "'");
+        if (std::abs(*x) > 1e9) fail(a.line, a.column, field, "value out of range '" + a.text + "'");
         v.push_back(*x);
       } else if (words_ok) {
         if (words) words->push_back(toUpper(a.text));

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <random>
 
 #include "geometry/cutter.h"
 #include "io/io_error.h"
@@ -204,6 +206,8 @@ TEST(AptReader, BadInputNamesFileLineAndColumn) {
       {"GOTO/1,2, $\n", 1, 0, "past the end"},
       {"GOTO/1,2,3\nCIRCLE/0,0,0,0,0,1,1\nGOTO/5,0,0\n", 2, 0, "not on one circle"},
       {"CSYS/1,0,0,0,0,2,0,0,0,0,1,0\n", 1, 0, "orthonormal"},
+      {"UNITS/INCHES\nGOTO/1e300,0,0\n", 2, 6, "out of range"},
+      {"GOTO/1,2,3\nNURBS/\nKNOT/0,1\n", 2, 0, "NURBS"},
   };
   for (const BadCase& c : cases) {
     try {
@@ -215,6 +219,43 @@ TEST(AptReader, BadInputNamesFileLineAndColumn) {
       if (c.column) EXPECT_EQ(e.column(), c.column) << e.what();
       EXPECT_NE(std::string(e.what()).find(c.needle), std::string::npos) << e.what();
     }
+  }
+}
+
+// Hostile input: random byte edits of real files either parse to finite points or throw an
+// InputError; never a crash, a hang or a NaN.
+TEST(AptReader, MutatedFilesFailCleanly) {
+  std::mt19937 rng(2024);
+  const char* alphabet = "GOTO/,.$-+e0123456789 \n\tCIRCLE";
+  for (const char* name : {"nx_ust_a.cls", "creo_profile_milling.ncl", "swcam_RotateThick.apt"}) {
+    const std::string original = readFile(test::sourcePath(std::string("tests/fixtures/cl/") + name));
+    int failed = 0;
+    for (int n = 0; n < 300; ++n) {
+      std::string text = original;
+      std::uniform_int_distribution<int> edits(1, 8);
+      for (int e = edits(rng); e > 0; --e) {
+        std::uniform_int_distribution<size_t> at(0, text.size() - 1);
+        const size_t i = at(rng);
+        switch (rng() % 4) {
+          case 0: text.erase(i, 1 + rng() % 5); break;
+          case 1: text.insert(i, 1, alphabet[rng() % std::strlen(alphabet)]); break;
+          case 2: text[i] = static_cast<char>(rng() % 256); break;
+          default: text.resize(i); break;
+        }
+        if (text.empty()) text = "X";
+      }
+      try {
+        const ClProgram p = parseApt(text, name);
+        for (const ClPoint& c : p.path) {
+          ASSERT_TRUE(c.p_w.allFinite());
+          ASSERT_TRUE(c.u_w.allFinite());
+        }
+      } catch (const InputError& e) {
+        ++failed;
+        EXPECT_EQ(e.file(), name);
+      }
+    }
+    EXPECT_GT(failed, 0);
   }
 }
 
