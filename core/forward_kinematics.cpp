@@ -246,6 +246,29 @@ void ForwardKinematics::tipAndAxis(const JointVector& q, Eigen::Vector3d* p_w,
   *u_w = w_end_.linear().transpose() * u;
 }
 
+void ForwardKinematics::chainFrames(const JointVector& q, ChainFrames* out) const {
+  const size_t n = model_->axes.size();
+  out->after_link.resize(n);
+  out->after_joint.resize(n);
+  for (int b = 0; b < 2; ++b) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    for (int a : b == 0 ? model_->workpiece_chain : model_->tool_chain) {
+      T = T * axis_[a].fixed;
+      out->after_link[a] = T;
+      const Axis& ax = model_->axes[a];
+      if (ax.type == JointType::Prismatic) {
+        T.translation() += T.linear() * (ax.direction * q[a]);
+      } else {
+        T.linear() = T.linear() * Eigen::AngleAxisd(q[a], ax.direction).toRotationMatrix();
+      }
+      if (axis_[a].max_degree >= 0) T = T * linkTransform(motionErrors(a, q[a]));
+      out->after_joint[a] = T;
+    }
+    if (b == 0) out->F_T_w = T * w_end_;
+    else out->F_T_t = T * t_end_;
+  }
+}
+
 Eigen::Isometry3d ForwardKinematics::w_T_t(const JointVector& q) const {
   const Pose W = chain(model_->workpiece_chain, q);
   const Pose T = chain(model_->tool_chain, q);

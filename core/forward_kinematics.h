@@ -36,6 +36,16 @@ class ForwardKinematics {
   Vector6d motionErrors(int a, double s) const;
 
   const MachineModel& model() const { return *model_; }
+  const Eigen::VectorXd& params() const { return params_; }
+
+  // Frames along the chains at q, all seen from F: for each axis a, after_link[a] is the frame
+  // after D1 L (where link errors act) and after_joint[a] the joint frame after E(s) (where
+  // motion errors act); F_T_w and F_T_t close the chains.
+  struct ChainFrames {
+    std::vector<Eigen::Isometry3d> after_link, after_joint;
+    Eigen::Isometry3d F_T_w, F_T_t;
+  };
+  void chainFrames(const JointVector& q, ChainFrames* out) const;
 
  private:
   // A rigid pose as rotation and translation: cheaper to compose than Isometry3d in the hot loop.

@@ -1,0 +1,68 @@
+#include "core/sensitivity_jacobian.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "io/machine_file.h"
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+// Body twist of b relative to a, to first order: vee(a^-1 b).
+Vector6d twistBetween(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  const Eigen::Isometry3d M = a.inverse(Eigen::Isometry) * b;
+  const Eigen::Matrix3d S = 0.5 * (M.linear() - M.linear().transpose());
+  Vector6d t;
+  t << M.translation(), S(2, 1), S(0, 2), S(1, 0);
+  return t;
+}
+
+class EveryMachine : public ::testing::TestWithParam<const char*> {};
+
+// Each column against central finite differences of the exact forward model, at random poses
+// and random non-zero parameters (so the exact parametrisation map M(v) is exercised).
+TEST_P(EveryMachine, MatchesCentralFiniteDifferences) {
+  Machine m = readMachineFile(test::sourcePath(GetParam()));
+  m.model.setup.gauge_length = 120;
+  m.model.setup.part_zero_table = Eigen::Vector3d(20, -10, 40);
+  std::mt19937 rng(17);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int i = 0; i < m.model.parameterCount(); ++i)
+    m.params[i] = n(rng) * (m.model.parameters[i].angular ? 2e-3 : 0.05);
+  const int np = m.model.parameterCount();
+  Eigen::MatrixXd J(6, np);
+  for (int pose = 0; pose < 20; ++pose) {
+    JointVector q(m.model.axes.size());
+    for (size_t a = 0; a < m.model.axes.size(); ++a) {
+      std::uniform_real_distribution<double> u(m.model.axes[a].travel_min, m.model.axes[a].travel_max);
+      q[a] = u(rng);
+    }
+    const ForwardKinematics fk(m.model, m.params);
+    sensitivityJacobian(fk, q, J);
+    const Eigen::Isometry3d T0 = fk.w_T_t(q);
+    for (int i = 0; i < np; ++i) {
+      const double h = m.model.parameters[i].angular ? 1e-6 : 1e-5;
+      Eigen::VectorXd pp = m.params, pm = m.params;
+      pp[i] += h;
+      pm[i] -= h;
+      const Vector6d fd = (twistBetween(T0, ForwardKinematics(m.model, pp).w_T_t(q)) -
+                           twistBetween(T0, ForwardKinematics(m.model, pm).w_T_t(q))) /
+                          (2 * h);
+      EXPECT_LT((fd - J.col(i)).norm(), 1e-5 * (1.0 + J.col(i).norm()))
+          << GetParam() << " " << m.model.parameters[i].iso_code << "\n"
+          << fd.transpose() << "\n"
+          << J.col(i).transpose();
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Shipped, EveryMachine, ::testing::ValuesIn(test::shippedMachines()));
+
+TEST(SensitivityJacobian, LinkTwistMapIsTheIdentityAtZero) {
+  EXPECT_TRUE(linkTwistMap(Vector6d::Zero()).isIdentity(0.0));
+}
+
+}  // namespace
+}  // namespace tolver
