@@ -27,6 +27,7 @@
 // Later capabilities append new block kinds; code that walks the vector uses the blocks.
 #include <Eigen/Geometry>
 #include <array>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -104,6 +105,9 @@ class MachineModel {
   std::vector<ParameterBlock> blocks;
   std::vector<ParameterInfo> parameters;  // one per entry of the flat parameter vector
   std::vector<ParameterAlias> aliases;
+  // Parameters kept by strategy II when choosing a minimal-complete set, per model name
+  // ("link", "motion"): the recognised link errors (thesis Tables 3.4 and 4.2).
+  std::map<std::string, std::vector<int>> preferred;
 
   // Builds blocks and parameters: link errors for each axis, motion errors of the given
   // Chebyshev degree per axis and component, then workpiece and tool set-up errors.

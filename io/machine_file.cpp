@@ -244,6 +244,21 @@ class Reader {
       for (size_t k = 0; k < v.v.size(); ++k)
         out.params[b.offset + k] = v.v[k] * scaleOf(v.component);
     }
+    if (const XMLElement* id = root->FirstChildElement("identification")) {
+      for (const XMLElement* e = id->FirstChildElement("prefer"); e;
+           e = e->NextSiblingElement("prefer")) {
+        const std::string model = attr(e, "model");
+        if (model != "link" && model != "motion")
+          fail(e, "prefer.model", "expected link or motion, found '" + model + "'");
+        std::istringstream in(attr(e, "parameters"));
+        std::string name;
+        while (in >> name) {
+          const int p = m.findParameter(name);
+          if (p < 0) fail(e, "prefer.parameters", "no parameter named '" + name + "'");
+          m.preferred[model].push_back(p);
+        }
+      }
+    }
     for (const auto& [e, value] : named) {
       const std::string name = attr(e, "name");
       const int p = m.findParameter(name);

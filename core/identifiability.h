@@ -1,0 +1,76 @@
+#pragma once
+// Identifiability of error parameters from a stacked Jacobian (thesis 3.6, 4.7): rank,
+// condition number and SVD of the column-scaled matrix, groups of confounded parameters from
+// the right singular vectors of the (near-)zero singular values, and the selection of a
+// minimal-complete parameter set by the thesis's strategies:
+//   I   keep part and tool set-up parameters;
+//   II  keep the parameters that stand for recognised link errors (a per-machine list,
+//       thesis Tables 3.4 and 4.2);
+//   III otherwise remove the parameter whose removal leaves the smallest condition number.
+//
+// Column scaling: each column is divided by its Euclidean norm, so millimetres and radians do not
+// mix. Rank tolerance: a singular value counts when it exceeds kRankTolerance times the largest.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/forward_kinematics.h"
+
+namespace tolver {
+
+constexpr double kRankTolerance = 1e-9;
+
+struct SvdSummary {
+  int rows = 0, cols = 0;
+  int rank = 0;
+  double condition = 0.0;           // sigma_max / sigma_min; infinity when rank < cols
+  double condition_unscaled = 0.0;  // the same without column scaling (mm, rad), as the
+                                    // thesis reports it
+  Eigen::VectorXd singular_values;  // of the column-scaled matrix, decreasing
+};
+
+// Column-scaled SVD summary of J (zero columns stay zero and count as rank-deficient).
+SvdSummary analyseColumns(const Eigen::MatrixXd& J);
+
+// Stacked sensitivity Jacobian: 6 rows per pose (twist in t), the given parameter columns.
+Eigen::MatrixXd stackedJacobian(const ForwardKinematics& fk, const std::vector<JointVector>& poses,
+                                const std::vector<int>& columns);
+
+// Parameter columns of the thesis's two models: "link" = link errors and set-up errors
+// (chapter 3), "motion" = motion-error coefficients and set-up errors (chapter 4);
+// "all" = every parameter.
+std::vector<int> modelColumns(const MachineModel& m, const std::string& model);
+
+// A copy of the model with every motion component at Chebyshev degree `degree`.
+MachineModel withMotionDegree(const MachineModel& m, int degree);
+
+struct ReductionStep {
+  std::vector<int> group;   // confounded parameters (parameter indices), largest weight first
+  int removed = -1;         // parameter index
+  std::string strategy;     // what decided: "no effect", "I", "II", "III" or a chain "I+III"
+  int size_after = 0;
+  int rank_after = 0;
+  double condition_after = 0.0;
+};
+
+struct MinimalSet {
+  std::vector<int> kept;      // parameter indices, in the order given
+  std::vector<int> removed;
+  std::vector<ReductionStep> steps;
+  SvdSummary initial, reduced;
+};
+
+// Reduces `columns` of J (J has one column per entry of `columns`) to a full-rank set.
+// setup[i]: parameter `columns[i]` is a set-up parameter (strategy I); preferred: parameter
+// indices kept by strategy II.
+MinimalSet selectMinimalSet(const Eigen::MatrixXd& J, const std::vector<int>& columns,
+                            const std::vector<bool>& setup, const std::vector<int>& preferred);
+
+// Convenience: the whole analysis on a machine model at the given poses.
+MinimalSet minimalSetForModel(const MachineModel& m, const std::vector<JointVector>& poses,
+                              const std::vector<int>& columns, const std::vector<int>& preferred);
+
+// Joint configurations drawn uniformly inside travel (deterministic for a seed).
+std::vector<JointVector> randomPoses(const MachineModel& m, int count, unsigned seed);
+
+}  // namespace tolver
