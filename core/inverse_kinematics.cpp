@@ -172,7 +172,7 @@ int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vecto
 }
 
 bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& q,
-                                       IkSolution* trig) const {
+                                       IkSolution* trig, const Eigen::Vector3d& b_t) const {
   // With the rotary angles fixed the tip is affine in the prismatic joints: p_w = p0 + G s.
   // One nominal pass with s = 0 gives p0 and each prismatic joint's direction in F; a joint on
   // the workpiece branch moves the part, so the tip moves by -g in w, a tool-branch joint by +g.
@@ -208,7 +208,7 @@ bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& 
   }
   const Eigen::Matrix3d Rw = R[0] * w_end_.linear();
   const Eigen::Vector3d pw = p[0] + R[0] * w_end_.translation();
-  const Eigen::Vector3d pt = p[1] + R[1] * t_end_.translation();
+  const Eigen::Vector3d pt = p[1] + R[1] * (t_end_ * b_t);
   const Eigen::Vector3d p0 = Rw.transpose() * (pt - pw);
   Eigen::Matrix3d G;
   for (int i = 0; i < 3; ++i) G.col(i) = Rw.transpose() * g_F[i];
@@ -220,6 +220,21 @@ bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& 
     for (const ChainLink& l : chains_[b])
       if (!model_->axes[l.axis].isRotary()) q[l.axis] = s[k++];
   return s.allFinite();
+}
+
+bool InverseKinematics::placeToolPoint(const Eigen::Vector3d& b_t, const Eigen::Vector3d& target_w,
+                                       JointVector& q, int* violated_axis) const {
+  IkSolution scratch;
+  *violated_axis = -1;
+  if (prismatic_.size() != 3 || !solvePrismatic(target_w, q, &scratch, b_t)) return false;
+  for (int a : prismatic_) {
+    const Axis& ax = model_->axes[a];
+    if (q[a] < ax.travel_min - kTravelEps || q[a] > ax.travel_max + kTravelEps) {
+      *violated_axis = a;
+      return false;
+    }
+  }
+  return true;
 }
 
 IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vector3d& u_w,

@@ -56,8 +56,15 @@ class InverseKinematics {
   int rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vector2d out[2], bool* singular) const;
   const std::vector<int>& rotaryAxes() const { return rotary_; }
 
+  // With the rotary joints of q fixed, sets its prismatic joints so that the tool-frame point
+  // b_t lands on target_w (both mm). Returns false when no solution lies inside travel
+  // (*violated_axis names the first axis outside it, or -1 when the system is singular).
+  bool placeToolPoint(const Eigen::Vector3d& b_t, const Eigen::Vector3d& target_w, JointVector& q,
+                      int* violated_axis) const;
+
  private:
-  bool solvePrismatic(const Eigen::Vector3d& p_w, JointVector& q, IkSolution* trig) const;
+  bool solvePrismatic(const Eigen::Vector3d& p_w, JointVector& q, IkSolution* trig,
+                      const Eigen::Vector3d& b_t = Eigen::Vector3d::Zero()) const;
 
   const MachineModel* model_;
   std::vector<int> rotary_;     // rotary axis indices in w->t chain order

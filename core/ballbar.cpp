@@ -1,0 +1,45 @@
+#include "core/ballbar.h"
+
+#include "core/sensitivity_jacobian.h"
+
+namespace tolver {
+
+double ballbarLength(const ForwardKinematics& fk, const JointVector& q, const BallbarSetup& s,
+                     const BallErrors& e) {
+  const Eigen::Isometry3d T = fk.w_T_t(q);
+  return (T * (s.tool_ball_t + e.tool_t) - (s.table_ball_w + e.table_w)).norm();
+}
+
+void ballbarGradient(const ForwardKinematics& fk, const JointVector& q, const BallbarSetup& s,
+                     const BallErrors& e, Eigen::Ref<Eigen::RowVectorXd> J_params,
+                     Eigen::RowVector3d* J_table, Eigen::RowVector3d* J_tool,
+                     Eigen::MatrixXd& scratch) {
+  const Eigen::Isometry3d T = fk.w_T_t(q);
+  const Eigen::Vector3d bt = s.tool_ball_t + e.tool_t;
+  const Eigen::Vector3d d = T * bt - (s.table_ball_w + e.table_w);
+  const Eigen::Vector3d n = d.normalized();
+  const Eigen::RowVector3d nR = n.transpose() * T.linear();  // bar direction in t
+  sensitivityJacobian(fk, q, scratch);
+  // d + theta x b_t = [I, -[b_t x]] twist
+  Eigen::Matrix<double, 3, 6> P;
+  P.leftCols<3>().setIdentity();
+  P.rightCols<3>() << 0, bt.z(), -bt.y(), -bt.z(), 0, bt.x(), bt.y(), -bt.x(), 0;
+  J_params = (nR * P) * scratch;
+  if (J_tool) *J_tool = nR;
+  if (J_table) *J_table = -n.transpose();
+}
+
+void deriveDirections(BallbarTest& test) {
+  for (size_t i = 0; i < test.readings.size(); ++i) {
+    BallbarReading& r = test.readings[i];
+    for (int a = 0; a < r.q.size(); ++a) {
+      if (r.direction[a] != 0) continue;
+      if (i == 0) continue;
+      const BallbarReading& p = test.readings[i - 1];
+      const double dq = r.q[a] - p.q[a];
+      r.direction[a] = dq > 0 ? 1 : (dq < 0 ? -1 : p.direction[a]);
+    }
+  }
+}
+
+}  // namespace tolver

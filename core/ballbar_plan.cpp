@@ -1,0 +1,138 @@
+#include "core/ballbar_plan.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "core/identifiability.h"
+#include "core/inverse_kinematics.h"
+
+namespace tolver {
+
+std::vector<BallbarSetup> defaultBallbarSetups(int n) {
+  std::vector<BallbarSetup> out;
+  for (int s = 0; s < n; ++s) {
+    const double psi = 2.0 * M_PI * s / std::max(n, 1), phi = psi + M_PI / 3;
+    BallbarSetup b;
+    b.id = s + 1;
+    b.table_ball_w = Eigen::Vector3d(s == 0 ? 0.0 : 80.0 * std::cos(psi),
+                                     s == 0 ? 0.0 : 80.0 * std::sin(psi), 30.0 * s);
+    b.tool_ball_t = Eigen::Vector3d(25.0 * std::cos(phi), 25.0 * std::sin(phi), 0.0);
+    out.push_back(b);
+  }
+  return out;
+}
+
+BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& unknowns,
+                            const BallbarPlanOptions& opt) {
+  BallbarPlan plan;
+  plan.test.setups = opt.geometry.empty() ? defaultBallbarSetups(opt.setups) : opt.geometry;
+  const int nsetups = static_cast<int>(plan.test.setups.size());
+  const ForwardKinematics fk(model, Eigen::VectorXd::Zero(model.parameterCount()));
+  const InverseKinematics ik(model);
+  std::mt19937 rng(opt.seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double min_el = opt.min_elevation_deg * M_PI / 180.0;
+
+  // 1. Candidate configurations per set-up.
+  std::vector<std::vector<BallbarReading>> pool(nsetups);
+  const int per_setup = (opt.poses + nsetups - 1) / nsetups;
+  const int wanted = per_setup * std::max(1, opt.candidates_per_pose);
+  for (int s = 0; s < nsetups; ++s) {
+    const BallbarSetup& bs = plan.test.setups[s];
+    int attempts = 0;
+    while (static_cast<int>(pool[s].size()) < wanted && attempts < 200 * wanted) {
+      ++attempts;
+      ++plan.sampled;
+      JointVector q = JointVector::Zero(model.axes.size());
+      for (size_t a = 0; a < model.axes.size(); ++a)
+        if (model.axes[a].isRotary())
+          q[a] = model.axes[a].travel_min +
+                 unit(rng) * (model.axes[a].travel_max - model.axes[a].travel_min);
+      // Bar direction: azimuth anywhere, elevation above the machine's xy plane, seen from F.
+      const double az = 2.0 * M_PI * unit(rng);
+      const double el = std::asin(std::sin(min_el) + unit(rng) * (1.0 - std::sin(min_el)));
+      const Eigen::Vector3d d_F(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
+                                std::sin(el));
+      const Eigen::Matrix3d F_R_w = fk.F_T_w(q).linear();
+      const Eigen::Vector3d target = bs.table_ball_w + opt.bar_length * (F_R_w.transpose() * d_F);
+      int violated = -1;
+      if (!ik.placeToolPoint(bs.tool_ball_t, target, q, &violated)) {
+        ++plan.rejected;
+        continue;
+      }
+      BallbarReading r;
+      r.setup = s;
+      r.q = q;
+      pool[s].push_back(r);
+    }
+  }
+
+  // 2. Identification rows of every candidate, columns scaled by their norms over the pool.
+  const int np = static_cast<int>(unknowns.size());
+  const int n = np + 6 * nsetups;
+  plan.unknowns = n;
+  std::vector<std::pair<int, int>> index;  // (setup, k)
+  for (int s = 0; s < nsetups; ++s)
+    for (size_t k = 0; k < pool[s].size(); ++k) index.emplace_back(s, static_cast<int>(k));
+  Eigen::MatrixXd rows = Eigen::MatrixXd::Zero(index.size(), n);
+  Eigen::MatrixXd scratch(6, model.parameterCount());
+  Eigen::RowVectorXd g(model.parameterCount());
+  for (size_t i = 0; i < index.size(); ++i) {
+    const auto [s, k] = index[i];
+    Eigen::RowVector3d jt, jb;
+    ballbarGradient(fk, pool[s][k].q, plan.test.setups[s], BallErrors{}, g, &jt, &jb, scratch);
+    for (int c = 0; c < np; ++c) rows(i, c) = g[unknowns[c]];
+    rows.block<1, 3>(i, np + 6 * s) = jt;
+    rows.block<1, 3>(i, np + 6 * s + 3) = jb;
+  }
+  Eigen::VectorXd scale = rows.colwise().norm().transpose();
+  for (int c = 0; c < n; ++c)
+    if (scale[c] == 0) scale[c] = 1;
+  rows = rows * scale.cwiseInverse().asDiagonal();
+
+  // 3. Greedy D-optimal choice, set-ups in turn: the candidate with the largest
+  //    x^T M^-1 x (M = eps I + sum of chosen x x^T), M^-1 kept by Sherman-Morrison.
+  Eigen::MatrixXd Minv = Eigen::MatrixXd::Identity(n, n) / 1e-6;
+  std::vector<bool> used(index.size(), false);
+  for (int pick = 0; pick < opt.poses; ++pick) {
+    const int s = pick % nsetups;
+    int best = -1;
+    double best_gain = -1.0;
+    for (size_t i = 0; i < index.size(); ++i) {
+      if (used[i] || index[i].first != s) continue;
+      const double gain = rows.row(i) * Minv * rows.row(i).transpose();
+      if (gain > best_gain) {
+        best_gain = gain;
+        best = static_cast<int>(i);
+      }
+    }
+    if (best < 0) continue;
+    used[best] = true;
+    const Eigen::VectorXd x = rows.row(best).transpose();
+    const Eigen::VectorXd Mx = Minv * x;
+    Minv -= (Mx * Mx.transpose()) / (1.0 + x.dot(Mx));
+    plan.test.readings.push_back(pool[index[best].first][index[best].second]);
+  }
+  // Measurement order: set-up by set-up.
+  std::stable_sort(plan.test.readings.begin(), plan.test.readings.end(),
+                   [](const BallbarReading& a, const BallbarReading& b) { return a.setup < b.setup; });
+
+  // 4. Rank and condition of the chosen design.
+  Eigen::MatrixXd J(plan.test.readings.size(), n);
+  for (size_t i = 0; i < plan.test.readings.size(); ++i) {
+    const BallbarReading& r = plan.test.readings[i];
+    Eigen::RowVector3d jt, jb;
+    ballbarGradient(fk, r.q, plan.test.setups[r.setup], BallErrors{}, g, &jt, &jb, scratch);
+    J.row(i).setZero();
+    for (int c = 0; c < np; ++c) J(i, c) = g[unknowns[c]];
+    J.block<1, 3>(i, np + 6 * r.setup) = jt;
+    J.block<1, 3>(i, np + 6 * r.setup + 3) = jb;
+  }
+  const SvdSummary sum = analyseColumns(J);
+  plan.rank = sum.rank;
+  plan.condition = sum.condition;
+  return plan;
+}
+
+}  // namespace tolver

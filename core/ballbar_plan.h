@@ -1,0 +1,41 @@
+#pragma once
+// Planning a three-set-up ball-bar test (thesis 4.8.1, Fig. 4.9): joint configurations inside
+// travel whose nominal ball-to-ball distance is the bar length, chosen among many sampled ones
+// to maximise identifiability (greedy D-optimal design on the column-scaled identification
+// Jacobian: each new pose is the candidate that most increases det(J^T J)).
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/ballbar.h"
+#include "core/machine_model.h"
+
+namespace tolver {
+
+struct BallbarPlanOptions {
+  double bar_length = 150.0;    // mm
+  int setups = 3;
+  int poses = 180;              // in all, shared equally between the set-ups
+  unsigned seed = 1;
+  int candidates_per_pose = 5;  // sampled configurations per selected one
+  double min_elevation_deg = 10.0;  // bar elevation above the machine's xy plane
+  // Set-up geometry; when empty, defaults: table balls spread on the table, tool balls 25 mm off
+  // the spindle axis at 0, 120 and 240 degrees (so the spindle's own errors are observable).
+  std::vector<BallbarSetup> geometry;
+};
+
+struct BallbarPlan {
+  BallbarTest test;       // readings without lengths
+  int unknowns = 0;       // machine parameters + 6 per set-up
+  int rank = 0;
+  double condition = 0;   // column-scaled identification Jacobian at the nominal machine
+  int sampled = 0, rejected = 0;
+};
+
+// unknowns: the machine parameters to identify (see defaultCalibrationUnknowns).
+BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& unknowns,
+                            const BallbarPlanOptions& options);
+
+// The default set-up geometry for n set-ups.
+std::vector<BallbarSetup> defaultBallbarSetups(int n);
+
+}  // namespace tolver

@@ -1,0 +1,62 @@
+#pragma once
+// Identification of a machine's errors from ball-bar readings (thesis 3.7, 4.9, eq. 43-44 and
+// 80-81): iterative Gauss-Newton with the SVD pseudo-inverse of the column-scaled
+// identification Jacobian, until the scaled step falls below a tolerance.
+//
+// Unknowns: the chosen machine parameters (normally the minimal-complete set without the part
+// and tool set-up parameters) and, per set-up, the position errors of the table ball (in w) and
+// of the tool ball (in t). Parameters the data cannot see (a rank-deficient identification
+// Jacobian) are named and held at their prior values; the rest are identified.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/ballbar.h"
+#include "core/machine_model.h"
+
+namespace tolver {
+
+struct CalibrationOptions {
+  int max_iterations = 30;
+  // Converged when the step, in column-scaled units (the change it makes to the modelled
+  // readings, mm), is below step_tolerance, or when it is below floor_tolerance and has stopped
+  // shrinking (rounding level).
+  double step_tolerance = 1e-12;
+  double floor_tolerance = 1e-8;
+  bool strict = false;  // refuse (status Unobservable) instead of holding unobservable parameters
+};
+
+enum class CalibrationStatus { Converged, NotConverged, Unobservable, NoData };
+
+struct CalibrationResult {
+  CalibrationStatus status = CalibrationStatus::NoData;
+  std::string message;
+  Eigen::VectorXd params;               // the full parameter vector, identified values set
+  std::vector<int> identified;          // parameter indices identified
+  std::vector<int> held;                // parameter indices the data cannot see, held at prior
+  Eigen::VectorXd uncertainty;          // standard uncertainty per identified parameter
+  Eigen::VectorXd observability;        // per identified parameter, in (0, 1]: 1 = independent
+  std::vector<BallErrors> ball_errors;  // per set-up
+  std::vector<BallErrors> ball_uncertainty;
+  Eigen::VectorXd residuals;            // measured - model, mm, per reading
+  double rms_residual = 0.0, max_residual = 0.0;  // mm
+  double residual_sigma = 0.0;          // s = sqrt(rss / (m - n)), mm
+  int rank = 0;
+  double condition = 0.0;               // column-scaled
+  int iterations = 0;
+  int unknowns = 0;
+};
+
+// prior: the starting parameter vector (values of parameters not identified stay as they are).
+// unknown_params: parameter indices to identify.
+CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& prior,
+                            const BallbarTest& test, const std::vector<int>& unknown_params,
+                            const CalibrationOptions& options = {});
+
+// The machine parameters a ball-bar calibration identifies by default: the minimal-complete set
+// of the motion model (strategies I-III with the model's preferred list) without the part and
+// tool set-up parameters, found at `poses` random configurations.
+std::vector<int> defaultCalibrationUnknowns(const MachineModel& model, int poses = 600,
+                                            unsigned seed = 1);
+
+}  // namespace tolver
