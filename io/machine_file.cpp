@@ -280,6 +280,126 @@ class Reader {
 
 }  // namespace
 
+namespace {
+
+std::string xmlEscape(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    switch (c) {
+      case '&': o += "&amp;"; break;
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '"': o += "&quot;"; break;
+      default: o += c;
+    }
+  }
+  return o;
+}
+
+std::string frameAttributes(const Eigen::Isometry3d& T) {
+  const Eigen::Matrix3d& R = T.linear();
+  const double ry = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
+  const double rx = std::atan2(R(2, 1), R(2, 2)), rz = std::atan2(R(1, 0), R(0, 0));
+  const double k = 180.0 / M_PI;
+  const Eigen::Vector3d t = T.translation();
+  return "translation=\"" + formatNumber(t.x()) + " " + formatNumber(t.y()) + " " +
+         formatNumber(t.z()) + "\" rotation=\"" + formatNumber(rx * k) + " " +
+         formatNumber(ry * k) + " " + formatNumber(rz * k) + "\"";
+}
+
+}  // namespace
+
+std::string formatMachineXml(const Machine& machine, const std::string& comment) {
+  const MachineModel& m = machine.model;
+  const double deg = 180.0 / M_PI;
+  std::string o = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
+  if (!comment.empty()) o += "<!-- " + xmlEscape(comment) + " -->\n";
+  o += "<machine name=\"" + xmlEscape(m.name) + "\" length_unit=\"mm\" angle_unit=\"deg\">\n";
+  auto order = [&](int a) {
+    const auto& chain = m.axes[a].branch == Branch::Workpiece ? m.workpiece_chain : m.tool_chain;
+    return static_cast<int>(std::find(chain.begin(), chain.end(), a) - chain.begin()) + 1;
+  };
+  for (size_t a = 0; a < m.axes.size(); ++a) {
+    const Axis& ax = m.axes[a];
+    const double k = ax.isRotary() ? deg : 1.0;
+    o += "  <axis name=\"" + xmlEscape(ax.name) + "\" type=\"" +
+         (ax.isRotary() ? "rotary" : "prismatic") + "\" branch=\"" +
+         (ax.branch == Branch::Workpiece ? "workpiece" : "tool") + "\" order=\"" +
+         std::to_string(order(static_cast<int>(a))) + "\" direction=\"" +
+         formatNumber(ax.direction.x()) + " " + formatNumber(ax.direction.y()) + " " +
+         formatNumber(ax.direction.z()) + "\" min=\"" + formatNumber(ax.travel_min * k) +
+         "\" max=\"" + formatNumber(ax.travel_max * k) + "\" nc_sign=\"" +
+         std::to_string(ax.nc_sign) + "\">\n";
+    o += "    <link " + frameAttributes(ax.parent_T_joint) + "/>\n  </axis>\n";
+  }
+  o += "  <table " + frameAttributes(m.last_T_table) + "/>\n";
+  o += "  <spindle " + frameAttributes(m.last_T_spindle) + "/>\n";
+  // Errors in um and urad. The most common motion degree is the default.
+  std::map<int, int> degree_count;
+  for (const ParameterBlock& b : m.blocks)
+    if (b.kind == BlockKind::MotionError) ++degree_count[b.degree];
+  int def = 3, best = -1;
+  for (const auto& [d, c] : degree_count)
+    if (c > best) {
+      best = c;
+      def = d;
+    }
+  o += "  <errors length_unit=\"um\" angle_unit=\"urad\" default_degree=\"" +
+       std::to_string(def) + "\">\n";
+  auto value = [&](int p) {
+    return formatNumber(machine.params[p] * (m.parameters[p].angular ? 1e6 : 1e3));
+  };
+  for (const ParameterBlock& b : m.blocks) {
+    const std::string comp = b.component >= 0 ? kComponentNames[b.component] : "";
+    switch (b.kind) {
+      case BlockKind::LinkError:
+        for (int c = 0; c < 6; ++c)
+          if (machine.params[b.offset + c] != 0.0)
+            o += "    <link axis=\"" + m.axes[b.axis].name + "\" component=\"" +
+                 kComponentNames[c] + "\" value=\"" + value(b.offset + c) + "\"/>\n";
+        break;
+      case BlockKind::MotionError: {
+        bool any = b.degree != def;
+        for (int k = 0; k <= b.degree; ++k) any |= machine.params[b.offset + k] != 0.0;
+        if (!any) break;
+        std::string coef;
+        for (int k = 0; k <= b.degree; ++k) coef += (k ? " " : "") + value(b.offset + k);
+        o += "    <motion axis=\"" + m.axes[b.axis].name + "\" component=\"" + comp +
+             "\" degree=\"" + std::to_string(b.degree) + "\" coefficients=\"" + coef + "\"/>\n";
+        break;
+      }
+      case BlockKind::WorkpieceSetup:
+      case BlockKind::ToolSetup:
+        for (int c = 0; c < 6; ++c)
+          if (machine.params[b.offset + c] != 0.0)
+            o += std::string("    <setup frame=\"") +
+                 (b.kind == BlockKind::WorkpieceSetup ? "workpiece" : "tool") + "\" component=\"" +
+                 kComponentNames[c] + "\" value=\"" + value(b.offset + c) + "\"/>\n";
+        break;
+    }
+  }
+  o += "  </errors>\n";
+  if (!m.aliases.empty()) {
+    o += "  <aliases>\n";
+    for (const ParameterAlias& a : m.aliases)
+      o += "    <alias name=\"" + xmlEscape(a.name) + "\" parameter=\"" +
+           m.parameters[a.parameter].iso_code + "\" description=\"" + xmlEscape(a.description) +
+           "\"/>\n";
+    o += "  </aliases>\n";
+  }
+  if (!m.preferred.empty()) {
+    o += "  <identification>\n";
+    for (const auto& [model, list] : m.preferred) {
+      std::string names;
+      for (int p : list) names += (names.empty() ? "" : " ") + m.parameters[p].iso_code;
+      o += "    <prefer model=\"" + model + "\" parameters=\"" + names + "\"/>\n";
+    }
+    o += "  </identification>\n";
+  }
+  o += "</machine>\n";
+  return o;
+}
+
 Machine parseMachineXml(const std::string& xml, const std::string& file_name) {
   return Reader(file_name).read(xml);
 }

@@ -28,4 +28,9 @@ namespace tolver {
 Machine readMachineFile(const std::string& path);
 Machine parseMachineXml(const std::string& xml, const std::string& file_name);
 
+// The machine file of a machine (geometry in mm and deg, errors in um and urad): every
+// parameter that is not zero, every alias and preference, so that reading it back gives the
+// same model and parameter values (to the last digit). comment: a line for the file's head.
+std::string formatMachineXml(const Machine& machine, const std::string& comment = "");
+
 }  // namespace tolver

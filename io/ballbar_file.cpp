@@ -1,0 +1,173 @@
+#include "io/ballbar_file.h"
+
+#include <cctype>
+#include <cmath>
+#include <map>
+
+#include "io/io_error.h"
+#include "io/text_util.h"
+
+namespace tolver {
+namespace {
+
+std::string lower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+std::vector<std::string> splitCsv(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : line) {
+    if (c == ',') {
+      out.emplace_back(trim(cur));
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  out.emplace_back(trim(cur));
+  return out;
+}
+
+std::string axisColumn(const Axis& ax) { return lower(ax.name) + (ax.isRotary() ? "_deg" : "_mm"); }
+
+}  // namespace
+
+BallbarFile parseBallbarCsv(const std::string& text, const std::string& file, const MachineModel& m,
+                            bool require_length) {
+  BallbarFile out;
+  const auto lines = splitLines(text);
+  std::map<std::string, int> col;
+  size_t i = 0;
+  int header_line = 0;
+  for (; i < lines.size(); ++i) {
+    const std::string_view t = trim(lines[i]);
+    if (t.empty() || t[0] == '#') continue;
+    header_line = static_cast<int>(i) + 1;
+    const auto names = splitCsv(lines[i]);
+    for (size_t k = 0; k < names.size(); ++k) {
+      const std::string n = lower(names[k]);
+      if (col.count(n)) throw InputError(file, header_line, 0, n, "column named twice");
+      col[n] = static_cast<int>(k);
+    }
+    ++i;
+    break;
+  }
+  if (header_line == 0) throw InputError(file, 0, 0, "", "empty file: no header line");
+  std::vector<std::string> required = {"setup",          "table_ball_x_mm", "table_ball_y_mm",
+                                       "table_ball_z_mm", "tool_ball_x_mm",  "tool_ball_y_mm",
+                                       "tool_ball_z_mm"};
+  for (const Axis& ax : m.axes) required.push_back(axisColumn(ax));
+  if (require_length) required.push_back("length_mm");
+  for (const std::string& r : required)
+    if (!col.count(r)) throw InputError(file, header_line, 0, r, "missing column");
+  std::map<std::string, bool> known;
+  for (const std::string& r : required) known[r] = true;
+  known["time_s"] = true;
+  known["length_mm"] = true;
+  std::vector<int> dir_col(m.axes.size(), -1);
+  for (size_t a = 0; a < m.axes.size(); ++a) {
+    const std::string d = lower(m.axes[a].name) + "_dir";
+    known[d] = true;
+    if (col.count(d)) {
+      dir_col[a] = col[d];
+      out.has_directions = true;
+    }
+  }
+  for (const auto& [name, k] : col)
+    if (!known.count(name)) out.warnings.push_back("ignored column '" + name + "'");
+
+  std::map<int, int> setup_index;  // file id -> index
+  std::map<int, int> setup_line;
+  for (; i < lines.size(); ++i) {
+    const std::string_view t = trim(lines[i]);
+    if (t.empty() || t[0] == '#') continue;
+    const int line = static_cast<int>(i) + 1;
+    const auto cells = splitCsv(lines[i]);
+    auto value = [&](const std::string& name) {
+      const int k = col.at(name);
+      if (k >= static_cast<int>(cells.size()) || cells[k].empty())
+        throw InputError(file, line, 0, name, "missing value");
+      const auto v = parseNumber(cells[k]);
+      if (!v) throw InputError(file, line, 0, name, "malformed number '" + cells[k] + "'");
+      return *v;
+    };
+    BallbarReading r;
+    r.line = line;
+    const double sid = value("setup");
+    if (sid != std::floor(sid)) throw InputError(file, line, 0, "setup", "expected an integer");
+    const Eigen::Vector3d bw(value("table_ball_x_mm"), value("table_ball_y_mm"), value("table_ball_z_mm"));
+    const Eigen::Vector3d bt(value("tool_ball_x_mm"), value("tool_ball_y_mm"), value("tool_ball_z_mm"));
+    const int id = static_cast<int>(sid);
+    auto it = setup_index.find(id);
+    if (it == setup_index.end()) {
+      BallbarSetup s;
+      s.id = id;
+      s.table_ball_w = bw;
+      s.tool_ball_t = bt;
+      it = setup_index.emplace(id, static_cast<int>(out.test.setups.size())).first;
+      setup_line[id] = line;
+      out.test.setups.push_back(s);
+    } else {
+      const BallbarSetup& s = out.test.setups[it->second];
+      if ((s.table_ball_w - bw).norm() > 1e-9 || (s.tool_ball_t - bt).norm() > 1e-9)
+        throw InputError(file, line, 0, "setup",
+                         "set-up " + std::to_string(id) + " has other ball positions at line " +
+                             std::to_string(setup_line[id]));
+    }
+    r.setup = it->second;
+    r.q.resize(m.axes.size());
+    for (size_t a = 0; a < m.axes.size(); ++a) {
+      const double v = value(axisColumn(m.axes[a]));
+      r.q[a] = m.axes[a].isRotary() ? v * M_PI / 180.0 : v;
+      if (dir_col[a] >= 0) {
+        const std::string name = lower(m.axes[a].name) + "_dir";
+        const double d = value(name);
+        if (d != 1.0 && d != -1.0) throw InputError(file, line, 0, name, "expected +1 or -1");
+        r.direction[a] = static_cast<signed char>(d);
+      }
+    }
+    if (require_length) {
+      r.length = value("length_mm");
+      if (!(r.length > 0)) throw InputError(file, line, 0, "length_mm", "must be positive");
+    }
+    if (col.count("time_s")) r.time_s = value("time_s");
+    out.test.readings.push_back(r);
+  }
+  if (out.test.readings.empty()) throw InputError(file, 0, 0, "", "no rows");
+  if (!out.has_directions) deriveDirections(out.test);
+  return out;
+}
+
+BallbarFile readBallbarFile(const std::string& path, const MachineModel& model, bool require_length) {
+  return parseBallbarCsv(readFile(path), path, model, require_length);
+}
+
+std::string formatBallbarCsv(const MachineModel& m, const BallbarTest& test, bool with_length,
+                             const std::vector<std::string>& comments) {
+  std::string out;
+  for (const std::string& c : comments) out += "# " + c + "\n";
+  out += "setup,table_ball_x_mm,table_ball_y_mm,table_ball_z_mm,tool_ball_x_mm,tool_ball_y_mm,"
+         "tool_ball_z_mm";
+  for (const Axis& ax : m.axes) out += "," + axisColumn(ax);
+  bool any_time = false;
+  for (const BallbarReading& r : test.readings) any_time |= !std::isnan(r.time_s);
+  if (any_time) out += ",time_s";
+  if (with_length) out += ",length_mm";
+  out += "\n";
+  for (const BallbarReading& r : test.readings) {
+    const BallbarSetup& s = test.setups[r.setup];
+    out += std::to_string(s.id);
+    for (int k = 0; k < 3; ++k) out += "," + formatNumber(s.table_ball_w[k]);
+    for (int k = 0; k < 3; ++k) out += "," + formatNumber(s.tool_ball_t[k]);
+    for (size_t a = 0; a < m.axes.size(); ++a)
+      out += "," + formatNumber(m.axes[a].isRotary() ? r.q[a] * 180.0 / M_PI : r.q[a]);
+    if (any_time) out += "," + formatNumber(r.time_s);
+    if (with_length) out += "," + formatNumber(r.length);
+    out += "\n";
+  }
+  return out;
+}
+
+}  // namespace tolver
