@@ -6,5 +6,7 @@ namespace tolver::app {
 
 // The command sets *exit_code when it finishes (0 by default).
 void registerPredict(CLI::App& app, int* exit_code);
+void registerAnalyze(CLI::App& app, int* exit_code);
+void registerBallbar(CLI::App& app, int* exit_code);
 
 }  // namespace tolver::app

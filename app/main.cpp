@@ -15,6 +15,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "tolver 0.1.0");
   int exit_code = 0;
   tolver::app::registerPredict(app, &exit_code);
+  tolver::app::registerAnalyze(app, &exit_code);
+  tolver::app::registerBallbar(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

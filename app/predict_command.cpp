@@ -6,61 +6,36 @@
 #include <string>
 
 #include "app/commands.h"
+#include "app/common.h"
 #include "core/tool_path_prediction.h"
 #include "geometry/cutter.h"
 #include "io/apt_reader.h"
 #include "io/apt_writer.h"
 #include "io/io_error.h"
-#include "io/machine_file.h"
 #include "io/point_table.h"
-#include "io/setup_file.h"
 
 namespace tolver::app {
 namespace {
 
 struct PredictOptions {
-  std::string machine, cl, setup, output, table;
-  std::vector<double> part_zero;
-  double part_rotation_deg = NAN;
-  double gauge_length = NAN;
+  MachineOptions machine;
+  std::string cl, output, table;
   double chordal_tolerance = 0.001;
 };
-
-std::string defaultTablePath(const std::string& output) {
-  std::filesystem::path p(output);
-  p.replace_extension(".csv");
-  if (p == std::filesystem::path(output)) p += ".points.csv";
-  return p.string();
-}
-
-void checkOutputDir(const std::string& path, const char* option) {
-  const auto dir = std::filesystem::path(path).parent_path();
-  if (!dir.empty() && !std::filesystem::is_directory(dir))
-    throw InputError(path, 0, 0, option, "directory " + dir.string() + " does not exist");
-}
 
 // Rounds away "-0.000" in printed figures.
 double clean(double v) { return std::abs(v) < 5e-7 ? 0.0 : v; }
 
 void runPredict(const PredictOptions& o, int* exit_code) {
-  Machine machine = readMachineFile(o.machine);
-  PartSetup setup;
-  if (!o.setup.empty()) setup = readSetupFile(o.setup);
-  if (!o.part_zero.empty()) {
-    if (o.part_zero.size() != 3)
-      throw InputError("--part-zero", 0, 0, "part zero", "expected x,y,z in mm");
-    setup.part_zero_table = Eigen::Vector3d(o.part_zero[0], o.part_zero[1], o.part_zero[2]);
-  }
-  if (!std::isnan(o.part_rotation_deg)) setup.part_rotation = o.part_rotation_deg * M_PI / 180.0;
-  if (!std::isnan(o.gauge_length)) setup.gauge_length = o.gauge_length;
-  machine.model.setup = setup;
+  Machine machine = loadMachine(o.machine);
+  const PartSetup& setup = machine.model.setup;
 
   AptReadOptions ro;
   ro.chordal_tolerance_mm = o.chordal_tolerance;
   const ClProgram program = readAptFile(o.cl, ro);
   if (program.path.empty())
     throw InputError(o.cl, 0, 0, "GOTO", "the program has no tool positions");
-  const std::string table = o.table.empty() ? defaultTablePath(o.output) : o.table;
+  const std::string table = o.table.empty() ? replaceExtension(o.output, ".csv") : o.table;
   checkOutputDir(o.output, "-o");
   checkOutputDir(table, "--errors");
 
@@ -82,7 +57,7 @@ void runPredict(const PredictOptions& o, int* exit_code) {
     predicted[i].u_w = pts[i].u_pred_w;
   }
   const std::vector<std::string> header = {
-      "tolver predicted CL: " + program.file + " on " + machine.model.name + " (" + o.machine +
+      "tolver predicted CL: " + program.file + " on " + machine.model.name + " (" + o.machine.machine +
           ")",
       "each GOTO is the tool position the machine will really reach, in the program's frame"};
   writeFileAtomically(o.output, formatPredictedApt(program, predicted, header));
@@ -94,7 +69,7 @@ void runPredict(const PredictOptions& o, int* exit_code) {
   for (int i = 0; i < machine.params.size(); ++i) nonzero += machine.params[i] != 0.0;
   std::printf("tolver predict\n");
   std::printf("  machine    %s (%s): %zu axes, %d error parameters, %d non-zero\n",
-              machine.model.name.c_str(), o.machine.c_str(), machine.model.axes.size(),
+              machine.model.name.c_str(), o.machine.machine.c_str(), machine.model.axes.size(),
               machine.model.parameterCount(), nonzero);
   std::printf("  program    %s: %d tool positions (%d arcs expanded), units %s\n",
               program.file.c_str(), s.points, program.arcs_expanded, program.units.c_str());
@@ -141,15 +116,8 @@ void registerPredict(CLI::App& app, int* exit_code) {
       "predict",
       "Predict the real tool path of a CL program on a machine with errors: inverse kinematics "
       "on the nominal machine, forward kinematics with the errors (CL_predicted).");
-  cmd->add_option("--machine", o->machine, "machine file (XML)")->required();
+  addMachineOptions(cmd, o->machine, "machine file (XML)");
   cmd->add_option("--cl", o->cl, "CL program (APT/CLDATA: .apt, .cls, .clsf, .ncl)")->required();
-  cmd->add_option("--setup", o->setup, "set-up file (part zero, part rotation, gauge length)");
-  cmd->add_option("--part-zero", o->part_zero, "part zero in the table frame, mm (x,y,z)")
-      ->delimiter(',')
-      ->expected(3);
-  cmd->add_option("--part-rotation-deg", o->part_rotation_deg,
-                  "rotation of the part about the table z axis, deg");
-  cmd->add_option("--gauge-length", o->gauge_length, "tool gauge length, mm");
   cmd->add_option("-o,--output", o->output, "predicted CL file to write (APT)")->required();
   cmd->add_option("--errors", o->table,
                   "per-point table to write (CSV; default: the output path with .csv)");

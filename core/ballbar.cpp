@@ -29,6 +29,30 @@ void ballbarGradient(const ForwardKinematics& fk, const JointVector& q, const Ba
   if (J_table) *J_table = -n.transpose();
 }
 
+Eigen::MatrixXd identificationJacobian(const ForwardKinematics& fk, const BallbarTest& test,
+                                       const std::vector<BallErrors>& balls,
+                                       const std::vector<int>& unknowns,
+                                       Eigen::VectorXd* residuals) {
+  const int np = static_cast<int>(unknowns.size());
+  const int n = np + 6 * static_cast<int>(test.setups.size());
+  const int pc = fk.model().parameterCount();
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(test.readings.size(), n);
+  if (residuals) residuals->resize(test.readings.size());
+  Eigen::MatrixXd scratch(6, pc);
+  Eigen::RowVectorXd row(pc);
+  for (size_t i = 0; i < test.readings.size(); ++i) {
+    const BallbarReading& rd = test.readings[i];
+    const BallbarSetup& s = test.setups[rd.setup];
+    Eigen::RowVector3d jt, jb;
+    ballbarGradient(fk, rd.q, s, balls[rd.setup], row, &jt, &jb, scratch);
+    for (int k = 0; k < np; ++k) J(i, k) = row[unknowns[k]];
+    J.block<1, 3>(i, np + 6 * rd.setup) = jt;
+    J.block<1, 3>(i, np + 6 * rd.setup + 3) = jb;
+    if (residuals) (*residuals)[i] = rd.length - ballbarLength(fk, rd.q, s, balls[rd.setup]);
+  }
+  return J;
+}
+
 void deriveDirections(BallbarTest& test) {
   for (size_t i = 0; i < test.readings.size(); ++i) {
     BallbarReading& r = test.readings[i];

@@ -54,6 +54,14 @@ void ballbarGradient(const ForwardKinematics& fk, const JointVector& q, const Ba
                      Eigen::RowVector3d* J_length_table, Eigen::RowVector3d* J_length_tool,
                      Eigen::MatrixXd& scratch);
 
+// The identification Jacobian of a test (thesis eq. 80): one row per reading, columns
+// [unknown machine parameters..., per set-up: table-ball xyz, tool-ball xyz] (balls: one per
+// set-up, the ball errors at which to linearise). residuals, when given: measured - model, mm.
+Eigen::MatrixXd identificationJacobian(const ForwardKinematics& fk, const BallbarTest& test,
+                                       const std::vector<BallErrors>& balls,
+                                       const std::vector<int>& unknowns,
+                                       Eigen::VectorXd* residuals = nullptr);
+
 // Directions of approach derived from the sequence: each axis's sign of motion from the previous
 // reading (kept when it did not move; 0 for the first reading), where the file gave none.
 void deriveDirections(BallbarTest& test);

@@ -12,11 +12,12 @@ namespace tolver {
 std::vector<BallbarSetup> defaultBallbarSetups(int n) {
   std::vector<BallbarSetup> out;
   for (int s = 0; s < n; ++s) {
+    // Table balls off the rotary axes (a ball on a rotation axis cannot see rotations about it),
+    // at three heights; tool balls 25 mm off the spindle axis.
     const double psi = 2.0 * M_PI * s / std::max(n, 1), phi = psi + M_PI / 3;
     BallbarSetup b;
     b.id = s + 1;
-    b.table_ball_w = Eigen::Vector3d(s == 0 ? 0.0 : 80.0 * std::cos(psi),
-                                     s == 0 ? 0.0 : 80.0 * std::sin(psi), 30.0 * s);
+    b.table_ball_w = Eigen::Vector3d(80.0 * std::cos(psi), 80.0 * std::sin(psi), 20.0 + 30.0 * s);
     b.tool_ball_t = Eigen::Vector3d(25.0 * std::cos(phi), 25.0 * std::sin(phi), 0.0);
     out.push_back(b);
   }
@@ -75,17 +76,11 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
   std::vector<std::pair<int, int>> index;  // (setup, k)
   for (int s = 0; s < nsetups; ++s)
     for (size_t k = 0; k < pool[s].size(); ++k) index.emplace_back(s, static_cast<int>(k));
-  Eigen::MatrixXd rows = Eigen::MatrixXd::Zero(index.size(), n);
-  Eigen::MatrixXd scratch(6, model.parameterCount());
-  Eigen::RowVectorXd g(model.parameterCount());
-  for (size_t i = 0; i < index.size(); ++i) {
-    const auto [s, k] = index[i];
-    Eigen::RowVector3d jt, jb;
-    ballbarGradient(fk, pool[s][k].q, plan.test.setups[s], BallErrors{}, g, &jt, &jb, scratch);
-    for (int c = 0; c < np; ++c) rows(i, c) = g[unknowns[c]];
-    rows.block<1, 3>(i, np + 6 * s) = jt;
-    rows.block<1, 3>(i, np + 6 * s + 3) = jb;
-  }
+  BallbarTest candidates;
+  candidates.setups = plan.test.setups;
+  for (const auto& [s, k] : index) candidates.readings.push_back(pool[s][k]);
+  Eigen::MatrixXd rows =
+      identificationJacobian(fk, candidates, std::vector<BallErrors>(nsetups), unknowns);
   Eigen::VectorXd scale = rows.colwise().norm().transpose();
   for (int c = 0; c < n; ++c)
     if (scale[c] == 0) scale[c] = 1;
@@ -119,16 +114,8 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
                    [](const BallbarReading& a, const BallbarReading& b) { return a.setup < b.setup; });
 
   // 4. Rank and condition of the chosen design.
-  Eigen::MatrixXd J(plan.test.readings.size(), n);
-  for (size_t i = 0; i < plan.test.readings.size(); ++i) {
-    const BallbarReading& r = plan.test.readings[i];
-    Eigen::RowVector3d jt, jb;
-    ballbarGradient(fk, r.q, plan.test.setups[r.setup], BallErrors{}, g, &jt, &jb, scratch);
-    J.row(i).setZero();
-    for (int c = 0; c < np; ++c) J(i, c) = g[unknowns[c]];
-    J.block<1, 3>(i, np + 6 * r.setup) = jt;
-    J.block<1, 3>(i, np + 6 * r.setup + 3) = jb;
-  }
+  const Eigen::MatrixXd J = identificationJacobian(
+      fk, plan.test, std::vector<BallErrors>(nsetups), unknowns);
   const SvdSummary sum = analyseColumns(J);
   plan.rank = sum.rank;
   plan.condition = sum.condition;

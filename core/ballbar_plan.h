@@ -18,8 +18,9 @@ struct BallbarPlanOptions {
   unsigned seed = 1;
   int candidates_per_pose = 5;  // sampled configurations per selected one
   double min_elevation_deg = 10.0;  // bar elevation above the machine's xy plane
-  // Set-up geometry; when empty, defaults: table balls spread on the table, tool balls 25 mm off
-  // the spindle axis at 0, 120 and 240 degrees (so the spindle's own errors are observable).
+  // Set-up geometry; when empty, defaults: table balls 80 mm off the table's axis at three
+  // heights, tool balls 25 mm off the spindle axis at 60, 180 and 300 degrees (so the spindle's
+  // own errors are observable).
   std::vector<BallbarSetup> geometry;
 };
 

@@ -16,28 +16,11 @@ bool isSetupParameter(const MachineModel& m, int p) {
   return k == BlockKind::WorkpieceSetup || k == BlockKind::ToolSetup;
 }
 
-// Residuals (measured - model) and the identification Jacobian over the unknowns:
-// columns [params..., per set-up: table ball xyz, tool ball xyz].
 void linearise(const MachineModel& m, const Eigen::VectorXd& params, const BallbarTest& test,
                const std::vector<BallErrors>& balls, const std::vector<int>& unknowns,
                Eigen::VectorXd* r, Eigen::MatrixXd* J) {
   const ForwardKinematics fk(m, params);
-  const int np = static_cast<int>(unknowns.size());
-  const int n = np + 6 * static_cast<int>(test.setups.size());
-  r->resize(test.readings.size());
-  J->setZero(test.readings.size(), n);
-  Eigen::MatrixXd scratch(6, m.parameterCount());
-  Eigen::RowVectorXd row(m.parameterCount());
-  for (size_t i = 0; i < test.readings.size(); ++i) {
-    const BallbarReading& rd = test.readings[i];
-    const BallbarSetup& s = test.setups[rd.setup];
-    Eigen::RowVector3d jt, jb;
-    ballbarGradient(fk, rd.q, s, balls[rd.setup], row, &jt, &jb, scratch);
-    for (int k = 0; k < np; ++k) (*J)(i, k) = row[unknowns[k]];
-    J->block<1, 3>(i, np + 6 * rd.setup) = jt;
-    J->block<1, 3>(i, np + 6 * rd.setup + 3) = jb;
-    (*r)[i] = rd.length - ballbarLength(fk, rd.q, s, balls[rd.setup]);
-  }
+  *J = identificationJacobian(fk, test, balls, unknowns, r);
 }
 
 }  // namespace
@@ -55,26 +38,26 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
   }
   // 1. Which unknowns can the data see? Reduce the identification Jacobian at the prior to a
   //    full-rank set (ball errors protected, strategy III otherwise).
-  std::vector<int> unknowns = unknown_params;
+  Eigen::VectorXd r;
+  Eigen::MatrixXd J0;
+  linearise(model, prior, test, res.ball_errors, unknown_params, &r, &J0);
+  const int np_all = static_cast<int>(unknown_params.size());
+  std::vector<int> keep_cols;  // columns of J0 that stay unknowns
   {
-    Eigen::VectorXd r;
-    Eigen::MatrixXd J;
-    linearise(model, prior, test, res.ball_errors, unknowns, &r, &J);
-    const int np = static_cast<int>(unknowns.size());
-    std::vector<int> cols(J.cols());
-    std::vector<bool> protect(J.cols(), false);
-    for (int c = 0; c < J.cols(); ++c) {
+    std::vector<int> cols(J0.cols());
+    std::vector<bool> protect(J0.cols(), false);
+    for (int c = 0; c < J0.cols(); ++c) {
       cols[c] = c;
-      protect[c] = c >= np;
+      protect[c] = c >= np_all;
     }
-    const MinimalSet ms = selectMinimalSet(J, cols, protect, {});
+    const MinimalSet ms = selectMinimalSet(J0, cols, protect, {});
     for (int c : ms.removed) {
-      if (c >= np) {
+      if (c >= np_all) {
         res.status = CalibrationStatus::Unobservable;
         res.message = "the readings cannot see the ball positions of every set-up";
         return res;
       }
-      res.held.push_back(unknowns[c]);
+      res.held.push_back(unknown_params[c]);
     }
     std::sort(res.held.begin(), res.held.end());
     if (!res.held.empty() && opt.strict) {
@@ -82,34 +65,38 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
       res.message = std::to_string(res.held.size()) + " parameters cannot be identified from these readings";
       return res;
     }
-    std::vector<int> keep;
-    for (int p : unknowns)
-      if (!std::binary_search(res.held.begin(), res.held.end(), p)) keep.push_back(p);
-    unknowns = keep;
+    for (int c = 0; c < J0.cols(); ++c)
+      if (c >= np_all || !std::binary_search(res.held.begin(), res.held.end(), unknown_params[c]))
+        keep_cols.push_back(c);
   }
+  std::vector<int> unknowns;
+  for (int c : keep_cols)
+    if (c < np_all) unknowns.push_back(unknown_params[c]);
   res.identified = unknowns;
   const int np = static_cast<int>(unknowns.size());
-  const int n = np + 6 * static_cast<int>(test.setups.size());
+  const int n = static_cast<int>(keep_cols.size());
   res.unknowns = n;
-  if (static_cast<int>(test.readings.size()) <= n) {
+  const int m = static_cast<int>(test.readings.size());
+  if (m <= n) {
     res.status = CalibrationStatus::Unobservable;
     res.message = "fewer readings than unknowns";
     return res;
   }
-  // 2. Gauss-Newton with the pseudo-inverse of the column-scaled Jacobian.
-  Eigen::VectorXd r, scale;
-  Eigen::MatrixXd J;
+  Eigen::MatrixXd J(m, n);
+  for (int k = 0; k < n; ++k) J.col(k) = J0.col(keep_cols[k]);
+
+  // 2. Gauss-Newton with the pseudo-inverse of the column-scaled Jacobian. Each pass factors
+  //    J (QR, then the SVD of the n x n triangle); the last factorisation also gives the
+  //    covariance.
+  Eigen::VectorXd scale;
   Eigen::BDCSVD<Eigen::MatrixXd> svd;
   res.status = CalibrationStatus::NotConverged;
   double previous_step = std::numeric_limits<double>::infinity();
   for (int it = 0; it < opt.max_iterations; ++it) {
-    linearise(model, res.params, test, res.ball_errors, unknowns, &r, &J);
     scale = J.colwise().norm().transpose();
     for (int c = 0; c < n; ++c)
       if (scale[c] == 0) scale[c] = 1;
-    const Eigen::MatrixXd Js = J * scale.cwiseInverse().asDiagonal();
-    // QR first: the SVD then works on an n x n triangle instead of m x n.
-    Eigen::HouseholderQR<Eigen::MatrixXd> qr(Js);
+    Eigen::HouseholderQR<Eigen::MatrixXd> qr(J * scale.cwiseInverse().asDiagonal());
     const Eigen::MatrixXd R = qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
     const Eigen::VectorXd Qtr = (qr.householderQ().transpose() * r).head(n);
     svd.compute(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
@@ -122,49 +109,51 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
     for (int k = 0; k < res.rank; ++k) inv[k] = 1.0 / sv[k];
     const Eigen::VectorXd step_s =
         svd.matrixV() * (inv.asDiagonal() * (svd.matrixU().transpose() * Qtr));
-    const Eigen::VectorXd step = step_s.cwiseQuotient(scale);
-    for (int k = 0; k < np; ++k) res.params[unknowns[k]] += step[k];
-    for (size_t s = 0; s < test.setups.size(); ++s) {
-      res.ball_errors[s].table_w += step.segment<3>(np + 6 * s);
-      res.ball_errors[s].tool_t += step.segment<3>(np + 6 * s + 3);
-    }
-    res.iterations = it + 1;
-    // Scaled step: a change of the model readings, in mm, that the step would make at most.
+    // The step's size in column-scaled units.
     const double sn = step_s.norm();
-    if (sn < opt.step_tolerance || (sn < opt.floor_tolerance && sn > 0.5 * previous_step)) {
+    // What no step can remove: the least-squares residual of the linearised problem.
+    const Eigen::VectorXd proj = svd.matrixU().leftCols(res.rank).transpose() * Qtr;
+    const double irreducible = std::sqrt(std::max(0.0, r.squaredNorm() - proj.squaredNorm()));
+    const bool done = sn < opt.step_tolerance || sn < opt.relative_tolerance * irreducible ||
+                      (sn < opt.floor_tolerance && sn > 0.5 * previous_step);
+    previous_step = sn;
+    if (done) {
       res.status = CalibrationStatus::Converged;
+      res.iterations = it;
       break;
     }
-    previous_step = sn;
+    const Eigen::VectorXd step = step_s.cwiseQuotient(scale);
+    for (int k = 0; k < np; ++k) res.params[unknowns[k]] += step[k];
+    for (int k = np; k < n; ++k) {
+      const int c = keep_cols[k] - np_all;  // ball column: set-up, table/tool, xyz
+      BallErrors& b = res.ball_errors[c / 6];
+      (c % 6 < 3 ? b.table_w : b.tool_t)[c % 3] += step[k];
+    }
+    res.iterations = it + 1;
+    Eigen::MatrixXd Jall;
+    linearise(model, res.params, test, res.ball_errors, unknown_params, &r, &Jall);
+    for (int k = 0; k < n; ++k) J.col(k) = Jall.col(keep_cols[k]);
   }
-  // 3. Final residuals and uncertainties: cov = s^2 (J^T J)^-1.
-  linearise(model, res.params, test, res.ball_errors, unknowns, &r, &J);
+
+  // 3. Residuals and uncertainties from the last factorisation: cov = s^2 (J^T J)^-1.
   res.residuals = r;
-  const int m = static_cast<int>(r.size());
   res.rms_residual = std::sqrt(r.squaredNorm() / m);
   res.max_residual = r.cwiseAbs().maxCoeff();
   res.residual_sigma = std::sqrt(r.squaredNorm() / std::max(1, m - n));
-  scale = J.colwise().norm().transpose();
-  for (int c = 0; c < n; ++c)
-    if (scale[c] == 0) scale[c] = 1;
-  const Eigen::MatrixXd Js = J * scale.cwiseInverse().asDiagonal();
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr(Js);
-  const Eigen::MatrixXd R = qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
-  svd.compute(R, Eigen::ComputeFullV);
   const Eigen::VectorXd& sv = svd.singularValues();
   Eigen::VectorXd inv2 = Eigen::VectorXd::Zero(sv.size());
   for (int k = 0; k < sv.size(); ++k)
     if (sv[k] > kRankTolerance * sv[0]) inv2[k] = 1.0 / (sv[k] * sv[k]);
-  const Eigen::MatrixXd& V = svd.matrixV();
   // diag(V diag(inv2) V^T): with unit-norm columns this is the variance inflation factor.
-  const Eigen::VectorXd vif = (V.array().square().matrix() * inv2);
+  const Eigen::VectorXd vif = svd.matrixV().array().square().matrix() * inv2;
   Eigen::VectorXd sd(n);
   for (int c = 0; c < n; ++c) sd[c] = res.residual_sigma * std::sqrt(vif[c]) / scale[c];
   res.uncertainty = sd.head(np);
   res.observability = vif.head(np).cwiseInverse().cwiseSqrt();
-  for (size_t s = 0; s < test.setups.size(); ++s) {
-    res.ball_uncertainty[s].table_w = sd.segment<3>(np + 6 * s);
-    res.ball_uncertainty[s].tool_t = sd.segment<3>(np + 6 * s + 3);
+  for (int k = np; k < n; ++k) {
+    const int c = keep_cols[k] - np_all;
+    BallErrors& u = res.ball_uncertainty[c / 6];
+    (c % 6 < 3 ? u.table_w : u.tool_t)[c % 3] = sd[k];
   }
   res.message = res.status == CalibrationStatus::Converged ? "converged" : "did not converge";
   return res;

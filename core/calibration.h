@@ -18,11 +18,14 @@ namespace tolver {
 
 struct CalibrationOptions {
   int max_iterations = 30;
-  // Converged when the step, in column-scaled units (the change it makes to the modelled
-  // readings, mm), is below step_tolerance, or when it is below floor_tolerance and has stopped
-  // shrinking (rounding level).
+  // Converged when the step, in column-scaled units (each unknown times its column norm, mm),
+  // is below step_tolerance, or below floor_tolerance and no longer shrinking (rounding
+  // level).
   double step_tolerance = 1e-12;
   double floor_tolerance = 1e-8;
+  // Also converged when the step changes the readings by less than this fraction of the
+  // residual no step can remove (noisy data: further steps only chase rounding).
+  double relative_tolerance = 1e-6;
   bool strict = false;  // refuse (status Unobservable) instead of holding unobservable parameters
 };
 
@@ -43,7 +46,7 @@ struct CalibrationResult {
   double residual_sigma = 0.0;          // s = sqrt(rss / (m - n)), mm
   int rank = 0;
   double condition = 0.0;               // column-scaled
-  int iterations = 0;
+  int iterations = 0;                   // Gauss-Newton steps taken
   int unknowns = 0;
 };
 

@@ -14,9 +14,10 @@ namespace {
 
 Eigen::MatrixXd scaleColumns(const Eigen::MatrixXd& J) {
   Eigen::MatrixXd S = J;
+  const Eigen::VectorXd norms = columnScales(J);
   for (int c = 0; c < S.cols(); ++c) {
-    const double n = S.col(c).norm();
-    if (n > 0) S.col(c) /= n;
+    if (norms[c] > 0) S.col(c) /= norms[c];
+    else S.col(c).setZero();
   }
   return S;
 }
@@ -58,6 +59,14 @@ double unscaledCondition(const Eigen::MatrixXd& J) {
 }
 
 }  // namespace
+
+Eigen::VectorXd columnScales(const Eigen::MatrixXd& J) {
+  Eigen::VectorXd n = J.colwise().norm().transpose();
+  const double largest = n.size() ? n.maxCoeff() : 0.0;
+  for (int c = 0; c < n.size(); ++c)
+    if (n[c] <= kNegligibleColumn * largest) n[c] = 0.0;
+  return n;
+}
 
 SvdSummary analyseColumns(const Eigen::MatrixXd& J) {
   SvdSummary s = summarise(compress(scaleColumns(J)), static_cast<int>(J.rows()));

@@ -9,7 +9,8 @@
 //   III otherwise remove the parameter whose removal leaves the smallest condition number.
 //
 // Column scaling: each column is divided by its Euclidean norm, so millimetres and radians do not
-// mix. Rank tolerance: a singular value counts when it exceeds kRankTolerance times the largest.
+// mix; a column under kNegligibleColumn of the largest norm is numerically zero and stays zero.
+// Rank tolerance: a singular value counts when it exceeds kRankTolerance times the largest.
 #include <Eigen/Core>
 #include <string>
 #include <vector>
@@ -19,6 +20,12 @@
 namespace tolver {
 
 constexpr double kRankTolerance = 1e-9;
+// A column whose norm is below this fraction of the largest column's is numerically zero (its
+// entries are rounding): it is not scaled up but counted as no effect.
+constexpr double kNegligibleColumn = 1e-10;
+
+// Column norms of J, with numerically zero columns (see kNegligibleColumn) set to 0.
+Eigen::VectorXd columnScales(const Eigen::MatrixXd& J);
 
 struct SvdSummary {
   int rows = 0, cols = 0;

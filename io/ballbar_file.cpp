@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <map>
 
 #include "io/io_error.h"
@@ -156,15 +157,22 @@ std::string formatBallbarCsv(const MachineModel& m, const BallbarTest& test, boo
   if (any_time) out += ",time_s";
   if (with_length) out += ",length_mm";
   out += "\n";
+  // Fixed precision: 1e-6 mm and 1e-6 deg for positions, 1e-7 mm for lengths (0.1 nm).
+  char buf[64];
+  auto put = [&](const char* fmt, double v) {
+    std::snprintf(buf, sizeof buf, fmt, v);
+    out += ",";
+    out += buf;
+  };
   for (const BallbarReading& r : test.readings) {
     const BallbarSetup& s = test.setups[r.setup];
     out += std::to_string(s.id);
-    for (int k = 0; k < 3; ++k) out += "," + formatNumber(s.table_ball_w[k]);
-    for (int k = 0; k < 3; ++k) out += "," + formatNumber(s.tool_ball_t[k]);
+    for (int k = 0; k < 3; ++k) put("%.6f", s.table_ball_w[k]);
+    for (int k = 0; k < 3; ++k) put("%.6f", s.tool_ball_t[k]);
     for (size_t a = 0; a < m.axes.size(); ++a)
-      out += "," + formatNumber(m.axes[a].isRotary() ? r.q[a] * 180.0 / M_PI : r.q[a]);
-    if (any_time) out += "," + formatNumber(r.time_s);
-    if (with_length) out += "," + formatNumber(r.length);
+      put("%.6f", m.axes[a].isRotary() ? r.q[a] * 180.0 / M_PI : r.q[a]);
+    if (any_time) put("%.3f", r.time_s);
+    if (with_length) put("%.7f", r.length);
     out += "\n";
   }
   return out;

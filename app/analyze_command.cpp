@@ -1,0 +1,128 @@
+// tolver analyze: identifiability of a machine's error model (thesis 3.6, 4.7; Tables 3.2-3.4,
+// 4.1-4.3), and of a ball-bar plan's identification Jacobian.
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "app/commands.h"
+#include "app/common.h"
+#include "core/ballbar.h"
+#include "core/calibration.h"
+#include "core/identifiability.h"
+#include "io/ballbar_file.h"
+#include "io/io_error.h"
+
+namespace tolver::app {
+namespace {
+
+struct AnalyzeOptions {
+  MachineOptions machine;
+  std::string model = "motion";
+  int degree = -1;
+  int poses = 0;
+  unsigned seed = 1;
+  std::string plan;
+};
+
+std::string cond(double c) {
+  if (std::isinf(c)) return "inf";
+  char b[32];
+  std::snprintf(b, sizeof b, "%.3g", c);
+  return b;
+}
+
+void runAnalyze(const AnalyzeOptions& o) {
+  Machine machine = loadMachine(o.machine);
+  MachineModel m = o.degree >= 0 ? withMotionDegree(machine.model, o.degree) : machine.model;
+  const int poses = o.poses > 0 ? o.poses : (o.model == "link" ? 30 : 600);
+  const std::vector<int> cols = modelColumns(m, o.model);
+  auto pref = m.preferred.find(o.model);
+  const std::vector<int> preferred = pref == m.preferred.end() ? std::vector<int>{} : pref->second;
+  const MinimalSet ms = minimalSetForModel(m, randomPoses(m, poses, o.seed), cols, preferred);
+  std::printf("tolver analyze: %s, %s model", m.name.c_str(), o.model.c_str());
+  if (o.model == "motion") std::printf(" (Chebyshev degree %d)", m.blocks[cols.front()].degree);
+  std::printf(": %zu parameters, %d random poses (seed %u)\n", cols.size(), poses, o.seed);
+  std::printf("  sensitivity Jacobian %d x %d: rank %d, condition %s column-scaled\n",
+              ms.initial.rows, ms.initial.cols, ms.initial.rank, cond(ms.initial.condition).c_str());
+  std::printf("  (columns scaled to unit norm; a singular value counts when above %.0e of the largest)\n",
+              kRankTolerance);
+  if (!ms.steps.empty()) {
+    std::printf("\n  confounded groups and removals (strategies: I keep set-up, II keep recognised link\n"
+                "  errors, III smallest condition number)\n");
+    std::printf("  %4s  %-12s %-10s %5s %5s %10s  %s\n", "step", "removed", "strategy", "size",
+                "rank", "condition", "group (largest weight first)");
+    for (size_t k = 0; k < ms.steps.size(); ++k) {
+      const ReductionStep& s = ms.steps[k];
+      std::string group;
+      for (size_t g = 0; g < s.group.size() && g < 8; ++g)
+        group += (g ? " " : "") + m.parameters[s.group[g]].iso_code;
+      if (s.group.size() > 8) group += " ...";
+      std::printf("  %4zu  %-12s %-10s %5d %5d %10s  %s\n", k + 1,
+                  m.parameters[s.removed].iso_code.c_str(), s.strategy.c_str(), s.size_after,
+                  s.rank_after, cond(s.condition_after).c_str(), group.c_str());
+    }
+  }
+  std::printf("\n  minimal-complete set: %zu parameters, condition %s column-scaled, %s unscaled (mm, rad)\n",
+              ms.kept.size(), cond(ms.reduced.condition).c_str(),
+              cond(ms.reduced.condition_unscaled).c_str());
+  std::string machine_part, setup_part;
+  for (int p : ms.kept) {
+    const BlockKind k = m.blocks[m.parameters[p].block].kind;
+    std::string& dst = (k == BlockKind::WorkpieceSetup || k == BlockKind::ToolSetup) ? setup_part : machine_part;
+    dst += " " + m.parameters[p].iso_code + " (" + m.parameters[p].thesis_name + ")";
+  }
+  std::printf("    machine:%s\n    set-up:%s\n", machine_part.c_str(), setup_part.c_str());
+
+  if (!o.plan.empty()) {
+    const BallbarFile plan = readBallbarFile(o.plan, machine.model, false);
+    std::vector<int> unknowns = defaultCalibrationUnknowns(machine.model);
+    const ForwardKinematics fk(machine.model, machine.params);
+    const int np = static_cast<int>(unknowns.size());
+    const int n = np + 6 * static_cast<int>(plan.test.setups.size());
+    const Eigen::MatrixXd J = identificationJacobian(
+        fk, plan.test, std::vector<BallErrors>(plan.test.setups.size()), unknowns);
+    std::vector<int> idx(n);
+    std::vector<bool> protect(n);
+    for (int c = 0; c < n; ++c) {
+      idx[c] = c;
+      protect[c] = c >= np;
+    }
+    const MinimalSet id = selectMinimalSet(J, idx, protect, {});
+    std::printf("\n  ball-bar plan %s: %zu readings, %zu set-ups, %d unknowns (%d machine + 6 per set-up)\n",
+                o.plan.c_str(), plan.test.readings.size(), plan.test.setups.size(), n, np);
+    std::printf("  identification Jacobian: rank %d, condition %s column-scaled\n", id.initial.rank,
+                cond(id.initial.condition).c_str());
+    if (id.removed.empty()) {
+      std::printf("  every unknown is observable\n");
+    } else {
+      std::string names;
+      for (int c : id.removed) names += " " + (c < np ? machine.model.parameters[unknowns[c]].iso_code : "ball");
+      std::printf("  unobservable with this plan (%zu):%s\n", id.removed.size(), names.c_str());
+    }
+  }
+}
+
+}  // namespace
+
+void registerAnalyze(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<AnalyzeOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "analyze",
+      "Identifiability of the machine's error model: rank, condition number, confounded groups "
+      "and the minimal-complete parameter set; with --plan, of a ball-bar plan.");
+  addMachineOptions(cmd, o->machine, "machine file (XML)");
+  cmd->add_option("--model", o->model, "link (link errors, thesis ch. 3) or motion (Chebyshev motion errors, ch. 4)")
+      ->check(CLI::IsMember({"link", "motion"}));
+  cmd->add_option("--degree", o->degree, "Chebyshev degree of every motion error (default: the file's)")
+      ->check(CLI::Range(0, 20));
+  cmd->add_option("--poses", o->poses, "random poses (default 30 for link, 600 for motion)")
+      ->check(CLI::Range(1, 100000));
+  cmd->add_option("--seed", o->seed, "random seed (default 1)");
+  cmd->add_option("--plan", o->plan, "ball-bar plan or readings (CSV) to analyse as well");
+  cmd->callback([o, exit_code] {
+    runAnalyze(*o);
+    *exit_code = 0;
+  });
+}
+
+}  // namespace tolver::app

@@ -1,0 +1,220 @@
+// tolver plan-ballbar, simulate-ballbar, calibrate: a telescoping ball-bar calibration of a
+// five-axis machine (thesis chapters 3 and 4).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <random>
+
+#include "app/commands.h"
+#include "app/common.h"
+#include "core/ballbar_plan.h"
+#include "core/calibration.h"
+#include "io/ballbar_file.h"
+#include "io/calibration_report.h"
+#include "io/io_error.h"
+#include "io/machine_file.h"
+
+namespace tolver::app {
+namespace {
+
+struct PlanOptions {
+  MachineOptions machine;
+  BallbarPlanOptions plan;
+  std::string output, gcode;
+  double feed = 2000.0;
+};
+
+void runPlan(const PlanOptions& o) {
+  const Machine machine = loadMachine(o.machine);
+  const std::string gcode = o.gcode.empty() ? replaceExtension(o.output, ".nc") : o.gcode;
+  checkOutputDir(o.output, "-o");
+  checkOutputDir(gcode, "--gcode");
+  const std::vector<int> unknowns = defaultCalibrationUnknowns(machine.model);
+  const BallbarPlan plan = planBallbarTest(machine.model, unknowns, o.plan);
+  if (static_cast<int>(plan.test.readings.size()) < o.plan.poses)
+    throw InputError(o.machine.machine, 0, 0, "plan",
+                     "only " + std::to_string(plan.test.readings.size()) +
+                         " poses inside travel were found for a " + std::to_string(o.plan.bar_length) +
+                         " mm bar; try another length or set-up");
+  char head[256];
+  std::snprintf(head, sizeof head, "tolver ball-bar plan for %s: bar %.3f mm, %d set-ups, %zu poses, seed %u",
+                machine.model.name.c_str(), o.plan.bar_length, static_cast<int>(plan.test.setups.size()),
+                plan.test.readings.size(), o.plan.seed);
+  writeFileAtomically(o.output, formatBallbarCsv(machine.model, plan.test, false, {head}));
+  writeFileAtomically(gcode, formatBallbarGcode(machine.model, plan.test, o.feed, 2.0));
+  std::printf("tolver plan-ballbar: %s\n", machine.model.name.c_str());
+  std::printf("  bar %.3f mm, %zu set-ups, %zu poses (%d sampled, %d outside travel)\n",
+              o.plan.bar_length, plan.test.setups.size(), plan.test.readings.size(), plan.sampled,
+              plan.rejected);
+  for (const BallbarSetup& s : plan.test.setups)
+    std::printf("  set-up %d: table ball (%.3f, %.3f, %.3f) mm in w, tool ball (%.3f, %.3f, %.3f) mm in t\n",
+                s.id, s.table_ball_w.x(), s.table_ball_w.y(), s.table_ball_w.z(), s.tool_ball_t.x(),
+                s.tool_ball_t.y(), s.tool_ball_t.z());
+  std::printf("  identification Jacobian: %d unknowns (%zu machine + 6 per set-up), rank %d, condition %.3g\n",
+              plan.unknowns, unknowns.size(), plan.rank, plan.condition);
+  if (plan.rank < plan.unknowns)
+    std::printf("  warning: %d unknowns are not observable with this plan\n", plan.unknowns - plan.rank);
+  std::printf("  wrote      %s (plan), %s (NC program)\n", o.output.c_str(), gcode.c_str());
+}
+
+struct SimulateOptions {
+  MachineOptions machine;
+  std::string plan, output;
+  double noise_um = 0.0;
+  double ball_error_um = 0.0;
+  double seconds_per_reading = 20.0;
+  unsigned seed = 1;
+};
+
+void runSimulate(const SimulateOptions& o) {
+  const Machine machine = loadMachine(o.machine);
+  BallbarFile f = readBallbarFile(o.plan, machine.model, false);
+  checkOutputDir(o.output, "-o");
+  std::mt19937 rng(o.seed);
+  std::normal_distribution<double> noise(0.0, o.noise_um * 1e-3), ball(0.0, o.ball_error_um * 1e-3);
+  std::vector<BallErrors> balls(f.test.setups.size());
+  for (BallErrors& b : balls) {
+    b.table_w = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+    b.tool_t = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+  }
+  const ForwardKinematics fk(machine.model, machine.params);
+  for (size_t i = 0; i < f.test.readings.size(); ++i) {
+    BallbarReading& r = f.test.readings[i];
+    r.length = ballbarLength(fk, r.q, f.test.setups[r.setup], balls[r.setup]) + noise(rng);
+    if (std::isnan(r.time_s)) r.time_s = o.seconds_per_reading * static_cast<double>(i);
+  }
+  char head[256];
+  std::snprintf(head, sizeof head, "simulated by tolver from %s: noise %.3f um, ball errors %.3f um, seed %u",
+                o.machine.machine.c_str(), o.noise_um, o.ball_error_um, o.seed);
+  writeFileAtomically(o.output, formatBallbarCsv(machine.model, f.test, true, {head}));
+  std::printf("tolver simulate-ballbar: %zu readings from %s (%s)\n", f.test.readings.size(),
+              machine.model.name.c_str(), o.machine.machine.c_str());
+  std::printf("  noise %.3f um (1 sigma), ball position errors %.3f um (1 sigma), seed %u\n",
+              o.noise_um, o.ball_error_um, o.seed);
+  std::printf("  wrote      %s\n", o.output.c_str());
+}
+
+struct CalibrateOptions {
+  MachineOptions machine;
+  std::string readings, output, report;
+  bool strict = false;
+};
+
+void runCalibrate(const CalibrateOptions& o, int* exit_code) {
+  const Machine machine = loadMachine(o.machine);
+  const BallbarFile f = readBallbarFile(o.readings, machine.model, true);
+  checkOutputDir(o.output, "-o");
+  const std::string report = o.report.empty() ? replaceExtension(o.output, ".json") : o.report;
+  checkOutputDir(report, "--report");
+  for (const std::string& w : f.warnings)
+    std::fprintf(stderr, "tolver: warning: %s: %s\n", o.readings.c_str(), w.c_str());
+  const std::vector<int> unknowns = defaultCalibrationUnknowns(machine.model);
+  CalibrationOptions opt;
+  opt.strict = o.strict;
+  const CalibrationResult r = calibrate(machine.model, machine.params, f.test, unknowns, opt);
+  if (r.status == CalibrationStatus::Unobservable || r.status == CalibrationStatus::NoData) {
+    std::string names;
+    for (int p : r.held) names += " " + machine.model.parameters[p].iso_code;
+    throw InputError(o.readings, 0, 0, "calibrate", r.message + (names.empty() ? "" : ":" + names));
+  }
+  const auto& m = machine.model;
+  std::printf("tolver calibrate: %s from %zu readings in %zu set-ups\n", m.name.c_str(),
+              f.test.readings.size(), f.test.setups.size());
+  std::printf("  unknowns   %d (%zu machine parameters + 6 ball positions per set-up)\n", r.unknowns,
+              r.identified.size());
+  std::printf("  solution   %s after %d iterations; rank %d, condition %.3g (column-scaled)\n",
+              r.message.c_str(), r.iterations, r.rank, r.condition);
+  std::printf("  residual   RMS %.3f um, max %.3f um, sigma %.3f um\n", r.rms_residual * 1e3,
+              r.max_residual * 1e3, r.residual_sigma * 1e3);
+  if (!r.held.empty()) {
+    std::string names;
+    for (int p : r.held) names += " " + m.parameters[p].iso_code;
+    std::fprintf(stderr,
+                 "tolver: warning: the readings cannot see %zu parameters, held at their prior values "
+                 "(predictions that depend on them are unverified):%s\n",
+                 r.held.size(), names.c_str());
+  }
+  // The largest identified errors, by significance.
+  std::vector<size_t> order(r.identified.size());
+  for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return std::abs(r.params[r.identified[a]]) / r.uncertainty[a] >
+           std::abs(r.params[r.identified[b]]) / r.uncertainty[b];
+  });
+  std::printf("  largest identified errors (value +- standard uncertainty):\n");
+  for (size_t k = 0; k < std::min<size_t>(10, order.size()); ++k) {
+    const int p = r.identified[order[k]];
+    const double s = m.parameters[p].angular ? 1e6 : 1e3;
+    std::printf("    %-10s %-18s %10.3f +- %.3f %s\n", m.parameters[p].iso_code.c_str(),
+                m.parameters[p].thesis_name.c_str(), r.params[p] * s, r.uncertainty[order[k]] * s,
+                m.parameters[p].angular ? "urad" : "um");
+  }
+  Machine identified = machine;
+  identified.params = r.params;
+  writeFileAtomically(o.output, formatMachineXml(identified, "identified by tolver calibrate from " +
+                                                                 o.readings + " (" + r.message + ")"));
+  writeFileAtomically(report, formatCalibrationJson(m, f.test, r,
+                                                    {o.machine.machine, o.readings, o.output,
+                                                     static_cast<int>(f.test.readings.size())}));
+  std::printf("  wrote      %s (identified machine), %s (report)\n", o.output.c_str(), report.c_str());
+  *exit_code = r.status == CalibrationStatus::Converged ? 0 : 1;
+}
+
+}  // namespace
+
+void registerBallbar(CLI::App& app, int* exit_code) {
+  {
+    auto o = std::make_shared<PlanOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "plan-ballbar",
+        "Plan a three-set-up ball-bar test: poses inside travel at the bar length, chosen for "
+        "identifiability; writes the plan (CSV) and an NC program.");
+    addMachineOptions(cmd, o->machine, "machine file (XML)");
+    cmd->add_option("--length", o->plan.bar_length, "bar length, mm (default 150)")->check(CLI::PositiveNumber);
+    cmd->add_option("--setups", o->plan.setups, "number of set-ups (default 3)")->check(CLI::Range(1, 12));
+    cmd->add_option("--poses", o->plan.poses, "poses in all (default 180)")->check(CLI::Range(1, 100000));
+    cmd->add_option("--seed", o->plan.seed, "random seed (default 1)");
+    cmd->add_option("-o,--output", o->output, "plan to write (CSV)")->required();
+    cmd->add_option("--gcode", o->gcode, "NC program to write (default: the plan path with .nc)");
+    cmd->callback([o, exit_code] {
+      runPlan(*o);
+      *exit_code = 0;
+    });
+  }
+  {
+    auto o = std::make_shared<SimulateOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "simulate-ballbar",
+        "The readings a machine with the given (true) errors would give for a plan.");
+    addMachineOptions(cmd, o->machine, "the true machine (XML)");
+    cmd->add_option("--plan", o->plan, "plan (CSV) from plan-ballbar")->required();
+    cmd->add_option("--noise-um", o->noise_um, "reading noise, um (1 sigma; default 0)")->check(CLI::NonNegativeNumber);
+    cmd->add_option("--ball-error-um", o->ball_error_um,
+                    "random ball position errors per set-up, um (1 sigma; default 0)")
+        ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--seconds-per-reading", o->seconds_per_reading,
+                    "time_s step when the plan has none (default 20)");
+    cmd->add_option("--seed", o->seed, "random seed (default 1)");
+    cmd->add_option("-o,--output", o->output, "readings to write (CSV)")->required();
+    cmd->callback([o, exit_code] {
+      runSimulate(*o);
+      *exit_code = 0;
+    });
+  }
+  {
+    auto o = std::make_shared<CalibrateOptions>();
+    CLI::App* cmd = app.add_subcommand(
+        "calibrate",
+        "Identify the machine's errors from ball-bar readings; writes the identified machine "
+        "file and a report with uncertainties.");
+    addMachineOptions(cmd, o->machine, "machine file (XML): topology and prior values");
+    cmd->add_option("--readings", o->readings, "ball-bar readings (CSV)")->required();
+    cmd->add_option("-o,--output", o->output, "identified machine file to write (XML)")->required();
+    cmd->add_option("--report", o->report, "report to write (JSON; default: the output path with .json)");
+    cmd->add_flag("--strict", o->strict, "refuse when some parameters cannot be identified");
+    cmd->callback([o, exit_code] { runCalibrate(*o, exit_code); });
+  }
+}
+
+}  // namespace tolver::app

@@ -1,0 +1,100 @@
+#include "io/calibration_report.h"
+
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+namespace tolver {
+
+std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test,
+                                  const CalibrationResult& r, const CalibrationReportInputs& in) {
+  using nlohmann::json;
+  auto unitScale = [&](int p) { return m.parameters[p].angular ? 1e6 : 1e3; };
+  auto unitName = [&](int p) { return m.parameters[p].angular ? "urad" : "um"; };
+  json j;
+  j["machine_file"] = in.machine_file;
+  j["readings_file"] = in.readings_file;
+  j["identified_machine_file"] = in.output_file;
+  j["readings"] = test.readings.size();
+  j["setups"] = test.setups.size();
+  j["status"] = r.status == CalibrationStatus::Converged ? "converged" : r.message;
+  j["iterations"] = r.iterations;
+  j["unknowns"] = r.unknowns;
+  j["rank"] = r.rank;
+  j["condition_number"] = r.condition;
+  j["residual_rms_um"] = r.rms_residual * 1e3;
+  j["residual_max_um"] = r.max_residual * 1e3;
+  j["residual_sigma_um"] = r.residual_sigma * 1e3;
+  j["method"] =
+      "Gauss-Newton with the SVD pseudo-inverse of the column-scaled identification Jacobian "
+      "(rank tolerance 1e-9 of the largest singular value); uncertainties from s^2 (J^T J)^-1; "
+      "observability = 1/sqrt(variance inflation factor) of the column-scaled Jacobian";
+  json params = json::array();
+  for (size_t k = 0; k < r.identified.size(); ++k) {
+    const int p = r.identified[k];
+    params.push_back({{"name", m.parameters[p].thesis_name},
+                      {"iso_code", m.parameters[p].iso_code},
+                      {"unit", unitName(p)},
+                      {"value", r.params[p] * unitScale(p)},
+                      {"uncertainty", r.uncertainty[k] * unitScale(p)},
+                      {"observability", r.observability[k]}});
+  }
+  j["parameters"] = params;
+  json held = json::array();
+  for (int p : r.held)
+    held.push_back({{"name", m.parameters[p].thesis_name},
+                    {"iso_code", m.parameters[p].iso_code},
+                    {"held_at", r.params[p] * unitScale(p)},
+                    {"unit", unitName(p)}});
+  j["held_parameters"] = held;
+  if (!r.held.empty())
+    j["warning"] = "the readings cannot see the held parameters: predictions that depend on them "
+                   "are unverified";
+  json balls = json::array();
+  for (size_t s = 0; s < test.setups.size() && s < r.ball_errors.size(); ++s) {
+    const auto& e = r.ball_errors[s];
+    const auto& u = r.ball_uncertainty[s];
+    balls.push_back({{"setup", test.setups[s].id},
+                     {"table_ball_error_um", {e.table_w.x() * 1e3, e.table_w.y() * 1e3, e.table_w.z() * 1e3}},
+                     {"table_ball_uncertainty_um", {u.table_w.x() * 1e3, u.table_w.y() * 1e3, u.table_w.z() * 1e3}},
+                     {"tool_ball_error_um", {e.tool_t.x() * 1e3, e.tool_t.y() * 1e3, e.tool_t.z() * 1e3}},
+                     {"tool_ball_uncertainty_um", {u.tool_t.x() * 1e3, u.tool_t.y() * 1e3, u.tool_t.z() * 1e3}}});
+  }
+  j["ball_errors"] = balls;
+  return j.dump(2) + "\n";
+}
+
+std::string formatBallbarGcode(const MachineModel& m, const BallbarTest& plan, double feed,
+                               double dwell_s) {
+  std::string o = "%\n(tolver ball-bar plan: " + m.name + ")\n";
+  o += "(NC values = nc_sign * joint value, relative to the machine file's zero: apply your work offset)\n";
+  o += "G90 G94 G21\n";
+  char buf[256];
+  int current = -1, n = 0;
+  for (const BallbarReading& r : plan.readings) {
+    if (r.setup != current) {
+      current = r.setup;
+      const BallbarSetup& s = plan.setups[r.setup];
+      std::snprintf(buf, sizeof buf,
+                    "(SET-UP %d: TABLE BALL %.3f %.3f %.3f IN W, TOOL BALL %.3f %.3f %.3f IN T)\nM0\n",
+                    s.id, s.table_ball_w.x(), s.table_ball_w.y(), s.table_ball_w.z(),
+                    s.tool_ball_t.x(), s.tool_ball_t.y(), s.tool_ball_t.z());
+      o += buf;
+    }
+    std::string rot, lin;
+    for (size_t a = 0; a < m.axes.size(); ++a) {
+      const Axis& ax = m.axes[a];
+      const double v = ax.nc_sign * (ax.isRotary() ? r.q[a] * 180.0 / M_PI : r.q[a]);
+      std::snprintf(buf, sizeof buf, " %s%.4f", ax.name.c_str(), v);
+      (ax.isRotary() ? rot : lin) += buf;
+    }
+    ++n;
+    if (!rot.empty()) o += "N" + std::to_string(10 * n) + " G0" + rot + "\n";
+    std::snprintf(buf, sizeof buf, " F%.0f\nG4 P%.1f\n", feed, dwell_s);
+    o += "G1" + lin + buf;
+  }
+  o += "M30\n%\n";
+  return o;
+}
+
+}  // namespace tolver
