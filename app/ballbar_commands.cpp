@@ -81,8 +81,8 @@ void runSimulate(const SimulateOptions& o) {
   const ForwardKinematics fk(machine.model, machine.params);
   for (size_t i = 0; i < f.test.readings.size(); ++i) {
     BallbarReading& r = f.test.readings[i];
-    r.length = ballbarLength(fk, r.q, f.test.setups[r.setup], balls[r.setup]) + noise(rng);
-    if (std::isnan(r.time_s)) r.time_s = o.seconds_per_reading * static_cast<double>(i);
+    if (std::isnan(r.context.time_s)) r.context.time_s = o.seconds_per_reading * static_cast<double>(i);
+    r.length = ballbarLength(fk, r.q, f.test.setups[r.setup], balls[r.setup], &r.context) + noise(rng);
   }
   char head[256];
   std::snprintf(head, sizeof head, "simulated by tolver from %s: noise %.3f um, ball errors %.3f um, seed %u",

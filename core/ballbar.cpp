@@ -5,21 +5,21 @@
 namespace tolver {
 
 double ballbarLength(const ForwardKinematics& fk, const JointVector& q, const BallbarSetup& s,
-                     const BallErrors& e) {
-  const Eigen::Isometry3d T = fk.w_T_t(q);
+                     const BallErrors& e, const MotionContext* ctx) {
+  const Eigen::Isometry3d T = fk.w_T_t(q, ctx);
   return (T * (s.tool_ball_t + e.tool_t) - (s.table_ball_w + e.table_w)).norm();
 }
 
 void ballbarGradient(const ForwardKinematics& fk, const JointVector& q, const BallbarSetup& s,
                      const BallErrors& e, Eigen::Ref<Eigen::RowVectorXd> J_params,
                      Eigen::RowVector3d* J_table, Eigen::RowVector3d* J_tool,
-                     Eigen::MatrixXd& scratch) {
-  const Eigen::Isometry3d T = fk.w_T_t(q);
+                     Eigen::MatrixXd& scratch, const MotionContext* ctx) {
+  const Eigen::Isometry3d T = fk.w_T_t(q, ctx);
   const Eigen::Vector3d bt = s.tool_ball_t + e.tool_t;
   const Eigen::Vector3d d = T * bt - (s.table_ball_w + e.table_w);
   const Eigen::Vector3d n = d.normalized();
   const Eigen::RowVector3d nR = n.transpose() * T.linear();  // bar direction in t
-  sensitivityJacobian(fk, q, scratch);
+  sensitivityJacobian(fk, q, scratch, ctx);
   // d + theta x b_t = [I, -[b_t x]] twist
   Eigen::Matrix<double, 3, 6> P;
   P.leftCols<3>().setIdentity();
@@ -44,11 +44,12 @@ Eigen::MatrixXd identificationJacobian(const ForwardKinematics& fk, const Ballba
     const BallbarReading& rd = test.readings[i];
     const BallbarSetup& s = test.setups[rd.setup];
     Eigen::RowVector3d jt, jb;
-    ballbarGradient(fk, rd.q, s, balls[rd.setup], row, &jt, &jb, scratch);
+    ballbarGradient(fk, rd.q, s, balls[rd.setup], row, &jt, &jb, scratch, &rd.context);
     for (int k = 0; k < np; ++k) J(i, k) = row[unknowns[k]];
     J.block<1, 3>(i, np + 6 * rd.setup) = jt;
     J.block<1, 3>(i, np + 6 * rd.setup + 3) = jb;
-    if (residuals) (*residuals)[i] = rd.length - ballbarLength(fk, rd.q, s, balls[rd.setup]);
+    if (residuals)
+      (*residuals)[i] = rd.length - ballbarLength(fk, rd.q, s, balls[rd.setup], &rd.context);
   }
   return J;
 }
@@ -57,11 +58,11 @@ void deriveDirections(BallbarTest& test) {
   for (size_t i = 0; i < test.readings.size(); ++i) {
     BallbarReading& r = test.readings[i];
     for (int a = 0; a < r.q.size(); ++a) {
-      if (r.direction[a] != 0) continue;
+      if (r.context.direction[a] != 0) continue;
       if (i == 0) continue;
       const BallbarReading& p = test.readings[i - 1];
       const double dq = r.q[a] - p.q[a];
-      r.direction[a] = dq > 0 ? 1 : (dq < 0 ? -1 : p.direction[a]);
+      r.context.direction[a] = dq > 0 ? 1 : (dq < 0 ? -1 : p.context.direction[a]);
     }
   }
 }

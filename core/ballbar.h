@@ -27,8 +27,7 @@ struct BallbarReading {
   int setup = 0;                  // index into BallbarTest::setups
   JointVector q;                  // joint values (mm, rad), model axis order
   double length = NAN;            // measured ball-to-ball distance, mm (NaN in a plan)
-  double time_s = NAN;            // seconds since the test began, when known
-  std::array<signed char, kMaxAxes> direction{};  // +1/-1: last motion of each axis; 0 unknown
+  MotionContext context;          // time_s and approach directions, passed to the model
   int line = 0;                   // source line, for messages
 };
 
@@ -45,14 +44,14 @@ struct BallErrors {
 
 // Ball-to-ball distance at q (mm).
 double ballbarLength(const ForwardKinematics& fk, const JointVector& q, const BallbarSetup& s,
-                     const BallErrors& e = {});
+                     const BallErrors& e = {}, const MotionContext* ctx = nullptr);
 
 // J_length_params: 1 x parameterCount() (mm per parameter unit); J_length_table, J_length_tool:
 // derivatives with respect to the ball errors. scratch: a 6 x parameterCount() work matrix.
 void ballbarGradient(const ForwardKinematics& fk, const JointVector& q, const BallbarSetup& s,
                      const BallErrors& e, Eigen::Ref<Eigen::RowVectorXd> J_length_params,
                      Eigen::RowVector3d* J_length_table, Eigen::RowVector3d* J_length_tool,
-                     Eigen::MatrixXd& scratch);
+                     Eigen::MatrixXd& scratch, const MotionContext* ctx = nullptr);
 
 // The identification Jacobian of a test (thesis eq. 80): one row per reading, columns
 // [unknown machine parameters..., per set-up: table-ball xyz, tool-ball xyz] (balls: one per

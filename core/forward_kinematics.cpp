@@ -51,7 +51,7 @@ ForwardKinematics::ForwardKinematics(const MachineModel& model, const Eigen::Vec
   t_end_ = model.last_T_spindle * spindle_T_t_err_;
 }
 
-Vector6d ForwardKinematics::motionErrors(int a, double s) const {
+Vector6d ForwardKinematics::motionErrors(int a, double s, const MotionContext* /*ctx*/) const {
   const AxisTerms& t = axis_[a];
   if (t.max_degree < 0) return Vector6d::Zero();
   const double x = (s - t.mid) * t.inv_half_range;  // eq. 58
@@ -68,7 +68,7 @@ Vector6d ForwardKinematics::motionErrors(int a, double s) const {
   return e;
 }
 
-void ForwardKinematics::composeJoint(int a, double s, Pose& T) const {
+void ForwardKinematics::composeJoint(int a, double s, Pose& T, const MotionContext* ctx) const {
   const Axis& ax = model_->axes[a];
   const AxisTerms& t = axis_[a];
   // T * fixed
@@ -89,22 +89,23 @@ void ForwardKinematics::composeJoint(int a, double s, Pose& T) const {
   }
   // * E(s): motion errors
   if (t.max_degree >= 0) {
-    const Vector6d e = motionErrors(a, s);
+    const Vector6d e = motionErrors(a, s, ctx);
     T.p += T.R * e.head<3>();
     T.R = T.R * rotationZYX(e[3], e[4], e[5]);
   }
 }
 
 ForwardKinematics::Pose ForwardKinematics::chain(const std::vector<int>& axes,
-                                                 const JointVector& q) const {
+                                                 const JointVector& q,
+                                                 const MotionContext* ctx) const {
   Pose T{Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
-  for (int a : axes) composeJoint(a, q[a], T);
+  for (int a : axes) composeJoint(a, q[a], T, ctx);
   return T;
 }
 
 Eigen::Isometry3d ForwardKinematics::jointTransform(int a, double s) const {
   Pose T{Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
-  composeJoint(a, s, T);
+  composeJoint(a, s, T, nullptr);
   Eigen::Isometry3d D = Eigen::Isometry3d::Identity();
   D.linear() = T.R;
   D.translation() = T.p;
@@ -112,7 +113,7 @@ Eigen::Isometry3d ForwardKinematics::jointTransform(int a, double s) const {
 }
 
 Eigen::Isometry3d ForwardKinematics::F_T_w(const JointVector& q) const {
-  const Pose T = chain(model_->workpiece_chain, q);
+  const Pose T = chain(model_->workpiece_chain, q, nullptr);
   Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
   out.linear() = T.R * w_end_.linear();
   out.translation() = T.p + T.R * w_end_.translation();
@@ -120,7 +121,7 @@ Eigen::Isometry3d ForwardKinematics::F_T_w(const JointVector& q) const {
 }
 
 Eigen::Isometry3d ForwardKinematics::F_T_t(const JointVector& q) const {
-  const Pose T = chain(model_->tool_chain, q);
+  const Pose T = chain(model_->tool_chain, q, nullptr);
   Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
   out.linear() = T.R * t_end_.linear();
   out.translation() = T.p + T.R * t_end_.translation();
@@ -246,7 +247,8 @@ void ForwardKinematics::tipAndAxis(const JointVector& q, Eigen::Vector3d* p_w,
   *u_w = w_end_.linear().transpose() * u;
 }
 
-void ForwardKinematics::chainFrames(const JointVector& q, ChainFrames* out) const {
+void ForwardKinematics::chainFrames(const JointVector& q, ChainFrames* out,
+                                    const MotionContext* ctx) const {
   const size_t n = model_->axes.size();
   out->after_link.resize(n);
   out->after_joint.resize(n);
@@ -261,7 +263,7 @@ void ForwardKinematics::chainFrames(const JointVector& q, ChainFrames* out) cons
       } else {
         T.linear() = T.linear() * Eigen::AngleAxisd(q[a], ax.direction).toRotationMatrix();
       }
-      if (axis_[a].max_degree >= 0) T = T * linkTransform(motionErrors(a, q[a]));
+      if (axis_[a].max_degree >= 0) T = T * linkTransform(motionErrors(a, q[a], ctx));
       out->after_joint[a] = T;
     }
     if (b == 0) out->F_T_w = T * w_end_;
@@ -269,9 +271,9 @@ void ForwardKinematics::chainFrames(const JointVector& q, ChainFrames* out) cons
   }
 }
 
-Eigen::Isometry3d ForwardKinematics::w_T_t(const JointVector& q) const {
-  const Pose W = chain(model_->workpiece_chain, q);
-  const Pose T = chain(model_->tool_chain, q);
+Eigen::Isometry3d ForwardKinematics::w_T_t(const JointVector& q, const MotionContext* ctx) const {
+  const Pose W = chain(model_->workpiece_chain, q, ctx);
+  const Pose T = chain(model_->tool_chain, q, ctx);
   // w_T_t = (W * w_end)^-1 * (T * t_end)
   const Eigen::Matrix3d Rw = W.R * w_end_.linear();
   const Eigen::Vector3d pw = W.p + W.R * w_end_.translation();

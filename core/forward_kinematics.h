@@ -19,7 +19,8 @@ class ForwardKinematics {
   ForwardKinematics(const MachineModel& model, const Eigen::VectorXd& params);
 
   // Pose of the tool frame t seen from the workpiece frame w at joint values q.
-  Eigen::Isometry3d w_T_t(const JointVector& q) const;
+  // ctx: the configuration's approach directions and time, for blocks that depend on them.
+  Eigen::Isometry3d w_T_t(const JointVector& q, const MotionContext* ctx = nullptr) const;
   // The tool tip (origin of t, mm) and the unit tool axis (z of t) in w: the same as
   // w_T_t(q).translation() and .linear().col(2), computed by carrying the two vectors through
   // the chains (matrix-vector products only): the hot path of prediction.
@@ -33,7 +34,7 @@ class ForwardKinematics {
   // D_S of axis a at joint value s (parent joint frame -> this joint frame).
   Eigen::Isometry3d jointTransform(int a, double s) const;
   // The six motion-error values [ex ey ez gx gy gz] of axis a at joint value s (mm, rad).
-  Vector6d motionErrors(int a, double s) const;
+  Vector6d motionErrors(int a, double s, const MotionContext* ctx = nullptr) const;
 
   const MachineModel& model() const { return *model_; }
   const Eigen::VectorXd& params() const { return params_; }
@@ -45,7 +46,7 @@ class ForwardKinematics {
     std::vector<Eigen::Isometry3d> after_link, after_joint;
     Eigen::Isometry3d F_T_w, F_T_t;
   };
-  void chainFrames(const JointVector& q, ChainFrames* out) const;
+  void chainFrames(const JointVector& q, ChainFrames* out, const MotionContext* ctx = nullptr) const;
 
  private:
   // A rigid pose as rotation and translation: cheaper to compose than Isometry3d in the hot loop.
@@ -54,8 +55,8 @@ class ForwardKinematics {
     Eigen::Vector3d p;
   };
   // this = this * D_S(s), composed in place.
-  void composeJoint(int a, double s, Pose& T) const;
-  Pose chain(const std::vector<int>& axes, const JointVector& q) const;
+  void composeJoint(int a, double s, Pose& T, const MotionContext* ctx) const;
+  Pose chain(const std::vector<int>& axes, const JointVector& q, const MotionContext* ctx) const;
   // p <- D_S(s) p, u <- R_S(s) u, and the inverse.
   // c, sn: cos and sin of s for rotary joints.
   void applyJoint(int a, double s, double c, double sn, Eigen::Vector3d& p,

@@ -27,6 +27,7 @@
 // Later capabilities append new block kinds; code that walks the vector uses the blocks.
 #include <Eigen/Geometry>
 #include <array>
+#include <limits>
 #include <map>
 #include <string>
 #include <string_view>
@@ -124,6 +125,14 @@ class MachineModel {
   // Nominal w in table and t in spindle, from the set-up (no errors).
   Eigen::Isometry3d table_T_w() const;
   Eigen::Isometry3d spindle_T_t() const;
+};
+
+// What a configuration carries besides its joint values, for error blocks that depend on it
+// (a reversal error on the approach direction, thermal drift on time). Blocks that do not use
+// it ignore it; code that evaluates the model passes it along (nullptr: unknown).
+struct MotionContext {
+  std::array<signed char, kMaxAxes> direction{};  // per axis: +1/-1 last motion, 0 unknown
+  double time_s = std::numeric_limits<double>::quiet_NaN();  // seconds since the test began
 };
 
 // A machine: its model and the values of its error parameters (mm, rad).

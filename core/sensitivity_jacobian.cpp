@@ -22,12 +22,12 @@ Eigen::Matrix<double, 6, 6> linkTwistMap(const Vector6d& v) {
 }
 
 void sensitivityJacobian(const ForwardKinematics& fk, const JointVector& q,
-                         Eigen::Ref<Eigen::MatrixXd> J) {
+                         Eigen::Ref<Eigen::MatrixXd> J, const MotionContext* ctx) {
   const MachineModel& m = fk.model();
   const Eigen::VectorXd& p = fk.params();
   assert(J.rows() == 6 && J.cols() == m.parameterCount());
   ForwardKinematics::ChainFrames fr;
-  fk.chainFrames(q, &fr);
+  fk.chainFrames(q, &fr, ctx);
   auto sideOf = [&](int axis) { return m.axes[axis].branch == Branch::Tool ? 1.0 : -1.0; };
   // C(A_T_t) for a frame A given as F_T_A.
   auto transportToTool = [&](const Eigen::Isometry3d& F_T_A) {
@@ -42,7 +42,7 @@ void sensitivityJacobian(const ForwardKinematics& fk, const JointVector& q,
         break;
       }
       case BlockKind::MotionError: {
-        const Vector6d e = fk.motionErrors(b.axis, q[b.axis]);
+        const Vector6d e = fk.motionErrors(b.axis, q[b.axis], ctx);
         const Eigen::Matrix<double, 6, 1> col =
             sideOf(b.axis) * transportToTool(fr.after_joint[b.axis]) *
             linkTwistMap(e).col(b.component);

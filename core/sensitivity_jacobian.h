@@ -23,6 +23,7 @@ Eigen::Matrix<double, 6, 6> linkTwistMap(const Vector6d& v);
 // J_twist_params: 6 x parameterCount(), rows [dx dy dz thx thy thz] of the twist in t (mm, rad),
 // one column per parameter of fk.model() (mm or rad). J must already have that size.
 void sensitivityJacobian(const ForwardKinematics& fk, const JointVector& q,
-                         Eigen::Ref<Eigen::MatrixXd> J_twist_params);
+                         Eigen::Ref<Eigen::MatrixXd> J_twist_params,
+                         const MotionContext* ctx = nullptr);
 
 }  // namespace tolver

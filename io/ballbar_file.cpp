@@ -126,14 +126,14 @@ BallbarFile parseBallbarCsv(const std::string& text, const std::string& file, co
         const std::string name = lower(m.axes[a].name) + "_dir";
         const double d = value(name);
         if (d != 1.0 && d != -1.0) throw InputError(file, line, 0, name, "expected +1 or -1");
-        r.direction[a] = static_cast<signed char>(d);
+        r.context.direction[a] = static_cast<signed char>(d);
       }
     }
     if (require_length) {
       r.length = value("length_mm");
       if (!(r.length > 0)) throw InputError(file, line, 0, "length_mm", "must be positive");
     }
-    if (col.count("time_s")) r.time_s = value("time_s");
+    if (col.count("time_s")) r.context.time_s = value("time_s");
     out.test.readings.push_back(r);
   }
   if (out.test.readings.empty()) throw InputError(file, 0, 0, "", "no rows");
@@ -153,7 +153,7 @@ std::string formatBallbarCsv(const MachineModel& m, const BallbarTest& test, boo
          "tool_ball_z_mm";
   for (const Axis& ax : m.axes) out += "," + axisColumn(ax);
   bool any_time = false;
-  for (const BallbarReading& r : test.readings) any_time |= !std::isnan(r.time_s);
+  for (const BallbarReading& r : test.readings) any_time |= !std::isnan(r.context.time_s);
   if (any_time) out += ",time_s";
   if (with_length) out += ",length_mm";
   out += "\n";
@@ -171,7 +171,7 @@ std::string formatBallbarCsv(const MachineModel& m, const BallbarTest& test, boo
     for (int k = 0; k < 3; ++k) put("%.6f", s.tool_ball_t[k]);
     for (size_t a = 0; a < m.axes.size(); ++a)
       put("%.6f", m.axes[a].isRotary() ? r.q[a] * 180.0 / M_PI : r.q[a]);
-    if (any_time) put("%.3f", r.time_s);
+    if (any_time) put("%.3f", r.context.time_s);
     if (with_length) put("%.7f", r.length);
     out += "\n";
   }

@@ -29,12 +29,12 @@ TEST(BallbarFile, ReadsReadingsWithCommentsDirectionsAndIgnoredColumns) {
   ASSERT_EQ(f.test.setups.size(), 2u);
   EXPECT_EQ(f.test.setups[1].table_ball_w, Eigen::Vector3d(80, 0, 30));
   EXPECT_NEAR(f.test.readings[0].q[3], -45 * M_PI / 180, 1e-15);
-  EXPECT_DOUBLE_EQ(f.test.readings[2].time_s, 40);
+  EXPECT_DOUBLE_EQ(f.test.readings[2].context.time_s, 40);
   EXPECT_EQ(f.warnings, std::vector<std::string>{"ignored column 'operator'"});
   // Directions derived from the sequence: x decreased, z increased.
-  EXPECT_EQ(f.test.readings[1].direction[0], -1);
-  EXPECT_EQ(f.test.readings[1].direction[2], 1);
-  EXPECT_EQ(f.test.readings[2].direction[0], -1);  // did not move: kept
+  EXPECT_EQ(f.test.readings[1].context.direction[0], -1);
+  EXPECT_EQ(f.test.readings[1].context.direction[2], 1);
+  EXPECT_EQ(f.test.readings[2].context.direction[0], -1);  // did not move: kept
 }
 
 TEST(BallbarFile, RoundTrip) {
