@@ -14,18 +14,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class BallbarCli : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           (std::string("tolver_ballbar_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& n) const { return (dir_ / n).string(); }
-  fs::path dir_;
-};
+class BallbarCli : public test::TempDirTest {};
 
 TEST_F(BallbarCli, PlanSimulateCalibratePredict) {
   const std::string nominal = test::sourcePath("resources/machines/matsuura_mc760vx.xml");

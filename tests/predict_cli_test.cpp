@@ -13,23 +13,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class PredictCli : public ::testing::Test {
+class PredictCli : public test::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("tolver_predict_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-            "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-  std::string path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string write(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name)) << text;
-    return path(name);
-  }
   static std::string src(const std::string& rel) { return test::sourcePath(rel); }
-  fs::path dir_;
 };
 
 const char* kThreeAxisMachine = R"(<machine name="three axis" angle_unit="deg">
