@@ -1,0 +1,118 @@
+#include "io/tolerance_file.h"
+
+#include <map>
+
+#include "io/io_error.h"
+#include "io/text_util.h"
+
+namespace tolver {
+namespace {
+
+std::vector<std::string> cells(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : line) {
+    if (c == ',') {
+      out.emplace_back(trim(cur));
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  out.emplace_back(trim(cur));
+  return out;
+}
+
+}  // namespace
+
+const char* categoryName(ToleranceCategory c) {
+  switch (c) {
+    case ToleranceCategory::Positional: return "positional";
+    case ToleranceCategory::LinearPositioning: return "linear_positioning";
+    case ToleranceCategory::AngularPositioning: return "angular_positioning";
+    case ToleranceCategory::LinearNonPositioning: return "linear_non_positioning";
+    case ToleranceCategory::AngularNonPositioning: return "angular_non_positioning";
+  }
+  return "?";
+}
+
+std::vector<ToleranceTerm> parseToleranceCsv(const std::string& text, const std::string& file,
+                                             const MachineModel& m) {
+  const auto lines = splitLines(text);
+  std::map<std::string, int> col;
+  std::vector<ToleranceTerm> out;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const std::string_view t = trim(lines[i]);
+    if (t.empty() || t[0] == '#') continue;
+    const int line = static_cast<int>(i) + 1;
+    const auto c = cells(lines[i]);
+    if (col.empty()) {
+      for (size_t k = 0; k < c.size(); ++k) col[c[k]] = static_cast<int>(k);
+      for (const char* r : {"term", "category", "standard", "unit"})
+        if (!col.count(r)) throw InputError(file, line, 0, r, "missing column");
+      continue;
+    }
+    auto cell = [&](const char* name) -> std::string {
+      auto it = col.find(name);
+      if (it == col.end() || it->second >= static_cast<int>(c.size())) return "";
+      return c[it->second];
+    };
+    ToleranceTerm term;
+    term.name = cell("term");
+    term.parameter = m.findParameter(term.name);
+    if (term.parameter < 0) throw InputError(file, line, 0, "term", "no parameter named '" + term.name + "'");
+    const std::string cat = cell("category");
+    bool found = false;
+    for (ToleranceCategory k : {ToleranceCategory::Positional, ToleranceCategory::LinearPositioning,
+                                ToleranceCategory::AngularPositioning,
+                                ToleranceCategory::LinearNonPositioning,
+                                ToleranceCategory::AngularNonPositioning})
+      if (cat == categoryName(k)) {
+        term.category = k;
+        found = true;
+      }
+    if (!found) throw InputError(file, line, 0, "category", "unknown category '" + cat + "'");
+    const std::string unit = cell("unit");
+    const bool angular = m.parameters[term.parameter].angular;
+    double scale = 0.0;
+    if (!angular && unit == "mm") scale = 1.0;
+    else if (!angular && unit == "um") scale = 1e-3;
+    else if (angular && unit == "rad") scale = 1.0;
+    else if (angular && unit == "urad") scale = 1e-6;
+    else if (angular && unit == "mm/m") scale = 1e-3;
+    else if (angular && unit.rfind("mm/", 0) == 0 && unit.size() > 5 && unit.substr(unit.size() - 2) == "mm") {
+      const auto len = parseNumber(unit.substr(3, unit.size() - 5));
+      if (len && *len > 0) scale = 1.0 / *len;
+    }
+    if (scale == 0.0)
+      throw InputError(file, line, 0, "unit",
+                       "'" + unit + "' does not suit " + (angular ? "an angular" : "a linear") +
+                           " term (mm, um / rad, urad, mm/m, mm/<L>mm)");
+    auto number = [&](const char* name, double fallback) {
+      const std::string s = cell(name);
+      if (s.empty()) {
+        if (fallback >= 0) return fallback;
+        throw InputError(file, line, 0, name, "missing value");
+      }
+      const auto v = parseNumber(s);
+      if (!v || !(*v > 0)) throw InputError(file, line, 0, name, "expected a positive number, found '" + s + "'");
+      return *v * scale;
+    };
+    term.standard = number("standard", -1);
+    term.lower = number("lower", term.standard);
+    term.upper = number("upper", 3.0 * term.standard);
+    if (!(term.lower <= term.standard || term.lower <= term.upper) || term.lower > term.upper)
+      throw InputError(file, line, 0, "upper", "upper bound below the lower bound");
+    for (const ToleranceTerm& o : out)
+      if (o.parameter == term.parameter) throw InputError(file, line, 0, "term", "term given twice");
+    out.push_back(term);
+  }
+  if (out.empty()) throw InputError(file, 0, 0, "", "no terms");
+  return out;
+}
+
+std::vector<ToleranceTerm> readToleranceFile(const std::string& path, const MachineModel& m) {
+  return parseToleranceCsv(readFile(path), path, m);
+}
+
+}  // namespace tolver
