@@ -8,5 +8,6 @@ namespace tolver::app {
 void registerPredict(CLI::App& app, int* exit_code);
 void registerAnalyze(CLI::App& app, int* exit_code);
 void registerBallbar(CLI::App& app, int* exit_code);
+void registerAllocate(CLI::App& app, int* exit_code);
 
 }  // namespace tolver::app

@@ -22,6 +22,7 @@
 //                        sqrt(sum_{i in g} (t_i / t_i,standard)^2) (maximise; eq. 17 with the
 //                        groups of this machine's own correlation analysis).
 #include <Eigen/Core>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -44,6 +45,7 @@ struct ToleranceTerm {
   double standard = 0.0;   // full band T, mm or rad
   double lower = 0.0;      // bounds of T
   double upper = 0.0;
+  double reference = std::numeric_limits<double>::quiet_NaN();  // e.g. a published allocation
 };
 
 struct AllocationModel {

@@ -101,6 +101,7 @@ std::vector<ToleranceTerm> parseToleranceCsv(const std::string& text, const std:
     term.standard = number("standard", -1);
     term.lower = number("lower", term.standard);
     term.upper = number("upper", 3.0 * term.standard);
+    if (!cell("reference").empty()) term.reference = number("reference", -1);
     if (!(term.lower <= term.standard || term.lower <= term.upper) || term.lower > term.upper)
       throw InputError(file, line, 0, "upper", "upper bound below the lower bound");
     for (const ToleranceTerm& o : out)

@@ -1,0 +1,217 @@
+#include "io/allocation_report.h"
+
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "io/io_error.h"
+#include "io/png_plot.h"
+#include "io/tolerance_file.h"
+
+namespace tolver {
+namespace {
+
+std::string base64(const std::string& in) {
+  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  size_t i = 0;
+  for (; i + 2 < in.size(); i += 3) {
+    const unsigned v = (static_cast<unsigned char>(in[i]) << 16) |
+                       (static_cast<unsigned char>(in[i + 1]) << 8) | static_cast<unsigned char>(in[i + 2]);
+    out += k[v >> 18];
+    out += k[(v >> 12) & 63];
+    out += k[(v >> 6) & 63];
+    out += k[v & 63];
+  }
+  if (i < in.size()) {
+    unsigned v = static_cast<unsigned char>(in[i]) << 16;
+    if (i + 1 < in.size()) v |= static_cast<unsigned char>(in[i + 1]) << 8;
+    out += k[v >> 18];
+    out += k[(v >> 12) & 63];
+    out += i + 1 < in.size() ? k[(v >> 6) & 63] : '=';
+    out += '=';
+  }
+  return out;
+}
+
+std::string fmt(const char* f, double v) {
+  char b[64];
+  std::snprintf(b, sizeof b, f, v);
+  return b;
+}
+
+}  // namespace
+
+double displayValue(const MachineModel& m, const ToleranceTerm& t, double v) {
+  return m.parameters[t.parameter].angular ? v * 1e3 : v;
+}
+const char* displayUnit(const MachineModel& m, const ToleranceTerm& t) {
+  return m.parameters[t.parameter].angular ? "mm/m" : "mm";
+}
+
+void writeAllocationReport(const std::string& dir, const MachineModel& m,
+                           const std::vector<ToleranceTerm>& terms, const AllocationModel& a,
+                           const AllocationResult& r, const AllocationReportInputs& in) {
+  using nlohmann::json;
+  const AllocationSolution* chosen = r.chosen >= 0 ? &r.front[r.chosen] : nullptr;
+  // allocation.csv: the Table 4 of this machine.
+  std::string table = "term,parameter,category,unit,standard,optimised,lower,upper,reference\n";
+  for (size_t i = 0; i < terms.size(); ++i) {
+    const ToleranceTerm& t = terms[i];
+    table += t.name + "," + m.parameters[t.parameter].iso_code + "," + categoryName(t.category) + "," +
+             displayUnit(m, t) + "," + fmt("%.6g", displayValue(m, t, t.standard)) + "," +
+             (chosen ? fmt("%.6g", displayValue(m, t, chosen->T[i])) : "") + "," +
+             fmt("%.6g", displayValue(m, t, t.lower)) + "," + fmt("%.6g", displayValue(m, t, t.upper)) +
+             "," + (std::isnan(t.reference) ? "" : fmt("%.6g", displayValue(m, t, t.reference))) + "\n";
+  }
+  writeFileAtomically(dir + "/allocation.csv", table);
+  // pareto.csv
+  std::string front = "m1,m2,cost,loss,worst_dx_mm,worst_dy_mm,worst_dz_mm,chosen";
+  for (const auto& t : terms) front += "," + t.name;
+  front += "\n";
+  for (size_t k = 0; k < r.front.size(); ++k) {
+    const auto& s = r.front[k];
+    front += fmt("%.8g", s.m1) + "," + fmt("%.8g", s.m2) + "," + fmt("%.8g", s.cost) + "," +
+             fmt("%.8g", s.loss) + "," + fmt("%.6f", s.worst_exact[0]) + "," +
+             fmt("%.6f", s.worst_exact[1]) + "," + fmt("%.6f", s.worst_exact[2]) + "," +
+             (static_cast<int>(k) == r.chosen ? "1" : "0");
+    for (size_t i = 0; i < terms.size(); ++i) front += "," + fmt("%.6g", displayValue(m, terms[i], s.T[i]));
+    front += "\n";
+  }
+  writeFileAtomically(dir + "/pareto.csv", front);
+  // pareto.png: M1 (x) against M2 (y); the standard in grey, the chosen point in red.
+  ScatterSeries all, std_pt, ch;
+  for (const auto& s : r.front) {
+    all.x.push_back(s.m1);
+    all.y.push_back(s.m2);
+  }
+  std_pt.x = {r.standard.m1};
+  std_pt.y = {r.standard.m2};
+  std_pt.rgb[0] = std_pt.rgb[1] = std_pt.rgb[2] = 150;
+  std_pt.radius = 5;
+  if (chosen) {
+    ch.x = {chosen->m1};
+    ch.y = {chosen->m2};
+  }
+  ch.rgb[0] = 220;
+  ch.rgb[1] = 30;
+  ch.rgb[2] = 30;
+  ch.radius = 6;
+  writeScatterPng(dir + "/pareto.png", {std_pt, all, ch});
+
+  json j;
+  j["machine_file"] = in.machine_file;
+  j["tolerance_file"] = in.tolerance_file;
+  j["gauge_length_mm"] = in.gauge_length;
+  j["workspace_poses"] = in.poses;
+  j["limits_mm"] = {a.limits[0], a.limits[1], a.limits[2]};
+  j["combination"] = a.rss ? "root-sum-square" : "worst case over the error signs";
+  j["cost_model"] = {{"h_p", a.h_p}, {"h_a", a.h_a}, {"h_d", a.h_d}, {"r", a.r},
+                     {"units", "t = T/2 in mm for lengths and mm/m for angles"}};
+  j["quality_loss"] = {{"weight", a.loss_weight},
+                       {"distribution", a.loss_normal ? "normal, t = 3 sigma" : "uniform in [-t, t]"}};
+  j["optimiser"] = {{"algorithm", "NSGA-II (pagmo)"}, {"population", in.options.population},
+                    {"generations", in.options.generations}, {"seed", in.options.seed},
+                    {"constraint_handling", r.constraint_handling},
+                    {"compromise_rule", "the front point closest to the ideal point (least M1, "
+                                        "largest M2), both objectives normalised over the front"}};
+  j["standard"] = {{"cost", r.standard.cost}, {"loss", r.standard.loss}, {"m1", r.standard.m1},
+                   {"m2", r.standard.m2},
+                   {"worst_mm", {r.standard.worst_exact[0], r.standard.worst_exact[1], r.standard.worst_exact[2]}},
+                   {"feasible", r.standard_feasible}};
+  json groups = json::array();
+  for (const auto& g : r.correlation.members) {
+    json names = json::array();
+    for (int i : g) names.push_back(terms[i].name);
+    groups.push_back(names);
+  }
+  j["correlation_groups"] = groups;
+  j["pareto_front_size"] = r.front.size();
+  if (chosen) {
+    j["chosen"] = {{"cost", chosen->cost}, {"loss", chosen->loss}, {"m1", chosen->m1}, {"m2", chosen->m2},
+                   {"worst_mm", {chosen->worst_exact[0], chosen->worst_exact[1], chosen->worst_exact[2]}},
+                   {"cost_saving_percent", 100.0 * (1.0 - chosen->cost / r.standard.cost)}};
+    json t = json::array();
+    for (size_t i = 0; i < terms.size(); ++i)
+      t.push_back({{"term", terms[i].name}, {"unit", displayUnit(m, terms[i])},
+                   {"standard", displayValue(m, terms[i], terms[i].standard)},
+                   {"optimised", displayValue(m, terms[i], chosen->T[i])}});
+    j["terms"] = t;
+  } else {
+    j["chosen"] = nullptr;
+    j["message"] = "no allocation within the bounds meets the limits";
+  }
+  writeFileAtomically(dir + "/report.json", j.dump(2) + "\n");
+
+  // report.html, self-contained.
+  std::string h = "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>tolver allocation</title>"
+                  "<style>body{font-family:sans-serif;max-width:60em;margin:2em auto}"
+                  "table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:2px 8px;text-align:right}"
+                  "th{background:#eee}.bad{color:#b00}.ok{color:#070}</style></head><body>";
+  h += "<h1>Tolerance allocation: " + m.name + "</h1>";
+  h += "<p>Machine file <code>" + in.machine_file + "</code>, tolerances <code>" + in.tolerance_file +
+       "</code>, tool gauge length " + fmt("%.1f", in.gauge_length) + " mm, " + std::to_string(in.poses) +
+       " workspace poses, errors combined by " + (a.rss ? "root-sum-square" : "worst case over their signs") +
+       ". Limits |dx|, |dy|, |dz| &le; " + fmt("%.4f", a.limits[0]) + ", " + fmt("%.4f", a.limits[1]) +
+       ", " + fmt("%.4f", a.limits[2]) + " mm.</p>";
+  auto worst = [&](const Eigen::Vector3d& w) {
+    std::string s;
+    for (int d = 0; d < 3; ++d)
+      s += std::string("<span class=\"") + (w[d] <= a.limits[d] ? "ok" : "bad") + "\">" +
+           fmt("%.4f", w[d]) + "</span> ";
+    return s;
+  };
+  h += "<p>Standard tolerances: cost " + fmt("%.5g", r.standard.cost) + ", worst errors " +
+       worst(r.standard.worst_exact) + "mm" + (r.standard_feasible ? "" : " &mdash; <b class=\"bad\">they break the limits</b>") + ".</p>";
+  if (chosen)
+    h += "<p>Chosen allocation: cost " + fmt("%.5g", chosen->cost) + " (" +
+         fmt("%+.1f", -100.0 * (1.0 - chosen->cost / r.standard.cost)) + " % against the standard), worst errors " +
+         worst(chosen->worst_exact) + "mm, checked with the nonlinear model.</p>";
+  else
+    h += "<p class=\"bad\">No allocation within the bounds meets the limits: loosen the limits or allow tighter tolerances (lower bounds).</p>";
+  h += "<h2>Pareto front</h2><p>M1 = cost + quality loss (x, minimised) against M2 (y, maximised); grey: the standard tolerances, red: the chosen compromise.</p>";
+  h += "<img alt=\"Pareto front\" src=\"data:image/png;base64," + base64(readFile(dir + "/pareto.png")) + "\">";
+  h += "<h2>Tolerances (like the paper's Table 4)</h2><table><tr><th>term</th><th>category</th><th>unit</th><th>standard</th><th>optimised</th><th>paper</th></tr>";
+  for (size_t i = 0; i < terms.size(); ++i) {
+    const auto& t = terms[i];
+    h += "<tr><td>" + t.name + "</td><td>" + categoryName(t.category) + "</td><td>" + displayUnit(m, t) +
+         "</td><td>" + fmt("%.5g", displayValue(m, t, t.standard)) + "</td><td>" +
+         (chosen ? fmt("%.5g", displayValue(m, t, chosen->T[i])) : "") + "</td><td>" +
+         (std::isnan(t.reference) ? "" : fmt("%.5g", displayValue(m, t, t.reference))) + "</td></tr>";
+  }
+  h += "</table>";
+  bool has_reference = false;
+  for (const auto& t : terms) has_reference |= !std::isnan(t.reference);
+  if (has_reference) {
+    Eigen::VectorXd Tref(terms.size());
+    bool complete = true;
+    for (size_t i = 0; i < terms.size(); ++i) {
+      Tref[i] = terms[i].reference;
+      complete &= !std::isnan(Tref[i]);
+    }
+    h += "<h2>Comparison with the published allocation</h2><p>";
+    if (complete) {
+      h += "The published values (column <i>paper</i>) cost " +
+           fmt("%.5g", manufacturingCost(m, terms, Tref, a)) + " in this cost model";
+    }
+    h += ". Differences come from how the accuracy is evaluated: here the tool-tip error is taken "
+         "over the whole working volume and rotary ranges with this machine file's travel and "
+         "tool length, the error values stacked " +
+         std::string(a.rss ? "root-sum-square" : "in the worst case over their signs") +
+         ", with the exact model's lever arms. Under such stacking even the standard tolerances "
+         "can exceed the limits, and the allocation must then tighten rather than loosen. Some "
+         "published optima lie below their own lower bound (for example the A-axis turning error) "
+         "or change their reference length between columns; they are shown as printed, converted "
+         "to mm/m.</p>";
+  }
+  h += "<h2>Correlation groups</h2><ol>";
+  for (const auto& g : r.correlation.members) {
+    h += "<li>";
+    for (int i : g) h += terms[i].name + " ";
+    h += "</li>";
+  }
+  h += "</ol><p>" + r.constraint_handling + ".</p></body></html>\n";
+  writeFileAtomically(dir + "/report.html", h);
+}
+
+}  // namespace tolver
