@@ -72,6 +72,20 @@ void runAllocate(const AllocateOptions& o, int* exit_code) {
   std::printf("  standard   cost %.5g, worst |dx| %.4f |dy| %.4f |dz| %.4f mm%s\n", r.standard.cost,
               r.standard.worst_exact[0], r.standard.worst_exact[1], r.standard.worst_exact[2],
               r.standard_feasible ? "" : "  (breaks the limits)");
+  {
+    Eigen::VectorXd Tref(terms.size());
+    bool complete = true;
+    for (size_t i = 0; i < terms.size(); ++i) {
+      Tref[i] = terms[i].reference;
+      complete &= !std::isnan(Tref[i]);
+    }
+    if (complete) {
+      const Eigen::Vector3d w = verifyAccuracy(m, terms, acc, Tref, a.rss);
+      std::printf("  reference  cost %.5g, worst |dx| %.4f |dy| %.4f |dz| %.4f mm%s\n",
+                  manufacturingCost(m, terms, Tref, a), w[0], w[1], w[2],
+                  (w.array() <= a.limits.array()).all() ? "" : "  (breaks the limits)");
+    }
+  }
   std::printf("  groups    ");
   for (const auto& g : corr.members) {
     std::printf(" {");

@@ -36,6 +36,13 @@ TEST_F(AllocateCli, Xkh800ReportsAndExitCodes) {
   std::ifstream html(path("b/report.html"));
   const std::string page((std::istreambuf_iterator<char>(html)), std::istreambuf_iterator<char>());
   EXPECT_NE(page.find("data:image/png;base64,iVBORw0KGgo"), std::string::npos);  // embedded PNG
+  // Stacked root-sum-square, the cheapest feasible allocation costs less than the standard.
+  r = test::runTolver(base + "--combination rss --lower-factor 0.25 --report-dir " + path("c"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in_c(path("c/report.json"));
+  const auto jc = nlohmann::json::parse(in_c);
+  EXPECT_GT(jc["chosen"]["cost_saving_percent"].get<double>(), 0.0);
+  EXPECT_LT(jc["chosen"]["cost"].get<double>(), jc["standard"]["cost"].get<double>());
 }
 
 TEST_F(AllocateCli, BadToleranceFilesExitWithCode2) {
