@@ -1,4 +1,5 @@
 // tolver allocate: tolerance allocation for machine builders (paper 002, Cai et al.).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -93,6 +94,22 @@ void runAllocate(const AllocateOptions& o, int* exit_code) {
     std::printf("}");
   }
   std::printf("\n");
+  int max_ref = 0;
+  for (const auto& t : terms) max_ref = std::max(max_ref, t.reference_group);
+  if (max_ref > 0) {
+    std::printf("  reference ");
+    for (int g = 1; g <= max_ref; ++g) {
+      std::printf(" {");
+      bool first = true;
+      for (const auto& t : terms)
+        if (t.reference_group == g) {
+          std::printf("%s%s", first ? "" : " ", t.name.c_str());
+          first = false;
+        }
+      std::printf("}");
+    }
+    std::printf("\n");
+  }
   if (c) {
     std::printf("  optimised  cost %.5g (%+.1f %% against the standard), worst |dx| %.4f |dy| %.4f |dz| %.4f mm"
                 " (nonlinear check); Pareto front of %zu\n",

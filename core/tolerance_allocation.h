@@ -46,6 +46,7 @@ struct ToleranceTerm {
   double lower = 0.0;      // bounds of T
   double upper = 0.0;
   double reference = std::numeric_limits<double>::quiet_NaN();  // e.g. a published allocation
+  int reference_group = 0;  // a published correlation class (1..), 0 if none
 };
 
 struct AllocationModel {

@@ -1,5 +1,6 @@
 #include "io/allocation_report.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -126,6 +127,10 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
     groups.push_back(names);
   }
   j["correlation_groups"] = groups;
+  json ref_groups = json::object();
+  for (const auto& t : terms)
+    if (t.reference_group > 0) ref_groups[std::to_string(t.reference_group)].push_back(t.name);
+  if (!ref_groups.empty()) j["reference_groups"] = ref_groups;
   j["pareto_front_size"] = r.front.size();
   if (chosen) {
     j["chosen"] = {{"cost", chosen->cost}, {"loss", chosen->loss}, {"m1", chosen->m1}, {"m2", chosen->m2},
@@ -210,7 +215,20 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
     for (int i : g) h += terms[i].name + " ";
     h += "</li>";
   }
-  h += "</ol><p>" + r.constraint_handling + ".</p></body></html>\n";
+  h += "</ol>";
+  int max_ref = 0;
+  for (const auto& t : terms) max_ref = std::max(max_ref, t.reference_group);
+  if (max_ref > 0) {
+    h += "<p>Published classes:</p><ol>";
+    for (int g = 1; g <= max_ref; ++g) {
+      h += "<li>";
+      for (const auto& t : terms)
+        if (t.reference_group == g) h += t.name + " ";
+      h += "</li>";
+    }
+    h += "</ol>";
+  }
+  h += "<p>" + r.constraint_handling + ".</p></body></html>\n";
   writeFileAtomically(dir + "/report.html", h);
 }
 

@@ -1,5 +1,6 @@
 #include "io/tolerance_file.h"
 
+#include <cmath>
 #include <map>
 
 #include "io/io_error.h"
@@ -102,6 +103,12 @@ std::vector<ToleranceTerm> parseToleranceCsv(const std::string& text, const std:
     term.lower = number("lower", term.standard);
     term.upper = number("upper", 3.0 * term.standard);
     if (!cell("reference").empty()) term.reference = number("reference", -1);
+    if (!cell("reference_group").empty()) {
+      const auto g = parseNumber(cell("reference_group"));
+      if (!g || *g < 1 || *g != std::floor(*g))
+        throw InputError(file, line, 0, "reference_group", "expected a positive integer");
+      term.reference_group = static_cast<int>(*g);
+    }
     if (!(term.lower <= term.standard || term.lower <= term.upper) || term.lower > term.upper)
       throw InputError(file, line, 0, "upper", "upper bound below the lower bound");
     for (const ToleranceTerm& o : out)

@@ -7,6 +7,7 @@
 //   unit       mm | um | rad | urad | mm/m | mm/<L>mm (a deviation over a length, e.g. mm/1000mm)
 //   lower, upper (optional)  bounds of the band, same unit; default standard and 3 x standard
 //   reference (optional)     a published allocation to compare with, same unit
+//   reference_group (optional) a published correlation class (1, 2, ...)
 #include <string>
 #include <vector>
 
