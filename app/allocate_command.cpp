@@ -97,7 +97,7 @@ void runAllocate(const AllocateOptions& o, int* exit_code) {
   int max_ref = 0;
   for (const auto& t : terms) max_ref = std::max(max_ref, t.reference_group);
   if (max_ref > 0) {
-    std::printf("  reference ");
+    std::printf("  published ");
     for (int g = 1; g <= max_ref; ++g) {
       std::printf(" {");
       bool first = true;
