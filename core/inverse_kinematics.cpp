@@ -13,12 +13,18 @@ constexpr double kTravelEps = 1e-9;     // mm or rad of tolerance on travel limi
 // Paden-Kahan sub-problem 1: the angle theta with Rot(w, theta) p = q (p, q equally inclined
 // to the unit axis w). Returns false when p is along w (theta free).
 bool subproblem1(const Eigen::Vector3d& w, const Eigen::Vector3d& p, const Eigen::Vector3d& q,
-                 double* theta) {
+                 double* theta, double* cos_theta = nullptr, double* sin_theta = nullptr) {
   const Eigen::Vector3d pp = p - w * w.dot(p);
   const Eigen::Vector3d qp = q - w * w.dot(q);
   constexpr double kEps2 = kSingularEps * kSingularEps;
   if (pp.squaredNorm() < kEps2 || qp.squaredNorm() < kEps2) return false;
-  *theta = std::atan2(w.dot(pp.cross(qp)), pp.dot(qp));
+  const double y = w.dot(pp.cross(qp)), x = pp.dot(qp);
+  *theta = std::atan2(y, x);
+  if (cos_theta) {  // cos and sin of theta without another trigonometric call
+    const double r = std::sqrt(x * x + y * y);
+    *cos_theta = x / r;
+    *sin_theta = y / r;
+  }
   return true;
 }
 
@@ -104,7 +110,14 @@ InverseKinematics::InverseKinematics(const MachineModel& model)
 }
 
 int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vector2d out[2],
-                                        bool* singular) const {
+                                        bool* singular, Eigen::Vector2d* cos_out,
+                                        Eigen::Vector2d* sin_out) const {
+  Eigen::Vector2d cos_local[2], sin_local[2];
+  if (!cos_out) {
+    cos_out = cos_local;
+    sin_out = sin_local;
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
   int count = 0;
   *singular = false;
   const Eigen::Vector3d k = Eigen::Vector3d::UnitZ();
@@ -117,11 +130,13 @@ int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vecto
     // Rot(a1, phi) (C1 k) = C0^T u
     const Eigen::Vector3d p = C1_ * k, q = C0_.transpose() * u;
     if (std::abs(a_[0].dot(p) - a_[0].dot(q)) > 1e-9) return count;
-    double phi = 0.0;
-    if (!subproblem1(a_[0], p, q, &phi)) {
+    double phi = 0.0, c1 = nan, s1 = nan;
+    if (!subproblem1(a_[0], p, q, &phi, &c1, &s1)) {
       *singular = true;
-      phi = std::numeric_limits<double>::quiet_NaN();
+      phi = nan;
     }
+    cos_out[count] = Eigen::Vector2d(c1, 1.0);
+    sin_out[count] = Eigen::Vector2d(sign_[0] * s1, 0.0);
     out[count++] = Eigen::Vector2d(sign_[0] * phi, 0.0);
     return count;
   }
@@ -140,9 +155,9 @@ int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vecto
   const double g = std::sqrt(g2);
   for (double sgn : {1.0, -1.0}) {
     const Eigen::Vector3d z = alpha * w1 + beta * w2 + sgn * g * w12;
-    double phi1 = 0.0, phi2 = 0.0;
-    bool free1 = !subproblem1(w1, z, q, &phi1);
-    bool free2 = !subproblem1(w2, p, z, &phi2);
+    double phi1 = 0.0, phi2 = 0.0, c1 = nan, s1 = nan, c2 = nan, s2 = nan;
+    bool free1 = !subproblem1(w1, z, q, &phi1, &c1, &s1);
+    bool free2 = !subproblem1(w2, p, z, &phi2, &c2, &s2);
     if (free1 || free2) *singular = true;
     // A free angle is marked NaN; solve() fills it from the previous point.
     if (!free1 && !free2 && g < 1e-2) {
@@ -162,9 +177,16 @@ int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vecto
         phi1 += d[0];
         phi2 += d[1];
       }
+      c1 = std::cos(phi1);
+      s1 = std::sin(phi1);
+      c2 = std::cos(phi2);
+      s2 = std::sin(phi2);
     }
-    if (free1) phi1 = std::numeric_limits<double>::quiet_NaN();
-    if (free2) phi2 = std::numeric_limits<double>::quiet_NaN();
+    if (free1) phi1 = c1 = s1 = nan;
+    if (free2) phi2 = c2 = s2 = nan;
+    // Joint value = sign * phi: the cosine is unchanged, the sine takes the sign.
+    cos_out[count] = Eigen::Vector2d(c1, c2);
+    sin_out[count] = Eigen::Vector2d(sign_[0] * s1, sign_[1] * s2);
     out[count++] = Eigen::Vector2d(sign_[0] * phi1, sign_[1] * phi2);
     if (g == 0.0) break;
   }
@@ -172,7 +194,8 @@ int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vecto
 }
 
 bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& q,
-                                       IkSolution* trig, const Eigen::Vector3d& b_t) const {
+                                       IkSolution* trig, const Eigen::Vector3d& b_t,
+                                       bool trig_given) const {
   // With the rotary angles fixed the tip is affine in the prismatic joints: p_w = p0 + G s.
   // One nominal pass with s = 0 gives p0 and each prismatic joint's direction in F; a joint on
   // the workpiece branch moves the part, so the tip moves by -g in w, a tool-branch joint by +g.
@@ -193,9 +216,11 @@ bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& 
         g_F[k++] = (b == 0 ? -1.0 : 1.0) * (R[b] * ax.direction);
         continue;
       }
-      const double c = std::cos(q[l.axis]), sn = std::sin(q[l.axis]);
-      trig->cos_q[l.axis] = c;
-      trig->sin_q[l.axis] = sn;
+      if (!trig_given) {
+        trig->cos_q[l.axis] = std::cos(q[l.axis]);
+        trig->sin_q[l.axis] = std::sin(q[l.axis]);
+      }
+      const double c = trig->cos_q[l.axis], sn = trig->sin_q[l.axis];
       if (l.principal >= 0) {
         const int i = (l.principal + 1) % 3, j = (l.principal + 2) % 3;
         const Eigen::Vector3d ci = R[b].col(i), cj = R[b].col(j);
@@ -247,8 +272,8 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
     return sol;
   }
   bool singular = false;
-  Eigen::Vector2d candidates[2];
-  const int ncand = rotaryCandidates(u_w, candidates, &singular);
+  Eigen::Vector2d candidates[2], ccos[2], csin[2];
+  const int ncand = rotaryCandidates(u_w, candidates, &singular, ccos, csin);
   if (ncand == 0) {
     sol.status = IkStatus::UnreachableOrientation;
     return sol;
@@ -274,7 +299,11 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
       const Axis& ax = model_->axes[rotary_[r]];
       const double ref = previous ? (*previous)[rotary_[r]] : 0.0;
       double angle = candidates[ci][r];
-      if (std::isnan(angle)) angle = ref;  // free angle: keep the previous value
+      if (std::isnan(angle)) {  // free angle: keep the previous value
+        angle = ref;
+        ccos[ci][r] = std::cos(ref);
+        csin[ci][r] = std::sin(ref);
+      }
       const double v = unwrapInto(angle, ax.travel_min, ax.travel_max, ref);
       if (std::isnan(v)) {
         violation(rotary_[r], angle);
@@ -293,7 +322,12 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
   for (int ci : order) {
     if (ci >= ncand || !std::isfinite(ccost[ci])) continue;
     JointVector q = cq[ci];
-    if (!solvePrismatic(p_w, q, &sol)) continue;
+    // Unwrapping by 2 pi keeps the cosine and sine of the candidate's angles.
+    for (int r = 0; r < nr; ++r) {
+      sol.cos_q[rotary_[r]] = ccos[ci][r];
+      sol.sin_q[rotary_[r]] = csin[ci][r];
+    }
+    if (!solvePrismatic(p_w, q, &sol, Eigen::Vector3d::Zero(), true)) continue;
     bool ok = true;
     for (int a : prismatic_) {
       const Axis& ax = model_->axes[a];

@@ -35,8 +35,9 @@ struct IkSolution {
   bool singular = false;      // a rotary angle was free and kept from the previous point
   int violated_axis = -1;     // with OutOfTravel: the first axis outside its travel
   double violated_value = 0;  // and the value it would need
-  // cos and sin of each rotary joint value (for reuse by the forward model), by axis index.
-  std::array<double, kMaxAxes> cos_q{}, sin_q{};
+  // cos and sin of each rotary joint value (for reuse by the forward model), by axis index;
+  // entries of prismatic axes are left unset (not zero-filled: this runs per CL point).
+  std::array<double, kMaxAxes> cos_q, sin_q;
 };
 
 class InverseKinematics {
@@ -53,7 +54,9 @@ class InverseKinematics {
   // The rotary-angle candidates for the tool axis u_w (before travel checks and unwrapping),
   // at most two; each holds the rotary angles in the order of rotaryAxes(), NaN for an angle
   // left free by a singular orientation. Returns how many were written to out.
-  int rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vector2d out[2], bool* singular) const;
+  // cos_out, sin_out (optional): cos and sin of each candidate's joint values (NaN where free).
+  int rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vector2d out[2], bool* singular,
+                       Eigen::Vector2d* cos_out = nullptr, Eigen::Vector2d* sin_out = nullptr) const;
   const std::vector<int>& rotaryAxes() const { return rotary_; }
 
   // With the rotary joints of q fixed, sets its prismatic joints so that the tool-frame point
@@ -63,8 +66,11 @@ class InverseKinematics {
                       int* violated_axis) const;
 
  private:
+  // trig_given: trig already holds cos and sin of q's rotary joints; otherwise they are computed
+  // and stored there.
   bool solvePrismatic(const Eigen::Vector3d& p_w, JointVector& q, IkSolution* trig,
-                      const Eigen::Vector3d& b_t = Eigen::Vector3d::Zero()) const;
+                      const Eigen::Vector3d& b_t = Eigen::Vector3d::Zero(),
+                      bool trig_given = false) const;
 
   const MachineModel* model_;
   std::vector<int> rotary_;     // rotary axis indices in w->t chain order

@@ -30,6 +30,22 @@ std::string describeIkFailure(const MachineModel& model, const IkSolution& sol) 
   return "unknown";
 }
 
+namespace {
+
+// Angle between two unit vectors. Prediction errors are micro-radians, where atan's series
+// t (1 - t^2/3 + t^4/5), t = |u x v| / (u . v), is exact to rounding (the next term is below
+// t^7/7 < 1e-21 t for t < 1e-3) and several times cheaper than atan2.
+double angleBetween(const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
+  const double sn = u.cross(v).norm(), cs = u.dot(v);
+  if (cs > 0.0 && sn < 1e-3 * cs) {
+    const double t = sn / cs, t2 = t * t;
+    return t * (1.0 - t2 * (1.0 / 3.0 - t2 * (1.0 / 5.0)));
+  }
+  return std::atan2(sn, cs);
+}
+
+}  // namespace
+
 PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                                  const std::vector<ClPoint>& path, int max_failures) {
   PredictionResult result;
@@ -68,7 +84,7 @@ PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorX
     out.deviation_w = out.p_pred_w - cl.p_w;
     out.along_axis = out.deviation_w.dot(u);
     out.across_axis = (out.deviation_w - out.along_axis * u).norm();
-    out.axis_angle = std::atan2(u.cross(out.u_pred_w).norm(), u.dot(out.u_pred_w));
+    out.axis_angle = angleBetween(u, out.u_pred_w);
     const double d = out.deviation_w.norm();
     sum2 += d * d;
     sum2_angle += out.axis_angle * out.axis_angle;

@@ -1,0 +1,73 @@
+#include "core/tool_path_prediction.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/forward_kinematics.h"
+#include "io/machine_file.h"
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+std::vector<ClPoint> hemisphere(int n) {
+  std::vector<ClPoint> out(n);
+  for (int i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) / n, polar = 0.05 + 0.9 * t, az = 20.0 * M_PI * t;
+    const Eigen::Vector3d u(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az), std::cos(polar));
+    out[i].p_w = 50.0 * u;
+    out[i].u_w = u;
+    out[i].line = i + 1;
+  }
+  return out;
+}
+
+// Each predicted point is the forward model with errors at the IK joints, and the reported
+// deviation components and tool-axis angle match their definitions computed the slow way.
+TEST(ToolPathPrediction, AgreesWithTheComposedForwardModel) {
+  Machine m = readMachineFile(test::sourcePath(test::shippedMachines()[0]));
+  m.model.setup.gauge_length = 100;
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int i = 0; i < m.model.parameterCount(); ++i)
+    m.params[i] = n(rng) * (m.model.parameters[i].angular ? 30e-6 : 0.01);
+  const auto path = hemisphere(2000);
+  const PredictionResult r = predictToolPath(m.model, m.params, path);
+  ASSERT_TRUE(r.ok());
+  const ForwardKinematics fk(m.model, m.params);
+  double max_dev = 0;
+  for (size_t i = 0; i < path.size(); ++i) {
+    const PredictedPoint& p = r.points[i];
+    const Eigen::Isometry3d T = fk.w_T_t(p.q);
+    EXPECT_LT((p.p_pred_w - T.translation()).norm(), 1e-11);
+    EXPECT_LT((p.u_pred_w - T.linear().col(2)).norm(), 1e-14);
+    const Eigen::Vector3d u = path[i].u_w, v = T.linear().col(2);
+    const double angle = std::atan2(u.cross(v).norm(), u.dot(v));
+    EXPECT_NEAR(p.axis_angle, angle, 1e-15 + 1e-12 * angle);
+    EXPECT_NEAR(p.along_axis, p.deviation_w.dot(u), 1e-15);
+    EXPECT_NEAR(std::hypot(p.along_axis, p.across_axis), p.deviation_w.norm(), 1e-15);
+    max_dev = std::max(max_dev, p.deviation_w.norm());
+  }
+  EXPECT_NEAR(r.summary.max_deviation, max_dev, 0.0);
+  EXPECT_GT(max_dev, 0.0);
+}
+
+TEST(ToolPathPrediction, ZeroErrorsGiveZeroDeviationAndFailuresAreNaN) {
+  Machine m = readMachineFile(test::sourcePath(test::shippedMachines()[0]));
+  auto path = hemisphere(200);
+  path[50].p_w = Eigen::Vector3d(900, 0, 0);  // beyond X travel
+  const PredictionResult r = predictToolPath(m.model, m.params, path);
+  ASSERT_EQ(r.failures.size(), 1u);
+  EXPECT_EQ(r.failures[0].line, 51);
+  EXPECT_TRUE(std::isnan(r.points[50].p_pred_w.x()));
+  for (size_t i = 0; i < path.size(); ++i) {
+    if (i == 50) continue;
+    EXPECT_LT(r.points[i].deviation_w.norm(), 1e-12);
+    EXPECT_LT(r.points[i].axis_angle, 1e-15);
+  }
+}
+
+}  // namespace
+}  // namespace tolver
