@@ -43,6 +43,9 @@ ForwardKinematics::ForwardKinematics(const MachineModel& model, const Eigen::Vec
     }
   }
   for (AxisTerms& t : axis_) {
+    t.fixed_R = t.fixed.linear();
+    t.fixed_Rt = t.fixed_R.transpose();
+    t.fixed_p = t.fixed.translation();
     t.coef = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, std::max(t.max_degree + 1, 1));
     for (int c = 0; c < 6; ++c)
       for (int k = 0; k <= t.degree[c]; ++k) t.coef(c, k) = params[t.offset[c] + k];
@@ -189,16 +192,16 @@ void ForwardKinematics::applyJoint(int a, double s, double c, double sn, Eigen::
     p = R * p;
     u = R * u;
   }
-  p = t.fixed.linear() * p + t.fixed.translation();  // D1 L
-  u = t.fixed.linear() * u;
+  p = t.fixed_R * p + t.fixed_p;  // D1 L
+  u = t.fixed_R * u;
 }
 
 void ForwardKinematics::applyJointInverse(int a, double s, double c, double sn,
                                           Eigen::Vector3d& p, Eigen::Vector3d& u) const {
   const Axis& ax = model_->axes[a];
   const AxisTerms& t = axis_[a];
-  p = t.fixed.linear().transpose() * (p - t.fixed.translation());
-  u = t.fixed.linear().transpose() * u;
+  p = t.fixed_Rt * (p - t.fixed_p);
+  u = t.fixed_Rt * u;
   if (ax.type == JointType::Prismatic) {
     p -= ax.direction * s;
   } else if (t.principal >= 0) {

@@ -66,6 +66,8 @@ class ForwardKinematics {
 
   struct AxisTerms {
     Eigen::Isometry3d fixed;     // D1 * L (nominal link with link errors)
+    Eigen::Matrix3d fixed_R, fixed_Rt;  // its rotation and transpose, contiguous for the hot path
+    Eigen::Vector3d fixed_p;
     std::array<int, 6> offset;   // motion-error coefficient offsets, -1 if none
     std::array<int, 6> degree;
     int max_degree = -1;         // -1: no motion errors on this axis
