@@ -16,21 +16,6 @@ std::string lower(std::string s) {
   return s;
 }
 
-std::vector<std::string> splitCsv(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cur;
-  for (char c : line) {
-    if (c == ',') {
-      out.emplace_back(trim(cur));
-      cur.clear();
-    } else {
-      cur += c;
-    }
-  }
-  out.emplace_back(trim(cur));
-  return out;
-}
-
 std::string axisColumn(const Axis& ax) { return lower(ax.name) + (ax.isRotary() ? "_deg" : "_mm"); }
 
 }  // namespace
@@ -46,7 +31,7 @@ BallbarFile parseBallbarCsv(const std::string& text, const std::string& file, co
     const std::string_view t = trim(lines[i]);
     if (t.empty() || t[0] == '#') continue;
     header_line = static_cast<int>(i) + 1;
-    const auto names = splitCsv(lines[i]);
+    const auto names = splitCsvLine(lines[i]);
     for (size_t k = 0; k < names.size(); ++k) {
       const std::string n = lower(names[k]);
       if (col.count(n)) throw InputError(file, header_line, 0, n, "column named twice");
@@ -85,7 +70,7 @@ BallbarFile parseBallbarCsv(const std::string& text, const std::string& file, co
     const std::string_view t = trim(lines[i]);
     if (t.empty() || t[0] == '#') continue;
     const int line = static_cast<int>(i) + 1;
-    const auto cells = splitCsv(lines[i]);
+    const auto cells = splitCsvLine(lines[i]);
     auto value = [&](const std::string& name) {
       const int k = col.at(name);
       if (k >= static_cast<int>(cells.size()) || cells[k].empty())

@@ -38,6 +38,21 @@ std::vector<std::string> splitLines(const std::string& text) {
   return lines;
 }
 
+std::vector<std::string> splitCsvLine(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : line) {
+    if (c == ',') {
+      out.emplace_back(trim(cur));
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  out.emplace_back(trim(cur));
+  return out;
+}
+
 std::optional<double> parseNumber(std::string_view token) {
   token = trim(token);
   if (token.empty()) return std::nullopt;

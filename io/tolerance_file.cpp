@@ -9,21 +9,6 @@
 namespace tolver {
 namespace {
 
-std::vector<std::string> cells(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cur;
-  for (char c : line) {
-    if (c == ',') {
-      out.emplace_back(trim(cur));
-      cur.clear();
-    } else {
-      cur += c;
-    }
-  }
-  out.emplace_back(trim(cur));
-  return out;
-}
-
 }  // namespace
 
 const char* categoryName(ToleranceCategory c) {
@@ -46,7 +31,7 @@ std::vector<ToleranceTerm> parseToleranceCsv(const std::string& text, const std:
     const std::string_view t = trim(lines[i]);
     if (t.empty() || t[0] == '#') continue;
     const int line = static_cast<int>(i) + 1;
-    const auto c = cells(lines[i]);
+    const auto c = splitCsvLine(lines[i]);
     if (col.empty()) {
       for (size_t k = 0; k < c.size(); ++k) col[c[k]] = static_cast<int>(k);
       for (const char* r : {"term", "category", "standard", "unit"})
