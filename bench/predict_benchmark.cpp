@@ -50,6 +50,19 @@ void BM_PredictToolPath(benchmark::State& state) {
 }
 BENCHMARK(BM_PredictToolPath)->Arg(100000)->Unit(benchmark::kMillisecond);
 
+// The same with the result's storage reused across calls (batch work): no page faults.
+void BM_PredictToolPathReusingStorage(benchmark::State& state) {
+  const tolver::Machine m = machineWithErrors();
+  const auto p = path(static_cast<size_t>(state.range(0)));
+  tolver::PredictionResult r;
+  for (auto _ : state) {
+    tolver::predictToolPath(m.model, m.params, p, r);
+    benchmark::DoNotOptimize(r.summary.max_deviation);
+  }
+  state.SetItemsProcessed(state.iterations() * state.range(0));
+}
+BENCHMARK(BM_PredictToolPathReusingStorage)->Arg(100000)->Unit(benchmark::kMillisecond);
+
 void BM_ForwardKinematicsWithErrors(benchmark::State& state) {
   const tolver::Machine m = machineWithErrors();
   const tolver::ForwardKinematics fk(m.model, m.params);

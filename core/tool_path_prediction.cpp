@@ -49,6 +49,14 @@ double angleBetween(const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
 PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                                  const std::vector<ClPoint>& path, int max_failures) {
   PredictionResult result;
+  predictToolPath(model, params, path, result, max_failures);
+  return result;
+}
+
+void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
+                     const std::vector<ClPoint>& path, PredictionResult& result, int max_failures) {
+  result.failures.clear();
+  result.summary = PredictionSummary{};
   const InverseKinematics ik(model);
   const ForwardKinematics actual(model, params);
   result.points.resize(path.size());
@@ -99,7 +107,6 @@ PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorX
     s.rms_deviation = std::sqrt(sum2 / path.size());
     s.rms_axis_angle = std::sqrt(sum2_angle / path.size());
   }
-  return result;
 }
 
 }  // namespace tolver

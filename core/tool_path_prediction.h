@@ -62,6 +62,11 @@ struct PredictionResult {
 // Stops collecting failures after max_failures.
 PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                                  const std::vector<ClPoint>& path, int max_failures = 20);
+// The same into an existing result, reusing its storage (no allocation when it already holds as
+// many points): for batch work over many programs.
+void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
+                     const std::vector<ClPoint>& path, PredictionResult& result,
+                     int max_failures = 20);
 
 // One-line description of an IK failure (axis names and values in mm or deg).
 std::string describeIkFailure(const MachineModel& model, const IkSolution& sol);
