@@ -2,6 +2,7 @@
 // Helpers shared by the tests: paths to fixtures and shipped files, running the CLI.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
 #include <cstdio>
@@ -47,7 +48,8 @@ class TempDirTest : public ::testing::Test {
   void SetUp() override {
     const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
     dir_ = std::filesystem::temp_directory_path() /
-           (std::string("tolver_") + info->test_suite_name() + "_" + info->name());
+           (std::string("tolver_") + info->test_suite_name() + "_" + info->name() + "_" +
+            std::to_string(::getpid()));  // unique per process: suites may run concurrently
     std::filesystem::remove_all(dir_);
     std::filesystem::create_directories(dir_);
   }
