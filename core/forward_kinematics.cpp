@@ -141,23 +141,10 @@ inline void rotatePrincipal(int k, double c, double s, Eigen::Vector3d& v) {
   v[j] = s * vi + c * vj;
 }
 
-// Small-angle sin/cos exact to rounding (see rigid_transform.cpp), library otherwise.
-inline void sinCosSmall(double x, double* s, double* c) {
-  if (std::abs(x) < 1e-3) {
-    constexpr double k6 = 1.0 / 6.0, k20 = 1.0 / 20.0, k12 = 1.0 / 12.0, k30 = 1.0 / 30.0;
-    const double x2 = x * x;
-    *s = x * (1.0 - x2 * k6 * (1.0 - x2 * k20));
-    *c = 1.0 - 0.5 * x2 * (1.0 - x2 * k12 * (1.0 - x2 * k30));
-  } else {
-    *s = std::sin(x);
-    *c = std::cos(x);
-  }
-}
-
 // v <- Rz(rz) Ry(ry) Rx(rx) v (eq. 22's rotation), or its transpose when inverse.
 inline void rotateZYX(const Vector6d& e, bool inverse, Eigen::Vector3d& p, Eigen::Vector3d& u) {
   double c[3], s[3];
-  for (int k = 0; k < 3; ++k) sinCosSmall(e[3 + k], &s[k], &c[k]);
+  for (int k = 0; k < 3; ++k) sinCosOfSmallAngle(e[3 + k], &s[k], &c[k]);
   if (!inverse) {
     for (int k = 0; k < 3; ++k) {
       rotatePrincipal(k, c[k], s[k], p);
