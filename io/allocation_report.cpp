@@ -228,7 +228,17 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
     }
     h += "</ol>";
   }
-  h += "<p>" + r.constraint_handling + ".</p></body></html>\n";
+  h += "<h2>Method</h2><p>Cost C = &Sigma; (h<sub>i</sub> t<sub>i</sub>)<sup>-r</sup> with t = T/2 "
+       "in mm for lengths and mm/m for angles; h<sub>p</sub> = " + fmt("%g", a.h_p) + ", h<sub>a</sub> = " +
+       fmt("%g", a.h_a) + ", h<sub>d</sub> = " + fmt("%g", a.h_d) + ", r = " + fmt("%g", a.r) +
+       ". Quality loss: the signal-to-noise ratio &eta;<sub>i</sub> = &minus;10 log<sub>10</sub> E[y<sub>i</sub><sup>2</sup>] "
+       "with the error value y<sub>i</sub> " +
+       std::string(a.loss_normal ? "normal with t = 3&sigma; (E = t&sup2;/9)" : "uniform in &plusmn;t (E = t&sup2;/3)") +
+       ", weights &lambda;<sub>i</sub> = (1/&eta;<sub>i</sub>)/&Sigma;(1/&eta;<sub>j</sub>), L = " + fmt("%g", a.loss_weight) +
+       " &Sigma; &lambda;<sub>i</sub> t<sub>i</sub><sup>2</sup>. M1 = C + L is minimised and M2 (the tolerance "
+       "spread over the correlation groups) maximised by NSGA-II; the chosen compromise is the front "
+       "point closest to the ideal point, both objectives normalised over the front. " +
+       r.constraint_handling + ".</p></body></html>\n";
   writeFileAtomically(dir + "/report.html", h);
 }
 
