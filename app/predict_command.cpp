@@ -1,7 +1,6 @@
 // tolver predict: CL_predicted of a part program on a machine with errors (thesis 5.5.1-5.5.3).
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <string>
 
