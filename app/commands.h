@@ -9,5 +9,6 @@ void registerPredict(CLI::App& app, int* exit_code);
 void registerAnalyze(CLI::App& app, int* exit_code);
 void registerBallbar(CLI::App& app, int* exit_code);
 void registerAllocate(CLI::App& app, int* exit_code);
+void registerVerify(CLI::App& app, int* exit_code);
 
 }  // namespace tolver::app

@@ -1,0 +1,524 @@
+// tolver verify: will this program on this machine make this part within its profile tolerance?
+// (thesis 5.5.4-5.5.6, by swept surfaces; see geometry/verification.h.)
+#include <tbb/parallel_for.h>
+#include <unistd.h>
+
+#include <Eigen/Geometry>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "app/commands.h"
+#include "app/common.h"
+#include "core/tool_motion.h"
+#include "core/tool_path_prediction.h"
+#include "geometry/cutter.h"
+#include "geometry/verification.h"
+#include "io/apt_reader.h"
+#include "io/deviation_map.h"
+#include "io/io_error.h"
+#include "io/mesh_file.h"
+#include "io/offscreen_display.h"
+#include "io/text_util.h"
+#include "io/verify_report.h"
+#include "io/zone_file.h"
+
+namespace tolver::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct VerifyOptions {
+  MachineOptions machine;
+  std::string cl, part, zones_file, report_dir, batch;
+  std::string mesh_units;
+  std::vector<double> mesh_offset, mesh_rotation_deg;
+  double tolerance = NAN, uz = NAN, asme_u = NAN;
+  double spacing = 0.3, step = NAN, excess_range = NAN, gouge_range = NAN, max_hole = -1;
+  std::vector<double> cutter;
+  int line_pass = 0;
+  bool no_images = false;
+  bool quiet = false;
+};
+
+struct JobOutcome {
+  std::string name;
+  bool ok = false, pass = false;
+  std::string error;
+  double max_um = 0, min_um = 0, machine_rms_um = 0, percent_in = 0;
+  int regions = 0;
+  std::string report;
+};
+
+std::mutex g_vtk_mutex;  // VTK rendering and writing are not thread-safe
+
+// A progress bar on stderr when it is a terminal.
+class ProgressBar {
+ public:
+  explicit ProgressBar(bool enabled) : enabled_(enabled && isatty(2)) {}
+  void operator()(const std::string& what, double f) {
+    if (!enabled_) return;
+    const int width = 40, filled = static_cast<int>(f * width + 0.5);
+    std::fprintf(stderr, "\r  %-24s [%s%s] %3d%%", what.c_str(), std::string(filled, '#').c_str(),
+                 std::string(width - filled, '.').c_str(), static_cast<int>(f * 100 + 0.5));
+    if (f >= 1.0) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  }
+
+ private:
+  bool enabled_;
+};
+
+std::vector<ToleranceZone> zonesFrom(const VerifyOptions& o) {
+  std::vector<ToleranceZone> zones;
+  if (!std::isnan(o.tolerance)) {
+    if (!std::isnan(o.uz) && !std::isnan(o.asme_u))
+      throw InputError("--uz", 0, 0, "zone", "give either --uz (ISO) or --asme-u (ASME), not both");
+    try {
+      zones.push_back(!std::isnan(o.uz)       ? isoUzZone(o.tolerance, o.uz)
+                      : !std::isnan(o.asme_u) ? asmeUZone(o.tolerance, o.asme_u)
+                                              : bilateralZone(o.tolerance));
+    } catch (const std::invalid_argument& e) {
+      throw InputError("--tolerance", 0, 0, "tolerance", e.what());
+    }
+  }
+  if (!o.zones_file.empty()) {
+    auto more = readZoneFile(o.zones_file);
+    zones.insert(zones.end(), more.begin(), more.end());
+  }
+  if (zones.empty())
+    throw InputError("--tolerance", 0, 0, "tolerance", "give --tolerance (mm) or --zones (file)");
+  return zones;
+}
+
+Cutter cutterFrom(const VerifyOptions& o, const ClProgram& program) {
+  Cutter c;
+  if (!o.cutter.empty()) {
+    std::vector<double> v = o.cutter;
+    if (!cutterFromApt("TLDATA", v, &c))
+      throw InputError("--cutter", 0, 0, "cutter", "expected d,r[,length,taper_deg] with 0 <= r <= d/2");
+    return c;
+  }
+  if (program.cutters.empty())
+    throw InputError(o.cl, 0, 0, "CUTTER", "the program declares no cutter (CUTTER or TLDATA); give --cutter d,r");
+  const CutterSpec& s = program.cutters.back();
+  if (!cutterFromApt(s.source, s.values, &c))
+    throw InputError(o.cl, s.line, 0, s.source, "the values do not describe a cutter");
+  return c;
+}
+
+std::string fmt(const char* f, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, v);
+  return buf;
+}
+
+// Renders the maps and the histogram; returns (caption, path) pairs.
+std::vector<std::pair<std::string, std::string>> renderImages(
+    const VerifyOptions& o, const std::string& dir, const SurfaceSamples& s, const VerifyResult& r,
+    const std::vector<ToleranceZone>& zones, const std::vector<LineProfilePoint>& profile,
+    const std::string& title, std::vector<std::string>* notes) {
+  std::vector<std::pair<std::string, std::string>> images;
+  if (o.no_images) return images;
+  std::string why;
+  if (!ensureDisplay(&why)) {
+    notes->push_back(why);
+    return images;
+  }
+  std::lock_guard<std::mutex> lock(g_vtk_mutex);
+  std::vector<Eigen::Vector3d> points(s.p_w);
+  DeviationMap map;
+  map.points = &points;
+  map.faces = &s.faces;
+  map.colours.resize(s.size());
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (r.conformance[i] == Conformance::Unmachined) map.colours[i] = kUnmachinedColour;
+    else if (r.conformance[i] == Conformance::Unchecked) map.colours[i] = kUncheckedColour;
+    else map.colours[i] = deviationColour(r.total[i], zones[r.zone[i]].lower, zones[r.zone[i]].upper);
+  }
+  map.bar_lower = zones.front().lower;
+  map.bar_upper = zones.front().upper;
+  map.title = title;
+  // Callouts: the three worst regions, or the largest deviation when in tolerance.
+  int worst = r.total_stats.max_sample;
+  if (r.total_stats.min_sample >= 0 &&
+      std::abs(r.total_stats.min) > std::abs(r.total_stats.max))
+    worst = r.total_stats.min_sample;
+  Eigen::Vector3d focus = worst >= 0 ? s.p_w[worst] : Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = worst >= 0 ? s.n_w[worst] : Eigen::Vector3d::UnitZ();
+  if (!r.regions.empty()) {
+    focus = r.regions.front().where_w;
+    normal = r.regions.front().normal_w;
+    for (size_t k = 0; k < r.regions.size() && k < 3; ++k)
+      map.callouts.push_back({r.regions[k].where_w, std::string(conformanceName(r.regions[k].kind)) +
+                                                        " " + fmt("%+.1f um", r.regions[k].worst_deviation * 1e3)});
+  } else if (worst >= 0) {
+    map.callouts.push_back({focus, "largest " + fmt("%+.1f um", r.total[worst] * 1e3)});
+  }
+  const Eigen::Vector3d up = std::abs(normal.z()) > 0.9 ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitZ();
+  const std::vector<MapView> views = {
+      {"isometric", Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d::UnitZ(), false, {}},
+      {"top", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitY(), false, {}},
+      {"worst", -normal, up, true, focus}};
+  for (const auto& v : views) {
+    const std::string path = (fs::path(dir) / ("map_" + v.name + ".png")).string();
+    renderDeviationMap(path, map, v);
+    images.push_back({"deviation map, " + v.name + " view", path});
+  }
+  std::vector<double> dev, w;
+  for (size_t i = 0; i < s.size(); ++i)
+    if (r.machined[i] && r.zone[i] >= 0) {
+      dev.push_back(r.total[i]);
+      w.push_back(s.area[i]);
+    }
+  if (!dev.empty()) {
+    const std::string path = (fs::path(dir) / "histogram.png").string();
+    renderHistogram(path, dev, w, zones.front().lower, zones.front().upper,
+                    "total deviation (predicted swept - CAD), area-weighted");
+    images.push_back({"histogram of the total deviation", path});
+  }
+  if (!profile.empty()) {
+    std::vector<double> x, t, m;
+    for (const auto& p : profile) {
+      x.push_back(p.arc_length);
+      t.push_back(p.total);
+      m.push_back(p.machine);
+    }
+    const std::string path = (fs::path(dir) / "line_profile.png").string();
+    renderLineProfile(path, x, t, m, zones.front().lower, zones.front().upper,
+                      "line profile along pass " + std::to_string(o.line_pass));
+    images.push_back({"line profile along pass " + std::to_string(o.line_pass), path});
+  }
+  return images;
+}
+
+JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress_bar) {
+  const auto t0 = std::chrono::steady_clock::now();
+  JobOutcome out;
+  out.name = name;
+  ProgressBar bar(progress_bar && !o.quiet);
+  Machine machine = loadMachine(o.machine);
+  const std::vector<ToleranceZone> zones = zonesFrom(o);
+  const ClProgram program = readAptFile(o.cl);
+  if (program.path.empty()) throw InputError(o.cl, 0, 0, "GOTO", "the program has no tool positions");
+  const Cutter cutter = cutterFrom(o, program);
+  fs::create_directories(o.report_dir);
+  if (!fs::is_directory(o.report_dir))
+    throw InputError(o.report_dir, 0, 0, "--report-dir", "cannot create the directory");
+
+  // Joint values and CL_predicted (thesis 5.5.3).
+  const PredictionResult pred = predictToolPath(machine.model, machine.params, program.path);
+  if (!pred.ok()) {
+    const PredictionFailure& f = pred.failures.front();
+    throw InputError(o.cl, f.line, 0, "unreachable", f.message);
+  }
+  double t_min = INFINITY;
+  for (const auto& z : zones) t_min = std::min(t_min, z.tolerance);
+  const double r_eff = cutter.corner_radius > 0 ? cutter.corner_radius : 0.5 * cutter.diameter;
+  MotionSampling sampling;
+  sampling.step = std::isnan(o.step) ? std::clamp(std::sqrt(0.8 * r_eff * t_min), 0.005, 1.0) : o.step;
+  sampling.reach = cutter.effectiveLength();
+  SweepOptions sweep;
+  sweep.excess_range = std::isnan(o.excess_range) ? std::max(0.1, 5.0 * t_min) : o.excess_range;
+  sweep.gouge_range = std::isnan(o.gouge_range) ? std::max(0.1, 5.0 * t_min) : o.gouge_range;
+
+  VerifyReport rep;
+  rep.name = name;
+  rep.machine_name = machine.model.name;
+  rep.machine_file = o.machine.machine;
+  rep.program_file = o.cl;
+  rep.cutter = cutter.describe() + ", length " + fmt("%.4g", cutter.effectiveLength()) + " mm" +
+               (cutter.length > 0 ? "" : " (assumed: 3 D)");
+  rep.cl_points = static_cast<int>(program.path.size());
+  for (const auto& p : program.path) rep.cl_lines.push_back(p.line);
+  rep.zones = zones;
+  rep.step_mm = sampling.step;
+
+  SurfaceSamples samples;
+  VerifyResult result;
+  if (o.part.empty()) {
+    rep.mode = "cl-only";
+    std::vector<ClPoint> predicted = program.path;
+    for (size_t i = 0; i < predicted.size(); ++i) {
+      predicted[i].p_w = pred.points[i].p_pred_w;
+      predicted[i].u_w = pred.points[i].u_pred_w;
+    }
+    clOnlyDeviation(program.path, predicted, zones, &samples, &result);
+    rep.notes.push_back("CL-only mode: no part model; the surfaces are built through the CL points "
+                        "(thesis 5.5.4-5.5.5) and the deviation is the machine's alone");
+  } else {
+    PartImportOptions io;
+    io.units = o.mesh_units;
+    if (!o.mesh_offset.empty()) io.w_T_file.translation() = Eigen::Vector3d(o.mesh_offset[0], o.mesh_offset[1], o.mesh_offset[2]);
+    if (!o.mesh_rotation_deg.empty()) {
+      const double k = M_PI / 180.0;
+      io.w_T_file.linear() = (Eigen::AngleAxisd(o.mesh_rotation_deg[2] * k, Eigen::Vector3d::UnitZ()) *
+                              Eigen::AngleAxisd(o.mesh_rotation_deg[1] * k, Eigen::Vector3d::UnitY()) *
+                              Eigen::AngleAxisd(o.mesh_rotation_deg[0] * k, Eigen::Vector3d::UnitX()))
+                                 .toRotationMatrix();
+    }
+    io.repair.max_hole_perimeter = o.max_hole;
+    const ImportedPart part = readPartMesh(o.part, io);
+    rep.has_repair = true;
+    rep.repair = part.repair;
+    rep.part_file = o.part;
+    samples = sampleSurface(part.mesh, o.spacing);
+    rep.spacing_mm = o.spacing;
+
+    ForwardKinematics fk_nominal(machine.model, Eigen::VectorXd::Zero(machine.model.parameterCount()));
+    ForwardKinematics fk_actual(machine.model, machine.params);
+    std::vector<JointVector> q(pred.points.size());
+    for (size_t i = 0; i < q.size(); ++i) q[i] = pred.points[i].q;
+    std::vector<ToolPlacement> nominal, actual;
+    samplePlacements(fk_nominal, fk_actual, program.path, q, sampling, &nominal, &actual);
+    rep.placements = static_cast<int>(nominal.size());
+    result = verifyPart(samples, cutter, nominal, actual, zones, sweep,
+                        [&](double f) { bar("sweeping " + name, f); });
+  }
+  rep.samples = &samples;
+  rep.result = &result;
+  if (o.line_pass > 0) {
+    const auto passes = clPasses(program.path);
+    if (o.line_pass > static_cast<int>(passes.size()))
+      throw InputError("--line-pass", 0, 0, "line pass",
+                       "the program has " + std::to_string(passes.size()) + " passes, not " +
+                           std::to_string(o.line_pass));
+    rep.line_pass = o.line_pass;
+    rep.line_profile = lineProfile(samples, result, passes[o.line_pass - 1]);
+  }
+
+  // Files: deviations, swept surfaces, images, reports.
+  const fs::path dir(o.report_dir);
+  VerifyReport& r = rep;
+  writeFileAtomically((dir / "deviations.csv").string(), formatDeviationsCsv(r));
+  {
+    std::vector<Eigen::Vector3d> nominal_swept(samples.size()), predicted_swept(samples.size());
+    std::vector<double> total_um(samples.size()), machine_um(samples.size()), program_um(samples.size()),
+        state(samples.size());
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const bool cut = result.machined[i];
+      predicted_swept[i] = samples.p_w[i] + (cut ? result.total[i] : 0.0) * samples.n_w[i];
+      nominal_swept[i] = samples.p_w[i] + (cut ? result.program[i] : 0.0) * samples.n_w[i];
+      total_um[i] = result.total[i] * 1e3;
+      machine_um[i] = result.machine[i] * 1e3;
+      program_um[i] = result.program[i] * 1e3;
+      state[i] = static_cast<double>(result.conformance[i]);
+    }
+    writePlyWithScalar((dir / "swept_predicted.ply").string(), predicted_swept, samples.faces, total_um,
+                       "deviation_um");
+    writePlyWithScalar((dir / "swept_nominal.ply").string(), nominal_swept, samples.faces, program_um,
+                       "deviation_um");
+    std::lock_guard<std::mutex> lock(g_vtk_mutex);
+    writeVtpWithScalars((dir / "swept_predicted.vtp").string(), predicted_swept, samples.faces,
+                        {{"total_um", &total_um}, {"machine_um", &machine_um}, {"program_um", &program_um},
+                         {"state", &state}});
+    writeVtpWithScalars((dir / "swept_nominal.vtp").string(), nominal_swept, samples.faces,
+                        {{"program_um", &program_um}});
+  }
+  const std::string title = std::string(result.pass ? "PASS" : "FAIL") + "  " + name +
+                            ": total deviation (predicted swept - CAD)";
+  r.images = renderImages(o, dir.string(), samples, result, zones, r.line_profile, title, &r.notes);
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  writeFileAtomically((dir / "report.json").string(), formatVerifyJson(r));
+  writeFileAtomically((dir / "report.html").string(), formatVerifyHtml(r));
+
+  out.ok = true;
+  out.pass = result.pass;
+  out.max_um = result.total_stats.max * 1e3;
+  out.min_um = result.total_stats.min * 1e3;
+  out.machine_rms_um = result.machine_stats.rms * 1e3;
+  out.percent_in = result.percent_in;
+  out.regions = static_cast<int>(result.regions.size());
+  out.report = (dir / "report.html").string();
+
+  if (!o.quiet && o.batch.empty()) {
+    std::printf("tolver verify: %s\n", result.pass ? "PASS" : "FAIL");
+    std::printf("  machine    %s (%s)\n", machine.model.name.c_str(), o.machine.machine.c_str());
+    std::printf("  program    %s: %d CL points, %d tool placements (step %.3g mm), %s\n", o.cl.c_str(),
+                r.cl_points, r.placements, r.step_mm, r.cutter.c_str());
+    if (r.mode == "cl-only")
+      std::printf("  part       none: CL-only mode, %zu points\n", samples.size());
+    else
+      std::printf("  part       %s: %zu samples at %.3g mm%s\n", o.part.c_str(), samples.size(), o.spacing,
+                  r.repair.notes.empty() ? "" : " (mesh repaired: see the report)");
+    for (const auto& z : zones)
+      std::printf("  zone       %s: %s mm [%+.1f, %+.1f] um\n", z.region.c_str(), z.spec.c_str(),
+                  z.lower * 1e3, z.upper * 1e3);
+    std::printf("  total      %+.2f .. %+.2f um, RMS %.2f um (+ material left, - gouge)\n",
+                result.total_stats.min * 1e3, result.total_stats.max * 1e3, result.total_stats.rms * 1e3);
+    if (r.mode != "cl-only")
+      std::printf("  program    %+.2f .. %+.2f um (nominal swept - CAD)\n", result.program_stats.min * 1e3,
+                  result.program_stats.max * 1e3);
+    std::printf("  machine    %+.2f .. %+.2f um, RMS %.2f um (predicted - nominal swept)\n",
+                result.machine_stats.min * 1e3, result.machine_stats.max * 1e3, result.machine_stats.rms * 1e3);
+    std::printf("  area       %.2f %% of %.1f mm2 machined in tolerance; %.1f mm2 not machined\n",
+                result.percent_in, result.area_machined, result.area_unmachined);
+    for (size_t k = 0; k < result.regions.size() && k < 5; ++k) {
+      const auto& g = result.regions[k];
+      std::printf("  region %zu   %s %.3f mm2, worst %+.2f um at (%.2f, %.2f, %.2f), cause: %s\n", k + 1,
+                  conformanceName(g.kind), g.area_mm2, g.worst_deviation * 1e3, g.where_w.x(), g.where_w.y(),
+                  g.where_w.z(), regionCause(r, g).c_str());
+    }
+    if (result.regions.size() > 5) std::printf("  ...        %zu regions in all\n", result.regions.size());
+    for (const auto& n : r.notes) std::fprintf(stderr, "tolver: note: %s\n", n.c_str());
+    std::printf("  report     %s (and report.json, deviations.csv, swept_*.ply/.vtp, *.png)\n",
+                out.report.c_str());
+  }
+  return out;
+}
+
+// Batch: jobs.csv with columns name,machine,cl,part,tolerance[,setup,zones]; paths relative to
+// the jobs file.
+int runBatch(const VerifyOptions& base) {
+  const std::string text = readFile(base.batch);
+  const auto lines = splitLines(text);
+  const fs::path root = fs::path(base.batch).parent_path();
+  auto resolve = [&](const std::string& p) {
+    if (p.empty() || fs::path(p).is_absolute()) return p;
+    return (root / p).string();
+  };
+  std::vector<VerifyOptions> jobs;
+  std::vector<std::string> names;
+  std::map<std::string, int> col;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const auto t = trim(lines[i]);
+    if (t.empty() || t[0] == '#') continue;
+    const int line = static_cast<int>(i) + 1;
+    const auto c = splitCsvLine(lines[i]);
+    if (col.empty()) {
+      for (size_t k = 0; k < c.size(); ++k) col[c[k]] = static_cast<int>(k);
+      for (const char* r : {"name", "machine", "cl", "tolerance"})
+        if (!col.count(r)) throw InputError(base.batch, line, 0, r, "missing column (name,machine,cl,part,tolerance[,setup,zones])");
+      continue;
+    }
+    auto cell = [&](const char* n) -> std::string {
+      auto it = col.find(n);
+      return it == col.end() || it->second >= static_cast<int>(c.size()) ? "" : c[it->second];
+    };
+    VerifyOptions o = base;
+    o.batch.clear();
+    o.quiet = true;
+    o.machine.machine = resolve(cell("machine"));
+    o.machine.setup = resolve(cell("setup"));
+    o.cl = resolve(cell("cl"));
+    o.part = resolve(cell("part"));
+    o.zones_file = resolve(cell("zones"));
+    const auto tol = parseNumber(cell("tolerance"));
+    if (!tol && o.zones_file.empty())
+      throw InputError(base.batch, line, col["tolerance"] + 1, "tolerance", "'" + cell("tolerance") + "' is not a number");
+    o.tolerance = tol ? *tol : NAN;
+    const std::string name = cell("name");
+    if (name.empty() || name.find('/') != std::string::npos || name == "." || name == "..")
+      throw InputError(base.batch, line, col["name"] + 1, "name", "a job name is a plain file name");
+    o.report_dir = (fs::path(base.report_dir) / name).string();
+    jobs.push_back(o);
+    names.push_back(name);
+  }
+  if (jobs.empty()) throw InputError(base.batch, 0, 0, "jobs", "the file lists no job");
+  fs::create_directories(base.report_dir);
+  std::vector<JobOutcome> outcomes(jobs.size());
+  std::atomic<int> done{0};
+  std::mutex print;
+  tbb::parallel_for(size_t(0), jobs.size(), [&](size_t k) {
+    try {
+      outcomes[k] = runJob(jobs[k], names[k], false);
+    } catch (const InputError& e) {
+      outcomes[k].name = names[k];
+      outcomes[k].error = e.what();
+    } catch (const std::exception& e) {
+      outcomes[k].name = names[k];
+      outcomes[k].error = std::string("internal error: ") + e.what();
+    }
+    std::lock_guard<std::mutex> lock(print);
+    const int n = ++done;
+    if (!base.quiet)
+      std::fprintf(stderr, "  [%d/%zu] %s: %s\n", n, jobs.size(), names[k].c_str(),
+                   !outcomes[k].ok ? "error" : outcomes[k].pass ? "pass" : "fail");
+  });
+  std::string csv = "name,verdict,min_um,max_um,machine_rms_um,percent_in_tolerance,regions,report,error\n";
+  int code = 0;
+  std::printf("tolver verify --batch %s: %zu jobs\n", base.batch.c_str(), jobs.size());
+  std::printf("  %-20s %-7s %10s %10s %12s %8s %8s\n", "name", "verdict", "min um", "max um",
+              "machine RMS", "% in", "regions");
+  for (const auto& r : outcomes) {
+    const std::string verdict = !r.ok ? "error" : r.pass ? "pass" : "fail";
+    code = std::max(code, !r.ok ? 2 : r.pass ? 0 : 1);
+    char buf[512];
+    std::snprintf(buf, sizeof buf, "%s,%s,%.3f,%.3f,%.3f,%.3f,%d,%s,\"%s\"\n", r.name.c_str(), verdict.c_str(),
+                  r.min_um, r.max_um, r.machine_rms_um, r.percent_in, r.regions, r.report.c_str(),
+                  r.error.c_str());
+    csv += buf;
+    if (r.ok)
+      std::printf("  %-20s %-7s %+10.2f %+10.2f %12.2f %8.2f %8d\n", r.name.c_str(), verdict.c_str(), r.min_um,
+                  r.max_um, r.machine_rms_um, r.percent_in, r.regions);
+    else
+      std::printf("  %-20s %-7s %s\n", r.name.c_str(), verdict.c_str(), r.error.c_str());
+  }
+  const std::string summary = (fs::path(base.report_dir) / "summary.csv").string();
+  writeFileAtomically(summary, csv);
+  std::printf("  wrote      %s\n", summary.c_str());
+  return code;
+}
+
+}  // namespace
+
+void registerVerify(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<VerifyOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "verify",
+      "Verify a part program on a machine: swept surfaces on the nominal and the real machine, "
+      "signed normal deviations against profile tolerance zones, maps and reports. Exit 0 in "
+      "tolerance, 1 out of tolerance, 2 bad input.");
+  addMachineOptions(cmd, o->machine, "machine file (XML), calibrated or not");
+  cmd->add_option("--cl", o->cl, "CL program (APT/CLDATA)");
+  cmd->add_option("--part", o->part,
+                  "part model (STL, OBJ, PLY, OFF, 3MF, glTF); without it: CL-only mode");
+  cmd->add_option("--tolerance", o->tolerance, "profile tolerance all over, mm (zone width t)");
+  cmd->add_option("--uz", o->uz, "ISO 1101 UZ offset of that zone, mm (+ towards material left)");
+  cmd->add_option("--asme-u", o->asme_u, "ASME Y14.5 U: the part of t outside the material, mm");
+  cmd->add_option("--zones", o->zones_file, "zones per region (CSV: region,tolerance,uz,u)");
+  cmd->add_option("--report-dir", o->report_dir, "directory for the report (created)")->required();
+  cmd->add_option("--batch", o->batch,
+                  "jobs file (CSV: name,machine,cl,part,tolerance[,setup,zones]); verifies them "
+                  "in parallel, one report directory each, and writes summary.csv");
+  cmd->add_option("--mesh-units", o->mesh_units, "length unit of the part file: mm, inch or m "
+                                                  "(default mm; m for glTF)");
+  cmd->add_option("--mesh-offset", o->mesh_offset, "placement of the part file in the part frame, mm (x,y,z)")
+      ->delimiter(',')
+      ->expected(3);
+  cmd->add_option("--mesh-rotation-deg", o->mesh_rotation_deg,
+                  "rotation of the part file about x, then y, then z of the part frame, deg (a,b,c)")
+      ->delimiter(',')
+      ->expected(3);
+  cmd->add_option("--spacing", o->spacing, "surface sample spacing, mm (default 0.3)")->check(CLI::PositiveNumber);
+  cmd->add_option("--step", o->step, "largest tool advance between placements, mm (default sqrt(0.8 R t))")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--excess-range", o->excess_range, "stock above the surface considered, mm (default max(0.1, 5t))")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--gouge-range", o->gouge_range, "depth searched for gouges, mm (default max(0.1, 5t))")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--max-hole", o->max_hole, "largest mesh hole perimeter filled, mm (default 2 % of the size)");
+  cmd->add_option("--cutter", o->cutter, "cutter d,r[,length,taper_deg] in mm, overriding the program's")
+      ->delimiter(',');
+  cmd->add_option("--line-pass", o->line_pass, "also a line profile along this pass (1-based)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("--no-images", o->no_images, "write no PNG images (no X server needed)");
+  cmd->add_flag("--quiet", o->quiet, "print nothing but errors");
+  cmd->callback([o, exit_code] {
+    if (!o->batch.empty()) {
+      *exit_code = runBatch(*o);
+      return;
+    }
+    if (o->cl.empty()) throw InputError("--cl", 0, 0, "cl", "give the CL program (--cl) or a jobs file (--batch)");
+    const std::string name = fs::path(o->cl).stem().string();
+    const JobOutcome r = runJob(*o, name, true);
+    *exit_code = r.pass ? 0 : 1;
+  });
+}
+
+}  // namespace tolver::app

@@ -1,0 +1,59 @@
+#include "core/tool_motion.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace tolver {
+namespace {
+
+// Length of the path of the point `reach` up the axis, estimated by a two-chord polyline
+// through the joint-space midpoint (the tip of a rotary move follows an arc).
+double moveLength(const Eigen::Vector3d& p0, const Eigen::Vector3d& u0, const Eigen::Vector3d& pm,
+                  const Eigen::Vector3d& um, const Eigen::Vector3d& p1, const Eigen::Vector3d& u1,
+                  double reach) {
+  const double tip = (pm - p0).norm() + (p1 - pm).norm();
+  const Eigen::Vector3d r0 = p0 + reach * u0, rm = pm + reach * um, r1 = p1 + reach * u1;
+  const double top = (rm - r0).norm() + (r1 - rm).norm();
+  return std::max(tip, top);
+}
+
+}  // namespace
+
+void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics& actual,
+                      const std::vector<ClPoint>& path, const std::vector<JointVector>& q,
+                      const MotionSampling& sampling, std::vector<ToolPlacement>* nominal_out,
+                      std::vector<ToolPlacement>* actual_out) {
+  nominal_out->clear();
+  actual_out->clear();
+  const size_t n = std::min(path.size(), q.size());
+  auto emit = [&](const JointVector& qk, int index) {
+    ToolPlacement a, b;
+    nominal.tipAndAxis(qk, &a.tip_w, &a.axis_w);
+    actual.tipAndAxis(qk, &b.tip_w, &b.axis_w);
+    a.cl_index = b.cl_index = index;
+    nominal_out->push_back(a);
+    actual_out->push_back(b);
+  };
+  JointVector qm;
+  Eigen::Vector3d p0, u0, pm, um, p1, u1;
+  for (size_t i = 0; i < n; ++i) {
+    if (i == 0 || path[i].rapid) {
+      emit(q[i], static_cast<int>(i));
+      continue;
+    }
+    nominal.tipAndAxis(q[i - 1], &p0, &u0);
+    qm = 0.5 * (q[i - 1] + q[i]);
+    nominal.tipAndAxis(qm, &pm, &um);
+    nominal.tipAndAxis(q[i], &p1, &u1);
+    const double len = moveLength(p0, u0, pm, um, p1, u1, sampling.reach);
+    const int m = std::clamp(static_cast<int>(std::ceil(len / sampling.step)), 1,
+                             sampling.max_substeps);
+    for (int k = 1; k <= m; ++k) {
+      const double f = static_cast<double>(k) / m;
+      qm = (1.0 - f) * q[i - 1] + f * q[i];
+      emit(k == m ? q[i] : qm, static_cast<int>(i));
+    }
+  }
+}
+
+}  // namespace tolver

@@ -1,0 +1,41 @@
+#pragma once
+// The tool's motion between CL points as a five-axis control makes it: joint values
+// interpolated linearly between consecutive points (so the tool tip does not follow the straight
+// CL segment when rotary axes move), sampled into discrete tool placements for swept-surface
+// computation. Placements are in the workpiece frame w, lengths in mm.
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/forward_kinematics.h"
+#include "core/tool_path_prediction.h"
+
+namespace tolver {
+
+// One position of the tool: tip (origin of the tool frame t) and unit axis (tip -> spindle)
+// seen from w, and the CL point it follows from.
+struct ToolPlacement {
+  Eigen::Vector3d tip_w = Eigen::Vector3d::Zero();
+  Eigen::Vector3d axis_w = Eigen::Vector3d::UnitZ();
+  int cl_index = 0;  // index of the CL point at the end of the move this placement lies on
+};
+
+struct MotionSampling {
+  // Largest advance between consecutive placements of the tool tip and of the point `reach` mm
+  // up the tool axis (mm). For a cutter of effective radius R and a tolerance t, a step of
+  // sqrt(0.8 R t) keeps the cusp between placements, step^2 / 8R, at a tenth of t.
+  double step = 0.1;
+  double reach = 10.0;
+  int max_substeps = 10000;  // per CL segment
+};
+
+// Placements along `path` for joint values `q` (one per CL point, from inverse kinematics),
+// on the nominal machine (`nominal`) and on the machine with errors (`actual`). Both are
+// sampled at the same joint values, chosen from the nominal motion, so placement k of one
+// corresponds to placement k of the other. Moves into a rapid point (APT RAPID) are not
+// cutting moves and produce no placements but their end point.
+void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics& actual,
+                      const std::vector<ClPoint>& path, const std::vector<JointVector>& q,
+                      const MotionSampling& sampling, std::vector<ToolPlacement>* nominal_out,
+                      std::vector<ToolPlacement>* actual_out);
+
+}  // namespace tolver

@@ -1,0 +1,35 @@
+#pragma once
+// The surface a cutter leaves when it moves through a sequence of placements: the point-vector
+// ("mow the grass") method of NC verification. From each sample of the nominal surface a blade
+// runs along the outward normal, from gouge_range below the surface to excess_range above it;
+// every tool placement that the blade meets cuts it down to where the line enters the cutter.
+// What is left of the blade is the signed normal deviation of the machined surface from the
+// nominal one: + material left, - gouge. A sample that no tool cuts below excess_range is
+// unmachined (not part of this program). A CGAL AABB tree over the placements' bounding boxes
+// gives each blade only the placements near it.
+#include <functional>
+#include <vector>
+
+#include "core/tool_motion.h"
+#include "geometry/cutter.h"
+#include "geometry/triangle_mesh.h"
+
+namespace tolver {
+
+struct SweepOptions {
+  double excess_range = 0.5;  // mm above the surface: stock considered; more left = unmachined
+  double gouge_range = 0.5;   // mm below the surface searched for gouges
+};
+
+struct SweepResult {
+  std::vector<double> deviation;  // #S, mm along the outward normal (excess_range when unmachined)
+  std::vector<char> machined;     // #S, 1 when a placement cut the blade
+  std::vector<int> placement;     // #S, the placement that cut deepest, -1 when none
+};
+
+// progress(fraction) is called from the calling thread between blocks of samples.
+void sweepSurface(const SurfaceSamples& samples, const Cutter& cutter,
+                  const std::vector<ToolPlacement>& placements, const SweepOptions& options,
+                  SweepResult* result, const std::function<void(double)>& progress = {});
+
+}  // namespace tolver

@@ -1,0 +1,46 @@
+#pragma once
+// An indexed triangle mesh of a part's nominal surface in the part (workpiece) frame w, mm, and
+// the surface samples the swept-surface computation works on.
+//
+// Faces are counter-clockwise seen from outside the material, so the right-hand normal of a
+// face points out of the part: "+" along it is material left, "-" a gouge.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace tolver {
+
+struct TriangleMesh {
+  std::vector<Eigen::Vector3d> vertices;  // #V, mm in w
+  std::vector<Eigen::Vector3i> faces;     // #F, vertex indices
+  std::vector<int> face_group;            // #F, index into group_names (region of the face)
+  std::vector<std::string> group_names;   // at least one
+
+  double area() const;
+  Eigen::Vector3d faceNormal(int f) const;  // unit; zero for a degenerate face
+  double faceArea(int f) const;
+};
+
+// Splits every edge longer than max_edge at its midpoint, conformingly (neighbouring faces share
+// the new vertices), until no edge is longer: the samples then lie at most max_edge apart on the
+// mesh's own (faceted) surface. Face groups are inherited.
+void refineMesh(TriangleMesh* mesh, double max_edge);
+
+// Surface samples: the refined mesh's vertices with outward unit normals. Along sharp edges
+// (dihedral angle above feature_angle) a vertex is split into one sample per side, each with
+// the normal of its own side, so a vector grown from a sample never leans across an edge.
+struct SurfaceSamples {
+  std::vector<Eigen::Vector3d> p_w;     // #S sample points, mm
+  std::vector<Eigen::Vector3d> n_w;     // #S outward unit normals
+  std::vector<double> area;             // #S area each sample stands for (a third of its faces), mm^2
+  std::vector<int> group;               // #S region (group of its faces; the first one met)
+  std::vector<Eigen::Vector3i> faces;   // the mesh's faces re-indexed into samples
+  std::vector<int> face_group;
+  std::vector<std::string> group_names;
+  size_t size() const { return p_w.size(); }
+};
+
+SurfaceSamples sampleSurface(const TriangleMesh& mesh, double spacing,
+                             double feature_angle_rad = 0.5236 /* 30 deg */);
+
+}  // namespace tolver

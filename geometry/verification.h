@@ -1,0 +1,80 @@
+#pragma once
+// Verification of a part program against the part's nominal surface (thesis 5.5.4-5.5.5, by the
+// point-vector method of geometry/swept_surface.h): the surface the cutter leaves along
+// CL_nominal (the program on a perfect machine) and along CL_predicted (on the real machine),
+// each as a signed normal deviation at every sample of the nominal surface, then the profile
+// tolerance zones. Deviations in mm along the outward normal, + material left, - gouge:
+//   total   = predicted swept - nominal surface   (what the part will be; the verdict)
+//   program = nominal swept - nominal surface     (the program's own error: scallops, gouges)
+//   machine = predicted swept - nominal swept     (the machine's contribution)
+#include <functional>
+#include <vector>
+
+#include "core/tool_motion.h"
+#include "geometry/cutter.h"
+#include "geometry/swept_surface.h"
+#include "geometry/tolerance_zone.h"
+#include "geometry/triangle_mesh.h"
+
+namespace tolver {
+
+struct DeviationStats {
+  int samples = 0;          // machined samples with a zone
+  double min = 0, max = 0, mean = 0, rms = 0;  // mm, area-weighted mean and RMS
+  int min_sample = -1, max_sample = -1;
+};
+
+struct VerifyResult {
+  std::vector<double> total, program, machine;  // #S, mm (0 where unmachined)
+  std::vector<char> machined;                   // #S: cut on both machines
+  std::vector<int> zone;                        // #S, -1: no zone holds it
+  std::vector<Conformance> conformance;         // #S, of `total`
+  std::vector<int> cl_index;                    // #S, CL point whose move cut it (predicted), -1
+  DeviationStats total_stats, program_stats, machine_stats;
+  double area = 0, area_machined = 0, area_in = 0, area_unmachined = 0;  // mm^2
+  double percent_in = 0;                        // of the machined area with a zone
+  std::vector<OutOfToleranceRegion> regions;
+  bool pass = false;                            // machined area nonempty and no region
+};
+
+// progress(fraction) over both sweeps.
+VerifyResult verifyPart(const SurfaceSamples& samples, const Cutter& cutter,
+                        const std::vector<ToolPlacement>& nominal,
+                        const std::vector<ToolPlacement>& predicted,
+                        const std::vector<ToleranceZone>& zones, const SweepOptions& options,
+                        const std::function<void(double)>& progress = {});
+
+// Conformance, statistics, regions and verdict from the three deviation fields (used by
+// verifyPart and by the CL-only mode).
+void evaluateZones(const SurfaceSamples& samples, const std::vector<ToleranceZone>& zones,
+                   VerifyResult* result);
+
+// Passes of a CL program: runs of points [first, last] between rapid moves and sharp turns of
+// the feed direction (more than 60 deg), with at least two points.
+struct ClPass {
+  int first = 0, last = 0;
+};
+std::vector<ClPass> clPasses(const std::vector<ClPoint>& path);
+
+// Line profile along one pass (thesis 5.5.4, Fig. 5.7): for each CL point of the pass, the
+// sample its move cut closest to the nominal surface (the contact point), in pass order.
+struct LineProfilePoint {
+  int cl_index = 0;
+  int sample = -1;
+  double arc_length = 0;  // mm along the contact points
+  double total = 0, machine = 0;
+};
+std::vector<LineProfilePoint> lineProfile(const SurfaceSamples& samples, const VerifyResult& r,
+                                          const ClPass& pass);
+
+// CL-only mode (thesis 5.5.4-5.5.5) when there is no CAD model: the nominal surface is the
+// surface through the CL points, pass after pass (neighbouring passes joined by triangle strips),
+// its normal turned towards the tool; the predicted one has the same connectivity through the
+// CL_predicted points. Deviation = (p_predicted - p_nominal) . n (the first-order distance along
+// the normal; the second-order term is below 1e-6 of it for micrometre errors). `program` is
+// zero. Fills `samples` (one per CL point used) and `result`.
+void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPoint>& predicted,
+                     const std::vector<ToleranceZone>& zones, SurfaceSamples* samples,
+                     VerifyResult* result);
+
+}  // namespace tolver

@@ -1,0 +1,63 @@
+#pragma once
+// Deviation maps (VTK, off screen): the part coloured by signed normal deviation on a diverging
+// scale centred on the tolerance zone: the in-tolerance band green, gouges (below the lower
+// limit) orange to red, material left beyond the upper limit light to dark blue, saturated at
+// `saturation` half-widths from the zone's centre, unmachined grey. A colour bar marks the zone
+// limits and says "+ material left". Callouts label the worst points. Plus a histogram.
+// Rendering needs an X display: see io/offscreen_display.h.
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "geometry/tolerance_zone.h"
+
+namespace tolver {
+
+using Rgb = std::array<unsigned char, 3>;
+
+// Colour of deviation d (mm) in the zone [lower, upper], saturated at `saturation` half-widths
+// from the zone's centre.
+Rgb deviationColour(double d, double lower, double upper, double saturation = 3.0);
+constexpr Rgb kUnmachinedColour = {165, 165, 165};
+constexpr Rgb kUncheckedColour = {215, 215, 215};
+
+struct MapCallout {
+  Eigen::Vector3d p_w;
+  std::string text;
+};
+
+struct MapView {
+  std::string name;            // "isometric", "top", "worst"
+  Eigen::Vector3d direction;   // from the camera towards the part, in w
+  Eigen::Vector3d up;
+  bool focus = false;          // zoom onto `focus_w`
+  Eigen::Vector3d focus_w = Eigen::Vector3d::Zero();
+};
+
+struct DeviationMap {
+  const std::vector<Eigen::Vector3d>* points = nullptr;  // #S, mm
+  const std::vector<Eigen::Vector3i>* faces = nullptr;
+  std::vector<Rgb> colours;                               // #S
+  double bar_lower = -0.01, bar_upper = 0.01;             // mm: the zone on the colour bar
+  std::string title;
+  std::vector<MapCallout> callouts;
+};
+
+// Renders one view into a PNG (atomic write). Throws InputError (field "image") when it
+// cannot render or write; call ensureDisplay() first.
+void renderDeviationMap(const std::string& png_path, const DeviationMap& map, const MapView& view,
+                        int width = 1200, int height = 900);
+
+// Histogram of deviations (mm, area-weighted) with the zone limits marked, as a PNG.
+void renderHistogram(const std::string& png_path, const std::vector<double>& deviation,
+                     const std::vector<double>& weight, double lower, double upper,
+                     const std::string& title, int width = 900, int height = 500);
+
+// A line profile (thesis Fig. 5.7): deviation (mm) against arc length (mm) with the zone band.
+void renderLineProfile(const std::string& png_path, const std::vector<double>& arc_length,
+                       const std::vector<double>& total, const std::vector<double>& machine,
+                       double lower, double upper, const std::string& title, int width = 900,
+                       int height = 450);
+
+}  // namespace tolver

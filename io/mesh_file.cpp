@@ -1,0 +1,188 @@
+#include "io/mesh_file.h"
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <vtkCellArray.h>
+#include <vtkDoubleArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkPolyData.h>
+#include <vtkXMLPolyDataWriter.h>
+
+#include <algorithm>
+#include <assimp/Importer.hpp>
+#include <cctype>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+
+#include "io/io_error.h"
+
+namespace tolver {
+namespace {
+
+std::string lowerExtension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  return ext;
+}
+
+Eigen::Matrix4d toEigen(const aiMatrix4x4& m) {
+  Eigen::Matrix4d e;
+  e << m.a1, m.a2, m.a3, m.a4, m.b1, m.b2, m.b3, m.b4, m.c1, m.c2, m.c3, m.c4, m.d1, m.d2, m.d3,
+      m.d4;
+  return e;
+}
+
+void collect(const aiScene* scene, const aiNode* node, const Eigen::Matrix4d& parent,
+             TriangleMesh* out, std::vector<char>* seen_mesh) {
+  const Eigen::Matrix4d T = parent * toEigen(node->mTransformation);
+  for (unsigned k = 0; k < node->mNumMeshes; ++k) {
+    const unsigned mi = node->mMeshes[k];
+    const aiMesh* m = scene->mMeshes[mi];
+    std::string name = m->mName.length > 0 ? m->mName.C_Str() : node->mName.C_Str();
+    if (name.empty() || name == "defaultobject") name = "part";
+    if ((*seen_mesh)[mi]) name += "#" + std::to_string(out->group_names.size());
+    (*seen_mesh)[mi] = 1;
+    int group;
+    auto it = std::find(out->group_names.begin(), out->group_names.end(), name);
+    if (it == out->group_names.end()) {
+      group = static_cast<int>(out->group_names.size());
+      out->group_names.push_back(name);
+    } else {
+      group = static_cast<int>(it - out->group_names.begin());
+    }
+    const int base = static_cast<int>(out->vertices.size());
+    for (unsigned v = 0; v < m->mNumVertices; ++v) {
+      const Eigen::Vector4d p(m->mVertices[v].x, m->mVertices[v].y, m->mVertices[v].z, 1.0);
+      out->vertices.push_back((T * p).head<3>());
+    }
+    for (unsigned f = 0; f < m->mNumFaces; ++f) {
+      const aiFace& face = m->mFaces[f];
+      if (face.mNumIndices != 3) continue;
+      out->faces.emplace_back(base + static_cast<int>(face.mIndices[0]),
+                              base + static_cast<int>(face.mIndices[1]),
+                              base + static_cast<int>(face.mIndices[2]));
+      out->face_group.push_back(group);
+    }
+  }
+  for (unsigned c = 0; c < node->mNumChildren; ++c)
+    collect(scene, node->mChildren[c], T, out, seen_mesh);
+}
+
+}  // namespace
+
+ImportedPart readPartMesh(const std::string& path, const PartImportOptions& options) {
+  ImportedPart part;
+  part.format = lowerExtension(path);
+  static const char* kFormats[] = {"stl", "obj", "ply", "off", "3mf", "gltf", "glb"};
+  if (std::find_if(std::begin(kFormats), std::end(kFormats),
+                   [&](const char* f) { return part.format == f; }) == std::end(kFormats))
+    throw InputError(path, 0, 0, "mesh",
+                     "unsupported part format '." + part.format +
+                         "' (use .stl, .obj, .ply, .off, .3mf, .gltf or .glb)");
+  if (!std::filesystem::is_regular_file(path))
+    throw InputError(path, 0, 0, "mesh", "cannot open the file");
+
+  part.units = options.units.empty() ? ((part.format == "gltf" || part.format == "glb") ? "m" : "mm")
+                                     : options.units;
+  double scale;
+  if (part.units == "mm") scale = 1.0;
+  else if (part.units == "inch" || part.units == "in") scale = 25.4;
+  else if (part.units == "m") scale = 1000.0;
+  else
+    throw InputError(path, 0, 0, "units", "unknown length unit '" + part.units +
+                                              "' (use mm, inch or m)");
+
+  Assimp::Importer importer;
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  const aiScene* scene = importer.ReadFile(
+      path, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure);
+  if (!scene || !scene->mRootNode) {
+    std::string why = importer.GetErrorString();
+    if (why.empty()) why = "not a readable mesh";
+    throw InputError(path, 0, 0, "mesh", why);
+  }
+  TriangleMesh raw;
+  std::vector<char> seen(scene->mNumMeshes, 0);
+  collect(scene, scene->mRootNode, Eigen::Matrix4d::Identity(), &raw, &seen);
+  if (raw.faces.empty()) throw InputError(path, 0, 0, "mesh", "the file holds no triangles");
+  for (auto& v : raw.vertices) v = options.w_T_file * (scale * v);
+  try {
+    part.mesh = repairMesh(raw, options.repair, &part.repair);
+  } catch (const MeshDefect& d) {
+    throw InputError(path, 0, 0, "mesh", d.what());
+  }
+  return part;
+}
+
+void writePlyWithScalar(const std::string& path, const std::vector<Eigen::Vector3d>& points,
+                        const std::vector<Eigen::Vector3i>& faces,
+                        const std::vector<double>& scalar, const std::string& scalar_name) {
+  std::string out;
+  out += "ply\nformat binary_little_endian 1.0\ncomment tolver swept surface, mm, part frame\n";
+  out += "element vertex " + std::to_string(points.size()) + "\n";
+  out += "property float x\nproperty float y\nproperty float z\n";
+  out += "property float " + scalar_name + "\n";
+  out += "element face " + std::to_string(faces.size()) + "\n";
+  out += "property list uchar int vertex_indices\nend_header\n";
+  auto put = [&](const void* p, size_t n) { out.append(static_cast<const char*>(p), n); };
+  for (size_t i = 0; i < points.size(); ++i) {
+    const float v[4] = {static_cast<float>(points[i].x()), static_cast<float>(points[i].y()),
+                        static_cast<float>(points[i].z()), static_cast<float>(scalar[i])};
+    put(v, sizeof v);
+  }
+  for (const auto& f : faces) {
+    const unsigned char three = 3;
+    put(&three, 1);
+    const int32_t idx[3] = {f[0], f[1], f[2]};
+    put(idx, sizeof idx);
+  }
+  writeFileAtomically(path, out);
+}
+
+void writeVtpWithScalars(
+    const std::string& path, const std::vector<Eigen::Vector3d>& points,
+    const std::vector<Eigen::Vector3i>& faces,
+    const std::vector<std::pair<std::string, const std::vector<double>*>>& scalars) {
+  vtkNew<vtkPoints> pts;
+  pts->SetDataTypeToDouble();
+  pts->SetNumberOfPoints(static_cast<vtkIdType>(points.size()));
+  for (size_t i = 0; i < points.size(); ++i)
+    pts->SetPoint(static_cast<vtkIdType>(i), points[i].data());
+  vtkNew<vtkCellArray> cells;
+  for (const auto& f : faces) {
+    const vtkIdType ids[3] = {f[0], f[1], f[2]};
+    cells->InsertNextCell(3, ids);
+  }
+  vtkNew<vtkPolyData> poly;
+  poly->SetPoints(pts);
+  poly->SetPolys(cells);
+  for (const auto& [name, values] : scalars) {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name.c_str());
+    a->SetNumberOfValues(static_cast<vtkIdType>(values->size()));
+    for (size_t i = 0; i < values->size(); ++i) a->SetValue(static_cast<vtkIdType>(i), (*values)[i]);
+    poly->GetPointData()->AddArray(a);
+  }
+  // Atomic: write beside the target, then rename.
+  const std::string tmp = path + ".tmp";
+  vtkNew<vtkXMLPolyDataWriter> writer;
+  writer->SetFileName(tmp.c_str());
+  writer->SetInputData(poly);
+  writer->SetDataModeToBinary();
+  if (writer->Write() != 1) {
+    std::remove(tmp.c_str());
+    throw InputError(path, 0, 0, "output", "cannot write the file");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::remove(tmp.c_str());
+    throw InputError(path, 0, 0, "output", "cannot write the file: " + ec.message());
+  }
+}
+
+}  // namespace tolver

@@ -1,0 +1,244 @@
+#include "io/verify_report.h"
+
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "io/io_error.h"
+
+namespace tolver {
+namespace {
+
+using nlohmann::json;
+
+double um(double mm) { return std::round(mm * 1e6) / 1e3; }  // um to 1 nm
+
+json stats(const DeviationStats& s) {
+  return {{"samples", s.samples}, {"min_um", um(s.min)}, {"max_um", um(s.max)},
+          {"mean_um", um(s.mean)}, {"rms_um", um(s.rms)}};
+}
+
+std::string base64(const std::string& in) {
+  static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((in.size() + 2) / 3 * 4);
+  size_t i = 0;
+  for (; i + 2 < in.size(); i += 3) {
+    const unsigned v = (static_cast<unsigned char>(in[i]) << 16) |
+                       (static_cast<unsigned char>(in[i + 1]) << 8) | static_cast<unsigned char>(in[i + 2]);
+    out += t[v >> 18];
+    out += t[(v >> 12) & 63];
+    out += t[(v >> 6) & 63];
+    out += t[v & 63];
+  }
+  if (i < in.size()) {
+    unsigned v = static_cast<unsigned char>(in[i]) << 16;
+    if (i + 1 < in.size()) v |= static_cast<unsigned char>(in[i + 1]) << 8;
+    out += t[v >> 18];
+    out += t[(v >> 12) & 63];
+    out += i + 1 < in.size() ? t[(v >> 6) & 63] : '=';
+    out += '=';
+  }
+  return out;
+}
+
+std::string html(const std::string& s) {
+  std::string o;
+  for (char c : s) {
+    switch (c) {
+      case '<': o += "&lt;"; break;
+      case '>': o += "&gt;"; break;
+      case '&': o += "&amp;"; break;
+      case '"': o += "&quot;"; break;
+      default: o += c;
+    }
+  }
+  return o;
+}
+
+std::string fmt(const char* f, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, v);
+  return buf;
+}
+
+int clLine(const VerifyReport& r, int sample) {
+  const int c = sample >= 0 ? r.result->cl_index[sample] : -1;
+  return c >= 0 && c < static_cast<int>(r.cl_lines.size()) ? r.cl_lines[c] : 0;
+}
+
+}  // namespace
+
+std::string regionCause(const VerifyReport& r, const OutOfToleranceRegion& region) {
+  if (r.mode == "cl-only") return "machine";
+  const int i = region.worst_sample;
+  const ToleranceZone& z = r.zones[region.zone];
+  const double program = r.result->program[i];
+  return classify(program, true, z) == Conformance::In ? "machine" : "program";
+}
+
+std::string formatVerifyJson(const VerifyReport& r) {
+  const VerifyResult& v = *r.result;
+  json j;
+  j["tool"] = "tolver verify";
+  j["name"] = r.name;
+  j["verdict"] = v.pass ? "pass" : "fail";
+  j["exit_code"] = v.pass ? 0 : 1;
+  j["mode"] = r.mode;
+  j["machine"] = {{"name", r.machine_name}, {"file", r.machine_file}};
+  j["program"] = {{"file", r.program_file}, {"cl_points", r.cl_points}, {"placements", r.placements},
+                  {"placement_step_mm", r.step_mm}, {"cutter", r.cutter}};
+  j["part"] = {{"file", r.part_file}, {"samples", r.samples->size()}, {"sample_spacing_mm", r.spacing_mm},
+               {"regions", r.samples->group_names}};
+  if (r.has_repair) {
+    const auto& m = r.repair;
+    j["part"]["repair"] = {{"merged_vertices", m.merged_vertices}, {"degenerate_faces", m.degenerate_faces},
+                           {"duplicate_faces", m.duplicate_faces}, {"reoriented_faces", m.reoriented_faces},
+                           {"split_vertices", m.split_vertices}, {"holes_filled", m.holes_filled},
+                           {"open_borders", m.open_borders}, {"closed", m.closed}, {"notes", m.notes}};
+  }
+  json zones = json::array();
+  for (const auto& z : r.zones)
+    zones.push_back({{"region", z.region}, {"spec", z.spec}, {"tolerance_um", um(z.tolerance)},
+                     {"lower_um", um(z.lower)}, {"upper_um", um(z.upper)}});
+  j["zones"] = zones;
+  j["sign_convention"] = "deviation along the outward normal of the nominal surface: + material left, - gouge";
+  j["deviation"] = {{"total", stats(v.total_stats)}, {"program", stats(v.program_stats)},
+                    {"machine", stats(v.machine_stats)},
+                    {"definitions", {{"total", "predicted swept surface - CAD (what the part will be)"},
+                                     {"program", "nominal swept surface - CAD (the program on a perfect machine)"},
+                                     {"machine", "predicted swept - nominal swept (the machine's contribution)"}}}};
+  j["area"] = {{"total_mm2", v.area}, {"machined_mm2", v.area_machined}, {"in_tolerance_mm2", v.area_in},
+               {"unmachined_mm2", v.area_unmachined}, {"percent_in_tolerance", v.percent_in}};
+  json regions = json::array();
+  for (const auto& g : v.regions) {
+    regions.push_back({{"kind", conformanceName(g.kind)}, {"zone", g.zone},
+                       {"region", r.zones[g.zone].region}, {"samples", g.samples},
+                       {"area_mm2", g.area_mm2}, {"worst_deviation_um", um(g.worst_deviation)},
+                       {"worst_excursion_um", um(g.worst_excursion)},
+                       {"where_mm", {g.where_w.x(), g.where_w.y(), g.where_w.z()}},
+                       {"machine_um", um(v.machine[g.worst_sample])},
+                       {"program_um", um(v.program[g.worst_sample])},
+                       {"cause", regionCause(r, g)}, {"cl_line", clLine(r, g.worst_sample)}});
+  }
+  j["out_of_tolerance_regions"] = regions;
+  if (r.line_pass > 0) {
+    json lp = json::array();
+    for (const auto& p : r.line_profile)
+      lp.push_back({{"cl_line", p.cl_index < static_cast<int>(r.cl_lines.size()) ? r.cl_lines[p.cl_index] : 0},
+                    {"arc_length_mm", p.arc_length}, {"total_um", um(p.total)}, {"machine_um", um(p.machine)}});
+    j["line_profile"] = {{"pass", r.line_pass}, {"points", lp}};
+  }
+  json images = json::array();
+  for (const auto& [caption, path] : r.images) images.push_back({{"caption", caption}, {"file", path}});
+  j["images"] = images;
+  j["notes"] = r.notes;
+  j["seconds"] = std::round(r.seconds * 1000) / 1000;
+  return j.dump(2) + "\n";
+}
+
+std::string formatDeviationsCsv(const VerifyReport& r) {
+  const SurfaceSamples& s = *r.samples;
+  const VerifyResult& v = *r.result;
+  std::string out =
+      "# tolver verify: signed normal deviation per surface sample, um (+ material left, - gouge); "
+      "positions mm in the part frame\n"
+      "sample,x,y,z,nx,ny,nz,region,zone,state,total_um,program_um,machine_um,cl_line\n";
+  char buf[512];
+  for (size_t i = 0; i < s.size(); ++i) {
+    const int line = clLine(r, static_cast<int>(i));
+    std::snprintf(buf, sizeof buf, "%zu,%.5f,%.5f,%.5f,%.6f,%.6f,%.6f,%s,%d,%s,%.4f,%.4f,%.4f,%d\n", i,
+                  s.p_w[i].x(), s.p_w[i].y(), s.p_w[i].z(), s.n_w[i].x(), s.n_w[i].y(), s.n_w[i].z(),
+                  s.group_names[s.group[i]].c_str(), v.zone[i], conformanceName(v.conformance[i]),
+                  v.machined[i] ? v.total[i] * 1e3 : 0.0, v.program[i] * 1e3, v.machine[i] * 1e3, line);
+    out += buf;
+  }
+  return out;
+}
+
+std::string formatVerifyHtml(const VerifyReport& r) {
+  const VerifyResult& v = *r.result;
+  std::string h;
+  h += "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>tolver verify: " + html(r.name) +
+       "</title>\n<style>body{font-family:sans-serif;margin:2em;max-width:1300px;color:#222}"
+       "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:4px 10px;"
+       "text-align:right}th{background:#eee}td.l,th.l{text-align:left}.pass{background:#2e9f43;"
+       "color:#fff;padding:6px 18px;font-size:1.6em}.fail{background:#be0000;color:#fff;"
+       "padding:6px 18px;font-size:1.6em}img{max-width:100%;border:1px solid #ddd;margin:6px 0}"
+       "</style></head><body>\n";
+  h += "<h1>tolver verify: " + html(r.name) + "</h1>\n";
+  h += std::string("<p><span class=\"") + (v.pass ? "pass\">PASS" : "fail\">FAIL") + "</span> ";
+  h += v.pass ? "the part is predicted in tolerance everywhere it is machined."
+              : "the part is predicted out of tolerance in " + std::to_string(v.regions.size()) +
+                    " region(s).";
+  h += "</p>\n<table>\n";
+  auto row = [&](const std::string& k, const std::string& val) {
+    h += "<tr><th class=\"l\">" + html(k) + "</th><td class=\"l\">" + html(val) + "</td></tr>\n";
+  };
+  row("machine", r.machine_name + " (" + r.machine_file + ")");
+  row("program", r.program_file + ": " + std::to_string(r.cl_points) + " CL points, " +
+                     std::to_string(r.placements) + " tool placements (step " + fmt("%.3g", r.step_mm) + " mm)");
+  row("cutter", r.cutter);
+  row("part", r.mode == "cl-only" ? "none: CL-only mode (surfaces through the CL points)"
+                                  : r.part_file + ": " + std::to_string(r.samples->size()) +
+                                        " samples at " + fmt("%.3g", r.spacing_mm) + " mm");
+  for (const auto& z : r.zones)
+    row("zone " + z.region, z.spec + " mm: [" + fmt("%+.1f", z.lower * 1e3) + ", " +
+                                fmt("%+.1f", z.upper * 1e3) + "] um");
+  row("sign convention", "along the outward normal: + material left, - gouge");
+  h += "</table>\n<h2>Deviations (um)</h2>\n<table><tr><th class=\"l\"></th><th>min</th><th>max</th>"
+       "<th>mean</th><th>RMS</th><th class=\"l\">what it is</th></tr>\n";
+  auto srow = [&](const char* name, const DeviationStats& s, const char* what) {
+    h += std::string("<tr><th class=\"l\">") + name + "</th><td>" + fmt("%+.2f", s.min * 1e3) + "</td><td>" +
+         fmt("%+.2f", s.max * 1e3) + "</td><td>" + fmt("%+.2f", s.mean * 1e3) + "</td><td>" +
+         fmt("%.2f", s.rms * 1e3) + "</td><td class=\"l\">" + what + "</td></tr>\n";
+  };
+  srow("total", v.total_stats, "predicted swept surface - CAD: what the part will be");
+  if (r.mode != "cl-only") srow("program", v.program_stats, "nominal swept - CAD: the program on a perfect machine");
+  srow("machine", v.machine_stats, "predicted swept - nominal swept: the machine's contribution");
+  h += "</table>\n<p>Machined area " + fmt("%.1f", v.area_machined) + " mm&sup2;, " +
+       fmt("%.2f", v.percent_in) + " % of it in tolerance; not machined by this program " +
+       fmt("%.1f", v.area_unmachined) + " mm&sup2; (grey in the maps).</p>\n";
+  if (!v.regions.empty()) {
+    h += "<h2>Out-of-tolerance regions</h2>\n<table><tr><th>#</th><th class=\"l\">kind</th>"
+         "<th class=\"l\">zone</th><th>area mm&sup2;</th><th>worst um</th><th>beyond limit um</th>"
+         "<th>machine um</th><th>program um</th><th class=\"l\">cause</th><th class=\"l\">where (mm)</th>"
+         "<th>CL line</th></tr>\n";
+    for (size_t k = 0; k < v.regions.size() && k < 50; ++k) {
+      const auto& g = v.regions[k];
+      char where[96];
+      std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", g.where_w.x(), g.where_w.y(), g.where_w.z());
+      h += "<tr><td>" + std::to_string(k + 1) + "</td><td class=\"l\">" + conformanceName(g.kind) +
+           "</td><td class=\"l\">" + html(r.zones[g.zone].region) + "</td><td>" + fmt("%.3f", g.area_mm2) +
+           "</td><td>" + fmt("%+.2f", g.worst_deviation * 1e3) + "</td><td>" +
+           fmt("%.2f", g.worst_excursion * 1e3) + "</td><td>" + fmt("%+.2f", v.machine[g.worst_sample] * 1e3) +
+           "</td><td>" + fmt("%+.2f", v.program[g.worst_sample] * 1e3) + "</td><td class=\"l\">" +
+           regionCause(r, g) + "</td><td class=\"l\">" + where + "</td><td>" +
+           std::to_string(clLine(r, g.worst_sample)) + "</td></tr>\n";
+    }
+    if (v.regions.size() > 50)
+      h += "<tr><td colspan=\"11\" class=\"l\">... " + std::to_string(v.regions.size() - 50) +
+           " more in report.json</td></tr>\n";
+    h += "</table>\n<p>cause: <i>program</i> when the program on a perfect machine is already out "
+         "of the zone there (scallop, gouge, step), <i>machine</i> when the machine's errors take "
+         "it out.</p>\n";
+  }
+  if (r.has_repair && !r.repair.notes.empty()) {
+    h += "<h2>Part mesh</h2>\n<ul>\n";
+    for (const auto& n : r.repair.notes) h += "<li>" + html(n) + "</li>\n";
+    h += "</ul>\n";
+  }
+  if (!r.notes.empty()) {
+    h += "<h2>Notes</h2>\n<ul>\n";
+    for (const auto& n : r.notes) h += "<li>" + html(n) + "</li>\n";
+    h += "</ul>\n";
+  }
+  for (const auto& [caption, path] : r.images) {
+    h += "<h3>" + html(caption) + "</h3>\n<img alt=\"" + html(caption) + "\" src=\"data:image/png;base64," +
+         base64(readFile(path)) + "\">\n";
+  }
+  h += "<p style=\"color:#777\">tolver verify, " + fmt("%.2f", r.seconds) + " s</p>\n</body></html>\n";
+  return h;
+}
+
+}  // namespace tolver

@@ -1,0 +1,42 @@
+#pragma once
+// Reports of `tolver verify`: report.json (machine-readable), report.html (self-contained, the
+// images embedded), deviations.csv (one row per surface sample). Deviations in um in the files,
+// signed along the outward normal: + material left, - gouge.
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "geometry/mesh_repair.h"
+#include "geometry/verification.h"
+
+namespace tolver {
+
+struct VerifyReport {
+  std::string name;                     // job name (batch) or the program's stem
+  std::string machine_name, machine_file, program_file, part_file, cutter;
+  std::string mode = "part";            // "part" (CAD model) or "cl-only"
+  int cl_points = 0, placements = 0;
+  std::vector<int> cl_lines;            // per CL point, its file line
+  double step_mm = 0, spacing_mm = 0;
+  const SurfaceSamples* samples = nullptr;
+  const VerifyResult* result = nullptr;
+  std::vector<ToleranceZone> zones;
+  bool has_repair = false;
+  MeshRepairReport repair;
+  int line_pass = -1;                   // 1-based pass of the line profile, -1 none
+  std::vector<LineProfilePoint> line_profile;
+  std::vector<std::pair<std::string, std::string>> images;  // caption, path
+  std::vector<std::string> notes;
+  double seconds = 0;
+};
+
+// The cause of an out-of-tolerance region at its worst sample: "program" when the program on a
+// perfect machine is already out of the zone there, "machine" when it is in and the machine's
+// errors take it out.
+std::string regionCause(const VerifyReport& r, const OutOfToleranceRegion& region);
+
+std::string formatVerifyJson(const VerifyReport& r);
+std::string formatVerifyHtml(const VerifyReport& r);
+std::string formatDeviationsCsv(const VerifyReport& r);
+
+}  // namespace tolver
