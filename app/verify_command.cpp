@@ -39,7 +39,7 @@ struct VerifyOptions {
   std::string mesh_units;
   std::vector<double> mesh_offset, mesh_rotation_deg;
   double tolerance = NAN, uz = NAN, asme_u = NAN;
-  double spacing = 0.3, step = NAN, excess_range = NAN, gouge_range = NAN, max_hole = -1;
+  double spacing = 0.5, step = NAN, excess_range = NAN, gouge_range = NAN, max_hole = -1;
   std::vector<double> cutter;
   int line_pass = 0;
   bool no_images = false;
@@ -199,6 +199,13 @@ std::vector<std::pair<std::string, std::string>> renderImages(
 
 JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress_bar) {
   const auto t0 = std::chrono::steady_clock::now();
+  auto lap = t0;
+  std::vector<std::pair<std::string, double>> timings;
+  auto phase = [&](const char* what) {
+    const auto now = std::chrono::steady_clock::now();
+    timings.push_back({what, std::chrono::duration<double>(now - lap).count()});
+    lap = now;
+  };
   JobOutcome out;
   out.name = name;
   ProgressBar bar(progress_bar && !o.quiet);
@@ -217,6 +224,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
     const PredictionFailure& f = pred.failures.front();
     throw InputError(o.cl, f.line, 0, "unreachable", f.message);
   }
+  phase("read_and_predict");
   double t_min = INFINITY;
   for (const auto& z : zones) t_min = std::min(t_min, z.tolerance);
   const double r_eff = cutter.corner_radius > 0 ? cutter.corner_radius : 0.5 * cutter.diameter;
@@ -267,8 +275,10 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
     rep.has_repair = true;
     rep.repair = part.repair;
     rep.part_file = o.part;
+    phase("read_part");
     samples = sampleSurface(part.mesh, o.spacing);
     rep.spacing_mm = o.spacing;
+    phase("sample_surface");
 
     ForwardKinematics fk_nominal(machine.model, Eigen::VectorXd::Zero(machine.model.parameterCount()));
     ForwardKinematics fk_actual(machine.model, machine.params);
@@ -277,8 +287,10 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
     std::vector<ToolPlacement> nominal, actual;
     samplePlacements(fk_nominal, fk_actual, program.path, q, sampling, &nominal, &actual);
     rep.placements = static_cast<int>(nominal.size());
+    phase("placements");
     result = verifyPart(samples, cutter, nominal, actual, zones, sweep,
                         [&](double f) { bar("sweeping " + name, f); });
+    phase("swept_surfaces");
   }
   rep.samples = &samples;
   rep.result = &result;
@@ -320,9 +332,12 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
     writeVtpWithScalars((dir / "swept_nominal.vtp").string(), nominal_swept, samples.faces,
                         {{"program_um", &program_um}});
   }
+  phase("write_surfaces");
   const std::string title = std::string(result.pass ? "PASS" : "FAIL") + "  " + name +
                             ": total deviation (predicted swept - CAD)";
   r.images = renderImages(o, dir.string(), samples, result, zones, r.line_profile, title, &r.notes);
+  phase("images");
+  r.timings = timings;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   writeFileAtomically((dir / "report.json").string(), formatVerifyJson(r));
   writeFileAtomically((dir / "report.html").string(), formatVerifyHtml(r));
@@ -356,8 +371,9 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
                   result.program_stats.max * 1e3);
     std::printf("  machine    %+.2f .. %+.2f um, RMS %.2f um (predicted - nominal swept)\n",
                 result.machine_stats.min * 1e3, result.machine_stats.max * 1e3, result.machine_stats.rms * 1e3);
-    std::printf("  area       %.2f %% of %.1f mm2 machined in tolerance; %.1f mm2 not machined\n",
-                result.percent_in, result.area_machined, result.area_unmachined);
+    std::printf("  area       %.2f %% of %.1f mm2 machined in tolerance; %.1f mm2 not machined; "
+                "%.1f mm2 on edges not verified\n",
+                result.percent_in, result.area_machined, result.area_unmachined, result.area_edge);
     for (size_t k = 0; k < result.regions.size() && k < 5; ++k) {
       const auto& g = result.regions[k];
       std::printf("  region %zu   %s %.3f mm2, worst %+.2f um at (%.2f, %.2f, %.2f), cause: %s\n", k + 1,
@@ -495,7 +511,7 @@ void registerVerify(CLI::App& app, int* exit_code) {
                   "rotation of the part file about x, then y, then z of the part frame, deg (a,b,c)")
       ->delimiter(',')
       ->expected(3);
-  cmd->add_option("--spacing", o->spacing, "surface sample spacing, mm (default 0.3)")->check(CLI::PositiveNumber);
+  cmd->add_option("--spacing", o->spacing, "surface sample spacing (remeshing target edge), mm (default 0.5)")->check(CLI::PositiveNumber);
   cmd->add_option("--step", o->step, "largest tool advance between placements, mm (default sqrt(0.8 R t))")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--excess-range", o->excess_range, "stock above the surface considered, mm (default max(0.1, 5t))")

@@ -64,28 +64,35 @@ void sweepSurface(const SurfaceSamples& samples, const Cutter& cutter,
   if (placements.empty() || n == 0) return;
 
   const double L = cutter.effectiveLength(), Rmax = cutter.maxRadius();
+  // One box per chunk of the cutter no longer than its diameter: a tilted tool's single box would
+  // hold much empty space, and every blade inside it would test the tool for nothing.
+  const int chunks = std::max(1, static_cast<int>(std::ceil(L / std::max(2.0 * Rmax, 1e-6))));
   std::vector<PlacementBox> boxes;
-  boxes.reserve(placements.size());
+  boxes.reserve(placements.size() * chunks);
   for (size_t k = 0; k < placements.size(); ++k) {
-    const Eigen::Vector3d& p = placements[k].tip_w;
     const Eigen::Vector3d& u = placements[k].axis_w;
-    // Box of the cylinder of radius Rmax around the axis segment: per coordinate the segment's
-    // extent plus Rmax sqrt(1 - u_i^2).
-    const Eigen::Vector3d q = p + L * u;
-    Eigen::Vector3d lo, hi;
-    for (int i = 0; i < 3; ++i) {
-      const double grow = Rmax * std::sqrt(std::max(0.0, 1.0 - u[i] * u[i])) + 1e-9;
-      lo[i] = std::min(p[i], q[i]) - grow;
-      hi[i] = std::max(p[i], q[i]) + grow;
+    for (int c = 0; c < chunks; ++c) {
+      const Eigen::Vector3d p = placements[k].tip_w + (L * c / chunks) * u;
+      const Eigen::Vector3d q = placements[k].tip_w + (L * (c + 1) / chunks) * u;
+      const double radius = cutter.radiusAt(L * (c + 1) / chunks);
+      // Box of the cylinder of that radius around the axis segment: per coordinate the
+      // segment's extent plus radius sqrt(1 - u_i^2).
+      Eigen::Vector3d lo, hi;
+      for (int i = 0; i < 3; ++i) {
+        const double grow = radius * std::sqrt(std::max(0.0, 1.0 - u[i] * u[i])) + 1e-9;
+        lo[i] = std::min(p[i], q[i]) - grow;
+        hi[i] = std::max(p[i], q[i]) + grow;
+      }
+      boxes.emplace_back(static_cast<int>(k), Kernel::Iso_cuboid_3(lo.x(), lo.y(), lo.z(), hi.x(),
+                                                                   hi.y(), hi.z()));
     }
-    boxes.emplace_back(static_cast<int>(k), Kernel::Iso_cuboid_3(lo.x(), lo.y(), lo.z(), hi.x(),
-                                                                 hi.y(), hi.z()));
   }
   Tree tree(boxes.begin(), boxes.end());
   tree.build();
 
   const double below = options.gouge_range, above = options.excess_range;
   auto sweepOne = [&](size_t i) {
+    if (!samples.on_edge.empty() && samples.on_edge[i]) return;
     const Eigen::Vector3d& p = samples.p_w[i];
     const Eigen::Vector3d& nrm = samples.n_w[i];
     const Eigen::Vector3d a = p - below * nrm, b = p + above * nrm;
@@ -93,8 +100,15 @@ void sweepSurface(const SurfaceSamples& samples, const Cutter& cutter,
                                   Kernel::Point_3(b.x(), b.y(), b.z()));
     double top = above;
     int who = -1;
+    const Eigen::Vector3d mid = p + 0.5 * (above - below) * nrm;
+    const double reach2 = (Rmax + 0.5 * (above + below)) * (Rmax + 0.5 * (above + below));
     auto cut = [&](int k) {
       const ToolPlacement& t = placements[k];
+      // Cheap rejection: the blade's midpoint farther from the tool axis than the tool's
+      // largest radius plus half the blade.
+      const Eigen::Vector3d w = mid - t.tip_w;
+      const double h = std::clamp(w.dot(t.axis_w), 0.0, L);
+      if ((w - h * t.axis_w).squaredNorm() > reach2) return;
       const double s = cutter.lineEntry(p - t.tip_w, nrm, t.axis_w, -below, top);
       if (s < top) {
         top = s;

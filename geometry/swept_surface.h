@@ -6,7 +6,7 @@
 // What is left of the blade is the signed normal deviation of the machined surface from the
 // nominal one: + material left, - gouge. A sample that no tool cuts below excess_range is
 // unmachined (not part of this program). A CGAL AABB tree over the placements' bounding boxes
-// gives each blade only the placements near it.
+// gives each blade only the placements near it. Samples on sharp edges are skipped (unmachined).
 #include <functional>
 #include <vector>
 

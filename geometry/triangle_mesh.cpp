@@ -27,78 +27,6 @@ double TriangleMesh::area() const {
   return a;
 }
 
-void refineMesh(TriangleMesh* mesh, double max_edge) {
-  if (!(max_edge > 0)) return;
-  const double limit2 = max_edge * max_edge;
-  auto& V = mesh->vertices;
-  for (int pass = 0; pass < 64; ++pass) {
-    std::unordered_map<uint64_t, int> mid;
-    auto key = [](int a, int b) {
-      return (static_cast<uint64_t>(std::min(a, b)) << 32) | static_cast<uint32_t>(std::max(a, b));
-    };
-    auto midpoint = [&](int a, int b) -> int {
-      if ((V[a] - V[b]).squaredNorm() <= limit2) return -1;
-      auto [it, fresh] = mid.try_emplace(key(a, b), static_cast<int>(V.size()));
-      if (fresh) V.push_back(0.5 * (V[a] + V[b]));
-      return it->second;
-    };
-    std::vector<Eigen::Vector3i> faces;
-    std::vector<int> groups;
-    faces.reserve(mesh->faces.size() * 2);
-    groups.reserve(mesh->faces.size() * 2);
-    bool split = false;
-    for (size_t f = 0; f < mesh->faces.size(); ++f) {
-      const Eigen::Vector3i t = mesh->faces[f];
-      const int g = mesh->face_group[f];
-      int m[3];
-      int count = 0;
-      for (int e = 0; e < 3; ++e) count += (m[e] = midpoint(t[e], t[(e + 1) % 3])) >= 0;
-      auto add = [&](int a, int b, int c) {
-        faces.emplace_back(a, b, c);
-        groups.push_back(g);
-      };
-      if (count == 0) {
-        add(t[0], t[1], t[2]);
-        continue;
-      }
-      split = true;
-      if (count == 3) {
-        add(t[0], m[0], m[2]);
-        add(m[0], t[1], m[1]);
-        add(m[2], m[1], t[2]);
-        add(m[0], m[1], m[2]);
-        continue;
-      }
-      // Rotate so that edge 0 (t0-t1) is split and, with two splits, edge 1 (t1-t2) too.
-      int r = 0;
-      if (count == 1) {
-        while (m[r] < 0) ++r;
-      } else {
-        while (!(m[r] >= 0 && m[(r + 1) % 3] >= 0)) ++r;
-      }
-      const int a = t[r], b = t[(r + 1) % 3], c = t[(r + 2) % 3];
-      const int mab = m[r], mbc = m[(r + 1) % 3];
-      if (count == 1) {
-        add(a, mab, c);
-        add(mab, b, c);
-      } else {
-        add(mab, b, mbc);
-        // Quad a, mab, mbc, c: cut along the shorter diagonal.
-        if ((V[a] - V[mbc]).squaredNorm() <= (V[mab] - V[c]).squaredNorm()) {
-          add(a, mab, mbc);
-          add(a, mbc, c);
-        } else {
-          add(a, mab, c);
-          add(mab, mbc, c);
-        }
-      }
-    }
-    mesh->faces.swap(faces);
-    mesh->face_group.swap(groups);
-    if (!split) return;
-  }
-}
-
 SurfaceSamples sampleSurface(const TriangleMesh& input, double spacing, double feature_angle) {
   TriangleMesh mesh = input;
   refineMesh(&mesh, spacing);
@@ -153,6 +81,33 @@ SurfaceSamples sampleSurface(const TriangleMesh& input, double spacing, double f
       s.area[si] += fa[f] / 3.0;
       s.faces[f][k] = si;
     }
+  }
+  // Samples on sharp edges (a vertex split in several) and on borders.
+  s.on_edge.assign(s.p_w.size(), 0);
+  {
+    std::vector<int> clusters(nv, 0);
+    std::unordered_map<uint64_t, int> edge_count;
+    for (const auto& t : mesh.faces)
+      for (int k = 0; k < 3; ++k) {
+        const int a = t[k], b = t[(k + 1) % 3];
+        ++edge_count[(static_cast<uint64_t>(std::min(a, b)) << 32) | static_cast<uint32_t>(std::max(a, b))];
+      }
+    std::vector<char> border(nv, 0);
+    for (const auto& [k, c] : edge_count)
+      if (c == 1) border[k >> 32] = border[k & 0xffffffffu] = 1;
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int v = mesh.faces[f][k];
+        if (border[v]) s.on_edge[s.faces[f][k]] = 1;
+      }
+    // A vertex that produced more than one sample lies on a sharp edge.
+    std::vector<int> first_sample(nv, -1);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int v = mesh.faces[f][k], si = s.faces[f][k];
+        if (first_sample[v] < 0) first_sample[v] = si;
+        else if (first_sample[v] != si) s.on_edge[si] = s.on_edge[first_sample[v]] = 1;
+      }
   }
   for (auto& n : s.n_w) {
     const double len = n.norm();

@@ -23,7 +23,10 @@ struct TriangleMesh {
 
 // Splits every edge longer than max_edge at its midpoint, conformingly (neighbouring faces share
 // the new vertices), until no edge is longer: the samples then lie at most max_edge apart on the
-// mesh's own (faceted) surface. Face groups are inherited.
+// mesh's own (faceted) surface. Between rounds of splits, edges between coplanar faces of one
+// group are flipped towards Delaunay (the surface does not change), so the long thin triangles
+// CAD systems write on flat faces become well-shaped instead of multiplying. Face groups are
+// inherited. (OpenMesh; mesh_refine.cpp.)
 void refineMesh(TriangleMesh* mesh, double max_edge);
 
 // Surface samples: the refined mesh's vertices with outward unit normals. Along sharp edges
@@ -34,6 +37,10 @@ struct SurfaceSamples {
   std::vector<Eigen::Vector3d> n_w;     // #S outward unit normals
   std::vector<double> area;             // #S area each sample stands for (a third of its faces), mm^2
   std::vector<int> group;               // #S region (group of its faces; the first one met)
+  // #S: 1 on a sharp edge or a border. The normal deviation is undefined there (the point
+  // belongs to two faces and a tool grazing the edge decides it), so such samples are not
+  // verified; their neighbours, one spacing away, are (as inspection software excludes edges).
+  std::vector<char> on_edge;
   std::vector<Eigen::Vector3i> faces;   // the mesh's faces re-indexed into samples
   std::vector<int> face_group;
   std::vector<std::string> group_names;

@@ -45,9 +45,14 @@ void evaluateZones(const SurfaceSamples& samples, const std::vector<ToleranceZon
   const size_t n = samples.size();
   r->zone = assignZones(samples, zones);
   r->conformance.assign(n, Conformance::Unchecked);
-  r->area = r->area_machined = r->area_in = r->area_unmachined = 0;
+  r->area = r->area_machined = r->area_in = r->area_unmachined = r->area_edge = 0;
   for (size_t i = 0; i < n; ++i) {
     r->area += samples.area[i];
+    if (!samples.on_edge.empty() && samples.on_edge[i]) {
+      r->conformance[i] = Conformance::Unchecked;
+      r->area_edge += samples.area[i];
+      continue;
+    }
     if (!r->machined[i]) {
       r->conformance[i] = Conformance::Unmachined;
       r->area_unmachined += samples.area[i];

@@ -28,10 +28,11 @@ struct VerifyResult {
   std::vector<double> total, program, machine;  // #S, mm (0 where unmachined)
   std::vector<char> machined;                   // #S: cut on both machines
   std::vector<int> zone;                        // #S, -1: no zone holds it
-  std::vector<Conformance> conformance;         // #S, of `total`
+  std::vector<Conformance> conformance;         // #S, of `total` (Unchecked: no zone, or on an edge)
   std::vector<int> cl_index;                    // #S, CL point whose move cut it (predicted), -1
   DeviationStats total_stats, program_stats, machine_stats;
   double area = 0, area_machined = 0, area_in = 0, area_unmachined = 0;  // mm^2
+  double area_edge = 0;  // mm^2 of samples on sharp edges and borders (not verified)
   double percent_in = 0;                        // of the machined area with a zone
   std::vector<OutOfToleranceRegion> regions;
   bool pass = false;                            // machined area nonempty and no region

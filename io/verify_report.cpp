@@ -109,7 +109,7 @@ std::string formatVerifyJson(const VerifyReport& r) {
                                      {"program", "nominal swept surface - CAD (the program on a perfect machine)"},
                                      {"machine", "predicted swept - nominal swept (the machine's contribution)"}}}};
   j["area"] = {{"total_mm2", v.area}, {"machined_mm2", v.area_machined}, {"in_tolerance_mm2", v.area_in},
-               {"unmachined_mm2", v.area_unmachined}, {"percent_in_tolerance", v.percent_in}};
+               {"unmachined_mm2", v.area_unmachined}, {"edges_not_verified_mm2", v.area_edge}, {"percent_in_tolerance", v.percent_in}};
   json regions = json::array();
   for (const auto& g : v.regions) {
     regions.push_back({{"kind", conformanceName(g.kind)}, {"zone", g.zone},
@@ -134,6 +134,9 @@ std::string formatVerifyJson(const VerifyReport& r) {
   j["images"] = images;
   j["notes"] = r.notes;
   j["seconds"] = std::round(r.seconds * 1000) / 1000;
+  json timings = json::object();
+  for (const auto& [phase, t] : r.timings) timings[phase] = std::round(t * 1000) / 1000;
+  j["timings_s"] = timings;
   return j.dump(2) + "\n";
 }
 

@@ -28,6 +28,7 @@ struct VerifyReport {
   std::vector<std::pair<std::string, std::string>> images;  // caption, path
   std::vector<std::string> notes;
   double seconds = 0;
+  std::vector<std::pair<std::string, double>> timings;  // phase, seconds
 };
 
 // The cause of an out-of-tolerance region at its worst sample: "program" when the program on a
