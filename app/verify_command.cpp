@@ -491,6 +491,7 @@ void registerVerify(CLI::App& app, int* exit_code) {
       "signed normal deviations against profile tolerance zones, maps and reports. Exit 0 in "
       "tolerance, 1 out of tolerance, 2 bad input.");
   addMachineOptions(cmd, o->machine, "machine file (XML), calibrated or not");
+  cmd->get_option("--machine")->required(false);  // a batch names its machines in the jobs file
   cmd->add_option("--cl", o->cl, "CL program (APT/CLDATA)");
   cmd->add_option("--part", o->part,
                   "part model (STL, OBJ, PLY, OFF, 3MF, glTF); without it: CL-only mode");
@@ -531,6 +532,7 @@ void registerVerify(CLI::App& app, int* exit_code) {
       return;
     }
     if (o->cl.empty()) throw InputError("--cl", 0, 0, "cl", "give the CL program (--cl) or a jobs file (--batch)");
+    if (o->machine.machine.empty()) throw InputError("--machine", 0, 0, "machine", "give the machine file (--machine)");
     const std::string name = fs::path(o->cl).stem().string();
     const JobOutcome r = runJob(*o, name, true);
     *exit_code = r.pass ? 0 : 1;

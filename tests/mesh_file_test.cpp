@@ -1,0 +1,183 @@
+// Part meshes in every supported format, and the repairs.
+#include "io/mesh_file.h"
+
+#include <gtest/gtest.h>
+
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
+#include <assimp/scene.h>
+#include <cmath>
+#include <fstream>
+
+#include "io/io_error.h"
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+// A cube [0, s]^3 as 8 vertices and 12 outward triangles.
+const double kSide = 20.0;
+const double kCorner[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                              {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+const int kFaces[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                           {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+
+std::string objText(int skip_face = -1, bool flip_face0 = false, bool extra_fin = false) {
+  std::string s = "# cube\n";
+  char buf[128];
+  for (const auto& c : kCorner) {
+    std::snprintf(buf, sizeof buf, "v %g %g %g\n", c[0] * kSide, c[1] * kSide, c[2] * kSide);
+    s += buf;
+  }
+  if (extra_fin) s += "v 10 -10 10\n";  // vertex 9
+  s += "g cube\n";
+  for (int f = 0; f < 12; ++f) {
+    if (f == skip_face) continue;
+    int a = kFaces[f][0] + 1, b = kFaces[f][1] + 1, c = kFaces[f][2] + 1;
+    if (f == 0 && flip_face0) std::swap(b, c);
+    std::snprintf(buf, sizeof buf, "f %d %d %d\n", a, b, c);
+    s += buf;
+  }
+  if (extra_fin) s += "f 1 2 9\n";  // a third face on the edge 1-2
+  return s;
+}
+
+double signedVolume(const TriangleMesh& m) {
+  double v = 0;
+  for (const auto& f : m.faces)
+    v += m.vertices[f[0]].dot(m.vertices[f[1]].cross(m.vertices[f[2]])) / 6.0;
+  return v;
+}
+
+class MeshFileTest : public test::TempDirTest {};
+
+void expectCube(const ImportedPart& p, double scale = 1.0) {
+  const double s = kSide * scale;
+  EXPECT_NEAR(p.mesh.area(), 6 * s * s, 1e-6 * s * s);
+  EXPECT_NEAR(signedVolume(p.mesh), s * s * s, 1e-6 * s * s * s);  // outward
+  EXPECT_TRUE(p.repair.closed);
+  EXPECT_EQ(p.repair.components, 1);
+}
+
+TEST_F(MeshFileTest, ReadsEveryFormat) {
+  const std::string obj = write("cube.obj", objText());
+  expectCube(readPartMesh(obj));
+  // STL ASCII and binary, PLY, OFF by hand.
+  {
+    std::ofstream a(path("cube.stl"));
+    a << "solid cube\n";
+    std::ofstream b(path("cube_bin.stl"), std::ios::binary);
+    char header[80] = "binary cube";
+    b.write(header, 80);
+    const uint32_t n = 12;
+    b.write(reinterpret_cast<const char*>(&n), 4);
+    for (const auto& f : kFaces) {
+      a << " facet normal 0 0 0\n  outer loop\n";
+      float v[12] = {0, 0, 0};
+      for (int k = 0; k < 3; ++k) {
+        const auto& c = kCorner[f[k]];
+        a << "   vertex " << c[0] * kSide << " " << c[1] * kSide << " " << c[2] * kSide << "\n";
+        for (int d = 0; d < 3; ++d) v[3 + 3 * k + d] = static_cast<float>(c[d] * kSide);
+      }
+      a << "  endloop\n endfacet\n";
+      b.write(reinterpret_cast<const char*>(v), 48);
+      const uint16_t attr = 0;
+      b.write(reinterpret_cast<const char*>(&attr), 2);
+    }
+    a << "endsolid cube\n";
+  }
+  {
+    std::ofstream ply(path("cube.ply")), off(path("cube.off"));
+    ply << "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+           "property float z\nelement face 12\nproperty list uchar int vertex_indices\nend_header\n";
+    off << "OFF\n8 12 0\n";
+    for (const auto& c : kCorner) {
+      ply << c[0] * kSide << " " << c[1] * kSide << " " << c[2] * kSide << "\n";
+      off << c[0] * kSide << " " << c[1] * kSide << " " << c[2] * kSide << "\n";
+    }
+    for (const auto& f : kFaces) {
+      ply << "3 " << f[0] << " " << f[1] << " " << f[2] << "\n";
+      off << "3 " << f[0] << " " << f[1] << " " << f[2] << "\n";
+    }
+  }
+  for (const char* f : {"cube.stl", "cube_bin.stl", "cube.ply", "cube.off"}) {
+    SCOPED_TRACE(f);
+    expectCube(readPartMesh(path(f)));
+  }
+  // 3MF and glTF through assimp's exporters, from the OBJ.
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(obj, 0);
+  ASSERT_NE(scene, nullptr);
+  Assimp::Exporter exporter;
+  ASSERT_EQ(exporter.Export(scene, "3mf", path("cube.3mf")), aiReturn_SUCCESS) << exporter.GetErrorString();
+  ASSERT_EQ(exporter.Export(scene, "glb2", path("cube.glb")), aiReturn_SUCCESS) << exporter.GetErrorString();
+  expectCube(readPartMesh(path("cube.3mf")));
+  // glTF's unit is the metre: 20 "m" read as 20000 mm unless told otherwise.
+  expectCube(readPartMesh(path("cube.glb")), 1000.0);
+  PartImportOptions mm;
+  mm.units = "mm";
+  expectCube(readPartMesh(path("cube.glb"), mm));
+}
+
+TEST_F(MeshFileTest, UnitsAndPlacement) {
+  const std::string obj = write("cube.obj", objText());
+  PartImportOptions o;
+  o.units = "inch";
+  o.w_T_file.translation() = Eigen::Vector3d(1, 2, 3);
+  const ImportedPart p = readPartMesh(obj, o);
+  expectCube(p, 25.4);
+  Eigen::AlignedBox3d box;
+  for (const auto& v : p.mesh.vertices) box.extend(v);
+  EXPECT_TRUE(box.min().isApprox(Eigen::Vector3d(1, 2, 3)));
+  o.units = "furlong";
+  EXPECT_THROW(readPartMesh(obj, o), InputError);
+}
+
+TEST_F(MeshFileTest, RepairsWhatIsSafe) {
+  // A flipped face is turned back.
+  {
+    const ImportedPart p = readPartMesh(write("flipped.obj", objText(-1, true)));
+    EXPECT_GE(p.repair.reoriented_faces, 1);
+    expectCube(p);
+  }
+  // A duplicate and a degenerate face are removed.
+  {
+    const ImportedPart p = readPartMesh(write("dup.obj", objText() + "f 1 3 2\nf 1 2 2\n"));
+    EXPECT_EQ(p.repair.duplicate_faces, 1);
+    EXPECT_EQ(p.repair.degenerate_faces, 1);
+    expectCube(p);
+  }
+  // A missing triangle is a hole: filled when small enough.
+  {
+    PartImportOptions o;
+    o.repair.max_hole_perimeter = 100.0;
+    const ImportedPart p = readPartMesh(write("hole.obj", objText(5)), o);
+    EXPECT_EQ(p.repair.holes_filled, 1);
+    expectCube(p);
+    // With a smaller limit, it stays open and is reported.
+    o.repair.max_hole_perimeter = 10.0;
+    const ImportedPart q = readPartMesh(path("hole.obj"), o);
+    EXPECT_EQ(q.repair.holes_filled, 0);
+    EXPECT_EQ(q.repair.open_borders, 1);
+    EXPECT_FALSE(q.repair.closed);
+  }
+}
+
+TEST_F(MeshFileTest, RefusesWhatIsNot) {
+  try {
+    readPartMesh(write("fin.obj", objText(-1, false, true)));
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("fin.obj"), std::string::npos) << what;
+    EXPECT_NE(what.find("non-manifold edge"), std::string::npos) << what;
+    EXPECT_NE(what.find("(0.0000, 0.0000, 0.0000) mm to (20.0000, 0.0000, 0.0000) mm"), std::string::npos) << what;
+  }
+  EXPECT_THROW(readPartMesh(write("empty.stl", "solid x\nendsolid x\n")), InputError);
+  EXPECT_THROW(readPartMesh(write("garbage.off", "this is not a mesh\n")), InputError);
+  EXPECT_THROW(readPartMesh(write("part.step", "ISO-10303-21;\n")), InputError);
+  EXPECT_THROW(readPartMesh(path("missing.stl")), InputError);
+}
+
+}  // namespace
+}  // namespace tolver

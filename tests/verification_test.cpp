@@ -1,0 +1,142 @@
+// verifyPart end to end on the Matsuura model: machine errors with analytic consequences.
+#include "geometry/verification.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/forward_kinematics.h"
+#include "core/tool_motion.h"
+#include "core/tool_path_prediction.h"
+#include "io/machine_file.h"
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+Machine matsuura() { return readMachineFile(test::sourcePath(test::shippedMachines()[0])); }
+
+// A flat plane z = 0 over [-90, 90] x [-15, 15] mm, as a grid of 1 mm squares.
+TriangleMesh plane() {
+  TriangleMesh m;
+  m.group_names = {"face"};
+  const int nx = 180, ny = 30;
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) m.vertices.emplace_back(-90.0 + i, -15.0 + j, 0.0);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int a = j * (nx + 1) + i;
+      m.faces.emplace_back(a, a + 1, a + nx + 2);
+      m.faces.emplace_back(a, a + nx + 2, a + nx + 1);
+      m.face_group.push_back(0);
+      m.face_group.push_back(0);
+    }
+  return m;
+}
+
+// Facing passes of a D10 flat end, tool axis vertical, along x at y = -20..20 every 5 mm.
+std::vector<ClPoint> facing() {
+  std::vector<ClPoint> path;
+  int line = 1;
+  for (int j = 0; j <= 8; ++j) {
+    const double y = -20.0 + 5.0 * j;
+    for (double x : {-100.0, 100.0}) {
+      ClPoint p;
+      p.p_w = Eigen::Vector3d(j % 2 ? -x : x, y, 0.0);
+      p.line = line++;
+      path.push_back(p);
+    }
+  }
+  return path;
+}
+
+struct FacingRun {
+  SurfaceSamples samples;
+  VerifyResult result;
+};
+
+FacingRun verifyFacing(const Machine& m) {
+  Cutter c;
+  c.diameter = 10;
+  c.length = 30;
+  const auto path = facing();
+  const PredictionResult pred = predictToolPath(m.model, m.params, path);
+  EXPECT_TRUE(pred.ok());
+  std::vector<JointVector> q;
+  for (const auto& p : pred.points) q.push_back(p.q);
+  const ForwardKinematics nominal(m.model, Eigen::VectorXd::Zero(m.model.parameterCount()));
+  const ForwardKinematics actual(m.model, m.params);
+  MotionSampling sampling;
+  sampling.step = 0.25;
+  sampling.reach = c.length;
+  std::vector<ToolPlacement> a, b;
+  samplePlacements(nominal, actual, path, q, sampling, &a, &b);
+  FacingRun r;
+  r.samples = sampleSurface(plane(), 1.0);
+  r.result = verifyPart(r.samples, c, a, b, {bilateralZone(0.02)}, SweepOptions());
+  return r;
+}
+
+// An out-of-squareness of X to Z (ISO 230-1: the slope of X's vertical straightness, the linear
+// Chebyshev term of e_z(X)) tilts the table's path: e_z(X) = c1 X / 380. To put the tool at part
+// coordinate x the table moves X = -x (the machine file's convention), so the table sits e_z(-x)
+// = -c1 x / 380 high and the tool +c1 x / 380 above its nominal height. Facing with the flat
+// bottom, the surface left at (x, y) is the lowest bottom over the tool positions that cover it,
+// x_t in [x - w, x + w] with w = sqrt(R^2 - dy^2) for the nearest pass dy away: c1 (x - w) / 380
+// for c1 > 0, to within one placement step of slope. The nominal program leaves the plane
+// exactly.
+TEST(Verification, FlatEndFacingOnASquarenessErrorGivesTheAnalyticTilt) {
+  Machine m = matsuura();
+  const double c1 = 0.019;  // 50 urad over X's half travel
+  m.params[m.model.findParameter("EZX.c1")] = c1;
+  const FacingRun r = verifyFacing(m);
+  int checked = 0;
+  double sxx = 0, sxy = 0, sx = 0, sy = 0;
+  for (size_t i = 0; i < r.samples.size(); ++i) {
+    if (r.samples.on_edge[i]) continue;
+    ASSERT_TRUE(r.result.machined[i]) << i;
+    const double x = r.samples.p_w[i].x(), y = r.samples.p_w[i].y();
+    const double dy = std::abs(y - (-20.0 + 5.0 * std::round((y + 20.0) / 5.0)));
+    const double w = std::sqrt(25.0 - dy * dy);
+    EXPECT_NEAR(r.result.program[i], 0.0, 1e-12);
+    EXPECT_NEAR(r.result.total[i], c1 * (x - w) / 380.0, 0.25 * c1 / 380.0 + 1e-12) << "x = " << x;
+    EXPECT_DOUBLE_EQ(r.result.machine[i], r.result.total[i] - r.result.program[i]);
+    sx += x;
+    sy += r.result.total[i];
+    sxx += x * x;
+    sxy += x * r.result.total[i];
+    ++checked;
+  }
+  ASSERT_GT(checked, 1000);
+  const double slope = (checked * sxy - sx * sy) / (checked * sxx - sx * sx);
+  EXPECT_NEAR(slope, c1 / 380.0, 1e-3 * c1 / 380.0);  // the tilt, 50 urad
+  // +-10 um zone: the ends of the 180 mm plane are 4.5 um out of level, all in tolerance.
+  EXPECT_TRUE(r.result.pass);
+}
+
+TEST(Verification, ZeroErrorMachineContributesNothing) {
+  const Machine m = matsuura();
+  ASSERT_EQ(m.params.norm(), 0.0);
+  const FacingRun r = verifyFacing(m);
+  for (size_t i = 0; i < r.samples.size(); ++i) {
+    EXPECT_EQ(r.result.machine[i], 0.0);
+    EXPECT_EQ(r.result.total[i], r.result.program[i]);
+  }
+  EXPECT_EQ(r.result.machine_stats.rms, 0.0);
+}
+
+// A sample far beyond the tolerance makes one region, found where it is.
+TEST(Verification, OutOfTolerancePlaneIsOneRegionWithItsArea) {
+  Machine m = matsuura();
+  m.params[m.model.findParameter("EZX.c1")] = 0.2;  // 526 urad: -25 .. +24 um
+  const FacingRun r = verifyFacing(m);
+  EXPECT_FALSE(r.result.pass);
+  ASSERT_GE(r.result.regions.size(), 1u);
+  const auto& worst = r.result.regions.front();
+  EXPECT_EQ(worst.kind, Conformance::Gouge);  // x < 0: the tool sits lower
+  EXPECT_LT(worst.where_w.x(), -80.0);
+  EXPECT_NEAR(worst.worst_deviation, -0.2 * (90.0 - 1.0 + 5.0) / 380.0, 0.2 * 1.5 / 380);
+}
+
+}  // namespace
+}  // namespace tolver

@@ -1,0 +1,120 @@
+// tolver verify from the command line: verdicts and exit codes, report files, bad input, batch.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+using test::runTolver;
+using test::sourcePath;
+
+class VerifyCli : public test::TempDirTest {
+ protected:
+  std::string base(const std::string& extra) const {
+    return "verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
+           " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
+           sourcePath("samples/sculptured_finish.apt") + " --part " +
+           sourcePath("samples/sculptured_part.obj") + " --spacing 1.2 " + extra;
+  }
+  static std::string slurp(const std::string& p) {
+    std::ifstream in(p);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+  }
+};
+
+TEST_F(VerifyCli, InToleranceExitsZeroAndWritesTheReport) {
+  const auto r = runTolver(base("--tolerance 0.05 --report-dir " + path("out")));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("PASS"), std::string::npos);
+  for (const char* f : {"report.html", "report.json", "deviations.csv", "swept_predicted.ply",
+                        "swept_predicted.vtp", "swept_nominal.ply", "swept_nominal.vtp",
+                        "map_isometric.png", "map_top.png", "map_worst.png", "histogram.png"})
+    EXPECT_TRUE(std::filesystem::exists(path("out/") + f)) << f;
+  const auto j = nlohmann::json::parse(slurp(path("out/report.json")));
+  EXPECT_EQ(j["verdict"], "pass");
+  EXPECT_EQ(j["exit_code"], 0);
+  EXPECT_GT(j["area"]["percent_in_tolerance"].get<double>(), 99.999);
+  EXPECT_GT(j["deviation"]["machine"]["rms_um"].get<double>(), 0.5);  // the sample machine's errors
+  EXPECT_LT(j["deviation"]["total"]["max_um"].get<double>(), 25.0);
+  const std::string html = slurp(path("out/report.html"));
+  EXPECT_NE(html.find("PASS"), std::string::npos);
+  EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
+  EXPECT_EQ(slurp(path("out/swept_predicted.ply")).rfind("ply\nformat binary_little_endian", 0), 0u);
+}
+
+TEST_F(VerifyCli, OutOfToleranceExitsOneWithRegionsAndTheirCause) {
+  const auto r = runTolver(base("--tolerance 0.01 --no-images --line-pass 3 --report-dir " + path("out")));
+  ASSERT_EQ(r.exit_code, 1) << r.output;
+  const auto j = nlohmann::json::parse(slurp(path("out/report.json")));
+  EXPECT_EQ(j["verdict"], "fail");
+  ASSERT_GT(j["out_of_tolerance_regions"].size(), 0u);
+  const auto& g = j["out_of_tolerance_regions"][0];
+  EXPECT_TRUE(g["cause"] == "machine" || g["cause"] == "program");
+  EXPECT_GT(g["worst_excursion_um"].get<double>(), 0.0);
+  EXPECT_EQ(j["line_profile"]["pass"], 3);
+  EXPECT_GT(j["line_profile"]["points"].size(), 50u);
+}
+
+TEST_F(VerifyCli, UnequalZonesFromAFile) {
+  const std::string zones = write("zones.csv", "region,tolerance,uz,u\n*,0.03,,\ntop,0.03,,0.0\n");
+  const auto r = runTolver(base("--zones " + zones + " --no-images --report-dir " + path("out")));
+  // Everything left on top (scallops, +) is beyond an all-inside ASME U 0 zone.
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  const auto j = nlohmann::json::parse(slurp(path("out/report.json")));
+  EXPECT_EQ(j["zones"][1]["upper_um"], 0.0);
+  EXPECT_EQ(j["out_of_tolerance_regions"][0]["kind"], "excess");
+}
+
+TEST_F(VerifyCli, BadInputExitsTwoNamingTheFile) {
+  auto r = runTolver(base("--tolerance 0.02 --report-dir " + path("out")).replace(
+      base("").find("sculptured_part.obj"), 19, "missing_part.stl"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("missing_part.stl"), std::string::npos) << r.output;
+  const std::string zones = write("bad.csv", "region,tolerance\n*,0.02\ntop,-1\n");
+  r = runTolver(base("--zones " + zones + " --report-dir " + path("out")));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("bad.csv:3"), std::string::npos) << r.output;
+  r = runTolver(base("--report-dir " + path("out")));  // no tolerance
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.output.find("--tolerance"), std::string::npos) << r.output;
+}
+
+TEST_F(VerifyCli, ClOnlyModeWithoutAPart) {
+  const auto r = runTolver("verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
+                           " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
+                           sourcePath("samples/nas979_cone.apt") + " --tolerance 0.05 --no-images --report-dir " +
+                           path("out"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(slurp(path("out/report.json")));
+  EXPECT_EQ(j["mode"], "cl-only");
+  // The machine moves the tool about 10 um (tolver predict's figure for this program).
+  EXPECT_GT(j["deviation"]["machine"]["max_um"].get<double>() - j["deviation"]["machine"]["min_um"].get<double>(), 1.0);
+}
+
+TEST_F(VerifyCli, BatchVerifiesJobsInParallelAndSummarises) {
+  const std::string m = sourcePath("samples/machines/matsuura_mc760vx_measured.xml");
+  const std::string jobs = write(
+      "jobs.csv", "name,machine,cl,part,tolerance,setup\n"
+                  "loose," + m + "," + sourcePath("samples/sculptured_finish.apt") + "," +
+                  sourcePath("samples/sculptured_part.obj") + ",0.05," + sourcePath("samples/matsuura_setup.txt") + "\n"
+                  "tight," + m + "," + sourcePath("samples/sculptured_finish.apt") + "," +
+                  sourcePath("samples/sculptured_part.obj") + ",0.01," + sourcePath("samples/matsuura_setup.txt") + "\n");
+  const auto r = runTolver("verify --batch " + jobs + " --spacing 1.5 --no-images --report-dir " + path("out"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;  // one job fails
+  const std::string summary = slurp(path("out/summary.csv"));
+  EXPECT_NE(summary.find("loose,pass"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("tight,fail"), std::string::npos) << summary;
+  EXPECT_TRUE(std::filesystem::exists(path("out/loose/report.json")));
+  EXPECT_TRUE(std::filesystem::exists(path("out/tight/report.json")));
+}
+
+}  // namespace
+}  // namespace tolver
