@@ -38,7 +38,7 @@ void refineMesh(TriangleMesh* mesh, double max_edge) {
                            CGAL::parameters::number_of_iterations(1)
                                .edge_is_constrained_map(constrained)
                                .face_patch_map(patch)
-                               .relax_constraints(true));
+                               .number_of_relaxation_steps(0));
   sm.collect_garbage();
   mesh->vertices.resize(sm.number_of_vertices());
   for (auto v : sm.vertices()) {

@@ -345,7 +345,7 @@ void renderHistogram(const std::string& png_path, const std::vector<double>& dev
     dmax = std::max(dmax, deviation[i]);
     total += weight[i];
   }
-  const double pad = 0.05 * (dmax - dmin + 1e-9);
+  const double pad = 0.12 * (dmax - dmin + 1e-9);
   dmin -= pad;
   dmax += pad;
   const int bins = 60;

@@ -1,15 +1,16 @@
 #!/usr/bin/env bash
-# One command: install what is missing, build, run the main job on the bundled sample.
+# One command: install what is missing, build, run the main job on the bundled sample:
+# verify the five-axis ball-end finish of the sculptured part on the measured Matsuura machine.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$here/scripts/install_deps.sh"
 "$here/scripts/build.sh"
 cd "$here"
-mkdir -p out
-./build/app/tolver predict \
+./build/app/tolver verify \
   --machine samples/machines/matsuura_mc760vx_measured.xml \
-  --cl samples/nas979_cone.apt \
   --setup samples/matsuura_setup.txt \
-  --errors out/predicted_points.csv \
-  -o out/predicted.apt
-echo "Predicted CL: out/predicted.apt   per-point table: out/predicted_points.csv"
+  --cl samples/sculptured_finish.apt \
+  --part samples/sculptured_part.obj \
+  --tolerance 0.03 \
+  --report-dir out/sculptured
+echo "Report: out/sculptured/report.html (open it in a browser); machine-readable: out/sculptured/report.json"

@@ -56,6 +56,9 @@ void cone(const std::string& dir) {
   header(w, "NAS979_CONE", "NAS 979 cone frustum, five-axis flank finish", "CUTTER/10,0,0,0,0,0,50");
   const double half = 15.0 * M_PI / 180.0, R0 = 40.0, r = 5.0;
   const int n = 720;
+  // On the Matsuura's set-up the C axis reaches its travel limit (-180 deg) half-way round; the
+  // inverse kinematics then takes the other rotary solution and the table swings half a turn
+  // between two points: tolver verify shows the gouge this would make (cause: program).
   const double start = -179.0 * M_PI / 180.0, sweep = 358.0 * M_PI / 180.0;
   auto pose = [&](double t, Eigen::Vector3d* p, Eigen::Vector3d* u) {
     const Eigen::Vector3d radial(std::cos(t), std::sin(t), 0);
@@ -230,7 +233,7 @@ void coneStl(const std::string& dir) {
   const double R0 = 40.0, H = 40.0, half = 15.0 * M_PI / 180.0, R1 = R0 - H * std::tan(half);
   const int n = 720;
   auto ring = [&](double r, double z, int k) {
-    const double t = 2.0 * M_PI * k / n;
+    const double t = 2.0 * M_PI * (k % n) / n;  // k = n is k = 0 exactly: no seam
     return Eigen::Vector3d(r * std::cos(t), r * std::sin(t), z);
   };
   const Eigen::Vector3d top_centre(0, 0, H);
@@ -243,7 +246,7 @@ void coneStl(const std::string& dir) {
   // Plate top (z = 0) around the cone: fan between the cone's base circle and the square border.
   const double P = 50.0;
   auto square = [&](int k) {
-    const double t = 2.0 * M_PI * k / n;
+    const double t = 2.0 * M_PI * (k % n) / n;
     const double c = std::cos(t), s = std::sin(t);
     const double scale = P / std::max(std::abs(c), std::abs(s));
     return Eigen::Vector3d(scale * c, scale * s, 0);

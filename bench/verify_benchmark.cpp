@@ -1,0 +1,74 @@
+// The hot loop of tolver verify: the point-vector sweep of the sample part (samples/
+// sculptured_part.obj at 0.5 mm, ~96k samples) by the five-axis ball-end finish (samples/
+// sculptured_finish.apt, ~36k placements) on the measured Matsuura machine; and the surface
+// sampling (CGAL isotropic remeshing) that precedes it.
+#include <benchmark/benchmark.h>
+
+#include "core/forward_kinematics.h"
+#include "core/tool_motion.h"
+#include "geometry/swept_surface.h"
+#include "io/apt_reader.h"
+#include "io/machine_file.h"
+#include "io/mesh_file.h"
+#include "io/setup_file.h"
+
+namespace tolver {
+namespace {
+
+struct Fixture {
+  TriangleMesh mesh;
+  SurfaceSamples samples;
+  Cutter cutter;
+  std::vector<ToolPlacement> nominal, actual;
+  Fixture() {
+    const std::string dir = TOLVER_SOURCE_DIR;
+    Machine m = readMachineFile(dir + "/samples/machines/matsuura_mc760vx_measured.xml");
+    m.model.setup = readSetupFile(dir + "/samples/matsuura_setup.txt");
+    const ClProgram program = readAptFile(dir + "/samples/sculptured_finish.apt");
+    cutterFromApt(program.cutters.back().source, program.cutters.back().values, &cutter);
+    mesh = readPartMesh(dir + "/samples/sculptured_part.obj").mesh;
+    samples = sampleSurface(mesh, 0.5);
+    const PredictionResult pred = predictToolPath(m.model, m.params, program.path);
+    std::vector<JointVector> q;
+    for (const auto& p : pred.points) q.push_back(p.q);
+    MotionSampling s;
+    s.step = 0.346;  // sqrt(0.8 R t), R = 5 mm, t = 0.03 mm
+    s.reach = cutter.effectiveLength();
+    samplePlacements(ForwardKinematics(m.model, Eigen::VectorXd::Zero(m.model.parameterCount())),
+                     ForwardKinematics(m.model, m.params), program.path, q, s, &nominal, &actual);
+  }
+};
+
+const Fixture& fixture() {
+  static const Fixture f;
+  return f;
+}
+
+void BM_SweepSculptured(benchmark::State& state) {
+  const Fixture& f = fixture();
+  SweepOptions opt;
+  opt.excess_range = opt.gouge_range = 0.15;
+  SweepResult r;
+  for (auto _ : state) {
+    sweepSurface(f.samples, f.cutter, f.actual, opt, &r);
+    benchmark::DoNotOptimize(r.deviation.data());
+  }
+  state.counters["samples"] = static_cast<double>(f.samples.size());
+  state.counters["placements"] = static_cast<double>(f.actual.size());
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(f.samples.size()));
+}
+BENCHMARK(BM_SweepSculptured)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_SampleSurfaceSculptured(benchmark::State& state) {
+  const Fixture& f = fixture();
+  for (auto _ : state) {
+    SurfaceSamples s = sampleSurface(f.mesh, 0.5);
+    benchmark::DoNotOptimize(s.p_w.data());
+  }
+}
+BENCHMARK(BM_SampleSurfaceSculptured)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+}  // namespace tolver
+
+BENCHMARK_MAIN();
