@@ -6,34 +6,12 @@
 #include <nlohmann/json.hpp>
 
 #include "io/io_error.h"
+#include "io/text_util.h"
 #include "io/png_plot.h"
 #include "io/tolerance_file.h"
 
 namespace tolver {
 namespace {
-
-std::string base64(const std::string& in) {
-  static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  size_t i = 0;
-  for (; i + 2 < in.size(); i += 3) {
-    const unsigned v = (static_cast<unsigned char>(in[i]) << 16) |
-                       (static_cast<unsigned char>(in[i + 1]) << 8) | static_cast<unsigned char>(in[i + 2]);
-    out += k[v >> 18];
-    out += k[(v >> 12) & 63];
-    out += k[(v >> 6) & 63];
-    out += k[v & 63];
-  }
-  if (i < in.size()) {
-    unsigned v = static_cast<unsigned char>(in[i]) << 16;
-    if (i + 1 < in.size()) v |= static_cast<unsigned char>(in[i + 1]) << 8;
-    out += k[v >> 18];
-    out += k[(v >> 12) & 63];
-    out += i + 1 < in.size() ? k[(v >> 6) & 63] : '=';
-    out += '=';
-  }
-  return out;
-}
 
 std::string fmt(const char* f, double v) {
   char b[64];
@@ -175,7 +153,7 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
   else
     h += "<p class=\"bad\">No allocation within the bounds meets the limits: loosen the limits or allow tighter tolerances (lower bounds).</p>";
   h += "<h2>Pareto front</h2><p>M1 = cost + quality loss (x, minimised) against M2 (y, maximised); grey: the standard tolerances, red: the chosen compromise.</p>";
-  h += "<img alt=\"Pareto front\" src=\"data:image/png;base64," + base64(readFile(dir + "/pareto.png")) + "\">";
+  h += "<img alt=\"Pareto front\" src=\"data:image/png;base64," + base64Encode(readFile(dir + "/pareto.png")) + "\">";
   h += "<h2>Tolerances (like the paper's Table 4)</h2><table><tr><th>term</th><th>category</th><th>unit</th><th>standard</th><th>optimised</th><th>paper</th></tr>";
   for (size_t i = 0; i < terms.size(); ++i) {
     const auto& t = terms[i];

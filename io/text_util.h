@@ -18,5 +18,7 @@ std::vector<std::string> splitCsvLine(const std::string& line);
 std::optional<double> parseNumber(std::string_view token);
 // Formats a double with the shortest precision that round-trips (17 significant digits max).
 std::string formatNumber(double v);
+// Base64 (RFC 4648, with padding) of bytes, for images embedded in HTML reports.
+std::string base64Encode(const std::string& bytes);
 
 }  // namespace tolver

@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/io_error.h"
+#include "io/text_util.h"
 
 namespace tolver {
 namespace {
@@ -16,30 +17,6 @@ double um(double mm) { return std::round(mm * 1e6) / 1e3; }  // um to 1 nm
 json stats(const DeviationStats& s) {
   return {{"samples", s.samples}, {"min_um", um(s.min)}, {"max_um", um(s.max)},
           {"mean_um", um(s.mean)}, {"rms_um", um(s.rms)}};
-}
-
-std::string base64(const std::string& in) {
-  static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  out.reserve((in.size() + 2) / 3 * 4);
-  size_t i = 0;
-  for (; i + 2 < in.size(); i += 3) {
-    const unsigned v = (static_cast<unsigned char>(in[i]) << 16) |
-                       (static_cast<unsigned char>(in[i + 1]) << 8) | static_cast<unsigned char>(in[i + 2]);
-    out += t[v >> 18];
-    out += t[(v >> 12) & 63];
-    out += t[(v >> 6) & 63];
-    out += t[v & 63];
-  }
-  if (i < in.size()) {
-    unsigned v = static_cast<unsigned char>(in[i]) << 16;
-    if (i + 1 < in.size()) v |= static_cast<unsigned char>(in[i + 1]) << 8;
-    out += t[v >> 18];
-    out += t[(v >> 12) & 63];
-    out += i + 1 < in.size() ? t[(v >> 6) & 63] : '=';
-    out += '=';
-  }
-  return out;
 }
 
 std::string html(const std::string& s) {
@@ -238,7 +215,7 @@ std::string formatVerifyHtml(const VerifyReport& r) {
   }
   for (const auto& [caption, path] : r.images) {
     h += "<h3>" + html(caption) + "</h3>\n<img alt=\"" + html(caption) + "\" src=\"data:image/png;base64," +
-         base64(readFile(path)) + "\">\n";
+         base64Encode(readFile(path)) + "\">\n";
   }
   h += "<p style=\"color:#777\">tolver verify, " + fmt("%.2f", r.seconds) + " s</p>\n</body></html>\n";
   return h;

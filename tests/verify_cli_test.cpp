@@ -87,6 +87,18 @@ TEST_F(VerifyCli, BadInputExitsTwoNamingTheFile) {
   EXPECT_NE(r.output.find("--tolerance"), std::string::npos) << r.output;
 }
 
+TEST_F(VerifyCli, MalformedJobsFileExitsTwoNamingItsLine) {
+  const std::string jobs = write("jobs.csv", "name,machine,cl,part,tolerance\nok/../x,m.xml,a.apt,,0.02\n");
+  auto r = runTolver("verify --batch " + jobs + " --report-dir " + path("out"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("jobs.csv:2"), std::string::npos) << r.output;
+  r = runTolver("verify --batch " + write("empty.csv", "") + " --report-dir " + path("out"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  r = runTolver("verify --batch " + write("nocol.csv", "name,cl\nx,a.apt\n") + " --report-dir " + path("out"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(path("out/summary.csv")));
+}
+
 TEST_F(VerifyCli, ClOnlyModeWithoutAPart) {
   const auto r = runTolver("verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
                            " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
