@@ -23,9 +23,22 @@ struct PlanOptions {
   BallbarPlanOptions plan;
   std::string output, gcode;
   double feed = 2000.0;
+  std::vector<double> lengths;
 };
 
-void runPlan(const PlanOptions& o) {
+std::string lengthText(const BallbarPlanOptions& p) {
+  std::string out;
+  char buf[32];
+  for (double l : p.bar_lengths.empty() ? std::vector<double>{p.bar_length} : p.bar_lengths) {
+    std::snprintf(buf, sizeof buf, "%s%.3f", out.empty() ? "" : ", ", l);
+    out += buf;
+  }
+  return out + " mm";
+}
+
+void runPlan(PlanOptions o) {
+  if (o.lengths.size() == 1) o.plan.bar_length = o.lengths[0];
+  if (o.lengths.size() > 1) o.plan.bar_lengths = o.lengths;
   const Machine machine = loadMachine(o.machine);
   const std::string gcode = o.gcode.empty() ? replaceExtension(o.output, ".nc") : o.gcode;
   checkOutputDir(o.output, "-o");
@@ -35,17 +48,17 @@ void runPlan(const PlanOptions& o) {
   if (static_cast<int>(plan.test.readings.size()) < o.plan.poses)
     throw InputError(o.machine.machine, 0, 0, "plan",
                      "only " + std::to_string(plan.test.readings.size()) +
-                         " poses inside travel were found for a " + std::to_string(o.plan.bar_length) +
-                         " mm bar; try another length or set-up");
+                         " poses inside travel were found for a " + lengthText(o.plan) +
+                         " bar; try another length or set-up");
   char head[256];
-  std::snprintf(head, sizeof head, "tolver ball-bar plan for %s: bar %.3f mm, %d set-ups, %zu poses, seed %u",
-                machine.model.name.c_str(), o.plan.bar_length, static_cast<int>(plan.test.setups.size()),
+  std::snprintf(head, sizeof head, "tolver ball-bar plan for %s: bar %s, %d set-ups, %zu poses, seed %u",
+                machine.model.name.c_str(), lengthText(o.plan).c_str(), static_cast<int>(plan.test.setups.size()),
                 plan.test.readings.size(), o.plan.seed);
   writeFileAtomically(o.output, formatBallbarCsv(machine.model, plan.test, false, {head}));
   writeFileAtomically(gcode, formatBallbarGcode(machine.model, plan.test, o.feed, 2.0));
   std::printf("tolver plan-ballbar: %s\n", machine.model.name.c_str());
-  std::printf("  bar %.3f mm, %zu set-ups, %zu poses (%d sampled, %d outside travel)\n",
-              o.plan.bar_length, plan.test.setups.size(), plan.test.readings.size(), plan.sampled,
+  std::printf("  bar %s, %zu set-ups, %zu poses (%d sampled, %d outside travel)\n",
+              lengthText(o.plan).c_str(), plan.test.setups.size(), plan.test.readings.size(), plan.sampled,
               plan.rejected);
   for (const BallbarSetup& s : plan.test.setups)
     std::printf("  set-up %d: table ball (%.3f, %.3f, %.3f) mm in w, tool ball (%.3f, %.3f, %.3f) mm in t\n",
@@ -171,10 +184,18 @@ void registerBallbar(CLI::App& app, int* exit_code) {
         "Plan a three-set-up ball-bar test: poses inside travel at the bar length, chosen for "
         "identifiability; writes the plan (CSV) and an NC program.");
     addMachineOptions(cmd, o->machine, "machine file (XML)");
-    cmd->add_option("--length", o->plan.bar_length, "bar length, mm (default 150)")->check(CLI::PositiveNumber);
+    cmd->add_option("--length", o->lengths,
+                    "bar length, mm (default 150); a list (100,150,300) gives each set-up its "
+                    "own, in turn")
+        ->delimiter(',')
+        ->check(CLI::PositiveNumber);
     cmd->add_option("--setups", o->plan.setups, "number of set-ups (default 3)")->check(CLI::Range(1, 12));
     cmd->add_option("--poses", o->plan.poses, "poses in all (default 180)")->check(CLI::Range(1, 100000));
     cmd->add_option("--seed", o->plan.seed, "random seed (default 1)");
+    cmd->add_option("--reference-every", o->plan.reference_every,
+                    "measure the set-up's first pose again after every N poses, a drift check "
+                    "(default 0: never)")
+        ->check(CLI::Range(0, 100000));
     cmd->add_option("-o,--output", o->output, "plan to write (CSV)")->required();
     cmd->add_option("--gcode", o->gcode, "NC program to write (default: the plan path with .nc)");
     cmd->callback([o, exit_code] {

@@ -10,5 +10,6 @@ void registerAnalyze(CLI::App& app, int* exit_code);
 void registerBallbar(CLI::App& app, int* exit_code);
 void registerAllocate(CLI::App& app, int* exit_code);
 void registerVerify(CLI::App& app, int* exit_code);
+void registerDiagnose(CLI::App& app, int* exit_code);
 
 }  // namespace tolver::app

@@ -1,5 +1,9 @@
 #include "app/common.h"
 
+#include <unistd.h>
+
+#include <cstdio>
+
 #include <filesystem>
 
 #include "io/io_error.h"
@@ -46,6 +50,17 @@ std::string replaceExtension(const std::string& path, const std::string& ext) {
   p.replace_extension(ext);
   if (p == original) p += ".out" + ext;
   return p.string();
+}
+
+ProgressBar::ProgressBar(bool enabled) : enabled_(enabled && isatty(2)) {}
+
+void ProgressBar::operator()(const std::string& what, double f) {
+  if (!enabled_) return;
+  const int width = 40, filled = static_cast<int>(f * width + 0.5);
+  std::fprintf(stderr, "\r  %-24s [%s%s] %3d%%", what.c_str(), std::string(filled, '#').c_str(),
+               std::string(width - filled, '.').c_str(), static_cast<int>(f * 100 + 0.5));
+  if (f >= 1.0) std::fprintf(stderr, "\n");
+  std::fflush(stderr);
 }
 
 }  // namespace tolver::app

@@ -23,6 +23,16 @@ void addMachineOptions(CLI::App* cmd, MachineOptions& o, const char* machine_hel
 Machine loadMachine(const MachineOptions& o);
 // Throws InputError when the directory of `path` does not exist.
 void checkOutputDir(const std::string& path, const char* option);
+// A progress bar on stderr when it is a terminal (and enabled).
+class ProgressBar {
+ public:
+  explicit ProgressBar(bool enabled);
+  void operator()(const std::string& what, double fraction);
+
+ private:
+  bool enabled_;
+};
+
 // `path` with its extension replaced (or `suffix` appended when it has none).
 std::string replaceExtension(const std::string& path, const std::string& ext);
 

@@ -57,23 +57,6 @@ struct JobOutcome {
 
 std::mutex g_vtk_mutex;  // VTK rendering and writing are not thread-safe
 
-// A progress bar on stderr when it is a terminal.
-class ProgressBar {
- public:
-  explicit ProgressBar(bool enabled) : enabled_(enabled && isatty(2)) {}
-  void operator()(const std::string& what, double f) {
-    if (!enabled_) return;
-    const int width = 40, filled = static_cast<int>(f * width + 0.5);
-    std::fprintf(stderr, "\r  %-24s [%s%s] %3d%%", what.c_str(), std::string(filled, '#').c_str(),
-                 std::string(width - filled, '.').c_str(), static_cast<int>(f * 100 + 0.5));
-    if (f >= 1.0) std::fprintf(stderr, "\n");
-    std::fflush(stderr);
-  }
-
- private:
-  bool enabled_;
-};
-
 std::vector<ToleranceZone> zonesFrom(const VerifyOptions& o) {
   std::vector<ToleranceZone> zones;
   if (!std::isnan(o.tolerance)) {

@@ -7,24 +7,54 @@ namespace tolver {
 double ballbarLength(const ForwardKinematics& fk, const JointVector& q, const BallbarSetup& s,
                      const BallErrors& e, const MotionContext* ctx) {
   const Eigen::Isometry3d T = fk.w_T_t(q, ctx);
-  return (T * (s.tool_ball_t + e.tool_t) - (s.table_ball_w + e.table_w)).norm();
+  return (T * (s.tool_ball_t + e.tool_t) - (s.table_ball_w + e.table_w)).norm() +
+         fk.barLengthError();
+}
+
+namespace {
+
+// Reading change per tool twist in t: n^T R_wt [I, -[b_t x]] (see the header).
+Eigen::Matrix<double, 1, 6> readingPerTwist(const ForwardKinematics& fk, const JointVector& q,
+                                            const BallbarSetup& s, const BallErrors& e,
+                                            const MotionContext* ctx, Eigen::Vector3d* n_w,
+                                            Eigen::RowVector3d* nR_t) {
+  const Eigen::Isometry3d T = fk.w_T_t(q, ctx);
+  const Eigen::Vector3d bt = s.tool_ball_t + e.tool_t;
+  const Eigen::Vector3d d = T * bt - (s.table_ball_w + e.table_w);
+  *n_w = d.normalized();
+  *nR_t = n_w->transpose() * T.linear();  // bar direction in t
+  Eigen::Matrix<double, 3, 6> P;
+  P.leftCols<3>().setIdentity();
+  P.rightCols<3>() << 0, bt.z(), -bt.y(), -bt.z(), 0, bt.x(), bt.y(), -bt.x(), 0;
+  return *nR_t * P;
+}
+
+}  // namespace
+
+void ballbarComponentGradient(const ForwardKinematics& fk, const JointVector& q,
+                              const BallbarSetup& s, const BallErrors& e,
+                              Eigen::Ref<Eigen::RowVectorXd> J_length_components,
+                              Eigen::MatrixXd& scratch, const MotionContext* ctx) {
+  Eigen::Vector3d n;
+  Eigen::RowVector3d nR;
+  const Eigen::Matrix<double, 1, 6> w = readingPerTwist(fk, q, s, e, ctx, &n, &nR);
+  scratch.resize(6, 6 * fk.model().axes.size());
+  componentSensitivities(fk, q, scratch, ctx);
+  J_length_components = w * scratch;
 }
 
 void ballbarGradient(const ForwardKinematics& fk, const JointVector& q, const BallbarSetup& s,
                      const BallErrors& e, Eigen::Ref<Eigen::RowVectorXd> J_params,
                      Eigen::RowVector3d* J_table, Eigen::RowVector3d* J_tool,
                      Eigen::MatrixXd& scratch, const MotionContext* ctx) {
-  const Eigen::Isometry3d T = fk.w_T_t(q, ctx);
-  const Eigen::Vector3d bt = s.tool_ball_t + e.tool_t;
-  const Eigen::Vector3d d = T * bt - (s.table_ball_w + e.table_w);
-  const Eigen::Vector3d n = d.normalized();
-  const Eigen::RowVector3d nR = n.transpose() * T.linear();  // bar direction in t
+  Eigen::Vector3d n;
+  Eigen::RowVector3d nR;
+  const Eigen::Matrix<double, 1, 6> w = readingPerTwist(fk, q, s, e, ctx, &n, &nR);
   sensitivityJacobian(fk, q, scratch, ctx);
-  // d + theta x b_t = [I, -[b_t x]] twist
-  Eigen::Matrix<double, 3, 6> P;
-  P.leftCols<3>().setIdentity();
-  P.rightCols<3>() << 0, bt.z(), -bt.y(), -bt.z(), 0, bt.x(), bt.y(), -bt.x(), 0;
-  J_params = (nR * P) * scratch;
+  J_params = w * scratch;
+  const MachineModel& m = fk.model();
+  for (const ParameterBlock& b : m.blocks)  // the instrument's length adds to the reading
+    if (b.kind == BlockKind::Effect && m.effects[b.effect].axis < 0) J_params[b.offset] = 1.0;
   if (J_tool) *J_tool = nR;
   if (J_table) *J_table = -n.transpose();
 }

@@ -3,9 +3,10 @@
 //
 // A reading is the distance between the tool-ball centre b_t (a point of the tool frame t) and
 // the table-ball centre b_w (a point of the workpiece frame w):
-//   L = | w_T_t(q) (b_t + db_t) - (b_w + db_w) |,
+//   L = | w_T_t(q) (b_t + db_t) - (b_w + db_w) | + dL,
 // where db_t (in t) and db_w (in w) are the position errors of the two balls in one set-up
-// (unknowns of a calibration, three each per set-up). Its gradient orients the error twist
+// (unknowns of a calibration, three each per set-up), and dL the bar's own length error (the
+// bar_length effect of core/effects.h, zero unless the model has it). Its gradient orients the error twist
 // along the bar: with n the unit vector from the table ball to the tool ball (in w),
 //   dL = n^T R_wt (d + theta x b_t) + n^T R_wt db_t - n^T db_w.
 #include <Eigen/Core>
@@ -52,6 +53,14 @@ void ballbarGradient(const ForwardKinematics& fk, const JointVector& q, const Ba
                      const BallErrors& e, Eigen::Ref<Eigen::RowVectorXd> J_length_params,
                      Eigen::RowVector3d* J_length_table, Eigen::RowVector3d* J_length_tool,
                      Eigen::MatrixXd& scratch, const MotionContext* ctx = nullptr);
+
+// Reading change per unit additive change of each motion-error component of each axis
+// (1 x 6 * axes, column 6 a + c; see componentSensitivities): what an effect's coefficient
+// multiplies by its basis value. scratch: a work matrix (resized).
+void ballbarComponentGradient(const ForwardKinematics& fk, const JointVector& q,
+                              const BallbarSetup& s, const BallErrors& e,
+                              Eigen::Ref<Eigen::RowVectorXd> J_length_components,
+                              Eigen::MatrixXd& scratch, const MotionContext* ctx = nullptr);
 
 // The identification Jacobian of a test (thesis eq. 80): one row per reading, columns
 // [unknown machine parameters..., per set-up: table-ball xyz, tool-ball xyz] (balls: one per

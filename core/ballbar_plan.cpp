@@ -56,7 +56,9 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
       const Eigen::Vector3d d_F(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
                                 std::sin(el));
       const Eigen::Matrix3d F_R_w = fk.F_T_w(q).linear();
-      const Eigen::Vector3d target = bs.table_ball_w + opt.bar_length * (F_R_w.transpose() * d_F);
+      const double length =
+          opt.bar_lengths.empty() ? opt.bar_length : opt.bar_lengths[s % opt.bar_lengths.size()];
+      const Eigen::Vector3d target = bs.table_ball_w + length * (F_R_w.transpose() * d_F);
       int violated = -1;
       if (!ik.placeToolPoint(bs.tool_ball_t, target, q, &violated)) {
         ++plan.rejected;
@@ -112,6 +114,21 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
   // Measurement order: set-up by set-up.
   std::stable_sort(plan.test.readings.begin(), plan.test.readings.end(),
                    [](const BallbarReading& a, const BallbarReading& b) { return a.setup < b.setup; });
+  if (opt.reference_every > 0) {
+    std::vector<BallbarReading> with_checks;
+    int since = 0;
+    for (size_t i = 0; i < plan.test.readings.size(); ++i) {
+      const BallbarReading& r = plan.test.readings[i];
+      if (i == 0 || plan.test.readings[i - 1].setup != r.setup) since = 0;
+      with_checks.push_back(r);
+      if (++since % opt.reference_every == 0) {
+        size_t first = i;
+        while (first > 0 && plan.test.readings[first - 1].setup == r.setup) --first;
+        with_checks.push_back(plan.test.readings[first]);
+      }
+    }
+    plan.test.readings = std::move(with_checks);
+  }
 
   // 4. Rank and condition of the chosen design.
   const Eigen::MatrixXd J = identificationJacobian(

@@ -13,11 +13,17 @@ namespace tolver {
 
 struct BallbarPlanOptions {
   double bar_length = 150.0;    // mm
+  // Per set-up bar lengths (mm), cycled over the set-ups; empty: bar_length for every set-up.
+  // Two or more lengths let a calibration tell the bar's own length error from machine scale.
+  std::vector<double> bar_lengths;
   int setups = 3;
   int poses = 180;              // in all, shared equally between the set-ups
   unsigned seed = 1;
   int candidates_per_pose = 5;  // sampled configurations per selected one
   double min_elevation_deg = 10.0;  // bar elevation above the machine's xy plane
+  // A drift check: after every `reference_every` poses of a set-up, the set-up's first pose is
+  // measured again (0: never). These repeats come on top of `poses`.
+  int reference_every = 0;
   // Set-up geometry; when empty, defaults: table balls 80 mm off the table's axis at three
   // heights, tool balls 25 mm off the spindle axis at 60, 180 and 300 degrees (so the spindle's
   // own errors are observable).

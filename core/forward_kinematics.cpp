@@ -4,6 +4,8 @@
 #include <cassert>
 #include <cmath>
 
+#include "core/chebyshev.h"
+#include "core/effects.h"
 
 namespace tolver {
 
@@ -40,12 +42,25 @@ ForwardKinematics::ForwardKinematics(const MachineModel& model, const Eigen::Vec
       case BlockKind::ToolSetup:
         spindle_T_t_err_ = spindle_T_t_err_ * linkTransform(six);
         break;
+      case BlockKind::Effect: {
+        const EffectSpec& spec = model.effects[b.effect];
+        if (spec.axis < 0) {  // the instrument
+          bar_length_error_ += params[b.offset];
+          break;
+        }
+        AxisTerms::Effect e{&spec, spec.component, b.size, {}};
+        assert(b.size <= static_cast<int>(e.coef.size()));
+        for (int k = 0; k < b.size; ++k) e.coef[k] = params[b.offset + k];
+        axis_[spec.axis].effects.push_back(e);
+        break;
+      }
     }
   }
   for (AxisTerms& t : axis_) {
     t.fixed_R = t.fixed.linear();
     t.fixed_Rt = t.fixed_R.transpose();
     t.fixed_p = t.fixed.translation();
+    t.has_errors = t.max_degree >= 0 || !t.effects.empty();
     t.coef = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, std::max(t.max_degree + 1, 1));
     for (int c = 0; c < 6; ++c)
       for (int k = 0; k <= t.degree[c]; ++k) t.coef(c, k) = params[t.offset[c] + k];
@@ -54,10 +69,24 @@ ForwardKinematics::ForwardKinematics(const MachineModel& model, const Eigen::Vec
   t_end_ = model.last_T_spindle * spindle_T_t_err_;
 }
 
-Vector6d ForwardKinematics::motionErrors(int a, double s, const MotionContext* /*ctx*/) const {
+Vector6d ForwardKinematics::motionErrors(int a, double s, const MotionContext* ctx) const {
   const AxisTerms& t = axis_[a];
-  if (t.max_degree < 0) return Vector6d::Zero();
+  if (!t.has_errors) return Vector6d::Zero();
   const double x = (s - t.mid) * t.inv_half_range;  // eq. 58
+  if (!t.effects.empty()) {
+    Vector6d e = Vector6d::Zero();
+    if (t.max_degree >= 0) {
+      double T[32];
+      chebyshevBasis(x, t.max_degree, T);
+      for (int k = 0; k <= t.max_degree; ++k) e += T[k] * t.coef.col(k);
+    }
+    for (const AxisTerms::Effect& f : t.effects) {
+      double phi[8];
+      traitsOf(f.spec->type).basis(*f.spec, s, x, ctx, phi);
+      for (int k = 0; k < f.size; ++k) e[f.component] += f.coef[k] * phi[k];
+    }
+    return e;
+  }
   // e = sum_k C_k T_k(x), the six components at once, T_k by the recurrence of eq. 57.
   Vector6d e = t.coef.col(0);
   if (t.max_degree >= 1) e += x * t.coef.col(1);
@@ -91,7 +120,7 @@ void ForwardKinematics::composeJoint(int a, double s, Pose& T, const MotionConte
     T.R = T.R * Eigen::AngleAxisd(s, ax.direction).toRotationMatrix();
   }
   // * E(s): motion errors
-  if (t.max_degree >= 0) {
+  if (t.has_errors) {
     const Vector6d e = motionErrors(a, s, ctx);
     T.p += T.R * e.head<3>();
     T.R = T.R * rotationZYX(e[3], e[4], e[5]);
@@ -161,11 +190,11 @@ inline void rotateZYX(const Vector6d& e, bool inverse, Eigen::Vector3d& p, Eigen
 }  // namespace
 
 void ForwardKinematics::applyJoint(int a, double s, double c, double sn, Eigen::Vector3d& p,
-                                   Eigen::Vector3d& u) const {
+                                   Eigen::Vector3d& u, const MotionContext* ctx) const {
   const Axis& ax = model_->axes[a];
   const AxisTerms& t = axis_[a];
-  if (t.max_degree >= 0) {  // E(s)
-    const Vector6d e = motionErrors(a, s);
+  if (t.has_errors) {  // E(s)
+    const Vector6d e = motionErrors(a, s, ctx);
     rotateZYX(e, false, p, u);
     p += e.head<3>();
   }
@@ -184,7 +213,8 @@ void ForwardKinematics::applyJoint(int a, double s, double c, double sn, Eigen::
 }
 
 void ForwardKinematics::applyJointInverse(int a, double s, double c, double sn,
-                                          Eigen::Vector3d& p, Eigen::Vector3d& u) const {
+                                          Eigen::Vector3d& p, Eigen::Vector3d& u,
+                                          const MotionContext* ctx) const {
   const Axis& ax = model_->axes[a];
   const AxisTerms& t = axis_[a];
   p = t.fixed_Rt * (p - t.fixed_p);
@@ -199,8 +229,8 @@ void ForwardKinematics::applyJointInverse(int a, double s, double c, double sn,
     p = R * p;
     u = R * u;
   }
-  if (t.max_degree >= 0) {
-    const Vector6d e = motionErrors(a, s);
+  if (t.has_errors) {
+    const Vector6d e = motionErrors(a, s, ctx);
     p -= e.head<3>();
     rotateZYX(e, true, p, u);
   }
@@ -208,7 +238,7 @@ void ForwardKinematics::applyJointInverse(int a, double s, double c, double sn,
 
 void ForwardKinematics::tipAndAxis(const JointVector& q, Eigen::Vector3d* p_w,
                                    Eigen::Vector3d* u_w, const double* cos_q,
-                                   const double* sin_q) const {
+                                   const double* sin_q, const MotionContext* ctx) const {
   auto trig = [&](int a, double* c, double* s) {
     if (!model_->axes[a].isRotary()) return;
     if (cos_q) {
@@ -226,12 +256,12 @@ void ForwardKinematics::tipAndAxis(const JointVector& q, Eigen::Vector3d* p_w,
   const auto& tool = model_->tool_chain;
   for (auto it = tool.rbegin(); it != tool.rend(); ++it) {
     trig(*it, &c, &s);
-    applyJoint(*it, q[*it], c, s, p, u);
+    applyJoint(*it, q[*it], c, s, p, u, ctx);
   }
   // w_p = w_end^-1 D_n^-1 ... D_1^-1 F_p.
   for (int a : model_->workpiece_chain) {
     trig(a, &c, &s);
-    applyJointInverse(a, q[a], c, s, p, u);
+    applyJointInverse(a, q[a], c, s, p, u, ctx);
   }
   *p_w = w_end_.linear().transpose() * (p - w_end_.translation());
   *u_w = w_end_.linear().transpose() * u;
@@ -253,7 +283,7 @@ void ForwardKinematics::chainFrames(const JointVector& q, ChainFrames* out,
       } else {
         T.linear() = T.linear() * Eigen::AngleAxisd(q[a], ax.direction).toRotationMatrix();
       }
-      if (axis_[a].max_degree >= 0) T = T * linkTransform(motionErrors(a, q[a], ctx));
+      if (axis_[a].has_errors) T = T * linkTransform(motionErrors(a, q[a], ctx));
       out->after_joint[a] = T;
     }
     if (b == 0) out->F_T_w = T * w_end_;

@@ -27,7 +27,8 @@ class ForwardKinematics {
   // cos_q, sin_q: optional cos and sin of the rotary joint values (by axis index), when the
   // caller has them already (inverse kinematics does).
   void tipAndAxis(const JointVector& q, Eigen::Vector3d* p_w, Eigen::Vector3d* u_w,
-                  const double* cos_q = nullptr, const double* sin_q = nullptr) const;
+                  const double* cos_q = nullptr, const double* sin_q = nullptr,
+                  const MotionContext* ctx = nullptr) const;
   // Pose of the workpiece (tool) frame seen from the foundation.
   Eigen::Isometry3d F_T_w(const JointVector& q) const;
   Eigen::Isometry3d F_T_t(const JointVector& q) const;
@@ -35,6 +36,9 @@ class ForwardKinematics {
   Eigen::Isometry3d jointTransform(int a, double s) const;
   // The six motion-error values [ex ey ez gx gy gz] of axis a at joint value s (mm, rad).
   Vector6d motionErrors(int a, double s, const MotionContext* ctx = nullptr) const;
+
+  // The instrument's own length error (the bar_length effect), mm: added to ball-bar readings.
+  double barLengthError() const { return bar_length_error_; }
 
   const MachineModel& model() const { return *model_; }
   const Eigen::VectorXd& params() const { return params_; }
@@ -60,9 +64,9 @@ class ForwardKinematics {
   // p <- D_S(s) p, u <- R_S(s) u, and the inverse.
   // c, sn: cos and sin of s for rotary joints.
   void applyJoint(int a, double s, double c, double sn, Eigen::Vector3d& p,
-                  Eigen::Vector3d& u) const;
+                  Eigen::Vector3d& u, const MotionContext* ctx) const;
   void applyJointInverse(int a, double s, double c, double sn, Eigen::Vector3d& p,
-                         Eigen::Vector3d& u) const;
+                         Eigen::Vector3d& u, const MotionContext* ctx) const;
 
   struct AxisTerms {
     Eigen::Isometry3d fixed;     // D1 * L (nominal link with link errors)
@@ -70,7 +74,15 @@ class ForwardKinematics {
     Eigen::Vector3d fixed_p;
     std::array<int, 6> offset;   // motion-error coefficient offsets, -1 if none
     std::array<int, 6> degree;
-    int max_degree = -1;         // -1: no motion errors on this axis
+    int max_degree = -1;         // -1: no Chebyshev motion errors on this axis
+    bool has_errors = false;     // Chebyshev motion errors or effects on this axis
+    struct Effect {
+      const EffectSpec* spec;
+      int component;
+      int size;
+      std::array<double, 8> coef;
+    };
+    std::vector<Effect> effects;  // effect blocks acting on this axis (core/effects.h)
     int principal = -1;          // 0/1/2 when the joint direction is +x/+y/+z
     double mid = 0.0;            // travel midpoint and 2 / travel range, for eq. 58
     double inv_half_range = 1.0;
@@ -83,6 +95,7 @@ class ForwardKinematics {
   Eigen::Isometry3d spindle_T_t_err_;   // nominal tool frame times tool set-up errors
   Eigen::Isometry3d w_end_;             // last workpiece joint -> w (table, set-up, errors)
   Eigen::Isometry3d t_end_;             // last tool joint -> t
+  double bar_length_error_ = 0.0;
 };
 
 }  // namespace tolver

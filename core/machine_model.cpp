@@ -23,6 +23,7 @@ std::string thesisLetter(int c) {
 
 void MachineModel::buildParameterLayout(const std::vector<std::array<int, 6>>& motion_degree) {
   blocks.clear();
+  effects.clear();
   parameters.clear();
   auto addBlock = [&](ParameterBlock b) {
     b.offset = parameterCount();

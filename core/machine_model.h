@@ -23,8 +23,11 @@
 //                      component as a function of the normalised joint coordinate (eq. 59);
 //                      ISO 230-1 motion errors EXS EYS EZS EAS EBS ECS;
 //  * WorkpieceSetup   6 values, error of w in table (thesis e_x,w ...);
-//  * ToolSetup        6 values, error of t in spindle (thesis e_x,t ...).
-// Later capabilities append new block kinds; code that walks the vector uses the blocks.
+//  * ToolSetup        6 values, error of t in spindle (thesis e_x,t ...);
+//  * Effect           the coefficients of one effect (core/effects.h: backlash, cyclic error,
+//                      rotary harmonics, thermal drift, instrument length, a higher degree),
+//                      appended by addEffect after the blocks above.
+// Code that walks the vector uses the blocks.
 #include <Eigen/Geometry>
 #include <array>
 #include <limits>
@@ -61,7 +64,22 @@ struct Axis {
   bool isRotary() const { return type == JointType::Rotary; }
 };
 
-enum class BlockKind { LinkError, MotionError, WorkpieceSetup, ToolSetup };
+enum class BlockKind { LinkError, MotionError, WorkpieceSetup, ToolSetup, Effect };
+
+// The kinds of effect (core/effects.h says what each adds).
+enum class EffectType { Chebyshev, Reversal, Periodic, Harmonics, Drift, Warmup, BarLength };
+
+// One effect on a machine: its kind, where it acts and its fixed settings.
+struct EffectSpec {
+  EffectType type = EffectType::Chebyshev;
+  int axis = -1;        // index into MachineModel::axes; -1 for the instrument (bar length)
+  int component = -1;   // motion-error component it adds to, 0..5 (ex .. gz)
+  int first_order = 0;  // chebyshev, harmonics: the orders it adds
+  int last_order = 0;
+  bool varying = false;  // reversal: also a part proportional to the axis coordinate
+  double period = 0.0;   // periodic: mm
+  double tau = 0.0;      // warmup: time constant, s
+};
 
 struct ParameterBlock {
   BlockKind kind = BlockKind::LinkError;
@@ -70,6 +88,7 @@ struct ParameterBlock {
   int degree = 0;      // Chebyshev degree of a MotionError block
   int offset = 0;      // first index in the flat parameter vector
   int size = 0;
+  int effect = -1;     // index into MachineModel::effects for an Effect block
 };
 
 struct ParameterInfo {
@@ -106,6 +125,7 @@ class MachineModel {
   std::vector<ParameterBlock> blocks;
   std::vector<ParameterInfo> parameters;  // one per entry of the flat parameter vector
   std::vector<ParameterAlias> aliases;
+  std::vector<EffectSpec> effects;        // one per Effect block, in block order
   // Parameters kept by strategy II when choosing a minimal-complete set, per model name
   // ("link", "motion"): the recognised link errors (thesis Tables 3.4 and 4.2).
   std::map<std::string, std::vector<int>> preferred;
@@ -114,6 +134,10 @@ class MachineModel {
   // Chebyshev degree per axis and component, then workpiece and tool set-up errors.
   // motion_degree[a][c] < 0 means that component has no motion-error block.
   void buildParameterLayout(const std::vector<std::array<int, 6>>& motion_degree);
+
+  // Appends an Effect block (and its named parameters) for spec; returns the block index.
+  // Parameter values of a Machine must be extended with zeros to match.
+  int addEffect(const EffectSpec& spec);
 
   int parameterCount() const { return static_cast<int>(parameters.size()); }
   int axisIndex(std::string_view axis_name) const;  // -1 if absent (case-insensitive)

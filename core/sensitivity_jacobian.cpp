@@ -3,6 +3,7 @@
 #include <cassert>
 
 #include "core/chebyshev.h"
+#include "core/effects.h"
 
 namespace tolver {
 
@@ -58,7 +59,41 @@ void sensitivityJacobian(const ForwardKinematics& fk, const JointVector& q,
       case BlockKind::ToolSetup:
         J.middleCols<6>(b.offset) = linkTwistMap(p.segment<6>(b.offset));
         break;
+      case BlockKind::Effect: {
+        const EffectSpec& spec = m.effects[b.effect];
+        if (spec.axis < 0) {  // the instrument: no motion of the tool
+          J.middleCols(b.offset, b.size).setZero();
+          break;
+        }
+        const Vector6d e = fk.motionErrors(spec.axis, q[spec.axis], ctx);
+        const Eigen::Matrix<double, 6, 1> col =
+            sideOf(spec.axis) * transportToTool(fr.after_joint[spec.axis]) *
+            linkTwistMap(e).col(spec.component);
+        const Axis& ax = m.axes[spec.axis];
+        double phi[8];
+        traitsOf(spec.type).basis(spec, q[spec.axis],
+                                  normalisedCoordinate(q[spec.axis], ax.travel_min, ax.travel_max),
+                                  ctx, phi);
+        for (int k = 0; k < b.size; ++k) J.col(b.offset + k) = col * phi[k];
+        break;
+      }
     }
+  }
+}
+
+void componentSensitivities(const ForwardKinematics& fk, const JointVector& q,
+                            Eigen::Ref<Eigen::MatrixXd> J, const MotionContext* ctx) {
+  const MachineModel& m = fk.model();
+  const int n = static_cast<int>(m.axes.size());
+  assert(J.rows() == 6 && J.cols() == 6 * n);
+  ForwardKinematics::ChainFrames fr;
+  fk.chainFrames(q, &fr, ctx);
+  for (int a = 0; a < n; ++a) {
+    const double side = m.axes[a].branch == Branch::Tool ? 1.0 : -1.0;
+    const Vector6d e = fk.motionErrors(a, q[a], ctx);
+    J.middleCols<6>(6 * a) =
+        side * transportMatrix(fr.after_joint[a].inverse(Eigen::Isometry) * fr.F_T_t) *
+        linkTwistMap(e);
   }
 }
 

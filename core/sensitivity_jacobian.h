@@ -26,4 +26,11 @@ void sensitivityJacobian(const ForwardKinematics& fk, const JointVector& q,
                          Eigen::Ref<Eigen::MatrixXd> J_twist_params,
                          const MotionContext* ctx = nullptr);
 
+// Twist in t per unit additive change of each motion-error component of each axis at q (the
+// derivative an effect's coefficient scales by its basis value): J_twist_components is
+// 6 x (6 * axes), column 6 a + c for axis a, component c (ex .. gz).
+void componentSensitivities(const ForwardKinematics& fk, const JointVector& q,
+                            Eigen::Ref<Eigen::MatrixXd> J_twist_components,
+                            const MotionContext* ctx = nullptr);
+
 }  // namespace tolver

@@ -1,5 +1,7 @@
 #include "core/tool_motion.h"
 
+#include "core/effects.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -26,10 +28,13 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
   nominal_out->clear();
   actual_out->clear();
   const size_t n = std::min(path.size(), q.size());
+  // Direction-dependent effects (reversal) see the approach directions of the joint moves.
+  MotionContext ctx;
+  const MotionContext* ctx_ptr = actual.model().effects.empty() ? nullptr : &ctx;
   auto emit = [&](const JointVector& qk, int index) {
     ToolPlacement a, b;
     nominal.tipAndAxis(qk, &a.tip_w, &a.axis_w);
-    actual.tipAndAxis(qk, &b.tip_w, &b.axis_w);
+    actual.tipAndAxis(qk, &b.tip_w, &b.axis_w, nullptr, nullptr, ctx_ptr);
     a.cl_index = b.cl_index = index;
     nominal_out->push_back(a);
     actual_out->push_back(b);
@@ -38,9 +43,11 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
   Eigen::Vector3d p0, u0, pm, um, p1, u1;
   for (size_t i = 0; i < n; ++i) {
     if (i == 0 || path[i].rapid) {
+      if (ctx_ptr && i > 0) updateDirections(ctx, q[i - 1], q[i]);
       emit(q[i], static_cast<int>(i));
       continue;
     }
+    if (ctx_ptr) updateDirections(ctx, q[i - 1], q[i]);
     nominal.tipAndAxis(q[i - 1], &p0, &u0);
     qm = 0.5 * (q[i - 1] + q[i]);
     nominal.tipAndAxis(qm, &pm, &um);

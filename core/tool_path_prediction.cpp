@@ -1,5 +1,7 @@
 #include "core/tool_path_prediction.h"
 
+#include "core/effects.h"
+
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -64,6 +66,10 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
   s.points = static_cast<int>(path.size());
   double sum2 = 0.0, sum2_angle = 0.0;
   const JointVector* previous = nullptr;
+  // Effects that depend on the approach direction (reversal) see it from the joint sequence;
+  // time-dependent ones (thermal) see an unknown time and add nothing.
+  MotionContext ctx;
+  const MotionContext* ctx_ptr = model.effects.empty() ? nullptr : &ctx;
   for (size_t i = 0; i < path.size(); ++i) {
     const ClPoint& cl = path[i];
     const IkSolution sol = ik.solve(cl.p_w, cl.u_w, previous);
@@ -87,7 +93,9 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
       if (s.singular_points == 0) s.first_singular_line = cl.line;
       ++s.singular_points;
     }
-    actual.tipAndAxis(sol.q, &out.p_pred_w, &out.u_pred_w, sol.cos_q.data(), sol.sin_q.data());
+    if (ctx_ptr && previous) updateDirections(ctx, *previous, sol.q);
+    actual.tipAndAxis(sol.q, &out.p_pred_w, &out.u_pred_w, sol.cos_q.data(), sol.sin_q.data(),
+                      ctx_ptr);
     const Eigen::Vector3d u = cl.u_w.normalized();
     out.deviation_w = out.p_pred_w - cl.p_w;
     out.along_axis = out.deviation_w.dot(u);

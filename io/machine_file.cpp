@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "core/effects.h"
 #include "io/io_error.h"
 #include "io/text_util.h"
 
@@ -100,6 +101,46 @@ class Reader {
     return a;
   }
 
+  // <effect type=".." axis=".." component=".." [orders="first last"] [varying="true"]
+  //         [period_mm=".."] [tau_s=".."] values=".."/>
+  EffectSpec effect(const XMLElement* e, const MachineModel& m) {
+    const std::string type = attr(e, "type");
+    const EffectTraits* t = findEffectType(type);
+    if (!t) {
+      std::string names;
+      for (const EffectTraits& x : effectTypes()) names += std::string(names.empty() ? "" : ", ") + x.name;
+      fail(e, "effect.type", "unknown effect type '" + type + "' (expected " + names + ")");
+    }
+    EffectSpec spec;
+    spec.type = t->type;
+    if (spec.type != EffectType::BarLength) {
+      spec.axis = axisRef(e, m);
+      spec.component = component(e);
+    }
+    if (spec.type == EffectType::Chebyshev || spec.type == EffectType::Harmonics) {
+      const std::vector<double> o = numbers(e, "orders", 2);
+      if (o[0] != std::floor(o[0]) || o[1] != std::floor(o[1]) || o[0] < (spec.type == EffectType::Harmonics ? 1 : 0) ||
+          o[1] < o[0] || o[1] - o[0] > 3 || o[1] > 30)
+        fail(e, "effect.orders", "expected two integers 'first last' with at most four orders");
+      spec.first_order = static_cast<int>(o[0]);
+      spec.last_order = static_cast<int>(o[1]);
+    }
+    if (spec.type == EffectType::Reversal) {
+      const std::string v = attr(e, "varying", false, "false");
+      if (v != "true" && v != "false") fail(e, "effect.varying", "expected true or false");
+      spec.varying = v == "true";
+    }
+    if (spec.type == EffectType::Periodic) {
+      spec.period = number(e, "period_mm");
+      if (!(spec.period > 0)) fail(e, "effect.period_mm", "expected a positive period");
+    }
+    if (spec.type == EffectType::Warmup) {
+      spec.tau = number(e, "tau_s");
+      if (!(spec.tau > 0)) fail(e, "effect.tau_s", "expected a positive time constant");
+    }
+    return spec;
+  }
+
   Machine read(const std::string& xml) {
     tinyxml2::XMLDocument doc;
     if (doc.Parse(xml.data(), xml.size()) != tinyxml2::XML_SUCCESS)
@@ -190,6 +231,7 @@ class Reader {
     };
     std::vector<Value> links, motions, setups;
     std::vector<std::pair<const XMLElement*, double>> named;
+    std::vector<const XMLElement*> effects;
     if (errs) {
       for (const XMLElement* e = errs->FirstChildElement(); e; e = e->NextSiblingElement()) {
         const std::string tag = e->Name();
@@ -215,6 +257,8 @@ class Reader {
           setups.push_back({e, f == "workpiece" ? 0 : 1, component(e), {number(e, "value")}});
         } else if (tag == "param") {
           named.emplace_back(e, number(e, "value"));
+        } else if (tag == "effect") {
+          effects.push_back(e);
         } else {
           fail(e, "errors", "unknown element <" + tag + ">");
         }
@@ -233,6 +277,19 @@ class Reader {
       }
     }
     auto scaleOf = [&](int c) { return isAngularComponent(c) ? e_ang : e_len; };
+    for (const XMLElement* e : effects) {
+      const int first = m.parameterCount();
+      const EffectSpec spec = effect(e, m);
+      m.addEffect(spec);
+      const int size = m.parameterCount() - first;
+      const std::vector<double> v = numbers(e, "values", 0);
+      if (static_cast<int>(v.size()) != size)
+        fail(e, "effect.values",
+             "expected " + std::to_string(size) + " values, found " + std::to_string(v.size()));
+      out.params.conservativeResize(m.parameterCount());
+      for (int k = 0; k < size; ++k)
+        out.params[first + k] = v[k] * (spec.axis < 0 ? e_len : scaleOf(spec.component));
+    }
     for (const Value& v : links) {
       const int b = std::find_if(m.blocks.begin(), m.blocks.end(), [&](const ParameterBlock& x) {
                       return x.kind == BlockKind::LinkError && x.axis == v.axis;
@@ -281,20 +338,6 @@ class Reader {
 }  // namespace
 
 namespace {
-
-std::string xmlEscape(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
-    }
-  }
-  return o;
-}
 
 std::string frameAttributes(const Eigen::Isometry3d& T) {
   const Eigen::Matrix3d& R = T.linear();
@@ -376,6 +419,20 @@ std::string formatMachineXml(const Machine& machine, const std::string& comment)
                  (b.kind == BlockKind::WorkpieceSetup ? "workpiece" : "tool") + "\" component=\"" +
                  kComponentNames[c] + "\" value=\"" + value(b.offset + c) + "\"/>\n";
         break;
+      case BlockKind::Effect: {
+        const EffectSpec& e = m.effects[b.effect];
+        o += std::string("    <effect type=\"") + traitsOf(e.type).name + "\"";
+        if (e.axis >= 0) o += " axis=\"" + m.axes[e.axis].name + "\" component=\"" + comp + "\"";
+        if (e.type == EffectType::Chebyshev || e.type == EffectType::Harmonics)
+          o += " orders=\"" + std::to_string(e.first_order) + " " + std::to_string(e.last_order) + "\"";
+        if (e.type == EffectType::Reversal && e.varying) o += " varying=\"true\"";
+        if (e.type == EffectType::Periodic) o += " period_mm=\"" + formatNumber(e.period) + "\"";
+        if (e.type == EffectType::Warmup) o += " tau_s=\"" + formatNumber(e.tau) + "\"";
+        std::string values;
+        for (int k = 0; k < b.size; ++k) values += (k ? " " : "") + value(b.offset + k);
+        o += " values=\"" + values + "\"/>\n";
+        break;
+      }
     }
   }
   o += "  </errors>\n";

@@ -12,6 +12,13 @@
 //     <link axis="X" component="gz" value="12"/>
 //     <motion axis="X" component="ey" [degree="3"] coefficients="0 1.5 -0.3 0.1"/>
 //     <setup frame="workpiece|tool" component="ex" value="5"/>
+//     <effect type="reversal" axis="X" component="ex" values="3"/>   <!-- core/effects.h -->
+//     <effect type="periodic" axis="Y" component="ey" period_mm="10" values="1.5 -0.8"/>
+//     <effect type="harmonics" axis="C" component="gz" orders="2 4" values="..6 values.."/>
+//     <effect type="chebyshev" axis="X" component="ey" orders="4 5" values="2 -1"/>
+//     <effect type="warmup" axis="Z" component="ez" tau_s="1800" values="6"/>
+//     <effect type="drift" axis="X" component="ex" values="1.2"/>   <!-- per hour -->
+//     <effect type="bar_length" values="2"/>                          <!-- the instrument -->
 //   </errors>
 // </machine>
 //

@@ -18,6 +18,8 @@ std::vector<std::string> splitCsvLine(const std::string& line);
 std::optional<double> parseNumber(std::string_view token);
 // Formats a double with the shortest precision that round-trips (17 significant digits max).
 std::string formatNumber(double v);
+// s with & < > " replaced by their XML/HTML entities.
+std::string xmlEscape(std::string_view s);
 // Base64 (RFC 4648, with padding) of bytes, for images embedded in HTML reports.
 std::string base64Encode(const std::string& bytes);
 

@@ -19,19 +19,7 @@ json stats(const DeviationStats& s) {
           {"mean_um", um(s.mean)}, {"rms_um", um(s.rms)}};
 }
 
-std::string html(const std::string& s) {
-  std::string o;
-  for (char c : s) {
-    switch (c) {
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '&': o += "&amp;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
-    }
-  }
-  return o;
-}
+std::string html(const std::string& s) { return xmlEscape(s); }
 
 std::string fmt(const char* f, double v) {
   char buf[64];

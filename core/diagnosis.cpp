@@ -1,0 +1,486 @@
+#include "core/diagnosis.h"
+
+#include <Eigen/QR>
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+
+#include "core/chebyshev.h"
+#include "core/effects.h"
+#include "core/statistics.h"
+
+namespace tolver {
+
+const char* verdictName(CandidateVerdict v) {
+  switch (v) {
+    case CandidateVerdict::Added: return "added";
+    case CandidateVerdict::Outscored: return "significant, outscored";
+    case CandidateVerdict::NotSignificant: return "not significant";
+    case CandidateVerdict::NoHeldOutGain: return "no held-out gain";
+    case CandidateVerdict::Confounded: return "confounded";
+    case CandidateVerdict::NotIdentifiable: return "not identifiable";
+  }
+  return "";
+}
+
+std::vector<int> contiguousFolds(const BallbarTest& test, int blocks_per_setup, int* folds) {
+  const int ns = static_cast<int>(test.setups.size());
+  std::vector<int> count(ns, 0), seen(ns, 0);
+  for (const BallbarReading& r : test.readings) ++count[r.setup];
+  std::vector<int> fold(test.readings.size());
+  const int b = std::max(1, blocks_per_setup);
+  for (size_t i = 0; i < test.readings.size(); ++i) {
+    const int s = test.readings[i].setup;
+    fold[i] = s * b + std::min(b - 1, seen[s]++ * b / std::max(1, count[s]));
+  }
+  *folds = ns * b;
+  return fold;
+}
+
+namespace {
+
+// Thin orthonormal basis of the column space of A (rank-revealing QR).
+Eigen::MatrixXd orthonormalBasis(const Eigen::ColPivHouseholderQR<Eigen::MatrixXd>& qr) {
+  const Eigen::Index rank = qr.rank();
+  Eigen::MatrixXd Q = Eigen::MatrixXd::Identity(qr.rows(), rank);
+  Q.applyOnTheLeft(qr.householderQ());
+  return Q;
+}
+
+Eigen::MatrixXd rowsOf(const Eigen::MatrixXd& A, const std::vector<int>& rows) {
+  Eigen::MatrixXd out(rows.size(), A.cols());
+  for (size_t i = 0; i < rows.size(); ++i) out.row(i) = A.row(rows[i]);
+  return out;
+}
+
+Eigen::VectorXd rowsOf(const Eigen::VectorXd& v, const std::vector<int>& rows) {
+  Eigen::VectorXd out(rows.size());
+  for (size_t i = 0; i < rows.size(); ++i) out[i] = v[rows[i]];
+  return out;
+}
+
+// The linearised fit at a solution, and everything a candidate is scored against.
+class Scorer {
+ public:
+  Scorer(const Machine& machine, const BallbarTest& test, const CalibrationResult& fit,
+         const std::vector<int>& fold_of, int folds)
+      : model_(machine.model), test_(test) {
+    const ForwardKinematics fk(model_, fit.params);
+    J_ = identificationJacobian(fk, test, fit.ball_errors, fit.identified, &r_);
+    m_ = static_cast<int>(r_.size());
+    scale_ = J_.colwise().norm().transpose();
+    for (Eigen::Index c = 0; c < scale_.size(); ++c)
+      if (scale_[c] == 0) scale_[c] = 1;
+    J_ = J_ * scale_.cwiseInverse().asDiagonal();
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J_);
+    Q_ = orthonormalBasis(qr);
+    n_ = static_cast<int>(qr.rank());
+    r_perp_ = r_ - Q_ * (Q_.transpose() * r_);
+    rss0_ = r_perp_.squaredNorm();
+    // Derivatives of each reading with respect to each axis's motion-error components.
+    const int na = static_cast<int>(model_.axes.size());
+    Gc_.resize(m_, 6 * na);
+    Eigen::MatrixXd scratch;
+    Eigen::RowVectorXd row(6 * na);
+    for (int i = 0; i < m_; ++i) {
+      const BallbarReading& rd = test.readings[i];
+      ballbarComponentGradient(fk, rd.q, test.setups[rd.setup], fit.ball_errors[rd.setup], row,
+                               scratch, &rd.context);
+      Gc_.row(i) = row;
+    }
+    same_run_.assign(m_, false);
+    for (int i = 1; i < m_; ++i) same_run_[i] = test.readings[i].setup == test.readings[i - 1].setup;
+    // Folds: the base fit without each block.
+    folds_.resize(folds);
+    for (int f = 0; f < folds; ++f) {
+      Fold& F = folds_[f];
+      for (int i = 0; i < m_; ++i) (fold_of[i] == f ? F.held : F.train).push_back(i);
+      if (F.held.empty() || F.train.empty()) continue;
+      F.JT = rowsOf(J_, F.train);
+      F.JH = rowsOf(J_, F.held);
+      F.rT = rowsOf(r_, F.train);
+      F.rH = rowsOf(r_, F.held);
+      F.qr.compute(F.JT);
+      F.Q = orthonormalBasis(F.qr);
+    }
+  }
+
+  int readings() const { return m_; }
+  int unknowns() const { return n_; }
+  double rss() const { return rss0_; }
+
+  // The readings' derivatives with respect to the effect's coefficients (m x k).
+  Eigen::MatrixXd columns(const EffectSpec& spec) const {
+    const EffectTraits& t = traitsOf(spec.type);
+    const int k = t.size(spec);
+    Eigen::MatrixXd G(m_, k);
+    if (spec.axis < 0) {
+      G.setOnes();
+      return G;
+    }
+    const Axis& ax = model_.axes[spec.axis];
+    double phi[8];
+    for (int i = 0; i < m_; ++i) {
+      const BallbarReading& rd = test_.readings[i];
+      const double s = rd.q[spec.axis];
+      t.basis(spec, s, normalisedCoordinate(s, ax.travel_min, ax.travel_max), &rd.context, phi);
+      const double g = Gc_(i, 6 * spec.axis + spec.component);
+      for (int j = 0; j < k; ++j) G(i, j) = g * phi[j];
+    }
+    return G;
+  }
+
+  // RSS after adding the columns G (the projection fit); rss() when G is empty or null.
+  double rssWith(const Eigen::MatrixXd& G, Eigen::VectorXd* residual = nullptr,
+                 double* new_information = nullptr) const {
+    Eigen::MatrixXd Gs = G;
+    for (Eigen::Index c = 0; c < Gs.cols(); ++c) {
+      const double n = Gs.col(c).norm();
+      if (n > 0) Gs.col(c) /= n;
+    }
+    const Eigen::MatrixXd Gp = Gs - Q_ * (Q_.transpose() * Gs);
+    if (new_information) {
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Gp);
+      *new_information = svd.singularValues().minCoeff();
+    }
+    const Eigen::VectorXd beta = Gp.colPivHouseholderQr().solve(r_perp_);
+    const Eigen::VectorXd e = r_perp_ - Gp * beta;
+    if (residual) *residual = e;
+    return e.squaredNorm();
+  }
+
+  // Cross-validated RMS of the base model (G empty) or the model with the columns G, mm.
+  double heldoutRms(const Eigen::MatrixXd* G) const {
+    double sum = 0.0;
+    int count = 0;
+    for (const Fold& F : folds_) {
+      if (F.held.empty() || F.train.empty()) continue;
+      Eigen::VectorXd eH;
+      if (!G) {
+        eH = F.rH - F.JH * F.qr.solve(F.rT);
+      } else {
+        const Eigen::MatrixXd GT = rowsOf(*G, F.train), GH = rowsOf(*G, F.held);
+        const Eigen::MatrixXd GTp = GT - F.Q * (F.Q.transpose() * GT);
+        const Eigen::VectorXd rTp = F.rT - F.Q * (F.Q.transpose() * F.rT);
+        const Eigen::VectorXd beta = GTp.colPivHouseholderQr().solve(rTp);
+        const Eigen::VectorXd alpha = F.qr.solve(F.rT - GT * beta);
+        eH = F.rH - F.JH * alpha - GH * beta;
+      }
+      sum += eH.squaredNorm();
+      count += static_cast<int>(eH.size());
+    }
+    return count ? std::sqrt(sum / count) : 0.0;
+  }
+
+  // Condition number of the column-scaled [J G].
+  double condition(const Eigen::MatrixXd& G) const {
+    Eigen::MatrixXd A(m_, J_.cols() + G.cols());
+    A << J_, G;
+    for (Eigen::Index c = 0; c < A.cols(); ++c) {
+      const double n = A.col(c).norm();
+      if (n > 0) A.col(c) /= n;
+    }
+    const Eigen::BDCSVD<Eigen::MatrixXd> svd(A);
+    const Eigen::VectorXd& s = svd.singularValues();
+    return s[s.size() - 1] > 0 ? s[0] / s[s.size() - 1] : INFINITY;
+  }
+
+  // Lag-1 autocorrelation of a residual vector within set-ups.
+  double autocorrelation(const Eigen::VectorXd& e) const {
+    return lagOneAutocorrelation(std::vector<double>(e.data(), e.data() + e.size()), same_run_);
+  }
+
+  // Range of an axis coordinate over the readings.
+  double span(int axis) const {
+    double lo = INFINITY, hi = -INFINITY;
+    for (const BallbarReading& rd : test_.readings) {
+      lo = std::min(lo, rd.q[axis]);
+      hi = std::max(hi, rd.q[axis]);
+    }
+    return hi - lo;
+  }
+
+ private:
+  struct Fold {
+    std::vector<int> train, held;
+    Eigen::MatrixXd JT, JH, Q;
+    Eigen::VectorXd rT, rH;
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
+  };
+  const MachineModel& model_;
+  const BallbarTest& test_;
+  Eigen::MatrixXd J_, Q_, Gc_;
+  Eigen::VectorXd r_, scale_, r_perp_;
+  std::vector<bool> same_run_;
+  std::vector<Fold> folds_;
+  int m_ = 0, n_ = 0;
+  double rss0_ = 0.0;
+};
+
+// Minimises f on [a, b] by golden-section search.
+template <class F>
+double goldenSection(F f, double a, double b, int iterations = 40) {
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double c = b - g * (b - a), d = a + g * (b - a);
+  double fc = f(c), fd = f(d);
+  for (int i = 0; i < iterations; ++i) {
+    if (fc < fd) {
+      b = d;
+      d = c;
+      fd = fc;
+      c = b - g * (b - a);
+      fc = f(c);
+    } else {
+      a = c;
+      c = d;
+      fc = fd;
+      d = a + g * (b - a);
+      fd = f(d);
+    }
+  }
+  return fc < fd ? c : d;
+}
+
+// Finds the hyperparameter of spec (period or time constant) that minimises the RSS; returns the
+// number of independent trials the search made.
+int searchHyperparameter(const Scorer& sc, const BallbarTest& test, EffectSpec& spec) {
+  double* h = hyperparameter(spec);
+  if (!h) return 1;
+  const HyperparameterRange range = traitsOf(spec.type).hyper;
+  auto rssAt = [&](double value) {
+    *h = value;
+    return sc.rssWith(sc.columns(spec));
+  };
+  if (range.frequency_grid) {
+    // Uniform in frequency, five samples per cycle of phase change across the data's span.
+    const double span = std::max(sc.span(spec.axis), range.min);
+    const double f0 = 1.0 / range.max, f1 = 1.0 / range.min, df = 1.0 / (5.0 * span);
+    double best_f = f0, best = INFINITY;
+    for (double f = f0; f <= f1 + 1e-12; f += df) {
+      const double v = rssAt(1.0 / f);
+      if (v < best) {
+        best = v;
+        best_f = f;
+      }
+    }
+    const double f = goldenSection([&](double x) { return rssAt(1.0 / x); },
+                                   std::max(f0, best_f - df), std::min(f1, best_f + df));
+    *h = 1.0 / f;
+    // Independent trials: one per cycle of phase change, twice over for the refined peak.
+    return std::max(1, static_cast<int>(std::lround(2.0 * (f1 - f0) * span)));
+  }
+  // Time constants: log-spaced grid, only where the test lasts long enough to see them.
+  double t_end = 0;
+  for (const BallbarReading& r : test.readings)
+    if (std::isfinite(r.context.time_s)) t_end = std::max(t_end, r.context.time_s);
+  const double lo = std::log(range.min), hi = std::log(std::max(range.min * 2, std::min(range.max, 2 * t_end)));
+  const int n = 24;
+  double best = INFINITY, best_x = lo;
+  for (int i = 0; i <= n; ++i) {
+    const double x = lo + (hi - lo) * i / n;
+    const double v = rssAt(std::exp(x));
+    if (v < best) {
+      best = v;
+      best_x = x;
+    }
+  }
+  const double step = (hi - lo) / n;
+  *h = std::exp(goldenSection([&](double x) { return rssAt(std::exp(x)); },
+                              std::max(lo, best_x - step), std::min(hi, best_x + step)));
+  return 3;
+}
+
+// Standard uncertainty of a searched hyperparameter from the curvature of the RSS profile:
+// u^2 = 2 s^2 / RSS''.
+double hyperparameterUncertainty(const Scorer& sc, EffectSpec spec, double sigma2) {
+  double* h = hyperparameter(spec);
+  if (!h) return NAN;
+  const double h0 = *h, dh = 1e-3 * h0;
+  auto rssAt = [&](double v) {
+    *h = v;
+    return sc.rssWith(sc.columns(spec));
+  };
+  const double curvature = (rssAt(h0 + dh) - 2 * rssAt(h0) + rssAt(h0 - dh)) / (dh * dh);
+  return curvature > 0 ? std::sqrt(2.0 * sigma2 / curvature) : INFINITY;
+}
+
+bool sameEffect(const EffectSpec& a, const EffectSpec& b) {
+  return a.type == b.type && a.axis == b.axis && a.component == b.component &&
+         a.varying == b.varying;
+}
+
+}  // namespace
+
+DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
+                         const DiagnosisOptions& opt,
+                         const std::function<void(int, int)>& progress) {
+  DiagnosisResult res;
+  res.machine = machine;
+  std::vector<int> unknowns =
+      opt.base_unknowns.empty() ? defaultCalibrationUnknowns(machine.model) : opt.base_unknowns;
+  res.base_fit = calibrate(machine.model, machine.params, test, unknowns);
+  if (res.base_fit.status == CalibrationStatus::Unobservable ||
+      res.base_fit.status == CalibrationStatus::NoData) {
+    res.message = res.base_fit.message;
+    return res;
+  }
+  res.final_fit = res.base_fit;
+  res.machine.params = res.base_fit.params;
+  const std::vector<int> fold_of = contiguousFolds(test, opt.blocks_per_setup, &res.folds);
+  std::vector<EffectSpec> rejected;  // found not identifiable by the nonlinear refit
+
+  for (int round = 1; round <= opt.max_effects + 1; ++round) {
+    const Scorer sc(res.machine, test, res.final_fit, fold_of, res.folds);
+    const double heldout_base = sc.heldoutRms(nullptr);
+    if (round == 1) res.heldout_rms_before = heldout_base;
+    res.heldout_rms_after = heldout_base;
+    if (round > opt.max_effects) break;
+
+    // Candidates of this round.
+    std::vector<CandidateScore> scores;
+    for (const EffectTraits& t : effectTypes()) {
+      if (!opt.types.empty() &&
+          std::find(opt.types.begin(), opt.types.end(), t.type) == opt.types.end())
+        continue;
+      for (const EffectSpec& spec : t.candidates(res.machine.model)) {
+        auto present = [&](const EffectSpec& e) {
+          return spec.type != EffectType::Chebyshev && sameEffect(e, spec);
+        };
+        if (std::any_of(res.machine.model.effects.begin(), res.machine.model.effects.end(), present))
+          continue;
+        CandidateScore c;
+        c.spec = spec;
+        c.round = round;
+        scores.push_back(c);
+      }
+    }
+    int tests = 0;
+    const int m = sc.readings(), n = sc.unknowns();
+    for (size_t i = 0; i < scores.size(); ++i) {
+      if (progress) progress(static_cast<int>(i), static_cast<int>(scores.size()));
+      CandidateScore& c = scores[i];
+      c.trials = searchHyperparameter(sc, test, c.spec);
+      tests += c.trials;
+      c.label = describeEffect(res.machine.model, c.spec);
+      const Eigen::MatrixXd G = sc.columns(c.spec);
+      c.coefficients = static_cast<int>(G.cols());
+      c.rss_before = sc.rss();
+      if ((G.colwise().norm().array() < 1e-12).any()) {  // the readings do not see it at all
+        c.rss_after = c.rss_before;
+        c.verdict = CandidateVerdict::NotIdentifiable;
+        continue;
+      }
+      Eigen::VectorXd e;
+      c.rss_after = sc.rssWith(G, &e, &c.new_information);
+      const double rho = std::clamp(sc.autocorrelation(e), 0.0, 0.95);
+      c.effective_readings = m * (1.0 - rho) / (1.0 + rho);
+      const int k = c.coefficients + (hyperparameter(c.spec) ? 1 : 0);
+      const double dof = c.effective_readings - n - c.coefficients;
+      c.heldout_rms_before = heldout_base;
+      c.heldout_rms_after = sc.heldoutRms(&G);
+      if (dof <= 1 || !(c.rss_after > 0)) {
+        c.verdict = CandidateVerdict::NotIdentifiable;
+        continue;
+      }
+      c.f_statistic = ((c.rss_before - c.rss_after) / c.coefficients) / (c.rss_after / dof);
+      c.p_value = fSurvival(c.f_statistic, c.coefficients, dof);
+      c.delta_ic = c.effective_readings * std::log(c.rss_before / c.rss_after) -
+                   k * std::log(c.effective_readings);
+    }
+    if (progress) progress(static_cast<int>(scores.size()), static_cast<int>(scores.size()));
+    std::vector<size_t> qualified;
+    for (size_t i = 0; i < scores.size(); ++i) {
+      CandidateScore& c = scores[i];
+      if (c.verdict == CandidateVerdict::NotIdentifiable) continue;
+      c.p_value = std::min(1.0, c.p_value * std::max(1, tests));
+      if (c.new_information < opt.min_new_information) {
+        c.verdict = CandidateVerdict::Confounded;
+      } else if (c.p_value >= opt.alpha || c.delta_ic <= 0) {
+        c.verdict = CandidateVerdict::NotSignificant;
+      } else if (!(c.heldout_rms_after < c.heldout_rms_before)) {
+        c.verdict = CandidateVerdict::NoHeldOutGain;
+      } else {
+        c.condition = sc.condition(sc.columns(c.spec));
+        if (c.condition > opt.max_condition ||
+            std::any_of(rejected.begin(), rejected.end(),
+                        [&](const EffectSpec& r) { return sameEffect(r, c.spec); })) {
+          c.verdict = CandidateVerdict::NotIdentifiable;
+        } else {
+          c.verdict = CandidateVerdict::Outscored;
+          qualified.push_back(i);
+        }
+      }
+    }
+    std::sort(qualified.begin(), qualified.end(),
+              [&](size_t a, size_t b) { return scores[a].delta_ic > scores[b].delta_ic; });
+    bool added = false;
+    for (size_t qi : qualified) {
+      CandidateScore& c = scores[qi];
+      Machine aug = res.machine;
+      const int first = aug.model.parameterCount();
+      aug.model.addEffect(c.spec);
+      aug.params.conservativeResize(aug.model.parameterCount());
+      aug.params.tail(aug.model.parameterCount() - first).setZero();
+      std::vector<int> aug_unknowns = unknowns;
+      AddedEffect a;
+      a.spec = c.spec;
+      a.label = c.label;
+      for (int p = first; p < aug.model.parameterCount(); ++p) {
+        aug_unknowns.push_back(p);
+        a.parameters.push_back(p);
+      }
+      const CalibrationResult fit = calibrate(aug.model, aug.params, test, aug_unknowns);
+      const bool seen = fit.status != CalibrationStatus::Unobservable &&
+                        fit.status != CalibrationStatus::NoData &&
+                        std::none_of(a.parameters.begin(), a.parameters.end(), [&](int p) {
+                          return std::binary_search(fit.held.begin(), fit.held.end(), p);
+                        });
+      if (!seen || !(fit.rms_residual < res.final_fit.rms_residual)) {
+        c.verdict = CandidateVerdict::NotIdentifiable;
+        rejected.push_back(c.spec);
+        continue;
+      }
+      c.verdict = CandidateVerdict::Added;
+      a.values.resize(a.parameters.size());
+      a.uncertainty.resize(a.parameters.size());
+      for (size_t j = 0; j < a.parameters.size(); ++j) {
+        const int p = a.parameters[j];
+        a.values[j] = fit.params[p];
+        const auto it = std::find(fit.identified.begin(), fit.identified.end(), p);
+        a.uncertainty[j] = fit.uncertainty[it - fit.identified.begin()];
+      }
+      a.hyperparameter = hyperparameterValue(c.spec);
+      a.hyperparameter_uncertainty =
+          hyperparameterUncertainty(sc, c.spec, fit.residual_sigma * fit.residual_sigma);
+      aug.params = fit.params;
+      res.machine = aug;
+      res.final_fit = fit;
+      unknowns = aug_unknowns;
+      res.added.push_back(a);
+      added = true;
+      break;
+    }
+    res.candidates.insert(res.candidates.end(), scores.begin(), scores.end());
+    if (!added) break;
+  }
+  // Values and uncertainties from the final fit (later rounds refit the earlier effects).
+  for (AddedEffect& a : res.added) {
+    const CalibrationResult& fit = res.final_fit;
+    for (size_t j = 0; j < a.parameters.size(); ++j) {
+      const int p = a.parameters[j];
+      a.values[j] = fit.params[p];
+      const auto it = std::find(fit.identified.begin(), fit.identified.end(), p);
+      a.uncertainty[j] = it == fit.identified.end() ? NAN : fit.uncertainty[it - fit.identified.begin()];
+    }
+  }
+  res.rms_before = res.base_fit.rms_residual;
+  res.rms_after = res.final_fit.rms_residual;
+  res.analysis_before = analyseResiduals(machine.model, test, res.base_fit.residuals);
+  res.analysis_after = analyseResiduals(res.machine.model, test, res.final_fit.residuals);
+  res.ok = true;
+  res.message = res.added.empty() ? "nothing missing: no effect qualifies"
+                                  : std::to_string(res.added.size()) + " effect(s) added";
+  return res;
+}
+
+}  // namespace tolver

@@ -1,0 +1,100 @@
+#pragma once
+// Closing the loop (issue 5): after a ball-bar calibration, find what the model failed to
+// explain, trace it to an effect the model lacks (core/effects.h), add it, refit, and report the
+// error before and after. Nothing is added when nothing is missing.
+//
+// Forward stepwise selection. Each round linearises the fit at its solution (identification
+// Jacobian J of the identified unknowns, residual r) and scores every candidate effect by the
+// readings' derivatives G with respect to its coefficients:
+//  * fit:  the least-squares fit of r on [J G] (the candidate's columns projected off J), RSS
+//          before and after;
+//  * significance: an F test of the RSS reduction with the effective number of readings
+//          m_eff = m (1 - rho) / (1 + rho), rho the lag-1 autocorrelation of the candidate's
+//          residuals within a set-up (correlated residuals carry less information), Bonferroni
+//          over the round's tests (a hyperparameter search counts its independent trials);
+//  * information criterion: dIC = m_eff ln(RSS_before / RSS_after) - k ln(m_eff) (BIC with
+//          m_eff; k counts the coefficients and the searched hyperparameter), positive = better;
+//  * cross-validation over held-out blocks: contiguous runs of readings (each set-up cut into
+//          `blocks_per_setup` runs), the model refitted without the block predicts it;
+//  * identifiability: the part of the candidate's columns that the base model cannot produce
+//          (smallest singular value of the projected, unit-norm columns; below
+//          `min_new_information` the effect is confounded with the base model) and the condition
+//          number of the column-scaled augmented Jacobian.
+// The best qualifying candidate (largest dIC) is added, the augmented model refitted by
+// calibrate() (nonlinear, with uncertainties), and the next round starts; a round with no
+// qualifying candidate ends the selection.
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/ballbar.h"
+#include "core/calibration.h"
+#include "core/machine_model.h"
+#include "core/residual_analysis.h"
+
+namespace tolver {
+
+struct DiagnosisOptions {
+  int blocks_per_setup = 6;           // cross-validation: contiguous runs per set-up
+  double alpha = 1e-3;                // family-wise significance level of a round
+  double min_new_information = 0.05;  // confounded below this
+  double max_condition = 1e8;         // column-scaled, of the augmented identification Jacobian
+  int max_effects = 4;
+  std::vector<EffectType> types;      // candidate types; empty: every type
+  // Parameters to identify in the base fit; empty: defaultCalibrationUnknowns(model).
+  std::vector<int> base_unknowns;
+};
+
+enum class CandidateVerdict { Added, Outscored, NotSignificant, NoHeldOutGain, Confounded, NotIdentifiable };
+const char* verdictName(CandidateVerdict v);
+
+struct CandidateScore {
+  EffectSpec spec;            // with the hyperparameter found by search
+  std::string label;          // describeEffect()
+  int round = 0;              // selection round (1-based)
+  int coefficients = 0;
+  int trials = 1;             // independent trials of its hyperparameter search
+  double rss_before = 0.0, rss_after = 0.0;  // mm^2
+  double f_statistic = 0.0;
+  double p_value = 1.0;       // Bonferroni-adjusted over the round
+  double effective_readings = 0.0;
+  double delta_ic = 0.0;
+  double heldout_rms_before = 0.0, heldout_rms_after = 0.0;  // mm
+  double new_information = 0.0;
+  double condition = 0.0;     // computed for candidates that pass the other tests
+  CandidateVerdict verdict = CandidateVerdict::NotSignificant;
+};
+
+struct AddedEffect {
+  EffectSpec spec;
+  std::string label;
+  std::vector<int> parameters;  // indices in the augmented model
+  Eigen::VectorXd values;       // mm or rad (or mm per hour for drift)
+  Eigen::VectorXd uncertainty;  // standard uncertainty, same units
+  double hyperparameter = NAN;  // period (mm) or time constant (s)
+  double hyperparameter_uncertainty = NAN;
+};
+
+struct DiagnosisResult {
+  bool ok = false;
+  std::string message;
+  Machine machine;                 // augmented model with the final identified values
+  CalibrationResult base_fit, final_fit;
+  std::vector<AddedEffect> added;
+  std::vector<CandidateScore> candidates;
+  double rms_before = 0.0, rms_after = 0.0;                  // mm, in-sample
+  double heldout_rms_before = 0.0, heldout_rms_after = 0.0;  // mm, cross-validated
+  int folds = 0;
+  ResidualAnalysis analysis_before, analysis_after;
+};
+
+// progress(done, total): candidates scored in the current round (may be empty).
+DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
+                         const DiagnosisOptions& options = {},
+                         const std::function<void(int, int)>& progress = {});
+
+// The fold of each reading: contiguous runs, blocks_per_setup per set-up.
+std::vector<int> contiguousFolds(const BallbarTest& test, int blocks_per_setup, int* folds);
+
+}  // namespace tolver

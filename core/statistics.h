@@ -1,0 +1,34 @@
+#pragma once
+// Statistics for residual analysis and model selection: distribution tails, the Lomb-Scargle
+// periodogram of unevenly sampled data, the runs test, autocorrelation.
+#include <vector>
+
+namespace tolver {
+
+// Regularised incomplete beta function I_x(a, b), a, b > 0, 0 <= x <= 1 (continued fraction).
+double incompleteBeta(double a, double b, double x);
+// P(F > f) for an F distribution with d1, d2 degrees of freedom (d1, d2 > 0).
+double fSurvival(double f, double d1, double d2);
+// P(Z > z) for a standard normal Z.
+double normalSurvival(double z);
+
+// Lomb-Scargle periodogram (Lomb 1976, Scargle 1982) of y(t), unevenly sampled, at angular
+// frequencies omega (rad per unit of t), normalised by the variance of y: a pure sinusoid fit
+// at omega explains the fraction 2 P / (n - 1) of the variance. y's mean is removed.
+std::vector<double> lombScargle(const std::vector<double>& t, const std::vector<double>& y,
+                                const std::vector<double>& omega);
+// False-alarm probability of a normalised periodogram peak P among `independent` frequencies.
+double periodogramFalseAlarm(double power, double independent);
+
+// Wald-Wolfowitz runs test on the signs of x (zeros skipped): z < 0 when there are fewer runs
+// than chance would give (correlated, structured residuals). p: two-sided.
+struct RunsTest {
+  int runs = 0, positive = 0, negative = 0;
+  double z = 0.0, p_value = 1.0;
+};
+RunsTest runsTest(const std::vector<double>& x);
+
+// Lag-1 autocorrelation of x over the consecutive pairs (i - 1, i) with same_run[i] true.
+double lagOneAutocorrelation(const std::vector<double>& x, const std::vector<bool>& same_run);
+
+}  // namespace tolver

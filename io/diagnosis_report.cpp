@@ -1,0 +1,344 @@
+#include "io/diagnosis_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/effects.h"
+#include "io/io_error.h"
+#include "io/png_plot.h"
+#include "io/text_util.h"
+
+namespace tolver {
+namespace {
+
+using nlohmann::json;
+
+double um(double mm) { return mm * 1e3; }
+// JSON has no NaN or infinity: such values are written as null.
+json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
+
+std::string fmt(const char* f, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, v);
+  return buf;
+}
+
+json findingsJson(const ResidualAnalysis& a) {
+  json out = json::array();
+  for (const ResidualFinding& f : a.findings) {
+    json j = {{"variable", f.variable}, {"test", f.test}, {"strength", num(f.strength)},
+              {"p_value", num(f.p_value)}};
+    if (f.test == "periodogram") j["period"] = num(f.period);
+    out.push_back(j);
+  }
+  return {{"rms_um", um(a.rms)},
+          {"follows", a.follows},
+          {"follows_strength", num(a.follows_strength)},
+          {"runs_z", num(a.runs_z)},
+          {"runs_p", num(a.runs_p)},
+          {"repeated_poses", a.repeats.size()},
+          {"repeated_pose_max_span_um",
+           um(a.repeats.empty() ? 0.0
+                                : std::max_element(a.repeats.begin(), a.repeats.end(),
+                                                   [](const RepeatedPose& x, const RepeatedPose& y) {
+                                                     return x.span_mm < y.span_mm;
+                                                   })->span_mm)},
+          {"findings", out}};
+}
+
+const char* hyperName(const EffectSpec& e) { return traitsOf(e.type).hyper.name; }
+
+json fitJson(const CalibrationResult& f) {
+  return {{"status", f.message}, {"iterations", f.iterations}, {"unknowns", f.unknowns},
+          {"rank", f.rank}, {"condition", num(f.condition)}, {"rms_um", um(f.rms_residual)},
+          {"max_um", um(f.max_residual)}, {"sigma_um", um(f.residual_sigma)}};
+}
+
+json summaryJson(const PredictionSummary& s) {
+  return {{"points", s.points}, {"max_um", um(s.max_deviation)}, {"rms_um", um(s.rms_deviation)},
+          {"max_point", s.max_index}, {"max_axis_error_urad", s.max_axis_angle * 1e6}};
+}
+
+// The variable an effect follows, per reading, and its axis label.
+std::vector<double> variableOf(const MachineModel& m, const BallbarTest& test, const EffectSpec& e,
+                               std::string* label) {
+  std::vector<double> v(test.readings.size());
+  const bool rotary = e.axis >= 0 && m.axes[e.axis].isRotary();
+  const double k = rotary ? 180.0 / M_PI : 1.0;
+  const std::string axis = e.axis >= 0 ? m.axes[e.axis].name : "";
+  for (size_t i = 0; i < v.size(); ++i) {
+    const BallbarReading& r = test.readings[i];
+    switch (e.type) {
+      case EffectType::Periodic:
+        v[i] = r.q[e.axis] - e.period * std::floor(r.q[e.axis] / e.period);
+        break;
+      case EffectType::Drift:
+      case EffectType::Warmup:
+        v[i] = r.context.time_s / 60.0;
+        break;
+      case EffectType::BarLength:
+        v[i] = static_cast<double>(i);
+        break;
+      default:
+        v[i] = r.q[e.axis] * k;
+    }
+  }
+  switch (e.type) {
+    case EffectType::Periodic: *label = axis + " position modulo the period (mm)"; break;
+    case EffectType::Drift:
+    case EffectType::Warmup: *label = "time since the test began (min)"; break;
+    case EffectType::BarLength: *label = "reading, in measurement order (set-ups in colour)"; break;
+    default: *label = axis + (rotary ? " angle (deg)" : " position (mm)");
+  }
+  return v;
+}
+
+// Residual series coloured by approach direction (reversal) or set-up (bar length), else one.
+std::vector<ScatterSeries> seriesOf(const BallbarTest& test, const EffectSpec& e,
+                                    const std::vector<double>& x, const Eigen::VectorXd& r) {
+  static const unsigned char colours[4][3] = {{40, 90, 200}, {210, 60, 40}, {40, 150, 60}, {150, 80, 170}};
+  std::vector<ScatterSeries> s;
+  auto groupOf = [&](size_t i) {
+    if (e.type == EffectType::Reversal) return test.readings[i].context.direction[e.axis] < 0 ? 1 : 0;
+    if (e.type == EffectType::BarLength) return test.readings[i].setup % 4;
+    return 0;
+  };
+  for (size_t i = 0; i < x.size(); ++i) {
+    const int g = groupOf(i);
+    while (static_cast<int>(s.size()) <= g) {
+      ScatterSeries n;
+      std::copy(colours[s.size()], colours[s.size()] + 3, n.rgb);
+      s.push_back(n);
+    }
+    s[g].x.push_back(x[i]);
+    s[g].y.push_back(um(r[i]));
+  }
+  return s;
+}
+
+std::string imageTag(const std::string& path, const std::string& alt) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return "<img alt=\"" + xmlEscape(alt) + "\" src=\"data:image/png;base64," + base64Encode(ss.str()) + "\">";
+}
+
+std::string effectKey(const MachineModel& m, const EffectSpec& e) {
+  std::string k = traitsOf(e.type).name;
+  if (e.axis >= 0) k += "_" + m.axes[e.axis].name + "_" + kComponentNames[e.component];
+  return k;
+}
+
+}  // namespace
+
+const char* effectUnit(const EffectSpec& spec, double* scale) {
+  const bool angular = spec.axis >= 0 && isAngularComponent(spec.component);
+  *scale = 1e3;
+  if (angular) *scale = 1e6;
+  if (spec.type == EffectType::Drift) return angular ? "urad/h" : "um/h";
+  return angular ? "urad" : "um";
+}
+
+std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& test,
+                                const DiagnosisResult& r, const DiagnosisReportInputs& in) {
+  const MachineModel& m = r.machine.model;
+  json added = json::array();
+  for (const AddedEffect& a : r.added) {
+    double k = 1;
+    const char* unit = effectUnit(a.spec, &k);
+    json params = json::object(), unc = json::object();
+    for (size_t j = 0; j < a.parameters.size(); ++j) {
+      const std::string& name = m.parameters[a.parameters[j]].iso_code;
+      params[name] = num(a.values[j] * k);
+      unc[name] = num(a.uncertainty[j] * k);
+    }
+    json e = {{"type", traitsOf(a.spec.type).name},
+              {"axis", a.spec.axis >= 0 ? json(m.axes[a.spec.axis].name) : json(nullptr)},
+              {"component", a.spec.component >= 0 ? json(kComponentNames[a.spec.component]) : json(nullptr)},
+              {"label", a.label},
+              {"unit", unit},
+              {"parameters", params},
+              {"uncertainty", unc}};
+    if (hyperName(a.spec))
+      e["hyperparameter"] = {{"name", hyperName(a.spec)}, {"value", num(a.hyperparameter)},
+                             {"uncertainty", num(a.hyperparameter_uncertainty)}};
+    if (a.spec.type == EffectType::Chebyshev || a.spec.type == EffectType::Harmonics)
+      e["orders"] = {a.spec.first_order, a.spec.last_order};
+    added.push_back(e);
+  }
+  json cands = json::array();
+  for (const CandidateScore& c : r.candidates) {
+    json j = {{"round", c.round},
+              {"type", traitsOf(c.spec.type).name},
+              {"axis", c.spec.axis >= 0 ? json(base.axes[c.spec.axis].name) : json(nullptr)},
+              {"component", c.spec.component >= 0 ? json(kComponentNames[c.spec.component]) : json(nullptr)},
+              {"label", c.label},
+              {"coefficients", c.coefficients},
+              {"search_trials", c.trials},
+              {"rss_before_um2", num(c.rss_before * 1e6)},
+              {"rss_after_um2", num(c.rss_after * 1e6)},
+              {"f_statistic", num(c.f_statistic)},
+              {"p_value", num(c.p_value)},
+              {"effective_readings", num(c.effective_readings)},
+              {"delta_ic", num(c.delta_ic)},
+              {"heldout_rms_before_um", num(um(c.heldout_rms_before))},
+              {"heldout_rms_after_um", num(um(c.heldout_rms_after))},
+              {"new_information", num(c.new_information)},
+              {"condition", c.condition > 0 ? num(c.condition) : json(nullptr)},
+              {"verdict", verdictName(c.verdict)}};
+    if (hyperName(c.spec)) j[hyperName(c.spec)] = num(hyperparameterValue(c.spec));
+    cands.push_back(j);
+  }
+  json out = {
+      {"tool", "tolver diagnose"},
+      {"machine", m.name},
+      {"machine_file", in.machine_file},
+      {"readings_file", in.readings_file},
+      {"augmented_machine_file", in.output_file},
+      {"readings", test.readings.size()},
+      {"setups", test.setups.size()},
+      {"verdict", r.added.empty() ? "nothing missing" : "effects added"},
+      {"message", r.message},
+      {"effects_added", added},
+      {"rms_before_um", um(r.rms_before)},
+      {"rms_after_um", um(r.rms_after)},
+      {"heldout_rms_before_um", um(r.heldout_rms_before)},
+      {"heldout_rms_after_um", um(r.heldout_rms_after)},
+      {"cross_validation", {{"folds", r.folds}, {"blocks", "contiguous runs of readings within each set-up"}}},
+      {"selection",
+       {{"method", "forward stepwise"},
+        {"significance", "F test on m_eff = m (1 - rho)/(1 + rho), Bonferroni over the round"},
+        {"information_criterion", "BIC with m_eff"}}},
+      {"base_fit", fitJson(r.base_fit)},
+      {"final_fit", fitJson(r.final_fit)},
+      {"residual_analysis", {{"before", findingsJson(r.analysis_before)}, {"after", findingsJson(r.analysis_after)}}},
+      {"candidates", cands},
+      {"seconds", in.seconds}};
+  if (in.program) {
+    const ProgramComparison& p = *in.program;
+    out["program"] = {{"cl_file", p.cl_file},
+                      {"before", summaryJson(p.before)},
+                      {"after", summaryJson(p.after)},
+                      {"change_max_um", um(p.change_max)},
+                      {"change_rms_um", um(p.change_rms)},
+                      {"change_max_line", p.change_max_line}};
+  }
+  return out.dump(2) + "\n";
+}
+
+std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
+                               const BallbarTest& test, const DiagnosisResult& r,
+                               const DiagnosisReportInputs& in) {
+  const MachineModel& m = r.machine.model;
+  std::string h =
+      "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>tolver diagnose: " +
+      xmlEscape(m.name) +
+      "</title><style>body{font-family:sans-serif;margin:2em;max-width:1400px}"
+      "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}"
+      "th{background:#eee}td.l,th.l{text-align:left}.pass{color:#070}.note{color:#555}"
+      "figure{display:inline-block;margin:0 1em 1em 0}</style></head><body>\n";
+  h += "<h1>Diagnosis of " + xmlEscape(m.name) + "</h1>\n";
+  h += "<p class=\"note\">Readings: " + xmlEscape(in.readings_file) + " (" +
+       std::to_string(test.readings.size()) + " in " + std::to_string(test.setups.size()) +
+       " set-ups). Machine: " + xmlEscape(in.machine_file) + ". Augmented machine file: " +
+       xmlEscape(in.output_file) + ".</p>\n";
+  h += "<h2>" + std::string(r.added.empty() ? "Nothing missing: no effect added" : "Effects added") + "</h2>\n";
+  h += "<table><tr><th class=\"l\"></th><th>before</th><th>after</th></tr>";
+  h += "<tr><td class=\"l\">residual RMS (µm)</td><td>" + fmt("%.3f", um(r.rms_before)) + "</td><td>" +
+       fmt("%.3f", um(r.rms_after)) + "</td></tr>";
+  h += "<tr><td class=\"l\">held-out RMS (µm, " + std::to_string(r.folds) +
+       " contiguous blocks)</td><td>" + fmt("%.3f", um(r.heldout_rms_before)) + "</td><td>" +
+       fmt("%.3f", um(r.heldout_rms_after)) + "</td></tr></table>\n";
+  if (!r.added.empty()) {
+    h += "<table><tr><th class=\"l\">effect</th><th class=\"l\">parameter</th><th>value</th>"
+         "<th>standard uncertainty</th><th class=\"l\">unit</th></tr>";
+    for (const AddedEffect& a : r.added) {
+      double k = 1;
+      const char* unit = effectUnit(a.spec, &k);
+      for (size_t j = 0; j < a.parameters.size(); ++j)
+        h += "<tr><td class=\"l\">" + xmlEscape(a.label) + "</td><td class=\"l\">" +
+             m.parameters[a.parameters[j]].iso_code + "</td><td>" + fmt("%.3f", a.values[j] * k) +
+             "</td><td>" + fmt("%.3f", a.uncertainty[j] * k) + "</td><td class=\"l\">" + unit + "</td></tr>";
+      if (hyperName(a.spec))
+        h += "<tr><td class=\"l\">" + xmlEscape(a.label) + "</td><td class=\"l\">" + hyperName(a.spec) +
+             "</td><td>" + fmt("%.4g", a.hyperparameter) + "</td><td>" +
+             fmt("%.2g", a.hyperparameter_uncertainty) + "</td><td class=\"l\">" +
+             (a.spec.type == EffectType::Periodic ? "mm" : "s") + "</td></tr>";
+    }
+    h += "</table>\n";
+  }
+  // Residual plots against the variable each effect follows.
+  std::vector<EffectSpec> shown;
+  for (const AddedEffect& a : r.added) shown.push_back(a.spec);
+  if (shown.empty()) {  // nothing added: the residuals in measurement order
+    EffectSpec e;
+    e.type = EffectType::BarLength;
+    shown.push_back(e);
+  }
+  h += "<h2>Residuals before and after</h2>\n";
+  for (const EffectSpec& e : shown) {
+    std::string label;
+    const std::vector<double> x = variableOf(m, test, e, &label);
+    const std::string key = effectKey(m, e);
+    for (int after = 0; after < 2; ++after) {
+      const std::string name = "residual_" + key + (after ? "_after.png" : "_before.png");
+      const std::string path = (std::filesystem::path(dir) / name).string();
+      writeScatterPng(path, seriesOf(test, e, x, after ? r.final_fit.residuals : r.base_fit.residuals));
+      h += "<figure>" + imageTag(path, name) + "<figcaption>residual (µm) " +
+           (after ? "after" : "before") + " against " + xmlEscape(label) +
+           (e.type == EffectType::Reversal ? "; blue: approach +, red: approach −" : "") +
+           "</figcaption></figure>\n";
+    }
+  }
+  // Residual analysis.
+  h += "<h2>Residual analysis</h2>\n<table><tr><th class=\"l\">variable</th><th class=\"l\">test</th>"
+       "<th>strength before</th><th>p before</th><th>strength after</th><th>p after</th></tr>";
+  for (const ResidualFinding& f : r.analysis_before.findings) {
+    const ResidualFinding* g = nullptr;
+    for (const ResidualFinding& x : r.analysis_after.findings)
+      if (x.variable == f.variable && x.test == f.test) g = &x;
+    h += "<tr><td class=\"l\">" + xmlEscape(f.variable) + "</td><td class=\"l\">" + f.test +
+         (f.test == "periodogram" ? fmt(f.period < 9 ? " (order %.0f)" : " (%.2f mm)", f.period) : "") +
+         "</td><td>" + fmt("%.3f", f.strength) + "</td><td>" + fmt("%.2g", f.p_value) + "</td><td>" +
+         (g ? fmt("%.3f", g->strength) : "") + "</td><td>" + (g ? fmt("%.2g", g->p_value) : "") + "</td></tr>";
+  }
+  h += "</table>\n<p class=\"note\">Strength: fraction of the residual variance explained. The "
+       "residual follows <b>" +
+       xmlEscape(r.analysis_before.follows.empty() ? "nothing in particular" : r.analysis_before.follows) +
+       "</b> before, <b>" +
+       xmlEscape(r.analysis_after.follows.empty() ? "nothing in particular" : r.analysis_after.follows) +
+       "</b> after.</p>\n";
+  if (in.program) {
+    const ProgramComparison& p = *in.program;
+    h += "<h2>Predicted error of " + xmlEscape(p.cl_file) + "</h2>\n<table><tr><th></th><th>max (µm)</th>"
+         "<th>RMS (µm)</th></tr><tr><td class=\"l\">before</td><td>" + fmt("%.3f", um(p.before.max_deviation)) +
+         "</td><td>" + fmt("%.3f", um(p.before.rms_deviation)) + "</td></tr><tr><td class=\"l\">after</td><td>" +
+         fmt("%.3f", um(p.after.max_deviation)) + "</td><td>" + fmt("%.3f", um(p.after.rms_deviation)) +
+         "</td></tr><tr><td class=\"l\">change</td><td>" + fmt("%.3f", um(p.change_max)) + "</td><td>" +
+         fmt("%.3f", um(p.change_rms)) + "</td></tr></table>\n";
+  }
+  // Candidates.
+  h += "<h2>Every candidate tried</h2>\n<table><tr><th>round</th><th class=\"l\">candidate</th>"
+       "<th>ΔIC</th><th>p (adjusted)</th><th>m_eff</th><th>held-out before (µm)</th>"
+       "<th>held-out after (µm)</th><th>new information</th><th class=\"l\">verdict</th></tr>";
+  std::vector<CandidateScore> c = r.candidates;
+  std::stable_sort(c.begin(), c.end(), [](const CandidateScore& a, const CandidateScore& b) {
+    return a.round != b.round ? a.round < b.round : a.delta_ic > b.delta_ic;
+  });
+  for (const CandidateScore& s : c)
+    h += "<tr><td>" + std::to_string(s.round) + "</td><td class=\"l\">" + xmlEscape(s.label) + "</td><td>" +
+         fmt("%.1f", s.delta_ic) + "</td><td>" + fmt("%.2g", s.p_value) + "</td><td>" +
+         fmt("%.0f", s.effective_readings) + "</td><td>" + fmt("%.3f", um(s.heldout_rms_before)) +
+         "</td><td>" + fmt("%.3f", um(s.heldout_rms_after)) + "</td><td>" + fmt("%.3f", s.new_information) +
+         "</td><td class=\"l\">" + verdictName(s.verdict) + "</td></tr>";
+  h += "</table>\n<p class=\"note\">" + xmlEscape(base.name) + "; " + fmt("%.2f", in.seconds) +
+       " s.</p></body></html>\n";
+  return h;
+}
+
+}  // namespace tolver
