@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <random>
 
+#include "core/ballbar_plan.h"
 #include "core/effects.h"
 #include "io/ballbar_file.h"
 #include "io/machine_file.h"
@@ -54,15 +55,147 @@ void printResult(const std::string& name, const DiagnosisResult& r, double secon
               r.analysis_before.follows_strength);
 }
 
-TEST(Diagnosis, Explore) {
-  for (const char* name : {"clean", "chebyshev", "reversal", "periodic", "harmonics", "drift", "warmup",
-                           "bar_length", "two_effects"}) {
-    Dataset d = load(name);
-    const auto t0 = std::chrono::steady_clock::now();
-    const DiagnosisResult r = diagnose(d.nominal, d.readings.test);
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    printResult(name, r, s);
+
+// The effects of the truth machine (type, axis, component) and their values.
+struct TruthEffect {
+  EffectSpec spec;
+  Eigen::VectorXd values;
+};
+
+std::vector<TruthEffect> truthEffects(const Machine& truth) {
+  std::vector<TruthEffect> out;
+  for (const ParameterBlock& b : truth.model.blocks)
+    if (b.kind == BlockKind::Effect)
+      out.push_back({truth.model.effects[b.effect], truth.params.segment(b.offset, b.size)});
+  return out;
+}
+
+bool sameKind(const EffectSpec& a, const EffectSpec& b) {
+  return a.type == b.type && a.axis == b.axis && a.component == b.component;
+}
+
+void expectFindsTruth(const std::string& name) {
+  SCOPED_TRACE(name);
+  const Dataset d = load(name);
+  const auto t0 = std::chrono::steady_clock::now();
+  const DiagnosisResult r = diagnose(d.nominal, d.readings.test);
+  printResult(name, r, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  ASSERT_TRUE(r.ok) << r.message;
+  const std::vector<TruthEffect> truth = truthEffects(d.truth);
+  ASSERT_FALSE(truth.empty());
+  // Exactly the truth's effects, each with the right type, axis and component.
+  ASSERT_EQ(r.added.size(), truth.size());
+  for (const TruthEffect& t : truth) {
+    const auto it = std::find_if(r.added.begin(), r.added.end(),
+                                 [&](const AddedEffect& a) { return sameKind(a.spec, t.spec); });
+    ASSERT_NE(it, r.added.end()) << describeEffect(d.truth.model, t.spec) << " not found";
+    // Values within three standard uncertainties of the truth. A varying reversal found for a
+    // constant one also counts when its slope is zero within its uncertainty.
+    ASSERT_GE(it->values.size(), t.values.size());
+    for (Eigen::Index k = 0; k < it->values.size(); ++k) {
+      const double truth_value = k < t.values.size() ? t.values[k] : 0.0;
+      EXPECT_LE(std::abs(it->values[k] - truth_value), 3 * it->uncertainty[k])
+          << it->label << " coefficient " << k << ": " << it->values[k] << " +- "
+          << it->uncertainty[k] << " vs " << truth_value;
+    }
+    const double h = hyperparameterValue(t.spec);
+    if (std::isfinite(h))
+      EXPECT_LE(std::abs(it->hyperparameter - h), 3 * it->hyperparameter_uncertainty)
+          << it->label << ": " << it->hyperparameter << " +- " << it->hyperparameter_uncertainty
+          << " vs " << h;
   }
+  // The held-out error after is at the noise level and below the one before.
+  EXPECT_LE(r.heldout_rms_after, 1.5 * kNoiseMm);
+  EXPECT_LT(r.heldout_rms_after, r.heldout_rms_before);
+  EXPECT_LT(r.rms_after, r.rms_before);
+  // Every candidate of every round was scored and kept in the result.
+  EXPECT_GT(r.candidates.size(), 50u);
+}
+
+TEST(Diagnosis, FindsAHigherChebyshevDegree) { expectFindsTruth("chebyshev"); }
+TEST(Diagnosis, FindsReversal) { expectFindsTruth("reversal"); }
+TEST(Diagnosis, FindsACyclicErrorAndItsPeriod) { expectFindsTruth("periodic"); }
+TEST(Diagnosis, FindsRotaryHarmonics) { expectFindsTruth("harmonics"); }
+TEST(Diagnosis, FindsLinearThermalDrift) { expectFindsTruth("drift"); }
+TEST(Diagnosis, FindsAThermalWarmUpAndItsTimeConstant) { expectFindsTruth("warmup"); }
+TEST(Diagnosis, FindsTheBarLengthError) { expectFindsTruth("bar_length"); }
+TEST(Diagnosis, FindsTwoEffectsAtOnce) { expectFindsTruth("two_effects"); }
+
+TEST(Diagnosis, CleanDataGetsNothingAdded) {
+  const Dataset d = load("clean");
+  const DiagnosisResult r = diagnose(d.nominal, d.readings.test);
+  ASSERT_TRUE(r.ok);
+  EXPECT_TRUE(r.added.empty());
+  EXPECT_EQ(r.rms_after, r.rms_before);
+  EXPECT_LE(r.heldout_rms_after, 1.5 * kNoiseMm);
+  EXPECT_TRUE(r.analysis_before.follows.empty()) << r.analysis_before.follows;
+  for (const CandidateScore& c : r.candidates) EXPECT_NE(c.verdict, CandidateVerdict::Added);
+}
+
+// Simulated readings of a machine for a plan: noise and ball position errors from a seed.
+BallbarTest simulate(const Machine& truth, BallbarTest plan, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, kNoiseMm), ball(0.0, 0.010);
+  std::vector<BallErrors> balls(plan.setups.size());
+  for (BallErrors& b : balls) {
+    b.table_w = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+    b.tool_t = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+  }
+  const ForwardKinematics fk(truth.model, truth.params);
+  for (BallbarReading& r : plan.readings)
+    r.length = ballbarLength(fk, r.q, plan.setups[r.setup], balls[r.setup], &r.context) + noise(rng);
+  return plan;
+}
+
+TEST(Diagnosis, OverTwentyNoiseSeedsCleanDataAddsAtMostOnce) {
+  const Dataset d = load("clean");
+  const std::vector<int> unknowns = defaultCalibrationUnknowns(d.nominal.model);
+  DiagnosisOptions opt;
+  opt.base_unknowns = unknowns;
+  int runs_adding = 0;
+  for (unsigned seed = 100; seed < 120; ++seed) {
+    const DiagnosisResult r = diagnose(d.nominal, simulate(d.truth, d.readings.test, seed), opt);
+    ASSERT_TRUE(r.ok);
+    if (!r.added.empty()) {
+      ++runs_adding;
+      std::printf("[ seed %u ] added %s\n", seed, r.added[0].label.c_str());
+    }
+  }
+  std::printf("[ clean ] 20 noise seeds: %d runs added an effect\n", runs_adding);
+  EXPECT_LE(runs_adding, 1);
+}
+
+// One bar length: the bar's own length error cannot be told from a uniform machine scale (and
+// the ball positions), so it is reported confounded and not added.
+TEST(Diagnosis, BarLengthWithOneBarIsReportedConfounded) {
+  const Dataset d = load("bar_length");
+  BallbarPlanOptions po;
+  po.poses = 150;
+  const std::vector<int> unknowns = defaultCalibrationUnknowns(d.nominal.model);
+  const BallbarPlan plan = planBallbarTest(d.nominal.model, unknowns, po);
+  DiagnosisOptions opt;
+  opt.base_unknowns = unknowns;
+  opt.types = {EffectType::BarLength};
+  const DiagnosisResult r = diagnose(d.nominal, simulate(d.truth, plan.test, 7), opt);
+  ASSERT_TRUE(r.ok);
+  EXPECT_TRUE(r.added.empty());
+  ASSERT_EQ(r.candidates.size(), 1u);
+  EXPECT_EQ(r.candidates[0].verdict, CandidateVerdict::Confounded);
+  EXPECT_LT(r.candidates[0].new_information, 1e-3);
+}
+
+TEST(Diagnosis, FoldsAreContiguousRunsWithinSetUps) {
+  const Dataset d = load("clean");
+  int folds = 0;
+  const std::vector<int> f = contiguousFolds(d.readings.test, 6, &folds);
+  EXPECT_EQ(folds, 18);
+  std::vector<int> count(folds, 0);
+  for (size_t i = 0; i < f.size(); ++i) {
+    ++count[f[i]];
+    if (i > 0) EXPECT_GE(f[i], f[i - 1]);  // each fold one contiguous run
+    EXPECT_EQ(f[i] / 6, d.readings.test.readings[i].setup);
+  }
+  for (int c : count) EXPECT_EQ(c, 20);
 }
 
 }  // namespace

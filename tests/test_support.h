@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 namespace tolver::test {
@@ -21,6 +22,11 @@ inline const std::array<const char*, 3>& shippedMachines() {
                                                "resources/machines/xkh800.xml",
                                                "resources/machines/trunnion_ac_trt.xml"};
   return m;
+}
+
+inline std::string readText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 struct RunResult {

@@ -1,0 +1,126 @@
+// Statistics for residual analysis and selection against closed forms and synthetic data.
+#include "core/statistics.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/residual_analysis.h"
+#include "io/ballbar_file.h"
+#include "io/machine_file.h"
+
+namespace tolver {
+namespace {
+
+TEST(Statistics, IncompleteBetaClosedForms) {
+  EXPECT_NEAR(incompleteBeta(2, 3, 0.5), 0.6875, 1e-14);  // 11/16
+  for (double x : {0.1, 0.4, 0.9}) {
+    EXPECT_NEAR(incompleteBeta(1, 1, x), x, 1e-14);
+    EXPECT_NEAR(incompleteBeta(1, 4, x), 1 - std::pow(1 - x, 4), 1e-14);
+    EXPECT_NEAR(incompleteBeta(3, 1, x), std::pow(x, 3), 1e-14);
+  }
+}
+
+TEST(Statistics, FSurvivalClosedForms) {
+  // d1 = 2: P(F > f) = (1 + 2 f / d2)^(-d2 / 2).
+  for (double f : {0.5, 3.0, 12.0}) EXPECT_NEAR(fSurvival(f, 2, 10), std::pow(1 + 2 * f / 10, -5), 1e-13);
+  // d1 = 1, d2 large: F = Z^2.
+  EXPECT_NEAR(fSurvival(4.0, 1, 1e7), 2 * normalSurvival(2.0), 1e-6);
+  EXPECT_EQ(fSurvival(0.0, 3, 10), 1.0);
+  EXPECT_NEAR(normalSurvival(1.959963984540054), 0.025, 1e-12);
+}
+
+TEST(Statistics, LombScargleFindsThePeriodOfUnevenSamples) {
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> u(0, 300);
+  std::normal_distribution<double> n(0, 0.5);
+  std::vector<double> t(200), y(200);
+  for (int i = 0; i < 200; ++i) {
+    t[i] = u(rng);
+    y[i] = 2.0 * std::sin(2 * M_PI * t[i] / 12.0 + 0.3) + n(rng);
+  }
+  std::vector<double> omega;
+  for (double f = 1.0 / 100; f <= 0.5; f += 1.0 / 1500) omega.push_back(2 * M_PI * f);
+  const std::vector<double> P = lombScargle(t, y, omega);
+  const size_t k = std::max_element(P.begin(), P.end()) - P.begin();
+  EXPECT_NEAR(2 * M_PI / omega[k], 12.0, 0.05);
+  // The sinusoid carries 2 / (2 + 0.25) of the variance.
+  EXPECT_NEAR(2 * P[k] / 199, 2.0 / 2.25, 0.05);
+  EXPECT_LT(periodogramFalseAlarm(P[k], 150), 1e-20);
+  // Pure noise: no significant peak.
+  for (double& v : y) v = n(rng);
+  const std::vector<double> Q = lombScargle(t, y, omega);
+  EXPECT_GT(periodogramFalseAlarm(*std::max_element(Q.begin(), Q.end()), 150), 0.01);
+}
+
+TEST(Statistics, RunsTestAndAutocorrelation) {
+  std::vector<double> blocks(100), alternating(100);
+  for (int i = 0; i < 100; ++i) {
+    blocks[i] = i < 50 ? 1 : -1;
+    alternating[i] = i % 2 ? 1 : -1;
+  }
+  const RunsTest b = runsTest(blocks);
+  EXPECT_EQ(b.runs, 2);
+  EXPECT_LT(b.z, -9);
+  EXPECT_LT(b.p_value, 1e-15);
+  const RunsTest a = runsTest(alternating);
+  EXPECT_EQ(a.runs, 100);
+  EXPECT_GT(a.z, 9);
+  const std::vector<bool> same(100, true);
+  EXPECT_NEAR(lagOneAutocorrelation(alternating, same), -0.99, 1e-12);
+  EXPECT_NEAR(lagOneAutocorrelation(blocks, same), 0.97, 1e-12);  // (98 - 1) / 100
+}
+
+// Residual analysis on the poses of the clean sample test with planted structure.
+class Analysis : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    machine_ = readMachineFile(std::string(TOLVER_SOURCE_DIR) + "/resources/machines/matsuura_mc760vx.xml");
+    test_ = readBallbarFile(std::string(TOLVER_SOURCE_DIR) + "/samples/ballbar/clean.csv", machine_.model, true).test;
+    std::mt19937 rng(9);
+    std::normal_distribution<double> n(0, 0.5e-3);
+    noise_.resize(test_.readings.size());
+    for (Eigen::Index i = 0; i < noise_.size(); ++i) noise_[i] = n(rng);
+  }
+  Machine machine_;
+  BallbarTest test_;
+  Eigen::VectorXd noise_;
+};
+
+TEST_F(Analysis, WhiteNoiseFollowsNothing) {
+  const ResidualAnalysis a = analyseResiduals(machine_.model, test_, noise_);
+  EXPECT_TRUE(a.follows.empty()) << a.follows;
+  EXPECT_NEAR(a.rms, 0.5e-3, 0.06e-3);
+  EXPECT_FALSE(a.repeats.empty());  // the plan's returns to a reference pose
+}
+
+TEST_F(Analysis, ACyclicResidualFollowsItsAxisAndPeriod) {
+  Eigen::VectorXd r = noise_;
+  for (size_t i = 0; i < test_.readings.size(); ++i) r[i] += 2e-3 * std::sin(2 * M_PI * test_.readings[i].q[1] / 15.0);
+  const ResidualAnalysis a = analyseResiduals(machine_.model, test_, r);
+  EXPECT_EQ(a.follows, "Y");
+  EXPECT_EQ(a.findings[0].test, "periodogram");
+  EXPECT_NEAR(a.findings[0].period, 15.0, 0.1);
+  EXPECT_GT(a.follows_strength, 0.7);
+}
+
+TEST_F(Analysis, AReversalResidualFollowsTheApproachDirection) {
+  Eigen::VectorXd r = noise_;
+  for (size_t i = 0; i < test_.readings.size(); ++i) r[i] += 1.5e-3 * test_.readings[i].context.direction[0];
+  const ResidualAnalysis a = analyseResiduals(machine_.model, test_, r);
+  EXPECT_EQ(a.follows, "X direction");
+}
+
+TEST_F(Analysis, ADriftFollowsTime) {
+  Eigen::VectorXd r = noise_;
+  for (size_t i = 0; i < test_.readings.size(); ++i) r[i] += 2e-3 * test_.readings[i].context.time_s / 7200.0;
+  const ResidualAnalysis a = analyseResiduals(machine_.model, test_, r);
+  EXPECT_EQ(a.follows, "time");
+  double span = 0;
+  for (const RepeatedPose& p : a.repeats) span = std::max(span, p.span_mm);
+  EXPECT_GT(span, 0.5e-3);  // the reference pose drifts
+}
+
+}  // namespace
+}  // namespace tolver
