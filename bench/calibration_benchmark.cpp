@@ -1,4 +1,4 @@
-// One ball-bar calibration solve on one core: Matsuura MC-760VX, full minimal-complete cubic
+// Ball-bar calibration and diagnosis on one core. One calibration solve: Matsuura MC-760VX, full minimal-complete cubic
 // model (92 coefficients + 18 ball positions), three set-ups, 600 readings, 0.5 um noise.
 //   ./build/bench/calibration_benchmark
 #include <benchmark/benchmark.h>
@@ -7,6 +7,8 @@
 
 #include "core/ballbar_plan.h"
 #include "core/calibration.h"
+#include "core/diagnosis.h"
+#include "io/ballbar_file.h"
 #include "io/machine_file.h"
 
 namespace {
@@ -58,6 +60,28 @@ void BM_IdentificationJacobian600(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(tolver::identificationJacobian(fk, d.test, balls, d.unknowns));
 }
 BENCHMARK(BM_IdentificationJacobian600)->Unit(benchmark::kMillisecond);
+
+// A full diagnosis (issue 5) of a 360-reading three-set-up test with two undeclared effects:
+// base calibration, the minimal-complete set, every candidate of every type with its
+// hyperparameter search and 18-block cross-validation, the nonlinear refits, residual analysis.
+void BM_Diagnose360Readings(benchmark::State& state) {
+  const tolver::Machine m = tolver::readMachineFile(std::string(TOLVER_SOURCE_DIR) +
+                                                    "/resources/machines/matsuura_mc760vx.xml");
+  const tolver::BallbarTest test =
+      tolver::readBallbarFile(std::string(TOLVER_SOURCE_DIR) + "/samples/ballbar/two_effects.csv",
+                              m.model, true)
+          .test;
+  size_t added = 0, candidates = 0;
+  for (auto _ : state) {
+    const tolver::DiagnosisResult r = tolver::diagnose(m, test);
+    added = r.added.size();
+    candidates = r.candidates.size();
+    benchmark::DoNotOptimize(r.rms_after);
+  }
+  state.counters["effects_added"] = static_cast<double>(added);
+  state.counters["candidates_scored"] = static_cast<double>(candidates);
+}
+BENCHMARK(BM_Diagnose360Readings)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
 

@@ -1,0 +1,101 @@
+// tolver diagnose end to end: report.json fields, report.html with plots, the augmented machine
+// file used as it is by predict and simulate-ballbar, --cl, and bad input.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+class DiagnoseCli : public test::TempDirTest {
+ protected:
+  const std::string nominal = test::sourcePath("resources/machines/matsuura_mc760vx.xml");
+  std::string readings(const std::string& name) { return test::sourcePath("samples/ballbar/" + name + ".csv"); }
+};
+
+TEST_F(DiagnoseCli, ReversalDatasetEndToEnd) {
+  const auto r = test::runTolver("diagnose --machine " + nominal + " --readings " + readings("reversal") +
+                                 " -o " + path("augmented.xml") + " --report-dir " + path("out") +
+                                 " --cl " + test::sourcePath("samples/nas979_cone.apt") + " --cl-setup " +
+                                 test::sourcePath("samples/matsuura_setup.txt") + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("added      reversal Y ey"), std::string::npos) << r.output;
+  std::ifstream in(path("out/report.json"));
+  const nlohmann::json j = nlohmann::json::parse(in);
+  ASSERT_EQ(j["effects_added"].size(), 1u);
+  const auto& e = j["effects_added"][0];
+  EXPECT_EQ(e["type"], "reversal");
+  EXPECT_EQ(e["axis"], "Y");
+  EXPECT_NEAR(e["parameters"]["EYY.rev"].get<double>(), 4.0, 3 * e["uncertainty"]["EYY.rev"].get<double>());
+  EXPECT_LT(j["rms_after_um"].get<double>(), j["rms_before_um"].get<double>());
+  EXPECT_LT(j["heldout_rms_after_um"].get<double>(), j["heldout_rms_before_um"].get<double>());
+  EXPECT_LE(j["heldout_rms_after_um"].get<double>(), 0.75);
+  EXPECT_GT(j["candidates"].size(), 50u);
+  for (const auto& c : j["candidates"]) {
+    EXPECT_TRUE(c.contains("delta_ic") && c.contains("p_value") && c.contains("heldout_rms_after_um") &&
+                c.contains("verdict"));
+  }
+  // The program's predicted error before and after: the reversal changes it.
+  EXPECT_GT(j["program"]["change_max_um"].get<double>(), 1.0);
+  EXPECT_GT(j["program"]["after"]["points"].get<int>(), 0);
+  // Report with the residual plots embedded, and the PNGs beside it.
+  const std::string html = test::readText(path("out/report.html"));
+  EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(path("out/residual_reversal_Y_ey_before.png")));
+  EXPECT_TRUE(std::filesystem::exists(path("out/residual_reversal_Y_ey_after.png")));
+  // The augmented machine file works as it is.
+  EXPECT_NE(test::readText(path("augmented.xml")).find("<effect type=\"reversal\" axis=\"Y\""), std::string::npos);
+  auto p = test::runTolver("predict --machine " + path("augmented.xml") + " --cl " +
+                           test::sourcePath("samples/nas979_cone.apt") + " --setup " +
+                           test::sourcePath("samples/matsuura_setup.txt") + " -o " + path("cone.apt"));
+  EXPECT_EQ(p.exit_code, 0) << p.output;
+  auto s = test::runTolver("simulate-ballbar --machine " + path("augmented.xml") + " --plan " +
+                           test::sourcePath("samples/ballbar/plan.csv") + " -o " + path("again.csv"));
+  EXPECT_EQ(s.exit_code, 0) << s.output;
+  // Diagnosing the data again on the augmented model's readings (no noise) finds the reversal again.
+  auto d = test::runTolver("diagnose --machine " + nominal + " --readings " + path("again.csv") + " -o " +
+                           path("again.xml") + " --report-dir " + path("again") + " --types reversal --quiet");
+  EXPECT_EQ(d.exit_code, 0) << d.output;
+  EXPECT_NE(d.output.find("added      reversal Y ey"), std::string::npos) << d.output;
+}
+
+TEST_F(DiagnoseCli, CleanDatasetAddsNothing) {
+  const auto r = test::runTolver("diagnose --machine " + nominal + " --readings " + readings("clean") + " -o " +
+                                 path("augmented.xml") + " --report-dir " + path("out") + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("nothing missing"), std::string::npos) << r.output;
+  std::ifstream in(path("out/report.json"));
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_TRUE(j["effects_added"].empty());
+  EXPECT_EQ(j["verdict"], "nothing missing");
+  EXPECT_EQ(test::readText(path("augmented.xml")).find("<effect"), std::string::npos);
+}
+
+TEST_F(DiagnoseCli, BadInputExitsTwoWithoutWriting) {
+  const std::string out = " -o " + path("aug.xml") + " --report-dir " + path("out") + " --quiet";
+  auto r = test::runTolver("diagnose --machine " + nominal + " --readings " + path("missing.csv") + out);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  const std::string bad = write("bad.csv", test::readText(readings("clean")).substr(0, 600) + "1,80,0,20,12.5,21.6,0,x,1,2,3,4,5,150\n");
+  r = test::runTolver("diagnose --machine " + nominal + " --readings " + bad + out);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("bad.csv:"), std::string::npos) << r.output;
+  r = test::runTolver("diagnose --machine " + test::sourcePath("samples/ballbar/truth_reversal.xml") +
+                      " --readings " + readings("clean") + out);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("already has effects"), std::string::npos) << r.output;
+  r = test::runTolver("diagnose --machine " + nominal + " --readings " + readings("clean") + out +
+                      " --types backlash");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  // Readings that the machine and set-up cannot explain: refused, not diagnosed.
+  r = test::runTolver("diagnose --machine " + nominal + " --gauge-length 200 --readings " + readings("clean") + out);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("did not converge"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(path("aug.xml")));
+}
+
+}  // namespace
+}  // namespace tolver
