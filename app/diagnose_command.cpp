@@ -168,9 +168,9 @@ void registerDiagnose(CLI::App& app, int* exit_code) {
   auto o = std::make_shared<DiagnoseOptions>();
   CLI::App* cmd = app.add_subcommand(
       "diagnose",
-      "find what a ball-bar calibration leaves unexplained, trace it to an effect the model "
+      "Find what a ball-bar calibration leaves unexplained, trace it to an effect the model "
       "lacks (backlash, cyclic error, rotary harmonics, thermal drift, bar length, a higher "
-      "degree), add it and report the error before and after");
+      "degree), add it and report the error before and after.");
   addMachineOptions(cmd, o->machine, "base machine file (XML): link and motion errors, no effects");
   cmd->add_option("--readings", o->readings, "ball-bar readings (CSV)")->required();
   cmd->add_option("-o,--output", o->output, "augmented machine file to write (XML)")->required();
