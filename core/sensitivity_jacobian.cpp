@@ -34,6 +34,11 @@ void sensitivityJacobian(const ForwardKinematics& fk, const JointVector& q,
   auto transportToTool = [&](const Eigen::Isometry3d& F_T_A) {
     return transportMatrix(F_T_A.inverse(Eigen::Isometry) * fr.F_T_t);
   };
+  // Twist per unit additive change of motion-error component c of axis a (acting after E(s)).
+  auto componentColumn = [&](int a, int c) -> Eigen::Matrix<double, 6, 1> {
+    return sideOf(a) * transportToTool(fr.after_joint[a]) *
+           linkTwistMap(fk.motionErrors(a, q[a], ctx)).col(c);
+  };
   for (const ParameterBlock& b : m.blocks) {
     switch (b.kind) {
       case BlockKind::LinkError: {
@@ -43,10 +48,7 @@ void sensitivityJacobian(const ForwardKinematics& fk, const JointVector& q,
         break;
       }
       case BlockKind::MotionError: {
-        const Vector6d e = fk.motionErrors(b.axis, q[b.axis], ctx);
-        const Eigen::Matrix<double, 6, 1> col =
-            sideOf(b.axis) * transportToTool(fr.after_joint[b.axis]) *
-            linkTwistMap(e).col(b.component);
+        const Eigen::Matrix<double, 6, 1> col = componentColumn(b.axis, b.component);
         const Axis& ax = m.axes[b.axis];
         double T[32];
         chebyshevBasis(normalisedCoordinate(q[b.axis], ax.travel_min, ax.travel_max), b.degree, T);
@@ -65,10 +67,7 @@ void sensitivityJacobian(const ForwardKinematics& fk, const JointVector& q,
           J.middleCols(b.offset, b.size).setZero();
           break;
         }
-        const Vector6d e = fk.motionErrors(spec.axis, q[spec.axis], ctx);
-        const Eigen::Matrix<double, 6, 1> col =
-            sideOf(spec.axis) * transportToTool(fr.after_joint[spec.axis]) *
-            linkTwistMap(e).col(spec.component);
+        const Eigen::Matrix<double, 6, 1> col = componentColumn(spec.axis, spec.component);
         const Axis& ax = m.axes[spec.axis];
         double phi[8];
         traitsOf(spec.type).basis(spec, q[spec.axis],

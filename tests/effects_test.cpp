@@ -12,9 +12,12 @@
 #include "io/io_error.h"
 #include "io/machine_file.h"
 #include "test_support.h"
+#include "twist_support.h"
 
 namespace tolver {
 namespace {
+
+using test::twistBetween;
 
 Machine matsuura() { return readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml")); }
 
@@ -116,14 +119,6 @@ TEST(Effects, HarmonicsAndPeriodicBasesAreTheirFourierTerms) {
   traitsOf(c.type).basis(c, 0.0, 0.5, nullptr, phi);
   EXPECT_NEAR(phi[0], 8 * std::pow(0.5, 4) - 8 * 0.25 + 1, 1e-15);           // T4(x)
   EXPECT_NEAR(phi[1], 16 * std::pow(0.5, 5) - 20 * std::pow(0.5, 3) + 5 * 0.5, 1e-15);  // T5(x)
-}
-
-Vector6d twistBetween(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  const Eigen::Isometry3d M = a.inverse(Eigen::Isometry) * b;
-  const Eigen::Matrix3d S = 0.5 * (M.linear() - M.linear().transpose());
-  Vector6d t;
-  t << M.translation(), S(2, 1), S(0, 2), S(1, 0);
-  return t;
 }
 
 // Effect columns of the sensitivity Jacobian against central finite differences.

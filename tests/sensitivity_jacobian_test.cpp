@@ -6,18 +6,12 @@
 
 #include "io/machine_file.h"
 #include "test_support.h"
+#include "twist_support.h"
 
 namespace tolver {
 namespace {
 
-// Body twist of b relative to a, to first order: vee(a^-1 b).
-Vector6d twistBetween(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
-  const Eigen::Isometry3d M = a.inverse(Eigen::Isometry) * b;
-  const Eigen::Matrix3d S = 0.5 * (M.linear() - M.linear().transpose());
-  Vector6d t;
-  t << M.translation(), S(2, 1), S(0, 2), S(1, 0);
-  return t;
-}
+using test::twistBetween;
 
 class EveryMachine : public ::testing::TestWithParam<const char*> {};
 
