@@ -3,6 +3,8 @@
 #include <cmath>
 #include <limits>
 
+#include "core/rigid_transform.h"
+
 namespace tolver {
 namespace {
 
@@ -10,21 +12,19 @@ constexpr double kTwoPi = 2.0 * M_PI;
 constexpr double kSingularEps = 1e-9;   // |component of a unit vector normal to an axis|
 constexpr double kTravelEps = 1e-9;     // mm or rad of tolerance on travel limits
 
-// Paden-Kahan sub-problem 1: the angle theta with Rot(w, theta) p = q (p, q equally inclined
-// to the unit axis w). Returns false when p is along w (theta free).
+// Paden-Kahan sub-problem 1: cos and sin of the angle theta with Rot(w, theta) p = q (p, q
+// equally inclined to the unit axis w), without a trigonometric call. Returns false when p or q
+// is along w (theta free).
 bool subproblem1(const Eigen::Vector3d& w, const Eigen::Vector3d& p, const Eigen::Vector3d& q,
-                 double* theta, double* cos_theta = nullptr, double* sin_theta = nullptr) {
+                 double* cos_theta, double* sin_theta) {
   const Eigen::Vector3d pp = p - w * w.dot(p);
   const Eigen::Vector3d qp = q - w * w.dot(q);
   constexpr double kEps2 = kSingularEps * kSingularEps;
   if (pp.squaredNorm() < kEps2 || qp.squaredNorm() < kEps2) return false;
   const double y = w.dot(pp.cross(qp)), x = pp.dot(qp);
-  *theta = std::atan2(y, x);
-  if (cos_theta) {  // cos and sin of theta without another trigonometric call
-    const double r = std::sqrt(x * x + y * y);
-    *cos_theta = x / r;
-    *sin_theta = y / r;
-  }
+  const double inv_r = 1.0 / std::sqrt(x * x + y * y);
+  *cos_theta = x * inv_r;
+  *sin_theta = y * inv_r;
   return true;
 }
 
@@ -44,7 +44,20 @@ double unwrapInto(double angle, double lo, double hi, double ref) {
   return best;
 }
 
+// unwrapInto, with the common case first: the representative nearest to ref, when it lies
+// inside travel and no other one is as near.
+double unwrapNear(double angle, double lo, double hi, double ref) {
+  const double v = angle + kTwoPi * std::round((ref - angle) / kTwoPi);
+  if (v >= lo - kTravelEps && v <= hi + kTravelEps && std::abs(v - ref) < M_PI - 1e-9) return v;
+  return unwrapInto(angle, lo, hi, ref);
+}
+
 }  // namespace
+
+double InverseKinematics::RotaryCandidate::angleOf(int r) const {
+  if (free[r]) return std::numeric_limits<double>::quiet_NaN();
+  return known[r] ? angle[r] : std::atan2(sin[r], cos[r]);
+}
 
 InverseKinematics::InverseKinematics(const MachineModel& model)
     : model_(&model) {
@@ -92,78 +105,120 @@ InverseKinematics::InverseKinematics(const MachineModel& model)
     if (!model.axes[a].isRotary()) prismatic_.push_back(a);
   w_end_ = model.last_T_table * model.table_T_w();
   t_end_ = model.last_T_spindle * model.spindle_T_t();
+  int column = 1;
   for (int b = 0; b < 2; ++b) {
     for (int a : b == 0 ? model.workpiece_chain : model.tool_chain) {
       ChainLink l;
       l.axis = a;
       l.link_R = model.axes[a].parent_T_joint.linear();
+      l.link_Rt = l.link_R.transpose();
       l.link_p = model.axes[a].parent_T_joint.translation();
+      l.direction = model.axes[a].direction;
       l.identity_link = model.axes[a].parent_T_joint.isApprox(Eigen::Isometry3d::Identity(), 0.0);
       for (int c = 0; c < 3; ++c)
         if (model.axes[a].direction[c] == 1.0) l.principal = c;
+      if (!model.axes[a].isRotary()) l.column = column++;
       chains_[b].push_back(l);
     }
+  }
+  if (rotary_.size() == 2) {
+    w1_ = a_[0];
+    w2_ = C1_ * a_[1];
+    p2_ = C1_ * C2_ * Eigen::Vector3d::UnitZ();
+    w12_ = w1_.cross(w2_);
+    w1w2_ = w1_.dot(w2_);
+    w2p2_ = w2_.dot(p2_);
+    p2_sq_ = p2_.squaredNorm();
+    w12_sq_ = w12_.squaredNorm();
+    sub1_.u1 = w2_ - w1w2_ * w1_;
+    sub1_.u2 = w1_ - w1w2_ * w2_;
+    sub1_.v1 = w1_.cross(w12_);
+    const Eigen::Vector3d pp2 = p2_ - w2_ * w2p2_, v2 = w2_.cross(pp2);
+    sub1_.u1_sq = sub1_.u1.squaredNorm();
+    sub1_.u2_sq = sub1_.u2.squaredNorm();
+    sub1_.pp2_sq = pp2.squaredNorm();
+    sub1_.pp2_u2 = pp2.dot(sub1_.u2);
+    sub1_.pp2_w12 = pp2.dot(w12_);
+    sub1_.v2_u2 = v2.dot(sub1_.u2);
+    sub1_.v2_w12 = v2.dot(w12_);
   }
   // Two parallel rotary axes cannot orient the tool independently (sub-problem 2 degenerates).
   parallel_rotaries_ =
       rotary_.size() == 2 && std::abs(a_[0].dot(C1_ * a_[1])) > 1.0 - 1e-12;
 }
 
-int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vector2d out[2],
-                                        bool* singular, Eigen::Vector2d* cos_out,
-                                        Eigen::Vector2d* sin_out) const {
-  Eigen::Vector2d cos_local[2], sin_local[2];
-  if (!cos_out) {
-    cos_out = cos_local;
-    sin_out = sin_local;
-  }
+int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, RotaryCandidate out[2],
+                                        bool* singular) const {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   int count = 0;
   *singular = false;
   const Eigen::Vector3d k = Eigen::Vector3d::UnitZ();
   const Eigen::Vector3d u = u_w.normalized();
   if (rotary_.empty()) {
-    if ((C0_ * k - u).norm() < 1e-9) out[count++] = Eigen::Vector2d(0.0, 0.0);
+    if ((C0_ * k - u).norm() < 1e-9) out[count++] = RotaryCandidate{};
     return count;
   }
+  // Joint value = sign * phi: the cosine is unchanged, the sine takes the sign.
+  auto set = [&](RotaryCandidate& c, int r, bool solved, double cs, double sn) {
+    c.free[r] = !solved;
+    c.cos[r] = solved ? cs : nan;
+    c.sin[r] = solved ? sign_[r] * sn : nan;
+  };
   if (rotary_.size() == 1) {
     // Rot(a1, phi) (C1 k) = C0^T u
     const Eigen::Vector3d p = C1_ * k, q = C0_.transpose() * u;
     if (std::abs(a_[0].dot(p) - a_[0].dot(q)) > 1e-9) return count;
-    double phi = 0.0, c1 = nan, s1 = nan;
-    if (!subproblem1(a_[0], p, q, &phi, &c1, &s1)) {
-      *singular = true;
-      phi = nan;
-    }
-    cos_out[count] = Eigen::Vector2d(c1, 1.0);
-    sin_out[count] = Eigen::Vector2d(sign_[0] * s1, 0.0);
-    out[count++] = Eigen::Vector2d(sign_[0] * phi, 0.0);
+    double c1 = 0.0, s1 = 0.0;
+    const bool solved = subproblem1(a_[0], p, q, &c1, &s1);
+    *singular = !solved;
+    RotaryCandidate& c = out[count++];
+    c = RotaryCandidate{};
+    set(c, 0, solved, c1, s1);
+    c.cos[1] = 1.0;  // the unused second slot: angle 0
+    c.known[1] = true;
     return count;
   }
-  // Rot(w1, phi1) Rot(w2, phi2) p = q.
-  const Eigen::Vector3d w1 = a_[0], w2 = C1_ * a_[1];
-  const Eigen::Vector3d p = C1_ * C2_ * k, q = C0_.transpose() * u;
-  const double c = w1.dot(w2);
+  // Rot(w1, phi1) Rot(w2, phi2) p = q: z = Rot(w2, phi2) p = alpha w1 + beta w2 + g w1 x w2.
+  const Eigen::Vector3d& w1 = w1_;
+  const Eigen::Vector3d& w2 = w2_;
+  const Eigen::Vector3d& p = p2_;
+  const Eigen::Vector3d q = C0_.transpose() * u;
+  const double c = w1w2_, w1q = w1.dot(q);
   const double den = c * c - 1.0;
-  const double alpha = (c * w2.dot(p) - w1.dot(q)) / den;
-  const double beta = (c * w1.dot(q) - w2.dot(p)) / den;
-  const Eigen::Vector3d w12 = w1.cross(w2);
-  double g2 = (p.squaredNorm() - alpha * alpha - beta * beta - 2.0 * alpha * beta * c) /
-              w12.squaredNorm();
+  const double alpha = (c * w2p2_ - w1q) / den;
+  const double beta = (c * w1q - w2p2_) / den;
+  double g2 = (p2_sq_ - alpha * alpha - beta * beta - 2.0 * alpha * beta * c) / w12_sq_;
   if (g2 < -1e-12) return count;
   g2 = std::max(g2, 0.0);
   const double g = std::sqrt(g2);
+  // The two sub-problems 1, Rot(w1, phi1) z = q and Rot(w2, phi2) p = z, in closed form: the
+  // parts normal to each axis are zp1 = beta u1 +- g w12 and qp1 = q - w1 (w1.q), and pp2
+  // (fixed) and zp2 = alpha u2 +- g w12 (sub1_ holds u1, u2 and the fixed dot products), so each
+  // cosine and sine is a few multiplications; the same as subproblem1(w1, z, q) and
+  // subproblem1(w2, p, z).
+  const Eigen::Vector3d qp1 = q - w1 * w1q;
+  const double qp1_w12 = qp1.dot(w12_), qp1_v1 = qp1.dot(sub1_.v1), qp1_u1 = qp1.dot(sub1_.u1);
+  constexpr double kEps2 = kSingularEps * kSingularEps;
+  const double gg = g2 * w12_sq_;
+  const bool axis1_free = qp1.squaredNorm() < kEps2 || beta * beta * sub1_.u1_sq + gg < kEps2;
+  const bool axis2_free = sub1_.pp2_sq < kEps2 || alpha * alpha * sub1_.u2_sq + gg < kEps2;
   for (double sgn : {1.0, -1.0}) {
-    const Eigen::Vector3d z = alpha * w1 + beta * w2 + sgn * g * w12;
-    double phi1 = 0.0, phi2 = 0.0, c1 = nan, s1 = nan, c2 = nan, s2 = nan;
-    bool free1 = !subproblem1(w1, z, q, &phi1, &c1, &s1);
-    bool free2 = !subproblem1(w2, p, z, &phi2, &c2, &s2);
-    if (free1 || free2) *singular = true;
-    // A free angle is marked NaN; solve() fills it from the previous point.
-    if (!free1 && !free2 && g < 1e-2) {
+    RotaryCandidate& out_c = out[count++];
+    out_c = RotaryCandidate{};
+    const double sg = sgn * g;
+    const double x1 = beta * qp1_u1 + sg * qp1_w12, y1 = beta * qp1_w12 + sg * qp1_v1;
+    const double x2 = alpha * sub1_.pp2_u2 + sg * sub1_.pp2_w12;
+    const double y2 = alpha * sub1_.v2_u2 + sg * sub1_.v2_w12;
+    const double r1 = 1.0 / std::sqrt(x1 * x1 + y1 * y1), r2 = 1.0 / std::sqrt(x2 * x2 + y2 * y2);
+    double c1 = x1 * r1, s1 = y1 * r1, c2 = x2 * r2, s2 = y2 * r2;
+    const bool solved1 = !axis1_free, solved2 = !axis2_free;
+    if (!solved1 || !solved2) *singular = true;
+    // A free angle is marked; solve() fills it from the previous point.
+    if (solved1 && solved2 && g < 1e-2) {
       // The closed form loses accuracy where gamma is small (the square root of a difference
       // amplifies rounding); two Gauss-Newton steps on Rot(w1, phi1) Rot(w2, phi2) p = q
       // restore it to rounding level.
+      double phi1 = std::atan2(s1, c1), phi2 = std::atan2(s2, c2);
       for (int it = 0; it < 2; ++it) {
         const Eigen::Matrix3d R1 = Eigen::AngleAxisd(phi1, w1).toRotationMatrix();
         const Eigen::Vector3d r2p = Eigen::AngleAxisd(phi2, w2) * p;
@@ -177,17 +232,17 @@ int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vecto
         phi1 += d[0];
         phi2 += d[1];
       }
+      phi1 = std::remainder(phi1, kTwoPi);
+      phi2 = std::remainder(phi2, kTwoPi);
       c1 = std::cos(phi1);
       s1 = std::sin(phi1);
       c2 = std::cos(phi2);
       s2 = std::sin(phi2);
+      out_c.angle = {sign_[0] * phi1, sign_[1] * phi2};
+      out_c.known = {true, true};
     }
-    if (free1) phi1 = c1 = s1 = nan;
-    if (free2) phi2 = c2 = s2 = nan;
-    // Joint value = sign * phi: the cosine is unchanged, the sine takes the sign.
-    cos_out[count] = Eigen::Vector2d(c1, c2);
-    sin_out[count] = Eigen::Vector2d(sign_[0] * s1, sign_[1] * s2);
-    out[count++] = Eigen::Vector2d(sign_[0] * phi1, sign_[1] * phi2);
+    set(out_c, 0, solved1, c1, s1);
+    set(out_c, 1, solved2, c2, s2);
     if (g == 0.0) break;
   }
   return count;
@@ -197,56 +252,57 @@ bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& 
                                        IkSolution* trig, const Eigen::Vector3d& b_t,
                                        bool trig_given) const {
   // With the rotary angles fixed the tip is affine in the prismatic joints: p_w = p0 + G s.
-  // One nominal pass with s = 0 gives p0 and each prismatic joint's direction in F; a joint on
-  // the workpiece branch moves the part, so the tip moves by -g in w, a tool-branch joint by +g.
-  Eigen::Vector3d g_F[3];
-  int k = 0;
-  Eigen::Matrix3d R[2];
-  Eigen::Vector3d p[2];
-  for (int b = 0; b < 2; ++b) {
-    R[b].setIdentity();
-    p[b].setZero();
-    for (const ChainLink& l : chains_[b]) {
-      if (!l.identity_link) {
-        p[b] += R[b] * l.link_p;
-        R[b] = R[b] * l.link_R;
-      }
-      const Axis& ax = model_->axes[l.axis];
-      if (!ax.isRotary()) {
-        g_F[k++] = (b == 0 ? -1.0 : 1.0) * (R[b] * ax.direction);
-        continue;
-      }
-      if (!trig_given) {
-        trig->cos_q[l.axis] = std::cos(q[l.axis]);
-        trig->sin_q[l.axis] = std::sin(q[l.axis]);
-      }
-      const double c = trig->cos_q[l.axis], sn = trig->sin_q[l.axis];
-      if (l.principal >= 0) {
-        const int i = (l.principal + 1) % 3, j = (l.principal + 2) % 3;
-        const Eigen::Vector3d ci = R[b].col(i), cj = R[b].col(j);
-        R[b].col(i) = c * ci + sn * cj;
-        R[b].col(j) = c * cj - sn * ci;
-      } else {
-        R[b] = R[b] * Eigen::AngleAxisd(q[l.axis], ax.direction).toRotationMatrix();
-      }
+  // One nominal pass with s = 0 carries the tool point (column 0) and each prismatic joint's
+  // direction (its column, from the joint on) along the chains into w: the tool branch from its
+  // last joint to the foundation, then the workpiece branch inverted from the foundation on (a
+  // workpiece-branch joint moves the part, so the tip moves by -direction in w).
+  Eigen::Matrix<double, 3, 4> M = Eigen::Matrix<double, 3, 4>::Zero();
+  M.col(0) = t_end_ * b_t;
+  auto rotate = [&](const ChainLink& l, bool inverse) {
+    if (!trig_given) {
+      trig->cos_q[l.axis] = std::cos(q[l.axis]);
+      trig->sin_q[l.axis] = std::sin(q[l.axis]);
+    }
+    const double c = trig->cos_q[l.axis];
+    const double sn = inverse ? -trig->sin_q[l.axis] : trig->sin_q[l.axis];
+    if (l.principal >= 0) {
+      rotateRowsAbout(l.principal, c, sn, M);
+    } else {
+      const double s = inverse ? -q[l.axis] : q[l.axis];
+      M = Eigen::AngleAxisd(s, model_->axes[l.axis].direction).toRotationMatrix() * M;
+    }
+  };
+  const auto& tool = chains_[1];
+  for (auto it = tool.rbegin(); it != tool.rend(); ++it) {
+    const ChainLink& l = *it;
+    if (model_->axes[l.axis].isRotary()) rotate(l, false);
+    else M.col(l.column) = l.direction;
+    if (!l.identity_link) {
+      M = l.link_R * M;
+      M.col(0) += l.link_p;
     }
   }
-  const Eigen::Matrix3d Rw = R[0] * w_end_.linear();
-  const Eigen::Vector3d pw = p[0] + R[0] * w_end_.translation();
-  const Eigen::Vector3d pt = p[1] + R[1] * (t_end_ * b_t);
-  const Eigen::Vector3d p0 = Rw.transpose() * (pt - pw);
-  Eigen::Matrix3d G;
-  for (int i = 0; i < 3; ++i) G.col(i) = Rw.transpose() * g_F[i];
-  if (!(std::abs(G.determinant()) > 1e-12)) return false;
-  const Eigen::Vector3d s = G.inverse() * (p_w - p0);
-  // Prismatic joints in chain order (workpiece branch first), as g_F was filled.
-  k = 0;
+  for (const ChainLink& l : chains_[0]) {
+    if (!l.identity_link) {
+      M.col(0) -= l.link_p;
+      M = l.link_Rt * M;
+    }
+    if (model_->axes[l.axis].isRotary()) rotate(l, true);
+    else M.col(l.column) = -l.direction;
+  }
+  M.col(0) -= w_end_.translation();
+  M = w_end_.linear().transpose() * M;
+  Eigen::Matrix3d G_inv;
+  double det = 0.0;
+  bool invertible = false;
+  M.rightCols<3>().computeInverseAndDetWithCheck(G_inv, det, invertible, 1e-12);
+  if (!invertible) return false;
+  const Eigen::Vector3d s = G_inv * (p_w - M.col(0));
   for (int b = 0; b < 2; ++b)
     for (const ChainLink& l : chains_[b])
-      if (!model_->axes[l.axis].isRotary()) q[l.axis] = s[k++];
+      if (!model_->axes[l.axis].isRotary()) q[l.axis] = s[l.column - 1];
   return s.allFinite();
 }
-
 bool InverseKinematics::placeToolPoint(const Eigen::Vector3d& b_t, const Eigen::Vector3d& target_w,
                                        JointVector& q, int* violated_axis) const {
   IkSolution scratch;
@@ -263,86 +319,135 @@ bool InverseKinematics::placeToolPoint(const Eigen::Vector3d& b_t, const Eigen::
 }
 
 IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vector3d& u_w,
-                                    const JointVector* previous) const {
+                                    const JointVector* previous, const double* previous_cos,
+                                    const double* previous_sin) const {
   IkSolution sol;
   const int n = static_cast<int>(model_->axes.size());
-  sol.q = JointVector::Zero(n);
   if (rotary_.size() > 2 || prismatic_.size() != 3 || parallel_rotaries_) {
+    sol.q = JointVector::Zero(n);
     sol.status = IkStatus::UnsupportedTopology;
     return sol;
   }
   bool singular = false;
-  Eigen::Vector2d candidates[2], ccos[2], csin[2];
-  const int ncand = rotaryCandidates(u_w, candidates, &singular, ccos, csin);
+  RotaryCandidate cand[2];
+  const int ncand = rotaryCandidates(u_w, cand, &singular);
   if (ncand == 0) {
+    sol.q = JointVector::Zero(n);
     sol.status = IkStatus::UnreachableOrientation;
     return sol;
   }
-  const int nr = static_cast<int>(std::min<size_t>(rotary_.size(), 2));
+  const int nr = static_cast<int>(rotary_.size());
+  // The reference: the previous rotary values (zero at the start), with their cos and sin.
+  double ref[2] = {0.0, 0.0}, ref_cos[2] = {1.0, 1.0}, ref_sin[2] = {0.0, 0.0};
+  for (int r = 0; r < nr && previous; ++r) {
+    const int a = rotary_[r];
+    ref[r] = (*previous)[a];
+    if (previous_cos) {
+      ref_cos[r] = previous_cos[a];
+      ref_sin[r] = previous_sin[a];
+    } else {
+      ref_cos[r] = std::cos(ref[r]);
+      ref_sin[r] = std::sin(ref[r]);
+    }
+  }
+  for (int ci = 0; ci < ncand; ++ci)  // a free angle keeps the previous value
+    for (int r = 0; r < nr; ++r)
+      if (cand[ci].free[r]) {
+        cand[ci].angle[r] = ref[r];
+        cand[ci].cos[r] = ref_cos[r];
+        cand[ci].sin[r] = ref_sin[r];
+        cand[ci].known[r] = true;
+        cand[ci].free[r] = false;
+      }
   auto violation = [&](int axis, double value) {
     if (sol.violated_axis < 0) {
       sol.violated_axis = axis;
       sol.violated_value = value;
     }
   };
-  // Rotary candidates in order of rotary motion from `previous` (continuity; each angle
-  // unwrapped by 2 pi into travel); the first whose prismatic solution is inside every axis's
-  // travel wins.
-  JointVector cq[2];
-  double ccost[2] = {std::numeric_limits<double>::infinity(),
-                     std::numeric_limits<double>::infinity()};
-  for (int ci = 0; ci < ncand; ++ci) {
-    JointVector q = JointVector::Zero(n);
-    bool ok = true;
-    double cost = 0.0;
-    for (int r = 0; r < nr && ok; ++r) {
+  // A candidate's rotary values, unwrapped by 2 pi to the representatives inside travel nearest
+  // to the reference, and its cost: the rotary motion from the reference (infinite when an angle
+  // has no representative inside travel).
+  double value[2][2] = {}, cost[2];
+  bool evaluated[2] = {false, false};
+  auto evaluate = [&](int ci) {
+    if (evaluated[ci]) return;
+    evaluated[ci] = true;
+    cost[ci] = 0.0;
+    for (int r = 0; r < nr; ++r) {
       const Axis& ax = model_->axes[rotary_[r]];
-      const double ref = previous ? (*previous)[rotary_[r]] : 0.0;
-      double angle = candidates[ci][r];
-      if (std::isnan(angle)) {  // free angle: keep the previous value
-        angle = ref;
-        ccos[ci][r] = std::cos(ref);
-        csin[ci][r] = std::sin(ref);
-      }
-      const double v = unwrapInto(angle, ax.travel_min, ax.travel_max, ref);
+      const double angle = cand[ci].angleOf(r);
+      const double v = unwrapNear(angle, ax.travel_min, ax.travel_max, ref[r]);
       if (std::isnan(v)) {
         violation(rotary_[r], angle);
-        ok = false;
-      } else {
-        q[rotary_[r]] = v;
-        cost += std::abs(v - ref);
+        cost[ci] = std::numeric_limits<double>::infinity();
+        return;
       }
+      value[ci][r] = v;
+      cost[ci] += std::abs(v - ref[r]);
     }
-    if (ok) {
-      cq[ci] = q;
-      ccost[ci] = cost;
-    }
-  }
-  const int order[2] = {ccost[1] < ccost[0] ? 1 : 0, ccost[1] < ccost[0] ? 0 : 1};
-  for (int ci : order) {
-    if (ci >= ncand || !std::isfinite(ccost[ci])) continue;
-    JointVector q = cq[ci];
+  };
+  // The candidate with the prismatic solution, if inside every axis's travel.
+  auto attempt = [&](int ci) {
+    evaluate(ci);
+    if (!std::isfinite(cost[ci])) return false;
+    JointVector q(n);
     // Unwrapping by 2 pi keeps the cosine and sine of the candidate's angles.
     for (int r = 0; r < nr; ++r) {
-      sol.cos_q[rotary_[r]] = ccos[ci][r];
-      sol.sin_q[rotary_[r]] = csin[ci][r];
+      q[rotary_[r]] = value[ci][r];
+      sol.cos_q[rotary_[r]] = cand[ci].cos[r];
+      sol.sin_q[rotary_[r]] = cand[ci].sin[r];
     }
-    if (!solvePrismatic(p_w, q, &sol, Eigen::Vector3d::Zero(), true)) continue;
-    bool ok = true;
+    if (!solvePrismatic(p_w, q, &sol, Eigen::Vector3d::Zero(), true)) return false;
     for (int a : prismatic_) {
       const Axis& ax = model_->axes[a];
       if (q[a] < ax.travel_min - kTravelEps || q[a] > ax.travel_max + kTravelEps) {
         violation(a, q[a]);
-        ok = false;
-        break;
+        return false;
       }
     }
-    if (!ok) continue;
     sol.q = q;
     sol.singular = singular;
     sol.violated_axis = -1;
-    return sol;
+    return true;
+  };
+  auto costOrder = [&](int order[2]) {
+    for (int ci = 0; ci < ncand; ++ci) evaluate(ci);
+    const bool swap = ncand == 2 && cost[1] < cost[0];
+    order[0] = swap ? 1 : 0;
+    order[1] = swap ? 0 : 1;
+  };
+  // Candidates in order of cost. Each angle's motion is at least the chord between the unit
+  // vectors (cos, sin) of the candidate and of the reference, and a sum at least the root of
+  // the sum of squares; so when the candidate nearer by chords costs less than the other's
+  // bound, the other's angles (two atan2) are needed only if the first fails.
+  int order[2] = {0, 1};
+  if (ncand == 2) {
+    double chord2[2] = {0.0, 0.0};
+    for (int ci = 0; ci < 2; ++ci)
+      for (int r = 0; r < nr; ++r) {
+        const double dc = cand[ci].cos[r] - ref_cos[r], ds = cand[ci].sin[r] - ref_sin[r];
+        chord2[ci] += dc * dc + ds * ds;
+      }
+    const int first = chord2[1] < chord2[0] ? 1 : 0;
+    evaluate(first);
+    if (std::isfinite(cost[first]) && cost[first] * cost[first] < chord2[1 - first] * (1.0 - 1e-9)) {
+      order[0] = first;
+      order[1] = 1 - first;
+    } else {
+      costOrder(order);
+    }
   }
+  for (int k = 0; k < 2; ++k)
+    if (order[k] < ncand && attempt(order[k])) return sol;
+  // Nothing fits: report the first violation in the order of the full search (every candidate's
+  // rotary travel, then each prismatic solution by cost).
+  sol.violated_axis = -1;
+  evaluated[0] = evaluated[1] = false;
+  costOrder(order);
+  for (int k = 0; k < 2; ++k)
+    if (order[k] < ncand) attempt(order[k]);
+  sol.q = JointVector::Zero(n);
   sol.status = IkStatus::OutOfTravel;
   return sol;
 }

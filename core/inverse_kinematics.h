@@ -46,17 +46,29 @@ class InverseKinematics {
 
   // Solves for (p_w, u_w). previous: the joint values of the previous point on the path, or
   // nullptr at the start. Among the candidate solutions inside travel it returns the one closest
-  // to previous in the rotary angles (continuity; each angle unwrapped by 2 pi to the nearest
-  // representative inside travel), or closest to zero at the start.
+  // to previous in the rotary angles (continuity: the sum over rotary axes of |value - previous|,
+  // each angle unwrapped by 2 pi to the nearest representative inside travel), or closest to zero
+  // at the start; when the nearest one puts a prismatic axis out of travel, the other.
+  // previous_cos, previous_sin (optional, by axis index): cos and sin of previous's rotary
+  // values, when the caller has them (IkSolution::cos_q and sin_q of the previous point).
   IkSolution solve(const Eigen::Vector3d& p_w, const Eigen::Vector3d& u_w,
-                   const JointVector* previous) const;
+                   const JointVector* previous, const double* previous_cos = nullptr,
+                   const double* previous_sin = nullptr) const;
 
-  // The rotary-angle candidates for the tool axis u_w (before travel checks and unwrapping),
-  // at most two; each holds the rotary angles in the order of rotaryAxes(), NaN for an angle
-  // left free by a singular orientation. Returns how many were written to out.
-  // cos_out, sin_out (optional): cos and sin of each candidate's joint values (NaN where free).
-  int rotaryCandidates(const Eigen::Vector3d& u_w, Eigen::Vector2d out[2], bool* singular,
-                       Eigen::Vector2d* cos_out = nullptr, Eigen::Vector2d* sin_out = nullptr) const;
+  // One solution of the orientation sub-problem: the rotary joint values that give a tool axis,
+  // in the order of rotaryAxes(), before travel checks and unwrapping.
+  struct RotaryCandidate {
+    std::array<double, 2> cos{}, sin{};  // of each joint value (NaN where free)
+    std::array<double, 2> angle{};       // each joint value in (-pi, pi], where known
+    std::array<bool, 2> known{};         // angle computed (the closed form gives cos and sin)
+    std::array<bool, 2> free{};          // left undetermined by a singular orientation
+    // The joint value of rotary r in (-pi, pi] (NaN where free): atan2 only when asked, since
+    // the continuity choice rarely needs the angles of the candidate it rejects.
+    double angleOf(int r) const;
+  };
+  // The candidates for the tool axis u_w, at most two. Returns how many were written to out;
+  // *singular tells whether an angle was left free.
+  int rotaryCandidates(const Eigen::Vector3d& u_w, RotaryCandidate out[2], bool* singular) const;
   const std::vector<int>& rotaryAxes() const { return rotary_; }
 
   // With the rotary joints of q fixed, sets its prismatic joints so that the tool-frame point
@@ -79,13 +91,24 @@ class InverseKinematics {
   Eigen::Vector3d a_[2];        // rotary directions in the sub-problem frames
   double sign_[2] = {1, 1};     // -1 for workpiece-branch joints
   bool parallel_rotaries_ = false;
+  // The constants of sub-problem 2 (two rotary axes): Rot(w1, phi1) Rot(w2, phi2) p2 = C0^T u.
+  Eigen::Vector3d w1_, w2_, w12_, p2_;
+  double w1w2_ = 0.0, w2p2_ = 0.0, p2_sq_ = 0.0, w12_sq_ = 1.0;
+  // Its two sub-problems 1 (rotaryCandidates): u1 = w2 - (w1.w2) w1, u2 = w1 - (w1.w2) w2,
+  // v1 = w1 x w12, pp2 = p2 - w2 (w2.p2), v2 = w2 x pp2, and their fixed products.
+  struct {
+    Eigen::Vector3d u1, u2, v1;
+    double u1_sq = 0, u2_sq = 0, pp2_sq = 0, pp2_u2 = 0, pp2_w12 = 0, v2_u2 = 0, v2_w12 = 0;
+  } sub1_;
   // The nominal chains, precomputed for the prismatic solve (workpiece branch, tool branch).
   struct ChainLink {
     int axis = 0;
-    Eigen::Matrix3d link_R;
+    Eigen::Matrix3d link_R, link_Rt;
     Eigen::Vector3d link_p;
+    Eigen::Vector3d direction;
     bool identity_link = false;
     int principal = -1;  // 0/1/2 when the joint direction is +x/+y/+z
+    int column = 0;      // prismatic joints: its column (1..3) in the carried block
   };
   std::vector<ChainLink> chains_[2];
   Eigen::Isometry3d w_end_, t_end_;  // last joint -> w, last joint -> t (nominal)

@@ -29,6 +29,25 @@ inline void sinCosOfSmallAngle(double x, double* s, double* c) {
   }
 }
 
+// M <- Rot(e_k, theta) M for the coordinate axis k (0, 1, 2 = x, y, z), given c = cos theta and
+// s = sin theta: only rows k+1 and k+2 (mod 3) change. M is 3 x n, its columns points or
+// directions; the hot loops carry a few vectors this way instead of composing 3x3 matrices.
+template <int k, typename Matrix>
+inline void rotateRowsAbout(double c, double s, Matrix& M) {
+  constexpr int i = (k + 1) % 3, j = (k + 2) % 3;
+  for (int col = 0; col < M.cols(); ++col) {
+    const double mi = M(i, col), mj = M(j, col);
+    M(i, col) = c * mi - s * mj;
+    M(j, col) = s * mi + c * mj;
+  }
+}
+template <typename Matrix>
+inline void rotateRowsAbout(int k, double c, double s, Matrix& M) {
+  if (k == 0) rotateRowsAbout<0>(c, s, M);
+  else if (k == 1) rotateRowsAbout<1>(c, s, M);
+  else rotateRowsAbout<2>(c, s, M);
+}
+
 // trans(dir, d): a pure translation by d (mm) along the unit vector dir.
 Eigen::Isometry3d translation(const Eigen::Vector3d& dir, double d);
 

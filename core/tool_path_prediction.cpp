@@ -2,6 +2,7 @@
 
 #include "core/effects.h"
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -66,13 +67,15 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
   s.points = static_cast<int>(path.size());
   double sum2 = 0.0, sum2_angle = 0.0;
   const JointVector* previous = nullptr;
+  std::array<double, kMaxAxes> previous_cos, previous_sin;  // of previous's rotary values
   // Effects that depend on the approach direction (reversal) see it from the joint sequence;
   // time-dependent ones (thermal) see an unknown time and add nothing.
   MotionContext ctx;
   const MotionContext* ctx_ptr = model.effects.empty() ? nullptr : &ctx;
   for (size_t i = 0; i < path.size(); ++i) {
     const ClPoint& cl = path[i];
-    const IkSolution sol = ik.solve(cl.p_w, cl.u_w, previous);
+    const IkSolution sol =
+        ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(), previous_sin.data());
     if (sol.status != IkStatus::Ok) {
       PredictedPoint& bad = result.points[i];
       const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -110,6 +113,8 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
     }
     if (out.axis_angle > s.max_axis_angle) s.max_axis_angle = out.axis_angle;
     previous = &out.q;
+    previous_cos = sol.cos_q;
+    previous_sin = sol.sin_q;
   }
   if (!path.empty()) {
     s.rms_deviation = std::sqrt(sum2 / path.size());

@@ -2,7 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "io/machine_file.h"
@@ -75,6 +78,72 @@ TEST_P(EveryMachine, ContinuityRecoversTheGeneratingJointsAlongAPath) {
     if (n > 0 && !s.singular) EXPECT_LT((s.q - q).cwiseAbs().maxCoeff(), 1e-7) << n;
     prev = s.q;
   }
+}
+
+// The returned solution is the cheapest feasible candidate, found by brute force: every
+// orientation candidate, every 2 pi representative inside travel, its prismatic solution
+// inside travel, cost = sum of |rotary value - previous|. The previous joints are random (large
+// jumps), so both candidates compete and solve()'s chord shortcut is tested against the full
+// search; with and without the previous point's cos and sin.
+TEST_P(EveryMachine, ChoiceIsTheCheapestFeasibleCandidate) {
+  Machine m = readMachineFile(test::sourcePath(GetParam()));
+  const ForwardKinematics fk(m.model, Eigen::VectorXd::Zero(m.model.parameterCount()));
+  const InverseKinematics ik(m.model);
+  const auto& rot = ik.rotaryAxes();
+  std::mt19937 rng(11);
+  int compared = 0, second_cheaper = 0;
+  for (int n = 0; n < 3000; ++n) {
+    const Eigen::Isometry3d T = fk.w_T_t(randomJoints(m.model, rng));
+    const Eigen::Vector3d p = T.translation(), u = T.linear().col(2);
+    const JointVector prev = randomJoints(m.model, rng);
+    std::array<double, kMaxAxes> pc{}, ps{};
+    for (int a : rot) {
+      pc[a] = std::cos(prev[a]);
+      ps[a] = std::sin(prev[a]);
+    }
+    double best = std::numeric_limits<double>::infinity();
+    bool singular = false;
+    InverseKinematics::RotaryCandidate cand[2];
+    const int ncand = ik.rotaryCandidates(u, cand, &singular);
+    if (singular) continue;
+    double costs[2] = {best, best};
+    for (int ci = 0; ci < ncand; ++ci) {
+      JointVector q = prev;
+      double cost = 0.0;
+      for (size_t r = 0; r < rot.size(); ++r) {
+        const Axis& ax = m.model.axes[rot[r]];
+        double near = std::numeric_limits<double>::infinity();
+        for (int k = -3; k <= 3; ++k) {
+          const double v = cand[ci].angleOf(static_cast<int>(r)) + 2 * M_PI * k;
+          if (v >= ax.travel_min - 1e-9 && v <= ax.travel_max + 1e-9 &&
+              std::abs(v - prev[rot[r]]) < std::abs(near - prev[rot[r]]))
+            near = v;
+        }
+        q[rot[r]] = near;
+        cost += std::abs(near - prev[rot[r]]);
+      }
+      int violated = -1;
+      if (std::isfinite(cost) && ik.placeToolPoint(Eigen::Vector3d::Zero(), p, q, &violated))
+        costs[ci] = cost;
+    }
+    best = std::min(costs[0], costs[1]);
+    if (costs[1] < costs[0]) ++second_cheaper;
+    for (bool with_trig : {false, true}) {
+      const IkSolution s = with_trig ? ik.solve(p, u, &prev, pc.data(), ps.data())
+                                     : ik.solve(p, u, &prev);
+      if (!std::isfinite(best)) {
+        EXPECT_NE(s.status, IkStatus::Ok) << GetParam() << " point " << n;
+        continue;
+      }
+      ASSERT_EQ(s.status, IkStatus::Ok) << GetParam() << " point " << n;
+      double cost = 0.0;
+      for (int a : rot) cost += std::abs(s.q[a] - prev[a]);
+      EXPECT_NEAR(cost, best, 1e-9) << GetParam() << " point " << n;
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 2000);
+  if (ik.rotaryAxes().size() == 2) EXPECT_GT(second_cheaper, 100);  // both orders occur
 }
 
 INSTANTIATE_TEST_SUITE_P(Shipped, EveryMachine, ::testing::ValuesIn(test::shippedMachines()));
