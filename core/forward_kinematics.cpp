@@ -60,6 +60,7 @@ ForwardKinematics::ForwardKinematics(const MachineModel& model, const Eigen::Vec
     t.fixed_R = t.fixed.linear();
     t.fixed_Rt = t.fixed_R.transpose();
     t.fixed_p = t.fixed.translation();
+    t.fixed_identity = t.fixed.isApprox(Eigen::Isometry3d::Identity(), 0.0);
     t.has_errors = t.max_degree >= 0 || !t.effects.empty();
     t.coef = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, std::max(t.max_degree + 1, 1));
     for (int c = 0; c < 6; ++c)
@@ -73,29 +74,47 @@ Vector6d ForwardKinematics::motionErrors(int a, double s, const MotionContext* c
   const AxisTerms& t = axis_[a];
   if (!t.has_errors) return Vector6d::Zero();
   const double x = (s - t.mid) * t.inv_half_range;  // eq. 58
-  if (!t.effects.empty()) {
-    Vector6d e = Vector6d::Zero();
-    if (t.max_degree >= 0) {
-      double T[32];
-      chebyshevBasis(x, t.max_degree, T);
-      for (int k = 0; k <= t.max_degree; ++k) e += T[k] * t.coef.col(k);
+  if (!t.effects.empty()) return motionErrorsWithEffects(t, s, x, ctx);
+  // e = sum_k C_k T_k(x), the six components at once, T_k by the recurrence of eq. 57 (the
+  // default cubic written out).
+  const auto C = [&](int k) { return t.coef.col(k); };
+  switch (t.max_degree) {
+    case 0:
+      return C(0);
+    case 1:
+      return C(0) + x * C(1);
+    case 2:
+      return C(0) + x * C(1) + (2.0 * x * x - 1.0) * C(2);
+    case 3: {
+      const double t2 = 2.0 * x * x - 1.0;
+      return C(0) + x * C(1) + t2 * C(2) + (2.0 * x * t2 - x) * C(3);
     }
-    for (const AxisTerms::Effect& f : t.effects) {
-      double phi[8];
-      traitsOf(f.spec->type).basis(*f.spec, s, x, ctx, phi);
-      for (int k = 0; k < f.size; ++k) e[f.component] += f.coef[k] * phi[k];
+    default: {
+      Vector6d e = C(0) + x * C(1);
+      double t_prev = 1.0, t_cur = x;
+      for (int k = 2; k <= t.max_degree; ++k) {
+        const double t_next = 2.0 * x * t_cur - t_prev;
+        e += t_next * C(k);
+        t_prev = t_cur;
+        t_cur = t_next;
+      }
+      return e;
     }
-    return e;
   }
-  // e = sum_k C_k T_k(x), the six components at once, T_k by the recurrence of eq. 57.
-  Vector6d e = t.coef.col(0);
-  if (t.max_degree >= 1) e += x * t.coef.col(1);
-  double t_prev = 1.0, t_cur = x;
-  for (int k = 2; k <= t.max_degree; ++k) {
-    const double t_next = 2.0 * x * t_cur - t_prev;
-    e += t_next * t.coef.col(k);
-    t_prev = t_cur;
-    t_cur = t_next;
+}
+
+Vector6d ForwardKinematics::motionErrorsWithEffects(const AxisTerms& t, double s, double x,
+                                                    const MotionContext* ctx) const {
+  Vector6d e = Vector6d::Zero();
+  if (t.max_degree >= 0) {
+    double T[32];
+    chebyshevBasis(x, t.max_degree, T);
+    for (int k = 0; k <= t.max_degree; ++k) e += T[k] * t.coef.col(k);
+  }
+  for (const AxisTerms::Effect& f : t.effects) {
+    double phi[8];
+    traitsOf(f.spec->type).basis(*f.spec, s, x, ctx, phi);
+    for (int k = 0; k < f.size; ++k) e[f.component] += f.coef[k] * phi[k];
   }
   return e;
 }
@@ -162,77 +181,64 @@ Eigen::Isometry3d ForwardKinematics::F_T_t(const JointVector& q) const {
 
 namespace {
 
-// v <- Rot(e_k, angle) v for a coordinate axis k, given c = cos, s = sin of the angle.
-inline void rotatePrincipal(int k, double c, double s, Eigen::Vector3d& v) {
-  const int i = (k + 1) % 3, j = (k + 2) % 3;
-  const double vi = v[i], vj = v[j];
-  v[i] = c * vi - s * vj;
-  v[j] = s * vi + c * vj;
-}
-
-// v <- Rz(rz) Ry(ry) Rx(rx) v (eq. 22's rotation), or its transpose when inverse.
-inline void rotateZYX(const Vector6d& e, bool inverse, Eigen::Vector3d& p, Eigen::Vector3d& u) {
+// M <- Rz(rz) Ry(ry) Rx(rx) M (eq. 22's rotation) for the error angles of e, or its transpose.
+inline void rotateZYX(const Vector6d& e, bool inverse, ForwardKinematics::Carry& M) {
   double c[3], s[3];
   for (int k = 0; k < 3; ++k) sinCosOfSmallAngle(e[3 + k], &s[k], &c[k]);
   if (!inverse) {
-    for (int k = 0; k < 3; ++k) {
-      rotatePrincipal(k, c[k], s[k], p);
-      rotatePrincipal(k, c[k], s[k], u);
-    }
+    rotateRowsAbout<0>(c[0], s[0], M);
+    rotateRowsAbout<1>(c[1], s[1], M);
+    rotateRowsAbout<2>(c[2], s[2], M);
   } else {
-    for (int k = 2; k >= 0; --k) {
-      rotatePrincipal(k, c[k], -s[k], p);
-      rotatePrincipal(k, c[k], -s[k], u);
-    }
+    rotateRowsAbout<2>(c[2], -s[2], M);
+    rotateRowsAbout<1>(c[1], -s[1], M);
+    rotateRowsAbout<0>(c[0], -s[0], M);
   }
 }
 
 }  // namespace
 
-void ForwardKinematics::applyJoint(int a, double s, double c, double sn, Eigen::Vector3d& p,
-                                   Eigen::Vector3d& u, const MotionContext* ctx) const {
+void ForwardKinematics::applyJoint(int a, double s, double c, double sn, Carry& M,
+                                   const MotionContext* ctx) const {
   const Axis& ax = model_->axes[a];
   const AxisTerms& t = axis_[a];
   if (t.has_errors) {  // E(s)
     const Vector6d e = motionErrors(a, s, ctx);
-    rotateZYX(e, false, p, u);
-    p += e.head<3>();
+    rotateZYX(e, false, M);
+    M.col(0) += e.head<3>();
   }
   if (ax.type == JointType::Prismatic) {  // D2(s)
-    p += ax.direction * s;
+    M.col(0) += ax.direction * s;
   } else if (t.principal >= 0) {
-    rotatePrincipal(t.principal, c, sn, p);
-    rotatePrincipal(t.principal, c, sn, u);
+    rotateRowsAbout(t.principal, c, sn, M);
   } else {
-    const Eigen::Matrix3d R = Eigen::AngleAxisd(s, ax.direction).toRotationMatrix();
-    p = R * p;
-    u = R * u;
+    M = Eigen::AngleAxisd(s, ax.direction).toRotationMatrix() * M;
   }
-  p = t.fixed_R * p + t.fixed_p;  // D1 L
-  u = t.fixed_R * u;
+  if (!t.fixed_identity) {  // D1 L
+    M = t.fixed_R * M;
+    M.col(0) += t.fixed_p;
+  }
 }
 
-void ForwardKinematics::applyJointInverse(int a, double s, double c, double sn,
-                                          Eigen::Vector3d& p, Eigen::Vector3d& u,
+void ForwardKinematics::applyJointInverse(int a, double s, double c, double sn, Carry& M,
                                           const MotionContext* ctx) const {
   const Axis& ax = model_->axes[a];
   const AxisTerms& t = axis_[a];
-  p = t.fixed_Rt * (p - t.fixed_p);
-  u = t.fixed_Rt * u;
+  if (!t.fixed_identity) {
+    M.col(0) -= t.fixed_p;
+    M = t.fixed_Rt * M;
+  }
   if (ax.type == JointType::Prismatic) {
-    p -= ax.direction * s;
+    M.col(0) -= ax.direction * s;
   } else if (t.principal >= 0) {
-    rotatePrincipal(t.principal, c, -sn, p);
-    rotatePrincipal(t.principal, c, -sn, u);
+    rotateRowsAbout(t.principal, c, -sn, M);
   } else {
-    const Eigen::Matrix3d R = Eigen::AngleAxisd(-s, ax.direction).toRotationMatrix();
-    p = R * p;
-    u = R * u;
+    M = Eigen::AngleAxisd(-s, ax.direction).toRotationMatrix() * M;
   }
   if (t.has_errors) {
     const Vector6d e = motionErrors(a, s, ctx);
-    p -= e.head<3>();
-    rotateZYX(e, true, p, u);
+    M.col(0) -= e.head<3>();
+    rotateZYX(e, true, M);
   }
 }
 
@@ -251,20 +257,23 @@ void ForwardKinematics::tipAndAxis(const JointVector& q, Eigen::Vector3d* p_w,
   };
   double c = 1.0, s = 0.0;
   // F_p_t = D_1 ... D_m t_end 0: apply from the last tool joint back to the foundation.
-  Eigen::Vector3d p = t_end_.translation();
-  Eigen::Vector3d u = t_end_.linear().col(2);
+  Carry M;
+  M.col(0) = t_end_.translation();
+  M.col(1) = t_end_.linear().col(2);
   const auto& tool = model_->tool_chain;
   for (auto it = tool.rbegin(); it != tool.rend(); ++it) {
     trig(*it, &c, &s);
-    applyJoint(*it, q[*it], c, s, p, u, ctx);
+    applyJoint(*it, q[*it], c, s, M, ctx);
   }
   // w_p = w_end^-1 D_n^-1 ... D_1^-1 F_p.
   for (int a : model_->workpiece_chain) {
     trig(a, &c, &s);
-    applyJointInverse(a, q[a], c, s, p, u, ctx);
+    applyJointInverse(a, q[a], c, s, M, ctx);
   }
-  *p_w = w_end_.linear().transpose() * (p - w_end_.translation());
-  *u_w = w_end_.linear().transpose() * u;
+  M.col(0) -= w_end_.translation();
+  M = w_end_.linear().transpose() * M;
+  *p_w = M.col(0);
+  *u_w = M.col(1);
 }
 
 void ForwardKinematics::chainFrames(const JointVector& q, ChainFrames* out,

@@ -41,6 +41,9 @@ class ForwardKinematics {
   double barLengthError() const { return bar_length_error_; }
 
   const MachineModel& model() const { return *model_; }
+
+  // A point (column 0) and a direction (column 1) carried through the chains by tipAndAxis.
+  using Carry = Eigen::Matrix<double, 3, 2>;
   const Eigen::VectorXd& params() const { return params_; }
 
   // Frames along the chains at q, all seen from F: for each axis a, after_link[a] is the frame
@@ -61,17 +64,17 @@ class ForwardKinematics {
   // this = this * D_S(s), composed in place.
   void composeJoint(int a, double s, Pose& T, const MotionContext* ctx) const;
   Pose chain(const std::vector<int>& axes, const JointVector& q, const MotionContext* ctx) const;
-  // p <- D_S(s) p, u <- R_S(s) u, and the inverse.
+  // p <- D_S(s) p, u <- R_S(s) u for M = [p u], and the inverse.
   // c, sn: cos and sin of s for rotary joints.
-  void applyJoint(int a, double s, double c, double sn, Eigen::Vector3d& p,
-                  Eigen::Vector3d& u, const MotionContext* ctx) const;
-  void applyJointInverse(int a, double s, double c, double sn, Eigen::Vector3d& p,
-                         Eigen::Vector3d& u, const MotionContext* ctx) const;
+  void applyJoint(int a, double s, double c, double sn, Carry& M, const MotionContext* ctx) const;
+  void applyJointInverse(int a, double s, double c, double sn, Carry& M,
+                         const MotionContext* ctx) const;
 
   struct AxisTerms {
     Eigen::Isometry3d fixed;     // D1 * L (nominal link with link errors)
     Eigen::Matrix3d fixed_R, fixed_Rt;  // its rotation and transpose, contiguous for the hot path
     Eigen::Vector3d fixed_p;
+    bool fixed_identity = false;  // no nominal offset and no link errors: D1 L = I
     std::array<int, 6> offset;   // motion-error coefficient offsets, -1 if none
     std::array<int, 6> degree;
     int max_degree = -1;         // -1: no Chebyshev motion errors on this axis
@@ -88,6 +91,10 @@ class ForwardKinematics {
     double inv_half_range = 1.0;
     Eigen::Matrix<double, 6, Eigen::Dynamic> coef;  // column k: c_k of the six components
   };
+  // motionErrors of an axis with effect blocks (x: s normalised by eq. 58).
+  Vector6d motionErrorsWithEffects(const AxisTerms& t, double s, double x,
+                                   const MotionContext* ctx) const;
+
   const MachineModel* model_;
   Eigen::VectorXd params_;
   std::vector<AxisTerms> axis_;

@@ -117,7 +117,8 @@ InverseKinematics::InverseKinematics(const MachineModel& model)
       l.identity_link = model.axes[a].parent_T_joint.isApprox(Eigen::Isometry3d::Identity(), 0.0);
       for (int c = 0; c < 3; ++c)
         if (model.axes[a].direction[c] == 1.0) l.principal = c;
-      if (!model.axes[a].isRotary()) l.column = column++;
+      l.rotary = model.axes[a].isRotary();
+      if (!l.rotary) l.column = column++;
       chains_[b].push_back(l);
     }
   }
@@ -256,7 +257,7 @@ bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& 
   // direction (its column, from the joint on) along the chains into w: the tool branch from its
   // last joint to the foundation, then the workpiece branch inverted from the foundation on (a
   // workpiece-branch joint moves the part, so the tip moves by -direction in w).
-  Eigen::Matrix<double, 3, 4> M = Eigen::Matrix<double, 3, 4>::Zero();
+  Eigen::Matrix<double, 3, 4> M;
   M.col(0) = t_end_ * b_t;
   auto rotate = [&](const ChainLink& l, bool inverse) {
     if (!trig_given) {
@@ -275,7 +276,7 @@ bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& 
   const auto& tool = chains_[1];
   for (auto it = tool.rbegin(); it != tool.rend(); ++it) {
     const ChainLink& l = *it;
-    if (model_->axes[l.axis].isRotary()) rotate(l, false);
+    if (l.rotary) rotate(l, false);
     else M.col(l.column) = l.direction;
     if (!l.identity_link) {
       M = l.link_R * M;
@@ -287,22 +288,24 @@ bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& 
       M.col(0) -= l.link_p;
       M = l.link_Rt * M;
     }
-    if (model_->axes[l.axis].isRotary()) rotate(l, true);
+    if (l.rotary) rotate(l, true);
     else M.col(l.column) = -l.direction;
   }
-  M.col(0) -= w_end_.translation();
-  M = w_end_.linear().transpose() * M;
-  Eigen::Matrix3d G_inv;
-  double det = 0.0;
-  bool invertible = false;
-  M.rightCols<3>().computeInverseAndDetWithCheck(G_inv, det, invertible, 1e-12);
-  if (!invertible) return false;
-  const Eigen::Vector3d s = G_inv * (p_w - M.col(0));
+  // In w: p0 = Rw^T (m0 - tw), G = Rw^T [m1 m2 m3] with (Rw, tw) = w_end; so G s = p_w - p0
+  // is [m1 m2 m3] s = y with y = Rw p_w + tw - m0, solved by Cramer's rule (det G = det M).
+  const Eigen::Vector3d y = w_end_.linear() * p_w + w_end_.translation() - M.col(0);
+  const Eigen::Vector3d c23 = M.col(2).cross(M.col(3)), c31 = M.col(3).cross(M.col(1)),
+                        c12 = M.col(1).cross(M.col(2));
+  const double det = M.col(1).dot(c23);
+  if (!(std::abs(det) > 1e-12)) return false;
+  const double inv_det = 1.0 / det;
+  const Eigen::Vector3d s(y.dot(c23) * inv_det, y.dot(c31) * inv_det, y.dot(c12) * inv_det);
   for (int b = 0; b < 2; ++b)
     for (const ChainLink& l : chains_[b])
-      if (!model_->axes[l.axis].isRotary()) q[l.axis] = s[l.column - 1];
+      if (!l.rotary) q[l.axis] = s[l.column - 1];
   return s.allFinite();
 }
+
 bool InverseKinematics::placeToolPoint(const Eigen::Vector3d& b_t, const Eigen::Vector3d& target_w,
                                        JointVector& q, int* violated_axis) const {
   IkSolution scratch;
@@ -376,12 +379,26 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
     cost[ci] = 0.0;
     for (int r = 0; r < nr; ++r) {
       const Axis& ax = model_->axes[rotary_[r]];
-      const double angle = cand[ci].angleOf(r);
-      const double v = unwrapNear(angle, ax.travel_min, ax.travel_max, ref[r]);
+      const RotaryCandidate& k = cand[ci];
+      // Near the reference (the usual step along a path), the value is ref + delta with delta
+      // from the cos and sin of the difference by atan's series: the representative nearest to
+      // ref, without atan2 and unwrapping.
+      double v = std::numeric_limits<double>::quiet_NaN();
+      const double dc = k.cos[r] * ref_cos[r] + k.sin[r] * ref_sin[r];
+      const double ds = k.sin[r] * ref_cos[r] - k.cos[r] * ref_sin[r];
+      if (!k.known[r] && dc > 0.0 && std::abs(ds) <= kAtanSeriesMax * dc) {
+        v = ref[r] + atanOfSmall(ds / dc);
+        if (v < ax.travel_min - kTravelEps || v > ax.travel_max + kTravelEps)
+          v = std::numeric_limits<double>::quiet_NaN();
+      }
       if (std::isnan(v)) {
-        violation(rotary_[r], angle);
-        cost[ci] = std::numeric_limits<double>::infinity();
-        return;
+        const double angle = k.angleOf(r);
+        v = unwrapNear(angle, ax.travel_min, ax.travel_max, ref[r]);
+        if (std::isnan(v)) {
+          violation(rotary_[r], angle);
+          cost[ci] = std::numeric_limits<double>::infinity();
+          return;
+        }
       }
       value[ci][r] = v;
       cost[ci] += std::abs(v - ref[r]);

@@ -107,6 +107,7 @@ class InverseKinematics {
     Eigen::Vector3d link_p;
     Eigen::Vector3d direction;
     bool identity_link = false;
+    bool rotary = false;
     int principal = -1;  // 0/1/2 when the joint direction is +x/+y/+z
     int column = 0;      // prismatic joints: its column (1..3) in the carried block
   };

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "core/forward_kinematics.h"
+#include "core/rigid_transform.h"
 
 namespace tolver {
 
@@ -35,15 +36,11 @@ std::string describeIkFailure(const MachineModel& model, const IkSolution& sol) 
 
 namespace {
 
-// Angle between two unit vectors. Prediction errors are micro-radians, where atan's series
-// t (1 - t^2/3 + t^4/5), t = |u x v| / (u . v), is exact to rounding (the next term is below
-// t^7/7 < 1e-21 t for t < 1e-3) and several times cheaper than atan2.
+// Angle between two unit vectors. Prediction errors are micro-radians, where atan's series of
+// t = |u x v| / (u . v) is exact to rounding and several times cheaper than atan2.
 double angleBetween(const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
   const double sn = u.cross(v).norm(), cs = u.dot(v);
-  if (cs > 0.0 && sn < 1e-3 * cs) {
-    const double t = sn / cs, t2 = t * t;
-    return t * (1.0 - t2 * (1.0 / 3.0 - t2 * (1.0 / 5.0)));
-  }
+  if (cs > 0.0 && sn <= kAtanSeriesMax * cs) return atanOfSmall(sn / cs);
   return std::atan2(sn, cs);
 }
 

@@ -59,5 +59,31 @@ TEST(RigidTransform, SmallAngleSinCosIsExactToRounding) {
   EXPECT_EQ(s, std::sin(0.7));
 }
 
+// atan's series agrees with the library to rounding over its whole range, and the helper that
+// rotates rows matches the rotation matrix.
+TEST(RigidTransform, SmallAtanSeriesIsExactToRounding) {
+  auto ulp = [](double v) { return std::abs(std::nextafter(v, 2.0 * v + 1.0) - v); };
+  int checked = 0;
+  for (double t = -kAtanSeriesMax; t <= kAtanSeriesMax; t += 1.3e-4, ++checked)
+    EXPECT_LE(std::abs(atanOfSmall(t) - std::atan(t)), 2.0 * ulp(std::atan(t))) << t;
+  EXPECT_GT(checked, 1500);
+  EXPECT_EQ(atanOfSmall(0.0), 0.0);
+  // One more term's worth: at twice the range the series is visibly off, so the bound is real.
+  EXPECT_GT(std::abs(atanOfSmall(0.2) - std::atan(0.2)), 1e-14);
+}
+
+TEST(RigidTransform, RotateRowsAboutMatchesTheRotationMatrix) {
+  Eigen::Matrix<double, 3, 2> M;
+  M << 1, -2, 3, 0.5, -4, 7;
+  for (int k = 0; k < 3; ++k) {
+    const double angle = 0.3 + k;
+    Eigen::Matrix<double, 3, 2> R = M;
+    rotateRowsAbout(k, std::cos(angle), std::sin(angle), R);
+    const Eigen::Matrix<double, 3, 2> expected =
+        Eigen::AngleAxisd(angle, Eigen::Vector3d::Unit(k)).toRotationMatrix() * M;
+    EXPECT_LT((R - expected).norm(), 1e-14) << k;
+  }
+}
+
 }  // namespace
 }  // namespace tolver
