@@ -49,11 +49,11 @@ TEST(ForwardKinematics, ZeroErrorsReproduceTheNominalPoseExactly) {
 }
 
 // The vector-carrying hot path agrees with the composed transform, for every shipped machine
-// with random errors everywhere.
+// and the nutating-head fixture, with random errors everywhere.
 TEST(ForwardKinematics, TipAndAxisMatchTheComposedPose) {
   std::mt19937 rng(8);
   std::normal_distribution<double> n(0.0, 1.0);
-  for (const char* file : test::shippedMachines()) {
+  for (const char* file : test::kinematicsTestMachines()) {
     Machine m = readMachineFile(test::sourcePath(file));
     for (int i = 0; i < m.model.parameterCount(); ++i)
       m.params[i] = n(rng) * (m.model.parameters[i].angular ? 1e-4 : 0.02);

@@ -24,6 +24,15 @@ inline const std::array<const char*, 3>& shippedMachines() {
   return m;
 }
 
+// The shipped machines and the test fixtures whose kinematics they do not cover (a rotary axis
+// along no coordinate axis, rotated links): for the forward and inverse kinematics tests.
+inline const std::array<const char*, 4>& kinematicsTestMachines() {
+  static const std::array<const char*, 4> m = {
+      shippedMachines()[0], shippedMachines()[1], shippedMachines()[2],
+      "tests/fixtures/machines/nutating_head_bc.xml"};
+  return m;
+}
+
 inline std::string readText(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
