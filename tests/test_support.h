@@ -24,12 +24,14 @@ inline const std::array<const char*, 3>& shippedMachines() {
   return m;
 }
 
-// The shipped machines and the test fixtures whose kinematics they do not cover (a rotary axis
-// along no coordinate axis, rotated links): for the forward and inverse kinematics tests.
-inline const std::array<const char*, 4>& kinematicsTestMachines() {
-  static const std::array<const char*, 4> m = {
+// The shipped machines and the test fixtures for what they do not cover (a rotary axis along
+// no coordinate axis, rotated links, one and no rotary axis): for the kinematics tests.
+inline const std::array<const char*, 6>& kinematicsTestMachines() {
+  static const std::array<const char*, 6> m = {
       shippedMachines()[0], shippedMachines()[1], shippedMachines()[2],
-      "tests/fixtures/machines/nutating_head_bc.xml"};
+      "tests/fixtures/machines/nutating_head_bc.xml",
+      "tests/fixtures/machines/four_axis_a_table.xml",
+      "tests/fixtures/machines/three_axis.xml"};
   return m;
 }
 
