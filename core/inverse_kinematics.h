@@ -59,7 +59,7 @@ class InverseKinematics {
   // in the order of rotaryAxes(), before travel checks and unwrapping.
   struct RotaryCandidate {
     std::array<double, 2> cos{}, sin{};  // of each joint value (NaN where free)
-    std::array<double, 2> angle{};       // each joint value in (-pi, pi], where known
+    std::array<double, 2> angle{};       // each joint value, where known (in [-pi, pi])
     std::array<bool, 2> known{};         // angle computed (the closed form gives cos and sin)
     std::array<bool, 2> free{};          // left undetermined by a singular orientation
     // The joint value of rotary r in (-pi, pi] (NaN where free): atan2 only when asked, since
