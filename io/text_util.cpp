@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "io/io_error.h"
+
 namespace tolver {
 
 std::string_view trim(std::string_view s) {
@@ -118,6 +120,37 @@ std::string base64Encode(const std::string& in) {
     out += '=';
   }
   return out;
+}
+
+std::string CsvRow::cell(const char* name) const {
+  const auto it = columns->find(name);
+  if (it == columns->end() || it->second >= static_cast<int>(cells->size())) return "";
+  return (*cells)[it->second];
+}
+
+int CsvRow::column(const char* name) const {
+  const auto it = columns->find(name);
+  return it == columns->end() ? 0 : it->second + 1;
+}
+
+void forEachCsvRow(const std::string& text, const std::string& file,
+                   std::initializer_list<const char*> required, const std::string& missing_message,
+                   const std::function<void(const CsvRow&)>& row) {
+  const auto lines = splitLines(text);
+  std::map<std::string, int> columns;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const std::string_view t = trim(lines[i]);
+    if (t.empty() || t[0] == '#') continue;
+    const int line = static_cast<int>(i) + 1;
+    const auto cells = splitCsvLine(lines[i]);
+    if (columns.empty()) {
+      for (size_t k = 0; k < cells.size(); ++k) columns[cells[k]] = static_cast<int>(k);
+      for (const char* r : required)
+        if (!columns.count(r)) throw InputError(file, line, 0, r, missing_message);
+      continue;
+    }
+    row(CsvRow{line, &cells, &columns});
+  }
 }
 
 }  // namespace tolver

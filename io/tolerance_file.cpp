@@ -1,15 +1,11 @@
 #include "io/tolerance_file.h"
 
 #include <cmath>
-#include <map>
 
 #include "io/io_error.h"
 #include "io/text_util.h"
 
 namespace tolver {
-namespace {
-
-}  // namespace
 
 const char* categoryName(ToleranceCategory c) {
   switch (c) {
@@ -24,25 +20,11 @@ const char* categoryName(ToleranceCategory c) {
 
 std::vector<ToleranceTerm> parseToleranceCsv(const std::string& text, const std::string& file,
                                              const MachineModel& m) {
-  const auto lines = splitLines(text);
-  std::map<std::string, int> col;
   std::vector<ToleranceTerm> out;
-  for (size_t i = 0; i < lines.size(); ++i) {
-    const std::string_view t = trim(lines[i]);
-    if (t.empty() || t[0] == '#') continue;
-    const int line = static_cast<int>(i) + 1;
-    const auto c = splitCsvLine(lines[i]);
-    if (col.empty()) {
-      for (size_t k = 0; k < c.size(); ++k) col[c[k]] = static_cast<int>(k);
-      for (const char* r : {"term", "category", "standard", "unit"})
-        if (!col.count(r)) throw InputError(file, line, 0, r, "missing column");
-      continue;
-    }
-    auto cell = [&](const char* name) -> std::string {
-      auto it = col.find(name);
-      if (it == col.end() || it->second >= static_cast<int>(c.size())) return "";
-      return c[it->second];
-    };
+  forEachCsvRow(text, file, {"term", "category", "standard", "unit"}, "missing column",
+                [&](const CsvRow& row) {
+    const int line = row.line;
+    auto cell = [&](const char* name) { return row.cell(name); };
     ToleranceTerm term;
     term.name = cell("term");
     term.parameter = m.findParameter(term.name);
@@ -99,7 +81,7 @@ std::vector<ToleranceTerm> parseToleranceCsv(const std::string& text, const std:
     for (const ToleranceTerm& o : out)
       if (o.parameter == term.parameter) throw InputError(file, line, 0, "term", "term given twice");
     out.push_back(term);
-  }
+  });
   if (out.empty()) throw InputError(file, 0, 0, "", "no terms");
   return out;
 }

@@ -1,6 +1,5 @@
 #include "io/zone_file.h"
 
-#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -10,25 +9,12 @@
 namespace tolver {
 
 std::vector<ToleranceZone> parseZoneCsv(const std::string& text, const std::string& file) {
-  const auto lines = splitLines(text);
-  std::map<std::string, int> col;
   std::vector<ToleranceZone> zones;
-  for (size_t i = 0; i < lines.size(); ++i) {
-    const std::string_view t = trim(lines[i]);
-    if (t.empty() || t[0] == '#') continue;
-    const int line = static_cast<int>(i) + 1;
-    const auto c = splitCsvLine(lines[i]);
-    if (col.empty()) {
-      for (size_t k = 0; k < c.size(); ++k) col[c[k]] = static_cast<int>(k);
-      for (const char* r : {"region", "tolerance"})
-        if (!col.count(r)) throw InputError(file, line, 0, r, "missing column (header: region,tolerance,uz,u)");
-      continue;
-    }
-    auto cell = [&](const char* name) -> std::string {
-      auto it = col.find(name);
-      return it == col.end() || it->second >= static_cast<int>(c.size()) ? std::string() : c[it->second];
-    };
-    auto column = [&](const char* name) { return col.count(name) ? col[name] + 1 : 0; };
+  forEachCsvRow(text, file, {"region", "tolerance"}, "missing column (header: region,tolerance,uz,u)",
+                [&](const CsvRow& row) {
+    const int line = row.line;
+    auto cell = [&](const char* name) { return row.cell(name); };
+    auto column = [&](const char* name) { return row.column(name); };
     auto number = [&](const char* name) {
       const auto v = parseNumber(cell(name));
       if (!v) throw InputError(file, line, column(name), name, "'" + cell(name) + "' is not a number");
@@ -63,7 +49,7 @@ std::vector<ToleranceZone> parseZoneCsv(const std::string& text, const std::stri
     }
     z.region = region;
     zones.push_back(z);
-  }
+  });
   if (zones.empty()) throw InputError(file, 0, 0, "zones", "the file defines no zone");
   return zones;
 }
