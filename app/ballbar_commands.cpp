@@ -165,6 +165,7 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
   }
   Machine identified = machine;
   identified.params = r.params;
+  identified.model.errors_source = "identified";
   writeFileAtomically(o.output, formatMachineXml(identified, "identified by tolver calibrate from " +
                                                                  o.readings + " (" + r.message + ")"));
   writeFileAtomically(report, formatCalibrationJson(m, f.test, r,

@@ -6,9 +6,12 @@
 
 #include <filesystem>
 
+#include "core/tool_path_prediction.h"
+#include "io/gcode_reader.h"
 #include "io/io_error.h"
 #include "io/machine_file.h"
 #include "io/setup_file.h"
+#include "io/text_util.h"
 
 namespace tolver::app {
 
@@ -32,10 +35,179 @@ Machine loadMachine(const MachineOptions& o) {
       throw InputError("--part-zero", 0, 0, "part zero", "expected x,y,z in mm");
     setup.part_zero_table = Eigen::Vector3d(o.part_zero[0], o.part_zero[1], o.part_zero[2]);
   }
-  if (!std::isnan(o.part_rotation_deg)) setup.part_rotation = o.part_rotation_deg * M_PI / 180.0;
-  if (!std::isnan(o.gauge_length)) setup.gauge_length = o.gauge_length;
+  if (!o.part_zero.empty()) setup.part_zero_given = true;
+  if (!std::isnan(o.part_rotation_deg)) {
+    setup.part_rotation = o.part_rotation_deg * M_PI / 180.0;
+    setup.part_rotation_given = true;
+  }
+  if (!std::isnan(o.gauge_length)) {
+    if (!(o.gauge_length >= 0) || o.gauge_length > 1e5)
+      throw InputError("--gauge-length", 0, 0, "gauge length",
+                       "expected a length from 0 to 1e5 mm, found " + formatNumber(o.gauge_length));
+    setup.gauge_length = o.gauge_length;
+    setup.gauge_length_given = true;
+  }
   machine.model.setup = setup;
   return machine;
+}
+
+std::vector<std::string> setupWarnings(const MachineModel& model) {
+  std::vector<std::string> w;
+  const PartSetup& s = model.setup;
+  std::string missing;
+  if (!s.part_zero_given) missing += "part zero (0, 0, 0) in the table frame";
+  if (!s.part_rotation_given) missing += std::string(missing.empty() ? "" : ", ") + "part rotation 0 deg";
+  if (!s.gauge_length_given) missing += std::string(missing.empty() ? "" : ", ") + "gauge length 0 mm (the tool tip at the spindle gauge point)";
+  if (!missing.empty())
+    w.push_back("no set-up given for " + missing + ": the defaults were used (--setup, "
+                "--part-zero, --part-rotation-deg, --gauge-length)");
+  return w;
+}
+
+std::string machineErrorsStatement(const Machine& machine, bool* none) {
+  bool any = false;
+  for (int i = 0; i < machine.params.size(); ++i) any = any || machine.params[i] != 0.0;
+  *none = !any;
+  if (!any)
+    return "the machine file carries no errors (" +
+           std::string(machine.model.errors_source.empty() ? "nominal geometry"
+                                                           : "errors: " + machine.model.errors_source) +
+           "): the machine's share is zero by construction; give a measured or identified "
+           "machine file (tolver calibrate) to predict the machine's errors";
+  return "errors: " + (machine.model.errors_source.empty() ? std::string("given, source not stated")
+                                                           : machine.model.errors_source);
+}
+
+void addProgramOptions(CLI::App* cmd, ProgramOptions& o) {
+  cmd->add_option("--cl", o.cl, "CL program (APT/CLDATA: .apt, .cls, .clsf, .ncl); posted "
+                                "G-code is detected");
+  cmd->add_option("--nc", o.nc, "posted G-code program (ISO 6983: .nc, .ngc, .tap, .gcode)");
+  cmd->add_option("--cl-units", o.units,
+                  "unit of a program that declares none: mm or inch (a CL without UNITS, a "
+                  "G-code without G20/G21; default: mm, or the control's default for G-code)")
+      ->check(CLI::IsMember({"mm", "inch"}));
+  cmd->add_option("--chordal-tol", o.chordal_tolerance,
+                  "chordal tolerance for expanding arcs, mm (default 0.001)")
+      ->check(CLI::PositiveNumber);
+}
+
+namespace {
+
+bool hasGcodeExtension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".nc" || ext == ".ngc" || ext == ".tap" || ext == ".gcode" || ext == ".mpf" ||
+         ext == ".cnc" || ext == ".iso" || ext == ".eia";
+}
+
+// A CL without UNITS read as mm: scales it to inches (points, frames, cutter lengths).
+void scaleToInches(ClProgram& p) {
+  for (ClPoint& c : p.path) c.p_w *= 25.4;
+  for (ClFrame& f : p.frames) f.scale *= 25.4;
+  for (CutterSpec& c : p.cutters)
+    for (size_t k = 0; k < c.values.size(); ++k) {
+      const bool angle = c.source == "CUTTER" ? (k == 4 || k == 5) : (k == 3 || k == 4);
+      if (!angle) c.values[k] *= 25.4;
+    }
+  p.units = "INCH";
+}
+
+}  // namespace
+
+ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model) {
+  if (o.cl.empty() == o.nc.empty())
+    throw InputError(o.cl.empty() ? "--cl" : o.cl, 0, 0, "program",
+                     "give the program with --cl (CL data) or --nc (G-code), one of them");
+  const std::string path = o.nc.empty() ? o.cl : o.nc;
+  const std::string text = readFile(path);
+  const bool gcode = !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(text);
+  ClProgram program;
+  if (gcode) {
+    GcodeReadOptions go;
+    go.chordal_tolerance_mm = o.chordal_tolerance;
+    if (o.units == "inch") go.unit_mm = 25.4;
+    if (o.units == "mm") go.unit_mm = 1.0;
+    program = parseGcode(text, path, model, go);
+  } else {
+    AptReadOptions ro;
+    ro.chordal_tolerance_mm = o.chordal_tolerance;
+    program = parseApt(text, path, ro);
+    if (program.path.empty())
+      throw InputError(path, 0, 0, "GOTO", "the program has no tool positions");
+    if (o.units == "inch") {
+      if (program.units_declared && program.units != "INCH")
+        throw InputError(path, 0, 0, "UNITS",
+                         "--cl-units inch, but the file declares UNITS/MM");
+      if (!program.units_declared) scaleToInches(program);
+    }
+  }
+  return program;
+}
+
+std::vector<std::string> unitWarnings(const ClProgram& program, const MachineModel& model,
+                                      const std::string& units_option) {
+  std::vector<std::string> w;
+  if (program.units_declared || !units_option.empty() || program.path.empty() ||
+      program.dialect == "G-code")  // the G-code reader says which default it used
+    return w;
+  Eigen::Vector3d lo = program.path[0].p_w, hi = lo;
+  for (const ClPoint& c : program.path) {
+    lo = lo.cwiseMin(c.p_w);
+    hi = hi.cwiseMax(c.p_w);
+  }
+  const double extent = (hi - lo).norm();
+  double travel = 0.0;
+  for (const Axis& a : model.axes)
+    if (!a.isRotary()) travel += (a.travel_max - a.travel_min) * (a.travel_max - a.travel_min);
+  travel = std::sqrt(travel);
+  double tool_d = 0.0;
+  if (!program.cutters.empty() && !program.cutters.back().values.empty())
+    tool_d = program.cutters.back().values[0];
+  const bool inch_fits = extent * 25.4 < travel;
+  const bool small_tool = tool_d > 0.0 && tool_d < 1.0;
+  const bool small_part = extent < 30.0;
+  char buf[400];
+  if (inch_fits && (small_tool || (small_part && tool_d < 3.0))) {
+    std::snprintf(buf, sizeof buf,
+                  "%s declares no units and looks like inches (extent %.3f, tool diameter %.3f, "
+                  "read as mm): use --cl-units inch if it is",
+                  program.file.c_str(), extent, tool_d);
+    w.push_back(buf);
+  } else {
+    std::snprintf(buf, sizeof buf, "%s declares no units: read as %s (extent %.1f mm%s)",
+                  program.file.c_str(), program.units == "INCH" ? "inches" : "mm", extent,
+                  inch_fits ? "; --cl-units inch if it is in inches" : "");
+    w.push_back(buf);
+  }
+  return w;
+}
+
+std::string describeUnreachable(const MachineModel& model, const PredictionResult& r) {
+  const PredictionFailure& f = r.failures.front();
+  std::string msg = f.message;
+  if (r.failed_points > 1) {
+    std::string per_axis;
+    for (size_t a = 0; a < r.failures_per_axis.size(); ++a) {
+      if (r.failures_per_axis[a] == 0) continue;
+      per_axis += (per_axis.empty() ? "" : ", ") +
+                  (a < model.axes.size() ? model.axes[a].name : std::string("orientation")) + " " +
+                  std::to_string(r.failures_per_axis[a]);
+    }
+    msg += "; " + std::to_string(r.failed_points) + " points fail (first axis to break: " +
+           per_axis + "): run 'tolver setup' to find a set-up that reaches the whole program";
+  }
+  return msg;
+}
+
+std::vector<std::string> programNotes(const ClProgram& program) {
+  std::vector<std::string> w = program.notes;
+  if (program.unknown_count > 0) {
+    std::string names;
+    for (const auto& n : program.unknown_names) names += (names.empty() ? "" : ", ") + n;
+    w.push_back("skipped " + std::to_string(program.unknown_count) + " unknown statements (" +
+                names + ")");
+  }
+  return w;
 }
 
 void checkOutputDir(const std::string& path, const char* option) {

@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "core/machine_model.h"
+#include "core/tool_path_prediction.h"
+#include "io/apt_reader.h"
 
 namespace tolver::app {
 
@@ -21,6 +23,32 @@ struct MachineOptions {
 void addMachineOptions(CLI::App* cmd, MachineOptions& o, const char* machine_help);
 // Reads the machine file and applies the set-up file and options. Throws InputError.
 Machine loadMachine(const MachineOptions& o);
+// Warnings naming the set-up defaults used (values no file or option gave).
+std::vector<std::string> setupWarnings(const MachineModel& model);
+// What the machine file says of its errors; *none: it carries none (the machine's share is zero
+// by construction).
+std::string machineErrorsStatement(const Machine& machine, bool* none);
+
+// The program options every command that reads a part program accepts.
+struct ProgramOptions {
+  std::string cl, nc;
+  std::string units;  // "", "mm" or "inch"
+  double chordal_tolerance = 0.001;
+};
+void addProgramOptions(CLI::App* cmd, ProgramOptions& o);
+// Reads the CL or G-code program (G-code: --nc, a G-code extension, or content that reads as
+// G-code). Throws InputError.
+ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model);
+// When the program declares no units: what was assumed, and whether inches fit better.
+std::vector<std::string> unitWarnings(const ClProgram& program, const MachineModel& model,
+                                      const std::string& units_option);
+
+// The message for a prediction that failed: the first failing point, how many fail, and per
+// axis how many break it first.
+std::string describeUnreachable(const MachineModel& model, const PredictionResult& r);
+// What the reader assumed or skipped, one line each.
+std::vector<std::string> programNotes(const ClProgram& program);
+
 // Throws InputError when the directory of `path` does not exist.
 void checkOutputDir(const std::string& path, const char* option);
 // A progress bar on stderr when it is a terminal (and enabled).

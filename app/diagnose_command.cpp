@@ -116,7 +116,9 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
   const std::string json_path = (std::filesystem::path(o.report_dir) / "report.json").string();
   const std::string html_path = (std::filesystem::path(o.report_dir) / "report.html").string();
   const std::string html = writeDiagnosisHtml(o.report_dir, machine.model, f.test, r, in);
-  writeFileAtomically(o.output, formatMachineXml(r.machine, "augmented by tolver diagnose from " +
+  Machine augmented = r.machine;
+  augmented.model.errors_source = "identified";
+  writeFileAtomically(o.output, formatMachineXml(augmented, "augmented by tolver diagnose from " +
                                                                 o.readings + " (" + r.message + ")"));
   writeFileAtomically(json_path, formatDiagnosisJson(machine.model, f.test, r, in));
   writeFileAtomically(html_path, html);

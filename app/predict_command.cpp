@@ -18,8 +18,9 @@ namespace {
 
 struct PredictOptions {
   MachineOptions machine;
-  std::string cl, output, table;
-  double chordal_tolerance = 0.001;
+  ProgramOptions program;
+  std::string output, table;
+  double max_rotary_step_deg = 10.0;
 };
 
 // Rounds away "-0.000" in printed figures.
@@ -28,25 +29,17 @@ double clean(double v) { return std::abs(v) < 5e-7 ? 0.0 : v; }
 void runPredict(const PredictOptions& o, int* exit_code) {
   Machine machine = loadMachine(o.machine);
   const PartSetup& setup = machine.model.setup;
-
-  AptReadOptions ro;
-  ro.chordal_tolerance_mm = o.chordal_tolerance;
-  const ClProgram program = readAptFile(o.cl, ro);
-  if (program.path.empty())
-    throw InputError(o.cl, 0, 0, "GOTO", "the program has no tool positions");
+  const ClProgram program = loadProgram(o.program, machine.model);
   const std::string table = o.table.empty() ? replaceExtension(o.output, ".csv") : o.table;
   checkOutputDir(o.output, "-o");
   checkOutputDir(table, "--errors");
 
-  const PredictionResult r = predictToolPath(machine.model, machine.params, program.path);
-  if (!r.ok()) {
-    const PredictionFailure& f = r.failures.front();
-    std::string more;
-    if (r.failures.size() > 1)
-      more = " (and " + std::to_string(r.failures.size() - 1) +
-             (r.failures.size() >= 20 ? " or more" : "") + " other points)";
-    throw InputError(o.cl, f.line, 0, "unreachable", f.message + more);
-  }
+  const std::vector<JointVector>* commanded = program.joints.empty() ? nullptr : &program.joints;
+  const PredictionResult r =
+      predictToolPath(machine.model, machine.params, program.path, 20, commanded);
+  if (!r.ok())
+    throw InputError(program.file, r.failures.front().line, 0, "unreachable",
+                     describeUnreachable(machine.model, r));
 
   std::vector<ClPoint> predicted(program.path.size());
   std::vector<PredictedPoint> pts = r.points;
@@ -56,8 +49,8 @@ void runPredict(const PredictOptions& o, int* exit_code) {
     predicted[i].u_w = pts[i].u_pred_w;
   }
   const std::vector<std::string> header = {
-      "tolver predicted CL: " + program.file + " on " + machine.model.name + " (" + o.machine.machine +
-          ")",
+      "tolver predicted CL: " + program.file + " on " + machine.model.name + " (" +
+          o.machine.machine + ")",
       "each GOTO is the tool position the machine will really reach, in the program's frame"};
   writeFileAtomically(o.output, formatPredictedApt(program, predicted, header));
   writeFileAtomically(table, formatPointTable(machine.model, program.path, pts));
@@ -70,8 +63,12 @@ void runPredict(const PredictOptions& o, int* exit_code) {
   std::printf("  machine    %s (%s): %zu axes, %d error parameters, %d non-zero\n",
               machine.model.name.c_str(), o.machine.machine.c_str(), machine.model.axes.size(),
               machine.model.parameterCount(), nonzero);
-  std::printf("  program    %s: %d tool positions (%d arcs expanded), units %s\n",
-              program.file.c_str(), s.points, program.arcs_expanded, program.units.c_str());
+  bool no_errors = false;
+  const std::string errors = machineErrorsStatement(machine, &no_errors);
+  std::printf("             %s\n", errors.c_str());
+  std::printf("  program    %s (%s): %d tool positions (%d arcs expanded), units %s%s\n",
+              program.file.c_str(), program.dialect.c_str(), s.points, program.arcs_expanded,
+              program.units.c_str(), program.units_declared ? "" : " (assumed)");
   Cutter cutter;
   if (!program.cutters.empty() &&
       cutterFromApt(program.cutters.back().source, program.cutters.back().values, &cutter))
@@ -93,15 +90,26 @@ void runPredict(const PredictOptions& o, int* exit_code) {
   std::printf("  tool axis  max %.3f urad, RMS %.3f urad\n", s.max_axis_angle * 1e6,
               s.rms_axis_angle * 1e6);
   if (s.singular_points > 0)
-    std::printf("  note       %d points have the tool axis along a rotary axis (first at line %d); "
-                "the free angle was kept from the previous point\n",
-                s.singular_points, s.first_singular_line);
-  if (program.unknown_count > 0) {
-    std::string names;
-    for (const auto& n : program.unknown_names) names += (names.empty() ? "" : ", ") + n;
-    std::fprintf(stderr, "tolver: warning: %s: skipped %d unknown statements (%s)\n",
-                 program.file.c_str(), program.unknown_count, names.c_str());
+    std::printf("  note       %d points have the tool axis within %.4g deg of a rotary axis (first "
+                "at line %d); that axis kept its previous angle\n",
+                s.singular_points, machine.model.control.singular_band * 180.0 / M_PI,
+                s.first_singular_line);
+  const auto jumps = findRotaryJumps(machine.model, program.path, r,
+                                     o.max_rotary_step_deg * M_PI / 180.0);
+  if (!jumps.empty()) {
+    std::printf("  risk       %zu rotary steps above %.1f deg between cutting moves:", jumps.size(),
+                o.max_rotary_step_deg);
+    for (size_t k = 0; k < jumps.size() && k < 5; ++k)
+      std::printf("%s line %d %s %+.1f deg", k ? "," : "", jumps[k].line,
+                  machine.model.axes[jumps[k].axis].name.c_str(), jumps[k].step * 180.0 / M_PI);
+    std::printf("%s\n", jumps.size() > 5 ? ", ..." : "");
   }
+  for (const std::string& w : setupWarnings(machine.model))
+    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+  for (const std::string& w : unitWarnings(program, machine.model, o.program.units))
+    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+  for (const std::string& w : programNotes(program))
+    std::fprintf(stderr, "tolver: note: %s: %s\n", program.file.c_str(), w.c_str());
   std::printf("  wrote      %s (predicted CL), %s (per-point table)\n", o.output.c_str(),
               table.c_str());
   *exit_code = 0;
@@ -116,13 +124,13 @@ void registerPredict(CLI::App& app, int* exit_code) {
       "Predict the real tool path of a CL program on a machine with errors: inverse kinematics "
       "on the nominal machine, forward kinematics with the errors (CL_predicted).");
   addMachineOptions(cmd, o->machine, "machine file (XML)");
-  cmd->add_option("--cl", o->cl, "CL program (APT/CLDATA: .apt, .cls, .clsf, .ncl)")->required();
+  addProgramOptions(cmd, o->program);
   cmd->add_option("-o,--output", o->output, "predicted CL file to write (APT)")->required();
+  cmd->add_option("--max-rotary-step-deg", o->max_rotary_step_deg,
+                  "report rotary steps above this between cutting moves, deg (default 10)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--errors", o->table,
                   "per-point table to write (CSV; default: the output path with .csv)");
-  cmd->add_option("--chordal-tol", o->chordal_tolerance,
-                  "chordal tolerance for expanding arcs, mm (default 0.001)")
-      ->check(CLI::PositiveNumber);
   cmd->callback([o, exit_code] { runPredict(*o, exit_code); });
 }
 

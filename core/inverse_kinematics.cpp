@@ -1,5 +1,6 @@
 #include "core/inverse_kinematics.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -10,6 +11,7 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * M_PI;
 constexpr double kSingularEps = 1e-9;   // |component of a unit vector normal to an axis|
+// (numerical floor; the control's singular band, NcControl::singular_band, widens it)
 constexpr double kTravelEps = 1e-9;     // mm or rad of tolerance on travel limits
 
 // Paden-Kahan sub-problem 1: cos and sin of the angle theta with Rot(w, theta) p = q (p, q
@@ -28,20 +30,16 @@ bool subproblem1(const Eigen::Vector3d& w, const Eigen::Vector3d& p, const Eigen
   return true;
 }
 
-// The representative of angle + 2 pi k inside [lo, hi] nearest to ref, or NaN if none.
+// The representative of angle + 2 pi k inside [lo, hi] nearest to ref, or NaN if none. The
+// representatives inside the range are consecutive, so when the one nearest to ref lies outside,
+// the nearest inside is the one at that end of the range: O(1) for any travel (endless axes).
 double unwrapInto(double angle, double lo, double hi, double ref) {
-  double best = std::numeric_limits<double>::quiet_NaN();
-  double best_dist = std::numeric_limits<double>::infinity();
-  const double k0 = std::floor((lo - angle) / kTwoPi);
-  for (double k = k0; angle + k * kTwoPi <= hi + kTravelEps; k += 1.0) {
-    const double v = angle + k * kTwoPi;
-    if (v < lo - kTravelEps) continue;
-    if (std::abs(v - ref) < best_dist) {
-      best_dist = std::abs(v - ref);
-      best = v;
-    }
-  }
-  return best;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double lo_e = lo - kTravelEps, hi_e = hi + kTravelEps;
+  double v = angle + kTwoPi * std::round((ref - angle) / kTwoPi);
+  if (v < lo_e) v = angle + kTwoPi * std::ceil((lo_e - angle) / kTwoPi);
+  else if (v > hi_e) v = angle + kTwoPi * std::floor((hi_e - angle) / kTwoPi);
+  return (v >= lo_e && v <= hi_e) ? v : nan;
 }
 
 // unwrapInto, with the common case first: the representative nearest to ref, when it lies
@@ -61,6 +59,10 @@ double InverseKinematics::RotaryCandidate::angleOf(int r) const {
 
 InverseKinematics::InverseKinematics(const MachineModel& model)
     : model_(&model) {
+  {
+    const double sb = std::sin(std::clamp(model.control.singular_band, 0.0, 0.1));
+    band_sq_ = std::max(kSingularEps * kSingularEps, sb * sb);
+  }
   // Orientation factors from w to t: table_T_w^T, then the workpiece chain backwards (each
   // joint inverted), then the tool chain forwards, then spindle_T_t.
   struct Factor {
@@ -199,7 +201,7 @@ int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, RotaryCandid
   // subproblem1(w2, p, z).
   const Eigen::Vector3d qp1 = q - w1 * w1q;
   const double qp1_w12 = qp1.dot(w12_), qp1_v1 = qp1.dot(sub1_.v1), qp1_u1 = qp1.dot(sub1_.u1);
-  constexpr double kEps2 = kSingularEps * kSingularEps;
+  const double kEps2 = band_sq_;
   const double gg = g2 * w12_sq_;
   const bool axis1_free = qp1.squaredNorm() < kEps2 || beta * beta * sub1_.u1_sq + gg < kEps2;
   const bool axis2_free = sub1_.pp2_sq < kEps2 || alpha * alpha * sub1_.u2_sq + gg < kEps2;
@@ -379,6 +381,9 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
     cost[ci] = 0.0;
     for (int r = 0; r < nr; ++r) {
       const Axis& ax = model_->axes[rotary_[r]];
+      // An endless axis (no stops) takes any representative: the continuity choice unwraps it.
+      const double inf = std::numeric_limits<double>::infinity();
+      const double lo = ax.endless ? -inf : ax.travel_min, hi = ax.endless ? inf : ax.travel_max;
       const RotaryCandidate& k = cand[ci];
       // Near the reference (the usual step along a path), the value is ref + delta with delta
       // from the cos and sin of the difference by atan's series: the representative nearest to
@@ -388,12 +393,12 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
       const double ds = k.sin[r] * ref_cos[r] - k.cos[r] * ref_sin[r];
       if (!k.known[r] && dc > 0.0 && std::abs(ds) <= kAtanSeriesMax * dc) {
         v = ref[r] + atanOfSmall(ds / dc);
-        if (v < ax.travel_min - kTravelEps || v > ax.travel_max + kTravelEps)
+        if (v < lo - kTravelEps || v > hi + kTravelEps)
           v = std::numeric_limits<double>::quiet_NaN();
       }
       if (std::isnan(v)) {
         const double angle = k.angleOf(r);
-        v = unwrapNear(angle, ax.travel_min, ax.travel_max, ref[r]);
+        v = unwrapNear(angle, lo, hi, ref[r]);
         if (std::isnan(v)) {
           violation(rotary_[r], angle);
           cost[ci] = std::numeric_limits<double>::infinity();
@@ -457,13 +462,13 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
   }
   for (int k = 0; k < 2; ++k)
     if (order[k] < ncand && attempt(order[k])) return sol;
-  // Nothing fits: report the first violation in the order of the full search (every candidate's
-  // rotary travel, then each prismatic solution by cost).
+  // Nothing fits: report the violation of the solution the continuity choice prefers (the
+  // cheapest by rotary motion): its rotary travel, then its prismatic solution.
   sol.violated_axis = -1;
   evaluated[0] = evaluated[1] = false;
   costOrder(order);
-  for (int k = 0; k < 2; ++k)
-    if (order[k] < ncand) attempt(order[k]);
+  if (order[0] < ncand) attempt(order[0]);
+  if (sol.violated_axis < 0 && order[1] < ncand) attempt(order[1]);
   sol.q = JointVector::Zero(n);
   sol.status = IkStatus::OutOfTravel;
   return sol;

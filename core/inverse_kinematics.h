@@ -12,7 +12,11 @@
 // chains gives the exact 3x3 linear system for them.
 //
 // Singular orientations (the tool axis along a rotary axis, which leaves that angle free) keep
-// the previous value of the free angle (0 at the start of a path) and are flagged.
+// the previous value of the free angle (0 at the start of a path) and are flagged. "Along" means
+// within the control's singular band (MachineModel::control.singular_band, 1e-4 rad by
+// default): inside it the free angle is kept and the other solved for the tool axis, so a
+// micro-radian tilt near the pole cannot swing the free axis by tens of degrees; the tool axis
+// is then reached to within the band, the tool tip exactly.
 #include <Eigen/Core>
 #include <array>
 #include <vector>
@@ -33,7 +37,8 @@ struct IkSolution {
   IkStatus status = IkStatus::Ok;
   JointVector q;              // joint values (mm, rad), model axis order
   bool singular = false;      // a rotary angle was free and kept from the previous point
-  int violated_axis = -1;     // with OutOfTravel: the first axis outside its travel
+  int violated_axis = -1;     // with OutOfTravel: the first axis outside its travel on the
+                              // preferred solution; -1 when the prismatic system is singular
   double violated_value = 0;  // and the value it would need
   // cos and sin of each rotary joint value (for reuse by the forward model), by axis index;
   // entries of prismatic axes are left unset (not zero-filled: this runs per CL point).
@@ -113,6 +118,7 @@ class InverseKinematics {
   };
   std::vector<ChainLink> chains_[2];
   Eigen::Isometry3d w_end_, t_end_;  // last joint -> w, last joint -> t (nominal)
+  double band_sq_ = 1e-18;  // sin^2 of the singular band (NcControl::singular_band)
 };
 
 }  // namespace tolver

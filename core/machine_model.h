@@ -32,6 +32,7 @@
 #include <array>
 #include <limits>
 #include <map>
+#include <utility>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -61,6 +62,7 @@ struct Axis {
   double travel_min = 0.0;          // mm or rad
   double travel_max = 0.0;
   int nc_sign = 1;                  // NC axis command = nc_sign * joint value (ISO 841)
+  bool endless = false;             // rotary without stops: travel_min/max bound multi-turn words
   bool isRotary() const { return type == JointType::Rotary; }
 };
 
@@ -110,6 +112,31 @@ struct PartSetup {
   Eigen::Vector3d part_zero_table = Eigen::Vector3d::Zero();  // part zero in the table frame, mm
   double part_rotation = 0.0;   // rotation of w about the table z axis, rad
   double gauge_length = 0.0;    // tool tip to spindle gauge point along the spindle axis, mm
+  // For G-code programs: work offsets (G54, G55, G54.1P1, ...: upper case, no spaces) in machine
+  // coordinates, mm; a work offset not given here puts its origin at the part zero. Tool lengths
+  // by H number, mm; an H not given here is the gauge length.
+  std::map<std::string, Eigen::Vector3d> work_offsets;
+  std::map<int, double> tool_lengths;
+  // Which of the values above were given (by a set-up file or an option), for the warnings
+  // that name the defaults used.
+  bool part_zero_given = false, part_rotation_given = false, gauge_length_given = false;
+};
+
+// How the machine's control reads a part program (ISO 6983 G-code): the words that switch
+// tool-centre-point mode on and off, the unit when a program says neither G20 nor G21.
+// In TCP mode XYZ is the tool tip in the part frame and the rotary words are joint values;
+// outside it every axis word is a joint (machine coordinate plus the active offsets).
+struct NcControl {
+  bool declared = false;        // the machine file has a <control> element
+  std::string name;             // e.g. "LinuxCNC xyzac-trt-kins"
+  double default_unit_mm = 1.0; // 25.4 for a control that defaults to inches
+  // Pairs of words (upper case, as written: "M428", "G43.4", "G234"): on switches TCP mode on,
+  // off switches that same mode off. Several pairs may be active at once.
+  std::vector<std::pair<std::string, std::string>> tcp_words;
+  // Values of named parameters the control supplies (LinuxCNC #<_hal[pin]>), by name.
+  std::map<std::string, double> parameters;
+  // Tool axes closer than this to a rotary axis keep that axis's previous angle (rad).
+  double singular_band = 1e-4;
 };
 
 class MachineModel {
@@ -121,6 +148,10 @@ class MachineModel {
   Eigen::Isometry3d last_T_table = Eigen::Isometry3d::Identity();    // table in last wp joint
   Eigen::Isometry3d last_T_spindle = Eigen::Isometry3d::Identity();  // spindle in last tool joint
   PartSetup setup;
+  NcControl control;
+  // Where the error values come from: "none" (a nominal machine: predictions show no machine
+  // error by construction), "measured", "identified", "simulated"; empty when the file is silent.
+  std::string errors_source;
 
   std::vector<ParameterBlock> blocks;
   std::vector<ParameterInfo> parameters;  // one per entry of the flat parameter vector

@@ -22,12 +22,17 @@ std::string describeIkFailure(const MachineModel& model, const IkSolution& sol) 
     case IkStatus::UnsupportedTopology:
       return "inverse kinematics needs three prismatic and at most two rotary axes";
     case IkStatus::OutOfTravel: {
+      if (sol.violated_axis < 0 || sol.violated_axis >= static_cast<int>(model.axes.size()))
+        return "the prismatic axes cannot place the tool tip (their directions are dependent)";
       const Axis& ax = model.axes[sol.violated_axis];
       const bool rot = ax.isRotary();
       const double k = rot ? 180.0 / M_PI : 1.0;
-      std::snprintf(buf, sizeof buf, "axis %s would need %.4f %s, outside its travel [%.4f, %.4f]",
-                    ax.name.c_str(), sol.violated_value * k, rot ? "deg" : "mm",
-                    ax.travel_min * k, ax.travel_max * k);
+      const double over = sol.violated_value > ax.travel_max ? sol.violated_value - ax.travel_max
+                                                             : ax.travel_min - sol.violated_value;
+      std::snprintf(buf, sizeof buf,
+                    "axis %s would need %.4f %s, %.4f %s beyond its travel [%.4f, %.4f]",
+                    ax.name.c_str(), sol.violated_value * k, rot ? "deg" : "mm", over * k,
+                    rot ? "deg" : "mm", ax.travel_min * k, ax.travel_max * k);
       return buf;
     }
   }
@@ -47,15 +52,20 @@ double angleBetween(const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
 }  // namespace
 
 PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
-                                 const std::vector<ClPoint>& path, int max_failures) {
+                                 const std::vector<ClPoint>& path, int max_failures,
+                                 const std::vector<JointVector>* commanded) {
   PredictionResult result;
-  predictToolPath(model, params, path, result, max_failures);
+  predictToolPath(model, params, path, result, max_failures, commanded);
   return result;
 }
 
 void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
-                     const std::vector<ClPoint>& path, PredictionResult& result, int max_failures) {
+                     const std::vector<ClPoint>& path, PredictionResult& result, int max_failures,
+                     const std::vector<JointVector>* commanded) {
   result.failures.clear();
+  result.failed_points = 0;
+  result.failures_per_axis.assign(model.axes.size() + 1, 0);
+  if (commanded && commanded->size() != path.size()) commanded = nullptr;
   result.summary = PredictionSummary{};
   const InverseKinematics ik(model);
   const ForwardKinematics actual(model, params);
@@ -72,7 +82,8 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
   for (size_t i = 0; i < path.size(); ++i) {
     const ClPoint& cl = path[i];
     const IkSolution sol =
-        ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(), previous_sin.data());
+        commanded ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
+                  : ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(), previous_sin.data());
     if (sol.status != IkStatus::Ok) {
       PredictedPoint& bad = result.points[i];
       const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -80,9 +91,12 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
       bad.p_pred_w = bad.u_pred_w = bad.deviation_w = Eigen::Vector3d::Constant(nan);
       bad.along_axis = bad.across_axis = bad.axis_angle = nan;
       bad.singular = false;
+      const int axis = sol.status == IkStatus::OutOfTravel ? sol.violated_axis : -1;
+      ++result.failed_points;
+      ++result.failures_per_axis[axis >= 0 ? axis : model.axes.size()];
       if (static_cast<int>(result.failures.size()) < max_failures)
         result.failures.push_back(
-            {static_cast<int>(i), cl.line, sol.status, describeIkFailure(model, sol)});
+            {static_cast<int>(i), cl.line, sol.status, axis, describeIkFailure(model, sol)});
       previous = nullptr;
       continue;
     }
@@ -117,6 +131,23 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
     s.rms_deviation = std::sqrt(sum2 / path.size());
     s.rms_axis_angle = std::sqrt(sum2_angle / path.size());
   }
+}
+
+std::vector<RotaryJump> findRotaryJumps(const MachineModel& model, const std::vector<ClPoint>& path,
+                                        const PredictionResult& result, double threshold) {
+  std::vector<RotaryJump> jumps;
+  for (size_t i = 1; i < path.size() && i < result.points.size(); ++i) {
+    if (path[i].rapid || path[i - 1].rapid) continue;
+    const JointVector& a = result.points[i - 1].q;
+    const JointVector& b = result.points[i].q;
+    for (int k = 0; k < static_cast<int>(model.axes.size()) && k < a.size() && k < b.size(); ++k) {
+      if (!model.axes[k].isRotary()) continue;
+      const double step = b[k] - a[k];
+      if (std::isfinite(step) && std::abs(step) > threshold)
+        jumps.push_back({static_cast<int>(i), path[i].line, k, step});
+    }
+  }
+  return jumps;
 }
 
 }  // namespace tolver

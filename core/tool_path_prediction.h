@@ -37,6 +37,7 @@ struct PredictionFailure {
   int index = 0;       // CL point index
   int line = 0;        // CL file line
   IkStatus status = IkStatus::Ok;
+  int axis = -1;       // with OutOfTravel: the axis that breaks its travel first
   std::string message;
 };
 
@@ -53,20 +54,42 @@ struct PredictionSummary {
 
 struct PredictionResult {
   std::vector<PredictedPoint> points;     // one per CL point; NaN where IK failed
-  std::vector<PredictionFailure> failures;
+  std::vector<PredictionFailure> failures;  // the first max_failures
+  int failed_points = 0;                  // all of them
+  // Failing points per axis that breaks first (index as model.axes; the last entry counts the
+  // points with no axis to blame: unreachable orientation, singular prismatic system).
+  std::vector<int> failures_per_axis;
   PredictionSummary summary;
   bool ok() const { return failures.empty(); }
 };
 
 // Predicts the path; params are the machine's error parameters (model.parameterCount()).
 // Stops collecting failures after max_failures.
+// commanded: optional, one joint vector per point (a G-code program's joint words): the inverse
+// kinematics then takes the solution nearest to the commanded rotary values, i.e. the one the
+// control was told to use, instead of the one nearest to the previous point.
 PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
-                                 const std::vector<ClPoint>& path, int max_failures = 20);
+                                 const std::vector<ClPoint>& path, int max_failures = 20,
+                                 const std::vector<JointVector>* commanded = nullptr);
 // The same into an existing result, reusing its storage (no allocation when it already holds as
 // many points): for batch work over many programs.
 void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                      const std::vector<ClPoint>& path, PredictionResult& result,
-                     int max_failures = 20);
+                     int max_failures = 20,
+                     const std::vector<JointVector>* commanded = nullptr);
+
+// A large rotary step between two consecutive cutting moves: the machine swings the part or
+// the head while the tool is in the material (a program risk near the singular pole).
+struct RotaryJump {
+  int index = 0;      // the point after the step
+  int line = 0;       // its source line
+  int axis = 0;       // model axis index
+  double step = 0.0;  // rad, signed
+};
+// Rotary steps above threshold (rad) between consecutive points that are both cutting moves
+// (not rapid) and both predicted.
+std::vector<RotaryJump> findRotaryJumps(const MachineModel& model, const std::vector<ClPoint>& path,
+                                        const PredictionResult& result, double threshold);
 
 // One-line description of an IK failure (axis names and values in mm or deg).
 std::string describeIkFailure(const MachineModel& model, const IkSolution& sol);

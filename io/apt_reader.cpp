@@ -305,6 +305,7 @@ class Parser {
              "unknown unit '" + (args.empty() ? std::string() : args[0].text) +
                  "' (expected MM or INCHES)");
       }
+      prog_.units_declared = true;
       ClFrame f = prog_.frames[frame_];
       f.scale = scale;
       pushFrame(f);

@@ -48,6 +48,7 @@ struct ClFrame {
 
 struct ClProgram {
   std::string file;
+  std::string dialect = "APT";           // "APT" (CL data) or "G-code" (io/gcode_reader.h)
   std::vector<std::string> lines;        // the file's physical lines, as read
   std::vector<AptStatement> statements;  // covering every line in order
   std::vector<ClPoint> path;             // tool positions in w, mm
@@ -61,6 +62,13 @@ struct ClProgram {
   int tool_planes = 0;                   // CSYS statements after TRNTYP/WORLD (not applied)
   int unknown_count = 0;                 // statements skipped as unknown
   std::vector<std::string> unknown_names;  // their major words, each once
+  bool units_declared = false;           // UNITS / G20 / G21 seen (else the default was used)
+  // G-code only: per point, the commanded joint values (mm, rad, model axis order; in TCP mode
+  // the prismatic ones are those of the nominal inverse kinematics' reference, not commands),
+  // and whether the point was programmed in tool-centre-point mode.
+  std::vector<JointVector> joints;
+  std::vector<char> tcp;
+  std::vector<std::string> notes;        // what the reader assumed or ignored, one line each
 };
 
 struct AptReadOptions {

@@ -11,8 +11,27 @@ std::string formatPredictedApt(const ClProgram& program, const std::vector<ClPoi
   std::string out;
   out.reserve(program.path.size() * 80 + 4096);
   for (const std::string& h : header) out += "$$ " + h + "\n";
-  if (!program.multiax) out += "MULTAX/ON\n";
   char buf[256];
+  if (program.dialect == "G-code") {
+    // A G-code program becomes plain CL data in mm, in the part frame: one GOTO per point,
+    // RAPID before positioning moves, the source line in a comment.
+    out += "UNITS/MM\nMULTAX/ON\n";
+    for (const AptStatement& st : program.statements) {
+      if (st.point_count <= 0) continue;
+      out += "$$ line " + std::to_string(st.first_line) + "\n";
+      for (int k = st.first_point; k < st.first_point + st.point_count; ++k) {
+        if (program.path[k].rapid) out += "RAPID\n";
+        const Eigen::Vector3d& p = predicted[k].p_w;
+        const Eigen::Vector3d u = predicted[k].u_w.normalized();
+        std::snprintf(buf, sizeof buf, "GOTO/%.6f,%.6f,%.6f,%.9f,%.9f,%.9f\n", p.x(), p.y(),
+                      p.z(), u.x(), u.y(), u.z());
+        out += buf;
+      }
+    }
+    out += "FINI\n";
+    return out;
+  }
+  if (!program.multiax) out += "MULTAX/ON\n";
   const bool inch = program.units == "INCH";
   for (const AptStatement& st : program.statements) {
     if (st.point_count > 0) {

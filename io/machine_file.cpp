@@ -103,6 +103,36 @@ class Reader {
 
   // <effect type=".." axis=".." component=".." [orders="first last"] [varying="true"]
   //         [period_mm=".."] [tau_s=".."] values=".."/>
+  // <control name=".." default_units="mm|inch" singular_band_deg="0.0057">
+  //   <tcp on="M428" off="M429"/>  <parameter name="_hal[pin]" value="0"/>
+  // </control>
+  void control(const XMLElement* e, NcControl& c) {
+    c.declared = true;
+    c.name = attr(e, "name", false, "");
+    const std::string u = attr(e, "default_units", false, "mm");
+    if (u == "mm") c.default_unit_mm = 1.0;
+    else if (u == "inch") c.default_unit_mm = 25.4;
+    else fail(e, "control.default_units", "expected mm or inch, found '" + u + "'");
+    if (e->Attribute("singular_band_deg")) {
+      const double b = number(e, "singular_band_deg");
+      if (!(b >= 0 && b <= 5)) fail(e, "control.singular_band_deg", "expected 0 to 5 degrees");
+      c.singular_band = b * M_PI / 180.0;
+    }
+    for (const XMLElement* t = e->FirstChildElement(); t; t = t->NextSiblingElement()) {
+      const std::string tag = t->Name();
+      if (tag == "tcp") {
+        const std::string on = toUpper(attr(t, "on")), off = toUpper(attr(t, "off"));
+        if (on.empty() || off.empty() || on == off)
+          fail(t, "tcp.on", "expected two different words, e.g. on=\"G43.4\" off=\"G49\"");
+        c.tcp_words.emplace_back(on, off);
+      } else if (tag == "parameter") {
+        c.parameters[attr(t, "name")] = number(t, "value");
+      } else {
+        fail(t, "control", "unknown element <" + tag + "> (expected tcp or parameter)");
+      }
+    }
+  }
+
   EffectSpec effect(const XMLElement* e, const MachineModel& m) {
     const std::string type = attr(e, "type");
     const EffectTraits* t = findEffectType(type);
@@ -186,6 +216,10 @@ class Reader {
       ax.travel_min = number(e, "min") * k;
       ax.travel_max = number(e, "max") * k;
       if (!(ax.travel_min < ax.travel_max)) fail(e, "axis.max", "max must exceed min");
+      const std::string endless = attr(e, "endless", false, "false");
+      if (endless != "true" && endless != "false") fail(e, "axis.endless", "expected true or false");
+      ax.endless = endless == "true";
+      if (ax.endless && !ax.isRotary()) fail(e, "axis.endless", "only a rotary axis can be endless");
       const std::string sign = attr(e, "nc_sign", false, "1");
       if (sign == "1" || sign == "+1") ax.nc_sign = 1;
       else if (sign == "-1") ax.nc_sign = -1;
@@ -205,12 +239,18 @@ class Reader {
       (p.axis.branch == Branch::Workpiece ? m.workpiece_chain : m.tool_chain).push_back(p.index);
     m.last_T_table = frame(root->FirstChildElement("table"), angle);
     m.last_T_spindle = frame(root->FirstChildElement("spindle"), angle);
+    if (const XMLElement* c = root->FirstChildElement("control")) control(c, m.control);
 
     // Error model.
     const XMLElement* errs = root->FirstChildElement("errors");
     int default_degree = 3;
     double e_len = 1.0, e_ang = 1.0;
     if (errs) {
+      m.errors_source = attr(errs, "source", false, "");
+      static const char* sources[] = {"", "none", "measured", "identified", "simulated"};
+      if (std::find_if(std::begin(sources), std::end(sources),
+                       [&](const char* x) { return m.errors_source == x; }) == std::end(sources))
+        fail(errs, "errors.source", "expected none, measured, identified or simulated");
       e_len = lengthUnit(attr(errs, "length_unit", false, "mm"), &ok);
       if (!ok) fail(errs, "errors.length_unit", "expected mm, um or inch");
       e_ang = angleUnit(attr(errs, "angle_unit", false, "rad"), &ok);
@@ -372,11 +412,22 @@ std::string formatMachineXml(const Machine& machine, const std::string& comment)
          formatNumber(ax.direction.x()) + " " + formatNumber(ax.direction.y()) + " " +
          formatNumber(ax.direction.z()) + "\" min=\"" + formatNumber(ax.travel_min * k) +
          "\" max=\"" + formatNumber(ax.travel_max * k) + "\" nc_sign=\"" +
-         std::to_string(ax.nc_sign) + "\">\n";
+         std::to_string(ax.nc_sign) + "\"" + (ax.endless ? " endless=\"true\"" : "") + ">\n";
     o += "    <link " + frameAttributes(ax.parent_T_joint) + "/>\n  </axis>\n";
   }
   o += "  <table " + frameAttributes(m.last_T_table) + "/>\n";
   o += "  <spindle " + frameAttributes(m.last_T_spindle) + "/>\n";
+  if (m.control.declared) {
+    const NcControl& c = m.control;
+    o += "  <control name=\"" + xmlEscape(c.name) + "\" default_units=\"" +
+         (c.default_unit_mm == 25.4 ? "inch" : "mm") + "\" singular_band_deg=\"" +
+         formatNumber(c.singular_band * deg) + "\">\n";
+    for (const auto& [on, off] : c.tcp_words)
+      o += "    <tcp on=\"" + xmlEscape(on) + "\" off=\"" + xmlEscape(off) + "\"/>\n";
+    for (const auto& [name, value] : c.parameters)
+      o += "    <parameter name=\"" + xmlEscape(name) + "\" value=\"" + formatNumber(value) + "\"/>\n";
+    o += "  </control>\n";
+  }
   // Errors in um and urad. The most common motion degree is the default.
   std::map<int, int> degree_count;
   for (const ParameterBlock& b : m.blocks)
@@ -387,8 +438,8 @@ std::string formatMachineXml(const Machine& machine, const std::string& comment)
       best = c;
       def = d;
     }
-  o += "  <errors length_unit=\"um\" angle_unit=\"urad\" default_degree=\"" +
-       std::to_string(def) + "\">\n";
+  o += "  <errors" + (m.errors_source.empty() ? std::string() : " source=\"" + m.errors_source + "\"") +
+       " length_unit=\"um\" angle_unit=\"urad\" default_degree=\"" + std::to_string(def) + "\">\n";
   auto value = [&](int p) {
     return formatNumber(machine.params[p] * (m.parameters[p].angular ? 1e6 : 1e3));
   };

@@ -1,5 +1,6 @@
 #include "io/setup_file.h"
 
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -38,19 +39,41 @@ PartSetup parseSetup(const std::string& text, const std::string& file_name, Part
                          "expected " + std::to_string(n) + " value(s), found " +
                              std::to_string(v.size()));
     };
+    for (double x : v)
+      if (std::abs(x) > 1e6)
+        throw InputError(file_name, line, 0, key, "value beyond 1e6: not a plausible set-up");
+    const std::string lower = toLower(key);
     if (key == "part_zero_mm") {
       need(3);
       s.part_zero_table = Eigen::Vector3d(v[0], v[1], v[2]);
+      s.part_zero_given = true;
     } else if (key == "part_rotation_deg") {
       need(1);
       s.part_rotation = v[0] * M_PI / 180.0;
+      s.part_rotation_given = true;
     } else if (key == "gauge_length_mm") {
       need(1);
       if (v[0] < 0) throw InputError(file_name, line, 0, key, "must not be negative");
       s.gauge_length = v[0];
+      s.gauge_length_given = true;
+    } else if (lower.size() > 4 && lower[0] == 'g' && lower.compare(lower.size() - 3, 3, "_mm") == 0 &&
+               std::isdigit(static_cast<unsigned char>(lower[1]))) {
+      // Work offset: g54_mm, g55_mm, g54.1p1_mm, g59.3_mm = x, y, z (machine coordinates).
+      need(3);
+      s.work_offsets[toUpper(lower.substr(0, lower.size() - 3))] = Eigen::Vector3d(v[0], v[1], v[2]);
+    } else if (lower.rfind("tool_h", 0) == 0 && lower.size() > 9 &&
+               lower.compare(lower.size() - 3, 3, "_mm") == 0) {
+      // Tool length of an H number: tool_h2_mm = 100.5.
+      need(1);
+      const auto h = parseNumber(lower.substr(6, lower.size() - 9));
+      if (!h || *h < 0 || *h != std::floor(*h))
+        throw InputError(file_name, line, 0, key, "expected tool_hN_mm with a whole number N");
+      if (v[0] < 0) throw InputError(file_name, line, 0, key, "must not be negative");
+      s.tool_lengths[static_cast<int>(*h)] = v[0];
     } else {
       throw InputError(file_name, line, 0, key,
-                       "unknown key (expected part_zero_mm, part_rotation_deg, gauge_length_mm)");
+                       "unknown key (expected part_zero_mm, part_rotation_deg, gauge_length_mm, "
+                       "g54_mm ... g59_mm, tool_hN_mm)");
     }
   }
   return s;

@@ -12,6 +12,7 @@ namespace tolver {
 
 std::string_view trim(std::string_view s);
 std::string toUpper(std::string_view s);
+std::string toLower(std::string_view s);
 // Splits text into lines (LF, CRLF or CR endings); a trailing newline adds no empty line.
 std::vector<std::string> splitLines(const std::string& text);
 // Splits one CSV line at commas (no quoting), each cell trimmed.

@@ -1,0 +1,881 @@
+#include "io/gcode_reader.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <map>
+#include <optional>
+#include <set>
+
+#include "core/arc_interpolation.h"
+#include "core/forward_kinematics.h"
+#include "core/inverse_kinematics.h"
+#include "io/io_error.h"
+#include "io/text_util.h"
+
+namespace tolver {
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+// One word of a block: its letter, value and, for G and M, the code as written ("G43.4").
+struct Word {
+  char letter = 0;
+  double value = 0.0;
+  std::string code;  // "G1", "G43.4", "M428" (no leading zeros); empty for other letters
+  int column = 0;
+};
+
+// "G" + 1 -> "G1", 43.4 -> "G43.4", 54.1 -> "G54.1".
+std::string codeOf(char letter, double value) {
+  const long v10 = std::lround(value * 10.0);
+  std::string s(1, letter);
+  s += std::to_string(v10 / 10);
+  if (v10 % 10 != 0) s += "." + std::to_string(std::labs(v10 % 10));
+  return s;
+}
+
+// G words that change geometry and that this reader does not carry out: refused.
+const std::map<std::string, const char*>& refusedG() {
+  static const std::map<std::string, const char*> m = {
+      {"G41", "cutter radius compensation is not supported: post the program with compensation "
+              "in the CAM system (tool centre path)"},
+      {"G42", "cutter radius compensation is not supported: post the program with compensation "
+              "in the CAM system (tool centre path)"},
+      {"G41.1", "cutter radius compensation is not supported"},
+      {"G42.1", "cutter radius compensation is not supported"},
+      {"G92", "G92 coordinate offsets are not supported: use work offsets (G54-G59)"},
+      {"G52", "local coordinate systems (G52) are not supported"},
+      {"G68", "coordinate rotation (G68) is not supported"},
+      {"G68.2", "tilted working planes (G68.2) are not supported: post with TCP or joint words"},
+      {"G51", "scaling (G51) is not supported"},
+      {"G51.1", "mirroring (G51.1) is not supported"},
+      {"G16", "polar coordinates (G16) are not supported"},
+      {"G7", "lathe diameter mode (G7) is not supported"},
+      {"G33", "threading (G33) is not supported"},
+      {"G76", "threading cycles (G76) are not supported"},
+      {"G38.2", "probing moves are not supported"},
+      {"G38.3", "probing moves are not supported"},
+      {"G84", "tapping cycles are not expanded"},
+      {"G85", "boring cycles are not expanded"},
+      {"G86", "boring cycles are not expanded"},
+      {"G87", "boring cycles are not expanded"},
+      {"G88", "boring cycles are not expanded"},
+      {"G89", "boring cycles are not expanded"},
+      {"G65", "macro calls (G65) are not supported"},
+      {"G66", "modal macro calls (G66) are not supported"},
+  };
+  return m;
+}
+
+// G words that do not change the tool path: accepted silently.
+const std::set<std::string>& harmlessG() {
+  static const std::set<std::string> s = {"G4",  "G9",  "G40", "G61", "G61.1", "G64", "G93",
+                                          "G94", "G95", "G96", "G97", "G15", "G50", "G69",
+                                          "G5.1", "G8", "G187", "G50.1", "G98", "G99", "G80"};
+  return s;
+}
+
+// M words that do not change the tool path: accepted silently.
+const std::set<std::string>& harmlessM() {
+  static const std::set<std::string> s = {
+      "M0",  "M1",  "M3",  "M4",  "M5",  "M6",  "M7",  "M8",  "M9",  "M10", "M11", "M12",
+      "M13", "M19", "M48", "M49", "M50", "M51", "M52", "M53", "M61", "M62", "M63", "M64",
+      "M65", "M66", "M67", "M68", "M70", "M71", "M72", "M73", "M88", "M89"};
+  return s;
+}
+
+class Reader {
+ public:
+  Reader(const std::string& text, const std::string& file, const MachineModel& model,
+         const GcodeReadOptions& opt)
+      : model_(model),
+        opt_(opt),
+        nominal_(model, Eigen::VectorXd::Zero(model.parameterCount())),
+        ik_(model) {
+    prog_.file = file;
+    prog_.dialect = "G-code";
+    prog_.multiax = true;
+    prog_.lines = splitLines(text);
+    if (!prog_.lines.empty() && prog_.lines[0].rfind("\xEF\xBB\xBF", 0) == 0)
+      prog_.lines[0].erase(0, 3);
+    prog_.frames.push_back(ClFrame{});
+    unit_ = opt.unit_mm > 0 ? opt.unit_mm : model.control.default_unit_mm;
+    prog_.units = unit_ == 25.4 ? "INCH" : "MM";
+    for (size_t a = 0; a < model.axes.size(); ++a) {
+      const std::string& n = model.axes[a].name;
+      if (n.size() == 1) letter_axis_[static_cast<unsigned char>(std::toupper(n[0]))] = static_cast<int>(a);
+    }
+    for (const auto& [name, value] : model.control.parameters) named_[lowerNoSpace(name)] = value;
+    prepareMachineCoordinates();
+    q_ = JointVector::Zero(static_cast<int>(model.axes.size()));
+  }
+
+  ClProgram run() {
+    bool any = false;
+    for (const auto& l : prog_.lines) any = any || !trim(l).empty();
+    if (!any) fail(0, 0, "", "empty file: no blocks");
+    int percent = 0;
+    for (size_t i = 0; i < prog_.lines.size(); ++i) {
+      line_ = static_cast<int>(i) + 1;
+      AptStatement st;
+      st.first_line = st.last_line = line_;
+      st.first_point = static_cast<int>(prog_.path.size());
+      const std::string_view t = trim(prog_.lines[i]);
+      if (!ended_ && !t.empty() && t[0] == '%') {
+        if (++percent >= 2 && seen_block_) ended_ = true;
+      } else if (!ended_ && !t.empty()) {
+        st.major = block(prog_.lines[i]);
+      }
+      st.point_count = static_cast<int>(prog_.path.size()) - st.first_point;
+      if (st.point_count == 0) st.first_point = -1;
+      prog_.statements.push_back(st);
+    }
+    if (prog_.path.empty())
+      fail(0, 0, "", "the program has no moves (no G0/G1/G2/G3 with axis words)");
+    if (!units_seen_) {
+      prog_.notes.push_back(std::string("no G20/G21: the control's default unit (") +
+                            (unit_ == 25.4 ? "inch" : "mm") + ") was used");
+    }
+    if (!ignored_.empty()) {
+      std::string names;
+      for (const auto& n : ignored_) names += (names.empty() ? "" : ", ") + n;
+      prog_.notes.push_back("ignored (no effect on the tool path): " + names);
+    }
+    if (tcp_without_tlc_)
+      prog_.notes.push_back(
+          "TCP mode without G43: LinuxCNC then drives the spindle gauge point; XYZ was taken as "
+          "the tool tip with the set-up's gauge length");
+    for (const auto& [word, first] : missing_offsets_)
+      prog_.notes.push_back(word + " (first used at line " + std::to_string(first) +
+                            ") is not in the set-up: its origin was put at the part zero");
+    return std::move(prog_);
+  }
+
+ private:
+  [[noreturn]] void fail(int line, int column, const std::string& field, const std::string& msg) {
+    throw InputError(prog_.file, line, column, field, msg);
+  }
+
+  static std::string lowerNoSpace(std::string_view s) {
+    std::string o;
+    for (char c : s)
+      if (!std::isspace(static_cast<unsigned char>(c)))
+        o += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return o;
+  }
+
+  // ---------------------------------------------------------------- machine coordinates
+  // p_w of the tip for machine coordinates m at rotary joints zero: g0 + Gm m (see header).
+  void prepareMachineCoordinates() {
+    const int n = static_cast<int>(model_.axes.size());
+    JointVector q0 = JointVector::Zero(n);
+    Eigen::Vector3d tip0, axis0;
+    nominal_.tipAndAxis(q0, &tip0, &axis0);
+    g0_ = tip0 + model_.setup.gauge_length * axis0;
+    int col = 0;
+    for (int a = 0; a < n; ++a) {
+      if (model_.axes[a].isRotary()) continue;
+      if (col >= 3) fail(0, 0, "machine", "G-code needs exactly three linear axes");
+      JointVector q = q0;
+      q[a] = 1.0;
+      Eigen::Vector3d tip, axis;
+      nominal_.tipAndAxis(q, &tip, &axis);
+      Gm_.col(col) = (tip - tip0) * model_.axes[a].nc_sign;
+      prismatic_[col++] = a;
+    }
+    if (col != 3) fail(0, 0, "machine", "G-code needs exactly three linear axes");
+    if (std::abs(Gm_.determinant()) < 1e-9)
+      fail(0, 0, "machine", "the linear axes of this machine are not independent");
+    Gm_inv_ = Gm_.inverse();
+    spindle_m_ = Gm_inv_ * axis0;  // the spindle axis in machine coordinates
+    // Work offsets: given ones as they are; others put their origin at the part zero.
+    default_offset_ = -Gm_inv_ * g0_;
+  }
+
+  Eigen::Vector3d workOffset(const std::string& name) {
+    auto set = set_offsets_.find(name);
+    if (set != set_offsets_.end()) return set->second;
+    auto it = model_.setup.work_offsets.find(name);
+    if (it != model_.setup.work_offsets.end()) return it->second;
+    if (!missing_offsets_.count(name)) missing_offsets_[name] = line_;
+    return default_offset_;
+  }
+
+  double toolLength() const {
+    auto it = model_.setup.tool_lengths.find(h_);
+    return it != model_.setup.tool_lengths.end() ? it->second : model_.setup.gauge_length;
+  }
+
+  // Joint vector from machine coordinates of the controlled point (prismatic) and the rotary
+  // words (deg, program values), in joint mode.
+  JointVector jointsFromMachine(const Eigen::Vector3d& m_controlled) const {
+    JointVector q = q_;
+    const Eigen::Vector3d m_gauge =
+        m_controlled + (tlc_ ? toolLength() : 0.0) * spindle_m_;
+    for (int k = 0; k < 3; ++k) q[prismatic_[k]] = model_.axes[prismatic_[k]].nc_sign * m_gauge[k];
+    setRotaries(q);
+    return q;
+  }
+
+  void setRotaries(JointVector& q) const {
+    for (size_t a = 0; a < model_.axes.size(); ++a)
+      if (model_.axes[a].isRotary()) q[a] = model_.axes[a].nc_sign * rot_word_[a] * kDegToRad;
+  }
+
+  // The machine coordinates of the controlled point that joint values q put there.
+  Eigen::Vector3d machineOfJoints(const JointVector& q) const {
+    Eigen::Vector3d m;
+    for (int k = 0; k < 3; ++k) m[k] = model_.axes[prismatic_[k]].nc_sign * q[prismatic_[k]];
+    return m - (tlc_ ? toolLength() : 0.0) * spindle_m_;
+  }
+
+  // ---------------------------------------------------------------- expressions
+  double parameter(const std::string& text, size_t& i, int col_base) {
+    // text[i] == '#'
+    ++i;
+    while (i < text.size() && text[i] == ' ') ++i;
+    if (i < text.size() && text[i] == '<') {
+      const size_t close = text.find('>', i);
+      if (close == std::string::npos) fail(line_, col_base + i, "#<", "unclosed parameter name");
+      const std::string name = lowerNoSpace(text.substr(i + 1, close - i - 1));
+      i = close + 1;
+      auto it = named_.find(name);
+      if (it == named_.end())
+        fail(line_, col_base + i, "#<" + name + ">",
+             name.rfind("_hal[", 0) == 0
+                 ? "HAL pin with no value: declare it in the machine file's <control> as "
+                   "<parameter name=\"" + name + "\" value=\"...\"/>"
+                 : "parameter has no value");
+      return it->second;
+    }
+    const double n = primary(text, i, col_base);
+    auto it = numbered_.find(static_cast<int>(n));
+    if (it == numbered_.end())
+      fail(line_, col_base + i, "#" + std::to_string(static_cast<int>(n)), "parameter has no value");
+    return it->second;
+  }
+
+  double primary(const std::string& text, size_t& i, int col_base) {
+    while (i < text.size() && text[i] == ' ') ++i;
+    if (i >= text.size()) fail(line_, col_base + i, "", "a number is missing");
+    const char c = text[i];
+    if (c == '[') {
+      ++i;
+      const double v = expression(text, i, col_base);
+      while (i < text.size() && text[i] == ' ') ++i;
+      if (i >= text.size() || text[i] != ']') fail(line_, col_base + i, "[", "missing ']'");
+      ++i;
+      return v;
+    }
+    if (c == '-' || c == '+') {
+      ++i;
+      const double v = primary(text, i, col_base);
+      return c == '-' ? -v : v;
+    }
+    if (c == '#') return parameter(text, i, col_base);
+    if (std::isalpha(static_cast<unsigned char>(c)))
+      fail(line_, col_base + i, "", "functions in expressions are not supported");
+    size_t j = i;
+    while (j < text.size() && (std::isdigit(static_cast<unsigned char>(text[j])) || text[j] == '.'))
+      ++j;
+    const auto v = parseNumber(std::string_view(text).substr(i, j - i));
+    if (!v) fail(line_, col_base + i, "", "malformed number '" + clip(text.substr(i, j - i + 1)) + "'");
+    i = j;
+    return *v;
+  }
+
+  double term(const std::string& text, size_t& i, int col_base) {
+    double v = primary(text, i, col_base);
+    for (;;) {
+      while (i < text.size() && text[i] == ' ') ++i;
+      if (i < text.size() && (text[i] == '*' || text[i] == '/')) {
+        const char op = text[i++];
+        const double r = primary(text, i, col_base);
+        if (op == '/' && r == 0.0) fail(line_, col_base + i, "/", "division by zero");
+        v = op == '*' ? v * r : v / r;
+      } else {
+        return v;
+      }
+    }
+  }
+
+  double expression(const std::string& text, size_t& i, int col_base) {
+    double v = term(text, i, col_base);
+    for (;;) {
+      while (i < text.size() && text[i] == ' ') ++i;
+      if (i < text.size() && (text[i] == '+' || text[i] == '-')) {
+        const char op = text[i++];
+        const double r = term(text, i, col_base);
+        v = op == '+' ? v + r : v - r;
+      } else {
+        return v;
+      }
+    }
+  }
+
+  static std::string clip(std::string s) {
+    if (s.size() > 60) s = s.substr(0, 57) + "...";
+    return s;
+  }
+
+  // ---------------------------------------------------------------- one block
+  std::string block(const std::string& raw) {
+    // Strip comments, keep positions (1-based columns of the raw line).
+    std::string text;
+    std::vector<int> col;
+    for (size_t i = 0; i < raw.size(); ++i) {
+      const char c = raw[i];
+      if (c == ';') break;
+      if (c == '(') {
+        const size_t close = raw.find(')', i);
+        if (close == std::string::npos) fail(line_, static_cast<int>(i) + 1, "(", "unclosed comment");
+        i = close;
+        continue;
+      }
+      if (c == '\r' || c == '\t') continue;
+      text += c;
+      col.push_back(static_cast<int>(i) + 1);
+    }
+    std::string_view tv = trim(text);
+    if (tv.empty()) return "";
+    const size_t lead = tv.data() - text.data();
+    text = std::string(tv);
+    col.erase(col.begin(), col.begin() + lead);
+    seen_block_ = true;
+    if (text[0] == '/') {  // block delete: the control runs it unless the switch is on
+      text[0] = ' ';
+    }
+    const std::string upper = toUpper(text);
+    // Parameter assignment: #n = expr or #<name> = expr.
+    if (upper[0] == '#') {
+      const size_t eq = upper.find('=');
+      if (eq == std::string::npos) fail(line_, col[0], "#", "expected '#parameter = value'");
+      const std::string lhs = lowerNoSpace(text.substr(0, eq));
+      size_t i = eq + 1;
+      const double v = expression(text, i, col[0] - 1);
+      if (lhs.size() > 2 && lhs[1] == '<') named_[lhs.substr(2, lhs.size() - 3)] = v;
+      else {
+        const auto n = parseNumber(lhs.substr(1));
+        if (!n) fail(line_, col[0], "#", "malformed parameter number");
+        numbered_[static_cast<int>(*n)] = v;
+      }
+      return "";
+    }
+    // O words: a program number alone is a name; O-word subprograms and control flow are not
+    // supported.
+    if (upper[0] == 'O') {
+      size_t j = 1;
+      while (j < upper.size() && (std::isdigit(static_cast<unsigned char>(upper[j])) || upper[j] == ' ')) ++j;
+      if (j < upper.size() && upper[j] == '<') j = upper.find('>', j) == std::string::npos ? upper.size() : upper.find('>', j) + 1;
+      const std::string rest(trim(std::string_view(upper).substr(j)));
+      if (rest.empty()) return "";
+      fail(line_, col[0], "O", "O-word subprograms and control flow ('" + clip(rest) +
+                                   "') are not supported: expand them in the post-processor");
+    }
+    // Words.
+    std::vector<Word> words;
+    size_t i = 0;
+    while (i < upper.size()) {
+      const char c = upper[i];
+      if (c == ' ') {
+        ++i;
+        continue;
+      }
+      if (!std::isalpha(static_cast<unsigned char>(c)))
+        fail(line_, col[i], "", "expected a word letter, found '" + clip(text.substr(i, 12)) + "'");
+      Word w;
+      w.letter = c;
+      w.column = col[i];
+      ++i;
+      w.value = expression(upper, i, 0);
+      if (c == 'G' || c == 'M') w.code = codeOf(c, w.value);
+      words.push_back(w);
+    }
+    return execute(words);
+  }
+
+  // ---------------------------------------------------------------- execution
+  std::string execute(const std::vector<Word>& words) {
+    std::map<char, const Word*> axis_words;  // X Y Z and rotary letters, I J K R, P Q L H
+    std::vector<const Word*> g, m;
+    for (const Word& w : words) {
+      if (w.letter == 'G') g.push_back(&w);
+      else if (w.letter == 'M') m.push_back(&w);
+      else if (w.letter == 'N' || w.letter == 'F' || w.letter == 'S' || w.letter == 'D') continue;
+      else if (w.letter == 'T') tool_ = static_cast<int>(w.value);
+      else {
+        if (axis_words.count(w.letter))
+          fail(line_, w.column, std::string(1, w.letter), "the word appears twice in the block");
+        axis_words[w.letter] = &w;
+      }
+    }
+    auto has = [&](char l) { return axis_words.count(l) > 0; };
+    auto val = [&](char l) { return axis_words.at(l)->value; };
+
+    // M words: subprograms refused, program end, TCP switches, tool number.
+    for (const Word* w : m) {
+      if (w->code == "M98" || w->code == "M99" || w->code == "M97")
+        fail(line_, w->column, w->code, "subprogram calls are not supported: expand them in the post");
+      if (w->code == "M2" || w->code == "M30") ended_ = true;
+      else if (w->code == "M61" && has('Q')) tool_ = static_cast<int>(val('Q'));
+      else if (!tcpWord(w->code) && !harmlessM().count(w->code)) ignored_.insert(w->code);
+    }
+    // G words in modal-group order.
+    std::string motion_this_block;
+    bool g53 = false, g28 = false, g10 = false;
+    for (const Word* w : g) {
+      const std::string& c = w->code;
+      if (tcpWord(c)) {
+        if (c == "G49") tlc_ = false;
+        if (c.rfind("G43", 0) == 0 || c == "G234") {
+          tlc_ = true;
+          if (has('H')) h_ = static_cast<int>(val('H'));
+          else if (h_ == 0) h_ = tool_;
+        }
+        continue;
+      }
+      auto refused = refusedG().find(c);
+      if (refused != refusedG().end()) fail(line_, w->column, c, refused->second);
+      if (c == "G0" || c == "G1" || c == "G2" || c == "G3") motion_this_block = c;
+      else if (c == "G81" || c == "G82" || c == "G83" || c == "G73") motion_this_block = c;
+      else if (c == "G17") plane_ = 2;
+      else if (c == "G18") plane_ = 1;
+      else if (c == "G19") plane_ = 0;
+      else if (c == "G20" || c == "G70") setUnits(25.4);
+      else if (c == "G21" || c == "G71") setUnits(1.0);
+      else if (c == "G90") absolute_ = true;
+      else if (c == "G91") absolute_ = false;
+      else if (c == "G90.1") arc_absolute_ = true;
+      else if (c == "G91.1") arc_absolute_ = false;
+      else if (c == "G43") {
+        tlc_ = true;
+        h_ = has('H') ? static_cast<int>(val('H')) : tool_;
+      } else if (c == "G49") {
+        tlc_ = false;
+        for (auto it = tcp_active_.begin(); it != tcp_active_.end();)
+          it = tcpOffOf(*it) == "G49" ? tcp_active_.erase(it) : std::next(it);
+      } else if (c == "G53") g53 = true;
+      else if (c == "G28" || c == "G30") g28 = true;
+      else if (c == "G10") g10 = true;
+      else if (c == "G80") {
+        motion_ = "G0";
+        cycle_ = false;
+      }
+      else if (c == "G98") cycle_return_initial_ = true;
+      else if (c == "G99") cycle_return_initial_ = false;
+      else if (c == "G54" || c == "G55" || c == "G56" || c == "G57" || c == "G58" || c == "G59" ||
+               c == "G59.1" || c == "G59.2" || c == "G59.3")
+        work_ = c;
+      else if (c == "G54.1") {
+        if (!has('P')) fail(line_, w->column, c, "G54.1 needs a P number");
+        work_ = "G54.1P" + std::to_string(static_cast<int>(val('P')));
+      } else if (!harmlessG().count(c)) {
+        ignored_.insert(c);
+      }
+    }
+    if (g10) return setOffsetByG10(axis_words, g);
+
+    // Axis words of this block (program units, absolute or incremental).
+    bool any_axis = false;
+    for (char l : {'X', 'Y', 'Z'}) any_axis |= has(l);
+    for (const auto& [l, w] : axis_words) {
+      if (l == 'X' || l == 'Y' || l == 'Z' || l == 'I' || l == 'J' || l == 'K' || l == 'R' ||
+          l == 'P' || l == 'Q' || l == 'L' || l == 'H' || l == 'E')
+        continue;
+      if (letter_axis_.count(l) && model_.axes[letter_axis_.at(l)].isRotary()) {
+        any_axis = true;
+        continue;
+      }
+      if (l == 'A' || l == 'B' || l == 'C' || l == 'U' || l == 'V' || l == 'W')
+        fail(line_, w->column, std::string(1, l),
+             std::string("the program commands axis ") + l + " but the machine has " + axisList());
+      ignored_.insert(std::string(1, l) + " word");
+    }
+    if (!motion_this_block.empty()) {
+      if (motion_this_block[1] == '8' || motion_this_block == "G73") {
+        cycle_ = true;
+        cycle_code_ = motion_this_block;
+        cycle_initial_z_ = cur_xyz_.z();
+      } else {
+        cycle_ = false;
+      }
+      motion_ = motion_this_block;
+    }
+    if (g28) return homeMove(axis_words);
+    if (g53) return machineMove(axis_words);
+    if (!any_axis) return "";
+    if (cycle_) return drillCycle(axis_words);
+    return move(axis_words, motion_);
+  }
+
+  std::string axisList() const {
+    std::string s;
+    for (const Axis& a : model_.axes) s += (s.empty() ? "" : ", ") + a.name;
+    return s;
+  }
+
+  void setUnits(double u) {
+    if (opt_.unit_mm > 0) return;  // forced by the user
+    if (units_seen_ && u != unit_)
+      prog_.notes.push_back("units change at line " + std::to_string(line_));
+    unit_ = u;
+    units_seen_ = true;
+    prog_.units_declared = true;
+    prog_.units = u == 25.4 ? "INCH" : "MM";
+  }
+
+  // TCP words of the control: switches the state; true when c is one.
+  bool tcpWord(const std::string& c) {
+    bool any = false;
+    for (const auto& [on, off] : model_.control.tcp_words) {
+      if (c == on) {
+        tcp_active_.insert(on);
+        any = true;
+        if (c[0] == 'M' && !tlc_) tcp_without_tlc_ = true;
+      } else if (c == off) {
+        tcp_active_.erase(on);
+        any = true;
+      }
+    }
+    if (any) {
+      // The control converts its current position into the new mode's coordinates.
+      cur_xyz_ = currentProgramXyz();
+      return true;
+    }
+    static const std::set<std::string> known = {"G43.4", "G43.5", "G234", "M428", "M128", "G254"};
+    if (known.count(c)) {
+      std::string declared;
+      for (const auto& [on, off] : model_.control.tcp_words) declared += (declared.empty() ? "" : ", ") + on;
+      fail(line_, 0, c,
+           declared.empty()
+               ? "a tool-centre-point word, but the machine file declares no TCP words: add "
+                 "<control><tcp on=\"" + c + "\" off=\"...\"/></control> to it"
+               : "a tool-centre-point word this machine's control does not use (it declares " +
+                     declared + "): is the program posted for this machine?");
+    }
+    return false;
+  }
+  std::string tcpOffOf(const std::string& on) const {
+    for (const auto& [a, b] : model_.control.tcp_words)
+      if (a == on) return b;
+    return "";
+  }
+  bool tcpMode() const { return !tcp_active_.empty(); }
+
+  // The program coordinates (mm) of the current position in the current mode.
+  Eigen::Vector3d currentProgramXyz() const {
+    if (tcpMode()) {
+      if (prog_.path.empty()) return Eigen::Vector3d::Zero();
+      return Gm_inv_ * (last_tip_w_ - g0_) - last_offset_;
+    }
+    return machineOfJoints(q_) - last_offset_;
+  }
+
+  // The target of the block in program coordinates (mm), from the words present.
+  Eigen::Vector3d target(const std::map<char, const Word*>& aw) const {
+    Eigen::Vector3d t = cur_xyz_;
+    const char L[3] = {'X', 'Y', 'Z'};
+    for (int k = 0; k < 3; ++k) {
+      auto it = aw.find(L[k]);
+      if (it == aw.end()) continue;
+      const double v = it->second->value * unit_;
+      t[k] = absolute_ ? v : t[k] + v;
+    }
+    return t;
+  }
+
+  void updateRotaryWords(const std::map<char, const Word*>& aw) {
+    for (const auto& [l, w] : aw) {
+      auto it = letter_axis_.find(l);
+      if (it == letter_axis_.end() || !model_.axes[it->second].isRotary()) continue;
+      const int a = it->second;
+      rot_word_[a] = absolute_ ? w->value : rot_word_[a] + w->value;
+      const Axis& ax = model_.axes[a];
+      const double q = ax.nc_sign * rot_word_[a] * kDegToRad;
+      if (!ax.endless && (q < ax.travel_min - 1e-9 || q > ax.travel_max + 1e-9))
+        fail(line_, w->column, std::string(1, l),
+             "rotary word " + formatNumber(rot_word_[a]) + " deg is outside the travel of " +
+                 ax.name + " [" + formatNumber(ax.travel_min / kDegToRad) + ", " +
+                 formatNumber(ax.travel_max / kDegToRad) + "] deg (mark the axis endless=\"true\" "
+                 "in the machine file if it turns without stops)");
+    }
+  }
+
+  // Emits the point for program coordinates xyz (mm) in the current mode.
+  void emit(const Eigen::Vector3d& xyz, bool rapid) {
+    const Eigen::Vector3d off = workOffset(work_);
+    last_offset_ = off;
+    ClPoint p;
+    p.line = line_;
+    p.rapid = rapid;
+    JointVector q;
+    if (tcpMode()) {
+      q = q_;
+      setRotaries(q);
+      Eigen::Vector3d tip, axis;
+      nominal_.tipAndAxis(q, &tip, &axis);
+      p.p_w = g0_ + Gm_ * (xyz + off);
+      p.u_w = axis;
+      // The prismatic joints follow by inverse kinematics (the rotaries stay as commanded).
+      const IkSolution sol = ik_.solve(p.p_w, p.u_w, &q);
+      if (sol.status == IkStatus::Ok)
+        for (int k = 0; k < 3; ++k) q[prismatic_[k]] = sol.q[prismatic_[k]];
+    } else {
+      q = jointsFromMachine(xyz + off);
+      nominal_.tipAndAxis(q, &p.p_w, &p.u_w);
+    }
+    q_ = q;
+    last_tip_w_ = p.p_w;
+    prog_.path.push_back(p);
+    prog_.point_frame.push_back(0);
+    prog_.joints.push_back(q);
+    prog_.tcp.push_back(tcpMode() ? 1 : 0);
+    cur_xyz_ = xyz;
+  }
+
+  // A joint-space point (G53, G28): machine coordinates of the gauge point as given.
+  void emitJoints(const JointVector& q) {
+    ClPoint p;
+    p.line = line_;
+    p.rapid = true;
+    nominal_.tipAndAxis(q, &p.p_w, &p.u_w);
+    q_ = q;
+    last_tip_w_ = p.p_w;
+    prog_.path.push_back(p);
+    prog_.point_frame.push_back(0);
+    prog_.joints.push_back(q);
+    prog_.tcp.push_back(0);
+    cur_xyz_ = currentProgramXyz();
+  }
+
+  std::string move(const std::map<char, const Word*>& aw, const std::string& motion) {
+    const Eigen::Vector3d start = cur_xyz_;
+    const Eigen::Vector3d end = target(aw);
+    const bool rotary_words = std::any_of(aw.begin(), aw.end(), [&](const auto& kv) {
+      auto it = letter_axis_.find(kv.first);
+      return it != letter_axis_.end() && model_.axes[it->second].isRotary();
+    });
+    if (motion == "G2" || motion == "G3") {
+      if (rotary_words)
+        fail(line_, 0, motion, "an arc with rotary words: arcs must keep the rotary axes fixed");
+      arc(aw, motion, start, end);
+      return motion;
+    }
+    updateRotaryWords(aw);
+    emit(end, motion == "G0");
+    return motion;
+  }
+
+  void arc(const std::map<char, const Word*>& aw, const std::string& motion,
+           const Eigen::Vector3d& start, const Eigen::Vector3d& end) {
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    n[plane_] = 1.0;
+    const Eigen::Vector3d axis = motion == "G3" ? n : -n;
+    Eigen::Vector3d centre;
+    if (aw.count('R')) {
+      const double r = aw.at('R')->value * unit_;
+      Eigen::Vector3d chord = end - start;
+      chord -= n * n.dot(chord);
+      const double d = chord.norm();
+      if (d < 1e-9) fail(line_, aw.at('R')->column, "R", "an R arc needs distinct end points");
+      const double h2 = r * r - d * d / 4.0;
+      if (h2 < -1e-6 * r * r)
+        fail(line_, aw.at('R')->column, "R", "radius " + formatNumber(std::abs(r / unit_)) +
+                                                 " is shorter than half the chord");
+      const double h = std::sqrt(std::max(0.0, h2));
+      const Eigen::Vector3d left = axis.cross(chord / d);
+      const Eigen::Vector3d mid = start + 0.5 * chord;
+      centre = mid + (r > 0 ? h : -h) * left;
+    } else {
+      const char ijk[3] = {'I', 'J', 'K'};
+      Eigen::Vector3d off = Eigen::Vector3d::Zero();
+      bool any = false;
+      for (int k = 0; k < 3; ++k)
+        if (aw.count(ijk[k])) {
+          off[k] = aw.at(ijk[k])->value * unit_;
+          any = true;
+        }
+      if (!any) fail(line_, 0, motion, "an arc needs I, J, K or R");
+      centre = arc_absolute_ ? off : start + off;
+      centre -= n * n.dot(centre - start);
+    }
+    std::vector<Eigen::Vector3d> pts;
+    const double tol = opt_.chordal_tolerance_mm;
+    const double r0 = (start - centre - n * n.dot(start - centre)).norm();
+    if (!interpolateArc(start, end, centre, axis, tol, std::max(0.002, 1e-4 * r0), pts))
+      fail(line_, 0, motion, "the end point is not on the arc's circle (radius differs by more "
+                             "than 0.002 mm)");
+    if (pts.size() > 2000000) fail(line_, 0, motion, "the arc expands into too many points");
+    ++prog_.arcs_expanded;
+    for (const Eigen::Vector3d& p : pts) emit(p, false);
+  }
+
+  std::string machineMove(const std::map<char, const Word*>& aw) {
+    JointVector q = q_;
+    for (const auto& [l, w] : aw) {
+      auto it = letter_axis_.find(l);
+      if (it == letter_axis_.end()) continue;
+      const Axis& ax = model_.axes[it->second];
+      if (ax.isRotary()) {
+        rot_word_[it->second] = w->value;
+        q[it->second] = ax.nc_sign * w->value * kDegToRad;
+      } else {
+        q[it->second] = ax.nc_sign * w->value * unit_;
+      }
+    }
+    emitJoints(q);
+    return "G53";
+  }
+
+  std::string homeMove(const std::map<char, const Word*>& aw) {
+    bool named = false;
+    for (const auto& [l, w] : aw) named |= letter_axis_.count(l) > 0;
+    if (named) {  // via the intermediate point, in program coordinates
+      const auto saved = motion_;
+      move(aw, "G0");
+      motion_ = saved;
+    }
+    JointVector q = q_;
+    for (size_t a = 0; a < model_.axes.size(); ++a) {
+      const std::string& n = model_.axes[a].name;
+      if (!named || (n.size() == 1 && aw.count(static_cast<char>(std::toupper(n[0]))))) {
+        q[a] = 0.0;
+        if (model_.axes[a].isRotary()) rot_word_[a] = 0.0;
+      }
+    }
+    emitJoints(q);
+    return "G28";
+  }
+
+  std::string drillCycle(const std::map<char, const Word*>& aw) {
+    if (!absolute_) fail(line_, 0, cycle_code_, "drilling cycles in G91 are not expanded");
+    if (aw.count('L') && aw.at('L')->value > 1)
+      fail(line_, aw.at('L')->column, "L", "repeated drilling cycles (L) are not expanded");
+    if (aw.count('R')) cycle_r_ = aw.at('R')->value * unit_;
+    if (aw.count('Z')) cycle_z_ = aw.at('Z')->value * unit_;
+    if (std::isnan(cycle_r_) || std::isnan(cycle_z_))
+      fail(line_, 0, cycle_code_, "a drilling cycle needs R and Z");
+    updateRotaryWords(aw);
+    Eigen::Vector3d xy = target(aw);
+    const double z_before = cur_xyz_.z();
+    const double clear = std::max(z_before, cycle_r_);
+    xy.z() = clear;
+    emit(xy, true);  // over the hole at the clearance height
+    xy.z() = cycle_r_;
+    emit(xy, true);
+    xy.z() = cycle_z_;
+    emit(xy, false);
+    xy.z() = cycle_return_initial_ ? std::max(cycle_initial_z_, cycle_r_) : cycle_r_;
+    emit(xy, true);
+    return cycle_code_;
+  }
+
+  std::string setOffsetByG10(const std::map<char, const Word*>& aw, const std::vector<const Word*>& g) {
+    const int L = aw.count('L') ? static_cast<int>(aw.at('L')->value) : -1;
+    if (L != 2 && L != 20)
+      fail(line_, g.front()->column, "G10", "only G10 L2 and L20 (work offsets) are supported");
+    const int P = aw.count('P') ? static_cast<int>(aw.at('P')->value) : 0;
+    static const char* names[] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
+    if (P < 0 || P > 9) fail(line_, aw.at('P')->column, "P", "expected P0 to P9");
+    const std::string name = P == 0 ? work_ : names[P - 1];
+    Eigen::Vector3d off = set_offsets_.count(name) ? set_offsets_[name] : workOffset(name);
+    const Eigen::Vector3d here = machineOfJoints(q_);
+    const char xyz[3] = {'X', 'Y', 'Z'};
+    for (int k = 0; k < 3; ++k) {
+      if (!aw.count(xyz[k])) continue;
+      const double v = aw.at(xyz[k])->value * unit_;
+      off[k] = L == 2 ? v : here[k] - v;
+    }
+    set_offsets_[name] = off;
+    missing_offsets_.erase(name);
+    cur_xyz_ = currentProgramXyz();
+    return "G10";
+  }
+
+  const MachineModel& model_;
+  GcodeReadOptions opt_;
+  ForwardKinematics nominal_;
+  InverseKinematics ik_;
+  ClProgram prog_;
+  int line_ = 0;
+  bool ended_ = false, seen_block_ = false;
+  double unit_ = 1.0;
+  bool units_seen_ = false;
+  int plane_ = 2;  // normal index: 2 = G17 (XY), 1 = G18 (ZX), 0 = G19 (YZ)
+  bool absolute_ = true, arc_absolute_ = false;
+  std::string motion_ = "G0";
+  std::string work_ = "G54";
+  bool tlc_ = false, tcp_without_tlc_ = false;
+  int h_ = 0, tool_ = 0;
+  std::set<std::string> tcp_active_;
+  std::set<std::string> ignored_;
+  std::map<std::string, int> missing_offsets_;  // work offset -> first line that used it
+  std::map<std::string, Eigen::Vector3d> set_offsets_;
+  std::map<std::string, double> named_;
+  std::map<int, double> numbered_;
+  std::map<char, int> letter_axis_;
+  std::array<double, kMaxAxes> rot_word_{};
+  // Drilling cycle state.
+  bool cycle_ = false, cycle_return_initial_ = true;
+  std::string cycle_code_;
+  double cycle_r_ = std::numeric_limits<double>::quiet_NaN();
+  double cycle_z_ = std::numeric_limits<double>::quiet_NaN();
+  double cycle_initial_z_ = 0.0;
+  // Machine coordinates.
+  Eigen::Vector3d g0_ = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d Gm_ = Eigen::Matrix3d::Identity(), Gm_inv_ = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d spindle_m_ = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d default_offset_ = Eigen::Vector3d::Zero();
+  std::array<int, 3> prismatic_{};
+  // Current state.
+  JointVector q_;
+  Eigen::Vector3d cur_xyz_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d last_tip_w_ = Eigen::Vector3d::Zero();
+  Eigen::Vector3d last_offset_ = Eigen::Vector3d::Zero();
+};
+
+}  // namespace
+
+ClProgram parseGcode(const std::string& text, const std::string& file_name,
+                     const MachineModel& model, const GcodeReadOptions& options) {
+  return Reader(text, file_name, model, options).run();
+}
+
+ClProgram readGcodeFile(const std::string& path, const MachineModel& model,
+                        const GcodeReadOptions& options) {
+  return parseGcode(readFile(path), path, model, options);
+}
+
+bool looksLikeGcode(const std::string& text) {
+  int gcode = 0, apt = 0, seen = 0;
+  for (const std::string& raw : splitLines(text)) {
+    std::string_view l = trim(raw);
+    if (l.rfind("\xEF\xBB\xBF", 0) == 0) l = trim(l.substr(3));
+    if (l.empty()) continue;
+    if (l[0] == '(' || l[0] == ';') continue;
+    if (l.rfind("$$", 0) == 0) {
+      ++apt;
+      continue;
+    }
+    const std::string u = toUpper(l.substr(0, std::min<size_t>(l.size(), 12)));
+    if (u[0] == '%' || u[0] == 'N' || u[0] == 'G' || u[0] == 'M' || u[0] == 'O' || u[0] == 'T' ||
+        u[0] == 'X' || u[0] == 'Y' || u[0] == 'Z' || u[0] == '#') {
+      // An APT major ("GOTO/", "MULTAX", "TOOL PATH/") has a slash or letters after the first.
+      const size_t slash = l.find('/');
+      const bool apt_like = slash != std::string_view::npos && slash < 16 &&
+                            std::isalpha(static_cast<unsigned char>(u[1]));
+      if (apt_like || u.rfind("MULTAX", 0) == 0 || u.rfind("PARTNO", 0) == 0 ||
+          u.rfind("TOOL PATH", 0) == 0 || u.rfind("MSYS", 0) == 0 || u.rfind("FINI", 0) == 0)
+        ++apt;
+      else
+        ++gcode;
+    } else {
+      ++apt;
+    }
+    if (++seen >= 20) break;
+  }
+  return gcode > apt;
+}
+
+}  // namespace tolver

@@ -1,0 +1,53 @@
+#pragma once
+// Reader of posted ISO 6983 G-code as five-axis controls run it (Fanuc, HAAS, LinuxCNC,
+// Heidenhain ISO, Siemens ISO mode), into the same program representation as the CL reader
+// (ClProgram: tool tip p_w and tool axis u_w in the workpiece frame w, mm), so that predict,
+// verify and setup take either.
+//
+// What a word means depends on the control (MachineModel::control, from the machine file):
+//  * in tool-centre-point mode (the control's TCP words: Fanuc G43.4/G43.5, HAAS G234 and G254,
+//    LinuxCNC M428, Heidenhain M128, Siemens TRAORI) X Y Z are the tool tip in the part frame
+//    and the rotary words are joint values: u_w is the nominal forward kinematics of the rotary
+//    joints;
+//  * outside it every axis word is a joint: machine coordinate = word + work offset (+ tool
+//    length along the spindle axis under G43), joint = nc_sign * machine coordinate, and the
+//    tool tip and axis are the nominal forward kinematics with the set-up's gauge length.
+// Machine coordinates m (mm) are those of the controlled point at rotary joints zero:
+// p_w = g0_w + G_m m, with g0_w the spindle gauge point at joints zero and G_m the prismatic
+// joints' effect on the tip (times nc_sign), both seen from w. A work offset the set-up does not
+// give puts its origin at the part zero.
+//
+// Recognised: N numbers, ( ) and ; comments, % and O lines, a UTF-8 BOM, CRLF; G0 G1 G2 G3 with
+// G17/G18/G19, I J K (incremental; G90.1 absolute) and R, helical arcs; G90/G91; G20/G21 (the
+// control's default unit otherwise); G93/G94/G95 (feed kept out: not needed); G53 and G28 (moves
+// in machine coordinates; G28 via its intermediate point to machine zero); G54-G59, G54.1 Pn,
+// G59.1-G59.3 with offsets from the set-up; G10 L2/L20 (work offsets set by the program); G43 H
+// and G49; the control's TCP words; G81/G82/G83/G73 drilling cycles expanded into straight moves
+// (G98/G99, G80); T, M6, M61 Q; parameters (#1, #<name>, #<_hal[pin]> from the control) and
+// bracketed arithmetic. Refused with file:line and the reason: subprograms and macros (M98, M99,
+// O-word control flow), cutter radius compensation (G41/G42), G92, coordinate rotation and
+// scaling (G68, G51), polar coordinates (G16) and other words that change the geometry. Words
+// that do not (spindle, coolant, feed modes, path control...) are listed once as ignored.
+#include <string>
+
+#include "core/machine_model.h"
+#include "io/apt_reader.h"
+
+namespace tolver {
+
+struct GcodeReadOptions {
+  double chordal_tolerance_mm = 0.001;  // for G2/G3 expansion
+  double unit_mm = 0.0;  // forced unit (mm per program unit), 0: G20/G21 or the control's default
+};
+
+// Throws InputError naming file:line:column and the word on malformed or unsupported input.
+ClProgram readGcodeFile(const std::string& path, const MachineModel& model,
+                        const GcodeReadOptions& options = {});
+ClProgram parseGcode(const std::string& text, const std::string& file_name,
+                     const MachineModel& model, const GcodeReadOptions& options = {});
+
+// True when the text reads as G-code rather than APT/CLDATA: its first statements are G, M, N,
+// %, O or axis words, not APT majors.
+bool looksLikeGcode(const std::string& text);
+
+}  // namespace tolver
