@@ -11,5 +11,6 @@ void registerBallbar(CLI::App& app, int* exit_code);
 void registerAllocate(CLI::App& app, int* exit_code);
 void registerVerify(CLI::App& app, int* exit_code);
 void registerDiagnose(CLI::App& app, int* exit_code);
+void registerSetup(CLI::App& app, int* exit_code);
 
 }  // namespace tolver::app

@@ -464,9 +464,9 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
     if (order[k] < ncand && attempt(order[k])) return sol;
   // Nothing fits: report the violation of the solution the continuity choice prefers (the
   // cheapest by rotary motion): its rotary travel, then its prismatic solution.
-  sol.violated_axis = -1;
   evaluated[0] = evaluated[1] = false;
-  costOrder(order);
+  costOrder(order);  // (evaluating records the rotary violations of both: start afresh)
+  sol.violated_axis = -1;
   if (order[0] < ncand) attempt(order[0]);
   if (sol.violated_axis < 0 && order[1] < ncand) attempt(order[1]);
   sol.q = JointVector::Zero(n);

@@ -216,7 +216,8 @@ TEST(Effects, MachineFileRoundTripKeepsEveryEffect) {
 
 std::string machineWithEffect(const std::string& effect) {
   std::string xml = test::readText(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
-  const std::string errors = "<errors length_unit=\"um\" angle_unit=\"urad\" default_degree=\"3\"/>";
+  const std::string errors =
+      "<errors source=\"none\" length_unit=\"um\" angle_unit=\"urad\" default_degree=\"3\"/>";
   const size_t at = xml.find(errors);
   EXPECT_NE(at, std::string::npos);
   return xml.replace(at, errors.size(),

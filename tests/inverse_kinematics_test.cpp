@@ -45,7 +45,9 @@ TEST_P(EveryMachine, ForwardAfterInverseIsTheIdentity) {
     ASSERT_EQ(s.status, IkStatus::Ok) << GetParam() << " point " << n;
     const Eigen::Isometry3d back = fk.w_T_t(s.q);
     EXPECT_LT((back.translation() - p).norm(), 1e-9);
-    EXPECT_LT(angleBetween(back.linear().col(2), u), 1e-12);
+    // Inside the singular band the free angle is kept and the axis reached to within the band.
+    EXPECT_LT(angleBetween(back.linear().col(2), u),
+              s.singular ? 2.0 * m.model.control.singular_band : 1e-12);
     ++solved;
   }
   EXPECT_EQ(solved, 5000);

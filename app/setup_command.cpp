@@ -1,0 +1,199 @@
+// tolver setup: the program's extent and joint ranges against the machine's travel, and a part
+// zero, rotation and gauge length that keep the whole program inside travel (core/setup_search).
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "app/commands.h"
+#include "app/common.h"
+#include "core/setup_search.h"
+#include "io/io_error.h"
+#include "io/text_util.h"
+
+namespace tolver::app {
+namespace {
+
+struct SetupOptions {
+  MachineOptions machine;
+  ProgramOptions program;
+  std::string output;
+  double rotation_step_deg = 15.0;
+  std::vector<double> gauge_lengths;
+};
+
+std::string axisValue(const Axis& a, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.3f", a.isRotary() ? v * 180.0 / M_PI : v);
+  return buf;
+}
+
+void printRanges(const MachineModel& model, const ClProgram& program,
+                 const std::vector<AxisRange>& ranges) {
+  std::printf("  %-5s %-26s %-24s %s\n", "axis", "the program needs", "travel", "margin");
+  for (size_t a = 0; a < model.axes.size(); ++a) {
+    const Axis& ax = model.axes[a];
+    const AxisRange& r = ranges[a];
+    const char* unit = ax.isRotary() ? "deg" : "mm";
+    if (!r.known) {
+      std::printf("  %-5s (no point solved)\n", ax.name.c_str());
+      continue;
+    }
+    const std::string needs = axisValue(ax, r.min) + " .. " + axisValue(ax, r.max) + " " + unit;
+    const std::string travel = ax.endless ? std::string("endless")
+                                          : "[" + axisValue(ax, ax.travel_min) + ", " +
+                                                axisValue(ax, ax.travel_max) + "]";
+    std::string margin;
+    if (ax.endless) {
+      margin = "-";
+    } else if (r.min < ax.travel_min - 1e-9) {
+      margin = axisValue(ax, ax.travel_min - r.min) + " " + unit + " over at line " +
+               std::to_string(program.path[r.min_index].line);
+    } else if (r.max > ax.travel_max + 1e-9) {
+      margin = axisValue(ax, r.max - ax.travel_max) + " " + unit + " over at line " +
+               std::to_string(program.path[r.max_index].line);
+    } else {
+      margin = axisValue(ax, std::min(r.min - ax.travel_min, ax.travel_max - r.max)) + " " + unit;
+    }
+    std::printf("  %-5s %-26s %-24s %s\n", ax.name.c_str(), needs.c_str(), travel.c_str(),
+                margin.c_str());
+  }
+}
+
+void runSetup(const SetupOptions& o, int* exit_code) {
+  Machine machine = loadMachine(o.machine);
+  const ClProgram program = loadProgram(o.program, machine.model);
+  if (!o.output.empty()) checkOutputDir(o.output, "-o");
+  for (double L : o.gauge_lengths)
+    if (!(L >= 0 && L < 1e5))
+      throw InputError("--gauge-lengths", 0, 0, "gauge length", "expected lengths from 0 to 1e5 mm");
+  const MachineModel& model = machine.model;
+
+  // Joint-mode G-code points are fixed in machine coordinates: the search moves the part under
+  // the points given in the part frame (CL data, TCP G-code).
+  std::vector<ClPoint> path;
+  std::vector<JointVector> commanded;
+  for (size_t i = 0; i < program.path.size(); ++i) {
+    if (!program.tcp.empty() && !program.tcp[i]) continue;
+    path.push_back(program.path[i]);
+    if (!program.joints.empty()) commanded.push_back(program.joints[i]);
+  }
+  if (path.empty())
+    throw InputError(program.file, 0, 0, "program",
+                     "no point is given in the part frame (all G-code moves are joint words): "
+                     "the set-up does not change where the machine goes");
+  const std::vector<JointVector>* cmd = commanded.empty() ? nullptr : &commanded;
+
+  Eigen::Vector3d lo = path[0].p_w, hi = lo;
+  for (const ClPoint& c : path) {
+    lo = lo.cwiseMin(c.p_w);
+    hi = hi.cwiseMax(c.p_w);
+  }
+  std::printf("tolver setup\n");
+  std::printf("  machine    %s (%s)\n", model.name.c_str(), o.machine.machine.c_str());
+  std::printf("  program    %s (%s): %zu tool positions in the part frame, units %s\n",
+              program.file.c_str(), program.dialect.c_str(), path.size(), program.units.c_str());
+  std::printf("  extent     x %.3f .. %.3f, y %.3f .. %.3f, z %.3f .. %.3f mm (part frame)\n",
+              lo.x(), hi.x(), lo.y(), hi.y(), lo.z(), hi.z());
+  const PartSetup& s = model.setup;
+  std::printf("  set-up     part zero (%.3f, %.3f, %.3f) mm, rotation %.3f deg, gauge length "
+              "%.3f mm%s\n",
+              s.part_zero_table.x(), s.part_zero_table.y(), s.part_zero_table.z(),
+              s.part_rotation * 180.0 / M_PI, s.gauge_length,
+              o.machine.setup.empty() ? " (defaults: no --setup)" : "");
+  int failed = 0, first_failed = -1;
+  const std::vector<AxisRange> now = jointRanges(model, path, cmd, &failed, &first_failed);
+  printRanges(model, program, now);
+  if (failed > 0)
+    std::printf("  rotary     %d points need rotary angles outside travel (first at line %d)\n",
+                failed, path[first_failed].line);
+
+  SetupSearchOptions so;
+  so.rotation_step = o.rotation_step_deg * M_PI / 180.0;
+  so.gauge_lengths = o.gauge_lengths;
+  const SetupSearchResult r = findSetup(model, path, cmd, so);
+  const PartSetup& b = r.setup;
+  std::printf("  searched   %d part rotations (%d rejected: rotary travel)%s\n", r.rotations_tried,
+              r.rotations_rejected,
+              o.gauge_lengths.size() > 1 ? ", gauge lengths given with --gauge-lengths" : "");
+  if (!std::isfinite(r.margin)) {
+    std::printf("  result     no rotation keeps the rotary axes inside travel: the program cannot "
+                "run on this machine in one set-up\n");
+    *exit_code = 1;
+    return;
+  }
+  std::printf("  proposed   part_zero_mm = %.3f, %.3f, %.3f\n", b.part_zero_table.x(),
+              b.part_zero_table.y(), b.part_zero_table.z());
+  std::printf("             part_rotation_deg = %.3f\n", b.part_rotation * 180.0 / M_PI);
+  std::printf("             gauge_length_mm = %.3f\n", b.gauge_length);
+  MachineModel best = model;
+  best.setup.part_zero_table = b.part_zero_table;
+  best.setup.part_rotation = b.part_rotation;
+  best.setup.gauge_length = b.gauge_length;
+  printRanges(best, program, r.ranges);
+  if (r.found) {
+    std::printf("  result     every point inside travel, smallest margin %.3f mm\n", r.margin);
+    *exit_code = 0;
+  } else {
+    // The lines the best set-up leaves outside: where to split the program.
+    std::string lines;
+    int runs = 0;
+    for (size_t k = 0; k < r.outside.size() && runs < 8; ++k) {
+      const int first = path[r.outside[k]].line;
+      size_t e = k;
+      while (e + 1 < r.outside.size() && r.outside[e + 1] == r.outside[e] + 1) ++e;
+      const int last = path[r.outside[e]].line;
+      lines += (lines.empty() ? "" : ", ") + std::to_string(first) +
+               (last != first ? "-" + std::to_string(last) : "");
+      k = e;
+      ++runs;
+    }
+    std::printf("  result     no single set-up reaches the whole program; the best leaves %zu points "
+                "outside travel, at lines %s%s: split the program there\n",
+                r.outside.size(), lines.c_str(), runs >= 8 ? ", ..." : "");
+    *exit_code = 1;
+  }
+  if (!o.output.empty()) {
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "# Set-up proposed by tolver setup for %s on %s (margin %.3f mm)\n"
+                  "part_zero_mm = %s, %s, %s\npart_rotation_deg = %s\ngauge_length_mm = %s\n",
+                  program.file.c_str(), model.name.c_str(), r.margin,
+                  formatNumber(b.part_zero_table.x()).c_str(),
+                  formatNumber(b.part_zero_table.y()).c_str(),
+                  formatNumber(b.part_zero_table.z()).c_str(),
+                  formatNumber(b.part_rotation * 180.0 / M_PI).c_str(),
+                  formatNumber(b.gauge_length).c_str());
+    std::string text = buf;
+    for (const auto& [name, off] : model.setup.work_offsets)
+      text += toLower(name) + "_mm = " + formatNumber(off.x()) + ", " + formatNumber(off.y()) +
+              ", " + formatNumber(off.z()) + "\n";
+    for (const auto& [h, len] : model.setup.tool_lengths)
+      text += "tool_h" + std::to_string(h) + "_mm = " + formatNumber(len) + "\n";
+    writeFileAtomically(o.output, text);
+    std::printf("  wrote      %s (set-up file)\n", o.output.c_str());
+  }
+}
+
+}  // namespace
+
+void registerSetup(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<SetupOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "setup",
+      "Where to clamp the part: the program's extent and joint ranges against the machine's "
+      "travel, and a part zero, rotation and gauge length that keep it inside with the largest "
+      "margin. Exit 1 when no single set-up reaches the whole program.");
+  addMachineOptions(cmd, o->machine, "machine file (XML)");
+  addProgramOptions(cmd, o->program);
+  cmd->add_option("-o,--output", o->output, "set-up file to write with the proposal");
+  cmd->add_option("--rotation-step-deg", o->rotation_step_deg,
+                  "step of the part rotations tried, deg (default 15; 0 keeps the given rotation)")
+      ->check(CLI::Range(0.0, 180.0));
+  cmd->add_option("--gauge-lengths", o->gauge_lengths,
+                  "gauge lengths to try, mm (default: the set-up's)")
+      ->delimiter(',');
+  cmd->callback([o, exit_code] { runSetup(*o, exit_code); });
+}
+
+}  // namespace tolver::app

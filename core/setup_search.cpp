@@ -1,0 +1,229 @@
+#include "core/setup_search.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "core/inverse_kinematics.h"
+
+namespace tolver {
+namespace {
+
+// The model with prismatic travel unbounded: the inverse kinematics then always places the tip
+// and only the rotary travel can fail.
+MachineModel relaxed(const MachineModel& model) {
+  MachineModel m = model;
+  for (Axis& a : m.axes)
+    if (!a.isRotary()) {
+      a.travel_min = -1e9;
+      a.travel_max = 1e9;
+    }
+  return m;
+}
+
+// Joints of every point for the model's set-up (relaxed model), NaN rows where the rotary
+// axes cannot give the tool axis.
+std::vector<JointVector> solveAll(const MachineModel& relaxed_model,
+                                  const std::vector<ClPoint>& path,
+                                  const std::vector<JointVector>* commanded,
+                                  const std::vector<int>& subset) {
+  const InverseKinematics ik(relaxed_model);
+  std::vector<JointVector> q(subset.size());
+  const JointVector* previous = nullptr;
+  for (size_t k = 0; k < subset.size(); ++k) {
+    const int i = subset[k];
+    const JointVector* ref = commanded ? &(*commanded)[i] : previous;
+    const IkSolution s = ik.solve(path[i].p_w, path[i].u_w, ref);
+    if (s.status == IkStatus::Ok) {
+      q[k] = s.q;
+      previous = &q[k];
+    } else {
+      q[k] = JointVector::Constant(relaxed_model.axes.size(),
+                                   std::numeric_limits<double>::quiet_NaN());
+      previous = nullptr;
+    }
+  }
+  return q;
+}
+
+std::vector<int> subsetOf(size_t n, int max_points) {
+  std::vector<int> s;
+  const size_t step = std::max<size_t>(1, (n + max_points - 1) / std::max(1, max_points));
+  for (size_t i = 0; i < n; i += step) s.push_back(static_cast<int>(i));
+  if (!s.empty() && s.back() != static_cast<int>(n) - 1) s.push_back(static_cast<int>(n) - 1);
+  return s;
+}
+
+// Nelder-Mead maximisation of f over R^3.
+template <class F>
+Eigen::Vector3d maximise(const F& f, const Eigen::Vector3d& start, double size, double* best) {
+  std::array<Eigen::Vector3d, 4> x;
+  std::array<double, 4> v;
+  x[0] = start;
+  for (int k = 0; k < 3; ++k) {
+    x[k + 1] = start;
+    x[k + 1][k] += size;
+  }
+  for (int k = 0; k < 4; ++k) v[k] = f(x[k]);
+  for (int it = 0; it < 600; ++it) {
+    std::array<int, 4> o = {0, 1, 2, 3};
+    std::sort(o.begin(), o.end(), [&](int a, int b) { return v[a] > v[b]; });
+    if (std::abs(v[o[0]] - v[o[3]]) < 1e-7 && (x[o[0]] - x[o[3]]).norm() < 1e-6) break;
+    const Eigen::Vector3d c = (x[o[0]] + x[o[1]] + x[o[2]]) / 3.0;
+    const int w = o[3];
+    const Eigen::Vector3d r = c + (c - x[w]);
+    const double fr = f(r);
+    if (fr > v[o[0]]) {
+      const Eigen::Vector3d e = c + 2.0 * (c - x[w]);
+      const double fe = f(e);
+      if (fe > fr) x[w] = e, v[w] = fe;
+      else x[w] = r, v[w] = fr;
+    } else if (fr > v[o[2]]) {
+      x[w] = r, v[w] = fr;
+    } else {
+      const Eigen::Vector3d k = c + 0.5 * (x[w] - c);
+      const double fk = f(k);
+      if (fk > v[w]) {
+        x[w] = k, v[w] = fk;
+      } else {
+        for (int j = 1; j < 4; ++j) {
+          x[o[j]] = x[o[0]] + 0.5 * (x[o[j]] - x[o[0]]);
+          v[o[j]] = f(x[o[j]]);
+        }
+      }
+    }
+  }
+  int b = 0;
+  for (int k = 1; k < 4; ++k)
+    if (v[k] > v[b]) b = k;
+  *best = v[b];
+  return x[b];
+}
+
+}  // namespace
+
+std::vector<AxisRange> jointRanges(const MachineModel& model, const std::vector<ClPoint>& path,
+                                   const std::vector<JointVector>* commanded, int* failed,
+                                   int* first_failed_index) {
+  const MachineModel m = relaxed(model);
+  std::vector<int> all(path.size());
+  for (size_t i = 0; i < path.size(); ++i) all[i] = static_cast<int>(i);
+  const std::vector<JointVector> q = solveAll(m, path, commanded, all);
+  std::vector<AxisRange> r(model.axes.size());
+  *failed = 0;
+  *first_failed_index = -1;
+  for (size_t i = 0; i < q.size(); ++i) {
+    if (q[i].size() == 0 || std::isnan(q[i][0])) {
+      if ((*failed)++ == 0) *first_failed_index = static_cast<int>(i);
+      continue;
+    }
+    for (size_t a = 0; a < r.size(); ++a) {
+      AxisRange& x = r[a];
+      if (!x.known || q[i][a] < x.min) x.min = q[i][a], x.min_index = static_cast<int>(i);
+      if (!x.known || q[i][a] > x.max) x.max = q[i][a], x.max_index = static_cast<int>(i);
+      x.known = true;
+    }
+  }
+  return r;
+}
+
+SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint>& path,
+                            const std::vector<JointVector>* commanded,
+                            const SetupSearchOptions& options) {
+  SetupSearchResult out;
+  out.setup = model.setup;
+  out.margin = -std::numeric_limits<double>::infinity();
+  const std::vector<int> subset = subsetOf(path.size(), options.max_points);
+  std::vector<int> prismatic;
+  for (size_t a = 0; a < model.axes.size(); ++a)
+    if (!model.axes[a].isRotary()) prismatic.push_back(static_cast<int>(a));
+  std::vector<double> rotations;
+  if (options.rotation_step <= 0.0) rotations.push_back(model.setup.part_rotation);
+  else
+    for (double r = 0.0; r < 2.0 * M_PI - 1e-9; r += options.rotation_step) rotations.push_back(r);
+  std::vector<double> gauges = options.gauge_lengths;
+  if (gauges.empty()) gauges.push_back(model.setup.gauge_length);
+
+  for (double rot : rotations) {
+    ++out.rotations_tried;
+    bool rejected = true;
+    for (double L : gauges) {
+      MachineModel m = relaxed(model);
+      m.setup.part_rotation = rot;
+      m.setup.gauge_length = L;
+      const Eigen::Vector3d x0 = model.setup.part_zero_table;
+      m.setup.part_zero_table = x0;
+      const std::vector<JointVector> q0 = solveAll(m, path, commanded, subset);
+      bool ok = true;
+      for (const JointVector& q : q0) ok = ok && !std::isnan(q[0]);
+      if (!ok) continue;  // rotary travel cannot be met at this rotation
+      rejected = false;
+      // Affine prismatic joints: a_i at x0 and B_i by unit steps with the rotaries kept.
+      const InverseKinematics base(m);
+      const size_t n = q0.size();
+      std::vector<Eigen::Vector3d> a(n);
+      std::vector<Eigen::Matrix3d> B(n);
+      for (int k = 0; k < 3; ++k) {
+        MachineModel mk = m;
+        mk.setup.part_zero_table = x0 + Eigen::Vector3d::Unit(k);
+        const InverseKinematics ik(mk);
+        for (size_t i = 0; i < n; ++i) {
+          const IkSolution s = ik.solve(path[subset[i]].p_w, path[subset[i]].u_w, &q0[i]);
+          for (int j = 0; j < 3; ++j) {
+            a[i][j] = q0[i][prismatic[j]];
+            B[i](j, k) = (s.status == IkStatus::Ok ? s.q[prismatic[j]] : a[i][j]) - a[i][j];
+          }
+        }
+      }
+      auto margin = [&](const Eigen::Vector3d& x) {
+        double t = std::numeric_limits<double>::infinity();
+        const Eigen::Vector3d d = x - x0;
+        for (size_t i = 0; i < n; ++i) {
+          const Eigen::Vector3d q = a[i] + B[i] * d;
+          for (int j = 0; j < 3; ++j) {
+            const Axis& ax = model.axes[prismatic[j]];
+            t = std::min(t, std::min(q[j] - ax.travel_min, ax.travel_max - q[j]));
+          }
+        }
+        return t;
+      };
+      double best0 = 0.0;
+      Eigen::Vector3d x = maximise(margin, x0, 50.0, &best0);
+      double best1 = 0.0;
+      x = maximise(margin, x, 5.0, &best1);  // restart: Nelder-Mead can stall at a kink
+      if (best1 > out.margin) {
+        out.margin = best1;
+        out.setup.part_zero_table = x;
+        out.setup.part_rotation = rot;
+        out.setup.gauge_length = L;
+      }
+    }
+    if (rejected) ++out.rotations_rejected;
+  }
+  // The best set-up on every point.
+  MachineModel best = model;
+  best.setup.part_zero_table = out.setup.part_zero_table;
+  best.setup.part_rotation = out.setup.part_rotation;
+  best.setup.gauge_length = out.setup.gauge_length;
+  int failed = 0, first = -1;
+  out.ranges = jointRanges(best, path, commanded, &failed, &first);
+  const InverseKinematics ik(best);
+  const JointVector* previous = nullptr;
+  JointVector prev;
+  for (size_t i = 0; i < path.size(); ++i) {
+    const JointVector* ref = commanded ? &(*commanded)[i] : previous;
+    const IkSolution s = ik.solve(path[i].p_w, path[i].u_w, ref);
+    if (s.status != IkStatus::Ok) {
+      out.outside.push_back(static_cast<int>(i));
+      previous = nullptr;
+    } else {
+      prev = s.q;
+      previous = &prev;
+    }
+  }
+  out.found = std::isfinite(out.margin) && out.outside.empty();
+  return out;
+}
+
+}  // namespace tolver

@@ -1,0 +1,54 @@
+#pragma once
+// Set-ups that reach: the joint ranges a program needs on a machine, and the part zero, part
+// rotation (about the table z axis) and gauge length that keep the whole program inside every
+// axis's travel with the largest margin.
+//
+// For a fixed rotation and gauge length the rotary joints of each point do not depend on the
+// part zero x (table frame, mm) and its prismatic joints are affine in it, q_ij(x) = a_ij + B_ij x
+// (nominal inverse kinematics, exact). The margin
+//   t(x) = min over points i and prismatic axes j of min(q_ij(x) - lo_j, hi_j - q_ij(x))
+// is concave and piecewise linear; it is maximised by Nelder-Mead from the given part zero and
+// from the centring guess, for each candidate rotation (steps of rotation_step) and gauge length.
+// Rotary travel does not depend on x; a rotation whose rotary angles leave travel is rejected.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/machine_model.h"
+#include "core/tool_path_prediction.h"
+
+namespace tolver {
+
+struct AxisRange {
+  double min = 0.0, max = 0.0;  // joint values the program needs (mm, rad)
+  int min_index = -1, max_index = -1;  // points where they occur
+  bool known = false;
+};
+
+// The joint ranges of a path on a model with its set-up, ignoring prismatic travel (so that a
+// program outside travel still shows how far it needs to go). failed: points whose tool axis
+// the rotary axes cannot give inside their travel.
+std::vector<AxisRange> jointRanges(const MachineModel& model, const std::vector<ClPoint>& path,
+                                   const std::vector<JointVector>* commanded, int* failed,
+                                   int* first_failed_index);
+
+struct SetupSearchOptions {
+  double rotation_step = M_PI / 12.0;  // candidate part rotations, rad (0 to keep the given one)
+  std::vector<double> gauge_lengths;   // candidates, mm; empty: the model's
+  int max_points = 20000;              // points used in the search (evenly spaced subset)
+};
+
+struct SetupSearchResult {
+  bool found = false;    // a set-up with every point inside travel (margin >= 0)
+  PartSetup setup;       // the best one (largest margin), even when not found
+  double margin = 0.0;   // mm: the smallest distance of a prismatic joint to its travel limit
+  std::vector<AxisRange> ranges;     // with the best set-up
+  std::vector<int> outside;          // with the best set-up: points outside travel
+  int rotations_tried = 0, rotations_rejected = 0;
+};
+
+SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint>& path,
+                            const std::vector<JointVector>* commanded,
+                            const SetupSearchOptions& options = {});
+
+}  // namespace tolver

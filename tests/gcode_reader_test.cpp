@@ -1,0 +1,258 @@
+// G-code reader: the real LinuxCNC programs against an independent forward/inverse kinematics
+// written from the LinuxCNC trt modules' equations (not from tolver's chain), joint-mode words,
+// arcs, offsets, units and the refusals.
+#include "io/gcode_reader.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/forward_kinematics.h"
+#include "core/tool_path_prediction.h"
+#include "io/io_error.h"
+#include "io/machine_file.h"
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+// LinuxCNC xyzac-trt-kins inverse (rotation points 0): joints from the controlled point pos =
+// tip + dt ez in the part frame and the joint angles (rad). dy, dz: y-offset, z-offset.
+Eigen::Vector3d xyzacInverse(const Eigen::Vector3d& pos, double a, double c, double dy, double dz,
+                             double dt) {
+  dz += dt;
+  Eigen::Vector3d J;
+  J.x() = std::cos(c) * pos.x() - std::sin(c) * pos.y();
+  J.y() = std::sin(c) * std::cos(a) * pos.x() + std::cos(c) * std::cos(a) * pos.y() -
+          std::sin(a) * pos.z() - std::cos(a) * dy + std::sin(a) * dz + dy;
+  J.z() = std::sin(c) * std::sin(a) * pos.x() + std::cos(c) * std::sin(a) * pos.y() +
+          std::cos(a) * pos.z() - std::sin(a) * dy - std::cos(a) * dz + dz;
+  return J;
+}
+// Its forward: pos from joints.
+Eigen::Vector3d xyzacForward(const Eigen::Vector3d& J, double a, double c, double dy, double dz,
+                             double dt) {
+  dz += dt;
+  Eigen::Vector3d p;
+  p.x() = std::cos(c) * J.x() + std::sin(c) * std::cos(a) * (J.y() - dy) +
+          std::sin(c) * std::sin(a) * (J.z() - dz) + std::sin(c) * dy;
+  p.y() = -std::sin(c) * J.x() + std::cos(c) * std::cos(a) * (J.y() - dy) +
+          std::cos(c) * std::sin(a) * (J.z() - dz) + std::cos(c) * dy;
+  p.z() = -std::sin(a) * (J.y() - dy) + std::cos(a) * (J.z() - dz) + dz;
+  return p;
+}
+// LinuxCNC xyzbc-trt-kins inverse (rotation points 0).
+Eigen::Vector3d xyzbcInverse(const Eigen::Vector3d& pos, double b, double c, double dx, double dz,
+                             double dt) {
+  dz += dt;
+  const double dpx = -std::cos(b) * dx - std::sin(b) * dz + dx;
+  const double dpz = std::sin(b) * dx - std::cos(b) * dz + dz;
+  Eigen::Vector3d J;
+  J.x() = std::cos(c) * std::cos(b) * pos.x() - std::sin(c) * std::cos(b) * pos.y() +
+          std::sin(b) * pos.z() + dpx;
+  J.y() = std::sin(c) * pos.x() + std::cos(c) * pos.y();
+  J.z() = -std::cos(c) * std::sin(b) * pos.x() + std::sin(c) * std::sin(b) * pos.y() +
+          std::cos(b) * pos.z() + dpz;
+  return J;
+}
+
+Machine machine(const char* rel, double gauge = 0.0) {
+  Machine m = readMachineFile(test::sourcePath(rel));
+  m.model.setup.gauge_length = gauge;
+  return m;
+}
+
+// Every point of the real program: tolver's joints (nominal IK, rotaries as commanded) equal
+// LinuxCNC's inverse kinematics of the program's XYZ and rotary words.
+TEST(GcodeReader, BoatXyzacMatchesLinuxCncKinematics) {
+  for (double dt : {0.0, 25.0}) {
+    const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", dt);
+    const ClProgram p = readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzac.ngc"), m.model);
+    ASSERT_GT(p.path.size(), 1800u);
+    EXPECT_EQ(p.units, "MM");
+    EXPECT_FALSE(p.units_declared);
+    const PredictionResult r = predictToolPath(m.model, m.params, p.path, 20, &p.joints);
+    ASSERT_TRUE(r.ok()) << r.failures.front().message << " line " << r.failures.front().line;
+    int tcp = 0;
+    double worst = 0.0, worst_axis = 0.0;
+    for (size_t i = 0; i < p.path.size(); ++i) {
+      if (!p.tcp[i]) continue;
+      ++tcp;
+      const JointVector& q = r.points[i].q;
+      const double a = q[3], c = q[4];
+      EXPECT_NEAR(a, p.joints[i][3], 1e-12) << "line " << p.path[i].line;
+      EXPECT_NEAR(c, p.joints[i][4], 1e-12) << "line " << p.path[i].line;
+      const Eigen::Vector3d pos = p.path[i].p_w + dt * Eigen::Vector3d::UnitZ();
+      const Eigen::Vector3d J = xyzacInverse(pos, a, c, 20, 10, dt);
+      worst = std::max(worst, (J - q.head<3>()).norm());
+      const Eigen::Vector3d u(std::sin(c) * std::sin(a), std::cos(c) * std::sin(a), std::cos(a));
+      worst_axis = std::max(worst_axis, (u - p.path[i].u_w).norm());
+    }
+    EXPECT_GT(tcp, 1800);
+    EXPECT_LT(worst, 1e-9) << "dt " << dt;
+    EXPECT_LT(worst_axis, 1e-12);
+  }
+}
+
+TEST(GcodeReader, BoatXyzbcMatchesLinuxCncKinematics) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzbc_trt.xml", 50.0);
+  const ClProgram p = readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc"), m.model);
+  const PredictionResult r = predictToolPath(m.model, m.params, p.path, 20, &p.joints);
+  ASSERT_TRUE(r.ok()) << r.failures.front().message;
+  double worst = 0.0;
+  for (size_t i = 0; i < p.path.size(); ++i) {
+    const JointVector& q = r.points[i].q;
+    const Eigen::Vector3d J =
+        xyzbcInverse(p.path[i].p_w + 50.0 * Eigen::Vector3d::UnitZ(), q[3], q[4], -20, -15, 50.0);
+    worst = std::max(worst, (J - q.head<3>()).norm());
+    const Eigen::Vector3d u(-std::cos(q[4]) * std::sin(q[3]), std::sin(q[4]) * std::sin(q[3]),
+                            std::cos(q[3]));
+    EXPECT_LT((u - p.path[i].u_w).norm(), 1e-12) << "line " << p.path[i].line;
+  }
+  EXPECT_LT(worst, 1e-9);
+}
+
+// Outside TCP mode the words are joints: the tip is LinuxCNC's forward kinematics of them.
+TEST(GcodeReader, JointWordsGiveLinuxCncForwardKinematics) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 40.0);
+  const ClProgram p = parseGcode(
+      "G21 G90\nM429\nG43 H1\nG0 X10 Y-20 Z30 A-25 C40\nG1 X-15 Y5 Z-12 A10 C-130\nG1 A-60 C400\n",
+      "joint.ngc", m.model);
+  ASSERT_EQ(p.path.size(), 3u);
+  const double words[3][5] = {{10, -20, 30, -25, 40}, {-15, 5, -12, 10, -130}, {-15, 5, -12, -60, 400}};
+  for (int k = 0; k < 3; ++k) {
+    const double a = words[k][3] * kDeg, c = words[k][4] * kDeg;
+    // G43 H1 with no tool table: H1 is the gauge length, so the joint is word + 40 on Z and the
+    // controlled point (the tip) is the word.
+    const Eigen::Vector3d J(words[k][0], words[k][1], words[k][2] + 40.0);
+    const Eigen::Vector3d tip = xyzacForward(J, a, c, 20, 10, 40.0) - 40.0 * Eigen::Vector3d::UnitZ();
+    EXPECT_LT((tip - p.path[k].p_w).norm(), 1e-9) << k;
+    EXPECT_NEAR(p.joints[k][2], J.z(), 1e-12);
+    EXPECT_NEAR(p.joints[k][4], c, 1e-12);
+  }
+}
+
+// The table-dual-rotary demo: parameters from the control, G10 L2/L20, G53, M61, G43.
+TEST(GcodeReader, ReadsTheTableDualRotaryDemoWithControlParameters) {
+  const Machine m = machine("tests/fixtures/machines/xyzab_tdr_like.xml", 30.0);
+  const ClProgram p = readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_xyzab-tdr-demo.ngc"), m.model);
+  EXPECT_GT(p.path.size(), 25u);
+  EXPECT_TRUE(p.units_declared);
+  // Without the control's HAL pins the same program names the line and the pin.
+  Machine bare = m;
+  bare.model.control.parameters.clear();
+  try {
+    readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_xyzab-tdr-demo.ngc"), bare.model);
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 10);
+    EXPECT_NE(std::string(e.what()).find("_hal[xyzab_tdr_kins.x-rot-point]"), std::string::npos) << e.what();
+  }
+}
+
+// A HAAS-style inch program: BOM, CRLF, listing header, G20, G234/G49, G254/G255, arcs in both
+// forms, multi-turn C on an endless axis, G53 and G28.
+TEST(GcodeReader, InchHaasProgramWithTcpAndDwo) {
+  Machine m = machine("resources/machines/umc_bc_trunnion.xml", 76.2);
+  const ClProgram p = readGcodeFile(test::sourcePath("tests/fixtures/gcode/umc_bc_inch.nc"), m.model);
+  EXPECT_EQ(p.units, "INCH");
+  // N70 G02 X0.5 Y0.5 I0.5 J0: a quarter circle about (0.5, 0) in the part frame, clockwise.
+  int arc_points = 0;
+  for (size_t i = 0; i < p.path.size(); ++i)
+    if (p.path[i].line == 10) {
+      ++arc_points;
+      EXPECT_NEAR((p.path[i].p_w.head<2>() - Eigen::Vector2d(12.7, 0)).norm(), 12.7, 1e-9);
+      EXPECT_NEAR(p.path[i].p_w.z(), 2.54, 1e-9);
+    }
+  EXPECT_GT(arc_points, 10);
+  // The R arc of N80 ends at (1, 0) inch.
+  const ClPoint* end80 = nullptr;
+  for (const ClPoint& c : p.path)
+    if (c.line == 11) end80 = &c;
+  ASSERT_NE(end80, nullptr);
+  EXPECT_LT((end80->p_w - Eigen::Vector3d(25.4, 0, 2.54)).norm(), 1e-9);
+  // N100: C-400 is kept as a multi-turn joint value; the tool axis follows B30 C-400.
+  for (size_t i = 0; i < p.path.size(); ++i)
+    if (p.path[i].line == 13) EXPECT_NEAR(p.joints[i][4], -400 * kDeg, 1e-12);
+  const PredictionResult r = predictToolPath(m.model, m.params, p.path, 20, &p.joints);
+  EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.failures.front().message);
+}
+
+TEST(GcodeReader, ArcFormsAgreeAndIncrementalMovesAdd) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const ClProgram ijk = parseGcode("G21 M428\nG0 X0 Y0 Z0 A0 C0\nG3 X-10 Y10 I-10 J0\n", "a.ngc", m.model);
+  const ClProgram r = parseGcode("G21 M428\nG0 X0 Y0 Z0 A0 C0\nG3 X-10 Y10 R10\n", "b.ngc", m.model);
+  ASSERT_EQ(ijk.path.size(), r.path.size());
+  for (size_t i = 0; i < r.path.size(); ++i) EXPECT_LT((ijk.path[i].p_w - r.path[i].p_w).norm(), 1e-9);
+  const ClProgram inc = parseGcode("G21 M428\nG0 X1 Y2 Z3 A0 C0\nG91 G1 X1 Y1 Z-1\nX1\n", "c.ngc", m.model);
+  EXPECT_LT((inc.path.back().p_w - Eigen::Vector3d(3, 3, 2)).norm(), 1e-12);
+}
+
+TEST(GcodeReader, DrillingCycleBecomesStraightMoves) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const ClProgram p = parseGcode("G21 M428\nG0 X0 Y0 Z20 A0 C0\nG98 G81 X5 Y6 Z-3 R2 F100\nX8\nG80\n",
+                                 "d.ngc", m.model);
+  // Per hole: over it at the clearance, down to R, feed to Z, back to the initial height.
+  ASSERT_EQ(p.path.size(), 9u);
+  EXPECT_LT((p.path[3].p_w - Eigen::Vector3d(5, 6, -3)).norm(), 1e-12);
+  EXPECT_FALSE(p.path[3].rapid);
+  EXPECT_LT((p.path[4].p_w - Eigen::Vector3d(5, 6, 20)).norm(), 1e-12);
+  EXPECT_LT((p.path[7].p_w - Eigen::Vector3d(8, 6, -3)).norm(), 1e-12);
+}
+
+// Refusals name file and line; harmless unknown words are listed, not dropped silently.
+TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  struct Case {
+    const char* text;
+    int line;
+    const char* says;
+  };
+  const Case cases[] = {
+      {"G21\nG0 X0 Y0 Z0\nG68 X0 Y0 R30\n", 3, "rotation"},
+      {"G21\nG41 D1\n", 2, "cutter radius compensation"},
+      {"G21\nM98 P1000\n", 2, "subprogram"},
+      {"G21\no100 call\n", 2, "O-word"},
+      {"G21\nG0 X0 Y0 Z0 B10\n", 2, "axis B"},
+      {"G21\nG43.4 H1\n", 2, "does not use"},
+      {"G21\nG0 X1.2.3\n", 2, "malformed"},
+      {"G21\nG0 X0 Y0 Z0 A70\n", 2, "outside the travel"},
+      {"G21\nG0 X(unclosed\n", 2, "unclosed comment"},
+      {"(only a comment)\n", 0, "no moves"},
+  };
+  for (const Case& c : cases) {
+    try {
+      parseGcode(c.text, "bad.ngc", m.model);
+      ADD_FAILURE() << "accepted: " << c.text;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.line(), c.line) << c.text << " -> " << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("bad.ngc"), std::string::npos);
+    }
+  }
+  // A TCP word on a machine whose file declares no control.
+  const Machine plain = machine("resources/machines/trunnion_ac_trt.xml", 0.0);
+  try {
+    parseGcode("G21\nM428\nG0 X0 Y0 Z0\n", "tcp.ngc", plain.model);
+    ADD_FAILURE() << "accepted M428 without TCP words";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("declares no TCP words"), std::string::npos) << e.what();
+  }
+  const ClProgram p = parseGcode("G21 G64 P0.01\nM123\nG0 X0 Y0 Z0 A0 C0 M8\n", "ok.ngc", m.model);
+  bool listed = false;
+  for (const std::string& n : p.notes) listed |= n.find("M123") != std::string::npos;
+  EXPECT_TRUE(listed);
+}
+
+TEST(GcodeReader, DetectsGcodeAgainstApt) {
+  EXPECT_TRUE(looksLikeGcode("%\nO1000\nN10 G21 G90\nG0 X0 Y0\n"));
+  EXPECT_TRUE(looksLikeGcode("\xEF\xBB\xBF; comment\nM428\nG0 X0\n"));
+  EXPECT_FALSE(looksLikeGcode("PARTNO/X\nMULTAX\nGOTO/0,0,0,0,0,1\n"));
+  EXPECT_FALSE(looksLikeGcode("$$ header\nTOOL PATH/A\nGOTO/1,2,3\n"));
+  EXPECT_TRUE(looksLikeGcode(test::readText(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc"))));
+}
+
+}  // namespace
+}  // namespace tolver
