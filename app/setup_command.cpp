@@ -110,6 +110,8 @@ void runSetup(const SetupOptions& o, int* exit_code) {
 
   SetupSearchOptions so;
   so.rotation_step = o.rotation_step_deg * M_PI / 180.0;
+  // A posted program's rotary words assume the part as the post placed it: keep its rotation.
+  if (program.dialect == "G-code") so.rotation_step = 0.0;
   so.gauge_lengths = o.gauge_lengths;
   const SetupSearchResult r = findSetup(model, path, cmd, so);
   const PartSetup& b = r.setup;

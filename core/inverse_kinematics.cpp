@@ -12,7 +12,8 @@ namespace {
 constexpr double kTwoPi = 2.0 * M_PI;
 constexpr double kSingularEps = 1e-9;   // |component of a unit vector normal to an axis|
 // (numerical floor; the control's singular band, NcControl::singular_band, widens it)
-constexpr double kTravelEps = 1e-9;     // mm or rad of tolerance on travel limits
+constexpr double kTravelEps = 1e-6;  // mm or rad of tolerance on travel limits: a CL file
+                                     // written to 6 decimals may round a point at a limit over
 
 // Paden-Kahan sub-problem 1: cos and sin of the angle theta with Rot(w, theta) p = q (p, q
 // equally inclined to the unit axis w), without a trigonometric call. Returns false when p or q
@@ -467,6 +468,7 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
   evaluated[0] = evaluated[1] = false;
   costOrder(order);  // (evaluating records the rotary violations of both: start afresh)
   sol.violated_axis = -1;
+  evaluated[0] = evaluated[1] = false;
   if (order[0] < ncand) attempt(order[0]);
   if (sol.violated_axis < 0 && order[1] < ncand) attempt(order[1]);
   sol.q = JointVector::Zero(n);

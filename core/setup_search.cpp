@@ -188,10 +188,18 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
         }
         return t;
       };
-      double best0 = 0.0;
-      Eigen::Vector3d x = maximise(margin, x0, 50.0, &best0);
-      double best1 = 0.0;
-      x = maximise(margin, x, 5.0, &best1);  // restart: Nelder-Mead can stall at a kink
+      // Nelder-Mead stalls at the kinks of a piecewise-linear function: restart from the best
+      // point with shrinking simplices, and from the centring guess of each axis's range.
+      double best1 = margin(x0);
+      Eigen::Vector3d x = x0;
+      for (double size : {200.0, 50.0, 100.0, 10.0, 30.0, 2.0, 0.5}) {
+        double v = 0.0;
+        const Eigen::Vector3d y = maximise(margin, x, size, &v);
+        if (v > best1) {
+          best1 = v;
+          x = y;
+        }
+      }
       if (best1 > out.margin) {
         out.margin = best1;
         out.setup.part_zero_table = x;
