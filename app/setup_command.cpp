@@ -62,7 +62,14 @@ void printRanges(const MachineModel& model, const ClProgram& program,
 
 void runSetup(const SetupOptions& o, int* exit_code) {
   Machine machine = loadMachine(o.machine);
+  // The search moves the part frame with the program in it: a posted program's work offsets
+  // move with it (their origin at the part zero), so the set-up's are set aside here.
+  const bool had_offsets = !machine.model.setup.work_offsets.empty();
+  machine.model.setup.work_offsets.clear();
   const ClProgram program = loadProgram(o.program, machine.model);
+  if (had_offsets && program.dialect == "G-code")
+    std::fprintf(stderr, "tolver: note: the set-up's work offsets are set aside: the search puts "
+                         "G54... at the part zero it proposes\n");
   if (!o.output.empty()) checkOutputDir(o.output, "-o");
   for (double L : o.gauge_lengths)
     if (!(L >= 0 && L < 1e5))
@@ -167,9 +174,14 @@ void runSetup(const SetupOptions& o, int* exit_code) {
                   formatNumber(b.part_rotation * 180.0 / M_PI).c_str(),
                   formatNumber(b.gauge_length).c_str());
     std::string text = buf;
-    for (const auto& [name, off] : model.setup.work_offsets)
-      text += toLower(name) + "_mm = " + formatNumber(off.x()) + ", " + formatNumber(off.y()) +
-              ", " + formatNumber(off.z()) + "\n";
+    // The proposal moves the part frame: the work offsets of a posted program go with it (a
+    // work offset the set-up does not give has its origin at the part zero: touch off there).
+    if (program.dialect == "G-code")
+      text += "# work offsets: not given, so G54... are at the part zero above (touch off there)\n";
+    else
+      for (const auto& [name, off] : model.setup.work_offsets)
+        text += toLower(name) + "_mm = " + formatNumber(off.x()) + ", " + formatNumber(off.y()) +
+                ", " + formatNumber(off.z()) + "\n";
     for (const auto& [h, len] : model.setup.tool_lengths)
       text += "tool_h" + std::to_string(h) + "_mm = " + formatNumber(len) + "\n";
     writeFileAtomically(o.output, text);

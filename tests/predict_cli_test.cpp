@@ -162,3 +162,80 @@ TEST_F(PredictCli, HelpExitsZero) {
 
 }  // namespace
 }  // namespace tolver
+
+namespace tolver {
+namespace {
+
+class GcodeCli : public test::TempDirTest {
+ protected:
+  static std::string src(const std::string& rel) { return test::sourcePath(rel); }
+};
+
+// A posted program end to end: predict on its machine, the predicted CL reads back with the same
+// set-up (the singular band and the travel tolerance keep the pole and the limits stable), and
+// the machine without errors says its share is zero by construction.
+TEST_F(GcodeCli, PostedProgramPredictsAndItsPredictedClReadsBack) {
+  const std::string m = src("resources/machines/umc_bc_trunnion.xml");
+  auto r = test::runTolver("predict --machine " + m + " --nc " + src("samples/gcode/umc_bc_inch.nc") +
+                           " --gauge-length 76.2 -o " + path("umc.apt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("(G-code)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("units INCH"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("zero by construction"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("rotary steps above"), std::string::npos) << r.output;
+  r = test::runTolver("predict --machine " + m + " --cl " + path("umc.apt") +
+                      " --gauge-length 76.2 -o " + path("back.apt"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  for (const char* machine : {"resources/machines/linuxcnc_xyzac_trt.xml"}) {
+    r = test::runTolver(std::string("predict --machine ") + src(machine) + " --nc " +
+                        src("samples/gcode/boat-xyzac.ngc") + " --setup " +
+                        src("samples/gcode/linuxcnc_setup.txt") + " -o " + path("boat.apt"));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    r = test::runTolver(std::string("predict --machine ") + src(machine) + " --cl " +
+                        path("boat.apt") + " --setup " + src("samples/gcode/linuxcnc_setup.txt") +
+                        " -o " + path("boat_back.apt"));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+  }
+}
+
+// The LinuxCNC boat does not fit with the part zero at the C axis and a 75 mm tool... it does:
+// setup reports the ranges and a proposal inside travel, and writes a set-up predict accepts.
+TEST_F(GcodeCli, SetupProposesASetupThatReaches) {
+  const std::string m = src("resources/machines/linuxcnc_xyzac_trt.xml");
+  auto r = test::runTolver("setup --machine " + m + " --nc " + src("samples/gcode/boat-xyzac.ngc") +
+                           " --setup " + src("samples/gcode/linuxcnc_setup.txt") + " -o " +
+                           path("proposed.txt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("every point inside travel"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the program needs"), std::string::npos);
+  r = test::runTolver("predict --machine " + m + " --nc " + src("samples/gcode/boat-xyzac.ngc") +
+                      " --setup " + path("proposed.txt") + " -o " + path("p.apt"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  // Far outside travel: the failing axis, how far over and the count per axis.
+  r = test::runTolver("predict --machine " + m + " --nc " + src("samples/gcode/boat-xyzac.ngc") +
+                      " --part-zero 0,0,0 --gauge-length 400 -o " + path("q.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("beyond its travel"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("points fail (first axis to break: Z"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("q.apt")));
+}
+
+TEST_F(GcodeCli, BadGcodeExitsWithCode2NamingTheLine) {
+  std::ofstream(path("bad.nc")) << "G21 G90\nG0 X0 Y0 Z0\nG68 X0 Y0 R15\n";
+  auto r = test::runTolver("predict --machine " + src("resources/machines/linuxcnc_xyzac_trt.xml") +
+                           " --nc " + path("bad.nc") + " -o " + path("x.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("bad.nc:3"), std::string::npos) << r.output;
+  std::ofstream(path("tcp.nc")) << "G21\nM428\nG0 X0 Y0 Z0\n";
+  r = test::runTolver("predict --machine " + src("resources/machines/trunnion_ac_trt.xml") +
+                      " --nc " + path("tcp.nc") + " -o " + path("y.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("declares no TCP words"), std::string::npos) << r.output;
+  r = test::runTolver("predict --machine " + src("resources/machines/linuxcnc_xyzac_trt.xml") +
+                      " --nc " + src("samples/gcode/boat-xyzac.ngc") + " --gauge-length -5 -o " +
+                      path("z.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+}
+
+}  // namespace
+}  // namespace tolver
