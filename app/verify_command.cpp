@@ -35,8 +35,8 @@ namespace fs = std::filesystem;
 
 struct VerifyOptions {
   MachineOptions machine;
-  std::string cl, part, zones_file, report_dir, batch;
-  std::string mesh_units;
+  std::string cl, nc, part, zones_file, report_dir, batch;
+  std::string mesh_units, cl_units, tolerance_units;
   std::vector<double> mesh_offset, mesh_rotation_deg;
   double tolerance = NAN, uz = NAN, asme_u = NAN;
   double spacing = 0.5, step = NAN, excess_range = NAN, gouge_range = NAN, max_hole = -1;
@@ -57,9 +57,46 @@ struct JobOutcome {
 
 std::mutex g_vtk_mutex;  // VTK rendering and writing are not thread-safe
 
+// A part file and a program whose sizes differ by the inch factor: one of them is in inches.
+void checkPartUnits(const VerifyOptions& o, const ClProgram& program, const TriangleMesh& mesh) {
+  if (mesh.vertices.empty() || program.path.empty()) return;
+  Eigen::Vector3d lo = mesh.vertices[0], hi = lo, plo = program.path[0].p_w, phi = plo;
+  for (const auto& v : mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+  for (const auto& c : program.path) {
+    if (c.rapid) continue;
+    plo = plo.cwiseMin(c.p_w);
+    phi = phi.cwiseMax(c.p_w);
+  }
+  const double part = (hi - lo).norm(), prog = (phi - plo).norm();
+  if (!(part > 0.0) || !(prog > 0.0)) return;
+  const double ratio = prog / part;
+  char buf[400];
+  if (ratio > 12.0 && ratio < 60.0 && o.mesh_units.empty()) {
+    std::snprintf(buf, sizeof buf,
+                  "the part (diagonal %.3f mm as read) is %.1f times smaller than the program "
+                  "(%.1f mm): it looks like inches; give --mesh-units inch",
+                  part, ratio, prog);
+    throw InputError(o.part, 0, 0, "units", buf);
+  }
+  if (ratio < 1.0 / 12.0 && ratio > 1.0 / 60.0 && !program.units_declared && o.cl_units.empty()) {
+    std::snprintf(buf, sizeof buf,
+                  "the program declares no units and is %.1f times smaller than the part "
+                  "(diagonal %.3f against %.1f mm): it looks like inches; give --cl-units inch",
+                  1.0 / ratio, prog, part);
+    throw InputError(program.file, 0, 0, "units", buf);
+  }
+}
+
 std::vector<ToleranceZone> zonesFrom(const VerifyOptions& o) {
   std::vector<ToleranceZone> zones;
   if (!std::isnan(o.tolerance)) {
+    // --tolerance is in mm: 30 meant as micrometres would accept gouges of tens of millimetres.
+    if (o.tolerance > 1.0 && o.tolerance_units.empty())
+      throw InputError("--tolerance", 0, 0, "tolerance",
+                       formatNumber(o.tolerance) + " mm is not a plausible profile tolerance: "
+                       "--tolerance is in mm (" + formatNumber(o.tolerance / 1000.0) +
+                       " for " + formatNumber(o.tolerance) + " um); give --tolerance-units mm to "
+                       "confirm a tolerance above 1 mm");
     if (!std::isnan(o.uz) && !std::isnan(o.asme_u))
       throw InputError("--uz", 0, 0, "zone", "give either --uz (ISO) or --asme-u (ASME), not both");
     try {
@@ -88,10 +125,12 @@ Cutter cutterFrom(const VerifyOptions& o, const ClProgram& program) {
     return c;
   }
   if (program.cutters.empty())
-    throw InputError(o.cl, 0, 0, "CUTTER", "the program declares no cutter (CUTTER or TLDATA); give --cutter d,r");
+    throw InputError(program.file, 0, 0, "CUTTER",
+                     "the program declares no cutter (CUTTER or TLDATA; G-code never does); give "
+                     "--cutter d,r");
   const CutterSpec& s = program.cutters.back();
   if (!cutterFromApt(s.source, s.values, &c))
-    throw InputError(o.cl, s.line, 0, s.source, "the values do not describe a cutter");
+    throw InputError(program.file, s.line, 0, s.source, "the values do not describe a cutter");
   return c;
 }
 
@@ -194,19 +233,29 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   ProgressBar bar(progress_bar && !o.quiet);
   Machine machine = loadMachine(o.machine);
   const std::vector<ToleranceZone> zones = zonesFrom(o);
-  const ClProgram program = readAptFile(o.cl);
-  if (program.path.empty()) throw InputError(o.cl, 0, 0, "GOTO", "the program has no tool positions");
+  ProgramOptions po;
+  po.cl = o.cl;
+  po.nc = o.nc;
+  po.units = o.cl_units;
+  const ClProgram program = loadProgram(po, machine.model);
   const Cutter cutter = cutterFrom(o, program);
-  fs::create_directories(o.report_dir);
-  if (!fs::is_directory(o.report_dir))
-    throw InputError(o.report_dir, 0, 0, "--report-dir", "cannot create the directory");
 
-  // Joint values and CL_predicted (thesis 5.5.3).
-  const PredictionResult pred = predictToolPath(machine.model, machine.params, program.path);
-  if (!pred.ok()) {
-    const PredictionFailure& f = pred.failures.front();
-    throw InputError(o.cl, f.line, 0, "unreachable", f.message);
-  }
+  // Joint values and CL_predicted (thesis 5.5.3); a posted program's own rotary solution.
+  const PredictionResult pred = predictToolPath(machine.model, machine.params, program.path, 20,
+                                                program.joints.empty() ? nullptr : &program.joints);
+  if (!pred.ok())
+    throw InputError(program.file, pred.failures.front().line, 0, "unreachable",
+                     describeUnreachable(machine.model, pred));
+  std::vector<std::string> warnings = setupWarnings(machine.model);
+  for (const std::string& w : unitWarnings(program, machine.model, o.cl_units)) warnings.push_back(w);
+  for (const std::string& w : programNotes(program)) warnings.push_back(program.file + ": " + w);
+  bool no_errors = false;
+  const std::string errors = machineErrorsStatement(machine, &no_errors);
+  if (no_errors) warnings.push_back(errors);
+  for (const RotaryJump& j : findRotaryJumps(machine.model, program.path, pred, 10.0 * M_PI / 180.0))
+    warnings.push_back(fmt("program risk: rotary step of %+.1f deg of ", j.step * 180.0 / M_PI) +
+                       machine.model.axes[j.axis].name + " between cutting moves at line " +
+                       std::to_string(j.line));
   phase("read_and_predict");
   double t_min = INFINITY;
   for (const auto& z : zones) t_min = std::min(t_min, z.tolerance);
@@ -222,7 +271,8 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   rep.name = name;
   rep.machine_name = machine.model.name;
   rep.machine_file = o.machine.machine;
-  rep.program_file = o.cl;
+  rep.program_file = program.file;
+  rep.notes = warnings;
   rep.cutter = cutter.describe() + ", length " + fmt("%.4g", cutter.effectiveLength()) + " mm" +
                (cutter.length > 0 ? "" : " (assumed: 3 D)");
   rep.cl_points = static_cast<int>(program.path.size());
@@ -255,6 +305,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
     }
     io.repair.max_hole_perimeter = o.max_hole;
     const ImportedPart part = readPartMesh(o.part, io);
+    checkPartUnits(o, program, part.mesh);
     rep.has_repair = true;
     rep.repair = part.repair;
     rep.part_file = o.part;
@@ -288,6 +339,9 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   }
 
   // Files: deviations, swept surfaces, images, reports.
+  fs::create_directories(o.report_dir);
+  if (!fs::is_directory(o.report_dir))
+    throw InputError(o.report_dir, 0, 0, "--report-dir", "cannot create the directory");
   const fs::path dir(o.report_dir);
   VerifyReport& r = rep;
   writeFileAtomically((dir / "deviations.csv").string(), formatDeviationsCsv(r));
@@ -337,8 +391,9 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   if (!o.quiet && o.batch.empty()) {
     std::printf("tolver verify: %s\n", result.pass ? "PASS" : "FAIL");
     std::printf("  machine    %s (%s)\n", machine.model.name.c_str(), o.machine.machine.c_str());
-    std::printf("  program    %s: %d CL points, %d tool placements (step %.3g mm), %s\n", o.cl.c_str(),
-                r.cl_points, r.placements, r.step_mm, r.cutter.c_str());
+    std::printf("  program    %s (%s): %d CL points, %d tool placements (step %.3g mm), %s\n",
+                program.file.c_str(), program.dialect.c_str(), r.cl_points, r.placements,
+                r.step_mm, r.cutter.c_str());
     if (r.mode == "cl-only")
       std::printf("  part       none: CL-only mode, %zu points\n", samples.size());
     else
@@ -475,7 +530,13 @@ void registerVerify(CLI::App& app, int* exit_code) {
       "tolerance, 1 out of tolerance, 2 bad input.");
   addMachineOptions(cmd, o->machine, "machine file (XML), calibrated or not");
   cmd->get_option("--machine")->required(false);  // a batch names its machines in the jobs file
-  cmd->add_option("--cl", o->cl, "CL program (APT/CLDATA)");
+  cmd->add_option("--cl", o->cl, "CL program (APT/CLDATA; posted G-code is detected)");
+  cmd->add_option("--nc", o->nc, "posted G-code program (ISO 6983)");
+  cmd->add_option("--cl-units", o->cl_units, "unit of a program that declares none: mm or inch")
+      ->check(CLI::IsMember({"mm", "inch"}));
+  cmd->add_option("--tolerance-units", o->tolerance_units,
+                  "unit of --tolerance: mm (default; needed to confirm one above 1 mm) or um")
+      ->check(CLI::IsMember({"mm", "um"}));
   cmd->add_option("--part", o->part,
                   "part model (STL, OBJ, PLY, OFF, 3MF, glTF); without it: CL-only mode");
   cmd->add_option("--tolerance", o->tolerance, "profile tolerance all over, mm (zone width t)");
@@ -514,9 +575,14 @@ void registerVerify(CLI::App& app, int* exit_code) {
       *exit_code = runBatch(*o);
       return;
     }
-    if (o->cl.empty()) throw InputError("--cl", 0, 0, "cl", "give the CL program (--cl) or a jobs file (--batch)");
+    if (o->cl.empty() && o->nc.empty())
+      throw InputError("--cl", 0, 0, "cl", "give the program (--cl or --nc) or a jobs file (--batch)");
     if (o->machine.machine.empty()) throw InputError("--machine", 0, 0, "machine", "give the machine file (--machine)");
-    const std::string name = fs::path(o->cl).stem().string();
+    if (o->tolerance_units == "um" && !std::isnan(o->tolerance)) {
+      o->tolerance /= 1000.0;
+      o->tolerance_units = "mm";
+    }
+    const std::string name = fs::path(o->cl.empty() ? o->nc : o->cl).stem().string();
     const JobOutcome r = runJob(*o, name, true);
     *exit_code = r.pass ? 0 : 1;
   });

@@ -239,3 +239,85 @@ TEST_F(GcodeCli, BadGcodeExitsWithCode2NamingTheLine) {
 
 }  // namespace
 }  // namespace tolver
+
+#include <nlohmann/json.hpp>
+
+#include "core/inverse_kinematics.h"
+#include "io/machine_file.h"
+
+namespace tolver {
+namespace {
+
+// The cone finish posted as TCP G-code for the LinuxCNC xyzac-trt machine (rotary words from
+// the nominal inverse kinematics, 6 decimals on X Y Z and 9 on the angles), as a post would.
+std::string postCone(const std::string& machine_file, const ClProgram& cl) {
+  const Machine m = readMachineFile(machine_file);
+  const InverseKinematics ik(m.model);
+  std::string g = "%\n(cone finish posted by the test)\nG21 G90 G17\nM428\n";
+  const JointVector* previous = nullptr;
+  JointVector q;
+  char buf[200];
+  for (const ClPoint& c : cl.path) {
+    const IkSolution s = ik.solve(c.p_w, c.u_w, previous);
+    if (s.status != IkStatus::Ok) return "";
+    q = s.q;
+    previous = &q;
+    std::snprintf(buf, sizeof buf, "%s X%.6f Y%.6f Z%.6f A%.9f C%.9f\n", c.rapid ? "G0" : "G1",
+                  c.p_w.x(), c.p_w.y(), c.p_w.z(), q[3] * 180.0 / M_PI, q[4] * 180.0 / M_PI);
+    g += buf;
+  }
+  return g + "M429\nM30\n%\n";
+}
+
+// verify end to end on a posted program with a part mesh: the same verdict and figures as the
+// CL it was posted from (nominal machine: the program's share alone), through the written
+// report.json.
+TEST_F(GcodeCli, VerifyOnPostedGcodeWithAPartMeshMatchesTheClRun) {
+  const std::string m = src("resources/machines/linuxcnc_xyzac_trt.xml");
+  const ClProgram cl = readAptFile(src("samples/nas979_cone.apt"));
+  const std::string g = postCone(m, cl);
+  ASSERT_FALSE(g.empty());
+  std::ofstream(path("cone.ngc")) << g;
+  const std::string common = " --machine " + m + " --part " + src("samples/nas979_cone.stl") +
+                             " --tolerance 0.05 --cutter 10,0,50 --no-images --spacing 1";
+  auto a = test::runTolver("verify --cl " + src("samples/nas979_cone.apt") + common +
+                           " --report-dir " + path("cl"));
+  auto b = test::runTolver("verify --nc " + path("cone.ngc") + common + " --report-dir " + path("nc"));
+  ASSERT_LE(a.exit_code, 1) << a.output;
+  ASSERT_EQ(b.exit_code, a.exit_code) << b.output;
+  EXPECT_NE(b.output.find("(G-code)"), std::string::npos) << b.output;
+  EXPECT_NE(b.output.find("zero by construction"), std::string::npos) << b.output;
+  std::ifstream ja(path("cl/report.json")), jb(path("nc/report.json"));
+  const auto A = nlohmann::json::parse(ja), B = nlohmann::json::parse(jb);
+  EXPECT_EQ(A["verdict"], B["verdict"]);
+  const double ta = A["deviation"]["total"]["max_um"], tb = B["deviation"]["total"]["max_um"];
+  EXPECT_NEAR(ta, tb, 0.05) << "max total deviation, um";
+  EXPECT_NEAR(B["deviation"]["machine"]["max_um"].get<double>(), 0.0, 1e-9);
+  // The program does machine the part (the comparison is not of two empty runs).
+  EXPECT_GT(B["area"]["machined_mm2"].get<double>(), 1000.0) << B["area"];
+}
+
+// Units and tolerance plausibility: an inch part, a 30 meant as micrometres.
+TEST_F(GcodeCli, VerifyRefusesImplausibleUnitsAndTolerances) {
+  const std::string m = src("samples/machines/matsuura_mc760vx_measured.xml");
+  const std::string base = " --machine " + m + " --setup " + src("samples/matsuura_setup.txt") +
+                           " --cl " + src("samples/nas979_cone.apt") + " --no-images";
+  auto r = test::runTolver("verify" + base + " --tolerance 30 --report-dir " + path("a"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("not a plausible profile tolerance"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("a")));
+  // The part written in inches (scaled by 1/25.4) without --mesh-units.
+  const std::string ascii =
+      "solid cone\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 3.1 0 0\nvertex 0 3.1 0\n"
+      "endloop\nendfacet\nfacet normal 0 0 1\nouter loop\nvertex 3.1 0 0\nvertex 3.1 3.1 0\n"
+      "vertex 0 3.1 0\nendloop\nendfacet\nendsolid cone\n";
+  std::ofstream(path("inch.stl")) << ascii;
+  r = test::runTolver("verify" + base + " --tolerance 0.05 --part " + path("inch.stl") +
+                      " --report-dir " + path("b"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--mesh-units inch"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("b")));
+}
+
+}  // namespace
+}  // namespace tolver
