@@ -6,6 +6,8 @@
 #include <random>
 
 #include "core/forward_kinematics.h"
+#include "io/apt_reader.h"
+#include "io/apt_writer.h"
 #include "io/machine_file.h"
 #include "test_support.h"
 
@@ -70,6 +72,65 @@ TEST(ToolPathPrediction, ZeroErrorsGiveZeroDeviationAndFailuresAreNaN) {
     EXPECT_LT(r.points[i].axis_angle, 1e-15);
   }
 }
+
+
+// The predicted CL reads back with the same set-up on every shipped machine: a path through the
+// singular pole (tool axis along a rotary axis) and to the travel limits of the prismatic axes,
+// on the machine with errors of a machine in service, predicted, written as APT to six
+// decimals, read and predicted again.
+class EveryShippedMachine : public ::testing::TestWithParam<const char*> {};
+
+TEST_P(EveryShippedMachine, PredictedClReadsBackWithTheSameSetup) {
+  Machine m = readMachineFile(test::sourcePath(GetParam()));
+  m.model.setup.gauge_length = 80;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int i = 0; i < m.model.parameterCount(); ++i)
+    m.params[i] = n(rng) * (m.model.parameters[i].angular ? 20e-6 : 0.005);
+  const ForwardKinematics nominal(m.model, Eigen::VectorXd::Zero(m.model.parameterCount()));
+  // Joints along a line: rotaries from -15 to +15 deg of tilt (through zero: the pole of
+  // table-on-tilt machines), prismatic axes from 30 % to 99.9 % of their range.
+  std::vector<ClPoint> path;
+  const int N = 400;
+  for (int k = 0; k <= N; ++k) {
+    const double t = static_cast<double>(k) / N;
+    JointVector q(m.model.axes.size());
+    for (size_t a = 0; a < m.model.axes.size(); ++a) {
+      const Axis& ax = m.model.axes[a];
+      if (ax.isRotary()) {
+        const double lim = std::min({15.0 * M_PI / 180.0, ax.travel_max, -ax.travel_min});
+        q[a] = lim * (2.0 * t - 1.0);
+      } else {
+        q[a] = ax.travel_min + (0.3 + 0.699 * t) * (ax.travel_max - ax.travel_min);
+      }
+    }
+    Eigen::Vector3d p, u;
+    nominal.tipAndAxis(q, &p, &u);
+    ClPoint c;
+    c.p_w = p;
+    c.u_w = u;
+    c.line = k + 1;
+    path.push_back(c);
+  }
+  const PredictionResult r = predictToolPath(m.model, m.params, path);
+  ASSERT_TRUE(r.ok()) << GetParam() << ": " << r.failures.front().message;
+  std::string apt = "UNITS/MM\nMULTAX/ON\n";
+  for (const ClPoint& c : path) apt += "GOTO/0,0,0,0,0,1\n";
+  ClProgram program = parseApt(apt, "nominal.apt");
+  program.path = path;
+  std::vector<ClPoint> predicted = path;
+  for (size_t i = 0; i < path.size(); ++i) {
+    predicted[i].p_w = r.points[i].p_pred_w;
+    predicted[i].u_w = r.points[i].u_pred_w;
+  }
+  const ClProgram back = parseApt(formatPredictedApt(program, predicted, {"round trip"}), "back.apt");
+  ASSERT_EQ(back.path.size(), path.size());
+  const PredictionResult again = predictToolPath(m.model, m.params, back.path);
+  EXPECT_TRUE(again.ok()) << GetParam() << ": "
+                          << (again.ok() ? "" : again.failures.front().message);
+}
+
+INSTANTIATE_TEST_SUITE_P(Shipped, EveryShippedMachine, ::testing::ValuesIn(test::shippedMachines()));
 
 }  // namespace
 }  // namespace tolver
