@@ -174,6 +174,22 @@ TEST(InverseKinematics, ToolAxisBeyondTheTiltRangeIsOutOfTravel) {
   EXPECT_EQ(m.model.axes[s.violated_axis].name, "A");
 }
 
+// When nothing fits, the axis named is the one that breaks first on the solution the choice
+// prefers, not a rotary violation of the other solution (on the Matsuura a 50 deg tilt has a
+// solution with A = -50 inside travel and one with A = +50 outside; the point is beyond X).
+TEST(InverseKinematics, FailureNamesTheAxisOfThePreferredSolution) {
+  const Machine m = readMachineFile(test::sourcePath(test::shippedMachines()[0]));
+  const InverseKinematics ik(m.model);
+  const double t = 50 * M_PI / 180;
+  for (const Eigen::Vector3d& u : {Eigen::Vector3d(0, std::sin(t), std::cos(t)),
+                                   Eigen::Vector3d(0, -std::sin(t), std::cos(t))}) {
+    const IkSolution s = ik.solve(Eigen::Vector3d(900, 0, 0), u, nullptr);
+    ASSERT_EQ(s.status, IkStatus::OutOfTravel);
+    ASSERT_GE(s.violated_axis, 0);
+    EXPECT_EQ(m.model.axes[s.violated_axis].name, "X") << u.transpose();
+  }
+}
+
 TEST(InverseKinematics, PointBeyondTheStrokeNamesTheAxis) {
   const Machine m = readMachineFile(test::sourcePath(test::shippedMachines()[0]));
   const InverseKinematics ik(m.model);
