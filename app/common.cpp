@@ -201,6 +201,28 @@ std::string describeUnreachable(const MachineModel& model, const PredictionResul
 
 std::vector<std::string> programNotes(const ClProgram& program) {
   std::vector<std::string> w = program.notes;
+  // A coordinate system statement moves the points out of the file's own frame: say where.
+  for (const AptStatement& st : program.statements) {
+    if (st.major != "MSYS" && st.major != "CSYS" && st.major != "$$*CATIA0") continue;
+    // The frame in force at the first point after the statement (a CSYS that names only a tool
+    // plane leaves it at the identity).
+    size_t k = 0;
+    while (k < program.path.size() && program.path[k].line <= st.first_line) ++k;
+    if (k == program.path.size() || k >= program.point_frame.size()) continue;
+    {
+      const ClFrame& f = program.frames[program.point_frame[k]];
+      if (f.T.isApprox(Eigen::Isometry3d::Identity())) continue;
+      const Eigen::Vector3d o = f.scale * f.T.translation();
+      char buf[300];
+      std::snprintf(buf, sizeof buf,
+                    "%s at line %d applied: the points are in the CAM system's absolute frame, "
+                    "where that system's origin is (%.3f, %.3f, %.3f) mm; the set-up's part zero "
+                    "places the absolute frame's origin",
+                    st.major.c_str(), st.first_line, o.x(), o.y(), o.z());
+      w.push_back(buf);
+      return w;
+    }
+  }
   if (program.unknown_count > 0) {
     std::string names;
     for (const auto& n : program.unknown_names) names += (names.empty() ? "" : ", ") + n;

@@ -108,6 +108,12 @@ void runSetup(const SetupOptions& o, int* exit_code) {
               s.part_zero_table.x(), s.part_zero_table.y(), s.part_zero_table.z(),
               s.part_rotation * 180.0 / M_PI, s.gauge_length,
               o.machine.setup.empty() ? " (defaults: no --setup)" : "");
+  for (const std::string& w : setupWarnings(model))
+    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+  for (const std::string& w : unitWarnings(program, model, o.program.units))
+    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+  for (const std::string& w : programNotes(program))
+    std::fprintf(stderr, "tolver: note: %s: %s\n", program.file.c_str(), w.c_str());
   int failed = 0, first_failed = -1;
   const std::vector<AxisRange> now = jointRanges(model, path, cmd, &failed, &first_failed);
   printRanges(model, program, now);

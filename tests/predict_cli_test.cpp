@@ -321,3 +321,35 @@ TEST_F(GcodeCli, VerifyRefusesImplausibleUnitsAndTolerances) {
 
 }  // namespace
 }  // namespace tolver
+
+namespace tolver {
+namespace {
+
+// A real NX CLSF (MSYS, 800 mm long, tool axes down to 4 deg from horizontal) on the Matsuura:
+// setup says which lines no single set-up reaches, and that MSYS put the points in NX's
+// absolute frame.
+TEST_F(GcodeCli, SetupOnARealClsfNamesTheLinesToSplitAndTheFrame) {
+  auto r = test::runTolver("setup --machine " + src("resources/machines/matsuura_mc760vx.xml") +
+                           " --cl " + src("tests/fixtures/cl/nx_ust_a.cls") +
+                           " --gauge-length 100 -o " + path("s.txt"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("no single set-up reaches the whole program"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("split the program there"), std::string::npos);
+  EXPECT_NE(r.output.find("MSYS at line 3 applied"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("-120.259, -1196.500, 142.500"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("extent     x -189.770 .. 130.866"), std::string::npos) << r.output;
+  // The proposal is written and reads back; predict with it fails on as many points as setup
+  // said it leaves outside.
+  const size_t at = r.output.find("the best leaves ");
+  ASSERT_NE(at, std::string::npos);
+  const int outside = std::stoi(r.output.substr(at + 16));
+  r = test::runTolver("predict --machine " + src("resources/machines/matsuura_mc760vx.xml") +
+                      " --cl " + src("tests/fixtures/cl/nx_ust_a.cls") + " --setup " + path("s.txt") +
+                      " -o " + path("p.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;  // still out of travel, now by the figures setup gave
+  EXPECT_NE(r.output.find("; " + std::to_string(outside) + " points fail"), std::string::npos)
+      << outside << ": " << r.output;
+}
+
+}  // namespace
+}  // namespace tolver
