@@ -9,6 +9,9 @@
 #include "core/forward_kinematics.h"
 #include "core/inverse_kinematics.h"
 #include "core/tool_path_prediction.h"
+#include "io/apt_reader.h"
+#include "io/gcode_reader.h"
+#include "io/io_error.h"
 #include "io/machine_file.h"
 
 namespace {
@@ -106,6 +109,36 @@ void BM_InverseKinematics(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_InverseKinematics);
+
+// Reading posted G-code: LinuxCNC's boat program (1 881 lines, TCP mode, arcs), text in memory,
+// on its machine; lines per second.
+void BM_ReadGcodeBoat(benchmark::State& state) {
+  const std::string dir = std::string(TOLVER_SOURCE_DIR);
+  const tolver::Machine m = tolver::readMachineFile(dir + "/resources/machines/linuxcnc_xyzac_trt.xml");
+  const std::string text = tolver::readFile(dir + "/samples/gcode/boat-xyzac.ngc");
+  size_t lines = 0;
+  for (auto _ : state) {
+    const tolver::ClProgram p = tolver::parseGcode(text, "boat-xyzac.ngc", m.model);
+    lines += p.lines.size();
+    benchmark::DoNotOptimize(p.path.data());
+  }
+  state.counters["lines/s"] = benchmark::Counter(static_cast<double>(lines), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_ReadGcodeBoat)->Unit(benchmark::kMillisecond);
+
+// The same for CL data: the sculptured finish (APT, 9 802 GOTO).
+void BM_ReadAptSculptured(benchmark::State& state) {
+  const std::string text =
+      tolver::readFile(std::string(TOLVER_SOURCE_DIR) + "/samples/sculptured_finish.apt");
+  size_t lines = 0;
+  for (auto _ : state) {
+    const tolver::ClProgram p = tolver::parseApt(text, "sculptured_finish.apt");
+    lines += p.lines.size();
+    benchmark::DoNotOptimize(p.path.data());
+  }
+  state.counters["lines/s"] = benchmark::Counter(static_cast<double>(lines), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_ReadAptSculptured)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 
