@@ -159,32 +159,71 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
       for (const JointVector& q : q0) ok = ok && !std::isnan(q[0]);
       if (!ok) continue;  // rotary travel cannot be met at this rotation
       rejected = false;
-      // Affine prismatic joints: a_i at x0 and B_i by unit steps with the rotaries kept.
+      // Each point's orientation solutions (the one the path's continuity takes and, for CL
+      // data, the other, which the inverse kinematics falls back to when the first leaves
+      // travel), and for each its affine prismatic joints: a at x0 and B by unit steps with
+      // the rotaries kept.
       const InverseKinematics base(m);
+      struct Affine {
+        JointVector ref;
+        Eigen::Vector3d a;
+        Eigen::Matrix3d B;
+      };
+      std::vector<Affine> cand;
+      std::vector<int> first(q0.size() + 1, 0);
+      for (size_t i = 0; i < q0.size(); ++i) {
+        first[i] = static_cast<int>(cand.size());
+        cand.push_back({q0[i], {}, {}});
+        if (commanded) continue;  // a posted program's rotary words are given
+        InverseKinematics::RotaryCandidate rc[2];
+        bool singular = false;
+        const int nc = base.rotaryCandidates(path[subset[i]].u_w, rc, &singular);
+        for (int c = 0; c < nc && !singular; ++c) {
+          JointVector ref = q0[i];
+          for (size_t r = 0; r < base.rotaryAxes().size(); ++r)
+            ref[base.rotaryAxes()[r]] = rc[c].angleOf(static_cast<int>(r));
+          const IkSolution s = base.solve(path[subset[i]].p_w, path[subset[i]].u_w, &ref);
+          if (s.status != IkStatus::Ok) continue;
+          bool same = true;
+          for (int r : base.rotaryAxes()) same = same && std::abs(s.q[r] - q0[i][r]) < 1e-9;
+          if (!same) {
+            cand.push_back({s.q, {}, {}});
+            break;
+          }
+        }
+      }
+      first[q0.size()] = static_cast<int>(cand.size());
       const size_t n = q0.size();
-      std::vector<Eigen::Vector3d> a(n);
-      std::vector<Eigen::Matrix3d> B(n);
+      for (Affine& c : cand)
+        for (int j = 0; j < 3; ++j) c.a[j] = c.ref[prismatic[j]];
       for (int k = 0; k < 3; ++k) {
         MachineModel mk = m;
         mk.setup.part_zero_table = x0 + Eigen::Vector3d::Unit(k);
         const InverseKinematics ik(mk);
-        for (size_t i = 0; i < n; ++i) {
-          const IkSolution s = ik.solve(path[subset[i]].p_w, path[subset[i]].u_w, &q0[i]);
-          for (int j = 0; j < 3; ++j) {
-            a[i][j] = q0[i][prismatic[j]];
-            B[i](j, k) = (s.status == IkStatus::Ok ? s.q[prismatic[j]] : a[i][j]) - a[i][j];
+        for (size_t i = 0; i < n; ++i)
+          for (int c = first[i]; c < first[i + 1]; ++c) {
+            const IkSolution s = ik.solve(path[subset[i]].p_w, path[subset[i]].u_w, &cand[c].ref);
+            for (int j = 0; j < 3; ++j)
+              cand[c].B(j, k) = (s.status == IkStatus::Ok ? s.q[prismatic[j]] : cand[c].a[j]) -
+                                cand[c].a[j];
           }
-        }
       }
+      // The margin of a part zero: over the points, the best of their solutions' margins.
       auto margin = [&](const Eigen::Vector3d& x) {
         double t = std::numeric_limits<double>::infinity();
         const Eigen::Vector3d d = x - x0;
         for (size_t i = 0; i < n; ++i) {
-          const Eigen::Vector3d q = a[i] + B[i] * d;
-          for (int j = 0; j < 3; ++j) {
-            const Axis& ax = model.axes[prismatic[j]];
-            t = std::min(t, std::min(q[j] - ax.travel_min, ax.travel_max - q[j]));
+          double best_c = -std::numeric_limits<double>::infinity();
+          for (int c = first[i]; c < first[i + 1]; ++c) {
+            const Eigen::Vector3d q = cand[c].a + cand[c].B * d;
+            double tc = std::numeric_limits<double>::infinity();
+            for (int j = 0; j < 3; ++j) {
+              const Axis& ax = model.axes[prismatic[j]];
+              tc = std::min(tc, std::min(q[j] - ax.travel_min, ax.travel_max - q[j]));
+            }
+            best_c = std::max(best_c, tc);
           }
+          t = std::min(t, best_c);
         }
         return t;
       };

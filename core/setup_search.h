@@ -7,8 +7,11 @@
 // part zero x (table frame, mm) and its prismatic joints are affine in it, q_ij(x) = a_ij + B_ij x
 // (nominal inverse kinematics, exact). The margin
 //   t(x) = min over points i and prismatic axes j of min(q_ij(x) - lo_j, hi_j - q_ij(x))
-// is concave and piecewise linear; it is maximised by Nelder-Mead from the given part zero and
-// from the centring guess, for each candidate rotation (steps of rotation_step) and gauge length.
+// is concave and piecewise linear for one orientation solution per point. A point of CL data
+// has two (the inverse kinematics falls back to the other when the first leaves travel), so the
+// margin takes, per point, the better of its solutions. It is maximised by Nelder-Mead with
+// restarts from the given part zero, for each candidate rotation (steps of rotation_step) and
+// gauge length; the proposal is then checked on every point with the real inverse kinematics.
 // Rotary travel does not depend on x; a rotation whose rotary angles leave travel is rejected.
 #include <Eigen/Core>
 #include <string>
