@@ -346,7 +346,21 @@ class Reader {
     if (text[0] == '/') {  // block delete: the control runs it unless the switch is on
       text[0] = ' ';
     }
-    const std::string upper = toUpper(text);
+    std::string upper = toUpper(text);
+    // TCP words that are names, not letter-number words (Siemens TRAORI / TRAFOOF): taken out
+    // of the block and carried out first.
+    for (const auto& [on, off] : model_.control.tcp_words)
+      for (const std::string* w : {&on, &off}) {
+        if (w->size() < 3 || !std::isalpha(static_cast<unsigned char>((*w)[1]))) continue;
+        const size_t at = upper.find(*w);
+        if (at == std::string::npos) continue;
+        const size_t end = at + w->size();
+        const bool alone = (at == 0 || !std::isalnum(static_cast<unsigned char>(upper[at - 1]))) &&
+                           (end == upper.size() || !std::isalnum(static_cast<unsigned char>(upper[end])));
+        if (!alone) continue;
+        tcpWord(*w);
+        for (size_t k = at; k < end; ++k) upper[k] = ' ';
+      }
     // Parameter assignment: #n = expr or #<name> = expr.
     if (upper[0] == '#') {
       const size_t eq = upper.find('=');
@@ -389,6 +403,9 @@ class Reader {
       w.column = col[i];
       ++i;
       w.value = expression(upper, i, 0);
+      if (!std::isfinite(w.value) || std::abs(w.value) > 1e7)
+        fail(line_, w.column, std::string(1, c),
+             "value " + clip(formatNumber(w.value)) + " is beyond any plausible length or angle");
       if (c == 'G' || c == 'M') w.code = codeOf(c, w.value);
       words.push_back(w);
     }
@@ -703,10 +720,15 @@ class Reader {
     std::vector<Eigen::Vector3d> pts;
     const double tol = opt_.chordal_tolerance_mm;
     const double r0 = (start - centre - n * n.dot(start - centre)).norm();
+    // Bounded work: a full turn at this radius and tolerance, before anything is expanded.
+    const double dphi = 2.0 * std::acos(std::max(-1.0, 1.0 - std::min(tol, r0) / std::max(r0, 1e-12)));
+    if (!(dphi > 0.0) || 2.0 * M_PI / dphi > 1e6)
+      fail(line_, 0, motion,
+           "an arc of radius " + formatNumber(r0) + " mm would expand into more than a million "
+           "points at chordal tolerance " + formatNumber(tol) + " mm (raise --chordal-tol)");
     if (!interpolateArc(start, end, centre, axis, tol, std::max(0.002, 1e-4 * r0), pts))
       fail(line_, 0, motion, "the end point is not on the arc's circle (radius differs by more "
                              "than 0.002 mm)");
-    if (pts.size() > 2000000) fail(line_, 0, motion, "the arc expands into too many points");
     ++prog_.arcs_expanded;
     for (const Eigen::Vector3d& p : pts) emit(p, false);
   }

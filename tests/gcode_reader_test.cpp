@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 
 #include "core/forward_kinematics.h"
 #include "core/tool_path_prediction.h"
@@ -190,6 +191,18 @@ TEST(GcodeReader, ArcFormsAgreeAndIncrementalMovesAdd) {
   EXPECT_LT((inc.path.back().p_w - Eigen::Vector3d(3, 3, 2)).norm(), 1e-12);
 }
 
+// A control whose TCP words are names (Siemens TRAORI / TRAFOOF).
+TEST(GcodeReader, NamedTcpWords) {
+  Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  m.model.control.tcp_words = {{"TRAORI", "TRAFOOF"}};
+  const ClProgram p = parseGcode("G21\nTRAORI\nG1 X10 Y5 Z2 A-30 C20\nTRAFOOF\nG1 X0 Y0 Z0 A0 C0\n",
+                                 "siemens.mpf", m.model);
+  ASSERT_EQ(p.path.size(), 2u);
+  EXPECT_TRUE(p.tcp[0]);
+  EXPECT_FALSE(p.tcp[1]);
+  EXPECT_LT((p.path[0].p_w - Eigen::Vector3d(10, 5, 2)).norm(), 1e-12);
+}
+
 TEST(GcodeReader, DrillingCycleBecomesStraightMoves) {
   const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
   const ClProgram p = parseGcode("G21 M428\nG0 X0 Y0 Z20 A0 C0\nG98 G81 X5 Y6 Z-3 R2 F100\nX8\nG80\n",
@@ -221,6 +234,9 @@ TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
       {"G21\nG0 X0 Y0 Z0 A70\n", 2, "outside the travel"},
       {"G21\nG0 X(unclosed\n", 2, "unclosed comment"},
       {"(only a comment)\n", 0, "no moves"},
+      {"", 0, "empty file"},
+      {"G21\nG0 X99999999999\n", 2, "plausible"},
+      {"G21\nG1 X[1/0]\n", 2, "division by zero"},
   };
   for (const Case& c : cases) {
     try {
@@ -231,6 +247,16 @@ TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
       EXPECT_NE(std::string(e.what()).find(c.says), std::string::npos) << e.what();
       EXPECT_NE(std::string(e.what()).find("bad.ngc"), std::string::npos);
     }
+  }
+  // Arc expansion is bounded before anything is expanded.
+  GcodeReadOptions fine;
+  fine.chordal_tolerance_mm = 1e-6;
+  try {
+    parseGcode("G21 M428\nG0 X0 Y0 Z0 A0 C0\nG2 X0 Y0 I900000 J0\n", "arc.ngc", m.model, fine);
+    ADD_FAILURE() << "accepted a huge arc";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_NE(std::string(e.what()).find("more than a million"), std::string::npos) << e.what();
   }
   // A TCP word on a machine whose file declares no control.
   const Machine plain = machine("resources/machines/trunnion_ac_trt.xml", 0.0);
@@ -244,6 +270,32 @@ TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
   bool listed = false;
   for (const std::string& n : p.notes) listed |= n.find("M123") != std::string::npos;
   EXPECT_TRUE(listed);
+}
+
+// Mutated lines of the real program: the reader either reads or throws InputError naming the
+// file; never another exception, a crash or a non-finite point.
+TEST(GcodeReader, MutatedProgramsFailCleanly) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const std::string base = test::readText(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzac.ngc"));
+  std::mt19937 rng(7);
+  const std::string junk = "XYZACGMIJKR#[]()-+.;/%0123456789eE\xff\x00 ";
+  int errors = 0;
+  for (int n = 0; n < 300; ++n) {
+    std::string text = base.substr(0, 6000);
+    for (int k = 0; k < 4; ++k) {
+      const size_t at = rng() % text.size();
+      text[at] = junk[rng() % junk.size()];
+    }
+    try {
+      const ClProgram p = parseGcode(text, "mutated.ngc", m.model);
+      for (const ClPoint& c : p.path) ASSERT_TRUE(c.p_w.allFinite() && c.u_w.allFinite());
+    } catch (const InputError& e) {
+      ++errors;
+      EXPECT_NE(std::string(e.what()).find("mutated.ngc"), std::string::npos);
+      EXPECT_LT(std::string(e.what()).size(), 600u);
+    }
+  }
+  EXPECT_GT(errors, 20);
 }
 
 TEST(GcodeReader, DetectsGcodeAgainstApt) {

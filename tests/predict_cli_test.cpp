@@ -353,3 +353,26 @@ TEST_F(GcodeCli, SetupOnARealClsfNamesTheLinesToSplitAndTheFrame) {
 
 }  // namespace
 }  // namespace tolver
+
+namespace tolver {
+namespace {
+
+TEST_F(GcodeCli, SetupBadInputExitsWithCode2AndWritesNothing) {
+  const std::string m = " --machine " + src("resources/machines/linuxcnc_xyzac_trt.xml");
+  const std::string nc = " --nc " + src("samples/gcode/boat-xyzac.ngc");
+  auto r = test::runTolver("setup" + m + nc + " --gauge-lengths 50,-3 -o " + path("s.txt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--gauge-lengths"), std::string::npos) << r.output;
+  r = test::runTolver("setup" + m + nc + " -o " + path("missing/dir/s.txt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  std::ofstream(path("empty.nc")) << "";
+  r = test::runTolver("setup" + m + " --nc " + path("empty.nc") + " -o " + path("s.txt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("empty.nc"), std::string::npos) << r.output;
+  r = test::runTolver("setup" + m + " --cl " + src("samples/nas979_cone.apt") + nc);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_FALSE(fs::exists(path("s.txt")));
+}
+
+}  // namespace
+}  // namespace tolver
