@@ -1,0 +1,223 @@
+// The CLI on posted G-code and real CAM files: predict, setup and verify end to end.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "core/inverse_kinematics.h"
+#include "io/apt_reader.h"
+#include "io/gcode_reader.h"
+#include "io/machine_file.h"
+#include "test_support.h"
+
+namespace fs = std::filesystem;
+
+namespace tolver {
+namespace {
+
+class GcodeCli : public test::TempDirTest {
+ protected:
+  static std::string src(const std::string& rel) { return test::sourcePath(rel); }
+};
+
+// A posted program end to end: predict on its machine, the predicted CL reads back with the same
+// set-up (the singular band and the travel tolerance keep the pole and the limits stable), and
+// the machine without errors says its share is zero by construction.
+TEST_F(GcodeCli, PostedProgramPredictsAndItsPredictedClReadsBack) {
+  const std::string m = src("resources/machines/umc_bc_trunnion.xml");
+  auto r = test::runTolver("predict --machine " + m + " --nc " + src("samples/gcode/umc_bc_inch.nc") +
+                           " --gauge-length 76.2 -o " + path("umc.apt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("(G-code)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("units INCH"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("zero by construction"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("rotary steps above"), std::string::npos) << r.output;
+  r = test::runTolver("predict --machine " + m + " --cl " + path("umc.apt") +
+                      " --gauge-length 76.2 -o " + path("back.apt"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  // The written CL is the program's path (a machine without errors predicts the nominal), in
+  // mm in the part frame, to the six decimals written.
+  {
+    Machine mm = readMachineFile(m);
+    mm.model.setup.gauge_length = 76.2;
+    const ClProgram nominal = readGcodeFile(src("samples/gcode/umc_bc_inch.nc"), mm.model);
+    const ClProgram written = readAptFile(path("umc.apt"));
+    ASSERT_EQ(written.path.size(), nominal.path.size());
+    for (size_t i = 0; i < nominal.path.size(); ++i) {
+      EXPECT_LT((written.path[i].p_w - nominal.path[i].p_w).norm(), 1e-6) << i;
+      EXPECT_LT((written.path[i].u_w - nominal.path[i].u_w).norm(), 1e-8) << i;
+      EXPECT_EQ(written.path[i].rapid, nominal.path[i].rapid) << i;
+    }
+  }
+  for (const char* machine : {"resources/machines/linuxcnc_xyzac_trt.xml"}) {
+    r = test::runTolver(std::string("predict --machine ") + src(machine) + " --nc " +
+                        src("samples/gcode/boat-xyzac.ngc") + " --setup " +
+                        src("samples/gcode/linuxcnc_setup.txt") + " -o " + path("boat.apt"));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    r = test::runTolver(std::string("predict --machine ") + src(machine) + " --cl " +
+                        path("boat.apt") + " --setup " + src("samples/gcode/linuxcnc_setup.txt") +
+                        " -o " + path("boat_back.apt"));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+  }
+}
+
+// The LinuxCNC boat does not fit with the part zero at the C axis and a 75 mm tool... it does:
+// setup reports the ranges and a proposal inside travel, and writes a set-up predict accepts.
+TEST_F(GcodeCli, SetupProposesASetupThatReaches) {
+  const std::string m = src("resources/machines/linuxcnc_xyzac_trt.xml");
+  auto r = test::runTolver("setup --machine " + m + " --nc " + src("samples/gcode/boat-xyzac.ngc") +
+                           " --setup " + src("samples/gcode/linuxcnc_setup.txt") + " -o " +
+                           path("proposed.txt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("every point inside travel"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the program needs"), std::string::npos);
+  r = test::runTolver("predict --machine " + m + " --nc " + src("samples/gcode/boat-xyzac.ngc") +
+                      " --setup " + path("proposed.txt") + " -o " + path("p.apt"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  // Far outside travel: the failing axis, how far over and the count per axis.
+  r = test::runTolver("predict --machine " + m + " --nc " + src("samples/gcode/boat-xyzac.ngc") +
+                      " --part-zero 0,0,0 --gauge-length 400 -o " + path("q.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("beyond its travel"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("points fail (first axis to break: Z"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("q.apt")));
+}
+
+TEST_F(GcodeCli, BadGcodeExitsWithCode2NamingTheLine) {
+  std::ofstream(path("bad.nc")) << "G21 G90\nG0 X0 Y0 Z0\nG68 X0 Y0 R15\n";
+  auto r = test::runTolver("predict --machine " + src("resources/machines/linuxcnc_xyzac_trt.xml") +
+                           " --nc " + path("bad.nc") + " -o " + path("x.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("bad.nc:3"), std::string::npos) << r.output;
+  std::ofstream(path("tcp.nc")) << "G21\nM428\nG0 X0 Y0 Z0\n";
+  r = test::runTolver("predict --machine " + src("resources/machines/trunnion_ac_trt.xml") +
+                      " --nc " + path("tcp.nc") + " -o " + path("y.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("declares no TCP words"), std::string::npos) << r.output;
+  r = test::runTolver("predict --machine " + src("resources/machines/linuxcnc_xyzac_trt.xml") +
+                      " --nc " + src("samples/gcode/boat-xyzac.ngc") + " --gauge-length -5 -o " +
+                      path("z.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+}
+
+
+// The cone finish posted as TCP G-code for the LinuxCNC xyzac-trt machine (rotary words from
+// the nominal inverse kinematics, 6 decimals on X Y Z and 9 on the angles), as a post would.
+std::string postCone(const std::string& machine_file, const ClProgram& cl) {
+  const Machine m = readMachineFile(machine_file);
+  const InverseKinematics ik(m.model);
+  std::string g = "%\n(cone finish posted by the test)\nG21 G90 G17\nM428\n";
+  const JointVector* previous = nullptr;
+  JointVector q;
+  char buf[200];
+  for (const ClPoint& c : cl.path) {
+    const IkSolution s = ik.solve(c.p_w, c.u_w, previous);
+    if (s.status != IkStatus::Ok) return "";
+    q = s.q;
+    previous = &q;
+    std::snprintf(buf, sizeof buf, "%s X%.6f Y%.6f Z%.6f A%.9f C%.9f\n", c.rapid ? "G0" : "G1",
+                  c.p_w.x(), c.p_w.y(), c.p_w.z(), q[3] * 180.0 / M_PI, q[4] * 180.0 / M_PI);
+    g += buf;
+  }
+  return g + "M429\nM30\n%\n";
+}
+
+// verify end to end on a posted program with a part mesh: the same verdict and figures as the
+// CL it was posted from (nominal machine: the program's share alone), through the written
+// report.json.
+TEST_F(GcodeCli, VerifyOnPostedGcodeWithAPartMeshMatchesTheClRun) {
+  const std::string m = src("resources/machines/linuxcnc_xyzac_trt.xml");
+  const ClProgram cl = readAptFile(src("samples/nas979_cone.apt"));
+  const std::string g = postCone(m, cl);
+  ASSERT_FALSE(g.empty());
+  std::ofstream(path("cone.ngc")) << g;
+  const std::string common = " --machine " + m + " --part " + src("samples/nas979_cone.stl") +
+                             " --tolerance 0.05 --cutter 10,0,50 --no-images --spacing 1";
+  auto a = test::runTolver("verify --cl " + src("samples/nas979_cone.apt") + common +
+                           " --report-dir " + path("cl"));
+  auto b = test::runTolver("verify --nc " + path("cone.ngc") + common + " --report-dir " + path("nc"));
+  ASSERT_LE(a.exit_code, 1) << a.output;
+  ASSERT_EQ(b.exit_code, a.exit_code) << b.output;
+  EXPECT_NE(b.output.find("(G-code)"), std::string::npos) << b.output;
+  EXPECT_NE(b.output.find("zero by construction"), std::string::npos) << b.output;
+  std::ifstream ja(path("cl/report.json")), jb(path("nc/report.json"));
+  const auto A = nlohmann::json::parse(ja), B = nlohmann::json::parse(jb);
+  EXPECT_EQ(A["verdict"], B["verdict"]);
+  const double ta = A["deviation"]["total"]["max_um"], tb = B["deviation"]["total"]["max_um"];
+  EXPECT_NEAR(ta, tb, 0.05) << "max total deviation, um";
+  EXPECT_NEAR(B["deviation"]["machine"]["max_um"].get<double>(), 0.0, 1e-9);
+  // The program does machine the part (the comparison is not of two empty runs).
+  EXPECT_GT(B["area"]["machined_mm2"].get<double>(), 1000.0) << B["area"];
+}
+
+// Units and tolerance plausibility: an inch part, a 30 meant as micrometres.
+TEST_F(GcodeCli, VerifyRefusesImplausibleUnitsAndTolerances) {
+  const std::string m = src("samples/machines/matsuura_mc760vx_measured.xml");
+  const std::string base = " --machine " + m + " --setup " + src("samples/matsuura_setup.txt") +
+                           " --cl " + src("samples/nas979_cone.apt") + " --no-images";
+  auto r = test::runTolver("verify" + base + " --tolerance 30 --report-dir " + path("a"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("not a plausible profile tolerance"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("a")));
+  // The part written in inches (scaled by 1/25.4) without --mesh-units.
+  const std::string ascii =
+      "solid cone\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 3.1 0 0\nvertex 0 3.1 0\n"
+      "endloop\nendfacet\nfacet normal 0 0 1\nouter loop\nvertex 3.1 0 0\nvertex 3.1 3.1 0\n"
+      "vertex 0 3.1 0\nendloop\nendfacet\nendsolid cone\n";
+  std::ofstream(path("inch.stl")) << ascii;
+  r = test::runTolver("verify" + base + " --tolerance 0.05 --part " + path("inch.stl") +
+                      " --report-dir " + path("b"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--mesh-units inch"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("b")));
+}
+
+
+// A real NX CLSF (MSYS, 800 mm long, tool axes down to 4 deg from horizontal) on the Matsuura:
+// setup says which lines no single set-up reaches, and that MSYS put the points in NX's
+// absolute frame.
+TEST_F(GcodeCli, SetupOnARealClsfNamesTheLinesToSplitAndTheFrame) {
+  auto r = test::runTolver("setup --machine " + src("resources/machines/matsuura_mc760vx.xml") +
+                           " --cl " + src("tests/fixtures/cl/nx_ust_a.cls") +
+                           " --gauge-length 100 -o " + path("s.txt"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("no single set-up reaches the whole program"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("split the program there"), std::string::npos);
+  EXPECT_NE(r.output.find("MSYS at line 3 applied"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("-120.259, -1196.500, 142.500"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("extent     x -189.770 .. 130.866"), std::string::npos) << r.output;
+  // The proposal is written and reads back; predict with it fails on as many points as setup
+  // said it leaves outside.
+  const size_t at = r.output.find("the best leaves ");
+  ASSERT_NE(at, std::string::npos);
+  const int outside = std::stoi(r.output.substr(at + 16));
+  r = test::runTolver("predict --machine " + src("resources/machines/matsuura_mc760vx.xml") +
+                      " --cl " + src("tests/fixtures/cl/nx_ust_a.cls") + " --setup " + path("s.txt") +
+                      " -o " + path("p.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;  // still out of travel, now by the figures setup gave
+  EXPECT_NE(r.output.find("; " + std::to_string(outside) + " points fail"), std::string::npos)
+      << outside << ": " << r.output;
+}
+
+
+TEST_F(GcodeCli, SetupBadInputExitsWithCode2AndWritesNothing) {
+  const std::string m = " --machine " + src("resources/machines/linuxcnc_xyzac_trt.xml");
+  const std::string nc = " --nc " + src("samples/gcode/boat-xyzac.ngc");
+  auto r = test::runTolver("setup" + m + nc + " --gauge-lengths 50,-3 -o " + path("s.txt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--gauge-lengths"), std::string::npos) << r.output;
+  r = test::runTolver("setup" + m + nc + " -o " + path("missing/dir/s.txt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  std::ofstream(path("empty.nc")) << "";
+  r = test::runTolver("setup" + m + " --nc " + path("empty.nc") + " -o " + path("s.txt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("empty.nc"), std::string::npos) << r.output;
+  r = test::runTolver("setup" + m + " --cl " + src("samples/nas979_cone.apt") + nc);
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_FALSE(fs::exists(path("s.txt")));
+}
+
+}  // namespace
+}  // namespace tolver
