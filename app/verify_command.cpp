@@ -35,8 +35,9 @@ namespace fs = std::filesystem;
 
 struct VerifyOptions {
   MachineOptions machine;
-  std::string cl, nc, part, zones_file, report_dir, batch;
-  std::string mesh_units, cl_units, tolerance_units;
+  ProgramOptions program;
+  std::string part, zones_file, report_dir, batch;
+  std::string mesh_units, tolerance_units;
   std::vector<double> mesh_offset, mesh_rotation_deg;
   double tolerance = NAN, uz = NAN, asme_u = NAN;
   double spacing = 0.5, step = NAN, excess_range = NAN, gouge_range = NAN, max_hole = -1;
@@ -78,7 +79,7 @@ void checkPartUnits(const VerifyOptions& o, const ClProgram& program, const Tria
                   part, ratio, prog);
     throw InputError(o.part, 0, 0, "units", buf);
   }
-  if (ratio < 1.0 / 12.0 && ratio > 1.0 / 60.0 && !program.units_declared && o.cl_units.empty()) {
+  if (ratio < 1.0 / 12.0 && ratio > 1.0 / 60.0 && !program.units_declared && o.program.units.empty()) {
     std::snprintf(buf, sizeof buf,
                   "the program declares no units and is %.1f times smaller than the part "
                   "(diagonal %.3f against %.1f mm): it looks like inches; give --cl-units inch",
@@ -233,11 +234,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   ProgressBar bar(progress_bar && !o.quiet);
   Machine machine = loadMachine(o.machine);
   const std::vector<ToleranceZone> zones = zonesFrom(o);
-  ProgramOptions po;
-  po.cl = o.cl;
-  po.nc = o.nc;
-  po.units = o.cl_units;
-  const ClProgram program = loadProgram(po, machine.model);
+  const ClProgram program = loadProgram(o.program, machine.model);
   const Cutter cutter = cutterFrom(o, program);
 
   // Joint values and CL_predicted (thesis 5.5.3); a posted program's own rotary solution.
@@ -247,7 +244,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
     throw InputError(program.file, pred.failures.front().line, 0, "unreachable",
                      describeUnreachable(machine.model, pred));
   std::vector<std::string> warnings = setupWarnings(machine.model);
-  for (const std::string& w : unitWarnings(program, machine.model, o.cl_units)) warnings.push_back(w);
+  for (const std::string& w : unitWarnings(program, machine.model, o.program.units)) warnings.push_back(w);
   for (const std::string& w : programNotes(program)) warnings.push_back(program.file + ": " + w);
   bool no_errors = false;
   const std::string errors = machineErrorsStatement(machine, &no_errors);
@@ -459,7 +456,8 @@ int runBatch(const VerifyOptions& base) {
     o.quiet = true;
     o.machine.machine = resolve(cell("machine"));
     o.machine.setup = resolve(cell("setup"));
-    o.cl = resolve(cell("cl"));
+    o.program.cl = resolve(cell("cl"));
+    o.program.nc.clear();
     o.part = resolve(cell("part"));
     o.zones_file = resolve(cell("zones"));
     const auto tol = parseNumber(cell("tolerance"));
@@ -530,10 +528,7 @@ void registerVerify(CLI::App& app, int* exit_code) {
       "tolerance, 1 out of tolerance, 2 bad input.");
   addMachineOptions(cmd, o->machine, "machine file (XML), calibrated or not");
   cmd->get_option("--machine")->required(false);  // a batch names its machines in the jobs file
-  cmd->add_option("--cl", o->cl, "CL program (APT/CLDATA; posted G-code is detected)");
-  cmd->add_option("--nc", o->nc, "posted G-code program (ISO 6983)");
-  cmd->add_option("--cl-units", o->cl_units, "unit of a program that declares none: mm or inch")
-      ->check(CLI::IsMember({"mm", "inch"}));
+  addProgramOptions(cmd, o->program);
   cmd->add_option("--tolerance-units", o->tolerance_units,
                   "unit of --tolerance: mm (default; needed to confirm one above 1 mm) or um")
       ->check(CLI::IsMember({"mm", "um"}));
@@ -575,14 +570,15 @@ void registerVerify(CLI::App& app, int* exit_code) {
       *exit_code = runBatch(*o);
       return;
     }
-    if (o->cl.empty() && o->nc.empty())
+    if (o->program.cl.empty() && o->program.nc.empty())
       throw InputError("--cl", 0, 0, "cl", "give the program (--cl or --nc) or a jobs file (--batch)");
     if (o->machine.machine.empty()) throw InputError("--machine", 0, 0, "machine", "give the machine file (--machine)");
     if (o->tolerance_units == "um" && !std::isnan(o->tolerance)) {
       o->tolerance /= 1000.0;
       o->tolerance_units = "mm";
     }
-    const std::string name = fs::path(o->cl.empty() ? o->nc : o->cl).stem().string();
+    const std::string name =
+        fs::path(o->program.cl.empty() ? o->program.nc : o->program.cl).stem().string();
     const JobOutcome r = runJob(*o, name, true);
     *exit_code = r.pass ? 0 : 1;
   });
