@@ -31,6 +31,9 @@ std::string formatPredictedApt(const ClProgram& program, const std::vector<ClPoi
     out += "FINI\n";
     return out;
   }
+  // A program read in inches without a UNITS statement (--cl-units inch) says so, or the
+  // written inches would read back as millimetres.
+  if (program.units == "INCH" && !program.units_declared) out += "UNITS/INCHES\n";
   if (!program.multiax) out += "MULTAX/ON\n";
   const bool inch = program.units == "INCH";
   for (const AptStatement& st : program.statements) {

@@ -65,6 +65,18 @@ TEST_F(GcodeCli, PostedProgramPredictsAndItsPredictedClReadsBack) {
 
 // The LinuxCNC boat does not fit with the part zero at the C axis and a 75 mm tool... it does:
 // setup reports the ranges and a proposal inside travel, and writes a set-up predict accepts.
+TEST_F(GcodeCli, SetupReachesTheXyzbcBoatOnItsMachine) {
+  auto r = test::runTolver("setup --machine " + src("resources/machines/linuxcnc_xyzbc_trt.xml") +
+                           " --nc " + src("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc") +
+                           " --gauge-length 25 -o " + path("bc.txt"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("every point inside travel"), std::string::npos) << r.output;
+  r = test::runTolver("predict --machine " + src("resources/machines/linuxcnc_xyzbc_trt.xml") +
+                      " --nc " + src("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc") +
+                      " --setup " + path("bc.txt") + " -o " + path("bc.apt"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+}
+
 TEST_F(GcodeCli, SetupProposesASetupThatReaches) {
   const std::string m = src("resources/machines/linuxcnc_xyzac_trt.xml");
   auto r = test::runTolver("setup --machine " + m + " --nc " + src("samples/gcode/boat-xyzac.ngc") +
@@ -201,6 +213,27 @@ TEST_F(GcodeCli, SetupOnARealClsfNamesTheLinesToSplitAndTheFrame) {
       << outside << ": " << r.output;
 }
 
+
+// A CL without UNITS whose tool and extent look like inches: predict says so and names the
+// option; with --cl-units inch the points are scaled.
+TEST_F(GcodeCli, ClWithoutUnitsThatLooksLikeInches) {
+  std::ofstream(path("inch.apt")) << "MULTAX\nCUTTER/0.75\nGOTO/0.5,0.5,0.2,0,0,1\n"
+                                     "GOTO/1.5,0.5,0.2,0,0,1\nGOTO/1.5,1.2,0.2,0,0,1\n";
+  const std::string base = "predict --machine " + src("resources/machines/matsuura_mc760vx.xml") +
+                           " --setup " + src("samples/matsuura_setup.txt") + " --cl " + path("inch.apt");
+  auto r = test::runTolver(base + " -o " + path("a.apt"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("looks like inches"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--cl-units inch"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("units MM (assumed)"), std::string::npos) << r.output;
+  r = test::runTolver(base + " --cl-units inch -o " + path("b.apt"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("units INCH"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("looks like inches"), std::string::npos) << r.output;
+  const ClProgram back = readAptFile(path("b.apt"));
+  ASSERT_EQ(back.path.size(), 3u);
+  EXPECT_NEAR(back.path[1].p_w.x(), 1.5 * 25.4, 1e-6);  // written in inches, read back in mm
+}
 
 TEST_F(GcodeCli, SetupBadInputExitsWithCode2AndWritesNothing) {
   const std::string m = " --machine " + src("resources/machines/linuxcnc_xyzac_trt.xml");

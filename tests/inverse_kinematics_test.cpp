@@ -190,6 +190,27 @@ TEST(InverseKinematics, FailureNamesTheAxisOfThePreferredSolution) {
   }
 }
 
+// Inside the singular band a micro-radian tilt of the tool axis keeps the free angle (it used to
+// swing C to wherever the tilt pointed, -90 deg for a tilt towards -x).
+TEST(InverseKinematics, MicroRadianTiltNearThePoleKeepsTheFreeAngle) {
+  const Machine m = readMachineFile(test::sourcePath("resources/machines/trunnion_ac_trt.xml"));
+  const InverseKinematics ik(m.model);
+  const IkSolution first = ik.solve(Eigen::Vector3d(10, 20, 5), Eigen::Vector3d::UnitZ(), nullptr);
+  ASSERT_EQ(first.status, IkStatus::Ok);
+  const int c = m.model.axisIndex("C");
+  for (double dir : {0.0, M_PI / 2, M_PI, -M_PI / 2}) {
+    const Eigen::Vector3d u(1e-6 * std::cos(dir), 1e-6 * std::sin(dir), 1.0);
+    const IkSolution s = ik.solve(Eigen::Vector3d(10, 20, 5), u.normalized(), &first.q);
+    ASSERT_EQ(s.status, IkStatus::Ok);
+    EXPECT_TRUE(s.singular);
+    EXPECT_NEAR(s.q[c], first.q[c], 1e-12) << dir;
+  }
+  // Beyond the band the angle follows the tool axis again.
+  const double t = 2.0 * m.model.control.singular_band;
+  const IkSolution s = ik.solve(Eigen::Vector3d(10, 20, 5), Eigen::Vector3d(0, std::sin(t), std::cos(t)), &first.q);
+  EXPECT_FALSE(s.singular);
+}
+
 TEST(InverseKinematics, PointBeyondTheStrokeNamesTheAxis) {
   const Machine m = readMachineFile(test::sourcePath(test::shippedMachines()[0]));
   const InverseKinematics ik(m.model);
