@@ -468,10 +468,8 @@ class Reader {
       else if (c == "G43") {
         tlc_ = true;
         h_ = has('H') ? static_cast<int>(val('H')) : tool_;
-      } else if (c == "G49") {
+      } else if (c == "G49") {  // (a TCP mode that G49 ends was switched off by tcpWord)
         tlc_ = false;
-        for (auto it = tcp_active_.begin(); it != tcp_active_.end();)
-          it = tcpOffOf(*it) == "G49" ? tcp_active_.erase(it) : std::next(it);
       } else if (c == "G53") g53 = true;
       else if (c == "G28" || c == "G30") g28 = true;
       else if (c == "G10") g10 = true;
@@ -572,11 +570,6 @@ class Reader {
                      declared + "): is the program posted for this machine?");
     }
     return false;
-  }
-  std::string tcpOffOf(const std::string& on) const {
-    for (const auto& [a, b] : model_.control.tcp_words)
-      if (a == on) return b;
-    return "";
   }
   bool tcpMode() const { return !tcp_active_.empty(); }
 
