@@ -2,6 +2,7 @@
 // zero, rotation and gauge length that keep the whole program inside travel (core/setup_search).
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 
@@ -58,6 +59,40 @@ void printRanges(const MachineModel& model, const ClProgram& program,
     std::printf("  %-5s %-26s %-24s %s\n", ax.name.c_str(), needs.c_str(), travel.c_str(),
                 margin.c_str());
   }
+}
+
+// The set-up file for a proposal: what `--setup` reads.
+void writeSetupFile(const std::string& file, const ClProgram& program, const MachineModel& model,
+                    const PartSetup& b, double margin, const std::string& what) {
+  char buf[768];
+  std::snprintf(buf, sizeof buf,
+                "# Set-up proposed by tolver setup for %s%s on %s (margin %.3f mm)\n"
+                "part_zero_mm = %s, %s, %s\npart_rotation_deg = %s\ngauge_length_mm = %s\n",
+                program.file.c_str(), what.c_str(), model.name.c_str(), margin,
+                formatNumber(b.part_zero_table.x()).c_str(),
+                formatNumber(b.part_zero_table.y()).c_str(),
+                formatNumber(b.part_zero_table.z()).c_str(),
+                formatNumber(b.part_rotation * 180.0 / M_PI).c_str(),
+                formatNumber(b.gauge_length).c_str());
+  std::string text = buf;
+  // The proposal moves the part frame: the work offsets of a posted program go with it (a
+  // work offset the set-up does not give has its origin at the part zero: touch off there).
+  if (program.dialect == "G-code")
+    text += "# work offsets: not given, so G54... are at the part zero above (touch off there)\n";
+  else
+    for (const auto& [name, off] : model.setup.work_offsets)
+      text += toLower(name) + "_mm = " + formatNumber(off.x()) + ", " + formatNumber(off.y()) +
+              ", " + formatNumber(off.z()) + "\n";
+  for (const auto& [h, len] : model.setup.tool_lengths)
+    text += "tool_h" + std::to_string(h) + "_mm = " + formatNumber(len) + "\n";
+  writeFileAtomically(file, text);
+}
+
+// s.txt -> s_part2.txt
+std::string pieceFileName(const std::string& output, size_t k) {
+  const std::filesystem::path p(output);
+  return (p.parent_path() / (p.stem().string() + "_part" + std::to_string(k + 1) +
+                             p.extension().string())).string();
 }
 
 void runSetup(const SetupOptions& o, int* exit_code) {
@@ -168,30 +203,45 @@ void runSetup(const SetupOptions& o, int* exit_code) {
                 r.outside.size(), lines.c_str(), runs >= 8 ? ", ..." : "");
     *exit_code = 1;
   }
-  if (!o.output.empty()) {
-    char buf[512];
-    std::snprintf(buf, sizeof buf,
-                  "# Set-up proposed by tolver setup for %s on %s (margin %.3f mm)\n"
-                  "part_zero_mm = %s, %s, %s\npart_rotation_deg = %s\ngauge_length_mm = %s\n",
-                  program.file.c_str(), model.name.c_str(), r.margin,
-                  formatNumber(b.part_zero_table.x()).c_str(),
-                  formatNumber(b.part_zero_table.y()).c_str(),
-                  formatNumber(b.part_zero_table.z()).c_str(),
-                  formatNumber(b.part_rotation * 180.0 / M_PI).c_str(),
-                  formatNumber(b.gauge_length).c_str());
-    std::string text = buf;
-    // The proposal moves the part frame: the work offsets of a posted program go with it (a
-    // work offset the set-up does not give has its origin at the part zero: touch off there).
-    if (program.dialect == "G-code")
-      text += "# work offsets: not given, so G54... are at the part zero above (touch off there)\n";
+  std::vector<SetupPiece> pieces;
+  if (!r.found) {
+    // Where to split: consecutive pieces of the program, each with a set-up that reaches it.
+    pieces = splitIntoSetups(model, path, cmd, so);
+    const bool all = !pieces.empty() && pieces.back().last == static_cast<int>(path.size()) - 1;
+    bool each = true;
+    for (const SetupPiece& p : pieces) each = each && p.result.found;
+    if (all && each)
+      std::printf("  split      %zu set-ups reach the program, one piece each:\n", pieces.size());
     else
-      for (const auto& [name, off] : model.setup.work_offsets)
-        text += toLower(name) + "_mm = " + formatNumber(off.x()) + ", " + formatNumber(off.y()) +
-                ", " + formatNumber(off.z()) + "\n";
-    for (const auto& [h, len] : model.setup.tool_lengths)
-      text += "tool_h" + std::to_string(h) + "_mm = " + formatNumber(len) + "\n";
-    writeFileAtomically(o.output, text);
-    std::printf("  wrote      %s (set-up file)\n", o.output.c_str());
+      std::printf("  split      no split into %zu pieces or fewer reaches every point:\n",
+                  pieces.size());
+    for (size_t k = 0; k < pieces.size(); ++k) {
+      const SetupPiece& p = pieces[k];
+      const PartSetup& ps = p.result.setup;
+      if (!p.result.found) {
+        std::printf("    piece %zu  line %d: no set-up reaches this point\n", k + 1,
+                    path[p.first].line);
+        continue;
+      }
+      std::printf("    piece %zu  lines %d-%d (%d points): part_zero_mm = %.3f, %.3f, %.3f; "
+                  "part_rotation_deg = %.3f; gauge_length_mm = %.3f; margin %.3f mm\n",
+                  k + 1, path[p.first].line, path[p.last].line, p.last - p.first + 1,
+                  ps.part_zero_table.x(), ps.part_zero_table.y(), ps.part_zero_table.z(),
+                  ps.part_rotation * 180.0 / M_PI, ps.gauge_length, p.result.margin);
+    }
+  }
+  if (!o.output.empty()) {
+    writeSetupFile(o.output, program, model, b, r.margin, "");
+    std::printf("  wrote      %s (set-up file%s)\n", o.output.c_str(),
+                r.found ? "" : ": the best single set-up, which leaves points outside travel");
+    for (size_t k = 0; k < pieces.size(); ++k) {
+      if (!pieces[k].result.found) continue;
+      const std::string f = pieceFileName(o.output, k);
+      const std::string what = ", lines " + std::to_string(path[pieces[k].first].line) + "-" +
+                               std::to_string(path[pieces[k].last].line);
+      writeSetupFile(f, program, model, pieces[k].result.setup, pieces[k].result.margin, what);
+      std::printf("  wrote      %s (set-up file for piece %zu%s)\n", f.c_str(), k + 1, what.c_str());
+    }
   }
 }
 

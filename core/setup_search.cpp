@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/inverse_kinematics.h"
+#include "core/max_min_affine.h"
 
 namespace tolver {
 namespace {
@@ -145,108 +146,201 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
   std::vector<double> gauges = options.gauge_lengths;
   if (gauges.empty()) gauges.push_back(model.setup.gauge_length);
 
-  for (double rot : rotations) {
-    ++out.rotations_tried;
-    bool rejected = true;
-    for (double L : gauges) {
-      MachineModel m = relaxed(model);
-      m.setup.part_rotation = rot;
-      m.setup.gauge_length = L;
-      const Eigen::Vector3d x0 = model.setup.part_zero_table;
-      m.setup.part_zero_table = x0;
-      const std::vector<JointVector> q0 = solveAll(m, path, commanded, subset);
-      bool ok = true;
-      for (const JointVector& q : q0) ok = ok && !std::isnan(q[0]);
-      if (!ok) continue;  // rotary travel cannot be met at this rotation
-      rejected = false;
-      // Each point's orientation solutions (the one the path's continuity takes and, for CL
-      // data, the other, which the inverse kinematics falls back to when the first leaves
-      // travel), and for each its affine prismatic joints: a at x0 and B by unit steps with
-      // the rotaries kept.
-      const InverseKinematics base(m);
-      struct Affine {
-        JointVector ref;
-        Eigen::Vector3d a;
-        Eigen::Matrix3d B;
-      };
-      std::vector<Affine> cand;
-      std::vector<int> first(q0.size() + 1, 0);
-      for (size_t i = 0; i < q0.size(); ++i) {
-        first[i] = static_cast<int>(cand.size());
-        cand.push_back({q0[i], {}, {}});
-        if (commanded) continue;  // a posted program's rotary words are given
-        InverseKinematics::RotaryCandidate rc[2];
-        bool singular = false;
-        const int nc = base.rotaryCandidates(path[subset[i]].u_w, rc, &singular);
-        for (int c = 0; c < nc && !singular; ++c) {
-          JointVector ref = q0[i];
-          for (size_t r = 0; r < base.rotaryAxes().size(); ++r)
-            ref[base.rotaryAxes()[r]] = rc[c].angleOf(static_cast<int>(r));
-          const IkSolution s = base.solve(path[subset[i]].p_w, path[subset[i]].u_w, &ref);
-          if (s.status != IkStatus::Ok) continue;
-          bool same = true;
-          for (int r : base.rotaryAxes()) same = same && std::abs(s.q[r] - q0[i][r]) < 1e-9;
-          if (!same) {
-            cand.push_back({s.q, {}, {}});
-            break;
-          }
+  // The largest margin at one rotation and gauge length (part zero in *x); -inf when the rotary
+  // travel cannot give every point's tool axis at that rotation.
+  auto bestAt = [&](double rot, double L, Eigen::Vector3d* x_best) {
+    MachineModel m = relaxed(model);
+    m.setup.part_rotation = rot;
+    m.setup.gauge_length = L;
+    const Eigen::Vector3d x0 = model.setup.part_zero_table;
+    m.setup.part_zero_table = x0;
+    const std::vector<JointVector> q0 = solveAll(m, path, commanded, subset);
+    for (const JointVector& q : q0)
+      if (std::isnan(q[0])) return -std::numeric_limits<double>::infinity();
+    // Each point's orientation solutions (the one the path's continuity takes and, for CL
+    // data, the other, which the inverse kinematics falls back to when the first leaves
+    // travel), and for each its affine prismatic joints: a at x0 and B by unit steps with
+    // the rotaries kept.
+    const InverseKinematics base(m);
+    struct Affine {
+      JointVector ref;
+      Eigen::Vector3d a;
+      Eigen::Matrix3d B;
+    };
+    std::vector<Affine> cand;
+    std::vector<int> first(q0.size() + 1, 0);
+    for (size_t i = 0; i < q0.size(); ++i) {
+      first[i] = static_cast<int>(cand.size());
+      cand.push_back({q0[i], Eigen::Vector3d::Zero(), Eigen::Matrix3d::Zero()});
+      if (commanded) continue;  // a posted program's rotary words are given
+      InverseKinematics::RotaryCandidate rc[2];
+      bool singular = false;
+      const int nc = base.rotaryCandidates(path[subset[i]].u_w, rc, &singular);
+      for (int c = 0; c < nc && !singular; ++c) {
+        JointVector ref = q0[i];
+        for (size_t r = 0; r < base.rotaryAxes().size(); ++r)
+          ref[base.rotaryAxes()[r]] = rc[c].angleOf(static_cast<int>(r));
+        const IkSolution s = base.solve(path[subset[i]].p_w, path[subset[i]].u_w, &ref);
+        if (s.status != IkStatus::Ok) continue;
+        bool same = true;
+        for (int r : base.rotaryAxes()) same = same && std::abs(s.q[r] - q0[i][r]) < 1e-9;
+        if (!same) {
+          cand.push_back({s.q, Eigen::Vector3d::Zero(), Eigen::Matrix3d::Zero()});
+          break;
         }
-      }
-      first[q0.size()] = static_cast<int>(cand.size());
-      const size_t n = q0.size();
-      for (Affine& c : cand)
-        for (int j = 0; j < 3; ++j) c.a[j] = c.ref[prismatic[j]];
-      for (int k = 0; k < 3; ++k) {
-        MachineModel mk = m;
-        mk.setup.part_zero_table = x0 + Eigen::Vector3d::Unit(k);
-        const InverseKinematics ik(mk);
-        for (size_t i = 0; i < n; ++i)
-          for (int c = first[i]; c < first[i + 1]; ++c) {
-            const IkSolution s = ik.solve(path[subset[i]].p_w, path[subset[i]].u_w, &cand[c].ref);
-            for (int j = 0; j < 3; ++j)
-              cand[c].B(j, k) = (s.status == IkStatus::Ok ? s.q[prismatic[j]] : cand[c].a[j]) -
-                                cand[c].a[j];
-          }
-      }
-      // The margin of a part zero: over the points, the best of their solutions' margins.
-      auto margin = [&](const Eigen::Vector3d& x) {
-        double t = std::numeric_limits<double>::infinity();
-        const Eigen::Vector3d d = x - x0;
-        for (size_t i = 0; i < n; ++i) {
-          double best_c = -std::numeric_limits<double>::infinity();
-          for (int c = first[i]; c < first[i + 1]; ++c) {
-            const Eigen::Vector3d q = cand[c].a + cand[c].B * d;
-            double tc = std::numeric_limits<double>::infinity();
-            for (int j = 0; j < 3; ++j) {
-              const Axis& ax = model.axes[prismatic[j]];
-              tc = std::min(tc, std::min(q[j] - ax.travel_min, ax.travel_max - q[j]));
-            }
-            best_c = std::max(best_c, tc);
-          }
-          t = std::min(t, best_c);
-        }
-        return t;
-      };
-      // Nelder-Mead stalls at the kinks of a piecewise-linear function: restart from the best
-      // point with shrinking simplices, and from the centring guess of each axis's range.
-      double best1 = margin(x0);
-      Eigen::Vector3d x = x0;
-      for (double size : {200.0, 50.0, 100.0, 10.0, 30.0, 2.0, 0.5}) {
-        double v = 0.0;
-        const Eigen::Vector3d y = maximise(margin, x, size, &v);
-        if (v > best1) {
-          best1 = v;
-          x = y;
-        }
-      }
-      if (best1 > out.margin) {
-        out.margin = best1;
-        out.setup.part_zero_table = x;
-        out.setup.part_rotation = rot;
-        out.setup.gauge_length = L;
       }
     }
-    if (rejected) ++out.rotations_rejected;
+    first[q0.size()] = static_cast<int>(cand.size());
+    const size_t n = q0.size();
+    for (Affine& c : cand)
+      for (int j = 0; j < 3; ++j) c.a[j] = c.ref[prismatic[j]];
+    for (int k = 0; k < 3; ++k) {
+      MachineModel mk = m;
+      mk.setup.part_zero_table = x0 + Eigen::Vector3d::Unit(k);
+      const InverseKinematics ik(mk);
+      for (size_t i = 0; i < n; ++i)
+        for (int c = first[i]; c < first[i + 1]; ++c) {
+          const IkSolution s = ik.solve(path[subset[i]].p_w, path[subset[i]].u_w, &cand[c].ref);
+          for (int j = 0; j < 3; ++j)
+            cand[c].B(j, k) = (s.status == IkStatus::Ok ? s.q[prismatic[j]] : cand[c].a[j]) -
+                              cand[c].a[j];
+        }
+    }
+    auto candMargin = [&](int c, const Eigen::Vector3d& d) {
+      const Eigen::Vector3d q = cand[c].a + cand[c].B * d;
+      double tc = std::numeric_limits<double>::infinity();
+      for (int j = 0; j < 3; ++j) {
+        const Axis& ax = model.axes[prismatic[j]];
+        tc = std::min(tc, std::min(q[j] - ax.travel_min, ax.travel_max - q[j]));
+      }
+      return tc;
+    };
+    // The margin of a part zero: over the points, the best of their solutions' margins.
+    auto margin = [&](const Eigen::Vector3d& x) {
+      double t = std::numeric_limits<double>::infinity();
+      const Eigen::Vector3d d = x - x0;
+      for (size_t i = 0; i < n; ++i) {
+        double best_c = -std::numeric_limits<double>::infinity();
+        for (int c = first[i]; c < first[i + 1]; ++c) best_c = std::max(best_c, candMargin(c, d));
+        t = std::min(t, best_c);
+      }
+      return t;
+    };
+    // With one solution chosen per point the margin is concave and piecewise linear: its
+    // maximum is a linear programme, solved exactly. The choice is then revised to each
+    // point's best solution at that optimum, until it no longer changes (the margin never
+    // decreases from one round to the next).
+    auto exactFrom = [&](std::vector<int> choice, Eigen::Vector3d* x_out) {
+      double best = -std::numeric_limits<double>::infinity();
+      Eigen::MatrixXd g(6 * n, 3);
+      Eigen::VectorXd c(6 * n);
+      for (int round = 0; round < 10; ++round) {
+        for (size_t i = 0; i < n; ++i) {
+          const Affine& a = cand[choice[i]];
+          for (int j = 0; j < 3; ++j) {
+            const Axis& ax = model.axes[prismatic[j]];
+            const size_t r = 6 * i + 2 * j;
+            g.row(r) = a.B.row(j);
+            c[r] = a.a[j] - ax.travel_min;
+            g.row(r + 1) = -a.B.row(j);
+            c[r + 1] = ax.travel_max - a.a[j];
+          }
+        }
+        const MaxMinResult lp = maximiseMinOfAffine(g, c);
+        if (lp.status != MaxMinStatus::Optimal) break;
+        const Eigen::Vector3d d = lp.x;
+        const double v = margin(x0 + d);
+        if (v > best) {
+          best = v;
+          *x_out = x0 + d;
+        }
+        bool changed = false;
+        for (size_t i = 0; i < n; ++i) {
+          int bc = choice[i];
+          for (int k = first[i]; k < first[i + 1]; ++k)
+            if (candMargin(k, d) > candMargin(bc, d) + 1e-9) bc = k;
+          changed = changed || bc != choice[i];
+          choice[i] = bc;
+        }
+        if (!changed) break;
+      }
+      return best;
+    };
+    std::vector<int> continuity(n);
+    for (size_t i = 0; i < n; ++i) continuity[i] = first[i];
+    Eigen::Vector3d x = x0;
+    double best1 = exactFrom(continuity, &x);
+    if (!std::isfinite(best1)) {
+      best1 = margin(x0);
+      x = x0;
+    }
+    // Nelder-Mead on the margin with every solution allowed finds other choices; it stalls at
+    // the kinks of a piecewise-linear function, so it restarts from the best point with
+    // shrinking simplices, and the exact step then polishes the choice it ends on.
+    Eigen::Vector3d y_best = x;
+    double v_best = best1;
+    for (double size : {200.0, 50.0, 100.0, 10.0, 30.0, 2.0, 0.5}) {
+      double v = 0.0;
+      const Eigen::Vector3d y = maximise(margin, y_best, size, &v);
+      if (v > v_best) {
+        v_best = v;
+        y_best = y;
+      }
+    }
+    if (v_best > best1) {
+      std::vector<int> choice(n);
+      const Eigen::Vector3d d = y_best - x0;
+      for (size_t i = 0; i < n; ++i) {
+        choice[i] = first[i];
+        for (int k = first[i]; k < first[i + 1]; ++k)
+          if (candMargin(k, d) > candMargin(choice[i], d)) choice[i] = k;
+      }
+      Eigen::Vector3d z = y_best;
+      const double vz = exactFrom(choice, &z);
+      if (vz > v_best) v_best = vz, y_best = z;
+      best1 = v_best;
+      x = y_best;
+    }
+    *x_best = x;
+    return best1;
+  };
+
+  auto consider = [&](double rot, double L) {
+    Eigen::Vector3d x;
+    const double v = bestAt(rot, L, &x);
+    if (v > out.margin) {
+      out.margin = v;
+      out.setup.part_zero_table = x;
+      out.setup.part_rotation = rot;
+      out.setup.gauge_length = L;
+    }
+    return v;
+  };
+  std::vector<std::pair<double, double>> coarse;  // margin, rotation
+  for (double rot : rotations) {
+    if (options.stop_when_found && out.margin >= 0.0) break;
+    ++out.rotations_tried;
+    double v = -std::numeric_limits<double>::infinity();
+    for (double L : gauges) v = std::max(v, consider(rot, L));
+    if (!std::isfinite(v)) ++out.rotations_rejected;
+    else coarse.push_back({v, rot});
+  }
+  // The margin changes with the rotation between the candidates: refine around the three best
+  // by halving steps down to a tenth of a degree.
+  if (options.rotation_step > 0.0) {
+    std::sort(coarse.begin(), coarse.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    if (coarse.size() > 3) coarse.resize(3);
+    for (const auto& [v0, rot0] : coarse) {
+      double rot = rot0, v = v0;
+      for (double h = options.rotation_step / 2.0;
+           h > M_PI / 1800.0 && !(options.stop_when_found && out.margin >= 0.0); h /= 2.0)
+        for (double r : {rot - h, rot + h}) {
+          double vr = -std::numeric_limits<double>::infinity();
+          const double rr = std::fmod(r + 2.0 * M_PI, 2.0 * M_PI);
+          for (double L : gauges) vr = std::max(vr, consider(rr, L));
+          if (vr > v) v = vr, rot = rr;
+        }
+    }
   }
   // The best set-up on every point.
   MachineModel best = model;
@@ -271,6 +365,60 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
   }
   out.found = std::isfinite(out.margin) && out.outside.empty();
   return out;
+}
+
+std::vector<SetupPiece> splitIntoSetups(const MachineModel& model, const std::vector<ClPoint>& path,
+                                        const std::vector<JointVector>* commanded,
+                                        const SetupSearchOptions& options, int max_pieces) {
+  SetupSearchOptions quick = options;
+  quick.stop_when_found = true;
+  auto reach = [&](int first, int end, SetupSearchResult* r) {
+    const std::vector<ClPoint> piece(path.begin() + first, path.begin() + end);
+    std::vector<JointVector> cmd;
+    if (commanded) cmd.assign(commanded->begin() + first, commanded->begin() + end);
+    *r = findSetup(model, piece, commanded ? &cmd : nullptr, quick);
+    return r->found;
+  };
+  std::vector<SetupPiece> pieces;
+  const int n = static_cast<int>(path.size());
+  int first = 0;
+  while (first < n && static_cast<int>(pieces.size()) < max_pieces) {
+    SetupPiece p;
+    p.first = first;
+    if (reach(first, n, &p.result)) {
+      p.last = n - 1;
+    } else {
+      // Bisection: lo reachable (one point at least is tried), hi not.
+      int lo = first + 1, hi = n;
+      SetupSearchResult r;
+      if (!reach(first, lo, &r)) {
+        p.last = first;  // a point no set-up reaches on its own
+        p.result = r;
+      } else {
+        p.result = r;
+        while (hi - lo > 1) {
+          const int mid = lo + (hi - lo) / 2;
+          if (reach(first, mid, &r)) {
+            lo = mid;
+            p.result = r;
+          } else {
+            hi = mid;
+          }
+        }
+        p.last = lo - 1;
+      }
+    }
+    // The piece's set-up with the margin of the full search (not the first that reached).
+    if (p.result.found) {
+      std::vector<ClPoint> piece(path.begin() + p.first, path.begin() + p.last + 1);
+      std::vector<JointVector> cmd;
+      if (commanded) cmd.assign(commanded->begin() + p.first, commanded->begin() + p.last + 1);
+      p.result = findSetup(model, piece, commanded ? &cmd : nullptr, options);
+    }
+    first = p.last + 1;
+    pieces.push_back(std::move(p));
+  }
+  return pieces;
 }
 
 }  // namespace tolver

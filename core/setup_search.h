@@ -39,6 +39,7 @@ struct SetupSearchOptions {
   double rotation_step = M_PI / 12.0;  // candidate part rotations, rad (0 to keep the given one)
   std::vector<double> gauge_lengths;   // candidates, mm; empty: the model's
   int max_points = 20000;              // points used in the search (evenly spaced subset)
+  bool stop_when_found = false;        // return the first set-up that reaches every point
 };
 
 struct SetupSearchResult {
@@ -53,5 +54,16 @@ struct SetupSearchResult {
 SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint>& path,
                             const std::vector<JointVector>* commanded,
                             const SetupSearchOptions& options = {});
+
+// A program no single set-up reaches, cut into consecutive pieces that each one set-up
+// reaches: greedily the longest reachable piece from the start, found by bisection on its end.
+struct SetupPiece {
+  int first = 0, last = 0;  // indices into the path, inclusive
+  SetupSearchResult result; // its set-up (found is false for a single point no set-up reaches)
+};
+std::vector<SetupPiece> splitIntoSetups(const MachineModel& model, const std::vector<ClPoint>& path,
+                                        const std::vector<JointVector>* commanded,
+                                        const SetupSearchOptions& options = {},
+                                        int max_pieces = 8);
 
 }  // namespace tolver

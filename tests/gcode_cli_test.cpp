@@ -7,9 +7,11 @@
 #include <string>
 
 #include "core/inverse_kinematics.h"
+#include "core/tool_path_prediction.h"
 #include "io/apt_reader.h"
 #include "io/gcode_reader.h"
 #include "io/machine_file.h"
+#include "io/setup_file.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;
@@ -187,30 +189,54 @@ TEST_F(GcodeCli, VerifyRefusesImplausibleUnitsAndTolerances) {
 }
 
 
-// A real NX CLSF (MSYS, 800 mm long, tool axes down to 4 deg from horizontal) on the Matsuura:
-// setup says which lines no single set-up reaches, and that MSYS put the points in NX's
-// absolute frame.
-TEST_F(GcodeCli, SetupOnARealClsfNamesTheLinesToSplitAndTheFrame) {
-  auto r = test::runTolver("setup --machine " + src("resources/machines/matsuura_mc760vx.xml") +
-                           " --cl " + src("tests/fixtures/cl/nx_ust_a.cls") +
+// A real NX CLSF (MSYS, 800 mm long, tool axes down to 4 deg from horizontal) on the Matsuura
+// (X 760, Y 510 mm of travel): no single set-up reaches it, which setup says with the lines the
+// best one leaves outside, and then splits it into two pieces whose set-up files each reach
+// every point of their lines; MSYS put the points in NX's absolute frame.
+TEST_F(GcodeCli, SetupOnARealClsfSplitsItIntoPiecesThatEachReach) {
+  const std::string machine = src("resources/machines/matsuura_mc760vx.xml");
+  const std::string cl = src("tests/fixtures/cl/nx_ust_a.cls");
+  auto r = test::runTolver("setup --machine " + machine + " --cl " + cl +
                            " --gauge-length 100 -o " + path("s.txt"));
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("no single set-up reaches the whole program"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("split the program there"), std::string::npos);
   EXPECT_NE(r.output.find("MSYS at line 3 applied"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("-120.259, -1196.500, 142.500"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("extent     x -189.770 .. 130.866"), std::string::npos) << r.output;
-  // The proposal is written and reads back; predict with it fails on as many points as setup
-  // said it leaves outside.
+  EXPECT_NE(r.output.find("2 set-ups reach the program, one piece each"), std::string::npos)
+      << r.output;
+  // The best single proposal is written and reads back; predict with it fails on as many
+  // points as setup said it leaves outside.
   const size_t at = r.output.find("the best leaves ");
   ASSERT_NE(at, std::string::npos);
   const int outside = std::stoi(r.output.substr(at + 16));
-  r = test::runTolver("predict --machine " + src("resources/machines/matsuura_mc760vx.xml") +
-                      " --cl " + src("tests/fixtures/cl/nx_ust_a.cls") + " --setup " + path("s.txt") +
-                      " -o " + path("p.apt"));
-  EXPECT_EQ(r.exit_code, 2) << r.output;  // still out of travel, now by the figures setup gave
-  EXPECT_NE(r.output.find("; " + std::to_string(outside) + " points fail"), std::string::npos)
-      << outside << ": " << r.output;
+  auto p = test::runTolver("predict --machine " + machine + " --cl " + cl + " --setup " +
+                           path("s.txt") + " -o " + path("p.apt"));
+  EXPECT_EQ(p.exit_code, 2) << p.output;  // still out of travel, now by the figures setup gave
+  EXPECT_NE(p.output.find("; " + std::to_string(outside) + " points fail"), std::string::npos)
+      << outside << ": " << p.output;
+  // Each piece's set-up file puts every point of its lines inside travel, and the pieces
+  // cover the program.
+  const Machine m = readMachineFile(machine);
+  const ClProgram program = readAptFile(cl);
+  size_t covered = 0;
+  for (int k = 1; k <= 2; ++k) {
+    const std::string f = path("s_part" + std::to_string(k) + ".txt");
+    ASSERT_TRUE(fs::exists(f)) << r.output;
+    const size_t w = r.output.find("piece " + std::to_string(k) + "  lines ");
+    ASSERT_NE(w, std::string::npos) << r.output;
+    const std::string range = r.output.substr(w + 15);
+    const int first = std::stoi(range), last = std::stoi(range.substr(range.find('-') + 1));
+    MachineModel model = m.model;
+    model.setup = readSetupFile(f, model.setup);
+    std::vector<ClPoint> piece;
+    for (const ClPoint& c : program.path)
+      if (c.line >= first && c.line <= last) piece.push_back(c);
+    covered += piece.size();
+    const PredictionResult pred = predictToolPath(model, m.params, piece);
+    EXPECT_TRUE(pred.ok()) << f << ": " << pred.failed_points << " points outside travel";
+  }
+  EXPECT_EQ(covered, program.path.size());
 }
 
 

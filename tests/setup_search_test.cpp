@@ -51,3 +51,72 @@ TEST(SetupSearch, FindsASetupThatReachesFromOneThatDoesNot) {
 
 }  // namespace
 }  // namespace tolver
+
+namespace tolver {
+namespace {
+
+// Analytic truth: a vertical-tool program on the Matsuura at a fixed rotation keeps A and C at
+// zero, so each prismatic joint is the point's coordinate plus a constant, and the best margin
+// is half the smallest difference between an axis's travel and the program's span along it.
+TEST(SetupSearch, VerticalToolMarginIsHalfTheSmallestSlack) {
+  Machine m = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
+  m.model.setup.gauge_length = 100;
+  m.model.setup.part_zero_table = Eigen::Vector3d(900, -700, 400);  // far outside
+  std::vector<ClPoint> path;
+  const Eigen::Vector3d span(600, 200, 90);
+  for (int i = 0; i < 40; ++i) {
+    ClPoint c;
+    c.p_w = Eigen::Vector3d(span.x() * ((i * 7) % 40) / 39.0, span.y() * ((i * 13) % 40) / 39.0,
+                            span.z() * ((i * 3) % 40) / 39.0) - Eigen::Vector3d(50, 20, 0);
+    c.u_w = Eigen::Vector3d::UnitZ();
+    c.line = i + 1;
+    path.push_back(c);
+  }
+  SetupSearchOptions o;
+  o.rotation_step = 0.0;
+  const SetupSearchResult r = findSetup(m.model, path, nullptr, o);
+  ASSERT_TRUE(r.found);
+  double expected = 1e9;
+  for (size_t a = 0; a < m.model.axes.size(); ++a) {
+    const Axis& ax = m.model.axes[a];
+    if (ax.isRotary()) continue;
+    const int j = ax.name == "X" ? 0 : ax.name == "Y" ? 1 : 2;
+    expected = std::min(expected, (ax.travel_max - ax.travel_min - span[j]) / 2.0);
+  }
+  EXPECT_NEAR(r.margin, expected, 1e-6);
+}
+
+// A program no single set-up reaches is cut into consecutive pieces that cover it, each with a
+// set-up that reaches every point of its piece.
+TEST(SetupSearch, SplitsAProgramTooLongForTheTravel) {
+  Machine m = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
+  m.model.setup.gauge_length = 100;
+  std::vector<ClPoint> path;
+  for (int i = 0; i <= 120; ++i) {  // a 1200 mm straight line: longer than any travel
+    ClPoint c;
+    c.p_w = Eigen::Vector3d(10.0 * i, 0, 0);
+    c.u_w = Eigen::Vector3d::UnitZ();
+    c.line = i + 1;
+    path.push_back(c);
+  }
+  SetupSearchOptions o;
+  EXPECT_FALSE(findSetup(m.model, path, nullptr, o).found);
+  const std::vector<SetupPiece> pieces = splitIntoSetups(m.model, path, nullptr, o);
+  // The longest piece lies along the diagonal of the X-Y travel, hypot(760, 510) = 915.3 mm
+  // (a part rotation puts it there): 91 steps of 10 mm fit, 92 do not.
+  ASSERT_EQ(pieces.size(), 2u);
+  EXPECT_EQ(pieces.front().first, 0);
+  EXPECT_EQ(pieces.back().last, 120);
+  EXPECT_EQ(pieces[1].first, pieces[0].last + 1);
+  EXPECT_EQ(pieces[0].last, 91);
+  for (const SetupPiece& p : pieces) {
+    ASSERT_TRUE(p.result.found);
+    MachineModel model = m.model;
+    model.setup = p.result.setup;
+    const std::vector<ClPoint> piece(path.begin() + p.first, path.begin() + p.last + 1);
+    EXPECT_TRUE(predictToolPath(model, m.params, piece).ok());
+  }
+}
+
+}  // namespace
+}  // namespace tolver
