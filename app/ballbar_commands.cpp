@@ -7,6 +7,7 @@
 #include <random>
 
 #include "app/commands.h"
+#include "app/ballbar_support.h"
 #include "app/common.h"
 #include "core/ballbar_plan.h"
 #include "core/calibration.h"
@@ -73,7 +74,7 @@ void runPlan(PlanOptions o) {
 
 struct SimulateOptions {
   MachineOptions machine;
-  std::string plan, output;
+  std::string plan, output, balls;
   double noise_um = 0.0;
   double ball_error_um = 0.0;
   double seconds_per_reading = 20.0;
@@ -86,10 +87,13 @@ void runSimulate(const SimulateOptions& o) {
   checkOutputDir(o.output, "-o");
   std::mt19937 rng(o.seed);
   std::normal_distribution<double> noise(0.0, o.noise_um * 1e-3), ball(0.0, o.ball_error_um * 1e-3);
-  std::vector<BallErrors> balls(f.test.setups.size());
+  // Ball positions: the plan's nominal ones, or those of --balls (identified by calibrate), plus
+  // the random errors asked for.
+  std::vector<BallErrors> balls = o.balls.empty() ? std::vector<BallErrors>(f.test.setups.size())
+                                                  : readBallPositionsFile(o.balls, f.test);
   for (BallErrors& b : balls) {
-    b.table_w = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
-    b.tool_t = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+    b.table_w += Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+    b.tool_t += Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
   }
   const ForwardKinematics fk(machine.model, machine.params);
   for (size_t i = 0; i < f.test.readings.size(); ++i) {
@@ -110,22 +114,33 @@ void runSimulate(const SimulateOptions& o) {
 
 struct CalibrateOptions {
   MachineOptions machine;
-  std::string readings, output, report;
-  bool strict = false;
+  std::string readings, output, report, heldout, balls;
+  bool strict = false, keep_outliers = false;
 };
 
 void runCalibrate(const CalibrateOptions& o, int* exit_code) {
   const Machine machine = loadMachine(o.machine);
   const BallbarFile f = readBallbarFile(o.readings, machine.model, true);
+  const BallbarTest heldout = loadHeldout(o.heldout, machine.model, f.test, o.readings);
   checkOutputDir(o.output, "-o");
   const std::string report = o.report.empty() ? replaceExtension(o.output, ".json") : o.report;
+  const std::string balls_file = o.balls.empty() ? ballsPathFor(o.output) : o.balls;
   checkOutputDir(report, "--report");
+  checkOutputDir(balls_file, "--balls");
   for (const std::string& w : f.warnings)
     std::fprintf(stderr, "tolver: warning: %s: %s\n", o.readings.c_str(), w.c_str());
   const std::vector<int> unknowns = defaultCalibrationUnknowns(machine.model);
   CalibrationOptions opt;
   opt.strict = o.strict;
-  const CalibrationResult r = calibrate(machine.model, machine.params, f.test, unknowns, opt);
+  const RobustCalibration rc =
+      o.keep_outliers ? RobustCalibration{} : calibrateWithoutGross(machine.model, machine.params,
+                                                                    f.test, unknowns, opt);
+  CalibrationResult r = rc.fit;
+  BallbarTest used = rc.test;
+  if (o.keep_outliers) {
+    r = calibrate(machine.model, machine.params, f.test, unknowns, opt);
+    used = f.test;
+  }
   if (r.status == CalibrationStatus::Unobservable || r.status == CalibrationStatus::NoData) {
     std::string names;
     for (int p : r.held) names += " " + machine.model.parameters[p].iso_code;
@@ -136,10 +151,17 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
               f.test.readings.size(), f.test.setups.size());
   std::printf("  unknowns   %d (%zu machine parameters + 6 ball positions per set-up)\n", r.unknowns,
               r.identified.size());
+  for (const std::string& w : testDesignWarnings(machine.model, f.test, r.unknowns))
+    std::fprintf(stderr, "tolver: warning: %s: %s\n", o.readings.c_str(), w.c_str());
   std::printf("  solution   %s after %d iterations; rank %d, condition %.3g (column-scaled)\n",
               r.message.c_str(), r.iterations, r.rank, r.condition);
-  std::printf("  residual   RMS %.3f um, max %.3f um, sigma %.3f um\n", r.rms_residual * 1e3,
-              r.max_residual * 1e3, r.residual_sigma * 1e3);
+  printGross(o.readings, f.test, o.keep_outliers
+                                     ? grossReadings(machine.model, f.test, r)
+                                     : rc.removed,
+             o.keep_outliers, rc.with_all, r, rc.limit_reached);
+  std::printf("  residual   RMS %.3f um, max %.3f um, sigma %.3f um (the %zu readings fitted)\n",
+              r.rms_residual * 1e3, r.max_residual * 1e3, r.residual_sigma * 1e3,
+              used.readings.size());
   if (!r.held.empty()) {
     std::string names;
     for (int p : r.held) names += " " + m.parameters[p].iso_code;
@@ -163,15 +185,50 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
                 m.parameters[p].thesis_name.c_str(), r.params[p] * s, r.uncertainty[order[k]] * s,
                 m.parameters[p].angular ? "urad" : "um");
   }
+  // Held-out readings: the prior machine with nominal balls, then the identified one.
+  HeldoutFigures ho;
+  if (!heldout.readings.empty()) {
+    const std::vector<BallErrors> nominal(f.test.setups.size());
+    ho.before = residualStats(
+        ballbarResiduals(ForwardKinematics(m, machine.params), heldout, nominal));
+    ho.after = residualStats(ballbarResiduals(ForwardKinematics(m, r.params), heldout, r.ball_errors));
+    ho.file = o.heldout;
+    std::printf("  held-out   %d readings (%s): RMS %.3f -> %.3f um, max %.3f -> %.3f um "
+                "(the prior machine with nominal balls -> the identified one)\n",
+                ho.before.readings, o.heldout.c_str(), ho.before.rms * 1e3, ho.after.rms * 1e3,
+                ho.before.max * 1e3, ho.after.max * 1e3);
+  }
   Machine identified = machine;
   identified.params = r.params;
   identified.model.errors_source = "identified";
   writeFileAtomically(o.output, formatMachineXml(identified, "identified by tolver calibrate from " +
-                                                                 o.readings + " (" + r.message + ")"));
-  writeFileAtomically(report, formatCalibrationJson(m, f.test, r,
-                                                    {o.machine.machine, o.readings, o.output,
-                                                     static_cast<int>(f.test.readings.size())}));
-  std::printf("  wrote      %s (identified machine), %s (report)\n", o.output.c_str(), report.c_str());
+                                                                 o.readings + " (" + r.message +
+                                                                 "); ball positions in " +
+                                                                 balls_file));
+  writeFileAtomically(balls_file,
+                      formatBallPositionsCsv(f.test, r.ball_errors, &r.ball_uncertainty,
+                                             {"identified ball positions of " + o.readings +
+                                              " by tolver calibrate (machine " + o.output + ")"}));
+  // What the written files predict, read back as the next command will.
+  const WrittenCheck check = checkWrittenFiles(o.output, balls_file, used, heldout);
+  std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um",
+              o.output.c_str(), balls_file.c_str(), check.fit.rms * 1e3);
+  if (check.heldout.readings > 0)
+    std::printf(", the held-out ones at %.3f um", check.heldout.rms * 1e3);
+  std::printf("\n");
+  CalibrationReportInputs in;
+  in.machine_file = o.machine.machine;
+  in.readings_file = o.readings;
+  in.output_file = o.output;
+  in.readings = static_cast<int>(f.test.readings.size());
+  in.balls_file = balls_file;
+  in.heldout = ho;
+  in.written = check;
+  for (const GrossReading& g : rc.removed)
+    in.removed.push_back({f.test.readings[g.index].line, g.residual, g.studentized});
+  writeFileAtomically(report, formatCalibrationJson(m, used, r, in));
+  std::printf("  wrote      %s (identified machine), %s (ball positions), %s (report)\n",
+              o.output.c_str(), balls_file.c_str(), report.c_str());
   *exit_code = r.status == CalibrationStatus::Converged ? 0 : 1;
 }
 
@@ -215,6 +272,9 @@ void registerBallbar(CLI::App& app, int* exit_code) {
     cmd->add_option("--ball-error-um", o->ball_error_um,
                     "random ball position errors per set-up, um (1 sigma; default 0)")
         ->check(CLI::NonNegativeNumber);
+    cmd->add_option("--balls", o->balls,
+                    "ball positions per set-up (CSV, as calibrate writes them) instead of the "
+                    "plan's nominal ones");
     cmd->add_option("--seconds-per-reading", o->seconds_per_reading,
                     "time_s step when the plan has none (default 20)");
     cmd->add_option("--seed", o->seed, "random seed (default 1)");
@@ -234,7 +294,14 @@ void registerBallbar(CLI::App& app, int* exit_code) {
     cmd->add_option("--readings", o->readings, "ball-bar readings (CSV)")->required();
     cmd->add_option("-o,--output", o->output, "identified machine file to write (XML)")->required();
     cmd->add_option("--report", o->report, "report to write (JSON; default: the output path with .json)");
+    cmd->add_option("--heldout", o->heldout,
+                    "held-out readings (CSV) of the same set-ups, not fitted: RMS before and after");
+    cmd->add_option("--balls", o->balls,
+                    "identified ball positions to write (CSV; default: the output path with "
+                    "_balls.csv)");
     cmd->add_flag("--strict", o->strict, "refuse when some parameters cannot be identified");
+    cmd->add_flag("--keep-outliers", o->keep_outliers,
+                  "fit every reading (gross readings are still named)");
     cmd->callback([o, exit_code] { runCalibrate(*o, exit_code); });
   }
 }

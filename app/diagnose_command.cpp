@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "app/commands.h"
+#include "app/ballbar_support.h"
 #include "app/common.h"
 #include "core/diagnosis.h"
 #include "core/effects.h"
@@ -23,12 +24,12 @@ namespace {
 
 struct DiagnoseOptions {
   MachineOptions machine;
-  std::string readings, output, report_dir, cl, cl_setup;
+  std::string readings, output, report_dir, cl, cl_setup, heldout, balls;
   std::vector<std::string> types;
   double alpha = 1e-3;
   int max_effects = 4;
   int blocks_per_setup = 6;
-  bool quiet = false;
+  bool quiet = false, keep_outliers = false;
 };
 
 PredictionResult predictOrThrow(const Machine& m, const ClProgram& program, const std::string& file) {
@@ -68,6 +69,9 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
                      "the machine already has effects; diagnose starts from a base model "
                      "(link and motion errors only)");
   const BallbarFile f = readBallbarFile(o.readings, machine.model, true);
+  const BallbarTest heldout = loadHeldout(o.heldout, machine.model, f.test, o.readings);
+  const std::string balls_file = o.balls.empty() ? ballsPathFor(o.output) : o.balls;
+  checkOutputDir(balls_file, "--balls");
   std::error_code ec;
   std::filesystem::create_directories(o.report_dir, ec);
   if (!std::filesystem::is_directory(o.report_dir))
@@ -87,8 +91,28 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
     if (!tr) throw InputError("--types", 0, 0, "type", "unknown effect type '" + t + "'");
     opt.types.push_back(tr->type);
   }
+  // Gross readings first: the base fit without them is what the diagnosis starts from.
+  const std::vector<int> base_unknowns = defaultCalibrationUnknowns(machine.model);
+  opt.base_unknowns = base_unknowns;
+  if (!heldout.readings.empty()) opt.heldout = &heldout;
+  std::printf("tolver diagnose: %s from %zu readings in %zu set-ups\n", machine.model.name.c_str(),
+              f.test.readings.size(), f.test.setups.size());
+  RobustCalibration rc;
+  if (!o.keep_outliers) {
+    rc = calibrateWithoutGross(machine.model, machine.params, f.test, base_unknowns);
+    printGross(o.readings, f.test, rc.removed, false, rc.with_all, rc.fit, rc.limit_reached);
+  } else {
+    rc.test = f.test;
+    const CalibrationResult all = calibrate(machine.model, machine.params, f.test, base_unknowns);
+    printGross(o.readings, f.test, grossReadings(machine.model, f.test, all), true, all, all, false);
+  }
+  const BallbarTest& used = rc.test;
+  for (const std::string& w : testDesignWarnings(machine.model, used,
+                                                 static_cast<int>(base_unknowns.size() +
+                                                                  6 * used.setups.size())))
+    std::fprintf(stderr, "tolver: warning: %s: %s\n", o.readings.c_str(), w.c_str());
   ProgressBar bar(!o.quiet);
-  const DiagnosisResult r = diagnose(machine, f.test, opt, [&](int done, int total) {
+  const DiagnosisResult r = diagnose(machine, used, opt, [&](int done, int total) {
     bar("scoring candidates", total > 0 ? static_cast<double>(done) / total : 1.0);
   });
   if (!r.ok) throw InputError(o.readings, 0, 0, "diagnose", r.message);
@@ -113,21 +137,30 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   DiagnosisReportInputs in{o.machine.machine, o.readings, o.output, program.get(), seconds};
+  in.balls_file = balls_file;
+  in.heldout_file = o.heldout;
+  for (const GrossReading& g : rc.removed)
+    in.removed.push_back({f.test.readings[g.index].line, g.residual, g.studentized});
   const std::string json_path = (std::filesystem::path(o.report_dir) / "report.json").string();
   const std::string html_path = (std::filesystem::path(o.report_dir) / "report.html").string();
-  const std::string html = writeDiagnosisHtml(o.report_dir, machine.model, f.test, r, in);
   Machine augmented = r.machine;
   augmented.model.errors_source = "identified";
   writeFileAtomically(o.output, formatMachineXml(augmented, "augmented by tolver diagnose from " +
-                                                                o.readings + " (" + r.message + ")"));
-  writeFileAtomically(json_path, formatDiagnosisJson(machine.model, f.test, r, in));
+                                                                o.readings + " (" + r.message +
+                                                                "); ball positions in " + balls_file));
+  writeFileAtomically(balls_file,
+                      formatBallPositionsCsv(used, r.final_fit.ball_errors, &r.final_fit.ball_uncertainty,
+                                             {"identified ball positions of " + o.readings +
+                                              " by tolver diagnose (machine " + o.output + ")"}));
+  // What the written files predict, read back as the next command will: the report states it.
+  in.written = checkWrittenFiles(o.output, balls_file, used, heldout);
+  const std::string html = writeDiagnosisHtml(o.report_dir, machine.model, used, r, in);
+  writeFileAtomically(json_path, formatDiagnosisJson(machine.model, used, r, in));
   writeFileAtomically(html_path, html);
 
   const MachineModel& m = r.machine.model;
-  std::printf("tolver diagnose: %s from %zu readings in %zu set-ups\n", m.name.c_str(),
-              f.test.readings.size(), f.test.setups.size());
-  std::printf("  base fit   residual RMS %.3f um, held-out RMS %.3f um (%d contiguous blocks)\n",
-              r.rms_before * 1e3, r.heldout_rms_before * 1e3, r.folds);
+  std::printf("  base fit   residual RMS %.3f um, cross-validated RMS %.3f um (%d contiguous blocks)\n",
+              r.rms_before * 1e3, r.cv_rms_before * 1e3, r.folds);
   std::printf("  residual   follows %s\n",
               r.analysis_before.follows.empty()
                   ? "nothing in particular"
@@ -137,7 +170,13 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
                         .c_str());
   std::printf("  candidates %zu scored in %d round(s)\n", r.candidates.size(),
               r.candidates.empty() ? 0 : r.candidates.back().round);
-  if (r.added.empty()) std::printf("  verdict    nothing missing: no effect added\n");
+  for (const CandidateScore& c : r.candidates)
+    if (c.verdict == CandidateVerdict::RefitFailed)
+      std::printf("  rejected   %s: %s\n", c.label.c_str(), c.reason.c_str());
+  if (!r.withdrawn.empty())
+    std::printf("  verdict    nothing added: %s\n", r.withdrawn_reason.c_str());
+  else if (r.added.empty())
+    std::printf("  verdict    nothing missing: no effect added\n");
   for (const AddedEffect& a : r.added) {
     double k = 1;
     const char* unit = effectUnit(a.spec, &k);
@@ -151,16 +190,25 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
                   a.hyperparameter_uncertainty);
     std::printf("\n");
   }
-  std::printf("  after      residual RMS %.3f um, held-out RMS %.3f um\n", r.rms_after * 1e3,
-              r.heldout_rms_after * 1e3);
+  std::printf("  after      residual RMS %.3f um, cross-validated RMS %.3f um\n", r.rms_after * 1e3,
+              r.cv_rms_after * 1e3);
+  if (r.heldout_before.readings > 0)
+    std::printf("  held-out   %d readings (%s): RMS %.3f -> %.3f um, max %.3f -> %.3f um\n",
+                r.heldout_before.readings, o.heldout.c_str(), r.heldout_before.rms * 1e3,
+                r.heldout_after.rms * 1e3, r.heldout_before.max * 1e3, r.heldout_after.max * 1e3);
+  std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um", o.output.c_str(),
+              balls_file.c_str(), in.written.fit.rms * 1e3);
+  if (in.written.heldout.readings > 0)
+    std::printf(", the held-out ones at %.3f um", in.written.heldout.rms * 1e3);
+  std::printf("\n");
   if (program)
     std::printf("  program    %s: predicted error max %.3f -> %.3f um, RMS %.3f -> %.3f um "
                 "(change up to %.3f um, line %d)\n",
                 o.cl.c_str(), program->before.max_deviation * 1e3, program->after.max_deviation * 1e3,
                 program->before.rms_deviation * 1e3, program->after.rms_deviation * 1e3,
                 program->change_max * 1e3, program->change_max_line);
-  std::printf("  wrote      %s (augmented machine), %s, %s\n", o.output.c_str(), json_path.c_str(),
-              html_path.c_str());
+  std::printf("  wrote      %s (augmented machine), %s (ball positions), %s, %s\n", o.output.c_str(),
+              balls_file.c_str(), json_path.c_str(), html_path.c_str());
   *exit_code = 0;
 }
 
@@ -193,6 +241,14 @@ void registerDiagnose(CLI::App& app, int* exit_code) {
   cmd->add_option("--blocks-per-setup", o->blocks_per_setup,
                   "cross-validation: contiguous blocks per set-up (default 6)")
       ->check(CLI::Range(2, 100));
+  cmd->add_option("--heldout", o->heldout,
+                  "held-out readings (CSV) of the same set-ups, never fitted: RMS before and "
+                  "after, and the final check of the augmented model");
+  cmd->add_option("--balls", o->balls,
+                  "identified ball positions to write (CSV; default: the output path with "
+                  "_balls.csv)");
+  cmd->add_flag("--keep-outliers", o->keep_outliers,
+                "fit every reading (gross readings are still named)");
   cmd->add_flag("--quiet", o->quiet, "no progress bar");
   cmd->callback([o, exit_code] { runDiagnose(*o, exit_code); });
 }

@@ -11,6 +11,25 @@ double ballbarLength(const ForwardKinematics& fk, const JointVector& q, const Ba
          fk.barLengthError();
 }
 
+Eigen::VectorXd ballbarResiduals(const ForwardKinematics& fk, const BallbarTest& test,
+                                 const std::vector<BallErrors>& balls) {
+  Eigen::VectorXd r(test.readings.size());
+  for (size_t i = 0; i < test.readings.size(); ++i) {
+    const BallbarReading& b = test.readings[i];
+    r[i] = b.length - ballbarLength(fk, b.q, test.setups[b.setup], balls[b.setup], &b.context);
+  }
+  return r;
+}
+
+ResidualStats residualStats(const Eigen::VectorXd& r) {
+  ResidualStats s;
+  s.readings = static_cast<int>(r.size());
+  if (r.size() == 0) return s;
+  s.rms = std::sqrt(r.squaredNorm() / static_cast<double>(r.size()));
+  s.max = r.cwiseAbs().maxCoeff();
+  return s;
+}
+
 namespace {
 
 // Reading change per tool twist in t: n^T R_wt [I, -[b_t x]] (see the header).

@@ -70,6 +70,17 @@ Eigen::MatrixXd identificationJacobian(const ForwardKinematics& fk, const Ballba
                                        const std::vector<int>& unknowns,
                                        Eigen::VectorXd* residuals = nullptr);
 
+// measured - model (mm) of every reading, with the ball errors of each set-up.
+Eigen::VectorXd ballbarResiduals(const ForwardKinematics& fk, const BallbarTest& test,
+                                 const std::vector<BallErrors>& balls);
+
+// Size of a set of residuals (mm): RMS and largest magnitude.
+struct ResidualStats {
+  int readings = 0;
+  double rms = 0.0, max = 0.0;
+};
+ResidualStats residualStats(const Eigen::VectorXd& residuals);
+
 // Directions of approach derived from the sequence: each axis's sign of motion from the previous
 // reading (kept when it did not move; 0 for the first reading), where the file gave none.
 void deriveDirections(BallbarTest& test);

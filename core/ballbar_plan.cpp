@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "core/identifiability.h"
@@ -137,6 +138,44 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
   plan.rank = sum.rank;
   plan.condition = sum.condition;
   return plan;
+}
+
+TimeJointCorrelation timeJointCorrelation(const MachineModel& model, const BallbarTest& test) {
+  TimeJointCorrelation out;
+  const size_t na = model.axes.size();
+  out.r.assign(na, std::numeric_limits<double>::quiet_NaN());
+  const size_t ns = test.setups.size();
+  std::vector<double> n(ns, 0.0), tm(ns, 0.0);
+  std::vector<Eigen::VectorXd> qm(ns, Eigen::VectorXd::Zero(na));
+  for (const BallbarReading& b : test.readings) {
+    if (std::isnan(b.context.time_s)) return out;
+    n[b.setup] += 1;
+    tm[b.setup] += b.context.time_s;
+    qm[b.setup] += b.q;
+  }
+  for (size_t s = 0; s < ns; ++s)
+    if (n[s] > 0) {
+      tm[s] /= n[s];
+      qm[s] /= n[s];
+    }
+  Eigen::VectorXd sxy = Eigen::VectorXd::Zero(na), syy = Eigen::VectorXd::Zero(na);
+  double sxx = 0.0;
+  for (const BallbarReading& b : test.readings) {
+    const double dt = b.context.time_s - tm[b.setup];
+    const Eigen::VectorXd dq = b.q - qm[b.setup];
+    sxx += dt * dt;
+    sxy += dt * dq;
+    syy += dq.cwiseAbs2();
+  }
+  for (size_t a = 0; a < na; ++a) {
+    if (!(sxx > 0) || !(syy[a] > 1e-18)) continue;
+    out.r[a] = sxy[a] / std::sqrt(sxx * syy[a]);
+    if (std::abs(out.r[a]) > out.worst) {
+      out.worst = std::abs(out.r[a]);
+      out.worst_axis = static_cast<int>(a);
+    }
+  }
+  return out;
 }
 
 }  // namespace tolver

@@ -42,6 +42,16 @@ struct BallbarPlan {
 BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& unknowns,
                             const BallbarPlanOptions& options);
 
+// How well a test can tell a time effect (drift, warm-up) from a joint effect: per axis, the
+// correlation of time with the joint value within the set-ups (both centred on each set-up's
+// mean, then pooled). NaN for an axis when the readings have no time or the axis never moves.
+struct TimeJointCorrelation {
+  std::vector<double> r;   // per axis, model order
+  int worst_axis = -1;     // largest |r|
+  double worst = 0.0;      // |r| of that axis
+};
+TimeJointCorrelation timeJointCorrelation(const MachineModel& model, const BallbarTest& test);
+
 // The default set-up geometry for n set-ups.
 std::vector<BallbarSetup> defaultBallbarSetups(int n);
 

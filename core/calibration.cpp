@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "core/identifiability.h"
+#include "core/statistics.h"
 
 namespace tolver {
 namespace {
@@ -167,6 +168,79 @@ std::vector<int> defaultCalibrationUnknowns(const MachineModel& model, int poses
   std::vector<int> out;
   for (int p : ms.kept)
     if (!isSetupParameter(model, p)) out.push_back(p);
+  return out;
+}
+
+std::vector<GrossReading> grossReadings(const MachineModel& model, const BallbarTest& test,
+                                        const CalibrationResult& fit, double alpha) {
+  std::vector<GrossReading> out;
+  const int m = static_cast<int>(test.readings.size());
+  if (m == 0 || fit.residuals.size() != m) return out;
+  const ForwardKinematics fk(model, fit.params);
+  Eigen::VectorXd r;
+  Eigen::MatrixXd J = identificationJacobian(fk, test, fit.ball_errors, fit.identified, &r);
+  for (int c = 0; c < J.cols(); ++c) {
+    const double n = J.col(c).norm();
+    if (n > 0) J.col(c) /= n;
+  }
+  const Eigen::BDCSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinU);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  int rank = 0;
+  while (rank < sv.size() && sv[rank] > 1e-9 * sv[0]) ++rank;
+  if (m - rank < 2) return out;  // no redundancy: nothing can be inconsistent
+  const double s = std::sqrt(r.squaredNorm() / (m - rank));
+  if (!(s > 0)) return out;
+  const Eigen::MatrixXd U = svd.matrixU().leftCols(rank);
+  for (int i = 0; i < m; ++i) {
+    const double h = std::min(U.row(i).squaredNorm(), 1.0 - 1e-12);
+    const double t = r[i] / (s * std::sqrt(1.0 - h));
+    if (2.0 * normalSurvival(std::abs(t)) * m < alpha) out.push_back({i, r[i], t});
+  }
+  std::sort(out.begin(), out.end(), [](const GrossReading& a, const GrossReading& b) {
+    return std::abs(a.studentized) > std::abs(b.studentized);
+  });
+  return out;
+}
+
+RobustCalibration calibrateWithoutGross(const MachineModel& model, const Eigen::VectorXd& prior,
+                                        const BallbarTest& test,
+                                        const std::vector<int>& unknown_params,
+                                        const CalibrationOptions& options, double alpha,
+                                        double max_fraction) {
+  RobustCalibration out;
+  out.with_all = calibrate(model, prior, test, unknown_params, options);
+  out.fit = out.with_all;
+  out.test = test;
+  std::vector<int> original(test.readings.size());
+  for (size_t i = 0; i < original.size(); ++i) original[i] = static_cast<int>(i);
+  const int limit = static_cast<int>(max_fraction * static_cast<double>(test.readings.size()));
+  while (out.fit.status == CalibrationStatus::Converged ||
+         out.fit.status == CalibrationStatus::NotConverged) {
+    const std::vector<GrossReading> g = grossReadings(model, out.test, out.fit, alpha);
+    if (g.empty()) break;
+    if (static_cast<int>(out.removed.size()) >= limit) {
+      out.limit_reached = true;
+      break;
+    }
+    GrossReading worst = g.front();
+    const int k = worst.index;
+    worst.index = original[k];
+    out.removed.push_back(worst);
+    out.test.readings.erase(out.test.readings.begin() + k);
+    original.erase(original.begin() + k);
+    out.fit = calibrate(model, prior, out.test, unknown_params, options);
+  }
+  // Each removed reading's deviation from the final fit (what it is off by), and that in units
+  // of the fit's residual sigma.
+  if (!out.removed.empty()) {
+    const ForwardKinematics fk(model, out.fit.params);
+    for (GrossReading& g : out.removed) {
+      const BallbarReading& b = test.readings[g.index];
+      g.residual = b.length - ballbarLength(fk, b.q, test.setups[b.setup],
+                                            out.fit.ball_errors[b.setup], &b.context);
+      g.studentized = out.fit.residual_sigma > 0 ? g.residual / out.fit.residual_sigma : 0.0;
+    }
+  }
   return out;
 }
 

@@ -56,6 +56,37 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
                             const BallbarTest& test, const std::vector<int>& unknown_params,
                             const CalibrationOptions& options = {});
 
+// Gross readings: readings inconsistent with the rest of a fit. A reading's studentised
+// residual t_i = r_i / (s sqrt(1 - h_ii)), h_ii its leverage (the diagonal of the hat matrix of
+// the column-scaled identification Jacobian at the solution, rank-truncated as in the fit), is
+// gross when its two-sided normal tail, Bonferroni-multiplied by the number of readings, is
+// below alpha. Sorted by |t|, largest first.
+struct GrossReading {
+  int index = 0;             // into the test's readings
+  double residual = 0.0;     // mm
+  double studentized = 0.0;
+};
+std::vector<GrossReading> grossReadings(const MachineModel& model, const BallbarTest& test,
+                                        const CalibrationResult& fit, double alpha = 0.01);
+
+// A calibration that removes gross readings one at a time (the largest, then a refit) until
+// none is left, at most max_fraction of the readings; the fit with every reading is kept for
+// the report.
+struct RobustCalibration {
+  CalibrationResult with_all;        // every reading
+  CalibrationResult fit;             // without the removed ones (= with_all when none)
+  BallbarTest test;                  // the readings of `fit`
+  // Index into the original test; residual: the reading's deviation from the final fit (mm),
+  // studentized: that over the final fit's residual sigma.
+  std::vector<GrossReading> removed;
+  bool limit_reached = false;        // more readings were gross than max_fraction allows
+};
+RobustCalibration calibrateWithoutGross(const MachineModel& model, const Eigen::VectorXd& prior,
+                                        const BallbarTest& test,
+                                        const std::vector<int>& unknown_params,
+                                        const CalibrationOptions& options = {},
+                                        double alpha = 0.01, double max_fraction = 0.05);
+
 // The machine parameters a ball-bar calibration identifies by default: the minimal-complete set
 // of the motion model (strategies I-III with the model's preferred list) without the part and
 // tool set-up parameters, found at `poses` random configurations.

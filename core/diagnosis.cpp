@@ -4,6 +4,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "core/chebyshev.h"
 #include "core/effects.h"
@@ -16,9 +17,10 @@ const char* verdictName(CandidateVerdict v) {
     case CandidateVerdict::Added: return "added";
     case CandidateVerdict::Outscored: return "significant, outscored";
     case CandidateVerdict::NotSignificant: return "not significant";
-    case CandidateVerdict::NoHeldOutGain: return "no held-out gain";
+    case CandidateVerdict::NoPredictiveGain: return "no cross-validated gain";
     case CandidateVerdict::Confounded: return "confounded";
     case CandidateVerdict::NotIdentifiable: return "not identifiable";
+    case CandidateVerdict::RefitFailed: return "refit failed";
   }
   return "";
 }
@@ -150,7 +152,7 @@ class Scorer {
   }
 
   // Cross-validated RMS of the base model (G empty) or the model with the columns G, mm.
-  double heldoutRms(const Eigen::MatrixXd* G) const {
+  double crossValidatedRms(const Eigen::MatrixXd* G) const {
     double sum = 0.0;
     int count = 0;
     for (const Fold& F : folds_) {
@@ -326,14 +328,17 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
   }
   res.final_fit = res.base_fit;
   res.machine.params = res.base_fit.params;
+  // Parameters the base fit could not see stay held at their prior values in every later fit:
+  // the refits identify what the base fit identified, plus the effects.
+  unknowns = res.base_fit.identified;
   const std::vector<int> fold_of = contiguousFolds(test, opt.blocks_per_setup, &res.folds);
   std::vector<EffectSpec> rejected;  // found not identifiable by the nonlinear refit
 
   for (int round = 1; round <= opt.max_effects + 1; ++round) {
     const Scorer sc(res.machine, test, res.final_fit, fold_of, res.folds);
-    const double heldout_base = sc.heldoutRms(nullptr);
-    if (round == 1) res.heldout_rms_before = heldout_base;
-    res.heldout_rms_after = heldout_base;
+    const double cv_base = sc.crossValidatedRms(nullptr);
+    if (round == 1) res.cv_rms_before = cv_base;
+    res.cv_rms_after = cv_base;
     if (round > opt.max_effects) break;
 
     // Candidates of this round.
@@ -376,8 +381,8 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
       c.effective_readings = m * (1.0 - rho) / (1.0 + rho);
       const int k = c.coefficients + (hyperparameter(c.spec) ? 1 : 0);
       const double dof = c.effective_readings - n - c.coefficients;
-      c.heldout_rms_before = heldout_base;
-      c.heldout_rms_after = sc.heldoutRms(&G);
+      c.cv_rms_before = cv_base;
+      c.cv_rms_after = sc.crossValidatedRms(&G);
       if (dof <= 1 || !(c.rss_after > 0)) {
         c.verdict = CandidateVerdict::NotIdentifiable;
         continue;
@@ -397,8 +402,8 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
         c.verdict = CandidateVerdict::Confounded;
       } else if (c.p_value >= opt.alpha || c.delta_ic <= 0) {
         c.verdict = CandidateVerdict::NotSignificant;
-      } else if (!(c.heldout_rms_after < c.heldout_rms_before)) {
-        c.verdict = CandidateVerdict::NoHeldOutGain;
+      } else if (!(c.cv_rms_after < c.cv_rms_before)) {
+        c.verdict = CandidateVerdict::NoPredictiveGain;
       } else {
         c.condition = sc.condition(sc.columns(c.spec));
         if (c.condition > opt.max_condition ||
@@ -433,10 +438,26 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
       const bool seen = fit.status != CalibrationStatus::Unobservable &&
                         fit.status != CalibrationStatus::NoData &&
                         std::none_of(a.parameters.begin(), a.parameters.end(), [&](int p) {
-                          return std::binary_search(fit.held.begin(), fit.held.end(), p);
+                          return std::find(fit.held.begin(), fit.held.end(), p) != fit.held.end();
                         });
-      if (!seen || !(fit.rms_residual < res.final_fit.rms_residual)) {
+      if (!seen) {
         c.verdict = CandidateVerdict::NotIdentifiable;
+        c.reason = "the refit cannot see its coefficients";
+        rejected.push_back(c.spec);
+        continue;
+      }
+      if (fit.status != CalibrationStatus::Converged || !fit.held.empty()) {
+        c.verdict = CandidateVerdict::RefitFailed;
+        c.reason = fit.status != CalibrationStatus::Converged
+                       ? "the refit did not converge in " + std::to_string(fit.iterations) + " iterations"
+                       : "the refit could not see " + std::to_string(fit.held.size()) +
+                             " parameter(s) the base fit identified";
+        rejected.push_back(c.spec);
+        continue;
+      }
+      if (!(fit.rms_residual < res.final_fit.rms_residual)) {
+        c.verdict = CandidateVerdict::RefitFailed;
+        c.reason = "the refit did not lower the residual";
         rejected.push_back(c.spec);
         continue;
       }
@@ -473,12 +494,47 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
       a.uncertainty[j] = it == fit.identified.end() ? NAN : fit.uncertainty[it - fit.identified.begin()];
     }
   }
+  // The final check: the augmented model must predict readings it was not fitted to at least
+  // as well as the base model (the held-out readings when given, else cross-validation).
+  if (opt.heldout && !opt.heldout->readings.empty()) {
+    res.heldout_before = residualStats(ballbarResiduals(
+        ForwardKinematics(machine.model, res.base_fit.params), *opt.heldout, res.base_fit.ball_errors));
+    res.heldout_after = residualStats(ballbarResiduals(
+        ForwardKinematics(res.machine.model, res.final_fit.params), *opt.heldout,
+        res.final_fit.ball_errors));
+  }
+  if (!res.added.empty()) {
+    const bool with_heldout = res.heldout_before.readings > 0;
+    const double before = with_heldout ? res.heldout_before.rms : res.cv_rms_before;
+    const double after = with_heldout ? res.heldout_after.rms : res.cv_rms_after;
+    if (after > before) {
+      char why[200];
+      std::snprintf(why, sizeof why,
+                    "the augmented model predicted the %s readings worse than the base model "
+                    "(RMS %.3f um against %.3f um)",
+                    with_heldout ? "held-out" : "cross-validated", after * 1e3, before * 1e3);
+      res.withdrawn_reason = why;
+      res.withdrawn = res.added;
+      res.added.clear();
+      for (CandidateScore& c : res.candidates)
+        if (c.verdict == CandidateVerdict::Added) {
+          c.verdict = CandidateVerdict::NoPredictiveGain;
+          c.reason = "withdrawn by the final check";
+        }
+      res.machine = machine;
+      res.machine.params = res.base_fit.params;
+      res.final_fit = res.base_fit;
+      res.cv_rms_after = res.cv_rms_before;
+      res.heldout_after = res.heldout_before;
+    }
+  }
   res.rms_before = res.base_fit.rms_residual;
   res.rms_after = res.final_fit.rms_residual;
   res.analysis_before = analyseResiduals(machine.model, test, res.base_fit.residuals);
   res.analysis_after = analyseResiduals(res.machine.model, test, res.final_fit.residuals);
   res.ok = true;
-  res.message = res.added.empty() ? "nothing missing: no effect qualifies"
+  res.message = !res.withdrawn.empty() ? "nothing added: " + res.withdrawn_reason
+                : res.added.empty()     ? "nothing missing: no effect qualifies"
                                   : std::to_string(res.added.size()) + " effect(s) added";
   return res;
 }

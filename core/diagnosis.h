@@ -44,9 +44,20 @@ struct DiagnosisOptions {
   std::vector<EffectType> types;      // candidate types; empty: every type
   // Parameters to identify in the base fit; empty: defaultCalibrationUnknowns(model).
   std::vector<int> base_unknowns;
+  // Readings of the same set-ups that no fit uses (aligned to the test's set-ups); when given,
+  // they judge the final model against the base one, otherwise cross-validation does.
+  const BallbarTest* heldout = nullptr;
 };
 
-enum class CandidateVerdict { Added, Outscored, NotSignificant, NoHeldOutGain, Confounded, NotIdentifiable };
+enum class CandidateVerdict {
+  Added,
+  Outscored,
+  NotSignificant,
+  NoPredictiveGain,
+  Confounded,
+  NotIdentifiable,
+  RefitFailed,  // the nonlinear refit with it did not converge or did not lower the residual
+};
 const char* verdictName(CandidateVerdict v);
 
 struct CandidateScore {
@@ -60,10 +71,11 @@ struct CandidateScore {
   double p_value = 1.0;       // Bonferroni-adjusted over the round
   double effective_readings = 0.0;
   double delta_ic = 0.0;
-  double heldout_rms_before = 0.0, heldout_rms_after = 0.0;  // mm
+  double cv_rms_before = 0.0, cv_rms_after = 0.0;  // mm
   double new_information = 0.0;
   double condition = 0.0;     // computed for candidates that pass the other tests
   CandidateVerdict verdict = CandidateVerdict::NotSignificant;
+  std::string reason;         // why a refit rejected it
 };
 
 struct AddedEffect {
@@ -84,8 +96,14 @@ struct DiagnosisResult {
   std::vector<AddedEffect> added;
   std::vector<CandidateScore> candidates;
   double rms_before = 0.0, rms_after = 0.0;                  // mm, in-sample
-  double heldout_rms_before = 0.0, heldout_rms_after = 0.0;  // mm, cross-validated
+  double cv_rms_before = 0.0, cv_rms_after = 0.0;  // mm, cross-validated
   int folds = 0;
+  // On options.heldout (readings == 0 when none): the base fit, and the final model.
+  ResidualStats heldout_before, heldout_after;
+  // The effects the selection added but the final check rejected (the augmented model
+  // predicted worse than the base one); then `added` is empty and `machine` the base model.
+  std::vector<AddedEffect> withdrawn;
+  std::string withdrawn_reason;
   ResidualAnalysis analysis_before, analysis_after;
 };
 

@@ -16,6 +16,12 @@ std::string lower(std::string s) {
   return s;
 }
 
+std::string setupText(int id) {
+  std::string s = "set-up ";
+  s += std::to_string(id);
+  return s;
+}
+
 std::string axisColumn(const Axis& ax) { return lower(ax.name) + (ax.isRotary() ? "_deg" : "_mm"); }
 
 }  // namespace
@@ -136,7 +142,7 @@ std::string formatBallbarCsv(const MachineModel& m, const BallbarTest& test, boo
   for (const std::string& c : comments) out += "# " + c + "\n";
   out += "setup,table_ball_x_mm,table_ball_y_mm,table_ball_z_mm,tool_ball_x_mm,tool_ball_y_mm,"
          "tool_ball_z_mm";
-  for (const Axis& ax : m.axes) out += "," + axisColumn(ax);
+  for (const Axis& ax : m.axes) { out += ","; out += axisColumn(ax); }
   bool any_time = false;
   for (const BallbarReading& r : test.readings) any_time |= !std::isnan(r.context.time_s);
   if (any_time) out += ",time_s";
@@ -161,6 +167,123 @@ std::string formatBallbarCsv(const MachineModel& m, const BallbarTest& test, boo
     out += "\n";
   }
   return out;
+}
+
+void alignHeldout(BallbarTest& heldout, const BallbarTest& fit, const std::string& file,
+                  const std::string& fit_file) {
+  std::vector<int> to_fit(heldout.setups.size(), -1);
+  for (size_t k = 0; k < heldout.setups.size(); ++k) {
+    const BallbarSetup& h = heldout.setups[k];
+    int first_line = 0;
+    for (const BallbarReading& r : heldout.readings)
+      if (r.setup == static_cast<int>(k)) {
+        first_line = r.line;
+        break;
+      }
+    for (size_t j = 0; j < fit.setups.size(); ++j)
+      if (fit.setups[j].id == h.id) to_fit[k] = static_cast<int>(j);
+    if (to_fit[k] < 0)
+      throw InputError(file, first_line, 0, "setup",
+                       setupText(h.id) + " is not in the fit readings " + fit_file +
+                           ": held-out readings must come from the fit's set-ups");
+    const BallbarSetup& f = fit.setups[to_fit[k]];
+    if ((f.table_ball_w - h.table_ball_w).norm() > 1e-6 || (f.tool_ball_t - h.tool_ball_t).norm() > 1e-6)
+      throw InputError(file, first_line, 0, "setup",
+                       setupText(h.id) + " has other nominal ball positions than in " + fit_file);
+  }
+  for (BallbarReading& r : heldout.readings) r.setup = to_fit[r.setup];
+  heldout.setups = fit.setups;
+  for (const BallbarReading& h : heldout.readings)
+    for (const BallbarReading& f : fit.readings)
+      if (f.setup == h.setup && (f.q - h.q).cwiseAbs().maxCoeff() < 1e-6)
+        throw InputError(file, h.line, 0, "pose",
+                         std::string("the fit readings measured this pose (") + fit_file +
+                             " line " + std::to_string(f.line) +
+                             "): a held-out reading must be a pose the fit did not use");
+}
+
+std::string formatBallPositionsCsv(const BallbarTest& test, const std::vector<BallErrors>& balls,
+                                   const std::vector<BallErrors>* uncertainty,
+                                   const std::vector<std::string>& comments) {
+  std::string out;
+  for (const std::string& c : comments) out += "# " + c + "\n";
+  out += "setup,table_ball_x_mm,table_ball_y_mm,table_ball_z_mm,tool_ball_x_mm,tool_ball_y_mm,"
+         "tool_ball_z_mm";
+  if (uncertainty)
+    out += ",u_table_x_um,u_table_y_um,u_table_z_um,u_tool_x_um,u_tool_y_um,u_tool_z_um";
+  out += "\n";
+  char buf[64];
+  for (size_t k = 0; k < test.setups.size(); ++k) {
+    const BallbarSetup& s = test.setups[k];
+    out += std::to_string(s.id);
+    const Eigen::Vector3d w = s.table_ball_w + balls[k].table_w, t = s.tool_ball_t + balls[k].tool_t;
+    for (int i = 0; i < 3; ++i) (out += ",") += formatNumber(w[i]);
+    for (int i = 0; i < 3; ++i) (out += ",") += formatNumber(t[i]);
+    if (uncertainty) {
+      for (int i = 0; i < 3; ++i) {
+        std::snprintf(buf, sizeof buf, ",%.4f", (*uncertainty)[k].table_w[i] * 1e3);
+        out += buf;
+      }
+      for (int i = 0; i < 3; ++i) {
+        std::snprintf(buf, sizeof buf, ",%.4f", (*uncertainty)[k].tool_t[i] * 1e3);
+        out += buf;
+      }
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+std::vector<BallErrors> parseBallPositionsCsv(const std::string& text, const std::string& file,
+                                              const BallbarTest& test) {
+  std::vector<BallErrors> out(test.setups.size());
+  std::vector<int> seen(test.setups.size(), 0);
+  forEachCsvRow(text, file,
+                {"setup", "table_ball_x_mm", "table_ball_y_mm", "table_ball_z_mm", "tool_ball_x_mm",
+                 "tool_ball_y_mm", "tool_ball_z_mm"},
+                "missing column", [&](const CsvRow& row) {
+                  auto value = [&](const char* name) {
+                    const std::string c = row.cell(name);
+                    const auto v = parseNumber(c);
+                    if (!v)
+                      throw InputError(file, row.line, row.column(name), name,
+                                       c.empty() ? "missing value" : "malformed number");
+                    return *v;
+                  };
+                  const double id = value("setup");
+                  int k = -1;
+                  for (size_t j = 0; j < test.setups.size(); ++j)
+                    if (test.setups[j].id == id) k = static_cast<int>(j);
+                  if (k < 0) return;  // a set-up these readings do not use
+                  if (seen[k])
+                    throw InputError(file, row.line, row.column("setup"), "setup",
+                                     "set-up " + std::to_string(test.setups[k].id) +
+                                         " given twice (first at line " + std::to_string(seen[k]) +
+                                         ")");
+                  seen[k] = row.line;
+                  const Eigen::Vector3d w(value("table_ball_x_mm"), value("table_ball_y_mm"),
+                                          value("table_ball_z_mm"));
+                  const Eigen::Vector3d t(value("tool_ball_x_mm"), value("tool_ball_y_mm"),
+                                          value("tool_ball_z_mm"));
+                  out[k].table_w = w - test.setups[k].table_ball_w;
+                  out[k].tool_t = t - test.setups[k].tool_ball_t;
+                  // A centre more than 10 mm from the nominal one is another set-up, not an error.
+                  if (out[k].table_w.norm() > 10.0 || out[k].tool_t.norm() > 10.0)
+                    throw InputError(file, row.line, 0, "setup",
+                                     "set-up " + std::to_string(test.setups[k].id) +
+                                         ": ball centres more than 10 mm from the readings' "
+                                         "nominal ones (another set-up?)");
+                });
+  for (size_t k = 0; k < seen.size(); ++k)
+    if (!seen[k])
+      throw InputError(file, 0, 0, "setup",
+                       "no ball positions for set-up " + std::to_string(test.setups[k].id) +
+                           " of the readings");
+  return out;
+}
+
+std::vector<BallErrors> readBallPositionsFile(const std::string& path, const BallbarTest& test) {
+  return parseBallPositionsCsv(readFile(path), path, test);
 }
 
 }  // namespace tolver

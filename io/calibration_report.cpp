@@ -1,5 +1,8 @@
 #include "io/calibration_report.h"
 
+#include "io/ballbar_file.h"
+#include "io/machine_file.h"
+
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -61,7 +64,35 @@ std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test
                      {"tool_ball_uncertainty_um", {u.tool_t.x() * 1e3, u.tool_t.y() * 1e3, u.tool_t.z() * 1e3}}});
   }
   j["ball_errors"] = balls;
+  auto stats = [](const ResidualStats& x) {
+    return json{{"readings", x.readings}, {"rms_um", x.rms * 1e3}, {"max_um", x.max * 1e3}};
+  };
+  if (!in.balls_file.empty()) j["ball_positions_file"] = in.balls_file;
+  if (!in.heldout.file.empty())
+    j["heldout"] = {{"file", in.heldout.file},
+                    {"before", stats(in.heldout.before)},
+                    {"after", stats(in.heldout.after)},
+                    {"before_means", "the prior machine file with the nominal ball positions"}};
+  j["written_files_check"] = {
+      {"description", "the written machine file and ball positions, read back, on the readings"},
+      {"fit", stats(in.written.fit)}};
+  if (in.written.heldout.readings > 0) j["written_files_check"]["heldout"] = stats(in.written.heldout);
+  json removed = json::array();
+  for (const RemovedReading& g : in.removed)
+    removed.push_back({{"line", g.line}, {"residual_um", g.residual * 1e3}, {"studentized", g.studentized}});
+  j["gross_readings_removed"] = removed;
   return j.dump(2) + "\n";
+}
+
+WrittenCheck checkWrittenFiles(const std::string& machine_file, const std::string& balls_file,
+                               const BallbarTest& fit, const BallbarTest& heldout) {
+  const Machine m = readMachineFile(machine_file);
+  const std::vector<BallErrors> balls = readBallPositionsFile(balls_file, fit);
+  const ForwardKinematics fk(m.model, m.params);
+  WrittenCheck c;
+  c.fit = residualStats(ballbarResiduals(fk, fit, balls));
+  if (!heldout.readings.empty()) c.heldout = residualStats(ballbarResiduals(fk, heldout, balls));
+  return c;
 }
 
 std::string formatBallbarGcode(const MachineModel& m, const BallbarTest& plan, double feed,

@@ -1,6 +1,7 @@
 #pragma once
 // Reports of a ball-bar calibration (JSON) and the NC program of a ball-bar plan (G-code).
 #include <string>
+#include <vector>
 
 #include "core/ballbar.h"
 #include "core/calibration.h"
@@ -8,10 +9,35 @@
 
 namespace tolver {
 
+// Held-out readings: RMS and max before (the prior machine, or the base model) and after.
+struct HeldoutFigures {
+  std::string file;  // empty: none given
+  ResidualStats before, after;
+};
+// What the written files (machine file + ball positions) predict, read back from disk.
+struct WrittenCheck {
+  ResidualStats fit, heldout;
+};
+// A gross reading removed from the fit.
+struct RemovedReading {
+  int line = 0;
+  double residual = 0.0;  // mm
+  double studentized = 0.0;
+};
+
 struct CalibrationReportInputs {
   std::string machine_file, readings_file, output_file;
   int readings = 0;
+  std::string balls_file;
+  HeldoutFigures heldout;
+  WrittenCheck written;
+  std::vector<RemovedReading> removed;
 };
+
+// Reads the machine file and ball positions written by calibrate or diagnose and returns what
+// they predict for the fitted and held-out readings (residual RMS and max).
+WrittenCheck checkWrittenFiles(const std::string& machine_file, const std::string& balls_file,
+                               const BallbarTest& fit, const BallbarTest& heldout);
 
 // JSON: status, iterations, rank, condition, residual RMS/max (um), unknowns, and per parameter
 // name, ISO code, value, standard uncertainty (um or urad), observability; held parameters;

@@ -186,11 +186,12 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
               {"p_value", num(c.p_value)},
               {"effective_readings", num(c.effective_readings)},
               {"delta_ic", num(c.delta_ic)},
-              {"heldout_rms_before_um", num(um(c.heldout_rms_before))},
-              {"heldout_rms_after_um", num(um(c.heldout_rms_after))},
+              {"cv_rms_before_um", num(um(c.cv_rms_before))},
+              {"cv_rms_after_um", num(um(c.cv_rms_after))},
               {"new_information", num(c.new_information)},
               {"condition", c.condition > 0 ? num(c.condition) : json(nullptr)},
               {"verdict", verdictName(c.verdict)}};
+    if (!c.reason.empty()) j["reason"] = c.reason;
     if (hyperName(c.spec)) j[hyperName(c.spec)] = num(hyperparameterValue(c.spec));
     cands.push_back(j);
   }
@@ -207,9 +208,10 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
       {"effects_added", added},
       {"rms_before_um", um(r.rms_before)},
       {"rms_after_um", um(r.rms_after)},
-      {"heldout_rms_before_um", um(r.heldout_rms_before)},
-      {"heldout_rms_after_um", um(r.heldout_rms_after)},
+      {"cv_rms_before_um", um(r.cv_rms_before)},
+      {"cv_rms_after_um", um(r.cv_rms_after)},
       {"cross_validation", {{"folds", r.folds}, {"blocks", "contiguous runs of readings within each set-up"}}},
+      {"ball_positions_file", in.balls_file},
       {"selection",
        {{"method", "forward stepwise"},
         {"significance", "F test on m_eff = m (1 - rho)/(1 + rho), Bonferroni over the round"},
@@ -219,6 +221,28 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
       {"residual_analysis", {{"before", findingsJson(r.analysis_before)}, {"after", findingsJson(r.analysis_after)}}},
       {"candidates", cands},
       {"seconds", in.seconds}};
+  auto stats = [](const ResidualStats& x) {
+    return json{{"readings", x.readings}, {"rms_um", x.rms * 1e3}, {"max_um", x.max * 1e3}};
+  };
+  if (r.heldout_before.readings > 0)
+    out["heldout"] = {{"file", in.heldout_file},
+                      {"before", stats(r.heldout_before)},
+                      {"after", stats(r.heldout_after)}};
+  if (in.written.fit.readings > 0) {
+    out["written_files_check"] = {
+        {"description", "the written machine file and ball positions, read back, on the readings"},
+        {"fit", stats(in.written.fit)}};
+    if (in.written.heldout.readings > 0) out["written_files_check"]["heldout"] = stats(in.written.heldout);
+  }
+  if (!r.withdrawn.empty()) {
+    json w = json::array();
+    for (const AddedEffect& a : r.withdrawn) w.push_back(a.label);
+    out["withdrawn"] = {{"effects", w}, {"reason", r.withdrawn_reason}};
+  }
+  json removed = json::array();
+  for (const RemovedReading& g : in.removed)
+    removed.push_back({{"line", g.line}, {"residual_um", g.residual * 1e3}, {"studentized", g.studentized}});
+  out["gross_readings_removed"] = removed;
   if (in.program) {
     const ProgramComparison& p = *in.program;
     out["program"] = {{"cl_file", p.cl_file},
@@ -251,9 +275,30 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
   h += "<table><tr><th class=\"l\"></th><th>before</th><th>after</th></tr>";
   h += "<tr><td class=\"l\">residual RMS (µm)</td><td>" + fmt("%.3f", um(r.rms_before)) + "</td><td>" +
        fmt("%.3f", um(r.rms_after)) + "</td></tr>";
-  h += "<tr><td class=\"l\">held-out RMS (µm, " + std::to_string(r.folds) +
-       " contiguous blocks)</td><td>" + fmt("%.3f", um(r.heldout_rms_before)) + "</td><td>" +
-       fmt("%.3f", um(r.heldout_rms_after)) + "</td></tr></table>\n";
+  h += "<tr><td class=\"l\">cross-validated RMS (µm, " + std::to_string(r.folds) +
+       " contiguous blocks left out in turn)</td><td>" + fmt("%.3f", um(r.cv_rms_before)) +
+       "</td><td>" + fmt("%.3f", um(r.cv_rms_after)) + "</td></tr>";
+  if (r.heldout_before.readings > 0)
+    h += "<tr><td class=\"l\">held-out readings RMS (µm, " + std::to_string(r.heldout_before.readings) +
+         " readings of " + xmlEscape(in.heldout_file) + ")</td><td>" + fmt("%.3f", um(r.heldout_before.rms)) +
+         "</td><td>" + fmt("%.3f", um(r.heldout_after.rms)) + "</td></tr>";
+  if (in.written.fit.readings > 0) {
+    h += "<tr><td class=\"l\">from the written files (" + xmlEscape(in.output_file) + " + " +
+         xmlEscape(in.balls_file) + "), fitted readings RMS (µm)</td><td></td><td>" +
+         fmt("%.3f", um(in.written.fit.rms)) + "</td></tr>";
+    if (in.written.heldout.readings > 0)
+      h += "<tr><td class=\"l\">from the written files, held-out readings RMS (µm)</td><td></td><td>" +
+           fmt("%.3f", um(in.written.heldout.rms)) + "</td></tr>";
+  }
+  h += "</table>\n";
+  if (!r.withdrawn.empty())
+    h += "<p><b>Withdrawn:</b> " + xmlEscape(r.withdrawn_reason) + ".</p>\n";
+  if (!in.removed.empty()) {
+    h += "<p><b>Gross readings removed</b> (deviation from the final fit):";
+    for (const RemovedReading& g : in.removed)
+      h += " line " + std::to_string(g.line) + " (" + fmt("%+.2f", um(g.residual)) + " µm)";
+    h += ".</p>\n";
+  }
   if (!r.added.empty()) {
     h += "<table><tr><th class=\"l\">effect</th><th class=\"l\">parameter</th><th>value</th>"
          "<th>standard uncertainty</th><th class=\"l\">unit</th></tr>";
@@ -333,8 +378,8 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
   for (const CandidateScore& s : c)
     h += "<tr><td>" + std::to_string(s.round) + "</td><td class=\"l\">" + xmlEscape(s.label) + "</td><td>" +
          fmt("%.1f", s.delta_ic) + "</td><td>" + fmt("%.2g", s.p_value) + "</td><td>" +
-         fmt("%.0f", s.effective_readings) + "</td><td>" + fmt("%.3f", um(s.heldout_rms_before)) +
-         "</td><td>" + fmt("%.3f", um(s.heldout_rms_after)) + "</td><td>" + fmt("%.3f", s.new_information) +
+         fmt("%.0f", s.effective_readings) + "</td><td>" + fmt("%.3f", um(s.cv_rms_before)) +
+         "</td><td>" + fmt("%.3f", um(s.cv_rms_after)) + "</td><td>" + fmt("%.3f", s.new_information) +
          "</td><td class=\"l\">" + verdictName(s.verdict) + "</td></tr>";
   h += "</table>\n<p class=\"note\">" + xmlEscape(base.name) + "; " + fmt("%.2f", in.seconds) +
        " s.</p></body></html>\n";

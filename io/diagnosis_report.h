@@ -6,6 +6,7 @@
 
 #include "core/diagnosis.h"
 #include "core/tool_path_prediction.h"
+#include "io/calibration_report.h"
 
 namespace tolver {
 
@@ -21,6 +22,9 @@ struct DiagnosisReportInputs {
   std::string machine_file, readings_file, output_file;
   const ProgramComparison* program = nullptr;
   double seconds = 0.0;
+  std::string balls_file, heldout_file;
+  WrittenCheck written;                 // what the written files predict (readings 0: not run)
+  std::vector<RemovedReading> removed;  // gross readings left out of the fit
 };
 
 std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& test,

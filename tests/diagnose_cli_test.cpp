@@ -32,11 +32,11 @@ TEST_F(DiagnoseCli, ReversalDatasetEndToEnd) {
   EXPECT_EQ(e["axis"], "Y");
   EXPECT_NEAR(e["parameters"]["EYY.rev"].get<double>(), 4.0, 3 * e["uncertainty"]["EYY.rev"].get<double>());
   EXPECT_LT(j["rms_after_um"].get<double>(), j["rms_before_um"].get<double>());
-  EXPECT_LT(j["heldout_rms_after_um"].get<double>(), j["heldout_rms_before_um"].get<double>());
-  EXPECT_LE(j["heldout_rms_after_um"].get<double>(), 0.75);
+  EXPECT_LT(j["cv_rms_after_um"].get<double>(), j["cv_rms_before_um"].get<double>());
+  EXPECT_LE(j["cv_rms_after_um"].get<double>(), 0.75);
   EXPECT_GT(j["candidates"].size(), 50u);
   for (const auto& c : j["candidates"]) {
-    EXPECT_TRUE(c.contains("delta_ic") && c.contains("p_value") && c.contains("heldout_rms_after_um") &&
+    EXPECT_TRUE(c.contains("delta_ic") && c.contains("p_value") && c.contains("cv_rms_after_um") &&
                 c.contains("verdict"));
   }
   // The program's predicted error before and after: the reversal changes it.

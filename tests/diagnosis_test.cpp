@@ -35,8 +35,8 @@ Dataset load(const std::string& name) {
 
 void printResult(const std::string& name, const DiagnosisResult& r, double seconds) {
   std::printf("[ %s ] %.2f s: rms %.3f -> %.3f um, held-out %.3f -> %.3f um\n", name.c_str(), seconds,
-              r.rms_before * 1e3, r.rms_after * 1e3, r.heldout_rms_before * 1e3,
-              r.heldout_rms_after * 1e3);
+              r.rms_before * 1e3, r.rms_after * 1e3, r.cv_rms_before * 1e3,
+              r.cv_rms_after * 1e3);
   for (const AddedEffect& a : r.added) {
     std::printf("    added %s:", a.label.c_str());
     for (Eigen::Index k = 0; k < a.values.size(); ++k)
@@ -49,8 +49,8 @@ void printResult(const std::string& name, const DiagnosisResult& r, double secon
   std::sort(c.begin(), c.end(), [](auto& a, auto& b) { return a.delta_ic > b.delta_ic; });
   for (size_t i = 0; i < std::min<size_t>(4, c.size()); ++i)
     std::printf("    r%d %-40s dIC %8.1f p %.2g info %.3f cv %.3f->%.3f %s\n", c[i].round, c[i].label.c_str(),
-                c[i].delta_ic, c[i].p_value, c[i].new_information, c[i].heldout_rms_before * 1e3,
-                c[i].heldout_rms_after * 1e3, verdictName(c[i].verdict));
+                c[i].delta_ic, c[i].p_value, c[i].new_information, c[i].cv_rms_before * 1e3,
+                c[i].cv_rms_after * 1e3, verdictName(c[i].verdict));
   std::printf("    residual follows: '%s' (%.2f)\n", r.analysis_before.follows.c_str(),
               r.analysis_before.follows_strength);
 }
@@ -105,8 +105,8 @@ void expectFindsTruth(const std::string& name) {
           << " vs " << h;
   }
   // The held-out error after is at the noise level and below the one before.
-  EXPECT_LE(r.heldout_rms_after, 1.5 * kNoiseMm);
-  EXPECT_LT(r.heldout_rms_after, r.heldout_rms_before);
+  EXPECT_LE(r.cv_rms_after, 1.5 * kNoiseMm);
+  EXPECT_LT(r.cv_rms_after, r.cv_rms_before);
   EXPECT_LT(r.rms_after, r.rms_before);
   // Every candidate of every round was scored and kept in the result.
   EXPECT_GT(r.candidates.size(), 50u);
@@ -127,7 +127,7 @@ TEST(Diagnosis, CleanDataGetsNothingAdded) {
   ASSERT_TRUE(r.ok);
   EXPECT_TRUE(r.added.empty());
   EXPECT_EQ(r.rms_after, r.rms_before);
-  EXPECT_LE(r.heldout_rms_after, 1.5 * kNoiseMm);
+  EXPECT_LE(r.cv_rms_after, 1.5 * kNoiseMm);
   EXPECT_TRUE(r.analysis_before.follows.empty()) << r.analysis_before.follows;
   for (const CandidateScore& c : r.candidates) EXPECT_NE(c.verdict, CandidateVerdict::Added);
 }

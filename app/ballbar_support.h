@@ -1,0 +1,33 @@
+#pragma once
+// What calibrate and diagnose share: held-out readings, the ball-positions file beside a
+// machine file, warnings about the test's design, and the gross readings found.
+#include <string>
+#include <vector>
+
+#include "core/ballbar.h"
+#include "core/calibration.h"
+#include "core/machine_model.h"
+
+namespace tolver::app {
+
+// The held-out readings of `file`, aligned to the fit's set-ups (an empty test when file is
+// empty). Exit 2 (InputError) for an empty file, a set-up the fit lacks, a pose the fit measured.
+BallbarTest loadHeldout(const std::string& file, const MachineModel& model, const BallbarTest& fit,
+                        const std::string& fit_file);
+
+// "out/m.xml" -> "out/m_balls.csv": the identified ball positions beside the machine file.
+std::string ballsPathFor(const std::string& machine_output);
+
+// Too few readings for the unknowns (fewer than 3 per unknown), time correlated with a joint
+// (|r| > 0.5: a drift and an error along that axis cannot be told apart). Also prints the
+// correlation line.
+std::vector<std::string> testDesignWarnings(const MachineModel& model, const BallbarTest& test,
+                                            int unknowns);
+
+// Prints the gross readings (by file line) and, when they were removed, the fit with and without
+// them.
+void printGross(const std::string& readings_file, const BallbarTest& test,
+                const std::vector<GrossReading>& gross, bool kept, const CalibrationResult& with_all,
+                const CalibrationResult& fit, bool limit_reached);
+
+}  // namespace tolver::app
