@@ -1,0 +1,167 @@
+// calibrate as a metrologist runs it: held-out readings of the same set-ups, the ball positions
+// written beside the identified machine (simulate-ballbar --balls reproduces the readings from
+// the two files), gross readings named by their line and removed, and bad held-out files.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "io/text_util.h"
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+namespace fs = std::filesystem;
+
+class CalibrateCli : public test::TempDirTest {
+ protected:
+  const std::string nominal = test::sourcePath("resources/machines/matsuura_mc760vx.xml");
+  const std::string truth = test::sourcePath("samples/machines/matsuura_mc760vx_measured.xml");
+  // A fit plan (seed 3) and a held-out plan of other poses (seed 4), simulated with noise.
+  void simulate() {
+    for (auto [name, seed, poses] : {std::tuple{"fit", 3, 360}, std::tuple{"held", 4, 60}}) {
+      auto r = test::runTolver("plan-ballbar --machine " + nominal + " --poses " +
+                               std::to_string(poses) + " --seed " + std::to_string(seed) + " -o " +
+                               path(std::string(name) + "_plan.csv"));
+      ASSERT_EQ(r.exit_code, 0) << r.output;
+      r = test::runTolver("simulate-ballbar --machine " + truth + " --plan " +
+                          path(std::string(name) + "_plan.csv") + " --noise-um 0.5 --seed " +
+                          std::to_string(seed + 10) + " -o " + path(std::string(name) + ".csv"));
+      ASSERT_EQ(r.exit_code, 0) << r.output;
+    }
+  }
+  // The length column of one file, in order.
+  static std::vector<double> lengths(const std::string& file) {
+    std::vector<double> out;
+    std::ifstream in(file);
+    std::string line;
+    int col = -1;
+    while (std::getline(in, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      const auto cells = splitCsvLine(line);
+      if (col < 0) {
+        for (size_t k = 0; k < cells.size(); ++k)
+          if (cells[k] == "length_mm") col = static_cast<int>(k);
+        continue;
+      }
+      out.push_back(std::stod(cells[col]));
+    }
+    return out;
+  }
+};
+
+TEST_F(CalibrateCli, HeldOutReadingsAndTheWrittenFilesReproduceTheReport) {
+  simulate();
+  auto r = test::runTolver("calibrate --machine " + nominal + " --readings " + path("fit.csv") +
+                           " --heldout " + path("held.csv") + " -o " + path("id.xml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("held-out   60 readings"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("gross      none"), std::string::npos) << r.output;
+  ASSERT_TRUE(fs::exists(path("id_balls.csv")));
+  std::ifstream in(path("id.json"));
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["ball_positions_file"], path("id_balls.csv"));
+  const double held_after = j["heldout"]["after"]["rms_um"].get<double>();
+  EXPECT_LT(held_after, j["heldout"]["before"]["rms_um"].get<double>() / 5);
+  EXPECT_LT(held_after, 1.5);  // 0.5 um noise
+  // The report's written-files figures are the fit's.
+  EXPECT_NEAR(j["written_files_check"]["fit"]["rms_um"].get<double>(), j["residual_rms_um"].get<double>(), 1e-3);
+  EXPECT_NEAR(j["written_files_check"]["heldout"]["rms_um"].get<double>(), held_after, 1e-3);
+  // simulate-ballbar with the two written files reproduces every fitted reading to the fit's
+  // residual, and the held-out ones to the reported held-out RMS.
+  for (const char* name : {"fit", "held"}) {
+    r = test::runTolver("simulate-ballbar --machine " + path("id.xml") + " --balls " +
+                        path("id_balls.csv") + " --plan " + path(std::string(name) + "_plan.csv") +
+                        " -o " + path(std::string(name) + "_re.csv"));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const std::vector<double> a = lengths(path(std::string(name) + ".csv")),
+                              b = lengths(path(std::string(name) + "_re.csv"));
+    ASSERT_EQ(a.size(), b.size());
+    double sum = 0;
+    for (size_t i = 0; i < a.size(); ++i) sum += (a[i] - b[i]) * (a[i] - b[i]);
+    const double rms_um = std::sqrt(sum / a.size()) * 1e3;
+    EXPECT_NEAR(rms_um, std::string(name) == "fit" ? j["residual_rms_um"].get<double>() : held_after, 2e-3)
+        << name;
+  }
+}
+
+TEST_F(CalibrateCli, GrossReadingsAreNamedByLineAndRemoved) {
+  simulate();
+  // +20 um on three readings (file lines 30, 150 and 300).
+  std::ifstream in(path("fit.csv"));
+  std::ostringstream out;
+  std::string line;
+  int n = 0;
+  while (std::getline(in, line)) {
+    ++n;
+    if (n == 30 || n == 150 || n == 300) {
+      const size_t c = line.rfind(',');
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%.7f", std::stod(line.substr(c + 1)) + 0.020);
+      line = line.substr(0, c + 1) + buf;
+    }
+    out << line << "\n";
+  }
+  write("gross.csv", out.str());
+  auto r = test::runTolver("calibrate --machine " + nominal + " --readings " + path("gross.csv") +
+                           " --heldout " + path("held.csv") + " -o " + path("g.xml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("3 reading(s) of " + path("gross.csv")), std::string::npos) << r.output;
+  for (const char* l : {"line 30 (+", "line 150 (+", "line 300 (+"})
+    EXPECT_NE(r.output.find(l), std::string::npos) << l << "\n" << r.output;
+  std::ifstream jin(path("g.json"));
+  const nlohmann::json j = nlohmann::json::parse(jin);
+  ASSERT_EQ(j["gross_readings_removed"].size(), 3u);
+  for (const auto& g : j["gross_readings_removed"]) EXPECT_NEAR(g["residual_um"].get<double>(), 20.0, 2.0);
+  const double clean = j["heldout"]["after"]["rms_um"].get<double>();
+  // Kept, they spoil the held-out prediction.
+  r = test::runTolver("calibrate --machine " + nominal + " --readings " + path("gross.csv") +
+                      " --heldout " + path("held.csv") + " --keep-outliers -o " + path("k.xml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("kept in the fit (--keep-outliers)"), std::string::npos) << r.output;
+  std::ifstream kin(path("k.json"));
+  const nlohmann::json k = nlohmann::json::parse(kin);
+  EXPECT_GT(k["heldout"]["after"]["rms_um"].get<double>(), 1.3 * clean);
+  EXPECT_EQ(k["gross_readings_removed"].size(), 0u);
+}
+
+TEST_F(CalibrateCli, BadHeldOutFilesExitTwoNamingTheLine) {
+  simulate();
+  const std::string base = "calibrate --machine " + nominal + " --readings " + path("fit.csv") + " -o " + path("x.xml");
+  // An empty held-out file.
+  write("empty.csv", "");
+  auto r = test::runTolver(base + " --heldout " + path("empty.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(path("empty.csv")), std::string::npos) << r.output;
+  // A set-up the fit lacks (set-up 7 on line 3).
+  std::ifstream in(path("held.csv"));
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  std::vector<std::string> lines;
+  std::istringstream ls(text);
+  for (std::string l; std::getline(ls, l);) lines.push_back(l);
+  std::string other;
+  for (size_t i = 0; i < lines.size(); ++i) other += (i == 2 ? "7" + lines[i].substr(1) : lines[i]) + "\n";
+  write("other.csv", other);
+  r = test::runTolver(base + " --heldout " + path("other.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(path("other.csv") + ":3"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("set-up 7 is not in the fit readings"), std::string::npos) << r.output;
+  // A pose the fit measured (the fit's first reading copied in as line 3).
+  std::ifstream fin(path("fit.csv"));
+  std::string fit_line;
+  for (int k = 0; k < 3 && std::getline(fin, fit_line);) if (!fit_line.empty() && fit_line[0] != '#') ++k, (void)0;
+  std::string dup;
+  for (size_t i = 0; i < lines.size(); ++i) dup += (i == 2 ? fit_line : lines[i]) + "\n";
+  write("dup.csv", dup);
+  r = test::runTolver(base + " --heldout " + path("dup.csv"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find(path("dup.csv") + ":3"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the fit readings measured this pose"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("x.xml")));
+}
+
+}  // namespace
+}  // namespace tolver
