@@ -1,0 +1,154 @@
+#pragma once
+// One diagnosis case on independently simulated readings (tests/independent_ballbar.h): a
+// Matsuura with random cubic errors and one or two undeclared effects, a three-set-up test
+// (fit readings with a return to a reference pose every 8, and held-out readings at other poses
+// measured in between), run through `diagnose` as the CLI runs it, judged on the held-out
+// readings through the files a user takes away (machine file + ball positions, written and
+// read back).
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "core/ballbar_plan.h"
+#include "core/calibration.h"
+#include "core/diagnosis.h"
+#include "core/effects.h"
+#include "independent_ballbar.h"
+#include "io/ballbar_file.h"
+#include "io/calibration_report.h"
+#include "io/io_error.h"
+#include "io/machine_file.h"
+#include "test_support.h"
+
+namespace tolver::test {
+
+struct DiagnosisCase {
+  std::string name;                      // "reversal Y ey"
+  std::vector<indep::Undeclared> truth;  // empty: clean
+  // What tolver should name: (type name, axis name, component) per effect.
+  std::vector<std::tuple<std::string, std::string, int>> expected;
+};
+
+struct DiagnosisOutcome {
+  bool named_right = false;  // every expected effect added, nothing else (clean: nothing)
+  std::vector<std::string> added;
+  std::string message;
+  double heldout_before_um = 0, heldout_after_um = 0;  // through the written files
+  double written_vs_memory_um = 0;                     // |RMS written - RMS in memory|
+  int gross_removed = 0;
+};
+
+// The cases of issue 12's table.
+inline std::vector<DiagnosisCase> diagnosisCases() {
+  using indep::Undeclared;
+  const int X = indep::kX, Y = indep::kY, Z = indep::kZ, A = indep::kA, C = indep::kC;
+  (void)A;
+  return {
+      {"none", {}, {}},
+      {"Y reversal 8 um", {{"reversal", Y, 1, 8e-3}}, {{"reversal", "Y", 1}}},
+      {"X periodic 4 um, 16 mm", {{"periodic", X, 0, 4e-3, 16.0, 0.7}}, {{"periodic", "X", 0}}},
+      {"C 2nd harmonic 5 um (ex)", {{"harmonic", C, 0, 5e-3, 2.0, 0.4}}, {{"harmonics", "C", 0}}},
+      {"Z warm-up 20 um, 1200 s", {{"warmup", Z, 2, 20e-3, 1200.0}}, {{"warmup", "Z", 2}}},
+      {"X straightness in Y, 6th order, 6 um", {{"straightness6", X, 1, 6e-3}}, {{"chebyshev", "X", 1}}},
+      {"Y drift 10 um/h", {{"drift", Y, 1, 10e-3}}, {{"drift", "Y", 1}}},
+      {"Z warm-up of the spindle tilt gx 20 urad, 900 s", {{"warmup", Z, 3, 20e-6, 900.0}}, {{"warmup", "Z", 3}}},
+      {"Y reversal + X periodic",
+       {{"reversal", Y, 1, 8e-3}, {"periodic", X, 0, 4e-3, 16.0, 0.7}},
+       {{"reversal", "Y", 1}, {"periodic", "X", 0}}},
+      {"Y reversal + X periodic + Z warm-up",
+       {{"reversal", Y, 1, 8e-3}, {"periodic", X, 0, 4e-3, 16.0, 0.7}, {"warmup", Z, 2, 20e-3, 1200.0}},
+       {{"reversal", "Y", 1}, {"periodic", "X", 0}, {"warmup", "Z", 2}}},
+  };
+}
+
+// on_axis: all tool balls on the spindle axis (else 25 mm off it, the planner's default).
+inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, unsigned seed,
+                                         const std::string& dir) {
+  DiagnosisOutcome out;
+  const Machine nominal = readMachineFile(sourcePath("resources/machines/matsuura_mc760vx.xml"));
+  const std::vector<int> unknowns = defaultCalibrationUnknowns(nominal.model);
+  // Poses: 320 for the fit (with a reference pose every 8), 80 held out, interleaved in time.
+  BallbarPlanOptions po;
+  po.poses = 400;
+  po.seed = 7000 + seed;
+  po.reference_every = 8;
+  po.geometry = defaultBallbarSetups(3);
+  if (on_axis)
+    for (BallbarSetup& s : po.geometry) s.tool_ball_t = Eigen::Vector3d(0, 0, 0);
+  const BallbarPlan plan = planBallbarTest(nominal.model, unknowns, po);
+  std::vector<indep::Setup> setups;
+  std::mt19937 rng(9000 + seed);
+  std::normal_distribution<double> ball(0.0, 0.01);
+  for (const BallbarSetup& s : plan.test.setups) {
+    indep::Setup is;
+    is.id = s.id;
+    is.table_ball_w = s.table_ball_w;
+    is.tool_ball_t = s.tool_ball_t;
+    is.table_error_w = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+    is.tool_error_t = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+    setups.push_back(is);
+  }
+  std::vector<indep::Pose> poses;
+  std::vector<int> count(setups.size(), 0), first(setups.size(), -1);
+  for (size_t i = 0; i < plan.test.readings.size(); ++i) {
+    const BallbarReading& r = plan.test.readings[i];
+    indep::Pose p;
+    p.setup = r.setup;
+    for (int a = 0; a < 5; ++a) p.q[a] = r.q[a];
+    // Every fifth pose of a set-up is held out, except the returns to its reference pose.
+    if (first[r.setup] < 0) first[r.setup] = static_cast<int>(i);
+    const bool reference = (r.q - plan.test.readings[first[r.setup]].q).norm() < 1e-9;
+    p.heldout = !reference && (++count[r.setup] % 5 == 0);
+    poses.push_back(p);
+  }
+  indep::Machine machine(100 + seed);
+  machine.effects = c.truth;
+  indep::measure(machine, poses, setups, 20.0, 0.5e-3, 500 + seed);
+  std::filesystem::create_directories(dir);
+  const std::string fit_csv = dir + "/fit.csv", held_csv = dir + "/held.csv";
+  indep::writeCsv(fit_csv, poses, setups, false);
+  indep::writeCsv(held_csv, poses, setups, true);
+
+  // As `tolver diagnose --heldout` does it.
+  const BallbarFile f = readBallbarFile(fit_csv, nominal.model, true);
+  BallbarTest held = readBallbarFile(held_csv, nominal.model, true).test;
+  alignHeldout(held, f.test, held_csv, fit_csv);
+  const RobustCalibration rc = calibrateWithoutGross(nominal.model, nominal.params, f.test, unknowns);
+  out.gross_removed = static_cast<int>(rc.removed.size());
+  DiagnosisOptions opt;
+  opt.base_unknowns = unknowns;
+  opt.heldout = &held;
+  const DiagnosisResult r = diagnose(nominal, rc.test, opt);
+  out.message = r.message;
+  for (const AddedEffect& a : r.added) out.added.push_back(a.label);
+  Machine augmented = r.machine;
+  writeFileAtomically(dir + "/aug.xml", formatMachineXml(augmented, "campaign"));
+  writeFileAtomically(dir + "/aug_balls.csv",
+                      formatBallPositionsCsv(rc.test, r.final_fit.ball_errors, nullptr, {"campaign"}));
+  const WrittenCheck w = checkWrittenFiles(dir + "/aug.xml", dir + "/aug_balls.csv", rc.test, held);
+  // Before: the base fit, through its own written files.
+  Machine base = nominal;
+  base.params = r.base_fit.params;
+  writeFileAtomically(dir + "/base.xml", formatMachineXml(base, "campaign"));
+  writeFileAtomically(dir + "/base_balls.csv",
+                      formatBallPositionsCsv(rc.test, r.base_fit.ball_errors, nullptr, {"campaign"}));
+  const WrittenCheck wb = checkWrittenFiles(dir + "/base.xml", dir + "/base_balls.csv", rc.test, held);
+  out.heldout_before_um = wb.heldout.rms * 1e3;
+  out.heldout_after_um = w.heldout.rms * 1e3;
+  out.written_vs_memory_um = std::abs(w.heldout.rms - r.heldout_after.rms) * 1e3;
+  // Named right: the added effects are exactly the expected ones (type, axis, component).
+  const MachineModel& m = r.machine.model;
+  int matched = 0;
+  for (const auto& [type, axis, comp] : c.expected)
+    for (const AddedEffect& a : r.added)
+      if (traitsOf(a.spec.type).name == type && a.spec.axis >= 0 &&
+          m.axes[a.spec.axis].name == axis && a.spec.component == comp) {
+        ++matched;
+        break;
+      }
+  out.named_right = matched == static_cast<int>(c.expected.size()) &&
+                    r.added.size() == c.expected.size();
+  return out;
+}
+
+}  // namespace tolver::test
