@@ -25,6 +25,8 @@ struct PlanOptions {
   std::string output, gcode;
   double feed = 2000.0;
   std::vector<double> lengths;
+  int heldout = 0;
+  PlanOptions() { plan.reference_every = 8; }
 };
 
 std::string lengthText(const BallbarPlanOptions& p) {
@@ -55,8 +57,29 @@ void runPlan(PlanOptions o) {
   std::snprintf(head, sizeof head, "tolver ball-bar plan for %s: bar %s, %d set-ups, %zu poses, seed %u",
                 machine.model.name.c_str(), lengthText(o.plan).c_str(), static_cast<int>(plan.test.setups.size()),
                 plan.test.readings.size(), o.plan.seed);
+  // Held-out poses: other poses of the same set-ups (random, not chosen for the fit), in a plan
+  // of their own, measured after the fit's.
+  BallbarPlan held;
+  const std::string held_file = replaceExtension(o.output, "") + "_heldout.csv";
+  if (o.heldout > 0) {
+    BallbarPlanOptions ho = o.plan;
+    ho.geometry = plan.test.setups;
+    ho.poses = o.heldout;
+    ho.seed = o.plan.seed + 7919u;
+    ho.reference_every = 0;
+    ho.candidates_per_pose = 1;
+    held = planBallbarTest(machine.model, unknowns, ho);
+    checkOutputDir(held_file, "--heldout");
+  }
   writeFileAtomically(o.output, formatBallbarCsv(machine.model, plan.test, false, {head}));
   writeFileAtomically(gcode, formatBallbarGcode(machine.model, plan.test, o.feed, 2.0));
+  if (o.heldout > 0) {
+    writeFileAtomically(held_file, formatBallbarCsv(machine.model, held.test, false,
+                                                    {"held-out poses for " + o.output +
+                                                     " (measure them too; calibrate --heldout)"}));
+    writeFileAtomically(replaceExtension(held_file, ".nc"),
+                        formatBallbarGcode(machine.model, held.test, o.feed, 2.0));
+  }
   std::printf("tolver plan-ballbar: %s\n", machine.model.name.c_str());
   std::printf("  bar %s, %zu set-ups, %zu poses (%d sampled, %d outside travel)\n",
               lengthText(o.plan).c_str(), plan.test.setups.size(), plan.test.readings.size(), plan.sampled,
@@ -69,7 +92,26 @@ void runPlan(PlanOptions o) {
               plan.unknowns, unknowns.size(), plan.rank, plan.condition);
   if (plan.rank < plan.unknowns)
     std::printf("  warning: %d unknowns are not observable with this plan\n", plan.unknowns - plan.rank);
+  if (plan.time_correlation_axis >= 0)
+    std::printf("  order      largest correlation of the measurement order with a joint within a "
+                "set-up: |r| = %.2f (%s)%s\n",
+                plan.time_correlation, machine.model.axes[plan.time_correlation_axis].name.c_str(),
+                plan.time_correlation < o.plan.max_time_correlation
+                    ? ": a drift in time cannot pass for an error along an axis"
+                    : ": above 0.3, no better order was found");
+  if (o.plan.reference_every > 0)
+    std::printf("  drift      each set-up's first pose measured again after every %d poses\n",
+                o.plan.reference_every);
+  if (static_cast<int>(plan.test.readings.size()) < 3 * plan.unknowns)
+    std::fprintf(stderr,
+                 "tolver: warning: %zu readings for %d unknowns (fewer than 3 per unknown): the fit "
+                 "will follow the noise; ask for at least --poses %d\n",
+                 plan.test.readings.size(), plan.unknowns, 3 * plan.unknowns);
   std::printf("  wrote      %s (plan), %s (NC program)\n", o.output.c_str(), gcode.c_str());
+  if (o.heldout > 0)
+    std::printf("  wrote      %s, %s (%zu held-out poses: measure them after the plan, give them "
+                "to calibrate --heldout)\n",
+                held_file.c_str(), replaceExtension(held_file, ".nc").c_str(), held.test.readings.size());
 }
 
 struct SimulateOptions {
@@ -252,7 +294,11 @@ void registerBallbar(CLI::App& app, int* exit_code) {
     cmd->add_option("--seed", o->plan.seed, "random seed (default 1)");
     cmd->add_option("--reference-every", o->plan.reference_every,
                     "measure the set-up's first pose again after every N poses, a drift check "
-                    "(default 0: never)")
+                    "(default 8; 0: never)")
+        ->check(CLI::Range(0, 100000));
+    cmd->add_option("--heldout", o->heldout,
+                    "also plan N held-out poses of the same set-ups (written to <plan>_heldout.csv "
+                    "and .nc), for calibrate/diagnose --heldout")
         ->check(CLI::Range(0, 100000));
     cmd->add_option("-o,--output", o->output, "plan to write (CSV)")->required();
     cmd->add_option("--gcode", o->gcode, "NC program to write (default: the plan path with .nc)");

@@ -189,6 +189,22 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
       std::printf("; %s %.4g +- %.2g", traitsOf(a.spec.type).hyper.name, a.hyperparameter,
                   a.hyperparameter_uncertainty);
     std::printf("\n");
+    if (!a.equivalent.empty()) {
+      std::printf("             the readings cannot tell it from:");
+      for (size_t k = 0; k < a.equivalent.size(); ++k)
+        std::printf("%s %s", k ? "," : "", a.equivalent[k].c_str());
+      std::printf(" (the same motion seen from the part)\n");
+    }
+    if (!a.confounded_with.empty()) {
+      std::printf("             partly confounded (new information %.3f) with", a.new_information);
+      for (size_t k = 0; k < a.confounded_with.size(); ++k) {
+        const AddedEffect::Confounding& c = a.confounded_with[k];
+        const double f = c.angular ? 1e6 : 1e3;
+        std::printf("%s %s (|cos| %.2f: %.3f -> %.3f %s)", k ? "," : "", c.name.c_str(), c.cosine,
+                    c.before * f, c.after * f, c.angular ? "urad" : "um");
+      }
+      std::printf("\n");
+    }
   }
   std::printf("  after      residual RMS %.3f um, cross-validated RMS %.3f um\n", r.rms_after * 1e3,
               r.cv_rms_after * 1e3);

@@ -112,9 +112,39 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
     Minv -= (Mx * Mx.transpose()) / (1.0 + x.dot(Mx));
     plan.test.readings.push_back(pool[index[best].first][index[best].second]);
   }
-  // Measurement order: set-up by set-up.
+  // Measurement order: set-up by set-up; within a set-up, an order in which time is not
+  // correlated with any joint (so that a thermal drift cannot pass for an error along an
+  // axis): the D-optimal order when it already is, else a random one (first pose kept: it is
+  // the reference the drift checks return to) with the smallest correlation found.
   std::stable_sort(plan.test.readings.begin(), plan.test.readings.end(),
                    [](const BallbarReading& a, const BallbarReading& b) { return a.setup < b.setup; });
+  {
+    auto correlation = [&](const std::vector<BallbarReading>& order) {
+      BallbarTest t;
+      t.setups = plan.test.setups;
+      t.readings = order;
+      for (size_t i = 0; i < t.readings.size(); ++i) t.readings[i].context.time_s = static_cast<double>(i);
+      return timeJointCorrelation(model, t);
+    };
+    std::vector<BallbarReading> best = plan.test.readings;
+    TimeJointCorrelation c = correlation(best);
+    std::mt19937 order_rng(opt.seed + 104729u);
+    for (int attempt = 0; attempt < 200 && c.worst >= opt.max_time_correlation; ++attempt) {
+      std::vector<BallbarReading> trial = plan.test.readings;
+      for (size_t b = 0; b < trial.size();) {
+        size_t e = b;
+        while (e < trial.size() && trial[e].setup == trial[b].setup) ++e;
+        if (e - b > 2) std::shuffle(trial.begin() + b + 1, trial.begin() + e, order_rng);
+        b = e;
+      }
+      const TimeJointCorrelation ct = correlation(trial);
+      if (ct.worst < c.worst) {
+        c = ct;
+        best = trial;
+      }
+    }
+    plan.test.readings = best;
+  }
   if (opt.reference_every > 0) {
     std::vector<BallbarReading> with_checks;
     int since = 0;
@@ -137,6 +167,13 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
   const SvdSummary sum = analyseColumns(J);
   plan.rank = sum.rank;
   plan.condition = sum.condition;
+  {
+    BallbarTest t = plan.test;
+    for (size_t i = 0; i < t.readings.size(); ++i) t.readings[i].context.time_s = static_cast<double>(i);
+    const TimeJointCorrelation c = timeJointCorrelation(model, t);
+    plan.time_correlation = c.worst;
+    plan.time_correlation_axis = c.worst_axis;
+  }
   return plan;
 }
 

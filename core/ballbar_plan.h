@@ -24,6 +24,9 @@ struct BallbarPlanOptions {
   // A drift check: after every `reference_every` poses of a set-up, the set-up's first pose is
   // measured again (0: never). These repeats come on top of `poses`.
   int reference_every = 0;
+  // Largest correlation of time (the reading's index) with a joint within a set-up that the
+  // measurement order may have (see timeJointCorrelation).
+  double max_time_correlation = 0.3;
   // Set-up geometry; when empty, defaults: table balls 80 mm off the table's axis at three
   // heights, tool balls 25 mm off the spindle axis at 60, 180 and 300 degrees (so the spindle's
   // own errors are observable).
@@ -36,6 +39,8 @@ struct BallbarPlan {
   int rank = 0;
   double condition = 0;   // column-scaled identification Jacobian at the nominal machine
   int sampled = 0, rejected = 0;
+  double time_correlation = 0;     // |r| of the measurement order (reading index vs joint)
+  int time_correlation_axis = -1;  // the axis it is largest for
 };
 
 // unknowns: the machine parameters to identify (see defaultCalibrationUnknowns).

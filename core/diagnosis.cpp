@@ -107,6 +107,24 @@ class Scorer {
     }
   }
 
+  // Unknowns of the fit whose (unit) columns have |cosine| >= min_cosine with one of G's, by
+  // column index of the identification Jacobian, largest first.
+  std::vector<std::pair<int, double>> similarColumns(const Eigen::MatrixXd& G, double min_cosine) const {
+    std::vector<std::pair<int, double>> out;
+    Eigen::MatrixXd Gs = G;
+    for (Eigen::Index c = 0; c < Gs.cols(); ++c) {
+      const double n = Gs.col(c).norm();
+      if (n > 0) Gs.col(c) /= n;
+    }
+    const Eigen::MatrixXd C = J_.transpose() * Gs;  // J_ columns are unit (scaled)
+    for (Eigen::Index j = 0; j < C.rows(); ++j) {
+      const double cj = C.row(j).cwiseAbs().maxCoeff();
+      if (cj >= min_cosine) out.emplace_back(static_cast<int>(j), cj);
+    }
+    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+    return out;
+  }
+
   int readings() const { return m_; }
   int unknowns() const { return n_; }
   double rss() const { return rss0_; }
@@ -306,6 +324,48 @@ double hyperparameterUncertainty(const Scorer& sc, EffectSpec spec, double sigma
   return curvature > 0 ? std::sqrt(2.0 * sigma2 / curvature) : INFINITY;
 }
 
+// Re-searches the hyperparameter (period, time constant) of each added effect with every other
+// effect in the model: an effect added early was searched while later ones were still missing,
+// and a time constant found beside an unexplained cyclic error is biased. For each, the model
+// without that effect's contribution is linearised at the current solution, the search run
+// again, and the nonlinear refit with the new value kept when it lowers the residual.
+void refineHyperparameters(DiagnosisResult& res, const BallbarTest& test,
+                           const std::vector<int>& unknowns, const std::vector<int>& fold_of) {
+  for (AddedEffect& a : res.added) {
+    if (!hyperparameter(a.spec) || a.parameters.empty()) continue;
+    Machine without = res.machine;
+    for (int p : a.parameters) without.params[p] = 0.0;
+    CalibrationResult f0 = res.final_fit;
+    f0.params = without.params;
+    f0.identified.erase(std::remove_if(f0.identified.begin(), f0.identified.end(),
+                                       [&](int p) {
+                                         return std::find(a.parameters.begin(), a.parameters.end(),
+                                                          p) != a.parameters.end();
+                                       }),
+                        f0.identified.end());
+    const Scorer sc(without, test, f0, fold_of, res.folds);
+    EffectSpec spec = a.spec;
+    searchHyperparameter(sc, test, spec);
+    const double h_old = hyperparameterValue(a.spec), h_new = hyperparameterValue(spec);
+    if (!(std::abs(h_new - h_old) > 1e-3 * h_old)) continue;
+    Machine trial = res.machine;
+    const int effect = trial.model.blocks[trial.model.parameters[a.parameters[0]].block].effect;
+    *hyperparameter(trial.model.effects[effect]) = h_new;
+    const CalibrationResult fit = calibrate(trial.model, res.machine.params, test, unknowns);
+    if (fit.status != CalibrationStatus::Converged || !fit.held.empty() ||
+        !(fit.rms_residual < res.final_fit.rms_residual))
+      continue;
+    trial.params = fit.params;
+    res.machine = trial;
+    res.final_fit = fit;
+    a.spec = spec;
+    a.label = describeEffect(res.machine.model, spec);
+    a.hyperparameter = h_new;
+    a.hyperparameter_uncertainty =
+        hyperparameterUncertainty(sc, spec, fit.residual_sigma * fit.residual_sigma);
+  }
+}
+
 bool sameEffect(const EffectSpec& a, const EffectSpec& b) {
   return a.type == b.type && a.axis == b.axis && a.component == b.component &&
          a.varying == b.varying;
@@ -419,8 +479,47 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
     std::sort(qualified.begin(), qualified.end(),
               [&](size_t a, size_t b) { return scores[a].delta_ic > scores[b].delta_ic; });
     bool added = false;
+    // Candidates the readings cannot tell from scores[i]: same type and size, columns (at its
+    // hyperparameter) spanning the same space to 0.1 % (the machine's own errors tilt the
+    // frames by micro-radians, so exact equivalents differ at that level).
+    auto equivalentsOf = [&](size_t i) {
+      std::vector<size_t> out;
+      const CandidateScore& c = scores[i];
+      const Eigen::MatrixXd G = sc.columns(c.spec);
+      const Eigen::HouseholderQR<Eigen::MatrixXd> qa(G);
+      const Eigen::MatrixXd Qa = qa.householderQ() * Eigen::MatrixXd::Identity(G.rows(), G.cols());
+      for (size_t j = 0; j < scores.size(); ++j) {
+        const CandidateScore& o = scores[j];
+        if (j == i || o.spec.type != c.spec.type || o.coefficients != c.coefficients) continue;
+        EffectSpec os = o.spec;
+        if (double* h = hyperparameter(os)) *h = hyperparameterValue(c.spec);
+        const Eigen::MatrixXd G2 = sc.columns(os);
+        if (G2.cols() != G.cols() || (G2.colwise().norm().array() < 1e-12).any()) continue;
+        bool same = true;
+        for (Eigen::Index k = 0; k < G2.cols() && same; ++k) {
+          const Eigen::VectorXd g = G2.col(k) / G2.col(k).norm();
+          same = (g - Qa * (Qa.transpose() * g)).norm() < 1e-3;
+        }
+        if (same) out.push_back(j);
+      }
+      return out;
+    };
+    auto principal = [&](const EffectSpec& e) {
+      return e.axis >= 0 && e.component == principalComponent(res.machine.model.axes[e.axis]);
+    };
     for (size_t qi : qualified) {
-      CandidateScore& c = scores[qi];
+      // Among equivalent names, the one along an axis's own motion (the drift of Z along z
+      // rather than the table's along z): the same fit, the likelier cause.
+      size_t pick = qi;
+      std::vector<size_t> equivalent = equivalentsOf(qi);
+      if (!principal(scores[qi].spec))
+        for (size_t e : equivalent)
+          if (principal(scores[e].spec) && scores[e].verdict == CandidateVerdict::Outscored) {
+            pick = e;
+            break;
+          }
+      if (pick != qi) equivalent.push_back(qi);
+      CandidateScore& c = scores[pick];
       Machine aug = res.machine;
       const int first = aug.model.parameterCount();
       aug.model.addEffect(c.spec);
@@ -473,6 +572,35 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
       a.hyperparameter = hyperparameterValue(c.spec);
       a.hyperparameter_uncertainty =
           hyperparameterUncertainty(sc, c.spec, fit.residual_sigma * fit.residual_sigma);
+      a.new_information = c.new_information;
+      for (size_t e : equivalent)
+        if (e != pick) a.equivalent.push_back(describeEffect(res.machine.model, scores[e].spec));
+      {
+        const CalibrationResult& before = res.final_fit;
+        const int np = static_cast<int>(before.identified.size());
+        const auto similar = sc.similarColumns(sc.columns(c.spec), 0.5);
+        for (size_t k = 0; k < similar.size() && k < 4; ++k) {
+          AddedEffect::Confounding cf;
+          cf.cosine = similar[k].second;
+          const int j = similar[k].first;
+          if (j < np) {
+            const int p = before.identified[j];
+            cf.name = aug.model.parameters[p].iso_code;
+            cf.angular = aug.model.parameters[p].angular;
+            cf.before = before.params[p];
+            cf.after = fit.params[p];
+          } else {
+            const int b = (j - np) / 6, k3 = (j - np) % 6;
+            cf.name = "ball " + std::to_string(test.setups[b].id) + (k3 < 3 ? " table " : " tool ") +
+                      "xyz"[k3 % 3];
+            const BallErrors& e0 = before.ball_errors[b];
+            const BallErrors& e1 = fit.ball_errors[b];
+            cf.before = (k3 < 3 ? e0.table_w : e0.tool_t)[k3 % 3];
+            cf.after = (k3 < 3 ? e1.table_w : e1.tool_t)[k3 % 3];
+          }
+          a.confounded_with.push_back(cf);
+        }
+      }
       aug.params = fit.params;
       res.machine = aug;
       res.final_fit = fit;
@@ -483,6 +611,7 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
     }
     res.candidates.insert(res.candidates.end(), scores.begin(), scores.end());
     if (!added) break;
+    if (res.added.size() >= 2) refineHyperparameters(res, test, unknowns, fold_of);
   }
   // Values and uncertainties from the final fit (later rounds refit the earlier effects).
   for (AddedEffect& a : res.added) {

@@ -38,7 +38,11 @@ namespace tolver {
 struct DiagnosisOptions {
   int blocks_per_setup = 6;           // cross-validation: contiguous runs per set-up
   double alpha = 1e-3;                // family-wise significance level of a round
-  double min_new_information = 0.05;  // confounded below this
+  // Confounded (no new information) below this: the part of the candidate's unit columns the
+  // base model cannot produce. A partly confounded effect (above it) is judged like any other,
+  // by its significance and its cross-validated gain, and reported with what it is confounded
+  // with.
+  double min_new_information = 1e-3;
   double max_condition = 1e8;         // column-scaled, of the augmented identification Jacobian
   int max_effects = 4;
   std::vector<EffectType> types;      // candidate types; empty: every type
@@ -86,6 +90,21 @@ struct AddedEffect {
   Eigen::VectorXd uncertainty;  // standard uncertainty, same units
   double hyperparameter = NAN;  // period (mm) or time constant (s)
   double hyperparameter_uncertainty = NAN;
+  // Partial confounding: identified unknowns whose readings' derivatives resemble one of the
+  // effect's (|cosine| >= 0.5), with their values in the fit before and after the effect was
+  // added (parameter units, mm or rad; ball coordinates in mm). The effect's new information
+  // is the part of its columns the base model cannot produce (1: independent).
+  double new_information = 1.0;
+  struct Confounding {
+    std::string name;     // ISO code, or "ball 2 tool z"
+    bool angular = false;
+    double cosine = 0.0;
+    double before = 0.0, after = 0.0;
+  };
+  std::vector<Confounding> confounded_with;
+  // Other candidates the readings cannot tell from this one (their columns span the same
+  // space: e.g. a rotation about x of Y, of X or of an A axis about x): equally true names.
+  std::vector<std::string> equivalent;
 };
 
 struct DiagnosisResult {

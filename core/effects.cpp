@@ -11,12 +11,6 @@ namespace {
 
 constexpr double kTwoPi = 6.283185307179586;
 
-int principalComponent(const Axis& a) {
-  for (int k = 0; k < 3; ++k)
-    if (std::abs(a.direction[k]) == 1.0) return a.isRotary() ? k + 3 : k;
-  return -1;
-}
-
 double direction(const EffectSpec& e, const MotionContext* ctx) {
   return ctx ? static_cast<double>(ctx->direction[e.axis]) : 0.0;
 }
@@ -44,6 +38,21 @@ std::vector<EffectSpec> alongEachAxis(const MachineModel& m, EffectType type, bo
   return out;
 }
 
+// Every motion-error component (translations and angles) of every axis: thermal effects can
+// move or tilt any carriage.
+std::vector<EffectSpec> everyComponent(const MachineModel& m, EffectType type) {
+  std::vector<EffectSpec> out;
+  for (int a = 0; a < static_cast<int>(m.axes.size()); ++a)
+    for (int c = 0; c < 6; ++c) {
+      EffectSpec e;
+      e.type = type;
+      e.axis = a;
+      e.component = c;
+      out.push_back(e);
+    }
+  return out;
+}
+
 std::vector<EffectSpec> chebyshevCandidates(const MachineModel& m) {
   std::vector<EffectSpec> out;
   for (const ParameterBlock& b : m.blocks) {
@@ -53,13 +62,21 @@ std::vector<EffectSpec> chebyshevCandidates(const MachineModel& m) {
       if (o.kind == BlockKind::Effect && m.effects[o.effect].type == EffectType::Chebyshev &&
           m.effects[o.effect].axis == b.axis && m.effects[o.effect].component == b.component)
         top = std::max(top, m.effects[o.effect].last_order);
-    EffectSpec e;
-    e.type = EffectType::Chebyshev;
-    e.axis = b.axis;
-    e.component = b.component;
-    e.first_order = top + 1;
-    e.last_order = top + 2;
-    out.push_back(e);
+    // Two more orders (a smooth residual shape), and five (up to degree 8 over a cubic base:
+    // a straightness with a few waves over the travel). Not five on a rotary axis of (nearly) a
+    // full turn: its errors repeat with the angle, which the harmonics describe.
+    const Axis& ax = m.axes[b.axis];
+    const bool full_turn = ax.isRotary() && ax.travel_max - ax.travel_min > 1.6 * M_PI;
+    for (int extra : {2, 5}) {
+      if (extra == 5 && full_turn) continue;
+      EffectSpec e;
+      e.type = EffectType::Chebyshev;
+      e.axis = b.axis;
+      e.component = b.component;
+      e.first_order = top + 1;
+      e.last_order = top + extra;
+      out.push_back(e);
+    }
   }
   return out;
 }
@@ -151,7 +168,7 @@ const std::vector<EffectTraits>& table() {
          phi[0] = std::isfinite(t_s) ? t_s / 3600.0 : 0.0;
        },
        [](const EffectSpec&, int) { return std::string("drift"); },
-       [](const MachineModel& m) { return alongEachAxis(m, EffectType::Drift, true, false); }, {}},
+       [](const MachineModel& m) { return everyComponent(m, EffectType::Drift); }, {}},
       {EffectType::Warmup, "warmup",
        "thermal drift settling as a first-order exponential (time constant by search)", "time",
        [](const EffectSpec&) { return 1; },
@@ -160,7 +177,7 @@ const std::vector<EffectTraits>& table() {
          phi[0] = std::isfinite(t_s) ? -std::expm1(-t_s / e.tau) : 0.0;
        },
        [](const EffectSpec&, int) { return std::string("warm"); },
-       [](const MachineModel& m) { return alongEachAxis(m, EffectType::Warmup, true, false); },
+       [](const MachineModel& m) { return everyComponent(m, EffectType::Warmup); },
        {"tau_s", 300.0, 4.0 * 3600.0, false}},
       {EffectType::BarLength, "bar_length", "an error of the ball-bar's own length", "reading",
        [](const EffectSpec&) { return 1; },
@@ -171,6 +188,12 @@ const std::vector<EffectTraits>& table() {
 }
 
 }  // namespace
+
+int principalComponent(const Axis& a) {
+  for (int k = 0; k < 3; ++k)
+    if (std::abs(a.direction[k]) == 1.0) return a.isRotary() ? k + 3 : k;
+  return -1;
+}
 
 const std::vector<EffectTraits>& effectTypes() { return table(); }
 

@@ -68,6 +68,10 @@ double hyperparameterValue(const EffectSpec& spec);
 // keeps its direction), as a control would see them.
 void updateDirections(MotionContext& ctx, const JointVector& q0, const JointVector& q1);
 
+// The motion-error component along an axis's own motion (ex of an X axis, gz of a C axis), -1
+// when its direction is not a coordinate axis.
+int principalComponent(const Axis& a);
+
 // "reversal X ex", "periodic X ex (period 10.000 mm)", "bar_length".
 std::string describeEffect(const MachineModel& model, const EffectSpec& spec);
 

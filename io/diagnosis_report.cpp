@@ -169,6 +169,18 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
                              {"uncertainty", num(a.hyperparameter_uncertainty)}};
     if (a.spec.type == EffectType::Chebyshev || a.spec.type == EffectType::Harmonics)
       e["orders"] = {a.spec.first_order, a.spec.last_order};
+    e["new_information"] = a.new_information;
+    json conf = json::array();
+    for (const AddedEffect::Confounding& c : a.confounded_with) {
+      const double f = c.angular ? 1e6 : 1e3;
+      conf.push_back({{"unknown", c.name},
+                      {"abs_cosine", c.cosine},
+                      {"unit", c.angular ? "urad" : "um"},
+                      {"before", c.before * f},
+                      {"after", c.after * f}});
+    }
+    e["partly_confounded_with"] = conf;
+    e["equivalent"] = a.equivalent;
     added.push_back(e);
   }
   json cands = json::array();

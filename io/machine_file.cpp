@@ -150,8 +150,8 @@ class Reader {
     if (spec.type == EffectType::Chebyshev || spec.type == EffectType::Harmonics) {
       const std::vector<double> o = numbers(e, "orders", 2);
       if (o[0] != std::floor(o[0]) || o[1] != std::floor(o[1]) || o[0] < (spec.type == EffectType::Harmonics ? 1 : 0) ||
-          o[1] < o[0] || o[1] - o[0] > 3 || o[1] > 30)
-        fail(e, "effect.orders", "expected two integers 'first last' with at most four orders");
+          o[1] < o[0] || o[1] - o[0] > 7 || o[1] > 30)
+        fail(e, "effect.orders", "expected two integers 'first last' with at most eight orders");
       spec.first_order = static_cast<int>(o[0]);
       spec.last_order = static_cast<int>(o[1]);
     }

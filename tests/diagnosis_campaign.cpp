@@ -1,8 +1,9 @@
 // The measurement of issue 12's table (README, "Diagnosis on independent data"): every case of
 // tests/independent_diagnosis.h x both set-up styles x seeds, printed as a Markdown table.
-// Not a test: run by hand, `./build/tests/diagnosis_campaign [seeds] [clean_seeds]`.
+// Not a test: run by hand, `./build/tests/diagnosis_campaign [seeds] [clean_seeds] [case]`.
 #include <cstdio>
 #include <cstdlib>
+#include <unistd.h>
 
 #include "independent_diagnosis.h"
 
@@ -10,9 +11,11 @@ int main(int argc, char** argv) {
   using namespace tolver::test;
   const int seeds = argc > 1 ? std::atoi(argv[1]) : 5;
   const int clean_seeds = argc > 2 ? std::atoi(argv[2]) : 20;
-  const std::string dir = "/tmp/tolver_campaign";
+  const std::string only = argc > 3 ? argv[3] : "";  // cases whose name contains this
+  const std::string dir = "/tmp/tolver_campaign_" + std::to_string(::getpid());
   std::printf("| undeclared effect | set-up style | named right | held-out RMS before -> after (um, written files) | what was added when wrong |\n|---|---|---|---|---|\n");
   for (const DiagnosisCase& c : diagnosisCases()) {
+    if (!only.empty() && c.name.find(only) == std::string::npos) continue;
     const int n = c.truth.empty() ? clean_seeds : seeds;
     for (bool on_axis : {false, true}) {
       int right = 0;
