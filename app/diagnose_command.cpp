@@ -206,6 +206,15 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
       std::printf("\n");
     }
   }
+  if (r.unexplained) {
+    const ResidualFinding& u = r.unexplained_finding;
+    char what[96] = "";
+    if (u.test == "periodogram")
+      std::snprintf(what, sizeof what, u.period < 9 ? ", order %.0f" : ", period %.2f mm", u.period);
+    std::printf("  unexplained the residual still follows %s (%s%s; %.0f %% of its variance, p %.1e): "
+                "structure no effect of the library removes (plot in the report)\n",
+                u.variable.c_str(), u.test.c_str(), what, u.strength * 100.0, u.p_value);
+  }
   std::printf("  after      residual RMS %.3f um, cross-validated RMS %.3f um\n", r.rms_after * 1e3,
               r.cv_rms_after * 1e3);
   if (r.heldout_before.readings > 0)

@@ -661,6 +661,10 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
   res.rms_after = res.final_fit.rms_residual;
   res.analysis_before = analyseResiduals(machine.model, test, res.base_fit.residuals);
   res.analysis_after = analyseResiduals(res.machine.model, test, res.final_fit.residuals);
+  if (!res.analysis_after.follows.empty() && !res.analysis_after.findings.empty()) {
+    res.unexplained = true;
+    res.unexplained_finding = res.analysis_after.findings.front();
+  }
   res.ok = true;
   res.message = !res.withdrawn.empty() ? "nothing added: " + res.withdrawn_reason
                 : res.added.empty()     ? "nothing missing: no effect qualifies"

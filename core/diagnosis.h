@@ -123,6 +123,10 @@ struct DiagnosisResult {
   // predicted worse than the base one); then `added` is empty and `machine` the base model.
   std::vector<AddedEffect> withdrawn;
   std::string withdrawn_reason;
+  // Structure the library does not explain: after the selection, the residual still follows a
+  // variable (the first finding of analysis_after, p < 1e-3) that no candidate removed.
+  bool unexplained = false;
+  ResidualFinding unexplained_finding;
   ResidualAnalysis analysis_before, analysis_after;
 };
 

@@ -101,6 +101,12 @@ std::vector<EffectSpec> harmonicCandidates(const MachineModel& m) {
       e.type = EffectType::Harmonics;
       e.axis = a;
       e.component = c;
+      // Once per revolution (an eccentric runout, a tilted bearing) and orders 2-4 (a lobed
+      // bearing, an out-of-flat table). Where order 1 falls into the span of the link errors
+      // the selection reports it confounded.
+      e.first_order = 1;
+      e.last_order = 1;
+      out.push_back(e);
       e.first_order = 2;
       e.last_order = 4;
       out.push_back(e);

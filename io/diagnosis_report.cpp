@@ -246,6 +246,14 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
         {"fit", stats(in.written.fit)}};
     if (in.written.heldout.readings > 0) out["written_files_check"]["heldout"] = stats(in.written.heldout);
   }
+  if (r.unexplained) {
+    const ResidualFinding& u = r.unexplained_finding;
+    out["unexplained_structure"] = {
+        {"variable", u.variable}, {"test", u.test}, {"strength", u.strength}, {"p_value", u.p_value},
+        {"description", "the residual after the selection still follows this variable, and no "
+                        "effect of the library removes it"}};
+    if (u.test == "periodogram") out["unexplained_structure"]["period"] = u.period;
+  }
   if (!r.withdrawn.empty()) {
     json w = json::array();
     for (const AddedEffect& a : r.withdrawn) w.push_back(a.label);
@@ -351,6 +359,35 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
            (e.type == EffectType::Reversal ? "; blue: approach +, red: approach −" : "") +
            "</figcaption></figure>\n";
     }
+  }
+  // Structure the library does not explain: the residual after, against that variable.
+  if (r.unexplained) {
+    const ResidualFinding& u = r.unexplained_finding;
+    h += "<h2>Structure the library does not explain</h2>\n<p>After the selection the residual "
+         "still follows <b>" + xmlEscape(u.variable) + "</b> (" + xmlEscape(u.test) +
+         (u.test == "periodogram" ? fmt(u.period < 9 ? ", order %.0f" : ", period %.2f mm", u.period) : "") +
+         ", " + fmt("%.0f", u.strength * 100) + " % of its variance, p " + fmt("%.1e", u.p_value) +
+         "), and no effect of the library removes it.</p>\n";
+    std::vector<double> x(test.readings.size());
+    std::string label = "reading, in measurement order";
+    int axis = -1;
+    for (size_t a = 0; a < m.axes.size(); ++a)
+      if (u.variable.rfind(m.axes[a].name, 0) == 0) axis = static_cast<int>(a);
+    for (size_t i = 0; i < x.size(); ++i) {
+      const BallbarReading& rd = test.readings[i];
+      if (u.variable == "time") x[i] = rd.context.time_s / 60.0;
+      else if (axis >= 0) x[i] = rd.q[axis] * (m.axes[axis].isRotary() ? 180.0 / M_PI : 1.0);
+      else x[i] = static_cast<double>(i);
+    }
+    if (u.variable == "time") label = "time since the test began (min)";
+    else if (axis >= 0) label = m.axes[axis].name + (m.axes[axis].isRotary() ? " angle (deg)" : " position (mm)");
+    ScatterSeries one;
+    one.x = x;
+    for (Eigen::Index i = 0; i < r.final_fit.residuals.size(); ++i) one.y.push_back(um(r.final_fit.residuals[i]));
+    const std::string path = (std::filesystem::path(dir) / "residual_unexplained.png").string();
+    writeScatterPng(path, {one});
+    h += "<figure>" + imageTag(path, "residual_unexplained.png") + "<figcaption>residual (µm) after, against " +
+         xmlEscape(label) + "</figcaption></figure>\n";
   }
   // Residual analysis.
   h += "<h2>Residual analysis</h2>\n<table><tr><th class=\"l\">variable</th><th class=\"l\">test</th>"

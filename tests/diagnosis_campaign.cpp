@@ -30,6 +30,7 @@ int main(int argc, char** argv) {
         if (!o.named_right) {
           std::string a;
           for (const std::string& x : o.added) a += (a.empty() ? "" : ", ") + x;
+          if (o.unexplained) a += (a.empty() ? "" : ", ") + std::string("unexplained: ") + o.unexplained_variable;
           wrong += (wrong.empty() ? "" : "; ") + (a.empty() ? std::string("nothing") : a);
         }
         std::fprintf(stderr, "%s %s seed %d: %s (%s)\n", c.name.c_str(), on_axis ? "on" : "off", s,

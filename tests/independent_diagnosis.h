@@ -27,12 +27,17 @@ struct DiagnosisCase {
   std::vector<indep::Undeclared> truth;  // empty: clean
   // What tolver should name: (type name, axis name, component) per effect.
   std::vector<std::tuple<std::string, std::string, int>> expected;
+  // An effect the library does not have: right when diagnose adds nothing and says the residual
+  // still follows `unexplained_variable`.
+  std::string unexplained_variable;
 };
 
 struct DiagnosisOutcome {
   bool named_right = false;  // every expected effect added, nothing else (clean: nothing)
   std::vector<std::string> added;
   std::string message;
+  bool unexplained = false;                           // diagnose said so
+  std::string unexplained_variable;
   double heldout_before_um = 0, heldout_after_um = 0;  // through the written files
   double written_vs_memory_um = 0;                     // |RMS written - RMS in memory|
   int gross_removed = 0;
@@ -52,6 +57,7 @@ inline std::vector<DiagnosisCase> diagnosisCases() {
       {"X straightness in Y, 6th order, 6 um", {{"straightness6", X, 1, 6e-3}}, {{"chebyshev", "X", 1}}},
       {"Y drift 10 um/h", {{"drift", Y, 1, 10e-3}}, {{"drift", "Y", 1}}},
       {"Y pitch (gx) warm-up 60 urad, 1800 s", {{"warmup", Y, 3, 60e-6, 1800.0}}, {{"warmup", "Y", 3}}},
+      {"outside the library: X periodic 4 um, 70 mm", {{"periodic", X, 0, 4e-3, 70.0, 0.2}}, {}, "X"},
       {"Y reversal + X periodic",
        {{"reversal", Y, 1, 8e-3}, {"periodic", X, 0, 4e-3, 16.0, 0.7}},
        {{"reversal", "Y", 1}, {"periodic", "X", 0}}},
@@ -120,6 +126,8 @@ inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, u
   opt.heldout = &held;
   const DiagnosisResult r = diagnose(nominal, rc.test, opt);
   out.message = r.message;
+  out.unexplained = r.unexplained;
+  if (r.unexplained) out.unexplained_variable = r.unexplained_finding.variable;
   for (const AddedEffect& a : r.added) out.added.push_back(a.label);
   Machine augmented = r.machine;
   writeFileAtomically(dir + "/aug.xml", formatMachineXml(augmented, "campaign"));
@@ -156,6 +164,11 @@ inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, u
   }
   out.named_right = matched == static_cast<int>(c.expected.size()) &&
                     r.added.size() == c.expected.size();
+  if (!c.unexplained_variable.empty())
+    out.named_right = r.added.empty() && r.unexplained &&
+                      r.unexplained_finding.variable == c.unexplained_variable;
+  else if (r.unexplained)
+    out.named_right = false;  // structure left where the truth has none
   return out;
 }
 
