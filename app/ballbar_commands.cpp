@@ -219,6 +219,13 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
     return std::abs(r.params[r.identified[a]]) / r.uncertainty[a] >
            std::abs(r.params[r.identified[b]]) / r.uncertainty[b];
   });
+  // What each identified parameter stands for: the minimal-complete set folds the parameters
+  // it leaves out into the ones it keeps.
+  const std::vector<std::vector<AbsorbedTerm>> absorbed = calibrationAbsorbed(m, unknowns);
+  auto termsOf = [&](int p) -> const std::vector<AbsorbedTerm>* {
+    const auto it = std::find(unknowns.begin(), unknowns.end(), p);
+    return it == unknowns.end() ? nullptr : &absorbed[it - unknowns.begin()];
+  };
   std::printf("  largest identified errors (value +- standard uncertainty):\n");
   for (size_t k = 0; k < std::min<size_t>(10, order.size()); ++k) {
     const int p = r.identified[order[k]];
@@ -226,6 +233,9 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
     std::printf("    %-10s %-18s %10.3f +- %.3f %s\n", m.parameters[p].iso_code.c_str(),
                 m.parameters[p].thesis_name.c_str(), r.params[p] * s, r.uncertainty[order[k]] * s,
                 m.parameters[p].angular ? "urad" : "um");
+    const std::vector<AbsorbedTerm>* t = termsOf(p);
+    if (t && !t->empty())
+      std::printf("               stands for %s\n", standsFor(m, p, *t).c_str());
   }
   // Held-out readings: the prior machine with nominal balls, then the identified one.
   HeldoutFigures ho;
@@ -265,6 +275,8 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
   in.readings = static_cast<int>(f.test.readings.size());
   in.balls_file = balls_file;
   in.heldout = ho;
+  in.unknowns = unknowns;
+  in.absorbed = absorbed;
   in.written = check;
   for (const GrossReading& g : rc.removed)
     in.removed.push_back({f.test.readings[g.index].line, g.residual, g.studentized});

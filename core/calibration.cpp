@@ -244,4 +244,14 @@ RobustCalibration calibrateWithoutGross(const MachineModel& model, const Eigen::
   return out;
 }
 
+std::vector<std::vector<AbsorbedTerm>> calibrationAbsorbed(const MachineModel& model,
+                                                           const std::vector<int>& unknowns,
+                                                           int poses, unsigned seed) {
+  std::vector<int> removed;
+  for (int p : modelColumns(model, "motion"))
+    if (!isSetupParameter(model, p) && std::find(unknowns.begin(), unknowns.end(), p) == unknowns.end())
+      removed.push_back(p);
+  return absorbedParameters(model, randomPoses(model, poses, seed), unknowns, removed);
+}
+
 }  // namespace tolver

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/ballbar.h"
+#include "core/identifiability.h"
 #include "core/machine_model.h"
 
 namespace tolver {
@@ -92,5 +93,12 @@ RobustCalibration calibrateWithoutGross(const MachineModel& model, const Eigen::
 // tool set-up parameters, found at `poses` random configurations.
 std::vector<int> defaultCalibrationUnknowns(const MachineModel& model, int poses = 600,
                                             unsigned seed = 1);
+
+// What each of `unknowns` stands for (see absorbedParameters): the motion-model parameters left
+// out of the minimal-complete set folded into it, at the same poses as
+// defaultCalibrationUnknowns. One list per unknown, in its order.
+std::vector<std::vector<AbsorbedTerm>> calibrationAbsorbed(const MachineModel& model,
+                                                           const std::vector<int>& unknowns,
+                                                           int poses = 600, unsigned seed = 1);
 
 }  // namespace tolver

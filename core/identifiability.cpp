@@ -208,6 +208,45 @@ MinimalSet minimalSetForModel(const MachineModel& m, const std::vector<JointVect
   return selectMinimalSet(J, columns, setup, preferred);
 }
 
+std::vector<std::vector<AbsorbedTerm>> absorbedParameters(const MachineModel& m,
+                                                          const std::vector<JointVector>& poses,
+                                                          const std::vector<int>& kept,
+                                                          const std::vector<int>& removed,
+                                                          double min_share) {
+  std::vector<std::vector<AbsorbedTerm>> out(kept.size());
+  if (kept.empty() || removed.empty()) return out;
+  std::vector<int> basis = kept;
+  for (int p = 0; p < m.parameterCount(); ++p) {
+    const BlockKind k = m.blocks[m.parameters[p].block].kind;
+    if ((k == BlockKind::WorkpieceSetup || k == BlockKind::ToolSetup) &&
+        std::find(kept.begin(), kept.end(), p) == kept.end())
+      basis.push_back(p);
+  }
+  const ForwardKinematics fk(m, Eigen::VectorXd::Zero(m.parameterCount()));
+  const Eigen::MatrixXd B = stackedJacobian(fk, poses, basis);
+  const Eigen::MatrixXd R = stackedJacobian(fk, poses, removed);
+  const Eigen::VectorXd nb = B.colwise().norm().transpose();
+  Eigen::VectorXd sb = nb;
+  for (Eigen::Index c = 0; c < sb.size(); ++c)
+    if (sb[c] == 0) sb[c] = 1;
+  const Eigen::MatrixXd Bs = B * sb.cwiseInverse().asDiagonal();
+  const Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(Bs);
+  for (Eigen::Index j = 0; j < R.cols(); ++j) {
+    const double nr = R.col(j).norm();
+    if (!(nr > 0)) continue;
+    const Eigen::VectorXd a = cod.solve(R.col(j)).cwiseQuotient(sb);
+    // Only a removed column the kept ones (and the set-up) reproduce is folded in.
+    if ((B * a - R.col(j)).norm() > 1e-6 * nr) continue;
+    for (size_t k = 0; k < kept.size(); ++k) {
+      const double share = std::abs(a[k]) * nb[k] / nr;
+      if (share >= min_share) out[k].push_back({removed[j], a[k], share});
+    }
+  }
+  for (auto& v : out)
+    std::sort(v.begin(), v.end(), [](const AbsorbedTerm& x, const AbsorbedTerm& y) { return x.share > y.share; });
+  return out;
+}
+
 std::vector<JointVector> randomPoses(const MachineModel& m, int count, unsigned seed) {
   std::mt19937 rng(seed);
   std::vector<JointVector> poses;

@@ -77,6 +77,24 @@ MinimalSet selectMinimalSet(const Eigen::MatrixXd& J, const std::vector<int>& co
 MinimalSet minimalSetForModel(const MachineModel& m, const std::vector<JointVector>& poses,
                               const std::vector<int>& columns, const std::vector<int>& preferred);
 
+// What an identified parameter stands for. A minimal-complete set keeps one parameter of each
+// confounded group; the data then show the kept one with the removed ones folded in:
+//   value(kept k) = own value + sum_j a_kj value(removed j),
+// with a_kj from the least-squares fit of each removed column on the kept columns (and the
+// set-up columns, which the ball positions replace), in parameter units (mm/mm, rad/rad, or
+// mm/rad for a lever arm). Only terms whose share of the removed column exceeds min_share
+// (|a_kj| |J_k| / |J_j|) are listed, largest first.
+struct AbsorbedTerm {
+  int parameter = -1;      // the removed parameter
+  double coefficient = 0;  // a_kj
+  double share = 0;
+};
+std::vector<std::vector<AbsorbedTerm>> absorbedParameters(const MachineModel& m,
+                                                          const std::vector<JointVector>& poses,
+                                                          const std::vector<int>& kept,
+                                                          const std::vector<int>& removed,
+                                                          double min_share = 0.05);
+
 // Joint configurations drawn uniformly inside travel (deterministic for a seed).
 std::vector<JointVector> randomPoses(const MachineModel& m, int count, unsigned seed);
 

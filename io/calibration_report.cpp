@@ -3,6 +3,7 @@
 #include "io/ballbar_file.h"
 #include "io/machine_file.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -41,6 +42,21 @@ std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test
                       {"value", r.params[p] * unitScale(p)},
                       {"uncertainty", r.uncertainty[k] * unitScale(p)},
                       {"observability", r.observability[k]}});
+  }
+  for (size_t k = 0; k < r.identified.size(); ++k) {
+    const int p = r.identified[k];
+    const auto it = std::find(in.unknowns.begin(), in.unknowns.end(), p);
+    if (it == in.unknowns.end() || in.absorbed.empty()) continue;
+    const auto& terms = in.absorbed[it - in.unknowns.begin()];
+    if (terms.empty()) continue;
+    json a = json::array();
+    for (const AbsorbedTerm& t : terms)
+      a.push_back({{"iso_code", m.parameters[t.parameter].iso_code},
+                   {"name", m.parameters[t.parameter].thesis_name},
+                   {"coefficient", t.coefficient},
+                   {"unit", std::string(unitName(p)) + " per " + unitName(t.parameter)}});
+    params[k]["stands_for"] = standsFor(m, p, terms, 1000);
+    params[k]["absorbs"] = a;
   }
   j["parameters"] = params;
   json held = json::array();
@@ -82,6 +98,30 @@ std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test
     removed.push_back({{"line", g.line}, {"residual_um", g.residual * 1e3}, {"studentized", g.studentized}});
   j["gross_readings_removed"] = removed;
   return j.dump(2) + "\n";
+}
+
+std::string standsFor(const MachineModel& m, int p, const std::vector<AbsorbedTerm>& terms,
+                      int max_terms) {
+  std::string s = m.parameters[p].iso_code;
+  char buf[96];
+  int n = 0;
+  for (const AbsorbedTerm& t : terms) {
+    if (n == max_terms) {
+      std::snprintf(buf, sizeof buf, " (+%d more)", static_cast<int>(terms.size()) - n);
+      s += buf;
+      break;
+    }
+    const double c = t.coefficient;
+    const std::string& name = m.parameters[t.parameter].iso_code;
+    if (std::abs(c - 1.0) < 1e-3) s += " + " + name;
+    else if (std::abs(c + 1.0) < 1e-3) s += " - " + name;
+    else {
+      std::snprintf(buf, sizeof buf, " %s %.3g ", c < 0 ? "-" : "+", std::abs(c));
+      s += buf + name;
+    }
+    ++n;
+  }
+  return s;
 }
 
 WrittenCheck checkWrittenFiles(const std::string& machine_file, const std::string& balls_file,

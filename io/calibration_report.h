@@ -5,6 +5,7 @@
 
 #include "core/ballbar.h"
 #include "core/calibration.h"
+#include "core/identifiability.h"
 #include "core/machine_model.h"
 
 namespace tolver {
@@ -32,7 +33,14 @@ struct CalibrationReportInputs {
   HeldoutFigures heldout;
   WrittenCheck written;
   std::vector<RemovedReading> removed;
+  // What each identified parameter stands for (calibrationAbsorbed), by unknown.
+  std::vector<int> unknowns;
+  std::vector<std::vector<AbsorbedTerm>> absorbed;
 };
+
+// "EAX.c0 + EAY.c0 - 0.5 EBX.c1 (+2 more)": an identified parameter with the ones it absorbs.
+std::string standsFor(const MachineModel& model, int parameter, const std::vector<AbsorbedTerm>& terms,
+                      int max_terms = 4);
 
 // Reads the machine file and ball positions written by calibrate or diagnose and returns what
 // they predict for the fitted and held-out readings (residual RMS and max).

@@ -69,6 +69,16 @@ TEST_F(CalibrateCli, HeldOutReadingsAndTheWrittenFilesReproduceTheReport) {
   std::ifstream in(path("id.json"));
   const nlohmann::json j = nlohmann::json::parse(in);
   EXPECT_EQ(j["ball_positions_file"], path("id_balls.csv"));
+  // A parameter that stands for a combination says so (console and JSON).
+  bool named = false;
+  for (const auto& p : j["parameters"])
+    if (p["iso_code"] == "EAX.c0") {
+      ASSERT_TRUE(p.contains("stands_for"));
+      EXPECT_NE(p["stands_for"].get<std::string>().find("EAY.c0"), std::string::npos);
+      EXPECT_NE(p["stands_for"].get<std::string>().find("EAA.c0"), std::string::npos);
+      named = true;
+    }
+  EXPECT_TRUE(named);
   const double held_after = j["heldout"]["after"]["rms_um"].get<double>();
   EXPECT_LT(held_after, j["heldout"]["before"]["rms_um"].get<double>() / 5);
   EXPECT_LT(held_after, 1.5);  // 0.5 um noise

@@ -299,3 +299,33 @@ TEST(Calibration, ToolBallsOnTheSpindleAxisLeaveParametersUnobservable) {
 
 }  // namespace
 }  // namespace tolver
+
+namespace tolver {
+namespace {
+
+// What an identified parameter stands for is true: a machine whose only error is a parameter
+// the minimal-complete set leaves out (gamma_x(Y).c0, a pitch of the Y carriage) calibrates to
+// the kept parameter that absorbs it, at the value its coefficient says.
+TEST(Calibration, AnIdentifiedParameterShowsTheRemovedOnesItStandsFor) {
+  const Fixture& f = fixture();
+  const MachineModel& m = f.m.model;
+  const auto absorbed = calibrationAbsorbed(m, f.unknowns);
+  const int eay = m.findParameter("EAY.c0"), eax = m.findParameter("EAX.c0");
+  ASSERT_GE(eay, 0);
+  ASSERT_TRUE(std::find(f.unknowns.begin(), f.unknowns.end(), eay) == f.unknowns.end());
+  const size_t k = std::find(f.unknowns.begin(), f.unknowns.end(), eax) - f.unknowns.begin();
+  ASSERT_LT(k, f.unknowns.size());
+  double coefficient = 0;
+  for (const AbsorbedTerm& t : absorbed[k])
+    if (t.parameter == eay) coefficient = t.coefficient;
+  EXPECT_NEAR(coefficient, 1.0, 1e-6);  // the same rotation about x, seen after Y or after X
+  Eigen::VectorXd truth = Eigen::VectorXd::Zero(m.parameterCount());
+  truth[eay] = 30e-6;
+  const BallbarTest data = simulate(m, truth, f.plan.test, std::vector<BallErrors>(3), 0.0, 1);
+  const CalibrationResult r = calibrate(m, Eigen::VectorXd::Zero(m.parameterCount()), data, f.unknowns);
+  ASSERT_EQ(r.status, CalibrationStatus::Converged);
+  EXPECT_NEAR(r.params[eax], coefficient * 30e-6, 1e-9);
+}
+
+}  // namespace
+}  // namespace tolver
