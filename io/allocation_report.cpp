@@ -76,7 +76,15 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
   ch.rgb[1] = 30;
   ch.rgb[2] = 30;
   ch.radius = 6;
-  writeScatterPng(dir + "/pareto.png", {std_pt, all, ch});
+  all.legend = "Pareto front";
+  std_pt.legend = "standard tolerances";
+  ch.legend = "chosen";
+  ScatterChart chart;
+  chart.title = "Cost against quality loss (NSGA-II front)";
+  chart.x_label = "M1: manufacturing cost";
+  chart.y_label = "M2: quality loss";
+  chart.series = {all, std_pt, ch};
+  writeScatterPng(dir + "/pareto.png", chart);
 
   json j;
   j["machine_file"] = in.machine_file;

@@ -113,6 +113,9 @@ std::vector<ScatterSeries> seriesOf(const BallbarTest& test, const EffectSpec& e
     while (static_cast<int>(s.size()) <= g) {
       ScatterSeries n;
       std::copy(colours[s.size()], colours[s.size()] + 3, n.rgb);
+      const int k = static_cast<int>(s.size());
+      if (e.type == EffectType::Reversal) n.legend = k == 0 ? "approach +" : "approach -";
+      if (e.type == EffectType::BarLength) n.legend = "set-up " + std::to_string(k + 1);
       s.push_back(n);
     }
     s[g].x.push_back(x[i]);
@@ -350,13 +353,27 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
     std::string label;
     const std::vector<double> x = variableOf(m, test, e, &label);
     const std::string key = effectKey(m, e);
-    for (int after = 0; after < 2; ++after) {
-      const std::string name = "residual_" + key + (after ? "_after.png" : "_before.png");
+    // Before and after on one scale, so the drop reads off the axes.
+    const std::vector<ScatterSeries> before = seriesOf(test, e, x, r.base_fit.residuals);
+    const std::vector<ScatterSeries> after = seriesOf(test, e, x, r.final_fit.residuals);
+    double y0 = 0, y1 = 0;
+    sharedYRange({&before, &after}, &y0, &y1);
+    for (int k = 0; k < 2; ++k) {
+      const std::string name = "residual_" + key + (k ? "_after.png" : "_before.png");
       const std::string path = (std::filesystem::path(dir) / name).string();
-      writeScatterPng(path, seriesOf(test, e, x, after ? r.final_fit.residuals : r.base_fit.residuals));
+      ScatterChart chart;
+      chart.title = std::string(k ? "After: " : "Before: ") +
+                    (e.type == EffectType::BarLength && r.added.empty() ? "residuals"
+                                                                        : describeEffect(m, e));
+      chart.x_label = label;
+      chart.y_label = "residual (µm)";
+      chart.series = k ? after : before;
+      chart.fixed_y = true;
+      chart.y_min = y0;
+      chart.y_max = y1;
+      writeScatterPng(path, chart);
       h += "<figure>" + imageTag(path, name) + "<figcaption>residual (µm) " +
-           (after ? "after" : "before") + " against " + xmlEscape(label) +
-           (e.type == EffectType::Reversal ? "; blue: approach +, red: approach −" : "") +
+           (k ? "after" : "before") + " against " + xmlEscape(label) + " (same scale)" +
            "</figcaption></figure>\n";
     }
   }
@@ -385,7 +402,12 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
     one.x = x;
     for (Eigen::Index i = 0; i < r.final_fit.residuals.size(); ++i) one.y.push_back(um(r.final_fit.residuals[i]));
     const std::string path = (std::filesystem::path(dir) / "residual_unexplained.png").string();
-    writeScatterPng(path, {one});
+    ScatterChart chart;
+    chart.title = "Unexplained: residual after, against " + u.variable;
+    chart.x_label = label;
+    chart.y_label = "residual (µm)";
+    chart.series = {one};
+    writeScatterPng(path, chart);
     h += "<figure>" + imageTag(path, "residual_unexplained.png") + "<figcaption>residual (µm) after, against " +
          xmlEscape(label) + "</figcaption></figure>\n";
   }

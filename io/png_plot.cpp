@@ -1,70 +1,110 @@
 #include "io/png_plot.h"
 
-#include <vtkImageData.h>
+#include <vtkAxis.h>
+#include <vtkChartLegend.h>
+#include <vtkChartXY.h>
+#include <vtkContextScene.h>
+#include <vtkContextView.h>
+#include <vtkDoubleArray.h>
 #include <vtkNew.h>
 #include <vtkPNGWriter.h>
+#include <vtkPen.h>
+#include <vtkPlotPoints.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkTable.h>
+#include <vtkTextProperty.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkWindowToImageFilter.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 
 #include "io/io_error.h"
+#include "io/offscreen_display.h"
 
 namespace tolver {
 
-void writeScatterPng(const std::string& path, const std::vector<ScatterSeries>& series, int width,
-                     int height) {
-  vtkNew<vtkImageData> img;
-  img->SetDimensions(width, height, 1);
-  img->AllocateScalars(VTK_UNSIGNED_CHAR, 3);
-  auto* px = static_cast<unsigned char*>(img->GetScalarPointer());
-  std::fill(px, px + 3 * width * height, 255);
-  auto put = [&](int x, int y, const unsigned char* c) {
-    if (x < 0 || y < 0 || x >= width || y >= height) return;
-    unsigned char* p = px + 3 * (y * width + x);  // VTK rows run bottom-up
-    p[0] = c[0];
-    p[1] = c[1];
-    p[2] = c[2];
-  };
-  double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
-  for (const auto& s : series)
-    for (size_t i = 0; i < s.x.size(); ++i) {
-      x0 = std::min(x0, s.x[i]);
-      x1 = std::max(x1, s.x[i]);
-      y0 = std::min(y0, s.y[i]);
-      y1 = std::max(y1, s.y[i]);
-    }
-  if (!(x1 > x0)) x1 = x0 + 1, x0 -= 1;
-  if (!(y1 > y0)) y1 = y0 + 1, y0 -= 1;
-  const int m = 40;
-  const unsigned char axis[3] = {60, 60, 60};
-  for (int x = m; x < width - m; ++x) put(x, m, axis);
-  for (int y = m; y < height - m; ++y) put(m, y, axis);
-  for (int k = 0; k <= 10; ++k) {  // tick marks every tenth of the range
-    const int tx = m + k * (width - 2 * m) / 10, ty = m + k * (height - 2 * m) / 10;
-    for (int d = 1; d <= 6; ++d) {
-      put(tx, m - d, axis);
-      put(m - d, ty, axis);
-    }
+void sharedYRange(const std::vector<const std::vector<ScatterSeries>*>& charts, double* y_min,
+                  double* y_max) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const auto* c : charts)
+    for (const ScatterSeries& s : *c)
+      for (double y : s.y)
+        if (std::isfinite(y)) {
+          lo = std::min(lo, y);
+          hi = std::max(hi, y);
+        }
+  if (!(hi > lo)) {
+    lo = std::isfinite(lo) ? lo - 1 : -1;
+    hi = lo + 2;
   }
-  for (const auto& s : series)
+  const double pad = 0.05 * (hi - lo);
+  *y_min = lo - pad;
+  *y_max = hi + pad;
+}
+
+void writeScatterPng(const std::string& path, const ScatterChart& c) {
+  std::string message;
+  if (!ensureDisplay(&message)) throw InputError(path, 0, 0, "image", message);
+  vtkNew<vtkContextView> view;
+  view->GetRenderWindow()->SetOffScreenRendering(1);
+  view->GetRenderWindow()->SetSize(c.width, c.height);
+  view->GetRenderer()->SetBackground(1.0, 1.0, 1.0);
+  vtkNew<vtkChartXY> chart;
+  view->GetScene()->AddItem(chart);
+  chart->SetTitle(c.title);
+  chart->GetTitleProperties()->SetFontSize(14);
+  chart->GetAxis(vtkAxis::BOTTOM)->SetTitle(c.x_label);
+  chart->GetAxis(vtkAxis::LEFT)->SetTitle(c.y_label);
+  for (int a : {vtkAxis::BOTTOM, vtkAxis::LEFT}) {
+    chart->GetAxis(a)->GetTitleProperties()->SetFontSize(12);
+    chart->GetAxis(a)->GetLabelProperties()->SetFontSize(11);
+  }
+  bool legend = false;
+  std::vector<vtkSmartPointer<vtkTable>> tables;
+  for (const ScatterSeries& s : c.series) {
+    if (s.x.empty()) continue;
+    vtkNew<vtkTable> t;
+    vtkNew<vtkDoubleArray> x, y;
+    x->SetName("x");
+    y->SetName(s.legend.empty() ? "y" : s.legend.c_str());
     for (size_t i = 0; i < s.x.size(); ++i) {
-      const int cx = m + static_cast<int>(std::lround((s.x[i] - x0) / (x1 - x0) * (width - 2 * m)));
-      const int cy = m + static_cast<int>(std::lround((s.y[i] - y0) / (y1 - y0) * (height - 2 * m)));
-      for (int dy = -s.radius; dy <= s.radius; ++dy)
-        for (int dx = -s.radius; dx <= s.radius; ++dx)
-          if (dx * dx + dy * dy <= s.radius * s.radius) put(cx + dx, cy + dy, s.rgb);
+      x->InsertNextValue(s.x[i]);
+      y->InsertNextValue(s.y[i]);
     }
-  const std::string tmp = path + ".tmp-tolver.png";
+    t->AddColumn(x);
+    t->AddColumn(y);
+    tables.push_back(t.Get());
+    auto* p = vtkPlotPoints::SafeDownCast(chart->AddPlot(vtkChart::POINTS));
+    p->SetInputData(t, 0, 1);
+    p->SetColor(s.rgb[0], s.rgb[1], s.rgb[2], 255);
+    p->SetMarkerStyle(vtkPlotPoints::CIRCLE);
+    p->SetMarkerSize(2.0f * static_cast<float>(s.radius));
+    p->SetLabel(s.legend.empty() ? "" : s.legend);
+    p->SetLegendVisibility(!s.legend.empty());
+    legend = legend || !s.legend.empty();
+  }
+  chart->SetShowLegend(legend);
+  if (c.fixed_y) {
+    vtkAxis* y = chart->GetAxis(vtkAxis::LEFT);
+    y->SetBehavior(vtkAxis::FIXED);
+    y->SetRange(c.y_min, c.y_max);
+  }
+  view->GetRenderWindow()->Render();
+  vtkNew<vtkWindowToImageFilter> grab;
+  grab->SetInput(view->GetRenderWindow());
+  grab->Update();
   vtkNew<vtkPNGWriter> w;
-  w->SetFileName(tmp.c_str());
-  w->SetInputData(img);
+  w->SetWriteToMemory(1);
+  w->SetInputConnection(grab->GetOutputPort());
   w->Write();
-  if (w->GetErrorCode() != 0 || std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw InputError(path, 0, 0, "output", "cannot write the PNG image");
-  }
+  vtkUnsignedCharArray* bytes = w->GetResult();
+  if (!bytes || bytes->GetNumberOfTuples() == 0)
+    throw InputError(path, 0, 0, "image", "rendering produced no image");
+  writeFileAtomically(path, std::string(reinterpret_cast<const char*>(bytes->GetPointer(0)),
+                                        static_cast<size_t>(bytes->GetNumberOfTuples())));
 }
 
 }  // namespace tolver

@@ -1,5 +1,6 @@
 #pragma once
-// Small raster plots written as PNG (VTK's PNG writer; no window or display needed).
+// Scatter charts written as PNG, drawn by VTK's chart module (vtkChartXY) off screen: a title,
+// axis titles with units, tick numbers, a legend, and, for before/after pairs, a shared scale.
 #include <string>
 #include <vector>
 
@@ -8,12 +9,24 @@ namespace tolver {
 struct ScatterSeries {
   std::vector<double> x, y;
   unsigned char rgb[3] = {40, 90, 200};
-  int radius = 3;  // pixels
+  int radius = 3;      // pixels
+  std::string legend;  // empty: not in the legend
 };
 
-// A scatter plot of the series on common axes (frame and tick marks, no text: the report that
-// embeds the image names the axes). Written atomically. Throws InputError when it cannot write.
-void writeScatterPng(const std::string& path, const std::vector<ScatterSeries>& series,
-                     int width = 640, int height = 420);
+struct ScatterChart {
+  std::string title, x_label, y_label;  // labels carry their units: "residual (µm)"
+  std::vector<ScatterSeries> series;
+  bool fixed_y = false;                 // y from y_min to y_max (a scale shared between charts)
+  double y_min = 0.0, y_max = 0.0;
+  int width = 640, height = 420;
+};
+
+// Written atomically. Throws InputError when it cannot render (no display: see
+// io/offscreen_display.h) or write.
+void writeScatterPng(const std::string& path, const ScatterChart& chart);
+
+// A range covering every y of the series with 5 % headroom: the shared scale of a pair.
+void sharedYRange(const std::vector<const std::vector<ScatterSeries>*>& charts, double* y_min,
+                  double* y_max);
 
 }  // namespace tolver
