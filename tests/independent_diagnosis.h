@@ -41,6 +41,9 @@ struct DiagnosisOutcome {
   double heldout_before_um = 0, heldout_after_um = 0;  // through the written files
   double written_vs_memory_um = 0;                     // |RMS written - RMS in memory|
   int gross_removed = 0;
+  bool withdrawn = false;       // the final check took the effects back
+  bool held_stayed_held = true; // parameters the base fit held are at their prior values
+  int held = 0;                 // how many the base fit held
 };
 
 // The cases of issue 12's table.
@@ -68,8 +71,10 @@ inline std::vector<DiagnosisCase> diagnosisCases() {
 }
 
 // on_axis: all tool balls on the spindle axis (else 25 mm off it, the planner's default).
+// heldout_without_effects: the held-out readings come from the machine without the undeclared
+// effects (a test of the final check: the augmented model must then be withdrawn).
 inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, unsigned seed,
-                                         const std::string& dir) {
+                                         const std::string& dir, bool heldout_without_effects = false) {
   DiagnosisOutcome out;
   const Machine nominal = readMachineFile(sourcePath("resources/machines/matsuura_mc760vx.xml"));
   const std::vector<int> unknowns = defaultCalibrationUnknowns(nominal.model);
@@ -110,6 +115,13 @@ inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, u
   indep::Machine machine(100 + seed);
   machine.effects = c.truth;
   indep::measure(machine, poses, setups, 20.0, 0.5e-3, 500 + seed);
+  if (heldout_without_effects) {
+    indep::Machine clean(100 + seed);
+    std::vector<indep::Pose> again = poses;
+    indep::measure(clean, again, setups, 20.0, 0.5e-3, 500 + seed);
+    for (size_t i = 0; i < poses.size(); ++i)
+      if (poses[i].heldout) poses[i].length = again[i].length;
+  }
   std::filesystem::create_directories(dir);
   const std::string fit_csv = dir + "/fit.csv", held_csv = dir + "/held.csv";
   indep::writeCsv(fit_csv, poses, setups, false);
@@ -126,6 +138,12 @@ inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, u
   opt.heldout = &held;
   const DiagnosisResult r = diagnose(nominal, rc.test, opt);
   out.message = r.message;
+  out.withdrawn = !r.withdrawn.empty();
+  out.held = static_cast<int>(r.base_fit.held.size());
+  for (int p : r.base_fit.held)
+    out.held_stayed_held = out.held_stayed_held && r.machine.params[p] == nominal.params[p] &&
+                           std::find(r.final_fit.identified.begin(), r.final_fit.identified.end(), p) ==
+                               r.final_fit.identified.end();
   out.unexplained = r.unexplained;
   if (r.unexplained) out.unexplained_variable = r.unexplained_finding.variable;
   for (const AddedEffect& a : r.added) out.added.push_back(a.label);
