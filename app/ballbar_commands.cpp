@@ -116,7 +116,7 @@ void runPlan(PlanOptions o) {
 
 struct SimulateOptions {
   MachineOptions machine;
-  std::string plan, output, balls;
+  std::string plan, output, balls, heldout_plan, heldout_output;
   double noise_um = 0.0;
   double ball_error_um = 0.0;
   double seconds_per_reading = 20.0;
@@ -143,15 +143,40 @@ void runSimulate(const SimulateOptions& o) {
     if (std::isnan(r.context.time_s)) r.context.time_s = o.seconds_per_reading * static_cast<double>(i);
     r.length = ballbarLength(fk, r.q, f.test.setups[r.setup], balls[r.setup], &r.context) + noise(rng);
   }
+  // Held-out poses: measured after the plan, on the same set-ups (the same ball errors), time
+  // running on.
+  BallbarTest held;
+  const std::string held_out = o.heldout_output.empty()
+                                   ? replaceExtension(o.output, "") + "_heldout.csv"
+                                   : o.heldout_output;
+  if (!o.heldout_plan.empty()) {
+    held = readBallbarFile(o.heldout_plan, machine.model, false).test;
+    alignHeldout(held, f.test, o.heldout_plan, o.plan);
+    checkOutputDir(held_out, "--heldout-output");
+    const size_t n = f.test.readings.size();
+    for (size_t i = 0; i < held.readings.size(); ++i) {
+      BallbarReading& r = held.readings[i];
+      if (std::isnan(r.context.time_s))
+        r.context.time_s = o.seconds_per_reading * static_cast<double>(n + i);
+      r.length = ballbarLength(fk, r.q, held.setups[r.setup], balls[r.setup], &r.context) + noise(rng);
+    }
+  }
   char head[256];
   std::snprintf(head, sizeof head, "simulated by tolver from %s: noise %.3f um, ball errors %.3f um, seed %u",
                 o.machine.machine.c_str(), o.noise_um, o.ball_error_um, o.seed);
   writeFileAtomically(o.output, formatBallbarCsv(machine.model, f.test, true, {head}));
+  if (!o.heldout_plan.empty())
+    writeFileAtomically(held_out, formatBallbarCsv(machine.model, held, true,
+                                                   {std::string(head) + "; held-out poses of " +
+                                                    o.heldout_plan + ", measured after the plan"}));
   std::printf("tolver simulate-ballbar: %zu readings from %s (%s)\n", f.test.readings.size(),
               machine.model.name.c_str(), o.machine.machine.c_str());
   std::printf("  noise %.3f um (1 sigma), ball position errors %.3f um (1 sigma), seed %u\n",
               o.noise_um, o.ball_error_um, o.seed);
   std::printf("  wrote      %s\n", o.output.c_str());
+  if (!o.heldout_plan.empty())
+    std::printf("  wrote      %s (%zu held-out readings: the same set-ups, measured after)\n",
+                held_out.c_str(), held.readings.size());
 }
 
 struct CalibrateOptions {
@@ -249,6 +274,7 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
                 "(the prior machine with nominal balls -> the identified one)\n",
                 ho.before.readings, o.heldout.c_str(), ho.before.rms * 1e3, ho.after.rms * 1e3,
                 ho.before.max * 1e3, ho.after.max * 1e3);
+    heldoutWarning(o.heldout, ho.after, r.rms_residual);
   }
   Machine identified = machine;
   identified.params = r.params;
@@ -333,6 +359,11 @@ void registerBallbar(CLI::App& app, int* exit_code) {
     cmd->add_option("--balls", o->balls,
                     "ball positions per set-up (CSV, as calibrate writes them) instead of the "
                     "plan's nominal ones");
+    cmd->add_option("--heldout-plan", o->heldout_plan,
+                    "held-out poses (plan-ballbar --heldout): simulated on the same set-ups "
+                    "(same ball errors), after the plan");
+    cmd->add_option("--heldout-output", o->heldout_output,
+                    "held-out readings to write (default: the output path with _heldout.csv)");
     cmd->add_option("--seconds-per-reading", o->seconds_per_reading,
                     "time_s step when the plan has none (default 20)");
     cmd->add_option("--seed", o->seed, "random seed (default 1)");

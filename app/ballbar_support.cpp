@@ -18,6 +18,15 @@ BallbarTest loadHeldout(const std::string& file, const MachineModel& model, cons
   return h.test;
 }
 
+void heldoutWarning(const std::string& file, const ResidualStats& after, double fit_rms) {
+  if (after.readings > 0 && after.rms > 3.0 * fit_rms && after.rms > 1e-3)
+    std::fprintf(stderr,
+                 "tolver: warning: %s: the identified machine predicts the held-out readings at "
+                 "RMS %.3f um, %.0f times its fit (%.3f um): were they measured on the same "
+                 "set-ups (ball positions untouched), in the same machine state?\n",
+                 file.c_str(), after.rms * 1e3, after.rms / fit_rms, fit_rms * 1e3);
+}
+
 std::string ballsPathFor(const std::string& machine_output) {
   const std::filesystem::path p(machine_output);
   return (p.parent_path() / (p.stem().string() + "_balls.csv")).string();

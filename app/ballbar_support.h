@@ -15,6 +15,10 @@ namespace tolver::app {
 BallbarTest loadHeldout(const std::string& file, const MachineModel& model, const BallbarTest& fit,
                         const std::string& fit_file);
 
+// A warning when the identified model predicts the held-out readings much worse than it fits
+// its own (more than 3 times the fit's RMS and above 1 um): not the same set-ups or machine state.
+void heldoutWarning(const std::string& heldout_file, const ResidualStats& after, double fit_rms);
+
 // "out/m.xml" -> "out/m_balls.csv": the identified ball positions beside the machine file.
 std::string ballsPathFor(const std::string& machine_output);
 

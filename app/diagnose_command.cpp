@@ -217,10 +217,12 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
   }
   std::printf("  after      residual RMS %.3f um, cross-validated RMS %.3f um\n", r.rms_after * 1e3,
               r.cv_rms_after * 1e3);
-  if (r.heldout_before.readings > 0)
+  if (r.heldout_before.readings > 0) {
     std::printf("  held-out   %d readings (%s): RMS %.3f -> %.3f um, max %.3f -> %.3f um\n",
                 r.heldout_before.readings, o.heldout.c_str(), r.heldout_before.rms * 1e3,
                 r.heldout_after.rms * 1e3, r.heldout_before.max * 1e3, r.heldout_after.max * 1e3);
+    heldoutWarning(o.heldout, r.heldout_after, r.final_fit.rms_residual);
+  }
   std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um", o.output.c_str(),
               balls_file.c_str(), in.written.fit.rms * 1e3);
   if (in.written.heldout.readings > 0)
