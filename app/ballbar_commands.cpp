@@ -279,6 +279,8 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
   Machine identified = machine;
   identified.params = r.params;
   identified.model.errors_source = "identified";
+  identified.identification =
+      identificationUncertainty(r, used, static_cast<int>(m.axes.size()));
   writeFileAtomically(o.output, formatMachineXml(identified, "identified by tolver calibrate from " +
                                                                  o.readings + " (" + r.message +
                                                                  "); ball positions in " +

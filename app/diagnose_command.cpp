@@ -145,6 +145,8 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
   const std::string html_path = (std::filesystem::path(o.report_dir) / "report.html").string();
   Machine augmented = r.machine;
   augmented.model.errors_source = "identified";
+  augmented.identification = identificationUncertainty(
+      r.final_fit, used, static_cast<int>(augmented.model.axes.size()));
   writeFileAtomically(o.output, formatMachineXml(augmented, "augmented by tolver diagnose from " +
                                                                 o.readings + " (" + r.message +
                                                                 "); ball positions in " + balls_file));

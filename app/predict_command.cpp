@@ -1,4 +1,5 @@
 // tolver predict: CL_predicted of a part program on a machine with errors (thesis 5.5.1-5.5.3).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -6,6 +7,7 @@
 
 #include "app/commands.h"
 #include "app/common.h"
+#include "core/prediction_uncertainty.h"
 #include "core/tool_path_prediction.h"
 #include "geometry/cutter.h"
 #include "io/apt_reader.h"
@@ -53,7 +55,14 @@ void runPredict(const PredictOptions& o, int* exit_code) {
           o.machine.machine + ")",
       "each GOTO is the tool position the machine will really reach, in the program's frame"};
   writeFileAtomically(o.output, formatPredictedApt(program, predicted, header));
-  writeFileAtomically(table, formatPointTable(machine.model, program.path, pts));
+  // The prediction's uncertainty, when the machine file carries its calibration's covariance.
+  std::vector<PoseUncertainty> unc;
+  if (!machine.identification.empty()) {
+    const PredictionUncertainty pu(machine);
+    unc.reserve(pts.size());
+    for (const PredictedPoint& p : pts) unc.push_back(pu.at(p.q));
+  }
+  writeFileAtomically(table, formatPointTable(machine.model, program.path, pts, unc.empty() ? nullptr : &unc));
 
   // Summary.
   const PredictionSummary& s = r.summary;
@@ -89,6 +98,45 @@ void runPredict(const PredictOptions& o, int* exit_code) {
               clean(worst.across_axis * 1e3));
   std::printf("  tool axis  max %.3f urad, RMS %.3f urad\n", s.max_axis_angle * 1e6,
               s.rms_axis_angle * 1e6);
+  if (!unc.empty()) {
+    std::vector<double> tip(unc.size()), axis(unc.size());
+    int outside = 0, first_outside = -1;
+    std::vector<double> beyond(machine.model.axes.size(), 0.0);
+    for (size_t i = 0; i < unc.size(); ++i) {
+      tip[i] = unc[i].tip;
+      axis[i] = unc[i].axis;
+      if (unc[i].outside) {
+        if (outside++ == 0) first_outside = static_cast<int>(i);
+        for (size_t a = 0; a < beyond.size() && a < unc[i].beyond.size(); ++a)
+          beyond[a] = std::max(beyond[a], unc[i].beyond[a]);
+      }
+    }
+    auto median = [](std::vector<double> v) {
+      std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+      return v[v.size() / 2];
+    };
+    std::printf("  uncertainty of the prediction (1 sigma, from the calibration's covariance of %zu "
+                "identified values): tip median %.3f um, max %.3f um; tool axis median %.3f urad, "
+                "max %.3f urad\n",
+                machine.identification.parameters.size(), median(tip) * 1e3,
+                *std::max_element(tip.begin(), tip.end()) * 1e3, median(axis) * 1e6,
+                *std::max_element(axis.begin(), axis.end()) * 1e6);
+    if (outside > 0) {
+      std::string where;
+      char buf[96];
+      for (size_t a = 0; a < beyond.size(); ++a)
+        if (beyond[a] > 0) {
+          const bool rot = machine.model.axes[a].isRotary();
+          std::snprintf(buf, sizeof buf, "%s%s by up to %.3f %s", where.empty() ? "" : ", ",
+                        machine.model.axes[a].name.c_str(), beyond[a] * (rot ? 180.0 / M_PI : 1.0),
+                        rot ? "deg" : "mm");
+          where += buf;
+        }
+      std::printf("  calibrated %d points lie outside the joint ranges the calibration readings "
+                  "covered (first at line %d; %s): there the errors are extrapolated\n",
+                  outside, program.path[first_outside].line, where.c_str());
+    }
+  }
   if (s.singular_points > 0)
     std::printf("  note       %d points have the tool axis within %.4g deg of a rotary axis (first "
                 "at line %d); that axis kept its previous angle\n",

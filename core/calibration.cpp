@@ -150,6 +150,13 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
   Eigen::VectorXd sd(n);
   for (int c = 0; c < n; ++c) sd[c] = res.residual_sigma * std::sqrt(vif[c]) / scale[c];
   res.uncertainty = sd.head(np);
+  {
+    // cov = s^2 D^-1 V diag(inv2) V^T D^-1 over the identified parameters (D the column scales).
+    const Eigen::MatrixXd Vp = svd.matrixV().topRows(np);
+    Eigen::MatrixXd c = Vp * inv2.asDiagonal() * Vp.transpose();
+    const Eigen::VectorXd d = scale.head(np).cwiseInverse();
+    res.covariance = res.residual_sigma * res.residual_sigma * (d.asDiagonal() * c * d.asDiagonal());
+  }
   res.observability = vif.head(np).cwiseInverse().cwiseSqrt();
   for (int k = np; k < n; ++k) {
     const int c = keep_cols[k] - np_all;
@@ -252,6 +259,24 @@ std::vector<std::vector<AbsorbedTerm>> calibrationAbsorbed(const MachineModel& m
     if (!isSetupParameter(model, p) && std::find(unknowns.begin(), unknowns.end(), p) == unknowns.end())
       removed.push_back(p);
   return absorbedParameters(model, randomPoses(model, poses, seed), unknowns, removed);
+}
+
+IdentificationUncertainty identificationUncertainty(const CalibrationResult& fit, const BallbarTest& test,
+                                                    int axes) {
+  IdentificationUncertainty u;
+  u.parameters = fit.identified;
+  u.covariance = fit.covariance;
+  u.readings = static_cast<int>(test.readings.size());
+  if (!test.readings.empty()) {
+    u.covered_min.assign(axes, std::numeric_limits<double>::infinity());
+    u.covered_max.assign(axes, -std::numeric_limits<double>::infinity());
+    for (const BallbarReading& r : test.readings)
+      for (int a = 0; a < axes && a < r.q.size(); ++a) {
+        u.covered_min[a] = std::min(u.covered_min[a], r.q[a]);
+        u.covered_max[a] = std::max(u.covered_max[a], r.q[a]);
+      }
+  }
+  return u;
 }
 
 }  // namespace tolver

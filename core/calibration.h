@@ -39,6 +39,7 @@ struct CalibrationResult {
   std::vector<int> identified;          // parameter indices identified
   std::vector<int> held;                // parameter indices the data cannot see, held at prior
   Eigen::VectorXd uncertainty;          // standard uncertainty per identified parameter
+  Eigen::MatrixXd covariance;           // of the identified parameters: s^2 (J^T J)^-1 (mm, rad)
   Eigen::VectorXd observability;        // per identified parameter, in (0, 1]: 1 = independent
   std::vector<BallErrors> ball_errors;  // per set-up
   std::vector<BallErrors> ball_uncertainty;
@@ -87,6 +88,11 @@ RobustCalibration calibrateWithoutGross(const MachineModel& model, const Eigen::
                                         const std::vector<int>& unknown_params,
                                         const CalibrationOptions& options = {},
                                         double alpha = 0.01, double max_fraction = 0.05);
+
+// The identification uncertainty of a fit for a machine file: the covariance of the identified
+// parameters and the joint ranges the readings covered.
+IdentificationUncertainty identificationUncertainty(const CalibrationResult& fit, const BallbarTest& test,
+                                                    int axes);
 
 // The machine parameters a ball-bar calibration identifies by default: the minimal-complete set
 // of the motion model (strategies I-III with the model's preferred list) without the part and

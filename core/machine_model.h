@@ -190,10 +190,23 @@ struct MotionContext {
   double time_s = std::numeric_limits<double>::quiet_NaN();  // seconds since the test began
 };
 
+// What a calibration knows of the values it identified: their covariance, and the joint ranges
+// its readings covered (empty when the machine was not calibrated). A prediction's uncertainty
+// is this covariance carried through the sensitivity Jacobian (core/prediction_uncertainty.h);
+// outside the covered ranges the fitted polynomials extrapolate.
+struct IdentificationUncertainty {
+  std::vector<int> parameters;   // indices into the parameter vector
+  Eigen::MatrixXd covariance;    // of those parameters, in mm and rad
+  std::vector<double> covered_min, covered_max;  // per axis, mm or rad; empty: unknown
+  int readings = 0;
+  bool empty() const { return parameters.empty(); }
+};
+
 // A machine: its model and the values of its error parameters (mm, rad).
 struct Machine {
   MachineModel model;
   Eigen::VectorXd params;  // model.parameterCount() values
+  IdentificationUncertainty identification;
 };
 
 }  // namespace tolver

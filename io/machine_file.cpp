@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <limits>
 #include <sstream>
 
 #include "core/effects.h"
@@ -367,7 +368,61 @@ class Reader {
       for (const ParameterBlock& b : m.blocks)
         if (b.kind == kind) out.params[b.offset + v.component] = v.v[0] * scaleOf(v.component);
     }
+    if (const XMLElement* u = root->FirstChildElement("identification_uncertainty"))
+      identification(u, angle, out);
     return out;
+  }
+
+  // <identification_uncertainty readings="n"> with <covered axis= min= max=/> (machine units)
+  // and <covariance parameters="codes"><row>..</row></covariance> (um and urad).
+  void identification(const XMLElement* u, double angle, Machine& out) {
+    const MachineModel& m = out.model;
+    IdentificationUncertainty& id = out.identification;
+    id.readings = u->Attribute("readings") ? static_cast<int>(number(u, "readings")) : 0;
+    for (const XMLElement* c = u->FirstChildElement("covered"); c; c = c->NextSiblingElement("covered")) {
+      const int a = m.axisIndex(attr(c, "axis"));
+      if (a < 0) fail(c, "covered.axis", "no axis named '" + attr(c, "axis") + "'");
+      if (id.covered_min.empty()) {
+        id.covered_min.assign(m.axes.size(), -std::numeric_limits<double>::infinity());
+        id.covered_max.assign(m.axes.size(), std::numeric_limits<double>::infinity());
+      }
+      const double k = m.axes[a].isRotary() ? angle : length_scale_;
+      id.covered_min[a] = number(c, "min") * k;
+      id.covered_max[a] = number(c, "max") * k;
+      if (!(id.covered_min[a] <= id.covered_max[a])) fail(c, "covered.min", "min above max");
+    }
+    const XMLElement* cov = u->FirstChildElement("covariance");
+    if (!cov) return;
+    std::istringstream names(attr(cov, "parameters"));
+    std::vector<double> unit;
+    for (std::string name; names >> name;) {
+      const int p = m.findParameter(name);
+      if (p < 0) fail(cov, "covariance.parameters", "no parameter named '" + name.substr(0, 60) + "'");
+      id.parameters.push_back(p);
+      unit.push_back(m.parameters[p].angular ? 1e-6 : 1e-3);
+    }
+    const size_t n = id.parameters.size();
+    id.covariance.resize(n, n);
+    size_t r = 0;
+    for (const XMLElement* row = cov->FirstChildElement("row"); row; row = row->NextSiblingElement("row"), ++r) {
+      if (r >= n) fail(row, "covariance.row", "more rows than parameters");
+      std::istringstream in(row->GetText() ? row->GetText() : "");
+      size_t c = 0;
+      for (std::string tok; in >> tok; ++c) {
+        const auto x = parseNumber(tok);
+        if (!x || c >= n) fail(row, "covariance.row", x ? "more values than parameters" : "malformed number");
+        id.covariance(r, c) = *x * unit[r] * unit[c];
+      }
+      if (c != n) fail(row, "covariance.row", "expected " + std::to_string(n) + " values");
+    }
+    if (r != n) fail(cov, "covariance", "expected " + std::to_string(n) + " rows");
+    for (size_t i = 0; i < n; ++i) {
+      if (!(id.covariance(i, i) >= 0)) fail(cov, "covariance", "a negative variance");
+      for (size_t j = 0; j < i; ++j)
+        if (std::abs(id.covariance(i, j) - id.covariance(j, i)) >
+            1e-9 * std::sqrt(id.covariance(i, i) * id.covariance(j, j)) + 1e-300)
+          fail(cov, "covariance", "not symmetric");
+    }
   }
 
  private:
@@ -494,6 +549,34 @@ std::string formatMachineXml(const Machine& machine, const std::string& comment)
            m.parameters[a.parameter].iso_code + "\" description=\"" + xmlEscape(a.description) +
            "\"/>\n";
     o += "  </aliases>\n";
+  }
+  const IdentificationUncertainty& id = machine.identification;
+  if (!id.empty() || !id.covered_min.empty()) {
+    o += "  <identification_uncertainty readings=\"" + std::to_string(id.readings) + "\">\n";
+    o += "    <!-- the joint ranges the readings covered (mm, deg), and the covariance of the "
+         "identified values (um and urad) -->\n";
+    for (size_t a = 0; a < id.covered_min.size() && a < m.axes.size(); ++a) {
+      const double k = m.axes[a].isRotary() ? deg : 1.0;
+      o += "    <covered axis=\"" + m.axes[a].name + "\" min=\"" + formatNumber(id.covered_min[a] * k) +
+           "\" max=\"" + formatNumber(id.covered_max[a] * k) + "\"/>\n";
+    }
+    if (!id.empty()) {
+      std::string names;
+      std::vector<double> unit;
+      for (int p : id.parameters) {
+        names += (names.empty() ? "" : " ") + m.parameters[p].iso_code;
+        unit.push_back(m.parameters[p].angular ? 1e6 : 1e3);
+      }
+      o += "    <covariance parameters=\"" + names + "\">\n";
+      for (Eigen::Index i = 0; i < id.covariance.rows(); ++i) {
+        o += "      <row>";
+        for (Eigen::Index j = 0; j < id.covariance.cols(); ++j)
+          o += (j ? " " : "") + formatNumber(id.covariance(i, j) * unit[i] * unit[j]);
+        o += "</row>\n";
+      }
+      o += "    </covariance>\n";
+    }
+    o += "  </identification_uncertainty>\n";
   }
   if (!m.preferred.empty()) {
     o += "  <identification>\n";

@@ -7,7 +7,8 @@
 namespace tolver {
 
 std::string formatPointTable(const MachineModel& model, const std::vector<ClPoint>& nominal,
-                             const std::vector<PredictedPoint>& predicted) {
+                             const std::vector<PredictedPoint>& predicted,
+                             const std::vector<PoseUncertainty>* uncertainty) {
   std::string out =
       "index,line,rapid,nominal_x_mm,nominal_y_mm,nominal_z_mm,nominal_i,nominal_j,nominal_k";
   for (const Axis& ax : model.axes) {
@@ -17,7 +18,8 @@ std::string formatPointTable(const MachineModel& model, const std::vector<ClPoin
   }
   out +=
       ",predicted_x_mm,predicted_y_mm,predicted_z_mm,predicted_i,predicted_j,predicted_k,"
-      "dev_x_um,dev_y_um,dev_z_um,dev_um,along_axis_um,across_axis_um,axis_angle_urad,singular\n";
+      "dev_x_um,dev_y_um,dev_z_um,dev_um,along_axis_um,across_axis_um,axis_angle_urad,singular";
+  out += uncertainty ? ",u_tip_um,u_along_axis_um,u_axis_urad,outside_calibrated\n" : "\n";
   char buf[512];
   for (size_t i = 0; i < nominal.size(); ++i) {
     const ClPoint& c = nominal[i];
@@ -33,11 +35,18 @@ std::string formatPointTable(const MachineModel& model, const std::vector<ClPoin
     }
     const Eigen::Vector3d d = p.deviation_w * 1e3;
     std::snprintf(buf, sizeof buf,
-                  ",%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d\n",
+                  ",%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d",
                   p.p_pred_w.x(), p.p_pred_w.y(), p.p_pred_w.z(), p.u_pred_w.x(), p.u_pred_w.y(),
                   p.u_pred_w.z(), d.x(), d.y(), d.z(), d.norm(), p.along_axis * 1e3,
                   p.across_axis * 1e3, p.axis_angle * 1e6, p.singular ? 1 : 0);
     out += buf;
+    if (uncertainty) {
+      const PoseUncertainty& u = (*uncertainty)[i];
+      std::snprintf(buf, sizeof buf, ",%.4f,%.4f,%.4f,%d", u.tip * 1e3,
+                    PredictionUncertainty::along(u, c.u_w) * 1e3, u.axis * 1e6, u.outside ? 1 : 0);
+      out += buf;
+    }
+    out += "\n";
   }
   return out;
 }

@@ -6,15 +6,21 @@
 //   predicted_x_mm, predicted_y_mm, predicted_z_mm, predicted_i, predicted_j, predicted_k,
 //   dev_x_um, dev_y_um, dev_z_um (deviation in the part frame), dev_um (its length),
 //   along_axis_um (component along the nominal tool axis), across_axis_um (normal to it),
-//   axis_angle_urad (angle between nominal and predicted tool axes), singular (0/1)
+//   axis_angle_urad (angle between nominal and predicted tool axes), singular (0/1);
+// with the identification's uncertainty (a calibrated machine):
+//   u_tip_um (1 sigma of the predicted tip, worst direction), u_along_axis_um (along the tool
+//   axis), u_axis_urad (1 sigma of the predicted tool axis), outside_calibrated (0/1: a joint
+//   beyond the ranges the readings covered)
 #include <string>
 #include <vector>
 
+#include "core/prediction_uncertainty.h"
 #include "core/tool_path_prediction.h"
 
 namespace tolver {
 
 std::string formatPointTable(const MachineModel& model, const std::vector<ClPoint>& nominal,
-                             const std::vector<PredictedPoint>& predicted);
+                             const std::vector<PredictedPoint>& predicted,
+                             const std::vector<PoseUncertainty>* uncertainty = nullptr);
 
 }  // namespace tolver

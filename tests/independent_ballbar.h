@@ -85,14 +85,16 @@ class Machine {
     }
   }
 
-  double reading(const Pose& p, const Setup& s) const {
+  // A point of the tool frame (b_t, mm) seen from the workpiece frame.
+  Eigen::Vector3d point(const Pose& p, const Eigen::Vector3d& b_t) const {
     const Eigen::Matrix4d F_T_w = joint(kY, p) * joint(kX, p) * joint(kA, p) * joint(kC, p);
     const Eigen::Matrix4d F_T_t = joint(kZ, p);
     const Eigen::Matrix4d w_T_t = F_T_w.inverse() * F_T_t;
-    const Eigen::Vector4d bt((s.tool_ball_t + s.tool_error_t).x(), (s.tool_ball_t + s.tool_error_t).y(),
-                             (s.tool_ball_t + s.tool_error_t).z(), 1.0);
-    const Eigen::Vector3d tip = (w_T_t * bt).head<3>();
-    return (tip - (s.table_ball_w + s.table_error_w)).norm();
+    return (w_T_t * Eigen::Vector4d(b_t.x(), b_t.y(), b_t.z(), 1.0)).head<3>();
+  }
+
+  double reading(const Pose& p, const Setup& s) const {
+    return (point(p, s.tool_ball_t + s.tool_error_t) - (s.table_ball_w + s.table_error_w)).norm();
   }
 
  private:

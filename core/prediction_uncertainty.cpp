@@ -1,0 +1,101 @@
+#include "core/prediction_uncertainty.h"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "core/sensitivity_jacobian.h"
+
+namespace tolver {
+
+PredictionUncertainty::PredictionUncertainty(const Machine& machine)
+    : machine_(machine), fk_(machine.model, machine.params) {
+  const IdentificationUncertainty& id = machine.identification;
+  if (id.empty()) throw std::invalid_argument("PredictionUncertainty: the machine has no covariance");
+  // A square root that tolerates a semi-definite covariance.
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(id.covariance);
+  const Eigen::VectorXd d = es.eigenvalues().cwiseMax(0.0).cwiseSqrt();
+  root_ = es.eigenvectors() * d.asDiagonal();
+  J_.resize(6, machine.model.parameterCount());
+  for (const ParameterBlock& b : machine.model.blocks) {
+    if (b.kind == BlockKind::WorkpieceSetup)
+      for (int c = 0; c < 6; ++c) setup_.push_back(b.offset + c);  // the part's pose
+    if (b.kind == BlockKind::ToolSetup)
+      for (int c = 0; c < 3; ++c) setup_.push_back(b.offset + c);  // the tool tip's offset
+  }
+}
+
+Eigen::MatrixXd PredictionUncertainty::tipColumns(const JointVector& q,
+                                                  const std::vector<int>& columns) const {
+  J_.setZero();
+  sensitivityJacobian(fk_, q, J_, nullptr);
+  const Eigen::Matrix3d R = fk_.w_T_t(q).linear();
+  Eigen::MatrixXd out(3, columns.size());
+  for (size_t k = 0; k < columns.size(); ++k) out.col(k) = R * J_.block<3, 1>(0, columns[k]);
+  return out;
+}
+
+void PredictionUncertainty::setupModulo(const std::vector<JointVector>& poses) {
+  const std::vector<int>& id = machine_.identification.parameters;
+  if (setup_.empty() || poses.empty()) return;
+  Eigen::MatrixXd S(3 * poses.size(), setup_.size()), J(3 * poses.size(), id.size());
+  for (size_t i = 0; i < poses.size(); ++i) {
+    S.middleRows(3 * i, 3) = tipColumns(poses[i], setup_);
+    J.middleRows(3 * i, 3) = tipColumns(poses[i], id);
+  }
+  B_ = S.completeOrthogonalDecomposition().solve(J);
+  modulo_ = true;
+}
+
+Eigen::VectorXd PredictionUncertainty::removeSetup(const std::vector<JointVector>& poses,
+                                                   std::vector<Eigen::Vector3d>& d) const {
+  Eigen::MatrixXd S(3 * poses.size(), setup_.size());
+  Eigen::VectorXd y(3 * poses.size());
+  std::vector<Eigen::MatrixXd> Si(poses.size());
+  for (size_t i = 0; i < poses.size(); ++i) {
+    Si[i] = tipColumns(poses[i], setup_);
+    S.middleRows(3 * i, 3) = Si[i];
+    y.segment<3>(3 * i) = d[i];
+  }
+  const Eigen::VectorXd beta = S.completeOrthogonalDecomposition().solve(y);
+  for (size_t i = 0; i < poses.size(); ++i) d[i] -= Si[i] * beta;
+  return beta;
+}
+
+PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionContext* ctx) const {
+  const IdentificationUncertainty& id = machine_.identification;
+  J_.setZero();
+  sensitivityJacobian(fk_, q, J_, ctx);
+  Eigen::MatrixXd Jid(6, id.parameters.size());
+  for (size_t k = 0; k < id.parameters.size(); ++k) Jid.col(k) = J_.col(id.parameters[k]);
+  if (modulo_) {
+    // The share a measured set-up leaves: J_id - J_set B (twist rows in t).
+    Eigen::MatrixXd Jset(6, setup_.size());
+    for (size_t k = 0; k < setup_.size(); ++k) Jset.col(k) = J_.col(setup_[k]);
+    Jid -= Jset * B_;
+  }
+  const Eigen::MatrixXd A = Jid * root_;
+  const Eigen::Matrix<double, 6, 6> S = A * A.transpose();
+  const Eigen::Matrix3d R = fk_.w_T_t(q, ctx).linear();
+  PoseUncertainty u;
+  u.tip_covariance_w = R * S.topLeftCorner<3, 3>() * R.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> tip(u.tip_covariance_w, Eigen::EigenvaluesOnly);
+  u.tip = std::sqrt(std::max(0.0, tip.eigenvalues()[2]));
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> ax(S.block<2, 2>(3, 3), Eigen::EigenvaluesOnly);
+  u.axis = std::sqrt(std::max(0.0, ax.eigenvalues()[1]));
+  if (!id.covered_min.empty()) {
+    u.beyond.assign(q.size(), 0.0);
+    for (Eigen::Index a = 0; a < q.size() && a < static_cast<Eigen::Index>(id.covered_min.size()); ++a) {
+      const double b = std::max(id.covered_min[a] - q[a], q[a] - id.covered_max[a]);
+      if (b > 1e-9) {
+        u.beyond[a] = b;
+        u.outside = true;
+      }
+    }
+  }
+  return u;
+}
+
+}  // namespace tolver

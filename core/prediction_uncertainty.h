@@ -1,0 +1,70 @@
+#pragma once
+// The uncertainty of a predicted tool pose: the covariance of the identified parameters
+// (IdentificationUncertainty, from a calibration) carried to the tool tip and tool axis by the
+// sensitivity Jacobian at the pose (first order):
+//   Sigma_twist = J_id Sigma_params J_id^T   (6 x 6, twist in t),
+//   Sigma_tip_w = R_wt Sigma_d R_wt^T        (3 x 3, the tip in w, mm^2),
+// and the tool axis's angular uncertainty from the rotations about the two axes across it.
+// Where the joints leave the ranges the readings covered, the fitted polynomials extrapolate:
+// the covariance says how much that costs, and the point is flagged.
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/forward_kinematics.h"
+
+namespace tolver {
+
+struct PoseUncertainty {
+  Eigen::Matrix3d tip_covariance_w = Eigen::Matrix3d::Zero();  // mm^2
+  double tip = 0.0;   // mm, 1 sigma along the worst direction (sqrt of the largest eigenvalue)
+  double axis = 0.0;  // rad, 1 sigma of the tool axis's direction (worst direction)
+  // How far the joints lie outside the covered ranges (mm or rad, per axis; 0 inside).
+  std::vector<double> beyond;
+  bool outside = false;
+};
+
+// Modulo a measured set-up. A ball-bar cannot see where the part sits on the table or where
+// the tool tip is relative to the spindle: a rigid motion of the workpiece frame moves each
+// table ball by a constant, a tool offset each tool ball, and the ball position errors of a
+// set-up absorb both. A shop measures them: the part's position and orientation by probing
+// (6 values), the tool tip's offset by presetting (length and radial offset, 3 values). Over the
+// poses of a program, the set-up that best explains a tip deviation field d is
+//   beta = S^+ d,  S = [R_i J_d,i(set-up columns)] stacked (least squares),
+// and what is left, d_i - R_i J_d,i(set-up) beta, is the machine's share that no set-up
+// removes. setupModulo() fixes S on the program's poses; after it, at() reports the
+// uncertainty of that share (the covariance carried through J_id - J_set B, B = S^+ J_id).
+// Measured on an independent simulation (tests/prediction_uncertainty_test.cpp): the true
+// tip deviation, modulo the same set-up, lies inside 1.96 sigma for 97.5 % of coordinates;
+// modulo only the part zero, rotation about the table axis and tool length, for 69 %.
+class PredictionUncertainty {
+ public:
+  // machine.identification must not be empty.
+  explicit PredictionUncertainty(const Machine& machine);
+  void setupModulo(const std::vector<JointVector>& poses);
+  // The part of a tip deviation field (one deviation in w per pose) that a measured set-up
+  // leaves: d_i - S_i beta, beta fitted over all given poses. Returns beta (part x y z mm,
+  // rotations rad, tool offset x y z mm).
+  Eigen::VectorXd removeSetup(const std::vector<JointVector>& poses,
+                              std::vector<Eigen::Vector3d>& deviations_w) const;
+  // The set-up parameters used (indices), for reports.
+  const std::vector<int>& setupParameters() const { return setup_; }
+  PoseUncertainty at(const JointVector& q, const MotionContext* ctx = nullptr) const;
+  // 1 sigma of the tip along a unit direction n_w (mm).
+  static double along(const PoseUncertainty& u, const Eigen::Vector3d& n_w) {
+    return std::sqrt(std::max(0.0, n_w.dot(u.tip_covariance_w * n_w)));
+  }
+
+ private:
+  // R_wt J_d for the given columns at q (3 x columns.size()).
+  Eigen::MatrixXd tipColumns(const JointVector& q, const std::vector<int>& columns) const;
+
+  const Machine& machine_;
+  ForwardKinematics fk_;
+  Eigen::MatrixXd root_;     // Sigma_params = root root^T
+  mutable Eigen::MatrixXd J_;  // 6 x parameterCount work matrix
+  std::vector<int> setup_;   // the part's pose (6), the tool tip's offset (3)
+  Eigen::MatrixXd B_;        // setup x identified: the set-up fit of each identified column
+  bool modulo_ = false;
+};
+
+}  // namespace tolver

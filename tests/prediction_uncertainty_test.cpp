@@ -1,0 +1,133 @@
+// The uncertainty of a prediction against an independent truth: a machine simulated by a second
+// implementation (tests/independent_ballbar.h), calibrated by tolver from its ball-bar readings,
+// then its tool tip predicted at poses inside the calibrated volume. After the set-up a shop
+// measures (part zero, rotation about the table axis, tool length: fitted over the poses), the
+// true deviation of each tip coordinate lies inside the 95 % band (1.96 sigma of the
+// propagated covariance, modulo the same set-up) at 90-98 % of the points. Also: the covariance
+// survives the machine file, and sigma grows outside the calibrated volume.
+#include "core/prediction_uncertainty.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "independent_diagnosis.h"
+
+namespace tolver {
+namespace {
+
+struct Calibrated {
+  Machine nominal, identified;
+  indep::Machine truth;
+  Calibrated() : truth(0) {}
+};
+
+Calibrated calibrateIndependent(unsigned seed, const std::string& dir) {
+  Calibrated c;
+  c.nominal = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
+  c.truth = indep::Machine(300 + seed);
+  const std::vector<int> unknowns = defaultCalibrationUnknowns(c.nominal.model);
+  BallbarPlanOptions po;
+  po.poses = 360;
+  po.seed = 4000 + seed;
+  const BallbarPlan plan = planBallbarTest(c.nominal.model, unknowns, po);
+  std::vector<indep::Setup> setups;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> ball(0.0, 0.01);
+  for (const BallbarSetup& s : plan.test.setups) {
+    indep::Setup is;
+    is.id = s.id;
+    is.table_ball_w = s.table_ball_w;
+    is.tool_ball_t = s.tool_ball_t;
+    is.table_error_w = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+    is.tool_error_t = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+    setups.push_back(is);
+  }
+  std::vector<indep::Pose> poses;
+  for (const BallbarReading& r : plan.test.readings) {
+    indep::Pose p;
+    p.setup = r.setup;
+    for (int a = 0; a < 5; ++a) p.q[a] = r.q[a];
+    poses.push_back(p);
+  }
+  indep::measure(c.truth, poses, setups, 20.0, 0.5e-3, 600 + seed);
+  indep::writeCsv(dir + "/fit.csv", poses, setups, false);
+  const BallbarFile f = readBallbarFile(dir + "/fit.csv", c.nominal.model, true);
+  const CalibrationResult r = calibrate(c.nominal.model, c.nominal.params, f.test, unknowns);
+  EXPECT_EQ(r.status, CalibrationStatus::Converged);
+  c.identified = c.nominal;
+  c.identified.params = r.params;
+  c.identified.identification =
+      identificationUncertainty(r, f.test, static_cast<int>(c.nominal.model.axes.size()));
+  // Through the machine file, as predict reads it.
+  writeFileAtomically(dir + "/id.xml", formatMachineXml(c.identified, "test"));
+  c.identified = readMachineFile(dir + "/id.xml");
+  EXPECT_EQ(c.identified.identification.parameters.size(), r.identified.size());
+  EXPECT_LT((c.identified.identification.covariance - r.covariance).norm(), 1e-9 * r.covariance.norm());
+  return c;
+}
+
+class PredictionUncertaintyTest : public test::TempDirTest {};
+
+TEST_F(PredictionUncertaintyTest, TheTrueDeviationLiesInTheBandAtNinetyFivePercent) {
+  int inside = 0, total = 0;
+  double sum_ratio = 0;
+  for (unsigned seed : {1u, 2u, 3u}) {
+    Calibrated c = calibrateIndependent(seed, path(""));
+    c.identified.model.setup.gauge_length = 100;  // the tip 100 mm below the gauge point
+    const IdentificationUncertainty& id = c.identified.identification;
+    std::mt19937 rng(77 + seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::vector<JointVector> qs;
+    std::vector<Eigen::Vector3d> d;
+    const ForwardKinematics fk(c.identified.model, c.identified.params);
+    for (int i = 0; i < 300; ++i) {
+      JointVector q(5);
+      indep::Pose p;
+      for (int a = 0; a < 5; ++a) {
+        q[a] = id.covered_min[a] + (id.covered_max[a] - id.covered_min[a]) * u(rng);
+        p.q[a] = q[a];
+      }
+      qs.push_back(q);
+      d.push_back(c.truth.point(p, Eigen::Vector3d(0, 0, -100)) - fk.w_T_t(q).translation());
+    }
+    PredictionUncertainty pu(c.identified);
+    pu.setupModulo(qs);
+    pu.removeSetup(qs, d);
+    for (size_t i = 0; i < qs.size(); ++i) {
+      const PoseUncertainty pe = pu.at(qs[i]);
+      EXPECT_FALSE(pe.outside);
+      for (int k = 0; k < 3; ++k) {
+        const double sigma = std::sqrt(pe.tip_covariance_w(k, k));
+        inside += std::abs(d[i][k]) <= 1.96 * sigma;
+        sum_ratio += d[i][k] * d[i][k] / (sigma * sigma);
+        ++total;
+      }
+    }
+  }
+  const double coverage = static_cast<double>(inside) / total;
+  std::printf("[ coverage ] %.3f of %d tip coordinates inside the 95 %% band; mean (d/sigma)^2 %.3f\n",
+              coverage, total, sum_ratio / total);
+  EXPECT_GE(coverage, 0.90);
+  EXPECT_LE(coverage, 0.98);
+}
+
+// Outside the calibrated volume the prediction is flagged and its uncertainty grows.
+TEST_F(PredictionUncertaintyTest, ExtrapolationIsFlaggedAndCostsUncertainty) {
+  Calibrated c = calibrateIndependent(4, path(""));
+  const IdentificationUncertainty& id = c.identified.identification;
+  PredictionUncertainty pu(c.identified);
+  JointVector q(5);
+  for (int a = 0; a < 5; ++a) q[a] = 0.5 * (id.covered_min[a] + id.covered_max[a]);
+  const PoseUncertainty in = pu.at(q);
+  EXPECT_FALSE(in.outside);
+  q[0] = c.identified.model.axes[0].travel_max;  // X at the end of its travel
+  ASSERT_GT(q[0], id.covered_max[0] + 50);
+  const PoseUncertainty out = pu.at(q);
+  EXPECT_TRUE(out.outside);
+  EXPECT_NEAR(out.beyond[0], q[0] - id.covered_max[0], 1e-9);
+  EXPECT_GT(out.tip, in.tip);
+}
+
+}  // namespace
+}  // namespace tolver
