@@ -23,6 +23,7 @@ struct PredictOptions {
   ProgramOptions program;
   std::string output, table;
   double max_rotary_step_deg = 10.0;
+  bool absolute = false;
 };
 
 // Rounds away "-0.000" in printed figures.
@@ -37,11 +38,24 @@ void runPredict(const PredictOptions& o, int* exit_code) {
   checkOutputDir(table, "--errors");
 
   const std::vector<JointVector>* commanded = program.joints.empty() ? nullptr : &program.joints;
-  const PredictionResult r =
-      predictToolPath(machine.model, machine.params, program.path, 20, commanded);
+  PredictionResult r = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
   if (!r.ok())
     throw InputError(program.file, r.failures.front().line, 0, "unreachable",
                      describeUnreachable(machine.model, r));
+  // A calibrated machine: what the ball-bar could not see (the part's pose on the table, the
+  // tool tip's offset from the spindle) the shop measures; predict after that set-up unless
+  // --absolute.
+  Eigen::VectorXd measured_setup;
+  if (!machine.identification.empty() && !o.absolute) {
+    std::vector<JointVector> q;
+    std::vector<Eigen::Vector3d> d;
+    for (const PredictedPoint& p : r.points) {
+      q.push_back(p.q);
+      d.push_back(p.deviation_w);
+    }
+    measured_setup = applyMeasuredSetup(machine, q, d);
+    r = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
+  }
 
   std::vector<ClPoint> predicted(program.path.size());
   std::vector<PredictedPoint> pts = r.points;
@@ -56,13 +70,22 @@ void runPredict(const PredictOptions& o, int* exit_code) {
       "each GOTO is the tool position the machine will really reach, in the program's frame"};
   writeFileAtomically(o.output, formatPredictedApt(program, predicted, header));
   // The prediction's uncertainty, when the machine file carries its calibration's covariance.
+  // The uncertainty of each prediction, from the calibration's covariance (modulo the measured
+  // set-up when it was applied).
   std::vector<PoseUncertainty> unc;
   if (!machine.identification.empty()) {
-    const PredictionUncertainty pu(machine);
+    PredictionUncertainty pu(machine);
+    if (measured_setup.size() > 0) {
+      std::vector<JointVector> sub;
+      const size_t step = std::max<size_t>(1, pts.size() / 2000);
+      for (size_t i = 0; i < pts.size(); i += step) sub.push_back(pts[i].q);
+      pu.setupModulo(sub);
+    }
     unc.reserve(pts.size());
     for (const PredictedPoint& p : pts) unc.push_back(pu.at(p.q));
   }
-  writeFileAtomically(table, formatPointTable(machine.model, program.path, pts, unc.empty() ? nullptr : &unc));
+  writeFileAtomically(table, formatPointTable(machine.model, program.path, pts,
+                                              unc.empty() ? nullptr : &unc));
 
   // Summary.
   const PredictionSummary& s = r.summary;
@@ -115,8 +138,19 @@ void runPredict(const PredictOptions& o, int* exit_code) {
       std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
       return v[v.size() / 2];
     };
-    std::printf("  uncertainty of the prediction (1 sigma, from the calibration's covariance of %zu "
-                "identified values): tip median %.3f um, max %.3f um; tool axis median %.3f urad, "
+    if (measured_setup.size() == 9)
+      std::printf("  set-up     the calibration cannot see the part's pose on the table or the tool "
+                  "tip's offset from the spindle: predicted after the set-up a shop measures (part "
+                  "probed: %+.2f %+.2f %+.2f um, %+.1f %+.1f %+.1f urad; tool preset: %+.2f %+.2f "
+                  "%+.2f um taken up); --absolute for the raw prediction\n",
+                  measured_setup[0] * 1e3, measured_setup[1] * 1e3, measured_setup[2] * 1e3,
+                  measured_setup[3] * 1e6, measured_setup[4] * 1e6, measured_setup[5] * 1e6,
+                  measured_setup[6] * 1e3, measured_setup[7] * 1e3, measured_setup[8] * 1e3);
+    else
+      std::printf("  set-up     absolute prediction (--absolute): it includes what probing the part "
+                  "and presetting the tool would take up, which the calibration cannot see\n");
+    std::printf("  uncertainty (1 sigma) of the prediction, from the calibration's covariance of %zu "
+                "identified values: tip median %.3f um, max %.3f um; tool axis median %.3f urad, "
                 "max %.3f urad\n",
                 machine.identification.parameters.size(), median(tip) * 1e3,
                 *std::max_element(tip.begin(), tip.end()) * 1e3, median(axis) * 1e6,
@@ -179,6 +213,9 @@ void registerPredict(CLI::App& app, int* exit_code) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--errors", o->table,
                   "per-point table to write (CSV; default: the output path with .csv)");
+  cmd->add_flag("--absolute", o->absolute,
+                "a calibrated machine: predict without the set-up a shop measures (part probed, "
+                "tool preset), i.e. with what the calibration cannot see left in");
   cmd->callback([o, exit_code] { runPredict(*o, exit_code); });
 }
 

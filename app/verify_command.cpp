@@ -14,6 +14,8 @@
 #include <string>
 
 #include "app/commands.h"
+#include "core/prediction_uncertainty.h"
+#include "geometry/nearest_point.h"
 #include "app/common.h"
 #include "core/tool_motion.h"
 #include "core/tool_path_prediction.h"
@@ -45,11 +47,13 @@ struct VerifyOptions {
   int line_pass = 0;
   bool no_images = false;
   bool quiet = false;
+  bool absolute = false;
 };
 
 struct JobOutcome {
   std::string name;
   bool ok = false, pass = false;
+  bool undecided = false;  // the decision lies within the prediction's 95 % band
   std::string error;
   double max_um = 0, min_um = 0, machine_rms_um = 0, percent_in = 0;
   int regions = 0;
@@ -238,11 +242,43 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   const Cutter cutter = cutterFrom(o, program);
 
   // Joint values and CL_predicted (thesis 5.5.3); a posted program's own rotary solution.
-  const PredictionResult pred = predictToolPath(machine.model, machine.params, program.path, 20,
-                                                program.joints.empty() ? nullptr : &program.joints);
+  PredictionResult pred = predictToolPath(machine.model, machine.params, program.path, 20,
+                                          program.joints.empty() ? nullptr : &program.joints);
   if (!pred.ok())
     throw InputError(program.file, pred.failures.front().line, 0, "unreachable",
                      describeUnreachable(machine.model, pred));
+  // A calibrated machine: after the set-up a shop measures (part probed, tool preset), which
+  // the calibration cannot see; and the uncertainty of each CL point's prediction.
+  std::string setup_note;
+  std::vector<PoseUncertainty> cl_unc;
+  if (!machine.identification.empty()) {
+    std::vector<JointVector> q;
+    std::vector<Eigen::Vector3d> d;
+    for (const PredictedPoint& p : pred.points) {
+      q.push_back(p.q);
+      d.push_back(p.deviation_w);
+    }
+    PredictionUncertainty* pu_ptr = nullptr;
+    if (!o.absolute) {
+      applyMeasuredSetup(machine, q, d);
+      pred = predictToolPath(machine.model, machine.params, program.path, 20,
+                             program.joints.empty() ? nullptr : &program.joints);
+      setup_note = "the machine's share is after the set-up a shop measures (the part probed, the "
+                   "tool preset): the ball-bar calibration cannot see either";
+    } else {
+      setup_note = "--absolute: the machine's share includes what probing the part and presetting "
+                   "the tool would take up, which the calibration cannot see";
+    }
+    PredictionUncertainty pu(machine);
+    pu_ptr = &pu;
+    if (!o.absolute) {
+      std::vector<JointVector> sub;
+      const size_t step = std::max<size_t>(1, q.size() / 2000);
+      for (size_t i = 0; i < q.size(); i += step) sub.push_back(q[i]);
+      pu_ptr->setupModulo(sub);
+    }
+    for (const JointVector& qi : q) cl_unc.push_back(pu_ptr->at(qi));
+  }
   std::vector<std::string> warnings = setupWarnings(machine.model);
   for (const std::string& w : unitWarnings(program, machine.model, o.program.units)) warnings.push_back(w);
   for (const std::string& w : programNotes(program)) warnings.push_back(program.file + ": " + w);
@@ -325,6 +361,48 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   }
   rep.samples = &samples;
   rep.result = &result;
+  // The 95 % band of the machine's share at each verified sample (the prediction's uncertainty
+  // at the nearest CL point, along the sample's normal), and the decision it allows: FAIL when
+  // a sample is out of its zone by more than the band, UNDECIDED when a limit lies inside the
+  // band of some sample, else PASS.
+  if (!cl_unc.empty() && samples.size() > 0) {
+    if (!setup_note.empty()) rep.notes.push_back(setup_note);
+    std::vector<Eigen::Vector3d> cl(program.path.size());
+    for (size_t i = 0; i < cl.size(); ++i) cl[i] = program.path[i].p_w;
+    const std::vector<int> nearest = nearestPointIndices(cl, samples.p_w);
+    const std::vector<int> zone_of = assignZones(samples, zones);
+    double worst_u = 0;
+    int definite_fail = 0, undecided = 0, undecided_at = -1;
+    rep.band95_um.assign(samples.size(), 0.0);
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const double u95 = 1.96 * PredictionUncertainty::along(cl_unc[nearest[i]], samples.n_w[i]);
+      rep.band95_um[i] = u95 * 1e3;
+      worst_u = std::max(worst_u, u95);
+      const Conformance c = result.conformance[i];
+      if (c == Conformance::Unchecked || c == Conformance::Unmachined || zone_of[i] < 0) continue;
+      const ToleranceZone& z = zones[zone_of[i]];
+      const double t = result.total[i];
+      const double beyond = std::max(t - z.upper, z.lower - t);  // > 0: outside the zone
+      if (beyond > u95) ++definite_fail;
+      else if (std::abs(beyond) <= u95) {
+        if (undecided++ == 0 || std::abs(beyond) < 1e-12) undecided_at = static_cast<int>(i);
+      }
+    }
+    rep.band95_max_um = worst_u * 1e3;
+    rep.undecided_samples = undecided;
+    if (definite_fail == 0 && undecided > 0) {
+      rep.undecided = true;
+      const int i = undecided_at;
+      char text[400];
+      std::snprintf(text, sizeof text,
+                    "UNDECIDED: %d samples lie within the prediction's 95 %% band of a zone limit; "
+                    "e.g. at (%.2f, %.2f, %.2f) the total is %+.2f um, the machine's share %+.2f "
+                    "+- %.2f um here",
+                    undecided, samples.p_w[i].x(), samples.p_w[i].y(), samples.p_w[i].z(),
+                    result.total[i] * 1e3, result.machine[i] * 1e3, rep.band95_um[i]);
+      rep.undecided_text = text;
+    }
+  }
   if (o.line_pass > 0) {
     const auto passes = clPasses(program.path);
     if (o.line_pass > static_cast<int>(passes.size()))
@@ -377,7 +455,8 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   writeFileAtomically((dir / "report.html").string(), formatVerifyHtml(r));
 
   out.ok = true;
-  out.pass = result.pass;
+  out.pass = result.pass && !rep.undecided;
+  out.undecided = rep.undecided;
   out.max_um = result.total_stats.max * 1e3;
   out.min_um = result.total_stats.min * 1e3;
   out.machine_rms_um = result.machine_stats.rms * 1e3;
@@ -386,7 +465,8 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   out.report = (dir / "report.html").string();
 
   if (!o.quiet && o.batch.empty()) {
-    std::printf("tolver verify: %s\n", result.pass ? "PASS" : "FAIL");
+    std::printf("tolver verify: %s\n", rep.undecided ? "UNDECIDED" : result.pass ? "PASS" : "FAIL");
+    if (rep.undecided) std::printf("  %s\n", rep.undecided_text.c_str());
     std::printf("  machine    %s (%s)\n", machine.model.name.c_str(), o.machine.machine.c_str());
     std::printf("  program    %s (%s): %d CL points, %d tool placements (step %.3g mm), %s\n",
                 program.file.c_str(), program.dialect.c_str(), r.cl_points, r.placements,
@@ -406,6 +486,10 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
                   result.program_stats.max * 1e3);
     std::printf("  machine    %+.2f .. %+.2f um, RMS %.2f um (predicted - nominal swept)\n",
                 result.machine_stats.min * 1e3, result.machine_stats.max * 1e3, result.machine_stats.rms * 1e3);
+    if (!cl_unc.empty())
+      std::printf("  band       the machine's share is known to +- %.2f um at most (95 %%, from the "
+                  "calibration's covariance)%s\n",
+                  rep.band95_max_um, o.absolute ? "" : ", after the set-up a shop measures");
     std::printf("  area       %.2f %% of %.1f mm2 machined in tolerance; %.1f mm2 not machined; "
                 "%.1f mm2 on edges not verified\n",
                 result.percent_in, result.area_machined, result.area_unmachined, result.area_edge);
@@ -498,7 +582,7 @@ int runBatch(const VerifyOptions& base) {
   std::printf("  %-20s %-7s %10s %10s %12s %8s %8s\n", "name", "verdict", "min um", "max um",
               "machine RMS", "% in", "regions");
   for (const auto& r : outcomes) {
-    const std::string verdict = !r.ok ? "error" : r.pass ? "pass" : "fail";
+    const std::string verdict = !r.ok ? "error" : r.pass ? "pass" : r.undecided ? "undecided" : "fail";
     code = std::max(code, !r.ok ? 2 : r.pass ? 0 : 1);
     char buf[512];
     std::snprintf(buf, sizeof buf, "%s,%s,%.3f,%.3f,%.3f,%.3f,%d,%s,\"%s\"\n", r.name.c_str(), verdict.c_str(),
@@ -525,7 +609,8 @@ void registerVerify(CLI::App& app, int* exit_code) {
       "verify",
       "Verify a part program on a machine: swept surfaces on the nominal and the real machine, "
       "signed normal deviations against profile tolerance zones, maps and reports. Exit 0 in "
-      "tolerance, 1 out of tolerance, 2 bad input.");
+      "tolerance, 1 out of tolerance, 2 bad input, 4 undecided (a calibrated machine: a zone "
+      "limit lies within the prediction's 95 % band).");
   addMachineOptions(cmd, o->machine, "machine file (XML), calibrated or not");
   cmd->get_option("--machine")->required(false);  // a batch names its machines in the jobs file
   addProgramOptions(cmd, o->program);
@@ -565,6 +650,9 @@ void registerVerify(CLI::App& app, int* exit_code) {
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--no-images", o->no_images, "write no PNG images (no X server needed)");
   cmd->add_flag("--quiet", o->quiet, "print nothing but errors");
+  cmd->add_flag("--absolute", o->absolute,
+                "a calibrated machine: verify without the set-up a shop measures (part probed, "
+                "tool preset), i.e. with what the calibration cannot see left in");
   cmd->callback([o, exit_code] {
     if (!o->batch.empty()) {
       *exit_code = runBatch(*o);
@@ -580,7 +668,7 @@ void registerVerify(CLI::App& app, int* exit_code) {
     const std::string name =
         fs::path(o->program.cl.empty() ? o->program.nc : o->program.cl).stem().string();
     const JobOutcome r = runJob(*o, name, true);
-    *exit_code = r.pass ? 0 : 1;
+    *exit_code = r.pass ? 0 : r.undecided ? 4 : 1;
   });
 }
 

@@ -70,17 +70,15 @@ PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionCont
   sensitivityJacobian(fk_, q, J_, ctx);
   Eigen::MatrixXd Jid(6, id.parameters.size());
   for (size_t k = 0; k < id.parameters.size(); ++k) Jid.col(k) = J_.col(id.parameters[k]);
-  if (modulo_) {
-    // The share a measured set-up leaves: J_id - J_set B (twist rows in t).
-    Eigen::MatrixXd Jset(6, setup_.size());
-    for (size_t k = 0; k < setup_.size(); ++k) Jset.col(k) = J_.col(setup_[k]);
-    Jid -= Jset * B_;
-  }
+  Eigen::MatrixXd Jset(6, setup_.size());
+  for (size_t k = 0; k < setup_.size(); ++k) Jset.col(k) = J_.col(setup_[k]);
+  if (modulo_) Jid -= Jset * B_;  // the share a measured set-up leaves (twist rows in t)
   const Eigen::MatrixXd A = Jid * root_;
   const Eigen::Matrix<double, 6, 6> S = A * A.transpose();
   const Eigen::Matrix3d R = fk_.w_T_t(q, ctx).linear();
   PoseUncertainty u;
   u.tip_covariance_w = R * S.topLeftCorner<3, 3>() * R.transpose();
+  u.setup_w = R * Jset.topRows<3>();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> tip(u.tip_covariance_w, Eigen::EigenvaluesOnly);
   u.tip = std::sqrt(std::max(0.0, tip.eigenvalues()[2]));
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> ax(S.block<2, 2>(3, 3), Eigen::EigenvaluesOnly);
@@ -96,6 +94,23 @@ PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionCont
     }
   }
   return u;
+}
+
+Eigen::VectorXd applyMeasuredSetup(Machine& machine, const std::vector<JointVector>& q,
+                                   const std::vector<Eigen::Vector3d>& deviations_w,
+                                   size_t max_poses) {
+  std::vector<JointVector> sub;
+  std::vector<Eigen::Vector3d> d;
+  const size_t step = std::max<size_t>(1, q.size() / std::max<size_t>(1, max_poses));
+  for (size_t i = 0; i < q.size(); i += step) {
+    sub.push_back(q[i]);
+    d.push_back(deviations_w[i]);
+  }
+  const PredictionUncertainty pu(machine);
+  const Eigen::VectorXd beta = pu.removeSetup(sub, d);
+  const std::vector<int> setup = pu.setupParameters();
+  for (size_t k = 0; k < setup.size(); ++k) machine.params[setup[k]] -= beta[k];
+  return beta;
 }
 
 }  // namespace tolver

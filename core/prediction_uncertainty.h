@@ -21,6 +21,9 @@ struct PoseUncertainty {
   // How far the joints lie outside the covered ranges (mm or rad, per axis; 0 inside).
   std::vector<double> beyond;
   bool outside = false;
+  // The tip's change per unit of each set-up value (3 x setupParameters().size(), in w): what a
+  // fitted set-up beta moves the tip by is setup_w * beta.
+  Eigen::MatrixXd setup_w;
 };
 
 // Modulo a measured set-up. A ball-bar cannot see where the part sits on the table or where
@@ -66,5 +69,14 @@ class PredictionUncertainty {
   Eigen::MatrixXd B_;        // setup x identified: the set-up fit of each identified column
   bool modulo_ = false;
 };
+
+// The set-up a shop measures, applied to a calibrated machine's prediction of a program: the
+// set-up beta that best explains the predicted tip deviations at the poses (up to max_poses of
+// them, evenly spaced) is taken off the machine's set-up parameters (params -= beta), so that
+// predictions made with the result are the machine's share that probing the part and presetting
+// the tool leave. Returns beta (part x y z mm, rotations about x y z rad, tool x y z mm).
+Eigen::VectorXd applyMeasuredSetup(Machine& machine, const std::vector<JointVector>& q,
+                                   const std::vector<Eigen::Vector3d>& deviations_w,
+                                   size_t max_poses = 2000);
 
 }  // namespace tolver

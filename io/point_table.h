@@ -8,9 +8,9 @@
 //   along_axis_um (component along the nominal tool axis), across_axis_um (normal to it),
 //   axis_angle_urad (angle between nominal and predicted tool axes), singular (0/1);
 // with the identification's uncertainty (a calibrated machine):
-//   u_tip_um (1 sigma of the predicted tip, worst direction), u_along_axis_um (along the tool
-//   axis), u_axis_urad (1 sigma of the predicted tool axis), outside_calibrated (0/1: a joint
-//   beyond the ranges the readings covered)
+//   u_tip_um (1 sigma of the predicted tip, worst direction), u_along_axis_um (along the tool axis),
+//   u_axis_urad (1 sigma of the tool axis), outside_calibrated (0/1: a joint beyond the ranges
+//   the calibration readings covered)
 #include <string>
 #include <vector>
 

@@ -47,8 +47,15 @@ std::string formatVerifyJson(const VerifyReport& r) {
   json j;
   j["tool"] = "tolver verify";
   j["name"] = r.name;
-  j["verdict"] = v.pass ? "pass" : "fail";
-  j["exit_code"] = v.pass ? 0 : 1;
+  j["verdict"] = r.undecided ? "undecided" : v.pass ? "pass" : "fail";
+  if (!r.band95_um.empty()) {
+    j["uncertainty"] = {{"band95_max_um", r.band95_max_um},
+                        {"undecided_samples", r.undecided_samples},
+                        {"method", "the calibration's covariance carried to each CL point's tip, "
+                                   "along each sample's normal (nearest CL point), k = 1.96"}};
+    if (r.undecided) j["uncertainty"]["undecided"] = r.undecided_text;
+  }
+  j["exit_code"] = r.undecided ? 4 : v.pass ? 0 : 1;
   j["mode"] = r.mode;
   j["machine"] = {{"name", r.machine_name}, {"file", r.machine_file}};
   j["program"] = {{"file", r.program_file}, {"cl_points", r.cl_points}, {"placements", r.placements},

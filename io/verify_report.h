@@ -27,6 +27,13 @@ struct VerifyReport {
   std::vector<LineProfilePoint> line_profile;
   std::vector<std::pair<std::string, std::string>> images;  // caption, path
   std::vector<std::string> notes;
+  // A calibrated machine: the 95 % band of the machine's share per sample (um), its largest
+  // value, and the decision when a zone limit lies within it.
+  std::vector<double> band95_um;
+  double band95_max_um = 0;
+  int undecided_samples = 0;
+  bool undecided = false;
+  std::string undecided_text;
   double seconds = 0;
   std::vector<std::pair<std::string, double>> timings;  // phase, seconds
 };
