@@ -237,6 +237,9 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
                  "(predictions that depend on them are unverified):%s\n",
                  r.held.size(), names.c_str());
   }
+  std::printf("  unseen     a ball-bar cannot see where the part sits on the table or where the tool "
+              "tip is relative to the spindle (the ball positions absorb both): predict and verify "
+              "apply the set-up a shop measures (part probed, tool preset)\n");
   // The largest identified errors, by significance.
   std::vector<size_t> order(r.identified.size());
   for (size_t k = 0; k < order.size(); ++k) order[k] = k;

@@ -1,0 +1,146 @@
+// The measurement behind the README's "Predictions on independent data": machines simulated by
+// the independent implementation (tests/independent_ballbar.h, seeds the tests do not use),
+// calibrated by tolver from a three-set-up ball-bar test, then the tool tip (gauge length 100 mm)
+// and tool axis predicted at random poses over the whole travel and inside the calibrated volume,
+// after the set-up a shop measures (fitted over the poses, as predict does). Reported against the
+// machine's own error (the truth against the nominal machine, after its own set-up fit) and the
+// coverage of the 95 % band. Not a test: `./build/tests/prediction_campaign [machines]`.
+#include <cstdio>
+#include <cstdlib>
+#include <unistd.h>
+
+#include "core/prediction_uncertainty.h"
+#include "independent_diagnosis.h"
+
+using namespace tolver;
+
+namespace {
+
+struct Figures {
+  double tip_rms = 0, axis_rms = 0, own_tip_rms = 0, own_axis_rms = 0, coverage = 0;
+};
+
+// Truth and prediction at the poses, each after its own best set-up (applyMeasuredSetup, as
+// predict does): the identified machine's prediction, and the nominal machine's (what assuming
+// no errors predicts: the machine's own error).
+Figures measure(const indep::Machine& truth, Machine identified, const std::vector<JointVector>& qs) {
+  identified.model.setup.gauge_length = 100;
+  Machine nominal = identified;
+  nominal.params.setZero();
+  std::vector<Eigen::Vector3d> tip(qs.size()), axis(qs.size());
+  for (size_t i = 0; i < qs.size(); ++i) {
+    indep::Pose p;
+    for (int a = 0; a < 5; ++a) p.q[a] = qs[i][a];
+    tip[i] = truth.point(p, Eigen::Vector3d(0, 0, -100));
+    axis[i] = (truth.point(p, Eigen::Vector3d(0, 0, 0)) - tip[i]).normalized();
+  }
+  // Errors of a machine's prediction after the set-up that best fits the truth.
+  auto errors = [&](Machine m, std::vector<double>* tip_err, std::vector<double>* axis_err) {
+    std::vector<Eigen::Vector3d> d(qs.size());
+    {
+      const ForwardKinematics fk(m.model, m.params);
+      for (size_t i = 0; i < qs.size(); ++i) d[i] = fk.w_T_t(qs[i]).translation() - tip[i];
+    }
+    applyMeasuredSetup(m, qs, d);
+    const ForwardKinematics fk(m.model, m.params);
+    for (size_t i = 0; i < qs.size(); ++i) {
+      const Eigen::Isometry3d T = fk.w_T_t(qs[i]);
+      tip_err->push_back((T.translation() - tip[i]).norm());
+      axis_err->push_back(std::acos(std::clamp(axis[i].dot(T.linear().col(2)), -1.0, 1.0)));
+    }
+    return m;
+  };
+  std::vector<double> tp, ap, to, ao;
+  const Machine after = errors(identified, &tp, &ap);
+  errors(nominal, &to, &ao);
+  // Coverage of the band: the truth against the prediction after its set-up.
+  PredictionUncertainty pu(after);
+  pu.setupModulo(qs);
+  const ForwardKinematics fk(after.model, after.params);
+  int inside = 0;
+  for (size_t i = 0; i < qs.size(); ++i) {
+    const Eigen::Vector3d d = tip[i] - fk.w_T_t(qs[i]).translation();
+    const PoseUncertainty u = pu.at(qs[i]);
+    for (int k = 0; k < 3; ++k) inside += std::abs(d[k]) <= 1.96 * std::sqrt(u.tip_covariance_w(k, k));
+  }
+  auto rms = [](const std::vector<double>& v, double k) {
+    double s = 0;
+    for (double x : v) s += x * x;
+    return std::sqrt(s / v.size()) * k;
+  };
+  Figures f;
+  f.tip_rms = rms(tp, 1e3);
+  f.own_tip_rms = rms(to, 1e3);
+  f.axis_rms = rms(ap, 1e6);
+  f.own_axis_rms = rms(ao, 1e6);
+  f.coverage = inside / (3.0 * qs.size());
+  return f;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int machines = argc > 1 ? std::atoi(argv[1]) : 3;
+  const std::string dir = "/tmp/tolver_prediction_campaign_" + std::to_string(::getpid());
+  std::filesystem::create_directories(dir);
+  const Machine nominal = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
+  const std::vector<int> unknowns = defaultCalibrationUnknowns(nominal.model);
+  std::printf("| machine (seed) | where | tip error after set-up, RMS (um) | machine's own (um) | ratio | tool axis RMS (urad) | own (urad) | 95 %% band coverage |\n|---|---|---|---|---|---|---|---|\n");
+  for (int k = 0; k < machines; ++k) {
+    const unsigned seed = 900 + k;
+    indep::Machine truth(seed);
+    BallbarPlanOptions po;
+    po.poses = 360;
+    po.seed = 5000 + seed;
+    po.reference_every = 8;
+    const BallbarPlan plan = planBallbarTest(nominal.model, unknowns, po);
+    std::vector<indep::Setup> setups;
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> ball(0.0, 0.01);
+    for (const BallbarSetup& s : plan.test.setups) {
+      indep::Setup is;
+      is.id = s.id;
+      is.table_ball_w = s.table_ball_w;
+      is.tool_ball_t = s.tool_ball_t;
+      is.table_error_w = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+      is.tool_error_t = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+      setups.push_back(is);
+    }
+    std::vector<indep::Pose> poses;
+    for (const BallbarReading& r : plan.test.readings) {
+      indep::Pose p;
+      p.setup = r.setup;
+      for (int a = 0; a < 5; ++a) p.q[a] = r.q[a];
+      poses.push_back(p);
+    }
+    indep::measure(truth, poses, setups, 20.0, 0.5e-3, 700 + seed);
+    indep::writeCsv(dir + "/fit.csv", poses, setups, false);
+    const BallbarFile f = readBallbarFile(dir + "/fit.csv", nominal.model, true);
+    const CalibrationResult r = calibrate(nominal.model, nominal.params, f.test, unknowns);
+    Machine id = nominal;
+    id.params = r.params;
+    id.identification = identificationUncertainty(r, f.test, 5);
+    writeFileAtomically(dir + "/id.xml", formatMachineXml(id, "campaign"));
+    id = readMachineFile(dir + "/id.xml");
+    std::mt19937 prng(seed + 1);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (bool inside : {false, true}) {
+      std::vector<JointVector> qs;
+      for (int i = 0; i < 500; ++i) {
+        JointVector q(5);
+        for (int a = 0; a < 5; ++a) {
+          const double lo = inside ? id.identification.covered_min[a] : nominal.model.axes[a].travel_min;
+          const double hi = inside ? id.identification.covered_max[a] : nominal.model.axes[a].travel_max;
+          q[a] = lo + (hi - lo) * u(prng);
+        }
+        qs.push_back(q);
+      }
+      const Figures g = measure(truth, id, qs);
+      std::printf("| %u | %s | %.2f | %.2f | %.2f | %.1f | %.1f | %.3f |\n", seed,
+                  inside ? "inside the calibrated volume" : "whole travel", g.tip_rms, g.own_tip_rms,
+                  g.tip_rms / g.own_tip_rms, g.axis_rms, g.own_axis_rms, g.coverage);
+      std::fflush(stdout);
+    }
+  }
+  return 0;
+}
