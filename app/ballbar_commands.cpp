@@ -15,6 +15,7 @@
 #include "io/calibration_report.h"
 #include "io/io_error.h"
 #include "io/machine_file.h"
+#include "io/text_util.h"
 
 namespace tolver::app {
 namespace {
@@ -182,6 +183,7 @@ void runSimulate(const SimulateOptions& o) {
 struct CalibrateOptions {
   MachineOptions machine;
   std::string readings, output, report, heldout, balls;
+  std::string prior = "auto";
   bool strict = false, keep_outliers = false;
 };
 
@@ -199,6 +201,20 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
   const std::vector<int> unknowns = defaultCalibrationUnknowns(machine.model);
   CalibrationOptions opt;
   opt.strict = o.strict;
+  // The prior towards zero (regularisation where the readings are weak).
+  double prior_um = 0, prior_urad = 0;
+  const bool prior_auto = o.prior == "auto";
+  if (!prior_auto && o.prior != "none") {
+    const auto cells = splitCsvLine(o.prior);
+    const auto a = cells.size() == 2 ? parseNumber(cells[0]) : std::nullopt;
+    const auto b = cells.size() == 2 ? parseNumber(cells[1]) : std::nullopt;
+    if (!a || !b || !(*a > 0) || !(*b > 0) || *a > 1e4 || *b > 1e5)
+      throw InputError("--prior", 0, 0, "prior",
+                       "expected auto, none, or 'um,urad' (the standard deviation of a linear and "
+                       "an angular error coefficient on this machine's class, e.g. 3,10)");
+    prior_um = *a;
+    prior_urad = *b;
+  }
   const RobustCalibration rc =
       o.keep_outliers ? RobustCalibration{} : calibrateWithoutGross(machine.model, machine.params,
                                                                     f.test, unknowns, opt);
@@ -207,6 +223,28 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
   if (o.keep_outliers) {
     r = calibrate(machine.model, machine.params, f.test, unknowns, opt);
     used = f.test;
+  }
+  // Regularised refit: the prior's scale from the readings' evidence (auto), or as given.
+  std::string prior_text = "none";
+  if ((prior_auto || prior_um > 0) && (r.status == CalibrationStatus::Converged ||
+                                       r.status == CalibrationStatus::NotConverged)) {
+    if (prior_auto) {
+      const double k = choosePriorScale(machine.model, used, r, 1e-3, 3.3e-6);
+      prior_um = k;
+      prior_urad = 3.3 * k;
+    }
+    CalibrationOptions ro = opt;
+    ro.prior_linear = prior_um * 1e-3;
+    ro.prior_angular = prior_urad * 1e-6;
+    ro.prior_noise = std::max(r.residual_sigma, 1e-12);
+    const CalibrationResult rr = calibrate(machine.model, machine.params, used, unknowns, ro);
+    if (rr.status == CalibrationStatus::Converged) {
+      r = rr;
+      char buf[160];
+      std::snprintf(buf, sizeof buf, "%.3g um per linear, %.3g urad per angular coefficient%s",
+                    prior_um, prior_urad, prior_auto ? " (chosen by the readings' evidence)" : "");
+      prior_text = buf;
+    }
   }
   if (r.status == CalibrationStatus::Unobservable || r.status == CalibrationStatus::NoData) {
     std::string names;
@@ -222,6 +260,14 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
     std::fprintf(stderr, "tolver: warning: %s: %s\n", o.readings.c_str(), w.c_str());
   std::printf("  solution   %s after %d iterations; rank %d, condition %.3g (column-scaled)\n",
               r.message.c_str(), r.iterations, r.rank, r.condition);
+  if (prior_text == "none")
+    std::printf("  prior      none: the plain least-squares fit (beyond the calibrated ranges its "
+                "polynomials extrapolate freely)\n");
+  else
+    std::printf("  prior      %s: values the readings pin down weakly are drawn towards zero, so "
+                "that predictions beyond the calibrated ranges are not worse than a perfect "
+                "machine's\n",
+                prior_text.c_str());
   printGross(o.readings, f.test, o.keep_outliers
                                      ? grossReadings(machine.model, f.test, r)
                                      : rc.removed,
@@ -393,6 +439,9 @@ void registerBallbar(CLI::App& app, int* exit_code) {
     cmd->add_option("--balls", o->balls,
                     "identified ball positions to write (CSV; default: the output path with "
                     "_balls.csv)");
+    cmd->add_option("--prior", o->prior,
+                    "regularisation towards zero: auto (default: its scale from the readings' "
+                    "evidence), none, or 'um,urad' per linear and angular coefficient");
     cmd->add_flag("--strict", o->strict, "refuse when some parameters cannot be identified");
     cmd->add_flag("--keep-outliers", o->keep_outliers,
                   "fit every reading (gross readings are still named)");

@@ -1,5 +1,6 @@
 #include "core/calibration.h"
 
+#include <Eigen/Cholesky>
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
@@ -85,6 +86,26 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
   }
   Eigen::MatrixXd J(m, n);
   for (int k = 0; k < n; ++k) J.col(k) = J0.col(keep_cols[k]);
+  // Prior rows (regularisation towards zero): w_k = s / sigma_k on each machine parameter.
+  const bool regularised = opt.prior_linear > 0 && opt.prior_angular > 0;
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(np);
+  if (regularised)
+    for (int k = 0; k < np; ++k)
+      w[k] = opt.prior_noise /
+             (model.parameters[unknowns[k]].angular ? opt.prior_angular : opt.prior_linear);
+  const int mp = regularised ? m + np : m;
+  auto augmented = [&](const Eigen::MatrixXd& Jr, const Eigen::VectorXd& rr, Eigen::MatrixXd* Ja,
+                       Eigen::VectorXd* ra) {
+    Ja->setZero(mp, n);
+    ra->resize(mp);
+    Ja->topRows(m) = Jr;
+    ra->head(m) = rr;
+    if (regularised)
+      for (int k = 0; k < np; ++k) {
+        (*Ja)(m + k, k) = w[k];
+        (*ra)[m + k] = -w[k] * res.params[unknowns[k]];
+      }
+  };
 
   // 2. Gauss-Newton with the pseudo-inverse of the column-scaled Jacobian. Each pass factors
   //    J (QR, then the SVD of the n x n triangle); the last factorisation also gives the
@@ -93,13 +114,16 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
   Eigen::BDCSVD<Eigen::MatrixXd> svd;
   res.status = CalibrationStatus::NotConverged;
   double previous_step = std::numeric_limits<double>::infinity();
+  Eigen::MatrixXd Ja;
+  Eigen::VectorXd ra;
   for (int it = 0; it < opt.max_iterations; ++it) {
-    scale = J.colwise().norm().transpose();
+    augmented(J, r, &Ja, &ra);
+    scale = Ja.colwise().norm().transpose();
     for (int c = 0; c < n; ++c)
       if (scale[c] == 0) scale[c] = 1;
-    Eigen::HouseholderQR<Eigen::MatrixXd> qr(J * scale.cwiseInverse().asDiagonal());
+    Eigen::HouseholderQR<Eigen::MatrixXd> qr(Ja * scale.cwiseInverse().asDiagonal());
     const Eigen::MatrixXd R = qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
-    const Eigen::VectorXd Qtr = (qr.householderQ().transpose() * r).head(n);
+    const Eigen::VectorXd Qtr = (qr.householderQ().transpose() * ra).head(n);
     svd.compute(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
     const Eigen::VectorXd& sv = svd.singularValues();
     res.rank = 0;
@@ -114,7 +138,7 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
     const double sn = step_s.norm();
     // What no step can remove: the least-squares residual of the linearised problem.
     const Eigen::VectorXd proj = svd.matrixU().leftCols(res.rank).transpose() * Qtr;
-    const double irreducible = std::sqrt(std::max(0.0, r.squaredNorm() - proj.squaredNorm()));
+    const double irreducible = std::sqrt(std::max(0.0, ra.squaredNorm() - proj.squaredNorm()));
     const bool done = sn < opt.step_tolerance || sn < opt.relative_tolerance * irreducible ||
                       (sn < opt.floor_tolerance && sn > 0.5 * previous_step);
     previous_step = sn;
@@ -277,6 +301,49 @@ IdentificationUncertainty identificationUncertainty(const CalibrationResult& fit
       }
   }
   return u;
+}
+
+double choosePriorScale(const MachineModel& model, const BallbarTest& test,
+                        const CalibrationResult& fit, double unit_linear, double unit_angular) {
+  const ForwardKinematics fk(model, fit.params);
+  Eigen::VectorXd r;
+  const Eigen::MatrixXd J = identificationJacobian(fk, test, fit.ball_errors, fit.identified, &r);
+  const int np = static_cast<int>(fit.identified.size());
+  const int m = static_cast<int>(J.rows()), nb = static_cast<int>(J.cols()) - np;
+  // The readings at zero machine errors, to first order: r + Jm theta.
+  Eigen::VectorXd theta(np);
+  Eigen::VectorXd d(np);
+  for (int k = 0; k < np; ++k) {
+    theta[k] = fit.params[fit.identified[k]];
+    const double u = model.parameters[fit.identified[k]].angular ? unit_angular : unit_linear;
+    d[k] = u * u;
+  }
+  const Eigen::VectorXd y0 = r + J.leftCols(np) * theta;
+  // Project off the ball columns (flat prior): the complement of their span.
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(J.rightCols(nb));
+  const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(m, m);
+  const Eigen::MatrixXd P = Q.rightCols(m - nb);
+  const Eigen::VectorXd y = P.transpose() * y0;
+  const Eigen::MatrixXd A = P.transpose() * J.leftCols(np);
+  const Eigen::MatrixXd ADA = A * d.asDiagonal() * A.transpose();
+  const double s2 = fit.residual_sigma * fit.residual_sigma;
+  double best_k = 1.0, best = -std::numeric_limits<double>::infinity();
+  for (int i = 0; i <= 40; ++i) {
+    const double k = 0.03 * std::pow(100.0 / 0.03, i / 40.0);
+    Eigen::MatrixXd C = k * k * ADA;
+    C.diagonal().array() += s2;
+    const Eigen::LLT<Eigen::MatrixXd> llt(C);
+    if (llt.info() != Eigen::Success) continue;
+    const Eigen::VectorXd z = llt.matrixL().solve(y);
+    double logdet = 0;
+    for (Eigen::Index j = 0; j < C.rows(); ++j) logdet += 2.0 * std::log(llt.matrixL()(j, j));
+    const double e = -0.5 * (z.squaredNorm() + logdet);
+    if (e > best) {
+      best = e;
+      best_k = k;
+    }
+  }
+  return best_k;
 }
 
 }  // namespace tolver

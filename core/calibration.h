@@ -28,6 +28,13 @@ struct CalibrationOptions {
   // residual no step can remove (noisy data: further steps only chase rounding).
   double relative_tolerance = 1e-6;
   bool strict = false;  // refuse (status Unobservable) instead of holding unobservable parameters
+  // A prior towards zero for each machine parameter (regularisation where the data are weak):
+  // the standard deviation of a linear (mm) and of an angular (rad) coefficient on a machine of
+  // its accuracy class; 0: none. The fit then minimises
+  //   |r - J d|^2 / s^2 + sum_k (value_k / sigma_k)^2,   s = prior_noise (mm),
+  // and the covariance is s^2 (J^T J + s^2 diag(1/sigma_k^2))^-1.
+  double prior_linear = 0.0, prior_angular = 0.0;
+  double prior_noise = 0.5e-3;
 };
 
 enum class CalibrationStatus { Converged, NotConverged, Unobservable, NoData };
@@ -88,6 +95,15 @@ RobustCalibration calibrateWithoutGross(const MachineModel& model, const Eigen::
                                         const std::vector<int>& unknown_params,
                                         const CalibrationOptions& options = {},
                                         double alpha = 0.01, double max_fraction = 0.05);
+
+// The scale of the prior (regularisation) chosen by the readings themselves (empirical Bayes):
+// with each machine parameter ~ N(0, (k sigma_unit)^2) (sigma_unit = unit_linear mm or
+// unit_angular rad) and the ball positions free, the readings projected off the ball columns are
+// Gaussian with covariance s^2 I + k^2 A D A^T (A the projected machine columns, D the unit
+// variances, s the fit's residual sigma); the k of largest marginal likelihood over a log grid
+// from 0.03 to 100 is returned. Linearised at the unregularised fit `fit`.
+double choosePriorScale(const MachineModel& model, const BallbarTest& test,
+                        const CalibrationResult& fit, double unit_linear, double unit_angular);
 
 // The identification uncertainty of a fit for a machine file: the covariance of the identified
 // parameters and the joint ranges the readings covered.

@@ -4,7 +4,7 @@
 // and tool axis predicted at random poses over the whole travel and inside the calibrated volume,
 // after the set-up a shop measures (fitted over the poses, as predict does). Reported against the
 // machine's own error (the truth against the nominal machine, after its own set-up fit) and the
-// coverage of the 95 % band. Not a test: `./build/tests/prediction_campaign [machines]`.
+// coverage of the 95 % band. Not a test: `./build/tests/prediction_campaign [machines] [prior_um prior_urad]`.
 #include <cstdio>
 #include <cstdlib>
 #include <unistd.h>
@@ -81,6 +81,8 @@ Figures measure(const indep::Machine& truth, Machine identified, const std::vect
 
 int main(int argc, char** argv) {
   const int machines = argc > 1 ? std::atoi(argv[1]) : 3;
+  // Optional prior (regularisation): linear um and angular urad per coefficient.
+  const double prior_um = argc > 3 ? std::atof(argv[2]) : 0.0, prior_urad = argc > 3 ? std::atof(argv[3]) : 0.0;
   const std::string dir = "/tmp/tolver_prediction_campaign_" + std::to_string(::getpid());
   std::filesystem::create_directories(dir);
   const Machine nominal = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
@@ -116,7 +118,18 @@ int main(int argc, char** argv) {
     indep::measure(truth, poses, setups, 20.0, 0.5e-3, 700 + seed);
     indep::writeCsv(dir + "/fit.csv", poses, setups, false);
     const BallbarFile f = readBallbarFile(dir + "/fit.csv", nominal.model, true);
-    const CalibrationResult r = calibrate(nominal.model, nominal.params, f.test, unknowns);
+    CalibrationOptions co;
+    co.prior_linear = prior_um * 1e-3;
+    co.prior_angular = prior_urad * 1e-6;
+    if (prior_um < 0) {  // auto: the scale by the evidence of the readings, units 1 um / 3.3 urad
+      const CalibrationResult free = calibrate(nominal.model, nominal.params, f.test, unknowns);
+      const double k = choosePriorScale(nominal.model, f.test, free, 1e-3, 3.3e-6);
+      co.prior_linear = k * 1e-3;
+      co.prior_angular = k * 3.3e-6;
+      co.prior_noise = free.residual_sigma;
+      std::fprintf(stderr, "seed %u: prior scale %.3g -> %.3g um, %.3g urad\n", seed, k, k, 3.3 * k);
+    }
+    const CalibrationResult r = calibrate(nominal.model, nominal.params, f.test, unknowns, co);
     Machine id = nominal;
     id.params = r.params;
     id.identification = identificationUncertainty(r, f.test, 5);
