@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <memory>
 #include <random>
 
@@ -11,6 +12,8 @@
 #include "app/common.h"
 #include "core/ballbar_plan.h"
 #include "core/calibration.h"
+#include "core/inverse_kinematics.h"
+#include "core/setup_search.h"
 #include "io/ballbar_file.h"
 #include "io/calibration_report.h"
 #include "io/io_error.h"
@@ -27,6 +30,8 @@ struct PlanOptions {
   double feed = 2000.0;
   std::vector<double> lengths;
   int heldout = 0;
+  ProgramOptions program;  // --for: plan where this program cuts
+  double noise_um = 0.5;   // for the expected prediction uncertainty
   PlanOptions() { plan.reference_every = 8; }
 };
 
@@ -48,6 +53,34 @@ void runPlan(PlanOptions o) {
   checkOutputDir(o.output, "-o");
   checkOutputDir(gcode, "--gcode");
   const std::vector<int> unknowns = defaultCalibrationUnknowns(machine.model);
+  // --for: poses chosen by the prediction variance of the tool tip at the program's poses
+  // (I-optimal), modulo the set-up a shop measures.
+  std::vector<JointVector> program_q;
+  std::string for_text;
+  if (!o.program.cl.empty()) {
+    const ClProgram program = loadProgram(o.program, machine.model);
+    int failed = 0, first = -1;
+    const std::vector<AxisRange> ranges = jointRanges(machine.model, program.path, nullptr, &failed, &first);
+    if (failed > 0)
+      throw InputError(program.file, program.path[first].line, 0, "unreachable",
+                       std::to_string(failed) + " points need rotary angles outside travel with this "
+                       "set-up; run tolver setup first");
+    (void)ranges;  // rotary travel checked; the poses themselves may go anywhere
+    // The set-up geometry stays the default: table balls on the part's points or tool balls at
+    // several lengths gave larger expected uncertainties where the program cuts (measured on
+    // the cone sample), the choice of poses is what helps.
+    const std::vector<ClPoint>& path = program.path;
+    const size_t step = std::max<size_t>(1, path.size() / 500);
+    const InverseKinematics ik(machine.model);
+    for (size_t i = 0; i < path.size(); i += step) {
+      const IkSolution sol = ik.solve(path[i].p_w, path[i].u_w, program_q.empty() ? nullptr : &program_q.back());
+      if (sol.status == IkStatus::Ok) program_q.push_back(sol.q);
+    }
+    for_text = program.file;
+    // A subset of the program's poses as the targets of the design.
+    const size_t tstep = std::max<size_t>(1, program_q.size() / 60);
+    for (size_t i = 0; i < program_q.size(); i += tstep) o.plan.target_poses.push_back(program_q[i]);
+  }
   const BallbarPlan plan = planBallbarTest(machine.model, unknowns, o.plan);
   if (static_cast<int>(plan.test.readings.size()) < o.plan.poses)
     throw InputError(o.machine.machine, 0, 0, "plan",
@@ -108,6 +141,31 @@ void runPlan(PlanOptions o) {
                  "tolver: warning: %zu readings for %d unknowns (fewer than 3 per unknown): the fit "
                  "will follow the noise; ask for at least --poses %d\n",
                  plan.test.readings.size(), plan.unknowns, 3 * plan.unknowns);
+  if (!program_q.empty()) {
+    // What the plan would give where the program cuts, before anyone measures; and what the
+    // default plan (the whole travel) would give there.
+    BallbarPlanOptions whole = o.plan;
+    whole.target_poses.clear();
+    whole.geometry.clear();
+    const BallbarPlan general = planBallbarTest(machine.model, unknowns, whole);
+    auto stats = [&](const BallbarPlan& p, double* med, double* mx) {
+      std::vector<double> u = expectedTipUncertainty(machine.model, unknowns, p.test,
+                                                     o.noise_um * 1e-3, program_q);
+      std::sort(u.begin(), u.end());
+      *med = u[u.size() / 2];
+      *mx = u.back();
+    };
+    double m1, x1, m0, x0;
+    stats(plan, &m1, &x1);
+    stats(general, &m0, &x0);
+    std::printf("  for        %s: poses chosen by the tool tip's prediction variance at %zu of its "
+                "points, after the set-up a shop measures (I-optimal)\n",
+                for_text.c_str(), o.plan.target_poses.size());
+    std::printf("  expected   tip uncertainty where the program cuts (1 sigma, %.2f um readings, "
+                "after the measured set-up): median %.3f um, max %.3f um; the D-optimal plan of "
+                "the same size: median %.3f um, max %.3f um\n",
+                o.noise_um, m1 * 1e3, x1 * 1e3, m0 * 1e3, x0 * 1e3);
+  }
   std::printf("  wrote      %s (plan), %s (NC program)\n", o.output.c_str(), gcode.c_str());
   if (o.heldout > 0)
     std::printf("  wrote      %s, %s (%zu held-out poses: measure them after the plan, give them "
@@ -385,6 +443,13 @@ void registerBallbar(CLI::App& app, int* exit_code) {
                     "measure the set-up's first pose again after every N poses, a drift check "
                     "(default 8; 0: never)")
         ->check(CLI::Range(0, 100000));
+    cmd->add_option("--for", o->program.cl,
+                    "plan where this program cuts (CL or G-code; its set-up from --setup): the "
+                    "joint ranges it uses, table balls on its points, and the expected prediction "
+                    "uncertainty there");
+    cmd->add_option("--noise-um", o->noise_um,
+                    "reading noise for the expected uncertainty, um (default 0.5)")
+        ->check(CLI::PositiveNumber);
     cmd->add_option("--heldout", o->heldout,
                     "also plan N held-out poses of the same set-ups (written to <plan>_heldout.csv "
                     "and .nc), for calibrate/diagnose --heldout")

@@ -1,5 +1,6 @@
 #include "core/ballbar_plan.h"
 
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -7,6 +8,8 @@
 
 #include "core/identifiability.h"
 #include "core/inverse_kinematics.h"
+#include "core/prediction_uncertainty.h"
+#include "core/sensitivity_jacobian.h"
 
 namespace tolver {
 
@@ -48,9 +51,12 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
       ++plan.sampled;
       JointVector q = JointVector::Zero(model.axes.size());
       for (size_t a = 0; a < model.axes.size(); ++a)
-        if (model.axes[a].isRotary())
-          q[a] = model.axes[a].travel_min +
-                 unit(rng) * (model.axes[a].travel_max - model.axes[a].travel_min);
+        if (model.axes[a].isRotary()) {
+          const bool ranged = a < opt.range_min.size();
+          const double lo = ranged ? opt.range_min[a] : model.axes[a].travel_min;
+          const double hi = ranged ? opt.range_max[a] : model.axes[a].travel_max;
+          q[a] = lo + unit(rng) * (hi - lo);
+        }
       // Bar direction: azimuth anywhere, elevation above the machine's xy plane, seen from F.
       const double az = 2.0 * M_PI * unit(rng);
       const double el = std::asin(std::sin(min_el) + unit(rng) * (1.0 - std::sin(min_el)));
@@ -62,6 +68,15 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
       const Eigen::Vector3d target = bs.table_ball_w + length * (F_R_w.transpose() * d_F);
       int violated = -1;
       if (!ik.placeToolPoint(bs.tool_ball_t, target, q, &violated)) {
+        ++plan.rejected;
+        continue;
+      }
+      bool in_range = true;
+      for (size_t a = 0; a < model.axes.size() && a < opt.range_min.size(); ++a)
+        if (!model.axes[a].isRotary() &&
+            (q[a] < opt.range_min[a] - opt.range_margin || q[a] > opt.range_max[a] + opt.range_margin))
+          in_range = false;
+      if (!in_range) {
         ++plan.rejected;
         continue;
       }
@@ -89,11 +104,65 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
     if (scale[c] == 0) scale[c] = 1;
   rows = rows * scale.cwiseInverse().asDiagonal();
 
-  // 3. Greedy D-optimal choice, set-ups in turn: the candidate with the largest
+  // 3. Greedy choice, set-ups in turn. D-optimal: the candidate with the largest
   //    x^T M^-1 x (M = eps I + sum of chosen x x^T), M^-1 kept by Sherman-Morrison.
+  //    I-optimal (target poses given): the candidate that most reduces tr(G M^-1 G^T), G the
+  //    tip sensitivities at the targets: gain |G M^-1 x|^2 / (1 + x^T M^-1 x), with
+  //    V = X M^-1, d = diag(X M^-1 X^T) and Y = X M^-1 G^T kept up to date by the same rank-one
+  //    updates (O(pool (n + g)) per pick).
   Eigen::MatrixXd Minv = Eigen::MatrixXd::Identity(n, n) / 1e-6;
   std::vector<bool> used(index.size(), false);
-  for (int pick = 0; pick < opt.poses; ++pick) {
+  if (!opt.target_poses.empty()) {
+    const int np_ = static_cast<int>(unknowns.size());
+    // Tip sensitivities at the targets (in w), with what a measured set-up takes up projected
+    // off (the part's pose and the tool tip's offset: see core/prediction_uncertainty.h).
+    std::vector<int> setup;
+    for (const ParameterBlock& b : model.blocks) {
+      if (b.kind == BlockKind::WorkpieceSetup)
+        for (int c = 0; c < 6; ++c) setup.push_back(b.offset + c);
+      if (b.kind == BlockKind::ToolSetup)
+        for (int c = 0; c < 3; ++c) setup.push_back(b.offset + c);
+    }
+    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(3 * opt.target_poses.size(), n);
+    Eigen::MatrixXd S(3 * opt.target_poses.size(), setup.size());
+    Eigen::MatrixXd Jt(6, model.parameterCount());
+    for (size_t t = 0; t < opt.target_poses.size(); ++t) {
+      Jt.setZero();
+      sensitivityJacobian(fk, opt.target_poses[t], Jt);
+      const Eigen::Matrix3d R = fk.w_T_t(opt.target_poses[t]).linear();
+      for (int k = 0; k < np_; ++k) G.block(3 * t, k, 3, 1) = R * Jt.block<3, 1>(0, unknowns[k]) / scale[k];
+      for (size_t k = 0; k < setup.size(); ++k) S.block(3 * t, k, 3, 1) = R * Jt.block<3, 1>(0, setup[k]);
+    }
+    if (S.cols() > 0) G -= S * S.completeOrthogonalDecomposition().solve(G);
+    const double eps = 1e-6;
+    Eigen::MatrixXd V = rows / eps;                      // X M^-1
+    Eigen::VectorXd d = rows.rowwise().squaredNorm() / eps;
+    Eigen::MatrixXd Y = (rows * G.transpose()) / eps;    // X M^-1 G^T
+    for (int pick = 0; pick < opt.poses; ++pick) {
+      const int s = pick % nsetups;
+      int best = -1;
+      double best_gain = -1.0;
+      for (size_t i = 0; i < index.size(); ++i) {
+        if (used[i] || index[i].first != s) continue;
+        const double gain = Y.row(i).squaredNorm() / (1.0 + d[i]);
+        if (gain > best_gain) {
+          best_gain = gain;
+          best = static_cast<int>(i);
+        }
+      }
+      if (best < 0) continue;
+      used[best] = true;
+      const Eigen::VectorXd Mx = V.row(best).transpose();   // M^-1 x
+      const double denom = 1.0 + d[best];
+      const Eigen::VectorXd XMx = rows * Mx;                // x_i^T M^-1 x
+      const Eigen::RowVectorXd GMx = Y.row(best);           // (G M^-1 x)^T
+      V -= XMx * Mx.transpose() / denom;
+      d -= XMx.cwiseAbs2() / denom;
+      Y -= XMx * GMx / denom;
+      plan.test.readings.push_back(pool[index[best].first][index[best].second]);
+    }
+  }
+  for (int pick = 0; opt.target_poses.empty() && pick < opt.poses; ++pick) {
     const int s = pick % nsetups;
     int best = -1;
     double best_gain = -1.0;
@@ -212,6 +281,32 @@ TimeJointCorrelation timeJointCorrelation(const MachineModel& model, const Ballb
       out.worst_axis = static_cast<int>(a);
     }
   }
+  return out;
+}
+
+std::vector<double> expectedTipUncertainty(const MachineModel& model, const std::vector<int>& unknowns,
+                                           const BallbarTest& plan, double noise_mm,
+                                           const std::vector<JointVector>& poses) {
+  Machine m;
+  m.model = model;
+  m.params = Eigen::VectorXd::Zero(model.parameterCount());
+  const ForwardKinematics fk(model, m.params);
+  const Eigen::MatrixXd J =
+      identificationJacobian(fk, plan, std::vector<BallErrors>(plan.setups.size()), unknowns);
+  Eigen::VectorXd scale = J.colwise().norm().transpose();
+  for (Eigen::Index c = 0; c < scale.size(); ++c)
+    if (scale[c] == 0) scale[c] = 1;
+  const Eigen::MatrixXd Js = J * scale.cwiseInverse().asDiagonal();
+  const Eigen::MatrixXd cov_s = (Js.transpose() * Js).completeOrthogonalDecomposition().pseudoInverse();
+  const int np = static_cast<int>(unknowns.size());
+  const Eigen::VectorXd d = scale.head(np).cwiseInverse();
+  m.identification.parameters = unknowns;
+  m.identification.covariance =
+      noise_mm * noise_mm * (d.asDiagonal() * cov_s.topLeftCorner(np, np) * d.asDiagonal());
+  PredictionUncertainty pu(m);
+  pu.setupModulo(poses);
+  std::vector<double> out;
+  for (const JointVector& q : poses) out.push_back(pu.at(q).tip);
   return out;
 }
 

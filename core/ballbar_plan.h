@@ -27,6 +27,16 @@ struct BallbarPlanOptions {
   // Largest correlation of time (the reading's index) with a joint within a set-up that the
   // measurement order may have (see timeJointCorrelation).
   double max_time_correlation = 0.3;
+  // Joint ranges to plan in (mm, rad, per axis; empty: the travel): rotary angles are drawn
+  // from them and candidates whose prismatic joints leave them by more than range_margin are
+  // rejected. plan-ballbar --for sets them to the ranges a program uses.
+  std::vector<double> range_min, range_max;
+  double range_margin = 50.0;  // mm
+  // Where the machine will be used (a program's poses): when given, poses are chosen by the
+  // prediction variance of the tool tip there (greedy I-optimal design: each new pose is the
+  // candidate that most reduces the summed variance of the tips at these poses) instead of
+  // D-optimality.
+  std::vector<JointVector> target_poses;
   // Set-up geometry; when empty, defaults: table balls 80 mm off the table's axis at three
   // heights, tool balls 25 mm off the spindle axis at 60, 180 and 300 degrees (so the spindle's
   // own errors are observable).
@@ -56,6 +66,15 @@ struct TimeJointCorrelation {
   double worst = 0.0;      // |r| of that axis
 };
 TimeJointCorrelation timeJointCorrelation(const MachineModel& model, const BallbarTest& test);
+
+// The expected standard uncertainty (mm) of the tool tip predicted at each of `poses` by the
+// machine a plan would identify, before anyone measures: the plan's identification Jacobian at
+// the nominal machine with readings of standard deviation noise_mm gives the covariance of the
+// machine parameters (ball positions free), carried to the tip modulo the measured set-up (see
+// core/prediction_uncertainty.h).
+std::vector<double> expectedTipUncertainty(const MachineModel& model, const std::vector<int>& unknowns,
+                                           const BallbarTest& plan, double noise_mm,
+                                           const std::vector<JointVector>& poses);
 
 // The default set-up geometry for n set-ups.
 std::vector<BallbarSetup> defaultBallbarSetups(int n);

@@ -86,5 +86,22 @@ TEST_F(UncertaintyCli, VerifySaysUndecidedWhenTheLimitIsInsideTheBand) {
   EXPECT_EQ(run(2 * (worst - 3 * band), "f").exit_code, 1);
 }
 
+// plan-ballbar --for: poses chosen by the prediction variance where the program cuts give a
+// smaller expected tip uncertainty there than the D-optimal plan of the same size (the
+// comparison plan-ballbar prints, recomputed here from its output).
+TEST_F(UncertaintyCli, APlanForAProgramPredictsItBetter) {
+  auto r = test::runTolver("plan-ballbar --machine " + test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
+                           " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " --for " +
+                           test::sourcePath("samples/nas979_cone.apt") + " --poses 360 -o " + path("p.csv"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m,
+                                std::regex("median ([0-9.]+) um, max ([0-9.]+) um; the D-optimal plan of "
+                                           "the same size: median ([0-9.]+) um, max ([0-9.]+) um")))
+      << r.output;
+  EXPECT_LT(std::stod(m[1]), 0.9 * std::stod(m[3]));
+  EXPECT_LT(std::stod(m[2]), std::stod(m[4]));
+}
+
 }  // namespace
 }  // namespace tolver
