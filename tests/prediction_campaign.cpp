@@ -4,13 +4,17 @@
 // and tool axis predicted at random poses over the whole travel and inside the calibrated volume,
 // after the set-up a shop measures (fitted over the poses, as predict does). Reported against the
 // machine's own error (the truth against the nominal machine, after its own set-up fit) and the
-// coverage of the 95 % band. Not a test: `./build/tests/prediction_campaign [machines] [prior_um prior_urad]`.
+// coverage of the 95 % band. Not a test: `./build/tests/prediction_campaign [machines] [prior_um prior_urad] [cone]`
+// (prior -1 -1: chosen by the readings' evidence; cone: a D-optimal plan against a --for plan,
+// judged at the cone sample's poses).
 #include <cstdio>
 #include <cstdlib>
 #include <unistd.h>
 
 #include "core/prediction_uncertainty.h"
 #include "independent_diagnosis.h"
+#include "io/apt_reader.h"
+#include "io/setup_file.h"
 
 using namespace tolver;
 
@@ -88,53 +92,78 @@ int main(int argc, char** argv) {
   const Machine nominal = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
   const std::vector<int> unknowns = defaultCalibrationUnknowns(nominal.model);
   std::printf("| machine (seed) | where | tip error after set-up, RMS (um) | machine's own (um) | ratio | tool axis RMS (urad) | own (urad) | 95 %% band coverage |\n|---|---|---|---|---|---|---|---|\n");
+  // The cone sample's poses on the Matsuura (its set-up file): where a --for plan aims.
+  std::vector<JointVector> cone;
+  {
+    Machine m = nominal;
+    m.model.setup = readSetupFile(test::sourcePath("samples/matsuura_setup.txt"), m.model.setup);
+    const ClProgram program = readAptFile(test::sourcePath("samples/nas979_cone.apt"));
+    const PredictionResult pr = predictToolPath(m.model, m.params, program.path);
+    for (size_t i = 0; i < pr.points.size(); i += 4) cone.push_back(pr.points[i].q);
+  }
+  const bool for_mode = argc > 4 && std::string(argv[4]) == "cone";
   for (int k = 0; k < machines; ++k) {
     const unsigned seed = 900 + k;
     indep::Machine truth(seed);
+    auto calibrateWith = [&](BallbarPlanOptions po) {
+      const BallbarPlan plan = planBallbarTest(nominal.model, unknowns, po);
+      std::vector<indep::Setup> setups;
+      std::mt19937 rng(seed);
+      std::normal_distribution<double> ball(0.0, 0.01);
+      for (const BallbarSetup& s : plan.test.setups) {
+        indep::Setup is;
+        is.id = s.id;
+        is.table_ball_w = s.table_ball_w;
+        is.tool_ball_t = s.tool_ball_t;
+        is.table_error_w = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+        is.tool_error_t = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+        setups.push_back(is);
+      }
+      std::vector<indep::Pose> poses;
+      for (const BallbarReading& r : plan.test.readings) {
+        indep::Pose p;
+        p.setup = r.setup;
+        for (int a = 0; a < 5; ++a) p.q[a] = r.q[a];
+        poses.push_back(p);
+      }
+      indep::measure(truth, poses, setups, 20.0, 0.5e-3, 700 + seed);
+      indep::writeCsv(dir + "/fit.csv", poses, setups, false);
+      const BallbarFile f = readBallbarFile(dir + "/fit.csv", nominal.model, true);
+      CalibrationOptions co;
+      co.prior_linear = prior_um * 1e-3;
+      co.prior_angular = prior_urad * 1e-6;
+      if (prior_um < 0) {  // auto: the scale by the evidence of the readings, units 1 um / 3.3 urad
+        const CalibrationResult free = calibrate(nominal.model, nominal.params, f.test, unknowns);
+        const double kk = choosePriorScale(nominal.model, f.test, free, 1e-3, 3.3e-6);
+        co.prior_linear = kk * 1e-3;
+        co.prior_angular = kk * 3.3e-6;
+        co.prior_noise = free.residual_sigma;
+      }
+      const CalibrationResult r = calibrate(nominal.model, nominal.params, f.test, unknowns, co);
+      Machine id = nominal;
+      id.params = r.params;
+      id.identification = identificationUncertainty(r, f.test, 5);
+      writeFileAtomically(dir + "/id.xml", formatMachineXml(id, "campaign"));
+      return readMachineFile(dir + "/id.xml");
+    };
     BallbarPlanOptions po;
     po.poses = 360;
     po.seed = 5000 + seed;
     po.reference_every = 8;
-    const BallbarPlan plan = planBallbarTest(nominal.model, unknowns, po);
-    std::vector<indep::Setup> setups;
-    std::mt19937 rng(seed);
-    std::normal_distribution<double> ball(0.0, 0.01);
-    for (const BallbarSetup& s : plan.test.setups) {
-      indep::Setup is;
-      is.id = s.id;
-      is.table_ball_w = s.table_ball_w;
-      is.tool_ball_t = s.tool_ball_t;
-      is.table_error_w = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
-      is.tool_error_t = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
-      setups.push_back(is);
+    if (for_mode) {
+      for (bool aimed : {false, true}) {
+        BallbarPlanOptions pa = po;
+        if (aimed)
+          for (size_t i = 0; i < cone.size(); i += std::max<size_t>(1, cone.size() / 60)) pa.target_poses.push_back(cone[i]);
+        const Figures g = measure(truth, calibrateWith(pa), cone);
+        std::printf("| %u | %s | the cone's poses | %.2f | %.2f | %.2f | %.1f | %.1f | %.3f |\n", seed,
+                    aimed ? "--for the cone" : "D-optimal", g.tip_rms, g.own_tip_rms, g.tip_rms / g.own_tip_rms,
+                    g.axis_rms, g.own_axis_rms, g.coverage);
+        std::fflush(stdout);
+      }
+      continue;
     }
-    std::vector<indep::Pose> poses;
-    for (const BallbarReading& r : plan.test.readings) {
-      indep::Pose p;
-      p.setup = r.setup;
-      for (int a = 0; a < 5; ++a) p.q[a] = r.q[a];
-      poses.push_back(p);
-    }
-    indep::measure(truth, poses, setups, 20.0, 0.5e-3, 700 + seed);
-    indep::writeCsv(dir + "/fit.csv", poses, setups, false);
-    const BallbarFile f = readBallbarFile(dir + "/fit.csv", nominal.model, true);
-    CalibrationOptions co;
-    co.prior_linear = prior_um * 1e-3;
-    co.prior_angular = prior_urad * 1e-6;
-    if (prior_um < 0) {  // auto: the scale by the evidence of the readings, units 1 um / 3.3 urad
-      const CalibrationResult free = calibrate(nominal.model, nominal.params, f.test, unknowns);
-      const double k = choosePriorScale(nominal.model, f.test, free, 1e-3, 3.3e-6);
-      co.prior_linear = k * 1e-3;
-      co.prior_angular = k * 3.3e-6;
-      co.prior_noise = free.residual_sigma;
-      std::fprintf(stderr, "seed %u: prior scale %.3g -> %.3g um, %.3g urad\n", seed, k, k, 3.3 * k);
-    }
-    const CalibrationResult r = calibrate(nominal.model, nominal.params, f.test, unknowns, co);
-    Machine id = nominal;
-    id.params = r.params;
-    id.identification = identificationUncertainty(r, f.test, 5);
-    writeFileAtomically(dir + "/id.xml", formatMachineXml(id, "campaign"));
-    id = readMachineFile(dir + "/id.xml");
+    const Machine id = calibrateWith(po);
     std::mt19937 prng(seed + 1);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     for (bool inside : {false, true}) {
