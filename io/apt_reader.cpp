@@ -40,6 +40,10 @@ class Parser {
       : opt_(opt) {
     prog_.file = file;
     prog_.lines = splitLines(text);
+    // A UTF-8 byte-order mark before the first statement (editors on Windows write one): not
+    // part of it, or a leading UNITS/INCHES would be lost.
+    if (!prog_.lines.empty() && prog_.lines[0].rfind("\xEF\xBB\xBF", 0) == 0)
+      prog_.lines[0] = prog_.lines[0].substr(3);
     prog_.frames.push_back(ClFrame{});
   }
 

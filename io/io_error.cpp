@@ -8,14 +8,40 @@
 
 namespace tolver {
 namespace {
+// A message quotes at most 60 characters of an offending token (the text between single
+// quotes: a 3 MB line must not become a 3 MB message), and the whole stays under 2000.
+std::string bounded(const std::string& text) {
+  std::string out;
+  bool quoted = false;
+  size_t run = 0;
+  for (char c : text) {
+    if (c == '\'') {
+      quoted = !quoted;
+      run = 0;
+      out += c;
+      continue;
+    }
+    if (quoted && ++run > 60) {
+      if (run == 61) out += "...";
+      continue;
+    }
+    out += c;
+    if (out.size() >= 2000) {
+      out += "...";
+      break;
+    }
+  }
+  return out;
+}
+
 std::string format(const std::string& file, int line, int column, const std::string& field,
                    const std::string& message) {
   std::string s = file;
   if (line > 0) s += ":" + std::to_string(line);
   if (column > 0) s += ":" + std::to_string(column);
   s += ": ";
-  if (!field.empty()) s += field + ": ";
-  return s + message;
+  if (!field.empty()) s += bounded(field) + ": ";
+  return s + bounded(message);
 }
 }  // namespace
 

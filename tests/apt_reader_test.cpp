@@ -261,3 +261,31 @@ TEST(AptReader, MutatedFilesFailCleanly) {
 
 }  // namespace
 }  // namespace tolver
+
+namespace tolver {
+namespace {
+
+// A UTF-8 byte-order mark before a leading UNITS/INCHES (issue 17, defect 12): the units hold.
+TEST(AptReader, ByteOrderMarkBeforeTheFirstStatementIsSkipped) {
+  const ClProgram p = parseApt("\xEF\xBB\xBFUNITS/INCHES\nMULTAX\nGOTO/0.5,0.5,0.2,0,0,1\n", "bom.apt", {});
+  ASSERT_EQ(p.path.size(), 1u);
+  EXPECT_EQ(p.units, "INCH");
+  EXPECT_NEAR(p.path[0].p_w.x(), 0.5 * 25.4, 1e-12);
+}
+
+// A 3 kB malformed number (issue 17, defect 9): the message quotes 60 characters of it.
+TEST(AptReader, MessagesQuoteAtMostSixtyCharactersOfABadToken) {
+  const std::string token(3000, '9');
+  try {
+    parseApt("GOTO/1,2,3,0,0,1\nGOTO/" + token + "x,2,3,0,0,1\n", "long.apt", {});
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_LT(m.size(), 200u) << m.size();
+    EXPECT_NE(m.find("long.apt:2"), std::string::npos) << m;
+    EXPECT_NE(m.find(std::string(60, '9') + "..."), std::string::npos) << m;
+  }
+}
+
+}  // namespace
+}  // namespace tolver
