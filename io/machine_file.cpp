@@ -2,6 +2,8 @@
 
 #include <tinyxml2.h>
 
+#include <Eigen/LU>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -241,6 +243,20 @@ class Reader {
     m.last_T_table = frame(root->FirstChildElement("table"), angle);
     m.last_T_spindle = frame(root->FirstChildElement("spindle"), angle);
     if (const XMLElement* c = root->FirstChildElement("control")) control(c, m.control);
+    // The prismatic axes must span their directions: two along one line leave the tool tip
+    // unplaceable (issue 17, defect 1).
+    {
+      std::vector<int> prismatic;
+      for (size_t a = 0; a < m.axes.size(); ++a)
+        if (!m.axes[a].isRotary()) prismatic.push_back(static_cast<int>(a));
+      Eigen::MatrixXd D(3, prismatic.size());
+      for (size_t k = 0; k < prismatic.size(); ++k) D.col(k) = m.axes[prismatic[k]].direction.normalized();
+      if (!prismatic.empty() && Eigen::FullPivLU<Eigen::MatrixXd>(D).setThreshold(1e-6).rank() <
+                                    static_cast<Eigen::Index>(std::min<size_t>(3, prismatic.size()))) {
+        const XMLElement* e = root->FirstChildElement("axis");
+        fail(e, "axis.direction", "the prismatic axes' directions are dependent (two along one line?)");
+      }
+    }
 
     // Error model.
     const XMLElement* errs = root->FirstChildElement("errors");

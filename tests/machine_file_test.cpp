@@ -105,6 +105,16 @@ TEST(MachineFile, MalformedFilesNameLineAndField) {
        "min='0' max='1'/>\n<errors><link axis='X' component='ew' value='1'/></errors></machine>",
        3, "link.component"},
       {"<machine name='m'>\n<axis name='X'", 2, "xml"},
+      // Two prismatic axes along one line (issue 17, defect 1).
+      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
+       "min='0' max='1'/>\n<axis name='Y' type='prismatic' branch='tool' direction='2 0 0' "
+       "min='0' max='1'/></machine>",
+       2, "axis.direction"},
+      // A covariance that is not symmetric.
+      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
+       "min='0' max='1'/>\n<identification_uncertainty>\n<covariance parameters='EXX.c1 EXX.c2'>"
+       "<row>1 0.5</row><row>0.2 1</row></covariance></identification_uncertainty></machine>",
+       4, "covariance"},
       {"<machine name='m'></machine>", 1, "axis"},
   };
   for (const Case& c : cases) {
