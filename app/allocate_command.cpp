@@ -39,7 +39,7 @@ void runAllocate(const AllocateOptions& o, int* exit_code) {
   }
   if (o.limits.size() != 3 || !(o.limits[0] > 0 && o.limits[1] > 0 && o.limits[2] > 0))
     throw InputError("--limits", 0, 0, "limits", "expected three positive values dx,dy,dz in mm");
-  std::filesystem::create_directories(o.report_dir);
+  makeReportDir(o.report_dir);
   AllocationModel a;
   a.limits = Eigen::Vector3d(o.limits[0], o.limits[1], o.limits[2]);
   a.h_p = o.cost[0];

@@ -238,6 +238,14 @@ void checkOutputDir(const std::string& path, const char* option) {
     throw InputError(path, 0, 0, option, "directory " + dir.string() + " does not exist");
 }
 
+void makeReportDir(const std::string& dir, const char* option) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir, ec))
+    throw InputError(dir, 0, 0, option,
+                     "cannot create the directory" + (ec ? ": " + ec.message() : std::string()));
+}
+
 std::string replaceExtension(const std::string& path, const std::string& ext) {
   std::filesystem::path p(path);
   const std::filesystem::path original = p;

@@ -51,6 +51,9 @@ std::vector<std::string> programNotes(const ClProgram& program);
 
 // Throws InputError when the directory of `path` does not exist.
 void checkOutputDir(const std::string& path, const char* option);
+// Creates a report directory (and its parents); an unwritable place, a path below a regular
+// file or naming one is InputError (exit 2), never an internal error.
+void makeReportDir(const std::string& dir, const char* option = "--report-dir");
 // A progress bar on stderr when it is a terminal (and enabled).
 class ProgressBar {
  public:

@@ -72,10 +72,7 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
   const BallbarTest heldout = loadHeldout(o.heldout, machine.model, f.test, o.readings);
   const std::string balls_file = o.balls.empty() ? ballsPathFor(o.output) : o.balls;
   checkOutputDir(balls_file, "--balls");
-  std::error_code ec;
-  std::filesystem::create_directories(o.report_dir, ec);
-  if (!std::filesystem::is_directory(o.report_dir))
-    throw InputError(o.report_dir, 0, 0, "--report-dir", "cannot create the directory");
+  makeReportDir(o.report_dir);
   checkOutputDir(o.output, "-o");
   if (!o.cl.empty() && !std::filesystem::exists(o.cl))
     throw InputError(o.cl, 0, 0, "--cl", "no such file");

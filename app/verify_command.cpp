@@ -414,7 +414,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   }
 
   // Files: deviations, swept surfaces, images, reports.
-  fs::create_directories(o.report_dir);
+  makeReportDir(o.report_dir);
   if (!fs::is_directory(o.report_dir))
     throw InputError(o.report_dir, 0, 0, "--report-dir", "cannot create the directory");
   const fs::path dir(o.report_dir);
@@ -556,7 +556,7 @@ int runBatch(const VerifyOptions& base) {
     names.push_back(name);
   }
   if (jobs.empty()) throw InputError(base.batch, 0, 0, "jobs", "the file lists no job");
-  fs::create_directories(base.report_dir);
+  makeReportDir(base.report_dir);
   std::vector<JobOutcome> outcomes(jobs.size());
   std::atomic<int> done{0};
   std::mutex print;

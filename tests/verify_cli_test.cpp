@@ -85,6 +85,15 @@ TEST_F(VerifyCli, BadInputExitsTwoNamingTheFile) {
   r = runTolver(base("--report-dir " + path("out")));  // no tolerance
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("--tolerance"), std::string::npos) << r.output;
+  // A report directory below a regular file (issue 17, defect 6): exit 2 naming it, not 3.
+  const std::string file = write("plain.txt", "x");
+  r = runTolver("verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
+                " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
+                sourcePath("samples/nas979_cone.apt") + " --tolerance 0.05 --no-images --report-dir " +
+                file + "/out");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--report-dir"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
 }
 
 TEST_F(VerifyCli, MalformedJobsFileExitsTwoNamingItsLine) {
