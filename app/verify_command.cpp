@@ -551,6 +551,10 @@ int runBatch(const VerifyOptions& base) {
     const std::string name = cell("name");
     if (name.empty() || name.find('/') != std::string::npos || name == "." || name == "..")
       throw InputError(base.batch, line, col["name"] + 1, "name", "a job name is a plain file name");
+    // Two jobs of one name would write one directory, one report lost (issue 17, defect 15).
+    if (std::find(names.begin(), names.end(), name) != names.end())
+      throw InputError(base.batch, line, col["name"] + 1, "name",
+                       "job '" + name + "' is named twice: each job needs its own name");
     o.report_dir = (fs::path(base.report_dir) / name).string();
     jobs.push_back(o);
     names.push_back(name);

@@ -194,6 +194,7 @@ class Reader {
       Axis axis;
       double order;
       int index;
+      bool explicit_order = false;
     };
     std::vector<Pending> pending;
     for (const XMLElement* e = root->FirstChildElement("axis"); e;
@@ -229,8 +230,16 @@ class Reader {
       else fail(e, "axis.nc_sign", "expected +1 or -1");
       ax.parent_T_joint = frame(e->FirstChildElement("link"), angle);
       double order = static_cast<double>(pending.size());
-      if (e->Attribute("order")) order = number(e, "order");
-      pending.push_back({ax, order, static_cast<int>(pending.size())});
+      if (e->Attribute("order")) {
+        order = number(e, "order");
+        // Two axes at one place in a branch leave the chain's order to chance (issue 17, 11).
+        for (const Pending& p : pending)
+          if (p.axis.branch == ax.branch && p.order == order && p.explicit_order)
+            fail(e, "axis.order", "order " + formatNumber(order) + " is also axis " + p.axis.name +
+                                      "'s in the " +
+                                      (ax.branch == Branch::Workpiece ? "workpiece" : "tool") + " branch");
+      }
+      pending.push_back({ax, order, static_cast<int>(pending.size()), e->Attribute("order") != nullptr});
       if (pending.size() > static_cast<size_t>(kMaxAxes)) fail(e, "axis", "too many axes");
     }
     if (pending.empty()) fail(root, "axis", "the machine has no axes");

@@ -110,6 +110,11 @@ TEST(MachineFile, MalformedFilesNameLineAndField) {
        "min='0' max='1'/>\n<axis name='Y' type='prismatic' branch='tool' direction='2 0 0' "
        "min='0' max='1'/></machine>",
        2, "axis.direction"},
+      // Two axes at one order in a branch (issue 17, defect 11).
+      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' order='1' direction='1 0 0' "
+       "min='0' max='1'/>\n<axis name='Y' type='prismatic' branch='tool' order='1' direction='0 1 0' "
+       "min='0' max='1'/></machine>",
+       3, "axis.order"},
       // A covariance that is not symmetric.
       {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
        "min='0' max='1'/>\n<identification_uncertainty>\n<covariance parameters='EXX.c1 EXX.c2'>"

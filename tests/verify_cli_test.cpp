@@ -105,6 +105,13 @@ TEST_F(VerifyCli, MalformedJobsFileExitsTwoNamingItsLine) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   r = runTolver("verify --batch " + write("nocol.csv", "name,cl\nx,a.apt\n") + " --report-dir " + path("out"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
+  // Two jobs of one name (issue 17, defects 11 and 15): the second named by its line.
+  r = runTolver("verify --batch " +
+                write("twice.csv", "name,machine,cl,part,tolerance\nj,m.xml,a.apt,,0.02\nj,m.xml,b.apt,,0.02\n") +
+                " --report-dir " + path("out"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("twice.csv:3"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("named twice"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(path("out/summary.csv")));
 }
 
