@@ -64,6 +64,12 @@ std::vector<ToleranceTerm> parseToleranceCsv(const std::string& text, const std:
       }
       const auto v = parseNumber(s);
       if (!v || !(*v > 0)) throw InputError(file, line, 0, name, "expected a positive number, found '" + s + "'");
+      // A tolerance is a machine's: at most 10 mm, or 10 mrad (issue 17, defect 10).
+      const double limit = angular ? 0.01 : 10.0;
+      if (*v * scale > limit)
+        throw InputError(file, line, 0, name,
+                         "'" + s + "' " + unit + " is beyond any machine tolerance (at most " +
+                             (angular ? "10 mrad" : "10 mm") + ")");
       return *v * scale;
     };
     term.standard = number("standard", -1);
@@ -78,6 +84,9 @@ std::vector<ToleranceTerm> parseToleranceCsv(const std::string& text, const std:
     }
     if (!(term.lower <= term.standard || term.lower <= term.upper) || term.lower > term.upper)
       throw InputError(file, line, 0, "upper", "upper bound below the lower bound");
+    if (!(term.upper > term.lower * (1.0 + 1e-9)))
+      throw InputError(file, line, 0, "upper",
+                       "the band from lower to upper is empty: nothing to allocate");
     for (const ToleranceTerm& o : out)
       if (o.parameter == term.parameter) throw InputError(file, line, 0, "term", "term given twice");
     out.push_back(term);

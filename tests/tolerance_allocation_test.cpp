@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "io/machine_file.h"
+#include "io/io_error.h"
 #include "io/tolerance_file.h"
 #include "test_support.h"
 
@@ -112,6 +113,27 @@ TEST(ToleranceAllocation, Xkh800StandardToleranceBreaksTheLimitsUnderWorstCaseSt
   for (const AllocationSolution& s : r.front) {
     const Eigen::Vector3d exact = verifyAccuracy(m.model, terms, acc, s.T);
     for (int d = 0; d < 3; ++d) EXPECT_LE(exact[d], a.limits[d] * (1 + 1e-6));
+  }
+}
+
+}  // namespace
+}  // namespace tolver
+
+namespace tolver {
+namespace {
+
+// Absurd tolerances and an empty band are refused with the line (issue 17, defect 10).
+TEST(ToleranceFile, ImplausibleValuesAndEmptyBandsAreRefused) {
+  const Machine m = parseMachineXml(kTwoTermMachine, "two.xml");
+  const std::string head = "term,category,standard,unit,lower,upper\n";
+  for (const char* row : {"EXX.c0,linear_positioning,1e300,mm,,\n",
+                          "EXX.c0,linear_positioning,0.005,mm,0.005,0.005\n"}) {
+    try {
+      parseToleranceCsv(head + row, "t.csv", m.model);
+      ADD_FAILURE() << row;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.line(), 2) << e.what();
+    }
   }
 }
 
