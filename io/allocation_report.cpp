@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
+#include "io/json_text.h"
+
 #include "io/io_error.h"
 #include "io/text_util.h"
 #include "io/png_plot.h"
@@ -132,7 +134,7 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
     j["chosen"] = nullptr;
     j["message"] = "no allocation within the bounds meets the limits";
   }
-  writeFileAtomically(dir + "/report.json", j.dump(2) + "\n");
+  writeFileAtomically(dir + "/report.json", jsonText(j));
 
   // report.html, self-contained.
   std::string h = "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>tolver allocation</title>"

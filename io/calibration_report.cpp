@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
+#include "io/json_text.h"
+
 namespace tolver {
 
 std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test,
@@ -97,7 +99,7 @@ std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test
   for (const RemovedReading& g : in.removed)
     removed.push_back({{"line", g.line}, {"residual_um", g.residual * 1e3}, {"studentized", g.studentized}});
   j["gross_readings_removed"] = removed;
-  return j.dump(2) + "\n";
+  return jsonText(j);
 }
 
 std::string standsFor(const MachineModel& m, int p, const std::vector<AbsorbedTerm>& terms,

@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+
+#include "io/json_text.h"
 #include <sstream>
 
 #include "core/effects.h"
@@ -275,7 +277,7 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
                       {"change_rms_um", um(p.change_rms)},
                       {"change_max_line", p.change_max_line}};
   }
-  return out.dump(2) + "\n";
+  return jsonText(out);
 }
 
 std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,

@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
+#include "io/json_text.h"
+
 #include "io/io_error.h"
 #include "io/text_util.h"
 
@@ -109,7 +111,7 @@ std::string formatVerifyJson(const VerifyReport& r) {
   json timings = json::object();
   for (const auto& [phase, t] : r.timings) timings[phase] = std::round(t * 1000) / 1000;
   j["timings_s"] = timings;
-  return j.dump(2) + "\n";
+  return jsonText(j);
 }
 
 std::string formatDeviationsCsv(const VerifyReport& r) {

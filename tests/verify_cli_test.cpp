@@ -85,6 +85,15 @@ TEST_F(VerifyCli, BadInputExitsTwoNamingTheFile) {
   r = runTolver(base("--report-dir " + path("out")));  // no tolerance
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("--tolerance"), std::string::npos) << r.output;
+  // A zone name with an invalid UTF-8 byte (issue 17, defect 2): the report is written and
+  // reads back as JSON.
+  const std::string zbad = write("zbad.csv", "region,tolerance\n*,0.05\n\xcb" "bad,0.03\n");
+  r = runTolver("verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
+                " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
+                sourcePath("samples/nas979_cone.apt") + " --zones " + zbad + " --no-images --report-dir " +
+                path("z"));
+  EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+  EXPECT_NO_THROW(nlohmann::json::parse(slurp(path("z") + "/report.json")));
   // A report directory below a regular file (issue 17, defect 6): exit 2 naming it, not 3.
   const std::string file = write("plain.txt", "x");
   r = runTolver("verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
