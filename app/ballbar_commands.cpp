@@ -388,16 +388,18 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
   identified.model.errors_source = "identified";
   identified.identification =
       identificationUncertainty(r, used, static_cast<int>(m.axes.size()));
-  writeFileAtomically(o.output, formatMachineXml(identified, "identified by tolver calibrate from " +
-                                                                 o.readings + " (" + r.message +
-                                                                 "); ball positions in " +
-                                                                 balls_file));
-  writeFileAtomically(balls_file,
-                      formatBallPositionsCsv(f.test, r.ball_errors, &r.ball_uncertainty,
-                                             {"identified ball positions of " + o.readings +
-                                              " by tolver calibrate (machine " + o.output + ")"}));
+  // The machine, its ball positions and the report as a set: all three or none.
+  OutputSet outputs;
+  const std::string xml_tmp = outputs.add(
+      o.output, formatMachineXml(identified, "identified by tolver calibrate from " + o.readings +
+                                                 " (" + r.message + "); ball positions in " +
+                                                 balls_file));
+  const std::string balls_tmp = outputs.add(
+      balls_file, formatBallPositionsCsv(f.test, r.ball_errors, &r.ball_uncertainty,
+                                         {"identified ball positions of " + o.readings +
+                                          " by tolver calibrate (machine " + o.output + ")"}));
   // What the written files predict, read back as the next command will.
-  const WrittenCheck check = checkWrittenFiles(o.output, balls_file, used, heldout);
+  const WrittenCheck check = checkWrittenFiles(xml_tmp, balls_tmp, used, heldout);
   std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um",
               o.output.c_str(), balls_file.c_str(), check.fit.rms * 1e3);
   if (check.heldout.readings > 0)
@@ -415,7 +417,8 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
   in.written = check;
   for (const GrossReading& g : rc.removed)
     in.removed.push_back({f.test.readings[g.index].line, g.residual, g.studentized});
-  writeFileAtomically(report, formatCalibrationJson(m, used, r, in));
+  outputs.add(report, formatCalibrationJson(m, used, r, in));
+  outputs.commit();
   std::printf("  wrote      %s (identified machine), %s (ball positions), %s (report)\n",
               o.output.c_str(), balls_file.c_str(), report.c_str());
   *exit_code = r.status == CalibrationStatus::Converged ? 0 : 1;

@@ -68,7 +68,8 @@ void runPredict(const PredictOptions& o, int* exit_code) {
       "tolver predicted CL: " + program.file + " on " + machine.model.name + " (" +
           o.machine.machine + ")",
       "each GOTO is the tool position the machine will really reach, in the program's frame"};
-  writeFileAtomically(o.output, formatPredictedApt(program, predicted, header));
+  OutputSet outputs;  // both files, or neither
+  outputs.add(o.output, formatPredictedApt(program, predicted, header));
   // The prediction's uncertainty, when the machine file carries its calibration's covariance.
   // The uncertainty of each prediction, from the calibration's covariance (modulo the measured
   // set-up when it was applied).
@@ -84,8 +85,8 @@ void runPredict(const PredictOptions& o, int* exit_code) {
     unc.reserve(pts.size());
     for (const PredictedPoint& p : pts) unc.push_back(pu.at(p.q));
   }
-  writeFileAtomically(table, formatPointTable(machine.model, program.path, pts,
-                                              unc.empty() ? nullptr : &unc));
+  outputs.add(table, formatPointTable(machine.model, program.path, pts, unc.empty() ? nullptr : &unc));
+  outputs.commit();
 
   // Summary.
   const PredictionSummary& s = r.summary;

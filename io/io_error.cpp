@@ -53,6 +53,40 @@ InputError::InputError(const std::string& file, int line, int column, const std:
       column_(column),
       field_(field) {}
 
+namespace {
+void writeTemporary(const std::string& path, const std::string& tmp, const std::string& content) {
+  std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+  if (!out) throw InputError(path, 0, 0, "output", std::string("cannot write: ") + std::strerror(errno));
+  out << content;
+  out.flush();
+  if (!out) {
+    out.close();
+    std::remove(tmp.c_str());
+    throw InputError(path, 0, 0, "output", "write failed");
+  }
+}
+}  // namespace
+
+OutputSet::~OutputSet() {
+  for (const auto& [tmp, path] : pending_) std::remove(tmp.c_str());
+}
+
+std::string OutputSet::add(const std::string& path, const std::string& content) {
+  const std::string tmp = path + ".tmp-tolver";
+  writeTemporary(path, tmp, content);
+  pending_.emplace_back(tmp, path);
+  return tmp;
+}
+
+void OutputSet::commit() {
+  for (const auto& [tmp, path] : pending_)
+    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+      const std::string why = std::strerror(errno);
+      throw InputError(path, 0, 0, "output", "cannot replace file: " + why);
+    }
+  pending_.clear();
+}
+
 void writeFileAtomically(const std::string& path, const std::string& content) {
   const std::string tmp = path + ".tmp-tolver";
   {

@@ -3,6 +3,8 @@
 // what() as one line and exits with code 2.
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace tolver {
 
@@ -26,6 +28,23 @@ class InputError : public std::runtime_error {
 // Writes content to path atomically: a temporary file beside it, then rename. Throws InputError
 // (field "output") when the directory cannot be written.
 void writeFileAtomically(const std::string& path, const std::string& content);
+
+// Several outputs of one command written as a set: add() writes each to a temporary file beside
+// its path (returning that name, so the command can read back what it wrote); commit() renames
+// them all. A failure before commit() (a second output that cannot be written) leaves none of
+// the new files and every previous one in place; the destructor removes the temporaries.
+class OutputSet {
+ public:
+  OutputSet() = default;
+  OutputSet(const OutputSet&) = delete;
+  OutputSet& operator=(const OutputSet&) = delete;
+  ~OutputSet();
+  std::string add(const std::string& path, const std::string& content);
+  void commit();
+
+ private:
+  std::vector<std::pair<std::string, std::string>> pending_;  // temporary, final path
+};
 
 // Reads a whole file; throws InputError when it cannot be opened.
 std::string readFile(const std::string& path);

@@ -162,3 +162,29 @@ TEST_F(PredictCli, HelpExitsZero) {
 
 }  // namespace
 }  // namespace tolver
+
+namespace tolver {
+namespace {
+
+class PredictOutputs : public test::TempDirTest {};
+
+// The second output cannot be written (issue 17, defect 7): neither is left, exit 2; the same
+// for calibrate's machine file when its report cannot be written.
+TEST_F(PredictOutputs, ASecondOutputThatFailsLeavesNoFirst) {
+  auto r = test::runTolver("predict --machine " + test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
+                           " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " --cl " +
+                           test::sourcePath("samples/nas979_cone.apt") + " -o " + path("ok.apt") +
+                           " --errors /proc/tolver_cannot_write.csv");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(path("ok.apt")));
+  EXPECT_FALSE(std::filesystem::exists(path("ok.apt.tmp-tolver")));
+  r = test::runTolver("calibrate --machine " + test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
+                      " --readings " + test::sourcePath("samples/ballbar/clean.csv") + " -o " +
+                      path("ok.xml") + " --report /proc/tolver_cannot_write.json");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(path("ok.xml")));
+  EXPECT_FALSE(std::filesystem::exists(path("ok_balls.csv")));
+}
+
+}  // namespace
+}  // namespace tolver
