@@ -110,6 +110,17 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
   collect(scene, scene->mRootNode, Eigen::Matrix4d::Identity(), &raw, &seen);
   if (raw.faces.empty()) throw InputError(path, 0, 0, "mesh", "the file holds no triangles");
   for (auto& v : raw.vertices) v = options.w_T_file * (scale * v);
+  // A vertex far beyond any part (a corrupt or mis-scaled file) would make the sampling and
+  // the sweeps run for hours (issue 17, defect 3): parts lie within 1e5 mm of the part frame.
+  for (size_t i = 0; i < raw.vertices.size(); ++i)
+    if (!raw.vertices[i].allFinite() || raw.vertices[i].cwiseAbs().maxCoeff() > 1e5) {
+      char buf[160];
+      std::snprintf(buf, sizeof buf,
+                    "vertex %zu at (%.4g, %.4g, %.4g) mm lies beyond 1e5 mm of the part frame "
+                    "(a corrupt file, or the wrong --mesh-units?)",
+                    i, raw.vertices[i].x(), raw.vertices[i].y(), raw.vertices[i].z());
+      throw InputError(path, 0, 0, "mesh", buf);
+    }
   try {
     part.mesh = repairMesh(raw, options.repair, &part.repair);
   } catch (const MeshDefect& d) {
