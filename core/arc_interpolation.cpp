@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace tolver {
 
@@ -35,6 +36,12 @@ bool interpolateArc(const Eigen::Vector3d& start, const Eigen::Vector3d& end,
     }
   }
   return true;
+}
+
+double arcPointsPerTurn(double radius, double tol) {
+  const double r = std::max(radius, 1e-12);
+  const double dphi = 2.0 * std::acos(std::max(-1.0, 1.0 - std::min(tol, r) / r));
+  return dphi > 0.0 ? 2.0 * M_PI / dphi : std::numeric_limits<double>::infinity();
 }
 
 }  // namespace tolver

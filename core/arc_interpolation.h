@@ -15,4 +15,10 @@ bool interpolateArc(const Eigen::Vector3d& start, const Eigen::Vector3d& end,
                     double chordal_tolerance, double radius_tolerance,
                     std::vector<Eigen::Vector3d>& out);
 
+// Points a full turn of radius r (mm) needs at the chordal tolerance: what a reader checks
+// against its budget before expanding an arc (a 1.7 kB file of 9e8 mm circles must not expand
+// for minutes). Infinite for a non-positive tolerance.
+double arcPointsPerTurn(double radius, double chordal_tolerance);
+constexpr double kMaxArcPoints = 1e6;
+
 }  // namespace tolver

@@ -714,8 +714,7 @@ class Reader {
     const double tol = opt_.chordal_tolerance_mm;
     const double r0 = (start - centre - n * n.dot(start - centre)).norm();
     // Bounded work: a full turn at this radius and tolerance, before anything is expanded.
-    const double dphi = 2.0 * std::acos(std::max(-1.0, 1.0 - std::min(tol, r0) / std::max(r0, 1e-12)));
-    if (!(dphi > 0.0) || 2.0 * M_PI / dphi > 1e6)
+    if (!(arcPointsPerTurn(r0, tol) <= kMaxArcPoints))
       fail(line_, 0, motion,
            "an arc of radius " + formatNumber(r0) + " mm would expand into more than a million "
            "points at chordal tolerance " + formatNumber(tol) + " mm (raise --chordal-tol)");

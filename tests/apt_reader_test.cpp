@@ -205,6 +205,8 @@ TEST(AptReader, BadInputNamesFileLineAndColumn) {
       {"GOTO/1,2,3,0,0,0\n", 1, 12, "zero-length"},
       {"GOTO/1,2, $\n", 1, 0, "past the end"},
       {"GOTO/1,2,3\nCIRCLE/0,0,0,0,0,1,1\nGOTO/5,0,0\n", 2, 0, "not on one circle"},
+      // A circle of 9e8 mm (issue 17, defect 13): refused before any point is expanded.
+      {"GOTO/900000000,0,0\nCIRCLE/0,0,0,0,0,1,900000000\nGOTO/0,900000000,0\n", 2, 0, "more than a million"},
       {"CSYS/1,0,0,0,0,2,0,0,0,0,1,0\n", 1, 0, "orthonormal"},
       {"UNITS/INCHES\nGOTO/1e300,0,0\n", 2, 6, "out of range"},
       {"GOTO/1,2,3\nNURBS/\nKNOT/0,1\n", 2, 0, "NURBS"},
