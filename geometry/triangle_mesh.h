@@ -21,12 +21,11 @@ struct TriangleMesh {
   double faceArea(int f) const;
 };
 
-// Splits every edge longer than max_edge at its midpoint, conformingly (neighbouring faces share
-// the new vertices), until no edge is longer: the samples then lie at most max_edge apart on the
-// mesh's own (faceted) surface. Between rounds of splits, edges between coplanar faces of one
-// group are flipped towards Delaunay (the surface does not change), so the long thin triangles
-// CAD systems write on flat faces become well-shaped instead of multiplying. Face groups are
-// inherited. (OpenMesh; mesh_refine.cpp.)
+// Remeshes to edges of about max_edge (CGAL's isotropic remeshing in mesh_refine.cpp: edges
+// split, collapsed and flipped, vertices relaxed on the surface, sharp edges and face-group
+// borders kept as constraints), so the samples lie about max_edge apart on the mesh's own
+// (faceted) surface and the long thin triangles CAD systems write become well-shaped. Face groups
+// are inherited.
 void refineMesh(TriangleMesh* mesh, double max_edge);
 
 // Surface samples: the refined mesh's vertices with outward unit normals. Along sharp edges
