@@ -1,4 +1,4 @@
-// tolver allocate: tolerance allocation for machine builders (paper 002, Cai et al.).
+// tolver allocate: tolerance allocation for machine builders (Cai, Li, Cheng, Sun, Wang: "A method to optimize geometric errors of machine tool based on SNR quality loss function and correlation analysis").
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

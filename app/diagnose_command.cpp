@@ -1,5 +1,5 @@
 // tolver diagnose: after a ball-bar calibration, find what the model failed to explain, trace it
-// to an effect the model lacks, add it, and report the error before and after (issue 5).
+// to an effect the model lacks, add it, and report the error before and after.
 #include <chrono>
 #include <cmath>
 #include <cstdio>

@@ -551,7 +551,7 @@ int runBatch(const VerifyOptions& base) {
     const std::string name = cell("name");
     if (name.empty() || name.find('/') != std::string::npos || name == "." || name == "..")
       throw InputError(base.batch, line, col["name"] + 1, "name", "a job name is a plain file name");
-    // Two jobs of one name would write one directory, one report lost (issue 17, defect 15).
+    // Two jobs of one name would write one directory, one report lost.
     if (std::find(names.begin(), names.end(), name) != names.end())
       throw InputError(base.batch, line, col["name"] + 1, "name",
                        "job '" + name + "' is named twice: each job needs its own name");

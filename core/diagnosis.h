@@ -1,5 +1,5 @@
 #pragma once
-// Closing the loop (issue 5): after a ball-bar calibration, find what the model failed to
+// Closing the loop: after a ball-bar calibration, find what the model failed to
 // explain, trace it to an effect the model lacks (core/effects.h), add it, refit, and report the
 // error before and after. Nothing is added when nothing is missing.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// What a fit's residuals follow (issue 5): against every joint coordinate (a smooth trend and,
+// What a fit's residuals follow: against every joint coordinate (a smooth trend and,
 // for uneven sampling, a Lomb-Scargle periodogram: periods of 2 to 100 mm on a prismatic axis,
 // harmonic orders 1 to 8 on a rotary one), against each axis's approach direction, against
 // time, per set-up, the runs test in measurement order, and the drift of repeated poses.

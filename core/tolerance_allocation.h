@@ -1,5 +1,5 @@
 #pragma once
-// Tolerance allocation for machine builders (paper 002, Cai et al.): how loose can each geometric
+// Tolerance allocation for machine builders (Cai, Li, Cheng, Sun, Wang: "A method to optimize geometric errors of machine tool based on SNR quality loss function and correlation analysis"): how loose can each geometric
 // error be toleranced so that the machine costs least while its tool-tip error stays within the
 // accuracy limits?
 //

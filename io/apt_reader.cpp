@@ -395,7 +395,7 @@ class Parser {
       const Eigen::Vector3d start = prog_.path.back().p_w;
       const double r = ((start - arc_centre_w_) -
                         arc_axis_w_ * arc_axis_w_.dot(start - arc_centre_w_)).norm();
-      // Bounded work (issue 17, defect 13): a full turn's points, before anything is expanded.
+      // Bounded work: a full turn's points, before anything is expanded.
       if (!(arcPointsPerTurn(r, opt_.chordal_tolerance_mm) <= kMaxArcPoints))
         fail(arc_line_, 0, "CIRCLE",
              "an arc of radius " + formatNumber(r) + " mm would expand into more than a million "

@@ -83,7 +83,7 @@ BallbarFile parseBallbarCsv(const std::string& text, const std::string& file, co
         throw InputError(file, line, 0, name, "missing value");
       const auto v = parseNumber(cells[k]);
       if (!v) throw InputError(file, line, 0, name, "malformed number '" + cells[k] + "'");
-      // Plausible ranges (issue 17): lengths within 1e6 mm, angles within 1e4 deg, times from 0
+      // Plausible ranges: lengths within 1e6 mm, angles within 1e4 deg, times from 0
       // to 1e9 s; nothing absurd reaches the model.
       const bool deg = name.size() > 4 && name.compare(name.size() - 4, 4, "_deg") == 0;
       const double limit = name == "time_s" ? 1e9 : deg ? 1e4 : 1e6;

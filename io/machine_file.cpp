@@ -232,7 +232,7 @@ class Reader {
       double order = static_cast<double>(pending.size());
       if (e->Attribute("order")) {
         order = number(e, "order");
-        // Two axes at one place in a branch leave the chain's order to chance (issue 17, 11).
+        // Two axes at one place in a branch leave the chain's order to chance.
         for (const Pending& p : pending)
           if (p.axis.branch == ax.branch && p.order == order && p.explicit_order)
             fail(e, "axis.order", "order " + formatNumber(order) + " is also axis " + p.axis.name +
@@ -253,7 +253,7 @@ class Reader {
     m.last_T_spindle = frame(root->FirstChildElement("spindle"), angle);
     if (const XMLElement* c = root->FirstChildElement("control")) control(c, m.control);
     // The prismatic axes must span their directions: two along one line leave the tool tip
-    // unplaceable (issue 17, defect 1).
+    // unplaceable.
     {
       std::vector<int> prismatic;
       for (size_t a = 0; a < m.axes.size(); ++a)

@@ -111,7 +111,7 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
   if (raw.faces.empty()) throw InputError(path, 0, 0, "mesh", "the file holds no triangles");
   for (auto& v : raw.vertices) v = options.w_T_file * (scale * v);
   // A vertex far beyond any part (a corrupt or mis-scaled file) would make the sampling and
-  // the sweeps run for hours (issue 17, defect 3): parts lie within 1e5 mm of the part frame.
+  // the sweeps run for hours: parts lie within 1e5 mm of the part frame.
   for (size_t i = 0; i < raw.vertices.size(); ++i)
     if (!raw.vertices[i].allFinite() || raw.vertices[i].cwiseAbs().maxCoeff() > 1e5) {
       char buf[160];

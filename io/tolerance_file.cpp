@@ -64,7 +64,7 @@ std::vector<ToleranceTerm> parseToleranceCsv(const std::string& text, const std:
       }
       const auto v = parseNumber(s);
       if (!v || !(*v > 0)) throw InputError(file, line, 0, name, "expected a positive number, found '" + s + "'");
-      // A tolerance is a machine's: at most 10 mm, or 10 mrad (issue 17, defect 10).
+      // A tolerance is a machine's: at most 10 mm, or 10 mrad.
       const double limit = angular ? 0.01 : 10.0;
       if (*v * scale > limit)
         throw InputError(file, line, 0, name,

@@ -205,7 +205,7 @@ TEST(AptReader, BadInputNamesFileLineAndColumn) {
       {"GOTO/1,2,3,0,0,0\n", 1, 12, "zero-length"},
       {"GOTO/1,2, $\n", 1, 0, "past the end"},
       {"GOTO/1,2,3\nCIRCLE/0,0,0,0,0,1,1\nGOTO/5,0,0\n", 2, 0, "not on one circle"},
-      // A circle of 9e8 mm (issue 17, defect 13): refused before any point is expanded.
+      // A circle of 9e8 mm: refused before any point is expanded.
       {"GOTO/900000000,0,0\nCIRCLE/0,0,0,0,0,1,900000000\nGOTO/0,900000000,0\n", 2, 0, "more than a million"},
       {"CSYS/1,0,0,0,0,2,0,0,0,0,1,0\n", 1, 0, "orthonormal"},
       {"UNITS/INCHES\nGOTO/1e300,0,0\n", 2, 6, "out of range"},
@@ -267,7 +267,7 @@ TEST(AptReader, MutatedFilesFailCleanly) {
 namespace tolver {
 namespace {
 
-// A UTF-8 byte-order mark before a leading UNITS/INCHES (issue 17, defect 12): the units hold.
+// A UTF-8 byte-order mark before a leading UNITS/INCHES: the units hold.
 TEST(AptReader, ByteOrderMarkBeforeTheFirstStatementIsSkipped) {
   const ClProgram p = parseApt("\xEF\xBB\xBFUNITS/INCHES\nMULTAX\nGOTO/0.5,0.5,0.2,0,0,1\n", "bom.apt", {});
   ASSERT_EQ(p.path.size(), 1u);
@@ -275,7 +275,7 @@ TEST(AptReader, ByteOrderMarkBeforeTheFirstStatementIsSkipped) {
   EXPECT_NEAR(p.path[0].p_w.x(), 0.5 * 25.4, 1e-12);
 }
 
-// A 3 kB malformed number (issue 17, defect 9): the message quotes 60 characters of it.
+// A 3 kB malformed number: the message quotes 60 characters of it.
 TEST(AptReader, MessagesQuoteAtMostSixtyCharactersOfABadToken) {
   const std::string token(3000, '9');
   try {

@@ -1,4 +1,4 @@
-// Closing the loop (issue 5): on simulated tests of a machine with one undeclared effect, the
+// Closing the loop: on simulated tests of a machine with one undeclared effect, the
 // diagnosis finds that effect (type and axis), its values within three standard uncertainties
 // of the truth, and a held-out RMS at the noise level; on clean data it adds nothing.
 #include "core/diagnosis.h"

@@ -46,7 +46,7 @@ struct DiagnosisOutcome {
   int held = 0;                 // how many the base fit held
 };
 
-// The cases of issue 12's table.
+// The cases: each kind of undeclared effect, two and three at once, one outside the library.
 inline std::vector<DiagnosisCase> diagnosisCases() {
   using indep::Undeclared;
   const int X = indep::kX, Y = indep::kY, Z = indep::kZ, A = indep::kA, C = indep::kC;

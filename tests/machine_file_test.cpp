@@ -105,12 +105,12 @@ TEST(MachineFile, MalformedFilesNameLineAndField) {
        "min='0' max='1'/>\n<errors><link axis='X' component='ew' value='1'/></errors></machine>",
        3, "link.component"},
       {"<machine name='m'>\n<axis name='X'", 2, "xml"},
-      // Two prismatic axes along one line (issue 17, defect 1).
+      // Two prismatic axes along one line.
       {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
        "min='0' max='1'/>\n<axis name='Y' type='prismatic' branch='tool' direction='2 0 0' "
        "min='0' max='1'/></machine>",
        2, "axis.direction"},
-      // Two axes at one order in a branch (issue 17, defect 11).
+      // Two axes at one order in a branch.
       {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' order='1' direction='1 0 0' "
        "min='0' max='1'/>\n<axis name='Y' type='prismatic' branch='tool' order='1' direction='0 1 0' "
        "min='0' max='1'/></machine>",

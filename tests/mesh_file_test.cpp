@@ -177,7 +177,7 @@ TEST_F(MeshFileTest, RefusesWhatIsNot) {
   EXPECT_THROW(readPartMesh(write("garbage.off", "this is not a mesh\n")), InputError);
   EXPECT_THROW(readPartMesh(write("part.step", "ISO-10303-21;\n")), InputError);
   EXPECT_THROW(readPartMesh(path("missing.stl")), InputError);
-  // One vertex at 1.3e7 mm (issue 17, defect 3): refused at once, not swept for hours.
+  // One vertex at 1.3e7 mm: refused at once, not swept for hours.
   try {
     readPartMesh(write("far.obj", "v 0 0 0\nv 10 0 0\nv 0 10 0\nv 1.3e7 0 5\nf 1 2 3\nf 1 2 4\n"));
     FAIL();

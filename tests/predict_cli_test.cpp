@@ -168,7 +168,7 @@ namespace {
 
 class PredictOutputs : public test::TempDirTest {};
 
-// The second output cannot be written (issue 17, defect 7): neither is left, exit 2; the same
+// The second output cannot be written: neither is left, exit 2; the same
 // for calibrate's machine file when its report cannot be written.
 TEST_F(PredictOutputs, ASecondOutputThatFailsLeavesNoFirst) {
   auto r = test::runTolver("predict --machine " + test::sourcePath("resources/machines/matsuura_mc760vx.xml") +

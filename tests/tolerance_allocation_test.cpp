@@ -122,7 +122,7 @@ TEST(ToleranceAllocation, Xkh800StandardToleranceBreaksTheLimitsUnderWorstCaseSt
 namespace tolver {
 namespace {
 
-// Absurd tolerances and an empty band are refused with the line (issue 17, defect 10).
+// Absurd tolerances and an empty band are refused with the line.
 TEST(ToleranceFile, ImplausibleValuesAndEmptyBandsAreRefused) {
   const Machine m = parseMachineXml(kTwoTermMachine, "two.xml");
   const std::string head = "term,category,standard,unit,lower,upper\n";

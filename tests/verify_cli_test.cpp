@@ -85,7 +85,7 @@ TEST_F(VerifyCli, BadInputExitsTwoNamingTheFile) {
   r = runTolver(base("--report-dir " + path("out")));  // no tolerance
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("--tolerance"), std::string::npos) << r.output;
-  // A zone name with an invalid UTF-8 byte (issue 17, defect 2): the report is written and
+  // A zone name with an invalid UTF-8 byte: the report is written and
   // reads back as JSON.
   const std::string zbad = write("zbad.csv", "region,tolerance\n*,0.05\n\xcb" "bad,0.03\n");
   r = runTolver("verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
@@ -94,7 +94,7 @@ TEST_F(VerifyCli, BadInputExitsTwoNamingTheFile) {
                 path("z"));
   EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
   EXPECT_NO_THROW(nlohmann::json::parse(slurp(path("z") + "/report.json")));
-  // A report directory below a regular file (issue 17, defect 6): exit 2 naming it, not 3.
+  // A report directory below a regular file: exit 2 naming it, not 3.
   const std::string file = write("plain.txt", "x");
   r = runTolver("verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
                 " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
@@ -114,7 +114,7 @@ TEST_F(VerifyCli, MalformedJobsFileExitsTwoNamingItsLine) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   r = runTolver("verify --batch " + write("nocol.csv", "name,cl\nx,a.apt\n") + " --report-dir " + path("out"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  // Two jobs of one name (issue 17, defects 11 and 15): the second named by its line.
+  // Two jobs of one name: the second named by its line.
   r = runTolver("verify --batch " +
                 write("twice.csv", "name,machine,cl,part,tolerance\nj,m.xml,a.apt,,0.02\nj,m.xml,b.apt,,0.02\n") +
                 " --report-dir " + path("out"));
