@@ -286,15 +286,17 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
   std::string prior_text = "none";
   if ((prior_auto || prior_um > 0) && (r.status == CalibrationStatus::Converged ||
                                        r.status == CalibrationStatus::NotConverged)) {
-    if (prior_auto) {
-      const double k = choosePriorScale(machine.model, used, r, 1e-3, 3.3e-6);
-      prior_um = k;
-      prior_urad = 3.3 * k;
-    }
     CalibrationOptions ro = opt;
-    ro.prior_linear = prior_um * 1e-3;
-    ro.prior_angular = prior_urad * 1e-6;
-    ro.prior_noise = std::max(r.residual_sigma, 1e-12);
+    if (prior_auto) {
+      double k = 0;
+      ro = evidencePrior(machine.model, used, r, opt, &k);
+      prior_um = k * kPriorUnitLinear * 1e3;
+      prior_urad = k * kPriorUnitAngular * 1e6;
+    } else {
+      ro.prior_linear = prior_um * 1e-3;
+      ro.prior_angular = prior_urad * 1e-6;
+      ro.prior_noise = std::max(r.residual_sigma, 1e-12);
+    }
     const CalibrationResult rr = calibrate(machine.model, machine.params, used, unknowns, ro);
     if (rr.status == CalibrationStatus::Converged) {
       r = rr;

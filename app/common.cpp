@@ -238,6 +238,33 @@ void checkOutputDir(const std::string& path, const char* option) {
     throw InputError(path, 0, 0, option, "directory " + dir.string() + " does not exist");
 }
 
+CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program,
+                                      PredictionResult& pred, bool absolute) {
+  CalibratedPrediction out;
+  if (machine.identification.empty()) return out;
+  std::vector<JointVector> q;
+  std::vector<Eigen::Vector3d> d;
+  for (const PredictedPoint& p : pred.points) {
+    q.push_back(p.q);
+    d.push_back(p.deviation_w);
+  }
+  if (!absolute) {
+    out.measured_setup = applyMeasuredSetup(machine, q, d);
+    pred = predictToolPath(machine.model, machine.params, program.path, 20,
+                           program.joints.empty() ? nullptr : &program.joints);
+  }
+  PredictionUncertainty pu(machine);
+  if (!absolute) {
+    std::vector<JointVector> sub;
+    const size_t step = std::max<size_t>(1, q.size() / 2000);
+    for (size_t i = 0; i < q.size(); i += step) sub.push_back(q[i]);
+    pu.setupModulo(sub);
+  }
+  out.uncertainty.reserve(pred.points.size());
+  for (const PredictedPoint& p : pred.points) out.uncertainty.push_back(pu.at(p.q));
+  return out;
+}
+
 void makeReportDir(const std::string& dir, const char* option) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/machine_model.h"
+#include "core/prediction_uncertainty.h"
 #include "core/tool_path_prediction.h"
 #include "io/apt_reader.h"
 
@@ -51,6 +52,18 @@ std::vector<std::string> programNotes(const ClProgram& program);
 
 // Throws InputError when the directory of `path` does not exist.
 void checkOutputDir(const std::string& path, const char* option);
+// A prediction on a calibrated machine (one whose file carries its calibration's covariance):
+// unless `absolute`, the set-up a shop measures (part probed, tool preset), which the calibration
+// cannot see, is fitted to the prediction and applied to the machine, and `pred` redone with it;
+// then the uncertainty of each point's prediction (modulo that set-up). Nothing for a machine
+// that was not calibrated.
+struct CalibratedPrediction {
+  Eigen::VectorXd measured_setup;          // part x y z (mm), rotations (rad), tool x y z (mm)
+  std::vector<PoseUncertainty> uncertainty;  // per program point
+};
+CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program,
+                                      PredictionResult& pred, bool absolute);
+
 // Creates a report directory (and its parents); an unwritable place, a path below a regular
 // file or naming one is InputError (exit 2), never an internal error.
 void makeReportDir(const std::string& dir, const char* option = "--report-dir");

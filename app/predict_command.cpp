@@ -42,20 +42,11 @@ void runPredict(const PredictOptions& o, int* exit_code) {
   if (!r.ok())
     throw InputError(program.file, r.failures.front().line, 0, "unreachable",
                      describeUnreachable(machine.model, r));
-  // A calibrated machine: what the ball-bar could not see (the part's pose on the table, the
-  // tool tip's offset from the spindle) the shop measures; predict after that set-up unless
-  // --absolute.
-  Eigen::VectorXd measured_setup;
-  if (!machine.identification.empty() && !o.absolute) {
-    std::vector<JointVector> q;
-    std::vector<Eigen::Vector3d> d;
-    for (const PredictedPoint& p : r.points) {
-      q.push_back(p.q);
-      d.push_back(p.deviation_w);
-    }
-    measured_setup = applyMeasuredSetup(machine, q, d);
-    r = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
-  }
+  // A calibrated machine: after the set-up a shop measures (unless --absolute), with each
+  // point's uncertainty.
+  const CalibratedPrediction cal = applyCalibration(machine, program, r, o.absolute);
+  const Eigen::VectorXd& measured_setup = cal.measured_setup;
+  const std::vector<PoseUncertainty>& unc = cal.uncertainty;
 
   std::vector<ClPoint> predicted(program.path.size());
   std::vector<PredictedPoint> pts = r.points;
@@ -71,20 +62,6 @@ void runPredict(const PredictOptions& o, int* exit_code) {
   OutputSet outputs;  // both files, or neither
   outputs.add(o.output, formatPredictedApt(program, predicted, header));
   // The prediction's uncertainty, when the machine file carries its calibration's covariance.
-  // The uncertainty of each prediction, from the calibration's covariance (modulo the measured
-  // set-up when it was applied).
-  std::vector<PoseUncertainty> unc;
-  if (!machine.identification.empty()) {
-    PredictionUncertainty pu(machine);
-    if (measured_setup.size() > 0) {
-      std::vector<JointVector> sub;
-      const size_t step = std::max<size_t>(1, pts.size() / 2000);
-      for (size_t i = 0; i < pts.size(); i += step) sub.push_back(pts[i].q);
-      pu.setupModulo(sub);
-    }
-    unc.reserve(pts.size());
-    for (const PredictedPoint& p : pts) unc.push_back(pu.at(p.q));
-  }
   outputs.add(table, formatPointTable(machine.model, program.path, pts, unc.empty() ? nullptr : &unc));
   outputs.commit();
 

@@ -249,36 +249,15 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
                      describeUnreachable(machine.model, pred));
   // A calibrated machine: after the set-up a shop measures (part probed, tool preset), which
   // the calibration cannot see; and the uncertainty of each CL point's prediction.
+  const std::vector<PoseUncertainty> cl_unc =
+      applyCalibration(machine, program, pred, o.absolute).uncertainty;
   std::string setup_note;
-  std::vector<PoseUncertainty> cl_unc;
-  if (!machine.identification.empty()) {
-    std::vector<JointVector> q;
-    std::vector<Eigen::Vector3d> d;
-    for (const PredictedPoint& p : pred.points) {
-      q.push_back(p.q);
-      d.push_back(p.deviation_w);
-    }
-    PredictionUncertainty* pu_ptr = nullptr;
-    if (!o.absolute) {
-      applyMeasuredSetup(machine, q, d);
-      pred = predictToolPath(machine.model, machine.params, program.path, 20,
-                             program.joints.empty() ? nullptr : &program.joints);
-      setup_note = "the machine's share is after the set-up a shop measures (the part probed, the "
-                   "tool preset): the ball-bar calibration cannot see either";
-    } else {
-      setup_note = "--absolute: the machine's share includes what probing the part and presetting "
-                   "the tool would take up, which the calibration cannot see";
-    }
-    PredictionUncertainty pu(machine);
-    pu_ptr = &pu;
-    if (!o.absolute) {
-      std::vector<JointVector> sub;
-      const size_t step = std::max<size_t>(1, q.size() / 2000);
-      for (size_t i = 0; i < q.size(); i += step) sub.push_back(q[i]);
-      pu_ptr->setupModulo(sub);
-    }
-    for (const JointVector& qi : q) cl_unc.push_back(pu_ptr->at(qi));
-  }
+  if (!cl_unc.empty())
+    setup_note = o.absolute
+                     ? "--absolute: the machine's share includes what probing the part and "
+                       "presetting the tool would take up, which the calibration cannot see"
+                     : "the machine's share is after the set-up a shop measures (the part probed, "
+                       "the tool preset): the ball-bar calibration cannot see either";
   std::vector<std::string> warnings = setupWarnings(machine.model);
   for (const std::string& w : unitWarnings(program, machine.model, o.program.units)) warnings.push_back(w);
   for (const std::string& w : programNotes(program)) warnings.push_back(program.file + ": " + w);

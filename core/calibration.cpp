@@ -346,4 +346,15 @@ double choosePriorScale(const MachineModel& model, const BallbarTest& test,
   return best_k;
 }
 
+CalibrationOptions evidencePrior(const MachineModel& model, const BallbarTest& test,
+                                 const CalibrationResult& free_fit, CalibrationOptions options,
+                                 double* scale) {
+  const double k = choosePriorScale(model, test, free_fit, kPriorUnitLinear, kPriorUnitAngular);
+  options.prior_linear = k * kPriorUnitLinear;
+  options.prior_angular = k * kPriorUnitAngular;
+  options.prior_noise = std::max(free_fit.residual_sigma, 1e-12);
+  if (scale) *scale = k;
+  return options;
+}
+
 }  // namespace tolver

@@ -105,6 +105,15 @@ RobustCalibration calibrateWithoutGross(const MachineModel& model, const Eigen::
 double choosePriorScale(const MachineModel& model, const BallbarTest& test,
                         const CalibrationResult& fit, double unit_linear, double unit_angular);
 
+// The prior's units of `calibrate --prior auto`: 1 um per linear and 3.3 urad per angular
+// coefficient (a 1 um straightness over 300 mm), scaled together by choosePriorScale.
+constexpr double kPriorUnitLinear = 1e-3, kPriorUnitAngular = 3.3e-6;
+// `options` with the prior chosen by the readings' evidence after the unregularised fit
+// `free_fit` (the refit with them is the regularised calibration); *scale: the k chosen.
+CalibrationOptions evidencePrior(const MachineModel& model, const BallbarTest& test,
+                                 const CalibrationResult& free_fit, CalibrationOptions options,
+                                 double* scale = nullptr);
+
 // The identification uncertainty of a fit for a machine file: the covariance of the identified
 // parameters and the joint ranges the readings covered.
 IdentificationUncertainty identificationUncertainty(const CalibrationResult& fit, const BallbarTest& test,

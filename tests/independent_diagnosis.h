@@ -46,6 +46,60 @@ struct DiagnosisOutcome {
   int held = 0;                 // how many the base fit held
 };
 
+// The independent simulator's set-ups for a plan's (ball position errors of 10 um, 1 sigma, drawn
+// from ball_seed) and its poses (in the plan's order).
+inline std::vector<indep::Setup> independentSetups(const BallbarTest& plan, unsigned ball_seed) {
+  std::vector<indep::Setup> setups;
+  std::mt19937 rng(ball_seed);
+  std::normal_distribution<double> ball(0.0, 0.01);
+  for (const BallbarSetup& s : plan.setups) {
+    indep::Setup is;
+    is.id = s.id;
+    is.table_ball_w = s.table_ball_w;
+    is.tool_ball_t = s.tool_ball_t;
+    is.table_error_w = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+    is.tool_error_t = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
+    setups.push_back(is);
+  }
+  return setups;
+}
+
+inline std::vector<indep::Pose> independentPoses(const BallbarTest& plan) {
+  std::vector<indep::Pose> poses;
+  for (const BallbarReading& r : plan.readings) {
+    indep::Pose p;
+    p.setup = r.setup;
+    for (int a = 0; a < 5; ++a) p.q[a] = r.q[a];
+    poses.push_back(p);
+  }
+  return poses;
+}
+
+// A truth machine measured on a plan (0.5 um noise from noise_seed, 20 s per reading) and
+// calibrated by tolver from the CSV it writes, as `calibrate` does (regularised: --prior auto),
+// the identified machine read back from its machine file.
+inline Machine calibrateOnIndependent(const Machine& nominal, const std::vector<int>& unknowns,
+                                      const indep::Machine& truth, const BallbarTest& plan,
+                                      unsigned ball_seed, unsigned noise_seed, bool regularised,
+                                      const std::string& dir, CalibrationResult* fit = nullptr) {
+  const std::vector<indep::Setup> setups = independentSetups(plan, ball_seed);
+  std::vector<indep::Pose> poses = independentPoses(plan);
+  indep::measure(truth, poses, setups, 20.0, 0.5e-3, noise_seed);
+  std::filesystem::create_directories(dir);
+  indep::writeCsv(dir + "/fit.csv", poses, setups, false);
+  const BallbarFile f = readBallbarFile(dir + "/fit.csv", nominal.model, true);
+  CalibrationResult r = calibrate(nominal.model, nominal.params, f.test, unknowns);
+  if (regularised)
+    r = calibrate(nominal.model, nominal.params, f.test, unknowns,
+                  evidencePrior(nominal.model, f.test, r, CalibrationOptions{}));
+  Machine id = nominal;
+  id.params = r.params;
+  id.identification = identificationUncertainty(r, f.test, static_cast<int>(nominal.model.axes.size()));
+  writeFileAtomically(dir + "/id.xml", formatMachineXml(id, "independent calibration"));
+  if (fit) *fit = r;
+  return readMachineFile(dir + "/id.xml");
+}
+
 // The cases: each kind of undeclared effect, two and three at once, one outside the library.
 inline std::vector<DiagnosisCase> diagnosisCases() {
   using indep::Undeclared;
@@ -87,30 +141,15 @@ inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, u
   if (on_axis)
     for (BallbarSetup& s : po.geometry) s.tool_ball_t = Eigen::Vector3d(0, 0, 0);
   const BallbarPlan plan = planBallbarTest(nominal.model, unknowns, po);
-  std::vector<indep::Setup> setups;
-  std::mt19937 rng(9000 + seed);
-  std::normal_distribution<double> ball(0.0, 0.01);
-  for (const BallbarSetup& s : plan.test.setups) {
-    indep::Setup is;
-    is.id = s.id;
-    is.table_ball_w = s.table_ball_w;
-    is.tool_ball_t = s.tool_ball_t;
-    is.table_error_w = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
-    is.tool_error_t = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
-    setups.push_back(is);
-  }
-  std::vector<indep::Pose> poses;
+  const std::vector<indep::Setup> setups = independentSetups(plan.test, 9000 + seed);
+  std::vector<indep::Pose> poses = independentPoses(plan.test);
   std::vector<int> count(setups.size(), 0), first(setups.size(), -1);
-  for (size_t i = 0; i < plan.test.readings.size(); ++i) {
+  for (size_t i = 0; i < poses.size(); ++i) {
     const BallbarReading& r = plan.test.readings[i];
-    indep::Pose p;
-    p.setup = r.setup;
-    for (int a = 0; a < 5; ++a) p.q[a] = r.q[a];
     // Every fifth pose of a set-up is held out, except the returns to its reference pose.
     if (first[r.setup] < 0) first[r.setup] = static_cast<int>(i);
     const bool reference = (r.q - plan.test.readings[first[r.setup]].q).norm() < 1e-9;
-    p.heldout = !reference && (++count[r.setup] % 5 == 0);
-    poses.push_back(p);
+    poses[i].heldout = !reference && (++count[r.setup] % 5 == 0);
   }
   indep::Machine machine(100 + seed);
   machine.effects = c.truth;

@@ -105,46 +105,26 @@ int main(int argc, char** argv) {
   for (int k = 0; k < machines; ++k) {
     const unsigned seed = 900 + k;
     indep::Machine truth(seed);
-    auto calibrateWith = [&](BallbarPlanOptions po) {
+    auto calibrateWith = [&](const BallbarPlanOptions& po) {
       const BallbarPlan plan = planBallbarTest(nominal.model, unknowns, po);
-      std::vector<indep::Setup> setups;
-      std::mt19937 rng(seed);
-      std::normal_distribution<double> ball(0.0, 0.01);
-      for (const BallbarSetup& s : plan.test.setups) {
-        indep::Setup is;
-        is.id = s.id;
-        is.table_ball_w = s.table_ball_w;
-        is.tool_ball_t = s.tool_ball_t;
-        is.table_error_w = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
-        is.tool_error_t = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
-        setups.push_back(is);
-      }
-      std::vector<indep::Pose> poses;
-      for (const BallbarReading& r : plan.test.readings) {
-        indep::Pose p;
-        p.setup = r.setup;
-        for (int a = 0; a < 5; ++a) p.q[a] = r.q[a];
-        poses.push_back(p);
-      }
+      if (prior_um < 0)  // auto: as calibrate --prior auto
+        return test::calibrateOnIndependent(nominal, unknowns, truth, plan.test, seed, 700 + seed, true, dir);
+      if (prior_um == 0)
+        return test::calibrateOnIndependent(nominal, unknowns, truth, plan.test, seed, 700 + seed, false, dir);
+      // A fixed prior: measure, then calibrate with it.
+      const std::vector<indep::Setup> setups = test::independentSetups(plan.test, seed);
+      std::vector<indep::Pose> poses = test::independentPoses(plan.test);
       indep::measure(truth, poses, setups, 20.0, 0.5e-3, 700 + seed);
       indep::writeCsv(dir + "/fit.csv", poses, setups, false);
       const BallbarFile f = readBallbarFile(dir + "/fit.csv", nominal.model, true);
       CalibrationOptions co;
       co.prior_linear = prior_um * 1e-3;
       co.prior_angular = prior_urad * 1e-6;
-      if (prior_um < 0) {  // auto: the scale by the evidence of the readings, units 1 um / 3.3 urad
-        const CalibrationResult free = calibrate(nominal.model, nominal.params, f.test, unknowns);
-        const double kk = choosePriorScale(nominal.model, f.test, free, 1e-3, 3.3e-6);
-        co.prior_linear = kk * 1e-3;
-        co.prior_angular = kk * 3.3e-6;
-        co.prior_noise = free.residual_sigma;
-      }
       const CalibrationResult r = calibrate(nominal.model, nominal.params, f.test, unknowns, co);
       Machine id = nominal;
       id.params = r.params;
       id.identification = identificationUncertainty(r, f.test, 5);
-      writeFileAtomically(dir + "/id.xml", formatMachineXml(id, "campaign"));
-      return readMachineFile(dir + "/id.xml");
+      return id;
     };
     BallbarPlanOptions po;
     po.poses = 360;

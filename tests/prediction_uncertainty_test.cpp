@@ -31,46 +31,11 @@ Calibrated calibrateIndependent(unsigned seed, const std::string& dir, bool regu
   po.poses = 360;
   po.seed = 4000 + seed;
   const BallbarPlan plan = planBallbarTest(c.nominal.model, unknowns, po);
-  std::vector<indep::Setup> setups;
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> ball(0.0, 0.01);
-  for (const BallbarSetup& s : plan.test.setups) {
-    indep::Setup is;
-    is.id = s.id;
-    is.table_ball_w = s.table_ball_w;
-    is.tool_ball_t = s.tool_ball_t;
-    is.table_error_w = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
-    is.tool_error_t = Eigen::Vector3d(ball(rng), ball(rng), ball(rng));
-    setups.push_back(is);
-  }
-  std::vector<indep::Pose> poses;
-  for (const BallbarReading& r : plan.test.readings) {
-    indep::Pose p;
-    p.setup = r.setup;
-    for (int a = 0; a < 5; ++a) p.q[a] = r.q[a];
-    poses.push_back(p);
-  }
-  indep::measure(c.truth, poses, setups, 20.0, 0.5e-3, 600 + seed);
-  indep::writeCsv(dir + "/fit.csv", poses, setups, false);
-  const BallbarFile f = readBallbarFile(dir + "/fit.csv", c.nominal.model, true);
-  CalibrationResult r = calibrate(c.nominal.model, c.nominal.params, f.test, unknowns);
+  CalibrationResult r;
+  c.identified = test::calibrateOnIndependent(c.nominal, unknowns, c.truth, plan.test, seed,
+                                              600 + seed, regularised, dir, &r);
   EXPECT_EQ(r.status, CalibrationStatus::Converged);
-  if (regularised) {  // as calibrate --prior auto does it
-    const double k = choosePriorScale(c.nominal.model, f.test, r, 1e-3, 3.3e-6);
-    CalibrationOptions o;
-    o.prior_linear = k * 1e-3;
-    o.prior_angular = k * 3.3e-6;
-    o.prior_noise = r.residual_sigma;
-    r = calibrate(c.nominal.model, c.nominal.params, f.test, unknowns, o);
-    EXPECT_EQ(r.status, CalibrationStatus::Converged);
-  }
-  c.identified = c.nominal;
-  c.identified.params = r.params;
-  c.identified.identification =
-      identificationUncertainty(r, f.test, static_cast<int>(c.nominal.model.axes.size()));
-  // Through the machine file, as predict reads it.
-  writeFileAtomically(dir + "/id.xml", formatMachineXml(c.identified, "test"));
-  c.identified = readMachineFile(dir + "/id.xml");
+  // The covariance survives the machine file.
   EXPECT_EQ(c.identified.identification.parameters.size(), r.identified.size());
   EXPECT_LT((c.identified.identification.covariance - r.covariance).norm(), 1e-9 * r.covariance.norm());
   return c;
