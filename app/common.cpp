@@ -89,9 +89,36 @@ void addProgramOptions(CLI::App* cmd, ProgramOptions& o) {
   cmd->add_option("--chordal-tol", o.chordal_tolerance,
                   "chordal tolerance for expanding arcs, mm (default 0.001)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--lines", o.lines,
+                  "only the tool positions of these program lines, 'first-last' (a piece that "
+                  "tolver setup split off)");
 }
 
 namespace {
+
+// Keeps the points of source lines first..last (and their parallel per-point data).
+void keepLines(ClProgram& p, const std::string& spec) {
+  const size_t dash = spec.find('-', 1);
+  const auto a = dash == std::string::npos ? std::nullopt : parseNumber(spec.substr(0, dash));
+  const auto b = dash == std::string::npos ? std::nullopt : parseNumber(spec.substr(dash + 1));
+  if (!a || !b || *a < 1 || *b < *a || *a != std::floor(*a) || *b != std::floor(*b))
+    throw InputError("--lines", 0, 0, "lines", "expected 'first-last', e.g. 11-578");
+  size_t k = 0;
+  for (size_t i = 0; i < p.path.size(); ++i) {
+    if (p.path[i].line < *a || p.path[i].line > *b) continue;
+    p.path[k] = p.path[i];
+    if (i < p.point_frame.size()) p.point_frame[k] = p.point_frame[i];
+    if (i < p.joints.size()) p.joints[k] = p.joints[i];
+    if (i < p.tcp.size()) p.tcp[k] = p.tcp[i];
+    ++k;
+  }
+  if (k == 0)
+    throw InputError(p.file, 0, 0, "--lines", "no tool position on lines " + spec);
+  p.path.resize(k);
+  if (p.point_frame.size() > k) p.point_frame.resize(k);
+  if (p.joints.size() > k) p.joints.resize(k);
+  if (p.tcp.size() > k) p.tcp.resize(k);
+}
 
 bool hasGcodeExtension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
@@ -141,6 +168,7 @@ ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model) {
       if (!program.units_declared) scaleToInches(program);
     }
   }
+  if (!o.lines.empty()) keepLines(program, o.lines);
   return program;
 }
 

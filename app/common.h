@@ -35,6 +35,7 @@ struct ProgramOptions {
   std::string cl, nc;
   std::string units;  // "", "mm" or "inch"
   double chordal_tolerance = 0.001;
+  std::string lines;  // "first-last": only the points of these source lines (a piece of a split)
 };
 void addProgramOptions(CLI::App* cmd, ProgramOptions& o);
 // Reads the CL or G-code program (G-code: --nc, a G-code extension, or content that reads as

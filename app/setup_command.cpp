@@ -224,7 +224,8 @@ void runSetup(const SetupOptions& o, int* exit_code) {
         continue;
       }
       std::printf("    piece %zu  lines %d-%d (%d points): part_zero_mm = %.3f, %.3f, %.3f; "
-                  "part_rotation_deg = %.3f; gauge_length_mm = %.3f; margin %.3f mm\n",
+                  "part_rotation_deg = %.3f; gauge_length_mm = %.3f; margin %.3f mm "
+                  "(predict or verify it with --lines and its set-up file)\n",
                   k + 1, path[p.first].line, path[p.last].line, p.last - p.first + 1,
                   ps.part_zero_table.x(), ps.part_zero_table.y(), ps.part_zero_table.z(),
                   ps.part_rotation * 180.0 / M_PI, ps.gauge_length, p.result.margin);

@@ -235,7 +235,19 @@ TEST_F(GcodeCli, SetupOnARealClsfSplitsItIntoPiecesThatEachReach) {
     covered += piece.size();
     const PredictionResult pred = predictToolPath(model, m.params, piece);
     EXPECT_TRUE(pred.ok()) << f << ": " << pred.failed_points << " points outside travel";
+    // And as a planner runs it: predict the piece with its set-up file and --lines.
+    const std::string lines = std::to_string(first) + "-" + std::to_string(last);
+    auto pr = test::runTolver("predict --machine " + machine + " --cl " + cl + " --setup " + f +
+                              " --lines " + lines + " -o " + path("piece.apt"));
+    EXPECT_EQ(pr.exit_code, 0) << pr.output;
+    EXPECT_NE(pr.output.find(std::to_string(piece.size()) + " tool positions"), std::string::npos) << pr.output;
   }
+  auto bad = test::runTolver("predict --machine " + machine + " --cl " + cl + " --lines 9-x -o " + path("b.apt"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("--lines"), std::string::npos) << bad.output;
+  bad = test::runTolver("predict --machine " + machine + " --cl " + cl + " --lines 1-5 -o " + path("b.apt"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_FALSE(fs::exists(path("b.apt")));
   EXPECT_EQ(covered, program.path.size());
 }
 
