@@ -10,6 +10,7 @@
 #include "io/gcode_reader.h"
 #include "io/io_error.h"
 #include "io/machine_file.h"
+#include "io/probe_file.h"
 #include "io/setup_file.h"
 #include "io/text_util.h"
 
@@ -267,8 +268,21 @@ void checkOutputDir(const std::string& path, const char* option) {
 }
 
 CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program,
-                                      PredictionResult& pred, bool absolute) {
+                                      PredictionResult& pred, bool absolute,
+                                      const std::vector<ProbedPoint>& probed) {
   CalibratedPrediction out;
+  const std::vector<JointVector>* commanded = program.joints.empty() ? nullptr : &program.joints;
+  if (!probed.empty()) {
+    out.probed = true;
+    out.probe = fitProbedSetup(machine, probed);
+    pred = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
+    if (machine.identification.empty()) return out;
+    PredictionUncertainty pu(machine);
+    pu.setupModuloProbed(probed);
+    out.uncertainty.reserve(pred.points.size());
+    for (const PredictedPoint& p : pred.points) out.uncertainty.push_back(pu.at(p.q));
+    return out;
+  }
   if (machine.identification.empty()) return out;
   std::vector<JointVector> q;
   std::vector<Eigen::Vector3d> d;
@@ -278,8 +292,7 @@ CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program
   }
   if (!absolute) {
     out.measured_setup = applyMeasuredSetup(machine, q, d);
-    pred = predictToolPath(machine.model, machine.params, program.path, 20,
-                           program.joints.empty() ? nullptr : &program.joints);
+    pred = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
   }
   PredictionUncertainty pu(machine);
   if (!absolute) {
@@ -291,6 +304,56 @@ CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program
   out.uncertainty.reserve(pred.points.size());
   for (const PredictedPoint& p : pred.points) out.uncertainty.push_back(pu.at(p.q));
   return out;
+}
+
+void addProbedOption(CLI::App* cmd, std::string& path) {
+  cmd->add_option("--probed", path,
+                  "probed points (CSV: part_x_mm,part_y_mm,part_z_mm, the joint values at each "
+                  "touch, optional part_nx,part_ny,part_nz and probe_length_mm): the part's set-up "
+                  "is fitted to them on the machine with its errors, the tool taken as preset");
+}
+
+std::vector<ProbedPoint> loadProbed(const std::string& path, const MachineModel& model) {
+  if (path.empty()) return {};
+  return readProbeFile(path, model);
+}
+
+std::string describeProbedSetup(const std::string& path, const ProbedSetupFit& fit,
+                                const std::vector<ProbedPoint>& points,
+                                std::vector<std::string>* warnings) {
+  size_t worst = 0;
+  for (size_t i = 0; i < fit.residual.size(); ++i)
+    if (fit.residual[i] > fit.residual[worst]) worst = i;
+  char buf[640];
+  std::snprintf(buf, sizeof buf,
+                "part set-up fitted to %zu probed points (%s), %d of %d set-up values observed: "
+                "part moved (%+.2f, %+.2f, %+.2f) um, rotated (%+.1f, %+.1f, %+.1f) urad, spindle "
+                "offset (%+.2f, %+.2f, %+.2f) um; the points disagree with the file's set-up by "
+                "%.2f um RMS before, %.2f um after (max %.2f um, line %d); the cutter's length "
+                "relative to the probe is taken as preset",
+                points.size(), path.c_str(), fit.observed, fit.columns, fit.change[0] * 1e3,
+                fit.change[1] * 1e3, fit.change[2] * 1e3, fit.change[3] * 1e6, fit.change[4] * 1e6,
+                fit.change[5] * 1e6, fit.spindle_change[0] * 1e3, fit.spindle_change[1] * 1e3,
+                fit.spindle_change[2] * 1e3, fit.rms_before * 1e3, fit.rms * 1e3, fit.max * 1e3,
+                points[worst].line);
+  const std::string line = buf;
+  if (warnings) {
+    if (!fit.unobserved.empty()) {
+      std::string names;
+      for (const std::string& n : fit.unobserved) names += (names.empty() ? "" : ", ") + n;
+      warnings->push_back(path + ": the probed points do not determine the part's " + names +
+                          "; the set-up file's value is kept for it (probe along more directions)");
+    }
+    // Touches a rigid set-up cannot explain: a wrong row, a wrong frame or a units slip.
+    if (fit.max > 0.02) {
+      std::snprintf(buf, sizeof buf,
+                    "%s:%d: the fitted set-up leaves %.1f um at this point (RMS %.1f um): check "
+                    "its part point, joint values, frame and units",
+                    path.c_str(), points[worst].line, fit.max * 1e3, fit.rms * 1e3);
+      warnings->push_back(buf);
+    }
+  }
+  return line;
 }
 
 void makeReportDir(const std::string& dir, const char* option) {

@@ -7,6 +7,7 @@
 
 #include "core/machine_model.h"
 #include "core/prediction_uncertainty.h"
+#include "core/probed_setup.h"
 #include "core/tool_path_prediction.h"
 #include "io/apt_reader.h"
 
@@ -58,12 +59,26 @@ void checkOutputDir(const std::string& path, const char* option);
 // cannot see, is fitted to the prediction and applied to the machine, and `pred` redone with it;
 // then the uncertainty of each point's prediction (modulo that set-up). Nothing for a machine
 // that was not calibrated.
+// With probed points (the set-up the shop measured, --probed), the part set-up is fitted to them
+// instead (fitProbedSetup, on any machine, calibrated or not), the tool taken as preset, and the
+// uncertainty is modulo that fit.
 struct CalibratedPrediction {
   Eigen::VectorXd measured_setup;          // part x y z (mm), rotations (rad), tool x y z (mm)
   std::vector<PoseUncertainty> uncertainty;  // per program point
+  bool probed = false;
+  ProbedSetupFit probe;                    // when probed
 };
 CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program,
-                                      PredictionResult& pred, bool absolute);
+                                      PredictionResult& pred, bool absolute,
+                                      const std::vector<ProbedPoint>& probed = {});
+// --probed FILE (predict, verify) and its reading.
+void addProbedOption(CLI::App* cmd, std::string& path);
+std::vector<ProbedPoint> loadProbed(const std::string& path, const MachineModel& model);
+// The console line for a probed set-up fit, and its warnings (unobserved directions, points the
+// fitted set-up does not explain).
+std::string describeProbedSetup(const std::string& path, const ProbedSetupFit& fit,
+                                const std::vector<ProbedPoint>& points,
+                                std::vector<std::string>* warnings);
 
 // Creates a report directory (and its parents); an unwritable place, a path below a regular
 // file or naming one is InputError (exit 2), never an internal error.

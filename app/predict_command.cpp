@@ -24,6 +24,7 @@ struct PredictOptions {
   std::string output, table;
   double max_rotary_step_deg = 10.0;
   bool absolute = false;
+  std::string probed;
 };
 
 // Rounds away "-0.000" in printed figures.
@@ -44,7 +45,11 @@ void runPredict(const PredictOptions& o, int* exit_code) {
                      describeUnreachable(machine.model, r));
   // A calibrated machine: after the set-up a shop measures (unless --absolute), with each
   // point's uncertainty.
-  const CalibratedPrediction cal = applyCalibration(machine, program, r, o.absolute);
+  const std::vector<ProbedPoint> probed = loadProbed(o.probed, machine.model);
+  const CalibratedPrediction cal = applyCalibration(machine, program, r, o.absolute, probed);
+  std::vector<std::string> probe_warnings;
+  const std::string probe_line =
+      cal.probed ? describeProbedSetup(o.probed, cal.probe, probed, &probe_warnings) : "";
   const Eigen::VectorXd& measured_setup = cal.measured_setup;
   const std::vector<PoseUncertainty>& unc = cal.uncertainty;
 
@@ -88,6 +93,7 @@ void runPredict(const PredictOptions& o, int* exit_code) {
               "gauge length %.4f mm\n",
               setup.part_zero_table.x(), setup.part_zero_table.y(), setup.part_zero_table.z(),
               setup.part_rotation * 180.0 / M_PI, setup.gauge_length);
+  if (cal.probed) std::printf("  probed     %s\n", probe_line.c_str());
   const PredictedPoint& worst = pts[s.max_index];
   std::printf("  deviation  max %.3f um at point %d (line %d), RMS %.3f um\n",
               s.max_deviation * 1e3, s.max_index, program.path[s.max_index].line,
@@ -116,7 +122,10 @@ void runPredict(const PredictOptions& o, int* exit_code) {
       std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
       return v[v.size() / 2];
     };
-    if (measured_setup.size() == 9)
+    if (cal.probed)
+      std::printf("  set-up     probed: the calibration cannot see the part's pose on the table; "
+                  "predicted with the set-up fitted to the probed points, uncertainty included\n");
+    else if (measured_setup.size() == 9)
       std::printf("  set-up     the calibration cannot see the part's pose on the table or the tool "
                   "tip's offset from the spindle: predicted after the set-up a shop measures (part "
                   "probed: %+.2f %+.2f %+.2f um, %+.1f %+.1f %+.1f urad; tool preset: %+.2f %+.2f "
@@ -164,6 +173,7 @@ void runPredict(const PredictOptions& o, int* exit_code) {
                   machine.model.axes[jumps[k].axis].name.c_str(), jumps[k].step * 180.0 / M_PI);
     std::printf("%s\n", jumps.size() > 5 ? ", ..." : "");
   }
+  for (const std::string& w : probe_warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
   for (const std::string& w : setupWarnings(machine.model))
     std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
   for (const std::string& w : unitWarnings(program, machine.model, o.program.units))
@@ -194,6 +204,7 @@ void registerPredict(CLI::App& app, int* exit_code) {
   cmd->add_flag("--absolute", o->absolute,
                 "a calibrated machine: predict without the set-up a shop measures (part probed, "
                 "tool preset), i.e. with what the calibration cannot see left in");
+  addProbedOption(cmd, o->probed);
   cmd->callback([o, exit_code] { runPredict(*o, exit_code); });
 }
 

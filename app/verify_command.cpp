@@ -48,6 +48,7 @@ struct VerifyOptions {
   bool no_images = false;
   bool quiet = false;
   bool absolute = false;
+  std::string probed;
 };
 
 struct JobOutcome {
@@ -249,10 +250,14 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
                      describeUnreachable(machine.model, pred));
   // A calibrated machine: after the set-up a shop measures (part probed, tool preset), which
   // the calibration cannot see; and the uncertainty of each CL point's prediction.
-  const std::vector<PoseUncertainty> cl_unc =
-      applyCalibration(machine, program, pred, o.absolute).uncertainty;
+  const std::vector<ProbedPoint> probed = loadProbed(o.probed, machine.model);
+  const CalibratedPrediction cal = applyCalibration(machine, program, pred, o.absolute, probed);
+  const std::vector<PoseUncertainty>& cl_unc = cal.uncertainty;
+  std::vector<std::string> probe_warnings;
   std::string setup_note;
-  if (!cl_unc.empty())
+  if (cal.probed)
+    setup_note = describeProbedSetup(o.probed, cal.probe, probed, &probe_warnings);
+  else if (!cl_unc.empty())
     setup_note = o.absolute
                      ? "--absolute: the machine's share includes what probing the part and "
                        "presetting the tool would take up, which the calibration cannot see"
@@ -261,6 +266,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   std::vector<std::string> warnings = setupWarnings(machine.model);
   for (const std::string& w : unitWarnings(program, machine.model, o.program.units)) warnings.push_back(w);
   for (const std::string& w : programNotes(program)) warnings.push_back(program.file + ": " + w);
+  for (const std::string& w : probe_warnings) warnings.push_back(w);
   bool no_errors = false;
   const std::string errors = machineErrorsStatement(machine, &no_errors);
   if (no_errors) warnings.push_back(errors);
@@ -486,7 +492,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   return out;
 }
 
-// Batch: jobs.csv with columns name,machine,cl,part,tolerance[,setup,zones]; paths relative to
+// Batch: jobs.csv with columns name,machine,cl,part,tolerance[,setup,zones,probed]; paths relative to
 // the jobs file.
 int runBatch(const VerifyOptions& base) {
   const std::string text = readFile(base.batch);
@@ -507,7 +513,7 @@ int runBatch(const VerifyOptions& base) {
     if (col.empty()) {
       for (size_t k = 0; k < c.size(); ++k) col[c[k]] = static_cast<int>(k);
       for (const char* r : {"name", "machine", "cl", "tolerance"})
-        if (!col.count(r)) throw InputError(base.batch, line, 0, r, "missing column (name,machine,cl,part,tolerance[,setup,zones])");
+        if (!col.count(r)) throw InputError(base.batch, line, 0, r, "missing column (name,machine,cl,part,tolerance[,setup,zones,probed])");
       continue;
     }
     auto cell = [&](const char* n) -> std::string {
@@ -519,6 +525,7 @@ int runBatch(const VerifyOptions& base) {
     o.quiet = true;
     o.machine.machine = resolve(cell("machine"));
     o.machine.setup = resolve(cell("setup"));
+    o.probed = resolve(cell("probed"));
     o.program.cl = resolve(cell("cl"));
     o.program.nc.clear();
     o.part = resolve(cell("part"));
@@ -608,7 +615,7 @@ void registerVerify(CLI::App& app, int* exit_code) {
   cmd->add_option("--zones", o->zones_file, "zones per region (CSV: region,tolerance,uz,u)");
   cmd->add_option("--report-dir", o->report_dir, "directory for the report (created)")->required();
   cmd->add_option("--batch", o->batch,
-                  "jobs file (CSV: name,machine,cl,part,tolerance[,setup,zones]); verifies them "
+                  "jobs file (CSV: name,machine,cl,part,tolerance[,setup,zones,probed]); verifies them "
                   "in parallel, one report directory each, and writes summary.csv");
   cmd->add_option("--mesh-units", o->mesh_units, "length unit of the part file: mm, inch or m "
                                                   "(default mm; m for glTF)");
@@ -636,6 +643,7 @@ void registerVerify(CLI::App& app, int* exit_code) {
   cmd->add_flag("--absolute", o->absolute,
                 "a calibrated machine: verify without the set-up a shop measures (part probed, "
                 "tool preset), i.e. with what the calibration cannot see left in");
+  addProbedOption(cmd, o->probed);
   cmd->callback([o, exit_code] {
     if (!o->batch.empty()) {
       *exit_code = runBatch(*o);

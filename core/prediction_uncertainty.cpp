@@ -2,6 +2,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
+#include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -46,6 +47,23 @@ void PredictionUncertainty::setupModulo(const std::vector<JointVector>& poses) {
     J.middleRows(3 * i, 3) = tipColumns(poses[i], id);
   }
   B_ = S.completeOrthogonalDecomposition().solve(J);
+  modulo_columns_ = setup_;
+  modulo_ = true;
+}
+
+void PredictionUncertainty::setupModuloProbed(const std::vector<ProbedPoint>& points) {
+  Eigen::VectorXd scale;
+  const std::vector<int> part = probedSetupColumns(machine_.model, &scale);
+  if (part.empty() || points.empty()) return;
+  Eigen::MatrixXd P, J;
+  probedRows(machine_, points, part, &P);
+  probedRows(machine_, points, machine_.identification.parameters, &J);
+  // The same scaling and rank rule as fitProbedSetup: unobserved set-up directions stay fixed.
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(P * scale.cwiseInverse().asDiagonal(),
+                                        Eigen::ComputeFullU | Eigen::ComputeFullV);
+  svd.setThreshold(1e-6);
+  B_ = scale.cwiseInverse().asDiagonal() * svd.solve(J);
+  modulo_columns_ = part;
   modulo_ = true;
 }
 
@@ -72,7 +90,11 @@ PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionCont
   for (size_t k = 0; k < id.parameters.size(); ++k) Jid.col(k) = J_.col(id.parameters[k]);
   Eigen::MatrixXd Jset(6, setup_.size());
   for (size_t k = 0; k < setup_.size(); ++k) Jset.col(k) = J_.col(setup_[k]);
-  if (modulo_) Jid -= Jset * B_;  // the share a measured set-up leaves (twist rows in t)
+  if (modulo_) {  // the share a measured set-up leaves (twist rows in t)
+    Eigen::MatrixXd Jm(6, modulo_columns_.size());
+    for (size_t k = 0; k < modulo_columns_.size(); ++k) Jm.col(k) = J_.col(modulo_columns_[k]);
+    Jid -= Jm * B_;
+  }
   const Eigen::MatrixXd A = Jid * root_;
   const Eigen::Matrix<double, 6, 6> S = A * A.transpose();
   const Eigen::Matrix3d R = fk_.w_T_t(q, ctx).linear();

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/forward_kinematics.h"
+#include "core/probed_setup.h"
 
 namespace tolver {
 
@@ -44,6 +45,12 @@ class PredictionUncertainty {
   // machine.identification must not be empty.
   explicit PredictionUncertainty(const Machine& machine);
   void setupModulo(const std::vector<JointVector>& poses);
+  // Modulo the part set-up fitted to probed points (fitProbedSetup): the identification's error
+  // reaches a prediction both directly and through the set-up it makes the probe fit find,
+  //   J_id(q) - J_part(q) P^+ J_id,probe,
+  // P the probe rows of the set-up columns the fit moves (probedSetupColumns). The cutter's length
+  // relative to the probe is taken as preset (exact).
+  void setupModuloProbed(const std::vector<ProbedPoint>& points);
   // The part of a tip deviation field (one deviation in w per pose) that a measured set-up
   // leaves: d_i - S_i beta, beta fitted over all given poses. Returns beta (part x y z mm,
   // rotations rad, tool offset x y z mm).
@@ -66,7 +73,8 @@ class PredictionUncertainty {
   Eigen::MatrixXd root_;     // Sigma_params = root root^T
   mutable Eigen::MatrixXd J_;  // 6 x parameterCount work matrix
   std::vector<int> setup_;   // the part's pose (6), the tool tip's offset (3)
-  Eigen::MatrixXd B_;        // setup x identified: the set-up fit of each identified column
+  std::vector<int> modulo_columns_;  // the set-up values B_ fits (all of setup_, or the part's)
+  Eigen::MatrixXd B_;        // modulo x identified: the set-up fit of each identified column
   bool modulo_ = false;
 };
 

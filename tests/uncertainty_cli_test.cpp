@@ -7,8 +7,14 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <sstream>
 
+#include "core/tool_path_prediction.h"
+#include "io/apt_reader.h"
+#include "io/io_error.h"
 #include "io/machine_file.h"
+#include "io/probe_file.h"
+#include "io/setup_file.h"
 #include "test_support.h"
 
 namespace tolver {
@@ -101,6 +107,74 @@ TEST_F(UncertaintyCli, APlanForAProgramPredictsItBetter) {
       << r.output;
   EXPECT_LT(std::stod(m[1]), 0.9 * std::stod(m[3]));
   EXPECT_LT(std::stod(m[2]), std::stod(m[4]));
+}
+
+// The set-up a shop measures, from probed points, end to end: touches simulated on the true
+// machine (the measured sample, where its tip really is at 12 of the cone's poses), given to
+// predict --probed with the identified machine: the predicted deviations follow the truth's,
+// and a bad probe file is exit 2 naming its line.
+std::vector<std::vector<double>> deviations(const std::string& csv) {
+  std::ifstream in(csv);
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> names;
+  std::stringstream hs(line);
+  for (std::string c; std::getline(hs, c, ',');) names.push_back(c);
+  const auto col = [&](const char* n) { return std::find(names.begin(), names.end(), n) - names.begin(); };
+  const long x = col("dev_x_um"), y = col("dev_y_um"), z = col("dev_z_um");
+  std::vector<std::vector<double>> out;
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::stringstream ls(line);
+    for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
+    out.push_back({std::stod(cells[x]), std::stod(cells[y]), std::stod(cells[z])});
+  }
+  return out;
+}
+
+TEST_F(UncertaintyCli, PredictWithProbedPointsFollowsTheTruth) {
+  const std::string id = identified();
+  const std::string truth_file = test::sourcePath("samples/machines/matsuura_mc760vx_measured.xml");
+  const std::string setup = test::sourcePath("samples/matsuura_setup.txt");
+  const std::string cone = test::sourcePath("samples/nas979_cone.apt");
+  Machine truth = readMachineFile(truth_file);
+  truth.model.setup = readSetupFile(setup, truth.model.setup);
+  const ClProgram program = readAptFile(cone);
+  const PredictionResult pr = predictToolPath(truth.model, truth.params, program.path);
+  ASSERT_TRUE(pr.ok());
+  std::vector<ProbedPoint> probes;
+  for (size_t i = 0; i < pr.points.size(); i += pr.points.size() / 12) {
+    ProbedPoint p;
+    p.q = pr.points[i].q;
+    p.p_w = pr.points[i].p_pred_w;  // where the true machine puts the tip: the part is there
+    p.probe_length = truth.model.setup.gauge_length;
+    probes.push_back(p);
+  }
+  writeFileAtomically(path("probed.csv"), formatProbeCsv(truth.model, probes));
+  const std::string base = "predict --cl " + cone + " --setup " + setup;
+  auto t = test::runTolver(base + " --machine " + truth_file + " -o " + path("t.apt"));
+  ASSERT_EQ(t.exit_code, 0) << t.output;
+  auto r = test::runTolver(base + " --machine " + id + " --probed " + path("probed.csv") + " -o " + path("p.apt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("part set-up fitted to"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("uncertainty (1 sigma)"), std::string::npos) << r.output;
+  const auto dt = deviations(path("t.csv")), dp = deviations(path("p.csv"));
+  ASSERT_EQ(dt.size(), dp.size());
+  double own = 0, err = 0;
+  for (size_t i = 0; i < dt.size(); ++i)
+    for (int k = 0; k < 3; ++k) {
+      own += dt[i][k] * dt[i][k];
+      err += (dt[i][k] - dp[i][k]) * (dt[i][k] - dp[i][k]);
+    }
+  own = std::sqrt(own / dt.size());
+  err = std::sqrt(err / dt.size());
+  std::printf("[ probed ] truth's deviation RMS %.3f um, predicted against it %.3f um\n", own, err);
+  EXPECT_LT(err, 0.3 * own);
+  // A bad row: exit 2, the file and line named.
+  std::ofstream(path("bad.csv")) << "part_x_mm,part_y_mm,part_z_mm,x_mm,y_mm,z_mm,a_deg,c_deg\n1,2,3,4,5,6,x,8\n";
+  auto b = test::runTolver(base + " --machine " + id + " --probed " + path("bad.csv") + " -o " + path("b.apt"));
+  EXPECT_EQ(b.exit_code, 2);
+  EXPECT_NE(b.output.find("bad.csv:2"), std::string::npos) << b.output;
 }
 
 }  // namespace

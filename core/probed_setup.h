@@ -1,0 +1,60 @@
+#pragma once
+// The part's set-up from probed points: what a shop measures before it cuts, and what a ball-bar
+// calibration cannot see (where the part sits on the table). A touch probe in the spindle
+// (its tip a length L below the gauge point) touches the part at known points; at each touch the
+// control records the joint values q_i. The part frame's error (the WorkpieceSetup block: its
+// offset and rotation in the table frame) is fitted so that the machine, errors included, puts
+// the probe tip where the part's nominal point is:
+//   min over v of  sum_i | n_i^T (tip_w(q_i; v) - p_i_w) |^2   (probing along a direction n_i),
+//   or            sum_i |        tip_w(q_i; v) - p_i_w  |^2   (a point probed in full),
+// by Gauss-Newton on the set-up columns of the sensitivity Jacobian (in w). With the part's six
+// values, the spindle's constant offset (the ToolSetup translations, shared by the probe and the
+// cutter: what calibrating the probe on the machine measures; the cutter's length relative to
+// the probe's is preset): a ball-bar cannot see it either, and touches at several table
+// orientations separate it from the part's offset. Directions the touches do not constrain (the
+// spindle offset when every touch is at one orientation, the rotation about z when every touch
+// is along z) keep the machine file's values (minimum-norm step, the part preferred over the
+// spindle) and are named.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/machine_model.h"
+
+namespace tolver {
+
+struct ProbedPoint {
+  int line = 0;                                   // source line, for messages
+  JointVector q;                                  // joint values at the touch (mm, rad)
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();  // the probe tip's nominal point in w, mm
+  Eigen::Vector3d n_w = Eigen::Vector3d::Zero();  // unit probing direction; zero: full point
+  double probe_length = 0.0;                      // probe tip below the gauge point, mm
+};
+
+struct ProbedSetupFit {
+  Vector6d change = Vector6d::Zero();  // added to the WorkpieceSetup block: x y z mm, rx ry rz rad
+  Eigen::Vector3d spindle_change = Eigen::Vector3d::Zero();  // added to the ToolSetup x y z, mm
+  int observed = 0;                    // set-up directions the touches constrain
+  int columns = 0;                     // of these many (6, or 9 with the spindle offset)
+  std::vector<std::string> unobserved; // names of those they do not ("rotation about z", ...)
+  std::vector<double> residual;        // per point, mm (along n_i, or the distance)
+  double rms = 0.0, max = 0.0;         // of the residuals after the fit, mm
+  double rms_before = 0.0;             // with the machine file's set-up, mm
+  int iterations = 0;
+};
+
+// Fits and applies (machine.params of the WorkpieceSetup block += change). Throws
+// std::invalid_argument when the machine has no WorkpieceSetup block or no point is given.
+ProbedSetupFit fitProbedSetup(Machine& machine, const std::vector<ProbedPoint>& points);
+
+// The parameters the fit moves (part 6, then spindle 3 when the model has a ToolSetup block) and
+// the column scale it solves in (mm for translations, rotations times 100 mm, the spindle's
+// translations times 1000 so that the minimum-norm step puts what the touches cannot tell apart
+// on the part).
+std::vector<int> probedSetupColumns(const MachineModel& model, Eigen::VectorXd* scale);
+// Rows of the touches (one per probed direction, three for a full point) for the given
+// parameter columns: what the uncertainty of a prediction modulo a probed set-up is built from.
+void probedRows(const Machine& machine, const std::vector<ProbedPoint>& points,
+                const std::vector<int>& columns, Eigen::MatrixXd* rows);
+
+}  // namespace tolver

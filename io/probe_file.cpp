@@ -1,0 +1,84 @@
+#include "io/probe_file.h"
+
+#include <cmath>
+
+#include "io/io_error.h"
+#include "io/text_util.h"
+
+namespace tolver {
+namespace {
+
+std::string axisColumn(const Axis& ax) { return toLower(ax.name) + (ax.isRotary() ? "_deg" : "_mm"); }
+
+}  // namespace
+
+std::vector<ProbedPoint> parseProbeCsv(const std::string& text, const std::string& file,
+                                       const MachineModel& model) {
+  std::vector<ProbedPoint> points;
+  forEachCsvRow(text, file, {"part_x_mm", "part_y_mm", "part_z_mm"},
+                "missing column (header: part_x_mm,part_y_mm,part_z_mm and one column per axis)",
+                [&](const CsvRow& row) {
+    auto number = [&](const std::string& name, double limit) {
+      if (row.column(name.c_str()) == 0)
+        throw InputError(file, row.line, 0, name, "missing column");
+      const std::string c = row.cell(name.c_str());
+      if (c.empty()) throw InputError(file, row.line, row.column(name.c_str()), name, "missing value");
+      const auto v = parseNumber(c);
+      if (!v) throw InputError(file, row.line, row.column(name.c_str()), name, "'" + c + "' is not a number");
+      if (!(std::abs(*v) <= limit))
+        throw InputError(file, row.line, row.column(name.c_str()), name,
+                         "'" + c + "' is out of range (within " + formatNumber(limit) + ")");
+      return *v;
+    };
+    ProbedPoint p;
+    p.line = row.line;
+    p.p_w = Eigen::Vector3d(number("part_x_mm", 1e6), number("part_y_mm", 1e6), number("part_z_mm", 1e6));
+    p.q.resize(model.axes.size());
+    for (size_t a = 0; a < model.axes.size(); ++a) {
+      const Axis& ax = model.axes[a];
+      const double v = number(axisColumn(ax), ax.isRotary() ? 1e4 : 1e6);
+      p.q[a] = ax.isRotary() ? v * M_PI / 180.0 : v;
+    }
+    const int given = !row.cell("part_nx").empty() + !row.cell("part_ny").empty() + !row.cell("part_nz").empty();
+    if (given == 3) {
+      const Eigen::Vector3d n(number("part_nx", 1e6), number("part_ny", 1e6), number("part_nz", 1e6));
+      if (n.norm() < 1e-9)
+        throw InputError(file, row.line, row.column("part_nx"), "part_nx", "the probing direction is zero");
+      p.n_w = n.normalized();
+    } else if (given != 0) {
+      throw InputError(file, row.line, 0, "part_nx", "give all of part_nx, part_ny, part_nz or none");
+    }
+    p.probe_length = model.setup.gauge_length;
+    if (!row.cell("probe_length_mm").empty()) {
+      p.probe_length = number("probe_length_mm", 1e4);
+      if (p.probe_length < 0)
+        throw InputError(file, row.line, row.column("probe_length_mm"), "probe_length_mm", "negative length");
+    }
+    points.push_back(p);
+  });
+  if (points.empty()) throw InputError(file, 0, 0, "points", "the file has no probed point");
+  return points;
+}
+
+std::vector<ProbedPoint> readProbeFile(const std::string& path, const MachineModel& model) {
+  return parseProbeCsv(readFile(path), path, model);
+}
+
+std::string formatProbeCsv(const MachineModel& model, const std::vector<ProbedPoint>& points) {
+  std::string out = "part_x_mm,part_y_mm,part_z_mm";
+  for (const Axis& ax : model.axes) out += "," + axisColumn(ax);
+  out += ",part_nx,part_ny,part_nz,probe_length_mm\n";
+  for (const ProbedPoint& p : points) {
+    std::string row = formatNumber(p.p_w.x()) + "," + formatNumber(p.p_w.y()) + "," + formatNumber(p.p_w.z());
+    for (size_t a = 0; a < model.axes.size(); ++a)
+      row += "," + formatNumber(model.axes[a].isRotary() ? p.q[a] * 180.0 / M_PI : p.q[a]);
+    if (p.n_w.isZero())
+      row += ",,,";
+    else
+      row += "," + formatNumber(p.n_w.x()) + "," + formatNumber(p.n_w.y()) + "," + formatNumber(p.n_w.z());
+    out += row + "," + formatNumber(p.probe_length) + "\n";
+  }
+  return out;
+}
+
+}  // namespace tolver
