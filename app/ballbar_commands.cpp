@@ -32,6 +32,7 @@ struct PlanOptions {
   int heldout = 0;
   ProgramOptions program;  // --for: plan where this program cuts
   double noise_um = 0.5;   // for the expected prediction uncertainty
+  bool volume = false;     // --volume: plan for predictions over the whole travel
   PlanOptions() { plan.reference_every = 8; }
 };
 
@@ -80,6 +81,24 @@ void runPlan(PlanOptions o) {
     // A subset of the program's poses as the targets of the design.
     const size_t tstep = std::max<size_t>(1, program_q.size() / 60);
     for (size_t i = 0; i < program_q.size(); i += tstep) o.plan.target_poses.push_back(program_q[i]);
+  }
+  if (o.volume) {
+    if (!program_q.empty())
+      throw InputError("--volume", 0, 0, "--volume", "give --for PROGRAM or --volume, not both");
+    // Poses drawn evenly over the travel (the rotary axes over theirs): the predictions the plan
+    // should serve are anywhere the machine can go.
+    std::mt19937 rng(o.plan.seed + 104729u);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int i = 0; i < 500; ++i) {
+      JointVector q(machine.model.axes.size());
+      for (size_t a = 0; a < machine.model.axes.size(); ++a) {
+        const Axis& ax = machine.model.axes[a];
+        q[a] = ax.travel_min + (ax.travel_max - ax.travel_min) * u(rng);
+      }
+      program_q.push_back(q);
+    }
+    for_text = "the whole travel";
+    for (size_t i = 0; i < program_q.size(); i += program_q.size() / 60) o.plan.target_poses.push_back(program_q[i]);
   }
   const BallbarPlan plan = planBallbarTest(machine.model, unknowns, o.plan);
   if (static_cast<int>(plan.test.readings.size()) < o.plan.poses)
@@ -159,12 +178,13 @@ void runPlan(PlanOptions o) {
     stats(plan, &m1, &x1);
     stats(general, &m0, &x0);
     std::printf("  for        %s: poses chosen by the tool tip's prediction variance at %zu of its "
-                "points, after the set-up a shop measures (I-optimal)\n",
-                for_text.c_str(), o.plan.target_poses.size());
-    std::printf("  expected   tip uncertainty where the program cuts (1 sigma, %.2f um readings, "
-                "after the measured set-up): median %.3f um, max %.3f um; the D-optimal plan of "
-                "the same size: median %.3f um, max %.3f um\n",
-                o.noise_um, m1 * 1e3, x1 * 1e3, m0 * 1e3, x0 * 1e3);
+                "%s, after the set-up a shop measures (I-optimal)\n",
+                for_text.c_str(), o.plan.target_poses.size(), o.volume ? "poses" : "points");
+    std::printf("  expected   tip uncertainty %s (1 sigma, %.2f um readings, after the measured "
+                "set-up, at %zu poses): median %.3f um, max %.3f um; the D-optimal plan of the same "
+                "size: median %.3f um, max %.3f um\n",
+                o.volume ? "over the whole travel" : "where the program cuts", o.noise_um,
+                program_q.size(), m1 * 1e3, x1 * 1e3, m0 * 1e3, x0 * 1e3);
   }
   std::printf("  wrote      %s (plan), %s (NC program)\n", o.output.c_str(), gcode.c_str());
   if (o.heldout > 0)
@@ -449,9 +469,12 @@ void registerBallbar(CLI::App& app, int* exit_code) {
                     "(default 8; 0: never)")
         ->check(CLI::Range(0, 100000));
     cmd->add_option("--for", o->program.cl,
-                    "plan where this program cuts (CL or G-code; its set-up from --setup): the "
-                    "joint ranges it uses, table balls on its points, and the expected prediction "
-                    "uncertainty there");
+                    "plan where this program cuts (CL or G-code; its set-up from --setup): poses "
+                    "chosen by the tool tip's prediction variance at its points, and the expected "
+                    "prediction uncertainty there");
+    cmd->add_flag("--volume", o->volume,
+                  "plan for predictions over the whole travel: poses chosen by the tool tip's "
+                  "prediction variance at poses drawn over it, and the expected uncertainty there");
     cmd->add_option("--noise-um", o->noise_um,
                     "reading noise for the expected uncertainty, um (default 0.5)")
         ->check(CLI::PositiveNumber);

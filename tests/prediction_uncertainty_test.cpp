@@ -196,35 +196,45 @@ TEST_F(PredictionUncertaintyTest, AProbedSetUpPredictsTheTruthWithItsBand) {
     std::mt19937 rng(55 + seed);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     std::vector<JointVector> qs;
-    std::vector<Eigen::Vector3d> truth;
+    std::vector<Eigen::Vector3d> truth, truth_axis;
     for (int i = 0; i < 300; ++i) {
       JointVector q(5);
       indep::Pose p;
       for (int a = 0; a < 5; ++a) q[a] = p.q[a] = mid(a, u(rng));
       qs.push_back(q);
       truth.push_back(c.truth.point(p, Eigen::Vector3d(0, 0, -100)));
+      truth_axis.push_back((c.truth.point(p, Eigen::Vector3d::Zero()) - truth.back()).normalized());
     }
-    auto tipRms = [&](Machine m, std::vector<Eigen::Vector3d>* d) {
+    auto tipRms = [&](Machine m, std::vector<Eigen::Vector3d>* d, double* axis_rms) {
       const ProbedSetupFit fit = fitProbedSetup(m, probes);
       EXPECT_EQ(fit.observed, 9);
       const ForwardKinematics fk(m.model, m.params);
-      double s = 0;
+      double s = 0, a = 0;
       for (size_t i = 0; i < qs.size(); ++i) {
-        const Eigen::Vector3d e = truth[i] - fk.w_T_t(qs[i]).translation();
+        const Eigen::Isometry3d T = fk.w_T_t(qs[i]);
+        const Eigen::Vector3d e = truth[i] - T.translation();
         if (d) d->push_back(e);
         s += e.squaredNorm();
+        const double ang = std::acos(std::clamp(truth_axis[i].dot(T.linear().col(2)), -1.0, 1.0));
+        a += ang * ang;
       }
+      *axis_rms = std::sqrt(a / qs.size());
       return std::sqrt(s / qs.size());
     };
     std::vector<Eigen::Vector3d> d;
     Machine fitted = c.identified;
-    const double t_id = tipRms(c.identified, &d);
+    double a_id, a_own;
+    const double t_id = tipRms(c.identified, &d, &a_id);
     Machine nominal = c.identified;
     nominal.params.setZero();
-    const double t_own = tipRms(nominal, nullptr);
-    std::printf("[ seed %u probed ] tip %.2f um, nominal machine probed the same way %.2f um\n", seed,
-                t_id * 1e3, t_own * 1e3);
+    const double t_own = tipRms(nominal, nullptr, &a_own);
+    std::printf("[ seed %u probed ] tip %.2f um, nominal machine probed the same way %.2f um; axis "
+                "%.1f / %.1f urad\n", seed, t_id * 1e3, t_own * 1e3, a_id * 1e6, a_own * 1e6);
     EXPECT_LT(t_id, 0.4 * t_own);
+    // The tool axis is the weak spot: 0.52 of the machine's own on seed 21, 1.20 on seed 22 (the
+    // issue's goal is 0.7; choosing the linear and angular prior scales separately by the
+    // evidence did not change it). A regression bound, not the goal.
+    EXPECT_LT(a_id, 1.25 * a_own);
     fitProbedSetup(fitted, probes);
     PredictionUncertainty pu(fitted);
     pu.setupModuloProbed(probes);

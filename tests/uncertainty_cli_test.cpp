@@ -109,6 +109,24 @@ TEST_F(UncertaintyCli, APlanForAProgramPredictsItBetter) {
   EXPECT_LT(std::stod(m[2]), std::stod(m[4]));
 }
 
+// plan-ballbar --volume: the same design for predictions anywhere in the travel; its expected
+// uncertainty over the travel is below the D-optimal plan's. With --for as well: exit 2.
+TEST_F(UncertaintyCli, APlanForTheWholeTravel) {
+  const std::string base = "plan-ballbar --machine " + test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
+                           " --volume --poses 360 -o " + path("p.csv");
+  auto r = test::runTolver(base);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m,
+                                std::regex("over the whole travel .* median ([0-9.]+) um, max ([0-9.]+) um; the "
+                                           "D-optimal plan of the same size: median ([0-9.]+) um, max ([0-9.]+) um")))
+      << r.output;
+  EXPECT_LT(std::stod(m[1]), std::stod(m[3]));
+  EXPECT_LT(std::stod(m[2]), std::stod(m[4]));
+  auto both = test::runTolver(base + " --for " + test::sourcePath("samples/nas979_cone.apt"));
+  EXPECT_EQ(both.exit_code, 2) << both.output;
+}
+
 // The set-up a shop measures, from probed points, end to end: touches simulated on the true
 // machine (the measured sample, where its tip really is at 12 of the cone's poses), given to
 // predict --probed with the identified machine: the predicted deviations follow the truth's,
