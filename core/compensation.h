@@ -1,0 +1,68 @@
+#pragma once
+// Compensation: the joint values at which the machine, errors included, puts the tool tip and the
+// tool axis where the program asked, and the program that commands them.
+//
+// For each program point (p_w, u_w), starting from the nominal inverse kinematics q0 (or the
+// program's commanded joints), Newton on
+//   r(q) = [ tip_w(q) - p_w ;  L e1 . u(q) ;  L e2 . u(q) ]      (e1, e2 across u_w, L = 100 mm)
+// with tip_w and u the forward kinematics with the errors (the exact model, no small-angle
+// shortcut) and the Jacobian dr/dq by forward differences; the step is the SVD pseudo-inverse,
+// truncated at 1/max_condition of the largest singular value, so that near a singular pose (the
+// tool axis on a rotary axis) the joint the axis cannot see keeps its value. Stops when the tip is
+// within `tolerance` and the axis within `angle_tolerance`. A 3-axis program (position only,
+// orientation=false) moves the prismatic joints only.
+//
+// The corrected program is then the nominal machine's pose at the compensating joints (what a
+// post-processor for a perfect machine turns into exactly those joints): for CL data,
+// nominal_p_w and nominal_u_w; for G-code, the joint changes q - q0.
+#include <Eigen/Core>
+#include <vector>
+
+#include "core/machine_model.h"
+#include "core/tool_path_prediction.h"
+
+namespace tolver {
+
+struct CompensationOptions {
+  double tolerance = 1e-7;        // mm
+  double angle_tolerance = 1e-9;  // rad
+  int max_iterations = 20;
+  // The Jacobian (orientation rows times L) is ill-conditioned beyond this condition number: the
+  // point is compensated in the directions it can be and reported.
+  double max_condition = 1e6;
+};
+
+enum class CompensationStatus {
+  Compensated,     // within the tolerances
+  IllConditioned,  // near a singular pose: compensated where the Jacobian allows, reported
+  OutOfTravel,     // the compensating joints leave travel: left uncompensated, reported
+  NotConverged,    // no convergence in max_iterations: left uncompensated, reported
+};
+
+struct CompensatedPoint {
+  CompensationStatus status = CompensationStatus::Compensated;
+  JointVector q0;                  // the program's joints (nominal inverse kinematics)
+  JointVector q;                   // the compensating joints (q0 when left uncompensated)
+  Eigen::Vector3d nominal_p_w = Eigen::Vector3d::Zero();  // nominal machine's tip at q: the corrected CL
+  Eigen::Vector3d nominal_u_w = Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d before_w = Eigen::Vector3d::Zero();  // tip deviation at q0 (machine - program), mm
+  Eigen::Vector3d after_w = Eigen::Vector3d::Zero();   // at q
+  double before_axis = 0, after_axis = 0;              // tool-axis angle to the program's, rad
+  double condition = 1;            // of the final Jacobian
+  int iterations = 0;
+  int axis_out = -1;               // OutOfTravel: the first axis beyond travel
+};
+
+struct CompensationResult {
+  std::vector<CompensatedPoint> points;
+  int ill_conditioned = 0, out_of_travel = 0, not_converged = 0;
+};
+
+// path and q0 (one joint vector per point, e.g. PredictionResult::points[i].q) on the machine
+// with the given error parameters.
+CompensationResult compensateToolPath(const MachineModel& model, const Eigen::VectorXd& params,
+                                      const std::vector<ClPoint>& path,
+                                      const std::vector<JointVector>& q0, bool orientation = true,
+                                      const CompensationOptions& options = {});
+
+}  // namespace tolver
