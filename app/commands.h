@@ -12,5 +12,6 @@ void registerAllocate(CLI::App& app, int* exit_code);
 void registerVerify(CLI::App& app, int* exit_code);
 void registerDiagnose(CLI::App& app, int* exit_code);
 void registerSetup(CLI::App& app, int* exit_code);
+void registerCompensate(CLI::App& app, int* exit_code);
 
 }  // namespace tolver::app

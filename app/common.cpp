@@ -147,7 +147,11 @@ ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model) {
     throw InputError(o.cl.empty() ? "--cl" : o.cl, 0, 0, "program",
                      "give the program with --cl (CL data) or --nc (G-code), one of them");
   const std::string path = o.nc.empty() ? o.cl : o.nc;
-  const std::string text = readFile(path);
+  return parseProgram(readFile(path), path, o, model);
+}
+
+ClProgram parseProgram(const std::string& text, const std::string& path, const ProgramOptions& o,
+                       const MachineModel& model) {
   const bool gcode = !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(text);
   ClProgram program;
   if (gcode) {

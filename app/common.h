@@ -42,6 +42,9 @@ void addProgramOptions(CLI::App* cmd, ProgramOptions& o);
 // Reads the CL or G-code program (G-code: --nc, a G-code extension, or content that reads as
 // G-code). Throws InputError.
 ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model);
+// The same on text already read (path names it and chooses the dialect as above).
+ClProgram parseProgram(const std::string& text, const std::string& path, const ProgramOptions& o,
+                       const MachineModel& model);
 // When the program declares no units: what was assumed, and whether inches fit better.
 std::vector<std::string> unitWarnings(const ClProgram& program, const MachineModel& model,
                                       const std::string& units_option);

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   tolver::app::registerVerify(app, &exit_code);
   tolver::app::registerDiagnose(app, &exit_code);
   tolver::app::registerSetup(app, &exit_code);
+  tolver::app::registerCompensate(app, &exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -49,6 +49,7 @@ struct VerifyOptions {
   bool quiet = false;
   bool absolute = false;
   std::string probed;
+  std::string compensated_from;  // the original of a compensated program: the nominal path
 };
 
 struct JobOutcome {
@@ -239,7 +240,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   ProgressBar bar(progress_bar && !o.quiet);
   Machine machine = loadMachine(o.machine);
   const std::vector<ToleranceZone> zones = zonesFrom(o);
-  const ClProgram program = loadProgram(o.program, machine.model);
+  ClProgram program = loadProgram(o.program, machine.model);
   const Cutter cutter = cutterFrom(o, program);
 
   // Joint values and CL_predicted (thesis 5.5.3); a posted program's own rotary solution.
@@ -263,6 +264,28 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
                        "presetting the tool would take up, which the calibration cannot see"
                      : "the machine's share is after the set-up a shop measures (the part probed, "
                        "the tool preset): the ball-bar calibration cannot see either";
+  // A compensated program: the machine runs its joints, the nominal is the original's path.
+  std::vector<JointVector> q_nominal;
+  if (!o.compensated_from.empty()) {
+    ProgramOptions po = o.program;
+    (po.nc.empty() ? po.cl : po.nc) = o.compensated_from;
+    const ClProgram original = loadProgram(po, machine.model);
+    if (original.path.size() != program.path.size())
+      throw InputError(o.compensated_from, 0, 0, "--compensated-from",
+                       "the original has " + std::to_string(original.path.size()) + " tool positions, the "
+                       "compensated program " + std::to_string(program.path.size()) +
+                       ": give the program compensate read");
+    const PredictionResult op = predictToolPath(machine.model, machine.params, original.path, 20,
+                                                original.joints.empty() ? nullptr : &original.joints);
+    if (!op.ok())
+      throw InputError(original.file, op.failures.front().line, 0, "unreachable",
+                       describeUnreachable(machine.model, op));
+    for (size_t i = 0; i < program.path.size(); ++i) {
+      program.path[i].p_w = original.path[i].p_w;
+      program.path[i].u_w = original.path[i].u_w;
+      q_nominal.push_back(op.points[i].q);
+    }
+  }
   std::vector<std::string> warnings = setupWarnings(machine.model);
   for (const std::string& w : unitWarnings(program, machine.model, o.program.units)) warnings.push_back(w);
   for (const std::string& w : programNotes(program)) warnings.push_back(program.file + ": " + w);
@@ -337,7 +360,10 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
     std::vector<JointVector> q(pred.points.size());
     for (size_t i = 0; i < q.size(); ++i) q[i] = pred.points[i].q;
     std::vector<ToolPlacement> nominal, actual;
-    samplePlacements(fk_nominal, fk_actual, program.path, q, sampling, &nominal, &actual);
+    if (q_nominal.empty())
+      samplePlacements(fk_nominal, fk_actual, program.path, q, sampling, &nominal, &actual);
+    else
+      samplePlacements(fk_nominal, fk_actual, program.path, q_nominal, q, sampling, &nominal, &actual);
     rep.placements = static_cast<int>(nominal.size());
     phase("placements");
     result = verifyPart(samples, cutter, nominal, actual, zones, sweep,
@@ -644,6 +670,9 @@ void registerVerify(CLI::App& app, int* exit_code) {
                 "a calibrated machine: verify without the set-up a shop measures (part probed, "
                 "tool preset), i.e. with what the calibration cannot see left in");
   addProbedOption(cmd, o->probed);
+  cmd->add_option("--compensated-from", o->compensated_from,
+                  "the program is the output of tolver compensate for this original: the nominal is "
+                  "the original's path, the machine runs the compensated program's joints");
   cmd->callback([o, exit_code] {
     if (!o->batch.empty()) {
       *exit_code = runBatch(*o);

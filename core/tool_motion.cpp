@@ -25,29 +25,36 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
                       const std::vector<ClPoint>& path, const std::vector<JointVector>& q,
                       const MotionSampling& sampling, std::vector<ToolPlacement>* nominal_out,
                       std::vector<ToolPlacement>* actual_out) {
+  samplePlacements(nominal, actual, path, q, q, sampling, nominal_out, actual_out);
+}
+
+void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics& actual,
+                      const std::vector<ClPoint>& path, const std::vector<JointVector>& q,
+                      const std::vector<JointVector>& qa, const MotionSampling& sampling,
+                      std::vector<ToolPlacement>* nominal_out, std::vector<ToolPlacement>* actual_out) {
   nominal_out->clear();
   actual_out->clear();
-  const size_t n = std::min(path.size(), q.size());
+  const size_t n = std::min({path.size(), q.size(), qa.size()});
   // Direction-dependent effects (reversal) see the approach directions of the joint moves.
   MotionContext ctx;
   const MotionContext* ctx_ptr = actual.model().effects.empty() ? nullptr : &ctx;
-  auto emit = [&](const JointVector& qk, int index) {
+  auto emit = [&](const JointVector& qk, const JointVector& qak, int index) {
     ToolPlacement a, b;
     nominal.tipAndAxis(qk, &a.tip_w, &a.axis_w);
-    actual.tipAndAxis(qk, &b.tip_w, &b.axis_w, nullptr, nullptr, ctx_ptr);
+    actual.tipAndAxis(qak, &b.tip_w, &b.axis_w, nullptr, nullptr, ctx_ptr);
     a.cl_index = b.cl_index = index;
     nominal_out->push_back(a);
     actual_out->push_back(b);
   };
-  JointVector qm;
+  JointVector qm, qam;
   Eigen::Vector3d p0, u0, pm, um, p1, u1;
   for (size_t i = 0; i < n; ++i) {
     if (i == 0 || path[i].rapid) {
-      if (ctx_ptr && i > 0) updateDirections(ctx, q[i - 1], q[i]);
-      emit(q[i], static_cast<int>(i));
+      if (ctx_ptr && i > 0) updateDirections(ctx, qa[i - 1], qa[i]);
+      emit(q[i], qa[i], static_cast<int>(i));
       continue;
     }
-    if (ctx_ptr) updateDirections(ctx, q[i - 1], q[i]);
+    if (ctx_ptr) updateDirections(ctx, qa[i - 1], qa[i]);
     nominal.tipAndAxis(q[i - 1], &p0, &u0);
     qm = 0.5 * (q[i - 1] + q[i]);
     nominal.tipAndAxis(qm, &pm, &um);
@@ -58,7 +65,8 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
     for (int k = 1; k <= m; ++k) {
       const double f = static_cast<double>(k) / m;
       qm = (1.0 - f) * q[i - 1] + f * q[i];
-      emit(k == m ? q[i] : qm, static_cast<int>(i));
+      qam = (1.0 - f) * qa[i - 1] + f * qa[i];
+      emit(k == m ? q[i] : qm, k == m ? qa[i] : qam, static_cast<int>(i));
     }
   }
 }

@@ -37,5 +37,12 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
                       const std::vector<ClPoint>& path, const std::vector<JointVector>& q,
                       const MotionSampling& sampling, std::vector<ToolPlacement>* nominal_out,
                       std::vector<ToolPlacement>* actual_out);
+// The same with the nominal placements at q_nominal and the actual ones at q_actual (a
+// compensated program: the original's joints and the compensating ones, point for point); the
+// sub-steps follow q_nominal.
+void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics& actual,
+                      const std::vector<ClPoint>& path, const std::vector<JointVector>& q_nominal,
+                      const std::vector<JointVector>& q_actual, const MotionSampling& sampling,
+                      std::vector<ToolPlacement>* nominal_out, std::vector<ToolPlacement>* actual_out);
 
 }  // namespace tolver

@@ -1,0 +1,264 @@
+// tolver compensate: a corrected program that the machine, errors included, runs onto the
+// nominal path; the predicted error before and after (the after measured on the written file).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "app/commands.h"
+#include "app/common.h"
+#include "core/compensation.h"
+#include "core/prediction_uncertainty.h"
+#include "io/compensated_program.h"
+#include "io/compensation_report.h"
+#include "io/io_error.h"
+
+namespace tolver::app {
+namespace {
+
+struct CompensateOptions {
+  MachineOptions machine;
+  ProgramOptions program;
+  std::string output, report, probed;
+  bool absolute = false;
+  double max_condition = 1e6;
+};
+
+double angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+// Figures over points [from, to): tip deviations (mm) and axis angles (rad).
+PathFigures figuresOf(const std::vector<Eigen::Vector3d>& dev, const std::vector<double>& ang,
+                      const std::vector<ClPoint>& path, size_t from, size_t to) {
+  PathFigures f;
+  double st = 0, sa = 0;
+  for (size_t i = from; i < to; ++i) {
+    const double t = dev[i].norm() * 1e3, a = ang[i] * 1e6;
+    st += t * t;
+    sa += a * a;
+    if (t > f.tip_max_um) f.tip_max_um = t, f.tip_max_line = path[i].line;
+    f.axis_max_urad = std::max(f.axis_max_urad, a);
+  }
+  const double n = std::max<size_t>(1, to - from);
+  f.tip_rms_um = std::sqrt(st / n);
+  f.axis_rms_urad = std::sqrt(sa / n);
+  return f;
+}
+
+void runCompensate(const CompensateOptions& o, int* exit_code) {
+  if (!o.program.lines.empty())
+    throw InputError("--lines", 0, 0, "--lines", "compensate writes the whole program; --lines is for predict and verify");
+  Machine machine = loadMachine(o.machine);
+  const ClProgram program = loadProgram(o.program, machine.model);
+  const std::string report = o.report.empty() ? replaceExtension(o.output, ".json") : o.report;
+  checkOutputDir(o.output, "-o");
+  checkOutputDir(report, "--report");
+  const std::vector<JointVector>* commanded = program.joints.empty() ? nullptr : &program.joints;
+  PredictionResult pred = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
+  if (!pred.ok())
+    throw InputError(program.file, pred.failures.front().line, 0, "unreachable",
+                     describeUnreachable(machine.model, pred));
+  // A calibrated machine: its share after the set-up the shop measures (the calibration cannot
+  // see the rest), as predict takes it.
+  const std::vector<ProbedPoint> probed = loadProbed(o.probed, machine.model);
+  const CalibratedPrediction cal = applyCalibration(machine, program, pred, o.absolute, probed);
+  std::vector<std::string> warnings;
+  std::string setup_note;
+  if (cal.probed)
+    setup_note = describeProbedSetup(o.probed, cal.probe, probed, &warnings);
+  else if (!machine.identification.empty())
+    setup_note = o.absolute ? "absolute (--absolute): what probing and presetting would take up is compensated too"
+                            : "after the set-up a shop measures (part probed, tool preset), which the calibration cannot see";
+
+  const bool gcode = program.dialect == "G-code";
+  const bool orientation = gcode ? gcodeGivesRotaryWords(program, machine.model) : program.multiax;
+  std::vector<JointVector> q0(pred.points.size());
+  for (size_t i = 0; i < q0.size(); ++i) q0[i] = pred.points[i].q;
+  CompensationOptions co;
+  co.max_condition = o.max_condition;
+  const CompensationResult comp = compensateToolPath(machine.model, machine.params, program.path, q0, orientation, co);
+
+  // The corrected program, in the source's dialect.
+  const std::vector<std::string> header = {
+      "tolver compensate: " + program.file + " for " + machine.model.name + " (" + o.machine.machine +
+      "): the machine with its errors runs this program onto the original's nominal path"};
+  CompensatedProgramText text;
+  if (gcode) {
+    std::vector<JointVector> q(comp.points.size());
+    std::vector<Eigen::Vector3d> p(comp.points.size());
+    for (size_t i = 0; i < q.size(); ++i) {
+      q[i] = comp.points[i].q;
+      p[i] = comp.points[i].nominal_p_w;
+    }
+    text = formatCompensatedGcode(program, machine.model, program.joints, q, p, header);
+  } else {
+    std::vector<ClPoint> corrected = program.path;
+    for (size_t i = 0; i < corrected.size(); ++i) {
+      corrected[i].p_w = comp.points[i].nominal_p_w;
+      corrected[i].u_w = comp.points[i].nominal_u_w;
+    }
+    text = formatCompensatedApt(program, corrected, header);
+  }
+  // The after, measured on the file as written: read back, predicted on the machine.
+  const ClProgram back = parseProgram(text.text, o.output, o.program, machine.model);
+  if (back.path.size() != program.path.size())
+    throw std::runtime_error("the compensated program reads back with " + std::to_string(back.path.size()) +
+                             " points instead of " + std::to_string(program.path.size()));
+  const PredictionResult after = predictToolPath(machine.model, machine.params, back.path, 20,
+                                                 back.joints.empty() ? nullptr : &back.joints);
+  if (!after.ok())
+    throw std::runtime_error("the compensated program does not predict: " + after.failures.front().message);
+  const size_t n = program.path.size();
+  std::vector<Eigen::Vector3d> dev_before(n), dev_after(n);
+  std::vector<double> ang_before(n), ang_after(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d u_t = program.path[i].u_w.normalized();
+    dev_before[i] = pred.points[i].p_pred_w - program.path[i].p_w;
+    ang_before[i] = angle(pred.points[i].u_pred_w, u_t);
+    dev_after[i] = after.points[i].p_pred_w - program.path[i].p_w;
+    ang_after[i] = orientation ? angle(after.points[i].u_pred_w, u_t) : ang_before[i];
+  }
+  CompensationReport rep;
+  rep.machine = o.machine.machine;
+  rep.program = program.file;
+  rep.dialect = program.dialect;
+  rep.output = o.output;
+  rep.points = static_cast<int>(n);
+  rep.before = figuresOf(dev_before, ang_before, program.path, 0, n);
+  rep.after = figuresOf(dev_after, ang_after, program.path, 0, n);
+  rep.setup_note = setup_note;
+  rep.notes = text.notes;
+  for (size_t a = 0; a < machine.model.axes.size(); ++a) {
+    double m = 0;
+    for (const CompensatedPoint& c : comp.points) m = std::max(m, std::abs(c.q[a] - c.q0[a]));
+    const bool rot = machine.model.axes[a].isRotary();
+    rep.joint_correction_max.push_back({machine.model.axes[a].name, m * (rot ? 1e6 : 1e3)});
+    rep.joint_rotary.push_back(rot);
+  }
+  rep.ill_conditioned = comp.ill_conditioned;
+  rep.out_of_travel = comp.out_of_travel;
+  rep.not_converged = comp.not_converged;
+  for (size_t i = 0; i < n; ++i) {
+    if (comp.points[i].status == CompensationStatus::IllConditioned) rep.ill_conditioned_lines.push_back(program.path[i].line);
+    if (comp.points[i].status == CompensationStatus::OutOfTravel) rep.out_of_travel_lines.push_back(program.path[i].line);
+    rep.left_by_writer += !text.written[i] && comp.points[i].status != CompensationStatus::OutOfTravel &&
+                          comp.points[i].status != CompensationStatus::NotConverged;
+  }
+  // Segments: runs of cutting moves between rapids.
+  for (size_t i = 0; i < n;) {
+    if (program.path[i].rapid) {
+      ++i;
+      continue;
+    }
+    size_t j = i;
+    while (j < n && !program.path[j].rapid) ++j;
+    SegmentFigures s;
+    s.first_line = program.path[i].line;
+    s.last_line = program.path[j - 1].line;
+    s.points = static_cast<int>(j - i);
+    s.before = figuresOf(dev_before, ang_before, program.path, i, j);
+    s.after = figuresOf(dev_after, ang_after, program.path, i, j);
+    rep.segments.push_back(s);
+    i = j;
+  }
+  // The model's own uncertainty of the after (a calibrated machine).
+  if (!cal.uncertainty.empty()) {
+    PredictionUncertainty pu(machine);
+    if (cal.probed)
+      pu.setupModuloProbed(probed);
+    else if (!o.absolute) {
+      std::vector<JointVector> sub;
+      const size_t step = std::max<size_t>(1, n / 2000);
+      for (size_t i = 0; i < n; i += step) sub.push_back(after.points[i].q);
+      pu.setupModulo(sub);
+    }
+    std::vector<double> band(n);
+    for (size_t i = 0; i < n; ++i) band[i] = 1.96 * pu.at(after.points[i].q).tip * 1e3;
+    rep.after_band95_max_um = *std::max_element(band.begin(), band.end());
+    std::nth_element(band.begin(), band.begin() + n / 2, band.end());
+    rep.after_band95_median_um = band[n / 2];
+  }
+  OutputSet outputs;
+  outputs.add(o.output, text.text);
+  outputs.add(report, formatCompensationJson(rep));
+  outputs.commit();
+
+  std::printf("tolver compensate\n");
+  std::printf("  machine    %s (%s)\n", machine.model.name.c_str(), o.machine.machine.c_str());
+  std::printf("  program    %s (%s): %zu tool positions, %s\n", program.file.c_str(), program.dialect.c_str(), n,
+              orientation ? "tool tip and tool axis compensated" : "3-axis: the tool tip compensated by the linear axes");
+  if (!setup_note.empty()) std::printf("  set-up     %s\n", setup_note.c_str());
+  std::printf("  before     tip max %.3f um (line %d), RMS %.3f um; tool axis max %.2f urad, RMS %.2f urad\n",
+              rep.before.tip_max_um, rep.before.tip_max_line, rep.before.tip_rms_um, rep.before.axis_max_urad,
+              rep.before.axis_rms_urad);
+  std::printf("  after      tip max %.4f um (line %d), RMS %.4f um; tool axis max %.3f urad, RMS %.3f urad "
+              "(the written program, read back and predicted)\n",
+              rep.after.tip_max_um, rep.after.tip_max_line, rep.after.tip_rms_um, rep.after.axis_max_urad,
+              rep.after.axis_rms_urad);
+  if (rep.after_band95_max_um >= 0)
+    std::printf("  model      the after is zero only to within the calibration's uncertainty: 95 %% band median "
+                "%.3f um, max %.3f um (compensation removes what the model knows, not what it does not)\n",
+                rep.after_band95_median_um, rep.after_band95_max_um);
+  std::string jc;
+  char buf[96];
+  for (size_t a = 0; a < rep.joint_correction_max.size(); ++a) {
+    std::snprintf(buf, sizeof buf, "%s%s %.3f %s", a ? ", " : "", rep.joint_correction_max[a].first.c_str(),
+                  rep.joint_correction_max[a].second, rep.joint_rotary[a] ? "urad" : "um");
+    jc += buf;
+  }
+  std::printf("  joints     largest corrections: %s\n", jc.c_str());
+  if (rep.segments.size() > 1) {
+    std::vector<const SegmentFigures*> worst;
+    for (const SegmentFigures& s : rep.segments) worst.push_back(&s);
+    std::sort(worst.begin(), worst.end(), [](auto* a, auto* b) { return a->before.tip_max_um > b->before.tip_max_um; });
+    std::printf("  segments   %zu (cutting runs between rapids); the worst before:", rep.segments.size());
+    for (size_t k = 0; k < worst.size() && k < 3; ++k)
+      std::printf("%s lines %d-%d %.2f -> %.4f um", k ? "," : "", worst[k]->first_line, worst[k]->last_line,
+                  worst[k]->before.tip_max_um, worst[k]->after.tip_max_um);
+    std::printf("\n");
+  }
+  auto lines = [](const std::vector<int>& v) {
+    std::string s;
+    for (size_t k = 0; k < v.size() && k < 6; ++k) s += (k ? ", " : "") + std::to_string(v[k]);
+    return s + (v.size() > 6 ? ", ..." : "");
+  };
+  if (rep.out_of_travel > 0)
+    std::printf("  travel     %d points would need joints beyond travel: left uncompensated (lines %s)\n",
+                rep.out_of_travel, lines(rep.out_of_travel_lines).c_str());
+  if (rep.not_converged > 0) std::printf("  warning    %d points did not converge: left uncompensated\n", rep.not_converged);
+  if (rep.ill_conditioned > 0)
+    std::printf("  singular   %d points near a singular pose (condition above %.0e): compensated where the "
+                "joints can act, the rest left (lines %s)\n",
+                rep.ill_conditioned, o.max_condition, lines(rep.ill_conditioned_lines).c_str());
+  for (const std::string& note : text.notes) std::printf("  note       %s\n", note.c_str());
+  for (const std::string& w : warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+  for (const std::string& w : setupWarnings(machine.model)) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+  std::printf("  wrote      %s (compensated program), %s (report)\n", o.output.c_str(), report.c_str());
+  *exit_code = 0;
+}
+
+}  // namespace
+
+void registerCompensate(CLI::App& app, int* exit_code) {
+  auto o = std::make_shared<CompensateOptions>();
+  CLI::App* cmd = app.add_subcommand(
+      "compensate",
+      "Write the program that the machine, errors included, runs onto the nominal path: joints by "
+      "Newton on the full error model, written back in the program's own dialect, with the "
+      "predicted error before and after.");
+  addMachineOptions(cmd, o->machine, "machine file (XML) with the errors to compensate");
+  addProgramOptions(cmd, o->program);
+  cmd->add_option("-o,--output", o->output, "compensated program to write (same dialect as the input)")->required();
+  cmd->add_option("--report", o->report, "JSON report (default: the output path with .json)");
+  cmd->add_option("--max-condition", o->max_condition,
+                  "condition number beyond which a point counts as near a singular pose (default 1e6)")
+      ->check(CLI::Range(10.0, 1e15));
+  cmd->add_flag("--absolute", o->absolute,
+                "a calibrated machine: compensate its raw prediction, with what probing and presetting "
+                "would take up");
+  addProbedOption(cmd, o->probed);
+  cmd->callback([o, exit_code] { runCompensate(*o, exit_code); });
+}
+
+}  // namespace tolver::app

@@ -1,0 +1,53 @@
+#pragma once
+// Writers of a compensated program in the source's own dialect: every line, comment and word
+// that is not a coordinate is kept byte for byte; coordinates change in place, with the token's
+// own number of decimals or more where fewer would round the correction away (CL data: at least
+// 6 decimals in mm, 8 in inches, 9 for tool-axis components; G-code: at least 4 in mm and in
+// degrees, 5 in inches, the resolution of a 0.1 um control).
+//
+// CL data (APT, CLSF): a GOTO/FROM of one point gets the corrected point (and, in a multi-axis
+// program, its tool axis: appended when the statement gave only x,y,z), in the statement's own
+// coordinate system; a statement whose points were expanded (CIRCLE, MOVARC, NURBS) becomes GOTOs
+// of its compensated points, with a comment naming the source line.
+//
+// G-code: on each G0/G1 block of one point in absolute mode, the axis words become the words that
+// command the compensating joints: outside tool-centre-point mode word += nc_sign * (q - q0)
+// (mm or deg, in program units); in TCP mode X Y Z += the corrected tip's change in program
+// coordinates and the rotary words as outside it. A word the block did not give is added when the
+// compensated value in force differs from the one the block needs. Blocks the writer cannot
+// change without changing the program's structure are left as they are and listed: arcs (G2/G3),
+// drilling cycles, incremental (G91) blocks, moves in machine coordinates (G53, G28) and words
+// given by expressions or parameters.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/machine_model.h"
+#include "io/apt_reader.h"
+
+namespace tolver {
+
+struct CompensatedProgramText {
+  std::string text;
+  std::vector<char> written;       // per program point: the text commands its compensation
+  std::vector<std::string> notes;  // what was left as it was, one line each
+};
+
+// corrected: per program point, the nominal machine's pose at the compensating joints (w, mm).
+CompensatedProgramText formatCompensatedApt(const ClProgram& program,
+                                            const std::vector<ClPoint>& corrected,
+                                            const std::vector<std::string>& header);
+
+// q0: the joints the program commands (program.joints); q: the compensating joints;
+// corrected_p_w: the nominal machine's tip at q (for TCP blocks).
+CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const MachineModel& model,
+                                              const std::vector<JointVector>& q0,
+                                              const std::vector<JointVector>& q,
+                                              const std::vector<Eigen::Vector3d>& corrected_p_w,
+                                              const std::vector<std::string>& header);
+
+// Whether any block of a G-code program gives a word of a rotary axis (else it is a 3-axis
+// program, compensated by the prismatic joints alone).
+bool gcodeGivesRotaryWords(const ClProgram& program, const MachineModel& model);
+
+}  // namespace tolver

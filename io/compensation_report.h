@@ -1,0 +1,38 @@
+#pragma once
+// The JSON report of `tolver compensate`: the predicted tool-path error before and after, along
+// the program and per segment (a run of cutting moves between rapids), the joint corrections,
+// the points left uncompensated and why. Lengths in um, angles in urad, joint corrections in um
+// (prismatic) and urad (rotary).
+#include <string>
+#include <vector>
+
+namespace tolver {
+
+struct PathFigures {
+  double tip_max_um = 0, tip_rms_um = 0, axis_max_urad = 0, axis_rms_urad = 0;
+  int tip_max_line = 0;
+};
+
+struct SegmentFigures {
+  int first_line = 0, last_line = 0, points = 0;
+  PathFigures before, after;
+};
+
+struct CompensationReport {
+  std::string machine, program, dialect, output;
+  int points = 0;
+  PathFigures before, after;          // after: predicted on the written file, read back
+  double after_band95_max_um = -1;    // the model's 95 % band of the after (calibrated machine)
+  double after_band95_median_um = -1;
+  std::string setup_note;             // the set-up the machine's share is taken after
+  std::vector<std::pair<std::string, double>> joint_correction_max;  // axis, um or urad
+  std::vector<bool> joint_rotary;
+  int ill_conditioned = 0, out_of_travel = 0, not_converged = 0, left_by_writer = 0;
+  std::vector<int> ill_conditioned_lines, out_of_travel_lines;
+  std::vector<SegmentFigures> segments;
+  std::vector<std::string> notes;
+};
+
+std::string formatCompensationJson(const CompensationReport& r);
+
+}  // namespace tolver
