@@ -105,8 +105,10 @@ void keepLines(ClProgram& p, const std::string& spec) {
   if (!a || !b || *a < 1 || *b < *a || *a != std::floor(*a) || *b != std::floor(*b))
     throw InputError("--lines", 0, 0, "lines", "expected 'first-last', e.g. 11-578");
   size_t k = 0;
+  std::vector<int> kept_index(p.path.size(), -1);  // old point -> new point
   for (size_t i = 0; i < p.path.size(); ++i) {
     if (p.path[i].line < *a || p.path[i].line > *b) continue;
+    kept_index[i] = static_cast<int>(k);
     p.path[k] = p.path[i];
     if (i < p.point_frame.size()) p.point_frame[k] = p.point_frame[i];
     if (i < p.joints.size()) p.joints[k] = p.joints[i];
@@ -115,6 +117,17 @@ void keepLines(ClProgram& p, const std::string& spec) {
   }
   if (k == 0)
     throw InputError(p.file, 0, 0, "--lines", "no tool position on lines " + spec);
+  // The statements own the kept points only (writers index the path through them).
+  for (AptStatement& st : p.statements) {
+    int first = -1, count = 0;
+    for (int i = st.first_point; st.point_count > 0 && i < st.first_point + st.point_count; ++i)
+      if (kept_index[i] >= 0) {
+        if (first < 0) first = kept_index[i];
+        ++count;
+      }
+    st.first_point = first;
+    st.point_count = count;
+  }
   p.path.resize(k);
   if (p.point_frame.size() > k) p.point_frame.resize(k);
   if (p.joints.size() > k) p.joints.resize(k);

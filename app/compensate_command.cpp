@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <set>
 
 #include "app/commands.h"
 #include "app/common.h"
@@ -47,8 +48,6 @@ PathFigures figuresOf(const std::vector<Eigen::Vector3d>& dev, const std::vector
 }
 
 void runCompensate(const CompensateOptions& o, int* exit_code) {
-  if (!o.program.lines.empty())
-    throw InputError("--lines", 0, 0, "--lines", "compensate writes the whole program; --lines is for predict and verify");
   Machine machine = loadMachine(o.machine);
   const ClProgram program = loadProgram(o.program, machine.model);
   const std::string report = o.report.empty() ? replaceExtension(o.output, ".json") : o.report;
@@ -100,11 +99,49 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
     }
     text = formatCompensatedApt(program, corrected, header);
   }
+  // The source's byte-order mark and line endings.
+  {
+    const std::string raw = readFile(o.program.nc.empty() ? o.program.cl : o.program.nc);
+    const size_t eol = raw.find('\n');
+    if (eol != std::string::npos && eol > 0 && raw[eol - 1] == '\r') {
+      std::string crlf;
+      crlf.reserve(text.text.size() + text.text.size() / 30);
+      for (char ch : text.text) {
+        if (ch == '\n') crlf += '\r';
+        crlf += ch;
+      }
+      text.text = std::move(crlf);
+    }
+    if (raw.rfind("\xEF\xBB\xBF", 0) == 0) text.text.insert(0, "\xEF\xBB\xBF");
+  }
   // The after, measured on the file as written: read back, predicted on the machine.
-  const ClProgram back = parseProgram(text.text, o.output, o.program, machine.model);
-  if (back.path.size() != program.path.size())
+  // Read back whole, then the points of the source lines compensated (--lines).
+  ProgramOptions whole = o.program;
+  whole.lines.clear();
+  ClProgram back = parseProgram(text.text, o.output, whole, machine.model);
+  if (!o.program.lines.empty()) {
+    std::set<int> lines;
+    for (const ClPoint& c : program.path) lines.insert(c.line);
+    size_t k = 0;
+    for (size_t i = 0; i < back.path.size(); ++i) {
+      const int l = back.path[i].line;
+      const int src = l >= 1 && l <= static_cast<int>(text.source_line.size()) ? text.source_line[l - 1] : 0;
+      if (!lines.count(src)) continue;
+      back.path[k] = back.path[i];
+      back.path[k].line = src;
+      if (i < back.joints.size()) back.joints[k] = back.joints[i];
+      ++k;
+    }
+    back.path.resize(k);
+    if (back.joints.size() > k) back.joints.resize(k);
+  }
+  if (back.path.size() != program.path.size()) {
+    size_t k = 0;
+    while (k < back.path.size() && back.path[k].line == program.path[k].line) ++k;
     throw std::runtime_error("the compensated program reads back with " + std::to_string(back.path.size()) +
-                             " points instead of " + std::to_string(program.path.size()));
+                             " points instead of " + std::to_string(program.path.size()) + " (from line " +
+                             std::to_string(k < program.path.size() ? program.path[k].line : 0) + ")");
+  }
   const PredictionResult after = predictToolPath(machine.model, machine.params, back.path, 20,
                                                  back.joints.empty() ? nullptr : &back.joints);
   if (!after.ok())
@@ -127,6 +164,20 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
   rep.points = static_cast<int>(n);
   rep.before = figuresOf(dev_before, ang_before, program.path, 0, n);
   rep.after = figuresOf(dev_after, ang_after, program.path, 0, n);
+  {
+    std::vector<Eigen::Vector3d> d;
+    std::vector<double> g;
+    std::vector<ClPoint> at;
+    for (size_t i = 0; i < n; ++i)
+      if (text.written[i] && (comp.points[i].status == CompensationStatus::Compensated ||
+                              comp.points[i].status == CompensationStatus::IllConditioned)) {
+        d.push_back(dev_after[i]);
+        g.push_back(ang_after[i]);
+        at.push_back(program.path[i]);
+      }
+    rep.compensated_points = static_cast<int>(d.size());
+    rep.after_compensated = figuresOf(d, g, at, 0, d.size());
+  }
   rep.setup_note = setup_note;
   rep.notes = text.notes;
   for (size_t a = 0; a < machine.model.axes.size(); ++a) {
@@ -186,7 +237,8 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
 
   std::printf("tolver compensate\n");
   std::printf("  machine    %s (%s)\n", machine.model.name.c_str(), o.machine.machine.c_str());
-  std::printf("  program    %s (%s): %zu tool positions, %s\n", program.file.c_str(), program.dialect.c_str(), n,
+  std::printf("  program    %s (%s): %zu tool positions%s, %s\n", program.file.c_str(), program.dialect.c_str(), n,
+              o.program.lines.empty() ? "" : (" of lines " + o.program.lines + " (the other lines written as they are)").c_str(),
               orientation ? "tool tip and tool axis compensated" : "3-axis: the tool tip compensated by the linear axes");
   if (!setup_note.empty()) std::printf("  set-up     %s\n", setup_note.c_str());
   std::printf("  before     tip max %.3f um (line %d), RMS %.3f um; tool axis max %.2f urad, RMS %.2f urad\n",
@@ -196,6 +248,11 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
               "(the written program, read back and predicted)\n",
               rep.after.tip_max_um, rep.after.tip_max_line, rep.after.tip_rms_um, rep.after.axis_max_urad,
               rep.after.axis_rms_urad);
+  if (rep.compensated_points < static_cast<int>(n))
+    std::printf("             on the %d points the file compensates (the others are listed below): tip max "
+                "%.4f um, RMS %.4f um; tool axis max %.3f urad\n",
+                rep.compensated_points, rep.after_compensated.tip_max_um, rep.after_compensated.tip_rms_um,
+                rep.after_compensated.axis_max_urad);
   if (rep.after_band95_max_um >= 0)
     std::printf("  model      the after is zero only to within the calibration's uncertainty: 95 %% band median "
                 "%.3f um, max %.3f um (compensation removes what the model knows, not what it does not)\n",
@@ -228,8 +285,9 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
                 rep.out_of_travel, lines(rep.out_of_travel_lines).c_str());
   if (rep.not_converged > 0) std::printf("  warning    %d points did not converge: left uncompensated\n", rep.not_converged);
   if (rep.ill_conditioned > 0)
-    std::printf("  singular   %d points near a singular pose (condition above %.0e): compensated where the "
-                "joints can act, the rest left (lines %s)\n",
+    std::printf("  singular   %d points near a singular pose (condition above %.0e): the tool tip "
+                "compensated, the tool axis left as programmed (correcting it would swing a rotary axis) "
+                "(lines %s)\n",
                 rep.ill_conditioned, o.max_condition, lines(rep.ill_conditioned_lines).c_str());
   for (const std::string& note : text.notes) std::printf("  note       %s\n", note.c_str());
   for (const std::string& w : warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());

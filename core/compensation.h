@@ -6,11 +6,12 @@
 // program's commanded joints), Newton on
 //   r(q) = [ tip_w(q) - p_w ;  L e1 . u(q) ;  L e2 . u(q) ]      (e1, e2 across u_w, L = 100 mm)
 // with tip_w and u the forward kinematics with the errors (the exact model, no small-angle
-// shortcut) and the Jacobian dr/dq by forward differences; the step is the SVD pseudo-inverse,
-// truncated at 1/max_condition of the largest singular value, so that near a singular pose (the
-// tool axis on a rotary axis) the joint the axis cannot see keeps its value. Stops when the tip is
-// within `tolerance` and the axis within `angle_tolerance`. A 3-axis program (position only,
-// orientation=false) moves the prismatic joints only.
+// shortcut) and the Jacobian dr/dq by forward differences, solved by SVD. Stops when the tip is
+// within `tolerance` and the axis within `angle_tolerance`. Near a singular pose (the tool axis
+// on a rotary axis: the condition of the Jacobian, orientation rows times L, beyond
+// max_condition) correcting the tool axis would swing a rotary axis half a turn: the axis is
+// left as programmed and the tip compensated by the prismatic joints (IllConditioned, reported).
+// A 3-axis program (orientation=false) moves the prismatic joints only.
 //
 // The corrected program is then the nominal machine's pose at the compensating joints (what a
 // post-processor for a perfect machine turns into exactly those joints): for CL data,
@@ -28,13 +29,13 @@ struct CompensationOptions {
   double angle_tolerance = 1e-9;  // rad
   int max_iterations = 20;
   // The Jacobian (orientation rows times L) is ill-conditioned beyond this condition number: the
-  // point is compensated in the directions it can be and reported.
+  // point's tool axis is left as programmed, its tip compensated, and it is reported.
   double max_condition = 1e6;
 };
 
 enum class CompensationStatus {
   Compensated,     // within the tolerances
-  IllConditioned,  // near a singular pose: compensated where the Jacobian allows, reported
+  IllConditioned,  // near a singular pose: the tip compensated, the axis left as programmed
   OutOfTravel,     // the compensating joints leave travel: left uncompensated, reported
   NotConverged,    // no convergence in max_iterations: left uncompensated, reported
 };

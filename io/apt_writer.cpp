@@ -50,6 +50,8 @@ std::string formatPredictedApt(const ClProgram& program, const std::vector<ClPoi
       }
       continue;
     }
+    // A motion statement without points lies outside the lines predicted (--lines): left out.
+    if ((st.major == "GOTO" || st.major == "FROM") && st.point_count == 0) continue;
     if (st.major == "CIRCLE" || st.major == "MOVARC") {
       out += "$$ tolver: " + st.major + " of line " + std::to_string(st.first_line) +
              " expanded into the GOTO points that follow\n";

@@ -94,7 +94,10 @@ CompensatedProgramText formatCompensatedApt(const ClProgram& program,
   out.written.assign(program.path.size(), 1);
   const bool inch = program.units == "INCH";
   const int pos_min = inch ? 8 : 6, axis_min = 9;
-  for (const std::string& h : header) out.text += "$$ " + h + "\n";
+  for (const std::string& h : header) {
+    out.text += "$$ " + h + "\n";
+    out.source_line.push_back(0);
+  }
   // The file's coordinates of a corrected point.
   auto inFile = [&](int k, Eigen::Vector3d* p, Eigen::Vector3d* u) {
     const ClFrame& f = program.frames[program.point_frame[k]];
@@ -136,7 +139,10 @@ CompensatedProgramText formatCompensatedApt(const ClProgram& program,
           if (k == 2 && !append.empty()) text += append;
           lines[l].replace(t.start, t.len, text);
         }
-        for (const std::string& l : lines) out.text += l + "\n";
+        for (size_t l = 0; l < lines.size(); ++l) {
+          out.text += lines[l] + "\n";
+          out.source_line.push_back(st.first_line + static_cast<int>(l));
+        }
         continue;
       }
     }
@@ -146,6 +152,7 @@ CompensatedProgramText formatCompensatedApt(const ClProgram& program,
       expanded_lines.push_back(st.first_line);
       out.text += "$$ tolver: " + (st.major.empty() ? std::string("statement") : st.major) + " of line " +
                   std::to_string(st.first_line) + " as the GOTOs of its compensated points\n";
+      out.source_line.push_back(st.first_line);
       for (int k = st.first_point; k < st.first_point + st.point_count; ++k) {
         Eigen::Vector3d p, u;
         inFile(k, &p, &u);
@@ -153,15 +160,20 @@ CompensatedProgramText formatCompensatedApt(const ClProgram& program,
         if (program.multiax)
           out.text += "," + fixed(u.x(), axis_min) + "," + fixed(u.y(), axis_min) + "," + fixed(u.z(), axis_min);
         out.text += "\n";
+        out.source_line.push_back(st.first_line);
       }
       continue;
     }
     if (st.major == "CIRCLE" || st.major == "MOVARC") {
       out.text += "$$ tolver: " + st.major + " of line " + std::to_string(st.first_line) +
                   " replaced by the compensated points of its arc that follow\n";
+      out.source_line.push_back(st.first_line);
       continue;
     }
-    for (int l = st.first_line; l <= st.last_line; ++l) out.text += program.lines[l - 1] + "\n";
+    for (int l = st.first_line; l <= st.last_line; ++l) {
+      out.text += program.lines[l - 1] + "\n";
+      out.source_line.push_back(l);
+    }
   }
   if (expanded > 0)
     out.notes.push_back(std::to_string(expanded) + " statements whose points the reader expanded " +
@@ -283,9 +295,32 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
   size_t first = 0;
   if (!program.lines.empty() && !program.lines[0].empty() && program.lines[0][0] == '%') {
     out.text += program.lines[0] + "\n";
+    out.source_line.push_back(1);
     first = 1;
   }
-  for (const std::string& h : header) out.text += "(" + withoutParentheses(h) + ")\n";
+  for (const std::string& h : header) {
+    out.text += "(" + withoutParentheses(h) + ")\n";
+    out.source_line.push_back(0);
+  }
+  // Which blocks are arcs (the motion mode in force, modal): the block before an arc gives the
+  // arc's start, which must stay on the arc's circle, so it is left as programmed too.
+  std::vector<char> arc_block(program.lines.size(), 0);
+  {
+    int mode = 0;
+    for (size_t li = 0; li < program.lines.size(); ++li) {
+      for (const GWord& w : gcodeWords(program.lines[li]))
+        if (w.letter == 'G' && w.numeric && (w.value == 0 || w.value == 1 || w.value == 2 || w.value == 3))
+          mode = static_cast<int>(w.value);
+      arc_block[li] = (mode == 2 || mode == 3) && li < program.statements.size() &&
+                      program.statements[li].point_count > 0;
+    }
+  }
+  auto startsArc = [&](size_t li) {
+    for (size_t k = li + 1; k < program.lines.size() && k < program.statements.size(); ++k)
+      if (program.statements[k].point_count > 0) return arc_block[k] != 0;
+    return false;
+  };
+  std::vector<int> arc_starts;
   for (size_t li = first; li < program.lines.size(); ++li) {
     std::string line = program.lines[li];
     const AptStatement* st = li < program.statements.size() ? &program.statements[li] : nullptr;
@@ -312,7 +347,12 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
     const int i = points > 0 ? st->first_point : -1;
     const int line_no = static_cast<int>(li) + 1;
     bool write = points == 1 && (motion == 0 || motion == 1) && absolute && !special && !expression;
-    if (points > 0 && !write) {
+    // The block before an arc is written back to the program's own position, all axes (the
+    // values in force may carry earlier corrections): the arc starts where it was programmed.
+    const bool restore = write && startsArc(li);
+    if (restore) {
+      arc_starts.push_back(line_no);
+    } else if (points > 0 && !write) {
       (motion == 2 || motion == 3)   ? arcs.push_back(line_no)
       : motion >= 73 && motion != 80 ? cycles.push_back(line_no)
       : !absolute                    ? incremental.push_back(line_no)
@@ -321,10 +361,10 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
     }
     std::vector<double> target(n, 0.0);
     if (write) {
-      const JointVector dq = q[i] - q0[i];
+      const JointVector dq = restore ? JointVector::Zero(n) : JointVector(q[i] - q0[i]);
       const bool tcp = i < static_cast<int>(program.tcp.size()) && program.tcp[i];
       Eigen::Vector3d dxyz = Eigen::Vector3d::Zero();
-      if (tcp) dxyz = Gm_inv * (corrected_p_w[i] - program.path[i].p_w) / unit;
+      if (tcp && !restore) dxyz = Gm_inv * (corrected_p_w[i] - program.path[i].p_w) / unit;
       const char L[3] = {'X', 'Y', 'Z'};
       for (int a = 0; a < n; ++a) {
         const Axis& ax = model.axes[a];
@@ -337,7 +377,10 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
         target[a] = old + delta;
         if (w == axis_words.end() && !known[a] && std::abs(delta) > 0) write = false;
       }
-      if (!write) expressions.push_back(line_no);
+      if (!write) {
+        expressions.push_back(line_no);
+        if (restore) arc_starts.pop_back();
+      }
     }
     if (write) {
       // Replace the words present (last first), then add the ones whose value in force differs.
@@ -363,7 +406,7 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
       std::sort(edits.begin(), edits.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
       if (!added.empty()) line.insert(insert_at, added);
       for (const auto& [start, e] : edits) line.replace(start, e.first, e.second);
-      out.written[i] = 1;
+      out.written[i] = !restore;
     } else {
       for (const auto& [a, w] : axis_words)
         if (w->numeric) new_word[a] = w->value;  // the block as written
@@ -381,6 +424,7 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
     if (special)
       for (const auto& [a, w] : axis_words) known[a] = 0;
     out.text += line + "\n";
+    out.source_line.push_back(static_cast<int>(li) + 1);
   }
   auto note = [&](const std::vector<int>& lines, const char* what) {
     if (!lines.empty())
@@ -388,6 +432,7 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
                           lineList(lines) + ")");
   };
   note(arcs, "arc blocks (G2/G3)");
+  note(arc_starts, "blocks that start an arc (written back to their programmed position: the arc's start must stay on its circle)");
   note(cycles, "drilling-cycle blocks");
   note(incremental, "incremental (G91) blocks");
   note(machine_moves, "moves in machine coordinates (G53, G28, ...)");

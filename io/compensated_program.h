@@ -31,6 +31,7 @@ struct CompensatedProgramText {
   std::string text;
   std::vector<char> written;       // per program point: the text commands its compensation
   std::vector<std::string> notes;  // what was left as it was, one line each
+  std::vector<int> source_line;    // per written line: the source line it comes from (0: added)
 };
 
 // corrected: per program point, the nominal machine's pose at the compensating joints (w, mm).

@@ -22,6 +22,8 @@ std::string formatCompensationJson(const CompensationReport& r) {
   j["points"] = r.points;
   j["before"] = figures(r.before);
   j["after"] = figures(r.after);
+  j["after_compensated_points"] = figures(r.after_compensated);
+  j["compensated_points"] = r.compensated_points;
   j["after_measured_on"] = "the written program, read back and predicted on the machine";
   if (r.after_band95_max_um >= 0)
     j["after_uncertainty"] = {{"band95_max_um", r.after_band95_max_um},

@@ -22,6 +22,8 @@ struct CompensationReport {
   std::string machine, program, dialect, output;
   int points = 0;
   PathFigures before, after;          // after: predicted on the written file, read back
+  PathFigures after_compensated;      // the same over the points the file compensates
+  int compensated_points = 0;
   double after_band95_max_um = -1;    // the model's 95 % band of the after (calibrated machine)
   double after_band95_median_um = -1;
   std::string setup_note;             // the set-up the machine's share is taken after
