@@ -76,7 +76,8 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
   for (size_t i = 0; i < q0.size(); ++i) q0[i] = pred.points[i].q;
   CompensationOptions co;
   co.max_condition = o.max_condition;
-  const CompensationResult comp = compensateToolPath(machine.model, machine.params, program.path, q0, orientation, co);
+  const CompensationResult comp = compensateToolPath(machine.model, machine.params, program.path, q0, orientation, co,
+                                                       &pred.points);
 
   // The corrected program, in the source's dialect.
   const std::vector<std::string> header = {

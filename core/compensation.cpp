@@ -1,5 +1,7 @@
 #include "core/compensation.h"
 
+#include <Eigen/LU>
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -24,7 +26,8 @@ double angleBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 CompensationResult compensateToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                                       const std::vector<ClPoint>& path,
                                       const std::vector<JointVector>& q0, bool orientation,
-                                      const CompensationOptions& opt) {
+                                      const CompensationOptions& opt,
+                                      const std::vector<PredictedPoint>* predicted) {
   const ForwardKinematics fk(model, params);
   const ForwardKinematics nominal(model, Eigen::VectorXd::Zero(params.size()));
   const int n = static_cast<int>(model.axes.size());
@@ -35,62 +38,151 @@ CompensationResult compensateToolPath(const MachineModel& model, const Eigen::Ve
   }
   CompensationResult out;
   out.points.resize(path.size());
-  Residual r(5), r_h(5);
+  Residual r(5), r_new(5);
+  // The Jacobian of the residual by forward differences, kept from point to point while it still
+  // converges (a chord method: a path's poses change slowly), with its LU, the joints it was
+  // taken at and which unknowns it is for. The orientation rows use a basis across the tool axis
+  // carried along the path (parallel transport), so that the kept Jacobian stays valid.
   Jac J(5, n);
+  using Lu = Eigen::PartialPivLU<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxRows, kMaxRows>>;
+  Lu lu;
+  bool have_J = false, J_axis = false;
+  JointVector J_q;
+  double J_cond = 1;
+  Eigen::Vector3d e1 = Eigen::Vector3d::Zero();
+  bool warm_ok = false, warm_axis = false;  // the previous point's correction, for a warm start
+  JointVector warm_q0, warm_dq;
   for (size_t i = 0; i < path.size(); ++i) {
     CompensatedPoint& c = out.points[i];
     const ClPoint& target = path[i];
     const Eigen::Vector3d u_t = target.u_w.normalized();
-    const Eigen::Vector3d e1 = u_t.unitOrthogonal(), e2 = u_t.cross(e1);
+    {
+      const Eigen::Vector3d t = e1 - e1.dot(u_t) * u_t;
+      e1 = t.norm() > 0.5 ? t.normalized() : u_t.unitOrthogonal();
+    }
+    const Eigen::Vector3d e2 = u_t.cross(e1);
     c.q0 = q0[i];
+    Eigen::Vector3d p0, u0;  // the machine's pose at q0
+    if (predicted) {
+      p0 = (*predicted)[i].p_pred_w;
+      u0 = (*predicted)[i].u_pred_w;
+    } else {
+      fk.tipAndAxis(q0[i], &p0, &u0);
+    }
     // Newton from q0 on the chosen joints and rows; returns whether it converged.
     auto solve = [&](bool with_axis, JointVector& q, Eigen::Vector3d& p, Eigen::Vector3d& u, double* cond) {
       const std::vector<int>& vars = with_axis ? all : prismatic;
       const int rows = with_axis ? 5 : 3, nv = static_cast<int>(vars.size());
       r.resize(rows);
-      r_h.resize(rows);
-      J.resize(rows, nv);
-      auto residual = [&](const JointVector& qq, Residual& res, Eigen::Vector3d* pp, Eigen::Vector3d* uu) {
-        fk.tipAndAxis(qq, pp, uu);
-        res.head<3>() = *pp - target.p_w;
+      r_new.resize(rows);
+      auto toResidual = [&](const Eigen::Vector3d& pp, const Eigen::Vector3d& uu, Residual& res) {
+        res.head<3>() = pp - target.p_w;
         if (with_axis) {
-          res[3] = kLever * e1.dot(*uu);
-          res[4] = kLever * e2.dot(*uu);
+          res[3] = kLever * e1.dot(uu);
+          res[4] = kLever * e2.dot(uu);
         }
       };
-      q = q0[i];
-      residual(q, r, &p, &u);
-      *cond = 1;
-      for (int it = 0; it <= opt.max_iterations; ++it) {
-        const double ang_err = with_axis ? angleBetween(u, u_t) : 0.0;
-        if (r.head<3>().norm() <= opt.tolerance && ang_err <= opt.angle_tolerance) return true;
-        if (it == opt.max_iterations) return false;
-        c.iterations = it + 1;
+      auto freshJacobian = [&](const JointVector& at) {
+        J.resize(rows, nv);
+        Residual r0(rows), rh(rows);
+        Eigen::Vector3d pa, ua;
+        fk.tipAndAxis(at, &pa, &ua);
+        toResidual(pa, ua, r0);
         for (int k = 0; k < nv; ++k) {
           const double h = 1e-6;
-          JointVector qh = q;
+          JointVector qh = at;
           qh[vars[k]] += h;
           Eigen::Vector3d ph, uh;
-          residual(qh, r_h, &ph, &uh);
-          J.col(k) = (r_h - r) / h;
+          fk.tipAndAxis(qh, &ph, &uh);
+          toResidual(ph, uh, rh);
+          J.col(k) = (rh - r0) / h;
         }
-        const Eigen::JacobiSVD<Jac> svd(J, Eigen::ComputeFullU | Eigen::ComputeFullV);
-        const auto s = svd.singularValues();
-        *cond = s[s.size() - 1] > 0 ? s[0] / s[s.size() - 1] : INFINITY;
-        if (*cond > opt.max_condition) return false;
-        const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxAxes, 1> dq = svd.solve(r);
-        for (int k = 0; k < nv; ++k) q[vars[k]] -= dq[k];
-        residual(q, r, &p, &u);
+        if (rows == nv) {
+          lu.compute(J);
+          J_cond = 1.0 / std::max(lu.rcond(), 1e-300);
+        } else {
+          const Eigen::JacobiSVD<Jac> svd(J);
+          const auto sv = svd.singularValues();
+          J_cond = sv[sv.size() - 1] > 0 ? sv[0] / sv[sv.size() - 1] : INFINITY;
+        }
+        have_J = true;
+        J_axis = with_axis;
+        J_q = at;
+      };
+      // Whether the kept Jacobian may serve this point: same unknowns, nearby joints.
+      auto near = [&](const JointVector& a, const JointVector& b) {
+        for (int k = 0; k < n; ++k)
+          if (std::abs(a[k] - b[k]) > (model.axes[k].isRotary() ? 0.05 : 50.0)) return false;
+        return true;
+      };
+      q = q0[i];
+      p = p0;
+      u = u0;
+      toResidual(p, u, r);
+      // Warm start: the previous point's correction (corrections vary slowly along a path).
+      if (warm_ok && warm_axis == with_axis && near(warm_q0, q0[i])) {
+        JointVector qs = q0[i] + warm_dq;
+        Eigen::Vector3d ps, us;
+        Residual rs(rows);
+        fk.tipAndAxis(qs, &ps, &us);
+        toResidual(ps, us, rs);
+        if (rs.norm() < r.norm()) {
+          q = qs;
+          p = ps;
+          u = us;
+          r = rs;
+        }
+      }
+      bool fresh = false;
+      if (!(have_J && J_axis == with_axis && J_q.size() == q.size() && near(J_q, q))) {
+        freshJacobian(q);
+        fresh = true;
+      }
+      *cond = J_cond;
+      for (int it = 0; it <= opt.max_iterations; ++it) {
+        // |u x u_t| is the angle to 1e-18 here (and u . u_t > 0: the axis is never reversed).
+        const double ang_err = with_axis ? u.cross(u_t).norm() : 0.0;
+        if (r.head<3>().norm() <= opt.tolerance && ang_err <= opt.angle_tolerance && u.dot(u_t) > 0) return true;
+        if (it == opt.max_iterations) return false;
+        c.iterations = it + 1;
+        if (J_cond > opt.max_condition) {
+          if (fresh) return false;
+          freshJacobian(q);  // the kept one may be the ill-conditioned one: look again here
+          fresh = true;
+          *cond = J_cond;
+          --it;
+          continue;
+        }
+        Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxAxes, 1> dq;
+        if (rows == nv)
+          dq = lu.solve(r);
+        else
+          dq = J.completeOrthogonalDecomposition().solve(r);
+        JointVector q_new = q;
+        for (int k = 0; k < nv; ++k) q_new[vars[k]] -= dq[k];
+        Eigen::Vector3d p_new, u_new;
+        fk.tipAndAxis(q_new, &p_new, &u_new);
+        toResidual(p_new, u_new, r_new);
+        if (r_new.norm() > 0.1 * r.norm() && !fresh) {
+          // The kept Jacobian no longer converges fast: a fresh one where the step landed (or
+          // here, when the step did not help).
+          const bool better = r_new.norm() < r.norm();
+          freshJacobian(better ? q_new : q);
+          fresh = true;
+          *cond = J_cond;
+          if (!better) continue;
+        }
+        q = q_new;
+        p = p_new;
+        u = u_new;
+        r = r_new;
       }
       return false;
     };
     JointVector q;
     Eigen::Vector3d p, u;
-    {
-      fk.tipAndAxis(q0[i], &p, &u);
-      c.before_w = p - target.p_w;
-      c.before_axis = angleBetween(u, u_t);
-    }
+    c.before_w = p0 - target.p_w;
+    c.before_axis = angleBetween(u0, u_t);
     double cond = 1;
     bool converged = solve(orientation, q, p, u, &cond);
     c.condition = cond;
@@ -121,6 +213,10 @@ CompensationResult compensateToolPath(const MachineModel& model, const Eigen::Ve
     out.ill_conditioned += c.status == CompensationStatus::IllConditioned;
     out.out_of_travel += c.status == CompensationStatus::OutOfTravel;
     out.not_converged += c.status == CompensationStatus::NotConverged;
+    warm_ok = c.status == CompensationStatus::Compensated || c.status == CompensationStatus::IllConditioned;
+    warm_axis = orientation && c.status == CompensationStatus::Compensated;
+    warm_q0 = q0[i];
+    warm_dq = q - q0[i];
     c.q = q;
     c.after_w = p - target.p_w;
     c.after_axis = angleBetween(u, u_t);

@@ -61,9 +61,12 @@ struct CompensationResult {
 
 // path and q0 (one joint vector per point, e.g. PredictionResult::points[i].q) on the machine
 // with the given error parameters.
+// predicted (optional): the machine's pose at q0 per point (predictToolPath's p_pred_w, u_pred_w),
+// which saves evaluating it again.
 CompensationResult compensateToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                                       const std::vector<ClPoint>& path,
                                       const std::vector<JointVector>& q0, bool orientation = true,
-                                      const CompensationOptions& options = {});
+                                      const CompensationOptions& options = {},
+                                      const std::vector<PredictedPoint>* predicted = nullptr);
 
 }  // namespace tolver

@@ -64,7 +64,8 @@ TEST(Compensation, AConstantRotaryPositioningErrorIsTakenOffThatAxisAlone) {
     EXPECT_LT(p.after_w.norm(), 1e-7);
     EXPECT_LT(p.after_axis, 1e-9);
     for (int a = 0; a < 5; ++a)
-      EXPECT_NEAR(p.q[a] - p.q0[a], a == c ? -delta : 0.0, a == c ? 1e-9 : 2e-7) << "point " << i << " axis " << a;
+      // To what the stopping rule (1e-7 mm, 1e-9 rad) pins the joints: C is weakly seen near the pole.
+      EXPECT_NEAR(p.q[a] - p.q0[a], a == c ? -delta : 0.0, a == c ? 1e-8 : 5e-7) << "point " << i << " axis " << a;
   }
 }
 
