@@ -13,6 +13,7 @@
 #include "io/compensated_program.h"
 #include "io/compensation_report.h"
 #include "io/io_error.h"
+#include "io/text_util.h"
 
 namespace tolver::app {
 namespace {
@@ -23,7 +24,83 @@ struct CompensateOptions {
   std::string output, report, probed;
   bool absolute = false;
   double max_condition = 1e6;
+  std::string table;          // --table: linear-axis compensation tables
+  double table_step = 10.0;   // mm
 };
+
+// --table: one CSV per linear axis, and what such tables leave.
+void writeTables(const CompensateOptions& o, const Machine& machine) {
+  const MachineModel& model = machine.model;
+  JointVector q_ref = JointVector::Zero(static_cast<int>(model.axes.size()));
+  for (size_t a = 0; a < model.axes.size(); ++a)
+    q_ref[a] = std::clamp(0.0, model.axes[a].travel_min, model.axes[a].travel_max);
+  const std::vector<AxisTable> tables = linearAxisTables(model, machine.params, q_ref, o.table_step);
+  std::vector<std::string> names;
+  if (!tables.empty())
+    for (int a : tables[0].prismatic) names.push_back(model.axes[a].name);
+  std::string ref_text;
+  char buf[160];
+  for (size_t a = 0; a < model.axes.size(); ++a) {
+    const bool rot = model.axes[a].isRotary();
+    std::snprintf(buf, sizeof buf, "%s%s=%g %s", a ? " " : "", model.axes[a].name.c_str(),
+                  rot ? q_ref[a] * 180.0 / M_PI : q_ref[a], rot ? "deg" : "mm");
+    ref_text += buf;
+  }
+  OutputSet outputs;
+  std::vector<std::string> written;
+  const std::string stem = replaceExtension(o.table, "");
+  for (size_t k = 0; k < tables.size(); ++k) {
+    const AxisTable& t = tables[k];
+    std::vector<std::vector<double>> um;
+    for (const Eigen::Vector3d& d : t.correction) {
+      std::vector<double> row;
+      for (size_t j = 0; j < names.size(); ++j) row.push_back(d[static_cast<Eigen::Index>(j)] * 1e3);
+      um.push_back(row);
+    }
+    std::snprintf(buf, sizeof buf, "grid: %s from %.3f mm, step %.3f mm, %zu points", names[k].c_str(), t.start,
+                  t.step, t.position.size());
+    const std::vector<std::string> header = {
+        "tolver compensate --table: " + model.name + " (" + o.machine.machine + "), axis " + names[k] +
+            " (pitch and straightness)",
+        buf,
+        "corrections: the joint changes to command (machine-file joint convention; NC values: times nc_sign), "
+        "um, added to those of the other axes' tables",
+        "zero at the reference pose " + ref_text + "; tool tip " + formatNumber(model.setup.gauge_length) +
+            " mm below the gauge point (the constant goes into the work offset)"};
+    const std::string file = stem + "_" + names[k] + ".csv";
+    checkOutputDir(file, "--table");
+    outputs.add(file, formatAxisTableCsv(names, static_cast<int>(k), t.position, um, header));
+    written.push_back(file);
+  }
+  outputs.commit();
+  const TableEffect flat = tableEffect(model, machine.params, tables, q_ref, false);
+  const TableEffect full = tableEffect(model, machine.params, tables, q_ref, true);
+  std::printf("tolver compensate --table\n");
+  std::printf("  machine    %s (%s)\n", model.name.c_str(), o.machine.machine.c_str());
+  std::printf("  tables     %zu linear axes, step %.3f mm, zero at %s\n", tables.size(), o.table_step, ref_text.c_str());
+  std::printf("  effect     tool-tip error over the linear travel (relative to the reference pose, whose constant "
+              "the work offset takes), rotary axes at the reference: RMS %.3f -> %.3f um\n",
+              flat.before_rms * 1e3, flat.after_rms * 1e3);
+  std::printf("             over the whole travel, rotary axes moving: RMS %.3f -> %.3f um (what linear tables cannot "
+              "carry: the rotary axes' errors and the angular errors seen through the other axes' offsets)\n",
+              full.before_rms * 1e3, full.after_rms * 1e3);
+  // The rotary axes' non-zero error terms: a linear table has no place for them.
+  std::string rotary;
+  int count = 0;
+  for (const ParameterBlock& b : model.blocks) {
+    if (b.axis < 0 || !model.axes[b.axis].isRotary()) continue;
+    for (int k = 0; k < b.size; ++k) {
+      const int idx = b.offset + k;
+      if (machine.params[idx] == 0.0) continue;
+      if (count++ < 8) rotary += (rotary.empty() ? "" : ", ") + model.parameters[idx].iso_code;
+    }
+  }
+  if (count > 0)
+    std::printf("  not carried %d error terms of the rotary axes (%s%s): a five-axis volumetric "
+                "compensation of the control is needed for them\n",
+                count, rotary.c_str(), count > 8 ? ", ..." : "");
+  for (const std::string& f : written) std::printf("  wrote      %s\n", f.c_str());
+}
 
 double angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
@@ -48,6 +125,13 @@ PathFigures figuresOf(const std::vector<Eigen::Vector3d>& dev, const std::vector
 }
 
 void runCompensate(const CompensateOptions& o, int* exit_code) {
+  if (!o.table.empty()) {
+    writeTables(o, loadMachine(o.machine));
+    *exit_code = 0;
+    if (o.program.cl.empty() && o.program.nc.empty()) return;
+  }
+  if (o.output.empty())
+    throw InputError("-o", 0, 0, "-o", "give the compensated program's path with -o (or only --table)");
   Machine machine = loadMachine(o.machine);
   const ClProgram program = loadProgram(o.program, machine.model);
   const std::string report = o.report.empty() ? replaceExtension(o.output, ".json") : o.report;
@@ -308,7 +392,12 @@ void registerCompensate(CLI::App& app, int* exit_code) {
       "predicted error before and after.");
   addMachineOptions(cmd, o->machine, "machine file (XML) with the errors to compensate");
   addProgramOptions(cmd, o->program);
-  cmd->add_option("-o,--output", o->output, "compensated program to write (same dialect as the input)")->required();
+  cmd->add_option("-o,--output", o->output, "compensated program to write (same dialect as the input)");
+  cmd->add_option("--table", o->table,
+                  "also (or only) write pitch and straightness tables for the linear axes: "
+                  "<stem>_<axis>.csv per axis");
+  cmd->add_option("--table-step", o->table_step, "grid step of the tables, mm (default 10)")
+      ->check(CLI::Range(0.1, 1000.0));
   cmd->add_option("--report", o->report, "JSON report (default: the output path with .json)");
   cmd->add_option("--max-condition", o->max_condition,
                   "condition number beyond which a point counts as near a singular pose (default 1e6)")

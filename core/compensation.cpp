@@ -5,6 +5,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 #include "core/forward_kinematics.h"
 
@@ -223,6 +224,101 @@ CompensationResult compensateToolPath(const MachineModel& model, const Eigen::Ve
     nominal.tipAndAxis(q, &c.nominal_p_w, &c.nominal_u_w);
   }
   return out;
+}
+
+std::vector<AxisTable> linearAxisTables(const MachineModel& model, const Eigen::VectorXd& params,
+                                        const JointVector& q_ref, double step) {
+  std::vector<int> prismatic;
+  for (int a = 0; a < static_cast<int>(model.axes.size()); ++a)
+    if (!model.axes[a].isRotary()) prismatic.push_back(a);
+  const ForwardKinematics nominal(model, Eigen::VectorXd::Zero(params.size()));
+  std::vector<AxisTable> out;
+  for (int a : prismatic) {
+    const Axis& ax = model.axes[a];
+    AxisTable t;
+    t.axis = a;
+    t.step = step;
+    t.prismatic = prismatic;
+    // A grid through the reference position, covering the travel.
+    const double ref = std::clamp(q_ref[a], ax.travel_min, ax.travel_max);
+    const int below = static_cast<int>(std::floor((ref - ax.travel_min) / step + 1e-9));
+    const int above = static_cast<int>(std::floor((ax.travel_max - ref) / step + 1e-9));
+    t.start = ref - below * step;
+    std::vector<ClPoint> path;
+    std::vector<JointVector> q0;
+    for (int k = -below; k <= above; ++k) {
+      JointVector q = q_ref;
+      q[a] = ref + k * step;
+      ClPoint c;
+      nominal.tipAndAxis(q, &c.p_w, &c.u_w);
+      path.push_back(c);
+      q0.push_back(q);
+      t.position.push_back(q[a]);
+    }
+    CompensationOptions co;
+    const CompensationResult r = compensateToolPath(model, params, path, q0, false, co);
+    const CompensatedPoint& zero = r.points[below];
+    for (const CompensatedPoint& c : r.points) {
+      Eigen::Vector3d d = Eigen::Vector3d::Zero();
+      for (size_t k = 0; k < prismatic.size() && k < 3; ++k)
+        d[k] = (c.q[prismatic[k]] - c.q0[prismatic[k]]) - (zero.q[prismatic[k]] - zero.q0[prismatic[k]]);
+      t.correction.push_back(d);
+    }
+    out.push_back(t);
+  }
+  return out;
+}
+
+Eigen::Vector3d tableCorrection(const std::vector<AxisTable>& tables, const JointVector& q) {
+  Eigen::Vector3d d = Eigen::Vector3d::Zero();
+  for (const AxisTable& t : tables) {
+    if (t.position.empty()) continue;
+    const double x = (q[t.axis] - t.start) / t.step;
+    const int last = static_cast<int>(t.position.size()) - 1;
+    const int k = std::clamp(static_cast<int>(std::floor(x)), 0, std::max(0, last - 1));
+    const double f = last == 0 ? 0.0 : std::clamp(x - k, 0.0, 1.0);
+    d += (1.0 - f) * t.correction[k] + f * t.correction[std::min(k + 1, last)];
+  }
+  return d;
+}
+
+TableEffect tableEffect(const MachineModel& model, const Eigen::VectorXd& params,
+                        const std::vector<AxisTable>& tables, const JointVector& q_ref,
+                        bool rotaries_move, int samples, unsigned seed) {
+  const ForwardKinematics fk(model, params), nominal(model, Eigen::VectorXd::Zero(params.size()));
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(0.0, 1.0);
+  TableEffect e;
+  // The deviation at the reference pose is a constant the work offset takes up (touching off):
+  // both figures are relative to it.
+  Eigen::Vector3d d_ref;
+  {
+    Eigen::Vector3d pn, pe, uu;
+    nominal.tipAndAxis(q_ref, &pn, &uu);
+    fk.tipAndAxis(q_ref, &pe, &uu);
+    d_ref = pe - pn;
+  }
+  for (int i = 0; i < samples; ++i) {
+    JointVector q = q_ref;
+    for (size_t a = 0; a < model.axes.size(); ++a) {
+      const Axis& ax = model.axes[a];
+      if (ax.isRotary() && !rotaries_move) continue;
+      q[a] = ax.travel_min + uni(rng) * (ax.travel_max - ax.travel_min);
+    }
+    Eigen::Vector3d p_nom, p, u;
+    nominal.tipAndAxis(q, &p_nom, &u);
+    fk.tipAndAxis(q, &p, &u);
+    e.before_rms += (p - p_nom - d_ref).squaredNorm();
+    JointVector qc = q;
+    const Eigen::Vector3d d = tableCorrection(tables, q);
+    if (!tables.empty())
+      for (size_t k = 0; k < tables[0].prismatic.size() && k < 3; ++k) qc[tables[0].prismatic[k]] += d[k];
+    fk.tipAndAxis(qc, &p, &u);
+    e.after_rms += (p - p_nom - d_ref).squaredNorm();
+  }
+  e.before_rms = std::sqrt(e.before_rms / samples);
+  e.after_rms = std::sqrt(e.after_rms / samples);
+  return e;
 }
 
 }  // namespace tolver

@@ -69,4 +69,34 @@ CompensationResult compensateToolPath(const MachineModel& model, const Eigen::Ve
                                       const CompensationOptions& options = {},
                                       const std::vector<PredictedPoint>* predicted = nullptr);
 
+// Compensation tables for a control's linear axes (pitch and straightness): for each prismatic
+// axis, on a grid over its travel with the other joints at q_ref, the changes of the prismatic
+// joints that put the tool tip back where the nominal machine puts it (compensateToolPath,
+// position only), relative to the grid point at q_ref's position (zero there: the constant goes
+// into the work offset). A control adds the tables of all axes at their positions; what depends
+// on more than one axis (angular errors seen through the tool length and the other axes'
+// offsets), and every error of a rotary axis, a linear table cannot carry.
+struct AxisTable {
+  int axis = 0;
+  double start = 0, step = 0;                   // mm
+  std::vector<double> position;                 // mm
+  std::vector<Eigen::Vector3d> correction;      // per position: the changes of the prismatic
+                                                // joints (in prismatic-axis order), mm
+  std::vector<int> prismatic;                   // the prismatic axes' indices
+};
+std::vector<AxisTable> linearAxisTables(const MachineModel& model, const Eigen::VectorXd& params,
+                                        const JointVector& q_ref, double step);
+// The tables' correction at joints q (linear interpolation, clamped at the ends), added over
+// the axes: the prismatic joint changes a control applies (mm).
+Eigen::Vector3d tableCorrection(const std::vector<AxisTable>& tables, const JointVector& q);
+// What the tables leave: the tool-tip deviation (RMS, mm) over `samples` poses drawn evenly over
+// the travel (the rotary joints at q_ref's values, or over their travel too), before and with
+// the tables applied; both relative to the deviation at q_ref (a constant the work offset takes).
+struct TableEffect {
+  double before_rms = 0, after_rms = 0;
+};
+TableEffect tableEffect(const MachineModel& model, const Eigen::VectorXd& params,
+                        const std::vector<AxisTable>& tables, const JointVector& q_ref,
+                        bool rotaries_move, int samples = 500, unsigned seed = 1);
+
 }  // namespace tolver

@@ -1,5 +1,8 @@
 #include "io/compensation_report.h"
 
+#include <cmath>
+#include <cstdio>
+
 #include "io/json_text.h"
 
 namespace tolver {
@@ -52,6 +55,28 @@ std::string formatCompensationJson(const CompensationReport& r) {
   j["segments"] = seg;
   j["notes"] = r.notes;
   return jsonText(j);
+}
+
+std::string formatAxisTableCsv(const std::vector<std::string>& axis_names, int axis,
+                               const std::vector<double>& position,
+                               const std::vector<std::vector<double>>& correction_um,
+                               const std::vector<std::string>& header) {
+  std::string out;
+  for (const std::string& h : header) out += "# " + h + "\n";
+  out += "position_" + axis_names[axis] + "_mm";
+  for (size_t k = 0; k < axis_names.size(); ++k) out += ",d" + axis_names[k] + "_um";
+  out += "\n";
+  char buf[64];
+  for (size_t i = 0; i < position.size(); ++i) {
+    std::snprintf(buf, sizeof buf, "%.3f", position[i]);
+    out += buf;
+    for (double v : correction_um[i]) {
+      std::snprintf(buf, sizeof buf, ",%.4f", std::abs(v) < 5e-5 ? 0.0 : v);
+      out += buf;
+    }
+    out += "\n";
+  }
+  return out;
 }
 
 }  // namespace tolver

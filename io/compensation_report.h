@@ -37,4 +37,11 @@ struct CompensationReport {
 
 std::string formatCompensationJson(const CompensationReport& r);
 
+// A linear axis's compensation table (CSV): '#' header lines (the grid, the reference, the sign
+// convention), then position_<axis>_mm and one correction column per prismatic axis, um.
+std::string formatAxisTableCsv(const std::vector<std::string>& axis_names, int axis,
+                               const std::vector<double>& position,
+                               const std::vector<std::vector<double>>& correction_um,
+                               const std::vector<std::string>& header);
+
 }  // namespace tolver

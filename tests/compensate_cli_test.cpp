@@ -178,6 +178,26 @@ TEST_F(CompensateCli, RealGcodeInTcpModeAndJointMode) {
   }
 }
 
+// --table: one pitch and straightness table per linear axis, with its grid in the header; the
+// console says what they remove and what they cannot carry.
+TEST_F(CompensateCli, LinearAxisTables) {
+  auto r = test::runTolver("compensate --machine " + src("samples/machines/matsuura_mc760vx_measured.xml") +
+                           " --setup " + src("samples/matsuura_setup.txt") + " --table " + path("t.csv") +
+                           " --table-step 20");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* axis : {"X", "Y", "Z"}) {
+    const auto lines = linesOf(path(std::string("t_") + axis + ".csv"));
+    ASSERT_GT(lines.size(), 10u) << axis;
+    EXPECT_NE(lines[1].find("step 20.000 mm"), std::string::npos) << lines[1];
+    EXPECT_EQ(lines[4], std::string("position_") + axis + "_mm,dX_um,dY_um,dZ_um");
+  }
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("rotary axes at the reference: RMS ([0-9.]+) -> ([0-9.]+) um")))
+      << r.output;
+  EXPECT_LT(std::stod(m[2]), 0.2 * std::stod(m[1]));
+  EXPECT_NE(r.output.find("error terms of the rotary axes"), std::string::npos) << r.output;
+}
+
 TEST_F(CompensateCli, BadInputIsExitTwoAndWritesNothing) {
   const std::string m = src("samples/machines/matsuura_mc760vx_measured.xml");
   std::ofstream(path("bad.apt")) << "UNITS/MM\nMULTAX/ON\nGOTO/1,2,abc,0,0,1\n";

@@ -158,5 +158,39 @@ TEST(Compensation, APointWhoseCorrectionLeavesTravelIsReportedAndLeftAlone) {
   EXPECT_EQ(out, 1);
 }
 
+// Linear-axis tables: on a three-axis machine with a scale error of X and a straightness of X in
+// y (no angular errors: nothing depends on more than one axis), the X table holds the closed-form
+// corrections relative to the reference, and the tables leave nothing over the travel.
+TEST(CompensationTables, PitchAndStraightnessOfALinearAxis) {
+  Machine m = readMachineFile(test::sourcePath("tests/fixtures/machines/three_axis.xml"));
+  m.model.setup.gauge_length = 50;
+  const int x = m.model.axisIndex("X"), y = m.model.axisIndex("Y");
+  const Axis& ax = m.model.axes[x];
+  const double c1 = 0.02, s2 = 0.008;  // e_x(X) = c1 T1, e_y(X) = s2 T2
+  m.params[m.model.findParameter("EXX.c1")] = c1;
+  m.params[m.model.findParameter("EYX.c2")] = s2;
+  const JointVector q_ref = JointVector::Zero(3);
+  const std::vector<AxisTable> tables = linearAxisTables(m.model, m.params, q_ref, 20.0);
+  ASSERT_EQ(tables.size(), 3u);
+  const AxisTable& tx = tables[x];
+  const double mid = 0.5 * (ax.travel_min + ax.travel_max), half = 0.5 * (ax.travel_max - ax.travel_min);
+  auto xOf = [&](double X) { return (X + c1 * mid / half) / (1.0 + c1 / half); };  // X' + e(X') = X
+  for (size_t k = 0; k < tx.position.size(); ++k) {
+    const double X = tx.position[k];
+    EXPECT_NEAR(tx.correction[k][x], (xOf(X) - X) - (xOf(0) - 0), 1e-7) << X;
+    // The straightness along y: e_y(X') = s2 T2(s_N(X')), taken off relative to X = 0.
+    auto ey = [&](double Xc) {
+      const double sn = (Xc - mid) / half;
+      return s2 * (2 * sn * sn - 1);
+    };
+    EXPECT_NEAR(std::abs(tx.correction[k][y]), std::abs(ey(xOf(X)) - ey(xOf(0))), 1e-7) << X;  // the stopping rule
+  }
+  // Tables of the other axes are zero (their errors are zero).
+  for (const Eigen::Vector3d& d : tables[y].correction) EXPECT_LT(d.norm(), 1e-12);
+  const TableEffect e = tableEffect(m.model, m.params, tables, q_ref, true);
+  EXPECT_GT(e.before_rms, 1e-3);
+  EXPECT_LT(e.after_rms, 1e-4);  // the interpolation between 20 mm grid points
+}
+
 }  // namespace
 }  // namespace tolver
