@@ -24,6 +24,7 @@ struct CompensateOptions {
   std::string output, report, probed;
   bool absolute = false;
   double max_condition = 1e6;
+  std::string report_dir;     // --report-dir: report.json, report.html, charts
   std::string table;          // --table: linear-axis compensation tables
   double table_step = 10.0;   // mm
 };
@@ -319,6 +320,19 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
   outputs.add(o.output, text.text);
   outputs.add(report, formatCompensationJson(rep));
   outputs.commit();
+  if (!o.report_dir.empty()) {
+    makeReportDir(o.report_dir);
+    std::vector<int> line(n);
+    std::vector<double> tb(n), ta(n), ab(n), aa(n);
+    for (size_t i = 0; i < n; ++i) {
+      line[i] = program.path[i].line;
+      tb[i] = dev_before[i].norm() * 1e3;
+      ta[i] = dev_after[i].norm() * 1e3;
+      ab[i] = ang_before[i] * 1e6;
+      aa[i] = ang_after[i] * 1e6;
+    }
+    writeCompensationReport(o.report_dir, rep, line, tb, ta, ab, aa);
+  }
 
   std::printf("tolver compensate\n");
   std::printf("  machine    %s (%s)\n", machine.model.name.c_str(), o.machine.machine.c_str());
@@ -378,6 +392,8 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
   for (const std::string& w : warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
   for (const std::string& w : setupWarnings(machine.model)) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
   std::printf("  wrote      %s (compensated program), %s (report)\n", o.output.c_str(), report.c_str());
+  if (!o.report_dir.empty())
+    std::printf("  report     %s/report.html (and report.json, tip_deviation.png, tool_axis.png)\n", o.report_dir.c_str());
   *exit_code = 0;
 }
 
@@ -399,6 +415,8 @@ void registerCompensate(CLI::App& app, int* exit_code) {
   cmd->add_option("--table-step", o->table_step, "grid step of the tables, mm (default 10)")
       ->check(CLI::Range(0.1, 1000.0));
   cmd->add_option("--report", o->report, "JSON report (default: the output path with .json)");
+  cmd->add_option("--report-dir", o->report_dir,
+                  "also write report.html with before/after charts (and report.json) in this directory");
   cmd->add_option("--max-condition", o->max_condition,
                   "condition number beyond which a point counts as near a singular pose (default 1e6)")
       ->check(CLI::Range(10.0, 1e15));

@@ -37,6 +37,16 @@ struct CompensationReport {
 
 std::string formatCompensationJson(const CompensationReport& r);
 
+// The report directory: report.json, report.html (the figures, the segments, the notes) and the
+// charts tip_deviation.png and tool_axis.png (before and after along the program, one scale),
+// embedded in the HTML. Per point: the source line, tip deviation (um) and axis error (urad)
+// before and after. Throws InputError when it cannot render or write.
+void writeCompensationReport(const std::string& dir, const CompensationReport& r,
+                             const std::vector<int>& line, const std::vector<double>& tip_before_um,
+                             const std::vector<double>& tip_after_um,
+                             const std::vector<double>& axis_before_urad,
+                             const std::vector<double>& axis_after_urad);
+
 // A linear axis's compensation table (CSV): '#' header lines (the grid, the reference, the sign
 // convention), then position_<axis>_mm and one correction column per prismatic axis, um.
 std::string formatAxisTableCsv(const std::vector<std::string>& axis_names, int axis,

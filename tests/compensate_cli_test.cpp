@@ -106,8 +106,15 @@ class CompensateCli : public test::TempDirTest {
 TEST_F(CompensateCli, TheConeOnTheMeasuredMatsuuraComesOutRight) {
   const std::string m = src("samples/machines/matsuura_mc760vx_measured.xml");
   const std::string setup = " --setup " + src("samples/matsuura_setup.txt");
-  const nlohmann::json j = compensate(m, "--cl", src("samples/nas979_cone.apt"), setup, path("c.apt"));
+  const nlohmann::json j = compensate(m, "--cl", src("samples/nas979_cone.apt"), setup + " --report-dir " + path("rep"),
+                                      path("c.apt"));
   ASSERT_FALSE(j.is_null());
+  // The report directory: the HTML with its two charts embedded, and the same JSON.
+  const std::string html = test::readText(path("rep/report.html"));
+  EXPECT_NE(html.find("tolver compensate"), std::string::npos);
+  EXPECT_EQ(html.find("data:image/png;base64,") != std::string::npos, true);
+  EXPECT_TRUE(fs::exists(path("rep/tip_deviation.png")));
+  EXPECT_TRUE(fs::exists(path("rep/report.json")));
   EXPECT_GT(j["before"]["tip_max_um"].get<double>(), 5.0);
   EXPECT_LT(j["after"]["tip_max_um"].get<double>(), 0.01);
   EXPECT_LT(j["after"]["axis_max_urad"].get<double>(), 0.01);
