@@ -497,6 +497,11 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
                   result.program_stats.max * 1e3);
     std::printf("  machine    %+.2f .. %+.2f um, RMS %.2f um (predicted - nominal swept)\n",
                 result.machine_stats.min * 1e3, result.machine_stats.max * 1e3, result.machine_stats.rms * 1e3);
+    if (result.split_beyond + result.split_boundary > 0)
+      std::printf("  split      total = program + machine at every other machined sample; not split: %d "
+                  "samples beyond the search range, %d on a cut's boundary (a micrometre of the tool's "
+                  "shift moves the boundary across them)\n",
+                  result.split_beyond, result.split_boundary);
     if (!cl_unc.empty())
       std::printf("  band       the machine's share is known to +- %.2f um at most (95 %%, from the "
                   "calibration's covariance)%s\n",
@@ -506,9 +511,9 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
                 result.percent_in, result.area_machined, result.area_unmachined, result.area_edge);
     for (size_t k = 0; k < result.regions.size() && k < 5; ++k) {
       const auto& g = result.regions[k];
-      std::printf("  region %zu   %s %.3f mm2, worst %+.2f um at (%.2f, %.2f, %.2f), cause: %s\n", k + 1,
-                  conformanceName(g.kind), g.area_mm2, g.worst_deviation * 1e3, g.where_w.x(), g.where_w.y(),
-                  g.where_w.z(), regionCause(r, g).c_str());
+      std::printf("  region %zu   %s %.3f mm2, worst %s um at (%.2f, %.2f, %.2f), cause: %s\n", k + 1,
+                  conformanceName(g.kind), g.area_mm2, worstDeviationText(result, g).c_str(), g.where_w.x(),
+                  g.where_w.y(), g.where_w.z(), regionCause(r, g).c_str());
     }
     if (result.regions.size() > 5) std::printf("  ...        %zu regions in all\n", result.regions.size());
     for (const auto& n : r.notes) std::fprintf(stderr, "tolver: note: %s\n", n.c_str());

@@ -88,23 +88,61 @@ VerifyResult verifyPart(const SurfaceSamples& samples, const Cutter& cutter,
   r.total.assign(n, 0.0);
   r.program.assign(n, 0.0);
   r.machine.assign(n, 0.0);
+  r.split.assign(n, Split::Attributable);
+  r.total_beyond.assign(n, 0);
   r.machined.assign(n, 0);
   r.cl_index.assign(n, -1);
-  std::vector<char> both(n, 0);
+  const double floor_mm = -options.gouge_range + 1e-9;
+  const double L = cutter.effectiveLength(), R = cutter.maxRadius();
+  // How far placement k moves between the perfect and the real machine, seen at height h on the
+  // tool (the tip plus the axis's turn over h and over the radius).
+  auto moved = [&](int k, double h) {
+    const double turn = (predicted[k].axis_w - nominal[k].axis_w).norm();
+    return (predicted[k].tip_w - nominal[k].tip_w).norm() + turn * (std::clamp(h, 0.0, L) + R);
+  };
   for (size_t i = 0; i < n; ++i) {
     r.machined[i] = pred.machined[i];
     if (pred.machined[i]) {
       r.total[i] = pred.deviation[i];
       r.cl_index[i] = predicted[pred.placement[i]].cl_index;
+      r.total_beyond[i] = pred.deviation[i] <= floor_mm;
     }
-    if (nom.machined[i]) r.program[i] = nom.deviation[i];
-    both[i] = pred.machined[i] && nom.machined[i];
-    if (both[i]) r.machine[i] = pred.deviation[i] - nom.deviation[i];
+    const bool nom_ok = nom.machined[i] && nom.deviation[i] > floor_mm;
+    const bool pred_ok = pred.machined[i] && pred.deviation[i] > floor_mm;
+    if (!pred.machined[i]) continue;  // unmachined: no verdict, no split
+    if (!nom_ok || !pred_ok) {
+      r.split[i] = Split::BeyondRange;
+      ++r.split_beyond;
+      continue;
+    }
+    const double machine = pred.deviation[i] - nom.deviation[i];
+    const int kn = nom.placement[i], kp = pred.placement[i];
+    const Eigen::Vector3d entry = samples.p_w[i] + pred.deviation[i] * samples.n_w[i];
+    const double hn = (entry - nominal[kn].tip_w).dot(nominal[kn].axis_w);
+    const double hp = (entry - predicted[kp].tip_w).dot(predicted[kp].axis_w);
+    const double bound = std::max(moved(kn, hn), moved(kp, hp));
+    if (std::abs(machine) > 1.5 * bound + 1e-4) {
+      r.split[i] = Split::CutBoundary;
+      ++r.split_boundary;
+      continue;
+    }
+    r.program[i] = nom.deviation[i];
+    r.machine[i] = machine;
   }
   evaluateZones(samples, zones, &r);
-  r.program_stats = statistics(samples, r.program, [&](size_t i) { return nom.machined[i] != 0; });
-  r.machine_stats = statistics(samples, r.machine, [&](size_t i) { return both[i] != 0; });
+  auto attributable = [&](size_t i) { return r.machined[i] && r.split[i] == Split::Attributable; };
+  r.program_stats = statistics(samples, r.program, attributable);
+  r.machine_stats = statistics(samples, r.machine, attributable);
   return r;
+}
+
+const char* splitName(Split s) {
+  switch (s) {
+    case Split::Attributable: return "split";
+    case Split::BeyondRange: return "beyond range";
+    case Split::CutBoundary: return "cut boundary";
+  }
+  return "";
 }
 
 std::vector<ClPass> clPasses(const std::vector<ClPoint>& path) {
@@ -248,6 +286,8 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
   r.total.assign(n, 0.0);
   r.program.assign(n, 0.0);
   r.machine.assign(n, 0.0);
+  r.split.assign(n, Split::Attributable);
+  r.total_beyond.assign(n, 0);
   r.machined.assign(n, 1);
   r.cl_index.assign(n, -1);
   for (size_t i = 0; i < n; ++i) {

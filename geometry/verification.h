@@ -24,8 +24,22 @@ struct DeviationStats {
   int min_sample = -1, max_sample = -1;
 };
 
+// Whether a sample's deviation splits into program and machine shares (total = program + machine
+// exactly when it does).
+enum class Split : char {
+  Attributable = 0,  // both sweeps cut it inside the search range
+  BeyondRange,       // a sweep reaches the gouge limit or leaves it uncut: no number to split
+  CutBoundary,       // the machine's share exceeds what moving the cutting placement can do: the
+                     // sample lies on a cut's boundary (a lateral shift carries the boundary across
+                     // it at grazing incidence), where a micrometre becomes a step of the surface
+};
+const char* splitName(Split s);
+
 struct VerifyResult {
-  std::vector<double> total, program, machine;  // #S, mm (0 where unmachined)
+  std::vector<double> total, program, machine;  // #S, mm (0 where unmachined or not attributable)
+  std::vector<Split> split;                     // #S: whether program + machine = total there
+  std::vector<char> total_beyond;               // #S: the predicted cut reaches the gouge limit
+  int split_beyond = 0, split_boundary = 0;     // machined samples not attributable, by reason
   std::vector<char> machined;                   // #S: cut on both machines
   std::vector<int> zone;                        // #S, -1: no zone holds it
   std::vector<Conformance> conformance;         // #S, of `total` (Unchecked: no zone, or on an edge)
@@ -38,7 +52,9 @@ struct VerifyResult {
   bool pass = false;                            // machined area nonempty and no region
 };
 
-// progress(fraction) over both sweeps.
+// progress(fraction) over both sweeps. The machine's share at a sample is bounded by how far the
+// placements that cut it move: |tip change| + |axis change| x (the entry's height on the tool) +
+// the cutter's radius x |axis change|; a share beyond 1.5 x that bound + 0.1 um is a cut boundary.
 VerifyResult verifyPart(const SurfaceSamples& samples, const Cutter& cutter,
                         const std::vector<ToolPlacement>& nominal,
                         const std::vector<ToolPlacement>& predicted,

@@ -36,9 +36,21 @@ int clLine(const VerifyReport& r, int sample) {
 
 }  // namespace
 
+static bool attributable(const VerifyResult& v, int i) {
+  return v.split.empty() || v.split[i] == Split::Attributable;
+}
+
+std::string worstDeviationText(const VerifyResult& v, const OutOfToleranceRegion& g) {
+  if (!v.total_beyond.empty() && v.total_beyond[g.worst_sample])
+    return "beyond the search range (" + fmt("%+.0f", g.worst_deviation * 1e3) + " um or deeper)";
+  return fmt("%+.2f", g.worst_deviation * 1e3);
+}
+
 std::string regionCause(const VerifyReport& r, const OutOfToleranceRegion& region) {
   if (r.mode == "cl-only") return "machine";
   const int i = region.worst_sample;
+  if (!r.result->split.empty() && r.result->split[i] != Split::Attributable)
+    return std::string("undetermined (") + splitName(r.result->split[i]) + ")";
   const ToleranceZone& z = r.zones[region.zone];
   const double program = r.result->program[i];
   return classify(program, true, z) == Conformance::In ? "machine" : "program";
@@ -82,6 +94,11 @@ std::string formatVerifyJson(const VerifyReport& r) {
                     {"definitions", {{"total", "predicted swept surface - CAD (what the part will be)"},
                                      {"program", "nominal swept surface - CAD (the program on a perfect machine)"},
                                      {"machine", "predicted swept - nominal swept (the machine's contribution)"}}}};
+  j["split"] = {{"beyond_search_range", v.split_beyond},
+                {"cut_boundary", v.split_boundary},
+                {"meaning", "total = program + machine at every other machined sample; these samples "
+                            "have no program and machine shares (null in the regions, empty in "
+                            "deviations.csv)"}};
   j["area"] = {{"total_mm2", v.area}, {"machined_mm2", v.area_machined}, {"in_tolerance_mm2", v.area_in},
                {"unmachined_mm2", v.area_unmachined}, {"edges_not_verified_mm2", v.area_edge}, {"percent_in_tolerance", v.percent_in}};
   json regions = json::array();
@@ -91,8 +108,9 @@ std::string formatVerifyJson(const VerifyReport& r) {
                        {"area_mm2", g.area_mm2}, {"worst_deviation_um", um(g.worst_deviation)},
                        {"worst_excursion_um", um(g.worst_excursion)},
                        {"where_mm", {g.where_w.x(), g.where_w.y(), g.where_w.z()}},
-                       {"machine_um", um(v.machine[g.worst_sample])},
-                       {"program_um", um(v.program[g.worst_sample])},
+                       {"machine_um", attributable(v, g.worst_sample) ? json(um(v.machine[g.worst_sample])) : json()},
+                       {"program_um", attributable(v, g.worst_sample) ? json(um(v.program[g.worst_sample])) : json()},
+                       {"beyond_search_range", !v.total_beyond.empty() && v.total_beyond[g.worst_sample] != 0},
                        {"cause", regionCause(r, g)}, {"cl_line", clLine(r, g.worst_sample)}});
   }
   j["out_of_tolerance_regions"] = regions;
@@ -120,14 +138,24 @@ std::string formatDeviationsCsv(const VerifyReport& r) {
   std::string out =
       "# tolver verify: signed normal deviation per surface sample, um (+ material left, - gouge); "
       "positions mm in the part frame\n"
-      "sample,x,y,z,nx,ny,nz,region,zone,state,total_um,program_um,machine_um,cl_line\n";
+      "# program_um and machine_um are empty where the deviation does not split (split: beyond range, "
+      "cut boundary); total_um is empty where the cut reaches the gouge search limit\n"
+      "sample,x,y,z,nx,ny,nz,region,zone,state,total_um,program_um,machine_um,cl_line,split\n";
   char buf[512];
   for (size_t i = 0; i < s.size(); ++i) {
     const int line = clLine(r, static_cast<int>(i));
-    std::snprintf(buf, sizeof buf, "%zu,%.5f,%.5f,%.5f,%.6f,%.6f,%.6f,%s,%d,%s,%.4f,%.4f,%.4f,%d\n", i,
+    const bool split = attributable(v, static_cast<int>(i));
+    const bool beyond = !v.total_beyond.empty() && v.total_beyond[i];
+    char t[32] = "", pr[32] = "", ma[32] = "";
+    if (!beyond) std::snprintf(t, sizeof t, "%.4f", v.machined[i] ? v.total[i] * 1e3 : 0.0);
+    if (split) {
+      std::snprintf(pr, sizeof pr, "%.4f", v.program[i] * 1e3);
+      std::snprintf(ma, sizeof ma, "%.4f", v.machine[i] * 1e3);
+    }
+    std::snprintf(buf, sizeof buf, "%zu,%.5f,%.5f,%.5f,%.6f,%.6f,%.6f,%s,%d,%s,%s,%s,%s,%d,%s\n", i,
                   s.p_w[i].x(), s.p_w[i].y(), s.p_w[i].z(), s.n_w[i].x(), s.n_w[i].y(), s.n_w[i].z(),
-                  s.group_names[s.group[i]].c_str(), v.zone[i], conformanceName(v.conformance[i]),
-                  v.machined[i] ? v.total[i] * 1e3 : 0.0, v.program[i] * 1e3, v.machine[i] * 1e3, line);
+                  s.group_names[s.group[i]].c_str(), v.zone[i], conformanceName(v.conformance[i]), t, pr, ma, line,
+                  !v.machined[i] ? "" : v.split.empty() ? "split" : splitName(v.split[i]));
     out += buf;
   }
   return out;
@@ -187,9 +215,12 @@ std::string formatVerifyHtml(const VerifyReport& r) {
       std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", g.where_w.x(), g.where_w.y(), g.where_w.z());
       h += "<tr><td>" + std::to_string(k + 1) + "</td><td class=\"l\">" + conformanceName(g.kind) +
            "</td><td class=\"l\">" + html(r.zones[g.zone].region) + "</td><td>" + fmt("%.3f", g.area_mm2) +
-           "</td><td>" + fmt("%+.2f", g.worst_deviation * 1e3) + "</td><td>" +
-           fmt("%.2f", g.worst_excursion * 1e3) + "</td><td>" + fmt("%+.2f", v.machine[g.worst_sample] * 1e3) +
-           "</td><td>" + fmt("%+.2f", v.program[g.worst_sample] * 1e3) + "</td><td class=\"l\">" +
+           "</td><td>" + worstDeviationText(v, g) + "</td><td>" +
+           fmt("%.2f", g.worst_excursion * 1e3) + "</td><td>" +
+           (attributable(v, g.worst_sample) ? fmt("%+.2f", v.machine[g.worst_sample] * 1e3) : std::string("&mdash;")) +
+           "</td><td>" +
+           (attributable(v, g.worst_sample) ? fmt("%+.2f", v.program[g.worst_sample] * 1e3) : std::string("&mdash;")) +
+           "</td><td class=\"l\">" +
            regionCause(r, g) + "</td><td class=\"l\">" + where + "</td><td>" +
            std::to_string(clLine(r, g.worst_sample)) + "</td></tr>\n";
     }

@@ -42,6 +42,9 @@ struct VerifyReport {
 // perfect machine is already out of the zone there, "machine" when it is in and the machine's
 // errors take it out.
 std::string regionCause(const VerifyReport& r, const OutOfToleranceRegion& region);
+// A region's worst deviation as printed: "+12.34", or "beyond the search range (-500 um or
+// deeper)" where the cut reaches the gouge limit (never a clipped number).
+std::string worstDeviationText(const VerifyResult& v, const OutOfToleranceRegion& region);
 
 std::string formatVerifyJson(const VerifyReport& r);
 std::string formatVerifyHtml(const VerifyReport& r);

@@ -138,5 +138,91 @@ TEST(Verification, OutOfTolerancePlaneIsOneRegionWithItsArea) {
   EXPECT_NEAR(worst.worst_deviation, -0.2 * (90.0 - 1.0 + 5.0) / 380.0, 0.2 * 1.5 / 380);
 }
 
+// A cut's boundary on a pocket floor: a D10 flat end faces the floor z = 0 along x at y = 0 (its
+// disc reaches y = 5), a second pass 0.1 mm higher covers y from 5 to 15. A sample at y = 4.995
+// is cut by the first pass's disc; shifted 10 um in y by the machine, the disc's edge leaves it
+// and the upper pass cuts it: a 100 um step for a 10 um shift. Such samples are a cut boundary
+// (no program/machine split), never a 100 um machine share; everywhere else total = program +
+// machine exactly and the machine's share stays within the tool's displacement.
+TEST(Verification, ACutBoundaryIsNotAMachineShare) {
+  Cutter c;
+  c.diameter = 10;
+  c.length = 30;
+  std::vector<ToolPlacement> nominal, actual;
+  const Eigen::Vector3d shift(0.0, -0.010, 0.0);
+  for (int k = 0; k <= 200; ++k) {
+    for (int pass = 0; pass < 2; ++pass) {
+      ToolPlacement t;
+      t.tip_w = Eigen::Vector3d(-20.0 + 0.2 * k, pass ? 10.0 : 0.0, pass ? 0.1 : 0.0);
+      t.cl_index = pass;
+      nominal.push_back(t);
+      t.tip_w += shift;
+      actual.push_back(t);
+    }
+  }
+  // Samples on the floor across the boundary at y = 5.
+  SurfaceSamples samples;
+  samples.group_names = {"floor"};
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 41; ++j) {
+      samples.p_w.emplace_back(-5.0 + 0.5 * i, 4.9013 + 0.005 * j, 0.0);
+      samples.n_w.emplace_back(0, 0, 1);
+      samples.area.push_back(0.01);
+      samples.group.push_back(0);
+      samples.on_edge.push_back(0);
+    }
+  const VerifyResult r = verifyPart(samples, c, nominal, actual, {bilateralZone(0.5)}, SweepOptions());
+  int boundary = 0, split = 0;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    ASSERT_TRUE(r.machined[i]) << samples.p_w[i].transpose();
+    if (r.split[i] == Split::CutBoundary) {
+      ++boundary;
+      EXPECT_NEAR(samples.p_w[i].y(), 4.995, 0.0051) << i;  // between the two edges of the disc
+      continue;
+    }
+    ASSERT_EQ(r.split[i], Split::Attributable);
+    ++split;
+    EXPECT_DOUBLE_EQ(r.total[i], r.program[i] + r.machine[i]);
+    EXPECT_LE(std::abs(r.machine[i]), shift.norm() + 1e-12) << samples.p_w[i].transpose();
+  }
+  EXPECT_GT(boundary, 0);
+  EXPECT_GT(split, boundary);
+  EXPECT_EQ(r.split_boundary, boundary);
+  EXPECT_LE(std::max(std::abs(r.machine_stats.min), std::abs(r.machine_stats.max)), shift.norm() + 1e-12);
+}
+
+// Beyond the gouge search range: a tool 1 mm below the floor cuts every blade at its lower end;
+// the deviation does not split, and the total is flagged as beyond the range (never a clipped
+// number taken for a value).
+TEST(Verification, BeyondTheSearchRangeIsFlagged) {
+  Cutter c;
+  c.diameter = 10;
+  c.length = 30;
+  std::vector<ToolPlacement> nominal, actual;
+  for (int k = 0; k <= 100; ++k) {
+    ToolPlacement t;
+    t.tip_w = Eigen::Vector3d(-10.0 + 0.2 * k, 0.0, 0.0);
+    nominal.push_back(t);
+    t.tip_w.z() = -1.0;
+    actual.push_back(t);
+  }
+  SurfaceSamples samples;
+  samples.group_names = {"floor"};
+  for (int i = 0; i < 10; ++i) {
+    samples.p_w.emplace_back(-4.5 + i, 0.0, 0.0);
+    samples.n_w.emplace_back(0, 0, 1);
+    samples.area.push_back(1.0);
+    samples.group.push_back(0);
+    samples.on_edge.push_back(0);
+  }
+  const VerifyResult r = verifyPart(samples, c, nominal, actual, {bilateralZone(0.02)}, SweepOptions());
+  for (size_t i = 0; i < samples.size(); ++i) {
+    EXPECT_EQ(r.split[i], Split::BeyondRange);
+    EXPECT_TRUE(r.total_beyond[i]);
+  }
+  EXPECT_EQ(r.split_beyond, 10);
+  EXPECT_FALSE(r.pass);
+}
+
 }  // namespace
 }  // namespace tolver

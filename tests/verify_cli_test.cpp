@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -29,6 +30,52 @@ class VerifyCli : public test::TempDirTest {
     return s.str();
   }
 };
+
+// The blame split adds up: in deviations.csv, total = program + machine at every sample whose
+// deviation splits (to the 4 decimals written), on the main job and on a real 3-axis pocket
+// (SolidWorks CAM, with its STL); the machine's share there stays within the tool's displacement
+// on this machine (below 25 um: its tool-tip error is 14-18 um), and the JSON counts the rest.
+TEST_F(VerifyCli, TheBlameSplitAddsUpOnEverySample) {
+  const std::string m = sourcePath("samples/machines/matsuura_mc760vx_measured.xml");
+  const std::vector<std::string> jobs = {
+      base("--tolerance 0.03 --no-images --report-dir " + path("a")),
+      "verify --machine " + m + " --part-zero 0,0,100 --gauge-length 100 --cl " +
+          sourcePath("tests/fixtures/cl/swcam_Teste-Metrologia.apt") + " --part " +
+          sourcePath("tests/fixtures/mesh/swcam_Teste-Metrologia.stl") +
+          " --tolerance 0.05 --no-images --report-dir " + path("b")};
+  for (size_t k = 0; k < jobs.size(); ++k) {
+    const auto r = runTolver(jobs[k]);
+    ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+    const std::string dir = path(k ? "b" : "a");
+    std::ifstream in(dir + "/deviations.csv");
+    std::string line;
+    int rows = 0, split = 0;
+    std::map<std::string, int> col;
+    while (std::getline(in, line)) {
+      if (line.empty() || line[0] == '#') continue;
+      std::vector<std::string> cells;
+      std::stringstream ls(line);
+      for (std::string c; std::getline(ls, c, ',');) cells.push_back(c);
+      if (line.size() > 0 && line.back() == ',') cells.push_back("");
+      if (col.empty()) {
+        for (size_t c = 0; c < cells.size(); ++c) col[cells[c]] = static_cast<int>(c);
+        ASSERT_TRUE(col.count("split")) << line;
+        continue;
+      }
+      ++rows;
+      if (cells[col["split"]] != "split") continue;
+      ++split;
+      const double t = std::stod(cells[col["total_um"]]), p = std::stod(cells[col["program_um"]]),
+                   mm = std::stod(cells[col["machine_um"]]);
+      EXPECT_NEAR(t, p + mm, 2e-4) << line;
+      EXPECT_LT(std::abs(mm), 25.0) << line;
+    }
+    EXPECT_GT(split, 1000) << dir;
+    const nlohmann::json j = nlohmann::json::parse(slurp(dir + "/report.json"));
+    ASSERT_TRUE(j.contains("split")) << dir;
+    EXPECT_TRUE(j["split"].contains("cut_boundary"));
+  }
+}
 
 TEST_F(VerifyCli, InToleranceExitsZeroAndWritesTheReport) {
   const auto r = runTolver(base("--tolerance 0.05 --report-dir " + path("out")));
