@@ -50,12 +50,14 @@ struct VerifyOptions {
   bool absolute = false;
   std::string probed;
   std::string compensated_from;  // the original of a compensated program: the nominal path
+  bool allow_open = false;       // holes in the checked surface do not make the verdict INCOMPLETE
 };
 
 struct JobOutcome {
   std::string name;
   bool ok = false, pass = false;
   bool undecided = false;  // the decision lies within the prediction's 95 % band
+  bool incomplete = false;  // a hole in the checked surface (without --allow-open)
   std::string error;
   double max_um = 0, min_um = 0, machine_rms_um = 0, percent_in = 0;
   int regions = 0;
@@ -424,6 +426,21 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
     rep.line_profile = lineProfile(samples, result, passes[o.line_pass - 1]);
   }
 
+  // Coverage: a hole in the checked surface is area nobody verified.
+  if (rep.has_repair && !rep.repair.holes.empty()) {
+    const MeshHole& h = rep.repair.holes.front();
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "%zu holes in the part's surface are not covered by its mesh: %.1f mm2 not verified "
+                  "(the first, %.1f mm2, at (%.2f, %.2f, %.2f)); holes with a border shorter than %.2f mm "
+                  "are filled (--max-hole)%s",
+                  rep.repair.holes.size(), rep.repair.hole_area, h.area, h.centre_w.x(), h.centre_w.y(),
+                  h.centre_w.z(), rep.repair.max_hole_perimeter,
+                  o.allow_open ? "; --allow-open: not part of the verdict" : "; --allow-open accepts them");
+    rep.incomplete_text = std::string("INCOMPLETE: ") + text;
+    rep.incomplete = !o.allow_open && result.pass;
+    if (o.allow_open || !result.pass) rep.notes.push_back(text);
+  }
   // Files: deviations, swept surfaces, images, reports.
   makeReportDir(o.report_dir);
   if (!fs::is_directory(o.report_dir))
@@ -456,7 +473,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
                         {{"program_um", &program_um}});
   }
   phase("write_surfaces");
-  const std::string title = std::string(result.pass ? "PASS" : "FAIL") + "  " + name +
+  const std::string title = verdictName(rep) + "  " + name +
                             ": total deviation (predicted swept - CAD)";
   r.images = renderImages(o, dir.string(), samples, result, zones, r.line_profile, title, &r.notes);
   phase("images");
@@ -466,8 +483,9 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   writeFileAtomically((dir / "report.html").string(), formatVerifyHtml(r));
 
   out.ok = true;
-  out.pass = result.pass && !rep.undecided;
-  out.undecided = rep.undecided;
+  out.pass = verdictName(rep) == "PASS";
+  out.undecided = verdictName(rep) == "UNDECIDED";
+  out.incomplete = rep.incomplete;
   out.max_um = result.total_stats.max * 1e3;
   out.min_um = result.total_stats.min * 1e3;
   out.machine_rms_um = result.machine_stats.rms * 1e3;
@@ -476,8 +494,9 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   out.report = (dir / "report.html").string();
 
   if (!o.quiet && o.batch.empty()) {
-    std::printf("tolver verify: %s\n", rep.undecided ? "UNDECIDED" : result.pass ? "PASS" : "FAIL");
-    if (rep.undecided) std::printf("  %s\n", rep.undecided_text.c_str());
+    std::printf("tolver verify: %s\n", verdictName(rep).c_str());
+    if (rep.incomplete) std::printf("  %s\n", rep.incomplete_text.c_str());
+    else if (rep.undecided) std::printf("  %s\n", rep.undecided_text.c_str());
     std::printf("  machine    %s (%s)\n", machine.model.name.c_str(), o.machine.machine.c_str());
     std::printf("  program    %s (%s): %d CL points, %d tool placements (step %.3g mm), %s\n",
                 program.file.c_str(), program.dialect.c_str(), r.cl_points, r.placements,
@@ -603,7 +622,8 @@ int runBatch(const VerifyOptions& base) {
   std::printf("  %-20s %-7s %10s %10s %12s %8s %8s\n", "name", "verdict", "min um", "max um",
               "machine RMS", "% in", "regions");
   for (const auto& r : outcomes) {
-    const std::string verdict = !r.ok ? "error" : r.pass ? "pass" : r.undecided ? "undecided" : "fail";
+    const std::string verdict = !r.ok ? "error" : r.pass ? "pass" : r.incomplete ? "incomplete"
+                                : r.undecided ? "undecided" : "fail";
     code = std::max(code, !r.ok ? 2 : r.pass ? 0 : 1);
     char buf[512];
     std::snprintf(buf, sizeof buf, "%s,%s,%.3f,%.3f,%.3f,%.3f,%d,%s,\"%s\"\n", r.name.c_str(), verdict.c_str(),
@@ -630,7 +650,8 @@ void registerVerify(CLI::App& app, int* exit_code) {
       "verify",
       "Verify a part program on a machine: swept surfaces on the nominal and the real machine, "
       "signed normal deviations against profile tolerance zones, maps and reports. Exit 0 in "
-      "tolerance, 1 out of tolerance, 2 bad input, 4 undecided (a calibrated machine: a zone "
+      "tolerance, 1 out of tolerance or incomplete (a hole in the checked surface), 2 bad input, 4 "
+      "undecided (a calibrated machine: a zone "
       "limit lies within the prediction's 95 % band).");
   addMachineOptions(cmd, o->machine, "machine file (XML), calibrated or not");
   cmd->get_option("--machine")->required(false);  // a batch names its machines in the jobs file
@@ -675,6 +696,8 @@ void registerVerify(CLI::App& app, int* exit_code) {
                 "a calibrated machine: verify without the set-up a shop measures (part probed, "
                 "tool preset), i.e. with what the calibration cannot see left in");
   addProbedOption(cmd, o->probed);
+  cmd->add_flag("--allow-open", o->allow_open,
+                "holes in the part's surface (not covered by its mesh) do not make the verdict INCOMPLETE");
   cmd->add_option("--compensated-from", o->compensated_from,
                   "the program is the output of tolver compensate for this original: the nominal is "
                   "the original's path, the machine runs the compensated program's joints");

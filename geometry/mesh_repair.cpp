@@ -178,6 +178,13 @@ TriangleMesh repairMesh(const TriangleMesh& input, const MeshRepairOptions& opti
                         " non-manifold vertices (surfaces touching at a point)");
 
   // 5. Holes: borders shorter than max_hole are filled (CGAL), the others kept.
+  struct OpenLoop {
+    Eigen::Vector3d centre;
+    double perimeter, area;
+    int face;
+  };
+  std::vector<OpenLoop> open_loops;
+  rep.max_hole_perimeter = max_hole;
   std::vector<Eigen::Vector3i> faces;
   for (const auto& p : polygons)
     faces.emplace_back(static_cast<int>(p[0]), static_cast<int>(p[1]), static_cast<int>(p[2]));
@@ -217,6 +224,12 @@ TriangleMesh repairMesh(const TriangleMesh& input, const MeshRepairOptions& opti
         centre /= static_cast<double>(loop.size());
         if (v != v0 || perimeter > max_hole || loop.size() < 3) {
           ++rep.open_borders;
+          if (v == v0 && loop.size() >= 3) {
+            Eigen::Vector3d spanned = Eigen::Vector3d::Zero();
+            for (size_t k = 0; k < loop.size(); ++k)
+              spanned += points[loop[k]].cross(points[loop[(k + 1) % loop.size()]]);
+            open_loops.push_back({centre, perimeter, 0.5 * spanned.norm(), border_face[loop[0]]});
+          }
           continue;
         }
         if (!built) {
@@ -272,6 +285,26 @@ TriangleMesh repairMesh(const TriangleMesh& input, const MeshRepairOptions& opti
     }
   }
   rep.closed = std::none_of(open.begin(), open.end(), [](char c) { return c != 0; });
+  // Which open borders are holes in the surface (see MeshRepairReport::holes).
+  {
+    std::vector<double> surface(rep.components, 0.0), largest(rep.components, 0.0);
+    for (int f = 0; f < static_cast<int>(faces.size()); ++f) {
+      const auto& t = faces[f];
+      surface[comp[f]] += 0.5 * (points[t[1]] - points[t[0]]).cross(points[t[2]] - points[t[0]]).norm();
+    }
+    for (const OpenLoop& l : open_loops) largest[comp[l.face]] = std::max(largest[comp[l.face]], l.area);
+    for (const OpenLoop& l : open_loops) {
+      const int c = comp[l.face];
+      const bool sheet = largest[c] >= 0.3 * surface[c];
+      if (sheet && l.area == largest[c]) continue;  // the sheet's outer edge
+      rep.holes.push_back({l.centre, l.perimeter, l.area});
+      rep.hole_area += l.area;
+    }
+    if (!rep.holes.empty())
+      rep.notes.push_back(std::to_string(rep.holes.size()) + " holes in the surface left open (" +
+                          std::to_string(static_cast<int>(std::round(rep.hole_area))) +
+                          " mm2 not covered by the mesh; the first at " + at(rep.holes.front().centre_w) + ")");
+  }
   int turned = 0;
   for (int f = 0; f < static_cast<int>(faces.size()); ++f)
     if (!open[comp[f]] && volume[comp[f]] < 0) {

@@ -28,6 +28,13 @@ struct MeshRepairOptions {
   double max_hole_perimeter = -1.0;  // mm; negative: 2 % of the bounding-box diagonal
 };
 
+// A border left open that is a hole in the part's surface (not the outer edge of a sheet): the
+// area it spans is missing from the faces being checked.
+struct MeshHole {
+  Eigen::Vector3d centre_w = Eigen::Vector3d::Zero();
+  double perimeter = 0, area = 0;  // mm, mm^2 (the area its border spans)
+};
+
 struct MeshRepairReport {
   int input_vertices = 0, input_faces = 0;
   int merged_vertices = 0;
@@ -37,6 +44,12 @@ struct MeshRepairReport {
   int split_vertices = 0;        // non-manifold vertices split by orient_polygon_soup
   int holes_filled = 0, hole_faces_added = 0;
   int open_borders = 0;          // borders left open (an open surface's edges)
+  double max_hole_perimeter = 0; // mm: the borders filled were shorter than this
+  // The open borders that are holes: every border of a component whose largest border spans
+  // less than 0.3 of its surface (a solid with holes), else all but that largest one (a sheet
+  // with holes in it).
+  std::vector<MeshHole> holes;
+  double hole_area = 0;          // mm^2, summed
   int components = 0;
   bool closed = false;           // every component closed after repair
   std::vector<std::string> notes;  // one line per repair made, with a location

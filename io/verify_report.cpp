@@ -36,6 +36,17 @@ int clLine(const VerifyReport& r, int sample) {
 
 }  // namespace
 
+std::string verdictName(const VerifyReport& r) {
+  if (r.incomplete) return "INCOMPLETE";  // set only when no region is out of tolerance
+  if (r.undecided) return "UNDECIDED";    // set only when no sample is clearly out
+  return r.result->pass ? "PASS" : "FAIL";
+}
+
+int verdictExitCode(const VerifyReport& r) {
+  const std::string v = verdictName(r);
+  return v == "PASS" ? 0 : v == "UNDECIDED" ? 4 : 1;
+}
+
 static bool attributable(const VerifyResult& v, int i) {
   return v.split.empty() || v.split[i] == Split::Attributable;
 }
@@ -61,7 +72,8 @@ std::string formatVerifyJson(const VerifyReport& r) {
   json j;
   j["tool"] = "tolver verify";
   j["name"] = r.name;
-  j["verdict"] = r.undecided ? "undecided" : v.pass ? "pass" : "fail";
+  j["verdict"] = toLower(verdictName(r));
+  if (r.incomplete) j["incomplete"] = r.incomplete_text;
   if (!r.band95_um.empty()) {
     j["uncertainty"] = {{"band95_max_um", r.band95_max_um},
                         {"undecided_samples", r.undecided_samples},
@@ -69,7 +81,7 @@ std::string formatVerifyJson(const VerifyReport& r) {
                                    "along each sample's normal (nearest CL point), k = 1.96"}};
     if (r.undecided) j["uncertainty"]["undecided"] = r.undecided_text;
   }
-  j["exit_code"] = r.undecided ? 4 : v.pass ? 0 : 1;
+  j["exit_code"] = verdictExitCode(r);
   j["mode"] = r.mode;
   j["machine"] = {{"name", r.machine_name}, {"file", r.machine_file}};
   j["program"] = {{"file", r.program_file}, {"cl_points", r.cl_points}, {"placements", r.placements},
@@ -172,10 +184,13 @@ std::string formatVerifyHtml(const VerifyReport& r) {
        "padding:6px 18px;font-size:1.6em}img{max-width:100%;border:1px solid #ddd;margin:6px 0}"
        "</style></head><body>\n";
   h += "<h1>tolver verify: " + html(r.name) + "</h1>\n";
-  h += std::string("<p><span class=\"") + (v.pass ? "pass\">PASS" : "fail\">FAIL") + "</span> ";
-  h += v.pass ? "the part is predicted in tolerance everywhere it is machined."
-              : "the part is predicted out of tolerance in " + std::to_string(v.regions.size()) +
-                    " region(s).";
+  const std::string verdict = verdictName(r);
+  h += std::string("<p><span class=\"") + (verdict == "PASS" ? "pass" : "fail") + "\">" + verdict + "</span> ";
+  h += verdict == "PASS"        ? std::string("the part is predicted in tolerance everywhere it is machined.")
+       : verdict == "INCOMPLETE" ? html(r.incomplete_text)
+       : verdict == "UNDECIDED"  ? html(r.undecided_text)
+                                 : "the part is predicted out of tolerance in " + std::to_string(v.regions.size()) +
+                                      " region(s).";
   h += "</p>\n<table>\n";
   auto row = [&](const std::string& k, const std::string& val) {
     h += "<tr><th class=\"l\">" + html(k) + "</th><td class=\"l\">" + html(val) + "</td></tr>\n";

@@ -34,9 +34,18 @@ struct VerifyReport {
   int undecided_samples = 0;
   bool undecided = false;
   std::string undecided_text;
+  // A checked face with a hole the mesh does not cover (MeshRepairReport::holes), without
+  // --allow-open: the verdict cannot be PASS.
+  bool incomplete = false;
+  std::string incomplete_text;
   double seconds = 0;
   std::vector<std::pair<std::string, double>> timings;  // phase, seconds
 };
+
+// The verdict: INCOMPLETE (holes in the checked surface, nothing out of tolerance), UNDECIDED
+// (a limit within the band, nothing clearly out), PASS, FAIL; and its exit code (1, 4, 0, 1).
+std::string verdictName(const VerifyReport& r);
+int verdictExitCode(const VerifyReport& r);
 
 // The cause of an out-of-tolerance region at its worst sample: "program" when the program on a
 // perfect machine is already out of the zone there, "machine" when it is in and the machine's

@@ -1,10 +1,12 @@
 // tolver verify from the command line: verdicts and exit codes, report files, bad input, batch.
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <sstream>
 
 #include "test_support.h"
@@ -75,6 +77,57 @@ TEST_F(VerifyCli, TheBlameSplitAddsUpOnEverySample) {
     ASSERT_TRUE(j.contains("split")) << dir;
     EXPECT_TRUE(j["split"].contains("cut_boundary"));
   }
+}
+
+// Coverage is part of the verdict: the sculptured part with a 10 x 10 mm hole cut out of its top
+// face (the face being checked) is INCOMPLETE (exit 1) with the hole's area, not "100 % in
+// tolerance"; --allow-open accepts it and notes it.
+TEST_F(VerifyCli, AHoleInTheCheckedFaceMakesTheVerdictIncomplete) {
+  std::ifstream in(sourcePath("samples/sculptured_part.obj"));
+  std::ofstream out(path("holed.obj"));
+  std::vector<Eigen::Vector3d> v;
+  int removed = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("v ", 0) == 0) {
+      std::stringstream ls(line.substr(2));
+      Eigen::Vector3d p;
+      ls >> p.x() >> p.y() >> p.z();
+      v.push_back(p);
+    } else if (line.rfind("f ", 0) == 0) {
+      std::stringstream ls(line.substr(2));
+      Eigen::Vector3d c = Eigen::Vector3d::Zero();
+      int n = 0;
+      for (std::string tok; ls >> tok; ++n) c += v[std::stoi(tok.substr(0, tok.find('/'))) - 1];
+      c /= n;
+      // Top-face triangles with their centroid in the box [0, 10] x [0, 10].
+      if (c.z() > -11 && c.x() > 0 && c.x() < 10 && c.y() > 0 && c.y() < 10) {
+        ++removed;
+        continue;
+      }
+    }
+    out << line << "\n";
+  }
+  out.close();
+  ASSERT_GT(removed, 100);
+  const std::string job = "verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
+                          " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
+                          sourcePath("samples/sculptured_finish.apt") + " --part " + path("holed.obj") +
+                          " --spacing 1.2 --tolerance 0.05 --no-images";
+  auto r = runTolver(job + " --report-dir " + path("h"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("tolver verify: INCOMPLETE"), std::string::npos) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(slurp(path("h/report.json")));
+  EXPECT_EQ(j["verdict"], "incomplete");
+  EXPECT_EQ(j["exit_code"], 1);
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("([0-9.]+) mm2 not verified"))) << r.output;
+  EXPECT_NEAR(std::stod(m[1]), 100.0, 15.0);  // the 10 x 10 mm hole (its border follows the grid)
+  auto a = runTolver(job + " --allow-open --report-dir " + path("a"));
+  EXPECT_EQ(a.exit_code, 0) << a.output;
+  // The unmodified part has no hole.
+  auto c = runTolver(base("--tolerance 0.05 --no-images --report-dir " + path("c")));
+  EXPECT_EQ(c.exit_code, 0) << c.output;
+  EXPECT_EQ(c.output.find("INCOMPLETE"), std::string::npos);
 }
 
 TEST_F(VerifyCli, InToleranceExitsZeroAndWritesTheReport) {
