@@ -153,7 +153,7 @@ std::string fmt(const char* f, double v) {
 std::vector<std::pair<std::string, std::string>> renderImages(
     const VerifyOptions& o, const std::string& dir, const SurfaceSamples& s, const VerifyResult& r,
     const std::vector<ToleranceZone>& zones, const std::vector<LineProfilePoint>& profile,
-    const std::string& title, std::vector<std::string>* notes) {
+    const std::string& title, std::vector<std::string>* notes, const std::vector<int>* cl_lines) {
   std::vector<std::pair<std::string, std::string>> images;
   if (o.no_images) return images;
   std::string why;
@@ -175,31 +175,39 @@ std::vector<std::pair<std::string, std::string>> renderImages(
   map.bar_lower = zones.front().lower;
   map.bar_upper = zones.front().upper;
   map.title = title;
-  // Callouts: the three worst regions, or the largest deviation when in tolerance.
+  // Callouts: the three worst regions (number, kind, value, where, CL line), or the largest
+  // deviation when in tolerance.
   int worst = r.total_stats.max_sample;
   if (r.total_stats.min_sample >= 0 &&
       std::abs(r.total_stats.min) > std::abs(r.total_stats.max))
     worst = r.total_stats.min_sample;
-  Eigen::Vector3d focus = worst >= 0 ? s.p_w[worst] : Eigen::Vector3d::Zero();
-  Eigen::Vector3d normal = worst >= 0 ? s.n_w[worst] : Eigen::Vector3d::UnitZ();
+  auto where = [](const Eigen::Vector3d& p) { return fmt("(%.1f, ", p.x()) + fmt("%.1f, ", p.y()) + fmt("%.1f)", p.z()); };
+  std::vector<MapView> views = {{"isometric", Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d::UnitZ(), false, {}},
+                                {"top", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitY(), false, {}}};
+  auto upFor = [](const Eigen::Vector3d& n) {
+    return std::abs(n.z()) > 0.9 ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitZ();
+  };
   if (!r.regions.empty()) {
-    focus = r.regions.front().where_w;
-    normal = r.regions.front().normal_w;
-    for (size_t k = 0; k < r.regions.size() && k < 3; ++k)
-      map.callouts.push_back({r.regions[k].where_w, std::string(conformanceName(r.regions[k].kind)) +
-                                                        " " + fmt("%+.1f um", r.regions[k].worst_deviation * 1e3)});
+    for (size_t k = 0; k < r.regions.size() && k < 3; ++k) {
+      const auto& g = r.regions[k];
+      const int line = g.worst_sample >= 0 && r.cl_index[g.worst_sample] >= 0 && cl_lines
+                           ? (*cl_lines)[r.cl_index[g.worst_sample]]
+                           : 0;
+      map.callouts.push_back({g.where_w, "R" + std::to_string(k + 1) + " " + conformanceName(g.kind) + " " +
+                                             fmt("%+.1f um", g.worst_deviation * 1e3) + "\n" + where(g.where_w) +
+                                             (line > 0 ? " line " + std::to_string(line) : std::string())});
+      // The views that show the worst regions: along each one's normal, the whole part.
+      views.push_back({k == 0 ? "worst" : "region" + std::to_string(k + 1), -g.normal_w, upFor(g.normal_w), true,
+                       g.where_w});
+    }
   } else if (worst >= 0) {
-    map.callouts.push_back({focus, "largest " + fmt("%+.1f um", r.total[worst] * 1e3)});
+    map.callouts.push_back({s.p_w[worst], "largest " + fmt("%+.1f um", r.total[worst] * 1e3) + "\n" + where(s.p_w[worst])});
+    views.push_back({"worst", -s.n_w[worst], upFor(s.n_w[worst]), true, s.p_w[worst]});
   }
-  const Eigen::Vector3d up = std::abs(normal.z()) > 0.9 ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitZ();
-  const std::vector<MapView> views = {
-      {"isometric", Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d::UnitZ(), false, {}},
-      {"top", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitY(), false, {}},
-      {"worst", -normal, up, true, focus}};
   for (const auto& v : views) {
     const std::string path = (fs::path(dir) / ("map_" + v.name + ".png")).string();
     renderDeviationMap(path, map, v);
-    images.push_back({"deviation map, " + v.name + " view", path});
+    images.push_back({"deviation map, " + (v.focus ? v.name + " (along the region's normal)" : v.name) + " view", path});
   }
   std::vector<double> dev, w;
   for (size_t i = 0; i < s.size(); ++i)
@@ -475,7 +483,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   phase("write_surfaces");
   const std::string title = verdictName(rep) + "  " + name +
                             ": total deviation (predicted swept - CAD)";
-  r.images = renderImages(o, dir.string(), samples, result, zones, r.line_profile, title, &r.notes);
+  r.images = renderImages(o, dir.string(), samples, result, zones, r.line_profile, title, &r.notes, &r.cl_lines);
   phase("images");
   r.timings = timings;
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -6,6 +6,7 @@
 #include <vtkCaptionActor2D.h>
 #include <vtkCellArray.h>
 #include <vtkCellData.h>
+#include <vtkCubeAxesActor.h>
 #include <vtkLookupTable.h>
 #include <vtkNew.h>
 #include <vtkPNGWriter.h>
@@ -185,14 +186,38 @@ void drawAxes(Canvas& c, const Frame& f, const std::string& xlabel, const std::s
 }  // namespace
 
 Rgb deviationColour(double d, double lower, double upper, double saturation) {
-  static const Rgb low_edge = {168, 214, 88}, centre = {46, 160, 67}, high_edge = {88, 196, 160};
-  static const Rgb gouge0 = {250, 160, 60}, gouge1 = {190, 0, 0};
-  static const Rgb excess0 = {120, 165, 240}, excess1 = {25, 40, 170};
-  const double mid = 0.5 * (lower + upper), half = std::max(0.5 * (upper - lower), 1e-12);
-  const double x = (d - mid) / half;
-  if (d < lower) return mix(gouge0, gouge1, (-x - 1.0) / (saturation - 1.0));
-  if (d > upper) return mix(excess0, excess1, (x - 1.0) / (saturation - 1.0));
-  return x < 0 ? mix(centre, low_edge, -x) : mix(centre, high_edge, x);
+  // Discrete steps, as inspection software draws them: one colour in the zone, then four bands
+  // beyond each limit, the last one saturated.
+  static const Rgb in_zone = {46, 160, 67};
+  static const Rgb gouge[4] = {{250, 205, 40}, {245, 135, 30}, {215, 50, 25}, {150, 0, 0}};
+  static const Rgb excess[4] = {{120, 175, 245}, {60, 110, 230}, {35, 60, 185}, {20, 25, 125}};
+  const double half = std::max(0.5 * (upper - lower), 1e-12);
+  const double band = std::max((saturation - 1.0) * half / 4.0, 1e-12);
+  if (d < lower) return gouge[std::clamp(static_cast<int>((lower - d) / band), 0, 3)];
+  if (d > upper) return excess[std::clamp(static_cast<int>((d - upper) / band), 0, 3)];
+  return in_zone;
+}
+
+std::vector<Eigen::Vector2d> placeCallouts(const std::vector<Eigen::Vector2d>& at, double label_w,
+                                           double label_h, double view_w, double view_h) {
+  std::vector<size_t> order(at.size());
+  for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return at[a].y() < at[b].y(); });
+  std::vector<Eigen::Vector2d> out(at.size());
+  double next_free = 0;
+  for (size_t k : order) {
+    const double x = at[k].x() + 30 + label_w < view_w ? at[k].x() + 30 : std::max(5.0, at[k].x() - 30 - label_w);
+    const double y = std::max(at[k].y() + 30, next_free);
+    out[k] = Eigen::Vector2d(x, y);
+    next_free = y + label_h + 6;
+  }
+  // Labels pushed above the view come down as a stack from its top.
+  double top = view_h - 5;
+  for (auto it = order.rbegin(); it != order.rend(); ++it) {
+    if (out[*it].y() + label_h > top) out[*it].y() = top - label_h;
+    top = out[*it].y() - 6;
+  }
+  return out;
 }
 
 void renderDeviationMap(const std::string& png_path, const DeviationMap& map, const MapView& view,
@@ -246,40 +271,10 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
   cam->SetViewUp(view.up.data());
   cam->ParallelProjectionOn();
   renderer->ResetCamera();
-  if (view.focus) {
-    const Eigen::Vector3d shift = view.focus_w - centre;
-    double fp[3], pos[3];
-    cam->GetFocalPoint(fp);
-    cam->GetPosition(pos);
-    for (int k = 0; k < 3; ++k) {
-      fp[k] += shift[k];
-      pos[k] += shift[k];
-    }
-    cam->SetFocalPoint(fp);
-    cam->SetPosition(pos);
-    cam->Zoom(2.5);
-  }
+  // The whole part in every view (a region's view looks along its normal; nothing is cropped),
+  // with room for the box's coordinates.
+  cam->Zoom(0.85);
   renderer->ResetCameraClippingRange();
-
-  // Callouts at the worst points.
-  for (const auto& c : map.callouts) {
-    vtkNew<vtkCaptionActor2D> cap;
-    cap->SetCaption(c.text.c_str());
-    cap->SetAttachmentPoint(const_cast<double*>(c.p_w.data()));
-    cap->BorderOn();
-    cap->LeaderOn();
-    cap->ThreeDimensionalLeaderOff();
-    cap->GetCaptionTextProperty()->SetColor(0.1, 0.1, 0.1);
-    cap->GetCaptionTextProperty()->SetFontSize(14);
-    cap->GetCaptionTextProperty()->BoldOff();
-    cap->GetCaptionTextProperty()->ShadowOff();
-    cap->GetCaptionTextProperty()->ItalicOff();
-    cap->GetProperty()->SetColor(0.1, 0.1, 0.1);
-    cap->SetPosition(25, 25);
-    cap->SetWidth(0.11);
-    cap->SetHeight(0.04);
-    renderer->AddActor2D(cap);
-  }
 
   // Colour bar: the same colour function sampled over the zone and beyond, in um.
   const double lo = map.bar_lower, up = map.bar_upper, half = 0.5 * (up - lo), mid = 0.5 * (lo + up);
@@ -295,10 +290,16 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
   }
   lut->SetAnnotation(vtkVariant(lo * 1e3), ("lower " + um(lo)).c_str());
   lut->SetAnnotation(vtkVariant(up * 1e3), ("upper " + um(up)).c_str());
+  // The band boundaries beyond the limits.
+  const double band = 2.0 * half / 4.0;
+  for (int k = 1; k <= 3; ++k) {
+    lut->SetAnnotation(vtkVariant((up + k * band) * 1e3), um(up + k * band).c_str());
+    lut->SetAnnotation(vtkVariant((lo - k * band) * 1e3), um(lo - k * band).c_str());
+  }
   vtkNew<vtkScalarBarActor> bar;
   bar->SetLookupTable(lut);
   bar->SetTitle("deviation um\n+ material left\n- gouge");
-  bar->SetNumberOfLabels(7);
+  bar->SetNumberOfLabels(0);
   bar->SetLabelFormat("%+.1f");
   bar->DrawAnnotationsOn();
   bar->SetPosition(0.84, 0.06);
@@ -331,6 +332,71 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
   window->AddRenderer(overlay);
   window->AddRenderer(renderer);
   renderer->SetBackground(1, 1, 1);
+
+  // The part's bounding box with its coordinates in mm (the axes' directions and a scale).
+  vtkNew<vtkCubeAxesActor> axes;
+  axes->SetBounds(bounds);
+  axes->SetCamera(cam);
+  axes->SetXTitle("x mm");
+  axes->SetYTitle("y mm");
+  axes->SetZTitle("z mm");
+  axes->SetFlyModeToOuterEdges();
+  axes->SetGridLineLocation(vtkCubeAxesActor::VTK_GRID_LINES_FURTHEST);
+  axes->XAxisMinorTickVisibilityOff();
+  axes->YAxisMinorTickVisibilityOff();
+  axes->ZAxisMinorTickVisibilityOff();
+  for (int k = 0; k < 3; ++k) {
+    axes->GetTitleTextProperty(k)->SetColor(0.15, 0.15, 0.15);
+    axes->GetLabelTextProperty(k)->SetColor(0.15, 0.15, 0.15);
+  }
+  axes->GetXAxesLinesProperty()->SetColor(0.3, 0.3, 0.3);
+  axes->GetYAxesLinesProperty()->SetColor(0.3, 0.3, 0.3);
+  axes->GetZAxesLinesProperty()->SetColor(0.3, 0.3, 0.3);
+  renderer->AddActor(axes);
+  renderer->ResetCameraClippingRange();
+
+  // Callouts, placed without overlap beside their points.
+  struct Placed {
+    const MapCallout* c;
+    double x, y;  // the attachment in display pixels
+    double lx = 0, ly = 0;
+  };
+  std::vector<Placed> placed;
+  std::vector<Eigen::Vector2d> at;
+  for (const auto& c : map.callouts) {
+    renderer->SetWorldPoint(c.p_w.x(), c.p_w.y(), c.p_w.z(), 1.0);
+    renderer->WorldToDisplay();
+    double dp[3];
+    renderer->GetDisplayPoint(dp);
+    placed.push_back({&c, dp[0], dp[1]});
+    at.emplace_back(dp[0], dp[1]);
+  }
+  const double label_w = 0.26 * width, label_h = 0.055 * height;
+  const std::vector<Eigen::Vector2d> where = placeCallouts(at, label_w, label_h, 0.84 * width, 0.93 * height);
+  for (size_t k = 0; k < placed.size(); ++k) {
+    placed[k].lx = where[k].x();
+    placed[k].ly = where[k].y();
+  }
+  for (const Placed& p : placed) {
+    vtkNew<vtkCaptionActor2D> cap;
+    cap->SetCaption(p.c->text.c_str());
+    cap->SetAttachmentPoint(const_cast<double*>(p.c->p_w.data()));
+    cap->BorderOn();
+    cap->LeaderOn();
+    cap->ThreeDimensionalLeaderOff();
+    cap->GetCaptionTextProperty()->SetColor(0.1, 0.1, 0.1);
+    cap->GetCaptionTextProperty()->SetFontSize(13);
+    cap->GetCaptionTextProperty()->BoldOff();
+    cap->GetCaptionTextProperty()->ShadowOff();
+    cap->GetCaptionTextProperty()->ItalicOff();
+    cap->GetCaptionTextProperty()->SetJustificationToLeft();
+    cap->GetProperty()->SetColor(0.1, 0.1, 0.1);
+    cap->SetPosition(p.lx - p.x, p.ly - p.y);
+    cap->SetWidth(label_w / width);
+    cap->SetHeight(label_h / height);
+    cap->GetTextActor()->SetTextScaleModeToNone();
+    renderer->AddActor2D(cap);
+  }
   window->Render();
   writePng(window, png_path);
 }

@@ -1,9 +1,12 @@
 #pragma once
-// Deviation maps (VTK, off screen): the part coloured by signed normal deviation on a diverging
-// scale centred on the tolerance zone: the in-tolerance band green, gouges (below the lower
-// limit) orange to red, material left beyond the upper limit light to dark blue, saturated at
-// `saturation` half-widths from the zone's centre, unmachined grey. A colour bar marks the zone
-// limits and says "+ material left". Callouts label the worst points. Plus a histogram.
+// Deviation maps (VTK, off screen), as inspection software draws them: the part coloured in
+// discrete steps with the zone limits as boundaries: one green in tolerance, then four bands
+// beyond each limit (gouges yellow to dark red, material left light to dark blue), the last
+// saturated (at `saturation` half-widths from the zone's centre), unmachined grey. The colour bar
+// is labelled at the limits and the band boundaries; the part's bounding box carries its
+// coordinates in mm (axes and scale); callouts (region, value, position, CL line) are placed
+// beside their points without covering each other; every view shows the whole part. Plus a
+// histogram and a line profile.
 // Rendering needs an X display: see io/offscreen_display.h.
 #include <Eigen/Core>
 #include <array>
@@ -31,7 +34,7 @@ struct MapView {
   std::string name;            // "isometric", "top", "worst"
   Eigen::Vector3d direction;   // from the camera towards the part, in w
   Eigen::Vector3d up;
-  bool focus = false;          // zoom onto `focus_w`
+  bool focus = false;          // a region's view (the whole part, seen along its normal)
   Eigen::Vector3d focus_w = Eigen::Vector3d::Zero();
 };
 
@@ -43,6 +46,12 @@ struct DeviationMap {
   std::string title;
   std::vector<MapCallout> callouts;
 };
+
+// Where the callout labels go (bottom-left corners, display pixels) for attachment points at
+// `at` (display pixels): beside each point (to the right, or to the left near the right edge),
+// pushed up so that no two labels of label_w x label_h overlap, kept inside the view.
+std::vector<Eigen::Vector2d> placeCallouts(const std::vector<Eigen::Vector2d>& at, double label_w,
+                                           double label_h, double view_w, double view_h);
 
 // Renders one view into a PNG (atomic write). Throws InputError (field "image") when it
 // cannot render or write; call ensureDisplay() first.

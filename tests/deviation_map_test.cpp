@@ -2,6 +2,7 @@
 #include "io/deviation_map.h"
 
 #include <gtest/gtest.h>
+#include <set>
 #include <vtkImageData.h>
 #include <vtkNew.h>
 #include <vtkPNGReader.h>
@@ -12,17 +13,52 @@
 namespace tolver {
 namespace {
 
-TEST(DeviationMap, ColourScaleIsGreenInsideRedForGougesBlueForExcess) {
+// Discrete steps with the zone limits as boundaries: one colour in the zone (the limits
+// included), then a band per 5 um (a quarter of the way to saturation at 3 half-widths) beyond
+// each limit, each its own colour, the last one saturated.
+TEST(DeviationMap, ColourScaleHasDiscreteStepsAtTheZoneLimits) {
   const Rgb in = deviationColour(0.0, -0.01, 0.01);
   EXPECT_GT(in[1], in[0] + 60);
   EXPECT_GT(in[1], in[2] + 60);
-  const Rgb gouge = deviationColour(-0.05, -0.01, 0.01);  // saturated
-  EXPECT_EQ(gouge, (Rgb{190, 0, 0}));
-  const Rgb excess = deviationColour(0.05, -0.01, 0.01);
-  EXPECT_EQ(excess, (Rgb{25, 40, 170}));
-  // Exactly at a limit: still the band's colour (green dominant).
-  const Rgb edge = deviationColour(0.01, -0.01, 0.01);
-  EXPECT_GT(edge[1], edge[0]);
+  EXPECT_EQ(deviationColour(0.0099, -0.01, 0.01), in);
+  EXPECT_EQ(deviationColour(-0.01, -0.01, 0.01), in);  // exactly at a limit: in
+  EXPECT_EQ(deviationColour(0.01, -0.01, 0.01), in);
+  // +10.5 um against +-10: a colour clearly not green (blue dominant).
+  const Rgb just_out = deviationColour(0.0105, -0.01, 0.01);
+  EXPECT_GT(just_out[2], just_out[1] + 40);
+  std::set<Rgb> excess, gouge;
+  for (int k = 0; k < 4; ++k) {
+    excess.insert(deviationColour(0.01 + 0.0025 + 0.005 * k, -0.01, 0.01));
+    gouge.insert(deviationColour(-0.01 - 0.0025 - 0.005 * k, -0.01, 0.01));
+  }
+  EXPECT_EQ(excess.size(), 4u);  // four distinct steps each side
+  EXPECT_EQ(gouge.size(), 4u);
+  EXPECT_EQ(deviationColour(0.05, -0.01, 0.01), (Rgb{20, 25, 125}));  // saturated
+  EXPECT_EQ(deviationColour(-0.05, -0.01, 0.01), (Rgb{150, 0, 0}));
+  EXPECT_EQ(deviationColour(0.013, -0.01, 0.01), deviationColour(0.0149, -0.01, 0.01));  // one step
+}
+
+// Callouts never cover each other, also when their points crowd together or near the top.
+TEST(DeviationMap, CalloutsArePlacedWithoutOverlap) {
+  const double w = 300, h = 50;
+  for (const std::vector<Eigen::Vector2d>& at :
+       {std::vector<Eigen::Vector2d>{{100, 100}, {110, 105}, {120, 98}},
+        std::vector<Eigen::Vector2d>{{900, 800}, {905, 810}, {50, 790}},
+        std::vector<Eigen::Vector2d>{{400, 400}}}) {
+    const auto p = placeCallouts(at, w, h, 1008, 837);
+    ASSERT_EQ(p.size(), at.size());
+    for (size_t a = 0; a < p.size(); ++a) {
+      EXPECT_GE(p[a].x(), 0);
+      EXPECT_LE(p[a].x() + w, 1008 + 1e-9);
+      EXPECT_GE(p[a].y(), 0);
+      EXPECT_LE(p[a].y() + h, 837 + 1e-9);
+      for (size_t b = a + 1; b < p.size(); ++b) {
+        const bool apart = p[a].x() + w <= p[b].x() || p[b].x() + w <= p[a].x() || p[a].y() + h <= p[b].y() ||
+                           p[b].y() + h <= p[a].y();
+        EXPECT_TRUE(apart) << a << " " << b;
+      }
+    }
+  }
 }
 
 class RenderTest : public test::TempDirTest {};
