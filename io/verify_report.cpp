@@ -182,6 +182,7 @@ std::string formatVerifyHtml(const VerifyReport& r) {
        "text-align:right}th{background:#eee}td.l,th.l{text-align:left}.pass{background:#2e9f43;"
        "color:#fff;padding:6px 18px;font-size:1.6em}.fail{background:#be0000;color:#fff;"
        "padding:6px 18px;font-size:1.6em}img{max-width:100%;border:1px solid #ddd;margin:6px 0}"
+       ".worst{display:flex;flex-wrap:wrap;gap:12px}.card{width:400px}.thumb{width:400px}"
        "</style></head><body>\n";
   h += "<h1>tolver verify: " + html(r.name) + "</h1>\n";
   const std::string verdict = verdictName(r);
@@ -191,7 +192,30 @@ std::string formatVerifyHtml(const VerifyReport& r) {
        : verdict == "UNDECIDED"  ? html(r.undecided_text)
                                  : "the part is predicted out of tolerance in " + std::to_string(v.regions.size()) +
                                       " region(s).";
-  h += "</p>\n<table>\n";
+  h += "</p>\n";
+  // The worst regions first, each with a thumbnail of the map that looks along its normal.
+  if (!v.regions.empty()) {
+    auto thumbnail = [&](size_t k) -> std::string {
+      const std::string want = k == 0 ? "map_worst.png" : "map_region" + std::to_string(k + 1) + ".png";
+      for (const auto& [caption, path] : r.images)
+        if (path.size() >= want.size() && path.compare(path.size() - want.size(), want.size(), want) == 0)
+          return "<img class=\"thumb\" alt=\"" + html(caption) + "\" src=\"data:image/png;base64," +
+                 base64Encode(readFile(path)) + "\">";
+      return "";
+    };
+    h += "<h2>Worst regions</h2>\n<div class=\"worst\">\n";
+    for (size_t k = 0; k < v.regions.size() && k < 3; ++k) {
+      const auto& g = v.regions[k];
+      char where[96];
+      std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", g.where_w.x(), g.where_w.y(), g.where_w.z());
+      h += "<div class=\"card\">" + thumbnail(k) + "<p><b>R" + std::to_string(k + 1) + "</b> " +
+           conformanceName(g.kind) + " " + worstDeviationText(v, g) + " um, " + fmt("%.3f", g.area_mm2) +
+           " mm&sup2;, at " + where + " mm, CL line " + std::to_string(clLine(r, g.worst_sample)) +
+           "; cause: " + regionCause(r, g) + "</p></div>\n";
+    }
+    h += "</div>\n";
+  }
+  h += "<h2>Figures</h2>\n<table>\n";
   auto row = [&](const std::string& k, const std::string& val) {
     h += "<tr><th class=\"l\">" + html(k) + "</th><td class=\"l\">" + html(val) + "</td></tr>\n";
   };

@@ -8,6 +8,7 @@ packages=(
   libtinyxml2-dev libcli11-dev nlohmann-json3-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev libpagmo-dev libx11-dev
   xvfb libgl1-mesa-dri
+  chromium
 )
 missing=()
 for p in "${packages[@]}"; do
