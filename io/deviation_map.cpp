@@ -30,16 +30,10 @@
 #include <cstdio>
 
 #include "io/io_error.h"
+#include "io/png_plot.h"
 
 namespace tolver {
 namespace {
-
-Rgb mix(const Rgb& a, const Rgb& b, double t) {
-  t = std::clamp(t, 0.0, 1.0);
-  Rgb c;
-  for (int k = 0; k < 3; ++k) c[k] = static_cast<unsigned char>(std::lround(a[k] + t * (b[k] - a[k])));
-  return c;
-}
 
 std::string um(double mm) {
   char buf[32];
@@ -69,118 +63,6 @@ vtkNew<vtkRenderWindow> offscreenWindow(int width, int height) {
   w->SetSize(width, height);
   w->SetMultiSamples(4);
   return w;
-}
-
-// 2-D drawing in pixel coordinates (origin bottom left): filled quads, lines and text.
-class Canvas {
- public:
-  Canvas(int width, int height) : width_(width), height_(height) {
-    points_->SetDataTypeToDouble();
-    colours_->SetNumberOfComponents(3);
-    line_colours_->SetNumberOfComponents(3);
-    renderer_->SetBackground(1, 1, 1);
-  }
-  void rect(double x0, double y0, double x1, double y1, const Rgb& c) {
-    const vtkIdType base = points_->GetNumberOfPoints();
-    points_->InsertNextPoint(x0, y0, 0);
-    points_->InsertNextPoint(x1, y0, 0);
-    points_->InsertNextPoint(x1, y1, 0);
-    points_->InsertNextPoint(x0, y1, 0);
-    const vtkIdType ids[4] = {base, base + 1, base + 2, base + 3};
-    quads_->InsertNextCell(4, ids);
-    colours_->InsertNextTypedTuple(c.data());
-  }
-  void line(const std::vector<double>& x, const std::vector<double>& y, const Rgb& c) {
-    const vtkIdType base = line_points_->GetNumberOfPoints();
-    std::vector<vtkIdType> ids;
-    for (size_t i = 0; i < x.size(); ++i) {
-      line_points_->InsertNextPoint(x[i], y[i], 0);
-      ids.push_back(base + static_cast<vtkIdType>(i));
-    }
-    lines_->InsertNextCell(static_cast<vtkIdType>(ids.size()), ids.data());
-    line_colours_->InsertNextTypedTuple(c.data());
-  }
-  void text(const std::string& s, double x, double y, int size, int justify = 0, bool bold = false,
-            double angle = 0) {
-    vtkNew<vtkTextActor> t;
-    t->SetInput(s.c_str());
-    t->SetPosition(x, y);
-    t->GetTextProperty()->SetFontSize(size);
-    t->GetTextProperty()->SetColor(0.1, 0.1, 0.1);
-    t->GetTextProperty()->SetBold(bold);
-    t->GetTextProperty()->SetJustification(justify);  // 0 left, 1 centred, 2 right
-    t->GetTextProperty()->SetOrientation(angle);
-    renderer_->AddActor2D(t);
-  }
-  void write(const std::string& path) {
-    vtkNew<vtkPolyData> quads;
-    quads->SetPoints(points_);
-    quads->SetPolys(quads_);
-    quads->GetCellData()->SetScalars(colours_);
-    vtkNew<vtkPolyDataMapper2D> qm;
-    qm->SetInputData(quads);
-    qm->SetColorModeToDirectScalars();
-    vtkNew<vtkActor2D> qa;
-    qa->SetMapper(qm);
-    renderer_->AddActor2D(qa);
-    vtkNew<vtkPolyData> lines;
-    lines->SetPoints(line_points_);
-    lines->SetLines(lines_);
-    lines->GetCellData()->SetScalars(line_colours_);
-    vtkNew<vtkPolyDataMapper2D> lm;
-    lm->SetInputData(lines);
-    lm->SetColorModeToDirectScalars();
-    vtkNew<vtkActor2D> la;
-    la->SetMapper(lm);
-    la->GetProperty()->SetLineWidth(2);
-    renderer_->AddActor2D(la);
-    auto window = offscreenWindow(width_, height_);
-    window->AddRenderer(renderer_);
-    window->Render();
-    writePng(window, path);
-  }
-
- private:
-  int width_, height_;
-  vtkNew<vtkPoints> points_, line_points_;
-  vtkNew<vtkCellArray> quads_, lines_;
-  vtkNew<vtkUnsignedCharArray> colours_, line_colours_;
-  vtkNew<vtkRenderer> renderer_;
-};
-
-// Axis frame with ticks for plots: maps data to pixels.
-struct Frame {
-  double x0, y0, x1, y1;        // pixel box
-  double xmin, xmax, ymin, ymax;
-  double px(double x) const { return x0 + (x - xmin) / (xmax - xmin) * (x1 - x0); }
-  double py(double y) const { return y0 + (y - ymin) / (ymax - ymin) * (y1 - y0); }
-};
-
-double niceStep(double range) {
-  const double raw = range / 6.0;
-  const double p = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * p >= raw) return m * p;
-  return 10 * p;
-}
-
-void drawAxes(Canvas& c, const Frame& f, const std::string& xlabel, const std::string& ylabel) {
-  const Rgb ink = {60, 60, 60};
-  c.line({f.x0, f.x1, f.x1, f.x0, f.x0}, {f.y0, f.y0, f.y1, f.y1, f.y0}, ink);
-  const double sx = niceStep(f.xmax - f.xmin), sy = niceStep(f.ymax - f.ymin);
-  char buf[32];
-  for (double x = std::ceil(f.xmin / sx) * sx; x <= f.xmax + 1e-9 * sx; x += sx) {
-    c.line({f.px(x), f.px(x)}, {f.y0, f.y0 - 6}, ink);
-    std::snprintf(buf, sizeof buf, "%g", std::abs(x) < 1e-9 * sx ? 0.0 : x);
-    c.text(buf, f.px(x), f.y0 - 24, 14, 1);
-  }
-  for (double y = std::ceil(f.ymin / sy) * sy; y <= f.ymax + 1e-9 * sy; y += sy) {
-    c.line({f.x0, f.x0 - 6}, {f.py(y), f.py(y)}, ink);
-    std::snprintf(buf, sizeof buf, "%g", std::abs(y) < 1e-9 * sy ? 0.0 : y);
-    c.text(buf, f.x0 - 10, f.py(y) - 6, 14, 2);
-  }
-  c.text(xlabel, 0.5 * (f.x0 + f.x1), f.y0 - 48, 15, 1);
-  c.text(ylabel, f.x0 - 62, 0.5 * (f.y0 + f.y1), 15, 1, false, 90);
 }
 
 }  // namespace
@@ -425,51 +307,93 @@ void renderHistogram(const std::string& png_path, const std::vector<double>& dev
     v = total > 0 ? 100.0 * v / total : 0.0;
     hmax = std::max(hmax, v);
   }
-  Canvas c(width, height);
-  const Frame f{90, 80, width - 30.0, height - 50.0, dmin * 1e3, dmax * 1e3, 0, hmax * 1.1};
+  // Bars in the zone green, beyond it blue (material left) or red (gouge); the limits as lines.
+  ScatterChart c;
+  c.title = title;
+  c.x_label = "normal deviation (µm): + material left, - gouge";
+  c.y_label = "% of the machined area";
+  c.width = width;
+  c.height = height;
+  c.bar_width = static_cast<double>((dmax - dmin) * 1e3 / bins);
+  ScatterSeries in, over, under;
+  in.style = over.style = under.style = ScatterSeries::Style::Bars;
+  in.legend = "in the zone";
+  over.legend = "material left beyond the zone";
+  under.legend = "gouge beyond the zone";
+  in.rgb[0] = 46, in.rgb[1] = 160, in.rgb[2] = 67;
+  over.rgb[0] = 60, over.rgb[1] = 110, over.rgb[2] = 230;
+  under.rgb[0] = 215, under.rgb[1] = 50, under.rgb[2] = 25;
   for (int b = 0; b < bins; ++b) {
-    const double a = dmin + (dmax - dmin) * b / bins, e = dmin + (dmax - dmin) * (b + 1) / bins;
-    if (h[b] <= 0) continue;
-    c.rect(f.px(a * 1e3), f.py(0), f.px(e * 1e3) - 1, f.py(h[b]), deviationColour(0.5 * (a + e), lower, upper));
+    const double mid = dmin + (dmax - dmin) * (b + 0.5) / bins;
+    ScatterSeries& s = mid > upper ? over : mid < lower ? under : in;
+    s.x.push_back(mid * 1e3);
+    s.y.push_back(h[b]);
   }
-  const Rgb limit = {20, 20, 20};
-  for (double l : {lower, upper}) c.line({f.px(l * 1e3), f.px(l * 1e3)}, {f.y0, f.y1}, limit);
-  c.text("lower " + um(lower), f.px(lower * 1e3) - 4, f.y1 - 18, 13, 2);
-  c.text("upper " + um(upper), f.px(upper * 1e3) + 4, f.y1 - 18, 13, 0);
-  drawAxes(c, f, "normal deviation, um (+ material left, - gouge)", "% of machined area");
-  c.text(title, 12, height - 30, 17, 0, true);
-  c.write(png_path);
+  c.series = {in, over, under};
+  for (double l : {lower, upper}) {
+    ScatterSeries lim;
+    lim.style = ScatterSeries::Style::Line;
+    lim.radius = 2;
+    lim.rgb[0] = lim.rgb[1] = lim.rgb[2] = 20;
+    lim.legend = l == lower ? "zone limits " + um(lower) + " / " + um(upper) + " µm" : "";
+    lim.x = {l * 1e3, l * 1e3};
+    lim.y = {0.0, hmax * 1.1};
+    c.series.push_back(lim);
+  }
+  c.fixed_x = true;
+  c.x_min = dmin * 1e3;
+  c.x_max = dmax * 1e3;
+  c.fixed_y = true;
+  c.y_min = 0;
+  c.y_max = hmax * 1.15;
+  writeScatterPng(png_path, c);
 }
 
 void renderLineProfile(const std::string& png_path, const std::vector<double>& arc_length,
                        const std::vector<double>& total, const std::vector<double>& machine,
                        double lower, double upper, const std::string& title, int width,
                        int height) {
-  double ymin = lower, ymax = upper, xmax = 1e-9;
+  double xmax = 1e-9;
+  for (double a : arc_length) xmax = std::max(xmax, a);
+  ScatterChart c;
+  c.title = title;
+  c.x_label = "arc length along the pass (mm)";
+  c.y_label = "normal deviation (µm)";
+  c.width = width;
+  c.height = height;
+  ScatterSeries t, m;
+  t.style = m.style = ScatterSeries::Style::Line;
+  t.radius = m.radius = 2;
+  t.legend = "total (predicted - CAD)";
+  m.legend = "machine (predicted - nominal swept)";
+  t.rgb[0] = 190, t.rgb[1] = 0, t.rgb[2] = 0;
+  m.rgb[0] = 25, m.rgb[1] = 40, m.rgb[2] = 170;
   for (size_t i = 0; i < total.size(); ++i) {
-    ymin = std::min({ymin, total[i], machine[i]});
-    ymax = std::max({ymax, total[i], machine[i]});
-    xmax = std::max(xmax, arc_length[i]);
+    t.x.push_back(arc_length[i]);
+    t.y.push_back(total[i] * 1e3);
+    m.x.push_back(arc_length[i]);
+    m.y.push_back(machine[i] * 1e3);
   }
-  const double pad = 0.1 * (ymax - ymin);
-  Canvas c(width, height);
-  const Frame f{90, 80, width - 30.0, height - 50.0, 0, xmax, (ymin - pad) * 1e3, (ymax + pad) * 1e3};
-  c.rect(f.x0 + 1, f.py(lower * 1e3), f.x1 - 1, f.py(upper * 1e3), {215, 238, 215});
-  std::vector<double> x, yt, ym;
+  c.series = {t, m};
+  double lo = lower, hi = upper;
   for (size_t i = 0; i < total.size(); ++i) {
-    x.push_back(f.px(arc_length[i]));
-    yt.push_back(f.py(total[i] * 1e3));
-    ym.push_back(f.py(machine[i] * 1e3));
+    lo = std::min({lo, total[i], machine[i]});
+    hi = std::max({hi, total[i], machine[i]});
   }
-  if (x.size() >= 2) {
-    c.line(x, yt, {190, 0, 0});
-    c.line(x, ym, {25, 40, 170});
+  c.fixed_y = true;
+  c.y_min = (lo - 0.15 * (hi - lo)) * 1e3;
+  c.y_max = (hi + 0.15 * (hi - lo)) * 1e3;
+  for (double l : {lower, upper}) {
+    ScatterSeries lim;
+    lim.style = ScatterSeries::Style::Line;
+    lim.radius = 1;
+    lim.rgb[0] = 46, lim.rgb[1] = 160, lim.rgb[2] = 67;
+    lim.legend = l == lower ? "zone limits" : "";
+    lim.x = {0.0, xmax};
+    lim.y = {l * 1e3, l * 1e3};
+    c.series.push_back(lim);
   }
-  drawAxes(c, f, "arc length along the pass, mm", "normal deviation, um");
-  c.text("red: total (predicted - CAD)   blue: machine (predicted - nominal swept)   green: zone",
-         f.x0 + 8, f.y1 + 8, 13);
-  c.text(title, 12, height - 30, 17, 0, true);
-  c.write(png_path);
+  writeScatterPng(png_path, c);
 }
 
 }  // namespace tolver

@@ -9,6 +9,8 @@
 #include <vtkNew.h>
 #include <vtkPNGWriter.h>
 #include <vtkPen.h>
+#include <vtkPlotBar.h>
+#include <vtkPlotLine.h>
 #include <vtkPlotPoints.h>
 #include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
@@ -77,11 +79,23 @@ void writeScatterPng(const std::string& path, const ScatterChart& c) {
     t->AddColumn(x);
     t->AddColumn(y);
     tables.push_back(t.Get());
-    auto* p = vtkPlotPoints::SafeDownCast(chart->AddPlot(vtkChart::POINTS));
+    vtkPlot* p = nullptr;
+    if (s.style == ScatterSeries::Style::Points) {
+      auto* pts = vtkPlotPoints::SafeDownCast(chart->AddPlot(vtkChart::POINTS));
+      pts->SetMarkerStyle(vtkPlotPoints::CIRCLE);
+      pts->SetMarkerSize(2.0f * static_cast<float>(s.radius));
+      p = pts;
+    } else if (s.style == ScatterSeries::Style::Line) {
+      p = chart->AddPlot(vtkChart::LINE);
+      p->SetWidth(static_cast<float>(s.radius));
+      if (auto* lp = vtkPlotPoints::SafeDownCast(p)) lp->SetMarkerStyle(vtkPlotPoints::NONE);
+    } else {
+      auto* bar = vtkPlotBar::SafeDownCast(chart->AddPlot(vtkChart::BAR));
+      if (c.bar_width > 0) bar->SetWidth(static_cast<float>(c.bar_width));
+      p = bar;
+    }
     p->SetInputData(t, 0, 1);
     p->SetColor(s.rgb[0], s.rgb[1], s.rgb[2], 255);
-    p->SetMarkerStyle(vtkPlotPoints::CIRCLE);
-    p->SetMarkerSize(2.0f * static_cast<float>(s.radius));
     p->SetLabel(s.legend.empty() ? "" : s.legend);
     p->SetLegendVisibility(!s.legend.empty());
     legend = legend || !s.legend.empty();
@@ -91,6 +105,11 @@ void writeScatterPng(const std::string& path, const ScatterChart& c) {
     vtkAxis* y = chart->GetAxis(vtkAxis::LEFT);
     y->SetBehavior(vtkAxis::FIXED);
     y->SetRange(c.y_min, c.y_max);
+  }
+  if (c.fixed_x) {
+    vtkAxis* x = chart->GetAxis(vtkAxis::BOTTOM);
+    x->SetBehavior(vtkAxis::FIXED);
+    x->SetRange(c.x_min, c.x_max);
   }
   view->GetRenderWindow()->Render();
   vtkNew<vtkWindowToImageFilter> grab;

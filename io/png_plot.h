@@ -1,6 +1,7 @@
 #pragma once
-// Scatter charts written as PNG, drawn by VTK's chart module (vtkChartXY) off screen: a title,
-// axis titles with units, tick numbers, a legend, and, for before/after pairs, a shared scale.
+// Charts written as PNG, drawn by VTK's chart module (vtkChartXY) off screen: points, lines or
+// bars; a title, axis titles with units, tick numbers, a legend, and, for before/after pairs, a
+// shared scale.
 #include <string>
 #include <vector>
 
@@ -9,8 +10,9 @@ namespace tolver {
 struct ScatterSeries {
   std::vector<double> x, y;
   unsigned char rgb[3] = {40, 90, 200};
-  int radius = 3;      // pixels
+  int radius = 3;      // pixels (points), line width (lines)
   std::string legend;  // empty: not in the legend
+  enum class Style { Points, Line, Bars } style = Style::Points;
 };
 
 struct ScatterChart {
@@ -18,6 +20,9 @@ struct ScatterChart {
   std::vector<ScatterSeries> series;
   bool fixed_y = false;                 // y from y_min to y_max (a scale shared between charts)
   double y_min = 0.0, y_max = 0.0;
+  bool fixed_x = false;                 // x from x_min to x_max
+  double x_min = 0.0, x_max = 0.0;
+  double bar_width = 0.0;               // bars: their width in x units (0: VTK's default)
   int width = 640, height = 420;
 };
 
