@@ -4,6 +4,9 @@
 #include <cmath>
 #include <limits>
 #include <pagmo/algorithms/nsga2.hpp>
+#include <stdexcept>
+#include <pagmo/batch_evaluators/thread_bfe.hpp>
+#include <pagmo/bfe.hpp>
 #include <pagmo/population.hpp>
 #include <pagmo/problem.hpp>
 
@@ -93,12 +96,19 @@ AccuracyModel buildAccuracyModel(const MachineModel& m, const std::vector<Tolera
     for (size_t i = 0; i < terms.size(); ++i)
       acc.J.block<3, 1>(3 * k, i) = F_R_t * J.block<3, 1>(0, terms[i].parameter);
   }
+  acc.absJ = acc.J.cwiseAbs();
+  acc.J2 = acc.J.cwiseAbs2();
   return acc;
 }
 
 Eigen::Vector3d worstCaseLinear(const AccuracyModel& acc, const Eigen::VectorXd& T, bool rss) {
-  const Eigen::VectorXd e = rss ? Eigen::VectorXd((acc.J * (0.5 * T).asDiagonal()).rowwise().norm())
-                                : Eigen::VectorXd(acc.J.cwiseAbs() * (0.5 * T));
+  const bool cached = acc.J2.rows() == acc.J.rows() && acc.J2.cols() == acc.J.cols();
+  Eigen::VectorXd e;
+  if (rss)
+    e = cached ? Eigen::VectorXd((acc.J2 * (0.25 * T.cwiseAbs2())).cwiseSqrt())
+               : Eigen::VectorXd((acc.J * (0.5 * T).asDiagonal()).rowwise().norm());
+  else
+    e = cached ? Eigen::VectorXd(acc.absJ * (0.5 * T)) : Eigen::VectorXd(acc.J.cwiseAbs() * (0.5 * T));
   Eigen::Vector3d w = Eigen::Vector3d::Zero();
   for (int r = 0; r < e.size(); ++r) w[r % 3] = std::max(w[r % 3], e[r]);
   return w;
@@ -229,12 +239,14 @@ struct Evaluator {
         if (b[r] > 0 && base[r] + b[r] > limit) alpha = std::min(alpha, (limit - base[r]) / b[r]);
       }
     } else {
-      // Row r: |u + alpha v|^2 <= limit^2 with u = J_r t_lo, v = J_r dt (element-wise).
-      const Eigen::MatrixXd U = acc->J * (0.5 * T_lo).asDiagonal(), V = acc->J * dt.asDiagonal();
-      for (int r = 0; r < U.rows(); ++r) {
+      // Row r: |u + alpha v|^2 <= limit^2 with u = J_r t_lo, v = J_r dt (element-wise):
+      // uu = J^2 t_lo^2, uv = J^2 (t_lo dt), vv = J^2 dt^2 (products with the cached J^2).
+      const Eigen::VectorXd t_lo = 0.5 * T_lo;
+      const Eigen::VectorXd UU = acc->J2 * t_lo.cwiseAbs2(), UV = acc->J2 * t_lo.cwiseProduct(dt),
+                            VV = acc->J2 * dt.cwiseAbs2();
+      for (int r = 0; r < UU.size(); ++r) {
         const double limit = a->limits[r % 3] * limit_scale[r % 3];
-        const double uu = U.row(r).squaredNorm(), uv = U.row(r).dot(V.row(r)),
-                     vv = V.row(r).squaredNorm(), l2 = limit * limit;
+        const double uu = UU[r], uv = UV[r], vv = VV[r], l2 = limit * limit;
         if (uu > l2) *violation = std::max(*violation, std::sqrt(uu) / limit - 1.0);
         if (vv > 0 && uu + 2 * uv + vv > l2) {
           const double root = (-uv + std::sqrt(std::max(0.0, uv * uv - vv * (uu - l2)))) / vv;
@@ -277,8 +289,17 @@ struct PagmoProblem {
 }  // namespace
 
 AllocationResult allocateTolerances(const MachineModel& m, const std::vector<ToleranceTerm>& terms,
-                                    const AllocationModel& a, const AccuracyModel& acc,
+                                    const AllocationModel& a, const AccuracyModel& acc_in,
                                     const CorrelationAnalysis& corr, const AllocationOptions& o) {
+  // |J| and J^2 once (a model built elsewhere may lack them).
+  AccuracyModel filled;
+  const bool has = acc_in.J2.rows() == acc_in.J.rows() && acc_in.absJ.rows() == acc_in.J.rows();
+  if (!has) {
+    filled = acc_in;
+    filled.absJ = acc_in.J.cwiseAbs();
+    filled.J2 = acc_in.J.cwiseAbs2();
+  }
+  const AccuracyModel& acc = has ? acc_in : filled;
   AllocationResult res;
   res.correlation = corr;
   res.constraint_handling =
@@ -286,7 +307,7 @@ AllocationResult allocateTolerances(const MachineModel& m, const std::vector<Tol
       "to the largest step that meets the limits (exact for the first-order worst case); "
       "penalty only when the lower bounds themselves violate the limits";
   const int n = static_cast<int>(terms.size());
-  Evaluator ev{&m, &terms, &a, &acc, &corr, acc.J.cwiseAbs(), Eigen::VectorXd(n), Eigen::VectorXd(), 0};
+  Evaluator ev{&m, &terms, &a, &acc, &corr, acc.absJ, Eigen::VectorXd(n), Eigen::VectorXd(), 0};
   Eigen::VectorXd Tstd(n);
   for (int i = 0; i < n; ++i) {
     ev.T_lo[i] = terms[i].lower;
@@ -310,6 +331,9 @@ AllocationResult allocateTolerances(const MachineModel& m, const std::vector<Tol
   const int pop_size = std::max(8, (o.population + 3) / 4 * 4);
   pagmo::population pop{prob, static_cast<pagmo::population::size_type>(pop_size), o.seed};
   pagmo::nsga2 algo{static_cast<unsigned>(o.generations), 0.95, 10.0, 1.0 / n, 50.0, o.seed};
+  // The population's fitness in parallel (pagmo's thread batch evaluator; the evaluator is
+  // const and shares nothing mutable). The same seed gives the same front.
+  algo.set_bfe(pagmo::bfe{pagmo::thread_bfe{}});
   pop = algo.evolve(pop);
 
   // The repaired final population, its non-dominated front, by increasing M1.

@@ -74,6 +74,9 @@ double qualityLoss(const MachineModel& m, const std::vector<ToleranceTerm>& term
 struct AccuracyModel {
   std::vector<JointVector> poses;
   Eigen::MatrixXd J;  // 3 * poses x terms
+  // |J| and J^2 (element-wise), computed once: the constraint is evaluated with matrix-vector
+  // products only, so the optimiser's loop allocates nothing large.
+  Eigen::MatrixXd absJ, J2;
 };
 // A grid of the working volume: `levels` values per prismatic axis, `rotary_levels` per rotary.
 std::vector<JointVector> workspaceGrid(const MachineModel& m, int levels, int rotary_levels);
