@@ -9,7 +9,9 @@
 #include "core/calibration.h"
 #include "core/diagnosis.h"
 #include "io/ballbar_file.h"
+#include "core/tolerance_allocation.h"
 #include "io/machine_file.h"
+#include "io/tolerance_file.h"
 
 namespace {
 
@@ -84,5 +86,25 @@ void BM_Diagnose360Readings(benchmark::State& state) {
 BENCHMARK(BM_Diagnose360Readings)->Unit(benchmark::kMillisecond)->Iterations(3);
 
 }  // namespace
+
+// tolver allocate's optimisation on the XKH800 (README's root-sum-square run: 675 poses, 100 x 250
+// NSGA-II, limits 15/15/10 um, lower bounds a quarter of the standard), both cores.
+void BM_AllocateXkh800Rss(benchmark::State& state) {
+  tolver::Machine m = tolver::readMachineFile(std::string(TOLVER_SOURCE_DIR) + "/resources/machines/xkh800.xml");
+  m.model.setup.gauge_length = 150;
+  std::vector<tolver::ToleranceTerm> terms =
+      tolver::readToleranceFile(std::string(TOLVER_SOURCE_DIR) + "/resources/allocation/xkh800_standard.csv", m.model);
+  for (auto& t : terms) t.lower = 0.25 * t.standard;
+  tolver::AllocationModel a;
+  a.limits = Eigen::Vector3d(0.015, 0.015, 0.010);
+  a.rss = true;
+  const tolver::AccuracyModel acc = tolver::buildAccuracyModel(m.model, terms, tolver::workspaceGrid(m.model, 3, 5));
+  const tolver::CorrelationAnalysis corr = tolver::correlateTerms(acc, 4);
+  for (auto _ : state) {
+    const auto r = tolver::allocateTolerances(m.model, terms, a, acc, corr, tolver::AllocationOptions{});
+    benchmark::DoNotOptimize(r.front.size());
+  }
+}
+BENCHMARK(BM_AllocateXkh800Rss)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(3);
 
 BENCHMARK_MAIN();
