@@ -39,7 +39,6 @@ void runAllocate(const AllocateOptions& o, int* exit_code) {
   }
   if (o.limits.size() != 3 || !(o.limits[0] > 0 && o.limits[1] > 0 && o.limits[2] > 0))
     throw InputError("--limits", 0, 0, "limits", "expected three positive values dx,dy,dz in mm");
-  makeReportDir(o.report_dir);
   AllocationModel a;
   a.limits = Eigen::Vector3d(o.limits[0], o.limits[1], o.limits[2]);
   a.h_p = o.cost[0];
@@ -52,9 +51,11 @@ void runAllocate(const AllocateOptions& o, int* exit_code) {
   const AccuracyModel acc = buildAccuracyModel(m, terms, workspaceGrid(m, o.grid, o.rotary_grid));
   const CorrelationAnalysis corr = correlateTerms(acc, o.groups);
   const AllocationResult r = allocateTolerances(m, terms, a, acc, corr, o.opt);
-  writeAllocationReport(o.report_dir, m, terms, a, r,
+  ReportDirectory report_dir(o.report_dir);  // written as a whole, swapped in at the end
+  writeAllocationReport(report_dir.staging(), m, terms, a, r,
                         {o.machine.machine, o.tolerances, m.setup.gauge_length,
                          static_cast<int>(acc.poses.size()), o.opt});
+  report_dir.commit();
 
   std::printf("tolver allocate: %s, %zu terms, %zu workspace poses, tool gauge length %.1f mm\n",
               m.name.c_str(), terms.size(), acc.poses.size(), m.setup.gauge_length);

@@ -321,7 +321,7 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
   outputs.add(report, formatCompensationJson(rep));
   outputs.commit();
   if (!o.report_dir.empty()) {
-    makeReportDir(o.report_dir);
+    ReportDirectory report_dir(o.report_dir);  // written as a whole, swapped in at the end
     std::vector<int> line(n);
     std::vector<double> tb(n), ta(n), ab(n), aa(n);
     for (size_t i = 0; i < n; ++i) {
@@ -331,7 +331,8 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
       ab[i] = ang_before[i] * 1e6;
       aa[i] = ang_after[i] * 1e6;
     }
-    writeCompensationReport(o.report_dir, rep, line, tb, ta, ab, aa);
+    writeCompensationReport(report_dir.staging(), rep, line, tb, ta, ab, aa);
+    report_dir.commit();
   }
 
   std::printf("tolver compensate\n");

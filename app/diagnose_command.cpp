@@ -72,7 +72,6 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
   const BallbarTest heldout = loadHeldout(o.heldout, machine.model, f.test, o.readings);
   const std::string balls_file = o.balls.empty() ? ballsPathFor(o.output) : o.balls;
   checkOutputDir(balls_file, "--balls");
-  makeReportDir(o.report_dir);
   checkOutputDir(o.output, "-o");
   if (!o.cl.empty() && !std::filesystem::exists(o.cl))
     throw InputError(o.cl, 0, 0, "--cl", "no such file");
@@ -138,8 +137,11 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
   in.heldout_file = o.heldout;
   for (const GrossReading& g : rc.removed)
     in.removed.push_back({f.test.readings[g.index].line, g.residual, g.studentized});
-  const std::string json_path = (std::filesystem::path(o.report_dir) / "report.json").string();
-  const std::string html_path = (std::filesystem::path(o.report_dir) / "report.html").string();
+  // The report directory is written as a whole (staged, swapped in at the end; a concurrent run on
+  // it is refused), and taken before anything is written.
+  ReportDirectory report_dir(o.report_dir);
+  const std::string json_path = (std::filesystem::path(report_dir.staging()) / "report.json").string();
+  const std::string html_path = (std::filesystem::path(report_dir.staging()) / "report.html").string();
   Machine augmented = r.machine;
   augmented.model.errors_source = "identified";
   augmented.identification = identificationUncertainty(
@@ -153,9 +155,10 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
                                               " by tolver diagnose (machine " + o.output + ")"}));
   // What the written files predict, read back as the next command will: the report states it.
   in.written = checkWrittenFiles(o.output, balls_file, used, heldout);
-  const std::string html = writeDiagnosisHtml(o.report_dir, machine.model, used, r, in);
+  const std::string html = writeDiagnosisHtml(report_dir.staging(), machine.model, used, r, in);
   writeFileAtomically(json_path, formatDiagnosisJson(machine.model, used, r, in));
   writeFileAtomically(html_path, html);
+  report_dir.commit();
 
   const MachineModel& m = r.machine.model;
   std::printf("  base fit   residual RMS %.3f um, cross-validated RMS %.3f um (%d contiguous blocks)\n",

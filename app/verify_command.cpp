@@ -450,10 +450,10 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
     if (o.allow_open || !result.pass) rep.notes.push_back(text);
   }
   // Files: deviations, swept surfaces, images, reports.
-  makeReportDir(o.report_dir);
-  if (!fs::is_directory(o.report_dir))
-    throw InputError(o.report_dir, 0, 0, "--report-dir", "cannot create the directory");
-  const fs::path dir(o.report_dir);
+  // Written as a whole into a staging directory, swapped in at the end (a killed run leaves the
+  // previous report; a concurrent run on the same directory is refused).
+  ReportDirectory report_dir(o.report_dir);
+  const fs::path dir(report_dir.staging());
   VerifyReport& r = rep;
   writeFileAtomically((dir / "deviations.csv").string(), formatDeviationsCsv(r));
   {
@@ -489,6 +489,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   writeFileAtomically((dir / "report.json").string(), formatVerifyJson(r));
   writeFileAtomically((dir / "report.html").string(), formatVerifyHtml(r));
+  report_dir.commit();
 
   out.ok = true;
   out.pass = verdictName(rep) == "PASS";
@@ -499,7 +500,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   out.machine_rms_um = result.machine_stats.rms * 1e3;
   out.percent_in = result.percent_in;
   out.regions = static_cast<int>(result.regions.size());
-  out.report = (dir / "report.html").string();
+  out.report = (fs::path(report_dir.final()) / "report.html").string();
 
   if (!o.quiet && o.batch.empty()) {
     std::printf("tolver verify: %s\n", verdictName(rep).c_str());

@@ -1,6 +1,12 @@
 #include "io/io_error.h"
 
+#include <fcntl.h>
+#include <stdio.h>  // renameat2, RENAME_EXCHANGE (glibc 2.28)
+#include <sys/file.h>
+#include <unistd.h>
+
 #include <cerrno>
+#include <filesystem>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -112,6 +118,57 @@ std::string readFile(const std::string& path) {
   std::ostringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+ReportDirectory::ReportDirectory(const std::string& dir, const char* option) : option_(option) {
+  namespace fs = std::filesystem;
+  fs::path final_path = fs::path(dir).lexically_normal();
+  if (final_path.filename().empty()) final_path = final_path.parent_path();
+  final_ = final_path.string();
+  const fs::path parent = final_path.has_parent_path() ? final_path.parent_path() : fs::path(".");
+  std::error_code ec;
+  fs::create_directories(parent, ec);
+  if (ec || !fs::is_directory(parent, ec))
+    throw InputError(dir, 0, 0, option_, "cannot create the directory" + (ec ? ": " + ec.message() : std::string()));
+  if (fs::exists(final_path, ec) && !fs::is_directory(final_path, ec))
+    throw InputError(dir, 0, 0, option_, "names a file, not a directory");
+  const std::string name = final_path.filename().string();
+  const std::string lock = (parent / ("." + name + ".lock")).string();
+  lock_fd_ = ::open(lock.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
+  if (lock_fd_ < 0) throw InputError(dir, 0, 0, option_, std::string("cannot write beside it: ") + std::strerror(errno));
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    throw InputError(dir, 0, 0, option_, "another tolver run is writing this report directory now; wait for it or give another");
+  }
+  // Staging directories a killed run left behind (the lock is ours: nobody is writing them).
+  const std::string stale = "." + name + ".tmp-";
+  for (const auto& e : fs::directory_iterator(parent, ec))
+    if (e.path().filename().string().rfind(stale, 0) == 0) fs::remove_all(e.path(), ec);
+  staging_ = (parent / ("." + name + ".tmp-" + std::to_string(::getpid()))).string();
+  fs::remove_all(staging_, ec);
+  fs::create_directories(staging_, ec);
+  if (ec) throw InputError(dir, 0, 0, option_, "cannot create the directory: " + ec.message());
+}
+
+void ReportDirectory::commit() {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (fs::is_directory(final_, ec)) {
+    // Swap the new report in with one atomic step; the old one is then at the staging name.
+    if (::renameat2(AT_FDCWD, staging_.c_str(), AT_FDCWD, final_.c_str(), RENAME_EXCHANGE) != 0)
+      throw InputError(final_, 0, 0, option_, std::string("cannot replace the directory: ") + std::strerror(errno));
+    fs::remove_all(staging_, ec);
+  } else if (::rename(staging_.c_str(), final_.c_str()) != 0) {
+    throw InputError(final_, 0, 0, option_, std::string("cannot create the directory: ") + std::strerror(errno));
+  }
+  committed_ = true;
+}
+
+ReportDirectory::~ReportDirectory() {
+  std::error_code ec;
+  if (!committed_ && !staging_.empty()) std::filesystem::remove_all(staging_, ec);
+  if (lock_fd_ >= 0) ::close(lock_fd_);
 }
 
 }  // namespace tolver

@@ -46,6 +46,28 @@ class OutputSet {
   std::vector<std::pair<std::string, std::string>> pending_;  // temporary, final path
 };
 
+// A report directory written as a whole: the files go to a staging directory beside it
+// (`.<name>.tmp-<pid>`), and commit() swaps it in with one atomic rename (renameat2
+// RENAME_EXCHANGE when the directory exists), so that a run killed while writing leaves the
+// previous report as it was. A second run writing the same directory at the same time is refused
+// (an flock on `.<name>.lock` beside it, released when the process ends). Throws InputError
+// (field `option`) when the place cannot be written or the lock is held.
+class ReportDirectory {
+ public:
+  explicit ReportDirectory(const std::string& dir, const char* option = "--report-dir");
+  ReportDirectory(const ReportDirectory&) = delete;
+  ReportDirectory& operator=(const ReportDirectory&) = delete;
+  ~ReportDirectory();  // removes the staging directory unless committed
+  const std::string& staging() const { return staging_; }
+  const std::string& final() const { return final_; }
+  void commit();
+
+ private:
+  std::string final_, staging_, option_;
+  int lock_fd_ = -1;
+  bool committed_ = false;
+};
+
 // Reads a whole file; throws InputError when it cannot be opened.
 std::string readFile(const std::string& path);
 

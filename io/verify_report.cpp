@@ -1,5 +1,7 @@
 #include "io/verify_report.h"
 
+#include <filesystem>
+
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -134,7 +136,8 @@ std::string formatVerifyJson(const VerifyReport& r) {
     j["line_profile"] = {{"pass", r.line_pass}, {"points", lp}};
   }
   json images = json::array();
-  for (const auto& [caption, path] : r.images) images.push_back({{"caption", caption}, {"file", path}});
+  for (const auto& [caption, path] : r.images)
+    images.push_back({{"caption", caption}, {"file", std::filesystem::path(path).filename().string()}});
   j["images"] = images;
   j["notes"] = r.notes;
   j["seconds"] = std::round(r.seconds * 1000) / 1000;
