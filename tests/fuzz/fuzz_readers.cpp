@@ -1,0 +1,55 @@
+// libFuzzer harnesses for tolver's readers (one binary per reader, chosen by TOLVER_FUZZ_TARGET at
+// compile time; tests/fuzz/run.sh builds and runs them). Each feeds the bytes to a reader as a
+// file's text: an InputError is the expected answer to bad input; anything else (a crash, a
+// sanitizer report, another exception, a hang) is a defect.
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "io/apt_reader.h"
+#include "io/ballbar_file.h"
+#include "io/gcode_reader.h"
+#include "io/io_error.h"
+#include "io/machine_file.h"
+#include "io/probe_file.h"
+#include "io/setup_file.h"
+#include "io/tolerance_file.h"
+#include "io/zone_file.h"
+
+namespace {
+
+const tolver::Machine& machine() {
+  static const tolver::Machine m = [] {
+    tolver::Machine x = tolver::readMachineFile(std::string(TOLVER_SOURCE_DIR) + "/resources/machines/linuxcnc_xyzac_trt.xml");
+    x.model.setup.gauge_length = 50;
+    return x;
+  }();
+  return m;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  try {
+#if TOLVER_FUZZ_TARGET == 1
+    tolver::parseApt(text, "fuzz.apt");
+#elif TOLVER_FUZZ_TARGET == 2
+    tolver::parseGcode(text, "fuzz.nc", machine().model);
+#elif TOLVER_FUZZ_TARGET == 3
+    tolver::parseMachineXml(text, "fuzz.xml");
+#elif TOLVER_FUZZ_TARGET == 4
+    tolver::parseSetup(text, "fuzz.txt", machine().model.setup);
+#elif TOLVER_FUZZ_TARGET == 5
+    tolver::parseBallbarCsv(text, "fuzz.csv", machine().model, false);
+#elif TOLVER_FUZZ_TARGET == 6
+    tolver::parseZoneCsv(text, "fuzz.csv");
+#elif TOLVER_FUZZ_TARGET == 7
+    tolver::parseToleranceCsv(text, "fuzz.csv", machine().model);
+#elif TOLVER_FUZZ_TARGET == 8
+    tolver::parseProbeCsv(text, "fuzz.csv", machine().model);
+#endif
+  } catch (const tolver::InputError&) {
+  }
+  return 0;
+}
