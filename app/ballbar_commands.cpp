@@ -364,8 +364,9 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
                  r.held.size(), names.c_str());
   }
   std::printf("  unseen     a ball-bar cannot see where the part sits on the table or where the tool "
-              "tip is relative to the spindle (the ball positions absorb both): predict and verify "
-              "apply the set-up a shop measures (part probed, tool preset)\n");
+              "tip is relative to the spindle (the ball positions absorb both): predict, verify and "
+              "compensate apply the set-up a shop measures (give its probed points with --probed; "
+              "without them, the set-up that best fits the program), the tool preset\n");
   // The largest identified errors, by significance.
   std::vector<size_t> order(r.identified.size());
   for (size_t k = 0; k < order.size(); ++k) order[k] = k;
