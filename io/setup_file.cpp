@@ -66,8 +66,8 @@ PartSetup parseSetup(const std::string& text, const std::string& file_name, Part
       // Tool length of an H number: tool_h2_mm = 100.5.
       need(1);
       const auto h = parseNumber(lower.substr(6, lower.size() - 9));
-      if (!h || *h < 0 || *h != std::floor(*h))
-        throw InputError(file_name, line, 0, key, "expected tool_hN_mm with a whole number N");
+      if (!h || *h < 0 || *h != std::floor(*h) || *h > 9999)
+        throw InputError(file_name, line, 0, key, "expected tool_hN_mm with a whole number N from 0 to 9999");
       if (v[0] < 0) throw InputError(file_name, line, 0, key, "must not be negative");
       s.tool_lengths[static_cast<int>(*h)] = v[0];
     } else {

@@ -19,10 +19,12 @@ TEST(SetupFile, ReadsKeysAndKeepsDefaults) {
 }
 
 TEST(SetupFile, BadLinesAreNamed) {
+  // The last: an H number of 1e40 (found by the fuzzer: it was cast to int).
   const char* bad[] = {"part_zero_mm = 1, 2\n", "gauge_length_mm = 1O0\n", "tool = 3\n",
-                       "\n\nnonsense\n", "gauge_length_mm = -5\n"};
-  const int lines[] = {1, 1, 1, 3, 1};
-  for (int i = 0; i < 5; ++i) {
+                       "\n\nnonsense\n", "gauge_length_mm = -5\n",
+                       "# x\ntool_h10000000000000000000000000000000000000000_mm = 5\n"};
+  const int lines[] = {1, 1, 1, 3, 1, 2};
+  for (int i = 0; i < 6; ++i) {
     try {
       parseSetup(bad[i], "s.txt");
       ADD_FAILURE() << bad[i];
