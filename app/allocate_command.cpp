@@ -7,7 +7,7 @@
 
 #include "app/commands.h"
 #include "app/common.h"
-#include "core/tolerance_allocation.h"
+#include "core/allocation/tolerance_allocation.h"
 #include "io/allocation_report.h"
 #include "io/io_error.h"
 #include "io/tolerance_file.h"

@@ -6,9 +6,9 @@
 
 #include "app/commands.h"
 #include "app/common.h"
-#include "core/ballbar.h"
-#include "core/calibration.h"
-#include "core/identifiability.h"
+#include "core/calibration/ballbar.h"
+#include "core/calibration/calibration.h"
+#include "core/calibration/identifiability.h"
 #include "io/ballbar_file.h"
 #include "io/io_error.h"
 

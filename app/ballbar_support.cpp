@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "core/ballbar_plan.h"
+#include "core/calibration/ballbar_plan.h"
 #include "io/ballbar_file.h"
 #include "io/io_error.h"
 

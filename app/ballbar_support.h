@@ -4,9 +4,9 @@
 #include <string>
 #include <vector>
 
-#include "core/ballbar.h"
-#include "core/calibration.h"
-#include "core/machine_model.h"
+#include "core/calibration/ballbar.h"
+#include "core/calibration/calibration.h"
+#include "core/model/machine_model.h"
 
 namespace tolver::app {
 

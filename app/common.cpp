@@ -6,7 +6,7 @@
 
 #include <filesystem>
 
-#include "core/tool_path_prediction.h"
+#include "core/path/tool_path_prediction.h"
 #include "io/gcode_reader.h"
 #include "io/io_error.h"
 #include "io/machine_file.h"

@@ -5,10 +5,10 @@
 #include <string>
 #include <vector>
 
-#include "core/machine_model.h"
-#include "core/prediction_uncertainty.h"
-#include "core/probed_setup.h"
-#include "core/tool_path_prediction.h"
+#include "core/model/machine_model.h"
+#include "core/path/prediction_uncertainty.h"
+#include "core/path/probed_setup.h"
+#include "core/path/tool_path_prediction.h"
 #include "io/apt_reader.h"
 
 namespace tolver::app {

@@ -8,8 +8,8 @@
 
 #include "app/commands.h"
 #include "app/common.h"
-#include "core/compensation.h"
-#include "core/prediction_uncertainty.h"
+#include "core/path/compensation.h"
+#include "core/path/prediction_uncertainty.h"
 #include "io/compensated_program.h"
 #include "io/compensation_report.h"
 #include "io/io_error.h"

@@ -7,8 +7,8 @@
 
 #include "app/commands.h"
 #include "app/common.h"
-#include "core/prediction_uncertainty.h"
-#include "core/tool_path_prediction.h"
+#include "core/path/prediction_uncertainty.h"
+#include "core/path/tool_path_prediction.h"
 #include "geometry/cutter.h"
 #include "io/apt_reader.h"
 #include "io/apt_writer.h"

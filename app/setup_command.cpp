@@ -8,7 +8,7 @@
 
 #include "app/commands.h"
 #include "app/common.h"
-#include "core/setup_search.h"
+#include "core/path/setup_search.h"
 #include "io/io_error.h"
 #include "io/text_util.h"
 

@@ -14,11 +14,11 @@
 #include <string>
 
 #include "app/commands.h"
-#include "core/prediction_uncertainty.h"
+#include "core/path/prediction_uncertainty.h"
 #include "geometry/nearest_point.h"
 #include "app/common.h"
-#include "core/tool_motion.h"
-#include "core/tool_path_prediction.h"
+#include "core/path/tool_motion.h"
+#include "core/path/tool_path_prediction.h"
 #include "geometry/cutter.h"
 #include "geometry/verification.h"
 #include "io/apt_reader.h"

@@ -5,11 +5,11 @@
 
 #include <random>
 
-#include "core/ballbar_plan.h"
-#include "core/calibration.h"
-#include "core/diagnosis.h"
+#include "core/calibration/ballbar_plan.h"
+#include "core/calibration/calibration.h"
+#include "core/diagnosis/diagnosis.h"
 #include "io/ballbar_file.h"
-#include "core/tolerance_allocation.h"
+#include "core/allocation/tolerance_allocation.h"
 #include "io/machine_file.h"
 #include "io/tolerance_file.h"
 

@@ -6,10 +6,10 @@
 #include <cmath>
 #include <random>
 
-#include "core/compensation.h"
-#include "core/forward_kinematics.h"
-#include "core/inverse_kinematics.h"
-#include "core/tool_path_prediction.h"
+#include "core/path/compensation.h"
+#include "core/kinematics/forward_kinematics.h"
+#include "core/kinematics/inverse_kinematics.h"
+#include "core/path/tool_path_prediction.h"
 #include "io/apt_reader.h"
 #include "io/gcode_reader.h"
 #include "io/io_error.h"

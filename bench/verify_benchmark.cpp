@@ -4,8 +4,8 @@
 // sampling (CGAL isotropic remeshing) that precedes it.
 #include <benchmark/benchmark.h>
 
-#include "core/forward_kinematics.h"
-#include "core/tool_motion.h"
+#include "core/kinematics/forward_kinematics.h"
+#include "core/path/tool_motion.h"
 #include "geometry/swept_surface.h"
 #include "io/apt_reader.h"
 #include "io/machine_file.h"

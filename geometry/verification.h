@@ -10,7 +10,7 @@
 #include <functional>
 #include <vector>
 
-#include "core/tool_motion.h"
+#include "core/path/tool_motion.h"
 #include "geometry/cutter.h"
 #include "geometry/swept_surface.h"
 #include "geometry/tolerance_zone.h"

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "core/tolerance_allocation.h"
+#include "core/allocation/tolerance_allocation.h"
 
 namespace tolver {
 

@@ -6,7 +6,7 @@
 #include <optional>
 #include <set>
 
-#include "core/arc_interpolation.h"
+#include "core/path/arc_interpolation.h"
 #include "io/io_error.h"
 #include "io/text_util.h"
 

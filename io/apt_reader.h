@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "core/tool_path_prediction.h"
+#include "core/path/tool_path_prediction.h"
 
 namespace tolver {
 

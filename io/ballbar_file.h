@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "core/ballbar.h"
-#include "core/machine_model.h"
+#include "core/calibration/ballbar.h"
+#include "core/model/machine_model.h"
 
 namespace tolver {
 

@@ -3,10 +3,10 @@
 #include <string>
 #include <vector>
 
-#include "core/ballbar.h"
-#include "core/calibration.h"
-#include "core/identifiability.h"
-#include "core/machine_model.h"
+#include "core/calibration/ballbar.h"
+#include "core/calibration/calibration.h"
+#include "core/calibration/identifiability.h"
+#include "core/model/machine_model.h"
 
 namespace tolver {
 

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <map>
 
-#include "core/forward_kinematics.h"
+#include "core/kinematics/forward_kinematics.h"
 
 namespace tolver {
 namespace {

@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "core/machine_model.h"
+#include "core/model/machine_model.h"
 #include "io/apt_reader.h"
 
 namespace tolver {

@@ -10,7 +10,7 @@
 #include "io/json_text.h"
 #include <sstream>
 
-#include "core/effects.h"
+#include "core/model/effects.h"
 #include "io/io_error.h"
 #include "io/png_plot.h"
 #include "io/text_util.h"

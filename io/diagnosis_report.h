@@ -4,8 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "core/diagnosis.h"
-#include "core/tool_path_prediction.h"
+#include "core/diagnosis/diagnosis.h"
+#include "core/path/tool_path_prediction.h"
 #include "io/calibration_report.h"
 
 namespace tolver {

@@ -7,9 +7,9 @@
 #include <optional>
 #include <set>
 
-#include "core/arc_interpolation.h"
-#include "core/forward_kinematics.h"
-#include "core/inverse_kinematics.h"
+#include "core/path/arc_interpolation.h"
+#include "core/kinematics/forward_kinematics.h"
+#include "core/kinematics/inverse_kinematics.h"
 #include "io/io_error.h"
 #include "io/text_util.h"
 

@@ -30,7 +30,7 @@
 // that do not (spindle, coolant, feed modes, path control...) are listed once as ignored.
 #include <string>
 
-#include "core/machine_model.h"
+#include "core/model/machine_model.h"
 #include "io/apt_reader.h"
 
 namespace tolver {

@@ -10,7 +10,7 @@
 #include <limits>
 #include <sstream>
 
-#include "core/effects.h"
+#include "core/model/effects.h"
 #include "io/io_error.h"
 #include "io/text_util.h"
 

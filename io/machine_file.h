@@ -12,7 +12,7 @@
 //     <link axis="X" component="gz" value="12"/>
 //     <motion axis="X" component="ey" [degree="3"] coefficients="0 1.5 -0.3 0.1"/>
 //     <setup frame="workpiece|tool" component="ex" value="5"/>
-//     <effect type="reversal" axis="X" component="ex" values="3"/>   <!-- core/effects.h -->
+//     <effect type="reversal" axis="X" component="ex" values="3"/>   <!-- core/model/effects.h -->
 //     <effect type="periodic" axis="Y" component="ey" period_mm="10" values="1.5 -0.8"/>
 //     <effect type="harmonics" axis="C" component="gz" orders="2 4" values="..6 values.."/>
 //     <effect type="chebyshev" axis="X" component="ey" orders="4 5" values="2 -1"/>
@@ -27,7 +27,7 @@
 // rot(i,rx) after the translation (thesis eq. 21). Components: ex ey ez gx gy gz.
 #include <string>
 
-#include "core/machine_model.h"
+#include "core/model/machine_model.h"
 
 namespace tolver {
 

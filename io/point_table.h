@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "core/prediction_uncertainty.h"
-#include "core/tool_path_prediction.h"
+#include "core/path/prediction_uncertainty.h"
+#include "core/path/tool_path_prediction.h"
 
 namespace tolver {
 

@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "core/machine_model.h"
-#include "core/probed_setup.h"
+#include "core/model/machine_model.h"
+#include "core/path/probed_setup.h"
 
 namespace tolver {
 

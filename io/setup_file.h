@@ -9,7 +9,7 @@
 //   tool_h1_mm        = L           # G-code tool length of H1 (G43 H1); one not given: gauge length
 #include <string>
 
-#include "core/machine_model.h"
+#include "core/model/machine_model.h"
 
 namespace tolver {
 

@@ -1,4 +1,4 @@
-#include "core/arc_interpolation.h"
+#include "core/path/arc_interpolation.h"
 
 #include <gtest/gtest.h>
 

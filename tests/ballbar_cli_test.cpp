@@ -5,7 +5,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "core/forward_kinematics.h"
+#include "core/kinematics/forward_kinematics.h"
 #include "io/machine_file.h"
 #include "test_support.h"
 

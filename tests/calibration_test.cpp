@@ -1,6 +1,6 @@
 // Known-truth recovery (thesis 3.7.4 and 4.9.1): simulate ball-bar readings from a machine with
 // known errors, identify, compare.
-#include "core/calibration.h"
+#include "core/calibration/calibration.h"
 
 #include <gtest/gtest.h>
 
@@ -9,9 +9,9 @@
 #include <cstdio>
 #include <random>
 
-#include "core/ballbar_plan.h"
-#include "core/identifiability.h"
-#include "core/sensitivity_jacobian.h"
+#include "core/calibration/ballbar_plan.h"
+#include "core/calibration/identifiability.h"
+#include "core/kinematics/sensitivity_jacobian.h"
 #include "io/machine_file.h"
 #include "test_support.h"
 

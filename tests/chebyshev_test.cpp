@@ -1,4 +1,4 @@
-#include "core/chebyshev.h"
+#include "core/numerics/chebyshev.h"
 
 #include <gtest/gtest.h>
 

@@ -4,13 +4,13 @@
 // post-processor would, then predict on the erroneous machine: the program's pose to 1e-6 mm),
 // a fixed point (compensating again from the compensating joints changes nothing), travel and
 // singular poses reported, never clipped.
-#include "core/compensation.h"
+#include "core/path/compensation.h"
 
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "core/forward_kinematics.h"
+#include "core/kinematics/forward_kinematics.h"
 #include "io/machine_file.h"
 #include "test_support.h"
 

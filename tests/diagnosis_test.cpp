@@ -1,7 +1,7 @@
 // Closing the loop: on simulated tests of a machine with one undeclared effect, the
 // diagnosis finds that effect (type and axis), its values within three standard uncertainties
 // of the truth, and a held-out RMS at the noise level; on clean data it adds nothing.
-#include "core/diagnosis.h"
+#include "core/diagnosis/diagnosis.h"
 
 #include <gtest/gtest.h>
 
@@ -9,8 +9,8 @@
 #include <cstdio>
 #include <random>
 
-#include "core/ballbar_plan.h"
-#include "core/effects.h"
+#include "core/calibration/ballbar_plan.h"
+#include "core/model/effects.h"
 #include "io/ballbar_file.h"
 #include "io/machine_file.h"
 #include "test_support.h"

@@ -1,14 +1,14 @@
-// Effects (core/effects.h) in the forward model, the sensitivity Jacobian, the ball-bar model,
+// Effects (core/model/effects.h) in the forward model, the sensitivity Jacobian, the ball-bar model,
 // prediction and machine files: analytic cases, finite differences and round trips.
-#include "core/effects.h"
+#include "core/model/effects.h"
 
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "core/ballbar.h"
-#include "core/sensitivity_jacobian.h"
-#include "core/tool_path_prediction.h"
+#include "core/calibration/ballbar.h"
+#include "core/kinematics/sensitivity_jacobian.h"
+#include "core/path/tool_path_prediction.h"
 #include "io/io_error.h"
 #include "io/machine_file.h"
 #include "test_support.h"

@@ -1,4 +1,4 @@
-#include "core/forward_kinematics.h"
+#include "core/kinematics/forward_kinematics.h"
 
 #include <gtest/gtest.h>
 

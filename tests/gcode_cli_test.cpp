@@ -6,8 +6,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "core/inverse_kinematics.h"
-#include "core/tool_path_prediction.h"
+#include "core/kinematics/inverse_kinematics.h"
+#include "core/path/tool_path_prediction.h"
 #include "io/apt_reader.h"
 #include "io/gcode_reader.h"
 #include "io/machine_file.h"

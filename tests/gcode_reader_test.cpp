@@ -8,8 +8,8 @@
 #include <cmath>
 #include <random>
 
-#include "core/forward_kinematics.h"
-#include "core/tool_path_prediction.h"
+#include "core/kinematics/forward_kinematics.h"
+#include "core/path/tool_path_prediction.h"
 #include "io/io_error.h"
 #include "io/machine_file.h"
 #include "test_support.h"

@@ -1,4 +1,4 @@
-#include "core/identifiability.h"
+#include "core/calibration/identifiability.h"
 
 #include <gtest/gtest.h>
 

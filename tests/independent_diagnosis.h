@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "core/ballbar_plan.h"
-#include "core/calibration.h"
-#include "core/diagnosis.h"
-#include "core/effects.h"
+#include "core/calibration/ballbar_plan.h"
+#include "core/calibration/calibration.h"
+#include "core/diagnosis/diagnosis.h"
+#include "core/model/effects.h"
 #include "independent_ballbar.h"
 #include "io/ballbar_file.h"
 #include "io/calibration_report.h"

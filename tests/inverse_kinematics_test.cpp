@@ -1,4 +1,4 @@
-#include "core/inverse_kinematics.h"
+#include "core/kinematics/inverse_kinematics.h"
 
 #include <gtest/gtest.h>
 

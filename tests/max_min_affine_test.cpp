@@ -1,7 +1,7 @@
 // maximiseMinOfAffine against an independent truth: the optimum of a max-min of affine functions
 // in n variables lies where n + 1 of them are equal, so enumerating every (n+1)-subset, solving
 // for its common point and keeping the best feasible value gives the answer by brute force.
-#include "core/max_min_affine.h"
+#include "core/numerics/max_min_affine.h"
 
 #include <gtest/gtest.h>
 

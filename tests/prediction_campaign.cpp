@@ -12,8 +12,8 @@
 #include <cstdlib>
 #include <unistd.h>
 
-#include "core/prediction_uncertainty.h"
-#include "core/probed_setup.h"
+#include "core/path/prediction_uncertainty.h"
+#include "core/path/probed_setup.h"
 #include <memory>
 #include "independent_diagnosis.h"
 #include "io/apt_reader.h"

@@ -5,7 +5,7 @@
 // true deviation of each tip coordinate lies inside the 95 % band (1.96 sigma of the
 // propagated covariance, modulo the same set-up) at 90-98 % of the points. Also: the covariance
 // survives the machine file, and sigma grows outside the calibrated volume.
-#include "core/prediction_uncertainty.h"
+#include "core/path/prediction_uncertainty.h"
 
 #include <gtest/gtest.h>
 

@@ -3,13 +3,13 @@
 // orientations, also when only the coordinate along each probing direction is measured; what
 // the touches cannot see is named and left where the file put it; the CSV reads back what
 // formatProbeCsv wrote and names the line and column of bad input.
-#include "core/probed_setup.h"
+#include "core/path/probed_setup.h"
 
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "core/forward_kinematics.h"
+#include "core/kinematics/forward_kinematics.h"
 #include "io/io_error.h"
 #include "io/machine_file.h"
 #include "io/probe_file.h"

@@ -1,4 +1,4 @@
-#include "core/rigid_transform.h"
+#include "core/model/rigid_transform.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "core/sensitivity_jacobian.h"
+#include "core/kinematics/sensitivity_jacobian.h"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // Set-up search: from a set-up that reaches nothing it finds one that reaches everything; its
 // margin is the one the joint ranges of the proposal give, and no point of a grid around it
 // does better.
-#include "core/setup_search.h"
+#include "core/path/setup_search.h"
 
 #include <gtest/gtest.h>
 

@@ -1,12 +1,12 @@
 // Statistics for residual analysis and selection against closed forms and synthetic data.
-#include "core/statistics.h"
+#include "core/numerics/statistics.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
-#include "core/residual_analysis.h"
+#include "core/diagnosis/residual_analysis.h"
 #include "io/ballbar_file.h"
 #include "io/machine_file.h"
 

@@ -1,4 +1,4 @@
-#include "core/tolerance_allocation.h"
+#include "core/allocation/tolerance_allocation.h"
 
 #include <gtest/gtest.h>
 

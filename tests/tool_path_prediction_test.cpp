@@ -1,11 +1,11 @@
-#include "core/tool_path_prediction.h"
+#include "core/path/tool_path_prediction.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
-#include "core/forward_kinematics.h"
+#include "core/kinematics/forward_kinematics.h"
 #include "io/apt_reader.h"
 #include "io/apt_writer.h"
 #include "io/machine_file.h"

@@ -2,7 +2,7 @@
 // Body twist between two poses, for finite-difference checks of Jacobians.
 #include <Eigen/Geometry>
 
-#include "core/rigid_transform.h"
+#include "core/model/rigid_transform.h"
 
 namespace tolver::test {
 

@@ -9,7 +9,7 @@
 #include <regex>
 #include <sstream>
 
-#include "core/tool_path_prediction.h"
+#include "core/path/tool_path_prediction.h"
 #include "io/apt_reader.h"
 #include "io/io_error.h"
 #include "io/machine_file.h"

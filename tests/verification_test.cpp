@@ -5,9 +5,9 @@
 
 #include <cmath>
 
-#include "core/forward_kinematics.h"
-#include "core/tool_motion.h"
-#include "core/tool_path_prediction.h"
+#include "core/kinematics/forward_kinematics.h"
+#include "core/path/tool_motion.h"
+#include "core/path/tool_path_prediction.h"
 #include "io/machine_file.h"
 #include "test_support.h"
 

@@ -6,8 +6,8 @@
 
 #include <random>
 
-#include "core/ballbar_plan.h"
-#include "core/calibration.h"
+#include "core/calibration/ballbar_plan.h"
+#include "core/calibration/calibration.h"
 #include "io/ballbar_file.h"
 #include "io/calibration_report.h"
 #include "io/io_error.h"

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <string>
 
-#include "core/tool_path_prediction.h"
+#include "core/path/tool_path_prediction.h"
 #include "io/apt_reader.h"
 #include "io/io_error.h"
 #include "io/machine_file.h"

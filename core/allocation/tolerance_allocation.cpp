@@ -1,4 +1,4 @@
-#include "core/tolerance_allocation.h"
+#include "core/allocation/tolerance_allocation.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,8 +10,8 @@
 #include <pagmo/population.hpp>
 #include <pagmo/problem.hpp>
 
-#include "core/forward_kinematics.h"
-#include "core/sensitivity_jacobian.h"
+#include "core/kinematics/forward_kinematics.h"
+#include "core/kinematics/sensitivity_jacobian.h"
 
 namespace tolver {
 

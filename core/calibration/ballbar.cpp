@@ -1,6 +1,6 @@
-#include "core/ballbar.h"
+#include "core/calibration/ballbar.h"
 
-#include "core/sensitivity_jacobian.h"
+#include "core/kinematics/sensitivity_jacobian.h"
 
 namespace tolver {
 

@@ -6,7 +6,7 @@
 //   L = | w_T_t(q) (b_t + db_t) - (b_w + db_w) | + dL,
 // where db_t (in t) and db_w (in w) are the position errors of the two balls in one set-up
 // (unknowns of a calibration, three each per set-up), and dL the bar's own length error (the
-// bar_length effect of core/effects.h, zero unless the model has it). Its gradient orients the error twist
+// bar_length effect of core/model/effects.h, zero unless the model has it). Its gradient orients the error twist
 // along the bar: with n the unit vector from the table ball to the tool ball (in w),
 //   dL = n^T R_wt (d + theta x b_t) + n^T R_wt db_t - n^T db_w.
 #include <Eigen/Core>
@@ -14,7 +14,7 @@
 #include <cmath>
 #include <vector>
 
-#include "core/forward_kinematics.h"
+#include "core/kinematics/forward_kinematics.h"
 
 namespace tolver {
 

@@ -1,4 +1,4 @@
-#include "core/ballbar_plan.h"
+#include "core/calibration/ballbar_plan.h"
 
 #include <Eigen/QR>
 #include <algorithm>
@@ -6,10 +6,10 @@
 #include <limits>
 #include <random>
 
-#include "core/identifiability.h"
-#include "core/inverse_kinematics.h"
-#include "core/prediction_uncertainty.h"
-#include "core/sensitivity_jacobian.h"
+#include "core/calibration/identifiability.h"
+#include "core/kinematics/inverse_kinematics.h"
+#include "core/path/prediction_uncertainty.h"
+#include "core/kinematics/sensitivity_jacobian.h"
 
 namespace tolver {
 
@@ -115,7 +115,7 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
   if (!opt.target_poses.empty()) {
     const int np_ = static_cast<int>(unknowns.size());
     // Tip sensitivities at the targets (in w), with what a measured set-up takes up projected
-    // off (the part's pose and the tool tip's offset: see core/prediction_uncertainty.h).
+    // off (the part's pose and the tool tip's offset: see core/path/prediction_uncertainty.h).
     std::vector<int> setup;
     for (const ParameterBlock& b : model.blocks) {
       if (b.kind == BlockKind::WorkpieceSetup)

@@ -6,8 +6,8 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "core/ballbar.h"
-#include "core/machine_model.h"
+#include "core/calibration/ballbar.h"
+#include "core/model/machine_model.h"
 
 namespace tolver {
 
@@ -71,7 +71,7 @@ TimeJointCorrelation timeJointCorrelation(const MachineModel& model, const Ballb
 // machine a plan would identify, before anyone measures: the plan's identification Jacobian at
 // the nominal machine with readings of standard deviation noise_mm gives the covariance of the
 // machine parameters (ball positions free), carried to the tip modulo the measured set-up (see
-// core/prediction_uncertainty.h).
+// core/path/prediction_uncertainty.h).
 std::vector<double> expectedTipUncertainty(const MachineModel& model, const std::vector<int>& unknowns,
                                            const BallbarTest& plan, double noise_mm,
                                            const std::vector<JointVector>& poses);

@@ -1,4 +1,4 @@
-#include "core/calibration.h"
+#include "core/calibration/calibration.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/QR>
@@ -7,8 +7,8 @@
 #include <cmath>
 #include <limits>
 
-#include "core/identifiability.h"
-#include "core/statistics.h"
+#include "core/calibration/identifiability.h"
+#include "core/numerics/statistics.h"
 
 namespace tolver {
 namespace {

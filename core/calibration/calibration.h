@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "core/ballbar.h"
-#include "core/identifiability.h"
-#include "core/machine_model.h"
+#include "core/calibration/ballbar.h"
+#include "core/calibration/identifiability.h"
+#include "core/model/machine_model.h"
 
 namespace tolver {
 

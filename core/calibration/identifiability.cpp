@@ -1,4 +1,4 @@
-#include "core/identifiability.h"
+#include "core/calibration/identifiability.h"
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -7,7 +7,7 @@
 #include <limits>
 #include <random>
 
-#include "core/sensitivity_jacobian.h"
+#include "core/kinematics/sensitivity_jacobian.h"
 
 namespace tolver {
 namespace {

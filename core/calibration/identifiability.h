@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "core/forward_kinematics.h"
+#include "core/kinematics/forward_kinematics.h"
 
 namespace tolver {
 

@@ -1,4 +1,4 @@
-#include "core/diagnosis.h"
+#include "core/diagnosis/diagnosis.h"
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
@@ -6,9 +6,9 @@
 #include <cmath>
 #include <cstdio>
 
-#include "core/chebyshev.h"
-#include "core/effects.h"
-#include "core/statistics.h"
+#include "core/numerics/chebyshev.h"
+#include "core/model/effects.h"
+#include "core/numerics/statistics.h"
 
 namespace tolver {
 

@@ -1,6 +1,6 @@
 #pragma once
 // Closing the loop: after a ball-bar calibration, find what the model failed to
-// explain, trace it to an effect the model lacks (core/effects.h), add it, refit, and report the
+// explain, trace it to an effect the model lacks (core/model/effects.h), add it, refit, and report the
 // error before and after. Nothing is added when nothing is missing.
 //
 // Forward stepwise selection. Each round linearises the fit at its solution (identification
@@ -28,10 +28,10 @@
 #include <string>
 #include <vector>
 
-#include "core/ballbar.h"
-#include "core/calibration.h"
-#include "core/machine_model.h"
-#include "core/residual_analysis.h"
+#include "core/calibration/ballbar.h"
+#include "core/calibration/calibration.h"
+#include "core/model/machine_model.h"
+#include "core/diagnosis/residual_analysis.h"
 
 namespace tolver {
 

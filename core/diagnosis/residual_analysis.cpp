@@ -1,12 +1,12 @@
-#include "core/residual_analysis.h"
+#include "core/diagnosis/residual_analysis.h"
 
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <map>
 
-#include "core/chebyshev.h"
-#include "core/statistics.h"
+#include "core/numerics/chebyshev.h"
+#include "core/numerics/statistics.h"
 
 namespace tolver {
 namespace {

@@ -1,11 +1,11 @@
-#include "core/forward_kinematics.h"
+#include "core/kinematics/forward_kinematics.h"
 
 #include <algorithm>
 #include <cassert>
 #include <cmath>
 
-#include "core/chebyshev.h"
-#include "core/effects.h"
+#include "core/numerics/chebyshev.h"
+#include "core/model/effects.h"
 
 namespace tolver {
 

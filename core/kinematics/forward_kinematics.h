@@ -6,7 +6,7 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "core/machine_model.h"
+#include "core/model/machine_model.h"
 
 namespace tolver {
 
@@ -85,7 +85,7 @@ class ForwardKinematics {
       int size;
       std::array<double, 8> coef;
     };
-    std::vector<Effect> effects;  // effect blocks acting on this axis (core/effects.h)
+    std::vector<Effect> effects;  // effect blocks acting on this axis (core/model/effects.h)
     int principal = -1;          // 0/1/2 when the joint direction is +x/+y/+z
     double mid = 0.0;            // travel midpoint and 2 / travel range, for eq. 58
     double inv_half_range = 1.0;

@@ -1,10 +1,10 @@
-#include "core/inverse_kinematics.h"
+#include "core/kinematics/inverse_kinematics.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
-#include "core/rigid_transform.h"
+#include "core/model/rigid_transform.h"
 
 namespace tolver {
 namespace {

@@ -21,8 +21,8 @@
 #include <array>
 #include <vector>
 
-#include "core/forward_kinematics.h"
-#include "core/machine_model.h"
+#include "core/kinematics/forward_kinematics.h"
+#include "core/model/machine_model.h"
 
 namespace tolver {
 

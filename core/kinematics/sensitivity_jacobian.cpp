@@ -1,9 +1,9 @@
-#include "core/sensitivity_jacobian.h"
+#include "core/kinematics/sensitivity_jacobian.h"
 
 #include <cassert>
 
-#include "core/chebyshev.h"
-#include "core/effects.h"
+#include "core/numerics/chebyshev.h"
+#include "core/model/effects.h"
 
 namespace tolver {
 

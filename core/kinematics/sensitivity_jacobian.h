@@ -13,7 +13,7 @@
 // through T_k(s_N) (eq. 71-72).
 #include <Eigen/Core>
 
-#include "core/forward_kinematics.h"
+#include "core/kinematics/forward_kinematics.h"
 
 namespace tolver {
 

@@ -1,10 +1,10 @@
-#include "core/effects.h"
+#include "core/model/effects.h"
 
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
-#include "core/chebyshev.h"
+#include "core/numerics/chebyshev.h"
 
 namespace tolver {
 namespace {

@@ -28,7 +28,7 @@
 #include <string>
 #include <vector>
 
-#include "core/machine_model.h"
+#include "core/model/machine_model.h"
 
 namespace tolver {
 

@@ -1,4 +1,4 @@
-#include "core/machine_model.h"
+#include "core/model/machine_model.h"
 
 #include <cctype>
 

@@ -24,7 +24,7 @@
 //                      ISO 230-1 motion errors EXS EYS EZS EAS EBS ECS;
 //  * WorkpieceSetup   6 values, error of w in table (thesis e_x,w ...);
 //  * ToolSetup        6 values, error of t in spindle (thesis e_x,t ...);
-//  * Effect           the coefficients of one effect (core/effects.h: backlash, cyclic error,
+//  * Effect           the coefficients of one effect (core/model/effects.h: backlash, cyclic error,
 //                      rotary harmonics, thermal drift, instrument length, a higher degree),
 //                      appended by addEffect after the blocks above.
 // Code that walks the vector uses the blocks.
@@ -37,7 +37,7 @@
 #include <string_view>
 #include <vector>
 
-#include "core/rigid_transform.h"
+#include "core/model/rigid_transform.h"
 
 namespace tolver {
 
@@ -68,7 +68,7 @@ struct Axis {
 
 enum class BlockKind { LinkError, MotionError, WorkpieceSetup, ToolSetup, Effect };
 
-// The kinds of effect (core/effects.h says what each adds).
+// The kinds of effect (core/model/effects.h says what each adds).
 enum class EffectType { Chebyshev, Reversal, Periodic, Harmonics, Drift, Warmup, BarLength };
 
 // One effect on a machine: its kind, where it acts and its fixed settings.
@@ -192,7 +192,7 @@ struct MotionContext {
 
 // What a calibration knows of the values it identified: their covariance, and the joint ranges
 // its readings covered (empty when the machine was not calibrated). A prediction's uncertainty
-// is this covariance carried through the sensitivity Jacobian (core/prediction_uncertainty.h);
+// is this covariance carried through the sensitivity Jacobian (core/path/prediction_uncertainty.h);
 // outside the covered ranges the fitted polynomials extrapolate.
 struct IdentificationUncertainty {
   std::vector<int> parameters;   // indices into the parameter vector

@@ -1,4 +1,4 @@
-#include "core/max_min_affine.h"
+#include "core/numerics/max_min_affine.h"
 
 #include <Eigen/LU>
 #include <cmath>

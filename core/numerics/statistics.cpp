@@ -1,4 +1,4 @@
-#include "core/statistics.h"
+#include "core/numerics/statistics.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "core/compensation.h"
+#include "core/path/compensation.h"
 
 #include <Eigen/LU>
 #include <Eigen/QR>
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <random>
 
-#include "core/forward_kinematics.h"
+#include "core/kinematics/forward_kinematics.h"
 
 namespace tolver {
 namespace {

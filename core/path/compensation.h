@@ -19,8 +19,8 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "core/machine_model.h"
-#include "core/tool_path_prediction.h"
+#include "core/model/machine_model.h"
+#include "core/path/tool_path_prediction.h"
 
 namespace tolver {
 

@@ -1,4 +1,4 @@
-#include "core/prediction_uncertainty.h"
+#include "core/path/prediction_uncertainty.h"
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "core/sensitivity_jacobian.h"
+#include "core/kinematics/sensitivity_jacobian.h"
 
 namespace tolver {
 

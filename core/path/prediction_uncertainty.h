@@ -10,8 +10,8 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "core/forward_kinematics.h"
-#include "core/probed_setup.h"
+#include "core/kinematics/forward_kinematics.h"
+#include "core/path/probed_setup.h"
 
 namespace tolver {
 

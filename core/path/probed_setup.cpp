@@ -1,4 +1,4 @@
-#include "core/probed_setup.h"
+#include "core/path/probed_setup.h"
 
 #include <Eigen/SVD>
 #include <cmath>
@@ -6,8 +6,8 @@
 #include <memory>
 #include <stdexcept>
 
-#include "core/forward_kinematics.h"
-#include "core/sensitivity_jacobian.h"
+#include "core/kinematics/forward_kinematics.h"
+#include "core/kinematics/sensitivity_jacobian.h"
 
 namespace tolver {
 namespace {

@@ -1,12 +1,12 @@
-#include "core/setup_search.h"
+#include "core/path/setup_search.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 
-#include "core/inverse_kinematics.h"
-#include "core/max_min_affine.h"
+#include "core/kinematics/inverse_kinematics.h"
+#include "core/numerics/max_min_affine.h"
 
 namespace tolver {
 namespace {

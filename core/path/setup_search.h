@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "core/machine_model.h"
-#include "core/tool_path_prediction.h"
+#include "core/model/machine_model.h"
+#include "core/path/tool_path_prediction.h"
 
 namespace tolver {
 

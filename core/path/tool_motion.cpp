@@ -1,6 +1,6 @@
-#include "core/tool_motion.h"
+#include "core/path/tool_motion.h"
 
-#include "core/effects.h"
+#include "core/model/effects.h"
 
 #include <algorithm>
 #include <cmath>

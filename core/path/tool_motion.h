@@ -6,8 +6,8 @@
 #include <Eigen/Core>
 #include <vector>
 
-#include "core/forward_kinematics.h"
-#include "core/tool_path_prediction.h"
+#include "core/kinematics/forward_kinematics.h"
+#include "core/path/tool_path_prediction.h"
 
 namespace tolver {
 

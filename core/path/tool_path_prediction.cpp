@@ -1,14 +1,14 @@
-#include "core/tool_path_prediction.h"
+#include "core/path/tool_path_prediction.h"
 
-#include "core/effects.h"
+#include "core/model/effects.h"
 
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 
-#include "core/forward_kinematics.h"
-#include "core/rigid_transform.h"
+#include "core/kinematics/forward_kinematics.h"
+#include "core/model/rigid_transform.h"
 
 namespace tolver {
 

@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "core/inverse_kinematics.h"
-#include "core/machine_model.h"
+#include "core/kinematics/inverse_kinematics.h"
+#include "core/model/machine_model.h"
 
 namespace tolver {
 

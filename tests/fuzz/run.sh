@@ -14,7 +14,7 @@ out="$here/build/fuzz"
 mkdir -p "$out/obj"
 flags=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
        -I"$here" -I/usr/include/eigen3 -DTOLVER_SOURCE_DIR="\"$here\"" -w)
-sources=("$here"/core/*.cpp "$here"/io/text_util.cpp "$here"/io/io_error.cpp "$here"/io/apt_reader.cpp
+sources=("$here"/core/*/*.cpp "$here"/io/text_util.cpp "$here"/io/io_error.cpp "$here"/io/apt_reader.cpp
          "$here"/io/gcode_reader.cpp "$here"/io/machine_file.cpp "$here"/io/setup_file.cpp
          "$here"/io/ballbar_file.cpp "$here"/io/zone_file.cpp "$here"/io/tolerance_file.cpp
          "$here"/io/probe_file.cpp "$here"/geometry/tolerance_zone.cpp)
