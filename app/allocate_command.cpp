@@ -8,9 +8,9 @@
 #include "app/commands.h"
 #include "app/common.h"
 #include "core/allocation/tolerance_allocation.h"
-#include "io/allocation_report.h"
-#include "io/io_error.h"
-#include "io/tolerance_file.h"
+#include "io/report/allocation_report.h"
+#include "io/common/io_error.h"
+#include "io/machine/tolerance_file.h"
 
 namespace tolver::app {
 namespace {

@@ -9,8 +9,8 @@
 #include "core/calibration/ballbar.h"
 #include "core/calibration/calibration.h"
 #include "core/calibration/identifiability.h"
-#include "io/ballbar_file.h"
-#include "io/io_error.h"
+#include "io/machine/ballbar_file.h"
+#include "io/common/io_error.h"
 
 namespace tolver::app {
 namespace {

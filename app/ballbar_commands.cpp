@@ -14,11 +14,11 @@
 #include "core/calibration/calibration.h"
 #include "core/kinematics/inverse_kinematics.h"
 #include "core/path/setup_search.h"
-#include "io/ballbar_file.h"
-#include "io/calibration_report.h"
-#include "io/io_error.h"
-#include "io/machine_file.h"
-#include "io/text_util.h"
+#include "io/machine/ballbar_file.h"
+#include "io/report/calibration_report.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
+#include "io/common/text_util.h"
 
 namespace tolver::app {
 namespace {

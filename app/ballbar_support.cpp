@@ -5,8 +5,8 @@
 #include <filesystem>
 
 #include "core/calibration/ballbar_plan.h"
-#include "io/ballbar_file.h"
-#include "io/io_error.h"
+#include "io/machine/ballbar_file.h"
+#include "io/common/io_error.h"
 
 namespace tolver::app {
 

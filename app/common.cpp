@@ -7,12 +7,12 @@
 #include <filesystem>
 
 #include "core/path/tool_path_prediction.h"
-#include "io/gcode_reader.h"
-#include "io/io_error.h"
-#include "io/machine_file.h"
-#include "io/probe_file.h"
-#include "io/setup_file.h"
-#include "io/text_util.h"
+#include "io/program/gcode_reader.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
+#include "io/program/probe_file.h"
+#include "io/program/setup_file.h"
+#include "io/common/text_util.h"
 
 namespace tolver::app {
 

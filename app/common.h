@@ -9,7 +9,7 @@
 #include "core/path/prediction_uncertainty.h"
 #include "core/path/probed_setup.h"
 #include "core/path/tool_path_prediction.h"
-#include "io/apt_reader.h"
+#include "io/program/apt_reader.h"
 
 namespace tolver::app {
 

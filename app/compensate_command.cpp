@@ -10,10 +10,10 @@
 #include "app/common.h"
 #include "core/path/compensation.h"
 #include "core/path/prediction_uncertainty.h"
-#include "io/compensated_program.h"
-#include "io/compensation_report.h"
-#include "io/io_error.h"
-#include "io/text_util.h"
+#include "io/program/compensated_program.h"
+#include "io/report/compensation_report.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
 
 namespace tolver::app {
 namespace {

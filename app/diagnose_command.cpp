@@ -12,12 +12,12 @@
 #include "core/diagnosis/diagnosis.h"
 #include "core/model/effects.h"
 #include "core/path/tool_path_prediction.h"
-#include "io/apt_reader.h"
-#include "io/ballbar_file.h"
-#include "io/diagnosis_report.h"
-#include "io/io_error.h"
-#include "io/machine_file.h"
-#include "io/setup_file.h"
+#include "io/program/apt_reader.h"
+#include "io/machine/ballbar_file.h"
+#include "io/report/diagnosis_report.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
+#include "io/program/setup_file.h"
 
 namespace tolver::app {
 namespace {

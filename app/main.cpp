@@ -5,7 +5,7 @@
 #include <exception>
 
 #include "app/commands.h"
-#include "io/io_error.h"
+#include "io/common/io_error.h"
 
 int main(int argc, char** argv) {
   CLI::App app{

@@ -10,10 +10,10 @@
 #include "core/path/prediction_uncertainty.h"
 #include "core/path/tool_path_prediction.h"
 #include "geometry/cutter.h"
-#include "io/apt_reader.h"
-#include "io/apt_writer.h"
-#include "io/io_error.h"
-#include "io/point_table.h"
+#include "io/program/apt_reader.h"
+#include "io/program/apt_writer.h"
+#include "io/common/io_error.h"
+#include "io/program/point_table.h"
 
 namespace tolver::app {
 namespace {

@@ -9,8 +9,8 @@
 #include "app/commands.h"
 #include "app/common.h"
 #include "core/path/setup_search.h"
-#include "io/io_error.h"
-#include "io/text_util.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
 
 namespace tolver::app {
 namespace {

@@ -21,14 +21,14 @@
 #include "core/path/tool_path_prediction.h"
 #include "geometry/cutter.h"
 #include "geometry/verification.h"
-#include "io/apt_reader.h"
-#include "io/deviation_map.h"
-#include "io/io_error.h"
-#include "io/mesh_file.h"
-#include "io/offscreen_display.h"
-#include "io/text_util.h"
-#include "io/verify_report.h"
-#include "io/zone_file.h"
+#include "io/program/apt_reader.h"
+#include "io/report/deviation_map.h"
+#include "io/common/io_error.h"
+#include "io/mesh/mesh_file.h"
+#include "io/report/offscreen_display.h"
+#include "io/common/text_util.h"
+#include "io/report/verify_report.h"
+#include "io/machine/zone_file.h"
 
 namespace tolver::app {
 namespace {

@@ -8,10 +8,10 @@
 #include "core/calibration/ballbar_plan.h"
 #include "core/calibration/calibration.h"
 #include "core/diagnosis/diagnosis.h"
-#include "io/ballbar_file.h"
+#include "io/machine/ballbar_file.h"
 #include "core/allocation/tolerance_allocation.h"
-#include "io/machine_file.h"
-#include "io/tolerance_file.h"
+#include "io/machine/machine_file.h"
+#include "io/machine/tolerance_file.h"
 
 namespace {
 

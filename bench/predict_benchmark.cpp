@@ -10,10 +10,10 @@
 #include "core/kinematics/forward_kinematics.h"
 #include "core/kinematics/inverse_kinematics.h"
 #include "core/path/tool_path_prediction.h"
-#include "io/apt_reader.h"
-#include "io/gcode_reader.h"
-#include "io/io_error.h"
-#include "io/machine_file.h"
+#include "io/program/apt_reader.h"
+#include "io/program/gcode_reader.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
 
 namespace {
 

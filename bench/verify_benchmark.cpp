@@ -7,10 +7,10 @@
 #include "core/kinematics/forward_kinematics.h"
 #include "core/path/tool_motion.h"
 #include "geometry/swept_surface.h"
-#include "io/apt_reader.h"
-#include "io/machine_file.h"
-#include "io/mesh_file.h"
-#include "io/setup_file.h"
+#include "io/program/apt_reader.h"
+#include "io/machine/machine_file.h"
+#include "io/mesh/mesh_file.h"
+#include "io/program/setup_file.h"
 
 namespace tolver {
 namespace {

@@ -1,4 +1,4 @@
-#include "io/apt_reader.h"
+#include "io/program/apt_reader.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <random>
 
 #include "geometry/cutter.h"
-#include "io/io_error.h"
+#include "io/common/io_error.h"
 #include "test_support.h"
 
 namespace tolver {

@@ -1,10 +1,10 @@
-#include "io/apt_writer.h"
+#include "io/program/apt_writer.h"
 
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "io/apt_reader.h"
+#include "io/program/apt_reader.h"
 #include "test_support.h"
 
 namespace tolver {

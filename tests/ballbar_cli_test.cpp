@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/kinematics/forward_kinematics.h"
-#include "io/machine_file.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

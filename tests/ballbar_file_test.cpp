@@ -1,9 +1,9 @@
-#include "io/ballbar_file.h"
+#include "io/machine/ballbar_file.h"
 
 #include <gtest/gtest.h>
 
-#include "io/io_error.h"
-#include "io/machine_file.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

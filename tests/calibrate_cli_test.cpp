@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "io/text_util.h"
+#include "io/common/text_util.h"
 #include "test_support.h"
 
 namespace tolver {

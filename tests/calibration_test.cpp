@@ -12,7 +12,7 @@
 #include "core/calibration/ballbar_plan.h"
 #include "core/calibration/identifiability.h"
 #include "core/kinematics/sensitivity_jacobian.h"
-#include "io/machine_file.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

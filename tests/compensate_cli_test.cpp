@@ -12,8 +12,8 @@
 #include <random>
 #include <regex>
 
-#include "io/io_error.h"
-#include "io/machine_file.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

@@ -11,7 +11,7 @@
 #include <random>
 
 #include "core/kinematics/forward_kinematics.h"
-#include "io/machine_file.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

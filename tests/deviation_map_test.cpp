@@ -1,5 +1,5 @@
 // Rendered maps have the colours the scale promises at known pixels.
-#include "io/deviation_map.h"
+#include "io/report/deviation_map.h"
 
 #include <gtest/gtest.h>
 #include <set>
@@ -7,7 +7,7 @@
 #include <vtkNew.h>
 #include <vtkPNGReader.h>
 
-#include "io/offscreen_display.h"
+#include "io/report/offscreen_display.h"
 #include "test_support.h"
 
 namespace tolver {

@@ -11,8 +11,8 @@
 
 #include "core/calibration/ballbar_plan.h"
 #include "core/model/effects.h"
-#include "io/ballbar_file.h"
-#include "io/machine_file.h"
+#include "io/machine/ballbar_file.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

@@ -9,8 +9,8 @@
 #include "core/calibration/ballbar.h"
 #include "core/kinematics/sensitivity_jacobian.h"
 #include "core/path/tool_path_prediction.h"
-#include "io/io_error.h"
-#include "io/machine_file.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 #include "twist_support.h"
 

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <random>
 
-#include "io/machine_file.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

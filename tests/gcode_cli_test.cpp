@@ -8,10 +8,10 @@
 
 #include "core/kinematics/inverse_kinematics.h"
 #include "core/path/tool_path_prediction.h"
-#include "io/apt_reader.h"
-#include "io/gcode_reader.h"
-#include "io/machine_file.h"
-#include "io/setup_file.h"
+#include "io/program/apt_reader.h"
+#include "io/program/gcode_reader.h"
+#include "io/machine/machine_file.h"
+#include "io/program/setup_file.h"
 #include "test_support.h"
 
 namespace fs = std::filesystem;

@@ -1,7 +1,7 @@
 // G-code reader: the real LinuxCNC programs against an independent forward/inverse kinematics
 // written from the LinuxCNC trt modules' equations (not from tolver's chain), joint-mode words,
 // arcs, offsets, units and the refusals.
-#include "io/gcode_reader.h"
+#include "io/program/gcode_reader.h"
 
 #include <gtest/gtest.h>
 
@@ -10,8 +10,8 @@
 
 #include "core/kinematics/forward_kinematics.h"
 #include "core/path/tool_path_prediction.h"
-#include "io/io_error.h"
-#include "io/machine_file.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

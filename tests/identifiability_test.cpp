@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "io/machine_file.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

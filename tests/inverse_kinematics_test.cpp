@@ -8,7 +8,7 @@
 #include <limits>
 #include <random>
 
-#include "io/machine_file.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

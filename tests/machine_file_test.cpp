@@ -1,10 +1,10 @@
-#include "io/machine_file.h"
+#include "io/machine/machine_file.h"
 
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "io/io_error.h"
+#include "io/common/io_error.h"
 #include "test_support.h"
 
 namespace tolver {

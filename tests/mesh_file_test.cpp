@@ -1,5 +1,5 @@
 // Part meshes in every supported format, and the repairs.
-#include "io/mesh_file.h"
+#include "io/mesh/mesh_file.h"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +9,7 @@
 #include <cmath>
 #include <fstream>
 
-#include "io/io_error.h"
+#include "io/common/io_error.h"
 #include "test_support.h"
 
 namespace tolver {

@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "io/apt_reader.h"
+#include "io/program/apt_reader.h"
 #include "test_support.h"
 
 namespace tolver {

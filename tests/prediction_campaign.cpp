@@ -16,8 +16,8 @@
 #include "core/path/probed_setup.h"
 #include <memory>
 #include "independent_diagnosis.h"
-#include "io/apt_reader.h"
-#include "io/setup_file.h"
+#include "io/program/apt_reader.h"
+#include "io/program/setup_file.h"
 
 using namespace tolver;
 

@@ -1,4 +1,4 @@
-// The part set-up from probed points (core/probed_setup, io/probe_file): a set-up error and a
+// The part set-up from probed points (core/probed_setup, io/program/probe_file): a set-up error and a
 // spindle offset built into a machine are recovered exactly from touches at several table
 // orientations, also when only the coordinate along each probing direction is measured; what
 // the touches cannot see is named and left where the file put it; the CSV reads back what
@@ -10,9 +10,9 @@
 #include <random>
 
 #include "core/kinematics/forward_kinematics.h"
-#include "io/io_error.h"
-#include "io/machine_file.h"
-#include "io/probe_file.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
+#include "io/program/probe_file.h"
 #include "test_support.h"
 
 namespace tolver {

@@ -1,4 +1,4 @@
-// Report directories written as a whole (io/io_error.h ReportDirectory): a run killed with SIGKILL
+// Report directories written as a whole (io/common/io_error.h ReportDirectory): a run killed with SIGKILL
 // while writing leaves the previous report as it was; a second run on the same directory at the
 // same time is refused (also a tolver verify started while one holds it: exit 2).
 #include <gtest/gtest.h>
@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "io/io_error.h"
+#include "io/common/io_error.h"
 #include "test_support.h"
 
 namespace tolver {

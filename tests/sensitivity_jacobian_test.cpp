@@ -4,7 +4,7 @@
 
 #include <random>
 
-#include "io/machine_file.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 #include "twist_support.h"
 

@@ -1,8 +1,8 @@
-#include "io/setup_file.h"
+#include "io/program/setup_file.h"
 
 #include <gtest/gtest.h>
 
-#include "io/io_error.h"
+#include "io/common/io_error.h"
 
 namespace tolver {
 namespace {

@@ -5,8 +5,8 @@
 
 #include <gtest/gtest.h>
 
-#include "io/apt_reader.h"
-#include "io/machine_file.h"
+#include "io/program/apt_reader.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

@@ -7,8 +7,8 @@
 #include <random>
 
 #include "core/diagnosis/residual_analysis.h"
-#include "io/ballbar_file.h"
-#include "io/machine_file.h"
+#include "io/machine/ballbar_file.h"
+#include "io/machine/machine_file.h"
 
 namespace tolver {
 namespace {

@@ -1,4 +1,4 @@
-#include "io/text_util.h"
+#include "io/common/text_util.h"
 
 #include <gtest/gtest.h>
 

@@ -4,9 +4,9 @@
 
 #include <cmath>
 
-#include "io/machine_file.h"
-#include "io/io_error.h"
-#include "io/tolerance_file.h"
+#include "io/machine/machine_file.h"
+#include "io/common/io_error.h"
+#include "io/machine/tolerance_file.h"
 #include "test_support.h"
 
 namespace tolver {

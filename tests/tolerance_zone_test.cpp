@@ -5,8 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "io/io_error.h"
-#include "io/zone_file.h"
+#include "io/common/io_error.h"
+#include "io/machine/zone_file.h"
 
 namespace tolver {
 namespace {

@@ -6,9 +6,9 @@
 #include <random>
 
 #include "core/kinematics/forward_kinematics.h"
-#include "io/apt_reader.h"
-#include "io/apt_writer.h"
-#include "io/machine_file.h"
+#include "io/program/apt_reader.h"
+#include "io/program/apt_writer.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

@@ -10,11 +10,11 @@
 #include <sstream>
 
 #include "core/path/tool_path_prediction.h"
-#include "io/apt_reader.h"
-#include "io/io_error.h"
-#include "io/machine_file.h"
-#include "io/probe_file.h"
-#include "io/setup_file.h"
+#include "io/program/apt_reader.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
+#include "io/program/probe_file.h"
+#include "io/program/setup_file.h"
 #include "test_support.h"
 
 namespace tolver {

@@ -8,7 +8,7 @@
 #include "core/kinematics/forward_kinematics.h"
 #include "core/path/tool_motion.h"
 #include "core/path/tool_path_prediction.h"
-#include "io/machine_file.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

@@ -8,10 +8,10 @@
 
 #include "core/calibration/ballbar_plan.h"
 #include "core/calibration/calibration.h"
-#include "io/ballbar_file.h"
-#include "io/calibration_report.h"
-#include "io/io_error.h"
-#include "io/machine_file.h"
+#include "io/machine/ballbar_file.h"
+#include "io/report/calibration_report.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {

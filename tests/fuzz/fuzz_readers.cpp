@@ -6,15 +6,15 @@
 #include <cstdint>
 #include <string>
 
-#include "io/apt_reader.h"
-#include "io/ballbar_file.h"
-#include "io/gcode_reader.h"
-#include "io/io_error.h"
-#include "io/machine_file.h"
-#include "io/probe_file.h"
-#include "io/setup_file.h"
-#include "io/tolerance_file.h"
-#include "io/zone_file.h"
+#include "io/program/apt_reader.h"
+#include "io/machine/ballbar_file.h"
+#include "io/program/gcode_reader.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
+#include "io/program/probe_file.h"
+#include "io/program/setup_file.h"
+#include "io/machine/tolerance_file.h"
+#include "io/machine/zone_file.h"
 
 namespace {
 

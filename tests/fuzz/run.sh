@@ -14,10 +14,10 @@ out="$here/build/fuzz"
 mkdir -p "$out/obj"
 flags=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
        -I"$here" -I/usr/include/eigen3 -DTOLVER_SOURCE_DIR="\"$here\"" -w)
-sources=("$here"/core/*/*.cpp "$here"/io/text_util.cpp "$here"/io/io_error.cpp "$here"/io/apt_reader.cpp
-         "$here"/io/gcode_reader.cpp "$here"/io/machine_file.cpp "$here"/io/setup_file.cpp
-         "$here"/io/ballbar_file.cpp "$here"/io/zone_file.cpp "$here"/io/tolerance_file.cpp
-         "$here"/io/probe_file.cpp "$here"/geometry/tolerance_zone.cpp)
+sources=("$here"/core/*/*.cpp "$here"/io/common/text_util.cpp "$here"/io/common/io_error.cpp "$here"/io/program/apt_reader.cpp
+         "$here"/io/program/gcode_reader.cpp "$here"/io/machine/machine_file.cpp "$here"/io/program/setup_file.cpp
+         "$here"/io/machine/ballbar_file.cpp "$here"/io/machine/zone_file.cpp "$here"/io/machine/tolerance_file.cpp
+         "$here"/io/program/probe_file.cpp "$here"/geometry/tolerance_zone.cpp)
 objs=()
 for s in "${sources[@]}"; do
   case "$s" in *tolerance_allocation.cpp) continue ;; esac

@@ -6,7 +6,7 @@
 
 #include "core/diagnosis/diagnosis.h"
 #include "core/path/tool_path_prediction.h"
-#include "io/calibration_report.h"
+#include "io/report/calibration_report.h"
 
 namespace tolver {
 

@@ -1,4 +1,4 @@
-#include "io/apt_writer.h"
+#include "io/program/apt_writer.h"
 
 #include <cassert>
 #include <cstdio>

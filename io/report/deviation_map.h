@@ -7,7 +7,7 @@
 // coordinates in mm (axes and scale); callouts (region, value, position, CL line) are placed
 // beside their points without covering each other; every view shows the whole part. Plus a
 // histogram and a line profile.
-// Rendering needs an X display: see io/offscreen_display.h.
+// Rendering needs an X display: see io/report/offscreen_display.h.
 #include <Eigen/Core>
 #include <array>
 #include <string>

@@ -1,4 +1,4 @@
-#include "io/compensated_program.h"
+#include "io/program/compensated_program.h"
 
 #include <Eigen/LU>
 #include <algorithm>

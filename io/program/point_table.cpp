@@ -1,4 +1,4 @@
-#include "io/point_table.h"
+#include "io/program/point_table.h"
 
 #include <cctype>
 #include <cmath>

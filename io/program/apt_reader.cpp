@@ -1,4 +1,4 @@
-#include "io/apt_reader.h"
+#include "io/program/apt_reader.h"
 
 #include <algorithm>
 #include <cctype>
@@ -7,8 +7,8 @@
 #include <set>
 
 #include "core/path/arc_interpolation.h"
-#include "io/io_error.h"
-#include "io/text_util.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
 
 namespace tolver {
 namespace {

@@ -1,11 +1,11 @@
-#include "io/setup_file.h"
+#include "io/program/setup_file.h"
 
 #include <cctype>
 #include <cmath>
 #include <sstream>
 
-#include "io/io_error.h"
-#include "io/text_util.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
 
 namespace tolver {
 

@@ -48,7 +48,7 @@ struct ClFrame {
 
 struct ClProgram {
   std::string file;
-  std::string dialect = "APT";           // "APT" (CL data) or "G-code" (io/gcode_reader.h)
+  std::string dialect = "APT";           // "APT" (CL data) or "G-code" (io/program/gcode_reader.h)
   std::vector<std::string> lines;        // the file's physical lines, as read
   std::vector<AptStatement> statements;  // covering every line in order
   std::vector<ClPoint> path;             // tool positions in w, mm

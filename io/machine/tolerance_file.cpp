@@ -1,9 +1,9 @@
-#include "io/tolerance_file.h"
+#include "io/machine/tolerance_file.h"
 
 #include <cmath>
 
-#include "io/io_error.h"
-#include "io/text_util.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
 
 namespace tolver {
 

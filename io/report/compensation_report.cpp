@@ -1,4 +1,4 @@
-#include "io/compensation_report.h"
+#include "io/report/compensation_report.h"
 
 #include <cmath>
 #include <cstdio>
@@ -7,10 +7,10 @@
 #include <fstream>
 #include <sstream>
 
-#include "io/io_error.h"
-#include "io/json_text.h"
-#include "io/png_plot.h"
-#include "io/text_util.h"
+#include "io/common/io_error.h"
+#include "io/common/json_text.h"
+#include "io/report/png_plot.h"
+#include "io/common/text_util.h"
 
 namespace tolver {
 namespace {

@@ -1,14 +1,14 @@
-#include "io/calibration_report.h"
+#include "io/report/calibration_report.h"
 
-#include "io/ballbar_file.h"
-#include "io/machine_file.h"
+#include "io/machine/ballbar_file.h"
+#include "io/machine/machine_file.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
-#include "io/json_text.h"
+#include "io/common/json_text.h"
 
 namespace tolver {
 

@@ -1,4 +1,4 @@
-#include "io/text_util.h"
+#include "io/common/text_util.h"
 
 #include <cctype>
 #include <charconv>
@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "io/io_error.h"
+#include "io/common/io_error.h"
 
 namespace tolver {
 

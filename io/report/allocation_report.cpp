@@ -1,16 +1,16 @@
-#include "io/allocation_report.h"
+#include "io/report/allocation_report.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
-#include "io/json_text.h"
+#include "io/common/json_text.h"
 
-#include "io/io_error.h"
-#include "io/text_util.h"
-#include "io/png_plot.h"
-#include "io/tolerance_file.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
+#include "io/report/png_plot.h"
+#include "io/machine/tolerance_file.h"
 
 namespace tolver {
 namespace {

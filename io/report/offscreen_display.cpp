@@ -1,4 +1,4 @@
-#include "io/offscreen_display.h"
+#include "io/report/offscreen_display.h"
 
 #include <X11/Xlib.h>
 #include <poll.h>

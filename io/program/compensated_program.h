@@ -23,7 +23,7 @@
 #include <vector>
 
 #include "core/model/machine_model.h"
-#include "io/apt_reader.h"
+#include "io/program/apt_reader.h"
 
 namespace tolver {
 

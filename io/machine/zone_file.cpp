@@ -1,10 +1,10 @@
-#include "io/zone_file.h"
+#include "io/machine/zone_file.h"
 
 #include <sstream>
 #include <stdexcept>
 
-#include "io/io_error.h"
-#include "io/text_util.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
 
 namespace tolver {
 

@@ -1,4 +1,4 @@
-#include "io/machine_file.h"
+#include "io/machine/machine_file.h"
 
 #include <tinyxml2.h>
 
@@ -11,8 +11,8 @@
 #include <sstream>
 
 #include "core/model/effects.h"
-#include "io/io_error.h"
-#include "io/text_util.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
 
 namespace tolver {
 namespace {

@@ -27,7 +27,7 @@ struct ScatterChart {
 };
 
 // Written atomically. Throws InputError when it cannot render (no display: see
-// io/offscreen_display.h) or write.
+// io/report/offscreen_display.h) or write.
 void writeScatterPng(const std::string& path, const ScatterChart& chart);
 
 // A range covering every y of the series with 5 % headroom: the shared scale of a pair.

@@ -1,4 +1,4 @@
-#include "io/io_error.h"
+#include "io/common/io_error.h"
 
 #include <fcntl.h>
 #include <stdio.h>  // renameat2, RENAME_EXCHANGE (glibc 2.28)

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "io/apt_reader.h"
+#include "io/program/apt_reader.h"
 
 namespace tolver {
 

@@ -1,4 +1,4 @@
-#include "io/verify_report.h"
+#include "io/report/verify_report.h"
 
 #include <filesystem>
 
@@ -6,10 +6,10 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
-#include "io/json_text.h"
+#include "io/common/json_text.h"
 
-#include "io/io_error.h"
-#include "io/text_util.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
 
 namespace tolver {
 namespace {

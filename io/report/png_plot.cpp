@@ -1,4 +1,4 @@
-#include "io/png_plot.h"
+#include "io/report/png_plot.h"
 
 #include <vtkAxis.h>
 #include <vtkChartLegend.h>
@@ -23,8 +23,8 @@
 #include <cmath>
 #include <limits>
 
-#include "io/io_error.h"
-#include "io/offscreen_display.h"
+#include "io/common/io_error.h"
+#include "io/report/offscreen_display.h"
 
 namespace tolver {
 

@@ -31,7 +31,7 @@
 #include <string>
 
 #include "core/model/machine_model.h"
-#include "io/apt_reader.h"
+#include "io/program/apt_reader.h"
 
 namespace tolver {
 

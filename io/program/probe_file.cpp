@@ -1,9 +1,9 @@
-#include "io/probe_file.h"
+#include "io/program/probe_file.h"
 
 #include <cmath>
 
-#include "io/io_error.h"
-#include "io/text_util.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
 
 namespace tolver {
 namespace {

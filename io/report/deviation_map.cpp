@@ -1,4 +1,4 @@
-#include "io/deviation_map.h"
+#include "io/report/deviation_map.h"
 
 #include <vtkActor.h>
 #include <vtkActor2D.h>
@@ -29,8 +29,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "io/io_error.h"
-#include "io/png_plot.h"
+#include "io/common/io_error.h"
+#include "io/report/png_plot.h"
 
 namespace tolver {
 namespace {

@@ -1,12 +1,12 @@
-#include "io/ballbar_file.h"
+#include "io/machine/ballbar_file.h"
 
 #include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <map>
 
-#include "io/io_error.h"
-#include "io/text_util.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
 
 namespace tolver {
 namespace {

@@ -1,4 +1,4 @@
-#include "io/mesh_file.h"
+#include "io/mesh/mesh_file.h"
 
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -17,7 +17,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "io/io_error.h"
+#include "io/common/io_error.h"
 
 namespace tolver {
 namespace {

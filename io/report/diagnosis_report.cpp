@@ -1,4 +1,4 @@
-#include "io/diagnosis_report.h"
+#include "io/report/diagnosis_report.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,13 +7,13 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "io/json_text.h"
+#include "io/common/json_text.h"
 #include <sstream>
 
 #include "core/model/effects.h"
-#include "io/io_error.h"
-#include "io/png_plot.h"
-#include "io/text_util.h"
+#include "io/common/io_error.h"
+#include "io/report/png_plot.h"
+#include "io/common/text_util.h"
 
 namespace tolver {
 namespace {
