@@ -245,6 +245,15 @@ std::string describeUnreachable(const MachineModel& model, const PredictionResul
   return msg;
 }
 
+PredictionResult predictProgram(const Machine& machine, const ClProgram& program) {
+  PredictionResult r = predictToolPath(machine.model, machine.params, program.path, 20,
+                                       program.joints.empty() ? nullptr : &program.joints);
+  if (!r.ok())
+    throw InputError(program.file, r.failures.front().line, 0, "unreachable",
+                     describeUnreachable(machine.model, r));
+  return r;
+}
+
 std::vector<std::string> programNotes(const ClProgram& program) {
   std::vector<std::string> w = program.notes;
   // A coordinate system statement moves the points out of the file's own frame: say where.

@@ -52,6 +52,9 @@ std::vector<std::string> unitWarnings(const ClProgram& program, const MachineMod
 // The message for a prediction that failed: the first failing point, how many fail, and per
 // axis how many break it first.
 std::string describeUnreachable(const MachineModel& model, const PredictionResult& r);
+// The program predicted on the machine (its own commanded joints for G-code); a point the
+// machine cannot reach is an InputError naming its line (describeUnreachable).
+PredictionResult predictProgram(const Machine& machine, const ClProgram& program);
 // What the reader assumed or skipped, one line each.
 std::vector<std::string> programNotes(const ClProgram& program);
 

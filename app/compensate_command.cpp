@@ -138,11 +138,7 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
   const std::string report = o.report.empty() ? replaceExtension(o.output, ".json") : o.report;
   checkOutputDir(o.output, "-o");
   checkOutputDir(report, "--report");
-  const std::vector<JointVector>* commanded = program.joints.empty() ? nullptr : &program.joints;
-  PredictionResult pred = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
-  if (!pred.ok())
-    throw InputError(program.file, pred.failures.front().line, 0, "unreachable",
-                     describeUnreachable(machine.model, pred));
+  PredictionResult pred = predictProgram(machine, program);
   // A calibrated machine: its share after the set-up the shop measures (the calibration cannot
   // see the rest), as predict takes it.
   const std::vector<ProbedPoint> probed = loadProbed(o.probed, machine.model);

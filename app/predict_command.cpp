@@ -38,11 +38,7 @@ void runPredict(const PredictOptions& o, int* exit_code) {
   checkOutputDir(o.output, "-o");
   checkOutputDir(table, "--errors");
 
-  const std::vector<JointVector>* commanded = program.joints.empty() ? nullptr : &program.joints;
-  PredictionResult r = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
-  if (!r.ok())
-    throw InputError(program.file, r.failures.front().line, 0, "unreachable",
-                     describeUnreachable(machine.model, r));
+  PredictionResult r = predictProgram(machine, program);
   // A calibrated machine: after the set-up a shop measures (unless --absolute), with each
   // point's uncertainty.
   const std::vector<ProbedPoint> probed = loadProbed(o.probed, machine.model);

@@ -254,11 +254,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   const Cutter cutter = cutterFrom(o, program);
 
   // Joint values and CL_predicted (thesis 5.5.3); a posted program's own rotary solution.
-  PredictionResult pred = predictToolPath(machine.model, machine.params, program.path, 20,
-                                          program.joints.empty() ? nullptr : &program.joints);
-  if (!pred.ok())
-    throw InputError(program.file, pred.failures.front().line, 0, "unreachable",
-                     describeUnreachable(machine.model, pred));
+  PredictionResult pred = predictProgram(machine, program);
   // A calibrated machine: after the set-up a shop measures (part probed, tool preset), which
   // the calibration cannot see; and the uncertainty of each CL point's prediction.
   const std::vector<ProbedPoint> probed = loadProbed(o.probed, machine.model);
@@ -285,11 +281,7 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
                        "the original has " + std::to_string(original.path.size()) + " tool positions, the "
                        "compensated program " + std::to_string(program.path.size()) +
                        ": give the program compensate read");
-    const PredictionResult op = predictToolPath(machine.model, machine.params, original.path, 20,
-                                                original.joints.empty() ? nullptr : &original.joints);
-    if (!op.ok())
-      throw InputError(original.file, op.failures.front().line, 0, "unreachable",
-                       describeUnreachable(machine.model, op));
+    const PredictionResult op = predictProgram(machine, original);
     for (size_t i = 0; i < program.path.size(); ++i) {
       program.path[i].p_w = original.path[i].p_w;
       program.path[i].u_w = original.path[i].u_w;

@@ -217,6 +217,15 @@ TEST_F(CompensateCli, BadInputIsExitTwoAndWritesNothing) {
                       " --report /nonexistent/dir/r.json");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_FALSE(fs::exists(path("o.apt")));
+  // verify --compensated-from with an original that is not the compensated program's: exit 2,
+  // no report directory.
+  r = test::runTolver("verify --machine " + m + " --cl " + src("samples/nas979_cone.apt") + " --setup " +
+                      src("samples/matsuura_setup.txt") + " --compensated-from " +
+                      src("samples/sculptured_finish.apt") + " --tolerance 0.02 --no-images --report-dir " +
+                      path("v"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--compensated-from"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("v")));
 }
 
 }  // namespace
