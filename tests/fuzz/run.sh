@@ -47,5 +47,10 @@ for n in "${names[@]}"; do
     status=1
   fi
   grep -E "stat::number_of_executed_units|stat::peak_rss_mb|cov: " "$out/$n/log.txt" | tail -3 >&2 || true
+  # One line per run, so the totals over many runs can be summed (tests/fuzz/totals.sh).
+  execs=$(grep -oE "stat::number_of_executed_units: [0-9]+" "$out/$n/log.txt" | grep -oE "[0-9]+$" || echo 0)
+  cov=$(grep -oE "cov: [0-9]+" "$out/$n/log.txt" | tail -1 | grep -oE "[0-9]+$" || echo 0)
+  crashes=$(ls "$out/$n" | grep -cE "^(crash|leak|timeout|oom)-" || true)
+  printf "%s\t%s\t%s\t%s\t%s\t%s\n" "$(date -u +%FT%TZ)" "$n" "$seconds" "$execs" "$cov" "$crashes" >> "$out/history.tsv"
 done
 exit $status

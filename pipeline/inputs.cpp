@@ -1,0 +1,367 @@
+#include "pipeline/inputs.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+
+#include <filesystem>
+
+#include "core/path/tool_path_prediction.h"
+#include "io/program/gcode_reader.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
+#include "io/program/probe_file.h"
+#include "io/program/setup_file.h"
+#include "io/common/text_util.h"
+
+namespace tolver {
+
+Machine loadMachine(const MachineOptions& o) {
+  Machine machine = readMachineFile(o.machine);
+  PartSetup setup;
+  if (!o.setup.empty()) setup = readSetupFile(o.setup);
+  if (!o.part_zero.empty()) {
+    if (o.part_zero.size() != 3)
+      throw InputError("--part-zero", 0, 0, "part zero", "expected x,y,z in mm");
+    setup.part_zero_table = Eigen::Vector3d(o.part_zero[0], o.part_zero[1], o.part_zero[2]);
+  }
+  if (!o.part_zero.empty()) setup.part_zero_given = true;
+  if (!std::isnan(o.part_rotation_deg)) {
+    setup.part_rotation = o.part_rotation_deg * M_PI / 180.0;
+    setup.part_rotation_given = true;
+  }
+  if (!std::isnan(o.gauge_length)) {
+    if (!(o.gauge_length >= 0) || o.gauge_length > 1e5)
+      throw InputError("--gauge-length", 0, 0, "gauge length",
+                       "expected a length from 0 to 1e5 mm, found " + formatNumber(o.gauge_length));
+    setup.gauge_length = o.gauge_length;
+    setup.gauge_length_given = true;
+  }
+  machine.model.setup = setup;
+  return machine;
+}
+
+std::vector<std::string> setupWarnings(const MachineModel& model) {
+  std::vector<std::string> w;
+  const PartSetup& s = model.setup;
+  std::string missing;
+  if (!s.part_zero_given) missing += "part zero (0, 0, 0) in the table frame";
+  if (!s.part_rotation_given) missing += std::string(missing.empty() ? "" : ", ") + "part rotation 0 deg";
+  if (!s.gauge_length_given) missing += std::string(missing.empty() ? "" : ", ") + "gauge length 0 mm (the tool tip at the spindle gauge point)";
+  if (!missing.empty())
+    w.push_back("no set-up given for " + missing + ": the defaults were used (--setup, "
+                "--part-zero, --part-rotation-deg, --gauge-length)");
+  return w;
+}
+
+std::string machineErrorsStatement(const Machine& machine, bool* none) {
+  bool any = false;
+  for (int i = 0; i < machine.params.size(); ++i) any = any || machine.params[i] != 0.0;
+  *none = !any;
+  if (!any)
+    return "the machine file carries no errors (" +
+           std::string(machine.model.errors_source.empty() ? "nominal geometry"
+                                                           : "errors: " + machine.model.errors_source) +
+           "): the machine's share is zero by construction; give a measured or identified "
+           "machine file (tolver calibrate) to predict the machine's errors";
+  return "errors: " + (machine.model.errors_source.empty() ? std::string("given, source not stated")
+                                                           : machine.model.errors_source);
+}
+
+namespace {
+
+// Keeps the points of source lines first..last (and their parallel per-point data).
+void keepLines(ClProgram& p, const std::string& spec) {
+  const size_t dash = spec.find('-', 1);
+  const auto a = dash == std::string::npos ? std::nullopt : parseNumber(spec.substr(0, dash));
+  const auto b = dash == std::string::npos ? std::nullopt : parseNumber(spec.substr(dash + 1));
+  if (!a || !b || *a < 1 || *b < *a || *a != std::floor(*a) || *b != std::floor(*b))
+    throw InputError("--lines", 0, 0, "lines", "expected 'first-last', e.g. 11-578");
+  size_t k = 0;
+  std::vector<int> kept_index(p.path.size(), -1);  // old point -> new point
+  for (size_t i = 0; i < p.path.size(); ++i) {
+    if (p.path[i].line < *a || p.path[i].line > *b) continue;
+    kept_index[i] = static_cast<int>(k);
+    p.path[k] = p.path[i];
+    if (i < p.point_frame.size()) p.point_frame[k] = p.point_frame[i];
+    if (i < p.joints.size()) p.joints[k] = p.joints[i];
+    if (i < p.tcp.size()) p.tcp[k] = p.tcp[i];
+    ++k;
+  }
+  if (k == 0)
+    throw InputError(p.file, 0, 0, "--lines", "no tool position on lines " + spec);
+  // The statements own the kept points only (writers index the path through them).
+  for (AptStatement& st : p.statements) {
+    int first = -1, count = 0;
+    for (int i = st.first_point; st.point_count > 0 && i < st.first_point + st.point_count; ++i)
+      if (kept_index[i] >= 0) {
+        if (first < 0) first = kept_index[i];
+        ++count;
+      }
+    st.first_point = first;
+    st.point_count = count;
+  }
+  p.path.resize(k);
+  if (p.point_frame.size() > k) p.point_frame.resize(k);
+  if (p.joints.size() > k) p.joints.resize(k);
+  if (p.tcp.size() > k) p.tcp.resize(k);
+}
+
+bool hasGcodeExtension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".nc" || ext == ".ngc" || ext == ".tap" || ext == ".gcode" || ext == ".mpf" ||
+         ext == ".cnc" || ext == ".iso" || ext == ".eia";
+}
+
+// A CL without UNITS read as mm: scales it to inches (points, frames, cutter lengths).
+void scaleToInches(ClProgram& p) {
+  for (ClPoint& c : p.path) c.p_w *= 25.4;
+  for (ClFrame& f : p.frames) f.scale *= 25.4;
+  for (CutterSpec& c : p.cutters)
+    for (size_t k = 0; k < c.values.size(); ++k) {
+      const bool angle = c.source == "CUTTER" ? (k == 4 || k == 5) : (k == 3 || k == 4);
+      if (!angle) c.values[k] *= 25.4;
+    }
+  p.units = "INCH";
+}
+
+}  // namespace
+
+ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model) {
+  if (o.cl.empty() == o.nc.empty())
+    throw InputError(o.cl.empty() ? "--cl" : o.cl, 0, 0, "program",
+                     "give the program with --cl (CL data) or --nc (G-code), one of them");
+  const std::string path = o.nc.empty() ? o.cl : o.nc;
+  return parseProgram(readFile(path), path, o, model);
+}
+
+ClProgram parseProgram(const std::string& text, const std::string& path, const ProgramOptions& o,
+                       const MachineModel& model) {
+  const bool gcode = !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(text);
+  ClProgram program;
+  if (gcode) {
+    GcodeReadOptions go;
+    go.chordal_tolerance_mm = o.chordal_tolerance;
+    if (o.units == "inch") go.unit_mm = 25.4;
+    if (o.units == "mm") go.unit_mm = 1.0;
+    program = parseGcode(text, path, model, go);
+  } else {
+    AptReadOptions ro;
+    ro.chordal_tolerance_mm = o.chordal_tolerance;
+    program = parseApt(text, path, ro);
+    if (program.path.empty())
+      throw InputError(path, 0, 0, "GOTO", "the program has no tool positions");
+    if (o.units == "inch") {
+      if (program.units_declared && program.units != "INCH")
+        throw InputError(path, 0, 0, "UNITS",
+                         "--cl-units inch, but the file declares UNITS/MM");
+      if (!program.units_declared) scaleToInches(program);
+    }
+  }
+  if (!o.lines.empty()) keepLines(program, o.lines);
+  return program;
+}
+
+std::vector<std::string> unitWarnings(const ClProgram& program, const MachineModel& model,
+                                      const std::string& units_option) {
+  std::vector<std::string> w;
+  if (program.units_declared || !units_option.empty() || program.path.empty() ||
+      program.dialect == "G-code")  // the G-code reader says which default it used
+    return w;
+  Eigen::Vector3d lo = program.path[0].p_w, hi = lo;
+  for (const ClPoint& c : program.path) {
+    lo = lo.cwiseMin(c.p_w);
+    hi = hi.cwiseMax(c.p_w);
+  }
+  const double extent = (hi - lo).norm();
+  double travel = 0.0;
+  for (const Axis& a : model.axes)
+    if (!a.isRotary()) travel += (a.travel_max - a.travel_min) * (a.travel_max - a.travel_min);
+  travel = std::sqrt(travel);
+  double tool_d = 0.0;
+  if (!program.cutters.empty() && !program.cutters.back().values.empty())
+    tool_d = program.cutters.back().values[0];
+  const bool inch_fits = extent * 25.4 < travel;
+  const bool small_tool = tool_d > 0.0 && tool_d < 1.0;
+  const bool small_part = extent < 30.0;
+  char buf[400];
+  if (inch_fits && (small_tool || (small_part && tool_d < 3.0))) {
+    std::snprintf(buf, sizeof buf,
+                  "%s declares no units and looks like inches (extent %.3f, tool diameter %.3f, "
+                  "read as mm): use --cl-units inch if it is",
+                  program.file.c_str(), extent, tool_d);
+    w.push_back(buf);
+  } else {
+    std::snprintf(buf, sizeof buf, "%s declares no units: read as %s (extent %.1f mm%s)",
+                  program.file.c_str(), program.units == "INCH" ? "inches" : "mm", extent,
+                  inch_fits ? "; --cl-units inch if it is in inches" : "");
+    w.push_back(buf);
+  }
+  return w;
+}
+
+std::string describeUnreachable(const MachineModel& model, const PredictionResult& r) {
+  const PredictionFailure& f = r.failures.front();
+  std::string msg = f.message;
+  if (r.failed_points > 1) {
+    std::string per_axis;
+    for (size_t a = 0; a < r.failures_per_axis.size(); ++a) {
+      if (r.failures_per_axis[a] == 0) continue;
+      per_axis += (per_axis.empty() ? "" : ", ") +
+                  (a < model.axes.size() ? model.axes[a].name : std::string("orientation")) + " " +
+                  std::to_string(r.failures_per_axis[a]);
+    }
+    msg += "; " + std::to_string(r.failed_points) + " points fail (first axis to break: " +
+           per_axis + "): run 'tolver setup' to find a set-up that reaches the whole program";
+  }
+  return msg;
+}
+
+PredictionResult predictProgram(const Machine& machine, const ClProgram& program) {
+  PredictionResult r = predictToolPath(machine.model, machine.params, program.path, 20,
+                                       program.joints.empty() ? nullptr : &program.joints);
+  if (!r.ok())
+    throw InputError(program.file, r.failures.front().line, 0, "unreachable",
+                     describeUnreachable(machine.model, r));
+  return r;
+}
+
+std::vector<std::string> programNotes(const ClProgram& program) {
+  std::vector<std::string> w = program.notes;
+  // A coordinate system statement moves the points out of the file's own frame: say where.
+  for (const AptStatement& st : program.statements) {
+    if (st.major != "MSYS" && st.major != "CSYS" && st.major != "$$*CATIA0") continue;
+    // The frame in force at the first point after the statement (a CSYS that names only a tool
+    // plane leaves it at the identity).
+    size_t k = 0;
+    while (k < program.path.size() && program.path[k].line <= st.first_line) ++k;
+    if (k == program.path.size() || k >= program.point_frame.size()) continue;
+    {
+      const ClFrame& f = program.frames[program.point_frame[k]];
+      if (f.T.isApprox(Eigen::Isometry3d::Identity())) continue;
+      const Eigen::Vector3d o = f.scale * f.T.translation();
+      char buf[300];
+      std::snprintf(buf, sizeof buf,
+                    "%s at line %d applied: the points are in the CAM system's absolute frame, "
+                    "where that system's origin is (%.3f, %.3f, %.3f) mm; the set-up's part zero "
+                    "places the absolute frame's origin",
+                    st.major.c_str(), st.first_line, o.x(), o.y(), o.z());
+      w.push_back(buf);
+      return w;
+    }
+  }
+  if (program.unknown_count > 0) {
+    std::string names;
+    for (const auto& n : program.unknown_names) names += (names.empty() ? "" : ", ") + n;
+    w.push_back("skipped " + std::to_string(program.unknown_count) + " unknown statements (" +
+                names + ")");
+  }
+  return w;
+}
+
+void checkOutputDir(const std::string& path, const char* option) {
+  const auto dir = std::filesystem::path(path).parent_path();
+  if (!dir.empty() && !std::filesystem::is_directory(dir))
+    throw InputError(path, 0, 0, option, "directory " + dir.string() + " does not exist");
+}
+
+CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program,
+                                      PredictionResult& pred, bool absolute,
+                                      const std::vector<ProbedPoint>& probed) {
+  CalibratedPrediction out;
+  const std::vector<JointVector>* commanded = program.joints.empty() ? nullptr : &program.joints;
+  if (!probed.empty()) {
+    out.probed = true;
+    out.probe = fitProbedSetup(machine, probed);
+    pred = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
+    if (machine.identification.empty()) return out;
+    PredictionUncertainty pu(machine);
+    pu.setupModuloProbed(probed);
+    out.uncertainty.reserve(pred.points.size());
+    for (const PredictedPoint& p : pred.points) out.uncertainty.push_back(pu.at(p.q));
+    return out;
+  }
+  if (machine.identification.empty()) return out;
+  std::vector<JointVector> q;
+  std::vector<Eigen::Vector3d> d;
+  for (const PredictedPoint& p : pred.points) {
+    q.push_back(p.q);
+    d.push_back(p.deviation_w);
+  }
+  if (!absolute) {
+    out.measured_setup = applyMeasuredSetup(machine, q, d);
+    pred = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
+  }
+  PredictionUncertainty pu(machine);
+  if (!absolute) {
+    std::vector<JointVector> sub;
+    const size_t step = std::max<size_t>(1, q.size() / 2000);
+    for (size_t i = 0; i < q.size(); i += step) sub.push_back(q[i]);
+    pu.setupModulo(sub);
+  }
+  out.uncertainty.reserve(pred.points.size());
+  for (const PredictedPoint& p : pred.points) out.uncertainty.push_back(pu.at(p.q));
+  return out;
+}
+
+std::vector<ProbedPoint> loadProbed(const std::string& path, const MachineModel& model) {
+  if (path.empty()) return {};
+  return readProbeFile(path, model);
+}
+
+std::string describeProbedSetup(const std::string& path, const ProbedSetupFit& fit,
+                                const std::vector<ProbedPoint>& points,
+                                std::vector<std::string>* warnings) {
+  size_t worst = 0;
+  for (size_t i = 0; i < fit.residual.size(); ++i)
+    if (fit.residual[i] > fit.residual[worst]) worst = i;
+  char buf[640];
+  std::snprintf(buf, sizeof buf,
+                "part set-up fitted to %zu probed points (%s), %d of %d set-up values observed: "
+                "part moved (%+.2f, %+.2f, %+.2f) um, rotated (%+.1f, %+.1f, %+.1f) urad, spindle "
+                "offset (%+.2f, %+.2f, %+.2f) um; the points disagree with the file's set-up by "
+                "%.2f um RMS before, %.2f um after (max %.2f um, line %d); the cutter's length "
+                "relative to the probe is taken as preset",
+                points.size(), path.c_str(), fit.observed, fit.columns, fit.change[0] * 1e3,
+                fit.change[1] * 1e3, fit.change[2] * 1e3, fit.change[3] * 1e6, fit.change[4] * 1e6,
+                fit.change[5] * 1e6, fit.spindle_change[0] * 1e3, fit.spindle_change[1] * 1e3,
+                fit.spindle_change[2] * 1e3, fit.rms_before * 1e3, fit.rms * 1e3, fit.max * 1e3,
+                points[worst].line);
+  const std::string line = buf;
+  if (warnings) {
+    if (!fit.unobserved.empty()) {
+      std::string names;
+      for (const std::string& n : fit.unobserved) names += (names.empty() ? "" : ", ") + n;
+      warnings->push_back(path + ": the probed points do not determine the part's " + names +
+                          "; the set-up file's value is kept for it (probe along more directions)");
+    }
+    // Touches a rigid set-up cannot explain: a wrong row, a wrong frame or a units slip.
+    if (fit.max > 0.02) {
+      std::snprintf(buf, sizeof buf,
+                    "%s:%d: the fitted set-up leaves %.1f um at this point (RMS %.1f um): check "
+                    "its part point, joint values, frame and units",
+                    path.c_str(), points[worst].line, fit.max * 1e3, fit.rms * 1e3);
+      warnings->push_back(buf);
+    }
+  }
+  return line;
+}
+
+void makeReportDir(const std::string& dir, const char* option) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir, ec))
+    throw InputError(dir, 0, 0, option,
+                     "cannot create the directory" + (ec ? ": " + ec.message() : std::string()));
+}
+
+std::string replaceExtension(const std::string& path, const std::string& ext) {
+  std::filesystem::path p(path);
+  const std::filesystem::path original = p;
+  p.replace_extension(ext);
+  if (p == original) p += ".out" + ext;
+  return p.string();
+}
+
+}  // namespace tolver

@@ -1,0 +1,95 @@
+#pragma once
+// The inputs every command reads: the machine with its set-up, the part program, probed points,
+// and the prediction of the program on the machine (with the set-up a shop measures and the
+// prediction's uncertainty on a calibrated machine). No printing, no command-line parsing: the
+// options are plain values, in the units their names give (mm, deg).
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "core/model/machine_model.h"
+#include "core/path/prediction_uncertainty.h"
+#include "core/path/probed_setup.h"
+#include "core/path/tool_path_prediction.h"
+#include "io/program/apt_reader.h"
+
+namespace tolver {
+
+// Machine file plus the set-up options every command accepts.
+struct MachineOptions {
+  std::string machine;
+  std::string setup;
+  std::vector<double> part_zero;
+  double part_rotation_deg = NAN;
+  double gauge_length = NAN;
+};
+
+// Reads the machine file and applies the set-up file and options. Throws InputError.
+Machine loadMachine(const MachineOptions& o);
+// Warnings naming the set-up defaults used (values no file or option gave).
+std::vector<std::string> setupWarnings(const MachineModel& model);
+// What the machine file says of its errors; *none: it carries none (the machine's share is zero
+// by construction).
+std::string machineErrorsStatement(const Machine& machine, bool* none);
+
+// The program options every command that reads a part program accepts.
+struct ProgramOptions {
+  std::string cl, nc;
+  std::string units;  // "", "mm" or "inch"
+  double chordal_tolerance = 0.001;
+  std::string lines;  // "first-last": only the points of these source lines (a piece of a split)
+};
+// Reads the CL or G-code program (G-code: --nc, a G-code extension, or content that reads as
+// G-code). Throws InputError.
+ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model);
+// The same on text already read (path names it and chooses the dialect as above).
+ClProgram parseProgram(const std::string& text, const std::string& path, const ProgramOptions& o,
+                       const MachineModel& model);
+// When the program declares no units: what was assumed, and whether inches fit better.
+std::vector<std::string> unitWarnings(const ClProgram& program, const MachineModel& model,
+                                      const std::string& units_option);
+
+// The message for a prediction that failed: the first failing point, how many fail, and per
+// axis how many break it first.
+std::string describeUnreachable(const MachineModel& model, const PredictionResult& r);
+// The program predicted on the machine (its own commanded joints for G-code); a point the
+// machine cannot reach is an InputError naming its line (describeUnreachable).
+PredictionResult predictProgram(const Machine& machine, const ClProgram& program);
+// What the reader assumed or skipped, one line each.
+std::vector<std::string> programNotes(const ClProgram& program);
+
+// Throws InputError when the directory of `path` does not exist.
+void checkOutputDir(const std::string& path, const char* option);
+// A prediction on a calibrated machine (one whose file carries its calibration's covariance):
+// unless `absolute`, the set-up a shop measures (part probed, tool preset), which the calibration
+// cannot see, is fitted to the prediction and applied to the machine, and `pred` redone with it;
+// then the uncertainty of each point's prediction (modulo that set-up). Nothing for a machine
+// that was not calibrated.
+// With probed points (the set-up the shop measured, --probed), the part set-up is fitted to them
+// instead (fitProbedSetup, on any machine, calibrated or not), the tool taken as preset, and the
+// uncertainty is modulo that fit.
+struct CalibratedPrediction {
+  Eigen::VectorXd measured_setup;          // part x y z (mm), rotations (rad), tool x y z (mm)
+  std::vector<PoseUncertainty> uncertainty;  // per program point
+  bool probed = false;
+  ProbedSetupFit probe;                    // when probed
+};
+CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program,
+                                      PredictionResult& pred, bool absolute,
+                                      const std::vector<ProbedPoint>& probed = {});
+// The probed points of --probed FILE (none for an empty path).
+std::vector<ProbedPoint> loadProbed(const std::string& path, const MachineModel& model);
+// The console line for a probed set-up fit, and its warnings (unobserved directions, points the
+// fitted set-up does not explain).
+std::string describeProbedSetup(const std::string& path, const ProbedSetupFit& fit,
+                                const std::vector<ProbedPoint>& points,
+                                std::vector<std::string>* warnings);
+
+// Creates a report directory (and its parents); an unwritable place, a path below a regular
+// file or naming one is InputError (exit 2), never an internal error.
+void makeReportDir(const std::string& dir, const char* option = "--report-dir");
+
+// `path` with its extension replaced (or `suffix` appended when it has none).
+std::string replaceExtension(const std::string& path, const std::string& ext);
+
+}  // namespace tolver

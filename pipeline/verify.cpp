@@ -1,0 +1,521 @@
+// The verify pipeline: see pipeline/verify.h.
+#include "pipeline/verify.h"
+
+#include <Eigen/Geometry>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <string>
+
+#include "core/path/prediction_uncertainty.h"
+#include "core/path/tool_motion.h"
+#include "core/path/tool_path_prediction.h"
+#include "geometry/cutter.h"
+#include "geometry/nearest_point.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
+#include "io/machine/zone_file.h"
+#include "io/mesh/mesh_file.h"
+#include "io/program/apt_reader.h"
+#include "io/report/deviation_map.h"
+#include "io/report/offscreen_display.h"
+
+namespace tolver {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::mutex g_vtk_mutex;  // VTK rendering and writing are not thread-safe
+
+// A part file and a program whose sizes differ by the inch factor: one of them is in inches.
+void checkPartUnits(const VerifyInputs& o, const ClProgram& program, const TriangleMesh& mesh) {
+  if (mesh.vertices.empty() || program.path.empty()) return;
+  Eigen::Vector3d lo = mesh.vertices[0], hi = lo, plo = program.path[0].p_w, phi = plo;
+  for (const auto& v : mesh.vertices) lo = lo.cwiseMin(v), hi = hi.cwiseMax(v);
+  for (const auto& c : program.path) {
+    if (c.rapid) continue;
+    plo = plo.cwiseMin(c.p_w);
+    phi = phi.cwiseMax(c.p_w);
+  }
+  const double part = (hi - lo).norm(), prog = (phi - plo).norm();
+  if (!(part > 0.0) || !(prog > 0.0)) return;
+  const double ratio = prog / part;
+  char buf[400];
+  if (ratio > 12.0 && ratio < 60.0 && o.mesh_units.empty()) {
+    std::snprintf(buf, sizeof buf,
+                  "the part (diagonal %.3f mm as read) is %.1f times smaller than the program "
+                  "(%.1f mm): it looks like inches; give --mesh-units inch",
+                  part, ratio, prog);
+    throw InputError(o.part, 0, 0, "units", buf);
+  }
+  if (ratio < 1.0 / 12.0 && ratio > 1.0 / 60.0 && !program.units_declared && o.program.units.empty()) {
+    std::snprintf(buf, sizeof buf,
+                  "the program declares no units and is %.1f times smaller than the part "
+                  "(diagonal %.3f against %.1f mm): it looks like inches; give --cl-units inch",
+                  1.0 / ratio, prog, part);
+    throw InputError(program.file, 0, 0, "units", buf);
+  }
+}
+
+std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o) {
+  std::vector<ToleranceZone> zones;
+  if (!std::isnan(o.tolerance_mm)) {
+    // --tolerance is in mm: 30 meant as micrometres would accept gouges of tens of millimetres.
+    if (o.tolerance_mm > 1.0 && !o.tolerance_confirmed)
+      throw InputError("--tolerance", 0, 0, "tolerance",
+                       formatNumber(o.tolerance_mm) + " mm is not a plausible profile tolerance: "
+                       "--tolerance is in mm (" + formatNumber(o.tolerance_mm / 1000.0) +
+                       " for " + formatNumber(o.tolerance_mm) + " um); give --tolerance-units mm to "
+                       "confirm a tolerance above 1 mm");
+    if (!std::isnan(o.uz_mm) && !std::isnan(o.asme_u_mm))
+      throw InputError("--uz", 0, 0, "zone", "give either --uz (ISO) or --asme-u (ASME), not both");
+    try {
+      zones.push_back(!std::isnan(o.uz_mm)       ? isoUzZone(o.tolerance_mm, o.uz_mm)
+                      : !std::isnan(o.asme_u_mm) ? asmeUZone(o.tolerance_mm, o.asme_u_mm)
+                                              : bilateralZone(o.tolerance_mm));
+    } catch (const std::invalid_argument& e) {
+      throw InputError("--tolerance", 0, 0, "tolerance", e.what());
+    }
+  }
+  if (!o.zones_file.empty()) {
+    auto more = readZoneFile(o.zones_file);
+    zones.insert(zones.end(), more.begin(), more.end());
+  }
+  if (zones.empty())
+    throw InputError("--tolerance", 0, 0, "tolerance", "give --tolerance (mm) or --zones (file)");
+  return zones;
+}
+
+Cutter cutterFrom(const VerifyInputs& o, const ClProgram& program) {
+  Cutter c;
+  if (!o.cutter.empty()) {
+    std::vector<double> v = o.cutter;
+    if (!cutterFromApt("TLDATA", v, &c))
+      throw InputError("--cutter", 0, 0, "cutter", "expected d,r[,length,taper_deg] with 0 <= r <= d/2");
+    return c;
+  }
+  if (program.cutters.empty())
+    throw InputError(program.file, 0, 0, "CUTTER",
+                     "the program declares no cutter (CUTTER or TLDATA; G-code never does); give "
+                     "--cutter d,r");
+  const CutterSpec& s = program.cutters.back();
+  if (!cutterFromApt(s.source, s.values, &c))
+    throw InputError(program.file, s.line, 0, s.source, "the values do not describe a cutter");
+  return c;
+}
+
+std::string fmt(const char* f, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, v);
+  return buf;
+}
+
+// Renders the maps and the histogram; returns (caption, path) pairs.
+std::vector<std::pair<std::string, std::string>> renderImages(
+    int line_pass, const std::string& dir, const SurfaceSamples& s, const VerifyResult& r,
+    const std::vector<ToleranceZone>& zones, const std::vector<LineProfilePoint>& profile,
+    const std::string& title, std::vector<std::string>* notes, const std::vector<int>* cl_lines) {
+  std::vector<std::pair<std::string, std::string>> images;
+  std::string why;
+  if (!ensureDisplay(&why)) {
+    notes->push_back(why);
+    return images;
+  }
+  std::lock_guard<std::mutex> lock(g_vtk_mutex);
+  std::vector<Eigen::Vector3d> points(s.p_w);
+  DeviationMap map;
+  map.points = &points;
+  map.faces = &s.faces;
+  map.colours.resize(s.size());
+  for (size_t i = 0; i < s.size(); ++i) {
+    if (r.conformance[i] == Conformance::Unmachined) map.colours[i] = kUnmachinedColour;
+    else if (r.conformance[i] == Conformance::Unchecked) map.colours[i] = kUncheckedColour;
+    else map.colours[i] = deviationColour(r.total[i], zones[r.zone[i]].lower, zones[r.zone[i]].upper);
+  }
+  map.bar_lower = zones.front().lower;
+  map.bar_upper = zones.front().upper;
+  map.title = title;
+  // Callouts: the three worst regions (number, kind, value, where, CL line), or the largest
+  // deviation when in tolerance.
+  int worst = r.total_stats.max_sample;
+  if (r.total_stats.min_sample >= 0 &&
+      std::abs(r.total_stats.min) > std::abs(r.total_stats.max))
+    worst = r.total_stats.min_sample;
+  auto where = [](const Eigen::Vector3d& p) { return fmt("(%.1f, ", p.x()) + fmt("%.1f, ", p.y()) + fmt("%.1f)", p.z()); };
+  std::vector<MapView> views = {{"isometric", Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d::UnitZ(), false, {}},
+                                {"top", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitY(), false, {}}};
+  auto upFor = [](const Eigen::Vector3d& n) {
+    return std::abs(n.z()) > 0.9 ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitZ();
+  };
+  if (!r.regions.empty()) {
+    for (size_t k = 0; k < r.regions.size() && k < 3; ++k) {
+      const auto& g = r.regions[k];
+      const int line = g.worst_sample >= 0 && r.cl_index[g.worst_sample] >= 0 && cl_lines
+                           ? (*cl_lines)[r.cl_index[g.worst_sample]]
+                           : 0;
+      map.callouts.push_back({g.where_w, "R" + std::to_string(k + 1) + " " + conformanceName(g.kind) + " " +
+                                             fmt("%+.1f um", g.worst_deviation * 1e3) + "\n" + where(g.where_w) +
+                                             (line > 0 ? " line " + std::to_string(line) : std::string())});
+      // The views that show the worst regions: along each one's normal, the whole part.
+      views.push_back({k == 0 ? "worst" : "region" + std::to_string(k + 1), -g.normal_w, upFor(g.normal_w), true,
+                       g.where_w});
+    }
+  } else if (worst >= 0) {
+    map.callouts.push_back({s.p_w[worst], "largest " + fmt("%+.1f um", r.total[worst] * 1e3) + "\n" + where(s.p_w[worst])});
+    views.push_back({"worst", -s.n_w[worst], upFor(s.n_w[worst]), true, s.p_w[worst]});
+  }
+  for (const auto& v : views) {
+    const std::string path = (fs::path(dir) / ("map_" + v.name + ".png")).string();
+    renderDeviationMap(path, map, v);
+    images.push_back({"deviation map, " + (v.focus ? v.name + " (along the region's normal)" : v.name) + " view", path});
+  }
+  std::vector<double> dev, w;
+  for (size_t i = 0; i < s.size(); ++i)
+    if (r.machined[i] && r.zone[i] >= 0) {
+      dev.push_back(r.total[i]);
+      w.push_back(s.area[i]);
+    }
+  if (!dev.empty()) {
+    const std::string path = (fs::path(dir) / "histogram.png").string();
+    renderHistogram(path, dev, w, zones.front().lower, zones.front().upper,
+                    "total deviation (predicted swept - CAD), area-weighted");
+    images.push_back({"histogram of the total deviation", path});
+  }
+  if (!profile.empty()) {
+    std::vector<double> x, t, m;
+    for (const auto& p : profile) {
+      x.push_back(p.arc_length);
+      t.push_back(p.total);
+      m.push_back(p.machine);
+    }
+    const std::string path = (fs::path(dir) / "line_profile.png").string();
+    renderLineProfile(path, x, t, m, zones.front().lower, zones.front().upper,
+                      "line profile along pass " + std::to_string(line_pass));
+    images.push_back({"line profile along pass " + std::to_string(line_pass), path});
+  }
+  return images;
+}
+
+
+// Phase timings: the seconds since the previous lap, by name.
+class PhaseClock {
+ public:
+  explicit PhaseClock(std::vector<std::pair<std::string, double>>* timings)
+      : timings_(timings), lap_(std::chrono::steady_clock::now()) {}
+  void operator()(const char* what) {
+    const auto now = std::chrono::steady_clock::now();
+    timings_->push_back({what, std::chrono::duration<double>(now - lap_).count()});
+    lap_ = now;
+  }
+
+ private:
+  std::vector<std::pair<std::string, double>>* timings_;
+  std::chrono::steady_clock::time_point lap_;
+};
+
+// The program on the machine: joints and CL_predicted, the measured set-up and the uncertainty
+// on a calibrated machine, the nominal joints of a compensated program's original, and what the
+// planner should know about them.
+struct ProgramOnMachine {
+  Machine machine;
+  ClProgram program;
+  PredictionResult pred;
+  CalibratedPrediction cal;
+  std::vector<JointVector> q_nominal;  // --compensated-from: the original's joints
+  std::string setup_note;
+  std::vector<std::string> warnings;
+};
+
+// A compensated program: the machine runs its joints, the nominal is the original's path.
+void useOriginalAsNominal(const VerifyInputs& o, ProgramOnMachine& m) {
+  ProgramOptions po = o.program;
+  (po.nc.empty() ? po.cl : po.nc) = o.compensated_from;
+  const ClProgram original = loadProgram(po, m.machine.model);
+  if (original.path.size() != m.program.path.size())
+    throw InputError(o.compensated_from, 0, 0, "--compensated-from",
+                     "the original has " + std::to_string(original.path.size()) + " tool positions, the "
+                     "compensated program " + std::to_string(m.program.path.size()) +
+                     ": give the program compensate read");
+  const PredictionResult op = predictProgram(m.machine, original);
+  for (size_t i = 0; i < m.program.path.size(); ++i) {
+    m.program.path[i].p_w = original.path[i].p_w;
+    m.program.path[i].u_w = original.path[i].u_w;
+    m.q_nominal.push_back(op.points[i].q);
+  }
+}
+
+ProgramOnMachine predictOnMachine(const VerifyInputs& o) {
+  ProgramOnMachine m;
+  m.machine = loadMachine(o.machine);
+  m.program = loadProgram(o.program, m.machine.model);
+  // Joint values and CL_predicted (thesis 5.5.3); a posted program's own rotary solution.
+  m.pred = predictProgram(m.machine, m.program);
+  // A calibrated machine: after the set-up a shop measures (part probed, tool preset), which
+  // the calibration cannot see; and the uncertainty of each CL point's prediction.
+  const std::vector<ProbedPoint> probed = loadProbed(o.probed, m.machine.model);
+  m.cal = applyCalibration(m.machine, m.program, m.pred, o.absolute, probed);
+  std::vector<std::string> probe_warnings;
+  if (m.cal.probed)
+    m.setup_note = describeProbedSetup(o.probed, m.cal.probe, probed, &probe_warnings);
+  else if (!m.cal.uncertainty.empty())
+    m.setup_note = o.absolute
+                       ? "--absolute: the machine's share includes what probing the part and "
+                         "presetting the tool would take up, which the calibration cannot see"
+                       : "the machine's share is after the set-up a shop measures (the part probed, "
+                         "the tool preset): the ball-bar calibration cannot see either";
+  if (!o.compensated_from.empty()) useOriginalAsNominal(o, m);
+  const MachineModel& model = m.machine.model;
+  m.warnings = setupWarnings(model);
+  for (const std::string& w : unitWarnings(m.program, model, o.program.units)) m.warnings.push_back(w);
+  for (const std::string& w : programNotes(m.program)) m.warnings.push_back(m.program.file + ": " + w);
+  for (const std::string& w : probe_warnings) m.warnings.push_back(w);
+  bool no_errors = false;
+  const std::string errors = machineErrorsStatement(m.machine, &no_errors);
+  if (no_errors) m.warnings.push_back(errors);
+  for (const RotaryJump& j : findRotaryJumps(model, m.program.path, m.pred, 10.0 * M_PI / 180.0))
+    m.warnings.push_back(fmt("program risk: rotary step of %+.1f deg of ", j.step * 180.0 / M_PI) +
+                         model.axes[j.axis].name + " between cutting moves at line " + std::to_string(j.line));
+  return m;
+}
+
+// The part file read, placed in w, repaired, checked against the program's size, sampled.
+ImportedPart readPart(const VerifyInputs& o, const ClProgram& program) {
+  PartImportOptions io;
+  io.units = o.mesh_units;
+  if (!o.mesh_offset.empty()) io.w_T_file.translation() = Eigen::Vector3d(o.mesh_offset[0], o.mesh_offset[1], o.mesh_offset[2]);
+  if (!o.mesh_rotation_deg.empty()) {
+    const double k = M_PI / 180.0;
+    io.w_T_file.linear() = (Eigen::AngleAxisd(o.mesh_rotation_deg[2] * k, Eigen::Vector3d::UnitZ()) *
+                            Eigen::AngleAxisd(o.mesh_rotation_deg[1] * k, Eigen::Vector3d::UnitY()) *
+                            Eigen::AngleAxisd(o.mesh_rotation_deg[0] * k, Eigen::Vector3d::UnitX()))
+                               .toRotationMatrix();
+  }
+  io.repair.max_hole_perimeter = o.max_hole_mm;
+  ImportedPart part = readPartMesh(o.part, io);
+  checkPartUnits(o, program, part.mesh);
+  return part;
+}
+
+// The nominal and the predicted tool placements along the program, swept over the samples.
+void sweepPart(const ProgramOnMachine& m, const Cutter& cutter, const std::vector<ToleranceZone>& zones,
+               const MotionSampling& sampling, const SweepOptions& sweep, Verification& v, PhaseClock& phase,
+               const std::function<void(double)>& progress) {
+  const MachineModel& model = m.machine.model;
+  ForwardKinematics fk_nominal(model, Eigen::VectorXd::Zero(model.parameterCount()));
+  ForwardKinematics fk_actual(model, m.machine.params);
+  std::vector<JointVector> q(m.pred.points.size());
+  for (size_t i = 0; i < q.size(); ++i) q[i] = m.pred.points[i].q;
+  std::vector<ToolPlacement> nominal, actual;
+  if (m.q_nominal.empty())
+    samplePlacements(fk_nominal, fk_actual, m.program.path, q, sampling, &nominal, &actual);
+  else
+    samplePlacements(fk_nominal, fk_actual, m.program.path, m.q_nominal, q, sampling, &nominal, &actual);
+  v.report.placements = static_cast<int>(nominal.size());
+  phase("placements");
+  v.result = verifyPart(v.samples, cutter, nominal, actual, zones, sweep, [&](double f) {
+    if (progress) progress(f);
+  });
+  phase("swept_surfaces");
+}
+
+// The 95 % band of the machine's share at each verified sample (the prediction's uncertainty
+// at the nearest CL point, along the sample's normal), and the decision it allows: FAIL when
+// a sample is out of its zone by more than the band, UNDECIDED when a limit lies inside the
+// band of some sample, else PASS.
+void decideWithinBand(const std::vector<PoseUncertainty>& cl_unc, const ClProgram& program,
+                      const std::vector<ToleranceZone>& zones, Verification& v) {
+  VerifyReport& rep = v.report;
+  const SurfaceSamples& samples = v.samples;
+  const VerifyResult& result = v.result;
+  std::vector<Eigen::Vector3d> cl(program.path.size());
+  for (size_t i = 0; i < cl.size(); ++i) cl[i] = program.path[i].p_w;
+  const std::vector<int> nearest = nearestPointIndices(cl, samples.p_w);
+  const std::vector<int> zone_of = assignZones(samples, zones);
+  double worst_u = 0;
+  int definite_fail = 0, undecided = 0, undecided_at = -1;
+  rep.band95_um.assign(samples.size(), 0.0);
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const double u95 = 1.96 * PredictionUncertainty::along(cl_unc[nearest[i]], samples.n_w[i]);
+    rep.band95_um[i] = u95 * 1e3;
+    worst_u = std::max(worst_u, u95);
+    const Conformance c = result.conformance[i];
+    if (c == Conformance::Unchecked || c == Conformance::Unmachined || zone_of[i] < 0) continue;
+    const ToleranceZone& z = zones[zone_of[i]];
+    const double t = result.total[i];
+    const double beyond = std::max(t - z.upper, z.lower - t);  // > 0: outside the zone
+    if (beyond > u95) ++definite_fail;
+    else if (std::abs(beyond) <= u95) {
+      if (undecided++ == 0 || std::abs(beyond) < 1e-12) undecided_at = static_cast<int>(i);
+    }
+  }
+  rep.band95_max_um = worst_u * 1e3;
+  rep.undecided_samples = undecided;
+  if (definite_fail == 0 && undecided > 0) {
+    rep.undecided = true;
+    const int i = undecided_at;
+    char text[400];
+    std::snprintf(text, sizeof text,
+                  "UNDECIDED: %d samples lie within the prediction's 95 %% band of a zone limit; "
+                  "e.g. at (%.2f, %.2f, %.2f) the total is %+.2f um, the machine's share %+.2f "
+                  "+- %.2f um here",
+                  undecided, samples.p_w[i].x(), samples.p_w[i].y(), samples.p_w[i].z(),
+                  result.total[i] * 1e3, result.machine[i] * 1e3, rep.band95_um[i]);
+    rep.undecided_text = text;
+  }
+}
+
+// Coverage: a hole in the checked surface is area nobody verified.
+void reportHoles(bool allow_open, Verification& v) {
+  VerifyReport& rep = v.report;
+  const VerifyResult& result = v.result;
+  if (!rep.has_repair || rep.repair.holes.empty()) return;
+  const MeshHole& h = rep.repair.holes.front();
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "%zu holes in the part's surface are not covered by its mesh: %.1f mm2 not verified "
+                "(the first, %.1f mm2, at (%.2f, %.2f, %.2f)); holes with a border shorter than %.2f mm "
+                "are filled (--max-hole)%s",
+                rep.repair.holes.size(), rep.repair.hole_area, h.area, h.centre_w.x(), h.centre_w.y(),
+                h.centre_w.z(), rep.repair.max_hole_perimeter,
+                allow_open ? "; --allow-open: not part of the verdict" : "; --allow-open accepts them");
+  rep.incomplete_text = std::string("INCOMPLETE: ") + text;
+  rep.incomplete = !allow_open && result.pass;
+  if (allow_open || !result.pass) rep.notes.push_back(text);
+}
+
+}  // namespace
+
+std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::string& name,
+                                              const std::function<void(double)>& progress) {
+  auto v = std::make_unique<Verification>();
+  v->started = std::chrono::steady_clock::now();
+  VerifyReport& rep = v->report;
+  PhaseClock phase(&rep.timings);
+  const std::vector<ToleranceZone> zones = zonesFrom(o);
+  const ProgramOnMachine m = predictOnMachine(o);
+  const ClProgram& program = m.program;
+  const Cutter cutter = cutterFrom(o, program);
+  phase("read_and_predict");
+  double t_min = INFINITY;
+  for (const auto& z : zones) t_min = std::min(t_min, z.tolerance);
+  const double r_eff = cutter.corner_radius > 0 ? cutter.corner_radius : 0.5 * cutter.diameter;
+  MotionSampling sampling;
+  sampling.step = std::isnan(o.step_mm) ? std::clamp(std::sqrt(0.8 * r_eff * t_min), 0.005, 1.0) : o.step_mm;
+  sampling.reach = cutter.effectiveLength();
+  SweepOptions sweep;
+  sweep.excess_range = std::isnan(o.excess_range_mm) ? std::max(0.1, 5.0 * t_min) : o.excess_range_mm;
+  sweep.gouge_range = std::isnan(o.gouge_range_mm) ? std::max(0.1, 5.0 * t_min) : o.gouge_range_mm;
+
+  rep.name = name;
+  rep.machine_name = m.machine.model.name;
+  rep.machine_file = o.machine.machine;
+  rep.program_file = program.file;
+  rep.notes = m.warnings;
+  rep.cutter = cutter.describe() + ", length " + fmt("%.4g", cutter.effectiveLength()) + " mm" +
+               (cutter.length > 0 ? "" : " (assumed: 3 D)");
+  rep.cl_points = static_cast<int>(program.path.size());
+  for (const auto& p : program.path) rep.cl_lines.push_back(p.line);
+  rep.zones = zones;
+  rep.step_mm = sampling.step;
+  v->machine_file = o.machine.machine;
+  v->program_dialect = program.dialect;
+  v->banded = !m.cal.uncertainty.empty();
+  if (o.part.empty()) {
+    rep.mode = "cl-only";
+    std::vector<ClPoint> predicted = program.path;
+    for (size_t i = 0; i < predicted.size(); ++i) {
+      predicted[i].p_w = m.pred.points[i].p_pred_w;
+      predicted[i].u_w = m.pred.points[i].u_pred_w;
+    }
+    clOnlyDeviation(program.path, predicted, zones, &v->samples, &v->result);
+    rep.notes.push_back("CL-only mode: no part model; the surfaces are built through the CL points "
+                        "(thesis 5.5.4-5.5.5) and the deviation is the machine's alone");
+  } else {
+    const ImportedPart part = readPart(o, program);
+    rep.has_repair = true;
+    rep.repair = part.repair;
+    rep.part_file = o.part;
+    phase("read_part");
+    v->samples = sampleSurface(part.mesh, o.spacing_mm);
+    rep.spacing_mm = o.spacing_mm;
+    phase("sample_surface");
+    sweepPart(m, cutter, zones, sampling, sweep, *v, phase, progress);
+  }
+  rep.samples = &v->samples;
+  rep.result = &v->result;
+  if (v->banded && v->samples.size() > 0) {
+    if (!m.setup_note.empty()) rep.notes.push_back(m.setup_note);
+    decideWithinBand(m.cal.uncertainty, program, zones, *v);
+  }
+  if (o.line_pass > 0) {
+    const auto passes = clPasses(program.path);
+    if (o.line_pass > static_cast<int>(passes.size()))
+      throw InputError("--line-pass", 0, 0, "line pass",
+                       "the program has " + std::to_string(passes.size()) + " passes, not " +
+                           std::to_string(o.line_pass));
+    rep.line_pass = o.line_pass;
+    rep.line_profile = lineProfile(v->samples, v->result, passes[o.line_pass - 1]);
+  }
+  reportHoles(o.allow_open, *v);
+  return v;
+}
+
+std::string writeVerification(Verification& v, const std::string& report_dir_path, bool images) {
+  // Written as a whole into a staging directory, swapped in at the end (a killed run leaves the
+  // previous report; a concurrent run on the same directory is refused).
+  ReportDirectory report_dir(report_dir_path);
+  const fs::path dir(report_dir.staging());
+  VerifyReport& r = v.report;
+  const SurfaceSamples& samples = v.samples;
+  const VerifyResult& result = v.result;
+  r.samples = &samples;
+  r.result = &result;
+  auto lap = std::chrono::steady_clock::now();
+  auto phase = [&](const char* what) {
+    const auto now = std::chrono::steady_clock::now();
+    r.timings.push_back({what, std::chrono::duration<double>(now - lap).count()});
+    lap = now;
+  };
+  writeFileAtomically((dir / "deviations.csv").string(), formatDeviationsCsv(r));
+  {
+    std::vector<Eigen::Vector3d> nominal_swept(samples.size()), predicted_swept(samples.size());
+    std::vector<double> total_um(samples.size()), machine_um(samples.size()), program_um(samples.size()),
+        state(samples.size());
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const bool cut = result.machined[i];
+      predicted_swept[i] = samples.p_w[i] + (cut ? result.total[i] : 0.0) * samples.n_w[i];
+      nominal_swept[i] = samples.p_w[i] + (cut ? result.program[i] : 0.0) * samples.n_w[i];
+      total_um[i] = result.total[i] * 1e3;
+      machine_um[i] = result.machine[i] * 1e3;
+      program_um[i] = result.program[i] * 1e3;
+      state[i] = static_cast<double>(result.conformance[i]);
+    }
+    writePlyWithScalar((dir / "swept_predicted.ply").string(), predicted_swept, samples.faces, total_um,
+                       "deviation_um");
+    writePlyWithScalar((dir / "swept_nominal.ply").string(), nominal_swept, samples.faces, program_um,
+                       "deviation_um");
+    std::lock_guard<std::mutex> lock(g_vtk_mutex);
+    writeVtpWithScalars((dir / "swept_predicted.vtp").string(), predicted_swept, samples.faces,
+                        {{"total_um", &total_um}, {"machine_um", &machine_um}, {"program_um", &program_um},
+                         {"state", &state}});
+    writeVtpWithScalars((dir / "swept_nominal.vtp").string(), nominal_swept, samples.faces,
+                        {{"program_um", &program_um}});
+  }
+  phase("write_surfaces");
+  const std::string title = verdictName(r) + "  " + r.name +
+                            ": total deviation (predicted swept - CAD)";
+  if (images)
+    r.images = renderImages(r.line_pass, dir.string(), samples, result, r.zones, r.line_profile, title, &r.notes,
+                            &r.cl_lines);
+  phase("images");
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - v.started).count();
+  writeFileAtomically((dir / "report.json").string(), formatVerifyJson(r));
+  writeFileAtomically((dir / "report.html").string(), formatVerifyHtml(r));
+  report_dir.commit();
+  return (fs::path(report_dir.final()) / "report.html").string();
+}
+
+}  // namespace tolver

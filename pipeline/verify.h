@@ -1,0 +1,65 @@
+#pragma once
+// The verify pipeline (thesis 5.5.4-5.5.6, by swept surfaces; see geometry/verification.h) as
+// library functions: will this program on this machine make this part within its profile
+// tolerance? runVerification reads the inputs and computes; writeVerification writes the report
+// directory as a whole. `tolver verify` parses options into VerifyInputs and prints.
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "geometry/verification.h"
+#include "io/report/verify_report.h"
+#include "pipeline/inputs.h"
+
+namespace tolver {
+
+struct VerifyInputs {
+  MachineOptions machine;
+  ProgramOptions program;
+  std::string part;        // part model; empty: CL-only mode
+  std::string zones_file;  // zones per region (CSV)
+  std::string mesh_units;  // "", "mm", "inch", "m"
+  std::vector<double> mesh_offset;        // placement of the part file in w, mm (x, y, z)
+  std::vector<double> mesh_rotation_deg;  // about x, then y, then z of w, deg
+  double tolerance_mm = NAN;               // profile tolerance all over (zone width t)
+  bool tolerance_confirmed = false;        // a tolerance above 1 mm was meant (else refused)
+  double uz_mm = NAN, asme_u_mm = NAN;     // ISO 1101 UZ offset, or ASME Y14.5 U
+  double spacing_mm = 0.5;                 // surface sample spacing
+  double step_mm = NAN, excess_range_mm = NAN, gouge_range_mm = NAN;  // NAN: from t and the cutter
+  double max_hole_mm = -1;                 // largest mesh hole perimeter filled; < 0: default
+  std::vector<double> cutter;              // d, r[, length, taper_deg]; empty: the program's
+  int line_pass = 0;                       // 1-based pass for a line profile, 0 none
+  bool absolute = false;                   // calibrated machine: no measured set-up
+  std::string probed;                      // probed points (CSV)
+  std::string compensated_from;            // the original of a compensated program
+  bool allow_open = false;                 // holes in the checked surface do not make INCOMPLETE
+};
+
+// What a verification computed. Not copyable: `report` points at `samples` and `result`.
+struct Verification {
+  VerifyReport report;
+  SurfaceSamples samples;
+  VerifyResult result;
+  std::string machine_file, program_dialect;
+  bool banded = false;  // a calibrated machine: report.band95_* hold the prediction's band
+  std::chrono::steady_clock::time_point started;
+
+  Verification() = default;
+  Verification(const Verification&) = delete;
+  Verification& operator=(const Verification&) = delete;
+};
+
+// Reads the inputs, predicts the program, samples the part, sweeps the nominal and predicted
+// tool and classifies every sample. `progress` gets the sweep's fraction done. Throws InputError.
+std::unique_ptr<Verification> runVerification(const VerifyInputs& in, const std::string& name,
+                                              const std::function<void(double)>& progress = {});
+
+// Writes deviations.csv, swept_{predicted,nominal}.{ply,vtp}, the images (unless !images, or
+// no display: then a note), report.json and report.html into `report_dir`, staged and swapped in
+// as a whole (ReportDirectory). Returns the path of report.html. Throws InputError.
+std::string writeVerification(Verification& v, const std::string& report_dir, bool images);
+
+}  // namespace tolver

@@ -1,0 +1,79 @@
+// The verify pipeline as a library (pipeline/verify.h), without the binary: the machine's share
+// on a machine without errors, the report written true of the result in memory, bad input.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "io/common/io_error.h"
+#include "pipeline/verify.h"
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+using test::sourcePath;
+
+class VerifyPipeline : public test::TempDirTest {
+ protected:
+  static VerifyInputs sculptured(const std::string& machine) {
+    VerifyInputs in;
+    in.machine.machine = sourcePath(machine);
+    in.machine.setup = sourcePath("samples/matsuura_setup.txt");
+    in.program.cl = sourcePath("samples/sculptured_finish.apt");
+    in.part = sourcePath("samples/sculptured_part.obj");
+    in.tolerance_mm = 0.03;
+    in.spacing_mm = 1.5;
+    return in;
+  }
+};
+
+// A machine without errors puts the tool where the program says: the machine's share is zero at
+// every sample and the total is the program's own deviation (nominal swept surface - CAD).
+TEST_F(VerifyPipeline, AMachineWithoutErrorsHasNoShare) {
+  const auto v = runVerification(sculptured("resources/machines/matsuura_mc760vx.xml"), "nominal");
+  ASSERT_GT(v->samples.size(), 1000u);
+  int machined = 0;
+  for (size_t i = 0; i < v->samples.size(); ++i) {
+    if (!v->result.machined[i]) continue;
+    ++machined;
+    EXPECT_EQ(v->result.machine[i], 0.0) << i;
+    EXPECT_EQ(v->result.total[i], v->result.program[i]) << i;
+  }
+  EXPECT_GT(machined, 500);
+  EXPECT_EQ(v->result.machine_stats.rms, 0.0);
+}
+
+// The measured machine moves the surface; the report directory written holds the figures of
+// the result in memory (verdict, extremes, sample count), and report.html names the verdict.
+TEST_F(VerifyPipeline, TheWrittenReportIsTrueOfTheResult) {
+  const auto v = runVerification(sculptured("samples/machines/matsuura_mc760vx_measured.xml"), "measured");
+  EXPECT_GT(v->result.machine_stats.rms, 1e-4);  // above 0.1 um: the machine's errors show
+  const std::string html = writeVerification(*v, path("report"), false);
+  EXPECT_EQ(html, path("report") + "/report.html");
+  std::ifstream in(path("report") + "/report.json");
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["verdict"], verdictName(v->report) == "PASS" ? "pass" : "fail");
+  EXPECT_NEAR(j["deviation"]["total"]["max_um"].get<double>(), v->result.total_stats.max * 1e3, 1e-3);
+  EXPECT_NEAR(j["deviation"]["total"]["min_um"].get<double>(), v->result.total_stats.min * 1e3, 1e-3);
+  EXPECT_EQ(j["deviation"]["total"]["samples"].get<int>(), v->result.total_stats.samples);
+  EXPECT_TRUE(std::filesystem::exists(path("report") + "/deviations.csv"));
+  EXPECT_FALSE(std::filesystem::exists(path("report") + "/map_isometric.png"));  // no images asked
+}
+
+// Bad input is an InputError naming the file; nothing is written before the inputs are read.
+TEST_F(VerifyPipeline, AMissingPartIsAnInputErrorAndWritesNothing) {
+  VerifyInputs in = sculptured("samples/machines/matsuura_mc760vx_measured.xml");
+  in.part = path("missing.stl");
+  try {
+    runVerification(in, "missing");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("missing.stl"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(path("report")));
+}
+
+}  // namespace
+}  // namespace tolver
