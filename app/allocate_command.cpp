@@ -7,6 +7,7 @@
 
 #include "app/commands.h"
 #include "app/common.h"
+#include "pipeline/allocate.h"
 #include "core/allocation/tolerance_allocation.h"
 #include "io/report/allocation_report.h"
 #include "io/common/io_error.h"
@@ -16,47 +17,23 @@ namespace tolver::app {
 namespace {
 
 struct AllocateOptions {
-  MachineOptions machine;
-  std::string tolerances, report_dir;
-  std::vector<double> limits{0.015, 0.015, 0.010};
-  std::vector<double> cost{3, 4, 5, 2};
+  AllocateInputs in;
+  std::string report_dir;
   std::string combination = "worst";
   std::string loss_distribution = "uniform";
-  double loss_weight = 1.0;
-  double lower_factor = NAN, upper_factor = NAN;
-  int grid = 3, rotary_grid = 5, groups = 4;
-  AllocationOptions opt;
 };
 
-void runAllocate(const AllocateOptions& o, int* exit_code) {
-  const Machine machine = loadMachine(o.machine);
-  const MachineModel& m = machine.model;
-  std::vector<ToleranceTerm> terms = readToleranceFile(o.tolerances, m);
-  for (auto& t : terms) {
-    if (!std::isnan(o.lower_factor)) t.lower = o.lower_factor * t.standard;
-    if (!std::isnan(o.upper_factor)) t.upper = o.upper_factor * t.standard;
-    if (t.lower > t.upper) throw InputError(o.tolerances, 0, 0, "bounds", t.name + ": lower bound above upper bound");
-  }
-  if (o.limits.size() != 3 || !(o.limits[0] > 0 && o.limits[1] > 0 && o.limits[2] > 0))
-    throw InputError("--limits", 0, 0, "limits", "expected three positive values dx,dy,dz in mm");
-  AllocationModel a;
-  a.limits = Eigen::Vector3d(o.limits[0], o.limits[1], o.limits[2]);
-  a.h_p = o.cost[0];
-  a.h_a = o.cost[1];
-  a.h_d = o.cost[2];
-  a.r = o.cost[3];
-  a.rss = o.combination == "rss";
-  a.loss_weight = o.loss_weight;
-  a.loss_normal = o.loss_distribution == "normal";
-  const AccuracyModel acc = buildAccuracyModel(m, terms, workspaceGrid(m, o.grid, o.rotary_grid));
-  const CorrelationAnalysis corr = correlateTerms(acc, o.groups);
-  const AllocationResult r = allocateTolerances(m, terms, a, acc, corr, o.opt);
-  ReportDirectory report_dir(o.report_dir);  // written as a whole, swapped in at the end
-  writeAllocationReport(report_dir.staging(), m, terms, a, r,
-                        {o.machine.machine, o.tolerances, m.setup.gauge_length,
-                         static_cast<int>(acc.poses.size()), o.opt});
-  report_dir.commit();
-
+void runAllocate(AllocateOptions& o, int* exit_code) {
+  o.in.rss = o.combination == "rss";
+  o.in.loss_normal = o.loss_distribution == "normal";
+  const AllocationRun run = runAllocation(o.in);
+  writeAllocation(run, o.in, o.report_dir);
+  const MachineModel& m = run.machine.model;
+  const std::vector<ToleranceTerm>& terms = run.terms;
+  const AllocationModel& a = run.model;
+  const AllocationResult& r = run.result;
+  const AccuracyModel& acc = run.accuracy;
+  const CorrelationAnalysis& corr = run.correlation;
   std::printf("tolver allocate: %s, %zu terms, %zu workspace poses, tool gauge length %.1f mm\n",
               m.name.c_str(), terms.size(), acc.poses.size(), m.setup.gauge_length);
   std::printf("  limits     |dx| %.4f  |dy| %.4f  |dz| %.4f mm, errors combined %s\n", a.limits[0],
@@ -74,20 +51,10 @@ void runAllocate(const AllocateOptions& o, int* exit_code) {
   std::printf("  standard   cost %.5g, worst |dx| %.4f |dy| %.4f |dz| %.4f mm%s\n", r.standard.cost,
               r.standard.worst_exact[0], r.standard.worst_exact[1], r.standard.worst_exact[2],
               r.standard_feasible ? "" : "  (breaks the limits)");
-  {
-    Eigen::VectorXd Tref(terms.size());
-    bool complete = true;
-    for (size_t i = 0; i < terms.size(); ++i) {
-      Tref[i] = terms[i].reference;
-      complete &= !std::isnan(Tref[i]);
-    }
-    if (complete) {
-      const Eigen::Vector3d w = verifyAccuracy(m, terms, acc, Tref, a.rss);
-      std::printf("  reference  cost %.5g, worst |dx| %.4f |dy| %.4f |dz| %.4f mm%s\n",
-                  manufacturingCost(m, terms, Tref, a), w[0], w[1], w[2],
-                  (w.array() <= a.limits.array()).all() ? "" : "  (breaks the limits)");
-    }
-  }
+  if (run.reference_complete)
+    std::printf("  reference  cost %.5g, worst |dx| %.4f |dy| %.4f |dz| %.4f mm%s\n", run.reference_cost,
+                run.reference_worst[0], run.reference_worst[1], run.reference_worst[2],
+                (run.reference_worst.array() <= a.limits.array()).all() ? "" : "  (breaks the limits)");
   std::printf("  groups    ");
   for (const auto& g : corr.members) {
     std::printf(" {");
@@ -135,29 +102,29 @@ void registerAllocate(CLI::App& app, int* exit_code) {
       "allocate",
       "Allocate geometric-error tolerances at least cost under an accuracy limit (NSGA-II over "
       "cost + quality loss and tolerance spread).");
-  addMachineOptions(cmd, o->machine, "machine file (XML)");
-  cmd->add_option("--tolerances", o->tolerances, "tolerance file (CSV)")->required();
+  addMachineOptions(cmd, o->in.machine, "machine file (XML)");
+  cmd->add_option("--tolerances", o->in.tolerances, "tolerance file (CSV)")->required();
   cmd->add_option("--report-dir", o->report_dir, "directory for the reports")->required();
-  cmd->add_option("--limits", o->limits, "allowed |dx|,|dy|,|dz| of the tool tip, mm (default 0.015,0.015,0.010)")
+  cmd->add_option("--limits", o->in.limits_mm, "allowed |dx|,|dy|,|dz| of the tool tip, mm (default 0.015,0.015,0.010)")
       ->delimiter(',')
       ->expected(3);
-  cmd->add_option("--cost", o->cost, "h_p,h_a,h_d,r of the cost model (default 3,4,5,2)")->delimiter(',')->expected(4);
+  cmd->add_option("--cost", o->in.cost, "h_p,h_a,h_d,r of the cost model (default 3,4,5,2)")->delimiter(',')->expected(4);
   cmd->add_option("--combination", o->combination, "worst (default) or rss")->check(CLI::IsMember({"worst", "rss"}));
-  cmd->add_option("--loss-weight", o->loss_weight, "weight of the quality loss in M1 (default 1)")
+  cmd->add_option("--loss-weight", o->in.loss_weight, "weight of the quality loss in M1 (default 1)")
       ->check(CLI::NonNegativeNumber);
   cmd->add_option("--loss-distribution", o->loss_distribution, "uniform (default) or normal (t = 3 sigma)")
       ->check(CLI::IsMember({"uniform", "normal"}));
-  cmd->add_option("--lower-factor", o->lower_factor, "lower bounds = factor x standard (default: the file's, or 1)")
+  cmd->add_option("--lower-factor", o->in.lower_factor, "lower bounds = factor x standard (default: the file's, or 1)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--upper-factor", o->upper_factor, "upper bounds = factor x standard (default: the file's, or 3)")
+  cmd->add_option("--upper-factor", o->in.upper_factor, "upper bounds = factor x standard (default: the file's, or 3)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--grid", o->grid, "values per linear axis in the workspace grid (default 3)")->check(CLI::Range(1, 20));
-  cmd->add_option("--rotary-grid", o->rotary_grid, "values per rotary axis (default 5)")->check(CLI::Range(1, 72));
-  cmd->add_option("--groups", o->groups, "correlation groups (default 4)")->check(CLI::Range(1, 100));
-  cmd->add_option("--population", o->opt.population, "NSGA-II population, a multiple of 4 (default 100)")
+  cmd->add_option("--grid", o->in.grid, "values per linear axis in the workspace grid (default 3)")->check(CLI::Range(1, 20));
+  cmd->add_option("--rotary-grid", o->in.rotary_grid, "values per rotary axis (default 5)")->check(CLI::Range(1, 72));
+  cmd->add_option("--groups", o->in.groups, "correlation groups (default 4)")->check(CLI::Range(1, 100));
+  cmd->add_option("--population", o->in.opt.population, "NSGA-II population, a multiple of 4 (default 100)")
       ->check(CLI::Range(8, 100000));
-  cmd->add_option("--generations", o->opt.generations, "NSGA-II generations (default 250)")->check(CLI::Range(1, 100000));
-  cmd->add_option("--seed", o->opt.seed, "random seed (default 1)");
+  cmd->add_option("--generations", o->in.opt.generations, "NSGA-II generations (default 250)")->check(CLI::Range(1, 100000));
+  cmd->add_option("--seed", o->in.opt.seed, "random seed (default 1)");
   cmd->callback([o, exit_code] { runAllocate(*o, exit_code); });
 }
 

@@ -10,6 +10,7 @@
 #include "app/commands.h"
 #include "app/ballbar_support.h"
 #include "app/common.h"
+#include "pipeline/calibrate.h"
 #include "core/calibration/ballbar_plan.h"
 #include "core/calibration/calibration.h"
 #include "core/kinematics/inverse_kinematics.h"
@@ -259,102 +260,61 @@ void runSimulate(const SimulateOptions& o) {
 }
 
 struct CalibrateOptions {
-  MachineOptions machine;
-  std::string readings, output, report, heldout, balls;
-  std::string prior = "auto";
-  bool strict = false, keep_outliers = false;
+  CalibrateInputs in;
+  std::string output, report, balls;
 };
 
-void runCalibrate(const CalibrateOptions& o, int* exit_code) {
-  const Machine machine = loadMachine(o.machine);
-  const BallbarFile f = readBallbarFile(o.readings, machine.model, true);
-  const BallbarTest heldout = loadHeldout(o.heldout, machine.model, f.test, o.readings);
-  checkOutputDir(o.output, "-o");
-  const std::string report = o.report.empty() ? replaceExtension(o.output, ".json") : o.report;
-  const std::string balls_file = o.balls.empty() ? ballsPathFor(o.output) : o.balls;
-  checkOutputDir(report, "--report");
-  checkOutputDir(balls_file, "--balls");
-  for (const std::string& w : f.warnings)
-    std::fprintf(stderr, "tolver: warning: %s: %s\n", o.readings.c_str(), w.c_str());
-  const std::vector<int> unknowns = defaultCalibrationUnknowns(machine.model);
-  CalibrationOptions opt;
-  opt.strict = o.strict;
-  // The prior towards zero (regularisation where the readings are weak).
-  double prior_um = 0, prior_urad = 0;
-  const bool prior_auto = o.prior == "auto";
-  if (!prior_auto && o.prior != "none") {
-    const auto cells = splitCsvLine(o.prior);
-    const auto a = cells.size() == 2 ? parseNumber(cells[0]) : std::nullopt;
-    const auto b = cells.size() == 2 ? parseNumber(cells[1]) : std::nullopt;
-    if (!a || !b || !(*a > 0) || !(*b > 0) || *a > 1e4 || *b > 1e5)
-      throw InputError("--prior", 0, 0, "prior",
-                       "expected auto, none, or 'um,urad' (the standard deviation of a linear and "
-                       "an angular error coefficient on this machine's class, e.g. 3,10)");
-    prior_um = *a;
-    prior_urad = *b;
+// The largest identified errors, by significance, with what each stands for (the minimal-
+// complete set folds the parameters it leaves out into the ones it keeps).
+void printLargestErrors(const CalibrationRun& run) {
+  const MachineModel& m = run.machine.model;
+  const CalibrationResult& r = run.fit;
+  std::vector<size_t> order(r.identified.size());
+  for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+    return std::abs(r.params[r.identified[a]]) / r.uncertainty[a] >
+           std::abs(r.params[r.identified[b]]) / r.uncertainty[b];
+  });
+  auto termsOf = [&](int p) -> const std::vector<AbsorbedTerm>* {
+    const auto it = std::find(run.unknowns.begin(), run.unknowns.end(), p);
+    return it == run.unknowns.end() ? nullptr : &run.absorbed[it - run.unknowns.begin()];
+  };
+  std::printf("  largest identified errors (value +- standard uncertainty):\n");
+  for (size_t k = 0; k < std::min<size_t>(10, order.size()); ++k) {
+    const int p = r.identified[order[k]];
+    const double s = m.parameters[p].angular ? 1e6 : 1e3;
+    std::printf("    %-10s %-18s %10.3f +- %.3f %s\n", m.parameters[p].iso_code.c_str(),
+                m.parameters[p].thesis_name.c_str(), r.params[p] * s, r.uncertainty[order[k]] * s,
+                m.parameters[p].angular ? "urad" : "um");
+    const std::vector<AbsorbedTerm>* t = termsOf(p);
+    if (t && !t->empty()) std::printf("               stands for %s\n", standsFor(m, p, *t).c_str());
   }
-  const RobustCalibration rc =
-      o.keep_outliers ? RobustCalibration{} : calibrateWithoutGross(machine.model, machine.params,
-                                                                    f.test, unknowns, opt);
-  CalibrationResult r = rc.fit;
-  BallbarTest used = rc.test;
-  if (o.keep_outliers) {
-    r = calibrate(machine.model, machine.params, f.test, unknowns, opt);
-    used = f.test;
-  }
-  // Regularised refit: the prior's scale from the readings' evidence (auto), or as given.
-  std::string prior_text = "none";
-  if ((prior_auto || prior_um > 0) && (r.status == CalibrationStatus::Converged ||
-                                       r.status == CalibrationStatus::NotConverged)) {
-    CalibrationOptions ro = opt;
-    if (prior_auto) {
-      double k = 0;
-      ro = evidencePrior(machine.model, used, r, opt, &k);
-      prior_um = k * kPriorUnitLinear * 1e3;
-      prior_urad = k * kPriorUnitAngular * 1e6;
-    } else {
-      ro.prior_linear = prior_um * 1e-3;
-      ro.prior_angular = prior_urad * 1e-6;
-      ro.prior_noise = std::max(r.residual_sigma, 1e-12);
-    }
-    const CalibrationResult rr = calibrate(machine.model, machine.params, used, unknowns, ro);
-    if (rr.status == CalibrationStatus::Converged) {
-      r = rr;
-      char buf[160];
-      std::snprintf(buf, sizeof buf, "%.3g um per linear, %.3g urad per angular coefficient%s",
-                    prior_um, prior_urad, prior_auto ? " (chosen by the readings' evidence)" : "");
-      prior_text = buf;
-    }
-  }
-  if (r.status == CalibrationStatus::Unobservable || r.status == CalibrationStatus::NoData) {
-    std::string names;
-    for (int p : r.held) names += " " + machine.model.parameters[p].iso_code;
-    throw InputError(o.readings, 0, 0, "calibrate", r.message + (names.empty() ? "" : ":" + names));
-  }
-  const auto& m = machine.model;
-  std::printf("tolver calibrate: %s from %zu readings in %zu set-ups\n", m.name.c_str(),
-              f.test.readings.size(), f.test.setups.size());
+}
+
+void printCalibration(const CalibrationRun& run, const CalibrateOptions& o) {
+  const MachineModel& m = run.machine.model;
+  const CalibrationResult& r = run.fit;
+  const BallbarTest& test = run.file.test;
+  std::printf("tolver calibrate: %s from %zu readings in %zu set-ups\n", m.name.c_str(), test.readings.size(),
+              test.setups.size());
   std::printf("  unknowns   %d (%zu machine parameters + 6 ball positions per set-up)\n", r.unknowns,
               r.identified.size());
-  for (const std::string& w : testDesignWarnings(machine.model, f.test, r.unknowns))
-    std::fprintf(stderr, "tolver: warning: %s: %s\n", o.readings.c_str(), w.c_str());
+  for (const std::string& w : testDesignWarnings(m, test, r.unknowns))
+    std::fprintf(stderr, "tolver: warning: %s: %s\n", o.in.readings.c_str(), w.c_str());
   std::printf("  solution   %s after %d iterations; rank %d, condition %.3g (column-scaled)\n",
               r.message.c_str(), r.iterations, r.rank, r.condition);
-  if (prior_text == "none")
+  if (run.prior_text == "none")
     std::printf("  prior      none: the plain least-squares fit (beyond the calibrated ranges its "
                 "polynomials extrapolate freely)\n");
   else
     std::printf("  prior      %s: values the readings pin down weakly are drawn towards zero, so "
                 "that predictions beyond the calibrated ranges are not worse than a perfect "
                 "machine's\n",
-                prior_text.c_str());
-  printGross(o.readings, f.test, o.keep_outliers
-                                     ? grossReadings(machine.model, f.test, r)
-                                     : rc.removed,
-             o.keep_outliers, rc.with_all, r, rc.limit_reached);
+                run.prior_text.c_str());
+  printGross(o.in.readings, test, run.gross, o.in.keep_outliers, run.robust.with_all, r,
+             run.robust.limit_reached);
   std::printf("  residual   RMS %.3f um, max %.3f um, sigma %.3f um (the %zu readings fitted)\n",
-              r.rms_residual * 1e3, r.max_residual * 1e3, r.residual_sigma * 1e3,
-              used.readings.size());
+              r.rms_residual * 1e3, r.max_residual * 1e3, r.residual_sigma * 1e3, run.used.readings.size());
   if (!r.held.empty()) {
     std::string names;
     for (int p : r.held) names += " " + m.parameters[p].iso_code;
@@ -367,84 +327,32 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
               "tip is relative to the spindle (the ball positions absorb both): predict, verify and "
               "compensate apply the set-up a shop measures (give its probed points with --probed; "
               "without them, the set-up that best fits the program), the tool preset\n");
-  // The largest identified errors, by significance.
-  std::vector<size_t> order(r.identified.size());
-  for (size_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-    return std::abs(r.params[r.identified[a]]) / r.uncertainty[a] >
-           std::abs(r.params[r.identified[b]]) / r.uncertainty[b];
-  });
-  // What each identified parameter stands for: the minimal-complete set folds the parameters
-  // it leaves out into the ones it keeps.
-  const std::vector<std::vector<AbsorbedTerm>> absorbed = calibrationAbsorbed(m, unknowns);
-  auto termsOf = [&](int p) -> const std::vector<AbsorbedTerm>* {
-    const auto it = std::find(unknowns.begin(), unknowns.end(), p);
-    return it == unknowns.end() ? nullptr : &absorbed[it - unknowns.begin()];
-  };
-  std::printf("  largest identified errors (value +- standard uncertainty):\n");
-  for (size_t k = 0; k < std::min<size_t>(10, order.size()); ++k) {
-    const int p = r.identified[order[k]];
-    const double s = m.parameters[p].angular ? 1e6 : 1e3;
-    std::printf("    %-10s %-18s %10.3f +- %.3f %s\n", m.parameters[p].iso_code.c_str(),
-                m.parameters[p].thesis_name.c_str(), r.params[p] * s, r.uncertainty[order[k]] * s,
-                m.parameters[p].angular ? "urad" : "um");
-    const std::vector<AbsorbedTerm>* t = termsOf(p);
-    if (t && !t->empty())
-      std::printf("               stands for %s\n", standsFor(m, p, *t).c_str());
-  }
-  // Held-out readings: the prior machine with nominal balls, then the identified one.
-  HeldoutFigures ho;
-  if (!heldout.readings.empty()) {
-    const std::vector<BallErrors> nominal(f.test.setups.size());
-    ho.before = residualStats(
-        ballbarResiduals(ForwardKinematics(m, machine.params), heldout, nominal));
-    ho.after = residualStats(ballbarResiduals(ForwardKinematics(m, r.params), heldout, r.ball_errors));
-    ho.file = o.heldout;
+  printLargestErrors(run);
+  const HeldoutFigures& ho = run.heldout_figures;
+  if (!run.heldout.readings.empty()) {
     std::printf("  held-out   %d readings (%s): RMS %.3f -> %.3f um, max %.3f -> %.3f um "
                 "(the prior machine with nominal balls -> the identified one)\n",
-                ho.before.readings, o.heldout.c_str(), ho.before.rms * 1e3, ho.after.rms * 1e3,
+                ho.before.readings, o.in.heldout.c_str(), ho.before.rms * 1e3, ho.after.rms * 1e3,
                 ho.before.max * 1e3, ho.after.max * 1e3);
-    heldoutWarning(o.heldout, ho.after, r.rms_residual);
+    heldoutWarning(o.in.heldout, ho.after, r.rms_residual);
   }
-  Machine identified = machine;
-  identified.params = r.params;
-  identified.model.errors_source = "identified";
-  identified.identification =
-      identificationUncertainty(r, used, static_cast<int>(m.axes.size()));
+}
+
+void runCalibrate(const CalibrateOptions& o, int* exit_code) {
+  const CalibrationOutputs out = calibrationOutputs(o.output, o.balls, o.report);
+  const CalibrationRun run = runCalibration(o.in);
+  for (const std::string& w : run.file.warnings)
+    std::fprintf(stderr, "tolver: warning: %s: %s\n", o.in.readings.c_str(), w.c_str());
+  printCalibration(run, o);
   // The machine, its ball positions and the report as a set: all three or none.
-  OutputSet outputs;
-  const std::string xml_tmp = outputs.add(
-      o.output, formatMachineXml(identified, "identified by tolver calibrate from " + o.readings +
-                                                 " (" + r.message + "); ball positions in " +
-                                                 balls_file));
-  const std::string balls_tmp = outputs.add(
-      balls_file, formatBallPositionsCsv(f.test, r.ball_errors, &r.ball_uncertainty,
-                                         {"identified ball positions of " + o.readings +
-                                          " by tolver calibrate (machine " + o.output + ")"}));
-  // What the written files predict, read back as the next command will.
-  const WrittenCheck check = checkWrittenFiles(xml_tmp, balls_tmp, used, heldout);
-  std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um",
-              o.output.c_str(), balls_file.c_str(), check.fit.rms * 1e3);
-  if (check.heldout.readings > 0)
-    std::printf(", the held-out ones at %.3f um", check.heldout.rms * 1e3);
+  const WrittenCheck check = writeCalibration(run, o.in, out);
+  std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um", out.machine.c_str(),
+              out.balls.c_str(), check.fit.rms * 1e3);
+  if (check.heldout.readings > 0) std::printf(", the held-out ones at %.3f um", check.heldout.rms * 1e3);
   std::printf("\n");
-  CalibrationReportInputs in;
-  in.machine_file = o.machine.machine;
-  in.readings_file = o.readings;
-  in.output_file = o.output;
-  in.readings = static_cast<int>(f.test.readings.size());
-  in.balls_file = balls_file;
-  in.heldout = ho;
-  in.unknowns = unknowns;
-  in.absorbed = absorbed;
-  in.written = check;
-  for (const GrossReading& g : rc.removed)
-    in.removed.push_back({f.test.readings[g.index].line, g.residual, g.studentized});
-  outputs.add(report, formatCalibrationJson(m, used, r, in));
-  outputs.commit();
-  std::printf("  wrote      %s (identified machine), %s (ball positions), %s (report)\n",
-              o.output.c_str(), balls_file.c_str(), report.c_str());
-  *exit_code = r.status == CalibrationStatus::Converged ? 0 : 1;
+  std::printf("  wrote      %s (identified machine), %s (ball positions), %s (report)\n", out.machine.c_str(),
+              out.balls.c_str(), out.report.c_str());
+  *exit_code = run.fit.status == CalibrationStatus::Converged ? 0 : 1;
 }
 
 }  // namespace
@@ -524,20 +432,20 @@ void registerBallbar(CLI::App& app, int* exit_code) {
         "calibrate",
         "Identify the machine's errors from ball-bar readings; writes the identified machine "
         "file and a report with uncertainties.");
-    addMachineOptions(cmd, o->machine, "machine file (XML): topology and prior values");
-    cmd->add_option("--readings", o->readings, "ball-bar readings (CSV)")->required();
+    addMachineOptions(cmd, o->in.machine, "machine file (XML): topology and prior values");
+    cmd->add_option("--readings", o->in.readings, "ball-bar readings (CSV)")->required();
     cmd->add_option("-o,--output", o->output, "identified machine file to write (XML)")->required();
     cmd->add_option("--report", o->report, "report to write (JSON; default: the output path with .json)");
-    cmd->add_option("--heldout", o->heldout,
+    cmd->add_option("--heldout", o->in.heldout,
                     "held-out readings (CSV) of the same set-ups, not fitted: RMS before and after");
     cmd->add_option("--balls", o->balls,
                     "identified ball positions to write (CSV; default: the output path with "
                     "_balls.csv)");
-    cmd->add_option("--prior", o->prior,
+    cmd->add_option("--prior", o->in.prior,
                     "regularisation towards zero: auto (default: its scale from the readings' "
                     "evidence), none, or 'um,urad' per linear and angular coefficient");
-    cmd->add_flag("--strict", o->strict, "refuse when some parameters cannot be identified");
-    cmd->add_flag("--keep-outliers", o->keep_outliers,
+    cmd->add_flag("--strict", o->in.strict, "refuse when some parameters cannot be identified");
+    cmd->add_flag("--keep-outliers", o->in.keep_outliers,
                   "fit every reading (gross readings are still named)");
     cmd->callback([o, exit_code] { runCalibrate(*o, exit_code); });
   }

@@ -10,14 +10,6 @@
 
 namespace tolver::app {
 
-BallbarTest loadHeldout(const std::string& file, const MachineModel& model, const BallbarTest& fit,
-                        const std::string& fit_file) {
-  if (file.empty()) return {};
-  BallbarFile h = readBallbarFile(file, model, true);
-  alignHeldout(h.test, fit, file, fit_file);
-  return h.test;
-}
-
 void heldoutWarning(const std::string& file, const ResidualStats& after, double fit_rms) {
   if (after.readings > 0 && after.rms > 3.0 * fit_rms && after.rms > 1e-3)
     std::fprintf(stderr,
@@ -25,11 +17,6 @@ void heldoutWarning(const std::string& file, const ResidualStats& after, double 
                  "RMS %.3f um, %.0f times its fit (%.3f um): were they measured on the same "
                  "set-ups (ball positions untouched), in the same machine state?\n",
                  file.c_str(), after.rms * 1e3, after.rms / fit_rms, fit_rms * 1e3);
-}
-
-std::string ballsPathFor(const std::string& machine_output) {
-  const std::filesystem::path p(machine_output);
-  return (p.parent_path() / (p.stem().string() + "_balls.csv")).string();
 }
 
 std::vector<std::string> testDesignWarnings(const MachineModel& model, const BallbarTest& test,

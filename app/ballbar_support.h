@@ -7,20 +7,13 @@
 #include "core/calibration/ballbar.h"
 #include "core/calibration/calibration.h"
 #include "core/model/machine_model.h"
+#include "pipeline/calibrate.h"
 
 namespace tolver::app {
-
-// The held-out readings of `file`, aligned to the fit's set-ups (an empty test when file is
-// empty). Exit 2 (InputError) for an empty file, a set-up the fit lacks, a pose the fit measured.
-BallbarTest loadHeldout(const std::string& file, const MachineModel& model, const BallbarTest& fit,
-                        const std::string& fit_file);
 
 // A warning when the identified model predicts the held-out readings much worse than it fits
 // its own (more than 3 times the fit's RMS and above 1 um): not the same set-ups or machine state.
 void heldoutWarning(const std::string& heldout_file, const ResidualStats& after, double fit_rms);
-
-// "out/m.xml" -> "out/m_balls.csv": the identified ball positions beside the machine file.
-std::string ballsPathFor(const std::string& machine_output);
 
 // Too few readings for the unknowns (fewer than 3 per unknown), time correlated with a joint
 // (|r| > 0.5: a drift and an error along that axis cannot be told apart). Also prints the

@@ -1,0 +1,158 @@
+// The diagnose pipeline: see pipeline/diagnose.h.
+#include "pipeline/diagnose.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "core/model/effects.h"
+#include "core/path/tool_path_prediction.h"
+#include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
+#include "io/program/apt_reader.h"
+#include "io/program/setup_file.h"
+#include "pipeline/calibrate.h"
+
+namespace tolver {
+namespace {
+
+PredictionResult predictOrThrow(const Machine& m, const ClProgram& program, const std::string& file) {
+  PredictionResult r = predictToolPath(m.model, m.params, program.path);
+  if (!r.ok()) throw InputError(file, r.failures.front().line, 0, "unreachable", r.failures.front().message);
+  return r;
+}
+
+// The part program's predicted error on the base machine and on the augmented one.
+ProgramComparison compareProgram(const std::string& cl, const Machine& before, const Machine& after) {
+  const ClProgram program = readAptFile(cl, AptReadOptions{});
+  if (program.path.empty()) throw InputError(cl, 0, 0, "GOTO", "the program has no tool positions");
+  const PredictionResult a = predictOrThrow(before, program, cl);
+  const PredictionResult b = predictOrThrow(after, program, cl);
+  ProgramComparison c;
+  c.cl_file = cl;
+  c.before = a.summary;
+  c.after = b.summary;
+  double sum2 = 0;
+  for (size_t i = 0; i < program.path.size(); ++i) {
+    const double d = (b.points[i].p_pred_w - a.points[i].p_pred_w).norm();
+    sum2 += d * d;
+    if (d > c.change_max) {
+      c.change_max = d;
+      c.change_max_line = program.path[i].line;
+    }
+  }
+  c.change_rms = std::sqrt(sum2 / program.path.size());
+  return c;
+}
+
+DiagnosisOptions diagnosisOptions(const DiagnoseInputs& in) {
+  DiagnosisOptions opt;
+  opt.alpha = in.alpha;
+  opt.max_effects = in.max_effects;
+  opt.blocks_per_setup = in.blocks_per_setup;
+  for (const std::string& t : in.types) {
+    const EffectTraits* tr = findEffectType(t);
+    if (!tr) throw InputError("--types", 0, 0, "type", "unknown effect type '" + t + "'");
+    opt.types.push_back(tr->type);
+  }
+  return opt;
+}
+
+}  // namespace
+
+DiagnosisOutputs diagnosisOutputs(const std::string& machine, const std::string& balls,
+                                  const std::string& report_dir) {
+  DiagnosisOutputs out{machine, balls.empty() ? ballsPathFor(machine) : balls, report_dir};
+  checkOutputDir(out.balls, "--balls");
+  checkOutputDir(out.machine, "-o");
+  return out;
+}
+
+DiagnosisRun runDiagnosis(const DiagnoseInputs& in, const std::function<void(int, int)>& progress) {
+  DiagnosisRun run;
+  run.started = std::chrono::steady_clock::now();
+  run.machine = loadMachine(in.machine);
+  const MachineModel& model = run.machine.model;
+  if (!model.effects.empty())
+    throw InputError(in.machine.machine, 0, 0, "effect",
+                     "the machine already has effects; diagnose starts from a base model "
+                     "(link and motion errors only)");
+  run.file = readBallbarFile(in.readings, model, true);
+  run.heldout = loadHeldout(in.heldout, model, run.file.test, in.readings);
+  if (!in.cl.empty() && !std::filesystem::exists(in.cl)) throw InputError(in.cl, 0, 0, "--cl", "no such file");
+  DiagnosisOptions opt = diagnosisOptions(in);
+  // Gross readings first: the base fit without them is what the diagnosis starts from.
+  opt.base_unknowns = defaultCalibrationUnknowns(model);
+  if (!run.heldout.readings.empty()) opt.heldout = &run.heldout;
+  if (!in.keep_outliers) {
+    run.robust = calibrateWithoutGross(model, run.machine.params, run.file.test, opt.base_unknowns);
+    run.gross = run.robust.removed;
+  } else {
+    run.robust.test = run.file.test;
+    run.robust.with_all = calibrate(model, run.machine.params, run.file.test, opt.base_unknowns);
+    run.robust.fit = run.robust.with_all;
+    run.gross = grossReadings(model, run.file.test, run.robust.with_all);
+  }
+  run.result = diagnose(run.machine, run.used(), opt, progress);
+  const DiagnosisResult& r = run.result;
+  if (!r.ok) throw InputError(in.readings, 0, 0, "diagnose", r.message);
+  if (r.base_fit.status != CalibrationStatus::Converged) {
+    char msg[200];
+    std::snprintf(msg, sizeof msg,
+                  "the base calibration did not converge (residual RMS %.3g um): do the machine "
+                  "file and its set-up match the test?",
+                  r.base_fit.rms_residual * 1e3);
+    throw InputError(in.readings, 0, 0, "calibrate", msg);
+  }
+  if (!in.cl.empty()) {
+    Machine before = run.machine, after = r.machine;
+    before.params = r.base_fit.params;
+    if (!in.cl_setup.empty()) {
+      before.model.setup = readSetupFile(in.cl_setup);
+      after.model.setup = before.model.setup;
+    }
+    run.program = std::make_unique<ProgramComparison>(compareProgram(in.cl, before, after));
+  }
+  return run;
+}
+
+DiagnosisWritten writeDiagnosis(const DiagnosisRun& run, const DiagnoseInputs& in, const DiagnosisOutputs& out) {
+  const DiagnosisResult& r = run.result;
+  const BallbarTest& used = run.used();
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - run.started).count();
+  DiagnosisReportInputs rin{in.machine.machine, in.readings, out.machine, run.program.get(), seconds};
+  rin.balls_file = out.balls;
+  rin.heldout_file = in.heldout;
+  for (const GrossReading& g : run.robust.removed)
+    rin.removed.push_back({run.file.test.readings[g.index].line, g.residual, g.studentized});
+  // The report directory is staged and swapped in at the end (a concurrent run on it is refused),
+  // taken before anything is written; the machine and ball files are renamed in after it.
+  ReportDirectory report_dir(out.report_dir);
+  const std::filesystem::path staging(report_dir.staging());
+  Machine augmented = r.machine;
+  augmented.model.errors_source = "identified";
+  augmented.identification =
+      identificationUncertainty(r.final_fit, used, static_cast<int>(augmented.model.axes.size()));
+  OutputSet files;
+  const std::string xml_tmp =
+      files.add(out.machine, formatMachineXml(augmented, "augmented by tolver diagnose from " + in.readings + " (" +
+                                                             r.message + "); ball positions in " + out.balls));
+  const std::string balls_tmp =
+      files.add(out.balls, formatBallPositionsCsv(used, r.final_fit.ball_errors, &r.final_fit.ball_uncertainty,
+                                                  {"identified ball positions of " + in.readings +
+                                                   " by tolver diagnose (machine " + out.machine + ")"}));
+  // What the written files predict, read back as the next command will: the report states it.
+  rin.written = checkWrittenFiles(xml_tmp, balls_tmp, used, run.heldout);
+  const std::string html = writeDiagnosisHtml(report_dir.staging(), run.machine.model, used, r, rin);
+  writeFileAtomically((staging / "report.json").string(), formatDiagnosisJson(run.machine.model, used, r, rin));
+  writeFileAtomically((staging / "report.html").string(), html);
+  report_dir.commit();
+  files.commit();
+  DiagnosisWritten w;
+  w.check = rin.written;
+  w.json = (std::filesystem::path(report_dir.final()) / "report.json").string();
+  w.html = (std::filesystem::path(report_dir.final()) / "report.html").string();
+  return w;
+}
+
+}  // namespace tolver

@@ -1,0 +1,63 @@
+#pragma once
+// The diagnose pipeline as library functions: after a ball-bar calibration, find what the model
+// failed to explain, trace it to an effect the model lacks, add it (core/diagnosis), and write
+// the augmented machine, its ball positions and the report directory as a set, read back.
+// `tolver diagnose` parses and prints.
+#include <chrono>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/calibration/calibration.h"
+#include "core/diagnosis/diagnosis.h"
+#include "io/machine/ballbar_file.h"
+#include "io/report/diagnosis_report.h"
+#include "pipeline/inputs.h"
+
+namespace tolver {
+
+struct DiagnoseInputs {
+  MachineOptions machine;         // the base model: link and motion errors, no effects
+  std::string readings;           // ball-bar readings (CSV)
+  std::string heldout;            // held-out readings on the same set-ups, or empty
+  std::string cl, cl_setup;       // a part program (APT) to predict before and after, its set-up
+  std::vector<std::string> types; // effect types to try (empty: all)
+  double alpha = 1e-3;            // family-wise significance level per round
+  int max_effects = 4;
+  int blocks_per_setup = 6;       // cross-validation blocks
+  bool keep_outliers = false;
+};
+
+struct DiagnosisOutputs {
+  std::string machine, balls, report_dir;
+};
+// The outputs' paths (balls beside the machine file unless given), checked before any work.
+DiagnosisOutputs diagnosisOutputs(const std::string& machine, const std::string& balls,
+                                  const std::string& report_dir);
+
+struct DiagnosisRun {
+  Machine machine;                          // the base machine as read
+  BallbarFile file;                         // the readings as read, with the reader's warnings
+  BallbarTest heldout;
+  RobustCalibration robust;                 // the base fit with and without the gross readings
+  std::vector<GrossReading> gross;          // found (removed, or kept with keep_outliers)
+  DiagnosisResult result;
+  std::unique_ptr<ProgramComparison> program;  // with a part program
+  std::chrono::steady_clock::time_point started;
+  const BallbarTest& used() const { return robust.test; }  // the readings fitted
+};
+
+// Reads the inputs, removes gross readings, diagnoses (progress: candidates scored of the
+// round's total). A failed diagnosis or a base fit that does not converge is an InputError.
+DiagnosisRun runDiagnosis(const DiagnoseInputs& in, const std::function<void(int, int)>& progress = {});
+
+struct DiagnosisWritten {
+  WrittenCheck check;       // what the written machine and ball files predict, read back
+  std::string json, html;   // the report's final paths
+};
+// Writes the augmented machine, the ball positions and the report directory (report.json,
+// report.html, plots) as a set: all or none.
+DiagnosisWritten writeDiagnosis(const DiagnosisRun& run, const DiagnoseInputs& in, const DiagnosisOutputs& out);
+
+}  // namespace tolver
