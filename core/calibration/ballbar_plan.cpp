@@ -99,10 +99,8 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
   for (const auto& [s, k] : index) candidates.readings.push_back(pool[s][k]);
   Eigen::MatrixXd rows =
       identificationJacobian(fk, candidates, std::vector<BallErrors>(nsetups), unknowns);
-  Eigen::VectorXd scale = rows.colwise().norm().transpose();
-  for (int c = 0; c < n; ++c)
-    if (scale[c] == 0) scale[c] = 1;
-  rows = rows * scale.cwiseInverse().asDiagonal();
+  Eigen::VectorXd scale;
+  rows = scaleColumns(rows, &scale);
 
   // 3. Greedy choice, set-ups in turn. D-optimal: the candidate with the largest
   //    x^T M^-1 x (M = eps I + sum of chosen x x^T), M^-1 kept by Sherman-Morrison.
@@ -293,10 +291,8 @@ std::vector<double> expectedTipUncertainty(const MachineModel& model, const std:
   const ForwardKinematics fk(model, m.params);
   const Eigen::MatrixXd J =
       identificationJacobian(fk, plan, std::vector<BallErrors>(plan.setups.size()), unknowns);
-  Eigen::VectorXd scale = J.colwise().norm().transpose();
-  for (Eigen::Index c = 0; c < scale.size(); ++c)
-    if (scale[c] == 0) scale[c] = 1;
-  const Eigen::MatrixXd Js = J * scale.cwiseInverse().asDiagonal();
+  Eigen::VectorXd scale;
+  const Eigen::MatrixXd Js = scaleColumns(J, &scale);
   const Eigen::MatrixXd cov_s = (Js.transpose() * Js).completeOrthogonalDecomposition().pseudoInverse();
   const int np = static_cast<int>(unknowns.size());
   const Eigen::VectorXd d = scale.head(np).cwiseInverse();

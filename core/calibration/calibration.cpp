@@ -118,17 +118,12 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
   Eigen::VectorXd ra;
   for (int it = 0; it < opt.max_iterations; ++it) {
     augmented(J, r, &Ja, &ra);
-    scale = Ja.colwise().norm().transpose();
-    for (int c = 0; c < n; ++c)
-      if (scale[c] == 0) scale[c] = 1;
-    Eigen::HouseholderQR<Eigen::MatrixXd> qr(Ja * scale.cwiseInverse().asDiagonal());
+    Eigen::HouseholderQR<Eigen::MatrixXd> qr(scaleColumns(Ja, &scale));
     const Eigen::MatrixXd R = qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
     const Eigen::VectorXd Qtr = (qr.householderQ().transpose() * ra).head(n);
     svd.compute(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
     const Eigen::VectorXd& sv = svd.singularValues();
-    res.rank = 0;
-    for (int k = 0; k < sv.size(); ++k)
-      if (sv[k] > kRankTolerance * sv[0]) ++res.rank;
+    res.rank = numericalRank(sv);
     res.condition = sv[0] / sv[res.rank - 1];
     Eigen::VectorXd inv = Eigen::VectorXd::Zero(sv.size());
     for (int k = 0; k < res.rank; ++k) inv[k] = 1.0 / sv[k];
@@ -209,15 +204,10 @@ std::vector<GrossReading> grossReadings(const MachineModel& model, const Ballbar
   if (m == 0 || fit.residuals.size() != m) return out;
   const ForwardKinematics fk(model, fit.params);
   Eigen::VectorXd r;
-  Eigen::MatrixXd J = identificationJacobian(fk, test, fit.ball_errors, fit.identified, &r);
-  for (int c = 0; c < J.cols(); ++c) {
-    const double n = J.col(c).norm();
-    if (n > 0) J.col(c) /= n;
-  }
+  const Eigen::MatrixXd J =
+      scaleColumns(identificationJacobian(fk, test, fit.ball_errors, fit.identified, &r));
   const Eigen::BDCSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinU);
-  const Eigen::VectorXd& sv = svd.singularValues();
-  int rank = 0;
-  while (rank < sv.size() && sv[rank] > 1e-9 * sv[0]) ++rank;
+  const int rank = numericalRank(svd.singularValues());
   if (m - rank < 2) return out;  // no redundancy: nothing can be inconsistent
   const double s = std::sqrt(r.squaredNorm() / (m - rank));
   if (!(s > 0)) return out;

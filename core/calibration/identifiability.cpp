@@ -12,67 +12,13 @@
 namespace tolver {
 namespace {
 
-Eigen::MatrixXd scaleColumns(const Eigen::MatrixXd& J) {
-  Eigen::MatrixXd S = J;
-  const Eigen::VectorXd norms = columnScales(J);
-  for (int c = 0; c < S.cols(); ++c) {
-    if (norms[c] > 0) S.col(c) /= norms[c];
-    else S.col(c).setZero();
-  }
-  return S;
-}
-
-SvdSummary summarise(const Eigen::MatrixXd& S, int rows) {
-  SvdSummary out;
-  out.rows = rows;
-  out.cols = static_cast<int>(S.cols());
-  if (S.cols() == 0) return out;
-  Eigen::BDCSVD<Eigen::MatrixXd> svd(S);
-  out.singular_values = svd.singularValues();
-  const double smax = out.singular_values.size() ? out.singular_values[0] : 0.0;
-  for (int i = 0; i < out.singular_values.size(); ++i)
-    if (out.singular_values[i] > kRankTolerance * smax) ++out.rank;
-  out.condition = out.rank < out.cols
-                      ? std::numeric_limits<double>::infinity()
-                      : smax / out.singular_values[out.singular_values.size() - 1];
-  return out;
-}
-
-// The upper-triangular factor of a column-scaled J: same singular values as J for any subset
-// of its columns, at a fraction of the size.
-Eigen::MatrixXd compress(const Eigen::MatrixXd& S) {
-  if (S.rows() <= S.cols()) return S;
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr(S);
-  return qr.matrixQR().topRows(S.cols()).triangularView<Eigen::Upper>();
-}
-
 Eigen::MatrixXd selectCols(const Eigen::MatrixXd& R, const std::vector<int>& idx) {
   Eigen::MatrixXd out(R.rows(), idx.size());
   for (size_t i = 0; i < idx.size(); ++i) out.col(i) = R.col(idx[i]);
   return out;
 }
 
-double unscaledCondition(const Eigen::MatrixXd& J) {
-  if (J.cols() == 0) return 0.0;
-  const Eigen::VectorXd sv = Eigen::BDCSVD<Eigen::MatrixXd>(compress(J)).singularValues();
-  return sv[sv.size() - 1] > 0 ? sv[0] / sv[sv.size() - 1] : std::numeric_limits<double>::infinity();
-}
-
 }  // namespace
-
-Eigen::VectorXd columnScales(const Eigen::MatrixXd& J) {
-  Eigen::VectorXd n = J.colwise().norm().transpose();
-  const double largest = n.size() ? n.maxCoeff() : 0.0;
-  for (int c = 0; c < n.size(); ++c)
-    if (n[c] <= kNegligibleColumn * largest) n[c] = 0.0;
-  return n;
-}
-
-SvdSummary analyseColumns(const Eigen::MatrixXd& J) {
-  SvdSummary s = summarise(compress(scaleColumns(J)), static_cast<int>(J.rows()));
-  s.condition_unscaled = unscaledCondition(J);
-  return s;
-}
 
 Eigen::MatrixXd stackedJacobian(const ForwardKinematics& fk, const std::vector<JointVector>& poses,
                                 const std::vector<int>& columns) {
@@ -116,8 +62,8 @@ MachineModel withMotionDegree(const MachineModel& m, int degree) {
 MinimalSet selectMinimalSet(const Eigen::MatrixXd& J, const std::vector<int>& columns,
                             const std::vector<bool>& setup, const std::vector<int>& preferred) {
   MinimalSet out;
-  const Eigen::MatrixXd R = compress(scaleColumns(J));
-  out.initial = summarise(R, static_cast<int>(J.rows()));
+  const Eigen::MatrixXd R = compressRows(scaleColumns(J));
+  out.initial = summariseScaled(R, static_cast<int>(J.rows()));
   out.initial.condition_unscaled = unscaledCondition(J);
   std::vector<int> live(columns.size());  // positions into columns / R
   for (size_t i = 0; i < live.size(); ++i) live[i] = static_cast<int>(i);
@@ -167,7 +113,7 @@ MinimalSet selectMinimalSet(const Eigen::MatrixXd& J, const std::vector<int>& co
       for (int g : candidates) {
         std::vector<int> trial = live;
         trial.erase(trial.begin() + g);
-        const SvdSummary s = summarise(selectCols(R, trial), static_cast<int>(J.rows()));
+        const SvdSummary s = summariseScaled(selectCols(R, trial), static_cast<int>(J.rows()));
         if (s.rank < cur.rank) continue;
         const double key = s.singular_values[0] / s.singular_values[s.rank - 1];
         if (key < best_key) {
@@ -179,7 +125,7 @@ MinimalSet selectMinimalSet(const Eigen::MatrixXd& J, const std::vector<int>& co
     }
     std::vector<int> next = live;
     next.erase(next.begin() + best);
-    cur = summarise(selectCols(R, next), static_cast<int>(J.rows()));
+    cur = summariseScaled(selectCols(R, next), static_cast<int>(J.rows()));
     step.removed = columns[live[best]];
     step.size_after = static_cast<int>(next.size());
     step.rank_after = cur.rank;

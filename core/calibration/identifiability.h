@@ -7,37 +7,15 @@
 //   II  keep the parameters that stand for recognised link errors (a per-machine list,
 //       thesis Tables 3.4 and 4.2);
 //   III otherwise remove the parameter whose removal leaves the smallest condition number.
-//
-// Column scaling: each column is divided by its Euclidean norm, so millimetres and radians do not
-// mix; a column under kNegligibleColumn of the largest norm is numerically zero and stays zero.
-// Rank tolerance: a singular value counts when it exceeds kRankTolerance times the largest.
+// Column scaling, rank and condition: core/numerics/scaled_svd.h.
 #include <Eigen/Core>
 #include <string>
 #include <vector>
 
 #include "core/kinematics/forward_kinematics.h"
+#include "core/numerics/scaled_svd.h"
 
 namespace tolver {
-
-constexpr double kRankTolerance = 1e-9;
-// A column whose norm is below this fraction of the largest column's is numerically zero (its
-// entries are rounding): it is not scaled up but counted as no effect.
-constexpr double kNegligibleColumn = 1e-10;
-
-// Column norms of J, with numerically zero columns (see kNegligibleColumn) set to 0.
-Eigen::VectorXd columnScales(const Eigen::MatrixXd& J);
-
-struct SvdSummary {
-  int rows = 0, cols = 0;
-  int rank = 0;
-  double condition = 0.0;           // sigma_max / sigma_min; infinity when rank < cols
-  double condition_unscaled = 0.0;  // the same without column scaling (mm, rad), as the
-                                    // thesis reports it
-  Eigen::VectorXd singular_values;  // of the column-scaled matrix, decreasing
-};
-
-// Column-scaled SVD summary of J (zero columns stay zero and count as rank-deficient).
-SvdSummary analyseColumns(const Eigen::MatrixXd& J);
 
 // Stacked sensitivity Jacobian: 6 rows per pose (twist in t), the given parameter columns.
 Eigen::MatrixXd stackedJacobian(const ForwardKinematics& fk, const std::vector<JointVector>& poses,

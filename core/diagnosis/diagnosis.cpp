@@ -70,10 +70,7 @@ class Scorer {
     const ForwardKinematics fk(model_, fit.params);
     J_ = identificationJacobian(fk, test, fit.ball_errors, fit.identified, &r_);
     m_ = static_cast<int>(r_.size());
-    scale_ = J_.colwise().norm().transpose();
-    for (Eigen::Index c = 0; c < scale_.size(); ++c)
-      if (scale_[c] == 0) scale_[c] = 1;
-    J_ = J_ * scale_.cwiseInverse().asDiagonal();
+    J_ = scaleColumns(J_, &scale_);
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J_);
     Q_ = orthonormalBasis(qr);
     n_ = static_cast<int>(qr.rank());
@@ -111,12 +108,7 @@ class Scorer {
   // column index of the identification Jacobian, largest first.
   std::vector<std::pair<int, double>> similarColumns(const Eigen::MatrixXd& G, double min_cosine) const {
     std::vector<std::pair<int, double>> out;
-    Eigen::MatrixXd Gs = G;
-    for (Eigen::Index c = 0; c < Gs.cols(); ++c) {
-      const double n = Gs.col(c).norm();
-      if (n > 0) Gs.col(c) /= n;
-    }
-    const Eigen::MatrixXd C = J_.transpose() * Gs;  // J_ columns are unit (scaled)
+    const Eigen::MatrixXd C = J_.transpose() * scaleColumns(G);  // J_ columns are unit (scaled)
     for (Eigen::Index j = 0; j < C.rows(); ++j) {
       const double cj = C.row(j).cwiseAbs().maxCoeff();
       if (cj >= min_cosine) out.emplace_back(static_cast<int>(j), cj);
@@ -153,11 +145,7 @@ class Scorer {
   // RSS after adding the columns G (the projection fit); rss() when G is empty or null.
   double rssWith(const Eigen::MatrixXd& G, Eigen::VectorXd* residual = nullptr,
                  double* new_information = nullptr) const {
-    Eigen::MatrixXd Gs = G;
-    for (Eigen::Index c = 0; c < Gs.cols(); ++c) {
-      const double n = Gs.col(c).norm();
-      if (n > 0) Gs.col(c) /= n;
-    }
+    const Eigen::MatrixXd Gs = scaleColumns(G);
     const Eigen::MatrixXd Gp = Gs - Q_ * (Q_.transpose() * Gs);
     if (new_information) {
       const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Gp);
@@ -196,13 +184,7 @@ class Scorer {
   double condition(const Eigen::MatrixXd& G) const {
     Eigen::MatrixXd A(m_, J_.cols() + G.cols());
     A << J_, G;
-    for (Eigen::Index c = 0; c < A.cols(); ++c) {
-      const double n = A.col(c).norm();
-      if (n > 0) A.col(c) /= n;
-    }
-    const Eigen::BDCSVD<Eigen::MatrixXd> svd(A);
-    const Eigen::VectorXd& s = svd.singularValues();
-    return s[s.size() - 1] > 0 ? s[0] / s[s.size() - 1] : INFINITY;
+    return scaledCondition(A);
   }
 
   // Lag-1 autocorrelation of a residual vector within set-ups.
