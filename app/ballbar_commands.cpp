@@ -20,6 +20,7 @@
 #include "io/common/io_error.h"
 #include "io/machine/machine_file.h"
 #include "io/common/text_util.h"
+#include "core/numerics/units.h"
 
 namespace tolver::app {
 namespace {
@@ -170,7 +171,7 @@ void runPlan(PlanOptions o) {
     const BallbarPlan general = planBallbarTest(machine.model, unknowns, whole);
     auto stats = [&](const BallbarPlan& p, double* med, double* mx) {
       std::vector<double> u = expectedTipUncertainty(machine.model, unknowns, p.test,
-                                                     o.noise_um * 1e-3, program_q);
+                                                     umToMm(o.noise_um), program_q);
       std::sort(u.begin(), u.end());
       *med = u[u.size() / 2];
       *mx = u.back();
@@ -185,7 +186,7 @@ void runPlan(PlanOptions o) {
                 "set-up, at %zu poses): median %.3f um, max %.3f um; the D-optimal plan of the same "
                 "size: median %.3f um, max %.3f um\n",
                 o.volume ? "over the whole travel" : "where the program cuts", o.noise_um,
-                program_q.size(), m1 * 1e3, x1 * 1e3, m0 * 1e3, x0 * 1e3);
+                program_q.size(), mmToUm(m1), mmToUm(x1), mmToUm(m0), mmToUm(x0));
   }
   std::printf("  wrote      %s (plan), %s (NC program)\n", o.output.c_str(), gcode.c_str());
   if (o.heldout > 0)
@@ -208,7 +209,7 @@ void runSimulate(const SimulateOptions& o) {
   BallbarFile f = readBallbarFile(o.plan, machine.model, false);
   checkOutputDir(o.output, "-o");
   std::mt19937 rng(o.seed);
-  std::normal_distribution<double> noise(0.0, o.noise_um * 1e-3), ball(0.0, o.ball_error_um * 1e-3);
+  std::normal_distribution<double> noise(0.0, umToMm(o.noise_um)), ball(0.0, umToMm(o.ball_error_um));
   // Ball positions: the plan's nominal ones, or those of --balls (identified by calibrate), plus
   // the random errors asked for.
   std::vector<BallErrors> balls = o.balls.empty() ? std::vector<BallErrors>(f.test.setups.size())
@@ -314,7 +315,7 @@ void printCalibration(const CalibrationRun& run, const CalibrateOptions& o) {
   printGross(o.in.readings, test, run.gross, o.in.keep_outliers, run.robust.with_all, r,
              run.robust.limit_reached);
   std::printf("  residual   RMS %.3f um, max %.3f um, sigma %.3f um (the %zu readings fitted)\n",
-              r.rms_residual * 1e3, r.max_residual * 1e3, r.residual_sigma * 1e3, run.used.readings.size());
+              mmToUm(r.rms_residual), mmToUm(r.max_residual), mmToUm(r.residual_sigma), run.used.readings.size());
   if (!r.held.empty()) {
     std::string names;
     for (int p : r.held) names += " " + m.parameters[p].iso_code;
@@ -332,8 +333,8 @@ void printCalibration(const CalibrationRun& run, const CalibrateOptions& o) {
   if (!run.heldout.readings.empty()) {
     std::printf("  held-out   %d readings (%s): RMS %.3f -> %.3f um, max %.3f -> %.3f um "
                 "(the prior machine with nominal balls -> the identified one)\n",
-                ho.before.readings, o.in.heldout.c_str(), ho.before.rms * 1e3, ho.after.rms * 1e3,
-                ho.before.max * 1e3, ho.after.max * 1e3);
+                ho.before.readings, o.in.heldout.c_str(), mmToUm(ho.before.rms), mmToUm(ho.after.rms),
+                mmToUm(ho.before.max), mmToUm(ho.after.max));
     heldoutWarning(o.in.heldout, ho.after, r.rms_residual);
   }
 }
@@ -347,8 +348,8 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
   // The machine, its ball positions and the report as a set: all three or none.
   const WrittenCheck check = writeCalibration(run, o.in, out);
   std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um", out.machine.c_str(),
-              out.balls.c_str(), check.fit.rms * 1e3);
-  if (check.heldout.readings > 0) std::printf(", the held-out ones at %.3f um", check.heldout.rms * 1e3);
+              out.balls.c_str(), mmToUm(check.fit.rms));
+  if (check.heldout.readings > 0) std::printf(", the held-out ones at %.3f um", mmToUm(check.heldout.rms));
   std::printf("\n");
   std::printf("  wrote      %s (identified machine), %s (ball positions), %s (report)\n", out.machine.c_str(),
               out.balls.c_str(), out.report.c_str());

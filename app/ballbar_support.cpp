@@ -7,6 +7,7 @@
 #include "core/calibration/ballbar_plan.h"
 #include "io/machine/ballbar_file.h"
 #include "io/common/io_error.h"
+#include "core/numerics/units.h"
 
 namespace tolver::app {
 
@@ -16,7 +17,7 @@ void heldoutWarning(const std::string& file, const ResidualStats& after, double 
                  "tolver: warning: %s: the identified machine predicts the held-out readings at "
                  "RMS %.3f um, %.0f times its fit (%.3f um): were they measured on the same "
                  "set-ups (ball positions untouched), in the same machine state?\n",
-                 file.c_str(), after.rms * 1e3, after.rms / fit_rms, fit_rms * 1e3);
+                 file.c_str(), mmToUm(after.rms), after.rms / fit_rms, mmToUm(fit_rms));
 }
 
 std::vector<std::string> testDesignWarnings(const MachineModel& model, const BallbarTest& test,
@@ -63,7 +64,7 @@ void printGross(const std::string& readings_file, const BallbarTest& test,
   char buf[96];
   for (size_t k = 0; k < gross.size() && k < 12; ++k) {
     std::snprintf(buf, sizeof buf, "%sline %d (%+.2f um, t = %.1f)", k ? ", " : "",
-                  test.readings[gross[k].index].line, gross[k].residual * 1e3, gross[k].studentized);
+                  test.readings[gross[k].index].line, mmToUm(gross[k].residual), gross[k].studentized);
     lines += buf;
   }
   if (gross.size() > 12) lines += ", ...";
@@ -74,7 +75,7 @@ void printGross(const std::string& readings_file, const BallbarTest& test,
     return;
   }
   std::printf("             removed and refitted: residual RMS %.3f um with them, %.3f um without\n",
-              with_all.rms_residual * 1e3, fit.rms_residual * 1e3);
+              mmToUm(with_all.rms_residual), mmToUm(fit.rms_residual));
   if (limit_reached)
     std::fprintf(stderr,
                  "tolver: warning: %s: more readings look gross than 5 %% of the test: the model or "

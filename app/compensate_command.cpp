@@ -14,6 +14,7 @@
 #include "io/report/compensation_report.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "core/numerics/units.h"
 
 namespace tolver::app {
 namespace {
@@ -44,7 +45,7 @@ void writeTables(const CompensateOptions& o, const Machine& machine) {
   for (size_t a = 0; a < model.axes.size(); ++a) {
     const bool rot = model.axes[a].isRotary();
     std::snprintf(buf, sizeof buf, "%s%s=%g %s", a ? " " : "", model.axes[a].name.c_str(),
-                  rot ? q_ref[a] * 180.0 / M_PI : q_ref[a], rot ? "deg" : "mm");
+                  rot ? radToDeg(q_ref[a]) : q_ref[a], rot ? "deg" : "mm");
     ref_text += buf;
   }
   OutputSet outputs;
@@ -55,7 +56,7 @@ void writeTables(const CompensateOptions& o, const Machine& machine) {
     std::vector<std::vector<double>> um;
     for (const Eigen::Vector3d& d : t.correction) {
       std::vector<double> row;
-      for (size_t j = 0; j < names.size(); ++j) row.push_back(d[static_cast<Eigen::Index>(j)] * 1e3);
+      for (size_t j = 0; j < names.size(); ++j) row.push_back(mmToUm(d[static_cast<Eigen::Index>(j)]));
       um.push_back(row);
     }
     std::snprintf(buf, sizeof buf, "grid: %s from %.3f mm, step %.3f mm, %zu points", names[k].c_str(), t.start,
@@ -81,10 +82,10 @@ void writeTables(const CompensateOptions& o, const Machine& machine) {
   std::printf("  tables     %zu linear axes, step %.3f mm, zero at %s\n", tables.size(), o.table_step, ref_text.c_str());
   std::printf("  effect     tool-tip error over the linear travel (relative to the reference pose, whose constant "
               "the work offset takes), rotary axes at the reference: RMS %.3f -> %.3f um\n",
-              flat.before_rms * 1e3, flat.after_rms * 1e3);
+              mmToUm(flat.before_rms), mmToUm(flat.after_rms));
   std::printf("             over the whole travel, rotary axes moving: RMS %.3f -> %.3f um (what linear tables cannot "
               "carry: the rotary axes' errors and the angular errors seen through the other axes' offsets)\n",
-              full.before_rms * 1e3, full.after_rms * 1e3);
+              mmToUm(full.before_rms), mmToUm(full.after_rms));
   // The rotary axes' non-zero error terms: a linear table has no place for them.
   std::string rotary;
   int count = 0;
@@ -113,7 +114,7 @@ PathFigures figuresOf(const std::vector<Eigen::Vector3d>& dev, const std::vector
   PathFigures f;
   double st = 0, sa = 0;
   for (size_t i = from; i < to; ++i) {
-    const double t = dev[i].norm() * 1e3, a = ang[i] * 1e6;
+    const double t = mmToUm(dev[i].norm()), a = radToUrad(ang[i]);
     st += t * t;
     sa += a * a;
     if (t > f.tip_max_um) f.tip_max_um = t, f.tip_max_line = path[i].line;
@@ -307,7 +308,7 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
       pu.setupModulo(sub);
     }
     std::vector<double> band(n);
-    for (size_t i = 0; i < n; ++i) band[i] = 1.96 * pu.at(after.points[i].q).tip * 1e3;
+    for (size_t i = 0; i < n; ++i) band[i] = 1.96 * mmToUm(pu.at(after.points[i].q).tip);
     rep.after_band95_max_um = *std::max_element(band.begin(), band.end());
     std::nth_element(band.begin(), band.begin() + n / 2, band.end());
     rep.after_band95_median_um = band[n / 2];
@@ -322,10 +323,10 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
     std::vector<double> tb(n), ta(n), ab(n), aa(n);
     for (size_t i = 0; i < n; ++i) {
       line[i] = program.path[i].line;
-      tb[i] = dev_before[i].norm() * 1e3;
-      ta[i] = dev_after[i].norm() * 1e3;
-      ab[i] = ang_before[i] * 1e6;
-      aa[i] = ang_after[i] * 1e6;
+      tb[i] = mmToUm(dev_before[i].norm());
+      ta[i] = mmToUm(dev_after[i].norm());
+      ab[i] = radToUrad(ang_before[i]);
+      aa[i] = radToUrad(ang_after[i]);
     }
     writeCompensationReport(report_dir.staging(), rep, line, tb, ta, ab, aa);
     report_dir.commit();

@@ -19,6 +19,7 @@
 #include "io/common/io_error.h"
 #include "io/machine/machine_file.h"
 #include "io/program/setup_file.h"
+#include "core/numerics/units.h"
 
 namespace tolver::app {
 namespace {
@@ -64,7 +65,7 @@ void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o, const Dia
   const ProgramComparison* program = run.program.get();
   const MachineModel& m = r.machine.model;
   std::printf("  base fit   residual RMS %.3f um, cross-validated RMS %.3f um (%d contiguous blocks)\n",
-              r.rms_before * 1e3, r.cv_rms_before * 1e3, r.folds);
+              mmToUm(r.rms_before), mmToUm(r.cv_rms_before), r.folds);
   std::printf("  residual   follows %s\n",
               r.analysis_before.follows.empty()
                   ? "nothing in particular"
@@ -91,25 +92,25 @@ void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o, const Dia
                 "structure no effect of the library removes (plot in the report)\n",
                 u.variable.c_str(), u.test.c_str(), what, u.strength * 100.0, u.p_value);
   }
-  std::printf("  after      residual RMS %.3f um, cross-validated RMS %.3f um\n", r.rms_after * 1e3,
-              r.cv_rms_after * 1e3);
+  std::printf("  after      residual RMS %.3f um, cross-validated RMS %.3f um\n", mmToUm(r.rms_after),
+              mmToUm(r.cv_rms_after));
   if (r.heldout_before.readings > 0) {
     std::printf("  held-out   %d readings (%s): RMS %.3f -> %.3f um, max %.3f -> %.3f um\n",
-                r.heldout_before.readings, o.in.heldout.c_str(), r.heldout_before.rms * 1e3,
-                r.heldout_after.rms * 1e3, r.heldout_before.max * 1e3, r.heldout_after.max * 1e3);
+                r.heldout_before.readings, o.in.heldout.c_str(), mmToUm(r.heldout_before.rms),
+                mmToUm(r.heldout_after.rms), mmToUm(r.heldout_before.max), mmToUm(r.heldout_after.max));
     heldoutWarning(o.in.heldout, r.heldout_after, r.final_fit.rms_residual);
   }
   std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um", out.machine.c_str(),
-              out.balls.c_str(), written.check.fit.rms * 1e3);
+              out.balls.c_str(), mmToUm(written.check.fit.rms));
   if (written.check.heldout.readings > 0)
-    std::printf(", the held-out ones at %.3f um", written.check.heldout.rms * 1e3);
+    std::printf(", the held-out ones at %.3f um", mmToUm(written.check.heldout.rms));
   std::printf("\n");
   if (program)
     std::printf("  program    %s: predicted error max %.3f -> %.3f um, RMS %.3f -> %.3f um "
                 "(change up to %.3f um, line %d)\n",
-                o.in.cl.c_str(), program->before.max_deviation * 1e3, program->after.max_deviation * 1e3,
-                program->before.rms_deviation * 1e3, program->after.rms_deviation * 1e3,
-                program->change_max * 1e3, program->change_max_line);
+                o.in.cl.c_str(), mmToUm(program->before.max_deviation), mmToUm(program->after.max_deviation),
+                mmToUm(program->before.rms_deviation), mmToUm(program->after.rms_deviation),
+                mmToUm(program->change_max), program->change_max_line);
   std::printf("  wrote      %s (augmented machine), %s (ball positions), %s, %s\n", out.machine.c_str(),
               out.balls.c_str(), written.json.c_str(), written.html.c_str());
 }

@@ -14,6 +14,7 @@
 #include "io/program/apt_writer.h"
 #include "io/common/io_error.h"
 #include "io/program/point_table.h"
+#include "core/numerics/units.h"
 
 namespace tolver::app {
 namespace {
@@ -88,19 +89,19 @@ void runPredict(const PredictOptions& o, int* exit_code) {
   std::printf("  set-up     part zero (%.4f, %.4f, %.4f) mm in the table frame, rotation %.4f deg, "
               "gauge length %.4f mm\n",
               setup.part_zero_table.x(), setup.part_zero_table.y(), setup.part_zero_table.z(),
-              setup.part_rotation * 180.0 / M_PI, setup.gauge_length);
+              radToDeg(setup.part_rotation), setup.gauge_length);
   if (cal.probed) std::printf("  probed     %s\n", probe_line.c_str());
   const PredictedPoint& worst = pts[s.max_index];
   std::printf("  deviation  max %.3f um at point %d (line %d), RMS %.3f um\n",
-              s.max_deviation * 1e3, s.max_index, program.path[s.max_index].line,
-              s.rms_deviation * 1e3);
+              mmToUm(s.max_deviation), s.max_index, program.path[s.max_index].line,
+              mmToUm(s.rms_deviation));
   std::printf("             at the max: (%.3f, %.3f, %.3f) um in the part frame, %.3f um along the "
               "tool axis, %.3f um across\n",
-              clean(worst.deviation_w.x() * 1e3), clean(worst.deviation_w.y() * 1e3),
-              clean(worst.deviation_w.z() * 1e3), clean(worst.along_axis * 1e3),
-              clean(worst.across_axis * 1e3));
-  std::printf("  tool axis  max %.3f urad, RMS %.3f urad\n", s.max_axis_angle * 1e6,
-              s.rms_axis_angle * 1e6);
+              clean(mmToUm(worst.deviation_w.x())), clean(mmToUm(worst.deviation_w.y())),
+              clean(mmToUm(worst.deviation_w.z())), clean(mmToUm(worst.along_axis)),
+              clean(mmToUm(worst.across_axis)));
+  std::printf("  tool axis  max %.3f urad, RMS %.3f urad\n", radToUrad(s.max_axis_angle),
+              radToUrad(s.rms_axis_angle));
   if (!unc.empty()) {
     std::vector<double> tip(unc.size()), axis(unc.size());
     int outside = 0, first_outside = -1;
@@ -126,18 +127,18 @@ void runPredict(const PredictOptions& o, int* exit_code) {
                   "tip's offset from the spindle: predicted after the set-up a shop measures (part "
                   "probed: %+.2f %+.2f %+.2f um, %+.1f %+.1f %+.1f urad; tool preset: %+.2f %+.2f "
                   "%+.2f um taken up); --absolute for the raw prediction\n",
-                  measured_setup[0] * 1e3, measured_setup[1] * 1e3, measured_setup[2] * 1e3,
-                  measured_setup[3] * 1e6, measured_setup[4] * 1e6, measured_setup[5] * 1e6,
-                  measured_setup[6] * 1e3, measured_setup[7] * 1e3, measured_setup[8] * 1e3);
+                  mmToUm(measured_setup[0]), mmToUm(measured_setup[1]), mmToUm(measured_setup[2]),
+                  radToUrad(measured_setup[3]), radToUrad(measured_setup[4]), radToUrad(measured_setup[5]),
+                  mmToUm(measured_setup[6]), mmToUm(measured_setup[7]), mmToUm(measured_setup[8]));
     else
       std::printf("  set-up     absolute prediction (--absolute): it includes what probing the part "
                   "and presetting the tool would take up, which the calibration cannot see\n");
     std::printf("  uncertainty (1 sigma) of the prediction, from the calibration's covariance of %zu "
                 "identified values: tip median %.3f um, max %.3f um; tool axis median %.3f urad, "
                 "max %.3f urad\n",
-                machine.identification.parameters.size(), median(tip) * 1e3,
-                *std::max_element(tip.begin(), tip.end()) * 1e3, median(axis) * 1e6,
-                *std::max_element(axis.begin(), axis.end()) * 1e6);
+                machine.identification.parameters.size(), mmToUm(median(tip)),
+                mmToUm(*std::max_element(tip.begin(), tip.end())), radToUrad(median(axis)),
+                radToUrad(*std::max_element(axis.begin(), axis.end())));
     if (outside > 0) {
       std::string where;
       char buf[96];
@@ -145,7 +146,7 @@ void runPredict(const PredictOptions& o, int* exit_code) {
         if (beyond[a] > 0) {
           const bool rot = machine.model.axes[a].isRotary();
           std::snprintf(buf, sizeof buf, "%s%s by up to %.3f %s", where.empty() ? "" : ", ",
-                        machine.model.axes[a].name.c_str(), beyond[a] * (rot ? 180.0 / M_PI : 1.0),
+                        machine.model.axes[a].name.c_str(), beyond[a] * (rot ? radToDeg(1.0) : 1.0),
                         rot ? "deg" : "mm");
           where += buf;
         }
@@ -157,16 +158,16 @@ void runPredict(const PredictOptions& o, int* exit_code) {
   if (s.singular_points > 0)
     std::printf("  note       %d points have the tool axis within %.4g deg of a rotary axis (first "
                 "at line %d); that axis kept its previous angle\n",
-                s.singular_points, machine.model.control.singular_band * 180.0 / M_PI,
+                s.singular_points, radToDeg(machine.model.control.singular_band),
                 s.first_singular_line);
   const auto jumps = findRotaryJumps(machine.model, program.path, r,
-                                     o.max_rotary_step_deg * M_PI / 180.0);
+                                     degToRad(o.max_rotary_step_deg));
   if (!jumps.empty()) {
     std::printf("  risk       %zu rotary steps above %.1f deg between cutting moves:", jumps.size(),
                 o.max_rotary_step_deg);
     for (size_t k = 0; k < jumps.size() && k < 5; ++k)
       std::printf("%s line %d %s %+.1f deg", k ? "," : "", jumps[k].line,
-                  machine.model.axes[jumps[k].axis].name.c_str(), jumps[k].step * 180.0 / M_PI);
+                  machine.model.axes[jumps[k].axis].name.c_str(), radToDeg(jumps[k].step));
     std::printf("%s\n", jumps.size() > 5 ? ", ..." : "");
   }
   for (const std::string& w : probe_warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());

@@ -11,6 +11,7 @@
 #include "core/path/setup_search.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "core/numerics/units.h"
 
 namespace tolver::app {
 namespace {
@@ -25,7 +26,7 @@ struct SetupOptions {
 
 std::string axisValue(const Axis& a, double v) {
   char buf[64];
-  std::snprintf(buf, sizeof buf, "%.3f", a.isRotary() ? v * 180.0 / M_PI : v);
+  std::snprintf(buf, sizeof buf, "%.3f", a.isRotary() ? radToDeg(v) : v);
   return buf;
 }
 
@@ -72,7 +73,7 @@ void writeSetupFile(const std::string& file, const ClProgram& program, const Mac
                 formatNumber(b.part_zero_table.x()).c_str(),
                 formatNumber(b.part_zero_table.y()).c_str(),
                 formatNumber(b.part_zero_table.z()).c_str(),
-                formatNumber(b.part_rotation * 180.0 / M_PI).c_str(),
+                formatNumber(radToDeg(b.part_rotation)).c_str(),
                 formatNumber(b.gauge_length).c_str());
   std::string text = buf;
   // The proposal moves the part frame: the work offsets of a posted program go with it (a
@@ -141,7 +142,7 @@ void runSetup(const SetupOptions& o, int* exit_code) {
   std::printf("  set-up     part zero (%.3f, %.3f, %.3f) mm, rotation %.3f deg, gauge length "
               "%.3f mm%s\n",
               s.part_zero_table.x(), s.part_zero_table.y(), s.part_zero_table.z(),
-              s.part_rotation * 180.0 / M_PI, s.gauge_length,
+              radToDeg(s.part_rotation), s.gauge_length,
               o.machine.setup.empty() ? " (defaults: no --setup)" : "");
   for (const std::string& w : setupWarnings(model))
     std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
@@ -157,7 +158,7 @@ void runSetup(const SetupOptions& o, int* exit_code) {
                 failed, path[first_failed].line);
 
   SetupSearchOptions so;
-  so.rotation_step = o.rotation_step_deg * M_PI / 180.0;
+  so.rotation_step = degToRad(o.rotation_step_deg);
   // A posted program's rotary words assume the part as the post placed it: keep its rotation.
   if (program.dialect == "G-code") so.rotation_step = 0.0;
   so.gauge_lengths = o.gauge_lengths;
@@ -174,7 +175,7 @@ void runSetup(const SetupOptions& o, int* exit_code) {
   }
   std::printf("  proposed   part_zero_mm = %.3f, %.3f, %.3f\n", b.part_zero_table.x(),
               b.part_zero_table.y(), b.part_zero_table.z());
-  std::printf("             part_rotation_deg = %.3f\n", b.part_rotation * 180.0 / M_PI);
+  std::printf("             part_rotation_deg = %.3f\n", radToDeg(b.part_rotation));
   std::printf("             gauge_length_mm = %.3f\n", b.gauge_length);
   MachineModel best = model;
   best.setup.part_zero_table = b.part_zero_table;
@@ -228,7 +229,7 @@ void runSetup(const SetupOptions& o, int* exit_code) {
                   "(predict or verify it with --lines and its set-up file)\n",
                   k + 1, path[p.first].line, path[p.last].line, p.last - p.first + 1,
                   ps.part_zero_table.x(), ps.part_zero_table.y(), ps.part_zero_table.z(),
-                  ps.part_rotation * 180.0 / M_PI, ps.gauge_length, p.result.margin);
+                  radToDeg(ps.part_rotation), ps.gauge_length, p.result.margin);
     }
   }
   if (!o.output.empty()) {

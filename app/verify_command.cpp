@@ -17,6 +17,7 @@
 #include "io/common/text_util.h"
 #include "io/report/verify_report.h"
 #include "pipeline/verify.h"
+#include "core/numerics/units.h"
 
 namespace tolver::app {
 namespace {
@@ -60,14 +61,14 @@ void printVerification(const Verification& v, const VerifyOptions& o, const std:
                 r.repair.notes.empty() ? "" : " (mesh repaired: see the report)");
   for (const auto& z : r.zones)
     std::printf("  zone       %s: %s mm [%+.1f, %+.1f] um\n", z.region.c_str(), z.spec.c_str(),
-                z.lower * 1e3, z.upper * 1e3);
+                mmToUm(z.lower), mmToUm(z.upper));
   std::printf("  total      %+.2f .. %+.2f um, RMS %.2f um (+ material left, - gouge)\n",
-              result.total_stats.min * 1e3, result.total_stats.max * 1e3, result.total_stats.rms * 1e3);
+              mmToUm(result.total_stats.min), mmToUm(result.total_stats.max), mmToUm(result.total_stats.rms));
   if (r.mode != "cl-only")
-    std::printf("  program    %+.2f .. %+.2f um (nominal swept - CAD)\n", result.program_stats.min * 1e3,
-                result.program_stats.max * 1e3);
+    std::printf("  program    %+.2f .. %+.2f um (nominal swept - CAD)\n", mmToUm(result.program_stats.min),
+                mmToUm(result.program_stats.max));
   std::printf("  machine    %+.2f .. %+.2f um, RMS %.2f um (predicted - nominal swept)\n",
-              result.machine_stats.min * 1e3, result.machine_stats.max * 1e3, result.machine_stats.rms * 1e3);
+              mmToUm(result.machine_stats.min), mmToUm(result.machine_stats.max), mmToUm(result.machine_stats.rms));
   if (result.split_beyond + result.split_boundary > 0)
     std::printf("  split      total = program + machine at every other machined sample; not split: %d "
                 "samples beyond the search range, %d on a cut's boundary (a micrometre of the tool's "
@@ -103,9 +104,9 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
   out.pass = verdictName(v->report) == "PASS";
   out.undecided = verdictName(v->report) == "UNDECIDED";
   out.incomplete = v->report.incomplete;
-  out.max_um = result.total_stats.max * 1e3;
-  out.min_um = result.total_stats.min * 1e3;
-  out.machine_rms_um = result.machine_stats.rms * 1e3;
+  out.max_um = mmToUm(result.total_stats.max);
+  out.min_um = mmToUm(result.total_stats.min);
+  out.machine_rms_um = mmToUm(result.machine_stats.rms);
   out.percent_in = result.percent_in;
   out.regions = static_cast<int>(result.regions.size());
   if (!o.quiet && o.batch.empty()) printVerification(*v, o, out.report);

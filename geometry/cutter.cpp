@@ -1,4 +1,5 @@
 #include "geometry/cutter.h"
+#include "core/numerics/units.h"
 
 #include <algorithm>
 #include <cmath>
@@ -29,7 +30,7 @@ std::string Cutter::describe() const {
                 diameter, corner_radius);
   std::string s = buf;
   if (taper_angle > 0) {
-    std::snprintf(buf, sizeof buf, ", taper %.4g deg", taper_angle * 180.0 / M_PI);
+    std::snprintf(buf, sizeof buf, ", taper %.4g deg", radToDeg(taper_angle));
     s += buf;
   }
   return s;
@@ -42,15 +43,15 @@ bool cutterFromApt(const std::string& source, const std::vector<double>& v, Cutt
   c.corner_radius = v.size() > 1 ? v[1] : 0.0;
   if (source == "CUTTER") {
     // APT: d, r, e, f, alpha (deg, base angle), beta (deg, side angle from the axis), h.
-    if (v.size() > 5) c.taper_angle = v[5] * M_PI / 180.0;
+    if (v.size() > 5) c.taper_angle = degToRad(v[5]);
     if (v.size() > 6) c.length = v[6];
   } else {
     // NX TLDATA/MILL: d, r, length, taper (deg), tip angle (deg).
     if (v.size() > 2) c.length = v[2];
-    if (v.size() > 3) c.taper_angle = v[3] * M_PI / 180.0;
+    if (v.size() > 3) c.taper_angle = degToRad(v[3]);
   }
   if (c.corner_radius < 0 || c.corner_radius > 0.5 * c.diameter + 1e-9) return false;
-  if (c.taper_angle < 0 || c.taper_angle >= M_PI / 2) return false;
+  if (c.taper_angle < 0 || c.taper_angle >= kPi / 2) return false;
   if (c.taper_angle > 0) c.type = CutterType::Tapered;
   else if (std::abs(c.corner_radius - 0.5 * c.diameter) < 1e-9) c.type = CutterType::BallEnd;
   else if (c.corner_radius > 0) c.type = CutterType::BullNose;

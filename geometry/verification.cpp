@@ -1,4 +1,5 @@
 #include "geometry/verification.h"
+#include "core/numerics/units.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -148,7 +149,7 @@ const char* splitName(Split s) {
 std::vector<ClPass> clPasses(const std::vector<ClPoint>& path) {
   std::vector<ClPass> raw;
   const int n = static_cast<int>(path.size());
-  const double cos_turn = std::cos(60.0 * M_PI / 180.0);
+  const double cos_turn = std::cos(degToRad(60.0));
   int first = 0;
   Eigen::Vector3d prev_dir = Eigen::Vector3d::Zero();
   for (int i = 1; i < n; ++i) {

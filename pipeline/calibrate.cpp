@@ -10,6 +10,7 @@
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
 #include "io/machine/machine_file.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -44,11 +45,11 @@ void refitWithPrior(const CalibrateInputs& in, const CalibrationOptions& opt, Ca
   if (prior_auto) {
     double k = 0;
     ro = evidencePrior(run.machine.model, run.used, r, opt, &k);
-    prior_um = k * kPriorUnitLinear * 1e3;
-    prior_urad = k * kPriorUnitAngular * 1e6;
+    prior_um = k * mmToUm(kPriorUnitLinear);
+    prior_urad = k * radToUrad(kPriorUnitAngular);
   } else {
-    ro.prior_linear = prior_um * 1e-3;
-    ro.prior_angular = prior_urad * 1e-6;
+    ro.prior_linear = umToMm(prior_um);
+    ro.prior_angular = uradToRad(prior_urad);
     ro.prior_noise = std::max(r.residual_sigma, 1e-12);
   }
   const CalibrationResult rr = calibrate(run.machine.model, run.machine.params, run.used, run.unknowns, ro);

@@ -12,6 +12,7 @@
 #include "io/program/apt_reader.h"
 #include "io/program/setup_file.h"
 #include "pipeline/calibrate.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -101,7 +102,7 @@ DiagnosisRun runDiagnosis(const DiagnoseInputs& in, const std::function<void(int
     std::snprintf(msg, sizeof msg,
                   "the base calibration did not converge (residual RMS %.3g um): do the machine "
                   "file and its set-up match the test?",
-                  r.base_fit.rms_residual * 1e3);
+                  mmToUm(r.base_fit.rms_residual));
     throw InputError(in.readings, 0, 0, "calibrate", msg);
   }
   if (!in.cl.empty()) {
@@ -120,7 +121,12 @@ DiagnosisWritten writeDiagnosis(const DiagnosisRun& run, const DiagnoseInputs& i
   const DiagnosisResult& r = run.result;
   const BallbarTest& used = run.used();
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - run.started).count();
-  DiagnosisReportInputs rin{in.machine.machine, in.readings, out.machine, run.program.get(), seconds};
+  DiagnosisReportInputs rin;
+  rin.machine_file = in.machine.machine;
+  rin.readings_file = in.readings;
+  rin.output_file = out.machine;
+  rin.program = run.program.get();
+  rin.seconds = seconds;
   rin.balls_file = out.balls;
   rin.heldout_file = in.heldout;
   for (const GrossReading& g : run.robust.removed)

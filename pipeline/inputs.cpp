@@ -13,6 +13,7 @@
 #include "io/program/probe_file.h"
 #include "io/program/setup_file.h"
 #include "io/common/text_util.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 
@@ -27,7 +28,7 @@ Machine loadMachine(const MachineOptions& o) {
   }
   if (!o.part_zero.empty()) setup.part_zero_given = true;
   if (!std::isnan(o.part_rotation_deg)) {
-    setup.part_rotation = o.part_rotation_deg * M_PI / 180.0;
+    setup.part_rotation = degToRad(o.part_rotation_deg);
     setup.part_rotation_given = true;
   }
   if (!std::isnan(o.gauge_length)) {
@@ -323,10 +324,10 @@ std::string describeProbedSetup(const std::string& path, const ProbedSetupFit& f
                 "offset (%+.2f, %+.2f, %+.2f) um; the points disagree with the file's set-up by "
                 "%.2f um RMS before, %.2f um after (max %.2f um, line %d); the cutter's length "
                 "relative to the probe is taken as preset",
-                points.size(), path.c_str(), fit.observed, fit.columns, fit.change[0] * 1e3,
-                fit.change[1] * 1e3, fit.change[2] * 1e3, fit.change[3] * 1e6, fit.change[4] * 1e6,
-                fit.change[5] * 1e6, fit.spindle_change[0] * 1e3, fit.spindle_change[1] * 1e3,
-                fit.spindle_change[2] * 1e3, fit.rms_before * 1e3, fit.rms * 1e3, fit.max * 1e3,
+                points.size(), path.c_str(), fit.observed, fit.columns, mmToUm(fit.change[0]),
+                mmToUm(fit.change[1]), mmToUm(fit.change[2]), radToUrad(fit.change[3]), radToUrad(fit.change[4]),
+                radToUrad(fit.change[5]), mmToUm(fit.spindle_change[0]), mmToUm(fit.spindle_change[1]),
+                mmToUm(fit.spindle_change[2]), mmToUm(fit.rms_before), mmToUm(fit.rms), mmToUm(fit.max),
                 points[worst].line);
   const std::string line = buf;
   if (warnings) {
@@ -341,7 +342,7 @@ std::string describeProbedSetup(const std::string& path, const ProbedSetupFit& f
       std::snprintf(buf, sizeof buf,
                     "%s:%d: the fitted set-up leaves %.1f um at this point (RMS %.1f um): check "
                     "its part point, joint values, frame and units",
-                    path.c_str(), points[worst].line, fit.max * 1e3, fit.rms * 1e3);
+                    path.c_str(), points[worst].line, mmToUm(fit.max), mmToUm(fit.rms));
       warnings->push_back(buf);
     }
   }

@@ -22,6 +22,7 @@
 #include "io/program/apt_reader.h"
 #include "io/report/deviation_map.h"
 #include "io/report/offscreen_display.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -157,14 +158,14 @@ std::vector<std::pair<std::string, std::string>> renderImages(
                            ? (*cl_lines)[r.cl_index[g.worst_sample]]
                            : 0;
       map.callouts.push_back({g.where_w, "R" + std::to_string(k + 1) + " " + conformanceName(g.kind) + " " +
-                                             fmt("%+.1f um", g.worst_deviation * 1e3) + "\n" + where(g.where_w) +
+                                             fmt("%+.1f um", mmToUm(g.worst_deviation)) + "\n" + where(g.where_w) +
                                              (line > 0 ? " line " + std::to_string(line) : std::string())});
       // The views that show the worst regions: along each one's normal, the whole part.
       views.push_back({k == 0 ? "worst" : "region" + std::to_string(k + 1), -g.normal_w, upFor(g.normal_w), true,
                        g.where_w});
     }
   } else if (worst >= 0) {
-    map.callouts.push_back({s.p_w[worst], "largest " + fmt("%+.1f um", r.total[worst] * 1e3) + "\n" + where(s.p_w[worst])});
+    map.callouts.push_back({s.p_w[worst], "largest " + fmt("%+.1f um", mmToUm(r.total[worst])) + "\n" + where(s.p_w[worst])});
     views.push_back({"worst", -s.n_w[worst], upFor(s.n_w[worst]), true, s.p_w[worst]});
   }
   for (const auto& v : views) {
@@ -275,8 +276,8 @@ ProgramOnMachine predictOnMachine(const VerifyInputs& o) {
   bool no_errors = false;
   const std::string errors = machineErrorsStatement(m.machine, &no_errors);
   if (no_errors) m.warnings.push_back(errors);
-  for (const RotaryJump& j : findRotaryJumps(model, m.program.path, m.pred, 10.0 * M_PI / 180.0))
-    m.warnings.push_back(fmt("program risk: rotary step of %+.1f deg of ", j.step * 180.0 / M_PI) +
+  for (const RotaryJump& j : findRotaryJumps(model, m.program.path, m.pred, degToRad(10.0)))
+    m.warnings.push_back(fmt("program risk: rotary step of %+.1f deg of ", radToDeg(j.step)) +
                          model.axes[j.axis].name + " between cutting moves at line " + std::to_string(j.line));
   return m;
 }
@@ -287,7 +288,7 @@ ImportedPart readPart(const VerifyInputs& o, const ClProgram& program) {
   io.units = o.mesh_units;
   if (!o.mesh_offset.empty()) io.w_T_file.translation() = Eigen::Vector3d(o.mesh_offset[0], o.mesh_offset[1], o.mesh_offset[2]);
   if (!o.mesh_rotation_deg.empty()) {
-    const double k = M_PI / 180.0;
+    const double k = degToRad(1.0);
     io.w_T_file.linear() = (Eigen::AngleAxisd(o.mesh_rotation_deg[2] * k, Eigen::Vector3d::UnitZ()) *
                             Eigen::AngleAxisd(o.mesh_rotation_deg[1] * k, Eigen::Vector3d::UnitY()) *
                             Eigen::AngleAxisd(o.mesh_rotation_deg[0] * k, Eigen::Vector3d::UnitX()))
@@ -339,7 +340,7 @@ void decideWithinBand(const std::vector<PoseUncertainty>& cl_unc, const ClProgra
   rep.band95_um.assign(samples.size(), 0.0);
   for (size_t i = 0; i < samples.size(); ++i) {
     const double u95 = 1.96 * PredictionUncertainty::along(cl_unc[nearest[i]], samples.n_w[i]);
-    rep.band95_um[i] = u95 * 1e3;
+    rep.band95_um[i] = mmToUm(u95);
     worst_u = std::max(worst_u, u95);
     const Conformance c = result.conformance[i];
     if (c == Conformance::Unchecked || c == Conformance::Unmachined || zone_of[i] < 0) continue;
@@ -351,7 +352,7 @@ void decideWithinBand(const std::vector<PoseUncertainty>& cl_unc, const ClProgra
       if (undecided++ == 0 || std::abs(beyond) < 1e-12) undecided_at = static_cast<int>(i);
     }
   }
-  rep.band95_max_um = worst_u * 1e3;
+  rep.band95_max_um = mmToUm(worst_u);
   rep.undecided_samples = undecided;
   if (definite_fail == 0 && undecided > 0) {
     rep.undecided = true;
@@ -362,7 +363,7 @@ void decideWithinBand(const std::vector<PoseUncertainty>& cl_unc, const ClProgra
                   "e.g. at (%.2f, %.2f, %.2f) the total is %+.2f um, the machine's share %+.2f "
                   "+- %.2f um here",
                   undecided, samples.p_w[i].x(), samples.p_w[i].y(), samples.p_w[i].z(),
-                  result.total[i] * 1e3, result.machine[i] * 1e3, rep.band95_um[i]);
+                  mmToUm(result.total[i]), mmToUm(result.machine[i]), rep.band95_um[i]);
     rep.undecided_text = text;
   }
 }
@@ -488,9 +489,9 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
       const bool cut = result.machined[i];
       predicted_swept[i] = samples.p_w[i] + (cut ? result.total[i] : 0.0) * samples.n_w[i];
       nominal_swept[i] = samples.p_w[i] + (cut ? result.program[i] : 0.0) * samples.n_w[i];
-      total_um[i] = result.total[i] * 1e3;
-      machine_um[i] = result.machine[i] * 1e3;
-      program_um[i] = result.program[i] * 1e3;
+      total_um[i] = mmToUm(result.total[i]);
+      machine_um[i] = mmToUm(result.machine[i]);
+      program_um[i] = mmToUm(result.program[i]);
       state[i] = static_cast<double>(result.conformance[i]);
     }
     writePlyWithScalar((dir / "swept_predicted.ply").string(), predicted_swept, samples.faces, total_um,

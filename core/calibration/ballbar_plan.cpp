@@ -10,6 +10,7 @@
 #include "core/kinematics/inverse_kinematics.h"
 #include "core/path/prediction_uncertainty.h"
 #include "core/kinematics/sensitivity_jacobian.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 
@@ -18,7 +19,7 @@ std::vector<BallbarSetup> defaultBallbarSetups(int n) {
   for (int s = 0; s < n; ++s) {
     // Table balls off the rotary axes (a ball on a rotation axis cannot see rotations about it),
     // at three heights; tool balls 25 mm off the spindle axis.
-    const double psi = 2.0 * M_PI * s / std::max(n, 1), phi = psi + M_PI / 3;
+    const double psi = 2.0 * kPi * s / std::max(n, 1), phi = psi + kPi / 3;
     BallbarSetup b;
     b.id = s + 1;
     b.table_ball_w = Eigen::Vector3d(80.0 * std::cos(psi), 80.0 * std::sin(psi), 20.0 + 30.0 * s);
@@ -37,7 +38,7 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
   const InverseKinematics ik(model);
   std::mt19937 rng(opt.seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const double min_el = opt.min_elevation_deg * M_PI / 180.0;
+  const double min_el = degToRad(opt.min_elevation_deg);
 
   // 1. Candidate configurations per set-up.
   std::vector<std::vector<BallbarReading>> pool(nsetups);
@@ -58,7 +59,7 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
           q[a] = lo + unit(rng) * (hi - lo);
         }
       // Bar direction: azimuth anywhere, elevation above the machine's xy plane, seen from F.
-      const double az = 2.0 * M_PI * unit(rng);
+      const double az = 2.0 * kPi * unit(rng);
       const double el = std::asin(std::sin(min_el) + unit(rng) * (1.0 - std::sin(min_el)));
       const Eigen::Vector3d d_F(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az),
                                 std::sin(el));

@@ -9,6 +9,7 @@
 #include "core/numerics/chebyshev.h"
 #include "core/model/effects.h"
 #include "core/numerics/statistics.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 
@@ -623,7 +624,7 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
       std::snprintf(why, sizeof why,
                     "the augmented model predicted the %s readings worse than the base model "
                     "(RMS %.3f um against %.3f um)",
-                    with_heldout ? "held-out" : "cross-validated", after * 1e3, before * 1e3);
+                    with_heldout ? "held-out" : "cross-validated", mmToUm(after), mmToUm(before));
       res.withdrawn_reason = why;
       res.withdrawn = res.added;
       res.added.clear();

@@ -5,11 +5,12 @@
 #include <limits>
 
 #include "core/model/rigid_transform.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
 
-constexpr double kTwoPi = 2.0 * M_PI;
+constexpr double kTwoPi = 2.0 * kPi;
 constexpr double kSingularEps = 1e-9;   // |component of a unit vector normal to an axis|
 // (numerical floor; the control's singular band, NcControl::singular_band, widens it)
 constexpr double kTravelEps = 1e-6;  // mm or rad of tolerance on travel limits: a CL file
@@ -47,7 +48,7 @@ double unwrapInto(double angle, double lo, double hi, double ref) {
 // inside travel and no other one is as near.
 double unwrapNear(double angle, double lo, double hi, double ref) {
   const double v = angle + kTwoPi * std::round((ref - angle) / kTwoPi);
-  if (v >= lo - kTravelEps && v <= hi + kTravelEps && std::abs(v - ref) < M_PI - 1e-9) return v;
+  if (v >= lo - kTravelEps && v <= hi + kTravelEps && std::abs(v - ref) < kPi - 1e-9) return v;
   return unwrapInto(angle, lo, hi, ref);
 }
 

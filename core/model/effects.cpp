@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "core/numerics/chebyshev.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -66,7 +67,7 @@ std::vector<EffectSpec> chebyshevCandidates(const MachineModel& m) {
     // a straightness with a few waves over the travel). Not five on a rotary axis of (nearly) a
     // full turn: its errors repeat with the angle, which the harmonics describe.
     const Axis& ax = m.axes[b.axis];
-    const bool full_turn = ax.isRotary() && ax.travel_max - ax.travel_min > 1.6 * M_PI;
+    const bool full_turn = ax.isRotary() && ax.travel_max - ax.travel_min > 1.6 * kPi;
     for (int extra : {2, 5}) {
       if (extra == 5 && full_turn) continue;
       EffectSpec e;

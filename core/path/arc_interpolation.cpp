@@ -1,4 +1,5 @@
 #include "core/path/arc_interpolation.h"
+#include "core/numerics/units.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -18,7 +19,7 @@ bool interpolateArc(const Eigen::Vector3d& start, const Eigen::Vector3d& end,
   const double r = rs.norm();
   if (r < 1e-12 || std::abs(re.norm() - r) > radius_tolerance) return false;
   double sweep = std::atan2(k.dot(rs.cross(re)), rs.dot(re));
-  if (sweep <= 1e-12) sweep += 2.0 * M_PI;  // counter-clockwise; equal points: full circle
+  if (sweep <= 1e-12) sweep += 2.0 * kPi;  // counter-clockwise; equal points: full circle
   // Sagitta r (1 - cos(dphi/2)) <= tol.
   const double tol = std::min(std::max(chordal_tolerance, 1e-9), r);
   const double dphi_max = 2.0 * std::acos(1.0 - tol / r);
@@ -41,7 +42,7 @@ bool interpolateArc(const Eigen::Vector3d& start, const Eigen::Vector3d& end,
 double arcPointsPerTurn(double radius, double tol) {
   const double r = std::max(radius, 1e-12);
   const double dphi = 2.0 * std::acos(std::max(-1.0, 1.0 - std::min(tol, r) / r));
-  return dphi > 0.0 ? 2.0 * M_PI / dphi : std::numeric_limits<double>::infinity();
+  return dphi > 0.0 ? 2.0 * kPi / dphi : std::numeric_limits<double>::infinity();
 }
 
 }  // namespace tolver

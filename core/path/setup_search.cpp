@@ -7,6 +7,7 @@
 
 #include "core/kinematics/inverse_kinematics.h"
 #include "core/numerics/max_min_affine.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -142,7 +143,7 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
   std::vector<double> rotations;
   if (options.rotation_step <= 0.0) rotations.push_back(model.setup.part_rotation);
   else
-    for (double r = 0.0; r < 2.0 * M_PI - 1e-9; r += options.rotation_step) rotations.push_back(r);
+    for (double r = 0.0; r < 2.0 * kPi - 1e-9; r += options.rotation_step) rotations.push_back(r);
   std::vector<double> gauges = options.gauge_lengths;
   if (gauges.empty()) gauges.push_back(model.setup.gauge_length);
 
@@ -333,10 +334,10 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
     for (const auto& [v0, rot0] : coarse) {
       double rot = rot0, v = v0;
       for (double h = options.rotation_step / 2.0;
-           h > M_PI / 1800.0 && !(options.stop_when_found && out.margin >= 0.0); h /= 2.0)
+           h > degToRad(0.1) && !(options.stop_when_found && out.margin >= 0.0); h /= 2.0)
         for (double r : {rot - h, rot + h}) {
           double vr = -std::numeric_limits<double>::infinity();
-          const double rr = std::fmod(r + 2.0 * M_PI, 2.0 * M_PI);
+          const double rr = std::fmod(r + 2.0 * kPi, 2.0 * kPi);
           for (double L : gauges) vr = std::max(vr, consider(rr, L));
           if (vr > v) v = vr, rot = rr;
         }

@@ -19,6 +19,7 @@
 
 #include "core/model/machine_model.h"
 #include "core/path/tool_path_prediction.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 
@@ -36,7 +37,7 @@ std::vector<AxisRange> jointRanges(const MachineModel& model, const std::vector<
                                    int* first_failed_index);
 
 struct SetupSearchOptions {
-  double rotation_step = M_PI / 12.0;  // candidate part rotations, rad (0 to keep the given one)
+  double rotation_step = degToRad(15.0);  // candidate part rotations, rad (0 to keep the given one)
   std::vector<double> gauge_lengths;   // candidates, mm; empty: the model's
   int max_points = 20000;              // points used in the search (evenly spaced subset)
   bool stop_when_found = false;        // return the first set-up that reaches every point

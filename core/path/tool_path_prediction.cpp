@@ -9,6 +9,7 @@
 
 #include "core/kinematics/forward_kinematics.h"
 #include "core/model/rigid_transform.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 
@@ -26,7 +27,7 @@ std::string describeIkFailure(const MachineModel& model, const IkSolution& sol) 
         return "the prismatic axes cannot place the tool tip (their directions are dependent)";
       const Axis& ax = model.axes[sol.violated_axis];
       const bool rot = ax.isRotary();
-      const double k = rot ? 180.0 / M_PI : 1.0;
+      const double k = rot ? radToDeg(1.0) : 1.0;
       const double over = sol.violated_value > ax.travel_max ? sol.violated_value - ax.travel_max
                                                              : ax.travel_min - sol.violated_value;
       std::snprintf(buf, sizeof buf,

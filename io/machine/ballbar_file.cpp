@@ -7,6 +7,7 @@
 
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -120,7 +121,7 @@ BallbarFile parseBallbarCsv(const std::string& text, const std::string& file, co
     r.q.resize(m.axes.size());
     for (size_t a = 0; a < m.axes.size(); ++a) {
       const double v = value(axisColumn(m.axes[a]));
-      r.q[a] = m.axes[a].isRotary() ? v * M_PI / 180.0 : v;
+      r.q[a] = m.axes[a].isRotary() ? degToRad(v) : v;
       if (dir_col[a] >= 0) {
         const std::string name = lower(m.axes[a].name) + "_dir";
         const double d = value(name);
@@ -169,7 +170,7 @@ std::string formatBallbarCsv(const MachineModel& m, const BallbarTest& test, boo
     for (int k = 0; k < 3; ++k) put("%.6f", s.table_ball_w[k]);
     for (int k = 0; k < 3; ++k) put("%.6f", s.tool_ball_t[k]);
     for (size_t a = 0; a < m.axes.size(); ++a)
-      put("%.6f", m.axes[a].isRotary() ? r.q[a] * 180.0 / M_PI : r.q[a]);
+      put("%.6f", m.axes[a].isRotary() ? radToDeg(r.q[a]) : r.q[a]);
     if (any_time) put("%.3f", r.context.time_s);
     if (with_length) put("%.7f", r.length);
     out += "\n";
@@ -229,11 +230,11 @@ std::string formatBallPositionsCsv(const BallbarTest& test, const std::vector<Ba
     for (int i = 0; i < 3; ++i) (out += ",") += formatNumber(t[i]);
     if (uncertainty) {
       for (int i = 0; i < 3; ++i) {
-        std::snprintf(buf, sizeof buf, ",%.4f", (*uncertainty)[k].table_w[i] * 1e3);
+        std::snprintf(buf, sizeof buf, ",%.4f", mmToUm((*uncertainty)[k].table_w[i]));
         out += buf;
       }
       for (int i = 0; i < 3; ++i) {
-        std::snprintf(buf, sizeof buf, ",%.4f", (*uncertainty)[k].tool_t[i] * 1e3);
+        std::snprintf(buf, sizeof buf, ",%.4f", mmToUm((*uncertainty)[k].tool_t[i]));
         out += buf;
       }
     }

@@ -13,6 +13,7 @@
 #include "core/model/effects.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -73,10 +74,10 @@ class Reader {
   static double angleUnit(const std::string& u, bool* ok) {
     *ok = true;
     if (u == "rad") return 1.0;
-    if (u == "deg") return M_PI / 180.0;
+    if (u == "deg") return degToRad(1.0);
     if (u == "urad") return 1e-6;
     if (u == "mrad") return 1e-3;
-    if (u == "arcsec") return M_PI / (180.0 * 3600.0);
+    if (u == "arcsec") return degToRad(1.0 / 3600.0);
     *ok = false;
     return 0;
   }
@@ -119,7 +120,7 @@ class Reader {
     if (e->Attribute("singular_band_deg")) {
       const double b = number(e, "singular_band_deg");
       if (!(b >= 0 && b <= 5)) fail(e, "control.singular_band_deg", "expected 0 to 5 degrees");
-      c.singular_band = b * M_PI / 180.0;
+      c.singular_band = degToRad(b);
     }
     for (const XMLElement* t = e->FirstChildElement(); t; t = t->NextSiblingElement()) {
       const std::string tag = t->Name();
@@ -463,7 +464,7 @@ std::string frameAttributes(const Eigen::Isometry3d& T) {
   const Eigen::Matrix3d& R = T.linear();
   const double ry = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
   const double rx = std::atan2(R(2, 1), R(2, 2)), rz = std::atan2(R(1, 0), R(0, 0));
-  const double k = 180.0 / M_PI;
+  const double k = radToDeg(1.0);
   const Eigen::Vector3d t = T.translation();
   return "translation=\"" + formatNumber(t.x()) + " " + formatNumber(t.y()) + " " +
          formatNumber(t.z()) + "\" rotation=\"" + formatNumber(rx * k) + " " +
@@ -474,7 +475,7 @@ std::string frameAttributes(const Eigen::Isometry3d& T) {
 
 std::string formatMachineXml(const Machine& machine, const std::string& comment) {
   const MachineModel& m = machine.model;
-  const double deg = 180.0 / M_PI;
+  const double deg = radToDeg(1.0);
   std::string o = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
   if (!comment.empty()) o += "<!-- " + xmlEscape(comment) + " -->\n";
   o += "<machine name=\"" + xmlEscape(m.name) + "\" length_unit=\"mm\" angle_unit=\"deg\">\n";

@@ -8,6 +8,7 @@
 #include <map>
 
 #include "core/kinematics/forward_kinematics.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -370,7 +371,7 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
         const Axis& ax = model.axes[a];
         const auto w = axis_words.find(a);
         const double old = w != axis_words.end() ? w->second->value : old_word[a];
-        double delta = ax.isRotary() ? ax.nc_sign * dq[a] * 180.0 / M_PI : ax.nc_sign * dq[a] / unit;
+        double delta = ax.isRotary() ? ax.nc_sign * radToDeg(dq[a]) : ax.nc_sign * dq[a] / unit;
         if (tcp && !ax.isRotary())
           for (int k = 0; k < 3; ++k)
             if (axis_of.count(L[k]) && axis_of[L[k]] == a) delta = dxyz[k];

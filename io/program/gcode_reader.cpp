@@ -12,11 +12,12 @@
 #include "core/kinematics/inverse_kinematics.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
+constexpr double kDegToRad = degToRad(1.0);
 
 // One word of a block: its letter, value and, for G and M, the code as written ("G43.4").
 struct Word {

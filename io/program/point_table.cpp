@@ -1,4 +1,5 @@
 #include "io/program/point_table.h"
+#include "core/numerics/units.h"
 
 #include <cctype>
 #include <cmath>
@@ -29,21 +30,21 @@ std::string formatPointTable(const MachineModel& model, const std::vector<ClPoin
                   c.u_w.z());
     out += buf;
     for (size_t a = 0; a < model.axes.size(); ++a) {
-      const double v = model.axes[a].isRotary() ? p.q[a] * 180.0 / M_PI : p.q[a];
+      const double v = model.axes[a].isRotary() ? radToDeg(p.q[a]) : p.q[a];
       std::snprintf(buf, sizeof buf, ",%.6f", v);
       out += buf;
     }
-    const Eigen::Vector3d d = p.deviation_w * 1e3;
+    const Eigen::Vector3d d = p.deviation_w * mmToUm(1.0);
     std::snprintf(buf, sizeof buf,
                   ",%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d",
                   p.p_pred_w.x(), p.p_pred_w.y(), p.p_pred_w.z(), p.u_pred_w.x(), p.u_pred_w.y(),
-                  p.u_pred_w.z(), d.x(), d.y(), d.z(), d.norm(), p.along_axis * 1e3,
-                  p.across_axis * 1e3, p.axis_angle * 1e6, p.singular ? 1 : 0);
+                  p.u_pred_w.z(), d.x(), d.y(), d.z(), d.norm(), mmToUm(p.along_axis),
+                  mmToUm(p.across_axis), radToUrad(p.axis_angle), p.singular ? 1 : 0);
     out += buf;
     if (uncertainty) {
       const PoseUncertainty& u = (*uncertainty)[i];
-      std::snprintf(buf, sizeof buf, ",%.4f,%.4f,%.4f,%d", u.tip * 1e3,
-                    PredictionUncertainty::along(u, c.u_w) * 1e3, u.axis * 1e6, u.outside ? 1 : 0);
+      std::snprintf(buf, sizeof buf, ",%.4f,%.4f,%.4f,%d", mmToUm(u.tip),
+                    mmToUm(PredictionUncertainty::along(u, c.u_w)), radToUrad(u.axis), u.outside ? 1 : 0);
       out += buf;
     }
     out += "\n";

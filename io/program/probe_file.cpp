@@ -4,6 +4,7 @@
 
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -37,7 +38,7 @@ std::vector<ProbedPoint> parseProbeCsv(const std::string& text, const std::strin
     for (size_t a = 0; a < model.axes.size(); ++a) {
       const Axis& ax = model.axes[a];
       const double v = number(axisColumn(ax), ax.isRotary() ? 1e4 : 1e6);
-      p.q[a] = ax.isRotary() ? v * M_PI / 180.0 : v;
+      p.q[a] = ax.isRotary() ? degToRad(v) : v;
     }
     const int given = !row.cell("part_nx").empty() + !row.cell("part_ny").empty() + !row.cell("part_nz").empty();
     if (given == 3) {
@@ -71,7 +72,7 @@ std::string formatProbeCsv(const MachineModel& model, const std::vector<ProbedPo
   for (const ProbedPoint& p : points) {
     std::string row = formatNumber(p.p_w.x()) + "," + formatNumber(p.p_w.y()) + "," + formatNumber(p.p_w.z());
     for (size_t a = 0; a < model.axes.size(); ++a)
-      row += "," + formatNumber(model.axes[a].isRotary() ? p.q[a] * 180.0 / M_PI : p.q[a]);
+      row += "," + formatNumber(model.axes[a].isRotary() ? radToDeg(p.q[a]) : p.q[a]);
     if (p.n_w.isZero())
       row += ",,,";
     else

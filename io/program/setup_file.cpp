@@ -6,6 +6,7 @@
 
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 
@@ -49,7 +50,7 @@ PartSetup parseSetup(const std::string& text, const std::string& file_name, Part
       s.part_zero_given = true;
     } else if (key == "part_rotation_deg") {
       need(1);
-      s.part_rotation = v[0] * M_PI / 180.0;
+      s.part_rotation = degToRad(v[0]);
       s.part_rotation_given = true;
     } else if (key == "gauge_length_mm") {
       need(1);

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/common/json_text.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 
@@ -28,9 +29,9 @@ std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test
   j["unknowns"] = r.unknowns;
   j["rank"] = r.rank;
   j["condition_number"] = r.condition;
-  j["residual_rms_um"] = r.rms_residual * 1e3;
-  j["residual_max_um"] = r.max_residual * 1e3;
-  j["residual_sigma_um"] = r.residual_sigma * 1e3;
+  j["residual_rms_um"] = mmToUm(r.rms_residual);
+  j["residual_max_um"] = mmToUm(r.max_residual);
+  j["residual_sigma_um"] = mmToUm(r.residual_sigma);
   j["method"] =
       "Gauss-Newton with the SVD pseudo-inverse of the column-scaled identification Jacobian "
       "(rank tolerance 1e-9 of the largest singular value); uncertainties from s^2 (J^T J)^-1; "
@@ -76,14 +77,14 @@ std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test
     const auto& e = r.ball_errors[s];
     const auto& u = r.ball_uncertainty[s];
     balls.push_back({{"setup", test.setups[s].id},
-                     {"table_ball_error_um", {e.table_w.x() * 1e3, e.table_w.y() * 1e3, e.table_w.z() * 1e3}},
-                     {"table_ball_uncertainty_um", {u.table_w.x() * 1e3, u.table_w.y() * 1e3, u.table_w.z() * 1e3}},
-                     {"tool_ball_error_um", {e.tool_t.x() * 1e3, e.tool_t.y() * 1e3, e.tool_t.z() * 1e3}},
-                     {"tool_ball_uncertainty_um", {u.tool_t.x() * 1e3, u.tool_t.y() * 1e3, u.tool_t.z() * 1e3}}});
+                     {"table_ball_error_um", {mmToUm(e.table_w.x()), mmToUm(e.table_w.y()), mmToUm(e.table_w.z())}},
+                     {"table_ball_uncertainty_um", {mmToUm(u.table_w.x()), mmToUm(u.table_w.y()), mmToUm(u.table_w.z())}},
+                     {"tool_ball_error_um", {mmToUm(e.tool_t.x()), mmToUm(e.tool_t.y()), mmToUm(e.tool_t.z())}},
+                     {"tool_ball_uncertainty_um", {mmToUm(u.tool_t.x()), mmToUm(u.tool_t.y()), mmToUm(u.tool_t.z())}}});
   }
   j["ball_errors"] = balls;
   auto stats = [](const ResidualStats& x) {
-    return json{{"readings", x.readings}, {"rms_um", x.rms * 1e3}, {"max_um", x.max * 1e3}};
+    return json{{"readings", x.readings}, {"rms_um", mmToUm(x.rms)}, {"max_um", mmToUm(x.max)}};
   };
   if (!in.balls_file.empty()) j["ball_positions_file"] = in.balls_file;
   if (!in.heldout.file.empty())
@@ -97,7 +98,7 @@ std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test
   if (in.written.heldout.readings > 0) j["written_files_check"]["heldout"] = stats(in.written.heldout);
   json removed = json::array();
   for (const RemovedReading& g : in.removed)
-    removed.push_back({{"line", g.line}, {"residual_um", g.residual * 1e3}, {"studentized", g.studentized}});
+    removed.push_back({{"line", g.line}, {"residual_um", mmToUm(g.residual)}, {"studentized", g.studentized}});
   j["gross_readings_removed"] = removed;
   return jsonText(j);
 }
@@ -157,7 +158,7 @@ std::string formatBallbarGcode(const MachineModel& m, const BallbarTest& plan, d
     std::string rot, lin;
     for (size_t a = 0; a < m.axes.size(); ++a) {
       const Axis& ax = m.axes[a];
-      const double v = ax.nc_sign * (ax.isRotary() ? r.q[a] * 180.0 / M_PI : r.q[a]);
+      const double v = ax.nc_sign * (ax.isRotary() ? radToDeg(r.q[a]) : r.q[a]);
       std::snprintf(buf, sizeof buf, " %s%.4f", ax.name.c_str(), v);
       (ax.isRotary() ? rot : lin) += buf;
     }

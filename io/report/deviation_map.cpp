@@ -31,13 +31,14 @@
 
 #include "io/common/io_error.h"
 #include "io/report/png_plot.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
 
 std::string um(double mm) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%+.1f", mm * 1e3);
+  std::snprintf(buf, sizeof buf, "%+.1f", mmToUm(mm));
   return buf;
 }
 
@@ -164,19 +165,19 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
   vtkNew<vtkLookupTable> lut;
   const int n = 240;
   lut->SetNumberOfTableValues(n);
-  lut->SetTableRange(range_lo * 1e3, range_hi * 1e3);
+  lut->SetTableRange(mmToUm(range_lo), mmToUm(range_hi));
   for (int i = 0; i < n; ++i) {
     const double d = range_lo + (i + 0.5) / n * (range_hi - range_lo);
     const Rgb c = deviationColour(d, lo, up);
     lut->SetTableValue(i, c[0] / 255.0, c[1] / 255.0, c[2] / 255.0, 1.0);
   }
-  lut->SetAnnotation(vtkVariant(lo * 1e3), ("lower " + um(lo)).c_str());
-  lut->SetAnnotation(vtkVariant(up * 1e3), ("upper " + um(up)).c_str());
+  lut->SetAnnotation(vtkVariant(mmToUm(lo)), ("lower " + um(lo)).c_str());
+  lut->SetAnnotation(vtkVariant(mmToUm(up)), ("upper " + um(up)).c_str());
   // The band boundaries beyond the limits.
   const double band = 2.0 * half / 4.0;
   for (int k = 1; k <= 3; ++k) {
-    lut->SetAnnotation(vtkVariant((up + k * band) * 1e3), um(up + k * band).c_str());
-    lut->SetAnnotation(vtkVariant((lo - k * band) * 1e3), um(lo - k * band).c_str());
+    lut->SetAnnotation(vtkVariant(mmToUm(up + k * band)), um(up + k * band).c_str());
+    lut->SetAnnotation(vtkVariant(mmToUm(lo - k * band)), um(lo - k * band).c_str());
   }
   vtkNew<vtkScalarBarActor> bar;
   bar->SetLookupTable(lut);
@@ -314,7 +315,7 @@ void renderHistogram(const std::string& png_path, const std::vector<double>& dev
   c.y_label = "% of the machined area";
   c.width = width;
   c.height = height;
-  c.bar_width = static_cast<double>((dmax - dmin) * 1e3 / bins);
+  c.bar_width = mmToUm(dmax - dmin) / bins;
   ScatterSeries in, over, under;
   in.style = over.style = under.style = ScatterSeries::Style::Bars;
   in.legend = "in the zone";
@@ -326,7 +327,7 @@ void renderHistogram(const std::string& png_path, const std::vector<double>& dev
   for (int b = 0; b < bins; ++b) {
     const double mid = dmin + (dmax - dmin) * (b + 0.5) / bins;
     ScatterSeries& s = mid > upper ? over : mid < lower ? under : in;
-    s.x.push_back(mid * 1e3);
+    s.x.push_back(mmToUm(mid));
     s.y.push_back(h[b]);
   }
   c.series = {in, over, under};
@@ -336,13 +337,13 @@ void renderHistogram(const std::string& png_path, const std::vector<double>& dev
     lim.radius = 2;
     lim.rgb[0] = lim.rgb[1] = lim.rgb[2] = 20;
     lim.legend = l == lower ? "zone limits " + um(lower) + " / " + um(upper) + " µm" : "";
-    lim.x = {l * 1e3, l * 1e3};
+    lim.x = {mmToUm(l), mmToUm(l)};
     lim.y = {0.0, hmax * 1.1};
     c.series.push_back(lim);
   }
   c.fixed_x = true;
-  c.x_min = dmin * 1e3;
-  c.x_max = dmax * 1e3;
+  c.x_min = mmToUm(dmin);
+  c.x_max = mmToUm(dmax);
   c.fixed_y = true;
   c.y_min = 0;
   c.y_max = hmax * 1.15;
@@ -370,9 +371,9 @@ void renderLineProfile(const std::string& png_path, const std::vector<double>& a
   m.rgb[0] = 25, m.rgb[1] = 40, m.rgb[2] = 170;
   for (size_t i = 0; i < total.size(); ++i) {
     t.x.push_back(arc_length[i]);
-    t.y.push_back(total[i] * 1e3);
+    t.y.push_back(mmToUm(total[i]));
     m.x.push_back(arc_length[i]);
-    m.y.push_back(machine[i] * 1e3);
+    m.y.push_back(mmToUm(machine[i]));
   }
   c.series = {t, m};
   double lo = lower, hi = upper;
@@ -381,8 +382,8 @@ void renderLineProfile(const std::string& png_path, const std::vector<double>& a
     hi = std::max({hi, total[i], machine[i]});
   }
   c.fixed_y = true;
-  c.y_min = (lo - 0.15 * (hi - lo)) * 1e3;
-  c.y_max = (hi + 0.15 * (hi - lo)) * 1e3;
+  c.y_min = mmToUm(lo - 0.15 * (hi - lo));
+  c.y_max = mmToUm(hi + 0.15 * (hi - lo));
   for (double l : {lower, upper}) {
     ScatterSeries lim;
     lim.style = ScatterSeries::Style::Line;
@@ -390,7 +391,7 @@ void renderLineProfile(const std::string& png_path, const std::vector<double>& a
     lim.rgb[0] = 46, lim.rgb[1] = 160, lim.rgb[2] = 67;
     lim.legend = l == lower ? "zone limits" : "";
     lim.x = {0.0, xmax};
-    lim.y = {l * 1e3, l * 1e3};
+    lim.y = {mmToUm(l), mmToUm(l)};
     c.series.push_back(lim);
   }
   writeScatterPng(png_path, c);

@@ -14,13 +14,14 @@
 #include "io/common/io_error.h"
 #include "io/report/png_plot.h"
 #include "io/common/text_util.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
 
 using nlohmann::json;
 
-double um(double mm) { return mm * 1e3; }
+double um(double mm) { return mmToUm(mm); }
 // JSON has no NaN or infinity: such values are written as null.
 json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 
@@ -63,7 +64,7 @@ json fitJson(const CalibrationResult& f) {
 
 json summaryJson(const PredictionSummary& s) {
   return {{"points", s.points}, {"max_um", um(s.max_deviation)}, {"rms_um", um(s.rms_deviation)},
-          {"max_point", s.max_index}, {"max_axis_error_urad", s.max_axis_angle * 1e6}};
+          {"max_point", s.max_index}, {"max_axis_error_urad", radToUrad(s.max_axis_angle)}};
 }
 
 // The variable an effect follows, per reading, and its axis label.
@@ -71,7 +72,7 @@ std::vector<double> variableOf(const MachineModel& m, const BallbarTest& test, c
                                std::string* label) {
   std::vector<double> v(test.readings.size());
   const bool rotary = e.axis >= 0 && m.axes[e.axis].isRotary();
-  const double k = rotary ? 180.0 / M_PI : 1.0;
+  const double k = rotary ? radToDeg(1.0) : 1.0;
   const std::string axis = e.axis >= 0 ? m.axes[e.axis].name : "";
   for (size_t i = 0; i < v.size(); ++i) {
     const BallbarReading& r = test.readings[i];
@@ -239,7 +240,7 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
       {"candidates", cands},
       {"seconds", in.seconds}};
   auto stats = [](const ResidualStats& x) {
-    return json{{"readings", x.readings}, {"rms_um", x.rms * 1e3}, {"max_um", x.max * 1e3}};
+    return json{{"readings", x.readings}, {"rms_um", mmToUm(x.rms)}, {"max_um", mmToUm(x.max)}};
   };
   if (r.heldout_before.readings > 0)
     out["heldout"] = {{"file", in.heldout_file},
@@ -266,7 +267,7 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
   }
   json removed = json::array();
   for (const RemovedReading& g : in.removed)
-    removed.push_back({{"line", g.line}, {"residual_um", g.residual * 1e3}, {"studentized", g.studentized}});
+    removed.push_back({{"line", g.line}, {"residual_um", mmToUm(g.residual)}, {"studentized", g.studentized}});
   out["gross_readings_removed"] = removed;
   if (in.program) {
     const ProgramComparison& p = *in.program;
@@ -395,7 +396,7 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
     for (size_t i = 0; i < x.size(); ++i) {
       const BallbarReading& rd = test.readings[i];
       if (u.variable == "time") x[i] = rd.context.time_s / 60.0;
-      else if (axis >= 0) x[i] = rd.q[axis] * (m.axes[axis].isRotary() ? 180.0 / M_PI : 1.0);
+      else if (axis >= 0) x[i] = rd.q[axis] * (m.axes[axis].isRotary() ? radToDeg(1.0) : 1.0);
       else x[i] = static_cast<double>(i);
     }
     if (u.variable == "time") label = "time since the test began (min)";

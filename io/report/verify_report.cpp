@@ -10,6 +10,7 @@
 
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -55,8 +56,8 @@ static bool attributable(const VerifyResult& v, int i) {
 
 std::string worstDeviationText(const VerifyResult& v, const OutOfToleranceRegion& g) {
   if (!v.total_beyond.empty() && v.total_beyond[g.worst_sample])
-    return "beyond the search range (" + fmt("%+.0f", g.worst_deviation * 1e3) + " um or deeper)";
-  return fmt("%+.2f", g.worst_deviation * 1e3);
+    return "beyond the search range (" + fmt("%+.0f", mmToUm(g.worst_deviation)) + " um or deeper)";
+  return fmt("%+.2f", mmToUm(g.worst_deviation));
 }
 
 std::string regionCause(const VerifyReport& r, const OutOfToleranceRegion& region) {
@@ -162,10 +163,10 @@ std::string formatDeviationsCsv(const VerifyReport& r) {
     const bool split = attributable(v, static_cast<int>(i));
     const bool beyond = !v.total_beyond.empty() && v.total_beyond[i];
     char t[32] = "", pr[32] = "", ma[32] = "";
-    if (!beyond) std::snprintf(t, sizeof t, "%.4f", v.machined[i] ? v.total[i] * 1e3 : 0.0);
+    if (!beyond) std::snprintf(t, sizeof t, "%.4f", v.machined[i] ? mmToUm(v.total[i]) : 0.0);
     if (split) {
-      std::snprintf(pr, sizeof pr, "%.4f", v.program[i] * 1e3);
-      std::snprintf(ma, sizeof ma, "%.4f", v.machine[i] * 1e3);
+      std::snprintf(pr, sizeof pr, "%.4f", mmToUm(v.program[i]));
+      std::snprintf(ma, sizeof ma, "%.4f", mmToUm(v.machine[i]));
     }
     std::snprintf(buf, sizeof buf, "%zu,%.5f,%.5f,%.5f,%.6f,%.6f,%.6f,%s,%d,%s,%s,%s,%s,%d,%s\n", i,
                   s.p_w[i].x(), s.p_w[i].y(), s.p_w[i].z(), s.n_w[i].x(), s.n_w[i].y(), s.n_w[i].z(),
@@ -230,15 +231,15 @@ std::string formatVerifyHtml(const VerifyReport& r) {
                                   : r.part_file + ": " + std::to_string(r.samples->size()) +
                                         " samples at " + fmt("%.3g", r.spacing_mm) + " mm");
   for (const auto& z : r.zones)
-    row("zone " + z.region, z.spec + " mm: [" + fmt("%+.1f", z.lower * 1e3) + ", " +
-                                fmt("%+.1f", z.upper * 1e3) + "] um");
+    row("zone " + z.region, z.spec + " mm: [" + fmt("%+.1f", mmToUm(z.lower)) + ", " +
+                                fmt("%+.1f", mmToUm(z.upper)) + "] um");
   row("sign convention", "along the outward normal: + material left, - gouge");
   h += "</table>\n<h2>Deviations (um)</h2>\n<table><tr><th class=\"l\"></th><th>min</th><th>max</th>"
        "<th>mean</th><th>RMS</th><th class=\"l\">what it is</th></tr>\n";
   auto srow = [&](const char* name, const DeviationStats& s, const char* what) {
-    h += std::string("<tr><th class=\"l\">") + name + "</th><td>" + fmt("%+.2f", s.min * 1e3) + "</td><td>" +
-         fmt("%+.2f", s.max * 1e3) + "</td><td>" + fmt("%+.2f", s.mean * 1e3) + "</td><td>" +
-         fmt("%.2f", s.rms * 1e3) + "</td><td class=\"l\">" + what + "</td></tr>\n";
+    h += std::string("<tr><th class=\"l\">") + name + "</th><td>" + fmt("%+.2f", mmToUm(s.min)) + "</td><td>" +
+         fmt("%+.2f", mmToUm(s.max)) + "</td><td>" + fmt("%+.2f", mmToUm(s.mean)) + "</td><td>" +
+         fmt("%.2f", mmToUm(s.rms)) + "</td><td class=\"l\">" + what + "</td></tr>\n";
   };
   srow("total", v.total_stats, "predicted swept surface - CAD: what the part will be");
   if (r.mode != "cl-only") srow("program", v.program_stats, "nominal swept - CAD: the program on a perfect machine");
@@ -258,10 +259,10 @@ std::string formatVerifyHtml(const VerifyReport& r) {
       h += "<tr><td>" + std::to_string(k + 1) + "</td><td class=\"l\">" + conformanceName(g.kind) +
            "</td><td class=\"l\">" + html(r.zones[g.zone].region) + "</td><td>" + fmt("%.3f", g.area_mm2) +
            "</td><td>" + worstDeviationText(v, g) + "</td><td>" +
-           fmt("%.2f", g.worst_excursion * 1e3) + "</td><td>" +
-           (attributable(v, g.worst_sample) ? fmt("%+.2f", v.machine[g.worst_sample] * 1e3) : std::string("&mdash;")) +
+           fmt("%.2f", mmToUm(g.worst_excursion)) + "</td><td>" +
+           (attributable(v, g.worst_sample) ? fmt("%+.2f", mmToUm(v.machine[g.worst_sample])) : std::string("&mdash;")) +
            "</td><td>" +
-           (attributable(v, g.worst_sample) ? fmt("%+.2f", v.program[g.worst_sample] * 1e3) : std::string("&mdash;")) +
+           (attributable(v, g.worst_sample) ? fmt("%+.2f", mmToUm(v.program[g.worst_sample])) : std::string("&mdash;")) +
            "</td><td class=\"l\">" +
            regionCause(r, g) + "</td><td class=\"l\">" + where + "</td><td>" +
            std::to_string(clLine(r, g.worst_sample)) + "</td></tr>\n";
