@@ -116,8 +116,6 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
 // Batch: jobs.csv with columns name,machine,cl,part,tolerance[,setup,zones,probed]; paths relative to
 // the jobs file.
 int runBatch(const VerifyOptions& base) {
-  const std::string text = readFile(base.batch);
-  const auto lines = splitLines(text);
   const fs::path root = fs::path(base.batch).parent_path();
   auto resolve = [&](const std::string& p) {
     if (p.empty() || fs::path(p).is_absolute()) return p;
@@ -125,47 +123,35 @@ int runBatch(const VerifyOptions& base) {
   };
   std::vector<VerifyOptions> jobs;
   std::vector<std::string> names;
-  std::map<std::string, int> col;
-  for (size_t i = 0; i < lines.size(); ++i) {
-    const auto t = trim(lines[i]);
-    if (t.empty() || t[0] == '#') continue;
-    const int line = static_cast<int>(i) + 1;
-    const auto c = splitCsvLine(lines[i]);
-    if (col.empty()) {
-      for (size_t k = 0; k < c.size(); ++k) col[c[k]] = static_cast<int>(k);
-      for (const char* r : {"name", "machine", "cl", "tolerance"})
-        if (!col.count(r)) throw InputError(base.batch, line, 0, r, "missing column (name,machine,cl,part,tolerance[,setup,zones,probed])");
-      continue;
-    }
-    auto cell = [&](const char* n) -> std::string {
-      auto it = col.find(n);
-      return it == col.end() || it->second >= static_cast<int>(c.size()) ? "" : c[it->second];
-    };
-    VerifyOptions o = base;
-    o.batch.clear();
-    o.quiet = true;
-    o.in.machine.machine = resolve(cell("machine"));
-    o.in.machine.setup = resolve(cell("setup"));
-    o.in.probed = resolve(cell("probed"));
-    o.in.program.cl = resolve(cell("cl"));
-    o.in.program.nc.clear();
-    o.in.part = resolve(cell("part"));
-    o.in.zones_file = resolve(cell("zones"));
-    const auto tol = parseNumber(cell("tolerance"));
-    if (!tol && o.in.zones_file.empty())
-      throw InputError(base.batch, line, col["tolerance"] + 1, "tolerance", "'" + cell("tolerance") + "' is not a number");
-    o.in.tolerance_mm = tol ? *tol : NAN;
-    const std::string name = cell("name");
-    if (name.empty() || name.find('/') != std::string::npos || name == "." || name == "..")
-      throw InputError(base.batch, line, col["name"] + 1, "name", "a job name is a plain file name");
-    // Two jobs of one name would write one directory, one report lost.
-    if (std::find(names.begin(), names.end(), name) != names.end())
-      throw InputError(base.batch, line, col["name"] + 1, "name",
-                       "job '" + name + "' is named twice: each job needs its own name");
-    o.report_dir = (fs::path(base.report_dir) / name).string();
-    jobs.push_back(o);
-    names.push_back(name);
-  }
+  forEachCsvRow(
+      readFile(base.batch), base.batch, {"name", "machine", "cl", "tolerance"},
+      "missing column (name,machine,cl,part,tolerance[,setup,zones,probed])", [&](const CsvRow& row) {
+        VerifyOptions o = base;
+        o.batch.clear();
+        o.quiet = true;
+        o.in.machine.machine = resolve(row.cell("machine"));
+        o.in.machine.setup = resolve(row.cell("setup"));
+        o.in.probed = resolve(row.cell("probed"));
+        o.in.program.cl = resolve(row.cell("cl"));
+        o.in.program.nc.clear();
+        o.in.part = resolve(row.cell("part"));
+        o.in.zones_file = resolve(row.cell("zones"));
+        const auto tol = parseNumber(row.cell("tolerance"));
+        if (!tol && o.in.zones_file.empty())
+          throw InputError(base.batch, row.line, row.column("tolerance"), "tolerance",
+                           "'" + row.cell("tolerance") + "' is not a number");
+        o.in.tolerance_mm = tol ? *tol : NAN;
+        const std::string name = row.cell("name");
+        if (name.empty() || name.find('/') != std::string::npos || name == "." || name == "..")
+          throw InputError(base.batch, row.line, row.column("name"), "name", "a job name is a plain file name");
+        // Two jobs of one name would write one directory, one report lost.
+        if (std::find(names.begin(), names.end(), name) != names.end())
+          throw InputError(base.batch, row.line, row.column("name"), "name",
+                           "job '" + name + "' is named twice: each job needs its own name");
+        o.report_dir = (fs::path(base.report_dir) / name).string();
+        jobs.push_back(o);
+        names.push_back(name);
+      });
   if (jobs.empty()) throw InputError(base.batch, 0, 0, "jobs", "the file lists no job");
   makeReportDir(base.report_dir);
   std::vector<JobOutcome> outcomes(jobs.size());
@@ -196,11 +182,10 @@ int runBatch(const VerifyOptions& base) {
     const std::string verdict = !r.ok ? "error" : r.pass ? "pass" : r.incomplete ? "incomplete"
                                 : r.undecided ? "undecided" : "fail";
     code = std::max(code, !r.ok ? 2 : r.pass ? 0 : 1);
-    char buf[512];
-    std::snprintf(buf, sizeof buf, "%s,%s,%.3f,%.3f,%.3f,%.3f,%d,%s,\"%s\"\n", r.name.c_str(), verdict.c_str(),
-                  r.min_um, r.max_um, r.machine_rms_um, r.percent_in, r.regions, r.report.c_str(),
-                  r.error.c_str());
-    csv += buf;
+    csv += csvLine({r.name, verdict, formatWith("%.3f", r.min_um), formatWith("%.3f", r.max_um),
+                    formatWith("%.3f", r.machine_rms_um), formatWith("%.3f", r.percent_in), std::to_string(r.regions),
+                    r.report, r.error}) +
+           "\n";
     if (r.ok)
       std::printf("  %-20s %-7s %+10.2f %+10.2f %12.2f %8.2f %8d\n", r.name.c_str(), verdict.c_str(), r.min_um,
                   r.max_um, r.machine_rms_um, r.percent_in, r.regions);

@@ -108,12 +108,6 @@ Cutter cutterFrom(const VerifyInputs& o, const ClProgram& program) {
   return c;
 }
 
-std::string fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
-
 // Renders the maps and the histogram; returns (caption, path) pairs.
 std::vector<std::pair<std::string, std::string>> renderImages(
     int line_pass, const std::string& dir, const SurfaceSamples& s, const VerifyResult& r,
@@ -145,7 +139,7 @@ std::vector<std::pair<std::string, std::string>> renderImages(
   if (r.total_stats.min_sample >= 0 &&
       std::abs(r.total_stats.min) > std::abs(r.total_stats.max))
     worst = r.total_stats.min_sample;
-  auto where = [](const Eigen::Vector3d& p) { return fmt("(%.1f, ", p.x()) + fmt("%.1f, ", p.y()) + fmt("%.1f)", p.z()); };
+  auto where = [](const Eigen::Vector3d& p) { return formatWith("(%.1f, ", p.x()) + formatWith("%.1f, ", p.y()) + formatWith("%.1f)", p.z()); };
   std::vector<MapView> views = {{"isometric", Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d::UnitZ(), false, {}},
                                 {"top", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitY(), false, {}}};
   auto upFor = [](const Eigen::Vector3d& n) {
@@ -158,14 +152,14 @@ std::vector<std::pair<std::string, std::string>> renderImages(
                            ? (*cl_lines)[r.cl_index[g.worst_sample]]
                            : 0;
       map.callouts.push_back({g.where_w, "R" + std::to_string(k + 1) + " " + conformanceName(g.kind) + " " +
-                                             fmt("%+.1f um", mmToUm(g.worst_deviation)) + "\n" + where(g.where_w) +
+                                             formatWith("%+.1f um", mmToUm(g.worst_deviation)) + "\n" + where(g.where_w) +
                                              (line > 0 ? " line " + std::to_string(line) : std::string())});
       // The views that show the worst regions: along each one's normal, the whole part.
       views.push_back({k == 0 ? "worst" : "region" + std::to_string(k + 1), -g.normal_w, upFor(g.normal_w), true,
                        g.where_w});
     }
   } else if (worst >= 0) {
-    map.callouts.push_back({s.p_w[worst], "largest " + fmt("%+.1f um", mmToUm(r.total[worst])) + "\n" + where(s.p_w[worst])});
+    map.callouts.push_back({s.p_w[worst], "largest " + formatWith("%+.1f um", mmToUm(r.total[worst])) + "\n" + where(s.p_w[worst])});
     views.push_back({"worst", -s.n_w[worst], upFor(s.n_w[worst]), true, s.p_w[worst]});
   }
   for (const auto& v : views) {
@@ -277,7 +271,7 @@ ProgramOnMachine predictOnMachine(const VerifyInputs& o) {
   const std::string errors = machineErrorsStatement(m.machine, &no_errors);
   if (no_errors) m.warnings.push_back(errors);
   for (const RotaryJump& j : findRotaryJumps(model, m.program.path, m.pred, degToRad(10.0)))
-    m.warnings.push_back(fmt("program risk: rotary step of %+.1f deg of ", radToDeg(j.step)) +
+    m.warnings.push_back(formatWith("program risk: rotary step of %+.1f deg of ", radToDeg(j.step)) +
                          model.axes[j.axis].name + " between cutting moves at line " + std::to_string(j.line));
   return m;
 }
@@ -415,7 +409,7 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   rep.machine_file = o.machine.machine;
   rep.program_file = program.file;
   rep.notes = m.warnings;
-  rep.cutter = cutter.describe() + ", length " + fmt("%.4g", cutter.effectiveLength()) + " mm" +
+  rep.cutter = cutter.describe() + ", length " + formatWith("%.4g", cutter.effectiveLength()) + " mm" +
                (cutter.length > 0 ? "" : " (assumed: 3 D)");
   rep.cl_points = static_cast<int>(program.path.size());
   for (const auto& p : program.path) rep.cl_lines.push_back(p.line);

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "io/common/io_error.h"
+
 namespace tolver {
 namespace {
 
@@ -15,6 +17,39 @@ TEST(TextUtil, Base64MatchesRfc4648) {
   EXPECT_EQ(base64Encode("fooba"), "Zm9vYmE=");
   EXPECT_EQ(base64Encode("foobar"), "Zm9vYmFy");
   EXPECT_EQ(base64Encode(std::string("\x89PNG", 4)), "iVBORw==");
+}
+
+// RFC 4180 quoting: what csvField writes, splitCsvLine reads back, cell for cell, for cells with
+// commas, quotes, edge spaces and nothing special; unquoted cells are trimmed.
+TEST(TextUtil, CsvCellsRoundTripThroughQuoting) {
+  const std::vector<std::string> cells = {"plain", "a,b", "say \"hi\"", "  edge ", "", "x\"\"y", "1.5"};
+  EXPECT_EQ(splitCsvLine(csvLine(cells)), cells);
+  EXPECT_EQ(csvField("plain"), "plain");
+  EXPECT_EQ(csvField("a,b"), "\"a,b\"");
+  EXPECT_EQ(csvField("say \"hi\""), "\"say \"\"hi\"\"\"");
+  EXPECT_EQ(splitCsvLine(" a , b ,c"), (std::vector<std::string>{"a", "b", "c"}));
+  EXPECT_EQ(splitCsvLine("\"x, y\" , z"), (std::vector<std::string>{"x, y", "z"}));
+}
+
+// One header policy: comments and blank lines skipped, names lowercased, a name given twice or a
+// required one missing is an error naming the header line.
+TEST(TextUtil, CsvHeaderIsReadOnePolicy) {
+  const std::string text = "# comment\n\nName,Value\na,1\n# again\nb,2\n";
+  std::vector<std::string> got;
+  int header_line = 0;
+  forEachCsvRow(
+      text, "t.csv", {"name", "value"}, "missing", [&](const CsvRow& r) { got.push_back(r.cell("name") + r.cell("value")); },
+      [&](const CsvHeader& h) { header_line = h.line; });
+  EXPECT_EQ(got, (std::vector<std::string>{"a1", "b2"}));
+  EXPECT_EQ(header_line, 3);
+  try {
+    forEachCsvRow("a,b,A\n1,2,3\n", "t.csv", {}, "missing", [](const CsvRow&) {});
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("named twice"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(forEachCsvRow("a\n1\n", "t.csv", {"b"}, "missing", [](const CsvRow&) {}), InputError);
+  EXPECT_THROW(forEachCsvRow("# only\n", "t.csv", {}, "missing", [](const CsvRow&) {}), InputError);
 }
 
 }  // namespace

@@ -94,22 +94,16 @@ void OutputSet::commit() {
 }
 
 void writeFileAtomically(const std::string& path, const std::string& content) {
+  OutputSet one;
+  one.add(path, content);
+  one.commit();
+}
+
+std::string OutputSet::addWritten(const std::string& path, const std::function<bool(const std::string&)>& write) {
   const std::string tmp = path + ".tmp-tolver";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw InputError(path, 0, 0, "output", std::string("cannot write: ") + std::strerror(errno));
-    out << content;
-    out.flush();
-    if (!out) {
-      std::remove(tmp.c_str());
-      throw InputError(path, 0, 0, "output", "write failed");
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(tmp.c_str());
-    throw InputError(path, 0, 0, "output", "cannot replace file: " + why);
-  }
+  pending_.emplace_back(tmp, path);  // removed by the destructor if anything below fails
+  if (!write(tmp)) throw InputError(path, 0, 0, "output", "cannot write the file");
+  return tmp;
 }
 
 std::string readFile(const std::string& path) {

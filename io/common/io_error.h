@@ -2,6 +2,7 @@
 // Errors in files and options: thrown at the io boundary, caught once by the CLI, which prints
 // what() as one line and exits with code 2.
 #include <stdexcept>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -40,6 +41,9 @@ class OutputSet {
   OutputSet& operator=(const OutputSet&) = delete;
   ~OutputSet();
   std::string add(const std::string& path, const std::string& content);
+  // The same for a file a library writes itself (VTK, assimp): write(temporary) returns false
+  // when it failed.
+  std::string addWritten(const std::string& path, const std::function<bool(const std::string&)>& write);
   void commit();
 
  private:

@@ -49,15 +49,49 @@ std::vector<std::string> splitLines(const std::string& text) {
 std::vector<std::string> splitCsvLine(const std::string& line) {
   std::vector<std::string> out;
   std::string cur;
-  for (char c : line) {
-    if (c == ',') {
-      out.emplace_back(trim(cur));
+  bool quoted = false;     // inside a quoted cell
+  bool was_quoted = false;  // the current cell was quoted: keep its inner spaces
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char c = line[i];
+    if (quoted) {
+      if (c == '"' && i + 1 < line.size() && line[i + 1] == '"') {
+        cur += '"';
+        ++i;
+      } else if (c == '"') {
+        quoted = false;
+      } else {
+        cur += c;
+      }
+    } else if (c == '"' && trim(cur).empty()) {
       cur.clear();
-    } else {
+      quoted = was_quoted = true;
+    } else if (c == ',') {
+      out.emplace_back(was_quoted ? cur : std::string(trim(cur)));
+      cur.clear();
+      was_quoted = false;
+    } else if (!(was_quoted && (c == ' ' || c == '\t'))) {
       cur += c;
     }
   }
-  out.emplace_back(trim(cur));
+  out.emplace_back(was_quoted ? cur : std::string(trim(cur)));
+  return out;
+}
+
+std::string csvField(std::string_view cell) {
+  const bool edge_space = !cell.empty() && (cell.front() == ' ' || cell.back() == ' ' || cell.front() == '\t' ||
+                                            cell.back() == '\t');
+  if (cell.find_first_of(",\"\r\n") == std::string_view::npos && !edge_space) return std::string(cell);
+  std::string out = "\"";
+  for (char c : cell) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string csvLine(const std::vector<std::string>& cells) {
+  std::string out;
+  for (size_t k = 0; k < cells.size(); ++k) out += (k ? "," : "") + csvField(cells[k]);
   return out;
 }
 
@@ -128,35 +162,48 @@ std::string base64Encode(const std::string& in) {
   return out;
 }
 
-std::string CsvRow::cell(const char* name) const {
+std::string CsvRow::cell(const std::string& name) const {
   const auto it = columns->find(name);
   if (it == columns->end() || it->second >= static_cast<int>(cells->size())) return "";
   return (*cells)[it->second];
 }
 
-int CsvRow::column(const char* name) const {
+int CsvRow::column(const std::string& name) const {
   const auto it = columns->find(name);
   return it == columns->end() ? 0 : it->second + 1;
 }
 
-void forEachCsvRow(const std::string& text, const std::string& file,
-                   std::initializer_list<const char*> required, const std::string& missing_message,
-                   const std::function<void(const CsvRow&)>& row) {
+void forEachCsvRow(const std::string& text, const std::string& file, const std::vector<std::string>& required,
+                   const std::string& missing_message, const std::function<void(const CsvRow&)>& row,
+                   const std::function<void(const CsvHeader&)>& header) {
   const auto lines = splitLines(text);
-  std::map<std::string, int> columns;
+  CsvHeader h;
   for (size_t i = 0; i < lines.size(); ++i) {
     const std::string_view t = trim(lines[i]);
     if (t.empty() || t[0] == '#') continue;
     const int line = static_cast<int>(i) + 1;
     const auto cells = splitCsvLine(lines[i]);
-    if (columns.empty()) {
-      for (size_t k = 0; k < cells.size(); ++k) columns[cells[k]] = static_cast<int>(k);
-      for (const char* r : required)
-        if (!columns.count(r)) throw InputError(file, line, 0, r, missing_message);
+    if (h.line == 0) {
+      h.line = line;
+      for (size_t k = 0; k < cells.size(); ++k) {
+        const std::string name = toLower(cells[k]);
+        if (h.columns.count(name)) throw InputError(file, line, static_cast<int>(k) + 1, name, "column named twice");
+        h.columns[name] = static_cast<int>(k);
+      }
+      for (const std::string& r : required)
+        if (!h.columns.count(r)) throw InputError(file, line, 0, r, missing_message);
+      if (header) header(h);
       continue;
     }
-    row(CsvRow{line, &cells, &columns});
+    row(CsvRow{line, &cells, &h.columns});
   }
+  if (h.line == 0) throw InputError(file, 0, 0, "", "empty file: no header line");
+}
+
+std::string formatWith(const char* printf_format, double v) {
+  char buf[128];
+  std::snprintf(buf, sizeof buf, printf_format, v);
+  return buf;
 }
 
 }  // namespace tolver

@@ -1,7 +1,6 @@
 #pragma once
 // Small text helpers shared by the readers.
 #include <functional>
-#include <initializer_list>
 #include <map>
 #include <optional>
 #include <string>
@@ -15,29 +14,48 @@ std::string toUpper(std::string_view s);
 std::string toLower(std::string_view s);
 // Splits text into lines (LF, CRLF or CR endings); a trailing newline adds no empty line.
 std::vector<std::string> splitLines(const std::string& text);
-// Splits one CSV line at commas (no quoting), each cell trimmed.
+// CSV, one policy for every table tolver reads or writes (RFC 4180 quoting):
+//  * a cell is trimmed; a cell in double quotes may hold commas, and "" stands for one quote;
+//  * blank lines and lines starting with '#' are skipped (comments);
+//  * the first other line is the header: column names, matched case-insensitively (lowercased),
+//    each at most once;
+//  * a written cell is quoted when it holds a comma, a quote, a line break or edge spaces.
+// Splits one CSV line into its cells.
 std::vector<std::string> splitCsvLine(const std::string& line);
+// One cell as written: quoted and escaped when needed (see above).
+std::string csvField(std::string_view cell);
+// Cells joined into one CSV line (no line ending).
+std::string csvLine(const std::vector<std::string>& cells);
+
+// The header of a CSV table: its 1-based line and column name (lowercased) -> 0-based index.
+struct CsvHeader {
+  int line = 0;
+  std::map<std::string, int> columns;
+  bool has(const std::string& name) const { return columns.count(name) > 0; }
+};
 // One data line of a headered CSV table (forEachCsvRow).
 struct CsvRow {
   int line = 0;                                // 1-based line in the file
   const std::vector<std::string>* cells = nullptr;
   const std::map<std::string, int>* columns = nullptr;  // header name -> 0-based index
   // The cell under the header name, "" when the column or the cell is absent.
-  std::string cell(const char* name) const;
+  std::string cell(const std::string& name) const;
   // The 1-based column of a header name, 0 when there is no such column.
-  int column(const char* name) const;
+  int column(const std::string& name) const;
 };
-// Reads a headered CSV table: blank lines and lines starting with '#' are skipped, the first
-// other line names the columns, every later one is passed to row. A required column missing
-// from the header throws InputError(file, header line, 0, column, missing_message).
-void forEachCsvRow(const std::string& text, const std::string& file,
-                   std::initializer_list<const char*> required, const std::string& missing_message,
-                   const std::function<void(const CsvRow&)>& row);
+// Reads a headered CSV table (see above): the header is passed to `header` (when given), every
+// later line to `row`. No header line, a column named twice, or a required column missing throws
+// InputError(file, header line, 0, column, missing_message for the last).
+void forEachCsvRow(const std::string& text, const std::string& file, const std::vector<std::string>& required,
+                   const std::string& missing_message, const std::function<void(const CsvRow&)>& row,
+                   const std::function<void(const CsvHeader&)>& header = {});
 // Strict number: the whole (trimmed) token must be a finite decimal number ("1.", "-.5",
 // "1.0E-3", "+2"); returns nullopt otherwise.
 std::optional<double> parseNumber(std::string_view token);
 // Formats a double with the shortest precision that round-trips (17 significant digits max).
 std::string formatNumber(double v);
+// Formats one double by a printf format ("%+.2f", "%.4g"): the reports' fixed precisions.
+std::string formatWith(const char* printf_format, double v);
 // s with & < > " replaced by their XML/HTML entities.
 std::string xmlEscape(std::string_view s);
 // Base64 (RFC 4648, with padding) of bytes, for images embedded in HTML reports.

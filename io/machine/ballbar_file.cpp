@@ -30,57 +30,38 @@ std::string axisColumn(const Axis& ax) { return lower(ax.name) + (ax.isRotary() 
 BallbarFile parseBallbarCsv(const std::string& text, const std::string& file, const MachineModel& m,
                             bool require_length) {
   BallbarFile out;
-  const auto lines = splitLines(text);
-  std::map<std::string, int> col;
-  size_t i = 0;
-  int header_line = 0;
-  for (; i < lines.size(); ++i) {
-    const std::string_view t = trim(lines[i]);
-    if (t.empty() || t[0] == '#') continue;
-    header_line = static_cast<int>(i) + 1;
-    const auto names = splitCsvLine(lines[i]);
-    for (size_t k = 0; k < names.size(); ++k) {
-      const std::string n = lower(names[k]);
-      if (col.count(n)) throw InputError(file, header_line, 0, n, "column named twice");
-      col[n] = static_cast<int>(k);
-    }
-    ++i;
-    break;
-  }
-  if (header_line == 0) throw InputError(file, 0, 0, "", "empty file: no header line");
   std::vector<std::string> required = {"setup",          "table_ball_x_mm", "table_ball_y_mm",
                                        "table_ball_z_mm", "tool_ball_x_mm",  "tool_ball_y_mm",
                                        "tool_ball_z_mm"};
   for (const Axis& ax : m.axes) required.push_back(axisColumn(ax));
   if (require_length) required.push_back("length_mm");
-  for (const std::string& r : required)
-    if (!col.count(r)) throw InputError(file, header_line, 0, r, "missing column");
-  std::map<std::string, bool> known;
-  for (const std::string& r : required) known[r] = true;
-  known["time_s"] = true;
-  known["length_mm"] = true;
   std::vector<int> dir_col(m.axes.size(), -1);
-  for (size_t a = 0; a < m.axes.size(); ++a) {
-    const std::string d = lower(m.axes[a].name) + "_dir";
-    known[d] = true;
-    if (col.count(d)) {
-      dir_col[a] = col[d];
-      out.has_directions = true;
+  bool has_time = false;
+  auto header = [&](const CsvHeader& h) {
+    std::map<std::string, bool> known;
+    for (const std::string& r : required) known[r] = true;
+    known["time_s"] = true;
+    known["length_mm"] = true;
+    for (size_t a = 0; a < m.axes.size(); ++a) {
+      const std::string d = lower(m.axes[a].name) + "_dir";
+      known[d] = true;
+      if (h.has(d)) {
+        dir_col[a] = h.columns.at(d);
+        out.has_directions = true;
+      }
     }
-  }
-  for (const auto& [name, k] : col)
-    if (!known.count(name)) out.warnings.push_back("ignored column '" + name + "'");
-
+    has_time = h.has("time_s");
+    for (const auto& [name, k] : h.columns)
+      if (!known.count(name)) out.warnings.push_back("ignored column '" + name + "'");
+  };
   std::map<int, int> setup_index;  // file id -> index
   std::map<int, int> setup_line;
-  for (; i < lines.size(); ++i) {
-    const std::string_view t = trim(lines[i]);
-    if (t.empty() || t[0] == '#') continue;
-    const int line = static_cast<int>(i) + 1;
-    const auto cells = splitCsvLine(lines[i]);
+  auto row = [&](const CsvRow& csv) {
+    const int line = csv.line;
+    const std::vector<std::string>& cells = *csv.cells;
     auto value = [&](const std::string& name) {
-      const int k = col.at(name);
-      if (k >= static_cast<int>(cells.size()) || cells[k].empty())
+      const int k = csv.column(name) - 1;
+      if (k < 0 || k >= static_cast<int>(cells.size()) || cells[k].empty())
         throw InputError(file, line, 0, name, "missing value");
       const auto v = parseNumber(cells[k]);
       if (!v) throw InputError(file, line, 0, name, "malformed number '" + cells[k] + "'");
@@ -133,9 +114,10 @@ BallbarFile parseBallbarCsv(const std::string& text, const std::string& file, co
       r.length = value("length_mm");
       if (!(r.length > 0)) throw InputError(file, line, 0, "length_mm", "must be positive");
     }
-    if (col.count("time_s")) r.context.time_s = value("time_s");
+    if (has_time) r.context.time_s = value("time_s");
     out.test.readings.push_back(r);
-  }
+  };
+  forEachCsvRow(text, file, required, "missing column", row, header);
   if (out.test.readings.empty()) throw InputError(file, 0, 0, "", "no rows");
   if (!out.has_directions) deriveDirections(out.test);
   return out;

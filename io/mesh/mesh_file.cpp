@@ -178,22 +178,15 @@ void writeVtpWithScalars(
     for (size_t i = 0; i < values->size(); ++i) a->SetValue(static_cast<vtkIdType>(i), (*values)[i]);
     poly->GetPointData()->AddArray(a);
   }
-  // Atomic: write beside the target, then rename.
-  const std::string tmp = path + ".tmp";
-  vtkNew<vtkXMLPolyDataWriter> writer;
-  writer->SetFileName(tmp.c_str());
-  writer->SetInputData(poly);
-  writer->SetDataModeToBinary();
-  if (writer->Write() != 1) {
-    std::remove(tmp.c_str());
-    throw InputError(path, 0, 0, "output", "cannot write the file");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::remove(tmp.c_str());
-    throw InputError(path, 0, 0, "output", "cannot write the file: " + ec.message());
-  }
+  OutputSet out;
+  out.addWritten(path, [&](const std::string& tmp) {
+    vtkNew<vtkXMLPolyDataWriter> writer;
+    writer->SetFileName(tmp.c_str());
+    writer->SetInputData(poly);
+    writer->SetDataModeToBinary();
+    return writer->Write() == 1;
+  });
+  out.commit();
 }
 
 }  // namespace tolver

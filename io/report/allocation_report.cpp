@@ -15,11 +15,6 @@
 namespace tolver {
 namespace {
 
-std::string fmt(const char* f, double v) {
-  char b[64];
-  std::snprintf(b, sizeof b, f, v);
-  return b;
-}
 
 }  // namespace
 
@@ -39,24 +34,24 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
   std::string table = "term,parameter,category,unit,standard,optimised,lower,upper,reference\n";
   for (size_t i = 0; i < terms.size(); ++i) {
     const ToleranceTerm& t = terms[i];
-    table += t.name + "," + m.parameters[t.parameter].iso_code + "," + categoryName(t.category) + "," +
-             displayUnit(m, t) + "," + fmt("%.6g", displayValue(m, t, t.standard)) + "," +
-             (chosen ? fmt("%.6g", displayValue(m, t, chosen->T[i])) : "") + "," +
-             fmt("%.6g", displayValue(m, t, t.lower)) + "," + fmt("%.6g", displayValue(m, t, t.upper)) +
-             "," + (std::isnan(t.reference) ? "" : fmt("%.6g", displayValue(m, t, t.reference))) + "\n";
+    table += csvField(t.name) + "," + csvField(m.parameters[t.parameter].iso_code) + "," + categoryName(t.category) + "," +
+             displayUnit(m, t) + "," + formatWith("%.6g", displayValue(m, t, t.standard)) + "," +
+             (chosen ? formatWith("%.6g", displayValue(m, t, chosen->T[i])) : "") + "," +
+             formatWith("%.6g", displayValue(m, t, t.lower)) + "," + formatWith("%.6g", displayValue(m, t, t.upper)) +
+             "," + (std::isnan(t.reference) ? "" : formatWith("%.6g", displayValue(m, t, t.reference))) + "\n";
   }
   writeFileAtomically(dir + "/allocation.csv", table);
   // pareto.csv
   std::string front = "m1,m2,cost,loss,worst_dx_mm,worst_dy_mm,worst_dz_mm,chosen";
-  for (const auto& t : terms) front += "," + t.name;
+  for (const auto& t : terms) front += "," + csvField(t.name);
   front += "\n";
   for (size_t k = 0; k < r.front.size(); ++k) {
     const auto& s = r.front[k];
-    front += fmt("%.8g", s.m1) + "," + fmt("%.8g", s.m2) + "," + fmt("%.8g", s.cost) + "," +
-             fmt("%.8g", s.loss) + "," + fmt("%.6f", s.worst_exact[0]) + "," +
-             fmt("%.6f", s.worst_exact[1]) + "," + fmt("%.6f", s.worst_exact[2]) + "," +
+    front += formatWith("%.8g", s.m1) + "," + formatWith("%.8g", s.m2) + "," + formatWith("%.8g", s.cost) + "," +
+             formatWith("%.8g", s.loss) + "," + formatWith("%.6f", s.worst_exact[0]) + "," +
+             formatWith("%.6f", s.worst_exact[1]) + "," + formatWith("%.6f", s.worst_exact[2]) + "," +
              (static_cast<int>(k) == r.chosen ? "1" : "0");
-    for (size_t i = 0; i < terms.size(); ++i) front += "," + fmt("%.6g", displayValue(m, terms[i], s.T[i]));
+    for (size_t i = 0; i < terms.size(); ++i) front += "," + formatWith("%.6g", displayValue(m, terms[i], s.T[i]));
     front += "\n";
   }
   writeFileAtomically(dir + "/pareto.csv", front);
@@ -160,22 +155,22 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
                   "th{background:#eee}.bad{color:#b00}.ok{color:#070}</style></head><body>";
   h += "<h1>Tolerance allocation: " + m.name + "</h1>";
   h += "<p>Machine file <code>" + in.machine_file + "</code>, tolerances <code>" + in.tolerance_file +
-       "</code>, tool gauge length " + fmt("%.1f", in.gauge_length) + " mm, " + std::to_string(in.poses) +
+       "</code>, tool gauge length " + formatWith("%.1f", in.gauge_length) + " mm, " + std::to_string(in.poses) +
        " workspace poses, errors combined by " + (a.rss ? "root-sum-square" : "worst case over their signs") +
-       ". Limits |dx|, |dy|, |dz| &le; " + fmt("%.4f", a.limits[0]) + ", " + fmt("%.4f", a.limits[1]) +
-       ", " + fmt("%.4f", a.limits[2]) + " mm.</p>";
+       ". Limits |dx|, |dy|, |dz| &le; " + formatWith("%.4f", a.limits[0]) + ", " + formatWith("%.4f", a.limits[1]) +
+       ", " + formatWith("%.4f", a.limits[2]) + " mm.</p>";
   auto worst = [&](const Eigen::Vector3d& w) {
     std::string s;
     for (int d = 0; d < 3; ++d)
       s += std::string("<span class=\"") + (w[d] <= a.limits[d] ? "ok" : "bad") + "\">" +
-           fmt("%.4f", w[d]) + "</span> ";
+           formatWith("%.4f", w[d]) + "</span> ";
     return s;
   };
-  h += "<p>Standard tolerances: cost " + fmt("%.5g", r.standard.cost) + ", worst errors " +
+  h += "<p>Standard tolerances: cost " + formatWith("%.5g", r.standard.cost) + ", worst errors " +
        worst(r.standard.worst_exact) + "mm" + (r.standard_feasible ? "" : " &mdash; <b class=\"bad\">they break the limits</b>") + ".</p>";
   if (chosen)
-    h += "<p>Chosen allocation: cost " + fmt("%.5g", chosen->cost) + " (" +
-         fmt("%+.1f", -100.0 * (1.0 - chosen->cost / r.standard.cost)) + " % against the standard), worst errors " +
+    h += "<p>Chosen allocation: cost " + formatWith("%.5g", chosen->cost) + " (" +
+         formatWith("%+.1f", -100.0 * (1.0 - chosen->cost / r.standard.cost)) + " % against the standard), worst errors " +
          worst(chosen->worst_exact) + "mm, checked with the nonlinear model.</p>";
   else
     h += "<p class=\"bad\">No allocation within the bounds meets the limits: loosen the limits or allow tighter tolerances (lower bounds).</p>";
@@ -185,9 +180,9 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
   for (size_t i = 0; i < terms.size(); ++i) {
     const auto& t = terms[i];
     h += "<tr><td>" + t.name + "</td><td>" + categoryName(t.category) + "</td><td>" + displayUnit(m, t) +
-         "</td><td>" + fmt("%.5g", displayValue(m, t, t.standard)) + "</td><td>" +
-         (chosen ? fmt("%.5g", displayValue(m, t, chosen->T[i])) : "") + "</td><td>" +
-         (std::isnan(t.reference) ? "" : fmt("%.5g", displayValue(m, t, t.reference))) + "</td></tr>";
+         "</td><td>" + formatWith("%.5g", displayValue(m, t, t.standard)) + "</td><td>" +
+         (chosen ? formatWith("%.5g", displayValue(m, t, chosen->T[i])) : "") + "</td><td>" +
+         (std::isnan(t.reference) ? "" : formatWith("%.5g", displayValue(m, t, t.reference))) + "</td></tr>";
   }
   h += "</table>";
   bool has_reference = false;
@@ -202,7 +197,7 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
     h += "<h2>Comparison with the published allocation</h2><p>";
     if (complete) {
       h += "The published values (column <i>paper</i>) cost " +
-           fmt("%.5g", manufacturingCost(m, terms, Tref, a)) + " in this cost model";
+           formatWith("%.5g", manufacturingCost(m, terms, Tref, a)) + " in this cost model";
     }
     h += ". Differences come from how the accuracy is evaluated: here the tool-tip error is taken "
          "over the whole working volume and rotary ranges with this machine file's travel and "
@@ -234,12 +229,12 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
     h += "</ol>";
   }
   h += "<h2>Method</h2><p>Cost C = &Sigma; (h<sub>i</sub> t<sub>i</sub>)<sup>-r</sup> with t = T/2 "
-       "in mm for lengths and mm/m for angles; h<sub>p</sub> = " + fmt("%g", a.h_p) + ", h<sub>a</sub> = " +
-       fmt("%g", a.h_a) + ", h<sub>d</sub> = " + fmt("%g", a.h_d) + ", r = " + fmt("%g", a.r) +
+       "in mm for lengths and mm/m for angles; h<sub>p</sub> = " + formatWith("%g", a.h_p) + ", h<sub>a</sub> = " +
+       formatWith("%g", a.h_a) + ", h<sub>d</sub> = " + formatWith("%g", a.h_d) + ", r = " + formatWith("%g", a.r) +
        ". Quality loss: the signal-to-noise ratio &eta;<sub>i</sub> = &minus;10 log<sub>10</sub> E[y<sub>i</sub><sup>2</sup>] "
        "with the error value y<sub>i</sub> " +
        std::string(a.loss_normal ? "normal with t = 3&sigma; (E = t&sup2;/9)" : "uniform in &plusmn;t (E = t&sup2;/3)") +
-       ", weights &lambda;<sub>i</sub> = (1/&eta;<sub>i</sub>)/&Sigma;(1/&eta;<sub>j</sub>), L = " + fmt("%g", a.loss_weight) +
+       ", weights &lambda;<sub>i</sub> = (1/&eta;<sub>i</sub>)/&Sigma;(1/&eta;<sub>j</sub>), L = " + formatWith("%g", a.loss_weight) +
        " &Sigma; &lambda;<sub>i</sub> t<sub>i</sub><sup>2</sup>. M1 = C + L is minimised and M2 (the tolerance "
        "spread over the correlation groups) maximised by NSGA-II; the chosen compromise is the front "
        "point closest to the ideal point, both objectives normalised over the front. " +

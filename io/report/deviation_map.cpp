@@ -1,5 +1,7 @@
 #include "io/report/deviation_map.h"
 
+#include "io/common/text_util.h"
+
 #include <vtkActor.h>
 #include <vtkActor2D.h>
 #include <vtkCamera.h>
@@ -36,11 +38,7 @@
 namespace tolver {
 namespace {
 
-std::string um(double mm) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%+.1f", mmToUm(mm));
-  return buf;
-}
+std::string um(double mm) { return formatWith("%+.1f", mmToUm(mm)); }
 
 void writePng(vtkRenderWindow* window, const std::string& path) {
   vtkNew<vtkWindowToImageFilter> grab;

@@ -21,15 +21,8 @@ namespace {
 
 using nlohmann::json;
 
-double um(double mm) { return mmToUm(mm); }
 // JSON has no NaN or infinity: such values are written as null.
 json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-
-std::string fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
 
 json findingsJson(const ResidualAnalysis& a) {
   json out = json::array();
@@ -39,14 +32,14 @@ json findingsJson(const ResidualAnalysis& a) {
     if (f.test == "periodogram") j["period"] = num(f.period);
     out.push_back(j);
   }
-  return {{"rms_um", um(a.rms)},
+  return {{"rms_um", mmToUm(a.rms)},
           {"follows", a.follows},
           {"follows_strength", num(a.follows_strength)},
           {"runs_z", num(a.runs_z)},
           {"runs_p", num(a.runs_p)},
           {"repeated_poses", a.repeats.size()},
           {"repeated_pose_max_span_um",
-           um(a.repeats.empty() ? 0.0
+           mmToUm(a.repeats.empty() ? 0.0
                                 : std::max_element(a.repeats.begin(), a.repeats.end(),
                                                    [](const RepeatedPose& x, const RepeatedPose& y) {
                                                      return x.span_mm < y.span_mm;
@@ -58,12 +51,12 @@ const char* hyperName(const EffectSpec& e) { return traitsOf(e.type).hyper.name;
 
 json fitJson(const CalibrationResult& f) {
   return {{"status", f.message}, {"iterations", f.iterations}, {"unknowns", f.unknowns},
-          {"rank", f.rank}, {"condition", num(f.condition)}, {"rms_um", um(f.rms_residual)},
-          {"max_um", um(f.max_residual)}, {"sigma_um", um(f.residual_sigma)}};
+          {"rank", f.rank}, {"condition", num(f.condition)}, {"rms_um", mmToUm(f.rms_residual)},
+          {"max_um", mmToUm(f.max_residual)}, {"sigma_um", mmToUm(f.residual_sigma)}};
 }
 
 json summaryJson(const PredictionSummary& s) {
-  return {{"points", s.points}, {"max_um", um(s.max_deviation)}, {"rms_um", um(s.rms_deviation)},
+  return {{"points", s.points}, {"max_um", mmToUm(s.max_deviation)}, {"rms_um", mmToUm(s.rms_deviation)},
           {"max_point", s.max_index}, {"max_axis_error_urad", radToUrad(s.max_axis_angle)}};
 }
 
@@ -122,7 +115,7 @@ std::vector<ScatterSeries> seriesOf(const BallbarTest& test, const EffectSpec& e
       s.push_back(n);
     }
     s[g].x.push_back(x[i]);
-    s[g].y.push_back(um(r[i]));
+    s[g].y.push_back(mmToUm(r[i]));
   }
   return s;
 }
@@ -204,8 +197,8 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
               {"p_value", num(c.p_value)},
               {"effective_readings", num(c.effective_readings)},
               {"delta_ic", num(c.delta_ic)},
-              {"cv_rms_before_um", num(um(c.cv_rms_before))},
-              {"cv_rms_after_um", num(um(c.cv_rms_after))},
+              {"cv_rms_before_um", num(mmToUm(c.cv_rms_before))},
+              {"cv_rms_after_um", num(mmToUm(c.cv_rms_after))},
               {"new_information", num(c.new_information)},
               {"condition", c.condition > 0 ? num(c.condition) : json(nullptr)},
               {"verdict", verdictName(c.verdict)}};
@@ -224,10 +217,10 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
       {"verdict", r.added.empty() ? "nothing missing" : "effects added"},
       {"message", r.message},
       {"effects_added", added},
-      {"rms_before_um", um(r.rms_before)},
-      {"rms_after_um", um(r.rms_after)},
-      {"cv_rms_before_um", um(r.cv_rms_before)},
-      {"cv_rms_after_um", um(r.cv_rms_after)},
+      {"rms_before_um", mmToUm(r.rms_before)},
+      {"rms_after_um", mmToUm(r.rms_after)},
+      {"cv_rms_before_um", mmToUm(r.cv_rms_before)},
+      {"cv_rms_after_um", mmToUm(r.cv_rms_after)},
       {"cross_validation", {{"folds", r.folds}, {"blocks", "contiguous runs of readings within each set-up"}}},
       {"ball_positions_file", in.balls_file},
       {"selection",
@@ -274,8 +267,8 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
     out["program"] = {{"cl_file", p.cl_file},
                       {"before", summaryJson(p.before)},
                       {"after", summaryJson(p.after)},
-                      {"change_max_um", um(p.change_max)},
-                      {"change_rms_um", um(p.change_rms)},
+                      {"change_max_um", mmToUm(p.change_max)},
+                      {"change_rms_um", mmToUm(p.change_rms)},
                       {"change_max_line", p.change_max_line}};
   }
   return jsonText(out);
@@ -299,22 +292,22 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
        xmlEscape(in.output_file) + ".</p>\n";
   h += "<h2>" + std::string(r.added.empty() ? "Nothing missing: no effect added" : "Effects added") + "</h2>\n";
   h += "<table><tr><th class=\"l\"></th><th>before</th><th>after</th></tr>";
-  h += "<tr><td class=\"l\">residual RMS (µm)</td><td>" + fmt("%.3f", um(r.rms_before)) + "</td><td>" +
-       fmt("%.3f", um(r.rms_after)) + "</td></tr>";
+  h += "<tr><td class=\"l\">residual RMS (µm)</td><td>" + formatWith("%.3f", mmToUm(r.rms_before)) + "</td><td>" +
+       formatWith("%.3f", mmToUm(r.rms_after)) + "</td></tr>";
   h += "<tr><td class=\"l\">cross-validated RMS (µm, " + std::to_string(r.folds) +
-       " contiguous blocks left out in turn)</td><td>" + fmt("%.3f", um(r.cv_rms_before)) +
-       "</td><td>" + fmt("%.3f", um(r.cv_rms_after)) + "</td></tr>";
+       " contiguous blocks left out in turn)</td><td>" + formatWith("%.3f", mmToUm(r.cv_rms_before)) +
+       "</td><td>" + formatWith("%.3f", mmToUm(r.cv_rms_after)) + "</td></tr>";
   if (r.heldout_before.readings > 0)
     h += "<tr><td class=\"l\">held-out readings RMS (µm, " + std::to_string(r.heldout_before.readings) +
-         " readings of " + xmlEscape(in.heldout_file) + ")</td><td>" + fmt("%.3f", um(r.heldout_before.rms)) +
-         "</td><td>" + fmt("%.3f", um(r.heldout_after.rms)) + "</td></tr>";
+         " readings of " + xmlEscape(in.heldout_file) + ")</td><td>" + formatWith("%.3f", mmToUm(r.heldout_before.rms)) +
+         "</td><td>" + formatWith("%.3f", mmToUm(r.heldout_after.rms)) + "</td></tr>";
   if (in.written.fit.readings > 0) {
     h += "<tr><td class=\"l\">from the written files (" + xmlEscape(in.output_file) + " + " +
          xmlEscape(in.balls_file) + "), fitted readings RMS (µm)</td><td></td><td>" +
-         fmt("%.3f", um(in.written.fit.rms)) + "</td></tr>";
+         formatWith("%.3f", mmToUm(in.written.fit.rms)) + "</td></tr>";
     if (in.written.heldout.readings > 0)
       h += "<tr><td class=\"l\">from the written files, held-out readings RMS (µm)</td><td></td><td>" +
-           fmt("%.3f", um(in.written.heldout.rms)) + "</td></tr>";
+           formatWith("%.3f", mmToUm(in.written.heldout.rms)) + "</td></tr>";
   }
   h += "</table>\n";
   if (!r.withdrawn.empty())
@@ -322,7 +315,7 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
   if (!in.removed.empty()) {
     h += "<p><b>Gross readings removed</b> (deviation from the final fit):";
     for (const RemovedReading& g : in.removed)
-      h += " line " + std::to_string(g.line) + " (" + fmt("%+.2f", um(g.residual)) + " µm)";
+      h += " line " + std::to_string(g.line) + " (" + formatWith("%+.2f", mmToUm(g.residual)) + " µm)";
     h += ".</p>\n";
   }
   if (!r.added.empty()) {
@@ -333,12 +326,12 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
       const char* unit = effectUnit(a.spec, &k);
       for (size_t j = 0; j < a.parameters.size(); ++j)
         h += "<tr><td class=\"l\">" + xmlEscape(a.label) + "</td><td class=\"l\">" +
-             m.parameters[a.parameters[j]].iso_code + "</td><td>" + fmt("%.3f", a.values[j] * k) +
-             "</td><td>" + fmt("%.3f", a.uncertainty[j] * k) + "</td><td class=\"l\">" + unit + "</td></tr>";
+             m.parameters[a.parameters[j]].iso_code + "</td><td>" + formatWith("%.3f", a.values[j] * k) +
+             "</td><td>" + formatWith("%.3f", a.uncertainty[j] * k) + "</td><td class=\"l\">" + unit + "</td></tr>";
       if (hyperName(a.spec))
         h += "<tr><td class=\"l\">" + xmlEscape(a.label) + "</td><td class=\"l\">" + hyperName(a.spec) +
-             "</td><td>" + fmt("%.4g", a.hyperparameter) + "</td><td>" +
-             fmt("%.2g", a.hyperparameter_uncertainty) + "</td><td class=\"l\">" +
+             "</td><td>" + formatWith("%.4g", a.hyperparameter) + "</td><td>" +
+             formatWith("%.2g", a.hyperparameter_uncertainty) + "</td><td class=\"l\">" +
              (a.spec.type == EffectType::Periodic ? "mm" : "s") + "</td></tr>";
     }
     h += "</table>\n";
@@ -385,8 +378,8 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
     const ResidualFinding& u = r.unexplained_finding;
     h += "<h2>Structure the library does not explain</h2>\n<p>After the selection the residual "
          "still follows <b>" + xmlEscape(u.variable) + "</b> (" + xmlEscape(u.test) +
-         (u.test == "periodogram" ? fmt(u.period < 9 ? ", order %.0f" : ", period %.2f mm", u.period) : "") +
-         ", " + fmt("%.0f", u.strength * 100) + " % of its variance, p " + fmt("%.1e", u.p_value) +
+         (u.test == "periodogram" ? formatWith(u.period < 9 ? ", order %.0f" : ", period %.2f mm", u.period) : "") +
+         ", " + formatWith("%.0f", u.strength * 100) + " % of its variance, p " + formatWith("%.1e", u.p_value) +
          "), and no effect of the library removes it.</p>\n";
     std::vector<double> x(test.readings.size());
     std::string label = "reading, in measurement order";
@@ -403,7 +396,7 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
     else if (axis >= 0) label = m.axes[axis].name + (m.axes[axis].isRotary() ? " angle (deg)" : " position (mm)");
     ScatterSeries one;
     one.x = x;
-    for (Eigen::Index i = 0; i < r.final_fit.residuals.size(); ++i) one.y.push_back(um(r.final_fit.residuals[i]));
+    for (Eigen::Index i = 0; i < r.final_fit.residuals.size(); ++i) one.y.push_back(mmToUm(r.final_fit.residuals[i]));
     const std::string path = (std::filesystem::path(dir) / "residual_unexplained.png").string();
     ScatterChart chart;
     chart.title = "Unexplained: residual after, against " + u.variable;
@@ -422,9 +415,9 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
     for (const ResidualFinding& x : r.analysis_after.findings)
       if (x.variable == f.variable && x.test == f.test) g = &x;
     h += "<tr><td class=\"l\">" + xmlEscape(f.variable) + "</td><td class=\"l\">" + f.test +
-         (f.test == "periodogram" ? fmt(f.period < 9 ? " (order %.0f)" : " (%.2f mm)", f.period) : "") +
-         "</td><td>" + fmt("%.3f", f.strength) + "</td><td>" + fmt("%.2g", f.p_value) + "</td><td>" +
-         (g ? fmt("%.3f", g->strength) : "") + "</td><td>" + (g ? fmt("%.2g", g->p_value) : "") + "</td></tr>";
+         (f.test == "periodogram" ? formatWith(f.period < 9 ? " (order %.0f)" : " (%.2f mm)", f.period) : "") +
+         "</td><td>" + formatWith("%.3f", f.strength) + "</td><td>" + formatWith("%.2g", f.p_value) + "</td><td>" +
+         (g ? formatWith("%.3f", g->strength) : "") + "</td><td>" + (g ? formatWith("%.2g", g->p_value) : "") + "</td></tr>";
   }
   h += "</table>\n<p class=\"note\">Strength: fraction of the residual variance explained. The "
        "residual follows <b>" +
@@ -435,11 +428,11 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
   if (in.program) {
     const ProgramComparison& p = *in.program;
     h += "<h2>Predicted error of " + xmlEscape(p.cl_file) + "</h2>\n<table><tr><th></th><th>max (µm)</th>"
-         "<th>RMS (µm)</th></tr><tr><td class=\"l\">before</td><td>" + fmt("%.3f", um(p.before.max_deviation)) +
-         "</td><td>" + fmt("%.3f", um(p.before.rms_deviation)) + "</td></tr><tr><td class=\"l\">after</td><td>" +
-         fmt("%.3f", um(p.after.max_deviation)) + "</td><td>" + fmt("%.3f", um(p.after.rms_deviation)) +
-         "</td></tr><tr><td class=\"l\">change</td><td>" + fmt("%.3f", um(p.change_max)) + "</td><td>" +
-         fmt("%.3f", um(p.change_rms)) + "</td></tr></table>\n";
+         "<th>RMS (µm)</th></tr><tr><td class=\"l\">before</td><td>" + formatWith("%.3f", mmToUm(p.before.max_deviation)) +
+         "</td><td>" + formatWith("%.3f", mmToUm(p.before.rms_deviation)) + "</td></tr><tr><td class=\"l\">after</td><td>" +
+         formatWith("%.3f", mmToUm(p.after.max_deviation)) + "</td><td>" + formatWith("%.3f", mmToUm(p.after.rms_deviation)) +
+         "</td></tr><tr><td class=\"l\">change</td><td>" + formatWith("%.3f", mmToUm(p.change_max)) + "</td><td>" +
+         formatWith("%.3f", mmToUm(p.change_rms)) + "</td></tr></table>\n";
   }
   // Candidates.
   h += "<h2>Every candidate tried</h2>\n<table><tr><th>round</th><th class=\"l\">candidate</th>"
@@ -451,11 +444,11 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
   });
   for (const CandidateScore& s : c)
     h += "<tr><td>" + std::to_string(s.round) + "</td><td class=\"l\">" + xmlEscape(s.label) + "</td><td>" +
-         fmt("%.1f", s.delta_ic) + "</td><td>" + fmt("%.2g", s.p_value) + "</td><td>" +
-         fmt("%.0f", s.effective_readings) + "</td><td>" + fmt("%.3f", um(s.cv_rms_before)) +
-         "</td><td>" + fmt("%.3f", um(s.cv_rms_after)) + "</td><td>" + fmt("%.3f", s.new_information) +
+         formatWith("%.1f", s.delta_ic) + "</td><td>" + formatWith("%.2g", s.p_value) + "</td><td>" +
+         formatWith("%.0f", s.effective_readings) + "</td><td>" + formatWith("%.3f", mmToUm(s.cv_rms_before)) +
+         "</td><td>" + formatWith("%.3f", mmToUm(s.cv_rms_after)) + "</td><td>" + formatWith("%.3f", s.new_information) +
          "</td><td class=\"l\">" + verdictName(s.verdict) + "</td></tr>";
-  h += "</table>\n<p class=\"note\">" + xmlEscape(base.name) + "; " + fmt("%.2f", in.seconds) +
+  h += "</table>\n<p class=\"note\">" + xmlEscape(base.name) + "; " + formatWith("%.2f", in.seconds) +
        " s.</p></body></html>\n";
   return h;
 }

@@ -17,20 +17,15 @@ namespace {
 
 using nlohmann::json;
 
-double um(double mm) { return std::round(mm * 1e6) / 1e3; }  // um to 1 nm
+// mm -> um rounded to the nanometre, as the JSON writes deviations.
+double umToTheNanometre(double mm) { return std::round(mm * 1e6) / 1e3; }
 
 json stats(const DeviationStats& s) {
-  return {{"samples", s.samples}, {"min_um", um(s.min)}, {"max_um", um(s.max)},
-          {"mean_um", um(s.mean)}, {"rms_um", um(s.rms)}};
+  return {{"samples", s.samples}, {"min_um", umToTheNanometre(s.min)}, {"max_um", umToTheNanometre(s.max)},
+          {"mean_um", umToTheNanometre(s.mean)}, {"rms_um", umToTheNanometre(s.rms)}};
 }
 
 std::string html(const std::string& s) { return xmlEscape(s); }
-
-std::string fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
 
 int clLine(const VerifyReport& r, int sample) {
   const int c = sample >= 0 ? r.result->cl_index[sample] : -1;
@@ -56,8 +51,8 @@ static bool attributable(const VerifyResult& v, int i) {
 
 std::string worstDeviationText(const VerifyResult& v, const OutOfToleranceRegion& g) {
   if (!v.total_beyond.empty() && v.total_beyond[g.worst_sample])
-    return "beyond the search range (" + fmt("%+.0f", mmToUm(g.worst_deviation)) + " um or deeper)";
-  return fmt("%+.2f", mmToUm(g.worst_deviation));
+    return "beyond the search range (" + formatWith("%+.0f", mmToUm(g.worst_deviation)) + " um or deeper)";
+  return formatWith("%+.2f", mmToUm(g.worst_deviation));
 }
 
 std::string regionCause(const VerifyReport& r, const OutOfToleranceRegion& region) {
@@ -100,8 +95,8 @@ std::string formatVerifyJson(const VerifyReport& r) {
   }
   json zones = json::array();
   for (const auto& z : r.zones)
-    zones.push_back({{"region", z.region}, {"spec", z.spec}, {"tolerance_um", um(z.tolerance)},
-                     {"lower_um", um(z.lower)}, {"upper_um", um(z.upper)}});
+    zones.push_back({{"region", z.region}, {"spec", z.spec}, {"tolerance_um", umToTheNanometre(z.tolerance)},
+                     {"lower_um", umToTheNanometre(z.lower)}, {"upper_um", umToTheNanometre(z.upper)}});
   j["zones"] = zones;
   j["sign_convention"] = "deviation along the outward normal of the nominal surface: + material left, - gouge";
   j["deviation"] = {{"total", stats(v.total_stats)}, {"program", stats(v.program_stats)},
@@ -120,11 +115,11 @@ std::string formatVerifyJson(const VerifyReport& r) {
   for (const auto& g : v.regions) {
     regions.push_back({{"kind", conformanceName(g.kind)}, {"zone", g.zone},
                        {"region", r.zones[g.zone].region}, {"samples", g.samples},
-                       {"area_mm2", g.area_mm2}, {"worst_deviation_um", um(g.worst_deviation)},
-                       {"worst_excursion_um", um(g.worst_excursion)},
+                       {"area_mm2", g.area_mm2}, {"worst_deviation_um", umToTheNanometre(g.worst_deviation)},
+                       {"worst_excursion_um", umToTheNanometre(g.worst_excursion)},
                        {"where_mm", {g.where_w.x(), g.where_w.y(), g.where_w.z()}},
-                       {"machine_um", attributable(v, g.worst_sample) ? json(um(v.machine[g.worst_sample])) : json()},
-                       {"program_um", attributable(v, g.worst_sample) ? json(um(v.program[g.worst_sample])) : json()},
+                       {"machine_um", attributable(v, g.worst_sample) ? json(umToTheNanometre(v.machine[g.worst_sample])) : json()},
+                       {"program_um", attributable(v, g.worst_sample) ? json(umToTheNanometre(v.program[g.worst_sample])) : json()},
                        {"beyond_search_range", !v.total_beyond.empty() && v.total_beyond[g.worst_sample] != 0},
                        {"cause", regionCause(r, g)}, {"cl_line", clLine(r, g.worst_sample)}});
   }
@@ -133,7 +128,7 @@ std::string formatVerifyJson(const VerifyReport& r) {
     json lp = json::array();
     for (const auto& p : r.line_profile)
       lp.push_back({{"cl_line", p.cl_index < static_cast<int>(r.cl_lines.size()) ? r.cl_lines[p.cl_index] : 0},
-                    {"arc_length_mm", p.arc_length}, {"total_um", um(p.total)}, {"machine_um", um(p.machine)}});
+                    {"arc_length_mm", p.arc_length}, {"total_um", umToTheNanometre(p.total)}, {"machine_um", umToTheNanometre(p.machine)}});
     j["line_profile"] = {{"pass", r.line_pass}, {"points", lp}};
   }
   json images = json::array();
@@ -170,7 +165,7 @@ std::string formatDeviationsCsv(const VerifyReport& r) {
     }
     std::snprintf(buf, sizeof buf, "%zu,%.5f,%.5f,%.5f,%.6f,%.6f,%.6f,%s,%d,%s,%s,%s,%s,%d,%s\n", i,
                   s.p_w[i].x(), s.p_w[i].y(), s.p_w[i].z(), s.n_w[i].x(), s.n_w[i].y(), s.n_w[i].z(),
-                  s.group_names[s.group[i]].c_str(), v.zone[i], conformanceName(v.conformance[i]), t, pr, ma, line,
+                  csvField(s.group_names[s.group[i]]).c_str(), v.zone[i], conformanceName(v.conformance[i]), t, pr, ma, line,
                   !v.machined[i] ? "" : v.split.empty() ? "split" : splitName(v.split[i]));
     out += buf;
   }
@@ -213,7 +208,7 @@ std::string formatVerifyHtml(const VerifyReport& r) {
       char where[96];
       std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", g.where_w.x(), g.where_w.y(), g.where_w.z());
       h += "<div class=\"card\">" + thumbnail(k) + "<p><b>R" + std::to_string(k + 1) + "</b> " +
-           conformanceName(g.kind) + " " + worstDeviationText(v, g) + " um, " + fmt("%.3f", g.area_mm2) +
+           conformanceName(g.kind) + " " + worstDeviationText(v, g) + " um, " + formatWith("%.3f", g.area_mm2) +
            " mm&sup2;, at " + where + " mm, CL line " + std::to_string(clLine(r, g.worst_sample)) +
            "; cause: " + regionCause(r, g) + "</p></div>\n";
     }
@@ -225,28 +220,28 @@ std::string formatVerifyHtml(const VerifyReport& r) {
   };
   row("machine", r.machine_name + " (" + r.machine_file + ")");
   row("program", r.program_file + ": " + std::to_string(r.cl_points) + " CL points, " +
-                     std::to_string(r.placements) + " tool placements (step " + fmt("%.3g", r.step_mm) + " mm)");
+                     std::to_string(r.placements) + " tool placements (step " + formatWith("%.3g", r.step_mm) + " mm)");
   row("cutter", r.cutter);
   row("part", r.mode == "cl-only" ? "none: CL-only mode (surfaces through the CL points)"
                                   : r.part_file + ": " + std::to_string(r.samples->size()) +
-                                        " samples at " + fmt("%.3g", r.spacing_mm) + " mm");
+                                        " samples at " + formatWith("%.3g", r.spacing_mm) + " mm");
   for (const auto& z : r.zones)
-    row("zone " + z.region, z.spec + " mm: [" + fmt("%+.1f", mmToUm(z.lower)) + ", " +
-                                fmt("%+.1f", mmToUm(z.upper)) + "] um");
+    row("zone " + z.region, z.spec + " mm: [" + formatWith("%+.1f", mmToUm(z.lower)) + ", " +
+                                formatWith("%+.1f", mmToUm(z.upper)) + "] um");
   row("sign convention", "along the outward normal: + material left, - gouge");
   h += "</table>\n<h2>Deviations (um)</h2>\n<table><tr><th class=\"l\"></th><th>min</th><th>max</th>"
        "<th>mean</th><th>RMS</th><th class=\"l\">what it is</th></tr>\n";
   auto srow = [&](const char* name, const DeviationStats& s, const char* what) {
-    h += std::string("<tr><th class=\"l\">") + name + "</th><td>" + fmt("%+.2f", mmToUm(s.min)) + "</td><td>" +
-         fmt("%+.2f", mmToUm(s.max)) + "</td><td>" + fmt("%+.2f", mmToUm(s.mean)) + "</td><td>" +
-         fmt("%.2f", mmToUm(s.rms)) + "</td><td class=\"l\">" + what + "</td></tr>\n";
+    h += std::string("<tr><th class=\"l\">") + name + "</th><td>" + formatWith("%+.2f", mmToUm(s.min)) + "</td><td>" +
+         formatWith("%+.2f", mmToUm(s.max)) + "</td><td>" + formatWith("%+.2f", mmToUm(s.mean)) + "</td><td>" +
+         formatWith("%.2f", mmToUm(s.rms)) + "</td><td class=\"l\">" + what + "</td></tr>\n";
   };
   srow("total", v.total_stats, "predicted swept surface - CAD: what the part will be");
   if (r.mode != "cl-only") srow("program", v.program_stats, "nominal swept - CAD: the program on a perfect machine");
   srow("machine", v.machine_stats, "predicted swept - nominal swept: the machine's contribution");
-  h += "</table>\n<p>Machined area " + fmt("%.1f", v.area_machined) + " mm&sup2;, " +
-       fmt("%.2f", v.percent_in) + " % of it in tolerance; not machined by this program " +
-       fmt("%.1f", v.area_unmachined) + " mm&sup2; (grey in the maps).</p>\n";
+  h += "</table>\n<p>Machined area " + formatWith("%.1f", v.area_machined) + " mm&sup2;, " +
+       formatWith("%.2f", v.percent_in) + " % of it in tolerance; not machined by this program " +
+       formatWith("%.1f", v.area_unmachined) + " mm&sup2; (grey in the maps).</p>\n";
   if (!v.regions.empty()) {
     h += "<h2>Out-of-tolerance regions</h2>\n<table><tr><th>#</th><th class=\"l\">kind</th>"
          "<th class=\"l\">zone</th><th>area mm&sup2;</th><th>worst um</th><th>beyond limit um</th>"
@@ -257,12 +252,12 @@ std::string formatVerifyHtml(const VerifyReport& r) {
       char where[96];
       std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", g.where_w.x(), g.where_w.y(), g.where_w.z());
       h += "<tr><td>" + std::to_string(k + 1) + "</td><td class=\"l\">" + conformanceName(g.kind) +
-           "</td><td class=\"l\">" + html(r.zones[g.zone].region) + "</td><td>" + fmt("%.3f", g.area_mm2) +
+           "</td><td class=\"l\">" + html(r.zones[g.zone].region) + "</td><td>" + formatWith("%.3f", g.area_mm2) +
            "</td><td>" + worstDeviationText(v, g) + "</td><td>" +
-           fmt("%.2f", mmToUm(g.worst_excursion)) + "</td><td>" +
-           (attributable(v, g.worst_sample) ? fmt("%+.2f", mmToUm(v.machine[g.worst_sample])) : std::string("&mdash;")) +
+           formatWith("%.2f", mmToUm(g.worst_excursion)) + "</td><td>" +
+           (attributable(v, g.worst_sample) ? formatWith("%+.2f", mmToUm(v.machine[g.worst_sample])) : std::string("&mdash;")) +
            "</td><td>" +
-           (attributable(v, g.worst_sample) ? fmt("%+.2f", mmToUm(v.program[g.worst_sample])) : std::string("&mdash;")) +
+           (attributable(v, g.worst_sample) ? formatWith("%+.2f", mmToUm(v.program[g.worst_sample])) : std::string("&mdash;")) +
            "</td><td class=\"l\">" +
            regionCause(r, g) + "</td><td class=\"l\">" + where + "</td><td>" +
            std::to_string(clLine(r, g.worst_sample)) + "</td></tr>\n";
@@ -288,7 +283,7 @@ std::string formatVerifyHtml(const VerifyReport& r) {
     h += "<h3>" + html(caption) + "</h3>\n<img alt=\"" + html(caption) + "\" src=\"data:image/png;base64," +
          base64Encode(readFile(path)) + "\">\n";
   }
-  h += "<p style=\"color:#777\">tolver verify, " + fmt("%.2f", r.seconds) + " s</p>\n</body></html>\n";
+  h += "<p style=\"color:#777\">tolver verify, " + formatWith("%.2f", r.seconds) + " s</p>\n</body></html>\n";
   return h;
 }
 
