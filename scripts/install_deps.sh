@@ -4,7 +4,7 @@
 set -euo pipefail
 packages=(
   build-essential cmake pkg-config
-  libeigen3-dev libcgal-dev libassimp-dev libvtk9-dev
+  libeigen3-dev libboost-dev libcgal-dev libassimp-dev libvtk9-dev
   libtinyxml2-dev libcli11-dev nlohmann-json3-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev libpagmo-dev libx11-dev
   xvfb libgl1-mesa-dri

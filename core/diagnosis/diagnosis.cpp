@@ -2,6 +2,7 @@
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
+#include <boost/math/tools/minima.hpp>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -220,28 +221,12 @@ class Scorer {
   double rss0_ = 0.0;
 };
 
-// Minimises f on [a, b] by golden-section search.
+// Minimises f on [a, b] (Brent's method, to half the double's digits: the precision a minimum
+// can be located to).
 template <class F>
-double goldenSection(F f, double a, double b, int iterations = 40) {
-  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-  double c = b - g * (b - a), d = a + g * (b - a);
-  double fc = f(c), fd = f(d);
-  for (int i = 0; i < iterations; ++i) {
-    if (fc < fd) {
-      b = d;
-      d = c;
-      fd = fc;
-      c = b - g * (b - a);
-      fc = f(c);
-    } else {
-      a = c;
-      c = d;
-      fc = fd;
-      d = a + g * (b - a);
-      fd = f(d);
-    }
-  }
-  return fc < fd ? c : d;
+double minimiseOn(F f, double a, double b) {
+  std::uintmax_t iterations = 100;
+  return boost::math::tools::brent_find_minima(f, a, b, std::numeric_limits<double>::digits / 2, iterations).first;
 }
 
 // Finds the hyperparameter of spec (period or time constant) that minimises the RSS; returns the
@@ -266,7 +251,7 @@ int searchHyperparameter(const Scorer& sc, const BallbarTest& test, EffectSpec& 
         best_f = f;
       }
     }
-    const double f = goldenSection([&](double x) { return rssAt(1.0 / x); },
+    const double f = minimiseOn([&](double x) { return rssAt(1.0 / x); },
                                    std::max(f0, best_f - df), std::min(f1, best_f + df));
     *h = 1.0 / f;
     // Independent trials: one per cycle of phase change, twice over for the refined peak.
@@ -288,7 +273,7 @@ int searchHyperparameter(const Scorer& sc, const BallbarTest& test, EffectSpec& 
     }
   }
   const double step = (hi - lo) / n;
-  *h = std::exp(goldenSection([&](double x) { return rssAt(std::exp(x)); },
+  *h = std::exp(minimiseOn([&](double x) { return rssAt(std::exp(x)); },
                               std::max(lo, best_x - step), std::min(hi, best_x + step)));
   return 3;
 }

@@ -1,56 +1,31 @@
 #include "core/numerics/statistics.h"
 
 #include <algorithm>
+#include <boost/math/distributions/fisher_f.hpp>
+#include <boost/math/special_functions/beta.hpp>
 #include <cmath>
 
 namespace tolver {
 namespace {
 
-// Continued fraction of the incomplete beta (modified Lentz), valid for x < (a + 1) / (a + b + 2).
-double betaFraction(double a, double b, double x) {
-  const double tiny = 1e-300;
-  double c = 1.0, d = 1.0 - (a + b) * x / (a + 1.0);
-  if (std::abs(d) < tiny) d = tiny;
-  d = 1.0 / d;
-  double h = d;
-  for (int m = 1; m <= 500; ++m) {
-    const double m2 = 2.0 * m;
-    double aa = m * (b - m) * x / ((a + m2 - 1.0) * (a + m2));
-    d = 1.0 + aa * d;
-    if (std::abs(d) < tiny) d = tiny;
-    c = 1.0 + aa / c;
-    if (std::abs(c) < tiny) c = tiny;
-    d = 1.0 / d;
-    h *= d * c;
-    aa = -(a + m) * (a + b + m) * x / ((a + m2) * (a + m2 + 1.0));
-    d = 1.0 + aa * d;
-    if (std::abs(d) < tiny) d = tiny;
-    c = 1.0 + aa / c;
-    if (std::abs(c) < tiny) c = tiny;
-    d = 1.0 / d;
-    const double del = d * c;
-    h *= del;
-    if (std::abs(del - 1.0) < 1e-15) break;
-  }
-  return h;
-}
+// Domain and overflow errors give NaN or infinity instead of exceptions; the callers decide.
+using QuietPolicy = boost::math::policies::policy<boost::math::policies::domain_error<boost::math::policies::ignore_error>,
+                                                  boost::math::policies::overflow_error<boost::math::policies::ignore_error>,
+                                                  boost::math::policies::evaluation_error<boost::math::policies::ignore_error>>;
 
 }  // namespace
 
 double incompleteBeta(double a, double b, double x) {
   if (x <= 0.0) return 0.0;
   if (x >= 1.0) return 1.0;
-  const double ln_front = std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) + a * std::log(x) +
-                          b * std::log1p(-x);
-  const double front = std::exp(ln_front);
-  if (x < (a + 1.0) / (a + b + 2.0)) return front * betaFraction(a, b, x) / a;
-  return 1.0 - front * betaFraction(b, a, 1.0 - x) / b;
+  return boost::math::ibeta(a, b, x, QuietPolicy());
 }
 
 double fSurvival(double f, double d1, double d2) {
-  if (!(f > 0.0)) return 1.0;
+  if (!(f > 0.0) || !(d1 > 0.0) || !(d2 > 0.0)) return 1.0;
   if (std::isinf(f)) return 0.0;
-  return incompleteBeta(0.5 * d2, 0.5 * d1, d2 / (d2 + d1 * f));
+  const boost::math::fisher_f_distribution<double, QuietPolicy> dist(d1, d2);
+  return boost::math::cdf(boost::math::complement(dist, f));
 }
 
 double normalSurvival(double z) { return 0.5 * std::erfc(z / std::sqrt(2.0)); }

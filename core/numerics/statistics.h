@@ -5,9 +5,10 @@
 
 namespace tolver {
 
-// Regularised incomplete beta function I_x(a, b), a, b > 0, 0 <= x <= 1 (continued fraction).
+// Regularised incomplete beta function I_x(a, b), a, b > 0, 0 <= x <= 1 (Boost.Math ibeta).
 double incompleteBeta(double a, double b, double x);
-// P(F > f) for an F distribution with d1, d2 degrees of freedom (d1, d2 > 0).
+// P(F > f) for an F distribution with d1, d2 degrees of freedom (Boost.Math fisher_f; 1 when
+// f, d1 or d2 is not positive).
 double fSurvival(double f, double d1, double d2);
 // P(Z > z) for a standard normal Z.
 double normalSurvival(double z);
