@@ -82,6 +82,17 @@ TEST(MachineFile, WriterRoundTripsEveryShippedMachine) {
   }
 }
 
+// The writer escapes what it writes: a name and a comment with XML's special characters (and a
+// "--", which a comment may not hold) read back as written.
+TEST(MachineFile, WriterEscapesNamesAndComments) {
+  Machine m = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
+  m.model.name = "Cell <3> & \"A\" 'left'";
+  const std::string xml = formatMachineXml(m, "from a <test> & more, run--1 -->");
+  EXPECT_EQ(xml.find("--", xml.find("<!--") + 4), xml.find("-->"));  // no "--" inside the comment
+  const Machine back = parseMachineXml(xml, "back.xml");
+  EXPECT_EQ(back.model.name, m.model.name);
+}
+
 TEST(MachineFile, MalformedFilesNameLineAndField) {
   struct Case {
     const char* xml;

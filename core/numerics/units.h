@@ -7,8 +7,9 @@ namespace tolver {
 
 constexpr double kPi = std::numbers::pi;
 
-constexpr double degToRad(double deg) { return deg * (kPi / 180.0); }
-constexpr double radToDeg(double rad) { return rad * (180.0 / kPi); }
+// deg * pi / 180 and rad * 180 / pi, the products the readers and writers always used.
+constexpr double degToRad(double deg) { return deg * kPi / 180.0; }
+constexpr double radToDeg(double rad) { return rad * 180.0 / kPi; }
 constexpr double mmToUm(double mm) { return mm * 1e3; }
 constexpr double umToMm(double um) { return um * 1e-3; }
 constexpr double radToUrad(double rad) { return rad * 1e6; }

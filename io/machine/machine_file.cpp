@@ -460,161 +460,246 @@ class Reader {
 
 namespace {
 
-std::string frameAttributes(const Eigen::Isometry3d& T) {
-  const Eigen::Matrix3d& R = T.linear();
-  const double ry = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
-  const double rx = std::atan2(R(2, 1), R(2, 2)), rz = std::atan2(R(1, 0), R(0, 0));
-  const double k = radToDeg(1.0);
-  const Eigen::Vector3d t = T.translation();
-  return "translation=\"" + formatNumber(t.x()) + " " + formatNumber(t.y()) + " " +
-         formatNumber(t.z()) + "\" rotation=\"" + formatNumber(rx * k) + " " +
-         formatNumber(ry * k) + " " + formatNumber(rz * k) + "\"";
-}
+// The machine file written with tinyxml2's printer (it escapes every attribute and text).
+class MachineXmlWriter {
+ public:
+  explicit MachineXmlWriter(const Machine& machine) : machine_(machine), m_(machine.model) {}
+
+  std::string write(const std::string& comment) {
+    p_.PushDeclaration("xml version=\"1.0\" encoding=\"UTF-8\"");
+    if (!comment.empty()) {
+      std::string text = comment;  // XML forbids "--" inside a comment
+      for (size_t k = text.find("--"); k != std::string::npos; k = text.find("--", k)) text.replace(k, 2, "- -");
+      p_.PushComment((" " + text + " ").c_str());
+    }
+    p_.OpenElement("machine");
+    attr("name", m_.name);
+    attr("length_unit", "mm");
+    attr("angle_unit", "deg");
+    for (size_t a = 0; a < m_.axes.size(); ++a) axis(static_cast<int>(a));
+    frame("table", m_.last_T_table);
+    frame("spindle", m_.last_T_spindle);
+    if (m_.control.declared) control();
+    errors();
+    aliases();
+    identificationUncertainty();
+    preferred();
+    p_.CloseElement();
+    return p_.CStr();
+  }
+
+ private:
+  void attr(const char* name, const std::string& value) { p_.PushAttribute(name, value.c_str()); }
+  void attr(const char* name, double value) { attr(name, formatNumber(value)); }
+  static std::string joined(const std::vector<std::string>& words) {
+    std::string out;
+    for (const std::string& w : words) out += (out.empty() ? "" : " ") + w;
+    return out;
+  }
+  // A frame: translation (mm) and rotation x, y, z (deg; R = Rz Ry Rx).
+  void frameAttributes(const Eigen::Isometry3d& T) {
+    const Eigen::Matrix3d& R = T.linear();
+    const double ry = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
+    const double rx = std::atan2(R(2, 1), R(2, 2)), rz = std::atan2(R(1, 0), R(0, 0));
+    const Eigen::Vector3d t = T.translation();
+    attr("translation", joined({formatNumber(t.x()), formatNumber(t.y()), formatNumber(t.z())}));
+    attr("rotation", joined({formatNumber(radToDeg(rx)), formatNumber(radToDeg(ry)), formatNumber(radToDeg(rz))}));
+  }
+  void frame(const char* element, const Eigen::Isometry3d& T) {
+    p_.OpenElement(element);
+    frameAttributes(T);
+    p_.CloseElement();
+  }
+  void axis(int a) {
+    const Axis& ax = m_.axes[a];
+    const auto& chain = ax.branch == Branch::Workpiece ? m_.workpiece_chain : m_.tool_chain;
+    const int order = static_cast<int>(std::find(chain.begin(), chain.end(), a) - chain.begin()) + 1;
+    const double k = ax.isRotary() ? radToDeg(1.0) : 1.0;
+    p_.OpenElement("axis");
+    attr("name", ax.name);
+    attr("type", ax.isRotary() ? "rotary" : "prismatic");
+    attr("branch", ax.branch == Branch::Workpiece ? "workpiece" : "tool");
+    attr("order", std::to_string(order));
+    attr("direction", joined({formatNumber(ax.direction.x()), formatNumber(ax.direction.y()),
+                              formatNumber(ax.direction.z())}));
+    attr("min", ax.travel_min * k);
+    attr("max", ax.travel_max * k);
+    attr("nc_sign", std::to_string(ax.nc_sign));
+    if (ax.endless) attr("endless", "true");
+    frame("link", ax.parent_T_joint);
+    p_.CloseElement();
+  }
+  void control() {
+    const NcControl& c = m_.control;
+    p_.OpenElement("control");
+    attr("name", c.name);
+    attr("default_units", c.default_unit_mm == 25.4 ? "inch" : "mm");
+    attr("singular_band_deg", radToDeg(c.singular_band));
+    for (const auto& [on, off] : c.tcp_words) {
+      p_.OpenElement("tcp");
+      attr("on", on);
+      attr("off", off);
+      p_.CloseElement();
+    }
+    for (const auto& [name, value] : c.parameters) {
+      p_.OpenElement("parameter");
+      attr("name", name);
+      attr("value", value);
+      p_.CloseElement();
+    }
+    p_.CloseElement();
+  }
+  // A value in the file's error units: um, urad.
+  std::string value(int p) const {
+    return formatNumber(m_.parameters[p].angular ? radToUrad(machine_.params[p]) : mmToUm(machine_.params[p]));
+  }
+  std::string values(int offset, int count) const {
+    std::vector<std::string> v;
+    for (int k = 0; k < count; ++k) v.push_back(value(offset + k));
+    return joined(v);
+  }
+  void component(const char* element, const char* key, const std::string& key_value, int c, int p) {
+    p_.OpenElement(element);
+    attr(key, key_value);
+    attr("component", kComponentNames[c]);
+    attr("value", value(p));
+    p_.CloseElement();
+  }
+  void effect(const ParameterBlock& b) {
+    const EffectSpec& e = m_.effects[b.effect];
+    p_.OpenElement("effect");
+    attr("type", traitsOf(e.type).name);
+    if (e.axis >= 0) {
+      attr("axis", m_.axes[e.axis].name);
+      attr("component", b.component >= 0 ? kComponentNames[b.component] : "");
+    }
+    if (e.type == EffectType::Chebyshev || e.type == EffectType::Harmonics)
+      attr("orders", std::to_string(e.first_order) + " " + std::to_string(e.last_order));
+    if (e.type == EffectType::Reversal && e.varying) attr("varying", "true");
+    if (e.type == EffectType::Periodic) attr("period_mm", e.period);
+    if (e.type == EffectType::Warmup) attr("tau_s", e.tau);
+    attr("values", values(b.offset, b.size));
+    p_.CloseElement();
+  }
+  // Errors in um and urad; the most common motion degree is the default.
+  void errors() {
+    std::map<int, int> degree_count;
+    for (const ParameterBlock& b : m_.blocks)
+      if (b.kind == BlockKind::MotionError) ++degree_count[b.degree];
+    int def = 3, best = -1;
+    for (const auto& [d, c] : degree_count)
+      if (c > best) {
+        best = c;
+        def = d;
+      }
+    p_.OpenElement("errors");
+    if (!m_.errors_source.empty()) attr("source", m_.errors_source);
+    attr("length_unit", "um");
+    attr("angle_unit", "urad");
+    attr("default_degree", std::to_string(def));
+    const Eigen::VectorXd& q = machine_.params;
+    for (const ParameterBlock& b : m_.blocks) {
+      switch (b.kind) {
+        case BlockKind::LinkError:
+          for (int c = 0; c < 6; ++c)
+            if (q[b.offset + c] != 0.0) component("link", "axis", m_.axes[b.axis].name, c, b.offset + c);
+          break;
+        case BlockKind::MotionError: {
+          bool any = b.degree != def;
+          for (int k = 0; k <= b.degree; ++k) any |= q[b.offset + k] != 0.0;
+          if (!any) break;
+          p_.OpenElement("motion");
+          attr("axis", m_.axes[b.axis].name);
+          attr("component", kComponentNames[b.component]);
+          attr("degree", std::to_string(b.degree));
+          attr("coefficients", values(b.offset, b.degree + 1));
+          p_.CloseElement();
+          break;
+        }
+        case BlockKind::WorkpieceSetup:
+        case BlockKind::ToolSetup:
+          for (int c = 0; c < 6; ++c)
+            if (q[b.offset + c] != 0.0)
+              component("setup", "frame", b.kind == BlockKind::WorkpieceSetup ? "workpiece" : "tool", c, b.offset + c);
+          break;
+        case BlockKind::Effect:
+          effect(b);
+          break;
+      }
+    }
+    p_.CloseElement();
+  }
+  void aliases() {
+    if (m_.aliases.empty()) return;
+    p_.OpenElement("aliases");
+    for (const ParameterAlias& a : m_.aliases) {
+      p_.OpenElement("alias");
+      attr("name", a.name);
+      attr("parameter", m_.parameters[a.parameter].iso_code);
+      attr("description", a.description);
+      p_.CloseElement();
+    }
+    p_.CloseElement();
+  }
+  void identificationUncertainty() {
+    const IdentificationUncertainty& id = machine_.identification;
+    if (id.empty() && id.covered_min.empty()) return;
+    p_.OpenElement("identification_uncertainty");
+    attr("readings", std::to_string(id.readings));
+    p_.PushComment(" the joint ranges the readings covered (mm, deg), and the covariance of the identified "
+                   "values (um and urad) ");
+    for (size_t a = 0; a < id.covered_min.size() && a < m_.axes.size(); ++a) {
+      const double k = m_.axes[a].isRotary() ? radToDeg(1.0) : 1.0;
+      p_.OpenElement("covered");
+      attr("axis", m_.axes[a].name);
+      attr("min", id.covered_min[a] * k);
+      attr("max", id.covered_max[a] * k);
+      p_.CloseElement();
+    }
+    if (!id.empty()) {
+      std::vector<std::string> names;
+      std::vector<double> unit;
+      for (int p : id.parameters) {
+        names.push_back(m_.parameters[p].iso_code);
+        unit.push_back(m_.parameters[p].angular ? radToUrad(1.0) : mmToUm(1.0));
+      }
+      p_.OpenElement("covariance");
+      attr("parameters", joined(names));
+      for (Eigen::Index i = 0; i < id.covariance.rows(); ++i) {
+        std::vector<std::string> row;
+        for (Eigen::Index j = 0; j < id.covariance.cols(); ++j)
+          row.push_back(formatNumber(id.covariance(i, j) * unit[i] * unit[j]));
+        p_.OpenElement("row");
+        p_.PushText(joined(row).c_str());
+        p_.CloseElement();
+      }
+      p_.CloseElement();
+    }
+    p_.CloseElement();
+  }
+  void preferred() {
+    if (m_.preferred.empty()) return;
+    p_.OpenElement("identification");
+    for (const auto& [model, list] : m_.preferred) {
+      std::vector<std::string> names;
+      for (int p : list) names.push_back(m_.parameters[p].iso_code);
+      p_.OpenElement("prefer");
+      attr("model", model);
+      attr("parameters", joined(names));
+      p_.CloseElement();
+    }
+    p_.CloseElement();
+  }
+
+  const Machine& machine_;
+  const MachineModel& m_;
+  tinyxml2::XMLPrinter p_;
+};
 
 }  // namespace
 
 std::string formatMachineXml(const Machine& machine, const std::string& comment) {
-  const MachineModel& m = machine.model;
-  const double deg = radToDeg(1.0);
-  std::string o = "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n";
-  if (!comment.empty()) o += "<!-- " + xmlEscape(comment) + " -->\n";
-  o += "<machine name=\"" + xmlEscape(m.name) + "\" length_unit=\"mm\" angle_unit=\"deg\">\n";
-  auto order = [&](int a) {
-    const auto& chain = m.axes[a].branch == Branch::Workpiece ? m.workpiece_chain : m.tool_chain;
-    return static_cast<int>(std::find(chain.begin(), chain.end(), a) - chain.begin()) + 1;
-  };
-  for (size_t a = 0; a < m.axes.size(); ++a) {
-    const Axis& ax = m.axes[a];
-    const double k = ax.isRotary() ? deg : 1.0;
-    o += "  <axis name=\"" + xmlEscape(ax.name) + "\" type=\"" +
-         (ax.isRotary() ? "rotary" : "prismatic") + "\" branch=\"" +
-         (ax.branch == Branch::Workpiece ? "workpiece" : "tool") + "\" order=\"" +
-         std::to_string(order(static_cast<int>(a))) + "\" direction=\"" +
-         formatNumber(ax.direction.x()) + " " + formatNumber(ax.direction.y()) + " " +
-         formatNumber(ax.direction.z()) + "\" min=\"" + formatNumber(ax.travel_min * k) +
-         "\" max=\"" + formatNumber(ax.travel_max * k) + "\" nc_sign=\"" +
-         std::to_string(ax.nc_sign) + "\"" + (ax.endless ? " endless=\"true\"" : "") + ">\n";
-    o += "    <link " + frameAttributes(ax.parent_T_joint) + "/>\n  </axis>\n";
-  }
-  o += "  <table " + frameAttributes(m.last_T_table) + "/>\n";
-  o += "  <spindle " + frameAttributes(m.last_T_spindle) + "/>\n";
-  if (m.control.declared) {
-    const NcControl& c = m.control;
-    o += "  <control name=\"" + xmlEscape(c.name) + "\" default_units=\"" +
-         (c.default_unit_mm == 25.4 ? "inch" : "mm") + "\" singular_band_deg=\"" +
-         formatNumber(c.singular_band * deg) + "\">\n";
-    for (const auto& [on, off] : c.tcp_words)
-      o += "    <tcp on=\"" + xmlEscape(on) + "\" off=\"" + xmlEscape(off) + "\"/>\n";
-    for (const auto& [name, value] : c.parameters)
-      o += "    <parameter name=\"" + xmlEscape(name) + "\" value=\"" + formatNumber(value) + "\"/>\n";
-    o += "  </control>\n";
-  }
-  // Errors in um and urad. The most common motion degree is the default.
-  std::map<int, int> degree_count;
-  for (const ParameterBlock& b : m.blocks)
-    if (b.kind == BlockKind::MotionError) ++degree_count[b.degree];
-  int def = 3, best = -1;
-  for (const auto& [d, c] : degree_count)
-    if (c > best) {
-      best = c;
-      def = d;
-    }
-  o += "  <errors" + (m.errors_source.empty() ? std::string() : " source=\"" + m.errors_source + "\"") +
-       " length_unit=\"um\" angle_unit=\"urad\" default_degree=\"" + std::to_string(def) + "\">\n";
-  auto value = [&](int p) {
-    return formatNumber(machine.params[p] * (m.parameters[p].angular ? 1e6 : 1e3));
-  };
-  for (const ParameterBlock& b : m.blocks) {
-    const std::string comp = b.component >= 0 ? kComponentNames[b.component] : "";
-    switch (b.kind) {
-      case BlockKind::LinkError:
-        for (int c = 0; c < 6; ++c)
-          if (machine.params[b.offset + c] != 0.0)
-            o += "    <link axis=\"" + m.axes[b.axis].name + "\" component=\"" +
-                 kComponentNames[c] + "\" value=\"" + value(b.offset + c) + "\"/>\n";
-        break;
-      case BlockKind::MotionError: {
-        bool any = b.degree != def;
-        for (int k = 0; k <= b.degree; ++k) any |= machine.params[b.offset + k] != 0.0;
-        if (!any) break;
-        std::string coef;
-        for (int k = 0; k <= b.degree; ++k) coef += (k ? " " : "") + value(b.offset + k);
-        o += "    <motion axis=\"" + m.axes[b.axis].name + "\" component=\"" + comp +
-             "\" degree=\"" + std::to_string(b.degree) + "\" coefficients=\"" + coef + "\"/>\n";
-        break;
-      }
-      case BlockKind::WorkpieceSetup:
-      case BlockKind::ToolSetup:
-        for (int c = 0; c < 6; ++c)
-          if (machine.params[b.offset + c] != 0.0)
-            o += std::string("    <setup frame=\"") +
-                 (b.kind == BlockKind::WorkpieceSetup ? "workpiece" : "tool") + "\" component=\"" +
-                 kComponentNames[c] + "\" value=\"" + value(b.offset + c) + "\"/>\n";
-        break;
-      case BlockKind::Effect: {
-        const EffectSpec& e = m.effects[b.effect];
-        o += std::string("    <effect type=\"") + traitsOf(e.type).name + "\"";
-        if (e.axis >= 0) o += " axis=\"" + m.axes[e.axis].name + "\" component=\"" + comp + "\"";
-        if (e.type == EffectType::Chebyshev || e.type == EffectType::Harmonics)
-          o += " orders=\"" + std::to_string(e.first_order) + " " + std::to_string(e.last_order) + "\"";
-        if (e.type == EffectType::Reversal && e.varying) o += " varying=\"true\"";
-        if (e.type == EffectType::Periodic) o += " period_mm=\"" + formatNumber(e.period) + "\"";
-        if (e.type == EffectType::Warmup) o += " tau_s=\"" + formatNumber(e.tau) + "\"";
-        std::string values;
-        for (int k = 0; k < b.size; ++k) values += (k ? " " : "") + value(b.offset + k);
-        o += " values=\"" + values + "\"/>\n";
-        break;
-      }
-    }
-  }
-  o += "  </errors>\n";
-  if (!m.aliases.empty()) {
-    o += "  <aliases>\n";
-    for (const ParameterAlias& a : m.aliases)
-      o += "    <alias name=\"" + xmlEscape(a.name) + "\" parameter=\"" +
-           m.parameters[a.parameter].iso_code + "\" description=\"" + xmlEscape(a.description) +
-           "\"/>\n";
-    o += "  </aliases>\n";
-  }
-  const IdentificationUncertainty& id = machine.identification;
-  if (!id.empty() || !id.covered_min.empty()) {
-    o += "  <identification_uncertainty readings=\"" + std::to_string(id.readings) + "\">\n";
-    o += "    <!-- the joint ranges the readings covered (mm, deg), and the covariance of the "
-         "identified values (um and urad) -->\n";
-    for (size_t a = 0; a < id.covered_min.size() && a < m.axes.size(); ++a) {
-      const double k = m.axes[a].isRotary() ? deg : 1.0;
-      o += "    <covered axis=\"" + m.axes[a].name + "\" min=\"" + formatNumber(id.covered_min[a] * k) +
-           "\" max=\"" + formatNumber(id.covered_max[a] * k) + "\"/>\n";
-    }
-    if (!id.empty()) {
-      std::string names;
-      std::vector<double> unit;
-      for (int p : id.parameters) {
-        names += (names.empty() ? "" : " ") + m.parameters[p].iso_code;
-        unit.push_back(m.parameters[p].angular ? 1e6 : 1e3);
-      }
-      o += "    <covariance parameters=\"" + names + "\">\n";
-      for (Eigen::Index i = 0; i < id.covariance.rows(); ++i) {
-        o += "      <row>";
-        for (Eigen::Index j = 0; j < id.covariance.cols(); ++j)
-          o += (j ? " " : "") + formatNumber(id.covariance(i, j) * unit[i] * unit[j]);
-        o += "</row>\n";
-      }
-      o += "    </covariance>\n";
-    }
-    o += "  </identification_uncertainty>\n";
-  }
-  if (!m.preferred.empty()) {
-    o += "  <identification>\n";
-    for (const auto& [model, list] : m.preferred) {
-      std::string names;
-      for (int p : list) names += (names.empty() ? "" : " ") + m.parameters[p].iso_code;
-      o += "    <prefer model=\"" + model + "\" parameters=\"" + names + "\"/>\n";
-    }
-    o += "  </identification>\n";
-  }
-  o += "</machine>\n";
-  return o;
+  return MachineXmlWriter(machine).write(comment);
 }
 
 Machine parseMachineXml(const std::string& xml, const std::string& file_name) {
