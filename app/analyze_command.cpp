@@ -1,4 +1,4 @@
-// tolver analyze: identifiability of a machine's error model (thesis 3.6, 4.7; Tables 3.2-3.4,
+// tolver analyze: identifiability of a machine's error model ([AM01] 3.6, 4.7; Tables 3.2-3.4,
 // 4.1-4.3), and of a ball-bar plan's identification Jacobian.
 #include <cmath>
 #include <cstdio>

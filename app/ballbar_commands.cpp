@@ -1,5 +1,5 @@
 // tolver plan-ballbar, simulate-ballbar, calibrate: a telescoping ball-bar calibration of a
-// five-axis machine (thesis chapters 3 and 4).
+// five-axis machine ([AM01] chapters 3 and 4).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

@@ -1,4 +1,4 @@
-// tolver predict: CL_predicted of a part program on a machine with errors (thesis 5.5.1-5.5.3).
+// tolver predict: CL_predicted of a part program on a machine with errors ([AM01] 5.5.1-5.5.3).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>

@@ -1,5 +1,5 @@
 // tolver verify: will this program on this machine make this part within its profile tolerance?
-// (thesis 5.5.4-5.5.6, by swept surfaces; see geometry/verification.h.)
+// ([AM01] 5.5.4-5.5.6, by swept surfaces; see geometry/verification.h.)
 #include <tbb/parallel_for.h>
 
 #include <atomic>

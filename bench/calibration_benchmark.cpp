@@ -63,7 +63,7 @@ void BM_IdentificationJacobian600(benchmark::State& state) {
 }
 BENCHMARK(BM_IdentificationJacobian600)->Unit(benchmark::kMillisecond);
 
-// A full diagnosis (issue 5) of a 360-reading three-set-up test with two undeclared effects:
+// A full diagnosis of a 360-reading three-set-up test with two undeclared effects:
 // base calibration, the minimal-complete set, every candidate of every type with its
 // hyperparameter search and 18-block cross-validation, the nonlinear refits, residual analysis.
 void BM_Diagnose360Readings(benchmark::State& state) {

@@ -1,5 +1,5 @@
 #pragma once
-// Verification of a part program against the part's nominal surface (thesis 5.5.4-5.5.5, by the
+// Verification of a part program against the part's nominal surface ([AM01] 5.5.4-5.5.5, by the
 // point-vector method of geometry/swept_surface.h): the surface the cutter leaves along
 // CL_nominal (the program on a perfect machine) and along CL_predicted (on the real machine),
 // each as a signed normal deviation at every sample of the nominal surface, then the profile
@@ -73,7 +73,7 @@ struct ClPass {
 };
 std::vector<ClPass> clPasses(const std::vector<ClPoint>& path);
 
-// Line profile along one pass (thesis 5.5.4, Fig. 5.7): for each CL point of the pass, the
+// Line profile along one pass ([AM01] 5.5.4, Fig. 5.7): for each CL point of the pass, the
 // sample its move cut closest to the nominal surface (the contact point), in pass order.
 struct LineProfilePoint {
   int cl_index = 0;
@@ -84,7 +84,7 @@ struct LineProfilePoint {
 std::vector<LineProfilePoint> lineProfile(const SurfaceSamples& samples, const VerifyResult& r,
                                           const ClPass& pass);
 
-// CL-only mode (thesis 5.5.4-5.5.5) when there is no CAD model: the nominal surface is the
+// CL-only mode ([AM01] 5.5.4-5.5.5) when there is no CAD model: the nominal surface is the
 // surface through the CL points, pass after pass (neighbouring passes joined by triangle strips),
 // its normal turned towards the tool; the predicted one has the same connectivity through the
 // CL_predicted points. Deviation = (p_predicted - p_nominal) . n (the first-order distance along

@@ -1,6 +1,6 @@
 #pragma once
 // The calibrate pipeline as library functions: the machine's errors identified from ball-bar
-// readings (thesis 3.7, 4.9: Gauss-Newton with gross readings removed, a prior towards zero
+// readings ([AM01] 3.7, 4.9: Gauss-Newton with gross readings removed, a prior towards zero
 // chosen by the readings' evidence), then the identified machine, its ball positions and the
 // report written as a set and read back. `tolver calibrate` parses and prints.
 #include <string>

@@ -246,7 +246,7 @@ ProgramOnMachine predictOnMachine(const VerifyInputs& o) {
   ProgramOnMachine m;
   m.machine = loadMachine(o.machine);
   m.program = loadProgram(o.program, m.machine.model);
-  // Joint values and CL_predicted (thesis 5.5.3); a posted program's own rotary solution.
+  // Joint values and CL_predicted ([AM01] 5.5.3); a posted program's own rotary solution.
   m.pred = predictProgram(m.machine, m.program);
   // A calibrated machine: after the set-up a shop measures (part probed, tool preset), which
   // the calibration cannot see; and the uncertainty of each CL point's prediction.

@@ -1,5 +1,5 @@
 #pragma once
-// The verify pipeline (thesis 5.5.4-5.5.6, by swept surfaces; see geometry/verification.h) as
+// The verify pipeline ([AM01] 5.5.4-5.5.6, by swept surfaces; see geometry/verification.h) as
 // library functions: will this program on this machine make this part within its profile
 // tolerance? runVerification reads the inputs and computes; writeVerification writes the report
 // directory as a whole. `tolver verify` parses options into VerifyInputs and prints.

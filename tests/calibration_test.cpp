@@ -1,4 +1,4 @@
-// Known-truth recovery (thesis 3.7.4 and 4.9.1): simulate ball-bar readings from a machine with
+// Known-truth recovery ([AM01] 3.7.4 and 4.9.1): simulate ball-bar readings from a machine with
 // known errors, identify, compare.
 #include "core/calibration/calibration.h"
 

@@ -36,7 +36,7 @@ TEST(Identifiability, MatsuuraLinkModelHasRank20Of42) {
 }
 
 // Thesis Table 3.4: the minimal set is the 8 machine parameters plus the 12 part and tool ones,
-// with a reduced condition number of order 10^2 (thesis: 87, unscaled; here about 8e2 unscaled
+// with a reduced condition number of order 10^2 ([AM01]: 87, unscaled; here about 8e2 unscaled
 // in mm and rad, about 5 with columns scaled).
 TEST(Identifiability, MatsuuraLinkMinimalSetIsTable34) {
   const Machine m = load(0);

@@ -1,7 +1,7 @@
 #pragma once
 // A second, independent implementation of ball-bar readings on the Matsuura MC-760VX (ZFYXAC),
 // for judging calibrate and diagnose on data their own code did not generate. It shares no code
-// with tolver's model: the chains are written out from the thesis's description (Fig. 3.2,
+// with tolver's model: the chains are written out from [AM01]'s description (Fig. 3.2,
 // eq. 20-22), the motion errors are power polynomials (not Chebyshev series), the undeclared
 // effects are closed-form functions of position, direction and time, and it writes its own CSV
 // (with the approach directions the machine really had, including those of the held-out poses

@@ -23,7 +23,7 @@ TEST(RigidTransform, LinkTransformIsTheProductOfEquation22) {
 }
 
 // A small twist at frame A, seen from a frame B rigidly attached to A: B' = A_T_B^-1 E(dA) A_T_B
-// must equal E(C dA) to first order (thesis eq. 28-29).
+// must equal E(C dA) to first order ([AM01] eq. 28-29).
 TEST(RigidTransform, TransportMatrixPropagatesSmallTwists) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -88,8 +88,8 @@ TEST(ToleranceAllocation, SolutionsMeetTheLimitsAndBoundsAndRepeat) {
   ASSERT_GE(r.chosen, 0);
 }
 
-// The XKH800 with the paper's standard tolerances, over its working volume with a 150 mm tool:
-// the standard values themselves exceed the paper's limits when the errors stack in the worst
+// The XKH800 with [Cai]'s standard tolerances, over its working volume with a 150 mm tool:
+// the standard values themselves exceed [Cai]'s limits when the errors stack in the worst
 // case (the five linear terms along z alone give 15 um against 10 um), so with the default
 // bounds nothing is feasible; allowing tighter tolerances finds the cheapest feasible allocation.
 TEST(ToleranceAllocation, Xkh800StandardToleranceBreaksTheLimitsUnderWorstCaseStacking) {

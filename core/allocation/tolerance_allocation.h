@@ -8,7 +8,7 @@
 // Cost (eq. 8):          C = sum_i (h_i t_i)^-r,  h_i from the term's category (Table 3: positional
 //                        h_p, linear positioning 1, angular positioning h_a, linear
 //                        non-positioning h_d, angular non-positioning h_a h_d), t_i in cost units:
-//                        mm for lengths and mm/m (mrad) for angles, as the paper's Table 4 states them.
+//                        mm for lengths and mm/m (mrad) for angles, as [Cai]'s Table 4 states them.
 // Quality loss (eq. 9-13): eta_i = -10 log10(E[y_i^2]) (smaller-the-better SNR) with y_i the error
 //                        value within its tolerance; this project's reading: y_i uniform in
 //                        [-t_i, t_i] (E[y^2] = t^2/3; or normal with t = 3 sigma, E = t^2/9);
@@ -93,7 +93,7 @@ Eigen::Vector3d verifyAccuracy(const MachineModel& m, const std::vector<Toleranc
 
 // Correlation of the terms' effects on the tool tip over the working volume (Pearson correlation
 // of the columns of J) and agglomerative clustering (average linkage, distance 1 - |r|) into
-// `groups` groups (paper 4.1).
+// `groups` groups ([Cai] 4.1).
 struct CorrelationAnalysis {
   Eigen::MatrixXd correlation;       // terms x terms
   std::vector<int> group;            // per term, 0 .. groups-1

@@ -1,5 +1,5 @@
 #pragma once
-// Telescoping ball-bar measurement model (thesis 4.8, eq. 79-81).
+// Telescoping ball-bar measurement model ([AM01] 4.8, eq. 79-81).
 //
 // A reading is the distance between the tool-ball centre b_t (a point of the tool frame t) and
 // the table-ball centre b_w (a point of the workpiece frame w):
@@ -62,7 +62,7 @@ void ballbarComponentGradient(const ForwardKinematics& fk, const JointVector& q,
                               Eigen::Ref<Eigen::RowVectorXd> J_length_components,
                               Eigen::MatrixXd& scratch, const MotionContext* ctx = nullptr);
 
-// The identification Jacobian of a test (thesis eq. 80): one row per reading, columns
+// The identification Jacobian of a test ([AM01] eq. 80): one row per reading, columns
 // [unknown machine parameters..., per set-up: table-ball xyz, tool-ball xyz] (balls: one per
 // set-up, the ball errors at which to linearise). residuals, when given: measured - model, mm.
 Eigen::MatrixXd identificationJacobian(const ForwardKinematics& fk, const BallbarTest& test,

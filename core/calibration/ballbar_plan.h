@@ -1,5 +1,5 @@
 #pragma once
-// Planning a three-set-up ball-bar test (thesis 4.8.1, Fig. 4.9): joint configurations inside
+// Planning a three-set-up ball-bar test ([AM01] 4.8.1, Fig. 4.9): joint configurations inside
 // travel whose nominal ball-to-ball distance is the bar length, chosen among many sampled ones
 // to maximise identifiability (greedy D-optimal design on the column-scaled identification
 // Jacobian: each new pose is the candidate that most increases det(J^T J)).

@@ -1,5 +1,5 @@
 #pragma once
-// Identification of a machine's errors from ball-bar readings (thesis 3.7, 4.9, eq. 43-44 and
+// Identification of a machine's errors from ball-bar readings ([AM01] 3.7, 4.9, eq. 43-44 and
 // 80-81): iterative Gauss-Newton with the SVD pseudo-inverse of the column-scaled
 // identification Jacobian, until the scaled step falls below a tolerance.
 //

@@ -1,11 +1,11 @@
 #pragma once
-// Identifiability of error parameters from a stacked Jacobian (thesis 3.6, 4.7): rank,
+// Identifiability of error parameters from a stacked Jacobian ([AM01] 3.6, 4.7): rank,
 // condition number and SVD of the column-scaled matrix, groups of confounded parameters from
 // the right singular vectors of the (near-)zero singular values, and the selection of a
-// minimal-complete parameter set by the thesis's strategies:
+// minimal-complete parameter set by [AM01]'s strategies:
 //   I   keep part and tool set-up parameters;
 //   II  keep the parameters that stand for recognised link errors (a per-machine list,
-//       thesis Tables 3.4 and 4.2);
+//       [AM01] Tables 3.4 and 4.2);
 //   III otherwise remove the parameter whose removal leaves the smallest condition number.
 // Column scaling, rank and condition: core/numerics/scaled_svd.h.
 #include <Eigen/Core>
@@ -21,7 +21,7 @@ namespace tolver {
 Eigen::MatrixXd stackedJacobian(const ForwardKinematics& fk, const std::vector<JointVector>& poses,
                                 const std::vector<int>& columns);
 
-// Parameter columns of the thesis's two models: "link" = link errors and set-up errors
+// Parameter columns of [AM01]'s two models: "link" = link errors and set-up errors
 // (chapter 3), "motion" = motion-error coefficients and set-up errors (chapter 4);
 // "all" = every parameter.
 std::vector<int> modelColumns(const MachineModel& m, const std::string& model);

@@ -1,5 +1,5 @@
 #pragma once
-// Forward kinematics of the machine with its errors (thesis eq. 27, 45-53, 82-89):
+// Forward kinematics of the machine with its errors ([AM01] eq. 27, 45-53, 82-89):
 //   w_T_t = (F_T_w)^-1 * F_T_t,
 //   F_T_w = D_1 ... D_n * table_T_w * E_w,   F_T_t = D_1 ... D_m * spindle_T_t * E_t,
 // each joint D_S = D1_S * L_S * D2_S(s) * E_S(s), all exact HTMs (no small-angle shortcut).

@@ -1,5 +1,5 @@
 #pragma once
-// The sensitivity Jacobian (thesis eq. 28-37, 61-72): how the pose of the tool frame t seen
+// The sensitivity Jacobian ([AM01] eq. 28-37, 61-72): how the pose of the tool frame t seen
 // from the workpiece frame w changes with each error parameter.
 //
 // The error twist dt = [d; theta] (mm, rad) is expressed in t: w_T_t(p + dp) = w_T_t(p) E(dt),

@@ -1,6 +1,6 @@
 #pragma once
 // The machine model: topology, nominal geometry and the layout of the error parameters
-// (thesis chapters 3-5; Pinocchio-style: an immutable description, evaluated by free functions
+// ([AM01] chapters 3-5; Pinocchio-style: an immutable description, evaluated by free functions
 // and small workspaces elsewhere).
 //
 // Frames:
@@ -17,13 +17,13 @@
 // moving body by s (mm or rad) along (about) its direction in its parent's frame.
 //
 // Error parameters form one flat vector of named blocks (lengths in mm, angles in rad):
-//  * LinkError        per axis, 6 values [ex ey ez gx gy gz] (thesis e_x,S ... gamma_z,S; ISO 230-1
+//  * LinkError        per axis, 6 values [ex ey ez gx gy gz] ([AM01] e_x,S ... gamma_z,S; ISO 230-1
 //                      location errors XOS YOS ZOS AOS BOS COS);
 //  * MotionError      per axis and component, the Chebyshev coefficients c_0..c_d of that
 //                      component as a function of the normalised joint coordinate (eq. 59);
 //                      ISO 230-1 motion errors EXS EYS EZS EAS EBS ECS;
-//  * WorkpieceSetup   6 values, error of w in table (thesis e_x,w ...);
-//  * ToolSetup        6 values, error of t in spindle (thesis e_x,t ...);
+//  * WorkpieceSetup   6 values, error of w in table ([AM01] e_x,w ...);
+//  * ToolSetup        6 values, error of t in spindle ([AM01] e_x,t ...);
 //  * Effect           the coefficients of one effect (core/model/effects.h: backlash, cyclic error,
 //                      rotary harmonics, thermal drift, instrument length, a higher degree),
 //                      appended by addEffect after the blocks above.
@@ -48,7 +48,7 @@ using JointVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxAxes, 1>;
 enum class JointType { Prismatic, Rotary };
 enum class Branch { Workpiece, Tool };
 
-// Error components of a twist, in order. Names as in the thesis (e, gamma) and ISO 230-1 letters.
+// Error components of a twist, in order. Names as in [AM01] (e, gamma) and ISO 230-1 letters.
 constexpr std::array<const char*, 6> kComponentNames = {"ex", "ey", "ez", "gx", "gy", "gz"};
 constexpr std::array<char, 6> kComponentIsoLetters = {'X', 'Y', 'Z', 'A', 'B', 'C'};
 inline bool isAngularComponent(int component) { return component >= 3; }
@@ -158,7 +158,7 @@ class MachineModel {
   std::vector<ParameterAlias> aliases;
   std::vector<EffectSpec> effects;        // one per Effect block, in block order
   // Parameters kept by strategy II when choosing a minimal-complete set, per model name
-  // ("link", "motion"): the recognised link errors (thesis Tables 3.4 and 4.2).
+  // ("link", "motion"): the recognised link errors ([AM01] Tables 3.4 and 4.2).
   std::map<std::string, std::vector<int>> preferred;
 
   // Builds blocks and parameters: link errors for each axis, motion errors of the given
@@ -172,7 +172,7 @@ class MachineModel {
 
   int parameterCount() const { return static_cast<int>(parameters.size()); }
   int axisIndex(std::string_view axis_name) const;  // -1 if absent (case-insensitive)
-  // Index of a parameter by thesis name, ISO code or alias (case-sensitive), -1 if absent.
+  // Index of a parameter by [AM01] name, ISO code or alias (case-sensitive), -1 if absent.
   int findParameter(std::string_view name) const;
   // Index of the motion-error block of (axis, component), -1 if absent.
   int motionBlock(int axis, int component) const;

@@ -1,5 +1,5 @@
 #pragma once
-// Homogeneous transforms used by the machine model (thesis chapter 3, eq. 20-23).
+// Homogeneous transforms used by the machine model ([AM01] chapter 3, eq. 20-23).
 //
 // Conventions, stated once for the whole project:
 //  * a_T_b (Eigen::Isometry3d) is the pose of frame b seen from frame a: p_a = a_T_b * p_b.
@@ -69,7 +69,7 @@ Eigen::Isometry3d translation(const Eigen::Vector3d& dir, double d);
 // rot(dir, angle): a pure rotation by angle (rad) about the unit vector dir through the origin.
 Eigen::Isometry3d rotation(const Eigen::Vector3d& dir, double angle);
 
-// The link HTM of thesis eq. 21/22, exact (no small-angle approximation):
+// The link HTM of [AM01] eq. 21/22, exact (no small-angle approximation):
 //   trans(i, tx) trans(j, ty) trans(k, tz) rot(k, rz) rot(j, ry) rot(i, rx)
 // with v = [tx ty tz rx ry rz] (mm, rad).
 Eigen::Isometry3d linkTransform(const Vector6d& v);
@@ -77,7 +77,7 @@ Eigen::Isometry3d linkTransform(const Vector6d& v);
 // The rotation part of linkTransform: Rz(rz) * Ry(ry) * Rx(rx).
 Eigen::Matrix3d rotationZYX(double rx, double ry, double rz);
 
-// The 6x6 transport matrix of thesis eq. 29: maps an error twist expressed in frame A to the
+// The 6x6 transport matrix of [AM01] eq. 29: maps an error twist expressed in frame A to the
 // equivalent twist expressed in frame B, where a_T_b is the pose of B seen from A.
 // [ R^T  -R^T [p x] ; 0  R^T ] with R, p the rotation and translation of a_T_b.
 Eigen::Matrix<double, 6, 6> transportMatrix(const Eigen::Isometry3d& a_T_b);

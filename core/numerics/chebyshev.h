@@ -1,5 +1,5 @@
 #pragma once
-// Chebyshev polynomials of the first kind for motion-error series (thesis eq. 54-59, 90-94).
+// Chebyshev polynomials of the first kind for motion-error series ([AM01] eq. 54-59, 90-94).
 //
 // A motion error e(s) of a joint is the series  e(s) = sum_k c_k T_k(s_N),
 // with s_N = (s - s_mid) / (range / 2) the joint coordinate normalised over its travel (eq. 58),

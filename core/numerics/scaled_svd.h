@@ -28,7 +28,7 @@ struct SvdSummary {
   int rank = 0;
   double condition = 0.0;           // sigma_max / sigma_min; infinity when rank < cols
   double condition_unscaled = 0.0;  // the same without column scaling (mm, rad), as the
-                                    // thesis reports it
+                                    // [AM01] reports it
   Eigen::VectorXd singular_values;  // of the column-scaled matrix, decreasing
 };
 
@@ -42,7 +42,7 @@ SvdSummary summariseScaled(const Eigen::MatrixXd& S, int rows);
 
 // sigma_max / sigma_min of scaleColumns(J); infinity when sigma_min is zero.
 double scaledCondition(const Eigen::MatrixXd& J);
-// The same of J as it is (mm and rad mixed, as the thesis reports it).
+// The same of J as it is (mm and rad mixed, as [AM01] reports it).
 double unscaledCondition(const Eigen::MatrixXd& J);
 
 // The upper-triangular factor R of J = QR: the same singular values as J for any subset of its

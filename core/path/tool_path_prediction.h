@@ -1,5 +1,5 @@
 #pragma once
-// CL_predicted (thesis 5.5.1-5.5.3): for each CL point, joint values by inverse kinematics on
+// CL_predicted ([AM01] 5.5.1-5.5.3): for each CL point, joint values by inverse kinematics on
 // the nominal machine, then the actual tool pose from the forward model with the machine's
 // errors. Deviations are expressed in the workpiece frame w.
 #include <Eigen/Core>

@@ -24,7 +24,7 @@
 //
 // Axes are listed from the foundation outwards in each branch (or sorted by `order`).
 // Rotations in link/table/spindle are (rx ry rz) in angle_unit, applied as rot(k,rz) rot(j,ry)
-// rot(i,rx) after the translation (thesis eq. 21). Components: ex ey ez gx gy gz.
+// rot(i,rx) after the translation ([AM01] eq. 21). Components: ex ey ez gx gy gz.
 #include <string>
 
 #include "core/model/machine_model.h"

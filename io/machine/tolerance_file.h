@@ -2,7 +2,7 @@
 // Tolerance files for allocation (CSV, '#' comments). Columns, by name:
 //   term       a parameter name, ISO code or alias of the machine file (dx_x, EXX.c0, COY)
 //   category   positional | linear_positioning | angular_positioning | linear_non_positioning |
-//              angular_non_positioning   (paper Table 3)
+//              angular_non_positioning   ([Cai] Table 3)
 //   standard   the standard full tolerance band
 //   unit       mm | um | rad | urad | mm/m | mm/<L>mm (a deviation over a length, e.g. mm/1000mm)
 //   lower, upper (optional)  bounds of the band, same unit; default standard and 3 x standard

@@ -1,5 +1,5 @@
 #pragma once
-// Reports of a tolerance allocation: a table like the paper's Table 4, the Pareto front (CSV and
+// Reports of a tolerance allocation: a table like [Cai]'s Table 4, the Pareto front (CSV and
 // PNG), JSON and a self-contained HTML page. All files are written atomically into a directory.
 #include <string>
 #include <vector>

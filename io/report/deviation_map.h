@@ -63,7 +63,7 @@ void renderHistogram(const std::string& png_path, const std::vector<double>& dev
                      const std::vector<double>& weight, double lower, double upper,
                      const std::string& title, int width = 900, int height = 500);
 
-// A line profile (thesis Fig. 5.7): deviation (mm) against arc length (mm) with the zone band.
+// A line profile ([AM01] Fig. 5.7): deviation (mm) against arc length (mm) with the zone band.
 void renderLineProfile(const std::string& png_path, const std::vector<double>& arc_length,
                        const std::vector<double>& total, const std::vector<double>& machine,
                        double lower, double upper, const std::string& title, int width = 900,
