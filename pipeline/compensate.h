@@ -1,0 +1,60 @@
+#pragma once
+// The compensate pipeline as library functions: the program that the machine, errors included,
+// runs onto the nominal path ([AM01] ch. 5, conclusion: correcting the CL data), written back in
+// the source's dialect, with the predicted error before and after, the after measured on the
+// written text read back; and the linear-axis tables (--table). `tolver compensate` parses and
+// prints.
+#include <string>
+#include <vector>
+
+#include "core/path/compensation.h"
+#include "io/program/compensated_program.h"
+#include "io/report/compensation_report.h"
+#include "pipeline/inputs.h"
+
+namespace tolver {
+
+struct CompensateInputs {
+  MachineOptions machine;
+  ProgramOptions program;
+  std::string probed;           // probed points (CSV)
+  bool absolute = false;        // calibrated machine: no measured set-up
+  double max_condition = 1e6;   // beyond it, a point is near a singular pose
+};
+
+struct CompensationRun {
+  Machine machine;              // after the measured set-up (calibrated machine)
+  ClProgram program;
+  PredictionResult before, after;  // after: the written text read back and predicted
+  CompensationResult compensation;
+  CompensatedProgramText text;  // the corrected program, in the source's encoding
+  bool orientation = false;     // the tool axis is compensated too (five-axis program)
+  std::string setup_note;
+  std::vector<std::string> warnings;
+  CompensationReport report;
+  // Per program point: source line, tip deviation (um) and axis error (urad), before and after.
+  std::vector<int> line;
+  std::vector<double> tip_before_um, tip_after_um, axis_before_urad, axis_after_urad;
+};
+
+// Reads, predicts, compensates, writes the text (named `output` in its notes) and measures it
+// read back. Throws InputError.
+CompensationRun runCompensation(const CompensateInputs& in, const std::string& output);
+// Writes the program and the JSON report as a set, then the report directory (when given).
+void writeCompensation(const CompensationRun& run, const std::string& output, const std::string& report_json,
+                       const std::string& report_dir);
+
+// --table: one CSV per linear axis (pitch and straightness), and what such tables leave.
+struct TableRun {
+  Machine machine;
+  std::vector<AxisTable> tables;
+  std::string reference;        // the reference pose, in words ("X=0 mm Y=0 mm ...")
+  TableEffect flat, full;       // rotary axes at the reference; whole travel, rotaries moving
+  int rotary_terms = 0;         // non-zero error terms of the rotary axes (no table carries them)
+  std::string rotary_names;     // the first of them
+  std::vector<std::string> files;
+};
+// Computes the tables and writes <stem>_<axis>.csv for each (stem: `table` without extension).
+TableRun runTables(const MachineOptions& machine, double step_mm, const std::string& table);
+
+}  // namespace tolver
