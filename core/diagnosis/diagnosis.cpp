@@ -339,249 +339,242 @@ bool sameEffect(const EffectSpec& a, const EffectSpec& b) {
          a.varying == b.varying;
 }
 
-}  // namespace
 
-DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
-                         const DiagnosisOptions& opt,
-                         const std::function<void(int, int)>& progress) {
-  DiagnosisResult res;
-  res.machine = machine;
-  std::vector<int> unknowns =
-      opt.base_unknowns.empty() ? defaultCalibrationUnknowns(machine.model) : opt.base_unknowns;
-  res.base_fit = calibrate(machine.model, machine.params, test, unknowns);
-  if (res.base_fit.status == CalibrationStatus::Unobservable ||
-      res.base_fit.status == CalibrationStatus::NoData) {
-    res.message = res.base_fit.message;
-    return res;
+// The candidates of a round: every effect of the types asked for that the model lacks.
+std::vector<CandidateScore> candidatesOf(const MachineModel& model, const DiagnosisOptions& opt, int round) {
+  std::vector<CandidateScore> scores;
+  for (const EffectTraits& t : effectTypes()) {
+    if (!opt.types.empty() && std::find(opt.types.begin(), opt.types.end(), t.type) == opt.types.end()) continue;
+    for (const EffectSpec& spec : t.candidates(model)) {
+      auto present = [&](const EffectSpec& e) { return spec.type != EffectType::Chebyshev && sameEffect(e, spec); };
+      if (std::any_of(model.effects.begin(), model.effects.end(), present)) continue;
+      CandidateScore c;
+      c.spec = spec;
+      c.round = round;
+      scores.push_back(c);
+    }
   }
-  res.final_fit = res.base_fit;
-  res.machine.params = res.base_fit.params;
-  // Parameters the base fit could not see stay held at their prior values in every later fit:
-  // the refits identify what the base fit identified, plus the effects.
-  unknowns = res.base_fit.identified;
-  const std::vector<int> fold_of = contiguousFolds(test, opt.blocks_per_setup, &res.folds);
-  std::vector<EffectSpec> rejected;  // found not identifiable by the nonlinear refit
+  return scores;
+}
 
-  for (int round = 1; round <= opt.max_effects + 1; ++round) {
-    const Scorer sc(res.machine, test, res.final_fit, fold_of, res.folds);
-    const double cv_base = sc.crossValidatedRms(nullptr);
-    if (round == 1) res.cv_rms_before = cv_base;
-    res.cv_rms_after = cv_base;
-    if (round > opt.max_effects) break;
+// Scores each candidate (hyperparameter search, RSS with and without it, F test on the
+// effective readings, information criterion, cross-validated RMS); returns the number of
+// independent tests made (for the Bonferroni factor).
+int scoreCandidates(const Scorer& sc, const BallbarTest& test, const MachineModel& model, double cv_base,
+                    std::vector<CandidateScore>& scores, const std::function<void(int, int)>& progress) {
+  int tests = 0;
+  const int m = sc.readings(), n = sc.unknowns();
+  for (size_t i = 0; i < scores.size(); ++i) {
+    if (progress) progress(static_cast<int>(i), static_cast<int>(scores.size()));
+    CandidateScore& c = scores[i];
+    c.trials = searchHyperparameter(sc, test, c.spec);
+    tests += c.trials;
+    c.label = describeEffect(model, c.spec);
+    const Eigen::MatrixXd G = sc.columns(c.spec);
+    c.coefficients = static_cast<int>(G.cols());
+    c.rss_before = sc.rss();
+    if ((G.colwise().norm().array() < 1e-12).any()) {  // the readings do not see it at all
+      c.rss_after = c.rss_before;
+      c.verdict = CandidateVerdict::NotIdentifiable;
+      continue;
+    }
+    Eigen::VectorXd e;
+    c.rss_after = sc.rssWith(G, &e, &c.new_information);
+    const double rho = std::clamp(sc.autocorrelation(e), 0.0, 0.95);
+    c.effective_readings = m * (1.0 - rho) / (1.0 + rho);
+    const int k = c.coefficients + (hyperparameter(c.spec) ? 1 : 0);
+    const double dof = c.effective_readings - n - c.coefficients;
+    c.cv_rms_before = cv_base;
+    c.cv_rms_after = sc.crossValidatedRms(&G);
+    if (dof <= 1 || !(c.rss_after > 0)) {
+      c.verdict = CandidateVerdict::NotIdentifiable;
+      continue;
+    }
+    c.f_statistic = ((c.rss_before - c.rss_after) / c.coefficients) / (c.rss_after / dof);
+    c.p_value = fSurvival(c.f_statistic, c.coefficients, dof);
+    c.delta_ic = c.effective_readings * std::log(c.rss_before / c.rss_after) -
+                 k * std::log(c.effective_readings);
+  }
+  if (progress) progress(static_cast<int>(scores.size()), static_cast<int>(scores.size()));
+  return tests;
+}
 
-    // Candidates of this round.
-    std::vector<CandidateScore> scores;
-    for (const EffectTraits& t : effectTypes()) {
-      if (!opt.types.empty() &&
-          std::find(opt.types.begin(), opt.types.end(), t.type) == opt.types.end())
-        continue;
-      for (const EffectSpec& spec : t.candidates(res.machine.model)) {
-        auto present = [&](const EffectSpec& e) {
-          return spec.type != EffectType::Chebyshev && sameEffect(e, spec);
-        };
-        if (std::any_of(res.machine.model.effects.begin(), res.machine.model.effects.end(), present))
-          continue;
-        CandidateScore c;
-        c.spec = spec;
-        c.round = round;
-        scores.push_back(c);
-      }
-    }
-    int tests = 0;
-    const int m = sc.readings(), n = sc.unknowns();
-    for (size_t i = 0; i < scores.size(); ++i) {
-      if (progress) progress(static_cast<int>(i), static_cast<int>(scores.size()));
-      CandidateScore& c = scores[i];
-      c.trials = searchHyperparameter(sc, test, c.spec);
-      tests += c.trials;
-      c.label = describeEffect(res.machine.model, c.spec);
-      const Eigen::MatrixXd G = sc.columns(c.spec);
-      c.coefficients = static_cast<int>(G.cols());
-      c.rss_before = sc.rss();
-      if ((G.colwise().norm().array() < 1e-12).any()) {  // the readings do not see it at all
-        c.rss_after = c.rss_before;
+// The verdict of each scored candidate; returns the qualified ones, best (largest information
+// gain) first.
+std::vector<size_t> qualify(const Scorer& sc, const DiagnosisOptions& opt, const std::vector<EffectSpec>& rejected,
+                            int tests, std::vector<CandidateScore>& scores) {
+  std::vector<size_t> qualified;
+  for (size_t i = 0; i < scores.size(); ++i) {
+    CandidateScore& c = scores[i];
+    if (c.verdict == CandidateVerdict::NotIdentifiable) continue;
+    c.p_value = std::min(1.0, c.p_value * std::max(1, tests));
+    if (c.new_information < opt.min_new_information) {
+      c.verdict = CandidateVerdict::Confounded;
+    } else if (c.p_value >= opt.alpha || c.delta_ic <= 0) {
+      c.verdict = CandidateVerdict::NotSignificant;
+    } else if (!(c.cv_rms_after < c.cv_rms_before)) {
+      c.verdict = CandidateVerdict::NoPredictiveGain;
+    } else {
+      c.condition = sc.condition(sc.columns(c.spec));
+      if (c.condition > opt.max_condition ||
+          std::any_of(rejected.begin(), rejected.end(),
+                      [&](const EffectSpec& r) { return sameEffect(r, c.spec); })) {
         c.verdict = CandidateVerdict::NotIdentifiable;
-        continue;
-      }
-      Eigen::VectorXd e;
-      c.rss_after = sc.rssWith(G, &e, &c.new_information);
-      const double rho = std::clamp(sc.autocorrelation(e), 0.0, 0.95);
-      c.effective_readings = m * (1.0 - rho) / (1.0 + rho);
-      const int k = c.coefficients + (hyperparameter(c.spec) ? 1 : 0);
-      const double dof = c.effective_readings - n - c.coefficients;
-      c.cv_rms_before = cv_base;
-      c.cv_rms_after = sc.crossValidatedRms(&G);
-      if (dof <= 1 || !(c.rss_after > 0)) {
-        c.verdict = CandidateVerdict::NotIdentifiable;
-        continue;
-      }
-      c.f_statistic = ((c.rss_before - c.rss_after) / c.coefficients) / (c.rss_after / dof);
-      c.p_value = fSurvival(c.f_statistic, c.coefficients, dof);
-      c.delta_ic = c.effective_readings * std::log(c.rss_before / c.rss_after) -
-                   k * std::log(c.effective_readings);
-    }
-    if (progress) progress(static_cast<int>(scores.size()), static_cast<int>(scores.size()));
-    std::vector<size_t> qualified;
-    for (size_t i = 0; i < scores.size(); ++i) {
-      CandidateScore& c = scores[i];
-      if (c.verdict == CandidateVerdict::NotIdentifiable) continue;
-      c.p_value = std::min(1.0, c.p_value * std::max(1, tests));
-      if (c.new_information < opt.min_new_information) {
-        c.verdict = CandidateVerdict::Confounded;
-      } else if (c.p_value >= opt.alpha || c.delta_ic <= 0) {
-        c.verdict = CandidateVerdict::NotSignificant;
-      } else if (!(c.cv_rms_after < c.cv_rms_before)) {
-        c.verdict = CandidateVerdict::NoPredictiveGain;
       } else {
-        c.condition = sc.condition(sc.columns(c.spec));
-        if (c.condition > opt.max_condition ||
-            std::any_of(rejected.begin(), rejected.end(),
-                        [&](const EffectSpec& r) { return sameEffect(r, c.spec); })) {
-          c.verdict = CandidateVerdict::NotIdentifiable;
-        } else {
-          c.verdict = CandidateVerdict::Outscored;
-          qualified.push_back(i);
-        }
+        c.verdict = CandidateVerdict::Outscored;
+        qualified.push_back(i);
       }
     }
-    std::sort(qualified.begin(), qualified.end(),
-              [&](size_t a, size_t b) { return scores[a].delta_ic > scores[b].delta_ic; });
-    bool added = false;
-    // Candidates the readings cannot tell from scores[i]: same type and size, columns (at its
-    // hyperparameter) spanning the same space to 0.1 % (the machine's own errors tilt the
-    // frames by micro-radians, so exact equivalents differ at that level).
-    auto equivalentsOf = [&](size_t i) {
-      std::vector<size_t> out;
-      const CandidateScore& c = scores[i];
-      const Eigen::MatrixXd G = sc.columns(c.spec);
-      const Eigen::HouseholderQR<Eigen::MatrixXd> qa(G);
-      const Eigen::MatrixXd Qa = qa.householderQ() * Eigen::MatrixXd::Identity(G.rows(), G.cols());
-      for (size_t j = 0; j < scores.size(); ++j) {
-        const CandidateScore& o = scores[j];
-        if (j == i || o.spec.type != c.spec.type || o.coefficients != c.coefficients) continue;
-        EffectSpec os = o.spec;
-        if (double* h = hyperparameter(os)) *h = hyperparameterValue(c.spec);
-        const Eigen::MatrixXd G2 = sc.columns(os);
-        if (G2.cols() != G.cols() || (G2.colwise().norm().array() < 1e-12).any()) continue;
-        bool same = true;
-        for (Eigen::Index k = 0; k < G2.cols() && same; ++k) {
-          const Eigen::VectorXd g = G2.col(k) / G2.col(k).norm();
-          same = (g - Qa * (Qa.transpose() * g)).norm() < 1e-3;
-        }
-        if (same) out.push_back(j);
-      }
-      return out;
-    };
-    auto principal = [&](const EffectSpec& e) {
-      return e.axis >= 0 && e.component == principalComponent(res.machine.model.axes[e.axis]);
-    };
-    for (size_t qi : qualified) {
-      // Among equivalent names, the one along an axis's own motion (the drift of Z along z
-      // rather than the table's along z): the same fit, the likelier cause.
-      size_t pick = qi;
-      std::vector<size_t> equivalent = equivalentsOf(qi);
-      if (!principal(scores[qi].spec))
-        for (size_t e : equivalent)
-          if (principal(scores[e].spec) && scores[e].verdict == CandidateVerdict::Outscored) {
-            pick = e;
-            break;
-          }
-      if (pick != qi) equivalent.push_back(qi);
-      CandidateScore& c = scores[pick];
-      Machine aug = res.machine;
-      const int first = aug.model.parameterCount();
-      aug.model.addEffect(c.spec);
-      aug.params.conservativeResize(aug.model.parameterCount());
-      aug.params.tail(aug.model.parameterCount() - first).setZero();
-      std::vector<int> aug_unknowns = unknowns;
-      AddedEffect a;
-      a.spec = c.spec;
-      a.label = c.label;
-      for (int p = first; p < aug.model.parameterCount(); ++p) {
-        aug_unknowns.push_back(p);
-        a.parameters.push_back(p);
-      }
-      const CalibrationResult fit = calibrate(aug.model, aug.params, test, aug_unknowns);
-      const bool seen = fit.status != CalibrationStatus::Unobservable &&
-                        fit.status != CalibrationStatus::NoData &&
-                        std::none_of(a.parameters.begin(), a.parameters.end(), [&](int p) {
-                          return std::find(fit.held.begin(), fit.held.end(), p) != fit.held.end();
-                        });
-      if (!seen) {
-        c.verdict = CandidateVerdict::NotIdentifiable;
-        c.reason = "the refit cannot see its coefficients";
-        rejected.push_back(c.spec);
-        continue;
-      }
-      if (fit.status != CalibrationStatus::Converged || !fit.held.empty()) {
-        c.verdict = CandidateVerdict::RefitFailed;
-        c.reason = fit.status != CalibrationStatus::Converged
-                       ? "the refit did not converge in " + std::to_string(fit.iterations) + " iterations"
-                       : "the refit could not see " + std::to_string(fit.held.size()) +
-                             " parameter(s) the base fit identified";
-        rejected.push_back(c.spec);
-        continue;
-      }
-      if (!(fit.rms_residual < res.final_fit.rms_residual)) {
-        c.verdict = CandidateVerdict::RefitFailed;
-        c.reason = "the refit did not lower the residual";
-        rejected.push_back(c.spec);
-        continue;
-      }
-      c.verdict = CandidateVerdict::Added;
-      a.values.resize(a.parameters.size());
-      a.uncertainty.resize(a.parameters.size());
-      for (size_t j = 0; j < a.parameters.size(); ++j) {
-        const int p = a.parameters[j];
-        a.values[j] = fit.params[p];
-        const auto it = std::find(fit.identified.begin(), fit.identified.end(), p);
-        a.uncertainty[j] = fit.uncertainty[it - fit.identified.begin()];
-      }
-      a.hyperparameter = hyperparameterValue(c.spec);
-      a.hyperparameter_uncertainty =
-          hyperparameterUncertainty(sc, c.spec, fit.residual_sigma * fit.residual_sigma);
-      a.new_information = c.new_information;
-      for (size_t e : equivalent)
-        if (e != pick) a.equivalent.push_back(describeEffect(res.machine.model, scores[e].spec));
-      {
-        const CalibrationResult& before = res.final_fit;
-        const int np = static_cast<int>(before.identified.size());
-        const auto similar = sc.similarColumns(sc.columns(c.spec), 0.5);
-        for (size_t k = 0; k < similar.size() && k < 4; ++k) {
-          AddedEffect::Confounding cf;
-          cf.cosine = similar[k].second;
-          const int j = similar[k].first;
-          if (j < np) {
-            const int p = before.identified[j];
-            cf.name = aug.model.parameters[p].iso_code;
-            cf.angular = aug.model.parameters[p].angular;
-            cf.before = before.params[p];
-            cf.after = fit.params[p];
-          } else {
-            const int b = (j - np) / 6, k3 = (j - np) % 6;
-            cf.name = "ball " + std::to_string(test.setups[b].id) + (k3 < 3 ? " table " : " tool ") +
-                      "xyz"[k3 % 3];
-            const BallErrors& e0 = before.ball_errors[b];
-            const BallErrors& e1 = fit.ball_errors[b];
-            cf.before = (k3 < 3 ? e0.table_w : e0.tool_t)[k3 % 3];
-            cf.after = (k3 < 3 ? e1.table_w : e1.tool_t)[k3 % 3];
-          }
-          a.confounded_with.push_back(cf);
-        }
-      }
-      aug.params = fit.params;
-      res.machine = aug;
-      res.final_fit = fit;
-      unknowns = aug_unknowns;
-      res.added.push_back(a);
-      added = true;
-      break;
-    }
-    res.candidates.insert(res.candidates.end(), scores.begin(), scores.end());
-    if (!added) break;
-    if (res.added.size() >= 2) refineHyperparameters(res, test, unknowns, fold_of);
   }
-  // Values and uncertainties from the final fit (later rounds refit the earlier effects).
+  std::sort(qualified.begin(), qualified.end(),
+            [&](size_t a, size_t b) { return scores[a].delta_ic > scores[b].delta_ic; });
+  return qualified;
+}
+
+// Candidates the readings cannot tell from scores[i]: same type and size, columns (at its
+// hyperparameter) spanning the same space to 0.1 % (the machine's own errors tilt the frames by
+// micro-radians, so exact equivalents differ at that level).
+std::vector<size_t> equivalentsOf(const Scorer& sc, const std::vector<CandidateScore>& scores, size_t i) {
+  std::vector<size_t> out;
+  const CandidateScore& c = scores[i];
+  const Eigen::MatrixXd G = sc.columns(c.spec);
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qa(G);
+  const Eigen::MatrixXd Qa = qa.householderQ() * Eigen::MatrixXd::Identity(G.rows(), G.cols());
+  for (size_t j = 0; j < scores.size(); ++j) {
+    const CandidateScore& o = scores[j];
+    if (j == i || o.spec.type != c.spec.type || o.coefficients != c.coefficients) continue;
+    EffectSpec os = o.spec;
+    if (double* h = hyperparameter(os)) *h = hyperparameterValue(c.spec);
+    const Eigen::MatrixXd G2 = sc.columns(os);
+    if (G2.cols() != G.cols() || (G2.colwise().norm().array() < 1e-12).any()) continue;
+    bool same = true;
+    for (Eigen::Index k = 0; k < G2.cols() && same; ++k) {
+      const Eigen::VectorXd g = G2.col(k) / G2.col(k).norm();
+      same = (g - Qa * (Qa.transpose() * g)).norm() < 1e-3;
+    }
+    if (same) out.push_back(j);
+  }
+  return out;
+}
+
+// The parameters of the fit (or ball coordinates) whose columns the added effect's resemble
+// (|cosine| >= 0.5), at most 4, with their values before and after the refit.
+std::vector<AddedEffect::Confounding> confoundings(const Scorer& sc, const MachineModel& aug_model,
+                                                   const BallbarTest& test, const EffectSpec& spec,
+                                                   const CalibrationResult& before, const CalibrationResult& fit) {
+  std::vector<AddedEffect::Confounding> out;
+  const int np = static_cast<int>(before.identified.size());
+  const auto similar = sc.similarColumns(sc.columns(spec), 0.5);
+  for (size_t k = 0; k < similar.size() && k < 4; ++k) {
+    AddedEffect::Confounding cf;
+    cf.cosine = similar[k].second;
+    const int j = similar[k].first;
+    if (j < np) {
+      const int p = before.identified[j];
+      cf.name = aug_model.parameters[p].iso_code;
+      cf.angular = aug_model.parameters[p].angular;
+      cf.before = before.params[p];
+      cf.after = fit.params[p];
+    } else {
+      const int b = (j - np) / 6, k3 = (j - np) % 6;
+      cf.name = "ball " + std::to_string(test.setups[b].id) + (k3 < 3 ? " table " : " tool ") +
+                "xyz"[k3 % 3];
+      const BallErrors& e0 = before.ball_errors[b];
+      const BallErrors& e1 = fit.ball_errors[b];
+      cf.before = (k3 < 3 ? e0.table_w : e0.tool_t)[k3 % 3];
+      cf.after = (k3 < 3 ? e1.table_w : e1.tool_t)[k3 % 3];
+    }
+    out.push_back(cf);
+  }
+  return out;
+}
+
+// Adds the qualified candidate scores[qi] (or an equivalent along an axis's own motion) when
+// the nonlinear refit sees it, converges and lowers the residual; otherwise records why not.
+bool tryToAdd(const Scorer& sc, const BallbarTest& test, std::vector<CandidateScore>& scores, size_t qi,
+              std::vector<int>& unknowns, std::vector<EffectSpec>& rejected, DiagnosisResult& res) {
+  auto principal = [&](const EffectSpec& e) {
+    return e.axis >= 0 && e.component == principalComponent(res.machine.model.axes[e.axis]);
+  };
+  // Among equivalent names, the one along an axis's own motion (the drift of Z along z
+  // rather than the table's along z): the same fit, the likelier cause.
+  size_t pick = qi;
+  std::vector<size_t> equivalent = equivalentsOf(sc, scores, qi);
+  if (!principal(scores[qi].spec))
+    for (size_t e : equivalent)
+      if (principal(scores[e].spec) && scores[e].verdict == CandidateVerdict::Outscored) {
+        pick = e;
+        break;
+      }
+  if (pick != qi) equivalent.push_back(qi);
+  CandidateScore& c = scores[pick];
+  Machine aug = res.machine;
+  const int first = aug.model.parameterCount();
+  aug.model.addEffect(c.spec);
+  aug.params.conservativeResize(aug.model.parameterCount());
+  aug.params.tail(aug.model.parameterCount() - first).setZero();
+  std::vector<int> aug_unknowns = unknowns;
+  AddedEffect a;
+  a.spec = c.spec;
+  a.label = c.label;
+  for (int p = first; p < aug.model.parameterCount(); ++p) {
+    aug_unknowns.push_back(p);
+    a.parameters.push_back(p);
+  }
+  const CalibrationResult fit = calibrate(aug.model, aug.params, test, aug_unknowns);
+  const bool seen = fit.status != CalibrationStatus::Unobservable &&
+                    fit.status != CalibrationStatus::NoData &&
+                    std::none_of(a.parameters.begin(), a.parameters.end(), [&](int p) {
+                      return std::find(fit.held.begin(), fit.held.end(), p) != fit.held.end();
+                    });
+  if (!seen) {
+    c.verdict = CandidateVerdict::NotIdentifiable;
+    c.reason = "the refit cannot see its coefficients";
+    rejected.push_back(c.spec);
+    return false;
+  }
+  if (fit.status != CalibrationStatus::Converged || !fit.held.empty()) {
+    c.verdict = CandidateVerdict::RefitFailed;
+    c.reason = fit.status != CalibrationStatus::Converged
+                   ? "the refit did not converge in " + std::to_string(fit.iterations) + " iterations"
+                   : "the refit could not see " + std::to_string(fit.held.size()) +
+                         " parameter(s) the base fit identified";
+    rejected.push_back(c.spec);
+    return false;
+  }
+  if (!(fit.rms_residual < res.final_fit.rms_residual)) {
+    c.verdict = CandidateVerdict::RefitFailed;
+    c.reason = "the refit did not lower the residual";
+    rejected.push_back(c.spec);
+    return false;
+  }
+  c.verdict = CandidateVerdict::Added;
+  a.values.resize(a.parameters.size());
+  a.uncertainty.resize(a.parameters.size());
+  for (size_t j = 0; j < a.parameters.size(); ++j) {
+    const int p = a.parameters[j];
+    a.values[j] = fit.params[p];
+    const auto it = std::find(fit.identified.begin(), fit.identified.end(), p);
+    a.uncertainty[j] = fit.uncertainty[it - fit.identified.begin()];
+  }
+  a.hyperparameter = hyperparameterValue(c.spec);
+  a.hyperparameter_uncertainty =
+      hyperparameterUncertainty(sc, c.spec, fit.residual_sigma * fit.residual_sigma);
+  a.new_information = c.new_information;
+  for (size_t e : equivalent)
+    if (e != pick) a.equivalent.push_back(describeEffect(res.machine.model, scores[e].spec));
+  a.confounded_with = confoundings(sc, aug.model, test, c.spec, res.final_fit, fit);
+  aug.params = fit.params;
+  res.machine = aug;
+  res.final_fit = fit;
+  unknowns = aug_unknowns;
+  res.added.push_back(a);
+  return true;
+}
+
+// Values and uncertainties of the added effects from the final fit (later rounds refit the
+// earlier effects).
+void finalValues(DiagnosisResult& res) {
   for (AddedEffect& a : res.added) {
     const CalibrationResult& fit = res.final_fit;
     for (size_t j = 0; j < a.parameters.size(); ++j) {
@@ -591,8 +584,12 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
       a.uncertainty[j] = it == fit.identified.end() ? NAN : fit.uncertainty[it - fit.identified.begin()];
     }
   }
-  // The final check: the augmented model must predict readings it was not fitted to at least
-  // as well as the base model (the held-out readings when given, else cross-validation).
+}
+
+// The final check: the augmented model must predict readings it was not fitted to at least as
+// well as the base model (the held-out readings when given, else cross-validation); otherwise
+// the effects are withdrawn.
+void finalCheck(const Machine& machine, const DiagnosisOptions& opt, DiagnosisResult& res) {
   if (opt.heldout && !opt.heldout->readings.empty()) {
     res.heldout_before = residualStats(ballbarResiduals(
         ForwardKinematics(machine.model, res.base_fit.params), *opt.heldout, res.base_fit.ball_errors));
@@ -625,6 +622,48 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
       res.heldout_after = res.heldout_before;
     }
   }
+}
+
+}  // namespace
+
+DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
+                         const DiagnosisOptions& opt,
+                         const std::function<void(int, int)>& progress) {
+  DiagnosisResult res;
+  res.machine = machine;
+  std::vector<int> unknowns =
+      opt.base_unknowns.empty() ? defaultCalibrationUnknowns(machine.model) : opt.base_unknowns;
+  res.base_fit = calibrate(machine.model, machine.params, test, unknowns);
+  if (res.base_fit.status == CalibrationStatus::Unobservable ||
+      res.base_fit.status == CalibrationStatus::NoData) {
+    res.message = res.base_fit.message;
+    return res;
+  }
+  res.final_fit = res.base_fit;
+  res.machine.params = res.base_fit.params;
+  // Parameters the base fit could not see stay held at their prior values in every later fit:
+  // the refits identify what the base fit identified, plus the effects.
+  unknowns = res.base_fit.identified;
+  const std::vector<int> fold_of = contiguousFolds(test, opt.blocks_per_setup, &res.folds);
+  std::vector<EffectSpec> rejected;  // found not identifiable by the nonlinear refit
+
+  for (int round = 1; round <= opt.max_effects + 1; ++round) {
+    const Scorer sc(res.machine, test, res.final_fit, fold_of, res.folds);
+    const double cv_base = sc.crossValidatedRms(nullptr);
+    if (round == 1) res.cv_rms_before = cv_base;
+    res.cv_rms_after = cv_base;
+    if (round > opt.max_effects) break;
+    std::vector<CandidateScore> scores = candidatesOf(res.machine.model, opt, round);
+    const int tests = scoreCandidates(sc, test, res.machine.model, cv_base, scores, progress);
+    bool added = false;
+    for (size_t qi : qualify(sc, opt, rejected, tests, scores))
+      if ((added = tryToAdd(sc, test, scores, qi, unknowns, rejected, res))) break;
+    res.candidates.insert(res.candidates.end(), scores.begin(), scores.end());
+    if (!added) break;
+    if (res.added.size() >= 2) refineHyperparameters(res, test, unknowns, fold_of);
+  }
+  finalValues(res);
+  finalCheck(machine, opt, res);
   res.rms_before = res.base_fit.rms_residual;
   res.rms_after = res.final_fit.rms_residual;
   res.analysis_before = analyseResiduals(machine.model, test, res.base_fit.residuals);
