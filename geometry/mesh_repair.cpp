@@ -63,40 +63,55 @@ int faceComponents(const std::vector<Eigen::Vector3i>& faces, std::vector<int>* 
   return static_cast<int>(ids.size());
 }
 
-}  // namespace
 
-TriangleMesh repairMesh(const TriangleMesh& input, const MeshRepairOptions& options,
-                        MeshRepairReport* report) {
+// A hole's border loop kept open (longer than the largest filled), for the coverage report.
+struct OpenLoop {
+  Eigen::Vector3d centre;
+  double perimeter, area;
+  int face;
+};
+
+// The mesh as it goes through the repair steps.
+struct Repair {
+  const TriangleMesh& input;
   MeshRepairReport rep;
-  rep.input_vertices = static_cast<int>(input.vertices.size());
-  rep.input_faces = static_cast<int>(input.faces.size());
-  if (input.faces.empty()) throw MeshDefect("the mesh has no faces", Eigen::Vector3d::Zero());
-  for (const auto& v : input.vertices)
-    if (!v.allFinite()) throw MeshDefect("a vertex coordinate is not a finite number", v);
-
-  // 1. Merge vertices at the same position.
-  std::unordered_map<std::array<uint64_t, 3>, int, BitsHash> by_position;
-  std::vector<int> remap(input.vertices.size());
   std::vector<Eigen::Vector3d> points;
-  for (size_t i = 0; i < input.vertices.size(); ++i) {
+  std::vector<int> remap;                      // input vertex -> merged point
+  int merged = 0;                              // distinct positions
+  Eigen::AlignedBox3d box;
+  double diag = 0, max_hole = 0;
+  std::vector<std::vector<size_t>> polygons;   // faces kept, as CGAL's polygon soup
+  std::vector<int> groups;                     // per face
+  std::vector<Point> cgal_points;
+  std::vector<Eigen::Vector3i> faces;          // after orientation and hole filling
+  std::vector<OpenLoop> open_loops;
+};
+
+// 1. Merge vertices at the same position (bit for bit; -0 is 0).
+void mergeVertices(Repair& r) {
+  std::unordered_map<std::array<uint64_t, 3>, int, BitsHash> by_position;
+  r.remap.resize(r.input.vertices.size());
+  for (size_t i = 0; i < r.input.vertices.size(); ++i) {
     std::array<uint64_t, 3> bits;
     for (int k = 0; k < 3; ++k) {
-      const double c = input.vertices[i][k] == 0.0 ? 0.0 : input.vertices[i][k];  // -0 == 0
+      const double c = r.input.vertices[i][k] == 0.0 ? 0.0 : r.input.vertices[i][k];  // -0 == 0
       std::memcpy(&bits[k], &c, sizeof c);
     }
-    auto [it, fresh] = by_position.try_emplace(bits, static_cast<int>(points.size()));
-    if (fresh) points.push_back(input.vertices[i]);
-    remap[i] = it->second;
+    auto [it, fresh] = by_position.try_emplace(bits, static_cast<int>(r.points.size()));
+    if (fresh) r.points.push_back(r.input.vertices[i]);
+    r.remap[i] = it->second;
   }
-  Eigen::AlignedBox3d box;
-  for (const auto& p : points) box.extend(p);
-  const double diag = box.diagonal().norm();
-  const double max_hole =
-      options.max_hole_perimeter >= 0 ? options.max_hole_perimeter : 0.02 * diag;
+  r.merged = static_cast<int>(by_position.size());
+  for (const auto& p : r.points) r.box.extend(p);
+  r.diag = r.box.diagonal().norm();
+}
 
-  // 2. Degenerate and duplicate faces.
-  std::vector<std::vector<size_t>> polygons;
-  std::vector<int> groups;
+// 2. Degenerate (zero-area) and duplicate faces removed, with notes.
+void removeDegenerateFaces(Repair& r) {
+  const TriangleMesh& input = r.input;
+  MeshRepairReport& rep = r.rep;
+  const std::vector<Eigen::Vector3d>& points = r.points;
+  const double diag = r.diag;
   std::map<std::array<int, 3>, int> seen;
   for (size_t f = 0; f < input.faces.size(); ++f) {
     Eigen::Vector3i t;
@@ -106,14 +121,12 @@ TriangleMesh repairMesh(const TriangleMesh& input, const MeshRepairOptions& opti
         throw MeshDefect("face " + std::to_string(f) + " refers to vertex " + std::to_string(v) +
                              ", which does not exist",
                          Eigen::Vector3d::Zero());
-      t[k] = remap[v];
+      t[k] = r.remap[v];
     }
     const Eigen::Vector3d c = (points[t[0]] + points[t[1]] + points[t[2]]) / 3.0;
-    const double twice_area =
-        (points[t[1]] - points[t[0]]).cross(points[t[2]] - points[t[0]]).norm();
+    const double twice_area = (points[t[1]] - points[t[0]]).cross(points[t[2]] - points[t[0]]).norm();
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(twice_area > 1e-14 * diag * diag)) {
-      if (rep.degenerate_faces++ < 3)
-        rep.notes.push_back("removed a degenerate (zero-area) face at " + at(c));
+      if (rep.degenerate_faces++ < 3) rep.notes.push_back("removed a degenerate (zero-area) face at " + at(c));
       continue;
     }
     std::array<int, 3> sorted = {t[0], t[1], t[2]};
@@ -122,42 +135,45 @@ TriangleMesh repairMesh(const TriangleMesh& input, const MeshRepairOptions& opti
       if (rep.duplicate_faces++ < 3) rep.notes.push_back("removed a duplicate face at " + at(c));
       continue;
     }
-    polygons.push_back({static_cast<size_t>(t[0]), static_cast<size_t>(t[1]),
-                        static_cast<size_t>(t[2])});
-    groups.push_back(input.face_group.empty() ? 0 : input.face_group[f]);
+    r.polygons.push_back({static_cast<size_t>(t[0]), static_cast<size_t>(t[1]), static_cast<size_t>(t[2])});
+    r.groups.push_back(input.face_group.empty() ? 0 : input.face_group[f]);
   }
   if (rep.degenerate_faces > 3)
     rep.notes.push_back("... " + std::to_string(rep.degenerate_faces) + " degenerate faces in all");
   if (rep.duplicate_faces > 3)
     rep.notes.push_back("... " + std::to_string(rep.duplicate_faces) + " duplicate faces in all");
-  if (polygons.empty()) throw MeshDefect("every face of the mesh is degenerate", box.center());
+  if (r.polygons.empty()) throw MeshDefect("every face of the mesh is degenerate", r.box.center());
+}
 
-  // 3. Non-manifold edges cannot be repaired without guessing which sheet is the part.
-  {
-    std::unordered_map<uint64_t, int> count;
-    for (const auto& p : polygons)
-      for (int e = 0; e < 3; ++e) ++count[edgeKey(static_cast<int>(p[e]), static_cast<int>(p[(e + 1) % 3]))];
-    int bad = 0;
-    uint64_t first = 0;
-    int first_count = 0;
-    for (const auto& [k, n] : count)
-      if (n > 2 && bad++ == 0) {
-        first = k;
-        first_count = n;
-      }
-    if (bad > 0) {
-      const Eigen::Vector3d a = points[first >> 32], b = points[first & 0xffffffffu];
-      throw MeshDefect("non-manifold edge: " + std::to_string(first_count) +
-                           " faces share the edge from " + at(a) + " to " + at(b) + " (" +
-                           std::to_string(bad) + " such edges); repair the model in CAD",
-                       0.5 * (a + b));
+// 3. Non-manifold edges cannot be repaired without guessing which sheet is the part: refused.
+void refuseNonManifoldEdges(const Repair& r) {
+  std::unordered_map<uint64_t, int> count;
+  for (const auto& p : r.polygons)
+    for (int e = 0; e < 3; ++e) ++count[edgeKey(static_cast<int>(p[e]), static_cast<int>(p[(e + 1) % 3]))];
+  int bad = 0;
+  uint64_t first = 0;
+  int first_count = 0;
+  for (const auto& [k, n] : count)
+    if (n > 2 && bad++ == 0) {
+      first = k;
+      first_count = n;
     }
+  if (bad > 0) {
+    const Eigen::Vector3d a = r.points[first >> 32], b = r.points[first & 0xffffffffu];
+    throw MeshDefect("non-manifold edge: " + std::to_string(first_count) +
+                         " faces share the edge from " + at(a) + " to " + at(b) + " (" +
+                         std::to_string(bad) + " such edges); repair the model in CAD",
+                     0.5 * (a + b));
   }
+}
 
-  // 4. Consistent orientation (CGAL), counting the faces it turned.
-  std::vector<Point> cgal_points;
-  cgal_points.reserve(points.size());
-  for (const auto& p : points) cgal_points.emplace_back(p.x(), p.y(), p.z());
+// 4. Consistent orientation (CGAL), counting the faces it turned and the vertices it split.
+void orientConsistently(Repair& r) {
+  MeshRepairReport& rep = r.rep;
+  std::vector<std::vector<size_t>>& polygons = r.polygons;
+  std::vector<Point>& cgal_points = r.cgal_points;
+  cgal_points.reserve(r.points.size());
+  for (const auto& p : r.points) cgal_points.emplace_back(p.x(), p.y(), p.z());
   const auto before = polygons;
   const size_t points_before = cgal_points.size();
   PMP::orient_polygon_soup(cgal_points, polygons);
@@ -177,98 +193,110 @@ TriangleMesh repairMesh(const TriangleMesh& input, const MeshRepairOptions& opti
     rep.notes.push_back("split " + std::to_string(rep.split_vertices) +
                         " non-manifold vertices (surfaces touching at a point)");
 
-  // 5. Holes: borders shorter than max_hole are filled (CGAL), the others kept.
-  struct OpenLoop {
-    Eigen::Vector3d centre;
-    double perimeter, area;
-    int face;
-  };
-  std::vector<OpenLoop> open_loops;
+}
+
+// The border loops of the faces: vertex -> next vertex along the border (opposite to the face's
+// edge), and the face of each border vertex's edge.
+void borderLoops(const std::vector<Eigen::Vector3i>& faces, std::unordered_map<int, int>* next,
+                 std::unordered_map<int, int>* border_face) {
+  std::unordered_map<uint64_t, int> directed;  // directed edge -> face
+  for (int f = 0; f < static_cast<int>(faces.size()); ++f)
+    for (int e = 0; e < 3; ++e)
+      directed[(static_cast<uint64_t>(faces[f][e]) << 32) | static_cast<uint32_t>(faces[f][(e + 1) % 3])] = f;
+  for (const auto& [k, f] : directed) {
+    const int a = static_cast<int>(k >> 32), b = static_cast<int>(k & 0xffffffffu);
+    if (!directed.count((static_cast<uint64_t>(b) << 32) | static_cast<uint32_t>(a))) {
+      (*next)[b] = a;
+      (*border_face)[b] = f;
+    }
+  }
+}
+
+// 5. Holes: borders shorter than max_hole are filled (CGAL), the others kept and measured.
+void fillHoles(Repair& r) {
+  MeshRepairReport& rep = r.rep;
+  const double max_hole = r.max_hole;
   rep.max_hole_perimeter = max_hole;
-  std::vector<Eigen::Vector3i> faces;
-  for (const auto& p : polygons)
+  std::vector<Eigen::Vector3i>& faces = r.faces;
+  std::vector<Eigen::Vector3d>& points = r.points;
+  std::vector<int>& groups = r.groups;
+  const std::vector<Point>& cgal_points = r.cgal_points;
+  for (const auto& p : r.polygons)
     faces.emplace_back(static_cast<int>(p[0]), static_cast<int>(p[1]), static_cast<int>(p[2]));
   points.clear();
   for (const auto& p : cgal_points) points.emplace_back(p.x(), p.y(), p.z());
-  {
-    std::unordered_map<uint64_t, int> directed;  // directed edge -> face
-    for (int f = 0; f < static_cast<int>(faces.size()); ++f)
-      for (int e = 0; e < 3; ++e)
-        directed[(static_cast<uint64_t>(faces[f][e]) << 32) | static_cast<uint32_t>(faces[f][(e + 1) % 3])] = f;
-    std::unordered_map<int, int> next;  // border: vertex -> next vertex along the border
-    std::unordered_map<int, int> border_face;
-    for (const auto& [k, f] : directed) {
-      const int a = static_cast<int>(k >> 32), b = static_cast<int>(k & 0xffffffffu);
-      if (!directed.count((static_cast<uint64_t>(b) << 32) | static_cast<uint32_t>(a))) {
-        next[b] = a;  // the border runs opposite to the face's edge
-        border_face[b] = f;
-      }
+  std::unordered_map<int, int> next, border_face;
+  borderLoops(faces, &next, &border_face);
+  if (next.empty()) return;
+  SurfaceMesh sm;
+  bool built = false;
+  std::unordered_map<int, bool> visited;
+  for (const auto& [v0, v1] : next) {
+    if (visited[v0]) continue;
+    std::vector<int> loop;
+    double perimeter = 0;
+    int v = v0;
+    while (!visited[v] && next.count(v)) {
+      visited[v] = true;
+      loop.push_back(v);
+      perimeter += (points[next[v]] - points[v]).norm();
+      v = next[v];
     }
-    if (!next.empty()) {
-      SurfaceMesh sm;
-      bool built = false;
-      std::unordered_map<int, bool> visited;
-      for (const auto& [v0, v1] : next) {
-        if (visited[v0]) continue;
-        std::vector<int> loop;
-        double perimeter = 0;
-        int v = v0;
-        while (!visited[v] && next.count(v)) {
-          visited[v] = true;
-          loop.push_back(v);
-          perimeter += (points[next[v]] - points[v]).norm();
-          v = next[v];
-        }
-        Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-        for (int u : loop) centre += points[u];
-        centre /= static_cast<double>(loop.size());
-        if (v != v0 || perimeter > max_hole || loop.size() < 3) {
-          ++rep.open_borders;
-          if (v == v0 && loop.size() >= 3) {
-            Eigen::Vector3d spanned = Eigen::Vector3d::Zero();
-            for (size_t k = 0; k < loop.size(); ++k)
-              spanned += points[loop[k]].cross(points[loop[(k + 1) % loop.size()]]);
-            open_loops.push_back({centre, perimeter, 0.5 * spanned.norm(), border_face[loop[0]]});
-          }
-          continue;
-        }
-        if (!built) {
-          std::vector<std::vector<size_t>> soup;
-          for (const auto& t : faces) soup.push_back({size_t(t[0]), size_t(t[1]), size_t(t[2])});
-          PMP::polygon_soup_to_polygon_mesh(cgal_points, soup, sm);
-          built = true;
-        }
-        // The border halfedge from loop[0] to loop[1] (no face on its side).
-        const auto h = CGAL::halfedge(SurfaceMesh::Vertex_index(loop[0]),
-                                      SurfaceMesh::Vertex_index(loop[1]), sm);
-        if (!h.second || !sm.is_border(h.first)) {
-          ++rep.open_borders;
-          continue;
-        }
-        std::vector<SurfaceMesh::Face_index> added;
-        PMP::triangulate_hole(sm, h.first, std::back_inserter(added));
-        const int g = groups[border_face[loop[0]]];
-        for (auto f : added) {
-          Eigen::Vector3i t;
-          int k = 0;
-          for (auto v2 : CGAL::vertices_around_face(sm.halfedge(f), sm)) t[k++] = static_cast<int>(v2);
-          faces.push_back(t);
-          groups.push_back(g);
-        }
-        ++rep.holes_filled;
-        rep.hole_faces_added += static_cast<int>(added.size());
-        if (rep.holes_filled <= 3)
-          rep.notes.push_back("filled a hole of " + std::to_string(loop.size()) +
-                              " edges at " + at(centre));
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    for (int u : loop) centre += points[u];
+    centre /= static_cast<double>(loop.size());
+    if (v != v0 || perimeter > max_hole || loop.size() < 3) {
+      ++rep.open_borders;
+      if (v == v0 && loop.size() >= 3) {
+        Eigen::Vector3d spanned = Eigen::Vector3d::Zero();
+        for (size_t k = 0; k < loop.size(); ++k)
+          spanned += points[loop[k]].cross(points[loop[(k + 1) % loop.size()]]);
+        r.open_loops.push_back({centre, perimeter, 0.5 * spanned.norm(), border_face[loop[0]]});
       }
-      if (rep.open_borders > 0)
-        rep.notes.push_back("open surface: " + std::to_string(rep.open_borders) +
-                            " borders kept (longer than " + std::to_string(max_hole) +
-                            " mm); outward is the side the file's winding gives");
+      continue;
     }
+    if (!built) {
+      std::vector<std::vector<size_t>> soup;
+      for (const auto& t : faces) soup.push_back({size_t(t[0]), size_t(t[1]), size_t(t[2])});
+      PMP::polygon_soup_to_polygon_mesh(cgal_points, soup, sm);
+      built = true;
+    }
+    // The border halfedge from loop[0] to loop[1] (no face on its side).
+    const auto h = CGAL::halfedge(SurfaceMesh::Vertex_index(loop[0]),
+                                  SurfaceMesh::Vertex_index(loop[1]), sm);
+    if (!h.second || !sm.is_border(h.first)) {
+      ++rep.open_borders;
+      continue;
+    }
+    std::vector<SurfaceMesh::Face_index> added;
+    PMP::triangulate_hole(sm, h.first, std::back_inserter(added));
+    const int g = groups[border_face[loop[0]]];
+    for (auto f : added) {
+      Eigen::Vector3i t;
+      int k = 0;
+      for (auto v2 : CGAL::vertices_around_face(sm.halfedge(f), sm)) t[k++] = static_cast<int>(v2);
+      faces.push_back(t);
+      groups.push_back(g);
+    }
+    ++rep.holes_filled;
+    rep.hole_faces_added += static_cast<int>(added.size());
+    if (rep.holes_filled <= 3)
+      rep.notes.push_back("filled a hole of " + std::to_string(loop.size()) +
+                          " edges at " + at(centre));
   }
+  if (rep.open_borders > 0)
+    rep.notes.push_back("open surface: " + std::to_string(rep.open_borders) +
+                        " borders kept (longer than " + std::to_string(max_hole) +
+                        " mm); outward is the side the file's winding gives");
+}
 
-  // 6. Closed components bound their volume: faces outward (positive signed volume).
+// 6. Closed components bound their volume: their faces turned outward (positive signed
+// volume); which open borders are holes in the surface (MeshRepairReport::holes).
+void orientOutwards(Repair& r) {
+  MeshRepairReport& rep = r.rep;
+  std::vector<Eigen::Vector3i>& faces = r.faces;
+  const std::vector<Eigen::Vector3d>& points = r.points;
+  const std::vector<OpenLoop>& open_loops = r.open_loops;
   std::vector<int> comp;
   rep.components = faceComponents(faces, &comp);
   std::vector<double> volume(rep.components, 0.0);
@@ -317,13 +345,32 @@ TriangleMesh repairMesh(const TriangleMesh& input, const MeshRepairOptions& opti
                         " faces of closed components inside out to face outwards");
   }
 
+}
+
+}  // namespace
+
+TriangleMesh repairMesh(const TriangleMesh& input, const MeshRepairOptions& options,
+                        MeshRepairReport* report) {
+  Repair r{input, {}, {}, {}, 0, {}, 0, 0, {}, {}, {}, {}, {}};
+  r.rep.input_vertices = static_cast<int>(input.vertices.size());
+  r.rep.input_faces = static_cast<int>(input.faces.size());
+  if (input.faces.empty()) throw MeshDefect("the mesh has no faces", Eigen::Vector3d::Zero());
+  for (const auto& v : input.vertices)
+    if (!v.allFinite()) throw MeshDefect("a vertex coordinate is not a finite number", v);
+  mergeVertices(r);
+  r.max_hole = options.max_hole_perimeter >= 0 ? options.max_hole_perimeter : 0.02 * r.diag;
+  removeDegenerateFaces(r);
+  refuseNonManifoldEdges(r);
+  orientConsistently(r);
+  fillHoles(r);
+  orientOutwards(r);
   TriangleMesh out;
-  out.vertices = std::move(points);
-  out.faces = std::move(faces);
-  out.face_group = std::move(groups);
+  out.vertices = std::move(r.points);
+  out.faces = std::move(r.faces);
+  out.face_group = std::move(r.groups);
   out.group_names = input.group_names.empty() ? std::vector<std::string>{"part"} : input.group_names;
-  rep.merged_vertices = rep.input_vertices - static_cast<int>(by_position.size());
-  if (report) *report = rep;
+  r.rep.merged_vertices = r.rep.input_vertices - r.merged;
+  if (report) *report = r.rep;
   return out;
 }
 
