@@ -79,8 +79,10 @@ Eigen::Vector3d maximise(const F& f, const Eigen::Vector3d& start, double size, 
     if (fr > v[o[0]]) {
       const Eigen::Vector3d e = c + 2.0 * (c - x[w]);
       const double fe = f(e);
-      if (fe > fr) x[w] = e, v[w] = fe;
-      else x[w] = r, v[w] = fr;
+      if (fe > fr)
+        x[w] = e, v[w] = fe;
+      else
+        x[w] = r, v[w] = fr;
     } else if (fr > v[o[2]]) {
       x[w] = r, v[w] = fr;
     } else {
@@ -130,46 +132,30 @@ std::vector<AxisRange> jointRanges(const MachineModel& model, const std::vector<
   return r;
 }
 
-SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint>& path,
-                            const std::vector<JointVector>* commanded,
-                            const SetupSearchOptions& options) {
-  SetupSearchResult out;
-  out.setup = model.setup;
-  out.margin = -std::numeric_limits<double>::infinity();
-  const std::vector<int> subset = subsetOf(path.size(), options.max_points);
-  std::vector<int> prismatic;
-  for (size_t a = 0; a < model.axes.size(); ++a)
-    if (!model.axes[a].isRotary()) prismatic.push_back(static_cast<int>(a));
-  std::vector<double> rotations;
-  if (options.rotation_step <= 0.0) rotations.push_back(model.setup.part_rotation);
-  else
-    for (double r = 0.0; r < 2.0 * kPi - 1e-9; r += options.rotation_step) rotations.push_back(r);
-  std::vector<double> gauges = options.gauge_lengths;
-  if (gauges.empty()) gauges.push_back(model.setup.gauge_length);
-
-  // The largest margin at one rotation and gauge length (part zero in *x); -inf when the rotary
-  // travel cannot give every point's tool axis at that rotation.
-  auto bestAt = [&](double rot, double L, Eigen::Vector3d* x_best) {
+// The part zero with the largest travel margin at one part rotation and gauge length. For
+// fixed rotary angles each point's prismatic joints are affine in the part zero x: q = a + B (x
+// - x0), one affine map per orientation solution of the point (the one the path's continuity
+// takes and, for CL data, the other, which the inverse kinematics falls back to when the first
+// leaves travel).
+class ZeroSearch {
+ public:
+  ZeroSearch(const MachineModel& model, const std::vector<ClPoint>& path,
+             const std::vector<JointVector>* commanded, const std::vector<int>& subset,
+             const std::vector<int>& prismatic, double rot, double L)
+      : model_(model), prismatic_(prismatic), x0(model.setup.part_zero_table) {
     MachineModel m = relaxed(model);
     m.setup.part_rotation = rot;
     m.setup.gauge_length = L;
-    const Eigen::Vector3d x0 = model.setup.part_zero_table;
     m.setup.part_zero_table = x0;
     const std::vector<JointVector> q0 = solveAll(m, path, commanded, subset);
     for (const JointVector& q : q0)
-      if (std::isnan(q[0])) return -std::numeric_limits<double>::infinity();
+      if (std::isnan(q[0])) return;  // the rotary travel cannot give every point's tool axis
     // Each point's orientation solutions (the one the path's continuity takes and, for CL
     // data, the other, which the inverse kinematics falls back to when the first leaves
     // travel), and for each its affine prismatic joints: a at x0 and B by unit steps with
     // the rotaries kept.
     const InverseKinematics base(m);
-    struct Affine {
-      JointVector ref;
-      Eigen::Vector3d a;
-      Eigen::Matrix3d B;
-    };
-    std::vector<Affine> cand;
-    std::vector<int> first(q0.size() + 1, 0);
+    first.assign(q0.size() + 1, 0);
     for (size_t i = 0; i < q0.size(); ++i) {
       first[i] = static_cast<int>(cand.size());
       cand.push_back({q0[i], Eigen::Vector3d::Zero(), Eigen::Matrix3d::Zero()});
@@ -192,9 +178,9 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
       }
     }
     first[q0.size()] = static_cast<int>(cand.size());
-    const size_t n = q0.size();
+    n = q0.size();
     for (Affine& c : cand)
-      for (int j = 0; j < 3; ++j) c.a[j] = c.ref[prismatic[j]];
+      for (int j = 0; j < 3; ++j) c.a[j] = c.ref[prismatic_[j]];
     for (int k = 0; k < 3; ++k) {
       MachineModel mk = m;
       mk.setup.part_zero_table = x0 + Eigen::Vector3d::Unit(k);
@@ -203,70 +189,17 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
         for (int c = first[i]; c < first[i + 1]; ++c) {
           const IkSolution s = ik.solve(path[subset[i]].p_w, path[subset[i]].u_w, &cand[c].ref);
           for (int j = 0; j < 3; ++j)
-            cand[c].B(j, k) = (s.status == IkStatus::Ok ? s.q[prismatic[j]] : cand[c].a[j]) -
-                              cand[c].a[j];
+            cand[c].B(j, k) =
+                (s.status == IkStatus::Ok ? s.q[prismatic_[j]] : cand[c].a[j]) - cand[c].a[j];
         }
     }
-    auto candMargin = [&](int c, const Eigen::Vector3d& d) {
-      const Eigen::Vector3d q = cand[c].a + cand[c].B * d;
-      double tc = std::numeric_limits<double>::infinity();
-      for (int j = 0; j < 3; ++j) {
-        const Axis& ax = model.axes[prismatic[j]];
-        tc = std::min(tc, std::min(q[j] - ax.travel_min, ax.travel_max - q[j]));
-      }
-      return tc;
-    };
-    // The margin of a part zero: over the points, the best of their solutions' margins.
-    auto margin = [&](const Eigen::Vector3d& x) {
-      double t = std::numeric_limits<double>::infinity();
-      const Eigen::Vector3d d = x - x0;
-      for (size_t i = 0; i < n; ++i) {
-        double best_c = -std::numeric_limits<double>::infinity();
-        for (int c = first[i]; c < first[i + 1]; ++c) best_c = std::max(best_c, candMargin(c, d));
-        t = std::min(t, best_c);
-      }
-      return t;
-    };
-    // With one solution chosen per point the margin is concave and piecewise linear: its
-    // maximum is a linear programme, solved exactly. The choice is then revised to each
-    // point's best solution at that optimum, until it no longer changes (the margin never
-    // decreases from one round to the next).
-    auto exactFrom = [&](std::vector<int> choice, Eigen::Vector3d* x_out) {
-      double best = -std::numeric_limits<double>::infinity();
-      Eigen::MatrixXd g(6 * n, 3);
-      Eigen::VectorXd c(6 * n);
-      for (int round = 0; round < 10; ++round) {
-        for (size_t i = 0; i < n; ++i) {
-          const Affine& a = cand[choice[i]];
-          for (int j = 0; j < 3; ++j) {
-            const Axis& ax = model.axes[prismatic[j]];
-            const size_t r = 6 * i + 2 * j;
-            g.row(r) = a.B.row(j);
-            c[r] = a.a[j] - ax.travel_min;
-            g.row(r + 1) = -a.B.row(j);
-            c[r + 1] = ax.travel_max - a.a[j];
-          }
-        }
-        const MaxMinResult lp = maximiseMinOfAffine(g, c);
-        if (lp.status != MaxMinStatus::Optimal) break;
-        const Eigen::Vector3d d = lp.x;
-        const double v = margin(x0 + d);
-        if (v > best) {
-          best = v;
-          *x_out = x0 + d;
-        }
-        bool changed = false;
-        for (size_t i = 0; i < n; ++i) {
-          int bc = choice[i];
-          for (int k = first[i]; k < first[i + 1]; ++k)
-            if (candMargin(k, d) > candMargin(bc, d) + 1e-9) bc = k;
-          changed = changed || bc != choice[i];
-          choice[i] = bc;
-        }
-        if (!changed) break;
-      }
-      return best;
-    };
+    feasible_ = true;
+  }
+
+  // The largest margin (part zero in *x_best); -inf when the rotary travel cannot give every
+  // point's tool axis at this rotation.
+  double best(Eigen::Vector3d* x_best) const {
+    if (!feasible_) return -std::numeric_limits<double>::infinity();
     std::vector<int> continuity(n);
     for (size_t i = 0; i < n; ++i) continuity[i] = first[i];
     Eigen::Vector3d x = x0;
@@ -282,7 +215,8 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
     double v_best = best1;
     for (double size : {200.0, 50.0, 100.0, 10.0, 30.0, 2.0, 0.5}) {
       double v = 0.0;
-      const Eigen::Vector3d y = maximise(margin, y_best, size, &v);
+      const Eigen::Vector3d y =
+          maximise([this](const Eigen::Vector3d& p) { return margin(p); }, y_best, size, &v);
       if (v > v_best) {
         v_best = v;
         y_best = y;
@@ -304,11 +238,108 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
     }
     *x_best = x;
     return best1;
+  }
+
+ private:
+  struct Affine {
+    JointVector ref;
+    Eigen::Vector3d a;
+    Eigen::Matrix3d B;
   };
+
+  double candMargin(int c, const Eigen::Vector3d& d) const {
+    const Eigen::Vector3d q = cand[c].a + cand[c].B * d;
+    double tc = std::numeric_limits<double>::infinity();
+    for (int j = 0; j < 3; ++j) {
+      const Axis& ax = model_.axes[prismatic_[j]];
+      tc = std::min(tc, std::min(q[j] - ax.travel_min, ax.travel_max - q[j]));
+    }
+    return tc;
+  }
+
+  // The margin of a part zero: over the points, the best of their solutions' margins.
+  double margin(const Eigen::Vector3d& x) const {
+    double t = std::numeric_limits<double>::infinity();
+    const Eigen::Vector3d d = x - x0;
+    for (size_t i = 0; i < n; ++i) {
+      double best_c = -std::numeric_limits<double>::infinity();
+      for (int c = first[i]; c < first[i + 1]; ++c) best_c = std::max(best_c, candMargin(c, d));
+      t = std::min(t, best_c);
+    }
+    return t;
+  }
+
+  // With one solution chosen per point the margin is concave and piecewise linear: its maximum
+  // is a linear programme, solved exactly. The choice is then revised to each point's best
+  // solution at that optimum, until it no longer changes (the margin never decreases from one
+  // round to the next).
+  double exactFrom(std::vector<int> choice, Eigen::Vector3d* x_out) const {
+    double best = -std::numeric_limits<double>::infinity();
+    Eigen::MatrixXd g(6 * n, 3);
+    Eigen::VectorXd c(6 * n);
+    for (int round = 0; round < 10; ++round) {
+      for (size_t i = 0; i < n; ++i) {
+        const Affine& a = cand[choice[i]];
+        for (int j = 0; j < 3; ++j) {
+          const Axis& ax = model_.axes[prismatic_[j]];
+          const size_t r = 6 * i + 2 * j;
+          g.row(r) = a.B.row(j);
+          c[r] = a.a[j] - ax.travel_min;
+          g.row(r + 1) = -a.B.row(j);
+          c[r + 1] = ax.travel_max - a.a[j];
+        }
+      }
+      const MaxMinResult lp = maximiseMinOfAffine(g, c);
+      if (lp.status != MaxMinStatus::Optimal) break;
+      const Eigen::Vector3d d = lp.x;
+      const double v = margin(x0 + d);
+      if (v > best) {
+        best = v;
+        *x_out = x0 + d;
+      }
+      bool changed = false;
+      for (size_t i = 0; i < n; ++i) {
+        int bc = choice[i];
+        for (int k = first[i]; k < first[i + 1]; ++k)
+          if (candMargin(k, d) > candMargin(bc, d) + 1e-9) bc = k;
+        changed = changed || bc != choice[i];
+        choice[i] = bc;
+      }
+      if (!changed) break;
+    }
+    return best;
+  }
+
+  const MachineModel& model_;
+  const std::vector<int>& prismatic_;
+  const Eigen::Vector3d x0;
+  bool feasible_ = false;
+  size_t n = 0;
+  std::vector<Affine> cand;
+  std::vector<int> first;
+};
+
+SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint>& path,
+                            const std::vector<JointVector>* commanded,
+                            const SetupSearchOptions& options) {
+  SetupSearchResult out;
+  out.setup = model.setup;
+  out.margin = -std::numeric_limits<double>::infinity();
+  const std::vector<int> subset = subsetOf(path.size(), options.max_points);
+  std::vector<int> prismatic;
+  for (size_t a = 0; a < model.axes.size(); ++a)
+    if (!model.axes[a].isRotary()) prismatic.push_back(static_cast<int>(a));
+  std::vector<double> rotations;
+  if (options.rotation_step <= 0.0)
+    rotations.push_back(model.setup.part_rotation);
+  else
+    for (double r = 0.0; r < 2.0 * kPi - 1e-9; r += options.rotation_step) rotations.push_back(r);
+  std::vector<double> gauges = options.gauge_lengths;
+  if (gauges.empty()) gauges.push_back(model.setup.gauge_length);
 
   auto consider = [&](double rot, double L) {
     Eigen::Vector3d x;
-    const double v = bestAt(rot, L, &x);
+    const double v = ZeroSearch(model, path, commanded, subset, prismatic, rot, L).best(&x);
     if (v > out.margin) {
       out.margin = v;
       out.setup.part_zero_table = x;
@@ -323,13 +354,16 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
     ++out.rotations_tried;
     double v = -std::numeric_limits<double>::infinity();
     for (double L : gauges) v = std::max(v, consider(rot, L));
-    if (!std::isfinite(v)) ++out.rotations_rejected;
-    else coarse.push_back({v, rot});
+    if (!std::isfinite(v))
+      ++out.rotations_rejected;
+    else
+      coarse.push_back({v, rot});
   }
   // The margin changes with the rotation between the candidates: refine around the three best
   // by halving steps down to a tenth of a degree.
   if (options.rotation_step > 0.0) {
-    std::sort(coarse.begin(), coarse.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    std::sort(coarse.begin(), coarse.end(),
+              [](const auto& a, const auto& b) { return a.first > b.first; });
     if (coarse.size() > 3) coarse.resize(3);
     for (const auto& [v0, rot0] : coarse) {
       double rot = rot0, v = v0;
