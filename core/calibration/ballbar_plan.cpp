@@ -8,9 +8,9 @@
 
 #include "core/calibration/identifiability.h"
 #include "core/kinematics/inverse_kinematics.h"
-#include "core/path/prediction_uncertainty.h"
 #include "core/kinematics/sensitivity_jacobian.h"
 #include "core/numerics/units.h"
+#include "core/path/prediction_uncertainty.h"
 
 namespace tolver {
 
@@ -29,18 +29,20 @@ std::vector<BallbarSetup> defaultBallbarSetups(int n) {
   return out;
 }
 
-BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& unknowns,
-                            const BallbarPlanOptions& opt) {
-  BallbarPlan plan;
-  plan.test.setups = opt.geometry.empty() ? defaultBallbarSetups(opt.setups) : opt.geometry;
+namespace {
+
+// 1. Candidate configurations per set-up: rotary joints at random in their ranges, the bar at
+// a random azimuth and an elevation above the machine's xy plane (seen from F), the linear
+// joints placing the tool ball; inside travel (and the asked ranges).
+std::vector<std::vector<BallbarReading>> candidatePool(const MachineModel& model,
+                                                       const BallbarPlanOptions& opt,
+                                                       const ForwardKinematics& fk,
+                                                       BallbarPlan& plan) {
   const int nsetups = static_cast<int>(plan.test.setups.size());
-  const ForwardKinematics fk(model, Eigen::VectorXd::Zero(model.parameterCount()));
   const InverseKinematics ik(model);
   std::mt19937 rng(opt.seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double min_el = degToRad(opt.min_elevation_deg);
-
-  // 1. Candidate configurations per set-up.
   std::vector<std::vector<BallbarReading>> pool(nsetups);
   const int per_setup = (opt.poses + nsetups - 1) / nsetups;
   const int wanted = per_setup * std::max(1, opt.candidates_per_pose);
@@ -74,8 +76,8 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
       }
       bool in_range = true;
       for (size_t a = 0; a < model.axes.size() && a < opt.range_min.size(); ++a)
-        if (!model.axes[a].isRotary() &&
-            (q[a] < opt.range_min[a] - opt.range_margin || q[a] > opt.range_max[a] + opt.range_margin))
+        if (!model.axes[a].isRotary() && (q[a] < opt.range_min[a] - opt.range_margin ||
+                                          q[a] > opt.range_max[a] + opt.range_margin))
           in_range = false;
       if (!in_range) {
         ++plan.rejected;
@@ -88,80 +90,90 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
     }
   }
 
-  // 2. Identification rows of every candidate, columns scaled by their norms over the pool.
-  const int np = static_cast<int>(unknowns.size());
-  const int n = np + 6 * nsetups;
-  plan.unknowns = n;
-  std::vector<std::pair<int, int>> index;  // (setup, k)
-  for (int s = 0; s < nsetups; ++s)
-    for (size_t k = 0; k < pool[s].size(); ++k) index.emplace_back(s, static_cast<int>(k));
-  BallbarTest candidates;
-  candidates.setups = plan.test.setups;
-  for (const auto& [s, k] : index) candidates.readings.push_back(pool[s][k]);
-  Eigen::MatrixXd rows =
-      identificationJacobian(fk, candidates, std::vector<BallErrors>(nsetups), unknowns);
-  Eigen::VectorXd scale;
-  rows = scaleColumns(rows, &scale);
+  return pool;
+}
 
-  // 3. Greedy choice, set-ups in turn. D-optimal: the candidate with the largest
-  //    x^T M^-1 x (M = eps I + sum of chosen x x^T), M^-1 kept by Sherman-Morrison.
-  //    I-optimal (target poses given): the candidate that most reduces tr(G M^-1 G^T), G the
-  //    tip sensitivities at the targets: gain |G M^-1 x|^2 / (1 + x^T M^-1 x), with
-  //    V = X M^-1, d = diag(X M^-1 X^T) and Y = X M^-1 G^T kept up to date by the same rank-one
-  //    updates (O(pool (n + g)) per pick).
-  Eigen::MatrixXd Minv = Eigen::MatrixXd::Identity(n, n) / 1e-6;
-  std::vector<bool> used(index.size(), false);
-  if (!opt.target_poses.empty()) {
-    const int np_ = static_cast<int>(unknowns.size());
-    // Tip sensitivities at the targets (in w), with what a measured set-up takes up projected
-    // off (the part's pose and the tool tip's offset: see core/path/prediction_uncertainty.h).
-    std::vector<int> setup;
-    for (const ParameterBlock& b : model.blocks) {
-      if (b.kind == BlockKind::WorkpieceSetup)
-        for (int c = 0; c < 6; ++c) setup.push_back(b.offset + c);
-      if (b.kind == BlockKind::ToolSetup)
-        for (int c = 0; c < 3; ++c) setup.push_back(b.offset + c);
-    }
-    Eigen::MatrixXd G = Eigen::MatrixXd::Zero(3 * opt.target_poses.size(), n);
-    Eigen::MatrixXd S(3 * opt.target_poses.size(), setup.size());
-    Eigen::MatrixXd Jt(6, model.parameterCount());
-    for (size_t t = 0; t < opt.target_poses.size(); ++t) {
-      Jt.setZero();
-      sensitivityJacobian(fk, opt.target_poses[t], Jt);
-      const Eigen::Matrix3d R = fk.w_T_t(opt.target_poses[t]).linear();
-      for (int k = 0; k < np_; ++k) G.block(3 * t, k, 3, 1) = R * Jt.block<3, 1>(0, unknowns[k]) / scale[k];
-      for (size_t k = 0; k < setup.size(); ++k) S.block(3 * t, k, 3, 1) = R * Jt.block<3, 1>(0, setup[k]);
-    }
-    if (S.cols() > 0) G -= S * S.completeOrthogonalDecomposition().solve(G);
-    const double eps = 1e-6;
-    Eigen::MatrixXd V = rows / eps;                      // X M^-1
-    Eigen::VectorXd d = rows.rowwise().squaredNorm() / eps;
-    Eigen::MatrixXd Y = (rows * G.transpose()) / eps;    // X M^-1 G^T
-    for (int pick = 0; pick < opt.poses; ++pick) {
-      const int s = pick % nsetups;
-      int best = -1;
-      double best_gain = -1.0;
-      for (size_t i = 0; i < index.size(); ++i) {
-        if (used[i] || index[i].first != s) continue;
-        const double gain = Y.row(i).squaredNorm() / (1.0 + d[i]);
-        if (gain > best_gain) {
-          best_gain = gain;
-          best = static_cast<int>(i);
-        }
-      }
-      if (best < 0) continue;
-      used[best] = true;
-      const Eigen::VectorXd Mx = V.row(best).transpose();   // M^-1 x
-      const double denom = 1.0 + d[best];
-      const Eigen::VectorXd XMx = rows * Mx;                // x_i^T M^-1 x
-      const Eigen::RowVectorXd GMx = Y.row(best);           // (G M^-1 x)^T
-      V -= XMx * Mx.transpose() / denom;
-      d -= XMx.cwiseAbs2() / denom;
-      Y -= XMx * GMx / denom;
-      plan.test.readings.push_back(pool[index[best].first][index[best].second]);
-    }
+// The rows of the candidates that can still be picked, and the picks' bookkeeping.
+struct Greedy {
+  const Eigen::MatrixXd& rows;                    // column-scaled identification rows
+  const std::vector<std::pair<int, int>>& index;  // row -> (set-up, pool index)
+  std::vector<bool> used;
+};
+
+// 3. I-optimal (target poses given): the candidate that most reduces tr(G M^-1 G^T), G the tip
+// sensitivities at the targets: gain |G M^-1 x|^2 / (1 + x^T M^-1 x), with V = X M^-1,
+// d = diag(X M^-1 X^T) and Y = X M^-1 G^T kept up to date by rank-one updates (O(pool (n + g))
+// per pick). Returns the picks in order.
+std::vector<int> chooseIOptimal(const MachineModel& model, const std::vector<int>& unknowns,
+                                const BallbarPlanOptions& opt, const ForwardKinematics& fk,
+                                const Eigen::VectorXd& scale, int nsetups, Greedy& g) {
+  const Eigen::MatrixXd& rows = g.rows;
+  const auto& index = g.index;
+  auto& used = g.used;
+  const int n = static_cast<int>(rows.cols());
+  std::vector<int> picks;
+  const int np_ = static_cast<int>(unknowns.size());
+  // Tip sensitivities at the targets (in w), with what a measured set-up takes up projected
+  // off (the part's pose and the tool tip's offset: see core/path/prediction_uncertainty.h).
+  std::vector<int> setup;
+  for (const ParameterBlock& b : model.blocks) {
+    if (b.kind == BlockKind::WorkpieceSetup)
+      for (int c = 0; c < 6; ++c) setup.push_back(b.offset + c);
+    if (b.kind == BlockKind::ToolSetup)
+      for (int c = 0; c < 3; ++c) setup.push_back(b.offset + c);
   }
-  for (int pick = 0; opt.target_poses.empty() && pick < opt.poses; ++pick) {
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(3 * opt.target_poses.size(), n);
+  Eigen::MatrixXd S(3 * opt.target_poses.size(), setup.size());
+  Eigen::MatrixXd Jt(6, model.parameterCount());
+  for (size_t t = 0; t < opt.target_poses.size(); ++t) {
+    Jt.setZero();
+    sensitivityJacobian(fk, opt.target_poses[t], Jt);
+    const Eigen::Matrix3d R = fk.w_T_t(opt.target_poses[t]).linear();
+    for (int k = 0; k < np_; ++k)
+      G.block(3 * t, k, 3, 1) = R * Jt.block<3, 1>(0, unknowns[k]) / scale[k];
+    for (size_t k = 0; k < setup.size(); ++k)
+      S.block(3 * t, k, 3, 1) = R * Jt.block<3, 1>(0, setup[k]);
+  }
+  if (S.cols() > 0) G -= S * S.completeOrthogonalDecomposition().solve(G);
+  const double eps = 1e-6;
+  Eigen::MatrixXd V = rows / eps;  // X M^-1
+  Eigen::VectorXd d = rows.rowwise().squaredNorm() / eps;
+  Eigen::MatrixXd Y = (rows * G.transpose()) / eps;  // X M^-1 G^T
+  for (int pick = 0; pick < opt.poses; ++pick) {
+    const int s = pick % nsetups;
+    int best = -1;
+    double best_gain = -1.0;
+    for (size_t i = 0; i < index.size(); ++i) {
+      if (used[i] || index[i].first != s) continue;
+      const double gain = Y.row(i).squaredNorm() / (1.0 + d[i]);
+      if (gain > best_gain) {
+        best_gain = gain;
+        best = static_cast<int>(i);
+      }
+    }
+    if (best < 0) continue;
+    used[best] = true;
+    const Eigen::VectorXd Mx = V.row(best).transpose();  // M^-1 x
+    const double denom = 1.0 + d[best];
+    const Eigen::VectorXd XMx = rows * Mx;       // x_i^T M^-1 x
+    const Eigen::RowVectorXd GMx = Y.row(best);  // (G M^-1 x)^T
+    V -= XMx * Mx.transpose() / denom;
+    d -= XMx.cwiseAbs2() / denom;
+    Y -= XMx * GMx / denom;
+    picks.push_back(best);
+  }
+  return picks;
+}
+
+// 3. D-optimal: the candidate with the largest x^T M^-1 x (M = eps I + sum of chosen x x^T),
+// M^-1 kept by Sherman-Morrison. Returns the picks in order.
+std::vector<int> chooseDOptimal(const BallbarPlanOptions& opt, int nsetups, Greedy& g) {
+  const Eigen::MatrixXd& rows = g.rows;
+  const auto& index = g.index;
+  auto& used = g.used;
+  Eigen::MatrixXd Minv = Eigen::MatrixXd::Identity(rows.cols(), rows.cols()) / 1e-6;
+  std::vector<int> picks;
+  for (int pick = 0; pick < opt.poses; ++pick) {
     const int s = pick % nsetups;
     int best = -1;
     double best_gain = -1.0;
@@ -178,20 +190,26 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
     const Eigen::VectorXd x = rows.row(best).transpose();
     const Eigen::VectorXd Mx = Minv * x;
     Minv -= (Mx * Mx.transpose()) / (1.0 + x.dot(Mx));
-    plan.test.readings.push_back(pool[index[best].first][index[best].second]);
+    picks.push_back(best);
   }
-  // Measurement order: set-up by set-up; within a set-up, an order in which time is not
-  // correlated with any joint (so that a thermal drift cannot pass for an error along an
-  // axis): the D-optimal order when it already is, else a random one (first pose kept: it is
-  // the reference the drift checks return to) with the smallest correlation found.
-  std::stable_sort(plan.test.readings.begin(), plan.test.readings.end(),
-                   [](const BallbarReading& a, const BallbarReading& b) { return a.setup < b.setup; });
+  return picks;
+}
+
+// Measurement order: set-up by set-up; within a set-up, an order in which time is not
+// correlated with any joint (so that a thermal drift cannot pass for an error along an axis):
+// the D-optimal order when it already is, else a random one (first pose kept: it is the
+// reference the drift checks return to) with the smallest correlation found.
+void orderForTime(const MachineModel& model, const BallbarPlanOptions& opt, BallbarPlan& plan) {
+  std::stable_sort(
+      plan.test.readings.begin(), plan.test.readings.end(),
+      [](const BallbarReading& a, const BallbarReading& b) { return a.setup < b.setup; });
   {
     auto correlation = [&](const std::vector<BallbarReading>& order) {
       BallbarTest t;
       t.setups = plan.test.setups;
       t.readings = order;
-      for (size_t i = 0; i < t.readings.size(); ++i) t.readings[i].context.time_s = static_cast<double>(i);
+      for (size_t i = 0; i < t.readings.size(); ++i)
+        t.readings[i].context.time_s = static_cast<double>(i);
       return timeJointCorrelation(model, t);
     };
     std::vector<BallbarReading> best = plan.test.readings;
@@ -213,31 +231,70 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
     }
     plan.test.readings = best;
   }
-  if (opt.reference_every > 0) {
-    std::vector<BallbarReading> with_checks;
-    int since = 0;
-    for (size_t i = 0; i < plan.test.readings.size(); ++i) {
-      const BallbarReading& r = plan.test.readings[i];
-      if (i == 0 || plan.test.readings[i - 1].setup != r.setup) since = 0;
-      with_checks.push_back(r);
-      if (++since % opt.reference_every == 0) {
-        size_t first = i;
-        while (first > 0 && plan.test.readings[first - 1].setup == r.setup) --first;
-        with_checks.push_back(plan.test.readings[first]);
-      }
+}
+
+// A return to each set-up's first pose every reference_every readings (drift checks).
+void insertReferenceChecks(const BallbarPlanOptions& opt, BallbarPlan& plan) {
+  std::vector<BallbarReading> with_checks;
+  int since = 0;
+  for (size_t i = 0; i < plan.test.readings.size(); ++i) {
+    const BallbarReading& r = plan.test.readings[i];
+    if (i == 0 || plan.test.readings[i - 1].setup != r.setup) since = 0;
+    with_checks.push_back(r);
+    if (++since % opt.reference_every == 0) {
+      size_t first = i;
+      while (first > 0 && plan.test.readings[first - 1].setup == r.setup) --first;
+      with_checks.push_back(plan.test.readings[first]);
     }
-    plan.test.readings = std::move(with_checks);
   }
+  plan.test.readings = std::move(with_checks);
+}
+
+}  // namespace
+
+BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& unknowns,
+                            const BallbarPlanOptions& opt) {
+  BallbarPlan plan;
+  plan.test.setups = opt.geometry.empty() ? defaultBallbarSetups(opt.setups) : opt.geometry;
+  const int nsetups = static_cast<int>(plan.test.setups.size());
+  const ForwardKinematics fk(model, Eigen::VectorXd::Zero(model.parameterCount()));
+
+  const std::vector<std::vector<BallbarReading>> pool = candidatePool(model, opt, fk, plan);
+
+  // 2. Identification rows of every candidate, columns scaled by their norms over the pool.
+  const int np = static_cast<int>(unknowns.size());
+  const int n = np + 6 * nsetups;
+  plan.unknowns = n;
+  std::vector<std::pair<int, int>> index;  // (setup, k)
+  for (int s = 0; s < nsetups; ++s)
+    for (size_t k = 0; k < pool[s].size(); ++k) index.emplace_back(s, static_cast<int>(k));
+  BallbarTest candidates;
+  candidates.setups = plan.test.setups;
+  for (const auto& [s, k] : index) candidates.readings.push_back(pool[s][k]);
+  Eigen::MatrixXd rows =
+      identificationJacobian(fk, candidates, std::vector<BallErrors>(nsetups), unknowns);
+  Eigen::VectorXd scale;
+  rows = scaleColumns(rows, &scale);
+
+  // 3. Greedy choice, set-ups in turn: I-optimal for target poses, else D-optimal.
+  Greedy g{rows, index, std::vector<bool>(index.size(), false)};
+  const std::vector<int> picks = opt.target_poses.empty()
+                                     ? chooseDOptimal(opt, nsetups, g)
+                                     : chooseIOptimal(model, unknowns, opt, fk, scale, nsetups, g);
+  for (int best : picks) plan.test.readings.push_back(pool[index[best].first][index[best].second]);
+  orderForTime(model, opt, plan);
+  if (opt.reference_every > 0) insertReferenceChecks(opt, plan);
 
   // 4. Rank and condition of the chosen design.
-  const Eigen::MatrixXd J = identificationJacobian(
-      fk, plan.test, std::vector<BallErrors>(nsetups), unknowns);
+  const Eigen::MatrixXd J =
+      identificationJacobian(fk, plan.test, std::vector<BallErrors>(nsetups), unknowns);
   const SvdSummary sum = analyseColumns(J);
   plan.rank = sum.rank;
   plan.condition = sum.condition;
   {
     BallbarTest t = plan.test;
-    for (size_t i = 0; i < t.readings.size(); ++i) t.readings[i].context.time_s = static_cast<double>(i);
+    for (size_t i = 0; i < t.readings.size(); ++i)
+      t.readings[i].context.time_s = static_cast<double>(i);
     const TimeJointCorrelation c = timeJointCorrelation(model, t);
     plan.time_correlation = c.worst;
     plan.time_correlation_axis = c.worst_axis;
@@ -283,7 +340,8 @@ TimeJointCorrelation timeJointCorrelation(const MachineModel& model, const Ballb
   return out;
 }
 
-std::vector<double> expectedTipUncertainty(const MachineModel& model, const std::vector<int>& unknowns,
+std::vector<double> expectedTipUncertainty(const MachineModel& model,
+                                           const std::vector<int>& unknowns,
                                            const BallbarTest& plan, double noise_mm,
                                            const std::vector<JointVector>& poses) {
   Machine m;
@@ -294,7 +352,8 @@ std::vector<double> expectedTipUncertainty(const MachineModel& model, const std:
       identificationJacobian(fk, plan, std::vector<BallErrors>(plan.setups.size()), unknowns);
   Eigen::VectorXd scale;
   const Eigen::MatrixXd Js = scaleColumns(J, &scale);
-  const Eigen::MatrixXd cov_s = (Js.transpose() * Js).completeOrthogonalDecomposition().pseudoInverse();
+  const Eigen::MatrixXd cov_s =
+      (Js.transpose() * Js).completeOrthogonalDecomposition().pseudoInverse();
   const int np = static_cast<int>(unknowns.size());
   const Eigen::VectorXd d = scale.head(np).cwiseInverse();
   m.identification.parameters = unknowns;
