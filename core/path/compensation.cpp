@@ -22,6 +22,219 @@ double angleBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
+// Compensation point by point along a path. The Jacobian of the residual is taken by forward
+// differences and kept from point to point while it still converges (a chord method: a path's
+// poses change slowly), with its LU, the joints it was taken at and which unknowns it is for. The
+// orientation rows use a basis across the tool axis carried along the path (parallel transport),
+// so that the kept Jacobian stays valid. Each point starts from the previous point's correction
+// (corrections vary slowly along a path).
+class PathCompensator {
+ public:
+  PathCompensator(const MachineModel& model, const Eigen::VectorXd& params, const CompensationOptions& opt)
+      : model_(model), opt_(opt), fk_(model, params), nominal_(model, Eigen::VectorXd::Zero(params.size())),
+        n_(static_cast<int>(model.axes.size())), r_(5), r_new_(5), J_(5, n_) {
+    for (int a = 0; a < n_; ++a) {
+      all_.push_back(a);
+      if (!model.axes[a].isRotary()) prismatic_.push_back(a);
+    }
+  }
+
+  // One point: the joints from q0 (where the machine is at p0, u0) that put the tip (and the axis
+  // when `orientation`) on the target.
+  void compensate(const ClPoint& target, const JointVector& q0, const Eigen::Vector3d& p0, const Eigen::Vector3d& u0,
+                  bool orientation, CompensatedPoint& c) {
+    target_ = &target;
+    u_t_ = target.u_w.normalized();
+    const Eigen::Vector3d t = e1_ - e1_.dot(u_t_) * u_t_;
+    e1_ = t.norm() > 0.5 ? t.normalized() : u_t_.unitOrthogonal();
+    e2_ = u_t_.cross(e1_);
+    c.q0 = q0;
+    JointVector q;
+    Eigen::Vector3d p, u;
+    c.before_w = p0 - target.p_w;
+    c.before_axis = angleBetween(u0, u_t_);
+    double cond = 1;
+    bool converged = solve(orientation, q0, p0, u0, q, p, u, &cond, &c.iterations);
+    c.condition = cond;
+    if (orientation && !converged && cond > opt_.max_condition) {
+      // Near a singular pose: correcting the tool axis would swing a rotary axis. The axis is
+      // left as programmed, the tip compensated by the linear joints.
+      c.status = CompensationStatus::IllConditioned;
+      double cond3 = 1;
+      converged = solve(false, q0, p0, u0, q, p, u, &cond3, &c.iterations);
+      if (!converged) c.status = CompensationStatus::NotConverged;
+    } else {
+      c.status = converged ? CompensationStatus::Compensated : CompensationStatus::NotConverged;
+    }
+    if (c.status != CompensationStatus::NotConverged) c.axis_out = axisOutOfTravel(q);
+    if (c.axis_out >= 0) c.status = CompensationStatus::OutOfTravel;
+    if (c.status == CompensationStatus::OutOfTravel || c.status == CompensationStatus::NotConverged) {
+      q = q0;
+      fk_.tipAndAxis(q, &p, &u);
+    }
+    warm_ok_ = c.status == CompensationStatus::Compensated || c.status == CompensationStatus::IllConditioned;
+    warm_axis_ = orientation && c.status == CompensationStatus::Compensated;
+    warm_q0_ = q0;
+    warm_dq_ = q - q0;
+    c.q = q;
+    c.after_w = p - target.p_w;
+    c.after_axis = angleBetween(u, u_t_);
+    nominal_.tipAndAxis(q, &c.nominal_p_w, &c.nominal_u_w);
+  }
+
+  const ForwardKinematics& fk() const { return fk_; }
+
+ private:
+  using Lu = Eigen::PartialPivLU<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxRows, kMaxRows>>;
+
+  // The first axis beyond its travel (endless axes excepted), -1 when none.
+  int axisOutOfTravel(const JointVector& q) const {
+    for (int a = 0; a < n_; ++a) {
+      const Axis& ax = model_.axes[a];
+      if (ax.endless) continue;
+      const double slack = ax.isRotary() ? 1e-9 : 1e-7;
+      if (q[a] < ax.travel_min - slack || q[a] > ax.travel_max + slack) return a;
+    }
+    return -1;
+  }
+
+  // Tip error (mm), and the axis across the target axis scaled to tip-like units.
+  void toResidual(bool with_axis, const Eigen::Vector3d& pp, const Eigen::Vector3d& uu, Residual& res) const {
+    res.head<3>() = pp - target_->p_w;
+    if (with_axis) {
+      res[3] = kLever * e1_.dot(uu);
+      res[4] = kLever * e2_.dot(uu);
+    }
+  }
+
+  void freshJacobian(bool with_axis, const JointVector& at) {
+    const std::vector<int>& vars = with_axis ? all_ : prismatic_;
+    const int rows = with_axis ? 5 : 3, nv = static_cast<int>(vars.size());
+    J_.resize(rows, nv);
+    Residual r0(rows), rh(rows);
+    Eigen::Vector3d pa, ua;
+    fk_.tipAndAxis(at, &pa, &ua);
+    toResidual(with_axis, pa, ua, r0);
+    for (int k = 0; k < nv; ++k) {
+      const double h = 1e-6;
+      JointVector qh = at;
+      qh[vars[k]] += h;
+      Eigen::Vector3d ph, uh;
+      fk_.tipAndAxis(qh, &ph, &uh);
+      toResidual(with_axis, ph, uh, rh);
+      J_.col(k) = (rh - r0) / h;
+    }
+    if (rows == nv) {
+      lu_.compute(J_);
+      J_cond_ = 1.0 / std::max(lu_.rcond(), 1e-300);
+    } else {
+      const Eigen::JacobiSVD<Jac> svd(J_);
+      const auto sv = svd.singularValues();
+      J_cond_ = sv[sv.size() - 1] > 0 ? sv[0] / sv[sv.size() - 1] : INFINITY;
+    }
+    have_J_ = true;
+    J_axis_ = with_axis;
+    J_q_ = at;
+  }
+
+  // Whether the kept Jacobian may serve a point: nearby joints.
+  bool near(const JointVector& a, const JointVector& b) const {
+    for (int k = 0; k < n_; ++k)
+      if (std::abs(a[k] - b[k]) > (model_.axes[k].isRotary() ? 0.05 : 50.0)) return false;
+    return true;
+  }
+
+  // Newton from q0 (warm-started) on the chosen joints and rows; returns whether it converged.
+  bool solve(bool with_axis, const JointVector& q0, const Eigen::Vector3d& p0, const Eigen::Vector3d& u0,
+             JointVector& q, Eigen::Vector3d& p, Eigen::Vector3d& u, double* cond, int* iterations) {
+    const std::vector<int>& vars = with_axis ? all_ : prismatic_;
+    const int rows = with_axis ? 5 : 3, nv = static_cast<int>(vars.size());
+    r_.resize(rows);
+    r_new_.resize(rows);
+    q = q0;
+    p = p0;
+    u = u0;
+    toResidual(with_axis, p, u, r_);
+    if (warm_ok_ && warm_axis_ == with_axis && near(warm_q0_, q0)) {
+      JointVector qs = q0 + warm_dq_;
+      Eigen::Vector3d ps, us;
+      Residual rs(rows);
+      fk_.tipAndAxis(qs, &ps, &us);
+      toResidual(with_axis, ps, us, rs);
+      if (rs.norm() < r_.norm()) {
+        q = qs;
+        p = ps;
+        u = us;
+        r_ = rs;
+      }
+    }
+    bool fresh = false;
+    if (!(have_J_ && J_axis_ == with_axis && J_q_.size() == q.size() && near(J_q_, q))) {
+      freshJacobian(with_axis, q);
+      fresh = true;
+    }
+    *cond = J_cond_;
+    for (int it = 0; it <= opt_.max_iterations; ++it) {
+      // |u x u_t| is the angle to 1e-18 here (and u . u_t > 0: the axis is never reversed).
+      const double ang_err = with_axis ? u.cross(u_t_).norm() : 0.0;
+      if (r_.head<3>().norm() <= opt_.tolerance && ang_err <= opt_.angle_tolerance && u.dot(u_t_) > 0) return true;
+      if (it == opt_.max_iterations) return false;
+      *iterations = it + 1;
+      if (J_cond_ > opt_.max_condition) {
+        if (fresh) return false;
+        freshJacobian(with_axis, q);  // the kept one may be the ill-conditioned one: look again here
+        fresh = true;
+        *cond = J_cond_;
+        --it;
+        continue;
+      }
+      Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxAxes, 1> dq;
+      if (rows == nv)
+        dq = lu_.solve(r_);
+      else
+        dq = J_.completeOrthogonalDecomposition().solve(r_);
+      JointVector q_new = q;
+      for (int k = 0; k < nv; ++k) q_new[vars[k]] -= dq[k];
+      Eigen::Vector3d p_new, u_new;
+      fk_.tipAndAxis(q_new, &p_new, &u_new);
+      toResidual(with_axis, p_new, u_new, r_new_);
+      if (r_new_.norm() > 0.1 * r_.norm() && !fresh) {
+        // The kept Jacobian no longer converges fast: a fresh one where the step landed (or
+        // here, when the step did not help).
+        const bool better = r_new_.norm() < r_.norm();
+        freshJacobian(with_axis, better ? q_new : q);
+        fresh = true;
+        *cond = J_cond_;
+        if (!better) continue;
+      }
+      q = q_new;
+      p = p_new;
+      u = u_new;
+      r_ = r_new_;
+    }
+    return false;
+  }
+
+  const MachineModel& model_;
+  const CompensationOptions& opt_;
+  const ForwardKinematics fk_, nominal_;
+  const int n_;
+  std::vector<int> all_, prismatic_;  // the joints Newton moves: all of them, or the linear ones
+  // The point being compensated: its target and the basis across its axis.
+  const ClPoint* target_ = nullptr;
+  Eigen::Vector3d u_t_, e1_ = Eigen::Vector3d::Zero(), e2_;
+  Residual r_, r_new_;
+  // The kept Jacobian.
+  Jac J_;
+  Lu lu_;
+  bool have_J_ = false, J_axis_ = false;
+  JointVector J_q_;
+  double J_cond_ = 1;
+  // The previous point's correction, for a warm start.
+  bool warm_ok_ = false, warm_axis_ = false;
+  JointVector warm_q0_, warm_dq_;
+};
+
 }  // namespace
 
 CompensationResult compensateToolPath(const MachineModel& model, const Eigen::VectorXd& params,
@@ -29,199 +242,22 @@ CompensationResult compensateToolPath(const MachineModel& model, const Eigen::Ve
                                       const std::vector<JointVector>& q0, bool orientation,
                                       const CompensationOptions& opt,
                                       const std::vector<PredictedPoint>* predicted) {
-  const ForwardKinematics fk(model, params);
-  const ForwardKinematics nominal(model, Eigen::VectorXd::Zero(params.size()));
-  const int n = static_cast<int>(model.axes.size());
-  std::vector<int> all, prismatic;  // the joints Newton moves: all of them, or the linear ones
-  for (int a = 0; a < n; ++a) {
-    all.push_back(a);
-    if (!model.axes[a].isRotary()) prismatic.push_back(a);
-  }
+  PathCompensator pc(model, params, opt);
   CompensationResult out;
   out.points.resize(path.size());
-  Residual r(5), r_new(5);
-  // The Jacobian of the residual by forward differences, kept from point to point while it still
-  // converges (a chord method: a path's poses change slowly), with its LU, the joints it was
-  // taken at and which unknowns it is for. The orientation rows use a basis across the tool axis
-  // carried along the path (parallel transport), so that the kept Jacobian stays valid.
-  Jac J(5, n);
-  using Lu = Eigen::PartialPivLU<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxRows, kMaxRows>>;
-  Lu lu;
-  bool have_J = false, J_axis = false;
-  JointVector J_q;
-  double J_cond = 1;
-  Eigen::Vector3d e1 = Eigen::Vector3d::Zero();
-  bool warm_ok = false, warm_axis = false;  // the previous point's correction, for a warm start
-  JointVector warm_q0, warm_dq;
   for (size_t i = 0; i < path.size(); ++i) {
-    CompensatedPoint& c = out.points[i];
-    const ClPoint& target = path[i];
-    const Eigen::Vector3d u_t = target.u_w.normalized();
-    {
-      const Eigen::Vector3d t = e1 - e1.dot(u_t) * u_t;
-      e1 = t.norm() > 0.5 ? t.normalized() : u_t.unitOrthogonal();
-    }
-    const Eigen::Vector3d e2 = u_t.cross(e1);
-    c.q0 = q0[i];
     Eigen::Vector3d p0, u0;  // the machine's pose at q0
     if (predicted) {
       p0 = (*predicted)[i].p_pred_w;
       u0 = (*predicted)[i].u_pred_w;
     } else {
-      fk.tipAndAxis(q0[i], &p0, &u0);
+      pc.fk().tipAndAxis(q0[i], &p0, &u0);
     }
-    // Newton from q0 on the chosen joints and rows; returns whether it converged.
-    auto solve = [&](bool with_axis, JointVector& q, Eigen::Vector3d& p, Eigen::Vector3d& u, double* cond) {
-      const std::vector<int>& vars = with_axis ? all : prismatic;
-      const int rows = with_axis ? 5 : 3, nv = static_cast<int>(vars.size());
-      r.resize(rows);
-      r_new.resize(rows);
-      auto toResidual = [&](const Eigen::Vector3d& pp, const Eigen::Vector3d& uu, Residual& res) {
-        res.head<3>() = pp - target.p_w;
-        if (with_axis) {
-          res[3] = kLever * e1.dot(uu);
-          res[4] = kLever * e2.dot(uu);
-        }
-      };
-      auto freshJacobian = [&](const JointVector& at) {
-        J.resize(rows, nv);
-        Residual r0(rows), rh(rows);
-        Eigen::Vector3d pa, ua;
-        fk.tipAndAxis(at, &pa, &ua);
-        toResidual(pa, ua, r0);
-        for (int k = 0; k < nv; ++k) {
-          const double h = 1e-6;
-          JointVector qh = at;
-          qh[vars[k]] += h;
-          Eigen::Vector3d ph, uh;
-          fk.tipAndAxis(qh, &ph, &uh);
-          toResidual(ph, uh, rh);
-          J.col(k) = (rh - r0) / h;
-        }
-        if (rows == nv) {
-          lu.compute(J);
-          J_cond = 1.0 / std::max(lu.rcond(), 1e-300);
-        } else {
-          const Eigen::JacobiSVD<Jac> svd(J);
-          const auto sv = svd.singularValues();
-          J_cond = sv[sv.size() - 1] > 0 ? sv[0] / sv[sv.size() - 1] : INFINITY;
-        }
-        have_J = true;
-        J_axis = with_axis;
-        J_q = at;
-      };
-      // Whether the kept Jacobian may serve this point: same unknowns, nearby joints.
-      auto near = [&](const JointVector& a, const JointVector& b) {
-        for (int k = 0; k < n; ++k)
-          if (std::abs(a[k] - b[k]) > (model.axes[k].isRotary() ? 0.05 : 50.0)) return false;
-        return true;
-      };
-      q = q0[i];
-      p = p0;
-      u = u0;
-      toResidual(p, u, r);
-      // Warm start: the previous point's correction (corrections vary slowly along a path).
-      if (warm_ok && warm_axis == with_axis && near(warm_q0, q0[i])) {
-        JointVector qs = q0[i] + warm_dq;
-        Eigen::Vector3d ps, us;
-        Residual rs(rows);
-        fk.tipAndAxis(qs, &ps, &us);
-        toResidual(ps, us, rs);
-        if (rs.norm() < r.norm()) {
-          q = qs;
-          p = ps;
-          u = us;
-          r = rs;
-        }
-      }
-      bool fresh = false;
-      if (!(have_J && J_axis == with_axis && J_q.size() == q.size() && near(J_q, q))) {
-        freshJacobian(q);
-        fresh = true;
-      }
-      *cond = J_cond;
-      for (int it = 0; it <= opt.max_iterations; ++it) {
-        // |u x u_t| is the angle to 1e-18 here (and u . u_t > 0: the axis is never reversed).
-        const double ang_err = with_axis ? u.cross(u_t).norm() : 0.0;
-        if (r.head<3>().norm() <= opt.tolerance && ang_err <= opt.angle_tolerance && u.dot(u_t) > 0) return true;
-        if (it == opt.max_iterations) return false;
-        c.iterations = it + 1;
-        if (J_cond > opt.max_condition) {
-          if (fresh) return false;
-          freshJacobian(q);  // the kept one may be the ill-conditioned one: look again here
-          fresh = true;
-          *cond = J_cond;
-          --it;
-          continue;
-        }
-        Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxAxes, 1> dq;
-        if (rows == nv)
-          dq = lu.solve(r);
-        else
-          dq = J.completeOrthogonalDecomposition().solve(r);
-        JointVector q_new = q;
-        for (int k = 0; k < nv; ++k) q_new[vars[k]] -= dq[k];
-        Eigen::Vector3d p_new, u_new;
-        fk.tipAndAxis(q_new, &p_new, &u_new);
-        toResidual(p_new, u_new, r_new);
-        if (r_new.norm() > 0.1 * r.norm() && !fresh) {
-          // The kept Jacobian no longer converges fast: a fresh one where the step landed (or
-          // here, when the step did not help).
-          const bool better = r_new.norm() < r.norm();
-          freshJacobian(better ? q_new : q);
-          fresh = true;
-          *cond = J_cond;
-          if (!better) continue;
-        }
-        q = q_new;
-        p = p_new;
-        u = u_new;
-        r = r_new;
-      }
-      return false;
-    };
-    JointVector q;
-    Eigen::Vector3d p, u;
-    c.before_w = p0 - target.p_w;
-    c.before_axis = angleBetween(u0, u_t);
-    double cond = 1;
-    bool converged = solve(orientation, q, p, u, &cond);
-    c.condition = cond;
-    if (orientation && !converged && cond > opt.max_condition) {
-      // Near a singular pose: correcting the tool axis would swing a rotary axis. The axis is
-      // left as programmed, the tip compensated by the linear joints.
-      c.status = CompensationStatus::IllConditioned;
-      double cond3 = 1;
-      converged = solve(false, q, p, u, &cond3);
-      if (!converged) c.status = CompensationStatus::NotConverged;
-    } else {
-      c.status = converged ? CompensationStatus::Compensated : CompensationStatus::NotConverged;
-    }
-    for (int a = 0; a < n && c.status != CompensationStatus::NotConverged; ++a) {
-      const Axis& ax = model.axes[a];
-      if (ax.endless) continue;
-      const double slack = ax.isRotary() ? 1e-9 : 1e-7;
-      if (q[a] < ax.travel_min - slack || q[a] > ax.travel_max + slack) {
-        c.status = CompensationStatus::OutOfTravel;
-        c.axis_out = a;
-        break;
-      }
-    }
-    if (c.status == CompensationStatus::OutOfTravel || c.status == CompensationStatus::NotConverged) {
-      q = q0[i];
-      fk.tipAndAxis(q, &p, &u);
-    }
+    CompensatedPoint& c = out.points[i];
+    pc.compensate(path[i], q0[i], p0, u0, orientation, c);
     out.ill_conditioned += c.status == CompensationStatus::IllConditioned;
     out.out_of_travel += c.status == CompensationStatus::OutOfTravel;
     out.not_converged += c.status == CompensationStatus::NotConverged;
-    warm_ok = c.status == CompensationStatus::Compensated || c.status == CompensationStatus::IllConditioned;
-    warm_axis = orientation && c.status == CompensationStatus::Compensated;
-    warm_q0 = q0[i];
-    warm_dq = q - q0[i];
-    c.q = q;
-    c.after_w = p - target.p_w;
-    c.after_axis = angleBetween(u, u_t);
-    nominal.tipAndAxis(q, &c.nominal_p_w, &c.nominal_u_w);
   }
   return out;
 }
