@@ -25,6 +25,74 @@ void linearise(const MachineModel& m, const Eigen::VectorXd& params, const Ballb
   *J = identificationJacobian(fk, test, balls, unknowns, r);
 }
 
+// 1. Which unknowns can the data see? The identification Jacobian at the prior reduced to a
+// full-rank set of columns (ball errors protected, strategy III otherwise): the columns kept in
+// *keep_cols, the machine parameters left out in res.held. False (res says why) when a ball
+// position cannot be seen, or, strict, when a parameter cannot.
+bool observableColumns(const Eigen::MatrixXd& J0, const std::vector<int>& unknown_params,
+                       const CalibrationOptions& opt, CalibrationResult& res, std::vector<int>* keep_cols) {
+  const int np_all = static_cast<int>(unknown_params.size());
+  std::vector<int> cols(J0.cols());
+  std::vector<bool> protect(J0.cols(), false);
+  for (int c = 0; c < J0.cols(); ++c) {
+    cols[c] = c;
+    protect[c] = c >= np_all;
+  }
+  const MinimalSet ms = selectMinimalSet(J0, cols, protect, {});
+  for (int c : ms.removed) {
+    if (c >= np_all) {
+      res.status = CalibrationStatus::Unobservable;
+      res.message = "the readings cannot see the ball positions of every set-up";
+      return false;
+    }
+    res.held.push_back(unknown_params[c]);
+  }
+  std::sort(res.held.begin(), res.held.end());
+  if (!res.held.empty() && opt.strict) {
+    res.status = CalibrationStatus::Unobservable;
+    res.message = std::to_string(res.held.size()) + " parameters cannot be identified from these readings";
+    return false;
+  }
+  for (int c = 0; c < J0.cols(); ++c)
+    if (c >= np_all || !std::binary_search(res.held.begin(), res.held.end(), unknown_params[c]))
+      keep_cols->push_back(c);
+  return true;
+}
+
+// 3. Residuals and uncertainties from the last factorisation (the SVD of the column-scaled
+// Jacobian's triangle, `scale` its column scales): cov = s^2 (J^T J)^-1.
+void residualsAndUncertainties(const Eigen::VectorXd& r, const Eigen::BDCSVD<Eigen::MatrixXd>& svd,
+                               const Eigen::VectorXd& scale, const std::vector<int>& keep_cols, int np_all, int np,
+                               CalibrationResult& res) {
+  const int m = static_cast<int>(r.size()), n = static_cast<int>(keep_cols.size());
+  res.residuals = r;
+  res.rms_residual = std::sqrt(r.squaredNorm() / m);
+  res.max_residual = r.cwiseAbs().maxCoeff();
+  res.residual_sigma = std::sqrt(r.squaredNorm() / std::max(1, m - n));
+  const Eigen::VectorXd& sv = svd.singularValues();
+  Eigen::VectorXd inv2 = Eigen::VectorXd::Zero(sv.size());
+  for (int k = 0; k < sv.size(); ++k)
+    if (sv[k] > kRankTolerance * sv[0]) inv2[k] = 1.0 / (sv[k] * sv[k]);
+  // diag(V diag(inv2) V^T): with unit-norm columns this is the variance inflation factor.
+  const Eigen::VectorXd vif = svd.matrixV().array().square().matrix() * inv2;
+  Eigen::VectorXd sd(n);
+  for (int c = 0; c < n; ++c) sd[c] = res.residual_sigma * std::sqrt(vif[c]) / scale[c];
+  res.uncertainty = sd.head(np);
+  {
+    // cov = s^2 D^-1 V diag(inv2) V^T D^-1 over the identified parameters (D the column scales).
+    const Eigen::MatrixXd Vp = svd.matrixV().topRows(np);
+    Eigen::MatrixXd c = Vp * inv2.asDiagonal() * Vp.transpose();
+    const Eigen::VectorXd d = scale.head(np).cwiseInverse();
+    res.covariance = res.residual_sigma * res.residual_sigma * (d.asDiagonal() * c * d.asDiagonal());
+  }
+  res.observability = vif.head(np).cwiseInverse().cwiseSqrt();
+  for (int k = np; k < n; ++k) {
+    const int c = keep_cols[k] - np_all;
+    BallErrors& u = res.ball_uncertainty[c / 6];
+    (c % 6 < 3 ? u.table_w : u.tool_t)[c % 3] = sd[k];
+  }
+}
+
 }  // namespace
 
 CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& prior,
@@ -45,32 +113,7 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
   linearise(model, prior, test, res.ball_errors, unknown_params, &r, &J0);
   const int np_all = static_cast<int>(unknown_params.size());
   std::vector<int> keep_cols;  // columns of J0 that stay unknowns
-  {
-    std::vector<int> cols(J0.cols());
-    std::vector<bool> protect(J0.cols(), false);
-    for (int c = 0; c < J0.cols(); ++c) {
-      cols[c] = c;
-      protect[c] = c >= np_all;
-    }
-    const MinimalSet ms = selectMinimalSet(J0, cols, protect, {});
-    for (int c : ms.removed) {
-      if (c >= np_all) {
-        res.status = CalibrationStatus::Unobservable;
-        res.message = "the readings cannot see the ball positions of every set-up";
-        return res;
-      }
-      res.held.push_back(unknown_params[c]);
-    }
-    std::sort(res.held.begin(), res.held.end());
-    if (!res.held.empty() && opt.strict) {
-      res.status = CalibrationStatus::Unobservable;
-      res.message = std::to_string(res.held.size()) + " parameters cannot be identified from these readings";
-      return res;
-    }
-    for (int c = 0; c < J0.cols(); ++c)
-      if (c >= np_all || !std::binary_search(res.held.begin(), res.held.end(), unknown_params[c]))
-        keep_cols.push_back(c);
-  }
+  if (!observableColumns(J0, unknown_params, opt, res, &keep_cols)) return res;
   std::vector<int> unknowns;
   for (int c : keep_cols)
     if (c < np_all) unknowns.push_back(unknown_params[c]);
@@ -155,33 +198,8 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
     for (int k = 0; k < n; ++k) J.col(k) = Jall.col(keep_cols[k]);
   }
 
-  // 3. Residuals and uncertainties from the last factorisation: cov = s^2 (J^T J)^-1.
-  res.residuals = r;
-  res.rms_residual = std::sqrt(r.squaredNorm() / m);
-  res.max_residual = r.cwiseAbs().maxCoeff();
-  res.residual_sigma = std::sqrt(r.squaredNorm() / std::max(1, m - n));
-  const Eigen::VectorXd& sv = svd.singularValues();
-  Eigen::VectorXd inv2 = Eigen::VectorXd::Zero(sv.size());
-  for (int k = 0; k < sv.size(); ++k)
-    if (sv[k] > kRankTolerance * sv[0]) inv2[k] = 1.0 / (sv[k] * sv[k]);
-  // diag(V diag(inv2) V^T): with unit-norm columns this is the variance inflation factor.
-  const Eigen::VectorXd vif = svd.matrixV().array().square().matrix() * inv2;
-  Eigen::VectorXd sd(n);
-  for (int c = 0; c < n; ++c) sd[c] = res.residual_sigma * std::sqrt(vif[c]) / scale[c];
-  res.uncertainty = sd.head(np);
-  {
-    // cov = s^2 D^-1 V diag(inv2) V^T D^-1 over the identified parameters (D the column scales).
-    const Eigen::MatrixXd Vp = svd.matrixV().topRows(np);
-    Eigen::MatrixXd c = Vp * inv2.asDiagonal() * Vp.transpose();
-    const Eigen::VectorXd d = scale.head(np).cwiseInverse();
-    res.covariance = res.residual_sigma * res.residual_sigma * (d.asDiagonal() * c * d.asDiagonal());
-  }
-  res.observability = vif.head(np).cwiseInverse().cwiseSqrt();
-  for (int k = np; k < n; ++k) {
-    const int c = keep_cols[k] - np_all;
-    BallErrors& u = res.ball_uncertainty[c / 6];
-    (c % 6 < 3 ? u.table_w : u.tool_t)[c % 3] = sd[k];
-  }
+  // 3. Residuals and uncertainties from the last factorisation.
+  residualsAndUncertainties(r, svd, scale, keep_cols, np_all, np, res);
   res.message = res.status == CalibrationStatus::Converged ? "converged" : "did not converge";
   return res;
 }
