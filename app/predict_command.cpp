@@ -31,6 +31,96 @@ struct PredictOptions {
 // Rounds away "-0.000" in printed figures.
 double clean(double v) { return std::abs(v) < 5e-7 ? 0.0 : v; }
 
+// The prediction's uncertainty on a calibrated machine: the set-up it is taken after, the 1-sigma
+// band, and the points beyond the calibrated ranges.
+void printUncertainty(const Machine& machine, const ClProgram& program, const CalibratedPrediction& cal) {
+  const std::vector<PoseUncertainty>& unc = cal.uncertainty;
+  const Eigen::VectorXd& measured_setup = cal.measured_setup;
+  std::vector<double> tip(unc.size()), axis(unc.size());
+  int outside = 0, first_outside = -1;
+  std::vector<double> beyond(machine.model.axes.size(), 0.0);
+  for (size_t i = 0; i < unc.size(); ++i) {
+    tip[i] = unc[i].tip;
+    axis[i] = unc[i].axis;
+    if (unc[i].outside) {
+      if (outside++ == 0) first_outside = static_cast<int>(i);
+      for (size_t a = 0; a < beyond.size() && a < unc[i].beyond.size(); ++a)
+        beyond[a] = std::max(beyond[a], unc[i].beyond[a]);
+    }
+  }
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
+  if (cal.probed)
+    std::printf("  set-up     probed: the calibration cannot see the part's pose on the table; "
+                "predicted with the set-up fitted to the probed points, uncertainty included\n");
+  else if (measured_setup.size() == 9)
+    std::printf("  set-up     the calibration cannot see the part's pose on the table or the tool "
+                "tip's offset from the spindle: predicted after the set-up a shop measures (part "
+                "probed: %+.2f %+.2f %+.2f um, %+.1f %+.1f %+.1f urad; tool preset: %+.2f %+.2f "
+                "%+.2f um taken up); --absolute for the raw prediction\n",
+                mmToUm(measured_setup[0]), mmToUm(measured_setup[1]), mmToUm(measured_setup[2]),
+                radToUrad(measured_setup[3]), radToUrad(measured_setup[4]), radToUrad(measured_setup[5]),
+                mmToUm(measured_setup[6]), mmToUm(measured_setup[7]), mmToUm(measured_setup[8]));
+  else
+    std::printf("  set-up     absolute prediction (--absolute): it includes what probing the part "
+                "and presetting the tool would take up, which the calibration cannot see\n");
+  std::printf("  uncertainty (1 sigma) of the prediction, from the calibration's covariance of %zu "
+              "identified values: tip median %.3f um, max %.3f um; tool axis median %.3f urad, "
+              "max %.3f urad\n",
+              machine.identification.parameters.size(), mmToUm(median(tip)),
+              mmToUm(*std::max_element(tip.begin(), tip.end())), radToUrad(median(axis)),
+              radToUrad(*std::max_element(axis.begin(), axis.end())));
+  if (outside > 0) {
+    std::string where;
+    char buf[96];
+    for (size_t a = 0; a < beyond.size(); ++a)
+      if (beyond[a] > 0) {
+        const bool rot = machine.model.axes[a].isRotary();
+        std::snprintf(buf, sizeof buf, "%s%s by up to %.3f %s", where.empty() ? "" : ", ",
+                      machine.model.axes[a].name.c_str(), beyond[a] * (rot ? radToDeg(1.0) : 1.0),
+                      rot ? "deg" : "mm");
+        where += buf;
+      }
+    std::printf("  calibrated %d points lie outside the joint ranges the calibration readings "
+                "covered (first at line %d; %s): there the errors are extrapolated\n",
+                outside, program.path[first_outside].line, where.c_str());
+  }
+}
+
+// Singular points and large rotary steps between cutting moves.
+void printRisks(const Machine& machine, const ClProgram& program, const PredictionResult& r,
+                double max_rotary_step_deg) {
+  const PredictionSummary& s = r.summary;
+  if (s.singular_points > 0)
+    std::printf("  note       %d points have the tool axis within %.4g deg of a rotary axis (first "
+                "at line %d); that axis kept its previous angle\n",
+                s.singular_points, radToDeg(machine.model.control.singular_band),
+                s.first_singular_line);
+  const auto jumps = findRotaryJumps(machine.model, program.path, r,
+                                     degToRad(max_rotary_step_deg));
+  if (!jumps.empty()) {
+    std::printf("  risk       %zu rotary steps above %.1f deg between cutting moves:", jumps.size(),
+                max_rotary_step_deg);
+    for (size_t k = 0; k < jumps.size() && k < 5; ++k)
+      std::printf("%s line %d %s %+.1f deg", k ? "," : "", jumps[k].line,
+                  machine.model.axes[jumps[k].axis].name.c_str(), radToDeg(jumps[k].step));
+    std::printf("%s\n", jumps.size() > 5 ? ", ..." : "");
+  }
+}
+
+void printWarnings(const Machine& machine, const ClProgram& program, const std::vector<std::string>& probe_warnings,
+                   const std::string& units_option) {
+  for (const std::string& w : probe_warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+  for (const std::string& w : setupWarnings(machine.model))
+    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+  for (const std::string& w : unitWarnings(program, machine.model, units_option))
+    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+  for (const std::string& w : programNotes(program))
+    std::fprintf(stderr, "tolver: note: %s: %s\n", program.file.c_str(), w.c_str());
+}
+
 void runPredict(const PredictOptions& o, int* exit_code) {
   Machine machine = loadMachine(o.machine);
   const PartSetup& setup = machine.model.setup;
@@ -47,7 +137,6 @@ void runPredict(const PredictOptions& o, int* exit_code) {
   std::vector<std::string> probe_warnings;
   const std::string probe_line =
       cal.probed ? describeProbedSetup(o.probed, cal.probe, probed, &probe_warnings) : "";
-  const Eigen::VectorXd& measured_setup = cal.measured_setup;
   const std::vector<PoseUncertainty>& unc = cal.uncertainty;
 
   std::vector<ClPoint> predicted(program.path.size());
@@ -102,81 +191,9 @@ void runPredict(const PredictOptions& o, int* exit_code) {
               clean(mmToUm(worst.across_axis)));
   std::printf("  tool axis  max %.3f urad, RMS %.3f urad\n", radToUrad(s.max_axis_angle),
               radToUrad(s.rms_axis_angle));
-  if (!unc.empty()) {
-    std::vector<double> tip(unc.size()), axis(unc.size());
-    int outside = 0, first_outside = -1;
-    std::vector<double> beyond(machine.model.axes.size(), 0.0);
-    for (size_t i = 0; i < unc.size(); ++i) {
-      tip[i] = unc[i].tip;
-      axis[i] = unc[i].axis;
-      if (unc[i].outside) {
-        if (outside++ == 0) first_outside = static_cast<int>(i);
-        for (size_t a = 0; a < beyond.size() && a < unc[i].beyond.size(); ++a)
-          beyond[a] = std::max(beyond[a], unc[i].beyond[a]);
-      }
-    }
-    auto median = [](std::vector<double> v) {
-      std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-      return v[v.size() / 2];
-    };
-    if (cal.probed)
-      std::printf("  set-up     probed: the calibration cannot see the part's pose on the table; "
-                  "predicted with the set-up fitted to the probed points, uncertainty included\n");
-    else if (measured_setup.size() == 9)
-      std::printf("  set-up     the calibration cannot see the part's pose on the table or the tool "
-                  "tip's offset from the spindle: predicted after the set-up a shop measures (part "
-                  "probed: %+.2f %+.2f %+.2f um, %+.1f %+.1f %+.1f urad; tool preset: %+.2f %+.2f "
-                  "%+.2f um taken up); --absolute for the raw prediction\n",
-                  mmToUm(measured_setup[0]), mmToUm(measured_setup[1]), mmToUm(measured_setup[2]),
-                  radToUrad(measured_setup[3]), radToUrad(measured_setup[4]), radToUrad(measured_setup[5]),
-                  mmToUm(measured_setup[6]), mmToUm(measured_setup[7]), mmToUm(measured_setup[8]));
-    else
-      std::printf("  set-up     absolute prediction (--absolute): it includes what probing the part "
-                  "and presetting the tool would take up, which the calibration cannot see\n");
-    std::printf("  uncertainty (1 sigma) of the prediction, from the calibration's covariance of %zu "
-                "identified values: tip median %.3f um, max %.3f um; tool axis median %.3f urad, "
-                "max %.3f urad\n",
-                machine.identification.parameters.size(), mmToUm(median(tip)),
-                mmToUm(*std::max_element(tip.begin(), tip.end())), radToUrad(median(axis)),
-                radToUrad(*std::max_element(axis.begin(), axis.end())));
-    if (outside > 0) {
-      std::string where;
-      char buf[96];
-      for (size_t a = 0; a < beyond.size(); ++a)
-        if (beyond[a] > 0) {
-          const bool rot = machine.model.axes[a].isRotary();
-          std::snprintf(buf, sizeof buf, "%s%s by up to %.3f %s", where.empty() ? "" : ", ",
-                        machine.model.axes[a].name.c_str(), beyond[a] * (rot ? radToDeg(1.0) : 1.0),
-                        rot ? "deg" : "mm");
-          where += buf;
-        }
-      std::printf("  calibrated %d points lie outside the joint ranges the calibration readings "
-                  "covered (first at line %d; %s): there the errors are extrapolated\n",
-                  outside, program.path[first_outside].line, where.c_str());
-    }
-  }
-  if (s.singular_points > 0)
-    std::printf("  note       %d points have the tool axis within %.4g deg of a rotary axis (first "
-                "at line %d); that axis kept its previous angle\n",
-                s.singular_points, radToDeg(machine.model.control.singular_band),
-                s.first_singular_line);
-  const auto jumps = findRotaryJumps(machine.model, program.path, r,
-                                     degToRad(o.max_rotary_step_deg));
-  if (!jumps.empty()) {
-    std::printf("  risk       %zu rotary steps above %.1f deg between cutting moves:", jumps.size(),
-                o.max_rotary_step_deg);
-    for (size_t k = 0; k < jumps.size() && k < 5; ++k)
-      std::printf("%s line %d %s %+.1f deg", k ? "," : "", jumps[k].line,
-                  machine.model.axes[jumps[k].axis].name.c_str(), radToDeg(jumps[k].step));
-    std::printf("%s\n", jumps.size() > 5 ? ", ..." : "");
-  }
-  for (const std::string& w : probe_warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
-  for (const std::string& w : setupWarnings(machine.model))
-    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
-  for (const std::string& w : unitWarnings(program, machine.model, o.program.units))
-    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
-  for (const std::string& w : programNotes(program))
-    std::fprintf(stderr, "tolver: note: %s: %s\n", program.file.c_str(), w.c_str());
+  if (!unc.empty()) printUncertainty(machine, program, cal);
+  printRisks(machine, program, r, o.max_rotary_step_deg);
+  printWarnings(machine, program, probe_warnings, o.program.units);
   std::printf("  wrote      %s (predicted CL), %s (per-point table)\n", o.output.c_str(),
               table.c_str());
   *exit_code = 0;
