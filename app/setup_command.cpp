@@ -8,10 +8,10 @@
 
 #include "app/commands.h"
 #include "app/common.h"
+#include "core/numerics/units.h"
 #include "core/path/setup_search.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
-#include "core/numerics/units.h"
 
 namespace tolver::app {
 namespace {
@@ -42,9 +42,9 @@ void printRanges(const MachineModel& model, const ClProgram& program,
       continue;
     }
     const std::string needs = axisValue(ax, r.min) + " .. " + axisValue(ax, r.max) + " " + unit;
-    const std::string travel = ax.endless ? std::string("endless")
-                                          : "[" + axisValue(ax, ax.travel_min) + ", " +
-                                                axisValue(ax, ax.travel_max) + "]";
+    const std::string travel =
+        ax.endless ? std::string("endless")
+                   : "[" + axisValue(ax, ax.travel_min) + ", " + axisValue(ax, ax.travel_max) + "]";
     std::string margin;
     if (ax.endless) {
       margin = "-";
@@ -63,18 +63,18 @@ void printRanges(const MachineModel& model, const ClProgram& program,
 }
 
 // The set-up file for a proposal: what `--setup` reads.
-void writeSetupFile(const std::string& file, const ClProgram& program, const MachineModel& model,
-                    const PartSetup& b, double margin, const std::string& what) {
+// The set-up file's text for a proposed set-up (the format setup_file.h reads).
+std::string setupFileText(const ClProgram& program, const MachineModel& model, const PartSetup& b, double margin,
+                          const std::string& what) {
   char buf[768];
-  std::snprintf(buf, sizeof buf,
-                "# Set-up proposed by tolver setup for %s%s on %s (margin %.3f mm)\n"
-                "part_zero_mm = %s, %s, %s\npart_rotation_deg = %s\ngauge_length_mm = %s\n",
-                program.file.c_str(), what.c_str(), model.name.c_str(), margin,
-                formatNumber(b.part_zero_table.x()).c_str(),
-                formatNumber(b.part_zero_table.y()).c_str(),
-                formatNumber(b.part_zero_table.z()).c_str(),
-                formatNumber(radToDeg(b.part_rotation)).c_str(),
-                formatNumber(b.gauge_length).c_str());
+  std::snprintf(
+      buf, sizeof buf,
+      "# Set-up proposed by tolver setup for %s%s on %s (margin %.3f mm)\n"
+      "part_zero_mm = %s, %s, %s\npart_rotation_deg = %s\ngauge_length_mm = %s\n",
+      program.file.c_str(), what.c_str(), model.name.c_str(), margin,
+      formatNumber(b.part_zero_table.x()).c_str(), formatNumber(b.part_zero_table.y()).c_str(),
+      formatNumber(b.part_zero_table.z()).c_str(), formatNumber(radToDeg(b.part_rotation)).c_str(),
+      formatNumber(b.gauge_length).c_str());
   std::string text = buf;
   // The proposal moves the part frame: the work offsets of a posted program go with it (a
   // work offset the set-up does not give has its origin at the part zero: touch off there).
@@ -86,47 +86,103 @@ void writeSetupFile(const std::string& file, const ClProgram& program, const Mac
               ", " + formatNumber(off.z()) + "\n";
   for (const auto& [h, len] : model.setup.tool_lengths)
     text += "tool_h" + std::to_string(h) + "_mm = " + formatNumber(len) + "\n";
-  writeFileAtomically(file, text);
+  return text;
 }
 
 // s.txt -> s_part2.txt
 std::string pieceFileName(const std::string& output, size_t k) {
   const std::filesystem::path p(output);
-  return (p.parent_path() / (p.stem().string() + "_part" + std::to_string(k + 1) +
-                             p.extension().string())).string();
+  return (p.parent_path() /
+          (p.stem().string() + "_part" + std::to_string(k + 1) + p.extension().string()))
+      .string();
 }
 
-void runSetup(const SetupOptions& o, int* exit_code) {
-  Machine machine = loadMachine(o.machine);
-  // The search moves the part frame with the program in it: a posted program's work offsets
-  // move with it (their origin at the part zero), so the set-up's are set aside here.
-  const bool had_offsets = !machine.model.setup.work_offsets.empty();
-  machine.model.setup.work_offsets.clear();
-  const ClProgram program = loadProgram(o.program, machine.model);
-  if (had_offsets && program.dialect == "G-code")
-    std::fprintf(stderr, "tolver: note: the set-up's work offsets are set aside: the search puts "
-                         "G54... at the part zero it proposes\n");
-  if (!o.output.empty()) checkOutputDir(o.output, "-o");
-  for (double L : o.gauge_lengths)
-    if (!(L >= 0 && L < 1e5))
-      throw InputError("--gauge-lengths", 0, 0, "gauge length", "expected lengths from 0 to 1e5 mm");
-  const MachineModel& model = machine.model;
-
-  // Joint-mode G-code points are fixed in machine coordinates: the search moves the part under
-  // the points given in the part frame (CL data, TCP G-code).
+// The program's points given in the part frame (CL data, TCP G-code) and their commanded joints.
+std::vector<ClPoint> partFramePoints(const ClProgram& program,
+                                     std::vector<JointVector>* commanded) {
   std::vector<ClPoint> path;
-  std::vector<JointVector> commanded;
   for (size_t i = 0; i < program.path.size(); ++i) {
     if (!program.tcp.empty() && !program.tcp[i]) continue;
     path.push_back(program.path[i]);
-    if (!program.joints.empty()) commanded.push_back(program.joints[i]);
+    if (!program.joints.empty()) commanded->push_back(program.joints[i]);
   }
   if (path.empty())
     throw InputError(program.file, 0, 0, "program",
                      "no point is given in the part frame (all G-code moves are joint words): "
                      "the set-up does not change where the machine goes");
-  const std::vector<JointVector>* cmd = commanded.empty() ? nullptr : &commanded;
+  return path;
+}
 
+// The lines of the points outside travel, as runs ("12-40, 77"), at most 8 runs.
+std::string outsideLines(const std::vector<ClPoint>& path, const std::vector<int>& outside,
+                         int* runs) {
+  std::string lines;
+  *runs = 0;
+  for (size_t k = 0; k < outside.size() && *runs < 8; ++k) {
+    const int first = path[outside[k]].line;
+    size_t e = k;
+    while (e + 1 < outside.size() && outside[e + 1] == outside[e] + 1) ++e;
+    const int last = path[outside[e]].line;
+    lines += (lines.empty() ? "" : ", ") + std::to_string(first) +
+             (last != first ? "-" + std::to_string(last) : "");
+    k = e;
+    ++*runs;
+  }
+  return lines;
+}
+
+// The pieces a split program runs in, each with its set-up.
+void printPieces(const std::vector<ClPoint>& path, const std::vector<SetupPiece>& pieces) {
+  const bool all = !pieces.empty() && pieces.back().last == static_cast<int>(path.size()) - 1;
+  bool each = true;
+  for (const SetupPiece& p : pieces) each = each && p.result.found;
+  if (all && each)
+    std::printf("  split      %zu set-ups reach the program, one piece each:\n", pieces.size());
+  else
+    std::printf("  split      no split into %zu pieces or fewer reaches every point:\n",
+                pieces.size());
+  for (size_t k = 0; k < pieces.size(); ++k) {
+    const SetupPiece& p = pieces[k];
+    const PartSetup& ps = p.result.setup;
+    if (!p.result.found) {
+      std::printf("    piece %zu  line %d: no set-up reaches this point\n", k + 1,
+                  path[p.first].line);
+      continue;
+    }
+    std::printf(
+        "    piece %zu  lines %d-%d (%d points): part_zero_mm = %.3f, %.3f, %.3f; "
+        "part_rotation_deg = %.3f; gauge_length_mm = %.3f; margin %.3f mm "
+        "(predict or verify it with --lines and its set-up file)\n",
+        k + 1, path[p.first].line, path[p.last].line, p.last - p.first + 1, ps.part_zero_table.x(),
+        ps.part_zero_table.y(), ps.part_zero_table.z(), radToDeg(ps.part_rotation), ps.gauge_length,
+        p.result.margin);
+  }
+}
+
+// The set-up file of the best single set-up, and one per piece of a split program.
+void writeSetupFiles(const std::string& output, const ClProgram& program, const MachineModel& model,
+                     const std::vector<ClPoint>& path, const SetupSearchResult& r,
+                     const std::vector<SetupPiece>& pieces) {
+  OutputSet files;  // all the set-up files, or none
+  files.add(output, setupFileText(program, model, r.setup, r.margin, ""));
+  std::vector<std::string> written;
+  for (size_t k = 0; k < pieces.size(); ++k) {
+    if (!pieces[k].result.found) continue;
+    const std::string f = pieceFileName(output, k);
+    const std::string what = ", lines " + std::to_string(path[pieces[k].first].line) + "-" +
+                             std::to_string(path[pieces[k].last].line);
+    files.add(f, setupFileText(program, model, pieces[k].result.setup, pieces[k].result.margin, what));
+    written.push_back("  wrote      " + f + " (set-up file for piece " + std::to_string(k + 1) + what + ")");
+  }
+  files.commit();
+  std::printf("  wrote      %s (set-up file%s)\n", output.c_str(),
+              r.found ? "" : ": the best single set-up, which leaves points outside travel");
+  for (const std::string& line : written) std::printf("%s\n", line.c_str());
+}
+
+// What the search starts from: the machine, the program's extent in the part frame, the set-up.
+void printSetupHeader(const SetupOptions& o, const ClProgram& program, const MachineModel& model,
+                      const std::vector<ClPoint>& path) {
   Eigen::Vector3d lo = path[0].p_w, hi = lo;
   for (const ClPoint& c : path) {
     lo = lo.cwiseMin(c.p_w);
@@ -139,17 +195,45 @@ void runSetup(const SetupOptions& o, int* exit_code) {
   std::printf("  extent     x %.3f .. %.3f, y %.3f .. %.3f, z %.3f .. %.3f mm (part frame)\n",
               lo.x(), hi.x(), lo.y(), hi.y(), lo.z(), hi.z());
   const PartSetup& s = model.setup;
-  std::printf("  set-up     part zero (%.3f, %.3f, %.3f) mm, rotation %.3f deg, gauge length "
-              "%.3f mm%s\n",
-              s.part_zero_table.x(), s.part_zero_table.y(), s.part_zero_table.z(),
-              radToDeg(s.part_rotation), s.gauge_length,
-              o.machine.setup.empty() ? " (defaults: no --setup)" : "");
+  std::printf(
+      "  set-up     part zero (%.3f, %.3f, %.3f) mm, rotation %.3f deg, gauge length "
+      "%.3f mm%s\n",
+      s.part_zero_table.x(), s.part_zero_table.y(), s.part_zero_table.z(),
+      radToDeg(s.part_rotation), s.gauge_length,
+      o.machine.setup.empty() ? " (defaults: no --setup)" : "");
   for (const std::string& w : setupWarnings(model))
     std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
   for (const std::string& w : unitWarnings(program, model, o.program.units))
     std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
   for (const std::string& w : programNotes(program))
     std::fprintf(stderr, "tolver: note: %s: %s\n", program.file.c_str(), w.c_str());
+}
+
+void runSetup(const SetupOptions& o, int* exit_code) {
+  Machine machine = loadMachine(o.machine);
+  // The search moves the part frame with the program in it: a posted program's work offsets
+  // move with it (their origin at the part zero), so the set-up's are set aside here.
+  const bool had_offsets = !machine.model.setup.work_offsets.empty();
+  machine.model.setup.work_offsets.clear();
+  const ClProgram program = loadProgram(o.program, machine.model);
+  if (had_offsets && program.dialect == "G-code")
+    std::fprintf(stderr,
+                 "tolver: note: the set-up's work offsets are set aside: the search puts "
+                 "G54... at the part zero it proposes\n");
+  if (!o.output.empty()) checkOutputDir(o.output, "-o");
+  for (double L : o.gauge_lengths)
+    if (!(L >= 0 && L < 1e5))
+      throw InputError("--gauge-lengths", 0, 0, "gauge length",
+                       "expected lengths from 0 to 1e5 mm");
+  const MachineModel& model = machine.model;
+
+  // Joint-mode G-code points are fixed in machine coordinates: the search moves the part under
+  // the points given in the part frame (CL data, TCP G-code).
+  std::vector<JointVector> commanded;
+  const std::vector<ClPoint> path = partFramePoints(program, &commanded);
+  const std::vector<JointVector>* cmd = commanded.empty() ? nullptr : &commanded;
+
+  printSetupHeader(o, program, model, path);
   int failed = 0, first_failed = -1;
   const std::vector<AxisRange> now = jointRanges(model, path, cmd, &failed, &first_failed);
   printRanges(model, program, now);
@@ -168,8 +252,9 @@ void runSetup(const SetupOptions& o, int* exit_code) {
               r.rotations_rejected,
               o.gauge_lengths.size() > 1 ? ", gauge lengths given with --gauge-lengths" : "");
   if (!std::isfinite(r.margin)) {
-    std::printf("  result     no rotation keeps the rotary axes inside travel: the program cannot "
-                "run on this machine in one set-up\n");
+    std::printf(
+        "  result     no rotation keeps the rotary axes inside travel: the program cannot "
+        "run on this machine in one set-up\n");
     *exit_code = 1;
     return;
   }
@@ -187,64 +272,21 @@ void runSetup(const SetupOptions& o, int* exit_code) {
     *exit_code = 0;
   } else {
     // The lines the best set-up leaves outside: where to split the program.
-    std::string lines;
     int runs = 0;
-    for (size_t k = 0; k < r.outside.size() && runs < 8; ++k) {
-      const int first = path[r.outside[k]].line;
-      size_t e = k;
-      while (e + 1 < r.outside.size() && r.outside[e + 1] == r.outside[e] + 1) ++e;
-      const int last = path[r.outside[e]].line;
-      lines += (lines.empty() ? "" : ", ") + std::to_string(first) +
-               (last != first ? "-" + std::to_string(last) : "");
-      k = e;
-      ++runs;
-    }
-    std::printf("  result     no single set-up reaches the whole program; the best leaves %zu points "
-                "outside travel, at lines %s%s: split the program there\n",
-                r.outside.size(), lines.c_str(), runs >= 8 ? ", ..." : "");
+    const std::string lines = outsideLines(path, r.outside, &runs);
+    std::printf(
+        "  result     no single set-up reaches the whole program; the best leaves %zu points "
+        "outside travel, at lines %s%s: split the program there\n",
+        r.outside.size(), lines.c_str(), runs >= 8 ? ", ..." : "");
     *exit_code = 1;
   }
   std::vector<SetupPiece> pieces;
   if (!r.found) {
     // Where to split: consecutive pieces of the program, each with a set-up that reaches it.
     pieces = splitIntoSetups(model, path, cmd, so);
-    const bool all = !pieces.empty() && pieces.back().last == static_cast<int>(path.size()) - 1;
-    bool each = true;
-    for (const SetupPiece& p : pieces) each = each && p.result.found;
-    if (all && each)
-      std::printf("  split      %zu set-ups reach the program, one piece each:\n", pieces.size());
-    else
-      std::printf("  split      no split into %zu pieces or fewer reaches every point:\n",
-                  pieces.size());
-    for (size_t k = 0; k < pieces.size(); ++k) {
-      const SetupPiece& p = pieces[k];
-      const PartSetup& ps = p.result.setup;
-      if (!p.result.found) {
-        std::printf("    piece %zu  line %d: no set-up reaches this point\n", k + 1,
-                    path[p.first].line);
-        continue;
-      }
-      std::printf("    piece %zu  lines %d-%d (%d points): part_zero_mm = %.3f, %.3f, %.3f; "
-                  "part_rotation_deg = %.3f; gauge_length_mm = %.3f; margin %.3f mm "
-                  "(predict or verify it with --lines and its set-up file)\n",
-                  k + 1, path[p.first].line, path[p.last].line, p.last - p.first + 1,
-                  ps.part_zero_table.x(), ps.part_zero_table.y(), ps.part_zero_table.z(),
-                  radToDeg(ps.part_rotation), ps.gauge_length, p.result.margin);
-    }
+    printPieces(path, pieces);
   }
-  if (!o.output.empty()) {
-    writeSetupFile(o.output, program, model, b, r.margin, "");
-    std::printf("  wrote      %s (set-up file%s)\n", o.output.c_str(),
-                r.found ? "" : ": the best single set-up, which leaves points outside travel");
-    for (size_t k = 0; k < pieces.size(); ++k) {
-      if (!pieces[k].result.found) continue;
-      const std::string f = pieceFileName(o.output, k);
-      const std::string what = ", lines " + std::to_string(path[pieces[k].first].line) + "-" +
-                               std::to_string(path[pieces[k].last].line);
-      writeSetupFile(f, program, model, pieces[k].result.setup, pieces[k].result.margin, what);
-      std::printf("  wrote      %s (set-up file for piece %zu%s)\n", f.c_str(), k + 1, what.c_str());
-    }
-  }
+  if (!o.output.empty()) writeSetupFiles(o.output, program, model, path, r, pieces);
 }
 
 }  // namespace
