@@ -410,6 +410,7 @@ void runCalibrate(const CalibrateOptions& o, int* exit_code) {
 
 }  // namespace
 
+// Long by design: the options of plan-ballbar, simulate-ballbar and calibrate, one per line.
 void registerBallbar(CLI::App& app, int* exit_code) {
   {
     auto o = std::make_shared<PlanOptions>();

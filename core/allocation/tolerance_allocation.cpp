@@ -288,6 +288,8 @@ struct PagmoProblem {
 
 }  // namespace
 
+// Long by design: the NSGA-II run as the paper sets it up ([Cai] 4.2): the problem, the
+// population, the evolution and the pick of the chosen solution share the bounds and the model.
 AllocationResult allocateTolerances(const MachineModel& m, const std::vector<ToleranceTerm>& terms,
                                     const AllocationModel& a, const AccuracyModel& acc_in,
                                     const CorrelationAnalysis& corr, const AllocationOptions& o) {

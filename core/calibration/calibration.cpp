@@ -95,6 +95,8 @@ void residualsAndUncertainties(const Eigen::VectorXd& r, const Eigen::BDCSVD<Eig
 
 }  // namespace
 
+// Long by design: the Gauss-Newton loop of [AM01] 3.7 with its stopping rules; the steps
+// before and after it are functions (observableColumns, residualsAndUncertainties).
 CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& prior,
                             const BallbarTest& test, const std::vector<int>& unknown_params,
                             const CalibrationOptions& opt) {

@@ -152,6 +152,8 @@ InverseKinematics::InverseKinematics(const MachineModel& model)
       rotary_.size() == 2 && std::abs(a_[0].dot(C1_ * a_[1])) > 1.0 - 1e-12;
 }
 
+// Long by design: the closed-form rotary solutions, one short case per topology (one or two
+// rotary axes, orthogonal or not, singular or not).
 int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, RotaryCandidate out[2],
                                         bool* singular) const {
   const double nan = std::numeric_limits<double>::quiet_NaN();
@@ -325,6 +327,8 @@ bool InverseKinematics::placeToolPoint(const Eigen::Vector3d& b_t, const Eigen::
   return true;
 }
 
+// Long by design: the prediction's hot loop (a few hundred ns per point): its steps are lambdas
+// over one stack frame so that nothing is allocated or copied between them.
 IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vector3d& u_w,
                                     const JointVector* previous, const double* previous_cos,
                                     const double* previous_sin) const {

@@ -251,6 +251,8 @@ std::vector<GWord> gcodeWords(const std::string& s) {
 
 }  // namespace
 
+// Long by design: one pass over the source's blocks carrying the control's modal state (units,
+// G90/G91, TCP, arcs, the block before an arc); split up, every part would take that state.
 CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const MachineModel& model,
                                               const std::vector<JointVector>& q0,
                                               const std::vector<JointVector>& q,

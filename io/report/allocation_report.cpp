@@ -25,6 +25,8 @@ const char* displayUnit(const MachineModel& m, const ToleranceTerm& t) {
   return m.parameters[t.parameter].angular ? "mm/m" : "mm";
 }
 
+// Long by design: the report's files (allocation.csv, pareto.csv, pareto.png, report.json,
+// report.html) in the order they are written, each a few lines over the same figures.
 void writeAllocationReport(const std::string& dir, const MachineModel& m,
                            const std::vector<ToleranceTerm>& terms, const AllocationModel& a,
                            const AllocationResult& r, const AllocationReportInputs& in) {

@@ -101,6 +101,8 @@ std::vector<Eigen::Vector2d> placeCallouts(const std::vector<Eigen::Vector2d>& a
   return out;
 }
 
+// Long by design: one VTK scene built step by step (surface, lookup table, bar, axes, callouts,
+// camera, render); VTK's objects live in this frame until the PNG is written.
 void renderDeviationMap(const std::string& png_path, const DeviationMap& map, const MapView& view,
                         int width, int height) {
   const auto& P = *map.points;

@@ -143,6 +143,7 @@ const char* effectUnit(const EffectSpec& spec, double* scale) {
   return angular ? "urad" : "um";
 }
 
+// Long by design: the JSON document's members in order, each a line or two.
 std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& test,
                                 const DiagnosisResult& r, const DiagnosisReportInputs& in) {
   const MachineModel& m = r.machine.model;
@@ -274,6 +275,7 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
   return jsonText(out);
 }
 
+// Long by design: the report's sections in the order the reader meets them, each a few lines.
 std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
                                const BallbarTest& test, const DiagnosisResult& r,
                                const DiagnosisReportInputs& in) {

@@ -172,6 +172,7 @@ std::string formatDeviationsCsv(const VerifyReport& r) {
   return out;
 }
 
+// Long by design: the report's sections in the order the reader meets them, each a few lines.
 std::string formatVerifyHtml(const VerifyReport& r) {
   const VerifyResult& v = *r.result;
   std::string h;
