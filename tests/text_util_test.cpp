@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "io/common/io_error.h"
 
 namespace tolver {
@@ -29,6 +31,21 @@ TEST(TextUtil, CsvCellsRoundTripThroughQuoting) {
   EXPECT_EQ(csvField("say \"hi\""), "\"say \"\"hi\"\"\"");
   EXPECT_EQ(splitCsvLine(" a , b ,c"), (std::vector<std::string>{"a", "b", "c"}));
   EXPECT_EQ(splitCsvLine("\"x, y\" , z"), (std::vector<std::string>{"x, y", "z"}));
+}
+
+// formatNumber: the shortest text that reads back to the same double, for random doubles over
+// many magnitudes; the short forms a file reader expects for round values.
+TEST(TextUtil, FormatNumberRoundTripsWithTheShortestText) {
+  EXPECT_EQ(formatNumber(0.1), "0.1");
+  EXPECT_EQ(formatNumber(120.0), "120");
+  EXPECT_EQ(formatNumber(-2.5), "-2.5");
+  EXPECT_EQ(formatNumber(1e-5), "1e-05");
+  unsigned s = 12345;
+  for (int i = 0; i < 20000; ++i) {
+    s = s * 1103515245u + 12345u;
+    const double v = (static_cast<double>(s % 100000) / 7.0 - 7000.0) * std::pow(10.0, static_cast<int>(s % 21) - 10);
+    EXPECT_EQ(std::stod(formatNumber(v)), v) << formatNumber(v);
+  }
 }
 
 // One header policy: comments and blank lines skipped, names lowercased, a name given twice or a

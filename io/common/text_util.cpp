@@ -117,11 +117,8 @@ std::optional<double> parseNumber(std::string_view token) {
 
 std::string formatNumber(double v) {
   char buf[64];
-  for (int prec = 6; prec <= 17; ++prec) {
-    std::snprintf(buf, sizeof buf, "%.*g", prec, v);
-    if (std::strtod(buf, nullptr) == v) break;
-  }
-  return buf;
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);  // shortest that round-trips, no locale
+  return std::string(buf, r.ptr);
 }
 
 std::string xmlEscape(std::string_view s) {

@@ -52,7 +52,7 @@ void forEachCsvRow(const std::string& text, const std::string& file, const std::
 // Strict number: the whole (trimmed) token must be a finite decimal number ("1.", "-.5",
 // "1.0E-3", "+2"); returns nullopt otherwise.
 std::optional<double> parseNumber(std::string_view token);
-// Formats a double with the shortest precision that round-trips (17 significant digits max).
+// Formats a double with the shortest digits that read back to it (std::to_chars, no locale).
 std::string formatNumber(double v);
 // Formats one double by a printf format ("%+.2f", "%.4g"): the reports' fixed precisions.
 std::string formatWith(const char* printf_format, double v);
