@@ -209,6 +209,8 @@ std::vector<LineProfilePoint> lineProfile(const SurfaceSamples& samples, const V
   return out;
 }
 
+// Long by design: [AM01] 5.5.4-5.5.5 step by step (passes, the surfaces through the CL points,
+// the deviation per point), on shared per-pass arrays.
 void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPoint>& predicted,
                      const std::vector<ToleranceZone>& zones, SurfaceSamples* samples,
                      VerifyResult* result) {

@@ -51,6 +51,8 @@ double range(const std::vector<double>& v) {
 
 }  // namespace
 
+// Long by design: the list of tests ([AM01] 4.9 and the periodogram [Lomb76]), one short block
+// each, ranked at the end.
 ResidualAnalysis analyseResiduals(const MachineModel& model, const BallbarTest& test,
                                   const Eigen::VectorXd& r) {
   ResidualAnalysis out;

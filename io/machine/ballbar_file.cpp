@@ -27,6 +27,8 @@ std::string axisColumn(const Axis& ax) { return lower(ax.name) + (ax.isRotary() 
 
 }  // namespace
 
+// Long by design: one reader over the header and the rows, each value checked against its
+// plausible range where it is read (the messages name line and column).
 BallbarFile parseBallbarCsv(const std::string& text, const std::string& file, const MachineModel& m,
                             bool require_length) {
   BallbarFile out;

@@ -88,6 +88,8 @@ std::string lineList(const std::vector<int>& lines) {
 
 }  // namespace
 
+// Long by design: one pass over the source's statements, keeping every line it does not change
+// byte for byte.
 CompensatedProgramText formatCompensatedApt(const ClProgram& program,
                                             const std::vector<ClPoint>& corrected,
                                             const std::vector<std::string>& header) {
