@@ -59,6 +59,8 @@ double InverseKinematics::RotaryCandidate::angleOf(int r) const {
   return known[r] ? angle[r] : std::atan2(sin[r], cos[r]);
 }
 
+// Long by design: the topology's classification once per model (axes, chains, the closed-form
+// case), so that solve() is free of it.
 InverseKinematics::InverseKinematics(const MachineModel& model)
     : model_(&model) {
   {

@@ -13,6 +13,7 @@
 
 namespace tolver {
 
+// Long by design: the JSON document's members in order, each a line or two.
 std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test,
                                   const CalibrationResult& r, const CalibrationReportInputs& in) {
   using nlohmann::json;
