@@ -41,6 +41,7 @@ for n in "${names[@]}"; do
     else cp -n $here/$c "$out/$n/corpus/" 2>/dev/null || true; fi
   done
   echo "fuzz $n: ${seconds} s" >&2
+  touch "$out/$n/.started"
   if ! (cd "$out/$n" && "$bin" -max_total_time="$seconds" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
           -print_final_stats=1 corpus > log.txt 2>&1); then
     echo "fuzz $n: FAILED, see $out/$n/log.txt" >&2
@@ -50,7 +51,7 @@ for n in "${names[@]}"; do
   # One line per run, so the totals over many runs can be summed (tests/fuzz/totals.sh).
   execs=$(grep -oE "stat::number_of_executed_units: [0-9]+" "$out/$n/log.txt" | grep -oE "[0-9]+$" || echo 0)
   cov=$(grep -oE "cov: [0-9]+" "$out/$n/log.txt" | tail -1 | grep -oE "[0-9]+$" || echo 0)
-  crashes=$(ls "$out/$n" | grep -cE "^(crash|leak|timeout|oom)-" || true)
+  crashes=$(find "$out/$n" -maxdepth 1 -newer "$out/$n/.started" -regextype egrep -regex ".*/(crash|leak|timeout|oom)-.*" | wc -l)
   printf "%s\t%s\t%s\t%s\t%s\t%s\n" "$(date -u +%FT%TZ)" "$n" "$seconds" "$execs" "$cov" "$crashes" >> "$out/history.tsv"
 done
 exit $status
