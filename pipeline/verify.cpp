@@ -195,6 +195,41 @@ std::vector<std::pair<std::string, std::string>> renderImages(
 }
 
 
+// Work budgets, so that no input makes verify run for hours or exhaust memory: an input that
+// would exceed one is refused, saying which budget and what to change.
+constexpr double kMaxSamples = 5e6;      // surface samples (the remeshed part at --spacing)
+constexpr double kMaxPlacements = 2e7;   // tool placements per sweep (the path at --step)
+
+// The remeshed part's sample count, from its area: isotropic triangles of edge s have area
+// (sqrt(3)/4) s^2, and a closed mesh has half as many vertices as faces.
+void checkSampleBudget(const VerifyInputs& o, const TriangleMesh& mesh) {
+  double area = 0;
+  for (const Eigen::Vector3i& f : mesh.faces)
+    area += 0.5 * (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]).norm();
+  const double s = o.spacing_mm;
+  const double samples = area / (std::sqrt(3.0) / 2.0 * s * s);
+  if (samples > kMaxSamples)
+    throw InputError("--spacing", 0, 0, "spacing",
+                     formatWith("the part, %.0f mm2 of surface at ", area) + formatWith("%g mm spacing", s) +
+                         formatWith(" make about %.3g surface samples, above the budget of ", samples) +
+                         formatWith("%.0f: give --spacing ", kMaxSamples) +
+                         formatWith("%.3g or more", std::sqrt(area / (std::sqrt(3.0) / 2.0 * kMaxSamples))));
+}
+
+// The placements of a sweep, from the path's length at the step.
+void checkPlacementBudget(const ClProgram& program, const MotionSampling& sampling) {
+  double length = 0;
+  for (size_t i = 1; i < program.path.size(); ++i) length += (program.path[i].p_w - program.path[i - 1].p_w).norm();
+  const double placements = length / sampling.step;
+  if (placements > kMaxPlacements)
+    throw InputError("--step", 0, 0, "step",
+                     formatWith("the program, %.0f mm of tool path at ", length) +
+                         formatWith("a %g mm step make about ", sampling.step) +
+                         formatWith("%.3g tool placements, above the budget of ", placements) +
+                         formatWith("%.0f: give --step ", kMaxPlacements) +
+                         formatWith("%.3g or more (or a larger tolerance)", length / kMaxPlacements));
+}
+
 // Phase timings: the seconds since the previous lap, by name.
 class PhaseClock {
  public:
@@ -430,6 +465,8 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
                         "(thesis 5.5.4-5.5.5) and the deviation is the machine's alone");
   } else {
     const ImportedPart part = readPart(o, program);
+    checkSampleBudget(o, part.mesh);
+    checkPlacementBudget(program, sampling);
     rep.has_repair = true;
     rep.repair = part.repair;
     rep.part_file = o.part;

@@ -75,5 +75,30 @@ TEST_F(VerifyPipeline, AMissingPartIsAnInputErrorAndWritesNothing) {
   EXPECT_FALSE(std::filesystem::exists(path("report")));
 }
 
+// Work budgets: a spacing that would make tens of millions of samples, or a step that would
+// make tens of millions of placements, is refused before the work, naming the option and a value
+// that fits; nothing is written.
+TEST_F(VerifyPipeline, WorkBeyondTheBudgetsIsRefusedBeforeItStarts) {
+  VerifyInputs in = sculptured("samples/machines/matsuura_mc760vx_measured.xml");
+  in.spacing_mm = 0.005;  // about 9e8 samples on this part
+  try {
+    runVerification(in, "fine");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    const std::string w = e.what();
+    EXPECT_NE(w.find("--spacing"), std::string::npos) << w;
+    EXPECT_NE(w.find("budget"), std::string::npos) << w;
+  }
+  in.spacing_mm = 1.5;
+  in.step_mm = 1e-5;  // the 9 802-point finish at 10 nm steps
+  try {
+    runVerification(in, "tiny-step");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--step"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(path("report")));
+}
+
 }  // namespace
 }  // namespace tolver
