@@ -327,7 +327,7 @@ void printLargestErrors(const CalibrationRun& run) {
   std::printf("  largest identified errors (value +- standard uncertainty):\n");
   for (size_t k = 0; k < std::min<size_t>(10, order.size()); ++k) {
     const int p = r.identified[order[k]];
-    const double s = m.parameters[p].angular ? 1e6 : 1e3;
+    const double s = m.parameters[p].angular ? radToUrad(1.0) : mmToUm(1.0);
     std::printf("    %-10s %-18s %10.3f +- %.3f %s\n", m.parameters[p].iso_code.c_str(),
                 m.parameters[p].thesis_name.c_str(), r.params[p] * s, r.uncertainty[order[k]] * s,
                 m.parameters[p].angular ? "urad" : "um");

@@ -51,7 +51,7 @@ void printAdded(const MachineModel& m, const AddedEffect& a) {
     std::printf("             partly confounded (new information %.3f) with", a.new_information);
     for (size_t k = 0; k < a.confounded_with.size(); ++k) {
       const AddedEffect::Confounding& c = a.confounded_with[k];
-      const double f = c.angular ? 1e6 : 1e3;
+      const double f = c.angular ? radToUrad(1.0) : mmToUm(1.0);
       std::printf("%s %s (|cos| %.2f: %.3f -> %.3f %s)", k ? "," : "", c.name.c_str(), c.cosine, c.before * f,
                   c.after * f, c.angular ? "urad" : "um");
     }

@@ -266,7 +266,7 @@ void registerVerify(CLI::App& app, int* exit_code) {
     if (o->in.program.cl.empty() && o->in.program.nc.empty())
       throw InputError("--cl", 0, 0, "cl", "give the program (--cl or --nc) or a jobs file (--batch)");
     if (o->in.machine.machine.empty()) throw InputError("--machine", 0, 0, "machine", "give the machine file (--machine)");
-    if (o->tolerance_units == "um" && !std::isnan(o->in.tolerance_mm)) o->in.tolerance_mm /= 1000.0;
+    if (o->tolerance_units == "um" && !std::isnan(o->in.tolerance_mm)) o->in.tolerance_mm = umToMm(o->in.tolerance_mm);
     o->in.tolerance_confirmed = !o->tolerance_units.empty();
     const std::string name =
         fs::path(o->in.program.cl.empty() ? o->in.program.nc : o->in.program.cl).stem().string();

@@ -76,7 +76,7 @@ class Reader {
     if (u == "rad") return 1.0;
     if (u == "deg") return degToRad(1.0);
     if (u == "urad") return 1e-6;
-    if (u == "mrad") return 1e-3;
+    if (u == "mrad") return uradToRad(1e3);
     if (u == "arcsec") return degToRad(1.0 / 3600.0);
     *ok = false;
     return 0;
@@ -84,7 +84,7 @@ class Reader {
   static double lengthUnit(const std::string& u, bool* ok) {
     *ok = true;
     if (u == "mm") return 1.0;
-    if (u == "um") return 1e-3;
+    if (u == "um") return umToMm(1.0);
     if (u == "inch") return 25.4;
     *ok = false;
     return 0;
@@ -425,7 +425,7 @@ class Reader {
       const int p = m.findParameter(name);
       if (p < 0) fail(cov, "covariance.parameters", "no parameter named '" + name.substr(0, 60) + "'");
       id.parameters.push_back(p);
-      unit.push_back(m.parameters[p].angular ? 1e-6 : 1e-3);
+      unit.push_back(m.parameters[p].angular ? uradToRad(1.0) : umToMm(1.0));
     }
     const size_t n = id.parameters.size();
     id.covariance.resize(n, n);

@@ -4,6 +4,7 @@
 
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "core/numerics/units.h"
 
 namespace tolver {
 
@@ -44,7 +45,7 @@ std::vector<ToleranceTerm> parseToleranceCsv(const std::string& text, const std:
     const bool angular = m.parameters[term.parameter].angular;
     double scale = 0.0;
     if (!angular && unit == "mm") scale = 1.0;
-    else if (!angular && unit == "um") scale = 1e-3;
+    else if (!angular && unit == "um") scale = umToMm(1.0);
     else if (angular && unit == "rad") scale = 1.0;
     else if (angular && unit == "urad") scale = 1e-6;
     else if (angular && unit == "mm/m") scale = 1e-3;

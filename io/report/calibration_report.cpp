@@ -17,7 +17,7 @@ namespace tolver {
 std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test,
                                   const CalibrationResult& r, const CalibrationReportInputs& in) {
   using nlohmann::json;
-  auto unitScale = [&](int p) { return m.parameters[p].angular ? 1e6 : 1e3; };
+  auto unitScale = [&](int p) { return m.parameters[p].angular ? radToUrad(1.0) : mmToUm(1.0); };
   auto unitName = [&](int p) { return m.parameters[p].angular ? "urad" : "um"; };
   json j;
   j["machine_file"] = in.machine_file;

@@ -137,8 +137,7 @@ std::string effectKey(const MachineModel& m, const EffectSpec& e) {
 
 const char* effectUnit(const EffectSpec& spec, double* scale) {
   const bool angular = spec.axis >= 0 && isAngularComponent(spec.component);
-  *scale = 1e3;
-  if (angular) *scale = 1e6;
+  *scale = angular ? radToUrad(1.0) : mmToUm(1.0);
   if (spec.type == EffectType::Drift) return angular ? "urad/h" : "um/h";
   return angular ? "urad" : "um";
 }
@@ -172,7 +171,7 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
     e["new_information"] = a.new_information;
     json conf = json::array();
     for (const AddedEffect::Confounding& c : a.confounded_with) {
-      const double f = c.angular ? 1e6 : 1e3;
+      const double f = c.angular ? radToUrad(1.0) : mmToUm(1.0);
       conf.push_back({{"unknown", c.name},
                       {"abs_cosine", c.cosine},
                       {"unit", c.angular ? "urad" : "um"},
@@ -192,8 +191,8 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
               {"label", c.label},
               {"coefficients", c.coefficients},
               {"search_trials", c.trials},
-              {"rss_before_um2", num(c.rss_before * 1e6)},
-              {"rss_after_um2", num(c.rss_after * 1e6)},
+              {"rss_before_um2", num(c.rss_before * mmToUm(1.0) * mmToUm(1.0))},
+              {"rss_after_um2", num(c.rss_after * mmToUm(1.0) * mmToUm(1.0))},
               {"f_statistic", num(c.f_statistic)},
               {"p_value", num(c.p_value)},
               {"effective_readings", num(c.effective_readings)},
