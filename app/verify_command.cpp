@@ -15,6 +15,7 @@
 #include "app/common.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "io/program/jobs_file.h"
 #include "io/report/verify_report.h"
 #include "pipeline/verify.h"
 #include "core/numerics/units.h"
@@ -116,43 +117,24 @@ JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress
 // Batch: jobs.csv with columns name,machine,cl,part,tolerance[,setup,zones,probed]; paths relative to
 // the jobs file.
 int runBatch(const VerifyOptions& base) {
-  const fs::path root = fs::path(base.batch).parent_path();
-  auto resolve = [&](const std::string& p) {
-    if (p.empty() || fs::path(p).is_absolute()) return p;
-    return (root / p).string();
-  };
   std::vector<VerifyOptions> jobs;
   std::vector<std::string> names;
-  forEachCsvRow(
-      readFile(base.batch), base.batch, {"name", "machine", "cl", "tolerance"},
-      "missing column (name,machine,cl,part,tolerance[,setup,zones,probed])", [&](const CsvRow& row) {
-        VerifyOptions o = base;
-        o.batch.clear();
-        o.quiet = true;
-        o.in.machine.machine = resolve(row.cell("machine"));
-        o.in.machine.setup = resolve(row.cell("setup"));
-        o.in.probed = resolve(row.cell("probed"));
-        o.in.program.cl = resolve(row.cell("cl"));
-        o.in.program.nc.clear();
-        o.in.part = resolve(row.cell("part"));
-        o.in.zones_file = resolve(row.cell("zones"));
-        const auto tol = parseNumber(row.cell("tolerance"));
-        if (!tol && o.in.zones_file.empty())
-          throw InputError(base.batch, row.line, row.column("tolerance"), "tolerance",
-                           "'" + row.cell("tolerance") + "' is not a number");
-        o.in.tolerance_mm = tol ? *tol : NAN;
-        const std::string name = row.cell("name");
-        if (name.empty() || name.find('/') != std::string::npos || name == "." || name == "..")
-          throw InputError(base.batch, row.line, row.column("name"), "name", "a job name is a plain file name");
-        // Two jobs of one name would write one directory, one report lost.
-        if (std::find(names.begin(), names.end(), name) != names.end())
-          throw InputError(base.batch, row.line, row.column("name"), "name",
-                           "job '" + name + "' is named twice: each job needs its own name");
-        o.report_dir = (fs::path(base.report_dir) / name).string();
-        jobs.push_back(o);
-        names.push_back(name);
-      });
-  if (jobs.empty()) throw InputError(base.batch, 0, 0, "jobs", "the file lists no job");
+  for (const VerifyJob& j : readJobsFile(base.batch)) {
+    VerifyOptions o = base;
+    o.batch.clear();
+    o.quiet = true;
+    o.in.machine.machine = j.machine;
+    o.in.machine.setup = j.setup;
+    o.in.probed = j.probed;
+    o.in.program.cl = j.cl;
+    o.in.program.nc.clear();
+    o.in.part = j.part;
+    o.in.zones_file = j.zones;
+    o.in.tolerance_mm = j.tolerance_mm;
+    o.report_dir = (fs::path(base.report_dir) / j.name).string();
+    jobs.push_back(o);
+    names.push_back(j.name);
+  }
   makeReportDir(base.report_dir);
   std::vector<JobOutcome> outcomes(jobs.size());
   std::atomic<int> done{0};

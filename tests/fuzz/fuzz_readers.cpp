@@ -15,6 +15,7 @@
 #include "io/program/setup_file.h"
 #include "io/machine/tolerance_file.h"
 #include "io/machine/zone_file.h"
+#include "io/program/jobs_file.h"
 
 namespace {
 
@@ -48,6 +49,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     tolver::parseToleranceCsv(text, "fuzz.csv", machine().model);
 #elif TOLVER_FUZZ_TARGET == 8
     tolver::parseProbeCsv(text, "fuzz.csv", machine().model);
+#elif TOLVER_FUZZ_TARGET == 9
+    tolver::parseJobsCsv(text, "fuzz/jobs.csv");
 #endif
   } catch (const tolver::InputError&) {
   }

@@ -9,7 +9,7 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 seconds="${1:-30}"
 shift || true
 names=("$@")
-[ ${#names[@]} -eq 0 ] && names=(apt gcode machine setup ballbar zones tolerances probe)
+[ ${#names[@]} -eq 0 ] && names=(apt gcode machine setup ballbar zones tolerances probe jobs)
 out="$here/build/fuzz"
 mkdir -p "$out/obj"
 flags=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-sanitize-recover=undefined
@@ -17,7 +17,7 @@ flags=(-std=c++20 -O1 -g -fsanitize=fuzzer-no-link,address,undefined -fno-saniti
 sources=("$here"/core/*/*.cpp "$here"/io/common/text_util.cpp "$here"/io/common/io_error.cpp "$here"/io/program/apt_reader.cpp
          "$here"/io/program/gcode_reader.cpp "$here"/io/machine/machine_file.cpp "$here"/io/program/setup_file.cpp
          "$here"/io/machine/ballbar_file.cpp "$here"/io/machine/zone_file.cpp "$here"/io/machine/tolerance_file.cpp
-         "$here"/io/program/probe_file.cpp "$here"/geometry/tolerance_zone.cpp)
+         "$here"/io/program/probe_file.cpp "$here"/io/program/jobs_file.cpp "$here"/geometry/tolerance_zone.cpp)
 objs=()
 for s in "${sources[@]}"; do
   case "$s" in *tolerance_allocation.cpp) continue ;; esac
@@ -25,11 +25,12 @@ for s in "${sources[@]}"; do
   if [ ! -f "$o" ] || [ "$s" -nt "$o" ]; then clang++ "${flags[@]}" -c "$s" -o "$o"; fi
   objs+=("$o")
 done
-declare -A target=([apt]=1 [gcode]=2 [machine]=3 [setup]=4 [ballbar]=5 [zones]=6 [tolerances]=7 [probe]=8)
+declare -A target=([apt]=1 [gcode]=2 [machine]=3 [setup]=4 [ballbar]=5 [zones]=6 [tolerances]=7 [probe]=8 [jobs]=9)
 declare -A corpus=([apt]="tests/fixtures/cl samples/*.apt" [gcode]="tests/fixtures/gcode samples/gcode/*.nc samples/gcode/*.ngc"
                    [machine]="resources/machines tests/fixtures/machines samples/machines" [setup]="samples/*setup*.txt samples/gcode/*.txt"
                    [ballbar]="samples/ballbar/*.csv" [zones]="samples/sculptured_zones.csv"
-                   [tolerances]="resources/allocation" [probe]="samples/matsuura_probed.csv")
+                   [tolerances]="resources/allocation" [probe]="samples/matsuura_probed.csv"
+                   [jobs]="samples/verify_jobs.csv")
 status=0
 for n in "${names[@]}"; do
   bin="$out/fuzz_$n"
