@@ -19,10 +19,13 @@ sources=("$here"/core/*/*.cpp "$here"/io/common/text_util.cpp "$here"/io/common/
          "$here"/io/machine/ballbar_file.cpp "$here"/io/machine/zone_file.cpp "$here"/io/machine/tolerance_file.cpp
          "$here"/io/program/probe_file.cpp "$here"/io/program/jobs_file.cpp "$here"/geometry/tolerance_zone.cpp)
 objs=()
+# An object is rebuilt when its source or any header is newer (a header change reaches every
+# object that includes it).
+newest_header=$(find "$here/core" "$here/io" "$here/geometry" -name '*.h' -printf '%T@ %p\n' | sort -n | tail -1 | cut -d' ' -f2)
 for s in "${sources[@]}"; do
   case "$s" in *tolerance_allocation.cpp) continue ;; esac
   o="$out/obj/$(basename "$(dirname "$s")")_$(basename "$s" .cpp).o"
-  if [ ! -f "$o" ] || [ "$s" -nt "$o" ]; then clang++ "${flags[@]}" -c "$s" -o "$o"; fi
+  if [ ! -f "$o" ] || [ "$s" -nt "$o" ] || [ "$newest_header" -nt "$o" ]; then clang++ "${flags[@]}" -c "$s" -o "$o"; fi
   objs+=("$o")
 done
 declare -A target=([apt]=1 [gcode]=2 [machine]=3 [setup]=4 [ballbar]=5 [zones]=6 [tolerances]=7 [probe]=8 [jobs]=9)
