@@ -98,6 +98,23 @@ struct Greedy {
   const Eigen::MatrixXd& rows;                    // column-scaled identification rows
   const std::vector<std::pair<int, int>>& index;  // row -> (set-up, pool index)
   std::vector<bool> used;
+
+  // The unused candidate of set-up s with the largest gain(i), marked used; -1 when none is left.
+  template <class Gain>
+  int pick(int s, const Gain& gain) {
+    int best = -1;
+    double best_gain = -1.0;
+    for (size_t i = 0; i < index.size(); ++i) {
+      if (used[i] || index[i].first != s) continue;
+      const double v = gain(i);
+      if (v > best_gain) {
+        best_gain = v;
+        best = static_cast<int>(i);
+      }
+    }
+    if (best >= 0) used[best] = true;
+    return best;
+  }
 };
 
 // 3. I-optimal (target poses given): the candidate that most reduces tr(G M^-1 G^T), G the tip
@@ -108,8 +125,6 @@ std::vector<int> chooseIOptimal(const MachineModel& model, const std::vector<int
                                 const BallbarPlanOptions& opt, const ForwardKinematics& fk,
                                 const Eigen::VectorXd& scale, int nsetups, Greedy& g) {
   const Eigen::MatrixXd& rows = g.rows;
-  const auto& index = g.index;
-  auto& used = g.used;
   const int n = static_cast<int>(rows.cols());
   std::vector<int> picks;
   const int np_ = static_cast<int>(unknowns.size());
@@ -139,20 +154,9 @@ std::vector<int> chooseIOptimal(const MachineModel& model, const std::vector<int
   Eigen::MatrixXd V = rows / eps;  // X M^-1
   Eigen::VectorXd d = rows.rowwise().squaredNorm() / eps;
   Eigen::MatrixXd Y = (rows * G.transpose()) / eps;  // X M^-1 G^T
-  for (int pick = 0; pick < opt.poses; ++pick) {
-    const int s = pick % nsetups;
-    int best = -1;
-    double best_gain = -1.0;
-    for (size_t i = 0; i < index.size(); ++i) {
-      if (used[i] || index[i].first != s) continue;
-      const double gain = Y.row(i).squaredNorm() / (1.0 + d[i]);
-      if (gain > best_gain) {
-        best_gain = gain;
-        best = static_cast<int>(i);
-      }
-    }
+  for (int k = 0; k < opt.poses; ++k) {
+    const int best = g.pick(k % nsetups, [&](size_t i) { return Y.row(i).squaredNorm() / (1.0 + d[i]); });
     if (best < 0) continue;
-    used[best] = true;
     const Eigen::VectorXd Mx = V.row(best).transpose();  // M^-1 x
     const double denom = 1.0 + d[best];
     const Eigen::VectorXd XMx = rows * Mx;       // x_i^T M^-1 x
@@ -169,24 +173,11 @@ std::vector<int> chooseIOptimal(const MachineModel& model, const std::vector<int
 // M^-1 kept by Sherman-Morrison. Returns the picks in order.
 std::vector<int> chooseDOptimal(const BallbarPlanOptions& opt, int nsetups, Greedy& g) {
   const Eigen::MatrixXd& rows = g.rows;
-  const auto& index = g.index;
-  auto& used = g.used;
   Eigen::MatrixXd Minv = Eigen::MatrixXd::Identity(rows.cols(), rows.cols()) / 1e-6;
   std::vector<int> picks;
-  for (int pick = 0; pick < opt.poses; ++pick) {
-    const int s = pick % nsetups;
-    int best = -1;
-    double best_gain = -1.0;
-    for (size_t i = 0; i < index.size(); ++i) {
-      if (used[i] || index[i].first != s) continue;
-      const double gain = rows.row(i) * Minv * rows.row(i).transpose();
-      if (gain > best_gain) {
-        best_gain = gain;
-        best = static_cast<int>(i);
-      }
-    }
+  for (int k = 0; k < opt.poses; ++k) {
+    const int best = g.pick(k % nsetups, [&](size_t i) { return rows.row(i) * Minv * rows.row(i).transpose(); });
     if (best < 0) continue;
-    used[best] = true;
     const Eigen::VectorXd x = rows.row(best).transpose();
     const Eigen::VectorXd Mx = Minv * x;
     Minv -= (Mx * Mx.transpose()) / (1.0 + x.dot(Mx));
