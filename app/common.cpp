@@ -36,8 +36,10 @@ void addProgramOptions(CLI::App* cmd, ProgramOptions& o) {
 void addProbedOption(CLI::App* cmd, std::string& path) {
   cmd->add_option("--probed", path,
                   "probed points (CSV: part_x_mm,part_y_mm,part_z_mm, the joint values at each "
-                  "touch, optional part_nx,part_ny,part_nz and probe_length_mm): the part's set-up "
-                  "is fitted to them on the machine with its errors, the tool taken as preset");
+                  "touch, optional part_nx,part_ny,part_nz and probe_length_mm; rows with "
+                  "tram_x_urad,tram_y_urad and joints only are spindle trams): the part's set-up "
+                  "(and with a tram the spindle's tilt) is fitted to them on the machine with its "
+                  "errors, the tool taken as preset");
 }
 
 ProgressBar::ProgressBar(bool enabled) : enabled_(enabled && isatty(2)) {}

@@ -314,9 +314,11 @@ std::vector<ProbedPoint> loadProbed(const std::string& path, const MachineModel&
 std::string describeProbedSetup(const std::string& path, const ProbedSetupFit& fit,
                                 const std::vector<ProbedPoint>& points,
                                 std::vector<std::string>* warnings) {
-  size_t worst = 0;
-  for (size_t i = 0; i < fit.residual.size(); ++i)
-    if (fit.residual[i] > fit.residual[worst]) worst = i;
+  size_t worst = 0, worst_tram = 0;
+  for (size_t i = 0; i < fit.residual.size(); ++i) {
+    size_t& w = points[i].tram ? worst_tram : worst;
+    if (points[w].tram != points[i].tram || fit.residual[i] > fit.residual[w]) w = i;
+  }
   char buf[640];
   std::snprintf(buf, sizeof buf,
                 "part set-up fitted to %zu probed points (%s), %d of %d set-up values observed: "
@@ -324,18 +326,37 @@ std::string describeProbedSetup(const std::string& path, const ProbedSetupFit& f
                 "offset (%+.2f, %+.2f, %+.2f) um; the points disagree with the file's set-up by "
                 "%.2f um RMS before, %.2f um after (max %.2f um, line %d); the cutter's length "
                 "relative to the probe is taken as preset",
-                points.size(), path.c_str(), fit.observed, fit.columns, mmToUm(fit.change[0]),
+                points.size() - fit.trams, path.c_str(), fit.observed, fit.columns, mmToUm(fit.change[0]),
                 mmToUm(fit.change[1]), mmToUm(fit.change[2]), radToUrad(fit.change[3]), radToUrad(fit.change[4]),
                 radToUrad(fit.change[5]), mmToUm(fit.spindle_change[0]), mmToUm(fit.spindle_change[1]),
                 mmToUm(fit.spindle_change[2]), mmToUm(fit.rms_before), mmToUm(fit.rms), mmToUm(fit.max),
                 points[worst].line);
-  const std::string line = buf;
+  std::string line = buf;
+  if (fit.trams > 0) {
+    std::snprintf(buf, sizeof buf,
+                  "; spindle tilted (%+.1f, %+.1f) urad about x and y by %d tram%s, which disagree "
+                  "with the file's spindle by %.1f urad before, %.1f urad after (line %d)",
+                  radToUrad(fit.spindle_tilt_change[0]), radToUrad(fit.spindle_tilt_change[1]), fit.trams,
+                  fit.trams > 1 ? "s" : "", radToUrad(fit.tram_before), radToUrad(fit.tram_max),
+                  points[worst_tram].line);
+    line += buf;
+  } else {
+    line += "; no tram: the tool axis against the part keeps the machine file's spindle tilt, which "
+            "a ball-bar cannot see (add a tram row)";
+  }
   if (warnings) {
     if (!fit.unobserved.empty()) {
       std::string names;
       for (const std::string& n : fit.unobserved) names += (names.empty() ? "" : ", ") + n;
       warnings->push_back(path + ": the probed points do not determine the part's " + names +
                           "; the set-up file's value is kept for it (probe along more directions)");
+    }
+    if (fit.tram_max > uradToRad(20)) {
+      std::snprintf(buf, sizeof buf,
+                    "%s:%d: the fitted spindle tilt leaves %.1f urad at this tram: check its joint "
+                    "values and signs (x and y of the tool axis in the table frame, urad)",
+                    path.c_str(), points[worst_tram].line, radToUrad(fit.tram_max));
+      warnings->push_back(buf);
     }
     // Touches a rigid set-up cannot explain: a wrong row, a wrong frame or a units slip.
     if (fit.max > 0.02) {

@@ -7,7 +7,8 @@
 // coverage of the 95 % band. Not a test: `./build/tests/prediction_campaign [machines] [prior_um prior_urad] [cone]`
 // (prior -1 -1: chosen by the readings' evidence; cone: a D-optimal plan against a --for plan,
 // judged at the cone sample's poses; probed: the set-up fitted to 12 probed points instead of the
-// best fit to the truth, the prediction compared with the truth as it is).
+// best fit to the truth, the prediction compared with the truth as it is; tram: probed, and a
+// spindle tram at the middle of the volume).
 #include <cstdio>
 #include <cstdlib>
 #include <unistd.h>
@@ -87,7 +88,10 @@ Figures measure(const indep::Machine& truth, Machine identified, const std::vect
 // The same, with the set-up from probed points (fitProbedSetup) instead of the best fit to the
 // truth: 12 touches around the middle of the calibrated volume at three table orientations,
 // where the truth puts the probe tip; the prediction then compared with the truth as it is.
-Figures measureProbed(const indep::Machine& truth, Machine identified, const std::vector<JointVector>& qs) {
+// tram: also a spindle tram at the middle of the volume, rotaries at zero (the truth's tool axis
+// in its table frame, which is its w).
+Figures measureProbed(const indep::Machine& truth, Machine identified, const std::vector<JointVector>& qs,
+                      bool tram) {
   identified.model.setup.gauge_length = 100;
   const IdentificationUncertainty& id = identified.identification;
   auto mid = [&](int a, double f) { return id.covered_min[a] + f * (id.covered_max[a] - id.covered_min[a]); };
@@ -105,6 +109,17 @@ Figures measureProbed(const indep::Machine& truth, Machine identified, const std
     pp.p_w = truth.point(p, Eigen::Vector3d(0, 0, -100));
     pp.probe_length = 100;
     probes.push_back(pp);
+  }
+  if (tram) {
+    ProbedPoint t;
+    t.tram = true;
+    t.q = JointVector::Zero(5);
+    indep::Pose p;
+    for (int a = 0; a < 3; ++a) t.q[a] = p.q[a] = mid(a, 0.5);
+    t.tilt = (truth.point(p, Eigen::Vector3d::Zero()) - truth.point(p, Eigen::Vector3d(0, 0, -100)))
+                 .normalized()
+                 .head<2>();
+    probes.push_back(t);
   }
   Machine nominal = identified;
   nominal.params.setZero();
@@ -165,7 +180,8 @@ int main(int argc, char** argv) {
     for (size_t i = 0; i < pr.points.size(); i += 4) cone.push_back(pr.points[i].q);
   }
   const bool for_mode = argc > 4 && std::string(argv[4]) == "cone";
-  const bool probed_mode = argc > 4 && std::string(argv[4]) == "probed";
+  const bool tram_mode = argc > 4 && std::string(argv[4]) == "tram";
+  const bool probed_mode = tram_mode || (argc > 4 && std::string(argv[4]) == "probed");
   for (int k = 0; k < machines; ++k) {
     const unsigned seed = 900 + k;
     indep::Machine truth(seed);
@@ -221,7 +237,7 @@ int main(int argc, char** argv) {
         }
         qs.push_back(q);
       }
-      const Figures g = probed_mode ? measureProbed(truth, id, qs) : measure(truth, id, qs);
+      const Figures g = probed_mode ? measureProbed(truth, id, qs, tram_mode) : measure(truth, id, qs);
       std::printf("| %u | %s | %.2f | %.2f | %.2f | %.1f | %.1f | %.3f |\n", seed,
                   inside ? "inside the calibrated volume" : "whole travel", g.tip_rms, g.own_tip_rms,
                   g.tip_rms / g.own_tip_rms, g.axis_rms, g.own_axis_rms, g.coverage);

@@ -143,6 +143,70 @@ TEST(ProbedSetup, WhatTheTouchesCannotSeeIsNamedAndKept) {
   }
 }
 
+// A tram reads the tool axis against the table: a spindle rotated by g about x tilts the axis
+// to (0, -sin g), about y to (sin g, 0) (the rotation matrices' third columns); the part's
+// set-up does not enter it.
+TEST(ProbedSetup, ATramReadsTheSpindleTiltAgainstTheTable) {
+  Case c = makeCase();  // the part set-up is tilted by 40 and -25 urad
+  const int tl = blockOffset(c.truth.model, BlockKind::ToolSetup);
+  JointVector q = JointVector::Zero(5);
+  q << 30, -20, 50, 0, 0;
+  Machine m = c.truth;
+  EXPECT_LT(tramTilt(m, q).norm(), 1e-15);
+  const double g = 70e-6;
+  m.params[tl + 3] = g;
+  EXPECT_LT((tramTilt(m, q) - Eigen::Vector2d(0, -std::sin(g))).norm(), 1e-15);
+  m.params[tl + 3] = 0;
+  m.params[tl + 4] = g;
+  EXPECT_LT((tramTilt(m, q) - Eigen::Vector2d(std::sin(g), 0)).norm(), 1e-15);
+}
+
+// The spindle's tilt: touches at one probe length cannot see it (tilt times length looks like
+// an offset), so the tool axis against the part keeps the file's; one tram recovers it, and the
+// fitted machine then has the truth's tool axis and the cutter's tip at another length.
+TEST(ProbedSetup, ATramRecoversTheSpindleTilt) {
+  Case c = makeCase();
+  const int tl = blockOffset(c.truth.model, BlockKind::ToolSetup);
+  c.truth.params[tl + 3] = 60e-6;
+  c.truth.params[tl + 4] = -35e-6;
+  std::vector<ProbedPoint> pts = touches(c.truth, false);
+  ProbedPoint tram;
+  tram.tram = true;
+  tram.line = 40;
+  tram.q = JointVector::Zero(5);
+  tram.q << 10, 20, 60, 0, 0;
+  tram.tilt = tramTilt(c.truth, tram.q);
+  JointVector q(5);
+  q << 100, -80, 40, -0.8, 2.0;
+  auto axisError = [&](const Machine& m) {
+    const ForwardKinematics a(m.model, m.params), b(c.truth.model, c.truth.params);
+    return (a.w_T_t(q).linear().col(2) - b.w_T_t(q).linear().col(2)).norm();
+  };
+  {
+    Machine m = c.nominal;
+    const ProbedSetupFit fit = fitProbedSetup(m, pts);
+    EXPECT_EQ(fit.columns, 9);
+    EXPECT_LT(fit.rms, 1e-9);      // the touches are explained...
+    EXPECT_GT(axisError(m), 50e-6);  // ...but the tool axis is off by the tilt
+  }
+  pts.push_back(tram);
+  Machine m = c.nominal;
+  const ProbedSetupFit fit = fitProbedSetup(m, pts);
+  EXPECT_EQ(fit.columns, 11);
+  EXPECT_EQ(fit.observed, 11);
+  EXPECT_EQ(fit.trams, 1);
+  EXPECT_LT((fit.spindle_tilt_change - Eigen::Vector2d(60e-6, -35e-6)).norm(), 1e-10);
+  EXPECT_LT((fit.change - c.part).tail<3>().norm(), 1e-10);
+  EXPECT_LT((fit.spindle_change - c.spindle).norm(), 1e-8);
+  EXPECT_LT(fit.rms, 1e-9);
+  EXPECT_LT(fit.tram_max, 1e-10);
+  EXPECT_GT(fit.tram_before, 60e-6);
+  EXPECT_LT(axisError(m), 1e-10);
+  m.model.setup.gauge_length = c.truth.model.setup.gauge_length = 150;
+  const ForwardKinematics a(m.model, m.params), b(c.truth.model, c.truth.params);
+  EXPECT_LT((a.w_T_t(q).translation() - b.w_T_t(q).translation()).norm(), 1e-8);
+}
+
 TEST(ProbeFile, ReadsBackWhatItWrites) {
   Case c = makeCase();
   std::vector<ProbedPoint> pts = touches(c.truth, false);
@@ -157,6 +221,21 @@ TEST(ProbeFile, ReadsBackWhatItWrites) {
     EXPECT_EQ(back[i].probe_length, 80);
     EXPECT_EQ(back[i].line, static_cast<int>(i) + 2);
   }
+  // With a tram row: the tram columns are written and read back; the touches are unchanged.
+  ProbedPoint tram;
+  tram.tram = true;
+  tram.q = pts[0].q;
+  tram.tilt = Eigen::Vector2d(12.5e-6, -3e-6);
+  pts.push_back(tram);
+  const std::string with = formatProbeCsv(c.nominal.model, pts);
+  EXPECT_NE(with.find("tram_x_urad,tram_y_urad"), std::string::npos);
+  const std::vector<ProbedPoint> again = parseProbeCsv(with, "p.csv", c.nominal.model);
+  ASSERT_EQ(again.size(), pts.size());
+  EXPECT_TRUE(again.back().tram);
+  EXPECT_LT((again.back().tilt - tram.tilt).norm(), 1e-18);
+  EXPECT_LT((again.back().q - tram.q).norm(), 1e-12);
+  EXPECT_FALSE(again.front().tram);
+  EXPECT_LT((again.front().p_w - pts.front().p_w).norm(), 1e-12);
 }
 
 TEST(ProbeFile, BadInputNamesTheLineAndColumn) {
@@ -178,6 +257,13 @@ TEST(ProbeFile, BadInputNamesTheLineAndColumn) {
   EXPECT_NE(message(h + ",part_nx,part_ny,part_nz\n1,2,3,4,5,6,7,8,0,0,0\n").find("zero"), std::string::npos);
   EXPECT_NE(message(h + "\n1e300,2,3,4,5,6,7,8\n").find("out of range"), std::string::npos);
   EXPECT_NE(message(h + "\n").find("no probed point"), std::string::npos);
+  // A tram row takes joints only; its tilt is a bounded number.
+  const std::string t = h + ",tram_x_urad,tram_y_urad\n";
+  EXPECT_NE(message(t + "1,,,4,5,6,7,8,3,4\n").find("p.csv:2:1: part_x_mm: a tram row"), std::string::npos)
+      << message(t + "1,,,4,5,6,7,8,3,4\n");
+  EXPECT_NE(message(t + ",,,4,5,6,7,8,3,\n").find("tram_y_urad: missing value"), std::string::npos);
+  EXPECT_NE(message(t + ",,,4,5,6,7,8,3,1e9\n").find("out of range"), std::string::npos);
+  EXPECT_EQ(message(t + ",,,4,5,6,7,8,3,-2\n"), "no error");
 }
 
 }  // namespace

@@ -153,7 +153,7 @@ TEST_F(UncertaintyCli, APlanForTheWholeTravel) {
 // machine (the measured sample, where its tip really is at 12 of the cone's poses), given to
 // predict --probed with the identified machine: the predicted deviations follow the truth's,
 // and a bad probe file is exit 2 naming its line.
-std::vector<std::vector<double>> deviations(const std::string& csv) {
+std::vector<std::vector<double>> columns(const std::string& csv, const char* a, const char* b, const char* c) {
   std::ifstream in(csv);
   std::string line;
   std::getline(in, line);
@@ -161,7 +161,7 @@ std::vector<std::vector<double>> deviations(const std::string& csv) {
   std::stringstream hs(line);
   for (std::string c; std::getline(hs, c, ',');) names.push_back(c);
   const auto col = [&](const char* n) { return std::find(names.begin(), names.end(), n) - names.begin(); };
-  const long x = col("dev_x_um"), y = col("dev_y_um"), z = col("dev_z_um");
+  const long x = col(a), y = col(b), z = col(c);
   std::vector<std::vector<double>> out;
   while (std::getline(in, line)) {
     std::vector<std::string> cells;
@@ -198,6 +198,7 @@ TEST_F(UncertaintyCli, PredictWithProbedPointsFollowsTheTruth) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("part set-up fitted to"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("uncertainty (1 sigma)"), std::string::npos) << r.output;
+  auto deviations = [](const std::string& csv) { return columns(csv, "dev_x_um", "dev_y_um", "dev_z_um"); };
   const auto dt = deviations(path("t.csv")), dp = deviations(path("p.csv"));
   ASSERT_EQ(dt.size(), dp.size());
   double own = 0, err = 0;
@@ -210,6 +211,33 @@ TEST_F(UncertaintyCli, PredictWithProbedPointsFollowsTheTruth) {
   err = std::sqrt(err / dt.size());
   std::printf("[ probed ] truth's deviation RMS %.3f um, predicted against it %.3f um\n", own, err);
   EXPECT_LT(err, 0.3 * own);
+  // The tool axis: the touches cannot see the spindle's tilt; a tram (the truth's tool axis
+  // against its table at the first touch's place, rotaries at zero) fits it.
+  JointVector q = probes.front().q;
+  q.tail<2>().setZero();
+  probes.push_back(simulatedTram(truth, q));
+  writeFileAtomically(path("tram.csv"), formatProbeCsv(truth.model, probes));
+  auto w = test::runTolver(base + " --machine " + id + " --probed " + path("tram.csv") + " -o " + path("w.apt"));
+  ASSERT_EQ(w.exit_code, 0) << w.output;
+  EXPECT_NE(w.output.find("spindle tilted"), std::string::npos) << w.output;
+  EXPECT_NE(r.output.find("no tram"), std::string::npos) << r.output;
+  auto axes = [](const std::string& csv) { return columns(csv, "predicted_i", "predicted_j", "predicted_k"); };
+  auto nominalAxes = [](const std::string& csv) { return columns(csv, "nominal_i", "nominal_j", "nominal_k"); };
+  const auto at = axes(path("t.csv")), ap = axes(path("p.csv")), aw = axes(path("w.csv")),
+             an = nominalAxes(path("t.csv"));
+  auto rmsAngle = [&](const std::vector<std::vector<double>>& u) {
+    double s = 0;
+    for (size_t i = 0; i < u.size(); ++i) {
+      const Eigen::Vector3d a(u[i][0], u[i][1], u[i][2]), b(at[i][0], at[i][1], at[i][2]);
+      s += (a.normalized() - b.normalized()).squaredNorm();
+    }
+    return std::sqrt(s / u.size());
+  };
+  const double axis_own = rmsAngle(an), axis_probed = rmsAngle(ap), axis_tram = rmsAngle(aw);
+  std::printf("[ tram ] tool axis against the truth: nominal %.1f urad, probed %.1f, probed + tram %.1f\n",
+              axis_own * 1e6, axis_probed * 1e6, axis_tram * 1e6);
+  EXPECT_LT(axis_tram, 0.5 * axis_own);
+  EXPECT_LT(axis_tram, axis_probed);
   // A bad row: exit 2, the file and line named.
   std::ofstream(path("bad.csv")) << "part_x_mm,part_y_mm,part_z_mm,x_mm,y_mm,z_mm,a_deg,c_deg\n1,2,3,4,5,6,x,8\n";
   auto b = test::runTolver(base + " --machine " + id + " --probed " + path("bad.csv") + " -o " + path("b.apt"));

@@ -1,7 +1,8 @@
 // Writes samples/matsuura_probed.csv: touches of a probe (the set-up's gauge length) on the cone
 // sample's part, on the measured Matsuura (samples/machines/matsuura_mc760vx_measured.xml) with the
 // cone's set-up: at 12 of the program's poses, the point where that machine really puts the
-// probe tip (the part sits there), with the joint values the control recorded.
+// probe tip (the part sits there), with the joint values the control recorded; and a spindle
+// tram (that machine's tool axis against its table) at the first touch's place.
 // Usage: make_probed_sample <source dir>
 #include <cstdio>
 #include <string>
@@ -34,10 +35,16 @@ int main(int argc, char** argv) {
     p.probe_length = truth.model.setup.gauge_length;
     probes.push_back(p);
   }
+  // A spindle tram at the first touch's place, rotaries at zero: that machine's tool axis
+  // against its table.
+  JointVector q = probes.front().q;
+  q.tail<2>().setZero();
+  probes.push_back(simulatedTram(truth, q));
   writeFileAtomically(src + "/samples/matsuura_probed.csv",
                       "# touches on the cone sample's part (samples/nas979_cone.apt, matsuura_setup.txt)\n"
                       "# made by tools/make_probed_sample from the measured Matsuura: the part point\n"
-                      "# the probe tip touched (part frame) and the joint values recorded\n" +
+                      "# the probe tip touched (part frame) and the joint values recorded; the last\n"
+                      "# row is a spindle tram: the tool axis against the table at its joints (urad)\n" +
                           formatProbeCsv(truth.model, probes));
   return 0;
 }

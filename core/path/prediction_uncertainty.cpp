@@ -53,7 +53,7 @@ void PredictionUncertainty::setupModulo(const std::vector<JointVector>& poses) {
 
 void PredictionUncertainty::setupModuloProbed(const std::vector<ProbedPoint>& points) {
   Eigen::VectorXd scale;
-  const std::vector<int> part = probedSetupColumns(machine_.model, &scale);
+  const std::vector<int> part = probedSetupColumns(machine_.model, &scale, hasTram(points));
   if (part.empty() || points.empty()) return;
   Eigen::MatrixXd P, J;
   probedRows(machine_, points, part, &P);

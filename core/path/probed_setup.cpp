@@ -1,6 +1,7 @@
 #include "core/path/probed_setup.h"
 
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -12,7 +13,38 @@
 namespace tolver {
 namespace {
 
-int rowsOf(const ProbedPoint& p) { return p.n_w.isZero() ? 3 : 1; }
+int rowsOf(const ProbedPoint& p) { return p.tram ? 2 : p.n_w.isZero() ? 3 : 1; }
+
+// The machine with its part set-up taken out (w = the table frame), for trams.
+Machine withoutPartSetup(const Machine& machine) {
+  Machine m = machine;
+  m.model.setup.part_zero_table.setZero();
+  m.model.setup.part_rotation = 0.0;
+  for (const ParameterBlock& b : m.model.blocks)
+    if (b.kind == BlockKind::WorkpieceSetup) m.params.segment(b.offset, b.size).setZero();
+  return m;
+}
+
+// A tram's rows (the model's tilt minus the measured, times kTramLever) and, when J is given,
+// their derivatives for columns by central differences (the parameters enter the axis through
+// whole rotations; a step of 1e-6 mm or rad leaves errors far below a microradian).
+void tramRows(const Machine& machine, const ProbedPoint& p, const std::vector<int>& columns,
+              Eigen::Ref<Eigen::VectorXd> r, Eigen::MatrixXd* J, int row) {
+  Machine table = withoutPartSetup(machine);
+  r = kTramLever * (tramTilt(table, p.q) - p.tilt);
+  if (!J) return;
+  constexpr double h = 1e-6;
+  for (size_t k = 0; k < columns.size(); ++k) {
+    double& v = table.params[columns[k]];
+    const double v0 = v;
+    v = v0 + h;
+    const Eigen::Vector2d plus = tramTilt(table, p.q);
+    v = v0 - h;
+    const Eigen::Vector2d minus = tramTilt(table, p.q);
+    v = v0;
+    J->block<2, 1>(row, k) = kTramLever * (plus - minus) / (2 * h);
+  }
+}
 
 // The probe's machine (its tip at the probe length) per distinct length, bound to params.
 class ProbeKinematics {
@@ -47,6 +79,13 @@ void evaluate(const Machine& machine, const std::vector<ProbedPoint>& points,
   Eigen::MatrixXd Jt(6, machine.model.parameterCount());
   int row = 0;
   for (const ProbedPoint& p : points) {
+    if (p.tram) {
+      Eigen::Vector2d rt;
+      tramRows(machine, p, columns, rt, J, row);
+      if (r) r->segment<2>(row) = rt;
+      row += 2;
+      continue;
+    }
     const ForwardKinematics& fk = kin.at(p.probe_length);
     const Eigen::Isometry3d T = fk.w_T_t(p.q);
     const Eigen::Vector3d d = T.translation() - p.p_w;
@@ -75,15 +114,54 @@ std::vector<double> perPoint(const std::vector<ProbedPoint>& points, const Eigen
   int row = 0;
   for (const ProbedPoint& p : points) {
     const int k = rowsOf(p);
-    out.push_back(k == 3 ? r.segment<3>(row).norm() : std::abs(r[row]));
+    out.push_back(p.tram ? r.segment<2>(row).norm() / kTramLever
+                  : k == 3 ? r.segment<3>(row).norm() : std::abs(r[row]));
     row += k;
   }
   return out;
 }
 
+// The touches' RMS and largest residual (mm) and the trams' largest disagreement (rad).
+void summarise(const std::vector<ProbedPoint>& points, const Eigen::VectorXd& r, double* rms,
+               double* max, double* tram_max) {
+  const std::vector<double> each = perPoint(points, r);
+  double ss = 0, mx = 0, tm = 0;
+  int touches = 0;
+  for (size_t i = 0; i < points.size(); ++i)
+    if (points[i].tram) {
+      tm = std::max(tm, each[i]);
+    } else {
+      ss += each[i] * each[i];
+      mx = std::max(mx, each[i]);
+      ++touches;
+    }
+  if (rms) *rms = touches ? std::sqrt(ss / touches) : 0.0;
+  if (max) *max = mx;
+  if (tram_max) *tram_max = tm;
+}
+
 }  // namespace
 
-std::vector<int> probedSetupColumns(const MachineModel& model, Eigen::VectorXd* scale) {
+Eigen::Vector2d tramTilt(const Machine& machine, const JointVector& q) {
+  const Machine table = withoutPartSetup(machine);
+  const ForwardKinematics fk(table.model, table.params);
+  return fk.w_T_t(q).linear().col(2).head<2>();
+}
+
+ProbedPoint simulatedTram(const Machine& machine, const JointVector& q, int line) {
+  ProbedPoint p;
+  p.tram = true;
+  p.line = line;
+  p.q = q;
+  p.tilt = tramTilt(machine, q);
+  return p;
+}
+
+bool hasTram(const std::vector<ProbedPoint>& points) {
+  return std::any_of(points.begin(), points.end(), [](const ProbedPoint& p) { return p.tram; });
+}
+
+std::vector<int> probedSetupColumns(const MachineModel& model, Eigen::VectorXd* scale, bool with_tram) {
   std::vector<int> cols;
   std::vector<double> sc;
   for (const ParameterBlock& b : model.blocks)
@@ -99,6 +177,13 @@ std::vector<int> probedSetupColumns(const MachineModel& model, Eigen::VectorXd* 
         cols.push_back(b.offset + c);
         sc.push_back(1000.0);
       }
+  if (with_tram)
+    for (const ParameterBlock& b : model.blocks)
+      if (b.kind == BlockKind::ToolSetup)
+        for (int c = 3; c < 5; ++c) {
+          cols.push_back(b.offset + c);
+          sc.push_back(100.0);
+        }
   if (scale) *scale = Eigen::Map<const Eigen::VectorXd>(sc.data(), sc.size());
   return cols;
 }
@@ -110,7 +195,7 @@ void probedRows(const Machine& machine, const std::vector<ProbedPoint>& points,
 
 ProbedSetupFit fitProbedSetup(Machine& machine, const std::vector<ProbedPoint>& points) {
   Eigen::VectorXd scale;
-  const std::vector<int> cols = probedSetupColumns(machine.model, &scale);
+  const std::vector<int> cols = probedSetupColumns(machine.model, &scale, hasTram(points));
   if (cols.empty()) throw std::invalid_argument("fitProbedSetup: the machine has no part set-up block");
   if (points.empty()) throw std::invalid_argument("fitProbedSetup: no probed point");
   const int n = static_cast<int>(cols.size());
@@ -119,14 +204,14 @@ ProbedSetupFit fitProbedSetup(Machine& machine, const std::vector<ProbedPoint>& 
   Eigen::VectorXd r;
   Eigen::MatrixXd J;
   evaluate(machine, points, cols, &r, &J);
-  fit.rms_before = std::sqrt(r.squaredNorm() / points.size());
+  summarise(points, r, &fit.rms_before, nullptr, &fit.tram_before);
   // Which set-up directions the touches constrain: the rank of the column-scaled rows.
   Eigen::MatrixXd Js = J * scale.cwiseInverse().asDiagonal();
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js, Eigen::ComputeFullU | Eigen::ComputeFullV);
   svd.setThreshold(1e-6);
   fit.observed = static_cast<int>(svd.rank());
   if (fit.observed < n) {
-    static const char* names[9] = {"x",
+    static const char* names[11] = {"x",
                                    "y",
                                    "z",
                                    "rotation about x",
@@ -134,7 +219,9 @@ ProbedSetupFit fitProbedSetup(Machine& machine, const std::vector<ProbedPoint>& 
                                    "rotation about z",
                                    "spindle offset x (touch at other table orientations)",
                                    "spindle offset y (touch at other table orientations)",
-                                   "spindle offset z (touch at other table orientations)"};
+                                   "spindle offset z (touch at other table orientations)",
+                                   "spindle tilt about x (tram at other positions)",
+                                   "spindle tilt about y (tram at other positions)"};
     // A set-up value is unobserved when its unit vector lies (mostly) in the null space.
     const Eigen::MatrixXd N = svd.matrixV().rightCols(n - fit.observed);
     for (int c = 0; c < n; ++c)
@@ -147,15 +234,17 @@ ProbedSetupFit fitProbedSetup(Machine& machine, const std::vector<ProbedPoint>& 
     const Eigen::VectorXd step = svd.solve(-r).cwiseQuotient(scale);
     for (int c = 0; c < n; ++c) machine.params[cols[c]] += step[c];
     fit.change += step.head<6>();
-    if (n == 9) fit.spindle_change += step.tail<3>();
+    if (n >= 9) fit.spindle_change += step.segment<3>(6);
+    if (n == 11) fit.spindle_tilt_change += step.tail<2>();
     evaluate(machine, points, cols, &r, &J);
     if (step.cwiseProduct(scale).norm() < 1e-10) break;
     Js = J * scale.cwiseInverse().asDiagonal();
     svd.compute(Js, Eigen::ComputeFullU | Eigen::ComputeFullV);
   }
   fit.residual = perPoint(points, r);
-  fit.rms = std::sqrt(r.squaredNorm() / points.size());
-  for (double v : fit.residual) fit.max = std::max(fit.max, v);
+  summarise(points, r, &fit.rms, &fit.max, &fit.tram_max);
+  fit.trams = static_cast<int>(std::count_if(points.begin(), points.end(),
+                                             [](const ProbedPoint& p) { return p.tram; }));
   return fit;
 }
 

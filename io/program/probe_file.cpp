@@ -33,13 +33,25 @@ std::vector<ProbedPoint> parseProbeCsv(const std::string& text, const std::strin
     };
     ProbedPoint p;
     p.line = row.line;
-    p.p_w = Eigen::Vector3d(number("part_x_mm", 1e6), number("part_y_mm", 1e6), number("part_z_mm", 1e6));
     p.q.resize(model.axes.size());
     for (size_t a = 0; a < model.axes.size(); ++a) {
       const Axis& ax = model.axes[a];
       const double v = number(axisColumn(ax), ax.isRotary() ? 1e4 : 1e6);
       p.q[a] = ax.isRotary() ? degToRad(v) : v;
     }
+    if (!row.cell("tram_x_urad").empty() || !row.cell("tram_y_urad").empty()) {
+      // A spindle tram: the tool axis against the table at these joints, nothing else.
+      for (const char* other : {"part_x_mm", "part_y_mm", "part_z_mm", "part_nx", "part_ny", "part_nz",
+                                "probe_length_mm"})
+        if (!row.cell(other).empty())
+          throw InputError(file, row.line, row.column(other), other,
+                           "a tram row (tram_x_urad, tram_y_urad) takes joints only: leave this empty");
+      p.tram = true;
+      p.tilt = Eigen::Vector2d(uradToRad(number("tram_x_urad", 1e5)), uradToRad(number("tram_y_urad", 1e5)));
+      points.push_back(p);
+      return;
+    }
+    p.p_w = Eigen::Vector3d(number("part_x_mm", 1e6), number("part_y_mm", 1e6), number("part_z_mm", 1e6));
     const int given = !row.cell("part_nx").empty() + !row.cell("part_ny").empty() + !row.cell("part_nz").empty();
     if (given == 3) {
       const Eigen::Vector3d n(number("part_nx", 1e6), number("part_ny", 1e6), number("part_nz", 1e6));
@@ -68,16 +80,22 @@ std::vector<ProbedPoint> readProbeFile(const std::string& path, const MachineMod
 std::string formatProbeCsv(const MachineModel& model, const std::vector<ProbedPoint>& points) {
   std::string out = "part_x_mm,part_y_mm,part_z_mm";
   for (const Axis& ax : model.axes) out += "," + axisColumn(ax);
-  out += ",part_nx,part_ny,part_nz,probe_length_mm\n";
+  out += ",part_nx,part_ny,part_nz,probe_length_mm";
+  const bool trams = hasTram(points);
+  out += trams ? ",tram_x_urad,tram_y_urad\n" : "\n";
   for (const ProbedPoint& p : points) {
-    std::string row = formatNumber(p.p_w.x()) + "," + formatNumber(p.p_w.y()) + "," + formatNumber(p.p_w.z());
+    std::string row = p.tram ? ",," : formatNumber(p.p_w.x()) + "," + formatNumber(p.p_w.y()) + "," +
+                                          formatNumber(p.p_w.z());
     for (size_t a = 0; a < model.axes.size(); ++a)
       row += "," + formatNumber(model.axes[a].isRotary() ? radToDeg(p.q[a]) : p.q[a]);
-    if (p.n_w.isZero())
+    if (p.n_w.isZero() || p.tram)
       row += ",,,";
     else
       row += "," + formatNumber(p.n_w.x()) + "," + formatNumber(p.n_w.y()) + "," + formatNumber(p.n_w.z());
-    out += row + "," + formatNumber(p.probe_length) + "\n";
+    row += "," + (p.tram ? std::string() : formatNumber(p.probe_length));
+    if (trams)
+      row += p.tram ? "," + formatNumber(radToUrad(p.tilt.x())) + "," + formatNumber(radToUrad(p.tilt.y())) : ",,";
+    out += row + "\n";
   }
   return out;
 }

@@ -9,6 +9,10 @@
 //                                     coordinate along it is measured; absent: a full point
 //   probe_length_mm                   (optional) probe tip below the gauge point; default the
 //                                     set-up's gauge length
+//   tram_x_urad, tram_y_urad          (optional) a spindle tram instead of a touch: the x and y
+//                                     components of the unit tool axis in the table frame at
+//                                     the row's joints (a test indicator swept over the table);
+//                                     the row's part point, direction and length stay empty
 #include <string>
 #include <vector>
 
