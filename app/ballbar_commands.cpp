@@ -374,10 +374,12 @@ void printCalibration(const CalibrationRun& run, const CalibrateOptions& o) {
         r.held.size(), names.c_str());
   }
   std::printf(
-      "  unseen     a ball-bar cannot see where the part sits on the table or where the tool "
-      "tip is relative to the spindle (the ball positions absorb both): predict, verify and "
-      "compensate apply the set-up a shop measures (give its probed points with --probed; "
-      "without them, the set-up that best fits the program), the tool preset\n");
+      "  unseen     a ball-bar cannot see where the part sits on the table (its position and "
+      "its three rotations), where the tool tip is relative to the spindle, or the spindle's "
+      "tilt against the machine's axes (the ball positions absorb all of them): predict, verify "
+      "and compensate apply the set-up a shop measures (give its probed points with --probed, "
+      "and a tram row for the spindle's tilt, which sets the tool axis; without them, the "
+      "set-up that best fits the program), the tool preset\n");
   printLargestErrors(run);
   const HeldoutFigures& ho = run.heldout_figures;
   if (!run.heldout.readings.empty()) {

@@ -65,6 +65,10 @@ TEST_F(CalibrateCli, HeldOutReadingsAndTheWrittenFilesReproduceTheReport) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("held-out   60 readings"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("gross      none"), std::string::npos) << r.output;
+  // What the test cannot see is named, with what a shop measures instead.
+  EXPECT_NE(r.output.find("its three rotations"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the spindle's tilt against the machine's axes"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("a tram row"), std::string::npos) << r.output;
   ASSERT_TRUE(fs::exists(path("id_balls.csv")));
   std::ifstream in(path("id.json"));
   const nlohmann::json j = nlohmann::json::parse(in);
