@@ -44,7 +44,7 @@ void printUncertainty(const Machine& machine, const ClProgram& program, const Ca
     axis[i] = unc[i].axis;
     if (unc[i].outside) {
       if (outside++ == 0) first_outside = static_cast<int>(i);
-      for (size_t a = 0; a < beyond.size() && a < unc[i].beyond.size(); ++a)
+      for (size_t a = 0; a < beyond.size() && a < static_cast<size_t>(unc[i].beyond.size()); ++a)
         beyond[a] = std::max(beyond[a], unc[i].beyond[a]);
     }
   }
@@ -140,7 +140,7 @@ void runPredict(const PredictOptions& o, int* exit_code) {
   const std::vector<PoseUncertainty>& unc = cal.uncertainty;
 
   std::vector<ClPoint> predicted(program.path.size());
-  std::vector<PredictedPoint> pts = r.points;
+  const std::vector<PredictedPoint>& pts = r.points;
   for (size_t i = 0; i < predicted.size(); ++i) {
     predicted[i] = program.path[i];
     predicted[i].p_w = pts[i].p_pred_w;
@@ -151,9 +151,12 @@ void runPredict(const PredictOptions& o, int* exit_code) {
           o.machine.machine + ")",
       "each GOTO is the tool position the machine will really reach, in the program's frame"};
   OutputSet outputs;  // both files, or neither
-  outputs.add(o.output, formatPredictedApt(program, predicted, header));
+  // Written as they are made: a long program's outputs never sit whole in memory.
+  outputs.addStreamed(o.output, [&](TextOut& out) { writePredictedApt(out, program, predicted, header); });
   // The prediction's uncertainty, when the machine file carries its calibration's covariance.
-  outputs.add(table, formatPointTable(machine.model, program.path, pts, unc.empty() ? nullptr : &unc));
+  outputs.addStreamed(table, [&](TextOut& out) {
+    writePointTable(out, machine.model, program.path, pts, unc.empty() ? nullptr : &unc);
+  });
   outputs.commit();
 
   // Summary.

@@ -275,6 +275,7 @@ CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program
   if (!probed.empty()) {
     out.probed = true;
     out.probe = fitProbedSetup(machine, probed);
+    pred = PredictionResult{};  // one path's points in memory at a time
     pred = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
     if (machine.identification.empty()) return out;
     PredictionUncertainty pu(machine);
@@ -284,23 +285,21 @@ CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program
     return out;
   }
   if (machine.identification.empty()) return out;
-  std::vector<JointVector> q;
+  // The set-up is fitted, and taken modulo, over at most 2000 evenly spaced poses.
+  const size_t n = pred.points.size(), step = std::max<size_t>(1, n / 2000);
+  std::vector<JointVector> sub;
   std::vector<Eigen::Vector3d> d;
-  for (const PredictedPoint& p : pred.points) {
-    q.push_back(p.q);
-    d.push_back(p.deviation_w);
+  for (size_t i = 0; i < n; i += step) {
+    sub.push_back(pred.points[i].q);
+    d.push_back(pred.points[i].deviation_w);
   }
   if (!absolute) {
-    out.measured_setup = applyMeasuredSetup(machine, q, d);
+    out.measured_setup = applyMeasuredSetup(machine, sub, d, sub.size());
+    pred = PredictionResult{};  // one path's points in memory at a time
     pred = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
   }
   PredictionUncertainty pu(machine);
-  if (!absolute) {
-    std::vector<JointVector> sub;
-    const size_t step = std::max<size_t>(1, q.size() / 2000);
-    for (size_t i = 0; i < q.size(); i += step) sub.push_back(q[i]);
-    pu.setupModulo(sub);
-  }
+  if (!absolute) pu.setupModulo(sub);
   out.uncertainty.reserve(pred.points.size());
   for (const PredictedPoint& p : pred.points) out.uncertainty.push_back(pu.at(p.q));
   return out;

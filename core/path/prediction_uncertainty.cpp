@@ -88,8 +88,6 @@ PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionCont
   sensitivityJacobian(fk_, q, J_, ctx);
   Eigen::MatrixXd Jid(6, id.parameters.size());
   for (size_t k = 0; k < id.parameters.size(); ++k) Jid.col(k) = J_.col(id.parameters[k]);
-  Eigen::MatrixXd Jset(6, setup_.size());
-  for (size_t k = 0; k < setup_.size(); ++k) Jset.col(k) = J_.col(setup_[k]);
   if (modulo_) {  // the share a measured set-up leaves (twist rows in t)
     Eigen::MatrixXd Jm(6, modulo_columns_.size());
     for (size_t k = 0; k < modulo_columns_.size(); ++k) Jm.col(k) = J_.col(modulo_columns_[k]);
@@ -100,13 +98,12 @@ PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionCont
   const Eigen::Matrix3d R = fk_.w_T_t(q, ctx).linear();
   PoseUncertainty u;
   u.tip_covariance_w = R * S.topLeftCorner<3, 3>() * R.transpose();
-  u.setup_w = R * Jset.topRows<3>();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> tip(u.tip_covariance_w, Eigen::EigenvaluesOnly);
   u.tip = std::sqrt(std::max(0.0, tip.eigenvalues()[2]));
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> ax(S.block<2, 2>(3, 3), Eigen::EigenvaluesOnly);
   u.axis = std::sqrt(std::max(0.0, ax.eigenvalues()[1]));
   if (!id.covered_min.empty()) {
-    u.beyond.assign(q.size(), 0.0);
+    u.beyond = JointVector::Zero(q.size());
     for (Eigen::Index a = 0; a < q.size() && a < static_cast<Eigen::Index>(id.covered_min.size()); ++a) {
       const double b = std::max(id.covered_min[a] - q[a], q[a] - id.covered_max[a]);
       if (b > 1e-9) {

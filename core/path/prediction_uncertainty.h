@@ -19,12 +19,10 @@ struct PoseUncertainty {
   Eigen::Matrix3d tip_covariance_w = Eigen::Matrix3d::Zero();  // mm^2
   double tip = 0.0;   // mm, 1 sigma along the worst direction (sqrt of the largest eigenvalue)
   double axis = 0.0;  // rad, 1 sigma of the tool axis's direction (worst direction)
-  // How far the joints lie outside the covered ranges (mm or rad, per axis; 0 inside).
-  std::vector<double> beyond;
+  // How far the joints lie outside the covered ranges (mm or rad, per axis; 0 inside; empty
+  // when the machine file gives no ranges). Fixed capacity: a long program keeps one per point.
+  JointVector beyond;
   bool outside = false;
-  // The tip's change per unit of each set-up value (3 x setupParameters().size(), in w): what a
-  // fitted set-up beta moves the tip by is setup_w * beta.
-  Eigen::MatrixXd setup_w;
 };
 
 // Modulo a measured set-up. A ball-bar cannot see where the part sits on the table or where

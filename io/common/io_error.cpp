@@ -106,12 +106,44 @@ std::string OutputSet::addWritten(const std::string& path, const std::function<b
   return tmp;
 }
 
+bool TextOut::flush() {
+  if (file_ && !buf_.empty()) {
+    ok_ = ok_ && std::fwrite(buf_.data(), 1, buf_.size(), file_) == buf_.size();
+    buf_.clear();
+  }
+  return ok_;
+}
+
+std::string OutputSet::addStreamed(const std::string& path, const std::function<void(TextOut&)>& fill) {
+  return addWritten(path, [&](const std::string& tmp) {
+    std::FILE* f = std::fopen(tmp.c_str(), "wb");
+    if (!f) return false;
+    TextOut out(f);
+    fill(out);
+    const bool ok = out.flush();
+    return std::fclose(f) == 0 && ok;
+  });
+}
+
 std::string readFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
+  // Read in one piece into a string of the file's size (a stream copy would hold it twice).
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
   if (!in) throw InputError(path, 0, 0, "", std::string("cannot open: ") + std::strerror(errno));
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  const std::streamoff size = in.tellg();
+  std::string text;
+  if (size > 0) {
+    text.resize(static_cast<size_t>(size));
+    in.seekg(0);
+    in.read(text.data(), size);
+    text.resize(static_cast<size_t>(in.gcount()));
+  } else {  // not a regular file (a pipe): read to the end
+    in.clear();
+    in.seekg(0);
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    text = ss.str();
+  }
+  return text;
 }
 
 ReportDirectory::ReportDirectory(const std::string& dir, const char* option) : option_(option) {

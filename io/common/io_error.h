@@ -1,9 +1,11 @@
 #pragma once
 // Errors in files and options: thrown at the io boundary, caught once by the CLI, which prints
 // what() as one line and exits with code 2.
+#include <cstdio>
 #include <stdexcept>
 #include <functional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -30,6 +32,30 @@ class InputError : public std::runtime_error {
 // (field "output") when the directory cannot be written.
 void writeFileAtomically(const std::string& path, const std::string& content);
 
+// Text written in pieces, into a string (no file) or into a file flushed every megabyte, so
+// that a long output (a predicted program, its point table) never sits whole in memory.
+class TextOut {
+ public:
+  TextOut() = default;
+  explicit TextOut(std::FILE* file) : file_(file) {}
+  TextOut& operator+=(std::string_view s) {
+    buf_ += s;
+    if (file_ && buf_.size() >= kFlushBytes) flush();
+    return *this;
+  }
+  TextOut& operator+=(char c) { return *this += std::string_view(&c, 1); }
+  // Writes what is buffered to the file; false once any write failed.
+  bool flush();
+  // The text, without a file.
+  std::string take() { return std::move(buf_); }
+
+ private:
+  static constexpr size_t kFlushBytes = 1 << 20;
+  std::FILE* file_ = nullptr;
+  std::string buf_;
+  bool ok_ = true;
+};
+
 // Several outputs of one command written as a set: add() writes each to a temporary file beside
 // its path (returning that name, so the command can read back what it wrote); commit() renames
 // them all. A failure before commit() (a second output that cannot be written) leaves none of
@@ -44,6 +70,8 @@ class OutputSet {
   // The same for a file a library writes itself (VTK, assimp): write(temporary) returns false
   // when it failed.
   std::string addWritten(const std::string& path, const std::function<bool(const std::string&)>& write);
+  // The same for text made in pieces (TextOut), written as it is made.
+  std::string addStreamed(const std::string& path, const std::function<void(TextOut&)>& fill);
   void commit();
 
  private:

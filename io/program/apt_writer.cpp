@@ -7,9 +7,14 @@ namespace tolver {
 
 std::string formatPredictedApt(const ClProgram& program, const std::vector<ClPoint>& predicted,
                                const std::vector<std::string>& header) {
+  TextOut out;
+  writePredictedApt(out, program, predicted, header);
+  return out.take();
+}
+
+void writePredictedApt(TextOut& out, const ClProgram& program, const std::vector<ClPoint>& predicted,
+                       const std::vector<std::string>& header) {
   assert(predicted.size() == program.path.size());
-  std::string out;
-  out.reserve(program.path.size() * 80 + 4096);
   for (const std::string& h : header) out += "$$ " + h + "\n";
   char buf[256];
   if (program.dialect == "G-code") {
@@ -29,7 +34,7 @@ std::string formatPredictedApt(const ClProgram& program, const std::vector<ClPoi
       }
     }
     out += "FINI\n";
-    return out;
+    return;
   }
   // A program read in inches without a UNITS statement (--cl-units inch) says so, or the
   // written inches would read back as millimetres.
@@ -57,9 +62,11 @@ std::string formatPredictedApt(const ClProgram& program, const std::vector<ClPoi
              " expanded into the GOTO points that follow\n";
       continue;
     }
-    for (int l = st.first_line; l <= st.last_line; ++l) out += program.lines[l - 1] + "\n";
+    for (int l = st.first_line; l <= st.last_line; ++l) {
+      out += program.lines[l - 1];
+      out += '\n';
+    }
   }
-  return out;
 }
 
 }  // namespace tolver

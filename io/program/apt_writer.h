@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "io/common/io_error.h"
 #include "io/program/apt_reader.h"
 
 namespace tolver {
@@ -13,5 +14,8 @@ namespace tolver {
 // header: comment lines (without the leading "$$ ") written at the top.
 std::string formatPredictedApt(const ClProgram& program, const std::vector<ClPoint>& predicted,
                                const std::vector<std::string>& header);
+// The same, written in pieces (into a file as it is made).
+void writePredictedApt(TextOut& out, const ClProgram& program, const std::vector<ClPoint>& predicted,
+                       const std::vector<std::string>& header);
 
 }  // namespace tolver

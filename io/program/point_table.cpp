@@ -10,7 +10,15 @@ namespace tolver {
 std::string formatPointTable(const MachineModel& model, const std::vector<ClPoint>& nominal,
                              const std::vector<PredictedPoint>& predicted,
                              const std::vector<PoseUncertainty>* uncertainty) {
-  std::string out =
+  TextOut out;
+  writePointTable(out, model, nominal, predicted, uncertainty);
+  return out.take();
+}
+
+void writePointTable(TextOut& out, const MachineModel& model, const std::vector<ClPoint>& nominal,
+                     const std::vector<PredictedPoint>& predicted,
+                     const std::vector<PoseUncertainty>* uncertainty) {
+  out +=
       "index,line,rapid,nominal_x_mm,nominal_y_mm,nominal_z_mm,nominal_i,nominal_j,nominal_k";
   for (const Axis& ax : model.axes) {
     std::string n = ax.name;
@@ -49,7 +57,6 @@ std::string formatPointTable(const MachineModel& model, const std::vector<ClPoin
     }
     out += "\n";
   }
-  return out;
 }
 
 }  // namespace tolver

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/path/prediction_uncertainty.h"
+#include "io/common/io_error.h"
 #include "core/path/tool_path_prediction.h"
 
 namespace tolver {
@@ -22,5 +23,9 @@ namespace tolver {
 std::string formatPointTable(const MachineModel& model, const std::vector<ClPoint>& nominal,
                              const std::vector<PredictedPoint>& predicted,
                              const std::vector<PoseUncertainty>* uncertainty = nullptr);
+// The same, written in pieces (into a file as it is made).
+void writePointTable(TextOut& out, const MachineModel& model, const std::vector<ClPoint>& nominal,
+                     const std::vector<PredictedPoint>& predicted,
+                     const std::vector<PoseUncertainty>* uncertainty = nullptr);
 
 }  // namespace tolver
