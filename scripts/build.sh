@@ -7,7 +7,11 @@ cd "$here"
 build_type="${TOLVER_BUILD_TYPE:-Release}"
 mkdir -p build
 echo "tolver: building ($build_type) in build/ ..." >&2
-if ! { cmake -S . -B build -DCMAKE_BUILD_TYPE="$build_type" &&
+# Ninja when there (it compiles the layers' libraries in parallel; make builds them one by one),
+# unless build/ was configured with another generator.
+generator=()
+if [ ! -f build/CMakeCache.txt ] && command -v ninja > /dev/null; then generator=(-G Ninja); fi
+if ! { cmake -S . -B build "${generator[@]}" -DCMAKE_BUILD_TYPE="$build_type" &&
        cmake --build build -j"$(nproc)"; } > build/build.log 2>&1; then
   tail -n 60 build/build.log >&2
   echo "tolver: build failed; full log in build/build.log" >&2

@@ -18,7 +18,7 @@ constexpr int kMaxRows = 5;
 using Residual = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxRows, 1>;
 using Jac = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxRows, kMaxAxes>;
 
-double angleBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+double angleOf(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
@@ -52,7 +52,7 @@ class PathCompensator {
     JointVector q;
     Eigen::Vector3d p, u;
     c.before_w = p0 - target.p_w;
-    c.before_axis = angleBetween(u0, u_t_);
+    c.before_axis = angleOf(u0, u_t_);
     double cond = 1;
     bool converged = solve(orientation, q0, p0, u0, q, p, u, &cond, &c.iterations);
     c.condition = cond;
@@ -78,7 +78,7 @@ class PathCompensator {
     warm_dq_ = q - q0;
     c.q = q;
     c.after_w = p - target.p_w;
-    c.after_axis = angleBetween(u, u_t_);
+    c.after_axis = angleOf(u, u_t_);
     nominal_.tipAndAxis(q, &c.nominal_p_w, &c.nominal_u_w);
   }
 

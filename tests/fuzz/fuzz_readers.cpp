@@ -1,9 +1,12 @@
 // libFuzzer harnesses for tolver's readers (one binary per reader, chosen by TOLVER_FUZZ_TARGET at
-// compile time; tests/fuzz/run.sh builds and runs them). Each feeds the bytes to a reader as a
+// compile time; built by the sanitizer build with TOLVER_FUZZ=ON, run by tests/fuzz/run.sh). Each feeds the bytes to a reader as a
 // file's text: an InputError is the expected answer to bad input; anything else (a crash, a
 // sanitizer report, another exception, a hang) is a defect.
+#include <unistd.h>
+
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
 #include <string>
 
 #include "io/program/apt_reader.h"
@@ -16,6 +19,7 @@
 #include "io/machine/tolerance_file.h"
 #include "io/machine/zone_file.h"
 #include "io/program/jobs_file.h"
+#include "io/mesh/mesh_file.h"
 
 namespace {
 
@@ -51,6 +55,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     tolver::parseProbeCsv(text, "fuzz.csv", machine().model);
 #elif TOLVER_FUZZ_TARGET == 9
     tolver::parseJobsCsv(text, "fuzz/jobs.csv");
+#elif TOLVER_FUZZ_TARGET == 10
+    // The mesh loader reads a path (assimp picks the format by extension and content): the first
+    // byte chooses STL, OBJ, PLY or OFF, the rest is the file; then units and repair as verify runs.
+    if (size < 1) return 0;
+    static const char* ext[4] = {".stl", ".obj", ".ply", ".off"};
+    const std::string path = "/tmp/tolver-fuzz-" + std::to_string(::getpid()) + ext[data[0] % 4];
+    if (std::FILE* f = std::fopen(path.c_str(), "wb")) {
+      std::fwrite(data + 1, 1, size - 1, f);
+      std::fclose(f);
+    }
+    tolver::PartImportOptions o;
+    o.units = data[0] & 4 ? "inch" : "mm";
+    tolver::readPartMesh(path, o);
 #endif
   } catch (const tolver::InputError&) {
   }

@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# The test suite again under AddressSanitizer and UndefinedBehaviorSanitizer (build-asan/, see
+# scripts/build_sanitized.sh), then each libFuzzer harness for 30 s on its corpus. CI runs it
+# after scripts/run_tests.sh. Any sanitizer report fails the test that made it.
+set -euo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+"$here/scripts/install_deps.sh"
+"$here/scripts/build_sanitized.sh"
+cd "$here/build-asan"
+# Leaks are not checked: the third-party libraries the reports use (VTK, Mesa, fontconfig) keep
+# allocations to the end by design.
+export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:strict_string_checks=1"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+ctest --output-on-failure -j"$(nproc)" --timeout 1800
+"$here/tests/fuzz/run.sh" "${TOLVER_FUZZ_SECONDS:-30}"
