@@ -45,6 +45,15 @@ Eigen::MatrixXd compressRows(const Eigen::MatrixXd& J) {
 
 namespace {
 
+// Singular values by one-sided Jacobi rotations. Not Eigen 3.4.0's BDCSVD: its perturbCol0 reads
+// perm(l - 1) at l = 0, before its buffer (AddressSanitizer: heap-buffer-overflow), on the
+// column-scaled identification matrices with exactly zero columns and equal columns that rank
+// decisions meet; Jacobi is also accurate to the last bits of the small singular values that
+// decide a rank. These matrices are at most a few hundred columns square (compressRows).
+Eigen::VectorXd singularValuesOf(const Eigen::MatrixXd& A) {
+  return Eigen::JacobiSVD<Eigen::MatrixXd>(A).singularValues();
+}
+
 double conditionOf(const Eigen::VectorXd& sv) {
   if (sv.size() == 0) return 0.0;
   return sv[sv.size() - 1] > 0 ? sv[0] / sv[sv.size() - 1] : std::numeric_limits<double>::infinity();
@@ -57,7 +66,7 @@ SvdSummary summariseScaled(const Eigen::MatrixXd& S, int rows) {
   out.rows = rows;
   out.cols = static_cast<int>(S.cols());
   if (S.cols() == 0) return out;
-  out.singular_values = Eigen::BDCSVD<Eigen::MatrixXd>(S).singularValues();
+  out.singular_values = singularValuesOf(S);
   out.rank = numericalRank(out.singular_values);
   out.condition = out.rank < out.cols ? std::numeric_limits<double>::infinity()
                                       : conditionOf(out.singular_values);
@@ -72,12 +81,12 @@ SvdSummary analyseColumns(const Eigen::MatrixXd& J) {
 
 double unscaledCondition(const Eigen::MatrixXd& J) {
   if (J.cols() == 0) return 0.0;
-  return conditionOf(Eigen::BDCSVD<Eigen::MatrixXd>(compressRows(J)).singularValues());
+  return conditionOf(singularValuesOf(compressRows(J)));
 }
 
 double scaledCondition(const Eigen::MatrixXd& J) {
   if (J.cols() == 0) return 0.0;
-  return conditionOf(Eigen::BDCSVD<Eigen::MatrixXd>(compressRows(scaleColumns(J))).singularValues());
+  return conditionOf(singularValuesOf(compressRows(scaleColumns(J))));
 }
 
 }  // namespace tolver
