@@ -184,6 +184,18 @@ TEST_F(MeshFileTest, RefusesWhatIsNot) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("beyond 1e5 mm"), std::string::npos) << e.what();
   }
+  // A PLY face list with a face of no vertex (the mesh fuzz harness's input): assimp's
+  // triangulation aborted the process on it; refused with a message instead.
+  const std::string ply =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 3\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n10 0 0\n0 10 0\n0 0 10\n3 0 1 2\n3 0 1 3 3\n0 2 3\n";
+  try {
+    readPartMesh(write("no_vertex_face.ply", ply));
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("has no vertex"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

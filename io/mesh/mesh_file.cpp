@@ -98,13 +98,24 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
 
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const aiScene* scene = importer.ReadFile(
-      path, aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_ValidateDataStructure);
-  if (!scene || !scene->mRootNode) {
+  // Read and validated first, triangulated after: Debian's assimp 5.2 aborts the process (an
+  // ai_assert in its TriangulateProcess) on a face without vertices, which a malformed PLY makes
+  // (found by the mesh fuzz harness), so such faces are refused before triangulating.
+  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+  auto unreadable = [&] {
     std::string why = importer.GetErrorString();
     if (why.empty()) why = "not a readable mesh";
     throw InputError(path, 0, 0, "mesh", why);
-  }
+  };
+  if (!scene || !scene->mRootNode) unreadable();
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m)
+    for (unsigned f = 0; f < scene->mMeshes[m]->mNumFaces; ++f)
+      if (scene->mMeshes[m]->mFaces[f].mNumIndices == 0)
+        throw InputError(path, 0, 0, "mesh",
+                         "face " + std::to_string(f + 1) + " of mesh " + std::to_string(m + 1) +
+                             " has no vertex (a malformed face list)");
+  scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_SortByPType);
+  if (!scene || !scene->mRootNode) unreadable();
   TriangleMesh raw;
   std::vector<char> seen(scene->mNumMeshes, 0);
   collect(scene, scene->mRootNode, Eigen::Matrix4d::Identity(), &raw, &seen);
