@@ -136,9 +136,13 @@ MinimalSet selectMinimalSet(const Eigen::MatrixXd& J, const std::vector<int>& co
   }
   for (int pos : live) out.kept.push_back(columns[pos]);
   out.reduced = cur;
-  Eigen::MatrixXd Jk(J.rows(), live.size());
-  for (size_t i = 0; i < live.size(); ++i) Jk.col(i) = J.col(live[i]);
-  out.reduced.condition_unscaled = unscaledCondition(Jk);
+  if (out.removed.empty()) {  // nothing removed: the same matrix
+    out.reduced.condition_unscaled = out.initial.condition_unscaled;
+  } else {
+    Eigen::MatrixXd Jk(J.rows(), live.size());
+    for (size_t i = 0; i < live.size(); ++i) Jk.col(i) = J.col(live[i]);
+    out.reduced.condition_unscaled = unscaledCondition(Jk);
+  }
   return out;
 }
 
