@@ -25,22 +25,28 @@ Machine withoutPartSetup(const Machine& machine) {
   return m;
 }
 
+// The tool axis's x and y in w of a machine whose part set-up is already taken out.
+Eigen::Vector2d tiltInTable(const Machine& table, const JointVector& q) {
+  const ForwardKinematics fk(table.model, table.params);
+  return fk.w_T_t(q).linear().col(2).head<2>();
+}
+
 // A tram's rows (the model's tilt minus the measured, times kTramLever) and, when J is given,
 // their derivatives for columns by central differences (the parameters enter the axis through
 // whole rotations; a step of 1e-6 mm or rad leaves errors far below a microradian).
 void tramRows(const Machine& machine, const ProbedPoint& p, const std::vector<int>& columns,
               Eigen::Ref<Eigen::VectorXd> r, Eigen::MatrixXd* J, int row) {
   Machine table = withoutPartSetup(machine);
-  r = kTramLever * (tramTilt(table, p.q) - p.tilt);
+  r = kTramLever * (tiltInTable(table, p.q) - p.tilt);
   if (!J) return;
   constexpr double h = 1e-6;
   for (size_t k = 0; k < columns.size(); ++k) {
     double& v = table.params[columns[k]];
     const double v0 = v;
     v = v0 + h;
-    const Eigen::Vector2d plus = tramTilt(table, p.q);
+    const Eigen::Vector2d plus = tiltInTable(table, p.q);
     v = v0 - h;
-    const Eigen::Vector2d minus = tramTilt(table, p.q);
+    const Eigen::Vector2d minus = tiltInTable(table, p.q);
     v = v0;
     J->block<2, 1>(row, k) = kTramLever * (plus - minus) / (2 * h);
   }
@@ -143,9 +149,7 @@ void summarise(const std::vector<ProbedPoint>& points, const Eigen::VectorXd& r,
 }  // namespace
 
 Eigen::Vector2d tramTilt(const Machine& machine, const JointVector& q) {
-  const Machine table = withoutPartSetup(machine);
-  const ForwardKinematics fk(table.model, table.params);
-  return fk.w_T_t(q).linear().col(2).head<2>();
+  return tiltInTable(withoutPartSetup(machine), q);
 }
 
 ProbedPoint simulatedTram(const Machine& machine, const JointVector& q, int line) {
