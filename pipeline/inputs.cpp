@@ -330,6 +330,13 @@ std::string describeProbedSetup(const std::string& path, const ProbedSetupFit& f
                 radToUrad(fit.change[5]), mmToUm(fit.spindle_change[0]), mmToUm(fit.spindle_change[1]),
                 mmToUm(fit.spindle_change[2]), mmToUm(fit.rms_before), mmToUm(fit.rms), mmToUm(fit.max),
                 points[worst].line);
+  // Touches no rigid set-up explains to a millimetre belong to another part or set-up: refused
+  // before anything is predicted or written (a fit on them moves the part by metres).
+  if (fit.max > 1.0)
+    throw InputError(path, points[worst].line, 0, "probed",
+                     "the best set-up leaves this touch " + formatWith("%.3f", fit.max) +
+                         " mm from its point: these touches do not belong to this part and set-up "
+                         "(check the set-up file, the part frame and units)");
   std::string line = buf;
   if (fit.trams > 0) {
     std::snprintf(buf, sizeof buf,

@@ -238,6 +238,15 @@ TEST_F(UncertaintyCli, PredictWithProbedPointsFollowsTheTruth) {
               axis_own * 1e6, axis_probed * 1e6, axis_tram * 1e6);
   EXPECT_LT(axis_tram, 0.5 * axis_own);
   EXPECT_LT(axis_tram, axis_probed);
+  // Touches no rigid set-up explains (every other part point moved 30 mm): refused, nothing
+  // written.
+  std::vector<ProbedPoint> moved(probes.begin(), probes.end() - 1);
+  for (size_t i = 0; i < moved.size(); i += 2) moved[i].p_w.x() += 30.0;
+  writeFileAtomically(path("moved.csv"), formatProbeCsv(truth.model, moved));
+  auto mv = test::runTolver(base + " --machine " + id + " --probed " + path("moved.csv") + " -o " + path("m.apt"));
+  EXPECT_EQ(mv.exit_code, 2) << mv.output;
+  EXPECT_NE(mv.output.find("do not belong to this part and set-up"), std::string::npos) << mv.output;
+  EXPECT_FALSE(std::filesystem::exists(path("m.apt")));
   // A bad row: exit 2, the file and line named.
   std::ofstream(path("bad.csv")) << "part_x_mm,part_y_mm,part_z_mm,x_mm,y_mm,z_mm,a_deg,c_deg\n1,2,3,4,5,6,x,8\n";
   auto b = test::runTolver(base + " --machine " + id + " --probed " + path("bad.csv") + " -o " + path("b.apt"));
