@@ -12,35 +12,12 @@
 #include "core/allocation/tolerance_allocation.h"
 #include "io/machine/machine_file.h"
 #include "io/machine/tolerance_file.h"
+#include "bench_fixtures.h"
 
 namespace {
 
-struct Data {
-  tolver::Machine m;
-  std::vector<int> unknowns;
-  tolver::BallbarTest test;
-};
-
-const Data& data() {
-  static const Data d = [] {
-    Data x;
-    x.m = tolver::readMachineFile(std::string(TOLVER_SOURCE_DIR) +
-                                  "/resources/machines/matsuura_mc760vx.xml");
-    x.unknowns = tolver::defaultCalibrationUnknowns(x.m.model);
-    tolver::BallbarPlanOptions o;
-    o.poses = 600;
-    x.test = tolver::planBallbarTest(x.m.model, x.unknowns, o).test;
-    std::mt19937 rng(1);
-    std::normal_distribution<double> n(0.0, 1.0);
-    Eigen::VectorXd truth = Eigen::VectorXd::Zero(x.m.model.parameterCount());
-    for (int p : x.unknowns) truth[p] = n(rng) * (x.m.model.parameters[p].angular ? 20e-6 : 0.005);
-    const tolver::ForwardKinematics fk(x.m.model, truth);
-    for (auto& r : x.test.readings)
-      r.length = tolver::ballbarLength(fk, r.q, x.test.setups[r.setup]) + 0.5e-3 * n(rng);
-    return x;
-  }();
-  return d;
-}
+using tolver::bench::data;
+using tolver::bench::Data;
 
 void BM_Calibrate600Readings(benchmark::State& state) {
   const Data& d = data();

@@ -14,34 +14,12 @@
 #include "io/program/gcode_reader.h"
 #include "io/common/io_error.h"
 #include "io/machine/machine_file.h"
+#include "bench_fixtures.h"
 
 namespace {
 
-tolver::Machine machineWithErrors() {
-  tolver::Machine m =
-      tolver::readMachineFile(std::string(TOLVER_SOURCE_DIR) + "/resources/machines/matsuura_mc760vx.xml");
-  std::mt19937 rng(1);
-  std::normal_distribution<double> n(0.0, 1.0);
-  for (int i = 0; i < m.model.parameterCount(); ++i)
-    m.params[i] = n(rng) * (m.model.parameters[i].angular ? 20e-6 : 0.005);
-  m.model.setup.gauge_length = 100;
-  m.model.setup.part_zero_table = Eigen::Vector3d(0, 0, 50);
-  return m;
-}
-
-// A five-axis path: a spiral on a hemisphere with the tool normal to it.
-std::vector<tolver::ClPoint> path(size_t n) {
-  std::vector<tolver::ClPoint> out(n);
-  for (size_t i = 0; i < n; ++i) {
-    const double t = static_cast<double>(i) / n;
-    const double polar = 0.05 + 0.9 * t * M_PI / 3, az = 40.0 * M_PI * t;
-    const Eigen::Vector3d u(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az),
-                            std::cos(polar));
-    out[i].p_w = 60.0 * u;
-    out[i].u_w = u;
-  }
-  return out;
-}
+using tolver::bench::machineWithErrors;
+using tolver::bench::path;
 
 void BM_PredictToolPath(benchmark::State& state) {
   const tolver::Machine m = machineWithErrors();
