@@ -38,7 +38,7 @@ bool observableColumns(const Eigen::MatrixXd& J0, const std::vector<int>& unknow
     cols[c] = c;
     protect[c] = c >= np_all;
   }
-  const MinimalSet ms = selectMinimalSet(J0, cols, protect, {});
+  const MinimalSet ms = selectMinimalSet(J0, cols, protect, {}, false);
   for (int c : ms.removed) {
     if (c >= np_all) {
       res.status = CalibrationStatus::Unobservable;
@@ -59,9 +59,26 @@ bool observableColumns(const Eigen::MatrixXd& J0, const std::vector<int>& unknow
   return true;
 }
 
-// 3. Residuals and uncertainties from the last factorisation (the SVD of the column-scaled
-// Jacobian's triangle, `scale` its column scales): cov = s^2 (J^T J)^-1.
-void residualsAndUncertainties(const Eigen::VectorXd& r, const Eigen::BDCSVD<Eigen::MatrixXd>& svd,
+// The scaled covariance (J_s^T J_s)^+ from the last factorisation J_s = Q R (J_s the column-scaled
+// Jacobian): R^-1 R^-T when R has full rank (the usual case: the unknowns were reduced to a
+// full-rank set), else the rank-truncated pseudo-inverse V diag(1/sigma^2) V^T.
+Eigen::MatrixXd scaledCovariance(const Eigen::MatrixXd& R, int rank) {
+  const Eigen::Index n = R.cols();
+  if (rank == n) {
+    const Eigen::MatrixXd Rinv =
+        R.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(n, n));
+    return Rinv * Rinv.transpose();
+  }
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(R, Eigen::ComputeFullV);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  Eigen::VectorXd inv2 = Eigen::VectorXd::Zero(sv.size());
+  for (int k = 0; k < rank; ++k) inv2[k] = 1.0 / (sv[k] * sv[k]);
+  return svd.matrixV() * inv2.asDiagonal() * svd.matrixV().transpose();
+}
+
+// 3. Residuals and uncertainties from the last factorisation (C: scaledCovariance, `scale` the
+// column scales): cov = s^2 (J^T J)^-1.
+void residualsAndUncertainties(const Eigen::VectorXd& r, const Eigen::MatrixXd& C,
                                const Eigen::VectorXd& scale, const std::vector<int>& keep_cols, int np_all, int np,
                                CalibrationResult& res) {
   const int m = static_cast<int>(r.size()), n = static_cast<int>(keep_cols.size());
@@ -69,21 +86,16 @@ void residualsAndUncertainties(const Eigen::VectorXd& r, const Eigen::BDCSVD<Eig
   res.rms_residual = std::sqrt(r.squaredNorm() / m);
   res.max_residual = r.cwiseAbs().maxCoeff();
   res.residual_sigma = std::sqrt(r.squaredNorm() / std::max(1, m - n));
-  const Eigen::VectorXd& sv = svd.singularValues();
-  Eigen::VectorXd inv2 = Eigen::VectorXd::Zero(sv.size());
-  for (int k = 0; k < sv.size(); ++k)
-    if (sv[k] > kRankTolerance * sv[0]) inv2[k] = 1.0 / (sv[k] * sv[k]);
-  // diag(V diag(inv2) V^T): with unit-norm columns this is the variance inflation factor.
-  const Eigen::VectorXd vif = svd.matrixV().array().square().matrix() * inv2;
+  // With unit-norm columns the diagonal is the variance inflation factor.
+  const Eigen::VectorXd vif = C.diagonal();
   Eigen::VectorXd sd(n);
   for (int c = 0; c < n; ++c) sd[c] = res.residual_sigma * std::sqrt(vif[c]) / scale[c];
   res.uncertainty = sd.head(np);
   {
-    // cov = s^2 D^-1 V diag(inv2) V^T D^-1 over the identified parameters (D the column scales).
-    const Eigen::MatrixXd Vp = svd.matrixV().topRows(np);
-    Eigen::MatrixXd c = Vp * inv2.asDiagonal() * Vp.transpose();
+    // cov = s^2 D^-1 C D^-1 over the identified parameters (D the column scales).
     const Eigen::VectorXd d = scale.head(np).cwiseInverse();
-    res.covariance = res.residual_sigma * res.residual_sigma * (d.asDiagonal() * c * d.asDiagonal());
+    res.covariance = res.residual_sigma * res.residual_sigma *
+                     (d.asDiagonal() * C.topLeftCorner(np, np) * d.asDiagonal());
   }
   res.observability = vif.head(np).cwiseInverse().cwiseSqrt();
   for (int k = np; k < n; ++k) {
@@ -153,10 +165,11 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
   };
 
   // 2. Gauss-Newton with the pseudo-inverse of the column-scaled Jacobian. Each pass factors
-  //    J (QR, then the SVD of the n x n triangle); the last factorisation also gives the
-  //    covariance.
+  //    J = QR; the step is R^-1 Q^T r when R has full rank (its singular values decide, by
+  //    bidiagonalisation), the rank-truncated pseudo-inverse by the SVD of R otherwise. The
+  //    last factorisation also gives the covariance.
   Eigen::VectorXd scale;
-  Eigen::BDCSVD<Eigen::MatrixXd> svd;
+  Eigen::MatrixXd R;
   res.status = CalibrationStatus::NotConverged;
   double previous_step = std::numeric_limits<double>::infinity();
   Eigen::MatrixXd Ja;
@@ -164,21 +177,28 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
   for (int it = 0; it < opt.max_iterations; ++it) {
     augmented(J, r, &Ja, &ra);
     Eigen::HouseholderQR<Eigen::MatrixXd> qr(scaleColumns(Ja, &scale));
-    const Eigen::MatrixXd R = qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
+    R = qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
     const Eigen::VectorXd Qtr = (qr.householderQ().transpose() * ra).head(n);
-    svd.compute(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
-    const Eigen::VectorXd& sv = svd.singularValues();
+    const Eigen::VectorXd sv = summariseScaled(R, mp).singular_values;
     res.rank = numericalRank(sv);
     res.condition = sv[0] / sv[res.rank - 1];
-    Eigen::VectorXd inv = Eigen::VectorXd::Zero(sv.size());
-    for (int k = 0; k < res.rank; ++k) inv[k] = 1.0 / sv[k];
-    const Eigen::VectorXd step_s =
-        svd.matrixV() * (inv.asDiagonal() * (svd.matrixU().transpose() * Qtr));
+    Eigen::VectorXd step_s;
+    double reducible2 = 0.0;  // |the part of r a step can remove|^2
+    if (res.rank == n) {
+      step_s = R.triangularView<Eigen::Upper>().solve(Qtr);
+      reducible2 = Qtr.squaredNorm();
+    } else {
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Eigen::VectorXd inv = Eigen::VectorXd::Zero(n);
+      for (int k = 0; k < res.rank; ++k) inv[k] = 1.0 / svd.singularValues()[k];
+      const Eigen::VectorXd Utr = svd.matrixU().transpose() * Qtr;
+      step_s = svd.matrixV() * inv.asDiagonal() * Utr;
+      reducible2 = Utr.head(res.rank).squaredNorm();
+    }
     // The step's size in column-scaled units.
     const double sn = step_s.norm();
     // What no step can remove: the least-squares residual of the linearised problem.
-    const Eigen::VectorXd proj = svd.matrixU().leftCols(res.rank).transpose() * Qtr;
-    const double irreducible = std::sqrt(std::max(0.0, ra.squaredNorm() - proj.squaredNorm()));
+    const double irreducible = std::sqrt(std::max(0.0, ra.squaredNorm() - reducible2));
     const bool done = sn < opt.step_tolerance || sn < opt.relative_tolerance * irreducible ||
                       (sn < opt.floor_tolerance && sn > 0.5 * previous_step);
     previous_step = sn;
@@ -201,7 +221,7 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
   }
 
   // 3. Residuals and uncertainties from the last factorisation.
-  residualsAndUncertainties(r, svd, scale, keep_cols, np_all, np, res);
+  residualsAndUncertainties(r, scaledCovariance(R, res.rank), scale, keep_cols, np_all, np, res);
   res.message = res.status == CalibrationStatus::Converged ? "converged" : "did not converge";
   return res;
 }
@@ -226,12 +246,22 @@ std::vector<GrossReading> grossReadings(const MachineModel& model, const Ballbar
   Eigen::VectorXd r;
   const Eigen::MatrixXd J =
       scaleColumns(identificationJacobian(fk, test, fit.ball_errors, fit.identified, &r));
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinU);
-  const int rank = numericalRank(svd.singularValues());
+  // The hat matrix U U^T, U an orthonormal basis of J's column space: the thin Q of J = QR when
+  // J has full rank, else the leading left singular vectors.
+  const int n = static_cast<int>(J.cols());
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(J);
+  const Eigen::MatrixXd R = m >= n ? Eigen::MatrixXd(qr.matrixQR().topRows(n).triangularView<Eigen::Upper>()) : J;
+  const int rank = numericalRank(summariseScaled(R, m).singular_values);
   if (m - rank < 2) return out;  // no redundancy: nothing can be inconsistent
   const double s = std::sqrt(r.squaredNorm() / (m - rank));
   if (!(s > 0)) return out;
-  const Eigen::MatrixXd U = svd.matrixU().leftCols(rank);
+  Eigen::MatrixXd U;
+  if (rank == n && m >= n) {
+    U = qr.householderQ() * Eigen::MatrixXd::Identity(m, n);
+  } else {
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(J, Eigen::ComputeThinU);
+    U = svd.matrixU().leftCols(rank);
+  }
   for (int i = 0; i < m; ++i) {
     const double h = std::min(U.row(i).squaredNorm(), 1.0 - 1e-12);
     const double t = r[i] / (s * std::sqrt(1.0 - h));

@@ -60,11 +60,12 @@ MachineModel withMotionDegree(const MachineModel& m, int degree) {
 }
 
 MinimalSet selectMinimalSet(const Eigen::MatrixXd& J, const std::vector<int>& columns,
-                            const std::vector<bool>& setup, const std::vector<int>& preferred) {
+                            const std::vector<bool>& setup, const std::vector<int>& preferred,
+                            bool unscaled_condition) {
   MinimalSet out;
   const Eigen::MatrixXd R = compressRows(scaleColumns(J));
   out.initial = summariseScaled(R, static_cast<int>(J.rows()));
-  out.initial.condition_unscaled = unscaledCondition(J);
+  if (unscaled_condition) out.initial.condition_unscaled = unscaledCondition(J);
   std::vector<int> live(columns.size());  // positions into columns / R
   for (size_t i = 0; i < live.size(); ++i) live[i] = static_cast<int>(i);
   auto isPreferred = [&](int pos) {
@@ -136,7 +137,9 @@ MinimalSet selectMinimalSet(const Eigen::MatrixXd& J, const std::vector<int>& co
   }
   for (int pos : live) out.kept.push_back(columns[pos]);
   out.reduced = cur;
-  if (out.removed.empty()) {  // nothing removed: the same matrix
+  if (!unscaled_condition) {
+    out.reduced.condition_unscaled = 0.0;
+  } else if (out.removed.empty()) {  // nothing removed: the same matrix
     out.reduced.condition_unscaled = out.initial.condition_unscaled;
   } else {
     Eigen::MatrixXd Jk(J.rows(), live.size());

@@ -47,9 +47,11 @@ struct MinimalSet {
 
 // Reduces `columns` of J (J has one column per entry of `columns`) to a full-rank set.
 // setup[i]: parameter `columns[i]` is a set-up parameter (strategy I); preferred: parameter
-// indices kept by strategy II.
+// indices kept by strategy II. unscaled_condition: also fill condition_unscaled of initial and
+// reduced (a report's figure; 0 when false: calibration does not need it).
 MinimalSet selectMinimalSet(const Eigen::MatrixXd& J, const std::vector<int>& columns,
-                            const std::vector<bool>& setup, const std::vector<int>& preferred);
+                            const std::vector<bool>& setup, const std::vector<int>& preferred,
+                            bool unscaled_condition = true);
 
 // Convenience: the whole analysis on a machine model at the given poses.
 MinimalSet minimalSetForModel(const MachineModel& m, const std::vector<JointVector>& poses,

@@ -1,7 +1,10 @@
 #include "core/numerics/scaled_svd.h"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <Eigen/SVD>
+#include <algorithm>
+#include <functional>
 #include <limits>
 
 namespace tolver {
@@ -45,12 +48,39 @@ Eigen::MatrixXd compressRows(const Eigen::MatrixXd& J) {
 
 namespace {
 
-// Singular values by one-sided Jacobi rotations. Not Eigen 3.4.0's BDCSVD: its perturbCol0 reads
-// perm(l - 1) at l = 0, before its buffer (AddressSanitizer: heap-buffer-overflow), on the
-// column-scaled identification matrices with exactly zero columns and equal columns that rank
-// decisions meet; Jacobi is also accurate to the last bits of the small singular values that
-// decide a rank. These matrices are at most a few hundred columns square (compressRows).
-Eigen::VectorXd singularValuesOf(const Eigen::MatrixXd& A) {
+// Singular values for the rank decisions of column-scaled matrices: Householder
+// bidiagonalisation, then the eigenvalues of the Golub-Kahan matrix [0 B; B^T 0] (symmetric
+// tridiagonal after a perfect shuffle, eigenvalues +-sigma) by the tridiagonal QR of
+// SelfAdjointEigenSolver. Both steps are backward stable: each singular value to within a few
+// units of rounding of the largest, ample for kRankTolerance = 1e-9 on matrices whose columns
+// are scaled to unit norm, and about ten times faster than Jacobi on the 110-column matrices of a
+// calibration. Not Eigen 3.4.0's BDCSVD: its perturbCol0 reads perm(l - 1) at l = 0, before its
+// buffer (AddressSanitizer: heap-buffer-overflow), on the column-scaled identification matrices
+// with exactly zero columns and equal columns that rank decisions meet.
+Eigen::VectorXd scaledSingularValues(const Eigen::MatrixXd& A) {
+  if (A.rows() < A.cols()) return scaledSingularValues(A.transpose());
+  const Eigen::Index n = A.cols();
+  if (n == 0) return Eigen::VectorXd();
+  if (n == 1) return Eigen::VectorXd::Constant(1, A.norm());
+  const Eigen::internal::UpperBidiagonalization<Eigen::MatrixXd> bid(A);
+  auto B = bid.bidiagonal();  // a copy (2 x n): Eigen 3.4 has no const diagonal<1>()
+  Eigen::VectorXd diagonal = Eigen::VectorXd::Zero(2 * n), off(2 * n - 1);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    off[2 * i] = B.diagonal()[i];
+    if (i + 1 < n) off[2 * i + 1] = B.diagonal<1>()[i];
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
+  es.computeFromTridiagonal(diagonal, off, Eigen::EigenvaluesOnly);
+  // Ascending +-sigma: the upper half, largest first.
+  Eigen::VectorXd sv = es.eigenvalues().tail(n).reverse().cwiseAbs();
+  std::sort(sv.data(), sv.data() + n, std::greater<double>());
+  return sv;
+}
+
+// Singular values by Jacobi rotations, accurate relative to each value (not only to the
+// largest) when the column-scaled matrix is well conditioned: for the unscaled condition numbers
+// (mm and rad mixed, 1e10 and more), which are reported, never decided on.
+Eigen::VectorXd unscaledSingularValues(const Eigen::MatrixXd& A) {
   return Eigen::JacobiSVD<Eigen::MatrixXd>(A).singularValues();
 }
 
@@ -66,7 +96,7 @@ SvdSummary summariseScaled(const Eigen::MatrixXd& S, int rows) {
   out.rows = rows;
   out.cols = static_cast<int>(S.cols());
   if (S.cols() == 0) return out;
-  out.singular_values = singularValuesOf(S);
+  out.singular_values = scaledSingularValues(S);
   out.rank = numericalRank(out.singular_values);
   out.condition = out.rank < out.cols ? std::numeric_limits<double>::infinity()
                                       : conditionOf(out.singular_values);
@@ -81,12 +111,12 @@ SvdSummary analyseColumns(const Eigen::MatrixXd& J) {
 
 double unscaledCondition(const Eigen::MatrixXd& J) {
   if (J.cols() == 0) return 0.0;
-  return conditionOf(singularValuesOf(compressRows(J)));
+  return conditionOf(unscaledSingularValues(compressRows(J)));
 }
 
 double scaledCondition(const Eigen::MatrixXd& J) {
   if (J.cols() == 0) return 0.0;
-  return conditionOf(singularValuesOf(compressRows(scaleColumns(J))));
+  return conditionOf(scaledSingularValues(compressRows(scaleColumns(J))));
 }
 
 }  // namespace tolver
