@@ -137,7 +137,7 @@ double Cutter::lineEntry(const Eigen::Vector3d& a_w, const Eigen::Vector3d& d_w,
   {
     const Interval in_slab = slab(h0, hd, rc, L);
     if (!in_slab.empty()) {
-      const double k = std::tan(taper_angle);
+      const double k = taper_angle == 0.0 ? 0.0 : std::tan(taper_angle);  // (tan: 3 % of a sweep)
       const double g0 = R + k * (h0 - rc), g1 = k * hd;
       Interval parts[2];
       const int n = quadraticBelow(A - g1 * g1, B - 2 * g0 * g1, C - g0 * g0, parts);
