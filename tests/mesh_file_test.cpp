@@ -184,6 +184,30 @@ TEST_F(MeshFileTest, RefusesWhatIsNot) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("beyond 1e5 mm"), std::string::npos) << e.what();
   }
+  // A PLY header cut short before end_header (the mesh fuzz harness's input, found in CI's 30 s):
+  // Debian's assimp looped for minutes on it, allocating; refused at once, naming the line.
+  try {
+    readPartMesh(write("no_end_header.ply",
+                       "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+                       "property float z\nelement face 12\nproperty list uchar int vertex_indices\n"
+                       "end_he0 10 0\n10 10 10\n3 0 1 3\n3 0 3 2\n"));
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no_end_header.ply:9"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("is not a PLY header line"), std::string::npos) << e.what();
+  }
+  // A binary PLY with a proper header still reads (the header check stops at end_header).
+  {
+    std::string bin = "ply\r\nformat binary_little_endian 1.0\r\nelement vertex 3\r\nproperty float x\r\n"
+                      "property float y\r\nproperty float z\r\nelement face 1\r\n"
+                      "property list uchar int vertex_indices\r\nend_header\r\n";
+    const float v[9] = {0, 0, 0, 10, 0, 0, 0, 10, 0};
+    bin.append(reinterpret_cast<const char*>(v), sizeof v);
+    bin.push_back(3);
+    const int idx[3] = {0, 1, 2};
+    bin.append(reinterpret_cast<const char*>(idx), sizeof idx);
+    EXPECT_EQ(readPartMesh(write("binary.ply", bin)).mesh.faces.size(), 1u);
+  }
   // A PLY face list with a face of no vertex (the mesh fuzz harness's input): assimp's
   // triangulation aborted the process on it; refused with a message instead.
   const std::string ply =
