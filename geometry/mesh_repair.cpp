@@ -19,6 +19,9 @@
 namespace tolver {
 namespace {
 
+// The largest hole filled, in border edges (MeshRepairReport notes the ones kept open).
+constexpr size_t kMaxHoleEdges = 200;
+
 using Kernel = CGAL::Simple_cartesian<double>;
 using Point = Kernel::Point_3;
 using SurfaceMesh = CGAL::Surface_mesh<Point>;
@@ -245,7 +248,8 @@ void fillHoles(Repair& r) {
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     for (int u : loop) centre += points[u];
     centre /= static_cast<double>(loop.size());
-    if (v != v0 || perimeter > max_hole || loop.size() < 3) {
+    // A hole of more than kMaxHoleEdges edges is kept open: filling is cubic in its edges.
+    if (v != v0 || perimeter > max_hole || loop.size() < 3 || loop.size() > kMaxHoleEdges) {
       ++rep.open_borders;
       if (v == v0 && loop.size() >= 3) {
         Eigen::Vector3d spanned = Eigen::Vector3d::Zero();
@@ -269,7 +273,11 @@ void fillHoles(Repair& r) {
       continue;
     }
     std::vector<SurfaceMesh::Face_index> added;
-    PMP::triangulate_hole(sm, h.first, std::back_inserter(added));
+    // Without the 3D Delaunay search space: with this inexact kernel its point location can walk
+    // for ever on degenerate borders (a fuzzed 8 kB STL ran verify for minutes); the dynamic
+    // programme over all triangulations is bounded, O(edges^3).
+    PMP::triangulate_hole(sm, h.first, std::back_inserter(added),
+                          CGAL::parameters::use_delaunay_triangulation(false));
     const int g = groups[border_face[loop[0]]];
     for (auto f : added) {
       Eigen::Vector3i t;
@@ -287,7 +295,8 @@ void fillHoles(Repair& r) {
   if (rep.open_borders > 0)
     rep.notes.push_back("open surface: " + std::to_string(rep.open_borders) +
                         " borders kept (longer than " + std::to_string(max_hole) +
-                        " mm); outward is the side the file's winding gives");
+                        " mm or of more than " + std::to_string(kMaxHoleEdges) +
+                        " edges); outward is the side the file's winding gives");
 }
 
 // 6. Closed components bound their volume: their faces turned outward (positive signed
