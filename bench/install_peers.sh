@@ -4,15 +4,5 @@
 # bench/peer_benchmark) and CloudCompare (point-to-mesh distances, bench/cloudcompare_deviations.sh).
 # Reconfigure afterwards (scripts/build.sh) so that peer_benchmark is built.
 set -euo pipefail
-packages=(liborocos-kdl-dev libceres-dev cloudcompare xvfb)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-[ ${#missing[@]} -eq 0 ] && exit 0
-echo "tolver: installing ${missing[*]}" >&2
-SUDO=""
-if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+exec "$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)/scripts/install_deps.sh" \
+  liborocos-kdl-dev libceres-dev cloudcompare xvfb

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs tolver's build and test dependencies from Debian 12 packages.
 # Idempotent: installs only what is missing; runs apt-get update only then.
+# Usage: scripts/install_deps.sh [packages...]
 set -euo pipefail
 packages=(
   build-essential cmake pkg-config ninja-build
@@ -11,6 +12,8 @@ packages=(
   xvfb libgl1-mesa-dri
   chromium
 )
+# Other packages instead, when given (bench/install_peers.sh): the same check and install.
+[ $# -gt 0 ] && packages=("$@")
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
