@@ -224,7 +224,9 @@ void fillReport(const CompensateInputs& in, const std::string& output, Compensat
 CompensationRun runCompensation(const CompensateInputs& in, const std::string& output) {
   CompensationRun run;
   run.machine = loadMachine(in.machine);
-  run.program = loadProgram(in.program, run.machine.model);
+  ProgramOptions program_options = in.program;
+  program_options.keep_motion_text = true;  // the in-place writer edits the GOTO statements
+  run.program = loadProgram(program_options, run.machine.model);
   run.before = predictProgram(run.machine, run.program);
   // A calibrated machine: its share after the set-up the shop measures (the calibration cannot
   // see the rest), as predict takes it.

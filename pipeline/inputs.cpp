@@ -9,6 +9,7 @@
 #include "core/path/tool_path_prediction.h"
 #include "io/program/gcode_reader.h"
 #include "io/common/io_error.h"
+#include "io/common/line_source.h"
 #include "io/machine/machine_file.h"
 #include "io/program/probe_file.h"
 #include "io/program/setup_file.h"
@@ -129,28 +130,22 @@ void scaleToInches(ClProgram& p) {
 
 }  // namespace
 
-ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model) {
-  if (o.cl.empty() == o.nc.empty())
-    throw InputError(o.cl.empty() ? "--cl" : o.cl, 0, 0, "program",
-                     "give the program with --cl (CL data) or --nc (G-code), one of them");
-  const std::string path = o.nc.empty() ? o.cl : o.nc;
-  return parseProgram(readFile(path), path, o, model);
-}
+namespace {
 
-ClProgram parseProgram(const std::string& text, const std::string& path, const ProgramOptions& o,
-                       const MachineModel& model) {
-  const bool gcode = !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(text);
+ClProgram readProgram(LineSource& source, const std::string& path, bool gcode, const ProgramOptions& o,
+                      const MachineModel& model) {
   ClProgram program;
   if (gcode) {
     GcodeReadOptions go;
     go.chordal_tolerance_mm = o.chordal_tolerance;
     if (o.units == "inch") go.unit_mm = 25.4;
     if (o.units == "mm") go.unit_mm = 1.0;
-    program = parseGcode(text, path, model, go);
+    program = readGcode(source, path, model, go);
   } else {
     AptReadOptions ro;
     ro.chordal_tolerance_mm = o.chordal_tolerance;
-    program = parseApt(text, path, ro);
+    ro.keep_motion_text = o.keep_motion_text;
+    program = readApt(source, path, ro);
     if (program.path.empty())
       throw InputError(path, 0, 0, "GOTO", "the program has no tool positions");
     if (o.units == "inch") {
@@ -162,6 +157,27 @@ ClProgram parseProgram(const std::string& text, const std::string& path, const P
   }
   if (!o.lines.empty()) keepLines(program, o.lines);
   return program;
+}
+
+}  // namespace
+
+ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model) {
+  if (o.cl.empty() == o.nc.empty())
+    throw InputError(o.cl.empty() ? "--cl" : o.cl, 0, 0, "program",
+                     "give the program with --cl (CL data) or --nc (G-code), one of them");
+  const std::string path = o.nc.empty() ? o.cl : o.nc;
+  // The dialect from the option, the extension, or the first statements (looksLikeGcode reads
+  // twenty non-blank lines; 64 kB hold them in any real program).
+  const bool gcode = !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(readFilePrefix(path, 65536));
+  LineSource source = LineSource::file(path);
+  return readProgram(source, path, gcode, o, model);
+}
+
+ClProgram parseProgram(const std::string& text, const std::string& path, const ProgramOptions& o,
+                       const MachineModel& model) {
+  const bool gcode = !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(text);
+  LineSource source(text);
+  return readProgram(source, path, gcode, o, model);
 }
 
 std::vector<std::string> unitWarnings(const ClProgram& program, const MachineModel& model,

@@ -38,9 +38,13 @@ struct ProgramOptions {
   std::string units;  // "", "mm" or "inch"
   double chordal_tolerance = 0.001;
   std::string lines;  // "first-last": only the points of these source lines (a piece of a split)
+  // Keep the text of APT GOTO statements, for the in-place compensated writer that edits it
+  // (compensate sets it); without it a long program costs its points, not its text
+  // (AptReadOptions::keep_motion_text).
+  bool keep_motion_text = false;
 };
 // Reads the CL or G-code program (G-code: --nc, a G-code extension, or content that reads as
-// G-code). Throws InputError.
+// G-code), as a stream of lines. Throws InputError.
 ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model);
 // The same on text already read (path names it and chooses the dialect as above).
 ClProgram parseProgram(const std::string& text, const std::string& path, const ProgramOptions& o,

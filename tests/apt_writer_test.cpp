@@ -35,6 +35,37 @@ TEST_P(RoundTrip, PredictedPointsReadBackUnchanged) {
   EXPECT_EQ(back.unknown_count, p.unknown_count);
 }
 
+// Read as a stream without the text of its GOTO and FROM statements (what predict keeps), a
+// program gives the same points, statements and written file as read whole from its text; the
+// text left out is that of the motion statements only.
+TEST_P(RoundTrip, StreamedWithoutMotionTextWritesTheSameFile) {
+  const std::string path = test::sourcePath(std::string("tests/fixtures/cl/") + GetParam());
+  const ClProgram whole = parseApt(test::readText(path), path);
+  AptReadOptions lean;
+  lean.keep_motion_text = false;
+  const ClProgram streamed = readAptFile(path, lean);
+  ASSERT_EQ(streamed.path.size(), whole.path.size());
+  for (size_t i = 0; i < whole.path.size(); ++i) {
+    EXPECT_EQ(streamed.path[i].p_w, whole.path[i].p_w) << i;
+    EXPECT_EQ(streamed.path[i].u_w, whole.path[i].u_w) << i;
+    EXPECT_EQ(streamed.path[i].line, whole.path[i].line) << i;
+  }
+  ASSERT_EQ(streamed.statements.size(), whole.statements.size());
+  ASSERT_EQ(streamed.lines.size(), whole.lines.size());
+  size_t dropped = 0;
+  for (const AptStatement& st : whole.statements)
+    for (int l = st.first_line; l <= st.last_line; ++l) {
+      const bool motion = st.major == "GOTO" || st.major == "FROM";
+      EXPECT_EQ(streamed.lines.kept(l - 1), !motion) << l;
+      EXPECT_TRUE(whole.lines.kept(l - 1)) << l;
+      if (!motion) EXPECT_EQ(streamed.lines[l - 1], whole.lines[l - 1]) << l;
+      dropped += motion;
+    }
+  EXPECT_GT(dropped, 0u);
+  const std::vector<std::string> header = {"streamed"};
+  EXPECT_EQ(formatPredictedApt(streamed, streamed.path, header), formatPredictedApt(whole, whole.path, header));
+}
+
 INSTANTIATE_TEST_SUITE_P(Dialects, RoundTrip,
                          ::testing::Values("nx_ust_a.cls", "nx_cutcom.clsf",
                                            "nx_TORETC_250_BOK.cls", "swcam_Teste-Metrologia.apt",

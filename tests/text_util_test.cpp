@@ -3,11 +3,76 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "io/common/line_source.h"
 
 #include "io/common/io_error.h"
 
 namespace tolver {
 namespace {
+
+std::vector<std::string> streamedLines(LineSource source) {
+  std::vector<std::string> lines;
+  std::string l;
+  while (source.next(l)) lines.push_back(l);
+  return lines;
+}
+
+std::vector<std::string> fileLines(const std::string& text) {
+  const std::string path = (std::filesystem::temp_directory_path() / "tolver_line_source.txt").string();
+  std::ofstream(path, std::ios::binary) << text;
+  std::vector<std::string> lines = streamedLines(LineSource::file(path));
+  std::filesystem::remove(path);
+  return lines;
+}
+
+// LineSource gives the lines splitLines gives (the independent truth: one pass over the whole
+// text), from memory and from a file read in 64 kB blocks, for texts with LF, CR and CRLF endings
+// mixed, blank lines, a CRLF cut by a block's end, lines longer than several blocks, and with
+// and without a last line ending.
+TEST(LineSource, GivesTheLinesOfSplitLinesAcrossBlocks) {
+  std::mt19937 rng(17);
+  const char* endings[] = {"\n", "\r", "\r\n", "\n\n", "\r\r\n"};
+  for (int trial = 0; trial < 40; ++trial) {
+    std::string text;
+    const size_t target = trial < 10 ? 200 : 150000 + 4000 * trial;
+    while (text.size() < target) {
+      const size_t len = (rng() % 50 == 0) ? 70000 + rng() % 100000 : rng() % 80;
+      for (size_t k = 0; k < len; ++k) text += static_cast<char>('a' + rng() % 26);
+      text += endings[rng() % 5];
+    }
+    if (trial % 2) text += "last";
+    const std::vector<std::string> truth = splitLines(text);
+    EXPECT_EQ(streamedLines(LineSource(text)), truth) << trial;
+    EXPECT_EQ(fileLines(text), truth) << trial;
+  }
+  // CRLF split between two blocks: one line ending, not two.
+  std::string cut(65535, 'x');
+  cut += "\r\nnext\n";
+  EXPECT_EQ(fileLines(cut), (std::vector<std::string>{std::string(65535, 'x'), "next"}));
+  EXPECT_EQ(fileLines(""), std::vector<std::string>{});
+}
+
+TEST(LineSource, DropsALeadingByteOrderMarkOnly) {
+  EXPECT_EQ(fileLines("\xEF\xBB\xBFUNITS/INCHES\nGOTO/1,2,3\n"),
+            (std::vector<std::string>{"UNITS/INCHES", "GOTO/1,2,3"}));
+  EXPECT_EQ(streamedLines(LineSource("\xEF\xBB\xBF")), std::vector<std::string>{});
+  EXPECT_EQ(streamedLines(LineSource("a\n\xEF\xBB\xBF")),
+            (std::vector<std::string>{"a", "\xEF\xBB\xBF"}));
+}
+
+TEST(LineSource, AMissingFileIsAnInputErrorNamingIt) {
+  try {
+    LineSource::file("/nonexistent/tolver.apt");
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/tolver.apt"), std::string::npos) << e.what();
+  }
+}
 
 // RFC 4648 section 10 test vectors, and bytes above 127.
 TEST(TextUtil, Base64MatchesRfc4648) {

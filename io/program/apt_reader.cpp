@@ -4,10 +4,12 @@
 #include <cctype>
 #include <cmath>
 #include <optional>
+#include <deque>
 #include <set>
 
 #include "core/path/arc_interpolation.h"
 #include "io/common/io_error.h"
+#include "io/common/line_source.h"
 #include "io/common/text_util.h"
 
 namespace tolver {
@@ -36,27 +38,21 @@ const std::set<std::string>& noOpStatements() {
 
 class Parser {
  public:
-  Parser(const std::string& text, const std::string& file, const AptReadOptions& opt)
-      : opt_(opt) {
+  Parser(LineSource& source, const std::string& file, const AptReadOptions& opt)
+      : opt_(opt), source_(source) {
     prog_.file = file;
-    prog_.lines = splitLines(text);
-    // A UTF-8 byte-order mark before the first statement (editors on Windows write one): not
-    // part of it, or a leading UNITS/INCHES would be lost.
-    if (!prog_.lines.empty() && prog_.lines[0].rfind("\xEF\xBB\xBF", 0) == 0)
-      prog_.lines[0] = prog_.lines[0].substr(3);
     prog_.frames.push_back(ClFrame{});
   }
 
   ClProgram run() {
-    const auto& L = prog_.lines;
     bool any = false;
-    for (const auto& l : L) any = any || !trim(l).empty();
-    if (!any) fail(0, 0, "", "empty file: no statements");
     size_t i = 0;
     bool finished = false;
-    while (i < L.size()) {
+    while (line(i) != nullptr) {
       const size_t start = i;
-      const std::string_view t = trim(L[i]);
+      const std::string& raw = *line(i);
+      const std::string_view t = trim(raw);
+      any = any || !t.empty();
       AptStatement st;
       st.first_line = static_cast<int>(i) + 1;
       if (finished || t.empty()) {
@@ -65,7 +61,7 @@ class Parser {
         i = catiaFrame(i);
         st.major = "$$*CATIA0";
       } else if (t.rfind("$$->", 0) == 0) {
-        Logical lg = gather(i, 4 + (t.data() - L[i].data()), /*pseudo=*/true);
+        Logical lg = gather(i, 4 + (t.data() - raw.data()), /*pseudo=*/true);
         st.major = statement(lg, /*pseudo=*/true, st);
         st.major.clear();  // Creo pseudo-comments are copied verbatim, never rewritten
       } else if (t.rfind("$$", 0) == 0 || t[0] == '$') {
@@ -76,12 +72,36 @@ class Parser {
         if (st.major == "FINI") finished = true;
       }
       st.last_line = static_cast<int>(std::max(i, start + 1));
+      // The writers regenerate GOTO and FROM from their points: their text is not needed.
+      keepUpTo(static_cast<size_t>(st.last_line),
+               opt_.keep_motion_text || (st.major != "GOTO" && st.major != "FROM"));
       prog_.statements.push_back(st);
     }
+    if (!any) fail(0, 0, "", "empty file: no statements");
     return std::move(prog_);
   }
 
  private:
+  // Physical line i (0-based) of the file, read on demand; nullptr past its end. The lines of
+  // the statement being read stay in the window; earlier ones are in prog_.lines.
+  const std::string* line(size_t i) {
+    while (i >= window_first_ + window_.size() && !at_end_) {
+      std::string l;
+      if (source_.next(l)) window_.push_back(std::move(l));
+      else at_end_ = true;
+    }
+    return i < window_first_ + window_.size() ? &window_[i - window_first_] : nullptr;
+  }
+
+  // Moves the lines before `end` (0-based, exclusive) from the window into prog_.lines.
+  void keepUpTo(size_t end, bool keep_text) {
+    while (window_first_ < end && !window_.empty()) {
+      prog_.lines.push(window_.front(), keep_text);
+      window_.pop_front();
+      ++window_first_;
+    }
+  }
+
   [[noreturn]] void fail(int line, int column, const std::string& field, const std::string& msg) {
     throw InputError(prog_.file, line, column, field, msg);
   }
@@ -91,9 +111,9 @@ class Parser {
     Logical lg;
     const size_t first = i;
     while (true) {
-      if (i >= prog_.lines.size())
+      if (line(i) == nullptr)
         fail(static_cast<int>(first) + 1, 0, "", "statement continues past the end of the file");
-      std::string_view raw = prog_.lines[i];
+      std::string_view raw = *line(i);
       size_t from = (i == first) ? skip : 0;
       std::string_view body = raw.substr(std::min(from, raw.size()));
       if (!pseudo || i != first) {
@@ -123,8 +143,8 @@ class Parser {
     const int head = static_cast<int>(i) + 1;
     ++i;
     std::vector<double> m;
-    while (i < prog_.lines.size() && m.size() < 12) {
-      std::string_view t = trim(prog_.lines[i]);
+    while (line(i) != nullptr && m.size() < 12) {
+      std::string_view t = trim(*line(i));
       if (t.rfind("$$", 0) != 0) break;
       t.remove_prefix(2);
       if (!t.empty() && t[0] == '*') t.remove_prefix(1);
@@ -423,6 +443,10 @@ class Parser {
   }
 
   const AptReadOptions& opt_;
+  LineSource& source_;
+  std::deque<std::string> window_;  // lines read but not yet in prog_.lines
+  size_t window_first_ = 0;         // the 0-based number of window_.front()
+  bool at_end_ = false;
   ClProgram prog_;
   int frame_ = 0;
   Eigen::Vector3d axis_local_ = Eigen::Vector3d::UnitZ();
@@ -437,13 +461,19 @@ class Parser {
 
 }  // namespace
 
+ClProgram readApt(LineSource& source, const std::string& file_name, const AptReadOptions& options) {
+  return Parser(source, file_name, options).run();
+}
+
 ClProgram parseApt(const std::string& text, const std::string& file_name,
                    const AptReadOptions& options) {
-  return Parser(text, file_name, options).run();
+  LineSource source(text);
+  return readApt(source, file_name, options);
 }
 
 ClProgram readAptFile(const std::string& path, const AptReadOptions& options) {
-  return parseApt(readFile(path), path, options);
+  LineSource source = LineSource::file(path);
+  return readApt(source, path, options);
 }
 
 }  // namespace tolver

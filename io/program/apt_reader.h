@@ -19,6 +19,8 @@
 #include <vector>
 
 #include "core/path/tool_path_prediction.h"
+#include "io/common/line_source.h"
+#include "io/program/source_lines.h"
 
 namespace tolver {
 
@@ -49,7 +51,7 @@ struct ClFrame {
 struct ClProgram {
   std::string file;
   std::string dialect = "APT";           // "APT" (CL data) or "G-code" (io/program/gcode_reader.h)
-  std::vector<std::string> lines;        // the file's physical lines, as read
+  SourceLines lines;                     // the file's physical lines (the text kept: AptReadOptions)
   std::vector<AptStatement> statements;  // covering every line in order
   std::vector<ClPoint> path;             // tool positions in w, mm
   std::vector<int> point_frame;          // per point, index into frames
@@ -73,9 +75,15 @@ struct ClProgram {
 
 struct AptReadOptions {
   double chordal_tolerance_mm = 0.001;  // for CIRCLE / MOVARC expansion
+  // Keep the text of GOTO and FROM statements in ClProgram::lines: the in-place compensated
+  // writer edits it; the predicted-CL writer regenerates those lines and does not need it.
+  bool keep_motion_text = true;
 };
 
-// Throws InputError naming file:line:column and the field on malformed input.
+// Throws InputError naming file:line:column and the field on malformed input. The file is
+// read as a stream of lines (io/common/line_source.h), not whole.
+ClProgram readApt(LineSource& source, const std::string& file_name,
+                  const AptReadOptions& options = {});
 ClProgram readAptFile(const std::string& path, const AptReadOptions& options = {});
 ClProgram parseApt(const std::string& text, const std::string& file_name,
                    const AptReadOptions& options = {});

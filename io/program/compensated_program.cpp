@@ -113,8 +113,8 @@ CompensatedProgramText formatCompensatedApt(const ClProgram& program,
     const bool single = st.point_count == 1 && (st.major == "GOTO" || st.major == "FROM");
     if (single) {
       // The numbers of the statement, across its continuation lines, after the '/'.
-      std::vector<std::string> lines(program.lines.begin() + st.first_line - 1,
-                                     program.lines.begin() + st.last_line);
+      std::vector<std::string> lines;
+      for (int l = st.first_line; l <= st.last_line; ++l) lines.emplace_back(program.lines[l - 1]);
       std::vector<std::pair<size_t, NumToken>> tokens;
       for (size_t l = 0; l < lines.size(); ++l) {
         size_t from = 0;
@@ -174,7 +174,8 @@ CompensatedProgramText formatCompensatedApt(const ClProgram& program,
       continue;
     }
     for (int l = st.first_line; l <= st.last_line; ++l) {
-      out.text += program.lines[l - 1] + "\n";
+      out.text += program.lines[l - 1];
+      out.text += '\n';
       out.source_line.push_back(l);
     }
   }
@@ -299,7 +300,8 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
   // The header after a leading '%' line.
   size_t first = 0;
   if (!program.lines.empty() && !program.lines[0].empty() && program.lines[0][0] == '%') {
-    out.text += program.lines[0] + "\n";
+    out.text += program.lines[0];
+    out.text += '\n';
     out.source_line.push_back(1);
     first = 1;
   }
@@ -313,7 +315,7 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
   {
     int mode = 0;
     for (size_t li = 0; li < program.lines.size(); ++li) {
-      for (const GWord& w : gcodeWords(program.lines[li]))
+      for (const GWord& w : gcodeWords(std::string(program.lines[li])))
         if (w.letter == 'G' && w.numeric && (w.value == 0 || w.value == 1 || w.value == 2 || w.value == 3))
           mode = static_cast<int>(w.value);
       arc_block[li] = (mode == 2 || mode == 3) && li < program.statements.size() &&
@@ -327,7 +329,7 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
   };
   std::vector<int> arc_starts;
   for (size_t li = first; li < program.lines.size(); ++li) {
-    std::string line = program.lines[li];
+    std::string line(program.lines[li]);
     const AptStatement* st = li < program.statements.size() ? &program.statements[li] : nullptr;
     const std::vector<GWord> words = gcodeWords(line);
     bool special = false, expression = false;
@@ -450,8 +452,8 @@ bool gcodeGivesRotaryWords(const ClProgram& program, const MachineModel& model) 
   for (const Axis& ax : model.axes)
     if (ax.isRotary() && ax.name.size() == 1)
       rotary[static_cast<unsigned char>(std::toupper(static_cast<unsigned char>(ax.name[0])))] = 1;
-  for (const std::string& line : program.lines)
-    for (const GWord& w : gcodeWords(line))
+  for (size_t li = 0; li < program.lines.size(); ++li)
+    for (const GWord& w : gcodeWords(std::string(program.lines[li])))
       if (rotary[static_cast<unsigned char>(w.letter)]) return true;
   return false;
 }

@@ -88,7 +88,7 @@ const std::set<std::string>& harmlessM() {
 
 class Reader {
  public:
-  Reader(const std::string& text, const std::string& file, const MachineModel& model,
+  Reader(LineSource& source, const std::string& file, const MachineModel& model,
          const GcodeReadOptions& opt)
       : model_(model),
         opt_(opt),
@@ -97,9 +97,7 @@ class Reader {
     prog_.file = file;
     prog_.dialect = "G-code";
     prog_.multiax = true;
-    prog_.lines = splitLines(text);
-    if (!prog_.lines.empty() && prog_.lines[0].rfind("\xEF\xBB\xBF", 0) == 0)
-      prog_.lines[0].erase(0, 3);
+    source_ = &source;
     prog_.frames.push_back(ClFrame{});
     unit_ = opt.unit_mm > 0 ? opt.unit_mm : model.control.default_unit_mm;
     prog_.units = unit_ == 25.4 ? "INCH" : "MM";
@@ -114,24 +112,28 @@ class Reader {
 
   ClProgram run() {
     bool any = false;
-    for (const auto& l : prog_.lines) any = any || !trim(l).empty();
-    if (!any) fail(0, 0, "", "empty file: no blocks");
     int percent = 0;
-    for (size_t i = 0; i < prog_.lines.size(); ++i) {
+    // Read as a stream of lines; all their text is kept (the in-place compensated writer
+    // edits the blocks' words).
+    std::string text;
+    for (size_t i = 0; source_->next(text); ++i) {
       line_ = static_cast<int>(i) + 1;
       AptStatement st;
       st.first_line = st.last_line = line_;
       st.first_point = static_cast<int>(prog_.path.size());
-      const std::string_view t = trim(prog_.lines[i]);
+      const std::string_view t = trim(text);
+      any = any || !t.empty();
       if (!ended_ && !t.empty() && t[0] == '%') {
         if (++percent >= 2 && seen_block_) ended_ = true;
       } else if (!ended_ && !t.empty()) {
-        st.major = block(prog_.lines[i]);
+        st.major = block(text);
       }
       st.point_count = static_cast<int>(prog_.path.size()) - st.first_point;
       if (st.point_count == 0) st.first_point = -1;
       prog_.statements.push_back(st);
+      prog_.lines.push(text, true);
     }
+    if (!any) fail(0, 0, "", "empty file: no blocks");
     if (prog_.path.empty())
       fail(0, 0, "", "the program has no moves (no G0/G1/G2/G3 with axis words)");
     if (!units_seen_) {
@@ -813,6 +815,7 @@ class Reader {
   ForwardKinematics nominal_;
   InverseKinematics ik_;
   ClProgram prog_;
+  LineSource* source_ = nullptr;
   int line_ = 0;
   bool ended_ = false, seen_block_ = false;
   double unit_ = 1.0;
@@ -852,14 +855,21 @@ class Reader {
 
 }  // namespace
 
+ClProgram readGcode(LineSource& source, const std::string& file_name, const MachineModel& model,
+                    const GcodeReadOptions& options) {
+  return Reader(source, file_name, model, options).run();
+}
+
 ClProgram parseGcode(const std::string& text, const std::string& file_name,
                      const MachineModel& model, const GcodeReadOptions& options) {
-  return Reader(text, file_name, model, options).run();
+  LineSource source(text);
+  return readGcode(source, file_name, model, options);
 }
 
 ClProgram readGcodeFile(const std::string& path, const MachineModel& model,
                         const GcodeReadOptions& options) {
-  return parseGcode(readFile(path), path, model, options);
+  LineSource source = LineSource::file(path);
+  return readGcode(source, path, model, options);
 }
 
 bool looksLikeGcode(const std::string& text) {

@@ -41,6 +41,9 @@ struct GcodeReadOptions {
 };
 
 // Throws InputError naming file:line:column and the word on malformed or unsupported input.
+// The file is read as a stream of lines (io/common/line_source.h); every line's text is kept.
+ClProgram readGcode(LineSource& source, const std::string& file_name, const MachineModel& model,
+                    const GcodeReadOptions& options = {});
 ClProgram readGcodeFile(const std::string& path, const MachineModel& model,
                         const GcodeReadOptions& options = {});
 ClProgram parseGcode(const std::string& text, const std::string& file_name,

@@ -1,0 +1,88 @@
+#include "io/common/line_source.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+
+#include "io/common/io_error.h"
+
+namespace tolver {
+
+namespace {
+constexpr size_t kBlockBytes = size_t{1} << 16;
+
+std::unique_ptr<std::FILE, void (*)(std::FILE*)> openOrThrow(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) throw InputError(path, 0, 0, "", std::string("cannot open: ") + std::strerror(errno));
+  return {f, [](std::FILE* g) { std::fclose(g); }};
+}
+}  // namespace
+
+LineSource::LineSource(std::string_view text) : rest_(text) {}
+
+LineSource LineSource::file(const std::string& path) {
+  LineSource s;
+  auto f = openOrThrow(path);
+  s.file_.reset(f.release());
+  s.name_ = path;
+  return s;
+}
+
+LineSource::LineSource(LineSource&&) noexcept = default;
+LineSource& LineSource::operator=(LineSource&&) noexcept = default;
+LineSource::~LineSource() = default;
+
+bool LineSource::fill() {
+  if (!file_) return false;
+  // Keep what is left (a line cut by the block's end) and append the next block.
+  // The block grows with a long line, so that reading one is linear in its length.
+  std::string next(rest_);
+  const size_t old = next.size();
+  const size_t want = std::max(kBlockBytes, old);
+  next.resize(old + want);
+  const size_t got = std::fread(next.data() + old, 1, want, file_.get());
+  if (got == 0 && std::ferror(file_.get()))
+    throw InputError(name_, 0, 0, "", std::string("cannot read: ") + std::strerror(errno));
+  next.resize(old + got);
+  buf_ = std::move(next);
+  rest_ = buf_;
+  if (got == 0) file_.reset();
+  return got > 0;
+}
+
+bool LineSource::next(std::string& line) {
+  line.clear();
+  while (true) {
+    if (first_) {
+      // The byte-order mark can only be judged with three bytes in hand.
+      while (rest_.size() < 3 && fill()) {
+      }
+      if (rest_.substr(0, 3) == "\xEF\xBB\xBF") rest_.remove_prefix(3);
+      first_ = false;
+    }
+    const size_t end = rest_.find_first_of("\r\n");
+    if (end == std::string_view::npos) {
+      if (fill()) continue;
+      if (rest_.empty()) return false;  // the end; a last line without ending was returned
+      line.assign(rest_);
+      rest_ = {};
+      return true;
+    }
+    // A CR at the block's end may be the first half of CRLF.
+    if (rest_[end] == '\r' && end + 1 == rest_.size() && fill()) continue;
+    line.assign(rest_.substr(0, end));
+    size_t skip = end + 1;
+    if (rest_[end] == '\r' && skip < rest_.size() && rest_[skip] == '\n') ++skip;
+    rest_.remove_prefix(skip);
+    return true;
+  }
+}
+
+std::string readFilePrefix(const std::string& path, size_t max_bytes) {
+  auto f = openOrThrow(path);
+  std::string text(max_bytes, '\0');
+  text.resize(std::fread(text.data(), 1, max_bytes, f.get()));
+  return text;
+}
+
+}  // namespace tolver

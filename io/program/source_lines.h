@@ -1,0 +1,29 @@
+#pragma once
+// The physical lines of a program file in one buffer (8 bytes a line besides the text kept), for
+// the writers that copy a program's statements. A reader may leave out the text of lines no
+// writer copies (the APT reader, of its GOTO and FROM statements, whose points the writers
+// regenerate), so that a long program costs its points, not its text.
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace tolver {
+
+class SourceLines {
+ public:
+  // Appends the next line; its text is kept only when `keep`.
+  void push(std::string_view line, bool keep);
+  size_t size() const { return end_.size(); }
+  bool empty() const { return end_.empty(); }
+  // Line i (0-based): its text, or "" when it was not kept.
+  std::string_view operator[](size_t i) const;
+  bool kept(size_t i) const { return (end_[i] & kDropped) == 0; }
+
+ private:
+  static constexpr std::uint64_t kDropped = std::uint64_t{1} << 63;
+  std::string text_;
+  std::vector<std::uint64_t> end_;  // per line: its end offset in text_, kDropped when not kept
+};
+
+}  // namespace tolver
