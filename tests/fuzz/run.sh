@@ -19,7 +19,8 @@ export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 mkdir -p "$out"
 targets=()
 for n in "${names[@]}"; do targets+=("fuzz_$n"); done
-"$here/scripts/build_sanitized.sh" --fuzz "${targets[@]}"
+# TOLVER_FUZZ_NO_BUILD=1: use the harnesses as built (several runs at once share build-fuzz/).
+[ -n "${TOLVER_FUZZ_NO_BUILD:-}" ] || "$here/scripts/build_sanitized.sh" --fuzz "${targets[@]}"
 declare -A corpus=([apt]="tests/fixtures/cl samples/*.apt" [gcode]="tests/fixtures/gcode samples/gcode/*.nc samples/gcode/*.ngc"
                    [machine]="resources/machines tests/fixtures/machines samples/machines" [setup]="samples/*setup*.txt samples/gcode/*.txt"
                    [ballbar]="samples/ballbar/*.csv" [zones]="samples/sculptured_zones.csv"
@@ -37,8 +38,11 @@ run_one() {
   touch "$out/$n/.started"
   rm -f "$out/$n/.failed"
   local t0=$SECONDS
-  if ! (cd "$out/$n" && "$bin" -max_total_time="$seconds" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
-          -print_final_stats=1 ${TOLVER_FUZZ_SEED:+-seed=$TOLVER_FUZZ_SEED} corpus > log.txt 2>&1); then
+  # The CPU time it used (user + system), which is what the totals count: a harness run at a
+  # low priority beside other work gets less than the wall time.
+  local TIMEFORMAT='%3U %3S'
+  if ! { time (cd "$out/$n" && "$bin" -max_total_time="$seconds" -max_len=65536 -timeout=10 -rss_limit_mb=2048 \
+          -print_final_stats=1 ${TOLVER_FUZZ_SEED:+-seed=$TOLVER_FUZZ_SEED} corpus > log.txt 2>&1); } 2> "$out/$n/cpu.txt"; then
     touch "$out/$n/.failed"
   fi
   # One line per run, so the totals over many runs can be summed (tests/fuzz/totals.sh).
@@ -46,8 +50,12 @@ run_one() {
   execs=$(grep -oE "stat::number_of_executed_units: [0-9]+" "$out/$n/log.txt" | grep -oE "[0-9]+$" || echo 0)
   cov=$(grep -oE "cov: [0-9]+" "$out/$n/log.txt" | tail -1 | grep -oE "[0-9]+$" || echo 0)
   crashes=$(find "$out/$n" -maxdepth 1 -newer "$out/$n/.started" -regextype egrep -regex ".*/(crash|leak|timeout|oom)-.*" | wc -l)
-  # The seconds it ran (a finding stops it before the time asked for).
-  printf "%s\t%s\t%s\t%s\t%s\t%s\n" "$(date -u +%FT%TZ)" "$n" "$((SECONDS - t0))" "$execs" "$cov" "$crashes" >> "$out/history.tsv"
+  # Columns: when, harness, CPU seconds, executions, coverage, crash files, wall seconds (a
+  # finding stops it before the time asked for).
+  local cpu
+  cpu=$(awk 'NF >= 2 { c = $1 + $2 } END { printf "%d", c + 0.5 }' "$out/$n/cpu.txt")
+  printf "%s\t%s\t%s\t%s\t%s\t%s\t%s\n" "$(date -u +%FT%TZ)" "$n" "$cpu" "$execs" "$cov" "$crashes" \
+    "$((SECONDS - t0))" >> "$out/history.tsv"
   printf "fuzz %-10s %4s s  %9s executions  coverage %5s  %s\n" "$n" "$seconds" "$execs" "$cov" \
     "$([ -f "$out/$n/.failed" ] && echo "FAILED, see $out/$n/log.txt" || echo ok)" >&2
 }
