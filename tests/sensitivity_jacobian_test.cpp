@@ -52,6 +52,33 @@ TEST_P(EveryMachine, MatchesCentralFiniteDifferences) {
   }
 }
 
+// The row form (what a ball-bar reading uses) is w times the Jacobian, column for column, for
+// random rows w, poses and non-zero parameters.
+TEST_P(EveryMachine, RowIsTheJacobianContracted) {
+  Machine m = readMachineFile(test::sourcePath(GetParam()));
+  std::mt19937 rng(23);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int i = 0; i < m.model.parameterCount(); ++i)
+    m.params[i] = n(rng) * (m.model.parameters[i].angular ? 2e-3 : 0.05);
+  const ForwardKinematics fk(m.model, m.params);
+  const int np = m.model.parameterCount();
+  Eigen::MatrixXd J(6, np);
+  Eigen::RowVectorXd row(np);
+  for (int pose = 0; pose < 20; ++pose) {
+    JointVector q(m.model.axes.size());
+    for (size_t a = 0; a < m.model.axes.size(); ++a) {
+      std::uniform_real_distribution<double> u(m.model.axes[a].travel_min, m.model.axes[a].travel_max);
+      q[a] = u(rng);
+    }
+    Eigen::Matrix<double, 1, 6> w;
+    for (int k = 0; k < 6; ++k) w[k] = n(rng);
+    sensitivityJacobian(fk, q, J);
+    sensitivityRow(fk, q, w, row);
+    const Eigen::RowVectorXd truth = w * J;
+    EXPECT_LT((row - truth).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + truth.cwiseAbs().maxCoeff())) << GetParam();
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Shipped, EveryMachine, ::testing::ValuesIn(test::shippedMachines()));
 
 TEST(SensitivityJacobian, LinkTwistMapIsTheIdentityAtZero) {

@@ -32,14 +32,16 @@ ResidualStats residualStats(const Eigen::VectorXd& r) {
 
 namespace {
 
-// Reading change per tool twist in t: n^T R_wt [I, -[b_t x]] (see the header).
+// Reading change per tool twist in t: n^T R_wt [I, -[b_t x]] (see the header); *length: the
+// ball-to-ball distance (as ballbarLength).
 Eigen::Matrix<double, 1, 6> readingPerTwist(const ForwardKinematics& fk, const JointVector& q,
                                             const BallbarSetup& s, const BallErrors& e,
                                             const MotionContext* ctx, Eigen::Vector3d* n_w,
-                                            Eigen::RowVector3d* nR_t) {
+                                            Eigen::RowVector3d* nR_t, double* length = nullptr) {
   const Eigen::Isometry3d T = fk.w_T_t(q, ctx);
   const Eigen::Vector3d bt = s.tool_ball_t + e.tool_t;
   const Eigen::Vector3d d = T * bt - (s.table_ball_w + e.table_w);
+  if (length) *length = d.norm() + fk.barLengthError();
   *n_w = d.normalized();
   *nR_t = n_w->transpose() * T.linear();  // bar direction in t
   Eigen::Matrix<double, 3, 6> P;
@@ -62,20 +64,21 @@ void ballbarComponentGradient(const ForwardKinematics& fk, const JointVector& q,
   J_length_components = w * scratch;
 }
 
-void ballbarGradient(const ForwardKinematics& fk, const JointVector& q, const BallbarSetup& s,
-                     const BallErrors& e, Eigen::Ref<Eigen::RowVectorXd> J_params,
-                     Eigen::RowVector3d* J_table, Eigen::RowVector3d* J_tool,
-                     Eigen::MatrixXd& scratch, const MotionContext* ctx) {
+double ballbarGradient(const ForwardKinematics& fk, const JointVector& q, const BallbarSetup& s,
+                       const BallErrors& e, Eigen::Ref<Eigen::RowVectorXd> J_params,
+                       Eigen::RowVector3d* J_table, Eigen::RowVector3d* J_tool,
+                       const MotionContext* ctx) {
   Eigen::Vector3d n;
   Eigen::RowVector3d nR;
-  const Eigen::Matrix<double, 1, 6> w = readingPerTwist(fk, q, s, e, ctx, &n, &nR);
-  sensitivityJacobian(fk, q, scratch, ctx);
-  J_params = w * scratch;
+  double length = 0.0;
+  const Eigen::Matrix<double, 1, 6> w = readingPerTwist(fk, q, s, e, ctx, &n, &nR, &length);
+  sensitivityRow(fk, q, w, J_params, ctx);
   const MachineModel& m = fk.model();
   for (const ParameterBlock& b : m.blocks)  // the instrument's length adds to the reading
     if (b.kind == BlockKind::Effect && m.effects[b.effect].axis < 0) J_params[b.offset] = 1.0;
   if (J_tool) *J_tool = nR;
   if (J_table) *J_table = -n.transpose();
+  return length;
 }
 
 Eigen::MatrixXd identificationJacobian(const ForwardKinematics& fk, const BallbarTest& test,
@@ -87,18 +90,16 @@ Eigen::MatrixXd identificationJacobian(const ForwardKinematics& fk, const Ballba
   const int pc = fk.model().parameterCount();
   Eigen::MatrixXd J = Eigen::MatrixXd::Zero(test.readings.size(), n);
   if (residuals) residuals->resize(test.readings.size());
-  Eigen::MatrixXd scratch(6, pc);
   Eigen::RowVectorXd row(pc);
   for (size_t i = 0; i < test.readings.size(); ++i) {
     const BallbarReading& rd = test.readings[i];
     const BallbarSetup& s = test.setups[rd.setup];
     Eigen::RowVector3d jt, jb;
-    ballbarGradient(fk, rd.q, s, balls[rd.setup], row, &jt, &jb, scratch, &rd.context);
+    const double length = ballbarGradient(fk, rd.q, s, balls[rd.setup], row, &jt, &jb, &rd.context);
     for (int k = 0; k < np; ++k) J(i, k) = row[unknowns[k]];
     J.block<1, 3>(i, np + 6 * rd.setup) = jt;
     J.block<1, 3>(i, np + 6 * rd.setup + 3) = jb;
-    if (residuals)
-      (*residuals)[i] = rd.length - ballbarLength(fk, rd.q, s, balls[rd.setup], &rd.context);
+    if (residuals) (*residuals)[i] = rd.length - length;
   }
   return J;
 }

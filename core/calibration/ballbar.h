@@ -48,11 +48,11 @@ double ballbarLength(const ForwardKinematics& fk, const JointVector& q, const Ba
                      const BallErrors& e = {}, const MotionContext* ctx = nullptr);
 
 // J_length_params: 1 x parameterCount() (mm per parameter unit); J_length_table, J_length_tool:
-// derivatives with respect to the ball errors. scratch: a 6 x parameterCount() work matrix.
-void ballbarGradient(const ForwardKinematics& fk, const JointVector& q, const BallbarSetup& s,
-                     const BallErrors& e, Eigen::Ref<Eigen::RowVectorXd> J_length_params,
-                     Eigen::RowVector3d* J_length_table, Eigen::RowVector3d* J_length_tool,
-                     Eigen::MatrixXd& scratch, const MotionContext* ctx = nullptr);
+// derivatives with respect to the ball errors. Returns the length, as ballbarLength.
+double ballbarGradient(const ForwardKinematics& fk, const JointVector& q, const BallbarSetup& s,
+                       const BallErrors& e, Eigen::Ref<Eigen::RowVectorXd> J_length_params,
+                       Eigen::RowVector3d* J_length_table, Eigen::RowVector3d* J_length_tool,
+                       const MotionContext* ctx = nullptr);
 
 // Reading change per unit additive change of each motion-error component of each axis
 // (1 x 6 * axes, column 6 a + c; see componentSensitivities): what an effect's coefficient

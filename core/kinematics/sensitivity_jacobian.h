@@ -26,6 +26,12 @@ void sensitivityJacobian(const ForwardKinematics& fk, const JointVector& q,
                          Eigen::Ref<Eigen::MatrixXd> J_twist_params,
                          const MotionContext* ctx = nullptr);
 
+// The same contracted with a row w (1 x 6, e.g. a reading's change per tool twist):
+// row = w * J_twist_params, without the 6 x parameterCount() matrix. row must have that size.
+void sensitivityRow(const ForwardKinematics& fk, const JointVector& q,
+                    const Eigen::Matrix<double, 1, 6>& w, Eigen::Ref<Eigen::RowVectorXd> row,
+                    const MotionContext* ctx = nullptr);
+
 // Twist in t per unit additive change of each motion-error component of each axis at q (the
 // derivative an effect's coefficient scales by its basis value): J_twist_components is
 // 6 x (6 * axes), column 6 a + c for axis a, component c (ex .. gz).
