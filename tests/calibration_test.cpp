@@ -256,6 +256,43 @@ TEST(Calibration, NoisyReadingsGiveAReducedChiSquareNearOne) {
   }
 }
 
+// The normal-equations path and the Householder QR path (the independent truth, backward
+// stable) reach the same fixed point: identified values, ball errors, uncertainties, covariance
+// and condition number agree, on noisy readings with a prior (regularised) and without.
+TEST(Calibration, NormalEquationsReachTheFixedPointOfQr) {
+  const Fixture& f = fixture();
+  std::mt19937 rng(29);
+  std::normal_distribution<double> n(0.0, 1.0);
+  Eigen::VectorXd truth = Eigen::VectorXd::Zero(f.m.model.parameterCount());
+  for (int p : f.unknowns) truth[p] = n(rng) * scaleOf(f.m.model, p);
+  const BallbarTest data = simulate(f.m.model, truth, f.plan.test, randomBalls(3, rng), 0.5e-3, 5);
+  for (const bool regularised : {false, true}) {
+    CalibrationOptions fast, qr;
+    if (regularised) fast.prior_linear = qr.prior_linear = 5e-3, fast.prior_angular = qr.prior_angular = 20e-6;
+    qr.normal_equations = false;
+    const Eigen::VectorXd prior = Eigen::VectorXd::Zero(truth.size());
+    const CalibrationResult a = calibrate(f.m.model, prior, data, f.unknowns, fast);
+    const CalibrationResult b = calibrate(f.m.model, prior, data, f.unknowns, qr);
+    ASSERT_EQ(a.status, CalibrationStatus::Converged);
+    ASSERT_EQ(b.status, CalibrationStatus::Converged);
+    ASSERT_EQ(a.identified, b.identified);
+    EXPECT_EQ(a.rank, b.rank);
+    EXPECT_NEAR(a.condition, b.condition, 1e-6 * b.condition);
+    for (size_t k = 0; k < a.identified.size(); ++k) {
+      const int p = a.identified[k];
+      // Differences far below each value's uncertainty (a thousandth of it).
+      EXPECT_LT(std::abs(a.params[p] - b.params[p]), 1e-3 * b.uncertainty[k]) << p;
+      EXPECT_NEAR(a.uncertainty[k], b.uncertainty[k], 1e-6 * b.uncertainty[k]) << p;
+    }
+    for (size_t s = 0; s < a.ball_errors.size(); ++s)
+      EXPECT_LT((a.ball_errors[s].table_w - b.ball_errors[s].table_w).norm() +
+                    (a.ball_errors[s].tool_t - b.ball_errors[s].tool_t).norm(),
+                1e-9);
+    EXPECT_LT((a.covariance - b.covariance).norm(), 1e-6 * b.covariance.norm());
+    EXPECT_NEAR(a.rms_residual, b.rms_residual, 1e-12);
+  }
+}
+
 // Thesis 4.8: one set-up cannot identify the full set: the rank stays at 78 of 98 unknowns.
 TEST(Calibration, OneSetupCannotIdentifyTheCubicModel) {
   const Fixture& f = fixture();

@@ -1,6 +1,7 @@
 // Column scaling, rank and condition (core/numerics/scaled_svd.h) against closed forms.
 #include <gtest/gtest.h>
 
+#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <cmath>
 #include <cstdlib>
@@ -69,6 +70,42 @@ TEST(ScaledSvd, SingularValuesAgreeWithJacobi) {
 }
 
 // numericalRank: values above 1e-9 of the largest.
+// The normal-matrix shortcut: its condition number squared agrees with Jacobi's singular values
+// of the column-scaled matrix; clearlyFullRank says yes below kappa 1e5 only, and no for a zero
+// column or a rank-deficient matrix.
+TEST(ScaledSvd, NormalMatrixConditionAgreesWithJacobi) {
+  std::srand(5);
+  int clear = 0, unclear = 0;  // both answers met
+  for (const double kappa : {1.0e1, 1.0e3, 3.0e4, 1.0e6, 1.0e8}) {
+    // Columns in mm and rad (scales 1 and 1e-4), with singular values spread to kappa.
+    const Eigen::MatrixXd U = Eigen::HouseholderQR<Eigen::MatrixXd>(Eigen::MatrixXd::Random(300, 40)).householderQ() *
+                              Eigen::MatrixXd::Identity(300, 40);
+    const Eigen::MatrixXd V = Eigen::HouseholderQR<Eigen::MatrixXd>(Eigen::MatrixXd::Random(40, 40)).householderQ();
+    Eigen::VectorXd sv(40);
+    for (int k = 0; k < 40; ++k) sv[k] = std::pow(kappa, -k / 39.0);
+    Eigen::MatrixXd J = U * sv.asDiagonal() * V.transpose();
+    for (int c = 0; c < 40; c += 2) J.col(c) *= 1e-4;
+    const Eigen::VectorXd truth = Eigen::JacobiSVD<Eigen::MatrixXd>(scaleColumns(J)).singularValues();
+    const double truth2 = std::pow(truth[0] / truth[39], 2);
+    Eigen::MatrixXd N = Eigen::MatrixXd::Zero(40, 40);
+    N.selfadjointView<Eigen::Lower>().rankUpdate(J.transpose());
+    Eigen::VectorXd scale;
+    ASSERT_TRUE(scaleNormalMatrix(N, &scale));
+    EXPECT_LT((scale - J.colwise().norm().transpose()).norm(), 1e-12 * scale.norm());
+    if (truth2 < 1e10) EXPECT_NEAR(normalConditionSquared(N), truth2, 1e-6 * truth2) << kappa;
+    EXPECT_EQ(clearlyFullRank(J), truth2 < 1e10) << kappa;
+    (truth2 < 1e10 ? clear : unclear) += 1;
+  }
+  EXPECT_EQ(clear, 3);
+  EXPECT_EQ(unclear, 2);
+  Eigen::MatrixXd Z = Eigen::MatrixXd::Random(50, 6);
+  Z.col(3).setZero();
+  EXPECT_FALSE(clearlyFullRank(Z));
+  Eigen::MatrixXd D = Eigen::MatrixXd::Random(50, 6);
+  D.col(5) = D.col(0) + D.col(1);
+  EXPECT_FALSE(clearlyFullRank(D));
+}
+
 TEST(ScaledSvd, NumericalRankUsesTheRelativeTolerance) {
   Eigen::VectorXd sv(4);
   sv << 10, 1, 2e-8, 5e-9;

@@ -1,6 +1,7 @@
 #include "core/calibration/calibration.h"
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
@@ -37,6 +38,11 @@ bool observableColumns(const Eigen::MatrixXd& J0, const std::vector<int>& unknow
   for (int c = 0; c < J0.cols(); ++c) {
     cols[c] = c;
     protect[c] = c >= np_all;
+  }
+  // Well conditioned (the usual case after a test plan): every column stays, no reduction.
+  if (clearlyFullRank(J0)) {
+    for (int c = 0; c < J0.cols(); ++c) keep_cols->push_back(c);
+    return true;
   }
   const MinimalSet ms = selectMinimalSet(J0, cols, protect, {}, false);
   for (int c : ms.removed) {
@@ -164,41 +170,85 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
       }
   };
 
-  // 2. Gauss-Newton with the pseudo-inverse of the column-scaled Jacobian. Each pass factors
-  //    J = QR; the step is R^-1 Q^T r when R has full rank (its singular values decide, by
-  //    bidiagonalisation), the rank-truncated pseudo-inverse by the SVD of R otherwise. The
-  //    last factorisation also gives the covariance.
+  // 2. Gauss-Newton with the pseudo-inverse of the column-scaled Jacobian A (prior rows
+  //    included). Two factorisations, chosen at the first pass:
+  //    * normal equations, N = A^T A by Cholesky, when N's eigenvalues give kappa(A)^2 below
+  //      kNormalConditionMax (kappa below 1e5): the usual case, the unknowns having been reduced
+  //      to a full-rank set (step 1); a step's relative error is then at most about
+  //      eps kappa^2 = 2e-6, and the residuals are evaluated exactly at every pass, so the
+  //      iteration reaches the same fixed point, J^T r = 0;
+  //    * otherwise Householder J = QR, the step R^-1 Q^T r when R has full rank (its singular
+  //      values decide, by bidiagonalisation), the rank-truncated pseudo-inverse by the SVD of R
+  //      otherwise.
+  //    The last factorisation also gives the covariance.
+  constexpr double kNormalConditionMax = 1e10;  // of N = A^T A
   Eigen::VectorXd scale;
   Eigen::MatrixXd R;
   res.status = CalibrationStatus::NotConverged;
   double previous_step = std::numeric_limits<double>::infinity();
-  Eigen::MatrixXd Ja;
+  Eigen::MatrixXd Ja, N;
   Eigen::VectorXd ra;
+  Eigen::LLT<Eigen::MatrixXd> llt;
+  bool normal = opt.normal_equations;  // the normal-equations path
+  // N and g = A^T r_a (scaled) at the current point; false when a column is zero.
+  Eigen::VectorXd g;
+  double ra2 = 0.0;  // |r_a|^2
+  auto normalEquations = [&]() {
+    N.setZero(n, n);
+    N.selfadjointView<Eigen::Lower>().rankUpdate(J.transpose());
+    g = J.transpose() * r;
+    ra2 = r.squaredNorm();
+    for (int k = 0; k < np && regularised; ++k) {
+      const double rk = -w[k] * res.params[unknowns[k]];
+      N(k, k) += w[k] * w[k];
+      g[k] += w[k] * rk;
+      ra2 += rk * rk;
+    }
+    if (!scaleNormalMatrix(N, &scale)) return false;
+    g = g.cwiseQuotient(scale);
+    return true;
+  };
   for (int it = 0; it < opt.max_iterations; ++it) {
-    augmented(J, r, &Ja, &ra);
-    Eigen::HouseholderQR<Eigen::MatrixXd> qr(scaleColumns(Ja, &scale));
-    R = qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
-    const Eigen::VectorXd Qtr = (qr.householderQ().transpose() * ra).head(n);
-    const Eigen::VectorXd sv = summariseScaled(R, mp).singular_values;
-    res.rank = numericalRank(sv);
-    res.condition = sv[0] / sv[res.rank - 1];
     Eigen::VectorXd step_s;
     double reducible2 = 0.0;  // |the part of r a step can remove|^2
-    if (res.rank == n) {
-      step_s = R.triangularView<Eigen::Upper>().solve(Qtr);
-      reducible2 = Qtr.squaredNorm();
-    } else {
-      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      Eigen::VectorXd inv = Eigen::VectorXd::Zero(n);
-      for (int k = 0; k < res.rank; ++k) inv[k] = 1.0 / svd.singularValues()[k];
-      const Eigen::VectorXd Utr = svd.matrixU().transpose() * Qtr;
-      step_s = svd.matrixV() * inv.asDiagonal() * Utr;
-      reducible2 = Utr.head(res.rank).squaredNorm();
+    double r2 = 0.0;          // |r_a|^2
+    if (normal) {
+      normal = normalEquations();
+      if (normal && it == 0) normal = normalConditionSquared(N) < kNormalConditionMax;
+      if (normal) llt.compute(N);
+      normal = normal && llt.info() == Eigen::Success;
+      if (normal) {
+        step_s = llt.solve(g);
+        reducible2 = g.dot(step_s);
+        r2 = ra2;
+        res.rank = n;
+      }
+    }
+    if (!normal) {
+      augmented(J, r, &Ja, &ra);
+      Eigen::HouseholderQR<Eigen::MatrixXd> qr(scaleColumns(Ja, &scale));
+      R = qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
+      const Eigen::VectorXd Qtr = (qr.householderQ().transpose() * ra).head(n);
+      const Eigen::VectorXd sv = summariseScaled(R, mp).singular_values;
+      res.rank = numericalRank(sv);
+      res.condition = sv[0] / sv[res.rank - 1];
+      if (res.rank == n) {
+        step_s = R.triangularView<Eigen::Upper>().solve(Qtr);
+        reducible2 = Qtr.squaredNorm();
+      } else {
+        const Eigen::JacobiSVD<Eigen::MatrixXd> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
+        Eigen::VectorXd inv = Eigen::VectorXd::Zero(n);
+        for (int k = 0; k < res.rank; ++k) inv[k] = 1.0 / svd.singularValues()[k];
+        const Eigen::VectorXd Utr = svd.matrixU().transpose() * Qtr;
+        step_s = svd.matrixV() * inv.asDiagonal() * Utr;
+        reducible2 = Utr.head(res.rank).squaredNorm();
+      }
+      r2 = ra.squaredNorm();
     }
     // The step's size in column-scaled units.
     const double sn = step_s.norm();
     // What no step can remove: the least-squares residual of the linearised problem.
-    const double irreducible = std::sqrt(std::max(0.0, ra.squaredNorm() - reducible2));
+    const double irreducible = std::sqrt(std::max(0.0, r2 - reducible2));
     const bool done = sn < opt.step_tolerance || sn < opt.relative_tolerance * irreducible ||
                       (sn < opt.floor_tolerance && sn > 0.5 * previous_step);
     previous_step = sn;
@@ -219,9 +269,18 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
     linearise(model, res.params, test, res.ball_errors, unknown_params, &r, &Jall);
     for (int k = 0; k < n; ++k) J.col(k) = Jall.col(keep_cols[k]);
   }
+  Eigen::MatrixXd C;  // the scaled covariance
+  if (normal) {
+    // The condition at the last factorisation, reported; the covariance N^-1.
+    const double kappa2 = normalConditionSquared(N);
+    res.condition = std::sqrt(kappa2);
+    C = llt.solve(Eigen::MatrixXd::Identity(n, n));
+  } else {
+    C = scaledCovariance(R, res.rank);
+  }
 
   // 3. Residuals and uncertainties from the last factorisation.
-  residualsAndUncertainties(r, scaledCovariance(R, res.rank), scale, keep_cols, np_all, np, res);
+  residualsAndUncertainties(r, C, scale, keep_cols, np_all, np, res);
   res.message = res.status == CalibrationStatus::Converged ? "converged" : "did not converge";
   return res;
 }

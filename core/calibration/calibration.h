@@ -35,6 +35,9 @@ struct CalibrationOptions {
   // and the covariance is s^2 (J^T J + s^2 diag(1/sigma_k^2))^-1.
   double prior_linear = 0.0, prior_angular = 0.0;
   double prior_noise = 0.5e-3;
+  // Solve each Gauss-Newton step by the normal equations when the column-scaled Jacobian is well
+  // conditioned (see calibrate); false: always by Householder QR (slower, for comparison).
+  bool normal_equations = true;
 };
 
 enum class CalibrationStatus { Converged, NotConverged, Unobservable, NoData };

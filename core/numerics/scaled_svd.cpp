@@ -119,4 +119,28 @@ double scaledCondition(const Eigen::MatrixXd& J) {
   return conditionOf(scaledSingularValues(compressRows(scaleColumns(J))));
 }
 
+bool scaleNormalMatrix(Eigen::MatrixXd& N, Eigen::VectorXd* scale) {
+  const Eigen::Index n = N.cols();
+  *scale = N.diagonal().cwiseSqrt();
+  if (n == 0 || !(scale->minCoeff() > kNegligibleColumn * scale->maxCoeff())) return false;
+  const Eigen::VectorXd inv = scale->cwiseInverse();
+  for (Eigen::Index c = 0; c < n; ++c) N.col(c).tail(n - c).array() *= inv[c] * inv.tail(n - c).array();
+  return true;
+}
+
+double normalConditionSquared(const Eigen::MatrixXd& N) {
+  const Eigen::VectorXd ev =
+      Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(N, Eigen::EigenvaluesOnly).eigenvalues();
+  return ev[0] > 0 ? ev[ev.size() - 1] / ev[0] : std::numeric_limits<double>::infinity();
+}
+
+bool clearlyFullRank(const Eigen::MatrixXd& J) {
+  const Eigen::Index n = J.cols();
+  if (n == 0 || J.rows() < n) return false;
+  Eigen::MatrixXd N = Eigen::MatrixXd::Zero(n, n);
+  N.selfadjointView<Eigen::Lower>().rankUpdate(J.transpose());
+  Eigen::VectorXd scale;
+  return scaleNormalMatrix(N, &scale) && normalConditionSquared(N) < 1e10;
+}
+
 }  // namespace tolver

@@ -45,6 +45,20 @@ double scaledCondition(const Eigen::MatrixXd& J);
 // The same of J as it is (mm and rad mixed, as [AM01] reports it).
 double unscaledCondition(const Eigen::MatrixXd& J);
 
+// The normal matrix N = A^T A of a matrix A (its lower triangle, all that is read) scaled in
+// place as A's columns would be by scaleColumns: unit diagonal. `scale` receives the column
+// norms, sqrt(diag N). False (N left part-scaled) when a column is numerically zero.
+bool scaleNormalMatrix(Eigen::MatrixXd& N, Eigen::VectorXd* scale);
+// kappa(A)^2 = the ratio of the extreme eigenvalues of N = A^T A (lower triangle); infinity when
+// N is not positive definite.
+double normalConditionSquared(const Eigen::MatrixXd& N);
+
+// True when scaleColumns(J) has no zero column and a condition number below 1e5, judged by the
+// eigenvalues of its normal matrix (their ratio below 1e10: each is then accurate to well within
+// the ratio, so full rank needs no singular value decomposition). False says nothing: decide by
+// summariseScaled.
+bool clearlyFullRank(const Eigen::MatrixXd& J);
+
 // The upper-triangular factor R of J = QR: the same singular values as J for any subset of its
 // columns, at a fraction of the size (J itself when it has no more rows than columns).
 Eigen::MatrixXd compressRows(const Eigen::MatrixXd& J);
