@@ -27,20 +27,38 @@ class BoxTree {
       build(0, static_cast<int>(boxes_.size()));
     }
   }
-  // Calls f(id) for each box that overlaps [lo, hi].
+  // Calls f(id) for each box that overlaps [lo, hi]. lo and hi may shrink while it runs (f
+  // changes them): what is left to visit is tested against them as they are.
   template <class F>
   void query(const Eigen::Array3d& lo, const Eigen::Array3d& hi, F&& f) const {
+    visit([&](const Eigen::Array3d& a, const Eigen::Array3d& b) { return !((a > hi).any() || (b < lo).any()); },
+          f);
+  }
+  // Calls f(id) for each box within Euclidean distance sqrt(r2) of the box [lo, hi] (both may
+  // shrink while it runs, as above).
+  template <class F>
+  void queryNear(const Eigen::Array3d& lo, const Eigen::Array3d& hi, const double& r2, F&& f) const {
+    visit(
+        [&](const Eigen::Array3d& a, const Eigen::Array3d& b) {
+          return ((a - hi).max(lo - b).max(0.0)).square().sum() <= r2;
+        },
+        f);
+  }
+
+ private:
+  template <class Near, class F>
+  void visit(Near&& near, F&& f) const {
     if (nodes_.empty()) return;
     int stack[128];
     int top = 0;
     stack[top++] = 0;
     while (top > 0) {
       const Node& node = nodes_[stack[--top]];
-      if ((node.lo > hi).any() || (node.hi < lo).any()) continue;
+      if (!near(node.lo, node.hi)) continue;
       if (node.count > 0) {
         for (int k = node.first; k < node.first + node.count; ++k) {
           const Box& b = boxes_[k];
-          if (!((b.lo > hi).any() || (b.hi < lo).any())) f(b.id);
+          if (near(b.lo, b.hi)) f(b.id);
         }
       } else {
         stack[top++] = node.right;
@@ -49,7 +67,6 @@ class BoxTree {
     }
   }
 
- private:
   static constexpr int kLeaf = 4;
   struct Node {
     Eigen::Array3d lo, hi;
@@ -106,17 +123,29 @@ void sweepSurface(const SurfaceSamples& samples, const Cutter& cutter,
   if (placements.empty() || n == 0) return;
 
   const double L = cutter.effectiveLength(), Rmax = cutter.maxRadius();
+  // A ball end (no flat between the corners): the ball's centres go in a tree of their own,
+  // searched by distance (a blade meets the ball only within rc of its centre), and the boxes of
+  // the rest of the tool start at the centre's height, where it is no wider than the ball's
+  // radius: a blade on the surface meets the ball of a few placements and the boxes of none.
+  const double rc = cutter.corner_radius;
+  const bool ball = rc > 0 && 0.5 * cutter.diameter - rc <= 1e-12 && rc < L;
+  const double from = ball ? rc : 0.0;  // where the boxes start along the axis
   // One box per chunk of the cutter no longer than its diameter: a tilted tool's single box would
   // hold much empty space, and every blade inside it would test the tool for nothing.
-  const int chunks = std::max(1, static_cast<int>(std::ceil(L / std::max(2.0 * Rmax, 1e-6))));
-  std::vector<BoxTree::Box> boxes;
+  const int chunks = std::max(1, static_cast<int>(std::ceil((L - from) / std::max(2.0 * Rmax, 1e-6))));
+  std::vector<BoxTree::Box> boxes, centres;
   boxes.reserve(placements.size() * chunks);
   for (size_t k = 0; k < placements.size(); ++k) {
     const Eigen::Vector3d& u = placements[k].axis_w;
+    if (ball) {
+      const Eigen::Array3d c = (placements[k].tip_w + rc * u).array();
+      centres.push_back({c, c, static_cast<int>(k)});
+    }
     for (int c = 0; c < chunks; ++c) {
-      const Eigen::Vector3d p = placements[k].tip_w + (L * c / chunks) * u;
-      const Eigen::Vector3d q = placements[k].tip_w + (L * (c + 1) / chunks) * u;
-      const double radius = cutter.radiusAt(L * (c + 1) / chunks);
+      const double h0 = from + (L - from) * c / chunks, h1 = from + (L - from) * (c + 1) / chunks;
+      const Eigen::Vector3d p = placements[k].tip_w + h0 * u;
+      const Eigen::Vector3d q = placements[k].tip_w + h1 * u;
+      const double radius = std::max(cutter.radiusAt(h0), cutter.radiusAt(h1));
       // Box of the cylinder of that radius around the axis segment: per coordinate the
       // segment's extent plus radius sqrt(1 - u_i^2).
       Eigen::Vector3d lo, hi;
@@ -128,37 +157,75 @@ void sweepSurface(const SurfaceSamples& samples, const Cutter& cutter,
       boxes.push_back({lo.array(), hi.array(), static_cast<int>(k)});
     }
   }
-  const BoxTree tree(std::move(boxes));
+  const BoxTree tree(std::move(boxes)), centre_tree(std::move(centres));
 
   const double below = options.gouge_range, above = options.excess_range;
-  auto sweepOne = [&](size_t i) {
+  // With a ball end, below the plane of the ball's centre the tool is the ball alone.
+  const double ball_reach2 = (rc + 1e-9) * (rc + 1e-9);
+  // What is left of the blade is [-below, top] along the normal, and only a placement that
+  // reaches into it can cut deeper: the search box and the rejection tests shrink with it, and
+  // each blade first tries the placement that cut the previous sample of its block (a
+  // neighbour: it, or one near it, usually cuts deepest), so the blade is short from the start.
+  // The tests only skip placements that cannot meet what is left of the blade (each bound holds
+  // with a margin of 1e-9 mm), so the answer is the same as testing every placement.
+  auto sweepOne = [&](size_t i, int& hint) {
     if (!samples.on_edge.empty() && samples.on_edge[i]) return;
     const Eigen::Vector3d& p = samples.p_w[i];
     const Eigen::Vector3d& nrm = samples.n_w[i];
-    const Eigen::Array3d a = (p - below * nrm).array(), b = (p + above * nrm).array();
+    const Eigen::Vector3d e0 = p - below * nrm;  // the blade's lower end
     double top = above;
     int who = -1;
-    const Eigen::Vector3d mid = p + 0.5 * (above - below) * nrm;
-    const double reach2 = (Rmax + 0.5 * (above + below)) * (Rmax + 0.5 * (above + below));
+    Eigen::Array3d lo, hi;
+    Eigen::Vector3d mid;
+    double reach2 = 0.0;
+    auto shrink = [&]() {
+      const Eigen::Array3d b = (p + top * nrm).array();
+      lo = e0.array().min(b);
+      hi = e0.array().max(b);
+      const double half = 0.5 * (top + below);
+      mid = p + 0.5 * (top - below) * nrm;
+      reach2 = (Rmax + half + 1e-9) * (Rmax + half + 1e-9);
+    };
+    shrink();
     auto cut = [&](int k) {
       const ToolPlacement& t = placements[k];
-      // Cheap rejection: the blade's midpoint farther from the tool axis than the tool's
-      // largest radius plus half the blade.
-      const Eigen::Vector3d w = mid - t.tip_w;
-      const double h = std::clamp(w.dot(t.axis_w), 0.0, L);
-      if ((w - h * t.axis_w).squaredNorm() > reach2) return;
+      bool below_centre = false;
+      if (ball) {
+        // The blade wholly below the ball centre's plane: it meets the tool only if it comes
+        // within rc of the centre.
+        const Eigen::Vector3d e0c = e0 - (t.tip_w + rc * t.axis_w);
+        const double len = top + below;
+        const double h0 = e0c.dot(t.axis_w), h1 = h0 + len * nrm.dot(t.axis_w);
+        if (h0 < -1e-9 && h1 < -1e-9) {
+          const double along = std::clamp(-e0c.dot(nrm), 0.0, len);
+          if ((e0c + along * nrm).squaredNorm() > ball_reach2) return;
+          below_centre = true;
+        }
+      }
+      if (!below_centre) {
+        // The blade's midpoint farther from the tool axis than the tool's largest radius plus
+        // half the blade.
+        const Eigen::Vector3d w = mid - t.tip_w;
+        const double h = std::clamp(w.dot(t.axis_w), 0.0, L);
+        if ((w - h * t.axis_w).squaredNorm() > reach2) return;
+      }
       const double s = cutter.lineEntry(p - t.tip_w, nrm, t.axis_w, -below, top);
       // Ties go to the earlier placement, whatever order the tree visits them in.
       if (s < top || (s == top && who > k)) {
+        const bool deeper = s < top;
         top = s;
         who = k;
+        if (deeper) shrink();
       }
     };
-    tree.query(a.min(b), a.max(b), cut);
+    if (hint >= 0) cut(hint);
+    if (ball) centre_tree.queryNear(lo, hi, ball_reach2, cut);
+    tree.query(lo, hi, cut);
     if (who >= 0) {
       result->deviation[i] = top;
       result->machined[i] = 1;
       result->placement[i] = who;
+      hint = who;
     }
   };
   const size_t block = 4096;
@@ -166,7 +233,8 @@ void sweepSurface(const SurfaceSamples& samples, const Cutter& cutter,
     const size_t last = std::min(n, first + block);
     tbb::parallel_for(tbb::blocked_range<size_t>(first, last, 64),
                       [&](const tbb::blocked_range<size_t>& r) {
-                        for (size_t i = r.begin(); i != r.end(); ++i) sweepOne(i);
+                        int hint = -1;
+                        for (size_t i = r.begin(); i != r.end(); ++i) sweepOne(i, hint);
                       });
     if (progress) progress(static_cast<double>(last) / n);
   }

@@ -5,8 +5,10 @@
 // every tool placement that the blade meets cuts it down to where the line enters the cutter.
 // What is left of the blade is the signed normal deviation of the machined surface from the
 // nominal one: + material left, - gouge. A sample that no tool cuts below excess_range is
-// unmachined (not part of this program). A CGAL AABB tree over the placements' bounding boxes
-// gives each blade only the placements near it. Samples on sharp edges are skipped (unmachined).
+// unmachined (not part of this program). Bounding-volume hierarchies over the placements give
+// each blade only the placements that can reach what is left of it (for a ball end, its ball by
+// distance to the ball's centre and the rest of the tool by boxes); the answer is that of
+// testing every placement. Samples on sharp edges are skipped (unmachined).
 #include <functional>
 #include <vector>
 
