@@ -8,6 +8,8 @@
 //   sculptured_finish.apt    five-axis ball-end (D10) finish of that top, 0.5 mm step-over
 //   nas979_cone.stl          the NAS 979 cone frustum on its base plate (binary STL)
 // Usage: make_samples <output directory>
+//        make_samples --large <output directory>: sculptured_part.obj and
+//        sculptured_finish_large.apt (0.1 mm step-over, 120 801 points; bench/verify_large.sh)
 #include <Eigen/Geometry>
 #include <array>
 #include <cmath>
@@ -200,12 +202,16 @@ void sculpturedPart(const std::string& dir) {
 // 6 um), a point every mm, the tool axis the surface normal tilted 20 deg about x, so that it
 // never passes through the vertical (where the C axis of a table-tilting machine would swing
 // half a turn between two points and the tool would gouge the part).
-void sculpturedFinish(const std::string& dir) {
-  Writer w{open(dir, "sculptured_finish.apt")};
-  header(w, "SCULPTURED_FINISH", "sculptured part, five-axis ball-end finish (0.5 mm step-over)",
+// large: the benchmark's version (bench/verify_large.sh), 0.1 mm step-over and a point every
+// 0.4 mm: 601 passes of 201 points, 120 801 points.
+void sculpturedFinish(const std::string& dir, bool large = false) {
+  Writer w{open(dir, large ? "sculptured_finish_large.apt" : "sculptured_finish.apt")};
+  header(w, "SCULPTURED_FINISH",
+         large ? "sculptured part, five-axis ball-end finish (0.1 mm step-over, a point every 0.4 mm)"
+               : "sculptured part, five-axis ball-end finish (0.5 mm step-over)",
          "CUTTER/10,5,0,0,0,0,40");
   const double r = 5.0, tilt = -20.0 * M_PI / 180.0;
-  const int passes = 121, per = 81;
+  const int passes = large ? 601 : 121, per = large ? 201 : 81;
   for (int j = 0; j < passes; ++j) {
     const double y = -30.0 + 60.0 * j / (passes - 1);
     const int sign = (j % 2 == 0) ? 1 : -1;
@@ -285,8 +291,14 @@ void coneStl(const std::string& dir) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc == 3 && std::string(argv[1]) == "--large") {
+    sculpturedPart(argv[2]);
+    sculpturedFinish(argv[2], true);
+    return 0;
+  }
   if (argc != 2) {
-    std::fprintf(stderr, "usage: make_samples <output directory>\n");
+    std::fprintf(stderr, "usage: make_samples <output directory>\n"
+                         "       make_samples --large <output directory>  (the part and a 120 801-point finish)\n");
     return 2;
   }
   cone(argv[1]);
