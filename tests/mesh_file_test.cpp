@@ -8,7 +8,16 @@
 #include <assimp/scene.h>
 #include <cmath>
 #include <fstream>
+#include <filesystem>
 #include <iterator>
+#include <random>
+
+#include <vtkCellArray.h>
+#include <vtkDataArray.h>
+#include <vtkPointData.h>
+#include <vtkPolyData.h>
+#include <vtkSmartPointer.h>
+#include <vtkXMLPolyDataReader.h>
 
 #include "io/common/io_error.h"
 #include "test_support.h"
@@ -240,6 +249,45 @@ TEST_F(MeshFileTest, AFuzzedBorderDoesNotMakeHoleFillingWalk) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("walk.stl"), std::string::npos) << e.what();
   }
+}
+
+// The VTP surface (raw appended binary, no compression) reads back through VTK's own reader:
+// every point, triangle and scalar value exactly.
+TEST(SurfaceFiles, VtpSurfaceReadsBackExactly) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(-100.0, 100.0);
+  std::vector<Eigen::Vector3d> points(500);
+  for (auto& p : points) p = Eigen::Vector3d(U(rng), U(rng), U(rng));
+  std::vector<Eigen::Vector3i> faces;
+  for (int k = 0; k + 2 < 500; k += 3) faces.emplace_back(k, k + 1, k + 2);
+  std::vector<double> a(500), b(500);
+  for (size_t i = 0; i < 500; ++i) {
+    a[i] = U(rng) * 1e-3;
+    b[i] = static_cast<double>(i % 4);
+  }
+  const std::string path = (std::filesystem::temp_directory_path() / "tolver_vtp_test.vtp").string();
+  writeVtpWithScalars(path, points, faces, {{"total_um", &a}, {"state", &b}});
+  vtkNew<vtkXMLPolyDataReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkPolyData* poly = reader->GetOutput();
+  ASSERT_EQ(poly->GetNumberOfPoints(), 500);
+  ASSERT_EQ(poly->GetNumberOfPolys(), static_cast<vtkIdType>(faces.size()));
+  for (vtkIdType i = 0; i < 500; ++i) {
+    double p[3];
+    poly->GetPoint(i, p);
+    EXPECT_EQ(Eigen::Vector3d(p[0], p[1], p[2]), points[i]) << i;
+    EXPECT_EQ(poly->GetPointData()->GetArray("total_um")->GetTuple1(i), a[i]) << i;
+    EXPECT_EQ(poly->GetPointData()->GetArray("state")->GetTuple1(i), b[i]) << i;
+  }
+  vtkIdType n = 0;
+  const vtkIdType* ids = nullptr;
+  poly->GetPolys()->InitTraversal();
+  for (size_t f = 0; poly->GetPolys()->GetNextCell(n, ids); ++f) {
+    ASSERT_EQ(n, 3);
+    EXPECT_EQ(Eigen::Vector3i(ids[0], ids[1], ids[2]), faces[f]) << f;
+  }
+  std::filesystem::remove(path);
 }
 
 }  // namespace
