@@ -190,9 +190,9 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
   Eigen::VectorXd ra;
   Eigen::LLT<Eigen::MatrixXd> llt;
   bool normal = opt.normal_equations;  // the normal-equations path
-  // N and g = A^T r_a (scaled) at the current point; false when a column is zero.
-  Eigen::VectorXd g;
-  double ra2 = 0.0;  // |r_a|^2
+  Eigen::VectorXd g;  // A^T r_a, scaled
+  double ra2 = 0.0;   // |r_a|^2
+  // N, g and ra2 at the current point (N and g column-scaled); false when a column is zero.
   auto normalEquations = [&]() {
     N.setZero(n, n);
     N.selfadjointView<Eigen::Lower>().rankUpdate(J.transpose());
