@@ -22,6 +22,9 @@ class LineSource {
 
   // The next line into `line` (without its ending); false at the end of the text.
   bool next(std::string& line);
+  // The text's size in bytes when known (a regular file, or text in memory), else 0: for a
+  // reader that keeps the text, to reserve it at once.
+  size_t sizeHint() const { return size_hint_; }
   const std::string& name() const { return name_; }
 
  private:
@@ -36,6 +39,7 @@ class LineSource {
   std::string buf_;         // the file's block being read
   std::string_view rest_;   // what is left to read: of buf_, or of the caller's text
   bool first_ = true;
+  size_t size_hint_ = 0;
 };
 
 // The first `max_bytes` of a file (for guessing its dialect before it is streamed); throws

@@ -42,6 +42,10 @@ class Parser {
       : opt_(opt), source_(source) {
     prog_.file = file;
     prog_.frames.push_back(ClFrame{});
+    // Line ends for a line of about 40 bytes; the text when it is kept (growing it by doubling
+    // would copy it and fault in fresh pages over and over).
+    const size_t bytes = source.sizeHint();
+    prog_.lines.reserve(opt.keep_motion_text ? bytes : 0, bytes / 40);
   }
 
   ClProgram run() {
@@ -86,7 +90,12 @@ class Parser {
   // the statement being read stay in the window; earlier ones are in prog_.lines.
   const std::string* line(size_t i) {
     while (i >= window_first_ + window_.size() && !at_end_) {
+      // A string of a line already passed on, whose buffer is reused (no allocation per line).
       std::string l;
+      if (!spare_.empty()) {
+        l = std::move(spare_.back());
+        spare_.pop_back();
+      }
       if (source_.next(l)) window_.push_back(std::move(l));
       else at_end_ = true;
     }
@@ -97,6 +106,7 @@ class Parser {
   void keepUpTo(size_t end, bool keep_text) {
     while (window_first_ < end && !window_.empty()) {
       prog_.lines.push(window_.front(), keep_text);
+      spare_.push_back(std::move(window_.front()));
       window_.pop_front();
       ++window_first_;
     }
@@ -445,6 +455,7 @@ class Parser {
   const AptReadOptions& opt_;
   LineSource& source_;
   std::deque<std::string> window_;  // lines read but not yet in prog_.lines
+  std::vector<std::string> spare_;  // strings of lines passed on, for reuse
   size_t window_first_ = 0;         // the 0-based number of window_.front()
   bool at_end_ = false;
   ClProgram prog_;

@@ -98,6 +98,7 @@ class Reader {
     prog_.dialect = "G-code";
     prog_.multiax = true;
     source_ = &source;
+    prog_.lines.reserve(source.sizeHint(), source.sizeHint() / 30);  // all the text is kept
     prog_.frames.push_back(ClFrame{});
     unit_ = opt.unit_mm > 0 ? opt.unit_mm : model.control.default_unit_mm;
     prog_.units = unit_ == 25.4 ? "INCH" : "MM";

@@ -12,6 +12,11 @@ namespace tolver {
 
 class SourceLines {
  public:
+  // Room for `bytes` of text and `lines` lines (a reader that knows the file's size).
+  void reserve(size_t bytes, size_t lines) {
+    text_.reserve(bytes);
+    end_.reserve(lines);
+  }
   // Appends the next line; its text is kept only when `keep`.
   void push(std::string_view line, bool keep);
   size_t size() const { return end_.size(); }
