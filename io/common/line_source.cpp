@@ -64,12 +64,16 @@ bool LineSource::next(std::string& line) {
       if (rest_.substr(0, 3) == "\xEF\xBB\xBF") rest_.remove_prefix(3);
       first_ = false;
     }
-    // The first CR or LF (two memchr: find_first_of calls one per character).
+    // The first CR or LF (two memchr: find_first_of calls one per character; none on an empty
+    // view, whose data() may be null).
     size_t end = std::string_view::npos;
-    if (const void* lf = std::memchr(rest_.data(), '\n', rest_.size()))
-      end = static_cast<size_t>(static_cast<const char*>(lf) - rest_.data());
-    if (const void* cr = std::memchr(rest_.data(), '\r', end == std::string_view::npos ? rest_.size() : end))
-      end = static_cast<size_t>(static_cast<const char*>(cr) - rest_.data());
+    if (!rest_.empty()) {
+      if (const void* lf = std::memchr(rest_.data(), '\n', rest_.size()))
+        end = static_cast<size_t>(static_cast<const char*>(lf) - rest_.data());
+      const size_t before = end == std::string_view::npos ? rest_.size() : end;
+      if (const void* cr = before > 0 ? std::memchr(rest_.data(), '\r', before) : nullptr)
+        end = static_cast<size_t>(static_cast<const char*>(cr) - rest_.data());
+    }
     if (end == std::string_view::npos) {
       if (fill()) continue;
       if (rest_.empty()) return false;  // the end; a last line without ending was returned
