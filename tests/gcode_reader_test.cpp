@@ -237,6 +237,9 @@ TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
       {"", 0, "empty file"},
       {"G21\nG0 X99999999999\n", 2, "plausible"},
       {"G21\nG1 X[1/0]\n", 2, "division by zero"},
+      // The fuzzer's input (tests/fuzz): thousands of signs made the expression parser's
+      // recursion overflow the stack.
+      {"G21\ng2++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++\n", 2, "nested deeper"},
   };
   for (const Case& c : cases) {
     try {
@@ -274,6 +277,21 @@ TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
 
 // Mutated lines of the real program: the reader either reads or throws InputError naming the
 // file; never another exception, a crash or a non-finite point.
+// The fuzzer's input itself (5 kB of '+' after a BOM and a comment): an error naming the line.
+TEST(GcodeReader, DeepExpressionNestingIsAnErrorNotAStackOverflow) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const std::string text = test::readText(test::sourcePath("tests/fuzz/gcode_corpus/deep_signs.ngc"));
+  for (const std::string& t : {text, "G21\nG0 X" + std::string(100000, '[') + "1\n",
+                               "G21\nG0 X" + std::string(100000, '-') + "1\n", "#1=" + std::string(100000, '#') + "1\n"}) {
+    try {
+      parseGcode(t, "deep.ngc", m.model);
+      FAIL() << "no error";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("deep.ngc:"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(GcodeReader, MutatedProgramsFailCleanly) {
   const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
   const std::string base = test::readText(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzac.ngc"));

@@ -261,6 +261,15 @@ class Reader {
   }
 
   double primary(const std::string& text, size_t& i, int col_base) {
+    // Signs, brackets and parameter references nest by recursion: bounded, so that a block of
+    // thousands of '+' or '[' is an error, not a stack overflow.
+    struct Depth {
+      int& d;
+      explicit Depth(int& depth) : d(++depth) {}
+      ~Depth() { --d; }
+    } depth(nesting_);
+    if (nesting_ > kMaxNesting)
+      fail(line_, col_base + i, "", "expression nested deeper than " + std::to_string(kMaxNesting) + " levels");
     while (i < text.size() && text[i] == ' ') ++i;
     if (i >= text.size()) fail(line_, col_base + i, "", "a number is missing");
     const char c = text[i];
@@ -816,6 +825,8 @@ class Reader {
   ForwardKinematics nominal_;
   InverseKinematics ik_;
   ClProgram prog_;
+  static constexpr int kMaxNesting = 64;  // signs, brackets and '#' within one expression
+  int nesting_ = 0;
   LineSource* source_ = nullptr;
   int line_ = 0;
   bool ended_ = false, seen_block_ = false;

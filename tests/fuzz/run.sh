@@ -21,7 +21,7 @@ targets=()
 for n in "${names[@]}"; do targets+=("fuzz_$n"); done
 # TOLVER_FUZZ_NO_BUILD=1: use the harnesses as built (several runs at once share build-fuzz/).
 [ -n "${TOLVER_FUZZ_NO_BUILD:-}" ] || "$here/scripts/build_sanitized.sh" --fuzz "${targets[@]}"
-declare -A corpus=([apt]="tests/fixtures/cl samples/*.apt" [gcode]="tests/fixtures/gcode samples/gcode/*.nc samples/gcode/*.ngc"
+declare -A corpus=([apt]="tests/fixtures/cl samples/*.apt" [gcode]="tests/fixtures/gcode tests/fuzz/gcode_corpus samples/gcode/*.nc samples/gcode/*.ngc"
                    [machine]="resources/machines tests/fixtures/machines samples/machines" [setup]="samples/*setup*.txt samples/gcode/*.txt"
                    [ballbar]="samples/ballbar/*.csv" [zones]="samples/sculptured_zones.csv"
                    [tolerances]="resources/allocation" [probe]="samples/matsuura_probed.csv"
