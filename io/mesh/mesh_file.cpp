@@ -133,7 +133,19 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
   // Read and validated first, triangulated after: Debian's assimp 5.2 aborts the process (an
   // ai_assert in its TriangulateProcess) on a face without vertices, which a malformed PLY makes
   // (found by the mesh fuzz harness), so such faces are refused before triangulating.
-  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+  // An OBJ is handed over from memory with a zero byte after it: Debian's assimp 5.2 parses
+  // numbers with strtol on its own copy of the file, which has no terminating zero, so a file
+  // ending in digits would be read past its end (the mesh fuzz harness,
+  // tests/fuzz/mesh_corpus/obj_strtol_unterminated).
+  const aiScene* scene = nullptr;
+  if (part.format == "obj") {
+    std::string text = readFile(path);
+    text.push_back('\n');
+    text.push_back('\0');
+    scene = importer.ReadFileFromMemory(text.data(), text.size(), aiProcess_ValidateDataStructure, "obj");
+  } else {
+    scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+  }
   auto unreadable = [&] {
     std::string why = importer.GetErrorString();
     if (why.empty()) why = "not a readable mesh";
