@@ -6,6 +6,8 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <string>
 #include <random>
 
 #include "io/machine/machine_file.h"
@@ -160,6 +162,92 @@ TEST_P(EveryMachine, ChoiceIsTheCheapestFeasibleCandidate) {
   }
   EXPECT_GT(compared, 2000);
   if (ik.rotaryAxes().size() == 2) EXPECT_GT(second_cheaper, 100);  // both orders occur
+}
+
+// The batch path (solveBlock: candidates, prismatic solutions and angle steps four points at
+// a time, the continuity choice point by point) gives solve()'s bits point by point, with the
+// reference predictToolPath uses (the previous solution, none after a failure), on a path that
+// mixes small steps, jumps, near-singular and singular tool axes, unreachable axes and points
+// beyond the stroke, in blocks of varying length.
+TEST_P(EveryMachine, BlockEqualsPointByPointBitForBit) {
+  Machine m = readMachineFile(test::sourcePath(GetParam()));
+  m.model.setup.part_zero_table = Eigen::Vector3d(10, -20, 30);
+  m.model.setup.gauge_length = 100;
+  const InverseKinematics ik(m.model);
+  if (!ik.batchable()) {  // the nutating head (axis off x/y/z), four and three axes
+    EXPECT_NE(std::string(GetParam()).find("fixtures"), std::string::npos) << GetParam();
+    return;
+  }
+  const ForwardKinematics fk(m.model, Eigen::VectorXd::Zero(m.model.parameterCount()));
+  std::mt19937 rng(77);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::vector<Eigen::Vector3d> ps, us;
+  JointVector q = randomJoints(m.model, rng);
+  for (int n = 0; n < 3000; ++n) {
+    const double kind = unit(rng);
+    if (kind < 0.9) {  // a small step of every joint
+      for (size_t a = 0; a < m.model.axes.size(); ++a) {
+        const Axis& ax = m.model.axes[a];
+        const double span = ax.travel_max - ax.travel_min;
+        q[a] = std::clamp(q[a] + 0.003 * (ax.isRotary() ? std::min(span, 2 * M_PI) : span) *
+                                     (unit(rng) - 0.5),
+                          ax.travel_min, ax.travel_max);
+      }
+    } else if (kind < 0.95) {
+      q = randomJoints(m.model, rng);  // a jump
+    }
+    const Eigen::Isometry3d T = fk.w_T_t(q);
+    Eigen::Vector3d p = T.translation(), u = T.linear().col(2);
+    const double odd = unit(rng);
+    if (odd < 0.01) p.x() += 1e4;                       // beyond the stroke
+    else if (odd < 0.02) u = -u;                        // often unreachable
+    else if (odd < 0.04) u = Eigen::Vector3d(std::pow(10.0, -9 * unit(rng)), 0, 1).normalized();
+    else if (odd < 0.05) u = Eigen::Vector3d::UnitZ();  // along a rotary axis on most machines
+    ps.push_back(p);
+    us.push_back(u);
+  }
+  // Point by point.
+  std::vector<IkSolution> ref;
+  const JointVector* previous = nullptr;
+  for (size_t i = 0; i < ps.size(); ++i) {
+    ref.push_back(ik.solve(ps[i], us[i], previous,
+                           previous ? ref[i - 1].cos_q.data() : nullptr,
+                           previous ? ref[i - 1].sin_q.data() : nullptr));
+    previous = ref.back().status == IkStatus::Ok ? &ref.back().q : nullptr;
+  }
+  // In blocks.
+  auto block = std::make_unique<InverseKinematics::Block>();
+  InverseKinematics::Cursor cursor;
+  const int axes = static_cast<int>(m.model.axes.size());
+  int solved = 0, from_lanes = 0;
+  for (size_t start = 0, len = 1; start < ps.size(); start += len, len = (len * 7 + 5) % 64 + 1) {
+    const int n = static_cast<int>(std::min(len, ps.size() - start));
+    block->n = n;
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) {
+        block->p[k][i] = ps[start + i][k];
+        block->u[k][i] = us[start + i][k];
+      }
+    ik.solveBlock(*block, cursor);
+    for (int i = 0; i < n; ++i) {
+      const IkSolution& r = ref[start + i];
+      const std::string where = std::string(GetParam()) + " point " + std::to_string(start + i);
+      ASSERT_EQ(block->status[i], r.status) << where;
+      ASSERT_EQ(block->violated_axis[i], r.violated_axis) << where;
+      if (r.status != IkStatus::Ok) continue;
+      ASSERT_EQ(block->singular[i], r.singular) << where;
+      for (int a = 0; a < axes; ++a) {
+        ASSERT_EQ(block->q[a][i], r.q[a]) << where << " axis " << a;
+        if (!m.model.axes[a].isRotary()) continue;
+        ASSERT_EQ(block->c[a][i], r.cos_q[a]) << where << " axis " << a;
+        ASSERT_EQ(block->s[a][i], r.sin_q[a]) << where << " axis " << a;
+      }
+      ++solved;
+    }
+    from_lanes += block->from_lanes;
+  }
+  EXPECT_GT(solved, 2000);
+  EXPECT_GT(from_lanes, 0.8 * solved);  // the lane stage's numbers were used, not only solve()
 }
 
 INSTANTIATE_TEST_SUITE_P(Shipped, EveryMachine, ::testing::ValuesIn(test::kinematicsTestMachines()));

@@ -5,6 +5,8 @@
 #include <cmath>
 
 #include "core/numerics/chebyshev.h"
+#include "core/numerics/lanes.h"
+#include "core/model/rigid_transform.h"
 #include "core/model/effects.h"
 
 namespace tolver {
@@ -61,44 +63,67 @@ ForwardKinematics::ForwardKinematics(const MachineModel& model, const Eigen::Vec
     t.fixed_Rt = t.fixed_R.transpose();
     t.fixed_p = t.fixed.translation();
     t.fixed_identity = t.fixed.isApprox(Eigen::Isometry3d::Identity(), 0.0);
+    t.fixed_R_identity = t.fixed_R == Eigen::Matrix3d::Identity();
     t.has_errors = t.max_degree >= 0 || !t.effects.empty();
     t.coef = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, std::max(t.max_degree + 1, 1));
     for (int c = 0; c < 6; ++c)
       for (int k = 0; k <= t.degree[c]; ++k) t.coef(c, k) = params[t.offset[c] + k];
   }
+  batchable_ = true;
+  for (size_t a = 0; a < axis_.size(); ++a)
+    if (!axis_[a].effects.empty() || (model.axes[a].isRotary() && axis_[a].principal < 0))
+      batchable_ = false;
   w_end_ = model.last_T_table * table_T_w_err_;
+  w_end_Rt_ = w_end_.linear().transpose();
   t_end_ = model.last_T_spindle * spindle_T_t_err_;
 }
 
 Vector6d ForwardKinematics::motionErrors(int a, double s, const MotionContext* ctx) const {
   const AxisTerms& t = axis_[a];
   if (!t.has_errors) return Vector6d::Zero();
-  const double x = (s - t.mid) * t.inv_half_range;  // eq. 58
-  if (!t.effects.empty()) return motionErrorsWithEffects(t, s, x, ctx);
-  // e = sum_k C_k T_k(x), the six components at once, T_k by the recurrence of eq. 57 (the
-  // default cubic written out).
-  const auto C = [&](int k) { return t.coef.col(k); };
+  if (!t.effects.empty()) {
+    const double x = (s - t.mid) * t.inv_half_range;  // eq. 58
+    return motionErrorsWithEffects(t, s, x, ctx);
+  }
+  Vector6d e;
+  motionErrorsL(t, s, e.data());
+  return e;
+}
+
+// e = sum_k C_k T_k(x) with x = s normalised by eq. 58, the six components, T_k by the
+// recurrence of eq. 57 (the default cubic written out). Chebyshev terms only (no effects).
+template <typename L>
+TOLVER_LANE_INLINE void ForwardKinematics::motionErrorsL(const AxisTerms& t, L s, L e[6]) const {
+  const L x = (s - t.mid) * t.inv_half_range;
+  const double* C = t.coef.data();  // column-major 6 x (degree + 1): C[6 k + c]
   switch (t.max_degree) {
     case 0:
-      return C(0);
+      for (int c = 0; c < 6; ++c) e[c] = lanes::splat<L>(C[c]);
+      return;
     case 1:
-      return C(0) + x * C(1);
-    case 2:
-      return C(0) + x * C(1) + (2.0 * x * x - 1.0) * C(2);
+      for (int c = 0; c < 6; ++c) e[c] = C[c] + x * C[6 + c];
+      return;
+    case 2: {
+      const L t2 = 2.0 * x * x - 1.0;
+      for (int c = 0; c < 6; ++c) e[c] = C[c] + x * C[6 + c] + t2 * C[12 + c];
+      return;
+    }
     case 3: {
-      const double t2 = 2.0 * x * x - 1.0;
-      return C(0) + x * C(1) + t2 * C(2) + (2.0 * x * t2 - x) * C(3);
+      const L t2 = 2.0 * x * x - 1.0;
+      const L t3 = 2.0 * x * t2 - x;
+      for (int c = 0; c < 6; ++c) e[c] = C[c] + x * C[6 + c] + t2 * C[12 + c] + t3 * C[18 + c];
+      return;
     }
     default: {
-      Vector6d e = C(0) + x * C(1);
-      double t_prev = 1.0, t_cur = x;
+      for (int c = 0; c < 6; ++c) e[c] = C[c] + x * C[6 + c];
+      L t_prev = lanes::splat<L>(1.0), t_cur = x;
       for (int k = 2; k <= t.max_degree; ++k) {
-        const double t_next = 2.0 * x * t_cur - t_prev;
-        e += t_next * C(k);
+        const L t_next = 2.0 * x * t_cur - t_prev;
+        for (int c = 0; c < 6; ++c) e[c] += t_next * C[6 * k + c];
         t_prev = t_cur;
         t_cur = t_next;
       }
-      return e;
+      return;
     }
   }
 }
@@ -181,99 +206,198 @@ Eigen::Isometry3d ForwardKinematics::F_T_t(const JointVector& q) const {
 
 namespace {
 
-// M <- Rz(rz) Ry(ry) Rx(rx) M (eq. 22's rotation) for the error angles of e, or its transpose.
-inline void rotateZYX(const Vector6d& e, bool inverse, ForwardKinematics::Carry& M) {
-  double c[3], s[3];
-  for (int k = 0; k < 3; ++k) sinCosOfSmallAngle(e[3 + k], &s[k], &c[k]);
-  if (!inverse) {
-    rotateRowsAbout<0>(c[0], s[0], M);
-    rotateRowsAbout<1>(c[1], s[1], M);
-    rotateRowsAbout<2>(c[2], s[2], M);
-  } else {
-    rotateRowsAbout<2>(c[2], -s[2], M);
-    rotateRowsAbout<1>(c[1], -s[1], M);
-    rotateRowsAbout<0>(c[0], -s[0], M);
+// sinCosOfSmallAngle over lanes: the same two series, chosen per lane; big: the lanes beyond
+// them (|x| >= 1e-3 rad, or NaN), which the caller recomputes with the scalar form.
+TOLVER_LANE_INLINE void sinCosSmall(double x, double* s, double* c, bool*) { sinCosOfSmallAngle(x, s, c); }
+template <typename L, typename M>
+TOLVER_LANE_INLINE void sinCosSmall(L x, L* s, L* c, M* big) {
+  const L x2 = x * x;
+  constexpr double k6 = 1.0 / 6.0, k20 = 1.0 / 20.0, k12 = 1.0 / 12.0, k30 = 1.0 / 30.0;
+  const M short_form = x2 < 1e-8;
+  if (lanes::all(short_form)) {  // the usual case: every angle under 0.1 mrad
+    *s = x - x * x2 * (1.0 / 6.0);
+    *c = 1.0 - 0.5 * x2;
+    return;
+  }
+  *s = lanes::select(short_form, x - x * x2 * (1.0 / 6.0), x * (1.0 - x2 * k6 * (1.0 - x2 * k20)));
+  *c = lanes::select(short_form, 1.0 - 0.5 * x2, 1.0 - 0.5 * x2 * (1.0 - x2 * k12 * (1.0 - x2 * k30)));
+  *big |= !(x2 < 1e-6);
+}
+
+// M <- Rot(e_k, theta) M on rows k+1, k+2 (rotateRowsAbout), M 3 x 2 of L.
+template <int k, typename L>
+TOLVER_LANE_INLINE void rotateRows(L c, L s, L M[3][2]) {
+  constexpr int i = (k + 1) % 3, j = (k + 2) % 3;
+  for (int col = 0; col < 2; ++col) {
+    const L mi = M[i][col], mj = M[j][col];
+    M[i][col] = c * mi - s * mj;
+    M[j][col] = s * mi + c * mj;
+  }
+}
+template <typename L>
+TOLVER_LANE_INLINE void rotateRows(int k, L c, L s, L M[3][2]) {
+  if (k == 0) rotateRows<0>(c, s, M);
+  else if (k == 1) rotateRows<1>(c, s, M);
+  else rotateRows<2>(c, s, M);
+}
+
+// M <- R M (R 3 x 3, column-major doubles).
+template <typename L>
+TOLVER_LANE_INLINE void multiply(const double* R, L M[3][2]) {
+  for (int col = 0; col < 2; ++col) {
+    const L m0 = M[0][col], m1 = M[1][col], m2 = M[2][col];
+    for (int i = 0; i < 3; ++i) M[i][col] = R[i] * m0 + R[3 + i] * m1 + R[6 + i] * m2;
   }
 }
 
 }  // namespace
 
-void ForwardKinematics::applyJoint(int a, double s, double c, double sn, Carry& M,
-                                   const MotionContext* ctx) const {
-  const Axis& ax = model_->axes[a];
-  const AxisTerms& t = axis_[a];
-  if (t.has_errors) {  // E(s)
-    const Vector6d e = motionErrors(a, s, ctx);
-    rotateZYX(e, false, M);
-    M.col(0) += e.head<3>();
+template <typename L>
+TOLVER_LANE_INLINE auto ForwardKinematics::carry(const L* q, const L* c, const L* sn, L M[3][2],
+                              const MotionContext* ctx) const {
+  using Mask = decltype(q[0] < q[0]);
+  Mask big{};
+  constexpr bool scalar = sizeof(L) == sizeof(double);
+  // E(s): M <- Rz Ry Rx M + e (eq. 22's rotation of the error angles), or its inverse.
+  auto errors = [&](const AxisTerms& t, int a, bool inverse) TOLVER_LANE_LAMBDA {
+    L e[6];
+    if constexpr (scalar) {
+      if (!t.effects.empty()) {
+        const Vector6d v = motionErrors(a, q[a], ctx);
+        for (int k = 0; k < 6; ++k) e[k] = v[k];
+      } else {
+        motionErrorsL(t, q[a], e);
+      }
+    } else {
+      motionErrorsL(t, q[a], e);
+    }
+    L ce[3], se[3];
+    for (int k = 0; k < 3; ++k) sinCosSmall(e[3 + k], &se[k], &ce[k], &big);
+    if (!inverse) {
+      rotateRows<0>(ce[0], se[0], M);
+      rotateRows<1>(ce[1], se[1], M);
+      rotateRows<2>(ce[2], se[2], M);
+      for (int k = 0; k < 3; ++k) M[k][0] += e[k];
+    } else {
+      for (int k = 0; k < 3; ++k) M[k][0] -= e[k];
+      rotateRows<2>(ce[2], -se[2], M);
+      rotateRows<1>(ce[1], -se[1], M);
+      rotateRows<0>(ce[0], -se[0], M);
+    }
+  };
+  // D2(s): the nominal motion, or its inverse.
+  auto motion = [&](const Axis& ax, const AxisTerms& t, int a, bool inverse) TOLVER_LANE_LAMBDA {
+    if (ax.type == JointType::Prismatic) {
+      for (int k = 0; k < 3; ++k) {
+        if (inverse) M[k][0] -= ax.direction[k] * q[a];
+        else M[k][0] += ax.direction[k] * q[a];
+      }
+    } else if (t.principal >= 0) {
+      rotateRows(t.principal, c[a], inverse ? -sn[a] : sn[a], M);
+    } else if constexpr (scalar) {
+      const Eigen::Matrix3d R =
+          Eigen::AngleAxisd(inverse ? -q[a] : q[a], ax.direction).toRotationMatrix();
+      multiply(R.data(), M);
+    }
+  };
+  for (int k = 0; k < 3; ++k) {
+    M[k][0] = lanes::splat<L>(t_end_.translation()[k]);
+    M[k][1] = lanes::splat<L>(t_end_.linear()(k, 2));
   }
-  if (ax.type == JointType::Prismatic) {  // D2(s)
-    M.col(0) += ax.direction * s;
-  } else if (t.principal >= 0) {
-    rotateRowsAbout(t.principal, c, sn, M);
-  } else {
-    M = Eigen::AngleAxisd(s, ax.direction).toRotationMatrix() * M;
+  // F_p_t = D_1 ... D_m t_end 0: from the last tool joint back to the foundation.
+  const auto& tool = model_->tool_chain;
+  for (auto it = tool.rbegin(); it != tool.rend(); ++it) {
+    const int a = *it;
+    const AxisTerms& t = axis_[a];
+    if (t.has_errors) errors(t, a, false);
+    motion(model_->axes[a], t, a, false);
+    if (!t.fixed_identity) {  // D1 L
+      if (!t.fixed_R_identity) multiply(t.fixed_R.data(), M);
+      for (int k = 0; k < 3; ++k) M[k][0] += t.fixed_p[k];
+    }
   }
-  if (!t.fixed_identity) {  // D1 L
-    M = t.fixed_R * M;
-    M.col(0) += t.fixed_p;
+  // w_p = w_end^-1 D_n^-1 ... D_1^-1 F_p.
+  for (int a : model_->workpiece_chain) {
+    const AxisTerms& t = axis_[a];
+    if (!t.fixed_identity) {
+      for (int k = 0; k < 3; ++k) M[k][0] -= t.fixed_p[k];
+      if (!t.fixed_R_identity) multiply(t.fixed_Rt.data(), M);
+    }
+    motion(model_->axes[a], t, a, true);
+    if (t.has_errors) errors(t, a, true);
   }
-}
-
-void ForwardKinematics::applyJointInverse(int a, double s, double c, double sn, Carry& M,
-                                          const MotionContext* ctx) const {
-  const Axis& ax = model_->axes[a];
-  const AxisTerms& t = axis_[a];
-  if (!t.fixed_identity) {
-    M.col(0) -= t.fixed_p;
-    M = t.fixed_Rt * M;
-  }
-  if (ax.type == JointType::Prismatic) {
-    M.col(0) -= ax.direction * s;
-  } else if (t.principal >= 0) {
-    rotateRowsAbout(t.principal, c, -sn, M);
-  } else {
-    M = Eigen::AngleAxisd(-s, ax.direction).toRotationMatrix() * M;
-  }
-  if (t.has_errors) {
-    const Vector6d e = motionErrors(a, s, ctx);
-    M.col(0) -= e.head<3>();
-    rotateZYX(e, true, M);
-  }
+  for (int k = 0; k < 3; ++k) M[k][0] -= w_end_.translation()[k];
+  multiply(w_end_Rt_.data(), M);
+  return big;
 }
 
 void ForwardKinematics::tipAndAxis(const JointVector& q, Eigen::Vector3d* p_w,
                                    Eigen::Vector3d* u_w, const double* cos_q,
                                    const double* sin_q, const MotionContext* ctx) const {
-  auto trig = [&](int a, double* c, double* s) {
-    if (!model_->axes[a].isRotary()) return;
-    if (cos_q) {
-      *c = cos_q[a];
-      *s = sin_q[a];
-    } else {
-      *c = std::cos(q[a]);
-      *s = std::sin(q[a]);
+  const int n = static_cast<int>(q.size());
+  double c[kMaxAxes], s[kMaxAxes];
+  for (int a = 0; a < n; ++a) {
+    if (!model_->axes[a].isRotary()) continue;
+    c[a] = cos_q ? cos_q[a] : std::cos(q[a]);
+    s[a] = sin_q ? sin_q[a] : std::sin(q[a]);
+  }
+  double M[3][2];
+  carry(q.data(), c, s, M, ctx);
+  *p_w = Eigen::Vector3d(M[0][0], M[1][0], M[2][0]);
+  *u_w = Eigen::Vector3d(M[0][1], M[1][1], M[2][1]);
+}
+
+// Four configurations at a time; the lanes flagged by carry, and a tail of fewer than four,
+// one at a time. Cloned for AVX2 (one register per Lane4) with the portable SSE2 default.
+TOLVER_LANE_CLONES
+void tipAndAxisLanes(const ForwardKinematics& fk, int n, const double* const q[],
+                     const double* const cq[], const double* const sq[], double* const p_w[3],
+                     double* const u_w[3]) {
+  using lanes::Lane4;
+  const int axes = static_cast<int>(fk.model_->axes.size());
+  auto one = [&](int i) {
+    double qs[kMaxAxes], cs[kMaxAxes], ss[kMaxAxes], M[3][2];
+    for (int a = 0; a < axes; ++a) {
+      qs[a] = q[a][i];
+      if (fk.model_->axes[a].isRotary()) {
+        cs[a] = cq[a][i];
+        ss[a] = sq[a][i];
+      }
+    }
+    fk.carry(qs, cs, ss, M, nullptr);
+    for (int k = 0; k < 3; ++k) {
+      p_w[k][i] = M[k][0];
+      u_w[k][i] = M[k][1];
     }
   };
-  double c = 1.0, s = 0.0;
-  // F_p_t = D_1 ... D_m t_end 0: apply from the last tool joint back to the foundation.
-  Carry M;
-  M.col(0) = t_end_.translation();
-  M.col(1) = t_end_.linear().col(2);
-  const auto& tool = model_->tool_chain;
-  for (auto it = tool.rbegin(); it != tool.rend(); ++it) {
-    trig(*it, &c, &s);
-    applyJoint(*it, q[*it], c, s, M, ctx);
+  int i = 0;
+  for (; i + lanes::kWidth <= n; i += lanes::kWidth) {
+    Lane4 qv[kMaxAxes], cv[kMaxAxes], sv[kMaxAxes];
+    for (int a = 0; a < axes; ++a) {
+      qv[a] = lanes::load4(q[a] + i);
+      if (fk.model_->axes[a].isRotary()) {
+        cv[a] = lanes::load4(cq[a] + i);
+        sv[a] = lanes::load4(sq[a] + i);
+      }
+    }
+    Lane4 M[3][2];
+    const auto big = fk.carry(qv, cv, sv, M, nullptr);
+    for (int k = 0; k < 3; ++k) {
+      lanes::store4(p_w[k] + i, M[k][0]);
+      lanes::store4(u_w[k] + i, M[k][1]);
+    }
+    if (lanes::any(big))
+      for (int l = 0; l < lanes::kWidth; ++l)
+        if (lanes::lane(big, l)) one(i + l);
   }
-  // w_p = w_end^-1 D_n^-1 ... D_1^-1 F_p.
-  for (int a : model_->workpiece_chain) {
-    trig(a, &c, &s);
-    applyJointInverse(a, q[a], c, s, M, ctx);
-  }
-  M.col(0) -= w_end_.translation();
-  M = w_end_.linear().transpose() * M;
-  *p_w = M.col(0);
-  *u_w = M.col(1);
+  for (; i < n; ++i) one(i);
+}
+
+void ForwardKinematics::tipAndAxisBatch(int n, const double* const q[], const double* const cq[],
+                                        const double* const sq[], double* const p_w[3],
+                                        double* const u_w[3]) const {
+  assert(batchable_);
+  tipAndAxisLanes(*this, n, q, cq, sq, p_w, u_w);
 }
 
 void ForwardKinematics::chainFrames(const JointVector& q, ChainFrames* out,

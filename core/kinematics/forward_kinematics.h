@@ -29,6 +29,17 @@ class ForwardKinematics {
   void tipAndAxis(const JointVector& q, Eigen::Vector3d* p_w, Eigen::Vector3d* u_w,
                   const double* cos_q = nullptr, const double* sin_q = nullptr,
                   const MotionContext* ctx = nullptr) const;
+  // tipAndAxis for n configurations at once (the batch path of prediction), four side by side
+  // (core/numerics/lanes.h), bit for bit the same as tipAndAxis point by point.
+  // q[a], cq[a], sq[a]: n joint values of axis a (mm, rad), and the cos and sin of the rotary
+  // ones; p_w[k], u_w[k]: n values of coordinate k (x, y, z) of the tip (mm) and the unit axis.
+  // Needs batchable(); configurations with motion-error angles beyond 1 mrad are computed one by
+  // one (exactly, as tipAndAxis does).
+  void tipAndAxisBatch(int n, const double* const q[], const double* const cq[],
+                       const double* const sq[], double* const p_w[3], double* const u_w[3]) const;
+  // The batch path applies: no effect blocks (they need the motion context) and every rotary
+  // axis along +x, +y or +z.
+  bool batchable() const { return batchable_; }
   // Pose of the workpiece (tool) frame seen from the foundation.
   Eigen::Isometry3d F_T_w(const JointVector& q) const;
   Eigen::Isometry3d F_T_t(const JointVector& q) const;
@@ -64,17 +75,16 @@ class ForwardKinematics {
   // this = this * D_S(s), composed in place.
   void composeJoint(int a, double s, Pose& T, const MotionContext* ctx) const;
   Pose chain(const std::vector<int>& axes, const JointVector& q, const MotionContext* ctx) const;
-  // p <- D_S(s) p, u <- R_S(s) u for M = [p u], and the inverse.
-  // c, sn: cos and sin of s for rotary joints.
-  void applyJoint(int a, double s, double c, double sn, Carry& M, const MotionContext* ctx) const;
-  void applyJointInverse(int a, double s, double c, double sn, Carry& M,
-                         const MotionContext* ctx) const;
+  friend void tipAndAxisLanes(const ForwardKinematics& fk, int n, const double* const q[],
+                              const double* const cq[], const double* const sq[],
+                              double* const p_w[3], double* const u_w[3]);
 
   struct AxisTerms {
     Eigen::Isometry3d fixed;     // D1 * L (nominal link with link errors)
     Eigen::Matrix3d fixed_R, fixed_Rt;  // its rotation and transpose, contiguous for the hot path
     Eigen::Vector3d fixed_p;
     bool fixed_identity = false;  // no nominal offset and no link errors: D1 L = I
+    bool fixed_R_identity = false;  // D1 L a pure translation
     std::array<int, 6> offset;   // motion-error coefficient offsets, -1 if none
     std::array<int, 6> degree;
     int max_degree = -1;         // -1: no Chebyshev motion errors on this axis
@@ -94,6 +104,15 @@ class ForwardKinematics {
   // motionErrors of an axis with effect blocks (x: s normalised by eq. 58).
   Vector6d motionErrorsWithEffects(const AxisTerms& t, double s, double x,
                                    const MotionContext* ctx) const;
+  // The carry of tipAndAxis over L = double or lanes::Lane4: M = [p u] (3 x 2 of L) from t_end
+  // through the tool chain to F (p <- D_S(s) p, u <- R_S(s) u), then through the workpiece
+  // chain inverted to w. q, c, sn: joint values and the cos and sin of rotary ones, by axis.
+  // Returns the lanes whose motion-error angles need more than the small-angle series (never
+  // for double, which computes those itself).
+  template <typename L>
+  auto carry(const L* q, const L* c, const L* sn, L M[3][2], const MotionContext* ctx) const;
+  template <typename L>
+  void motionErrorsL(const AxisTerms& t, L s, L e[6]) const;
 
   const MachineModel* model_;
   Eigen::VectorXd params_;
@@ -101,8 +120,10 @@ class ForwardKinematics {
   Eigen::Isometry3d table_T_w_err_;     // nominal set-up times workpiece set-up errors
   Eigen::Isometry3d spindle_T_t_err_;   // nominal tool frame times tool set-up errors
   Eigen::Isometry3d w_end_;             // last workpiece joint -> w (table, set-up, errors)
+  Eigen::Matrix3d w_end_Rt_;            // the transpose of its rotation
   Eigen::Isometry3d t_end_;             // last tool joint -> t
   double bar_length_error_ = 0.0;
+  bool batchable_ = false;
 };
 
 }  // namespace tolver

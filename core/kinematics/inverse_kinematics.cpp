@@ -1,10 +1,13 @@
 #include "core/kinematics/inverse_kinematics.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include "core/model/rigid_transform.h"
+#include "core/numerics/lanes.h"
 #include "core/numerics/units.h"
 
 namespace tolver {
@@ -121,9 +124,11 @@ InverseKinematics::InverseKinematics(const MachineModel& model)
       l.link_p = model.axes[a].parent_T_joint.translation();
       l.direction = model.axes[a].direction;
       l.identity_link = model.axes[a].parent_T_joint.isApprox(Eigen::Isometry3d::Identity(), 0.0);
+      l.identity_rotation = l.link_R == Eigen::Matrix3d::Identity();
       for (int c = 0; c < 3; ++c)
         if (model.axes[a].direction[c] == 1.0) l.principal = c;
       l.rotary = model.axes[a].isRotary();
+      if (!l.rotary && column <= 3) column_axis_[column - 1] = a;
       if (!l.rotary) l.column = column++;
       chains_[b].push_back(l);
     }
@@ -152,6 +157,146 @@ InverseKinematics::InverseKinematics(const MachineModel& model)
   // Two parallel rotary axes cannot orient the tool independently (sub-problem 2 degenerates).
   parallel_rotaries_ =
       rotary_.size() == 2 && std::abs(a_[0].dot(C1_ * a_[1])) > 1.0 - 1e-12;
+  batchable_ = rotary_.size() == 2 && prismatic_.size() == 3 && !parallel_rotaries_ &&
+               sub1_.pp2_sq >= band_sq_;
+  for (int b = 0; b < 2; ++b)
+    for (const ChainLink& l : chains_[b])
+      if (l.rotary && l.principal < 0) batchable_ = false;
+}
+
+template <typename L, typename M>
+TOLVER_LANE_INLINE void InverseKinematics::candidatesL(const L u_w[3], L c[2][2], L s[2][2], L* g_out,
+                                                 M* unreachable, M* free1, M* free2,
+                                                 M* refine) const {
+  using lanes::select;
+  using lanes::sqrtL;
+  // u = u_w normalised (as Eigen's normalized(): unchanged when zero), q = C0^T u.
+  const L n2 = u_w[0] * u_w[0] + u_w[1] * u_w[1] + u_w[2] * u_w[2];
+  const L root = sqrtL(n2);
+  const M positive = n2 > 0.0;
+  L u[3], q[3];
+  for (int k = 0; k < 3; ++k) u[k] = select(positive, u_w[k] / root, u_w[k]);
+  for (int i = 0; i < 3; ++i) q[i] = C0_(0, i) * u[0] + C0_(1, i) * u[1] + C0_(2, i) * u[2];
+  // Rot(w1, phi1) Rot(w2, phi2) p = q: z = Rot(w2, phi2) p = alpha w1 + beta w2 + g w1 x w2.
+  const double cw = w1w2_;
+  const L w1q = w1_[0] * q[0] + w1_[1] * q[1] + w1_[2] * q[2];
+  const double den = cw * cw - 1.0;
+  const L alpha = (cw * w2p2_ - w1q) / den;
+  const L beta = (cw * w1q - w2p2_) / den;
+  L g2 = (p2_sq_ - alpha * alpha - beta * beta - 2.0 * alpha * beta * cw) / w12_sq_;
+  *unreachable = g2 < -1e-12;
+  g2 = lanes::maxL(g2, lanes::splat<L>(0.0));
+  const L g = sqrtL(g2);
+  // The two sub-problems 1, Rot(w1, phi1) z = q and Rot(w2, phi2) p = z, in closed form: the
+  // parts normal to each axis are zp1 = beta u1 +- g w12 and qp1 = q - w1 (w1.q), and pp2
+  // (fixed) and zp2 = alpha u2 +- g w12 (sub1_ holds u1, u2 and the fixed dot products), so each
+  // cosine and sine is a few multiplications; the same as subproblem1(w1, z, q) and
+  // subproblem1(w2, p, z).
+  L qp1[3];
+  for (int k = 0; k < 3; ++k) qp1[k] = q[k] - w1_[k] * w1q;
+  const auto dot = [&](const L* a, const Eigen::Vector3d& b) TOLVER_LANE_LAMBDA {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+  };
+  const L qp1_w12 = dot(qp1, w12_), qp1_v1 = dot(qp1, sub1_.v1), qp1_u1 = dot(qp1, sub1_.u1);
+  const L qp1_sq = qp1[0] * qp1[0] + qp1[1] * qp1[1] + qp1[2] * qp1[2];
+  const double eps2 = band_sq_;
+  const L gg = g2 * w12_sq_;
+  *free1 = (qp1_sq < eps2) | (beta * beta * sub1_.u1_sq + gg < eps2);
+  *free2 = alpha * alpha * sub1_.u2_sq + gg < eps2;
+  if (sub1_.pp2_sq < eps2) *free2 = (g == g) | (g != g);  // every lane
+  *refine = g < 1e-2;
+  *g_out = g;
+  for (int k = 0; k < 2; ++k) {
+    const double sgn = k == 0 ? 1.0 : -1.0;
+    const L sg = sgn * g;
+    const L x1 = beta * qp1_u1 + sg * qp1_w12, y1 = beta * qp1_w12 + sg * qp1_v1;
+    const L x2 = alpha * sub1_.pp2_u2 + sg * sub1_.pp2_w12;
+    const L y2 = alpha * sub1_.v2_u2 + sg * sub1_.v2_w12;
+    const L r1 = 1.0 / sqrtL(x1 * x1 + y1 * y1), r2 = 1.0 / sqrtL(x2 * x2 + y2 * y2);
+    c[k][0] = x1 * r1;
+    s[k][0] = y1 * r1;
+    c[k][1] = x2 * r2;
+    s[k][1] = y2 * r2;
+  }
+}
+
+template <typename L>
+TOLVER_LANE_INLINE auto InverseKinematics::prismaticL(const L* q, const L* c, const L* sn,
+                                                const double m0[3], const L p_w[3],
+                                                L out[3]) const {
+  // With the rotary angles fixed the tip is affine in the prismatic joints: p_w = p0 + G s.
+  // One nominal pass with s = 0 carries the tool point (column 0) and each prismatic joint's
+  // direction (its column, from the joint on) along the chains into w: the tool branch from its
+  // last joint to the foundation, then the workpiece branch inverted from the foundation on (a
+  // workpiece-branch joint moves the part, so the tip moves by -direction in w).
+  L M[3][4];
+  for (int i = 0; i < 3; ++i) {
+    M[i][0] = lanes::splat<L>(m0[i]);
+    for (int j = 1; j < 4; ++j) M[i][j] = lanes::splat<L>(0.0);
+  }
+  const auto multiply = [&](const Eigen::Matrix3d& R) TOLVER_LANE_LAMBDA {
+    for (int j = 0; j < 4; ++j) {
+      const L m0j = M[0][j], m1j = M[1][j], m2j = M[2][j];
+      for (int i = 0; i < 3; ++i) M[i][j] = R(i, 0) * m0j + R(i, 1) * m1j + R(i, 2) * m2j;
+    }
+  };
+  const auto rotate = [&](const ChainLink& l, bool inverse) TOLVER_LANE_LAMBDA {
+    const L cs = c[l.axis], s = inverse ? -sn[l.axis] : sn[l.axis];
+    if (l.principal >= 0) {
+      const int i = (l.principal + 1) % 3, j = (l.principal + 2) % 3;
+      for (int col = 0; col < 4; ++col) {
+        const L mi = M[i][col], mj = M[j][col];
+        M[i][col] = cs * mi - s * mj;
+        M[j][col] = s * mi + cs * mj;
+      }
+    } else if constexpr (sizeof(L) == sizeof(double)) {
+      multiply(Eigen::AngleAxisd(inverse ? -q[l.axis] : q[l.axis], model_->axes[l.axis].direction)
+                   .toRotationMatrix());
+    }
+  };
+  const auto& tool = chains_[1];
+  for (auto it = tool.rbegin(); it != tool.rend(); ++it) {
+    const ChainLink& l = *it;
+    if (l.rotary) rotate(l, false);
+    else
+      for (int i = 0; i < 3; ++i) M[i][l.column] = lanes::splat<L>(l.direction[i]);
+    if (!l.identity_link) {
+      if (!l.identity_rotation) multiply(l.link_R);
+      for (int i = 0; i < 3; ++i) M[i][0] += l.link_p[i];
+    }
+  }
+  for (const ChainLink& l : chains_[0]) {
+    if (!l.identity_link) {
+      for (int i = 0; i < 3; ++i) M[i][0] -= l.link_p[i];
+      if (!l.identity_rotation) multiply(l.link_Rt);
+    }
+    if (l.rotary) rotate(l, true);
+    else
+      for (int i = 0; i < 3; ++i) M[i][l.column] = lanes::splat<L>(-l.direction[i]);
+  }
+  // In w: p0 = Rw^T (m0 - tw), G = Rw^T [m1 m2 m3] with (Rw, tw) = w_end; so G s = p_w - p0
+  // is [m1 m2 m3] s = y with y = Rw p_w + tw - m0, solved by Cramer's rule (det G = det M).
+  const Eigen::Matrix3d& Rw = w_end_.linear();
+  L y[3];
+  for (int i = 0; i < 3; ++i)
+    y[i] = Rw(i, 0) * p_w[0] + Rw(i, 1) * p_w[1] + Rw(i, 2) * p_w[2] + w_end_.translation()[i] -
+           M[i][0];
+  const auto cross = [&](int a, int b, L r[3]) TOLVER_LANE_LAMBDA {
+    r[0] = M[1][a] * M[2][b] - M[2][a] * M[1][b];
+    r[1] = M[2][a] * M[0][b] - M[0][a] * M[2][b];
+    r[2] = M[0][a] * M[1][b] - M[1][a] * M[0][b];
+  };
+  L c23[3], c31[3], c12[3];
+  cross(2, 3, c23);
+  cross(3, 1, c31);
+  cross(1, 2, c12);
+  const L det = M[0][1] * c23[0] + M[1][1] * c23[1] + M[2][1] * c23[2];
+  const auto ok = lanes::absL(det) > 1e-12;
+  const L inv_det = 1.0 / det;
+  out[0] = (y[0] * c23[0] + y[1] * c23[1] + y[2] * c23[2]) * inv_det;
+  out[1] = (y[0] * c31[0] + y[1] * c31[1] + y[2] * c31[2]) * inv_det;
+  out[2] = (y[0] * c12[0] + y[1] * c12[1] + y[2] * c12[2]) * inv_det;
+  return ok;
 }
 
 // Long by design: the closed-form rotary solutions, one short case per topology (one or two
@@ -187,46 +332,27 @@ int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, RotaryCandid
     c.known[1] = true;
     return count;
   }
-  // Rot(w1, phi1) Rot(w2, phi2) p = q: z = Rot(w2, phi2) p = alpha w1 + beta w2 + g w1 x w2.
+  // Two rotary axes: the closed form (candidatesL), refined where it loses accuracy.
+  const double uw[3] = {u_w[0], u_w[1], u_w[2]};
+  double cc[2][2], ss[2][2], g = 0.0;
+  bool unreachable = false, free1 = false, free2 = false, refine = false;
+  candidatesL(uw, cc, ss, &g, &unreachable, &free1, &free2, &refine);
+  if (unreachable) return count;
   const Eigen::Vector3d& w1 = w1_;
   const Eigen::Vector3d& w2 = w2_;
   const Eigen::Vector3d& p = p2_;
-  const Eigen::Vector3d q = C0_.transpose() * u;
-  const double c = w1w2_, w1q = w1.dot(q);
-  const double den = c * c - 1.0;
-  const double alpha = (c * w2p2_ - w1q) / den;
-  const double beta = (c * w1q - w2p2_) / den;
-  double g2 = (p2_sq_ - alpha * alpha - beta * beta - 2.0 * alpha * beta * c) / w12_sq_;
-  if (g2 < -1e-12) return count;
-  g2 = std::max(g2, 0.0);
-  const double g = std::sqrt(g2);
-  // The two sub-problems 1, Rot(w1, phi1) z = q and Rot(w2, phi2) p = z, in closed form: the
-  // parts normal to each axis are zp1 = beta u1 +- g w12 and qp1 = q - w1 (w1.q), and pp2
-  // (fixed) and zp2 = alpha u2 +- g w12 (sub1_ holds u1, u2 and the fixed dot products), so each
-  // cosine and sine is a few multiplications; the same as subproblem1(w1, z, q) and
-  // subproblem1(w2, p, z).
-  const Eigen::Vector3d qp1 = q - w1 * w1q;
-  const double qp1_w12 = qp1.dot(w12_), qp1_v1 = qp1.dot(sub1_.v1), qp1_u1 = qp1.dot(sub1_.u1);
-  const double kEps2 = band_sq_;
-  const double gg = g2 * w12_sq_;
-  const bool axis1_free = qp1.squaredNorm() < kEps2 || beta * beta * sub1_.u1_sq + gg < kEps2;
-  const bool axis2_free = sub1_.pp2_sq < kEps2 || alpha * alpha * sub1_.u2_sq + gg < kEps2;
-  for (double sgn : {1.0, -1.0}) {
+  for (int ci = 0; ci < 2; ++ci) {
     RotaryCandidate& out_c = out[count++];
     out_c = RotaryCandidate{};
-    const double sg = sgn * g;
-    const double x1 = beta * qp1_u1 + sg * qp1_w12, y1 = beta * qp1_w12 + sg * qp1_v1;
-    const double x2 = alpha * sub1_.pp2_u2 + sg * sub1_.pp2_w12;
-    const double y2 = alpha * sub1_.v2_u2 + sg * sub1_.v2_w12;
-    const double r1 = 1.0 / std::sqrt(x1 * x1 + y1 * y1), r2 = 1.0 / std::sqrt(x2 * x2 + y2 * y2);
-    double c1 = x1 * r1, s1 = y1 * r1, c2 = x2 * r2, s2 = y2 * r2;
-    const bool solved1 = !axis1_free, solved2 = !axis2_free;
+    double c1 = cc[ci][0], s1 = ss[ci][0], c2 = cc[ci][1], s2 = ss[ci][1];
+    const bool solved1 = !free1, solved2 = !free2;
     if (!solved1 || !solved2) *singular = true;
     // A free angle is marked; solve() fills it from the previous point.
-    if (solved1 && solved2 && g < 1e-2) {
+    if (solved1 && solved2 && refine) {
       // The closed form loses accuracy where gamma is small (the square root of a difference
       // amplifies rounding); two Gauss-Newton steps on Rot(w1, phi1) Rot(w2, phi2) p = q
       // restore it to rounding level.
+      const Eigen::Vector3d q = C0_.transpose() * u;
       double phi1 = std::atan2(s1, c1), phi2 = std::atan2(s2, c2);
       for (int it = 0; it < 2; ++it) {
         const Eigen::Matrix3d R1 = Eigen::AngleAxisd(phi1, w1).toRotationMatrix();
@@ -260,58 +386,26 @@ int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, RotaryCandid
 bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& q,
                                        IkSolution* trig, const Eigen::Vector3d& b_t,
                                        bool trig_given) const {
-  // With the rotary angles fixed the tip is affine in the prismatic joints: p_w = p0 + G s.
-  // One nominal pass with s = 0 carries the tool point (column 0) and each prismatic joint's
-  // direction (its column, from the joint on) along the chains into w: the tool branch from its
-  // last joint to the foundation, then the workpiece branch inverted from the foundation on (a
-  // workpiece-branch joint moves the part, so the tip moves by -direction in w).
-  Eigen::Matrix<double, 3, 4> M;
-  M.col(0) = t_end_ * b_t;
-  auto rotate = [&](const ChainLink& l, bool inverse) {
-    if (!trig_given) {
-      trig->cos_q[l.axis] = std::cos(q[l.axis]);
-      trig->sin_q[l.axis] = std::sin(q[l.axis]);
+  double qv[kMaxAxes], c[kMaxAxes], sn[kMaxAxes];
+  for (int b = 0; b < 2; ++b)
+    for (const ChainLink& l : chains_[b]) {
+      qv[l.axis] = q[l.axis];
+      if (!l.rotary) continue;
+      if (!trig_given) {
+        trig->cos_q[l.axis] = std::cos(q[l.axis]);
+        trig->sin_q[l.axis] = std::sin(q[l.axis]);
+      }
+      c[l.axis] = trig->cos_q[l.axis];
+      sn[l.axis] = trig->sin_q[l.axis];
     }
-    const double c = trig->cos_q[l.axis];
-    const double sn = inverse ? -trig->sin_q[l.axis] : trig->sin_q[l.axis];
-    if (l.principal >= 0) {
-      rotateRowsAbout(l.principal, c, sn, M);
-    } else {
-      const double s = inverse ? -q[l.axis] : q[l.axis];
-      M = Eigen::AngleAxisd(s, model_->axes[l.axis].direction).toRotationMatrix() * M;
-    }
-  };
-  const auto& tool = chains_[1];
-  for (auto it = tool.rbegin(); it != tool.rend(); ++it) {
-    const ChainLink& l = *it;
-    if (l.rotary) rotate(l, false);
-    else M.col(l.column) = l.direction;
-    if (!l.identity_link) {
-      M = l.link_R * M;
-      M.col(0) += l.link_p;
-    }
-  }
-  for (const ChainLink& l : chains_[0]) {
-    if (!l.identity_link) {
-      M.col(0) -= l.link_p;
-      M = l.link_Rt * M;
-    }
-    if (l.rotary) rotate(l, true);
-    else M.col(l.column) = -l.direction;
-  }
-  // In w: p0 = Rw^T (m0 - tw), G = Rw^T [m1 m2 m3] with (Rw, tw) = w_end; so G s = p_w - p0
-  // is [m1 m2 m3] s = y with y = Rw p_w + tw - m0, solved by Cramer's rule (det G = det M).
-  const Eigen::Vector3d y = w_end_.linear() * p_w + w_end_.translation() - M.col(0);
-  const Eigen::Vector3d c23 = M.col(2).cross(M.col(3)), c31 = M.col(3).cross(M.col(1)),
-                        c12 = M.col(1).cross(M.col(2));
-  const double det = M.col(1).dot(c23);
-  if (!(std::abs(det) > 1e-12)) return false;
-  const double inv_det = 1.0 / det;
-  const Eigen::Vector3d s(y.dot(c23) * inv_det, y.dot(c31) * inv_det, y.dot(c12) * inv_det);
+  const Eigen::Vector3d m0 = t_end_ * b_t;
+  const double m0a[3] = {m0[0], m0[1], m0[2]}, pw[3] = {p_w[0], p_w[1], p_w[2]};
+  double s[3];
+  if (!prismaticL(qv, c, sn, m0a, pw, s)) return false;
   for (int b = 0; b < 2; ++b)
     for (const ChainLink& l : chains_[b])
       if (!l.rotary) q[l.axis] = s[l.column - 1];
-  return s.allFinite();
+  return std::isfinite(s[0]) && std::isfinite(s[1]) && std::isfinite(s[2]);
 }
 
 bool InverseKinematics::placeToolPoint(const Eigen::Vector3d& b_t, const Eigen::Vector3d& target_w,
@@ -481,6 +575,216 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
   sol.q = JointVector::Zero(n);
   sol.status = IkStatus::OutOfTravel;
   return sol;
+}
+
+}  // namespace tolver
+
+namespace tolver {
+
+// solveBlock's lane stage: the candidates and both prismatic solutions of every point, then the
+// angle steps from each candidate of the previous point, four points at a time (the tail one
+// at a time, with the same operations).
+TOLVER_LANE_CLONES
+void ikBlockLanes(const InverseKinematics& ik, InverseKinematics::Block& b) {
+  using lanes::Lane4;
+  const int n = b.n;
+  const int r0 = ik.rotary_[0], r1 = ik.rotary_[1];
+  const double sign0 = ik.sign_[0], sign1 = ik.sign_[1];
+  const double m0[3] = {ik.t_end_.translation()[0], ik.t_end_.translation()[1],
+                        ik.t_end_.translation()[2]};
+  double lo[3], hi[3];
+  for (int j = 0; j < 3; ++j) {
+    const Axis& ax = ik.model_->axes[ik.column_axis_[j]];
+    lo[j] = ax.travel_min - kTravelEps;
+    hi[j] = ax.travel_max + kTravelEps;
+  }
+  auto points = [&](auto lanes_tag, int i) TOLVER_LANE_LAMBDA {
+    using L = decltype(lanes_tag);
+    auto load = [&](const double* x) TOLVER_LANE_LAMBDA {
+      if constexpr (sizeof(L) == sizeof(double)) return x[0];
+      else return lanes::load4(x);
+    };
+    auto store = [&](double* x, L v) TOLVER_LANE_LAMBDA {
+      if constexpr (sizeof(L) == sizeof(double)) x[0] = v;
+      else lanes::store4(x, v);
+    };
+    using M = decltype(L{} < L{});
+    auto storeMask = [&](long long* x, M m) TOLVER_LANE_LAMBDA {
+      if constexpr (sizeof(L) == sizeof(double)) x[0] = m ? -1 : 0;
+      else std::memcpy(x, &m, sizeof m);
+    };
+    const L u[3] = {load(b.u[0] + i), load(b.u[1] + i), load(b.u[2] + i)};
+    const L p[3] = {load(b.p[0] + i), load(b.p[1] + i), load(b.p[2] + i)};
+    L c[2][2], s[2][2], g;
+    M unreachable, free1, free2, refine;
+    ik.candidatesL(u, c, s, &g, &unreachable, &free1, &free2, &refine);
+    storeMask(b.irregular + i, unreachable | free1 | free2 | refine);
+    for (int k = 0; k < 2; ++k) {
+      const L s0 = sign0 * s[k][0], s1 = sign1 * s[k][1];
+      store(b.cand_c[k][0] + i + 1, c[k][0]);
+      store(b.cand_s[k][0] + i + 1, s0);
+      store(b.cand_c[k][1] + i + 1, c[k][1]);
+      store(b.cand_s[k][1] + i + 1, s1);
+      L cs[kMaxAxes], sn[kMaxAxes], out[3];
+      cs[r0] = c[k][0];
+      sn[r0] = s0;
+      cs[r1] = c[k][1];
+      sn[r1] = s1;
+      M ok = ik.prismaticL(cs, cs, sn, m0, p, out);  // (q is read only off +x/+y/+z)
+      for (int j = 0; j < 3; ++j) {
+        store(b.prism[k][j] + i, out[j]);
+        ok = ok & ((out[j] - out[j]) == 0.0) & !(out[j] < lo[j]) & !(out[j] > hi[j]);
+      }
+      storeMask(b.prism_ok[k] + i, ok);
+    }
+  };
+  auto steps = [&](auto lanes_tag, int i) TOLVER_LANE_LAMBDA {
+    using L = decltype(lanes_tag);
+    auto load = [&](const double* x) TOLVER_LANE_LAMBDA {
+      if constexpr (sizeof(L) == sizeof(double)) return x[0];
+      else return lanes::load4(x);
+    };
+    auto store = [&](double* x, L v) TOLVER_LANE_LAMBDA {
+      if constexpr (sizeof(L) == sizeof(double)) x[0] = v;
+      else lanes::store4(x, v);
+    };
+    using M = decltype(L{} < L{});
+    for (int j = 0; j < 2; ++j)
+      for (int k = 0; k < 2; ++k) {
+        L chord = lanes::splat<L>(0.0);
+        for (int r = 0; r < 2; ++r) {
+          const L ref_c = load(b.cand_c[j][r] + i), ref_s = load(b.cand_s[j][r] + i);
+          const L kc = load(b.cand_c[k][r] + i + 1), ks = load(b.cand_s[k][r] + i + 1);
+          // As solve()'s evaluate: the step from the reference by atan's series.
+          const L dc = kc * ref_c + ks * ref_s;
+          const L ds = ks * ref_c - kc * ref_s;
+          const M ok = (dc > 0.0) & (lanes::absL(ds) <= kAtanSeriesMax * dc);
+          store(b.delta[j][k][r] + i, atanOfSmallL(ds / dc));
+          if constexpr (sizeof(L) == sizeof(double)) b.delta_ok[j][k][r][i] = ok ? -1 : 0;
+          else std::memcpy(b.delta_ok[j][k][r] + i, &ok, sizeof ok);
+          // As solve()'s chords.
+          const L ec = kc - ref_c, es = ks - ref_s;
+          chord += ec * ec + es * es;
+        }
+        store(b.chord2[j][k] + i, chord);
+      }
+  };
+  int i = 0;
+  for (; i + lanes::kWidth <= n; i += lanes::kWidth) points(Lane4{}, i);
+  for (; i < n; ++i) points(0.0, i);
+  for (i = 0; i + lanes::kWidth <= n; i += lanes::kWidth) steps(Lane4{}, i);
+  for (; i < n; ++i) steps(0.0, i);
+}
+
+// Long by design: solve()'s continuity choice written out for the common case, on the lane
+// stage's numbers, with solve() itself for every other case.
+void InverseKinematics::solveBlock(Block& b, Cursor& cursor) const {
+  assert(batchable_);
+  const int n = b.n;
+  b.from_lanes = 0;
+  const int axes = static_cast<int>(model_->axes.size());
+  if (cursor.previous_candidate < 0)  // index 0 is read only through a candidate: keep it finite
+    for (int k = 0; k < 2; ++k)
+      for (int r = 0; r < 2; ++r) {
+        b.cand_c[k][r][0] = 1.0;
+        b.cand_s[k][r][0] = 0.0;
+      }
+  ikBlockLanes(*this, b);
+  double lo[2], hi[2];
+  for (int r = 0; r < 2; ++r) {
+    const Axis& ax = model_->axes[rotary_[r]];
+    const double inf = std::numeric_limits<double>::infinity();
+    lo[r] = (ax.endless ? -inf : ax.travel_min) - kTravelEps;
+    hi[r] = (ax.endless ? inf : ax.travel_max) + kTravelEps;
+  }
+  for (int i = 0; i < n; ++i) {
+    // The common case: a regular point after a point solved from its own candidate.
+    const int j = cursor.previous_candidate;
+    int chosen = -1;
+    double value[2][2];
+    if (j >= 0 && !b.irregular[i]) {
+      const double ref[2] = {cursor.previous[rotary_[0]], cursor.previous[rotary_[1]]};
+      double cost[2];
+      auto evaluate = [&](int k) {
+        cost[k] = 0.0;
+        for (int r = 0; r < 2; ++r) {
+          if (!b.delta_ok[j][k][r][i]) return false;
+          const double v = ref[r] + b.delta[j][k][r][i];
+          if (v < lo[r] || v > hi[r]) return false;
+          value[k][r] = v;
+          cost[k] += std::abs(v - ref[r]);
+        }
+        return true;
+      };
+      const int first = b.chord2[j][1][i] < b.chord2[j][0][i] ? 1 : 0;
+      if (evaluate(first)) {
+        if (cost[first] * cost[first] < b.chord2[j][1 - first][i] * (1.0 - 1e-9))
+          chosen = first;
+        else if (evaluate(1 - first))
+          chosen = cost[1] < cost[0] ? 1 : 0;
+      }
+      if (chosen >= 0 && !b.prism_ok[chosen][i]) chosen = -1;
+    }
+    if (chosen >= 0) {
+      for (int a = 0; a < axes; ++a) {
+        b.c[a][i] = 1.0;
+        b.s[a][i] = 0.0;
+      }
+      for (int r = 0; r < 2; ++r) {
+        const int a = rotary_[r];
+        b.q[a][i] = cursor.previous[a] = value[chosen][r];
+        b.c[a][i] = cursor.previous_cos[a] = b.cand_c[chosen][r][i + 1];
+        b.s[a][i] = cursor.previous_sin[a] = b.cand_s[chosen][r][i + 1];
+      }
+      for (int col = 0; col < 3; ++col)
+        b.q[column_axis_[col]][i] = cursor.previous[column_axis_[col]] = b.prism[chosen][col][i];
+      b.status[i] = IkStatus::Ok;
+      b.singular[i] = false;
+      b.violated_axis[i] = -1;
+      b.violated_value[i] = 0.0;
+      cursor.previous_candidate = chosen;
+      ++b.from_lanes;
+      continue;
+    }
+    // Anything else: solve() itself, from the same reference.
+    const Eigen::Vector3d p(b.p[0][i], b.p[1][i], b.p[2][i]), u(b.u[0][i], b.u[1][i], b.u[2][i]);
+    const IkSolution sol =
+        solve(p, u, cursor.has_previous ? &cursor.previous : nullptr, cursor.previous_cos.data(),
+              cursor.previous_sin.data());
+    b.status[i] = sol.status;
+    b.singular[i] = sol.singular;
+    b.violated_axis[i] = sol.violated_axis;
+    b.violated_value[i] = sol.violated_value;
+    const bool ok = sol.status == IkStatus::Ok;
+    for (int a = 0; a < axes; ++a) {
+      const bool rotary = model_->axes[a].isRotary();
+      b.q[a][i] = ok ? sol.q[a] : 0.0;
+      b.c[a][i] = ok && rotary ? sol.cos_q[a] : 1.0;
+      b.s[a][i] = ok && rotary ? sol.sin_q[a] : 0.0;
+    }
+    cursor.has_previous = ok;
+    cursor.previous_candidate = -1;
+    if (!ok) continue;
+    cursor.previous = sol.q;
+    cursor.previous_cos = sol.cos_q;
+    cursor.previous_sin = sol.sin_q;
+    // The next point can start from the lane stage's steps if this solution is one of the
+    // candidates, bit for bit.
+    for (int k = 0; k < 2 && !b.irregular[i]; ++k)
+      if (sol.cos_q[rotary_[0]] == b.cand_c[k][0][i + 1] &&
+          sol.sin_q[rotary_[0]] == b.cand_s[k][0][i + 1] &&
+          sol.cos_q[rotary_[1]] == b.cand_c[k][1][i + 1] &&
+          sol.sin_q[rotary_[1]] == b.cand_s[k][1][i + 1]) {
+        cursor.previous_candidate = k;
+        break;
+      }
+  }
+  // The last point's candidates are the next block's index 0.
+  for (int k = 0; k < 2; ++k)
+    for (int r = 0; r < 2; ++r) {
+      b.cand_c[k][r][0] = b.cand_c[k][r][n];
+      b.cand_s[k][r][0] = b.cand_s[k][r][n];
+    }
 }
 
 }  // namespace tolver

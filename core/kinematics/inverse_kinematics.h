@@ -60,6 +60,45 @@ class InverseKinematics {
                    const JointVector* previous, const double* previous_cos = nullptr,
                    const double* previous_sin = nullptr) const;
 
+  // The batch path of prediction: solve() along consecutive CL points, bit for bit the same
+  // as calling it point by point with the previous point's solution as reference (none at the
+  // start and after a point that failed, as predictToolPath does). The closed-form candidates,
+  // both candidates' prismatic solutions and the angle steps from each candidate of the
+  // previous point are computed four points at a time (core/numerics/lanes.h); the continuity
+  // choice then runs point by point on them, and any point off the common case (singular,
+  // near-singular closed form, a step of more than 0.1 rad, a travel limit in play) is
+  // handed to solve().
+  static constexpr int kBlock = 64;
+  struct Block {
+    int n = 0;                                 // points in this block, <= kBlock
+    double p[3][kBlock], u[3][kBlock];         // in: tip p_w (mm) and tool axis u_w, by coordinate
+    // out, by axis index: joint values (mm, rad), cos and sin of the rotary ones (0, 1, 0
+    // where the point failed)
+    double q[kMaxAxes][kBlock], c[kMaxAxes][kBlock], s[kMaxAxes][kBlock];
+    IkStatus status[kBlock];
+    bool singular[kBlock];
+    int violated_axis[kBlock];
+    double violated_value[kBlock];
+    int from_lanes = 0;  // points solved on the lane stage's numbers (the others by solve())
+    // Scratch: candidate k's cos and sin of rotary r at point i in [k][r][i + 1] (index 0: the
+    // previous block's last point), the prismatic solution of each candidate, the angle steps
+    // delta[j][k][r] from candidate j of the previous point, their chords, and lane masks.
+    double cand_c[2][2][kBlock + 1], cand_s[2][2][kBlock + 1];
+    double prism[2][3][kBlock];
+    double delta[2][2][2][kBlock], chord2[2][2][kBlock];
+    long long irregular[kBlock], prism_ok[2][kBlock], delta_ok[2][2][2][kBlock];
+  };
+  // What solveBlock carries from one block to the next.
+  struct Cursor {
+    bool has_previous = false;
+    JointVector previous;
+    std::array<double, kMaxAxes> previous_cos, previous_sin;
+    int previous_candidate = -1;  // the previous point's solution is its candidate k (-1: none)
+  };
+  // The batch path applies: two rotary axes along +x, +y or +z, three prismatic axes.
+  bool batchable() const { return batchable_; }
+  void solveBlock(Block& b, Cursor& cursor) const;
+
   // One solution of the orientation sub-problem: the rotary joint values that give a tool axis,
   // in the order of rotaryAxes(), before travel checks and unwrapping.
   struct RotaryCandidate {
@@ -89,7 +128,26 @@ class InverseKinematics {
                       const Eigen::Vector3d& b_t = Eigen::Vector3d::Zero(),
                       bool trig_given = false) const;
 
+  // The closed form of two rotary axes (rotaryCandidates) over L = double or lanes::Lane4:
+  // for a tool axis u_w (3 of L, not necessarily unit), the cos and sin of rotary r's joint
+  // value in candidate k (+g, -g) into c[k][r], s[k][r]; g; and masks: unreachable, the two
+  // axes free, and g < 1e-2 (refined by Gauss-Newton).
+  template <typename L, typename M>
+  void candidatesL(const L u_w[3], L c[2][2], L s[2][2], L* g, M* unreachable, M* free1,
+                   M* free2, M* refine) const;
+  // The prismatic solution (solvePrismatic) over L: c, sn the cos and sin of the rotary joints
+  // by axis index (q their values, for axes off +x/+y/+z, scalar only), m0 the tool point
+  // t_end * b_t, p_w the target. Writes the three prismatic values in column order; returns
+  // the mask of |det| > 1e-12.
+  template <typename L>
+  auto prismaticL(const L* q, const L* c, const L* sn, const double m0[3], const L p_w[3],
+                  L out[3]) const;
+
+  friend void ikBlockLanes(const InverseKinematics& ik, Block& b);
+
   const MachineModel* model_;
+  bool batchable_ = false;
+  int column_axis_[3] = {-1, -1, -1};  // the prismatic axis of each column of the solution
   std::vector<int> rotary_;     // rotary axis indices in w->t chain order
   std::vector<int> prismatic_;  // prismatic axis indices
   Eigen::Matrix3d C0_, C1_, C2_;
@@ -112,6 +170,7 @@ class InverseKinematics {
     Eigen::Vector3d link_p;
     Eigen::Vector3d direction;
     bool identity_link = false;
+    bool identity_rotation = false;  // the link a pure translation
     bool rotary = false;
     int principal = -1;  // 0/1/2 when the joint direction is +x/+y/+z
     int column = 0;      // prismatic joints: its column (1..3) in the carried block

@@ -7,6 +7,8 @@
 //  * A "twist" here is the 6-vector [ex ey ez gx gy gz]: three small translations (mm)
 //    followed by three small rotations (rad) about x, y, z.
 #include <Eigen/Geometry>
+
+#include "core/numerics/lanes.h"
 #include <cmath>
 
 namespace tolver {
@@ -38,11 +40,14 @@ inline void sinCosOfSmallAngle(double x, double* s, double* c) {
 // out, t^17/17, is below 6e-18 t there, so the result is exact to rounding; a few times cheaper
 // than atan2 for the small angles between consecutive poses.
 constexpr double kAtanSeriesMax = 0.1;
-inline double atanOfSmall(double t) {
-  const double t2 = t * t;
+// L: double, or four lanes (core/numerics/lanes.h), with the same operations.
+template <typename L>
+TOLVER_LANE_INLINE L atanOfSmallL(L t) {
+  const L t2 = t * t;
   return t * (1.0 + t2 * (-1.0 / 3.0 + t2 * (1.0 / 5.0 + t2 * (-1.0 / 7.0 + t2 * (1.0 / 9.0 +
          t2 * (-1.0 / 11.0 + t2 * (1.0 / 13.0 - t2 * (1.0 / 15.0))))))));
 }
+inline double atanOfSmall(double t) { return atanOfSmallL(t); }
 
 // M <- Rot(e_k, theta) M for the coordinate axis k (0, 1, 2 = x, y, z), given c = cos theta and
 // s = sin theta: only rows k+1 and k+2 (mod 3) change. M is 3 x n, its columns points or
