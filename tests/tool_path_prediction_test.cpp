@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <random>
+#include <string>
 
 #include "core/kinematics/forward_kinematics.h"
 #include "io/program/apt_reader.h"
@@ -24,6 +25,64 @@ std::vector<ClPoint> hemisphere(int n) {
     out[i].line = i + 1;
   }
   return out;
+}
+
+// The batch path (four points side by side) gives the reference path's bits, point by point
+// (joint values and their count, predicted tip and axis, deviations, flags), and the same
+// failures and summary, on every shipped machine with errors everywhere and a path that mixes
+// smooth stretches, jumps, near-singular axes, unreachable axes and points beyond the stroke.
+TEST(ToolPathPrediction, BatchEqualsOneByOneBitForBit) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (const char* file : test::shippedMachines()) {
+    Machine m = readMachineFile(test::sourcePath(file));
+    m.model.setup.gauge_length = 100;
+    for (int i = 0; i < m.model.parameterCount(); ++i)
+      m.params[i] = n(rng) * (m.model.parameters[i].angular ? 30e-6 : 0.01);
+    std::vector<ClPoint> path = hemisphere(1500);
+    for (size_t i = 0; i < path.size(); ++i) {
+      const double odd = unit(rng);
+      if (odd < 0.01) path[i].p_w.x() += 1e4;
+      else if (odd < 0.02) path[i].u_w = -path[i].u_w;
+      else if (odd < 0.03) path[i].u_w = Eigen::Vector3d(std::pow(10.0, -9 * unit(rng)), 0, 1);
+      else if (odd < 0.04) path[i].u_w = 2.5 * path[(i * 7919) % path.size()].u_w;  // a jump
+    }
+    PredictionResult a, b;
+    predictToolPath(m.model, m.params, path, a, 5, nullptr, true);
+    predictToolPath(m.model, m.params, path, b, 5, nullptr, false);
+    ASSERT_EQ(a.points.size(), b.points.size());
+    for (size_t i = 0; i < path.size(); ++i) {
+      const PredictedPoint &x = a.points[i], &y = b.points[i];
+      const std::string where = std::string(file) + " point " + std::to_string(i);
+      ASSERT_EQ(x.q.size(), static_cast<Eigen::Index>(m.model.axes.size())) << where;
+      ASSERT_EQ(x.q.size(), y.q.size()) << where;
+      for (int k = 0; k < x.q.size(); ++k)
+        ASSERT_TRUE(x.q[k] == y.q[k] || (std::isnan(x.q[k]) && std::isnan(y.q[k]))) << where;
+      const double xs[] = {x.p_pred_w.x(), x.p_pred_w.y(), x.p_pred_w.z(), x.u_pred_w.x(),
+                           x.u_pred_w.y(), x.u_pred_w.z(), x.deviation_w.x(), x.deviation_w.y(),
+                           x.deviation_w.z(), x.along_axis, x.across_axis, x.axis_angle};
+      const double ys[] = {y.p_pred_w.x(), y.p_pred_w.y(), y.p_pred_w.z(), y.u_pred_w.x(),
+                           y.u_pred_w.y(), y.u_pred_w.z(), y.deviation_w.x(), y.deviation_w.y(),
+                           y.deviation_w.z(), y.along_axis, y.across_axis, y.axis_angle};
+      for (int k = 0; k < 12; ++k)
+        ASSERT_TRUE(xs[k] == ys[k] || (std::isnan(xs[k]) && std::isnan(ys[k]))) << where << " field " << k;
+      ASSERT_EQ(x.singular, y.singular) << where;
+    }
+    EXPECT_GT(a.failed_points, 0) << file;
+    EXPECT_EQ(a.failed_points, b.failed_points);
+    EXPECT_EQ(a.failures_per_axis, b.failures_per_axis);
+    ASSERT_EQ(a.failures.size(), b.failures.size());
+    for (size_t k = 0; k < a.failures.size(); ++k) {
+      EXPECT_EQ(a.failures[k].index, b.failures[k].index);
+      EXPECT_EQ(a.failures[k].message, b.failures[k].message);
+    }
+    EXPECT_EQ(a.summary.max_deviation, b.summary.max_deviation);
+    EXPECT_EQ(a.summary.rms_deviation, b.summary.rms_deviation);
+    EXPECT_EQ(a.summary.max_index, b.summary.max_index);
+    EXPECT_EQ(a.summary.rms_axis_angle, b.summary.rms_axis_angle);
+    EXPECT_EQ(a.summary.singular_points, b.summary.singular_points);
+  }
 }
 
 // Each predicted point is the forward model with errors at the IK joints, and the reported

@@ -180,10 +180,10 @@ TOLVER_LANE_INLINE void InverseKinematics::candidatesL(const L u_w[3], L c[2][2]
   // Rot(w1, phi1) Rot(w2, phi2) p = q: z = Rot(w2, phi2) p = alpha w1 + beta w2 + g w1 x w2.
   const double cw = w1w2_;
   const L w1q = w1_[0] * q[0] + w1_[1] * q[1] + w1_[2] * q[2];
-  const double den = cw * cw - 1.0;
-  const L alpha = (cw * w2p2_ - w1q) / den;
-  const L beta = (cw * w1q - w2p2_) / den;
-  L g2 = (p2_sq_ - alpha * alpha - beta * beta - 2.0 * alpha * beta * cw) / w12_sq_;
+  const double inv_den = 1.0 / (cw * cw - 1.0), inv_w12_sq = 1.0 / w12_sq_;
+  const L alpha = (cw * w2p2_ - w1q) * inv_den;
+  const L beta = (cw * w1q - w2p2_) * inv_den;
+  L g2 = (p2_sq_ - alpha * alpha - beta * beta - 2.0 * alpha * beta * cw) * inv_w12_sq;
   *unreachable = g2 < -1e-12;
   g2 = lanes::maxL(g2, lanes::splat<L>(0.0));
   const L g = sqrtL(g2);
@@ -655,16 +655,18 @@ void ikBlockLanes(const InverseKinematics& ik, InverseKinematics::Block& b) {
         for (int r = 0; r < 2; ++r) {
           const L ref_c = load(b.cand_c[j][r] + i), ref_s = load(b.cand_s[j][r] + i);
           const L kc = load(b.cand_c[k][r] + i + 1), ks = load(b.cand_s[k][r] + i + 1);
-          // As solve()'s evaluate: the step from the reference by atan's series.
-          const L dc = kc * ref_c + ks * ref_s;
-          const L ds = ks * ref_c - kc * ref_s;
-          const M ok = (dc > 0.0) & (lanes::absL(ds) <= kAtanSeriesMax * dc);
-          store(b.delta[j][k][r] + i, atanOfSmallL(ds / dc));
-          if constexpr (sizeof(L) == sizeof(double)) b.delta_ok[j][k][r][i] = ok ? -1 : 0;
-          else std::memcpy(b.delta_ok[j][k][r] + i, &ok, sizeof ok);
           // As solve()'s chords.
           const L ec = kc - ref_c, es = ks - ref_s;
           chord += ec * ec + es * es;
+          // As solve()'s evaluate: the step from the reference by atan's series; along a path
+          // the branch continues (k = j), the other steps are taken point by point when needed.
+          if (j != k) continue;
+          const L dc = kc * ref_c + ks * ref_s;
+          const L ds = ks * ref_c - kc * ref_s;
+          const M ok = (dc > 0.0) & (lanes::absL(ds) <= kAtanSeriesMax * dc);
+          store(b.delta[k][r] + i, atanOfSmallL(ds / dc));
+          if constexpr (sizeof(L) == sizeof(double)) b.delta_ok[k][r][i] = ok ? -1 : 0;
+          else std::memcpy(b.delta_ok[k][r] + i, &ok, sizeof ok);
         }
         store(b.chord2[j][k] + i, chord);
       }
@@ -708,8 +710,19 @@ void InverseKinematics::solveBlock(Block& b, Cursor& cursor) const {
       auto evaluate = [&](int k) {
         cost[k] = 0.0;
         for (int r = 0; r < 2; ++r) {
-          if (!b.delta_ok[j][k][r][i]) return false;
-          const double v = ref[r] + b.delta[j][k][r][i];
+          double delta;
+          if (k == j) {
+            if (!b.delta_ok[k][r][i]) return false;
+            delta = b.delta[k][r][i];
+          } else {  // the lane stage's operations, for a branch change
+            const double ref_c = b.cand_c[j][r][i], ref_s = b.cand_s[j][r][i];
+            const double kc = b.cand_c[k][r][i + 1], ks = b.cand_s[k][r][i + 1];
+            const double dc = kc * ref_c + ks * ref_s;
+            const double ds = ks * ref_c - kc * ref_s;
+            if (!(dc > 0.0 && std::abs(ds) <= kAtanSeriesMax * dc)) return false;
+            delta = atanOfSmallL(ds / dc);
+          }
+          const double v = ref[r] + delta;
           if (v < lo[r] || v > hi[r]) return false;
           value[k][r] = v;
           cost[k] += std::abs(v - ref[r]);
@@ -717,12 +730,11 @@ void InverseKinematics::solveBlock(Block& b, Cursor& cursor) const {
         return true;
       };
       const int first = b.chord2[j][1][i] < b.chord2[j][0][i] ? 1 : 0;
-      if (evaluate(first)) {
-        if (cost[first] * cost[first] < b.chord2[j][1 - first][i] * (1.0 - 1e-9))
-          chosen = first;
-        else if (evaluate(1 - first))
-          chosen = cost[1] < cost[0] ? 1 : 0;
-      }
+      // solve()'s shortcut: the candidate nearer by chords, when it costs less than the other
+      // could (two candidates that near each other are near the pole: left to solve()).
+      if (evaluate(first) &&
+          cost[first] * cost[first] < b.chord2[j][1 - first][i] * (1.0 - 1e-9))
+        chosen = first;
       if (chosen >= 0 && !b.prism_ok[chosen][i]) chosen = -1;
     }
     if (chosen >= 0) {

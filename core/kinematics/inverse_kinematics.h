@@ -82,11 +82,12 @@ class InverseKinematics {
     int from_lanes = 0;  // points solved on the lane stage's numbers (the others by solve())
     // Scratch: candidate k's cos and sin of rotary r at point i in [k][r][i + 1] (index 0: the
     // previous block's last point), the prismatic solution of each candidate, the angle steps
-    // delta[j][k][r] from candidate j of the previous point, their chords, and lane masks.
+    // delta[k][r] from candidate k of the previous point, the chords chord2[j][k] from its
+    // candidate j, and lane masks.
     double cand_c[2][2][kBlock + 1], cand_s[2][2][kBlock + 1];
     double prism[2][3][kBlock];
-    double delta[2][2][2][kBlock], chord2[2][2][kBlock];
-    long long irregular[kBlock], prism_ok[2][kBlock], delta_ok[2][2][2][kBlock];
+    double delta[2][2][kBlock], chord2[2][2][kBlock];
+    long long irregular[kBlock], prism_ok[2][kBlock], delta_ok[2][2][kBlock];
   };
   // What solveBlock carries from one block to the next.
   struct Cursor {

@@ -2,13 +2,20 @@
 
 #include "core/model/effects.h"
 
+#include <algorithm>
 #include <array>
+#include <cstring>
+#include <type_traits>
+#if defined(__x86_64__)
+#include <emmintrin.h>
+#endif
 #include <cmath>
 #include <cstdio>
 #include <limits>
 
 #include "core/kinematics/forward_kinematics.h"
 #include "core/model/rigid_transform.h"
+#include "core/numerics/lanes.h"
 #include "core/numerics/units.h"
 
 namespace tolver {
@@ -42,12 +49,210 @@ std::string describeIkFailure(const MachineModel& model, const IkSolution& sol) 
 
 namespace {
 
-// Angle between two unit vectors. Prediction errors are micro-radians, where atan's series of
-// t = |u x v| / (u . v) is exact to rounding and several times cheaper than atan2.
-double angleBetween(const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
-  const double sn = u.cross(v).norm(), cs = u.dot(v);
-  if (cs > 0.0 && sn <= kAtanSeriesMax * cs) return atanOfSmall(sn / cs);
-  return std::atan2(sn, cs);
+// The deviation of a predicted point, over L = double or four lanes (core/numerics/lanes.h):
+// p, u_raw the CL point and its tool axis (not necessarily unit), pp, up the predicted tip and
+// unit axis. The axis angle: prediction errors are micro-radians, where atan's series of
+// t = |u x v| / (u . v) is exact to rounding and several times cheaper than atan2; a lane
+// beyond the series is flagged (and recomputed by the double form, which takes atan2).
+struct Deviation {
+  double dev[3], along, across, angle, norm;
+};
+template <typename L>
+TOLVER_LANE_INLINE auto deviationL(const L p[3], const L u_raw[3], const L pp[3], const L up[3],
+                                   L dev[3], L* along, L* across, L* angle, L* norm) {
+  using lanes::select;
+  using lanes::sqrtL;
+  const L n2 = u_raw[0] * u_raw[0] + u_raw[1] * u_raw[1] + u_raw[2] * u_raw[2];
+  const L root = sqrtL(n2);
+  const auto positive = n2 > 0.0;
+  L u[3];
+  for (int k = 0; k < 3; ++k) u[k] = select(positive, u_raw[k] / root, u_raw[k]);
+  for (int k = 0; k < 3; ++k) dev[k] = pp[k] - p[k];
+  *along = dev[0] * u[0] + dev[1] * u[1] + dev[2] * u[2];
+  L w[3];
+  for (int k = 0; k < 3; ++k) w[k] = dev[k] - *along * u[k];
+  *across = sqrtL(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+  const L x = u[1] * up[2] - u[2] * up[1], y = u[2] * up[0] - u[0] * up[2],
+          z = u[0] * up[1] - u[1] * up[0];
+  const L sn = sqrtL(x * x + y * y + z * z), cs = u[0] * up[0] + u[1] * up[1] + u[2] * up[2];
+  const auto series = (cs > 0.0) & (sn <= kAtanSeriesMax * cs);
+  *angle = atanOfSmallL(sn / cs);
+  *norm = sqrtL(dev[0] * dev[0] + dev[1] * dev[1] + dev[2] * dev[2]);
+  if constexpr (sizeof(L) == sizeof(double)) {
+    if (!series) *angle = std::atan2(sn, cs);
+    return false;
+  } else {
+    return !series;
+  }
+}
+
+Deviation deviationOf(const Eigen::Vector3d& p_w, const Eigen::Vector3d& u_w,
+                      const Eigen::Vector3d& p_pred, const Eigen::Vector3d& u_pred) {
+  const double p[3] = {p_w[0], p_w[1], p_w[2]}, u[3] = {u_w[0], u_w[1], u_w[2]};
+  const double pp[3] = {p_pred[0], p_pred[1], p_pred[2]}, up[3] = {u_pred[0], u_pred[1], u_pred[2]};
+  Deviation d;
+  deviationL(p, u, pp, up, d.dev, &d.along, &d.across, &d.angle, &d.norm);
+  return d;
+}
+
+// deviationL over a block: in[0..3] the CL tips, axes, predicted tips and axes (3 arrays of n
+// each), out the deviations (dev x, y, z, along, across, angle, norm: 7 arrays of n).
+TOLVER_LANE_CLONES
+void deviationLanes(int n, const double* const in[4][3], double* const out[7]) {
+  int i = 0;
+  for (; i + lanes::kWidth <= n; i += lanes::kWidth) {
+    lanes::Lane4 v[4][3], dev[3], along, across, angle, norm;
+    for (int a = 0; a < 4; ++a)
+      for (int k = 0; k < 3; ++k) v[a][k] = lanes::load4(in[a][k] + i);
+    const auto redo = deviationL(v[0], v[1], v[2], v[3], dev, &along, &across, &angle, &norm);
+    for (int k = 0; k < 3; ++k) lanes::store4(out[k] + i, dev[k]);
+    lanes::store4(out[3] + i, along);
+    lanes::store4(out[4] + i, across);
+    lanes::store4(out[5] + i, angle);
+    lanes::store4(out[6] + i, norm);
+    if (!lanes::any(redo)) continue;
+    for (int l = 0; l < lanes::kWidth; ++l) {
+      if (!lanes::lane(redo, l)) continue;
+      double s[4][3], d[3], al, ac, an, no;
+      for (int a = 0; a < 4; ++a)
+        for (int k = 0; k < 3; ++k) s[a][k] = in[a][k][i + l];
+      deviationL(s[0], s[1], s[2], s[3], d, &al, &ac, &an, &no);
+      out[5][i + l] = an;
+    }
+  }
+  for (; i < n; ++i) {
+    double s[4][3], d[3], al, ac, an, no;
+    for (int a = 0; a < 4; ++a)
+      for (int k = 0; k < 3; ++k) s[a][k] = in[a][k][i];
+    deviationL(s[0], s[1], s[2], s[3], d, &al, &ac, &an, &no);
+    for (int k = 0; k < 3; ++k) out[k][i] = d[k];
+    out[3][i] = al;
+    out[4][i] = ac;
+    out[5][i] = an;
+    out[6][i] = no;
+  }
+}
+
+// A predicted point written past the caches (x86-64: non-temporal stores, 8 bytes at a time):
+// a long path's results do not fit in them, and a plain store would first read each line in.
+// streamFence orders the stores before the results are read.
+static_assert(sizeof(PredictedPoint) % 8 == 0);  // plain storage (Eigen fixed-size members)
+inline void streamTo(PredictedPoint* dst, const PredictedPoint& src) {
+#if defined(__x86_64__)
+  long long words[sizeof(PredictedPoint) / 8];
+  std::memcpy(words, &src, sizeof src);
+  auto* out = reinterpret_cast<long long*>(dst);
+  for (size_t k = 0; k < sizeof(PredictedPoint) / 8; ++k) _mm_stream_si64(out + k, words[k]);
+#else
+  *dst = src;
+#endif
+}
+inline void streamFence() {
+#if defined(__x86_64__)
+  _mm_sfence();
+#endif
+}
+
+// The prediction's bookkeeping of one point, shared by both paths.
+struct Accumulator {
+  PredictionResult& result;
+  const MachineModel& model;
+  int max_failures;
+  double sum2 = 0.0, sum2_angle = 0.0;
+  void fail(size_t i, const ClPoint& cl, IkStatus status, int violated_axis, double violated_value,
+            int q_size) {
+    PredictedPoint& bad = result.points[i];
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    bad.q = JointVector::Constant(q_size, nan);
+    bad.p_pred_w = bad.u_pred_w = bad.deviation_w = Eigen::Vector3d::Constant(nan);
+    bad.along_axis = bad.across_axis = bad.axis_angle = nan;
+    bad.singular = false;
+    const int axis = status == IkStatus::OutOfTravel ? violated_axis : -1;
+    ++result.failed_points;
+    ++result.failures_per_axis[axis >= 0 ? axis : model.axes.size()];
+    if (static_cast<int>(result.failures.size()) < max_failures) {
+      IkSolution sol;
+      sol.status = status;
+      sol.violated_axis = violated_axis;
+      sol.violated_value = violated_value;
+      result.failures.push_back(
+          {static_cast<int>(i), cl.line, status, axis, describeIkFailure(model, sol)});
+    }
+  }
+  void add(size_t i, const ClPoint& cl, bool singular, double d, double angle) {
+    PredictionSummary& s = result.summary;
+    if (singular) {
+      if (s.singular_points == 0) s.first_singular_line = cl.line;
+      ++s.singular_points;
+    }
+    sum2 += d * d;
+    sum2_angle += angle * angle;
+    if (d > s.max_deviation || s.max_index < 0) {
+      s.max_deviation = d;
+      s.max_index = static_cast<int>(i);
+    }
+    if (angle > s.max_axis_angle) s.max_axis_angle = angle;
+  }
+};
+
+// The batch path: blocks of InverseKinematics::kBlock points through the lanes of the inverse
+// kinematics, the forward carry and the deviations, then the bookkeeping point by point.
+void predictInBlocks(const InverseKinematics& ik, const ForwardKinematics& actual,
+                     const std::vector<ClPoint>& path, Accumulator& acc) {
+  constexpr int kBlock = InverseKinematics::kBlock;
+  InverseKinematics::Block b;
+  InverseKinematics::Cursor cursor;
+  double pred[6][kBlock], dev[7][kBlock];
+  const int axes = static_cast<int>(acc.model.axes.size());
+  const double* q[kMaxAxes];
+  const double* c[kMaxAxes];
+  const double* s[kMaxAxes];
+  for (int a = 0; a < axes; ++a) {
+    q[a] = b.q[a];
+    c[a] = b.c[a];
+    s[a] = b.s[a];
+  }
+  double* const p_pred[3] = {pred[0], pred[1], pred[2]};
+  double* const u_pred[3] = {pred[3], pred[4], pred[5]};
+  const double* const in[4][3] = {{b.p[0], b.p[1], b.p[2]},
+                                  {b.u[0], b.u[1], b.u[2]},
+                                  {pred[0], pred[1], pred[2]},
+                                  {pred[3], pred[4], pred[5]}};
+  double* const out[7] = {dev[0], dev[1], dev[2], dev[3], dev[4], dev[5], dev[6]};
+  for (size_t start = 0; start < path.size(); start += kBlock) {
+    const int n = static_cast<int>(std::min<size_t>(kBlock, path.size() - start));
+    b.n = n;
+    for (int i = 0; i < n; ++i) {
+      const ClPoint& cl = path[start + i];
+      for (int k = 0; k < 3; ++k) {
+        b.p[k][i] = cl.p_w[k];
+        b.u[k][i] = cl.u_w[k];
+      }
+    }
+    ik.solveBlock(b, cursor);
+    actual.tipAndAxisBatch(n, q, c, s, p_pred, u_pred);
+    deviationLanes(n, in, out);
+    for (int i = 0; i < n; ++i) {
+      const size_t at = start + i;
+      if (b.status[i] != IkStatus::Ok) {
+        acc.fail(at, path[at], b.status[i], b.violated_axis[i], b.violated_value[i], axes);
+        continue;
+      }
+      PredictedPoint o;
+      o.q.resize(axes);
+      for (int a = 0; a < axes; ++a) o.q[a] = b.q[a][i];
+      o.singular = b.singular[i];
+      o.p_pred_w = Eigen::Vector3d(pred[0][i], pred[1][i], pred[2][i]);
+      o.u_pred_w = Eigen::Vector3d(pred[3][i], pred[4][i], pred[5][i]);
+      o.deviation_w = Eigen::Vector3d(dev[0][i], dev[1][i], dev[2][i]);
+      o.along_axis = dev[3][i];
+      o.across_axis = dev[4][i];
+      o.axis_angle = dev[5][i];
+      acc.add(at, path[at], o.singular, dev[6][i], o.axis_angle);
+      streamTo(&acc.result.points[at], o);
+    }
+  }
+  streamFence();
 }
 
 }  // namespace
@@ -63,6 +268,12 @@ PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorX
 void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                      const std::vector<ClPoint>& path, PredictionResult& result, int max_failures,
                      const std::vector<JointVector>* commanded) {
+  predictToolPath(model, params, path, result, max_failures, commanded, true);
+}
+
+void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
+                     const std::vector<ClPoint>& path, PredictionResult& result, int max_failures,
+                     const std::vector<JointVector>* commanded, bool batch) {
   result.failures.clear();
   result.failed_points = 0;
   result.failures_per_axis.assign(model.axes.size() + 1, 0);
@@ -73,64 +284,47 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
   result.points.resize(path.size());
   PredictionSummary& s = result.summary;
   s.points = static_cast<int>(path.size());
-  double sum2 = 0.0, sum2_angle = 0.0;
-  const JointVector* previous = nullptr;
-  std::array<double, kMaxAxes> previous_cos, previous_sin;  // of previous's rotary values
-  // Effects that depend on the approach direction (reversal) see it from the joint sequence;
-  // time-dependent ones (thermal) see an unknown time and add nothing.
-  MotionContext ctx;
-  const MotionContext* ctx_ptr = model.effects.empty() ? nullptr : &ctx;
-  for (size_t i = 0; i < path.size(); ++i) {
-    const ClPoint& cl = path[i];
-    const IkSolution sol =
-        commanded ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
-                  : ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(), previous_sin.data());
-    if (sol.status != IkStatus::Ok) {
-      PredictedPoint& bad = result.points[i];
-      const double nan = std::numeric_limits<double>::quiet_NaN();
-      bad.q = JointVector::Constant(sol.q.size(), nan);
-      bad.p_pred_w = bad.u_pred_w = bad.deviation_w = Eigen::Vector3d::Constant(nan);
-      bad.along_axis = bad.across_axis = bad.axis_angle = nan;
-      bad.singular = false;
-      const int axis = sol.status == IkStatus::OutOfTravel ? sol.violated_axis : -1;
-      ++result.failed_points;
-      ++result.failures_per_axis[axis >= 0 ? axis : model.axes.size()];
-      if (static_cast<int>(result.failures.size()) < max_failures)
-        result.failures.push_back(
-            {static_cast<int>(i), cl.line, sol.status, axis, describeIkFailure(model, sol)});
-      previous = nullptr;
-      continue;
+  Accumulator acc{result, model, max_failures};
+  if (batch && !commanded && ik.batchable() && actual.batchable()) {
+    predictInBlocks(ik, actual, path, acc);
+  } else {
+    const JointVector* previous = nullptr;
+    std::array<double, kMaxAxes> previous_cos, previous_sin;  // of previous's rotary values
+    // Effects that depend on the approach direction (reversal) see it from the joint sequence;
+    // time-dependent ones (thermal) see an unknown time and add nothing.
+    MotionContext ctx;
+    const MotionContext* ctx_ptr = model.effects.empty() ? nullptr : &ctx;
+    for (size_t i = 0; i < path.size(); ++i) {
+      const ClPoint& cl = path[i];
+      const IkSolution sol =
+          commanded ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
+                    : ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(), previous_sin.data());
+      if (sol.status != IkStatus::Ok) {
+        acc.fail(i, cl, sol.status, sol.violated_axis, sol.violated_value,
+                 static_cast<int>(sol.q.size()));
+        previous = nullptr;
+        continue;
+      }
+      PredictedPoint& out = result.points[i];
+      out.q = sol.q;
+      out.singular = sol.singular;
+      if (ctx_ptr && previous) updateDirections(ctx, *previous, sol.q);
+      actual.tipAndAxis(sol.q, &out.p_pred_w, &out.u_pred_w, sol.cos_q.data(), sol.sin_q.data(),
+                        ctx_ptr);
+      const Deviation d = deviationOf(cl.p_w, cl.u_w, out.p_pred_w, out.u_pred_w);
+      out.deviation_w = Eigen::Vector3d(d.dev[0], d.dev[1], d.dev[2]);
+      out.along_axis = d.along;
+      out.across_axis = d.across;
+      out.axis_angle = d.angle;
+      acc.add(i, cl, sol.singular, d.norm, d.angle);
+      previous = &out.q;
+      previous_cos = sol.cos_q;
+      previous_sin = sol.sin_q;
     }
-    PredictedPoint& out = result.points[i];
-    out.q = sol.q;
-    out.singular = sol.singular;
-    if (sol.singular) {
-      if (s.singular_points == 0) s.first_singular_line = cl.line;
-      ++s.singular_points;
-    }
-    if (ctx_ptr && previous) updateDirections(ctx, *previous, sol.q);
-    actual.tipAndAxis(sol.q, &out.p_pred_w, &out.u_pred_w, sol.cos_q.data(), sol.sin_q.data(),
-                      ctx_ptr);
-    const Eigen::Vector3d u = cl.u_w.normalized();
-    out.deviation_w = out.p_pred_w - cl.p_w;
-    out.along_axis = out.deviation_w.dot(u);
-    out.across_axis = (out.deviation_w - out.along_axis * u).norm();
-    out.axis_angle = angleBetween(u, out.u_pred_w);
-    const double d = out.deviation_w.norm();
-    sum2 += d * d;
-    sum2_angle += out.axis_angle * out.axis_angle;
-    if (d > s.max_deviation || s.max_index < 0) {
-      s.max_deviation = d;
-      s.max_index = static_cast<int>(i);
-    }
-    if (out.axis_angle > s.max_axis_angle) s.max_axis_angle = out.axis_angle;
-    previous = &out.q;
-    previous_cos = sol.cos_q;
-    previous_sin = sol.sin_q;
   }
   if (!path.empty()) {
-    s.rms_deviation = std::sqrt(sum2 / path.size());
-    s.rms_axis_angle = std::sqrt(sum2_angle / path.size());
+    s.rms_deviation = std::sqrt(acc.sum2 / path.size());
+    s.rms_axis_angle = std::sqrt(acc.sum2_angle / path.size());
   }
 }
 

@@ -78,6 +78,13 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                      int max_failures = 20,
                      const std::vector<JointVector>* commanded = nullptr);
 
+// batch: false takes the reference path, one point at a time, that the batch path (four
+// points side by side, when the model allows: InverseKinematics and ForwardKinematics
+// batchable()) reproduces bit for bit (tests); without commanded joints only.
+void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
+                     const std::vector<ClPoint>& path, PredictionResult& result, int max_failures,
+                     const std::vector<JointVector>* commanded, bool batch);
+
 // A large rotary step between two consecutive cutting moves: the machine swings the part or
 // the head while the tool is in the material (a program risk near the singular pole).
 struct RotaryJump {
