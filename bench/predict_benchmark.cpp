@@ -10,6 +10,7 @@
 #include "core/kinematics/forward_kinematics.h"
 #include "core/kinematics/inverse_kinematics.h"
 #include "core/path/tool_path_prediction.h"
+#include "pipeline/parallel_prediction.h"
 #include "io/program/apt_reader.h"
 #include "io/program/gcode_reader.h"
 #include "io/common/io_error.h"
@@ -44,6 +45,18 @@ void BM_PredictToolPathReusingStorage(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * state.range(0));
 }
 BENCHMARK(BM_PredictToolPathReusingStorage)->Arg(100000)->Unit(benchmark::kMillisecond);
+
+// The same on two threads (pipeline/parallel_prediction.h): the figure for a 2-core machine.
+void BM_PredictToolPathTwoThreads(benchmark::State& state) {
+  const tolver::Machine m = machineWithErrors();
+  const auto p = path(static_cast<size_t>(state.range(0)));
+  for (auto _ : state) {
+    auto r = tolver::predictToolPathParallel(m.model, m.params, p, 20, nullptr, 2);
+    benchmark::DoNotOptimize(r.summary.max_deviation);
+  }
+  state.SetItemsProcessed(state.iterations() * state.range(0));
+}
+BENCHMARK(BM_PredictToolPathTwoThreads)->Arg(100000)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // Compensation of the same path (Newton on the full error model from the nominal IK): the
 // issue's target is within 3x of predict's rate.

@@ -223,6 +223,9 @@ TEST_P(EveryMachine, BlockEqualsPointByPointBitForBit) {
   for (size_t start = 0, len = 1; start < ps.size(); start += len, len = (len * 7 + 5) % 64 + 1) {
     const int n = static_cast<int>(std::min(len, ps.size() - start));
     block->n = n;
+    block->has_before = start > 0;
+    if (start > 0)
+      for (int k = 0; k < 3; ++k) block->u_before[k] = us[start - 1][k];
     for (int i = 0; i < n; ++i)
       for (int k = 0; k < 3; ++k) {
         block->p[k][i] = ps[start + i][k];

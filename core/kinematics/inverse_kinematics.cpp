@@ -680,18 +680,30 @@ void ikBlockLanes(const InverseKinematics& ik, InverseKinematics::Block& b) {
 
 // Long by design: solve()'s continuity choice written out for the common case, on the lane
 // stage's numbers, with solve() itself for every other case.
-void InverseKinematics::solveBlock(Block& b, Cursor& cursor) const {
+void InverseKinematics::blockLanes(Block& b) const {
   assert(batchable_);
+  // Index 0: the candidates of the point before the block (the lane stage's operations), read
+  // only when that point was solved from one of them.
+  double cc[2][2] = {{1.0, 1.0}, {1.0, 1.0}}, ss[2][2] = {};
+  if (b.has_before) {
+    double g;
+    bool unreachable, free1, free2, refine;
+    candidatesL(b.u_before, cc, ss, &g, &unreachable, &free1, &free2, &refine);
+    for (int k = 0; k < 2; ++k)
+      for (int r = 0; r < 2; ++r) ss[k][r] = sign_[r] * ss[k][r];
+  }
+  for (int k = 0; k < 2; ++k)
+    for (int r = 0; r < 2; ++r) {
+      b.cand_c[k][r][0] = cc[k][r];
+      b.cand_s[k][r][0] = ss[k][r];
+    }
+  ikBlockLanes(*this, b);
+}
+
+void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
   const int n = b.n;
   b.from_lanes = 0;
   const int axes = static_cast<int>(model_->axes.size());
-  if (cursor.previous_candidate < 0)  // index 0 is read only through a candidate: keep it finite
-    for (int k = 0; k < 2; ++k)
-      for (int r = 0; r < 2; ++r) {
-        b.cand_c[k][r][0] = 1.0;
-        b.cand_s[k][r][0] = 0.0;
-      }
-  ikBlockLanes(*this, b);
   double lo[2], hi[2];
   for (int r = 0; r < 2; ++r) {
     const Axis& ax = model_->axes[rotary_[r]];
@@ -791,12 +803,6 @@ void InverseKinematics::solveBlock(Block& b, Cursor& cursor) const {
         break;
       }
   }
-  // The last point's candidates are the next block's index 0.
-  for (int k = 0; k < 2; ++k)
-    for (int r = 0; r < 2; ++r) {
-      b.cand_c[k][r][0] = b.cand_c[k][r][n];
-      b.cand_s[k][r][0] = b.cand_s[k][r][n];
-    }
 }
 
 }  // namespace tolver

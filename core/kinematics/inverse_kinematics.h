@@ -72,6 +72,8 @@ class InverseKinematics {
   struct Block {
     int n = 0;                                 // points in this block, <= kBlock
     double p[3][kBlock], u[3][kBlock];         // in: tip p_w (mm) and tool axis u_w, by coordinate
+    bool has_before = false;                   // in: a point precedes the block on the path,
+    double u_before[3] = {0, 0, 1};            // with this tool axis
     // out, by axis index: joint values (mm, rad), cos and sin of the rotary ones (0, 1, 0
     // where the point failed)
     double q[kMaxAxes][kBlock], c[kMaxAxes][kBlock], s[kMaxAxes][kBlock];
@@ -98,7 +100,14 @@ class InverseKinematics {
   };
   // The batch path applies: two rotary axes along +x, +y or +z, three prismatic axes.
   bool batchable() const { return batchable_; }
-  void solveBlock(Block& b, Cursor& cursor) const;
+  void solveBlock(Block& b, Cursor& cursor) const {
+    blockLanes(b);
+    blockChoice(b, cursor);
+  }
+  // solveBlock's two stages: the lane stage depends on the block alone (blocks may run it on
+  // several threads at once); the choice needs the cursor, block after block in path order.
+  void blockLanes(Block& b) const;
+  void blockChoice(Block& b, Cursor& cursor) const;
 
   // One solution of the orientation sub-problem: the rotary joint values that give a tool axis,
   // in the order of rotaryAxes(), before travel checks and unwrapping.

@@ -153,8 +153,11 @@ inline void streamFence() {
 #endif
 }
 
-// The prediction's bookkeeping of one point, shared by both paths.
-struct Accumulator {
+}  // namespace
+
+// The prediction's bookkeeping (file-local; outside the anonymous namespace because
+// BlockPrediction::State holds one).
+struct PredictionAccumulator {
   PredictionResult& result;
   const MachineModel& model;
   int max_failures;
@@ -195,15 +198,89 @@ struct Accumulator {
   }
 };
 
-// The batch path: blocks of InverseKinematics::kBlock points through the lanes of the inverse
-// kinematics, the forward carry and the deviations, then the bookkeeping point by point.
-void predictInBlocks(const InverseKinematics& ik, const ForwardKinematics& actual,
-                     const std::vector<ClPoint>& path, Accumulator& acc) {
-  constexpr int kBlock = InverseKinematics::kBlock;
-  InverseKinematics::Block b;
+
+struct BlockPrediction::Work {
+  size_t start = 0;
+  InverseKinematics::Block ik;
+  double pred[6][InverseKinematics::kBlock], dev[7][InverseKinematics::kBlock];
+};
+
+struct BlockPrediction::State {
+  State(const MachineModel& m, const Eigen::VectorXd& params, const std::vector<ClPoint>& p,
+        PredictionResult& r, int max_failures)
+      : model(m), path(p), ik(m), actual(m, params), acc{r, m, max_failures} {}
+  const MachineModel& model;
+  const std::vector<ClPoint>& path;
+  const InverseKinematics ik;
+  const ForwardKinematics actual;
+  PredictionAccumulator acc;
   InverseKinematics::Cursor cursor;
-  double pred[6][kBlock], dev[7][kBlock];
-  const int axes = static_cast<int>(acc.model.axes.size());
+};
+
+namespace {
+
+void prepare(const MachineModel& model, const std::vector<ClPoint>& path,
+             PredictionResult& result) {
+  result.failures.clear();
+  result.failed_points = 0;
+  result.failures_per_axis.assign(model.axes.size() + 1, 0);
+  result.summary = PredictionSummary{};
+  result.points.resize(path.size());
+  result.summary.points = static_cast<int>(path.size());
+}
+
+void finishSummary(const std::vector<ClPoint>& path, const PredictionAccumulator& acc,
+                   PredictionSummary& s) {
+  if (path.empty()) return;
+  s.rms_deviation = std::sqrt(acc.sum2 / path.size());
+  s.rms_axis_angle = std::sqrt(acc.sum2_angle / path.size());
+}
+
+}  // namespace
+
+BlockPrediction::BlockPrediction(const MachineModel& model, const Eigen::VectorXd& params,
+                                 const std::vector<ClPoint>& path, PredictionResult& result,
+                                 int max_failures)
+    : s_(std::make_unique<State>(model, params, path, result, max_failures)) {
+  prepare(model, path, result);
+}
+
+BlockPrediction::~BlockPrediction() = default;
+
+bool BlockPrediction::batchable() const { return s_->ik.batchable() && s_->actual.batchable(); }
+
+size_t BlockPrediction::blocks() const {
+  return (s_->path.size() + InverseKinematics::kBlock - 1) / InverseKinematics::kBlock;
+}
+
+std::shared_ptr<BlockPrediction::Work> BlockPrediction::newWork() const {
+  return std::make_shared<Work>();
+}
+
+void BlockPrediction::lanes(size_t block, Work& w) const {
+  const std::vector<ClPoint>& path = s_->path;
+  w.start = block * InverseKinematics::kBlock;
+  InverseKinematics::Block& b = w.ik;
+  b.n = static_cast<int>(std::min<size_t>(InverseKinematics::kBlock, path.size() - w.start));
+  for (int i = 0; i < b.n; ++i) {
+    const ClPoint& cl = path[w.start + i];
+    for (int k = 0; k < 3; ++k) {
+      b.p[k][i] = cl.p_w[k];
+      b.u[k][i] = cl.u_w[k];
+    }
+  }
+  b.has_before = w.start > 0;
+  if (b.has_before)
+    for (int k = 0; k < 3; ++k) b.u_before[k] = path[w.start - 1].u_w[k];
+  s_->ik.blockLanes(b);
+}
+
+void BlockPrediction::choice(Work& w) { s_->ik.blockChoice(w.ik, s_->cursor); }
+
+void BlockPrediction::forward(Work& w) const {
+  InverseKinematics::Block& b = w.ik;
+  const int n = b.n;
+  const int axes = static_cast<int>(s_->model.axes.size());
   const double* q[kMaxAxes];
   const double* c[kMaxAxes];
   const double* s[kMaxAxes];
@@ -212,50 +289,48 @@ void predictInBlocks(const InverseKinematics& ik, const ForwardKinematics& actua
     c[a] = b.c[a];
     s[a] = b.s[a];
   }
-  double* const p_pred[3] = {pred[0], pred[1], pred[2]};
-  double* const u_pred[3] = {pred[3], pred[4], pred[5]};
+  double* const p_pred[3] = {w.pred[0], w.pred[1], w.pred[2]};
+  double* const u_pred[3] = {w.pred[3], w.pred[4], w.pred[5]};
+  s_->actual.tipAndAxisBatch(n, q, c, s, p_pred, u_pred);
   const double* const in[4][3] = {{b.p[0], b.p[1], b.p[2]},
                                   {b.u[0], b.u[1], b.u[2]},
-                                  {pred[0], pred[1], pred[2]},
-                                  {pred[3], pred[4], pred[5]}};
-  double* const out[7] = {dev[0], dev[1], dev[2], dev[3], dev[4], dev[5], dev[6]};
-  for (size_t start = 0; start < path.size(); start += kBlock) {
-    const int n = static_cast<int>(std::min<size_t>(kBlock, path.size() - start));
-    b.n = n;
-    for (int i = 0; i < n; ++i) {
-      const ClPoint& cl = path[start + i];
-      for (int k = 0; k < 3; ++k) {
-        b.p[k][i] = cl.p_w[k];
-        b.u[k][i] = cl.u_w[k];
-      }
-    }
-    ik.solveBlock(b, cursor);
-    actual.tipAndAxisBatch(n, q, c, s, p_pred, u_pred);
-    deviationLanes(n, in, out);
-    for (int i = 0; i < n; ++i) {
-      const size_t at = start + i;
-      if (b.status[i] != IkStatus::Ok) {
-        acc.fail(at, path[at], b.status[i], b.violated_axis[i], b.violated_value[i], axes);
-        continue;
-      }
-      PredictedPoint o;
-      o.q.resize(axes);
-      for (int a = 0; a < axes; ++a) o.q[a] = b.q[a][i];
-      o.singular = b.singular[i];
-      o.p_pred_w = Eigen::Vector3d(pred[0][i], pred[1][i], pred[2][i]);
-      o.u_pred_w = Eigen::Vector3d(pred[3][i], pred[4][i], pred[5][i]);
-      o.deviation_w = Eigen::Vector3d(dev[0][i], dev[1][i], dev[2][i]);
-      o.along_axis = dev[3][i];
-      o.across_axis = dev[4][i];
-      o.axis_angle = dev[5][i];
-      acc.add(at, path[at], o.singular, dev[6][i], o.axis_angle);
-      streamTo(&acc.result.points[at], o);
-    }
+                                  {w.pred[0], w.pred[1], w.pred[2]},
+                                  {w.pred[3], w.pred[4], w.pred[5]}};
+  double* const out[7] = {w.dev[0], w.dev[1], w.dev[2], w.dev[3], w.dev[4], w.dev[5], w.dev[6]};
+  deviationLanes(n, in, out);
+  std::vector<PredictedPoint>& points = s_->acc.result.points;
+  for (int i = 0; i < n; ++i) {
+    if (b.status[i] != IkStatus::Ok) continue;  // account() writes the failed points
+    PredictedPoint o;
+    o.q.resize(axes);
+    for (int a = 0; a < axes; ++a) o.q[a] = b.q[a][i];
+    o.singular = b.singular[i];
+    o.p_pred_w = Eigen::Vector3d(w.pred[0][i], w.pred[1][i], w.pred[2][i]);
+    o.u_pred_w = Eigen::Vector3d(w.pred[3][i], w.pred[4][i], w.pred[5][i]);
+    o.deviation_w = Eigen::Vector3d(w.dev[0][i], w.dev[1][i], w.dev[2][i]);
+    o.along_axis = w.dev[3][i];
+    o.across_axis = w.dev[4][i];
+    o.axis_angle = w.dev[5][i];
+    streamTo(&points[w.start + i], o);
   }
   streamFence();
 }
 
-}  // namespace
+void BlockPrediction::account(Work& w) {
+  const InverseKinematics::Block& b = w.ik;
+  const int axes = static_cast<int>(s_->model.axes.size());
+  for (int i = 0; i < b.n; ++i) {
+    const size_t at = w.start + i;
+    if (b.status[i] != IkStatus::Ok)
+      s_->acc.fail(at, s_->path[at], b.status[i], b.violated_axis[i], b.violated_value[i], axes);
+    else
+      s_->acc.add(at, s_->path[at], b.singular[i], w.dev[6][i], w.dev[5][i]);
+  }
+}
+
+void BlockPrediction::finish() {
+  finishSummary(s_->path, s_->acc, s_->acc.result.summary);
+}
 
 PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                                  const std::vector<ClPoint>& path, int max_failures,
@@ -274,58 +349,59 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
 void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                      const std::vector<ClPoint>& path, PredictionResult& result, int max_failures,
                      const std::vector<JointVector>* commanded, bool batch) {
-  result.failures.clear();
-  result.failed_points = 0;
-  result.failures_per_axis.assign(model.axes.size() + 1, 0);
   if (commanded && commanded->size() != path.size()) commanded = nullptr;
-  result.summary = PredictionSummary{};
-  const InverseKinematics ik(model);
-  const ForwardKinematics actual(model, params);
-  result.points.resize(path.size());
-  PredictionSummary& s = result.summary;
-  s.points = static_cast<int>(path.size());
-  Accumulator acc{result, model, max_failures};
-  if (batch && !commanded && ik.batchable() && actual.batchable()) {
-    predictInBlocks(ik, actual, path, acc);
-  } else {
-    const JointVector* previous = nullptr;
-    std::array<double, kMaxAxes> previous_cos, previous_sin;  // of previous's rotary values
-    // Effects that depend on the approach direction (reversal) see it from the joint sequence;
-    // time-dependent ones (thermal) see an unknown time and add nothing.
-    MotionContext ctx;
-    const MotionContext* ctx_ptr = model.effects.empty() ? nullptr : &ctx;
-    for (size_t i = 0; i < path.size(); ++i) {
-      const ClPoint& cl = path[i];
-      const IkSolution sol =
-          commanded ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
-                    : ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(), previous_sin.data());
-      if (sol.status != IkStatus::Ok) {
-        acc.fail(i, cl, sol.status, sol.violated_axis, sol.violated_value,
-                 static_cast<int>(sol.q.size()));
-        previous = nullptr;
-        continue;
+  if (batch && !commanded) {
+    BlockPrediction bp(model, params, path, result, max_failures);
+    if (bp.batchable()) {
+      const std::shared_ptr<BlockPrediction::Work> w = bp.newWork();
+      for (size_t k = 0; k < bp.blocks(); ++k) {
+        bp.lanes(k, *w);
+        bp.choice(*w);
+        bp.forward(*w);
+        bp.account(*w);
       }
-      PredictedPoint& out = result.points[i];
-      out.q = sol.q;
-      out.singular = sol.singular;
-      if (ctx_ptr && previous) updateDirections(ctx, *previous, sol.q);
-      actual.tipAndAxis(sol.q, &out.p_pred_w, &out.u_pred_w, sol.cos_q.data(), sol.sin_q.data(),
-                        ctx_ptr);
-      const Deviation d = deviationOf(cl.p_w, cl.u_w, out.p_pred_w, out.u_pred_w);
-      out.deviation_w = Eigen::Vector3d(d.dev[0], d.dev[1], d.dev[2]);
-      out.along_axis = d.along;
-      out.across_axis = d.across;
-      out.axis_angle = d.angle;
-      acc.add(i, cl, sol.singular, d.norm, d.angle);
-      previous = &out.q;
-      previous_cos = sol.cos_q;
-      previous_sin = sol.sin_q;
+      bp.finish();
+      return;
     }
   }
-  if (!path.empty()) {
-    s.rms_deviation = std::sqrt(acc.sum2 / path.size());
-    s.rms_axis_angle = std::sqrt(acc.sum2_angle / path.size());
+  prepare(model, path, result);
+  const InverseKinematics ik(model);
+  const ForwardKinematics actual(model, params);
+  PredictionAccumulator acc{result, model, max_failures};
+  const JointVector* previous = nullptr;
+  std::array<double, kMaxAxes> previous_cos, previous_sin;  // of previous's rotary values
+  // Effects that depend on the approach direction (reversal) see it from the joint sequence;
+  // time-dependent ones (thermal) see an unknown time and add nothing.
+  MotionContext ctx;
+  const MotionContext* ctx_ptr = model.effects.empty() ? nullptr : &ctx;
+  for (size_t i = 0; i < path.size(); ++i) {
+    const ClPoint& cl = path[i];
+    const IkSolution sol =
+        commanded ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
+                  : ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(), previous_sin.data());
+    if (sol.status != IkStatus::Ok) {
+      acc.fail(i, cl, sol.status, sol.violated_axis, sol.violated_value,
+               static_cast<int>(sol.q.size()));
+      previous = nullptr;
+      continue;
+    }
+    PredictedPoint& out = result.points[i];
+    out.q = sol.q;
+    out.singular = sol.singular;
+    if (ctx_ptr && previous) updateDirections(ctx, *previous, sol.q);
+    actual.tipAndAxis(sol.q, &out.p_pred_w, &out.u_pred_w, sol.cos_q.data(), sol.sin_q.data(),
+                      ctx_ptr);
+    const Deviation d = deviationOf(cl.p_w, cl.u_w, out.p_pred_w, out.u_pred_w);
+    out.deviation_w = Eigen::Vector3d(d.dev[0], d.dev[1], d.dev[2]);
+    out.along_axis = d.along;
+    out.across_axis = d.across;
+    out.axis_angle = d.angle;
+    acc.add(i, cl, sol.singular, d.norm, d.angle);
+    previous = &out.q;
+    previous_cos = sol.cos_q;
+    previous_sin = sol.sin_q;
   }
+  finishSummary(path, acc, result.summary);
 }
 
 std::vector<RotaryJump> findRotaryJumps(const MachineModel& model, const std::vector<ClPoint>& path,

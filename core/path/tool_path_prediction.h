@@ -3,6 +3,7 @@
 // the nominal machine, then the actual tool pose from the forward model with the machine's
 // errors. Deviations are expressed in the workpiece frame w.
 #include <Eigen/Core>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -84,6 +85,33 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
 void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                      const std::vector<ClPoint>& path, PredictionResult& result, int max_failures,
                      const std::vector<JointVector>* commanded, bool batch);
+
+// The batch path in stages, for a driver that runs them on several threads
+// (pipeline/parallel_prediction.h): blocks of InverseKinematics::kBlock points. lanes() and
+// forward() of different blocks may run at the same time; choice() and account() run one block
+// at a time, in path order. predictToolPath runs the four in turn on one thread; any order
+// that keeps those rules gives its result, bit for bit.
+class BlockPrediction {
+ public:
+  struct Work;  // one block's numbers (about 50 kB)
+  // Prepares result for path (its points resized, its failures and summary cleared).
+  BlockPrediction(const MachineModel& model, const Eigen::VectorXd& params,
+                  const std::vector<ClPoint>& path, PredictionResult& result, int max_failures);
+  ~BlockPrediction();
+  // The stages apply (InverseKinematics and ForwardKinematics batchable()).
+  bool batchable() const;
+  size_t blocks() const;
+  std::shared_ptr<Work> newWork() const;  // (shared: Work is complete only in core)
+  void lanes(size_t block, Work& w) const;  // the block's IK lane stage
+  void choice(Work& w);                     // the continuity choice, after the previous block's
+  void forward(Work& w) const;              // forward carry, deviations, the block's points
+  void account(Work& w);                    // failures and summary, after the previous block's
+  void finish();                            // after the last block
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
 
 // A large rotary step between two consecutive cutting moves: the machine swings the part or
 // the head while the tool is in the material (a program risk near the singular pole).
