@@ -1,6 +1,8 @@
 // The compensate pipeline: see pipeline/compensate.h.
 #include "pipeline/compensate.h"
 
+#include "pipeline/parallel_prediction.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -251,7 +253,7 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
   run.text = correctedText(in, run);
   // The after, measured on the file as written: read back, predicted on the machine.
   const ClProgram back = readBack(in, run, output);
-  run.after = predictToolPath(run.machine.model, run.machine.params, back.path, 20,
+  run.after = predictToolPathParallel(run.machine.model, run.machine.params, back.path, 20,
                               back.joints.empty() ? nullptr : &back.joints);
   if (!run.after.ok())
     throw std::runtime_error("the compensated program does not predict: " + run.after.failures.front().message);

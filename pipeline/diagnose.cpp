@@ -7,6 +7,7 @@
 
 #include "core/model/effects.h"
 #include "core/path/tool_path_prediction.h"
+#include "pipeline/parallel_prediction.h"
 #include "io/common/io_error.h"
 #include "io/machine/machine_file.h"
 #include "io/program/apt_reader.h"
@@ -18,7 +19,7 @@ namespace tolver {
 namespace {
 
 PredictionResult predictOrThrow(const Machine& m, const ClProgram& program, const std::string& file) {
-  PredictionResult r = predictToolPath(m.model, m.params, program.path);
+  PredictionResult r = predictToolPathParallel(m.model, m.params, program.path);
   if (!r.ok()) throw InputError(file, r.failures.front().line, 0, "unreachable", r.failures.front().message);
   return r;
 }

@@ -7,6 +7,7 @@
 #include <filesystem>
 
 #include "core/path/tool_path_prediction.h"
+#include "pipeline/parallel_prediction.h"
 #include "io/program/gcode_reader.h"
 #include "io/common/io_error.h"
 #include "io/common/line_source.h"
@@ -236,7 +237,7 @@ std::string describeUnreachable(const MachineModel& model, const PredictionResul
 }
 
 PredictionResult predictProgram(const Machine& machine, const ClProgram& program) {
-  PredictionResult r = predictToolPath(machine.model, machine.params, program.path, 20,
+  PredictionResult r = predictToolPathParallel(machine.model, machine.params, program.path, 20,
                                        program.joints.empty() ? nullptr : &program.joints);
   if (!r.ok())
     throw InputError(program.file, r.failures.front().line, 0, "unreachable",
@@ -292,7 +293,7 @@ CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program
     out.probed = true;
     out.probe = fitProbedSetup(machine, probed);
     pred = PredictionResult{};  // one path's points in memory at a time
-    pred = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
+    pred = predictToolPathParallel(machine.model, machine.params, program.path, 20, commanded);
     if (machine.identification.empty()) return out;
     PredictionUncertainty pu(machine);
     pu.setupModuloProbed(probed);
@@ -312,7 +313,7 @@ CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program
   if (!absolute) {
     out.measured_setup = applyMeasuredSetup(machine, sub, d, sub.size());
     pred = PredictionResult{};  // one path's points in memory at a time
-    pred = predictToolPath(machine.model, machine.params, program.path, 20, commanded);
+    pred = predictToolPathParallel(machine.model, machine.params, program.path, 20, commanded);
   }
   PredictionUncertainty pu(machine);
   if (!absolute) pu.setupModulo(sub);
