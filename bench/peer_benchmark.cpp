@@ -20,7 +20,9 @@
 // the covariance and the per-parameter uncertainties.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <cstdio>
+#include <vector>
 #include <map>
 #include <string>
 
@@ -33,6 +35,7 @@
 #include "bench_fixtures.h"
 #include "core/calibration/ballbar.h"
 #include "core/kinematics/forward_kinematics.h"
+#include "pipeline/parallel_prediction.h"
 
 namespace {
 
@@ -112,6 +115,49 @@ void BM_Tolver_TipAndAxis(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations());
 }
 BENCHMARK(BM_Tolver_TipAndAxis);
+
+// The forward model alone, tip and axis, 1 024 configurations at a time (the batch carry that
+// prediction uses: four side by side).
+void BM_Tolver_BatchTipAndAxis(benchmark::State& state) {
+  const tolver::Machine m = tolver::bench::machineWithErrors();
+  const tolver::ForwardKinematics fk(m.model, m.params);
+  constexpr int n = 1024;
+  std::vector<double> v(5 * n), c(5 * n), s(5 * n), out(6 * n);
+  for (int i = 0; i < n; ++i) {
+    const double q[5] = {100.0 - 0.1 * i, -50.0 + 0.05 * i, 80.0, -0.5 + 1e-3 * i, 1.0 - 2e-3 * i};
+    for (int a = 0; a < 5; ++a) {
+      v[a * n + i] = q[a];
+      c[a * n + i] = std::cos(q[a]);
+      s[a * n + i] = std::sin(q[a]);
+    }
+  }
+  const double *qp[5], *cp[5], *sp[5];
+  for (int a = 0; a < 5; ++a) {
+    qp[a] = &v[a * n];
+    cp[a] = &c[a * n];
+    sp[a] = &s[a * n];
+  }
+  double* pp[3] = {&out[0], &out[n], &out[2 * n]};
+  double* up[3] = {&out[3 * n], &out[4 * n], &out[5 * n]};
+  for (auto _ : state) {
+    fk.tipAndAxisBatch(n, qp, cp, sp, pp, up);
+    benchmark::DoNotOptimize(out.data());
+  }
+  state.SetItemsProcessed(state.iterations() * n);
+}
+BENCHMARK(BM_Tolver_BatchTipAndAxis);
+
+// A predicted CL point on both cores of this machine (pipeline/parallel_prediction.h).
+void BM_Tolver_PredictedPointTwoCores(benchmark::State& state) {
+  const tolver::Machine m = tolver::bench::machineWithErrors();
+  const auto p = tolver::bench::path(100000);
+  for (auto _ : state) {
+    auto r = tolver::predictToolPathParallel(m.model, m.params, p, 20, nullptr, 2);
+    benchmark::DoNotOptimize(r.summary.max_deviation);
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(p.size()));
+}
+BENCHMARK(BM_Tolver_PredictedPointTwoCores)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 // The calibration as one Ceres cost: x = [unknown machine parameters, per set-up table-ball xyz,
 // tool-ball xyz], residuals model - measured (mm) with tolver's identification Jacobian.
@@ -209,13 +255,14 @@ int main(int argc, char** argv) {
   benchmark::RunSpecifiedBenchmarks(&reporter);
   const auto find = [&](const char* prefix) {
     for (const auto& [name, r] : reporter.rate)
-      if (name.rfind(prefix, 0) == 0) return r;
+      if (name == prefix || name.rfind(std::string(prefix) + "/", 0) == 0) return r;
     return 0.0;
   };
   const double kdl = find("BM_Kdl_FullPose");
   if (kdl > 0) {
-    std::printf("\nratios to KDL's full poses per second (same run, one core):\n");
-    for (const char* n : {"BM_Tolver_PredictedPoint", "BM_Tolver_FullPose", "BM_Tolver_TipAndAxis"})
+    std::printf("\nratios to KDL's full poses per second (same run; KDL on one core):\n");
+    for (const char* n : {"BM_Tolver_PredictedPoint", "BM_Tolver_PredictedPointTwoCores",
+                          "BM_Tolver_FullPose", "BM_Tolver_TipAndAxis", "BM_Tolver_BatchTipAndAxis"})
       if (find(n) > 0) std::printf("  %-26s %6.2f M/s   %5.2fx KDL (%.2f M/s)\n", n, find(n) / 1e6,
                                    find(n) / kdl, kdl / 1e6);
   }

@@ -174,7 +174,7 @@ TEST_P(EveryShippedMachine, PredictedClReadsBackWithTheSameSetup) {
   const PredictionResult r = predictToolPath(m.model, m.params, path);
   ASSERT_TRUE(r.ok()) << GetParam() << ": " << r.failures.front().message;
   std::string apt = "UNITS/MM\nMULTAX/ON\n";
-  for (const ClPoint& c : path) apt += "GOTO/0,0,0,0,0,1\n";
+  for (size_t i = 0; i < path.size(); ++i) apt += "GOTO/0,0,0,0,0,1\n";
   ClProgram program = parseApt(apt, "nominal.apt");
   program.path = path;
   std::vector<ClPoint> predicted = path;
