@@ -45,6 +45,25 @@ run_one() {
           -print_final_stats=1 ${TOLVER_FUZZ_SEED:+-seed=$TOLVER_FUZZ_SEED} corpus > log.txt 2>&1); } 2> "$out/$n/cpu.txt"; then
     touch "$out/$n/.failed"
   fi
+  # A timeout whose input runs within the limit on replay was the process being paused (SIGSTOP
+  # while a benchmark ran, a suspended machine: libFuzzer's timer counts wall time). Its input
+  # is kept aside in spurious/ and the run is not a finding.
+  if [ -f "$out/$n/.failed" ]; then
+    local real=0 found=0 f
+    while read -r f; do
+      found=1
+      case "$f" in
+        */timeout-*)
+          if (cd "$out/$n" && timeout 10 "$bin" "$f" > /dev/null 2>&1); then
+            mkdir -p "$out/$n/spurious" && mv "$f" "$out/$n/spurious/"
+          else
+            real=1
+          fi ;;
+        *) real=1 ;;
+      esac
+    done < <(find "$out/$n" -maxdepth 1 -newer "$out/$n/.started" -regextype egrep -regex ".*/(crash|leak|timeout|oom)-.*")
+    [ "$found" = 1 ] && [ "$real" = 0 ] && rm -f "$out/$n/.failed"
+  fi
   # One line per run, so the totals over many runs can be summed (tests/fuzz/totals.sh).
   local execs cov crashes
   execs=$(grep -oE "stat::number_of_executed_units: [0-9]+" "$out/$n/log.txt" | grep -oE "[0-9]+$" || echo 0)
