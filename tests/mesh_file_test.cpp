@@ -271,6 +271,36 @@ TEST_F(MeshFileTest, AnObjEndingInDigitsIsReadWithinItsBuffer) {
   }
 }
 
+// A PLY header's element counts must fit in the file (the mesh harness: 'element face
+// 777...71' in a 345-byte file made assimp ask for 26 GB): refused with the line, before assimp
+// reads it; a count that fits, and a file that holds what it declares, read as before.
+TEST_F(MeshFileTest, APlyElementCountBeyondTheFileIsRefused) {
+  std::ifstream in(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/mesh_corpus/ply_huge_face_count",
+                   std::ios::binary);
+  const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(found.size(), 100u);
+  const std::string header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                             "property float y\nproperty float z\nelement face ";
+  const std::string body = "\nproperty list uchar int vertex_indices\nend_header\n"
+                           "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  // (The harness takes the first byte as the format.)
+  for (const std::string& text : {found.substr(1), header + "4000" + body, header + "12x" + body,
+                                   header + std::string(40, '9') + body}) {
+    const std::string ply = write("huge.ply", text);
+    try {
+      readPartMesh(ply);
+      ADD_FAILURE() << "accepted " << text.substr(0, 120);
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("huge.ply:"), std::string::npos) << what;
+      EXPECT_NE(what.find("element"), std::string::npos) << what;
+      EXPECT_LT(what.size(), 300u) << what;
+    }
+  }
+  const ImportedPart part = readPartMesh(write("fits.ply", header + "1" + body));
+  EXPECT_EQ(part.mesh.faces.size(), 1u);
+}
+
 // The VTP surface (raw appended binary, no compression) reads back through VTK's own reader:
 // every point, triangle and scalar value exactly.
 TEST(SurfaceFiles, VtpSurfaceReadsBackExactly) {

@@ -32,8 +32,12 @@ std::string lowerExtension(const std::string& path) {
 // A PLY header is checked before assimp reads the file: Debian's assimp 5.2 loops for minutes,
 // allocating, on a header without its end_header line (found by the mesh fuzz harness: 'end_he'
 // cut short). Every header line must be one of PLY's keywords, and end_header must come within
-// the first 64 kB.
+// the first 64 kB. An element's count must fit in the file, at least a byte per element in any
+// of PLY's formats: assimp allocates the count before reading (the harness again: 'element face
+// 7777...' asked for 26 GB).
 void checkPlyHeader(const std::string& path) {
+  std::error_code size_error;
+  const auto file_size = std::filesystem::file_size(path, size_error);
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) throw InputError(path, 0, 0, "mesh", "cannot open the file");
   std::string head(65536, '\0');
@@ -55,6 +59,20 @@ void checkPlyHeader(const std::string& path) {
                                  [&](const char* k) { return word == k; }))
       throw InputError(path, line, 0, "PLY header",
                        "'" + text + "' is not a PLY header line (the header must end with end_header)");
+    if (word == "element") {
+      char name[64] = {}, count[32] = {}, rest[2] = {};
+      const int n = std::sscanf(text.c_str(), "element %63s %31s %1s", name, count, rest);
+      const std::string c = n >= 2 ? count : "";
+      const bool digits = !c.empty() && c.size() < 19 &&
+                          std::all_of(c.begin(), c.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
+      if (n != 2 || !digits)
+        throw InputError(path, line, 0, "PLY element",
+                         "'" + text + "' is not 'element <name> <count>' with a count below 1e18");
+      if (!size_error && std::stoull(c) > file_size)
+        throw InputError(path, line, 0, "PLY element",
+                         "'" + text + "' declares more " + name + " elements than the file's " +
+                             std::to_string(file_size) + " bytes can hold");
+    }
     start = end + 1;
   }
   throw InputError(path, 0, 0, "PLY header", "no end_header line in the first 64 kB");
