@@ -328,6 +328,36 @@ TEST_F(MeshFileTest, APlyWithoutVerticesBeforeItsFacesIsRefusedFromItsHeader) {
   }
 }
 
+// An ASCII PLY's list counts must fit their type and the file (the mesh harness: a face whose
+// count is a run of 4s made assimp allocate 477 million indices, 15 s and 7.5 GB, before it
+// refused the face): refused with the line, at once; ordinary faces still read.
+TEST_F(MeshFileTest, AnAsciiPlyListCountBeyondItsTypeIsRefused) {
+  std::ifstream in(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/mesh_corpus/ply_ascii_list_count",
+                   std::ios::binary);
+  const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(found.size(), 100u);
+  const std::string header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                             "property float y\nproperty float z\nelement face 1\n"
+                             "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+  for (const std::string& text : {found.substr(1), header + std::string(58, '4') + " 0 1 2\n",
+                                   header + "256 0 1 2\n", header + "x 0 1 2\n"}) {
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      readPartMesh(write("count.ply", text));
+      ADD_FAILURE() << "accepted " << text.substr(text.size() - 20);
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("count.ply:"), std::string::npos) << e.what();
+    }
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+  }
+  EXPECT_EQ(readPartMesh(write("ok.ply", header + "3 0 1 2\n")).mesh.faces.size(), 1u);
+  try {
+    readPartMesh(write("line.ply", header + std::string(58, '4') + " 0 1 2\n"));
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("line.ply:13:"), std::string::npos) << e.what();
+  }
+}
+
 // The VTP surface (raw appended binary, no compression) reads back through VTK's own reader:
 // every point, triangle and scalar value exactly.
 TEST(SurfaceFiles, VtpSurfaceReadsBackExactly) {
