@@ -41,6 +41,37 @@ inline std::vector<ClPoint> path(size_t n) {
   return out;
 }
 
+// 1 024 configurations of the five axes, in the structure-of-arrays layout
+// ForwardKinematics::tipAndAxisBatch takes (joint values, their cos and sin, by axis; the tip
+// and axis out, by coordinate): the batch forward benchmarks' input.
+struct BatchJoints {
+  static constexpr int n = 1024;
+  std::vector<double> q = std::vector<double>(5 * n), c = q, s = q, out = std::vector<double>(6 * n);
+  const double *qp[5], *cp[5], *sp[5];
+  double *pp[3], *up[3];
+  BatchJoints() {
+    for (int i = 0; i < n; ++i) {
+      const double v[5] = {100.0 - 0.1 * i, -50.0 + 0.05 * i, 80.0, -0.5 + 1e-3 * i, 1.0 - 2e-3 * i};
+      for (int a = 0; a < 5; ++a) {
+        q[a * n + i] = v[a];
+        c[a * n + i] = std::cos(v[a]);
+        s[a * n + i] = std::sin(v[a]);
+      }
+    }
+    for (int a = 0; a < 5; ++a) {
+      qp[a] = &q[a * n];
+      cp[a] = &c[a * n];
+      sp[a] = &s[a * n];
+    }
+    for (int k = 0; k < 3; ++k) {
+      pp[k] = &out[k * n];
+      up[k] = &out[(3 + k) * n];
+    }
+  }
+  BatchJoints(const BatchJoints&) = delete;
+  BatchJoints& operator=(const BatchJoints&) = delete;
+};
+
 // One calibration problem: the same machine with its minimal-complete cubic model (92
 // coefficients + 18 ball positions), three set-ups, 600 readings simulated from random errors
 // with 0.5 um noise.

@@ -113,31 +113,12 @@ BENCHMARK(BM_TipAndAxisWithErrors);
 void BM_TipAndAxisBatch(benchmark::State& state) {
   const tolver::Machine m = machineWithErrors();
   const tolver::ForwardKinematics fk(m.model, m.params);
-  constexpr int n = 1024;
-  std::vector<double> q(5 * n), c(5 * n), s(5 * n), out(6 * n);
-  for (int i = 0; i < n; ++i) {
-    const double v[5] = {100.0 - 0.1 * i, -50.0 + 0.05 * i, 80.0, -0.5 + 1e-3 * i, 1.0 - 2e-3 * i};
-    for (int a = 0; a < 5; ++a) {
-      q[a * n + i] = v[a];
-      c[a * n + i] = std::cos(v[a]);
-      s[a * n + i] = std::sin(v[a]);
-    }
-  }
-  const double* qp[5];
-  const double* cp[5];
-  const double* sp[5];
-  for (int a = 0; a < 5; ++a) {
-    qp[a] = &q[a * n];
-    cp[a] = &c[a * n];
-    sp[a] = &s[a * n];
-  }
-  double* pp[3] = {&out[0], &out[n], &out[2 * n]};
-  double* up[3] = {&out[3 * n], &out[4 * n], &out[5 * n]};
+  tolver::bench::BatchJoints j;
   for (auto _ : state) {
-    fk.tipAndAxisBatch(n, qp, cp, sp, pp, up);
-    benchmark::DoNotOptimize(out.data());
+    fk.tipAndAxisBatch(j.n, j.qp, j.cp, j.sp, j.pp, j.up);
+    benchmark::DoNotOptimize(j.out.data());
   }
-  state.SetItemsProcessed(state.iterations() * n);
+  state.SetItemsProcessed(state.iterations() * j.n);
 }
 BENCHMARK(BM_TipAndAxisBatch);
 

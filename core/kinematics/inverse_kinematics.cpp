@@ -587,6 +587,9 @@ namespace tolver {
 TOLVER_LANE_CLONES
 void ikBlockLanes(const InverseKinematics& ik, InverseKinematics::Block& b) {
   using lanes::Lane4;
+  using lanes::loadL;
+  using lanes::storeL;
+  using lanes::storeMask;
   const int n = b.n;
   const int r0 = ik.rotary_[0], r1 = ik.rotary_[1];
   const double sign0 = ik.sign_[0], sign1 = ik.sign_[1];
@@ -600,31 +603,19 @@ void ikBlockLanes(const InverseKinematics& ik, InverseKinematics::Block& b) {
   }
   auto points = [&](auto lanes_tag, int i) TOLVER_LANE_LAMBDA {
     using L = decltype(lanes_tag);
-    auto load = [&](const double* x) TOLVER_LANE_LAMBDA {
-      if constexpr (sizeof(L) == sizeof(double)) return x[0];
-      else return lanes::load4(x);
-    };
-    auto store = [&](double* x, L v) TOLVER_LANE_LAMBDA {
-      if constexpr (sizeof(L) == sizeof(double)) x[0] = v;
-      else lanes::store4(x, v);
-    };
     using M = decltype(L{} < L{});
-    auto storeMask = [&](long long* x, M m) TOLVER_LANE_LAMBDA {
-      if constexpr (sizeof(L) == sizeof(double)) x[0] = m ? -1 : 0;
-      else std::memcpy(x, &m, sizeof m);
-    };
-    const L u[3] = {load(b.u[0] + i), load(b.u[1] + i), load(b.u[2] + i)};
-    const L p[3] = {load(b.p[0] + i), load(b.p[1] + i), load(b.p[2] + i)};
+    const L u[3] = {loadL<L>(b.u[0] + i), loadL<L>(b.u[1] + i), loadL<L>(b.u[2] + i)};
+    const L p[3] = {loadL<L>(b.p[0] + i), loadL<L>(b.p[1] + i), loadL<L>(b.p[2] + i)};
     L c[2][2], s[2][2], g;
     M unreachable, free1, free2, refine;
     ik.candidatesL(u, c, s, &g, &unreachable, &free1, &free2, &refine);
-    storeMask(b.irregular + i, unreachable | free1 | free2 | refine);
+    storeMask<M>(b.irregular + i, unreachable | free1 | free2 | refine);
     for (int k = 0; k < 2; ++k) {
       const L s0 = sign0 * s[k][0], s1 = sign1 * s[k][1];
-      store(b.cand_c[k][0] + i + 1, c[k][0]);
-      store(b.cand_s[k][0] + i + 1, s0);
-      store(b.cand_c[k][1] + i + 1, c[k][1]);
-      store(b.cand_s[k][1] + i + 1, s1);
+      storeL<L>(b.cand_c[k][0] + i + 1, c[k][0]);
+      storeL<L>(b.cand_s[k][0] + i + 1, s0);
+      storeL<L>(b.cand_c[k][1] + i + 1, c[k][1]);
+      storeL<L>(b.cand_s[k][1] + i + 1, s1);
       L cs[kMaxAxes], sn[kMaxAxes], out[3];
       cs[r0] = c[k][0];
       sn[r0] = s0;
@@ -632,29 +623,21 @@ void ikBlockLanes(const InverseKinematics& ik, InverseKinematics::Block& b) {
       sn[r1] = s1;
       M ok = ik.prismaticL(cs, cs, sn, m0, p, out);  // (q is read only off +x/+y/+z)
       for (int j = 0; j < 3; ++j) {
-        store(b.prism[k][j] + i, out[j]);
+        storeL<L>(b.prism[k][j] + i, out[j]);
         ok = ok & ((out[j] - out[j]) == 0.0) & !(out[j] < lo[j]) & !(out[j] > hi[j]);
       }
-      storeMask(b.prism_ok[k] + i, ok);
+      storeMask<M>(b.prism_ok[k] + i, ok);
     }
   };
   auto steps = [&](auto lanes_tag, int i) TOLVER_LANE_LAMBDA {
     using L = decltype(lanes_tag);
-    auto load = [&](const double* x) TOLVER_LANE_LAMBDA {
-      if constexpr (sizeof(L) == sizeof(double)) return x[0];
-      else return lanes::load4(x);
-    };
-    auto store = [&](double* x, L v) TOLVER_LANE_LAMBDA {
-      if constexpr (sizeof(L) == sizeof(double)) x[0] = v;
-      else lanes::store4(x, v);
-    };
     using M = decltype(L{} < L{});
     for (int j = 0; j < 2; ++j)
       for (int k = 0; k < 2; ++k) {
         L chord = lanes::splat<L>(0.0);
         for (int r = 0; r < 2; ++r) {
-          const L ref_c = load(b.cand_c[j][r] + i), ref_s = load(b.cand_s[j][r] + i);
-          const L kc = load(b.cand_c[k][r] + i + 1), ks = load(b.cand_s[k][r] + i + 1);
+          const L ref_c = loadL<L>(b.cand_c[j][r] + i), ref_s = loadL<L>(b.cand_s[j][r] + i);
+          const L kc = loadL<L>(b.cand_c[k][r] + i + 1), ks = loadL<L>(b.cand_s[k][r] + i + 1);
           // As solve()'s chords.
           const L ec = kc - ref_c, es = ks - ref_s;
           chord += ec * ec + es * es;
@@ -664,11 +647,10 @@ void ikBlockLanes(const InverseKinematics& ik, InverseKinematics::Block& b) {
           const L dc = kc * ref_c + ks * ref_s;
           const L ds = ks * ref_c - kc * ref_s;
           const M ok = (dc > 0.0) & (lanes::absL(ds) <= kAtanSeriesMax * dc);
-          store(b.delta[k][r] + i, atanOfSmallL(ds / dc));
-          if constexpr (sizeof(L) == sizeof(double)) b.delta_ok[k][r][i] = ok ? -1 : 0;
-          else std::memcpy(b.delta_ok[k][r] + i, &ok, sizeof ok);
+          storeL<L>(b.delta[k][r] + i, atanOfSmallL(ds / dc));
+          storeMask<M>(b.delta_ok[k][r] + i, ok);
         }
-        store(b.chord2[j][k] + i, chord);
+        storeL<L>(b.chord2[j][k] + i, chord);
       }
   };
   int i = 0;

@@ -85,6 +85,22 @@ TOLVER_LANE_INLINE Lane4 load4(const double* p) {
 }
 TOLVER_LANE_INLINE void store4(double* p, Lane4 v) { std::memcpy(p, &v, sizeof v); }
 TOLVER_LANE_INLINE Lane4 broadcast4(double x) { return Lane4{x, x, x, x}; }
+// The same for L = double (one value) or Lane4 (four), and a mask stored as 0 or all ones.
+template <typename L>
+TOLVER_LANE_INLINE L loadL(const double* p) {
+  if constexpr (sizeof(L) == sizeof(double)) return p[0];
+  else return load4(p);
+}
+template <typename L>
+TOLVER_LANE_INLINE void storeL(double* p, L v) {
+  if constexpr (sizeof(L) == sizeof(double)) p[0] = v;
+  else store4(p, v);
+}
+template <typename M>
+TOLVER_LANE_INLINE void storeMask(long long* p, M m) {
+  if constexpr (sizeof(M) == sizeof(bool)) p[0] = m ? -1 : 0;
+  else std::memcpy(p, &m, sizeof m);
+}
 // A constant as L: the double itself, or in every lane.
 template <typename L>
 TOLVER_LANE_INLINE L splat(double x) {

@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
-#include <type_traits>
 #if defined(__x86_64__)
 #include <emmintrin.h>
 #endif
@@ -99,38 +98,25 @@ Deviation deviationOf(const Eigen::Vector3d& p_w, const Eigen::Vector3d& u_w,
 // each), out the deviations (dev x, y, z, along, across, angle, norm: 7 arrays of n).
 TOLVER_LANE_CLONES
 void deviationLanes(int n, const double* const in[4][3], double* const out[7]) {
+  auto one = [&](int i) {  // the double form: the tail, and lanes beyond the series
+    double v[4][3], d[7];
+    for (int a = 0; a < 4; ++a)
+      for (int k = 0; k < 3; ++k) v[a][k] = in[a][k][i];
+    deviationL(v[0], v[1], v[2], v[3], d, &d[3], &d[4], &d[5], &d[6]);
+    for (int k = 0; k < 7; ++k) out[k][i] = d[k];
+  };
   int i = 0;
   for (; i + lanes::kWidth <= n; i += lanes::kWidth) {
-    lanes::Lane4 v[4][3], dev[3], along, across, angle, norm;
+    lanes::Lane4 v[4][3], d[7];
     for (int a = 0; a < 4; ++a)
       for (int k = 0; k < 3; ++k) v[a][k] = lanes::load4(in[a][k] + i);
-    const auto redo = deviationL(v[0], v[1], v[2], v[3], dev, &along, &across, &angle, &norm);
-    for (int k = 0; k < 3; ++k) lanes::store4(out[k] + i, dev[k]);
-    lanes::store4(out[3] + i, along);
-    lanes::store4(out[4] + i, across);
-    lanes::store4(out[5] + i, angle);
-    lanes::store4(out[6] + i, norm);
-    if (!lanes::any(redo)) continue;
-    for (int l = 0; l < lanes::kWidth; ++l) {
-      if (!lanes::lane(redo, l)) continue;
-      double s[4][3], d[3], al, ac, an, no;
-      for (int a = 0; a < 4; ++a)
-        for (int k = 0; k < 3; ++k) s[a][k] = in[a][k][i + l];
-      deviationL(s[0], s[1], s[2], s[3], d, &al, &ac, &an, &no);
-      out[5][i + l] = an;
-    }
+    const auto redo = deviationL(v[0], v[1], v[2], v[3], d, &d[3], &d[4], &d[5], &d[6]);
+    for (int k = 0; k < 7; ++k) lanes::store4(out[k] + i, d[k]);
+    if (lanes::any(redo))
+      for (int l = 0; l < lanes::kWidth; ++l)
+        if (lanes::lane(redo, l)) one(i + l);
   }
-  for (; i < n; ++i) {
-    double s[4][3], d[3], al, ac, an, no;
-    for (int a = 0; a < 4; ++a)
-      for (int k = 0; k < 3; ++k) s[a][k] = in[a][k][i];
-    deviationL(s[0], s[1], s[2], s[3], d, &al, &ac, &an, &no);
-    for (int k = 0; k < 3; ++k) out[k][i] = d[k];
-    out[3][i] = al;
-    out[4][i] = ac;
-    out[5][i] = an;
-    out[6][i] = no;
-  }
+  for (; i < n; ++i) one(i);
 }
 
 // A predicted point written past the caches (x86-64: non-temporal stores, 8 bytes at a time):
