@@ -29,14 +29,26 @@ double TriangleMesh::area() const {
 
 SurfaceSamples sampleSurface(const TriangleMesh& input, double spacing, double feature_angle) {
   TriangleMesh mesh = input;
-  refineMesh(&mesh, spacing);
+  const double target_vertices = mesh.area() / (std::sqrt(3.0) / 2.0 * spacing * spacing);
+  if (static_cast<double>(mesh.vertices.size()) < 0.5 * target_vertices)
+    resampleFaces(&mesh, spacing);
+  else
+    refineMesh(&mesh, spacing);
   const int nv = static_cast<int>(mesh.vertices.size());
   const int nf = static_cast<int>(mesh.faces.size());
   std::vector<Eigen::Vector3d> fn(nf);
   std::vector<double> fa(nf);
   for (int f = 0; f < nf; ++f) {
-    fn[f] = mesh.faceNormal(f);
-    fa[f] = mesh.faceArea(f);
+    // A face with no area to the last few digits (a refined face's points along one input edge)
+    // has no normal: its angle at the middle point is pi, and its rounding noise must not vote.
+    const Eigen::Vector3i& t = mesh.faces[f];
+    const Eigen::Vector3d e1 = mesh.vertices[t[1]] - mesh.vertices[t[0]];
+    const Eigen::Vector3d e2 = mesh.vertices[t[2]] - mesh.vertices[t[0]];
+    const Eigen::Vector3d n = e1.cross(e2);
+    const double scale2 = std::max({e1.squaredNorm(), e2.squaredNorm(), (e2 - e1).squaredNorm()});
+    const double len = n.norm();
+    fn[f] = len > 1e-10 * scale2 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
+    fa[f] = 0.5 * len;
   }
   // Faces around each vertex (CSR).
   std::vector<int> start(nv + 1, 0), around(3 * nf);

@@ -202,19 +202,27 @@ constexpr double kMaxSamples = 5e6;      // surface samples (the remeshed part a
 constexpr double kMaxPlacements = 2e7;   // tool placements per sweep (the path at --step)
 
 // The remeshed part's sample count, from its area: isotropic triangles of edge s have area
-// (sqrt(3)/4) s^2, and a closed mesh has half as many vertices as faces.
+// (sqrt(3)/4) s^2, and a closed mesh has half as many vertices as faces; plus the points its
+// edges are cut into (pieces of up to 4/3 s), which a face of no area (a long needle) still has.
 void checkSampleBudget(const VerifyInputs& o, const TriangleMesh& mesh) {
-  double area = 0;
-  for (const Eigen::Vector3i& f : mesh.faces)
-    area += 0.5 * (mesh.vertices[f[1]] - mesh.vertices[f[0]]).cross(mesh.vertices[f[2]] - mesh.vertices[f[0]]).norm();
+  double area = 0, perimeter = 0;
+  for (const Eigen::Vector3i& f : mesh.faces) {
+    const Eigen::Vector3d& a = mesh.vertices[f[0]];
+    const Eigen::Vector3d& b = mesh.vertices[f[1]];
+    const Eigen::Vector3d& c = mesh.vertices[f[2]];
+    area += 0.5 * (b - a).cross(c - a).norm();
+    perimeter += (b - a).norm() + (c - b).norm() + (a - c).norm();
+  }
   const double s = o.spacing_mm;
-  const double samples = area / (std::sqrt(3.0) / 2.0 * s * s);
+  const double samples = area / (std::sqrt(3.0) / 2.0 * s * s) + 0.5 * perimeter / (4.0 / 3.0 * s);
+  // The spacing that fits: the count is a x^2 + b x in x = 1 / spacing.
+  const double qa = area / (std::sqrt(3.0) / 2.0), qb = 0.5 * perimeter / (4.0 / 3.0);
+  const double fitting = 2.0 * qa / (-qb + std::sqrt(qb * qb + 4.0 * qa * kMaxSamples)) * 1.001;
   if (samples > kMaxSamples)
     throw InputError("--spacing", 0, 0, "spacing",
                      formatWith("the part, %.0f mm2 of surface at ", area) + formatWith("%g mm spacing", s) +
                          formatWith(" make about %.3g surface samples, above the budget of ", samples) +
-                         formatWith("%.0f: give --spacing ", kMaxSamples) +
-                         formatWith("%.3g or more", std::sqrt(area / (std::sqrt(3.0) / 2.0 * kMaxSamples))));
+                         formatWith("%.0f: give --spacing ", kMaxSamples) + formatWith("%.3g or more", fitting));
 }
 
 // The placements of a sweep, from the path's length at the step.
