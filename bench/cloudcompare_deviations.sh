@@ -2,7 +2,7 @@
 # Point-to-surface deviations: tolver against CloudCompare, the tool a metrologist would use
 # instead, on the same points and in the same run.
 #   bench/cloudcompare_deviations.sh            (after scripts/build.sh; installs CloudCompare)
-# 1. tolver verify on the bundled sample (sculptured part, 0.5 mm samples, ball-end finish on the
+# 1. tolver verify on the bundled sample (sculptured part, 0.4 mm samples as verify_benchmark's, ball-end finish on the
 #    measured Matsuura) writes the predicted swept surface (swept_predicted.ply) and each
 #    sample's deviation (deviations.csv, total_um).
 # 2. CloudCompare 2.11 computes the signed cloud-to-mesh distance (C2M) of the same sample points
@@ -24,7 +24,7 @@ work="$(mktemp -d)"; [ -n "${TOLVER_BENCH_KEEP:-}" ] && echo "files kept in $wor
 cd "$here"
 "$tolver" verify --machine samples/machines/matsuura_mc760vx_measured.xml \
   --setup samples/matsuura_setup.txt --cl samples/sculptured_finish.apt \
-  --part samples/sculptured_part.obj --tolerance 0.03 --report-dir "$work/report" > /dev/null || true
+  --part samples/sculptured_part.obj --tolerance 0.03 --spacing 0.4 --report-dir "$work/report" > /dev/null || true
 [ -f "$work/report/swept_predicted.ply" ] || { echo "tolver verify wrote no swept surface" >&2; exit 1; }
 # x y z of every sample with a total deviation, and that deviation (um).
 awk -F, '/^#/ || /^sample,/ { next } $11 != "" { print $2, $3, $4 > "'"$work"'/pts.xyz"; print $11 > "'"$work"'/tolver_um.txt" }' \
@@ -52,7 +52,7 @@ ours1=$(sweep_time 0)
 # The points are read back from deviations.csv, written to 10 nm.
 diff_um=$(paste -d' ' "$work"/pts_C2M_DIST*.asc "$work/tolver_um.txt" |
   awk '{ d = $4 * 1000 + $5; if (d < 0) d = -d; if ($4 !~ /nan/ && d > m) m = d } END { printf "%.3f", m }')
-printf "points                         %d (sculptured sample, 0.5 mm)\n" "$points"
+printf "points                         %d (sculptured sample, 0.4 mm)\n" "$points"
 printf "CloudCompare C2M, 2 cores      %s s\n" "$cc2"
 printf "CloudCompare C2M, 1 core       %s s\n" "$cc1"
 printf "tolver sweep, 2 cores          %s s   %sx CloudCompare\n" "$ours2" "$(awk -v a="$cc2" -v b="$ours2" 'BEGIN { printf "%.2f", a / b }')"

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <unordered_map>
 
 namespace tolver {
 
@@ -97,16 +96,26 @@ SurfaceSamples sampleSurface(const TriangleMesh& input, double spacing, double f
   // Samples on sharp edges (a vertex split in several) and on borders.
   s.on_edge.assign(s.p_w.size(), 0);
   {
-    std::vector<int> clusters(nv, 0);
-    std::unordered_map<uint64_t, int> edge_count;
-    for (const auto& t : mesh.faces)
-      for (int k = 0; k < 3; ++k) {
-        const int a = t[k], b = t[(k + 1) % 3];
-        ++edge_count[(static_cast<uint64_t>(std::min(a, b)) << 32) | static_cast<uint32_t>(std::max(a, b))];
-      }
+    // A border edge (v, u) is in one face only: u is then once among the corners next to v in
+    // v's faces (twice for an edge inside the surface).
     std::vector<char> border(nv, 0);
-    for (const auto& [k, c] : edge_count)
-      if (c == 1) border[k >> 32] = border[k & 0xffffffffu] = 1;
+    std::vector<int> ring;
+    for (int v = 0; v < nv; ++v) {
+      ring.clear();
+      for (int i = start[v]; i < start[v + 1]; ++i) {
+        const Eigen::Vector3i& t = mesh.faces[around[i]];
+        const int k = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+        ring.push_back(t[(k + 1) % 3]);
+        ring.push_back(t[(k + 2) % 3]);
+      }
+      std::sort(ring.begin(), ring.end());
+      for (size_t i = 0; i < ring.size();) {
+        size_t j = i + 1;
+        while (j < ring.size() && ring[j] == ring[i]) ++j;
+        if (j - i == 1) border[v] = border[ring[i]] = 1;
+        i = j;
+      }
+    }
     for (int f = 0; f < nf; ++f)
       for (int k = 0; k < 3; ++k) {
         const int v = mesh.faces[f][k];

@@ -188,6 +188,32 @@ TEST(SampleSurface, SamplesAreNoRegularGrid) {
   EXPECT_LT(sum / w, 0.5);
 }
 
+// Samples on sharp edges and borders are marked (not verified), and only they: on the cube,
+// the samples with two coordinates on a side's plane; on one open triangle, those on its sides.
+TEST(SampleSurface, MarksTheSamplesOnSharpEdgesAndBorders) {
+  const double a = 20.0;
+  const SurfaceSamples cube = sampleSurface(fannedCube(a, 16), 0.5);
+  int marked = 0;
+  for (size_t i = 0; i < cube.size(); ++i) {
+    int on = 0;
+    for (int k = 0; k < 3; ++k) on += std::abs(cube.p_w[i][k]) < 1e-9 || std::abs(cube.p_w[i][k] - a) < 1e-9;
+    ASSERT_EQ(cube.on_edge[i] != 0, on >= 2) << cube.p_w[i].transpose();
+    marked += cube.on_edge[i];
+  }
+  EXPECT_GE(marked, 12 * 31 * 2);  // each of the 12 edges in 16 input pieces, each cut in two; a sample per side
+  TriangleMesh m;
+  m.group_names = {"plane"};
+  m.vertices = {{0, 0, 0}, {10, 0, 0}, {0, 10, 0}};
+  m.faces = {{0, 1, 2}};
+  m.face_group = {0};
+  const SurfaceSamples s = sampleSurface(m, 0.5);
+  for (size_t i = 0; i < s.size(); ++i) {
+    const Eigen::Vector3d& p = s.p_w[i];
+    const bool on_side = std::abs(p.x()) < 1e-9 || std::abs(p.y()) < 1e-9 || std::abs(p.x() + p.y() - 10) < 1e-9;
+    ASSERT_EQ(s.on_edge[i] != 0, on_side) << p.transpose();
+  }
+}
+
 // A mesh already finer than the spacing goes to the remesher, whose collapses bring the samples
 // near the spacing (splitting alone would keep every input vertex).
 TEST(SampleSurface, AFineInputIsCoarsenedToTheSpacing) {
