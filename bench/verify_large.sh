@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # Verify at scale (issue 18): about a million surface samples and 120 801 CL points.
-#   bench/verify_large.sh [spacing mm, default 0.155]     (after scripts/build.sh)
+#   bench/verify_large.sh [spacing mm, default 0.115]     (after scripts/build.sh)
 # The sculptured part (80 x 60 mm block, 13 067 mm2 of surface) and a five-axis ball-end finish of
 # its top with a 0.1 mm step-over and a point every 0.4 mm (tools/make_samples --large), verified
 # on the measured Matsuura with both cores. Prints the sample and placement counts, the wall time
 # and peak memory, and the phase table verify records in report.json.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-spacing="${1:-0.155}"
+spacing="${1:-0.115}"
 tolver="$here/build/app/tolver"
 make_samples="$here/build/tools/make_samples"
 [ -x "$tolver" ] && [ -x "$make_samples" ] || { echo "build first: scripts/build.sh" >&2; exit 1; }
