@@ -84,7 +84,7 @@ void printVerification(const Verification& v, const VerifyOptions& o, const std:
               result.percent_in, result.area_machined, result.area_unmachined, result.area_edge);
   for (size_t k = 0; k < result.regions.size() && k < 5; ++k) {
     const auto& g = result.regions[k];
-    std::printf("  region %zu   %s %.3f mm2, worst %s um at (%.2f, %.2f, %.2f), cause: %s\n", k + 1,
+    std::printf("  region %zu   %s %.3f mm2, worst %s at (%.2f, %.2f, %.2f), cause: %s\n", k + 1,
                 conformanceName(g.kind), g.area_mm2, worstDeviationText(result, g).c_str(), g.where_w.x(),
                 g.where_w.y(), g.where_w.z(), regionCause(r, g).c_str());
   }

@@ -163,6 +163,22 @@ TEST_F(VerifyCli, OutOfToleranceExitsOneWithRegionsAndTheirCause) {
   EXPECT_GT(j["line_profile"]["points"].size(), 50u);
 }
 
+// A region's worst deviation reads once with its unit, in the terminal and in the report, also
+// where the cut goes deeper than the gouge search range (a 0.3 um range here): "-0.3 um or
+// deeper (beyond the search range)", never "... deeper) um" nor "-0 um".
+TEST_F(VerifyCli, ARegionsWorstDeviationReadsWithItsUnitOnce) {
+  const auto r = runTolver(base("--tolerance 0.0004 --gouge-range 0.0003 --no-images --report-dir " + path("out")));
+  ASSERT_EQ(r.exit_code, 1) << r.output;
+  const std::regex plain(R"(region 1   (excess|gouge) [0-9.]+ mm2, worst [+-][0-9.]+ um at \()");
+  const std::regex beyond(R"(region [0-9]   gouge [0-9.]+ mm2, worst -0\.3 um or deeper \(beyond the search range\) at \()");
+  EXPECT_TRUE(std::regex_search(r.output, plain)) << r.output;
+  EXPECT_TRUE(std::regex_search(r.output, beyond)) << r.output;
+  EXPECT_EQ(r.output.find(") um"), std::string::npos) << r.output;
+  const std::string html = slurp(path("out/report.html"));
+  EXPECT_NE(html.find("um or deeper (beyond the search range), "), std::string::npos);
+  EXPECT_NE(html.find("<td>-0.3 or deeper (beyond the search range)</td>"), std::string::npos);
+}
+
 TEST_F(VerifyCli, UnequalZonesFromAFile) {
   const std::string zones = write("zones.csv", "region,tolerance,uz,u\n*,0.03,,\ntop,0.03,,0.0\n");
   const auto r = runTolver(base("--zones " + zones + " --no-images --report-dir " + path("out")));

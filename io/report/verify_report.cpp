@@ -49,10 +49,11 @@ static bool attributable(const VerifyResult& v, int i) {
   return v.split.empty() || v.split[i] == Split::Attributable;
 }
 
-std::string worstDeviationText(const VerifyResult& v, const OutOfToleranceRegion& g) {
+std::string worstDeviationText(const VerifyResult& v, const OutOfToleranceRegion& g, bool unit) {
+  const std::string um = unit ? " um" : "";
   if (!v.total_beyond.empty() && v.total_beyond[g.worst_sample])
-    return "beyond the search range (" + formatWith("%+.0f", mmToUm(g.worst_deviation)) + " um or deeper)";
-  return formatWith("%+.2f", mmToUm(g.worst_deviation));
+    return formatWith("%+.4g", mmToUm(g.worst_deviation)) + um + " or deeper (beyond the search range)";
+  return formatWith("%+.2f", mmToUm(g.worst_deviation)) + um;
 }
 
 std::string regionCause(const VerifyReport& r, const OutOfToleranceRegion& region) {
@@ -209,7 +210,7 @@ std::string formatVerifyHtml(const VerifyReport& r) {
       char where[96];
       std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", g.where_w.x(), g.where_w.y(), g.where_w.z());
       h += "<div class=\"card\">" + thumbnail(k) + "<p><b>R" + std::to_string(k + 1) + "</b> " +
-           conformanceName(g.kind) + " " + worstDeviationText(v, g) + " um, " + formatWith("%.3f", g.area_mm2) +
+           conformanceName(g.kind) + " " + worstDeviationText(v, g) + ", " + formatWith("%.3f", g.area_mm2) +
            " mm&sup2;, at " + where + " mm, CL line " + std::to_string(clLine(r, g.worst_sample)) +
            "; cause: " + regionCause(r, g) + "</p></div>\n";
     }
@@ -254,7 +255,7 @@ std::string formatVerifyHtml(const VerifyReport& r) {
       std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", g.where_w.x(), g.where_w.y(), g.where_w.z());
       h += "<tr><td>" + std::to_string(k + 1) + "</td><td class=\"l\">" + conformanceName(g.kind) +
            "</td><td class=\"l\">" + html(r.zones[g.zone].region) + "</td><td>" + formatWith("%.3f", g.area_mm2) +
-           "</td><td>" + worstDeviationText(v, g) + "</td><td>" +
+           "</td><td>" + worstDeviationText(v, g, false) + "</td><td>" +
            formatWith("%.2f", mmToUm(g.worst_excursion)) + "</td><td>" +
            (attributable(v, g.worst_sample) ? formatWith("%+.2f", mmToUm(v.machine[g.worst_sample])) : std::string("&mdash;")) +
            "</td><td>" +

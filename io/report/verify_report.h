@@ -51,9 +51,10 @@ int verdictExitCode(const VerifyReport& r);
 // perfect machine is already out of the zone there, "machine" when it is in and the machine's
 // errors take it out.
 std::string regionCause(const VerifyReport& r, const OutOfToleranceRegion& region);
-// A region's worst deviation as printed: "+12.34", or "beyond the search range (-500 um or
-// deeper)" where the cut reaches the gouge limit (never a clipped number).
-std::string worstDeviationText(const VerifyResult& v, const OutOfToleranceRegion& region);
+// A region's worst deviation as printed, in um: "+12.34 um", or "-500 um or deeper (beyond the
+// search range)" where the cut reaches the gouge limit (never a clipped number); without the
+// unit ("+12.34", "-500 or deeper (beyond the search range)") for a column headed in um.
+std::string worstDeviationText(const VerifyResult& v, const OutOfToleranceRegion& region, bool unit = true);
 
 std::string formatVerifyJson(const VerifyReport& r);
 std::string formatVerifyHtml(const VerifyReport& r);
