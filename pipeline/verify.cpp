@@ -215,9 +215,11 @@ void checkSampleBudget(const VerifyInputs& o, const TriangleMesh& mesh) {
   }
   const double s = o.spacing_mm;
   const double samples = area / (std::sqrt(3.0) / 2.0 * s * s) + 0.5 * perimeter / (4.0 / 3.0 * s);
-  // The spacing that fits: the count is a x^2 + b x in x = 1 / spacing.
+  // The spacing that fits: the count is a x^2 + b x in x = 1 / spacing, so the spacing is
+  // (b + sqrt(b^2 + 4 a N)) / 2N (this form holds for a part of no area too); 0.1 % above it, so
+  // that the three digits printed still fit.
   const double qa = area / (std::sqrt(3.0) / 2.0), qb = 0.5 * perimeter / (4.0 / 3.0);
-  const double fitting = 2.0 * qa / (-qb + std::sqrt(qb * qb + 4.0 * qa * kMaxSamples)) * 1.001;
+  const double fitting = (qb + std::sqrt(qb * qb + 4.0 * qa * kMaxSamples)) / (2.0 * kMaxSamples) * 1.001;
   if (samples > kMaxSamples)
     throw InputError("--spacing", 0, 0, "spacing",
                      formatWith("the part, %.0f mm2 of surface at ", area) + formatWith("%g mm spacing", s) +
