@@ -292,6 +292,37 @@ TEST(GcodeReader, DeepExpressionNestingIsAnErrorNotAStackOverflow) {
   }
 }
 
+// Numbered parameters are LinuxCNC's: an integer number from 1 to 5601. The G-code harness found
+// "#1111...1" (35 digits) read as a parameter number: a double of 1.1e35 cast to int (undefined
+// behaviour). Now each such number is an error naming the line; good numbers still read.
+TEST(GcodeReader, AParameterNumberOutOfRangeOrNotAnIntegerIsAnError) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const std::string found = test::readText(test::sourcePath("tests/fuzz/gcode_corpus/huge_parameter_number.ngc"));
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {found, "out of range"},
+      {"G21\nG0 X#" + std::string(35, '1') + "\n", "out of range"},
+      {"G21\n#0=1\n", "out of range"},
+      {"G21\n#5602=1\n", "out of range"},
+      {"G21\n#-3=1\n", ""},
+      {"G21\n#1=2\nG0 X#[0.5]\n", "not an integer"},
+      {"G21\n#1.5=2\n", "not an integer"},
+      {"G21\n#1=2\nG0 X#1.5\n", "not an integer"},
+      {"G21\n#1=2\nG0 X#[1e300]\n", ""}};
+  for (const auto& [text, why] : bad) {
+    try {
+      parseGcode(text, "par.ngc", m.model);
+      FAIL() << "no error: " << text.substr(0, 60);
+    } catch (const InputError& e) {
+      const std::string w = e.what();
+      EXPECT_NE(w.find("par.ngc:"), std::string::npos) << w;
+      EXPECT_NE(w.find(why), std::string::npos) << w;
+      EXPECT_LT(w.size(), 300u) << w;
+    }
+  }
+  const ClProgram p = parseGcode("G21\n#5601=2\n#1=3.00001\nG0 X#5601 Y#1 Z0 A0 C0\n", "ok.ngc", m.model);
+  ASSERT_FALSE(p.path.empty());
+}
+
 TEST(GcodeReader, MutatedProgramsFailCleanly) {
   const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
   const std::string base = test::readText(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzac.ngc"));

@@ -253,11 +253,21 @@ class Reader {
                  : "parameter has no value");
       return it->second;
     }
-    const double n = primary(text, i, col_base);
-    auto it = numbered_.find(static_cast<int>(n));
-    if (it == numbered_.end())
-      fail(line_, col_base + i, "#" + std::to_string(static_cast<int>(n)), "parameter has no value");
+    const size_t at = i;
+    const int n = parameterNumber(primary(text, i, col_base), col_base + static_cast<int>(at));
+    auto it = numbered_.find(n);
+    if (it == numbered_.end()) fail(line_, col_base + i, "#" + std::to_string(n), "parameter has no value");
     return it->second;
+  }
+
+  // A numbered parameter's number, as LinuxCNC takes it: an integer (to 1e-4) from 1 to 5601.
+  int parameterNumber(double n, int col) {
+    const double r = std::round(n);
+    if (!(r >= 1 && r <= kMaxParameter))
+      fail(line_, col, "#", "parameter number " + formatWith("%g", n) + " out of range (1 to " +
+                                std::to_string(kMaxParameter) + ")");
+    if (std::abs(n - r) > 1e-4) fail(line_, col, "#", "parameter number " + formatWith("%g", n) + " is not an integer");
+    return static_cast<int>(r);
   }
 
   double primary(const std::string& text, size_t& i, int col_base) {
@@ -385,7 +395,7 @@ class Reader {
       else {
         const auto n = parseNumber(lhs.substr(1));
         if (!n) fail(line_, col[0], "#", "malformed parameter number");
-        numbered_[static_cast<int>(*n)] = v;
+        numbered_[parameterNumber(*n, col[0])] = v;
       }
       return "";
     }
@@ -826,6 +836,7 @@ class Reader {
   InverseKinematics ik_;
   ClProgram prog_;
   static constexpr int kMaxNesting = 64;  // signs, brackets and '#' within one expression
+  static constexpr int kMaxParameter = 5601;  // LinuxCNC's numbered parameters: #1 to #5601
   int nesting_ = 0;
   LineSource* source_ = nullptr;
   int line_ = 0;
