@@ -131,6 +131,15 @@ TEST(MachineFile, MalformedFilesNameLineAndField) {
        "min='0' max='1'/>\n<identification_uncertainty>\n<covariance parameters='EXX.c1 EXX.c2'>"
        "<row>1 0.5</row><row>0.2 1</row></covariance></identification_uncertainty></machine>",
        4, "covariance"},
+      // A count of readings an int cannot hold (1e300 was cast to int: undefined behaviour).
+      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
+       "min='0' max='1'/>\n<identification_uncertainty readings='1e300'>\n<covariance parameters='EXX.c1'>"
+       "<row>1</row></covariance></identification_uncertainty></machine>",
+       3, "identification_uncertainty.readings"},
+      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
+       "min='0' max='1'/>\n<identification_uncertainty readings='2.5'>\n<covariance parameters='EXX.c1'>"
+       "<row>1</row></covariance></identification_uncertainty></machine>",
+       3, "identification_uncertainty.readings"},
       {"<machine name='m'></machine>", 1, "axis"},
   };
   for (const Case& c : cases) {

@@ -135,6 +135,22 @@ TEST(ToleranceFile, ImplausibleValuesAndEmptyBandsAreRefused) {
       EXPECT_EQ(e.line(), 2) << e.what();
     }
   }
+  // A correlation class is a whole number a table can hold: 1e300 was cast to int (undefined
+  // behaviour; found reviewing the readers after the G-code harness's parameter-number finding).
+  const std::string with_group = "term,category,standard,unit,reference_group\n";
+  for (const char* group : {"1e300", "0", "2.5", "-1", "1000001", "x"}) {
+    try {
+      parseToleranceCsv(with_group + "EXX.c0,linear_positioning,0.005,mm," + group + "\n", "t.csv", m.model);
+      ADD_FAILURE() << group;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.line(), 2) << e.what();
+      EXPECT_NE(std::string(e.what()).find("reference_group"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(parseToleranceCsv(with_group + "EXX.c0,linear_positioning,0.005,mm,3\n", "t.csv", m.model)
+                .at(0)
+                .reference_group,
+            3);
 }
 
 }  // namespace

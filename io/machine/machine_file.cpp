@@ -404,7 +404,13 @@ class Reader {
   void identification(const XMLElement* u, double angle, Machine& out) {
     const MachineModel& m = out.model;
     IdentificationUncertainty& id = out.identification;
-    id.readings = u->Attribute("readings") ? static_cast<int>(number(u, "readings")) : 0;
+    id.readings = 0;
+    if (u->Attribute("readings")) {
+      const double n = number(u, "readings");
+      if (!(n >= 0 && n <= 1e9) || n != std::floor(n))
+        fail(u, "identification_uncertainty.readings", "expected a whole number from 0 to 1e9");
+      id.readings = static_cast<int>(n);
+    }
     for (const XMLElement* c = u->FirstChildElement("covered"); c; c = c->NextSiblingElement("covered")) {
       const int a = m.axisIndex(attr(c, "axis"));
       if (a < 0) fail(c, "covered.axis", "no axis named '" + attr(c, "axis") + "'");

@@ -79,8 +79,8 @@ std::vector<ToleranceTerm> parseToleranceCsv(const std::string& text, const std:
     if (!cell("reference").empty()) term.reference = number("reference", -1);
     if (!cell("reference_group").empty()) {
       const auto g = parseNumber(cell("reference_group"));
-      if (!g || *g < 1 || *g != std::floor(*g))
-        throw InputError(file, line, 0, "reference_group", "expected a positive integer");
+      if (!g || *g < 1 || *g != std::floor(*g) || *g > 1e6)
+        throw InputError(file, line, 0, "reference_group", "expected a whole number from 1 to 1000000");
       term.reference_group = static_cast<int>(*g);
     }
     if (!(term.lower <= term.standard || term.lower <= term.upper) || term.lower > term.upper)
