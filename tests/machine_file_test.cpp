@@ -140,6 +140,23 @@ TEST(MachineFile, MalformedFilesNameLineAndField) {
        "min='0' max='1'/>\n<identification_uncertainty readings='2.5'>\n<covariance parameters='EXX.c1'>"
        "<row>1</row></covariance></identification_uncertainty></machine>",
        3, "identification_uncertainty.readings"},
+      // Absurd numbers (issue 17's policy): a link 1e300 mm away, a travel beyond 1e6 mm or 1e6
+      // deg (an endless rotary axis may run many turns), any number beyond 1e9 in its own unit.
+      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
+       "min='0' max='1'>\n<link translation='1e300 0 0'/></axis></machine>",
+       3, "link.translation"},
+      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
+       "min='0' max='1'>\n<link translation='2e6 0 0'/></axis></machine>",
+       3, "link.translation"},
+      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
+       "min='-2e6' max='1'/></machine>",
+       2, "axis.min"},
+      {"<machine name='m'>\n<axis name='C' type='rotary' branch='tool' direction='0 0 1' "
+       "min='0' max='2e6'/></machine>",
+       2, "axis.max"},
+      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1e10 0 0' "
+       "min='0' max='1'/></machine>",
+       2, "axis.direction"},
       {"<machine name='m'></machine>", 1, "axis"},
   };
   for (const Case& c : cases) {

@@ -50,6 +50,10 @@ class Reader {
     while (in >> tok) {
       auto x = parseNumber(tok);
       if (!x) fail(e, std::string(e->Name()) + "." + name, "malformed number '" + tok + "'");
+      // No field of a machine file holds a value this large in its own unit (um, urad, mm, deg,
+      // s, um^2); the lengths and angles are bounded more tightly where they are read.
+      if (std::abs(*x) > 1e9)
+        fail(e, std::string(e->Name()) + "." + name, "'" + tok + "' is beyond any plausible value");
       v.push_back(*x);
     }
     if (!required && text.empty()) return std::vector<double>(count, 0.0);
@@ -65,6 +69,12 @@ class Reader {
     if (!e) return Eigen::Isometry3d::Identity();
     const auto t = numbers(e, "translation", 3, false);
     const auto r = numbers(e, "rotation", 3, false);
+    for (int k = 0; k < 3; ++k) {
+      if (std::abs(t[k] * length_scale_) > 1e6)
+        fail(e, std::string(e->Name()) + ".translation", "beyond 1e6 mm");
+      if (std::abs(r[k] * angle_scale) > 1e4 * M_PI / 180.0)
+        fail(e, std::string(e->Name()) + ".rotation", "beyond 1e4 deg");
+    }
     Vector6d v;
     v << t[0] * length_scale_, t[1] * length_scale_, t[2] * length_scale_, r[0] * angle_scale,
         r[1] * angle_scale, r[2] * angle_scale;
@@ -220,6 +230,10 @@ class Reader {
       const double k = ax.isRotary() ? angle : length_scale_;
       ax.travel_min = number(e, "min") * k;
       ax.travel_max = number(e, "max") * k;
+      // A rotary axis's travel may run many turns (LinuxCNC's XYZAC table: C within 36 000 deg).
+      const double bound = ax.isRotary() ? 1e6 * M_PI / 180.0 : 1e6;
+      if (std::abs(ax.travel_min) > bound) fail(e, "axis.min", ax.isRotary() ? "beyond 1e6 deg" : "beyond 1e6 mm");
+      if (std::abs(ax.travel_max) > bound) fail(e, "axis.max", ax.isRotary() ? "beyond 1e6 deg" : "beyond 1e6 mm");
       if (!(ax.travel_min < ax.travel_max)) fail(e, "axis.max", "max must exceed min");
       const std::string endless = attr(e, "endless", false, "false");
       if (endless != "true" && endless != "false") fail(e, "axis.endless", "expected true or false");
