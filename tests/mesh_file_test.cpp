@@ -303,6 +303,35 @@ TEST_F(MeshFileTest, APlyElementCountBeyondTheFileIsRefused) {
   EXPECT_EQ(part.mesh.faces.size(), 1u);
 }
 
+// An OFF header's counts must fit in the file: Debian's assimp allocates the declared faces
+// first (the mesh harness: 'OFF' then '8 1888...880' asked for more than 2 GB). Refused from
+// the header, with its line, at once; comments and the 'n' dimension are skipped as assimp does.
+TEST_F(MeshFileTest, AnOffCountBeyondTheFileIsRefused) {
+  std::ifstream in(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/mesh_corpus/off_huge_face_count",
+                   std::ios::binary);
+  const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(found.size(), 100u);
+  const std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  for (const std::string& text : {found.substr(1), "OFF\n3 4000000 0\n" + body, "OFF\n4000000 1 0\n" + body,
+                                   "# a comment\nOFF\n# another\n3 " + std::string(40, '9') + " 0\n" + body,
+                                   "nOFF 3\n3 4000000 0\n" + body, "3 4000000 0\n" + body}) {
+    const std::string off = write("huge.off", text);
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      readPartMesh(off);
+      ADD_FAILURE() << "accepted " << text.substr(0, 120);
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("huge.off:"), std::string::npos) << what;
+      EXPECT_NE(what.find("OFF header"), std::string::npos) << what;
+      EXPECT_LT(what.size(), 300u) << what;
+    }
+    EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), 5.0);
+  }
+  const ImportedPart part = readPartMesh(write("fits.off", "OFF\n# c\n3 1 0\n" + body));
+  EXPECT_EQ(part.mesh.faces.size(), 1u);
+}
+
 // Faces need the vertices declared before them (the mesh harness: an 'element vbspertex' in
 // place of the vertices, with garbage in the face list, took assimp 50 s and 17 GB before it
 // said so): refused from the header, at once.
