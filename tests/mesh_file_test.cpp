@@ -311,8 +311,14 @@ TEST_F(MeshFileTest, AnOffCountBeyondTheFileIsRefused) {
                    std::ios::binary);
   const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   ASSERT_GT(found.size(), 100u);
+  std::ifstream in2(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/mesh_corpus/off_keyword_glued_count",
+                    std::ios::binary);
+  const std::string glued((std::istreambuf_iterator<char>(in2)), std::istreambuf_iterator<char>());
+  ASSERT_GT(glued.size(), 50u);
   const std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
-  for (const std::string& text : {found.substr(1), "OFF\n3 4000000 0\n" + body, "OFF\n4000000 1 0\n" + body,
+  // The second found input: 'OFF8' then a count of 2222222223222222220 on the next line.
+  for (const std::string& text : {found.substr(1), glued.substr(1), "OFF3 4000000 0\n" + body,
+                                   "OFF\n3 4000000 0\n" + body, "OFF\n4000000 1 0\n" + body,
                                    "# a comment\nOFF\n# another\n3 " + std::string(40, '9') + " 0\n" + body,
                                    "nOFF 3\n3 4000000 0\n" + body, "3 4000000 0\n" + body}) {
     const std::string off = write("huge.off", text);
@@ -330,6 +336,8 @@ TEST_F(MeshFileTest, AnOffCountBeyondTheFileIsRefused) {
   }
   const ImportedPart part = readPartMesh(write("fits.off", "OFF\n# c\n3 1 0\n" + body));
   EXPECT_EQ(part.mesh.faces.size(), 1u);
+  // A coordinate is no count, even a large one in a short file.
+  EXPECT_EQ(readPartMesh(write("far.off", "OFF\n3 1 0\n900 0 0\n901 0 0\n900 1 0\n3 0 1 2\n")).mesh.faces.size(), 1u);
 }
 
 // Faces need the vertices declared before them (the mesh harness: an 'element vbspertex' in

@@ -198,7 +198,8 @@ void collect(const aiScene* scene, const aiNode* node, const Eigen::Matrix4d& pa
 // Debian's assimp 5.2 allocates the faces the header declares before reading any (the mesh
 // harness: 'OFF' then '8 1888...880' made it ask for more than 2 GB). The counts are where
 // assimp reads them: after the keyword ([ST][C][N][4][n]OFF, with a dimension after an 'n'
-// prefix), or the first two numbers of a file without one; '#' lines are comments.
+// prefix), or the first two numbers of a file without one; '#' lines are comments. The
+// three numbers after the keyword are checked, whichever assimp takes for the counts.
 void checkOffHeader(const std::string& path) {
   std::error_code size_error;
   const auto file_size = std::filesystem::file_size(path, size_error);
@@ -231,20 +232,25 @@ void checkOffHeader(const std::string& path) {
     }
   }
   if (tokens.empty()) return;
-  size_t first = 0;  // the first count's token
-  const std::string& key = tokens[0].text;
-  if (key.size() >= 3 && key.compare(key.size() - 3, 3, "OFF") == 0) {
-    first = key.find('n') != std::string::npos ? 2 : 1;
+  // The keyword, and what follows it in its token ("OFF8": the harness again), apart.
+  size_t first = 0;  // the first number after the keyword
+  const size_t off = tokens[0].text.find("OFF");
+  if (off != std::string::npos) {
+    const std::string rest = tokens[0].text.substr(off + 3);
+    if (rest.empty()) first = 1;
+    else tokens[0].text = rest;
   }
-  for (size_t k = first; k < first + 2 && k < tokens.size(); ++k) {
+  // The three numbers after it (a dimension and two counts, or two counts and the edges'), each
+  // within the file's size: never a vertex's coordinate, which comes fourth at the earliest.
+  for (size_t k = first; k < first + 3 && k < tokens.size(); ++k) {
     const std::string& t = tokens[k].text;
     size_t digits = 0;
     while (digits < t.size() && std::isdigit(static_cast<unsigned char>(t[digits]))) ++digits;
     if (digits == 0) return;  // not a count: assimp says what is wrong
     if (digits >= 19 || std::stoull(t.substr(0, digits)) > file_size)
       throw InputError(path, tokens[k].line, 0, "OFF header",
-                       std::string(k == first ? "vertex" : "face") + " count '" + t +
-                           "' is more than the file's " + std::to_string(file_size) + " bytes can hold");
+                       "count '" + t + "' is more than the file's " + std::to_string(file_size) +
+                           " bytes can hold");
   }
 }
 
