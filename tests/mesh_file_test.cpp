@@ -320,7 +320,8 @@ TEST_F(MeshFileTest, AnOffCountBeyondTheFileIsRefused) {
   for (const std::string& text : {found.substr(1), glued.substr(1), "OFF3 4000000 0\n" + body,
                                    "OFF\n3 4000000 0\n" + body, "OFF\n4000000 1 0\n" + body,
                                    "# a comment\nOFF\n# another\n3 " + std::string(40, '9') + " 0\n" + body,
-                                   "nOFF 3\n3 4000000 0\n" + body, "3 4000000 0\n" + body}) {
+                                   "nOFF 3\n3 4000000 0\n" + body, "3 4000000 0\n" + body,
+                                   "C3 4000000 0\n" + body, "OFF\n#3 1 0\n3 4000000 0\n" + body}) {
     const std::string off = write("huge.off", text);
     const auto t0 = std::chrono::steady_clock::now();
     try {

@@ -196,10 +196,10 @@ void collect(const aiScene* scene, const aiNode* node, const Eigen::Matrix4d& pa
 
 // An OFF file's vertex and face counts must fit in the file (a byte per element at least):
 // Debian's assimp 5.2 allocates the faces the header declares before reading any (the mesh
-// harness: 'OFF' then '8 1888...880' made it ask for more than 2 GB). The counts are where
-// assimp reads them: after the keyword ([ST][C][N][4][n]OFF, with a dimension after an 'n'
-// prefix), or the first two numbers of a file without one; '#' lines are comments. The
-// three numbers after the keyword are checked, whichever assimp takes for the counts.
+// harness: 'OFF' then '8 1888...880', and 'OFF8' then '2222222223222222220', each made it ask
+// for more than 2 GB). The header is read as assimp reads it: spaces, line ends and '#' lines
+// skipped, the prefixes [ST][C][N][4][n] and the keyword OFF (optional, and the counts may follow
+// it without a space), a dimension after an 'n', then the vertex and face counts.
 void checkOffHeader(const std::string& path) {
   std::error_code size_error;
   const auto file_size = std::filesystem::file_size(path, size_error);
@@ -209,48 +209,40 @@ void checkOffHeader(const std::string& path) {
   std::string head(4096, '\0');
   head.resize(std::fread(head.data(), 1, head.size(), f));
   std::fclose(f);
-  struct Token {
-    std::string text;
-    int line;
-  };
-  std::vector<Token> tokens;
+  size_t i = 0;
   int line = 1;
-  for (size_t i = 0; i < head.size() && tokens.size() < 4;) {
-    const char c = head[i];
-    if (c == '\n') {
-      ++line;
-      ++i;
-    } else if (std::isspace(static_cast<unsigned char>(c))) {
-      ++i;
-    } else if (c == '#') {
-      while (i < head.size() && head[i] != '\n') ++i;
-    } else {
-      size_t j = i;
-      while (j < head.size() && !std::isspace(static_cast<unsigned char>(head[j]))) ++j;
-      tokens.push_back({head.substr(i, j - i), line});
-      i = j;
+  auto next = [&] {
+    for (;;) {
+      while (i < head.size() && (head[i] == ' ' || head[i] == '\t' || head[i] == '\r' || head[i] == '\n'))
+        if (head[i++] == '\n') ++line;
+      if (i < head.size() && head[i] == '#') {
+        while (i < head.size() && head[i] != '\n') ++i;
+        continue;
+      }
+      return;
     }
-  }
-  if (tokens.empty()) return;
-  // The keyword, and what follows it in its token ("OFF8": the harness again), apart.
-  size_t first = 0;  // the first number after the keyword
-  const size_t off = tokens[0].text.find("OFF");
-  if (off != std::string::npos) {
-    const std::string rest = tokens[0].text.substr(off + 3);
-    if (rest.empty()) first = 1;
-    else tokens[0].text = rest;
-  }
-  // The three numbers after it (a dimension and two counts, or two counts and the edges'), each
-  // within the file's size: never a vertex's coordinate, which comes fourth at the earliest.
-  for (size_t k = first; k < first + 3 && k < tokens.size(); ++k) {
-    const std::string& t = tokens[k].text;
-    size_t digits = 0;
-    while (digits < t.size() && std::isdigit(static_cast<unsigned char>(t[digits]))) ++digits;
-    if (digits == 0) return;  // not a count: assimp says what is wrong
-    if (digits >= 19 || std::stoull(t.substr(0, digits)) > file_size)
-      throw InputError(path, tokens[k].line, 0, "OFF header",
-                       "count '" + t + "' is more than the file's " + std::to_string(file_size) +
+  };
+  auto at = [&](const char* word) { return head.compare(i, std::strlen(word), word) == 0; };
+  next();
+  if (at("ST")) i += 2;
+  if (at("C")) ++i;
+  if (at("N")) ++i;
+  if (at("4")) ++i;
+  const bool dimension = at("n");
+  if (dimension) ++i;
+  if (at("OFF")) i += 3;
+  next();
+  for (int k = 0; k < (dimension ? 3 : 2); ++k) {
+    size_t j = i;
+    while (j < head.size() && std::isdigit(static_cast<unsigned char>(head[j]))) ++j;
+    if (j == i) return;  // no number: assimp says what is wrong
+    const std::string number = head.substr(i, j - i);
+    if (number.size() >= 19 || std::stoull(number) > file_size)
+      throw InputError(path, line, 0, "OFF header",
+                       "count '" + number + "' is more than the file's " + std::to_string(file_size) +
                            " bytes can hold");
+    i = j;
+    next();
   }
 }
 
