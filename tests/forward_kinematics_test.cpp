@@ -1,4 +1,5 @@
 #include "core/kinematics/forward_kinematics.h"
+#include "core/numerics/lanes.h"
 
 #include <gtest/gtest.h>
 
@@ -111,20 +112,26 @@ TEST(ForwardKinematics, BatchEqualsOneByOneBitForBit) {
       }
       double* pp[3] = {p[0].data(), p[1].data(), p[2].data()};
       double* up[3] = {u[0].data(), u[1].data(), u[2].data()};
-      fk.tipAndAxisBatch(count, qp.data(), cp.data(), sp.data(), pp, up);
-      for (int i = 0; i < count; ++i) {
-        JointVector qi(axes);
-        double ci[kMaxAxes], si[kMaxAxes];
-        for (int a = 0; a < axes; ++a) {
-          qi[a] = q[a][i];
-          ci[a] = c[a][i];
-          si[a] = s[a][i];
-        }
-        Eigen::Vector3d p1, u1;
-        fk.tipAndAxis(qi, &p1, &u1, ci, si);
-        for (int k = 0; k < 3; ++k) {
-          ASSERT_EQ(p[k][i], p1[k]) << file << " point " << i;
-          ASSERT_EQ(u[k][i], u1[k]) << file << " point " << i;
+      // Both lane widths where the processor runs the eight-lane (AVX-512) kernels.
+      for (const bool wide : {false, true}) {
+        lanes::setWideLanes(wide);
+        if (wide && !lanes::wideLanes()) break;
+        fk.tipAndAxisBatch(count, qp.data(), cp.data(), sp.data(), pp, up);
+        lanes::setWideLanes(true);
+        for (int i = 0; i < count; ++i) {
+          JointVector qi(axes);
+          double ci[kMaxAxes], si[kMaxAxes];
+          for (int a = 0; a < axes; ++a) {
+            qi[a] = q[a][i];
+            ci[a] = c[a][i];
+            si[a] = s[a][i];
+          }
+          Eigen::Vector3d p1, u1;
+          fk.tipAndAxis(qi, &p1, &u1, ci, si);
+          for (int k = 0; k < 3; ++k) {
+            ASSERT_EQ(p[k][i], p1[k]) << file << (wide ? " wide" : " narrow") << " point " << i;
+            ASSERT_EQ(u[k][i], u1[k]) << file << (wide ? " wide" : " narrow") << " point " << i;
+          }
         }
       }
     }

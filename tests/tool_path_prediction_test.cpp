@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/kinematics/forward_kinematics.h"
+#include "core/numerics/lanes.h"
 #include "io/program/apt_reader.h"
 #include "io/program/apt_writer.h"
 #include "io/machine/machine_file.h"
@@ -48,40 +49,48 @@ TEST(ToolPathPrediction, BatchEqualsOneByOneBitForBit) {
       else if (odd < 0.03) path[i].u_w = Eigen::Vector3d(std::pow(10.0, -9 * unit(rng)), 0, 1);
       else if (odd < 0.04) path[i].u_w = 2.5 * path[(i * 7919) % path.size()].u_w;  // a jump
     }
-    PredictionResult a, b;
-    predictToolPath(m.model, m.params, path, a, 5, nullptr, true);
+    PredictionResult b;
     predictToolPath(m.model, m.params, path, b, 5, nullptr, false);
-    ASSERT_EQ(a.points.size(), b.points.size());
-    for (size_t i = 0; i < path.size(); ++i) {
-      const PredictedPoint &x = a.points[i], &y = b.points[i];
-      const std::string where = std::string(file) + " point " + std::to_string(i);
-      ASSERT_EQ(x.q.size(), static_cast<Eigen::Index>(m.model.axes.size())) << where;
-      ASSERT_EQ(x.q.size(), y.q.size()) << where;
-      for (int k = 0; k < x.q.size(); ++k)
-        ASSERT_TRUE(x.q[k] == y.q[k] || (std::isnan(x.q[k]) && std::isnan(y.q[k]))) << where;
-      const double xs[] = {x.p_pred_w.x(), x.p_pred_w.y(), x.p_pred_w.z(), x.u_pred_w.x(),
-                           x.u_pred_w.y(), x.u_pred_w.z(), x.deviation_w.x(), x.deviation_w.y(),
-                           x.deviation_w.z(), x.along_axis, x.across_axis, x.axis_angle};
-      const double ys[] = {y.p_pred_w.x(), y.p_pred_w.y(), y.p_pred_w.z(), y.u_pred_w.x(),
-                           y.u_pred_w.y(), y.u_pred_w.z(), y.deviation_w.x(), y.deviation_w.y(),
-                           y.deviation_w.z(), y.along_axis, y.across_axis, y.axis_angle};
-      for (int k = 0; k < 12; ++k)
-        ASSERT_TRUE(xs[k] == ys[k] || (std::isnan(xs[k]) && std::isnan(ys[k]))) << where << " field " << k;
-      ASSERT_EQ(x.singular, y.singular) << where;
+    // Both lane widths where the processor runs the eight-lane (AVX-512) kernels.
+    for (const bool wide : {false, true}) {
+      lanes::setWideLanes(wide);
+      if (wide && !lanes::wideLanes()) break;
+      PredictionResult a;
+      predictToolPath(m.model, m.params, path, a, 5, nullptr, true);
+      lanes::setWideLanes(true);
+      ASSERT_EQ(a.points.size(), b.points.size());
+      for (size_t i = 0; i < path.size(); ++i) {
+        const PredictedPoint &x = a.points[i], &y = b.points[i];
+        const std::string where =
+            std::string(file) + (wide ? " wide" : " narrow") + " point " + std::to_string(i);
+        ASSERT_EQ(x.q.size(), static_cast<Eigen::Index>(m.model.axes.size())) << where;
+        ASSERT_EQ(x.q.size(), y.q.size()) << where;
+        for (int k = 0; k < x.q.size(); ++k)
+          ASSERT_TRUE(x.q[k] == y.q[k] || (std::isnan(x.q[k]) && std::isnan(y.q[k]))) << where;
+        const double xs[] = {x.p_pred_w.x(), x.p_pred_w.y(), x.p_pred_w.z(), x.u_pred_w.x(),
+                             x.u_pred_w.y(), x.u_pred_w.z(), x.deviation_w.x(), x.deviation_w.y(),
+                             x.deviation_w.z(), x.along_axis, x.across_axis, x.axis_angle};
+        const double ys[] = {y.p_pred_w.x(), y.p_pred_w.y(), y.p_pred_w.z(), y.u_pred_w.x(),
+                             y.u_pred_w.y(), y.u_pred_w.z(), y.deviation_w.x(), y.deviation_w.y(),
+                             y.deviation_w.z(), y.along_axis, y.across_axis, y.axis_angle};
+        for (int k = 0; k < 12; ++k)
+          ASSERT_TRUE(xs[k] == ys[k] || (std::isnan(xs[k]) && std::isnan(ys[k]))) << where << " field " << k;
+        ASSERT_EQ(x.singular, y.singular) << where;
+      }
+      EXPECT_GT(a.failed_points, 0) << file;
+      EXPECT_EQ(a.failed_points, b.failed_points);
+      EXPECT_EQ(a.failures_per_axis, b.failures_per_axis);
+      ASSERT_EQ(a.failures.size(), b.failures.size());
+      for (size_t k = 0; k < a.failures.size(); ++k) {
+        EXPECT_EQ(a.failures[k].index, b.failures[k].index);
+        EXPECT_EQ(a.failures[k].message, b.failures[k].message);
+      }
+      EXPECT_EQ(a.summary.max_deviation, b.summary.max_deviation);
+      EXPECT_EQ(a.summary.rms_deviation, b.summary.rms_deviation);
+      EXPECT_EQ(a.summary.max_index, b.summary.max_index);
+      EXPECT_EQ(a.summary.rms_axis_angle, b.summary.rms_axis_angle);
+      EXPECT_EQ(a.summary.singular_points, b.summary.singular_points);
     }
-    EXPECT_GT(a.failed_points, 0) << file;
-    EXPECT_EQ(a.failed_points, b.failed_points);
-    EXPECT_EQ(a.failures_per_axis, b.failures_per_axis);
-    ASSERT_EQ(a.failures.size(), b.failures.size());
-    for (size_t k = 0; k < a.failures.size(); ++k) {
-      EXPECT_EQ(a.failures[k].index, b.failures[k].index);
-      EXPECT_EQ(a.failures[k].message, b.failures[k].message);
-    }
-    EXPECT_EQ(a.summary.max_deviation, b.summary.max_deviation);
-    EXPECT_EQ(a.summary.rms_deviation, b.summary.rms_deviation);
-    EXPECT_EQ(a.summary.max_index, b.summary.max_index);
-    EXPECT_EQ(a.summary.rms_axis_angle, b.summary.rms_axis_angle);
-    EXPECT_EQ(a.summary.singular_points, b.summary.singular_points);
   }
 }
 

@@ -213,7 +213,7 @@ template <typename L, typename M>
 TOLVER_LANE_INLINE void sinCosSmall(L x, L* s, L* c, M* big) {
   const L x2 = x * x;
   constexpr double k6 = 1.0 / 6.0, k20 = 1.0 / 20.0, k12 = 1.0 / 12.0, k30 = 1.0 / 30.0;
-  const M short_form = x2 < 1e-8;
+  const M short_form = lanes::maskOf(x2 < 1e-8);
   if (lanes::all(short_form)) {  // the usual case: every angle under 0.1 mrad
     *s = x - x * x2 * (1.0 / 6.0);
     *c = 1.0 - 0.5 * x2;
@@ -221,7 +221,7 @@ TOLVER_LANE_INLINE void sinCosSmall(L x, L* s, L* c, M* big) {
   }
   *s = lanes::select(short_form, x - x * x2 * (1.0 / 6.0), x * (1.0 - x2 * k6 * (1.0 - x2 * k20)));
   *c = lanes::select(short_form, 1.0 - 0.5 * x2, 1.0 - 0.5 * x2 * (1.0 - x2 * k12 * (1.0 - x2 * k30)));
-  *big |= !(x2 < 1e-6);
+  *big |= lanes::maskOf(!(x2 < 1e-6));
 }
 
 // M <- Rot(e_k, theta) M on rows k+1, k+2 (rotateRowsAbout), M 3 x 2 of L.
@@ -347,13 +347,31 @@ void ForwardKinematics::tipAndAxis(const JointVector& q, Eigen::Vector3d* p_w,
   *u_w = Eigen::Vector3d(M[0][1], M[1][1], M[2][1]);
 }
 
-// Four configurations at a time; the lanes flagged by carry, and a tail of fewer than four,
-// one at a time. Cloned for AVX2 (one register per Lane4) with the portable SSE2 default.
-TOLVER_LANE_CLONES
-void tipAndAxisLanes(const ForwardKinematics& fk, int n, const double* const q[],
-                     const double* const cq[], const double* const sq[], double* const p_w[3],
-                     double* const u_w[3]) {
-  using lanes::Lane4;
+struct FkLaneKernels {
+  template <typename V>
+  TOLVER_LANE_INLINE static void tipAndAxis(const ForwardKinematics& fk, int n,
+                                            const double* const q[], const double* const cq[],
+                                            const double* const sq[], double* const p_w[3],
+                                            double* const u_w[3]);
+  static void tipAndAxis4(const ForwardKinematics& fk, int n, const double* const q[],
+                          const double* const cq[], const double* const sq[],
+                          double* const p_w[3], double* const u_w[3]);
+  static void tipAndAxis8(const ForwardKinematics& fk, int n, const double* const q[],
+                          const double* const cq[], const double* const sq[],
+                          double* const p_w[3], double* const u_w[3]);
+};
+
+// V's width of configurations at a time; the lanes flagged by carry, and a tail shorter than
+// the width, one at a time.
+template <typename V>
+TOLVER_LANE_INLINE void FkLaneKernels::tipAndAxis(const ForwardKinematics& fk, int n,
+                                                  const double* const q[],
+                                                  const double* const cq[],
+                                                  const double* const sq[],
+                                                  double* const p_w[3], double* const u_w[3]) {
+  using lanes::loadL;
+  using lanes::storeL;
+  constexpr int width = lanes::widthOf<V>();
   const int axes = static_cast<int>(fk.model_->axes.size());
   auto one = [&](int i) {
     double qs[kMaxAxes], cs[kMaxAxes], ss[kMaxAxes], M[3][2];
@@ -371,33 +389,57 @@ void tipAndAxisLanes(const ForwardKinematics& fk, int n, const double* const q[]
     }
   };
   int i = 0;
-  for (; i + lanes::kWidth <= n; i += lanes::kWidth) {
-    Lane4 qv[kMaxAxes], cv[kMaxAxes], sv[kMaxAxes];
+  for (; i + width <= n; i += width) {
+    V qv[kMaxAxes], cv[kMaxAxes], sv[kMaxAxes];
     for (int a = 0; a < axes; ++a) {
-      qv[a] = lanes::load4(q[a] + i);
+      qv[a] = loadL<V>(q[a] + i);
       if (fk.model_->axes[a].isRotary()) {
-        cv[a] = lanes::load4(cq[a] + i);
-        sv[a] = lanes::load4(sq[a] + i);
+        cv[a] = loadL<V>(cq[a] + i);
+        sv[a] = loadL<V>(sq[a] + i);
       }
     }
-    Lane4 M[3][2];
+    V M[3][2];
     const auto big = fk.carry(qv, cv, sv, M, nullptr);
     for (int k = 0; k < 3; ++k) {
-      lanes::store4(p_w[k] + i, M[k][0]);
-      lanes::store4(u_w[k] + i, M[k][1]);
+      storeL<V>(p_w[k] + i, M[k][0]);
+      storeL<V>(u_w[k] + i, M[k][1]);
     }
     if (lanes::any(big))
-      for (int l = 0; l < lanes::kWidth; ++l)
+      for (int l = 0; l < width; ++l)
         if (lanes::lane(big, l)) one(i + l);
   }
   for (; i < n; ++i) one(i);
 }
 
+// Cloned for AVX2 (one register per Lane4) with the portable SSE2 default.
+TOLVER_LANE_CLONES
+void FkLaneKernels::tipAndAxis4(const ForwardKinematics& fk, int n, const double* const q[],
+                                const double* const cq[], const double* const sq[],
+                                double* const p_w[3], double* const u_w[3]) {
+  tipAndAxis<lanes::Lane4>(fk, n, q, cq, sq, p_w, u_w);
+}
+
+#if TOLVER_HAS_WIDE_LANES
+TOLVER_LANE_WIDE
+void FkLaneKernels::tipAndAxis8(const ForwardKinematics& fk, int n, const double* const q[],
+                                const double* const cq[], const double* const sq[],
+                                double* const p_w[3], double* const u_w[3]) {
+  tipAndAxis<lanes::Lane8>(fk, n, q, cq, sq, p_w, u_w);
+}
+#else
+void FkLaneKernels::tipAndAxis8(const ForwardKinematics& fk, int n, const double* const q[],
+                                const double* const cq[], const double* const sq[],
+                                double* const p_w[3], double* const u_w[3]) {
+  tipAndAxis4(fk, n, q, cq, sq, p_w, u_w);
+}
+#endif
+
 void ForwardKinematics::tipAndAxisBatch(int n, const double* const q[], const double* const cq[],
                                         const double* const sq[], double* const p_w[3],
                                         double* const u_w[3]) const {
   assert(batchable_);
-  tipAndAxisLanes(*this, n, q, cq, sq, p_w, u_w);
+  if (lanes::wideLanes()) FkLaneKernels::tipAndAxis8(*this, n, q, cq, sq, p_w, u_w);
+  else FkLaneKernels::tipAndAxis4(*this, n, q, cq, sq, p_w, u_w);
 }
 
 void ForwardKinematics::chainFrames(const JointVector& q, ChainFrames* out,

@@ -30,7 +30,7 @@ class ForwardKinematics {
                   const double* cos_q = nullptr, const double* sin_q = nullptr,
                   const MotionContext* ctx = nullptr) const;
   // tipAndAxis for n configurations at once (the batch path of prediction), four side by side
-  // (core/numerics/lanes.h), bit for bit the same as tipAndAxis point by point.
+  // (eight on an AVX-512 processor: core/numerics/lanes.h), bit for bit the same as tipAndAxis point by point.
   // q[a], cq[a], sq[a]: n joint values of axis a (mm, rad), and the cos and sin of the rotary
   // ones; p_w[k], u_w[k]: n values of coordinate k (x, y, z) of the tip (mm) and the unit axis.
   // Needs batchable(); configurations with motion-error angles beyond 1 mrad are computed one by
@@ -75,9 +75,7 @@ class ForwardKinematics {
   // this = this * D_S(s), composed in place.
   void composeJoint(int a, double s, Pose& T, const MotionContext* ctx) const;
   Pose chain(const std::vector<int>& axes, const JointVector& q, const MotionContext* ctx) const;
-  friend void tipAndAxisLanes(const ForwardKinematics& fk, int n, const double* const q[],
-                              const double* const cq[], const double* const sq[],
-                              double* const p_w[3], double* const u_w[3]);
+  friend struct FkLaneKernels;  // tipAndAxisBatch's kernels (forward_kinematics.cpp)
 
   struct AxisTerms {
     Eigen::Isometry3d fixed;     // D1 * L (nominal link with link errors)

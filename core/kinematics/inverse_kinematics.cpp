@@ -184,7 +184,7 @@ TOLVER_LANE_INLINE void InverseKinematics::candidatesL(const L u_w[3], L c[2][2]
   const L alpha = (cw * w2p2_ - w1q) * inv_den;
   const L beta = (cw * w1q - w2p2_) * inv_den;
   L g2 = (p2_sq_ - alpha * alpha - beta * beta - 2.0 * alpha * beta * cw) * inv_w12_sq;
-  *unreachable = g2 < -1e-12;
+  *unreachable = lanes::maskOf(g2 < -1e-12);
   g2 = lanes::maxL(g2, lanes::splat<L>(0.0));
   const L g = sqrtL(g2);
   // The two sub-problems 1, Rot(w1, phi1) z = q and Rot(w2, phi2) p = z, in closed form: the
@@ -201,10 +201,10 @@ TOLVER_LANE_INLINE void InverseKinematics::candidatesL(const L u_w[3], L c[2][2]
   const L qp1_sq = qp1[0] * qp1[0] + qp1[1] * qp1[1] + qp1[2] * qp1[2];
   const double eps2 = band_sq_;
   const L gg = g2 * w12_sq_;
-  *free1 = (qp1_sq < eps2) | (beta * beta * sub1_.u1_sq + gg < eps2);
-  *free2 = alpha * alpha * sub1_.u2_sq + gg < eps2;
-  if (sub1_.pp2_sq < eps2) *free2 = (g == g) | (g != g);  // every lane
-  *refine = g < 1e-2;
+  *free1 = lanes::maskOf(qp1_sq < eps2) | lanes::maskOf(beta * beta * sub1_.u1_sq + gg < eps2);
+  *free2 = lanes::maskOf(alpha * alpha * sub1_.u2_sq + gg < eps2);
+  if (sub1_.pp2_sq < eps2) *free2 = lanes::maskOf(g == g) | lanes::maskOf(g != g);  // every lane
+  *refine = lanes::maskOf(g < 1e-2);
   *g_out = g;
   for (int k = 0; k < 2; ++k) {
     const double sgn = k == 0 ? 1.0 : -1.0;
@@ -291,7 +291,7 @@ TOLVER_LANE_INLINE auto InverseKinematics::prismaticL(const L* q, const L* c, co
   cross(3, 1, c31);
   cross(1, 2, c12);
   const L det = M[0][1] * c23[0] + M[1][1] * c23[1] + M[2][1] * c23[2];
-  const auto ok = lanes::absL(det) > 1e-12;
+  const auto ok = lanes::maskOf(lanes::absL(det) > 1e-12);
   const L inv_det = 1.0 / det;
   out[0] = (y[0] * c23[0] + y[1] * c23[1] + y[2] * c23[2]) * inv_det;
   out[1] = (y[0] * c31[0] + y[1] * c31[1] + y[2] * c31[2]) * inv_det;
@@ -581,12 +581,20 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
 
 namespace tolver {
 
+struct IkLaneKernels {
+  template <typename V>
+  TOLVER_LANE_INLINE static void blockLanes(const InverseKinematics& ik,
+                                            InverseKinematics::Block& b);
+  static void blockLanes4(const InverseKinematics& ik, InverseKinematics::Block& b);
+  static void blockLanes8(const InverseKinematics& ik, InverseKinematics::Block& b);
+};
+
 // solveBlock's lane stage: the candidates and both prismatic solutions of every point, then the
-// angle steps from each candidate of the previous point, four points at a time (the tail one
-// at a time, with the same operations).
-TOLVER_LANE_CLONES
-void ikBlockLanes(const InverseKinematics& ik, InverseKinematics::Block& b) {
-  using lanes::Lane4;
+// angle steps from each candidate of the previous point, V's width of points at a time (the
+// tail one at a time, with the same operations).
+template <typename V>
+TOLVER_LANE_INLINE void IkLaneKernels::blockLanes(const InverseKinematics& ik,
+                                                  InverseKinematics::Block& b) {
   using lanes::loadL;
   using lanes::storeL;
   using lanes::storeMask;
@@ -624,7 +632,8 @@ void ikBlockLanes(const InverseKinematics& ik, InverseKinematics::Block& b) {
       M ok = ik.prismaticL(cs, cs, sn, m0, p, out);  // (q is read only off +x/+y/+z)
       for (int j = 0; j < 3; ++j) {
         storeL<L>(b.prism[k][j] + i, out[j]);
-        ok = ok & ((out[j] - out[j]) == 0.0) & !(out[j] < lo[j]) & !(out[j] > hi[j]);
+        ok = ok & lanes::maskOf((out[j] - out[j]) == 0.0) & lanes::maskOf(!(out[j] < lo[j])) &
+             lanes::maskOf(!(out[j] > hi[j]));
       }
       storeMask<M>(b.prism_ok[k] + i, ok);
     }
@@ -646,19 +655,37 @@ void ikBlockLanes(const InverseKinematics& ik, InverseKinematics::Block& b) {
           if (j != k) continue;
           const L dc = kc * ref_c + ks * ref_s;
           const L ds = ks * ref_c - kc * ref_s;
-          const M ok = (dc > 0.0) & (lanes::absL(ds) <= kAtanSeriesMax * dc);
+          const M ok =
+              lanes::maskOf(dc > 0.0) & lanes::maskOf(lanes::absL(ds) <= kAtanSeriesMax * dc);
           storeL<L>(b.delta[k][r] + i, atanOfSmallL(ds / dc));
           storeMask<M>(b.delta_ok[k][r] + i, ok);
         }
         storeL<L>(b.chord2[j][k] + i, chord);
       }
   };
+  constexpr int width = lanes::widthOf<V>();
   int i = 0;
-  for (; i + lanes::kWidth <= n; i += lanes::kWidth) points(Lane4{}, i);
+  for (; i + width <= n; i += width) points(V{}, i);
   for (; i < n; ++i) points(0.0, i);
-  for (i = 0; i + lanes::kWidth <= n; i += lanes::kWidth) steps(Lane4{}, i);
+  for (i = 0; i + width <= n; i += width) steps(V{}, i);
   for (; i < n; ++i) steps(0.0, i);
 }
+
+TOLVER_LANE_CLONES
+void IkLaneKernels::blockLanes4(const InverseKinematics& ik, InverseKinematics::Block& b) {
+  blockLanes<lanes::Lane4>(ik, b);
+}
+
+#if TOLVER_HAS_WIDE_LANES
+TOLVER_LANE_WIDE
+void IkLaneKernels::blockLanes8(const InverseKinematics& ik, InverseKinematics::Block& b) {
+  blockLanes<lanes::Lane8>(ik, b);
+}
+#else
+void IkLaneKernels::blockLanes8(const InverseKinematics& ik, InverseKinematics::Block& b) {
+  blockLanes4(ik, b);
+}
+#endif
 
 // Long by design: solve()'s continuity choice written out for the common case, on the lane
 // stage's numbers, with solve() itself for every other case.
@@ -679,7 +706,8 @@ void InverseKinematics::blockLanes(Block& b) const {
       b.cand_c[k][r][0] = cc[k][r];
       b.cand_s[k][r][0] = ss[k][r];
     }
-  ikBlockLanes(*this, b);
+  if (lanes::wideLanes()) IkLaneKernels::blockLanes8(*this, b);
+  else IkLaneKernels::blockLanes4(*this, b);
 }
 
 void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {

@@ -64,8 +64,8 @@ class InverseKinematics {
   // as calling it point by point with the previous point's solution as reference (none at the
   // start and after a point that failed, as predictToolPath does). The closed-form candidates,
   // both candidates' prismatic solutions and the angle steps from each candidate of the
-  // previous point are computed four points at a time (core/numerics/lanes.h); the continuity
-  // choice then runs point by point on them, and any point off the common case (singular,
+  // previous point are computed four points at a time (eight on an AVX-512 processor:
+  // core/numerics/lanes.h); the continuity choice then runs point by point on them, and any point off the common case (singular,
   // near-singular closed form, a step of more than 0.1 rad, a travel limit in play) is
   // handed to solve().
   static constexpr int kBlock = 64;
@@ -153,7 +153,7 @@ class InverseKinematics {
   auto prismaticL(const L* q, const L* c, const L* sn, const double m0[3], const L p_w[3],
                   L out[3]) const;
 
-  friend void ikBlockLanes(const InverseKinematics& ik, Block& b);
+  friend struct IkLaneKernels;  // blockLanes's kernels (inverse_kinematics.cpp)
 
   const MachineModel* model_;
   bool batchable_ = false;

@@ -5,9 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
-#if defined(__x86_64__)
-#include <emmintrin.h>
-#endif
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -74,7 +71,7 @@ TOLVER_LANE_INLINE auto deviationL(const L p[3], const L u_raw[3], const L pp[3]
   const L x = u[1] * up[2] - u[2] * up[1], y = u[2] * up[0] - u[0] * up[2],
           z = u[0] * up[1] - u[1] * up[0];
   const L sn = sqrtL(x * x + y * y + z * z), cs = u[0] * up[0] + u[1] * up[1] + u[2] * up[2];
-  const auto series = (cs > 0.0) & (sn <= kAtanSeriesMax * cs);
+  const auto series = lanes::maskOf(cs > 0.0) & lanes::maskOf(sn <= kAtanSeriesMax * cs);
   *angle = atanOfSmallL(sn / cs);
   *norm = sqrtL(dev[0] * dev[0] + dev[1] * dev[1] + dev[2] * dev[2]);
   if constexpr (sizeof(L) == sizeof(double)) {
@@ -96,8 +93,9 @@ Deviation deviationOf(const Eigen::Vector3d& p_w, const Eigen::Vector3d& u_w,
 
 // deviationL over a block: in[0..3] the CL tips, axes, predicted tips and axes (3 arrays of n
 // each), out the deviations (dev x, y, z, along, across, angle, norm: 7 arrays of n).
-TOLVER_LANE_CLONES
-void deviationLanes(int n, const double* const in[4][3], double* const out[7]) {
+template <typename V>
+TOLVER_LANE_INLINE void deviationLanesOf(int n, const double* const in[4][3],
+                                         double* const out[7]) {
   auto one = [&](int i) {  // the double form: the tail, and lanes beyond the series
     double v[4][3], d[7];
     for (int a = 0; a < 4; ++a)
@@ -105,38 +103,38 @@ void deviationLanes(int n, const double* const in[4][3], double* const out[7]) {
     deviationL(v[0], v[1], v[2], v[3], d, &d[3], &d[4], &d[5], &d[6]);
     for (int k = 0; k < 7; ++k) out[k][i] = d[k];
   };
+  constexpr int width = lanes::widthOf<V>();
   int i = 0;
-  for (; i + lanes::kWidth <= n; i += lanes::kWidth) {
-    lanes::Lane4 v[4][3], d[7];
+  for (; i + width <= n; i += width) {
+    V v[4][3], d[7];
     for (int a = 0; a < 4; ++a)
-      for (int k = 0; k < 3; ++k) v[a][k] = lanes::load4(in[a][k] + i);
+      for (int k = 0; k < 3; ++k) v[a][k] = lanes::loadL<V>(in[a][k] + i);
     const auto redo = deviationL(v[0], v[1], v[2], v[3], d, &d[3], &d[4], &d[5], &d[6]);
-    for (int k = 0; k < 7; ++k) lanes::store4(out[k] + i, d[k]);
+    for (int k = 0; k < 7; ++k) lanes::storeL<V>(out[k] + i, d[k]);
     if (lanes::any(redo))
-      for (int l = 0; l < lanes::kWidth; ++l)
+      for (int l = 0; l < width; ++l)
         if (lanes::lane(redo, l)) one(i + l);
   }
   for (; i < n; ++i) one(i);
 }
 
-// A predicted point written past the caches (x86-64: non-temporal stores, 8 bytes at a time):
-// a long path's results do not fit in them, and a plain store would first read each line in.
-// streamFence orders the stores before the results are read.
-static_assert(sizeof(PredictedPoint) % 8 == 0);  // plain storage (Eigen fixed-size members)
-inline void streamTo(PredictedPoint* dst, const PredictedPoint& src) {
-#if defined(__x86_64__)
-  long long words[sizeof(PredictedPoint) / 8];
-  std::memcpy(words, &src, sizeof src);
-  auto* out = reinterpret_cast<long long*>(dst);
-  for (size_t k = 0; k < sizeof(PredictedPoint) / 8; ++k) _mm_stream_si64(out + k, words[k]);
-#else
-  *dst = src;
-#endif
+TOLVER_LANE_CLONES
+void deviationLanes4(int n, const double* const in[4][3], double* const out[7]) {
+  deviationLanesOf<lanes::Lane4>(n, in, out);
 }
-inline void streamFence() {
-#if defined(__x86_64__)
-  _mm_sfence();
+
+#if TOLVER_HAS_WIDE_LANES
+TOLVER_LANE_WIDE
+void deviationLanes8(int n, const double* const in[4][3], double* const out[7]) {
+  deviationLanesOf<lanes::Lane8>(n, in, out);
+}
 #endif
+
+void deviationLanes(int n, const double* const in[4][3], double* const out[7]) {
+#if TOLVER_HAS_WIDE_LANES
+  if (lanes::wideLanes()) return deviationLanes8(n, in, out);
+#endif
+  deviationLanes4(n, in, out);
 }
 
 }  // namespace
@@ -287,7 +285,7 @@ void BlockPrediction::forward(Work& w) const {
   std::vector<PredictedPoint>& points = s_->acc.result.points;
   for (int i = 0; i < n; ++i) {
     if (b.status[i] != IkStatus::Ok) continue;  // account() writes the failed points
-    PredictedPoint o;
+    PredictedPoint& o = points[w.start + i];
     o.q.resize(axes);
     for (int a = 0; a < axes; ++a) o.q[a] = b.q[a][i];
     o.singular = b.singular[i];
@@ -297,9 +295,7 @@ void BlockPrediction::forward(Work& w) const {
     o.along_axis = w.dev[3][i];
     o.across_axis = w.dev[4][i];
     o.axis_angle = w.dev[5][i];
-    streamTo(&points[w.start + i], o);
   }
-  streamFence();
 }
 
 void BlockPrediction::account(Work& w) {

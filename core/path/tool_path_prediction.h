@@ -80,7 +80,7 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                      const std::vector<JointVector>* commanded = nullptr);
 
 // batch: false takes the reference path, one point at a time, that the batch path (four
-// points side by side, when the model allows: InverseKinematics and ForwardKinematics
+// or eight points side by side, when the model allows: InverseKinematics and ForwardKinematics
 // batchable()) reproduces bit for bit (tests); without commanded joints only.
 void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                      const std::vector<ClPoint>& path, PredictionResult& result, int max_failures,
