@@ -65,9 +65,9 @@ class InverseKinematics {
   // start and after a point that failed, as predictToolPath does). The closed-form candidates,
   // both candidates' prismatic solutions and the angle steps from each candidate of the
   // previous point are computed four points at a time (eight on an AVX-512 processor:
-  // core/numerics/lanes.h); the continuity choice then runs point by point on them, and any point off the common case (singular,
-  // near-singular closed form, a step of more than 0.1 rad, a travel limit in play) is
-  // handed to solve().
+  // core/numerics/lanes.h); the continuity choice then runs point by point on them, and any
+  // point off the common case (singular, near-singular closed form, a step of more than
+  // 0.1 rad, a travel limit in play) is handed to solve().
   static constexpr int kBlock = 64;
   struct Block {
     int n = 0;                                 // points in this block, <= kBlock

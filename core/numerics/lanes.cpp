@@ -1,6 +1,10 @@
 #include "core/numerics/lanes.h"
 
 #include <atomic>
+#include <cstring>
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace tolver::lanes {
 
@@ -26,5 +30,39 @@ std::atomic<bool>& wideFlag() {
 bool wideLanes() { return wideFlag().load(std::memory_order_relaxed); }
 
 void setWideLanes(bool on) { wideFlag().store(on && processorRunsWideLanes()); }
+
+}  // namespace tolver::lanes
+
+namespace tolver::lanes {
+
+namespace {
+
+#if TOLVER_HAS_WIDE_LANES
+__attribute__((target("avx512f"))) void streamLines512(void* dst, const void* src, size_t bytes) {
+  auto* d = static_cast<__m512i*>(dst);
+  const auto* s = static_cast<const __m512i*>(src);
+  for (size_t i = 0; i < bytes / 64; ++i) _mm512_stream_si512(d + i, _mm512_load_si512(s + i));
+}
+#endif
+
+}  // namespace
+
+void streamLines(void* dst, const void* src, size_t bytes) {
+#if defined(__x86_64__)
+#if TOLVER_HAS_WIDE_LANES
+  if (wideLanes()) {
+    streamLines512(dst, src, bytes);
+    _mm_sfence();  // the stores are seen before what follows
+    return;
+  }
+#endif
+  auto* d = static_cast<__m128i*>(dst);
+  const auto* s = static_cast<const __m128i*>(src);
+  for (size_t i = 0; i < bytes / 16; ++i) _mm_stream_si128(d + i, _mm_load_si128(s + i));
+  _mm_sfence();
+#else
+  std::memcpy(dst, src, bytes);
+#endif
+}
 
 }  // namespace tolver::lanes

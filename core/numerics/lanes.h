@@ -14,6 +14,7 @@
 // lane form (std::sin, atan2) are left to the scalar instantiation: a lane that needs one is
 // flagged and recomputed by it.
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 
 // Lane4 values are passed between inlined functions only; GCC's note on the AVX calling
@@ -62,6 +63,10 @@ constexpr int widthOf() {
 // a process on the Lane4 forms (tests compare the two).
 bool wideLanes();
 void setWideLanes(bool on);
+
+// Copies bytes (a multiple of 64) from src to dst, both 64-byte aligned, with non-temporal
+// full-line stores: dst's lines are not read into the caches first (long outputs).
+void streamLines(void* dst, const void* src, size_t bytes);
 
 TOLVER_LANE_INLINE double select(bool m, double a, double b) { return m ? a : b; }
 template <typename M>

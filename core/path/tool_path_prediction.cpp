@@ -187,7 +187,9 @@ struct BlockPrediction::Work {
   size_t start = 0;
   InverseKinematics::Block ik;
   double pred[6][InverseKinematics::kBlock], dev[7][InverseKinematics::kBlock];
+  PredictedPoint out[InverseKinematics::kBlock];  // the block's points, then streamed out
 };
+static_assert(sizeof(PredictedPoint) % 64 == 0 && alignof(PredictedPoint) == 64);
 
 struct BlockPrediction::State {
   State(const MachineModel& m, const Eigen::VectorXd& params, const std::vector<ClPoint>& p,
@@ -285,7 +287,7 @@ void BlockPrediction::forward(Work& w) const {
   std::vector<PredictedPoint>& points = s_->acc.result.points;
   for (int i = 0; i < n; ++i) {
     if (b.status[i] != IkStatus::Ok) continue;  // account() writes the failed points
-    PredictedPoint& o = points[w.start + i];
+    PredictedPoint& o = w.out[i];
     o.q.resize(axes);
     for (int a = 0; a < axes; ++a) o.q[a] = b.q[a][i];
     o.singular = b.singular[i];
@@ -296,6 +298,7 @@ void BlockPrediction::forward(Work& w) const {
     o.across_axis = w.dev[4][i];
     o.axis_angle = w.dev[5][i];
   }
+  lanes::streamLines(&points[w.start], w.out, n * sizeof(PredictedPoint));
 }
 
 void BlockPrediction::account(Work& w) {

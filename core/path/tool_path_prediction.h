@@ -20,7 +20,9 @@ struct ClPoint {
   bool rapid = false;  // a positioning move (APT RAPID), not a cutting move
 };
 
-struct PredictedPoint {
+// Three whole cache lines (64-byte aligned, 192 bytes): the prediction writes a block of points
+// with full-line stores that need not read the lines first.
+struct alignas(64) PredictedPoint {
   // Left uninitialised on purpose: predictToolPath writes every field of every point, and a
   // zero-filling pass over a long path costs a tenth of the prediction.
   PredictedPoint() {}
