@@ -206,22 +206,35 @@ Eigen::Isometry3d ForwardKinematics::F_T_t(const JointVector& q) const {
 
 namespace {
 
-// sinCosOfSmallAngle over lanes: the same two series, chosen per lane; big: the lanes beyond
-// them (|x| >= 1e-3 rad, or NaN), which the caller recomputes with the scalar form.
-TOLVER_LANE_INLINE void sinCosSmall(double x, double* s, double* c, bool*) { sinCosOfSmallAngle(x, s, c); }
+// sinCosOfSmallAngle of three angles over lanes: the same two series, chosen per lane; big: the
+// lanes beyond them (|x| >= 1e-3 rad, or NaN), which the caller recomputes with the scalar form.
+TOLVER_LANE_INLINE void sinCosSmall3(const double* x, double* s, double* c, bool*) {
+  for (int k = 0; k < 3; ++k) sinCosOfSmallAngle(x[k], &s[k], &c[k]);
+}
 template <typename L, typename M>
-TOLVER_LANE_INLINE void sinCosSmall(L x, L* s, L* c, M* big) {
-  const L x2 = x * x;
+TOLVER_LANE_INLINE void sinCosSmall3(const L* x, L* s, L* c, M* big) {
   constexpr double k6 = 1.0 / 6.0, k20 = 1.0 / 20.0, k12 = 1.0 / 12.0, k30 = 1.0 / 30.0;
-  const M short_form = lanes::maskOf(x2 < 1e-8);
-  if (lanes::all(short_form)) {  // the usual case: every angle under 0.1 mrad
-    *s = x - x * x2 * (1.0 / 6.0);
-    *c = 1.0 - 0.5 * x2;
+  L x2[3];
+  M short_form[3];
+  for (int k = 0; k < 3; ++k) {
+    x2[k] = x[k] * x[k];
+    short_form[k] = lanes::maskOf(x2[k] < 1e-8);
+  }
+  // The usual case: every angle of every lane under 0.1 mrad (one test for the three).
+  if (lanes::all(short_form[0] & short_form[1] & short_form[2])) {
+    for (int k = 0; k < 3; ++k) {
+      s[k] = x[k] - x[k] * x2[k] * (1.0 / 6.0);
+      c[k] = 1.0 - 0.5 * x2[k];
+    }
     return;
   }
-  *s = lanes::select(short_form, x - x * x2 * (1.0 / 6.0), x * (1.0 - x2 * k6 * (1.0 - x2 * k20)));
-  *c = lanes::select(short_form, 1.0 - 0.5 * x2, 1.0 - 0.5 * x2 * (1.0 - x2 * k12 * (1.0 - x2 * k30)));
-  *big |= lanes::maskOf(!(x2 < 1e-6));
+  for (int k = 0; k < 3; ++k) {
+    s[k] = lanes::select(short_form[k], x[k] - x[k] * x2[k] * (1.0 / 6.0),
+                         x[k] * (1.0 - x2[k] * k6 * (1.0 - x2[k] * k20)));
+    c[k] = lanes::select(short_form[k], 1.0 - 0.5 * x2[k],
+                         1.0 - 0.5 * x2[k] * (1.0 - x2[k] * k12 * (1.0 - x2[k] * k30)));
+    *big |= lanes::maskOf(!(x2[k] < 1e-6));
+  }
 }
 
 // M <- Rot(e_k, theta) M on rows k+1, k+2 (rotateRowsAbout), M 3 x 2 of L.
@@ -272,7 +285,7 @@ TOLVER_LANE_INLINE auto ForwardKinematics::carry(const L* q, const L* c, const L
       motionErrorsL(t, q[a], e);
     }
     L ce[3], se[3];
-    for (int k = 0; k < 3; ++k) sinCosSmall(e[3 + k], &se[k], &ce[k], &big);
+    sinCosSmall3(e + 3, se, ce, &big);
     if (!inverse) {
       rotateRows<0>(ce[0], se[0], M);
       rotateRows<1>(ce[1], se[1], M);
