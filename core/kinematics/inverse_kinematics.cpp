@@ -760,10 +760,7 @@ void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
       if (chosen >= 0 && !b.prism_ok[chosen][i]) chosen = -1;
     }
     if (chosen >= 0) {
-      for (int a = 0; a < axes; ++a) {
-        b.c[a][i] = 1.0;
-        b.s[a][i] = 0.0;
-      }
+      // (c and s of the prismatic axes are not read: Block's rotary ones only)
       for (int r = 0; r < 2; ++r) {
         const int a = rotary_[r];
         b.q[a][i] = cursor.previous[a] = value[chosen][r];
