@@ -30,7 +30,8 @@ class ForwardKinematics {
                   const double* cos_q = nullptr, const double* sin_q = nullptr,
                   const MotionContext* ctx = nullptr) const;
   // tipAndAxis for n configurations at once (the batch path of prediction), four side by side
-  // (eight on an AVX-512 processor: core/numerics/lanes.h), bit for bit the same as tipAndAxis point by point.
+  // (eight on an AVX-512 processor: core/numerics/lanes.h), bit for bit the same as tipAndAxis
+  // point by point.
   // q[a], cq[a], sq[a]: n joint values of axis a (mm, rad), and the cos and sin of the rotary
   // ones; p_w[k], u_w[k]: n values of coordinate k (x, y, z) of the tip (mm) and the unit axis.
   // Needs batchable(); configurations with motion-error angles beyond 1 mrad are computed one by

@@ -31,10 +31,6 @@ bool wideLanes() { return wideFlag().load(std::memory_order_relaxed); }
 
 void setWideLanes(bool on) { wideFlag().store(on && processorRunsWideLanes()); }
 
-}  // namespace tolver::lanes
-
-namespace tolver::lanes {
-
 namespace {
 
 #if TOLVER_HAS_WIDE_LANES

@@ -33,8 +33,9 @@
 
 // A function over lanes is cloned for AVX2 (one register per Lane4), beside the portable
 // default (SSE2 pairs), and the loader picks the clone the processor runs (GCC on x86-64).
-// TOLVER_LANE_WIDE marks the Lane8 form of a kernel, compiled for AVX-512 (GCC on x86-64; elsewhere
-// TOLVER_HAS_WIDE_LANES is 0, the Lane8 forms are not compiled and wideLanes() is false).
+// TOLVER_LANE_WIDE marks the Lane8 form of a kernel, compiled for AVX-512 (GCC on x86-64;
+// elsewhere TOLVER_HAS_WIDE_LANES is 0, the Lane8 forms are not compiled and wideLanes() is
+// false).
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(TOLVER_NO_CLONES)
 #define TOLVER_LANE_CLONES __attribute__((target_clones("avx2", "default")))
 #define TOLVER_LANE_WIDE __attribute__((target("avx512f,avx512dq,avx512vl,avx512bw")))
@@ -125,7 +126,8 @@ TOLVER_LANE_INLINE bool any(M m) {
 }
 TOLVER_LANE_INLINE bool any(Mask8 m) {  // a reduction: no lane-by-lane branches
   m = maskOf(m);
-  const Mask4 h = __builtin_shufflevector(m, m, 0, 1, 2, 3) | __builtin_shufflevector(m, m, 4, 5, 6, 7);
+  const Mask4 h =
+      __builtin_shufflevector(m, m, 0, 1, 2, 3) | __builtin_shufflevector(m, m, 4, 5, 6, 7);
   return (h[0] | h[1] | h[2] | h[3]) != 0;
 }
 TOLVER_LANE_INLINE bool all(bool m) { return m; }
@@ -137,7 +139,8 @@ TOLVER_LANE_INLINE bool all(M m) {
 }
 TOLVER_LANE_INLINE bool all(Mask8 m) {
   m = maskOf(m);
-  const Mask4 h = __builtin_shufflevector(m, m, 0, 1, 2, 3) & __builtin_shufflevector(m, m, 4, 5, 6, 7);
+  const Mask4 h =
+      __builtin_shufflevector(m, m, 0, 1, 2, 3) & __builtin_shufflevector(m, m, 4, 5, 6, 7);
   return (h[0] & h[1] & h[2] & h[3]) != 0;
 }
 template <typename M>
