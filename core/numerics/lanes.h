@@ -50,7 +50,6 @@ namespace tolver::lanes {
 
 using Lane4 = double __attribute__((vector_size(32)));
 using Mask4 = decltype(Lane4{} < Lane4{});  // all-ones or zero 64-bit lanes
-constexpr int kWidth = 4;
 using Lane8 = double __attribute__((vector_size(64)));
 using Mask8 = decltype(Lane8{} < Lane8{});
 // The lanes of a number type or of its mask: 1 for double and bool.
@@ -147,16 +146,8 @@ template <typename M>
 TOLVER_LANE_INLINE bool lane(M m, int i) { return m[i] != 0; }
 TOLVER_LANE_INLINE bool lane(bool m, int) { return m; }
 
-// Loads and stores of kWidth consecutive doubles.
-TOLVER_LANE_INLINE Lane4 load4(const double* p) {
-  Lane4 v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-TOLVER_LANE_INLINE void store4(double* p, Lane4 v) { std::memcpy(p, &v, sizeof v); }
-TOLVER_LANE_INLINE Lane4 broadcast4(double x) { return Lane4{x, x, x, x}; }
-// The same for L = double (one value) or lanes (widthOf<L>() values), and a mask stored as 0
-// or all ones.
+// Loads and stores for L = double (one value) or lanes (widthOf<L>() values), and a mask
+// stored as 0 or all ones.
 template <typename L>
 TOLVER_LANE_INLINE L loadL(const double* p) {
   if constexpr (sizeof(L) == sizeof(double)) {
