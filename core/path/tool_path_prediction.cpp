@@ -139,13 +139,36 @@ void deviationLanes(int n, const double* const in[4][3], double* const out[7]) {
 
 }  // namespace
 
+// The running figures of the summary, in path order: a value the block loop keeps in registers
+// (PredictionSummary lives behind a reference, which would make every sum a store and a load).
+struct RunningSummary {
+  double sum2 = 0.0, sum2_angle = 0.0;
+  double max_deviation = 0.0, max_axis_angle = 0.0;
+  int max_index = -1;
+  int singular_points = 0, first_singular_line = 0;
+  TOLVER_LANE_INLINE void add(size_t i, const ClPoint& cl, bool singular, double d,
+                              double angle) {
+    if (singular) {
+      if (singular_points == 0) first_singular_line = cl.line;
+      ++singular_points;
+    }
+    sum2 += d * d;
+    sum2_angle += angle * angle;
+    if (d > max_deviation || max_index < 0) {
+      max_deviation = d;
+      max_index = static_cast<int>(i);
+    }
+    if (angle > max_axis_angle) max_axis_angle = angle;
+  }
+};
+
 // The prediction's bookkeeping (file-local; outside the anonymous namespace because
 // BlockPrediction::State holds one).
 struct PredictionAccumulator {
   PredictionResult& result;
   const MachineModel& model;
   int max_failures;
-  double sum2 = 0.0, sum2_angle = 0.0;
+  RunningSummary run;
   void fail(size_t i, const ClPoint& cl, IkStatus status, int violated_axis, double violated_value,
             int q_size) {
     PredictedPoint& bad = result.points[i];
@@ -166,20 +189,6 @@ struct PredictionAccumulator {
           {static_cast<int>(i), cl.line, status, axis, describeIkFailure(model, sol)});
     }
   }
-  void add(size_t i, const ClPoint& cl, bool singular, double d, double angle) {
-    PredictionSummary& s = result.summary;
-    if (singular) {
-      if (s.singular_points == 0) s.first_singular_line = cl.line;
-      ++s.singular_points;
-    }
-    sum2 += d * d;
-    sum2_angle += angle * angle;
-    if (d > s.max_deviation || s.max_index < 0) {
-      s.max_deviation = d;
-      s.max_index = static_cast<int>(i);
-    }
-    if (angle > s.max_axis_angle) s.max_axis_angle = angle;
-  }
 };
 
 
@@ -194,7 +203,7 @@ static_assert(sizeof(PredictedPoint) % 64 == 0 && alignof(PredictedPoint) == 64)
 struct BlockPrediction::State {
   State(const MachineModel& m, const Eigen::VectorXd& params, const std::vector<ClPoint>& p,
         PredictionResult& r, int max_failures)
-      : model(m), path(p), ik(m), actual(m, params), acc{r, m, max_failures} {}
+      : model(m), path(p), ik(m), actual(m, params), acc{r, m, max_failures, {}} {}
   const MachineModel& model;
   const std::vector<ClPoint>& path;
   const InverseKinematics ik;
@@ -215,11 +224,16 @@ void prepare(const MachineModel& model, const std::vector<ClPoint>& path,
   result.summary.points = static_cast<int>(path.size());
 }
 
-void finishSummary(const std::vector<ClPoint>& path, const PredictionAccumulator& acc,
+void finishSummary(const std::vector<ClPoint>& path, const RunningSummary& run,
                    PredictionSummary& s) {
+  s.singular_points = run.singular_points;
+  s.first_singular_line = run.first_singular_line;
+  s.max_deviation = run.max_deviation;
+  s.max_index = run.max_index;
+  s.max_axis_angle = run.max_axis_angle;
   if (path.empty()) return;
-  s.rms_deviation = std::sqrt(acc.sum2 / path.size());
-  s.rms_axis_angle = std::sqrt(acc.sum2_angle / path.size());
+  s.rms_deviation = std::sqrt(run.sum2 / path.size());
+  s.rms_axis_angle = std::sqrt(run.sum2_angle / path.size());
 }
 
 }  // namespace
@@ -248,6 +262,15 @@ void BlockPrediction::lanes(size_t block, Work& w) const {
   w.start = block * InverseKinematics::kBlock;
   InverseKinematics::Block& b = w.ik;
   b.n = static_cast<int>(std::min<size_t>(InverseKinematics::kBlock, path.size() - w.start));
+  // The next block's CL points, towards the caches while this one is copied and solved (the
+  // copy otherwise waits on each line).
+  const size_t next = w.start + InverseKinematics::kBlock;
+  if (next < path.size()) {
+    const char* from = reinterpret_cast<const char*>(&path[next]);
+    const size_t bytes =
+        std::min<size_t>(InverseKinematics::kBlock, path.size() - next) * sizeof(ClPoint);
+    for (size_t at = 0; at < bytes; at += 64) __builtin_prefetch(from + at);
+  }
   for (int i = 0; i < b.n; ++i) {
     const ClPoint& cl = path[w.start + i];
     for (int k = 0; k < 3; ++k) {
@@ -304,17 +327,19 @@ void BlockPrediction::forward(Work& w) const {
 void BlockPrediction::account(Work& w) {
   const InverseKinematics::Block& b = w.ik;
   const int axes = static_cast<int>(s_->model.axes.size());
+  RunningSummary run = s_->acc.run;
   for (int i = 0; i < b.n; ++i) {
     const size_t at = w.start + i;
     if (b.status[i] != IkStatus::Ok)
       s_->acc.fail(at, s_->path[at], b.status[i], b.violated_axis[i], b.violated_value[i], axes);
     else
-      s_->acc.add(at, s_->path[at], b.singular[i], w.dev[6][i], w.dev[5][i]);
+      run.add(at, s_->path[at], b.singular[i], w.dev[6][i], w.dev[5][i]);
   }
+  s_->acc.run = run;
 }
 
 void BlockPrediction::finish() {
-  finishSummary(s_->path, s_->acc, s_->acc.result.summary);
+  finishSummary(s_->path, s_->acc.run, s_->acc.result.summary);
 }
 
 PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
@@ -352,7 +377,7 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
   prepare(model, path, result);
   const InverseKinematics ik(model);
   const ForwardKinematics actual(model, params);
-  PredictionAccumulator acc{result, model, max_failures};
+  PredictionAccumulator acc{result, model, max_failures, {}};
   const JointVector* previous = nullptr;
   std::array<double, kMaxAxes> previous_cos, previous_sin;  // of previous's rotary values
   // Effects that depend on the approach direction (reversal) see it from the joint sequence;
@@ -381,12 +406,12 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
     out.along_axis = d.along;
     out.across_axis = d.across;
     out.axis_angle = d.angle;
-    acc.add(i, cl, sol.singular, d.norm, d.angle);
+    acc.run.add(i, cl, sol.singular, d.norm, d.angle);
     previous = &out.q;
     previous_cos = sol.cos_q;
     previous_sin = sol.sin_q;
   }
-  finishSummary(path, acc, result.summary);
+  finishSummary(path, acc.run, result.summary);
 }
 
 std::vector<RotaryJump> findRotaryJumps(const MachineModel& model, const std::vector<ClPoint>& path,
