@@ -712,22 +712,39 @@ void InverseKinematics::blockLanes(Block& b) const {
 
 void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
   const int n = b.n;
-  b.from_lanes = 0;
   const int axes = static_cast<int>(model_->axes.size());
+  const int ra[2] = {rotary_[0], rotary_[1]};
   double lo[2], hi[2];
   for (int r = 0; r < 2; ++r) {
-    const Axis& ax = model_->axes[rotary_[r]];
+    const Axis& ax = model_->axes[ra[r]];
     const double inf = std::numeric_limits<double>::infinity();
     lo[r] = (ax.endless ? -inf : ax.travel_min) - kTravelEps;
     hi[r] = (ax.endless ? inf : ax.travel_max) + kTravelEps;
   }
+  // The common case's state in locals, which the loop keeps in registers: the candidate the
+  // previous point was solved from (-1: none), its rotary values, and the last point solved
+  // here since the cursor was written (-1: none). The cursor is written from the block's
+  // numbers before solve() reads it and at the end.
+  int j = cursor.previous_candidate;
+  double ref[2] = {0.0, 0.0};
+  if (j >= 0)
+    for (int r = 0; r < 2; ++r) ref[r] = cursor.previous[ra[r]];
+  int last = -1, from_lanes = 0;
+  const auto writeCursor = [&] {
+    if (last < 0) return;
+    for (int a = 0; a < axes; ++a) cursor.previous[a] = b.q[a][last];
+    for (int r = 0; r < 2; ++r) {
+      cursor.previous_cos[ra[r]] = b.c[ra[r]][last];
+      cursor.previous_sin[ra[r]] = b.s[ra[r]][last];
+    }
+    cursor.previous_candidate = j;
+    last = -1;
+  };
   for (int i = 0; i < n; ++i) {
     // The common case: a regular point after a point solved from its own candidate.
-    const int j = cursor.previous_candidate;
     int chosen = -1;
     double value[2][2];
     if (j >= 0 && !b.irregular[i]) {
-      const double ref[2] = {cursor.previous[rotary_[0]], cursor.previous[rotary_[1]]};
       double cost[2];
       auto evaluate = [&](int k) {
         cost[k] = 0.0;
@@ -762,22 +779,22 @@ void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
     if (chosen >= 0) {
       // (c and s of the prismatic axes are not read: Block's rotary ones only)
       for (int r = 0; r < 2; ++r) {
-        const int a = rotary_[r];
-        b.q[a][i] = cursor.previous[a] = value[chosen][r];
-        b.c[a][i] = cursor.previous_cos[a] = b.cand_c[chosen][r][i + 1];
-        b.s[a][i] = cursor.previous_sin[a] = b.cand_s[chosen][r][i + 1];
+        b.q[ra[r]][i] = ref[r] = value[chosen][r];
+        b.c[ra[r]][i] = b.cand_c[chosen][r][i + 1];
+        b.s[ra[r]][i] = b.cand_s[chosen][r][i + 1];
       }
-      for (int col = 0; col < 3; ++col)
-        b.q[column_axis_[col]][i] = cursor.previous[column_axis_[col]] = b.prism[chosen][col][i];
+      for (int col = 0; col < 3; ++col) b.q[column_axis_[col]][i] = b.prism[chosen][col][i];
       b.status[i] = IkStatus::Ok;
       b.singular[i] = false;
       b.violated_axis[i] = -1;
       b.violated_value[i] = 0.0;
-      cursor.previous_candidate = chosen;
-      ++b.from_lanes;
+      j = chosen;
+      last = i;
+      ++from_lanes;
       continue;
     }
     // Anything else: solve() itself, from the same reference.
+    writeCursor();
     const Eigen::Vector3d p(b.p[0][i], b.p[1][i], b.p[2][i]), u(b.u[0][i], b.u[1][i], b.u[2][i]);
     const IkSolution sol =
         solve(p, u, cursor.has_previous ? &cursor.previous : nullptr, cursor.previous_cos.data(),
@@ -794,7 +811,7 @@ void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
       b.s[a][i] = ok && rotary ? sol.sin_q[a] : 0.0;
     }
     cursor.has_previous = ok;
-    cursor.previous_candidate = -1;
+    cursor.previous_candidate = j = -1;
     if (!ok) continue;
     cursor.previous = sol.q;
     cursor.previous_cos = sol.cos_q;
@@ -802,14 +819,15 @@ void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
     // The next point can start from the lane stage's steps if this solution is one of the
     // candidates, bit for bit.
     for (int k = 0; k < 2 && !b.irregular[i]; ++k)
-      if (sol.cos_q[rotary_[0]] == b.cand_c[k][0][i + 1] &&
-          sol.sin_q[rotary_[0]] == b.cand_s[k][0][i + 1] &&
-          sol.cos_q[rotary_[1]] == b.cand_c[k][1][i + 1] &&
-          sol.sin_q[rotary_[1]] == b.cand_s[k][1][i + 1]) {
-        cursor.previous_candidate = k;
+      if (sol.cos_q[ra[0]] == b.cand_c[k][0][i + 1] && sol.sin_q[ra[0]] == b.cand_s[k][0][i + 1] &&
+          sol.cos_q[ra[1]] == b.cand_c[k][1][i + 1] && sol.sin_q[ra[1]] == b.cand_s[k][1][i + 1]) {
+        cursor.previous_candidate = j = k;
         break;
       }
+    for (int r = 0; r < 2; ++r) ref[r] = sol.q[ra[r]];
   }
+  writeCursor();
+  b.from_lanes = from_lanes;
 }
 
 }  // namespace tolver
