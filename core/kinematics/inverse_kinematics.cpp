@@ -596,6 +596,7 @@ template <typename V>
 TOLVER_LANE_INLINE void IkLaneKernels::blockLanes(const InverseKinematics& ik,
                                                   InverseKinematics::Block& b) {
   using lanes::loadL;
+  using lanes::loadMask;
   using lanes::storeL;
   using lanes::storeMask;
   const int n = b.n;
@@ -662,6 +663,15 @@ TOLVER_LANE_INLINE void IkLaneKernels::blockLanes(const InverseKinematics& ik,
         }
         storeL<L>(b.chord2[j][k] + i, chord);
       }
+    for (int j = 0; j < 2; ++j) {
+      // blockChoice's first == j, first = chord2[j][1] < chord2[j][0] ? 1 : 0
+      const L same = loadL<L>(b.chord2[j][j] + i), other = loadL<L>(b.chord2[j][1 - j] + i);
+      const M first_is_j = j == 0 ? lanes::maskOf(!(other < same)) : lanes::maskOf(same < other);
+      const M common = lanes::notMask(loadMask<M>(b.irregular + i)) & first_is_j &
+                       loadMask<M>(b.delta_ok[j][0] + i) & loadMask<M>(b.delta_ok[j][1] + i) &
+                       loadMask<M>(b.prism_ok[j] + i);
+      storeMask<M>(b.common[j] + i, common);
+    }
   };
   constexpr int width = lanes::widthOf<V>();
   int i = 0;
@@ -732,16 +742,34 @@ void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
   int last = -1, from_lanes = 0;
   const auto writeCursor = [&] {
     if (last < 0) return;
-    for (int a = 0; a < axes; ++a) cursor.previous[a] = b.q[a][last];
+    const int k = b.taken[last];  // (= j)
     for (int r = 0; r < 2; ++r) {
-      cursor.previous_cos[ra[r]] = b.c[ra[r]][last];
-      cursor.previous_sin[ra[r]] = b.s[ra[r]][last];
+      cursor.previous[ra[r]] = b.q[ra[r]][last];
+      cursor.previous_cos[ra[r]] = b.cand_c[k][r][last + 1];
+      cursor.previous_sin[ra[r]] = b.cand_s[k][r][last + 1];
     }
-    cursor.previous_candidate = j;
+    for (int col = 0; col < 3; ++col) cursor.previous[column_axis_[col]] = b.prism[k][col][last];
+    cursor.previous_candidate = k;
     last = -1;
   };
   for (int i = 0; i < n; ++i) {
-    // The common case: a regular point after a point solved from its own candidate.
+    // The common case, tested in lanes: the branch continues, its steps give the values.
+    if (j >= 0 && b.common[j][i]) {
+      const double v0 = ref[0] + b.delta[j][0][i], v1 = ref[1] + b.delta[j][1][i];
+      if (!(v0 < lo[0] || v0 > hi[0] || v1 < lo[1] || v1 > hi[1])) {
+        const double cost = std::abs(v0 - ref[0]) + std::abs(v1 - ref[1]);
+        if (cost * cost < b.chord2[j][1 - j][i] * (1.0 - 1e-9)) {
+          b.q[ra[0]][i] = ref[0] = v0;
+          b.q[ra[1]][i] = ref[1] = v1;
+          b.taken[i] = static_cast<signed char>(j);
+          last = i;
+          ++from_lanes;
+          continue;
+        }
+      }
+    }
+    // The same written out for any regular point after a point solved from its own candidate
+    // (a change of branch included).
     int chosen = -1;
     double value[2][2];
     if (j >= 0 && !b.irregular[i]) {
@@ -777,23 +805,15 @@ void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
       if (chosen >= 0 && !b.prism_ok[chosen][i]) chosen = -1;
     }
     if (chosen >= 0) {
-      // (c and s of the prismatic axes are not read: Block's rotary ones only)
-      for (int r = 0; r < 2; ++r) {
-        b.q[ra[r]][i] = ref[r] = value[chosen][r];
-        b.c[ra[r]][i] = b.cand_c[chosen][r][i + 1];
-        b.s[ra[r]][i] = b.cand_s[chosen][r][i + 1];
-      }
-      for (int col = 0; col < 3; ++col) b.q[column_axis_[col]][i] = b.prism[chosen][col][i];
-      b.status[i] = IkStatus::Ok;
-      b.singular[i] = false;
-      b.violated_axis[i] = -1;
-      b.violated_value[i] = 0.0;
+      for (int r = 0; r < 2; ++r) b.q[ra[r]][i] = ref[r] = value[chosen][r];
+      b.taken[i] = static_cast<signed char>(chosen);
       j = chosen;
       last = i;
       ++from_lanes;
       continue;
     }
     // Anything else: solve() itself, from the same reference.
+    b.taken[i] = -1;
     writeCursor();
     const Eigen::Vector3d p(b.p[0][i], b.p[1][i], b.p[2][i]), u(b.u[0][i], b.u[1][i], b.u[2][i]);
     const IkSolution sol =
@@ -825,6 +845,21 @@ void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
         break;
       }
     for (int r = 0; r < 2; ++r) ref[r] = sol.q[ra[r]];
+  }
+  // The other numbers of the points solved from a candidate: its cos and sin (c and s of the
+  // prismatic axes are not read: Block's rotary ones only) and its prismatic solution.
+  for (int i = 0; i < n; ++i) {
+    const int k = b.taken[i];
+    if (k < 0) continue;
+    for (int r = 0; r < 2; ++r) {
+      b.c[ra[r]][i] = b.cand_c[k][r][i + 1];
+      b.s[ra[r]][i] = b.cand_s[k][r][i + 1];
+    }
+    for (int col = 0; col < 3; ++col) b.q[column_axis_[col]][i] = b.prism[k][col][i];
+    b.status[i] = IkStatus::Ok;
+    b.singular[i] = false;
+    b.violated_axis[i] = -1;
+    b.violated_value[i] = 0.0;
   }
   writeCursor();
   b.from_lanes = from_lanes;

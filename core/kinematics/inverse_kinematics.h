@@ -90,6 +90,12 @@ class InverseKinematics {
     double prism[2][3][kBlock];
     double delta[2][2][kBlock], chord2[2][2][kBlock];
     long long irregular[kBlock], prism_ok[2][kBlock], delta_ok[2][2][kBlock];
+    // The common case's test (blockChoice), for each candidate j the previous point was solved
+    // from: the point regular, j's branch nearer by chords, both steps from it in the series,
+    // its prismatic solution inside travel.
+    long long common[2][kBlock];
+    // The candidate each point was solved from by the choice (-1: by solve()).
+    signed char taken[kBlock];
   };
   // What solveBlock carries from one block to the next.
   struct Cursor {

@@ -168,6 +168,20 @@ TOLVER_LANE_INLINE void storeMask(long long* p, M m) {
   if constexpr (sizeof(M) == sizeof(bool)) p[0] = m ? -1 : 0;
   else std::memcpy(p, &m, sizeof m);
 }
+template <typename M>
+TOLVER_LANE_INLINE M loadMask(const long long* p) {
+  if constexpr (sizeof(M) == sizeof(bool)) {
+    return p[0] != 0;
+  } else {
+    M m;
+    std::memcpy(&m, p, sizeof m);
+    return m;
+  }
+}
+// The mask's complement (for bool, !m: ~ on a bool would give a non-zero int).
+TOLVER_LANE_INLINE bool notMask(bool m) { return !m; }
+template <typename M>
+TOLVER_LANE_INLINE M notMask(M m) { return ~m; }
 // A constant as L: the double itself, or in every lane.
 template <typename L>
 TOLVER_LANE_INLINE L splat(double x) {
