@@ -140,7 +140,7 @@ void runPredict(const PredictOptions& o, int* exit_code) {
   const std::vector<PoseUncertainty>& unc = cal.uncertainty;
 
   std::vector<ClPoint> predicted(program.path.size());
-  const std::vector<PredictedPoint>& pts = r.points;
+  const PredictedPoints& pts = r.points;
   for (size_t i = 0; i < predicted.size(); ++i) {
     predicted[i] = program.path[i];
     predicted[i].p_w = pts[i].p_pred_w;

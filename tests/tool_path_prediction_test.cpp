@@ -96,6 +96,88 @@ TEST(ToolPathPrediction, BatchEqualsOneByOneBitForBit) {
 
 // Each predicted point is the forward model with errors at the IK joints, and the reported
 // deviation components and tool-axis angle match their definitions computed the slow way.
+// The structure-of-arrays result: every number of a point read back as set, NaN for a failed
+// point, whole aligned lines per array, and its storage kept when a result is reused for a path
+// as long or shorter (no allocation).
+TEST(PredictedPoints, ReadsBackWhatWasSetInAlignedReusedArrays) {
+  PredictedPoints pts;
+  pts.resize(130, 5);
+  ASSERT_EQ(pts.size(), 130u);
+  ASSERT_EQ(pts.axes(), 5);
+  for (int a = 0; a < 5; ++a) EXPECT_EQ(reinterpret_cast<uintptr_t>(pts.q(a)) % 64, 0u) << a;
+  for (int f = 0; f < PredictedPoints::kFields; ++f)
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(pts.field(f)) % 64, 0u) << f;
+  EXPECT_EQ(reinterpret_cast<uintptr_t>(pts.singular()) % 64, 0u);
+  // Arrays do not overlap: each point's numbers are distinct and read back.
+  for (size_t i = 0; i < pts.size(); ++i) {
+    PredictedPoint p;
+    p.q = JointVector::LinSpaced(5, 1000.0 * i, 1000.0 * i + 4);
+    p.p_pred_w = Eigen::Vector3d(i + 0.1, i + 0.2, i + 0.3);
+    p.u_pred_w = Eigen::Vector3d(i + 0.4, i + 0.5, i + 0.6);
+    p.deviation_w = Eigen::Vector3d(i + 0.7, i + 0.8, i + 0.9);
+    p.along_axis = -1.0 * i;
+    p.across_axis = -2.0 * i;
+    p.axis_angle = -3.0 * i;
+    p.singular = i % 3 == 0;
+    pts.set(i, p);
+  }
+  pts.setFailed(7);
+  size_t count = 0;
+  for (const PredictedPoint& p : pts) {
+    const size_t i = count++;
+    ASSERT_EQ(p.q.size(), 5);
+    if (i == 7) {
+      EXPECT_TRUE(p.q.array().isNaN().all());
+      EXPECT_TRUE(std::isnan(p.p_pred_w.y()) && std::isnan(p.u_pred_w.z()) &&
+                  std::isnan(p.deviation_w.x()) && std::isnan(p.along_axis) &&
+                  std::isnan(p.across_axis) && std::isnan(p.axis_angle));
+      EXPECT_FALSE(p.singular);
+      continue;
+    }
+    EXPECT_EQ(p.q[4], 1000.0 * i + 4) << i;
+    EXPECT_EQ(p.p_pred_w.z(), i + 0.3) << i;
+    EXPECT_EQ(p.u_pred_w.x(), i + 0.4) << i;
+    EXPECT_EQ(p.deviation_w.y(), i + 0.8) << i;
+    EXPECT_EQ(p.along_axis, -1.0 * i);
+    EXPECT_EQ(p.across_axis, -2.0 * i);
+    EXPECT_EQ(p.axis_angle, -3.0 * i);
+    EXPECT_EQ(p.singular, i % 3 == 0) << i;
+  }
+  EXPECT_EQ(count, 130u);
+  EXPECT_EQ(pts.back().q[0], 1000.0 * 129);
+  const double* storage = pts.q(0);
+  pts.resize(130, 5);
+  EXPECT_EQ(pts.q(0), storage);
+  pts.resize(64, 5);
+  EXPECT_EQ(pts.q(0), storage);
+  EXPECT_EQ(pts.size(), 64u);
+}
+
+// A result reused for a shorter path, then a longer one, holds what a new result would.
+TEST(ToolPathPrediction, ReusedResultEqualsANewOne) {
+  Machine m = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
+  m.model.setup.gauge_length = 100;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int i = 0; i < m.model.parameterCount(); ++i)
+    m.params[i] = n(rng) * (m.model.parameters[i].angular ? 20e-6 : 0.005);
+  PredictionResult reused;
+  for (const int length : {1000, 77, 1500}) {
+    const std::vector<ClPoint> path = hemisphere(length);
+    predictToolPath(m.model, m.params, path, reused);
+    const PredictionResult fresh = predictToolPath(m.model, m.params, path);
+    ASSERT_EQ(reused.points.size(), path.size());
+    for (size_t i = 0; i < path.size(); ++i) {
+      const PredictedPoint a = reused.points[i], b = fresh.points[i];
+      ASSERT_EQ(a.q, b.q) << length << " " << i;
+      ASSERT_EQ(a.p_pred_w, b.p_pred_w) << length << " " << i;
+      ASSERT_EQ(a.deviation_w, b.deviation_w) << length << " " << i;
+    }
+    EXPECT_EQ(reused.summary.max_deviation, fresh.summary.max_deviation);
+    EXPECT_EQ(reused.summary.rms_deviation, fresh.summary.rms_deviation);
+  }
+}
+
 TEST(ToolPathPrediction, AgreesWithTheComposedForwardModel) {
   Machine m = readMachineFile(test::sourcePath(test::shippedMachines()[0]));
   m.model.setup.gauge_length = 100;

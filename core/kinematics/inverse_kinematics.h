@@ -76,9 +76,11 @@ class InverseKinematics {
     double u_before[3] = {0, 0, 1};            // with this tool axis
     // out, by axis index: joint values (mm, rad), cos and sin of the rotary ones (0, 1, 0
     // where the point failed)
-    double q[kMaxAxes][kBlock], c[kMaxAxes][kBlock], s[kMaxAxes][kBlock];
+    // (q and singular start on cache lines: the prediction streams them out whole)
+    alignas(64) double q[kMaxAxes][kBlock];
+    double c[kMaxAxes][kBlock], s[kMaxAxes][kBlock];
     IkStatus status[kBlock];
-    bool singular[kBlock];
+    alignas(64) bool singular[kBlock];
     int violated_axis[kBlock];
     double violated_value[kBlock];
     int from_lanes = 0;  // points solved on the lane stage's numbers (the others by solve())

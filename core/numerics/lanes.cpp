@@ -43,22 +43,29 @@ __attribute__((target("avx512f"))) void streamLines512(void* dst, const void* sr
 
 }  // namespace
 
-void streamLines(void* dst, const void* src, size_t bytes) {
+void streamLines(const StreamCopy* copies, int count) {
 #if defined(__x86_64__)
 #if TOLVER_HAS_WIDE_LANES
   if (wideLanes()) {
-    streamLines512(dst, src, bytes);
+    for (int k = 0; k < count; ++k) streamLines512(copies[k].dst, copies[k].src, copies[k].bytes);
     _mm_sfence();  // the stores are seen before what follows
     return;
   }
 #endif
-  auto* d = static_cast<__m128i*>(dst);
-  const auto* s = static_cast<const __m128i*>(src);
-  for (size_t i = 0; i < bytes / 16; ++i) _mm_stream_si128(d + i, _mm_load_si128(s + i));
+  for (int k = 0; k < count; ++k) {
+    auto* d = static_cast<__m128i*>(copies[k].dst);
+    const auto* s = static_cast<const __m128i*>(copies[k].src);
+    for (size_t i = 0; i < copies[k].bytes / 16; ++i) _mm_stream_si128(d + i, _mm_load_si128(s + i));
+  }
   _mm_sfence();
 #else
-  std::memcpy(dst, src, bytes);
+  for (int k = 0; k < count; ++k) std::memcpy(copies[k].dst, copies[k].src, copies[k].bytes);
 #endif
+}
+
+void streamLines(void* dst, const void* src, size_t bytes) {
+  const StreamCopy copy{dst, src, bytes};
+  streamLines(&copy, 1);
 }
 
 }  // namespace tolver::lanes

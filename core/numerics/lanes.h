@@ -67,6 +67,13 @@ void setWideLanes(bool on);
 // Copies bytes (a multiple of 64) from src to dst, both 64-byte aligned, with non-temporal
 // full-line stores: dst's lines are not read into the caches first (long outputs).
 void streamLines(void* dst, const void* src, size_t bytes);
+// The same for several copies, with one store fence after the last.
+struct StreamCopy {
+  void* dst;
+  const void* src;
+  size_t bytes;
+};
+void streamLines(const StreamCopy* copies, int count);
 
 TOLVER_LANE_INLINE double select(bool m, double a, double b) { return m ? a : b; }
 template <typename M>

@@ -241,7 +241,7 @@ CompensationResult compensateToolPath(const MachineModel& model, const Eigen::Ve
                                       const std::vector<ClPoint>& path,
                                       const std::vector<JointVector>& q0, bool orientation,
                                       const CompensationOptions& opt,
-                                      const std::vector<PredictedPoint>* predicted) {
+                                      const PredictedPoints* predicted) {
   PathCompensator pc(model, params, opt);
   CompensationResult out;
   out.points.resize(path.size());

@@ -67,7 +67,7 @@ CompensationResult compensateToolPath(const MachineModel& model, const Eigen::Ve
                                       const std::vector<ClPoint>& path,
                                       const std::vector<JointVector>& q0, bool orientation = true,
                                       const CompensationOptions& options = {},
-                                      const std::vector<PredictedPoint>* predicted = nullptr);
+                                      const PredictedPoints* predicted = nullptr);
 
 // Compensation tables for a control's linear axes (pitch and straightness): for each prismatic
 // axis, on a grid over its travel with the other joints at q_ref, the changes of the prismatic

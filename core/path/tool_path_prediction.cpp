@@ -43,6 +43,47 @@ std::string describeIkFailure(const MachineModel& model, const IkSolution& sol) 
   return "unknown";
 }
 
+PredictedPoint PredictedPoints::operator[](size_t i) const {
+  PredictedPoint p;
+  p.q.resize(axes_);
+  for (int a = 0; a < axes_; ++a) p.q[a] = q(a)[i];
+  p.p_pred_w = Eigen::Vector3d(field(kTipX)[i], field(kTipY)[i], field(kTipZ)[i]);
+  p.u_pred_w = Eigen::Vector3d(field(kAxisX)[i], field(kAxisY)[i], field(kAxisZ)[i]);
+  p.deviation_w = Eigen::Vector3d(field(kDevX)[i], field(kDevY)[i], field(kDevZ)[i]);
+  p.along_axis = field(kAlong)[i];
+  p.across_axis = field(kAcross)[i];
+  p.axis_angle = field(kAngle)[i];
+  p.singular = singular_[i] != 0;
+  return p;
+}
+
+void PredictedPoints::set(size_t i, const PredictedPoint& p) {
+  for (int a = 0; a < axes_; ++a) q(a)[i] = p.q[a];
+  for (int k = 0; k < 3; ++k) {
+    field(kTipX + k)[i] = p.p_pred_w[k];
+    field(kAxisX + k)[i] = p.u_pred_w[k];
+    field(kDevX + k)[i] = p.deviation_w[k];
+  }
+  field(kAlong)[i] = p.along_axis;
+  field(kAcross)[i] = p.across_axis;
+  field(kAngle)[i] = p.axis_angle;
+  singular_[i] = p.singular ? 1 : 0;
+}
+
+void PredictedPoints::setFailed(size_t i) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (int a = 0; a < axes_ + kFields; ++a) q(a)[i] = nan;
+  singular_[i] = 0;
+}
+
+void PredictedPoints::resize(size_t n, int axes) {
+  n_ = n;
+  axes_ = axes;
+  stride_ = (n + 63) / 64 * 64;
+  numbers_.resize(stride_ * (axes + kFields));
+  singular_.resize(stride_);
+}
+
 namespace {
 
 // The deviation of a predicted point, over L = double or four lanes (core/numerics/lanes.h):
@@ -169,14 +210,9 @@ struct PredictionAccumulator {
   const MachineModel& model;
   int max_failures;
   RunningSummary run;
-  void fail(size_t i, const ClPoint& cl, IkStatus status, int violated_axis, double violated_value,
-            int q_size) {
-    PredictedPoint& bad = result.points[i];
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    bad.q = JointVector::Constant(q_size, nan);
-    bad.p_pred_w = bad.u_pred_w = bad.deviation_w = Eigen::Vector3d::Constant(nan);
-    bad.along_axis = bad.across_axis = bad.axis_angle = nan;
-    bad.singular = false;
+  void fail(size_t i, const ClPoint& cl, IkStatus status, int violated_axis,
+            double violated_value) {
+    result.points.setFailed(i);
     const int axis = status == IkStatus::OutOfTravel ? violated_axis : -1;
     ++result.failed_points;
     ++result.failures_per_axis[axis >= 0 ? axis : model.axes.size()];
@@ -192,13 +228,17 @@ struct PredictionAccumulator {
 };
 
 
+// Each array of a block starts on a cache line and spans whole lines (kBlock doubles), so a
+// block's points are streamed into PredictedPoints array by array.
 struct BlockPrediction::Work {
   size_t start = 0;
   InverseKinematics::Block ik;
-  double pred[6][InverseKinematics::kBlock], dev[7][InverseKinematics::kBlock];
-  PredictedPoint out[InverseKinematics::kBlock];  // the block's points, then streamed out
+  // predicted tip and axis; deviation, along, across, angle (PredictedPoints::Field's order
+  // from kTipX), then the deviation's norm
+  alignas(64) double pred[6][InverseKinematics::kBlock];
+  alignas(64) double dev[7][InverseKinematics::kBlock];
 };
-static_assert(sizeof(PredictedPoint) % 64 == 0 && alignof(PredictedPoint) == 64);
+static_assert(InverseKinematics::kBlock % 64 == 0);
 
 struct BlockPrediction::State {
   State(const MachineModel& m, const Eigen::VectorXd& params, const std::vector<ClPoint>& p,
@@ -220,7 +260,7 @@ void prepare(const MachineModel& model, const std::vector<ClPoint>& path,
   result.failed_points = 0;
   result.failures_per_axis.assign(model.axes.size() + 1, 0);
   result.summary = PredictionSummary{};
-  result.points.resize(path.size());
+  result.points.resize(path.size(), static_cast<int>(model.axes.size()));
   result.summary.points = static_cast<int>(path.size());
 }
 
@@ -307,31 +347,29 @@ void BlockPrediction::forward(Work& w) const {
                                   {w.pred[3], w.pred[4], w.pred[5]}};
   double* const out[7] = {w.dev[0], w.dev[1], w.dev[2], w.dev[3], w.dev[4], w.dev[5], w.dev[6]};
   deviationLanes(n, in, out);
-  std::vector<PredictedPoint>& points = s_->acc.result.points;
-  for (int i = 0; i < n; ++i) {
-    if (b.status[i] != IkStatus::Ok) continue;  // account() writes the failed points
-    PredictedPoint& o = w.out[i];
-    o.q.resize(axes);
-    for (int a = 0; a < axes; ++a) o.q[a] = b.q[a][i];
-    o.singular = b.singular[i];
-    o.p_pred_w = Eigen::Vector3d(w.pred[0][i], w.pred[1][i], w.pred[2][i]);
-    o.u_pred_w = Eigen::Vector3d(w.pred[3][i], w.pred[4][i], w.pred[5][i]);
-    o.deviation_w = Eigen::Vector3d(w.dev[0][i], w.dev[1][i], w.dev[2][i]);
-    o.along_axis = w.dev[3][i];
-    o.across_axis = w.dev[4][i];
-    o.axis_angle = w.dev[5][i];
-  }
-  lanes::streamLines(&points[w.start], w.out, n * sizeof(PredictedPoint));
+  // The block into the result, whole lines per array (past n within the block's arrays and
+  // the result's rounded length); account() then writes NaN over the points that failed.
+  PredictedPoints& points = s_->acc.result.points;
+  const size_t bytes = static_cast<size_t>((n + 7) / 8 * 8) * sizeof(double);
+  lanes::StreamCopy copies[kMaxAxes + PredictedPoints::kFields + 1];
+  int m = 0;
+  for (int a = 0; a < axes; ++a) copies[m++] = {points.q(a) + w.start, b.q[a], bytes};
+  for (int k = 0; k < 6; ++k)
+    copies[m++] = {points.field(PredictedPoints::kTipX + k) + w.start, w.pred[k], bytes};
+  for (int k = 0; k < 6; ++k)
+    copies[m++] = {points.field(PredictedPoints::kDevX + k) + w.start, w.dev[k], bytes};
+  static_assert(sizeof(b.singular[0]) == 1 && InverseKinematics::kBlock == 64);
+  copies[m++] = {points.singular() + w.start, b.singular, 64};
+  lanes::streamLines(copies, m);
 }
 
 void BlockPrediction::account(Work& w) {
   const InverseKinematics::Block& b = w.ik;
-  const int axes = static_cast<int>(s_->model.axes.size());
   RunningSummary run = s_->acc.run;
   for (int i = 0; i < b.n; ++i) {
     const size_t at = w.start + i;
     if (b.status[i] != IkStatus::Ok)
-      s_->acc.fail(at, s_->path[at], b.status[i], b.violated_axis[i], b.violated_value[i], axes);
+      s_->acc.fail(at, s_->path[at], b.status[i], b.violated_axis[i], b.violated_value[i]);
     else
       run.add(at, s_->path[at], b.singular[i], w.dev[6][i], w.dev[5][i]);
   }
@@ -378,24 +416,24 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
   const InverseKinematics ik(model);
   const ForwardKinematics actual(model, params);
   PredictionAccumulator acc{result, model, max_failures, {}};
+  JointVector previous_q;
   const JointVector* previous = nullptr;
   std::array<double, kMaxAxes> previous_cos, previous_sin;  // of previous's rotary values
   // Effects that depend on the approach direction (reversal) see it from the joint sequence;
   // time-dependent ones (thermal) see an unknown time and add nothing.
   MotionContext ctx;
   const MotionContext* ctx_ptr = model.effects.empty() ? nullptr : &ctx;
+  PredictedPoint out;
   for (size_t i = 0; i < path.size(); ++i) {
     const ClPoint& cl = path[i];
     const IkSolution sol =
         commanded ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
                   : ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(), previous_sin.data());
     if (sol.status != IkStatus::Ok) {
-      acc.fail(i, cl, sol.status, sol.violated_axis, sol.violated_value,
-               static_cast<int>(sol.q.size()));
+      acc.fail(i, cl, sol.status, sol.violated_axis, sol.violated_value);
       previous = nullptr;
       continue;
     }
-    PredictedPoint& out = result.points[i];
     out.q = sol.q;
     out.singular = sol.singular;
     if (ctx_ptr && previous) updateDirections(ctx, *previous, sol.q);
@@ -406,8 +444,10 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
     out.along_axis = d.along;
     out.across_axis = d.across;
     out.axis_angle = d.angle;
+    result.points.set(i, out);
     acc.run.add(i, cl, sol.singular, d.norm, d.angle);
-    previous = &out.q;
+    previous_q = sol.q;
+    previous = &previous_q;
     previous_cos = sol.cos_q;
     previous_sin = sol.sin_q;
   }
@@ -417,13 +457,12 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
 std::vector<RotaryJump> findRotaryJumps(const MachineModel& model, const std::vector<ClPoint>& path,
                                         const PredictionResult& result, double threshold) {
   std::vector<RotaryJump> jumps;
-  for (size_t i = 1; i < path.size() && i < result.points.size(); ++i) {
+  const PredictedPoints& points = result.points;
+  for (size_t i = 1; i < path.size() && i < points.size(); ++i) {
     if (path[i].rapid || path[i - 1].rapid) continue;
-    const JointVector& a = result.points[i - 1].q;
-    const JointVector& b = result.points[i].q;
-    for (int k = 0; k < static_cast<int>(model.axes.size()) && k < a.size() && k < b.size(); ++k) {
+    for (int k = 0; k < static_cast<int>(model.axes.size()) && k < points.axes(); ++k) {
       if (!model.axes[k].isRotary()) continue;
-      const double step = b[k] - a[k];
+      const double step = points.q(k)[i] - points.q(k)[i - 1];
       if (std::isfinite(step) && std::abs(step) > threshold)
         jumps.push_back({static_cast<int>(i), path[i].line, k, step});
     }

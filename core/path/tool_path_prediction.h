@@ -3,12 +3,14 @@
 // the nominal machine, then the actual tool pose from the forward model with the machine's
 // errors. Deviations are expressed in the workpiece frame w.
 #include <Eigen/Core>
+#include <iterator>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "core/kinematics/inverse_kinematics.h"
 #include "core/model/machine_model.h"
+#include "core/numerics/aligned_allocator.h"
 
 namespace tolver {
 
@@ -20,20 +22,75 @@ struct ClPoint {
   bool rapid = false;  // a positioning move (APT RAPID), not a cutting move
 };
 
-// Three whole cache lines (64-byte aligned, 192 bytes): the prediction writes a block of points
-// with full-line stores that need not read the lines first.
-struct alignas(64) PredictedPoint {
-  // Left uninitialised on purpose: predictToolPath writes every field of every point, and a
-  // zero-filling pass over a long path costs a tenth of the prediction.
-  PredictedPoint() {}
+// One predicted point, as a value: PredictedPoints assembles it from its arrays.
+struct PredictedPoint {
   JointVector q;                       // joint values from nominal IK (mm, rad)
   Eigen::Vector3d p_pred_w;            // predicted tool tip (mm)
   Eigen::Vector3d u_pred_w;            // predicted unit tool axis
   Eigen::Vector3d deviation_w;         // p_pred_w - p_w (mm)
-  double along_axis;                   // deviation . u_w (mm)
-  double across_axis;                  // |deviation - along u_w| (mm)
-  double axis_angle;                   // angle between u_w and u_pred_w (rad)
-  bool singular;
+  double along_axis = 0.0;             // deviation . u_w (mm)
+  double across_axis = 0.0;            // |deviation - along u_w| (mm)
+  double axis_angle = 0.0;             // angle between u_w and u_pred_w (rad)
+  bool singular = false;
+};
+
+// The predicted points of a path, stored field by field (structure of arrays): the batch
+// prediction writes each field of a block of points as whole cache lines, 137 bytes a point on
+// a five-axis machine where a record of every field took 192. points[i] assembles point i;
+// iteration gives the points by value.
+class PredictedPoints {
+ public:
+  // The numbers of a point after its joint values, one array each.
+  enum Field { kTipX, kTipY, kTipZ, kAxisX, kAxisY, kAxisZ, kDevX, kDevY, kDevZ, kAlong,
+               kAcross, kAngle, kFields };
+  size_t size() const { return n_; }
+  bool empty() const { return n_ == 0; }
+  int axes() const { return axes_; }
+  PredictedPoint operator[](size_t i) const;
+  PredictedPoint back() const { return (*this)[n_ - 1]; }
+  void set(size_t i, const PredictedPoint& p);  // p.q holds axes() values
+  void setFailed(size_t i);                     // NaN in every number, not singular
+  // n points of axes joint values, their numbers unspecified (storage is kept when it holds
+  // them: no allocation when a result is reused for a path as long).
+  void resize(size_t n, int axes);
+  // The arrays, each 64-byte aligned and writable up to size() rounded up to a multiple of 64
+  // (whole cache lines): joint value a of every point (mm, rad), field f of every point, the
+  // singular flags (0 or 1).
+  double* q(int a) { return numbers_.data() + a * stride_; }
+  const double* q(int a) const { return numbers_.data() + a * stride_; }
+  double* field(int f) { return q(axes_ + f); }
+  const double* field(int f) const { return q(axes_ + f); }
+  unsigned char* singular() { return singular_.data(); }
+  const unsigned char* singular() const { return singular_.data(); }
+
+  class const_iterator {
+   public:
+    using iterator_category = std::input_iterator_tag;
+    using value_type = PredictedPoint;
+    using difference_type = std::ptrdiff_t;
+    using pointer = void;
+    using reference = PredictedPoint;
+    const_iterator(const PredictedPoints* points, size_t i) : points_(points), i_(i) {}
+    PredictedPoint operator*() const { return (*points_)[i_]; }
+    const_iterator& operator++() {
+      ++i_;
+      return *this;
+    }
+    bool operator==(const const_iterator& o) const { return i_ == o.i_; }
+    bool operator!=(const const_iterator& o) const { return i_ != o.i_; }
+
+   private:
+    const PredictedPoints* points_;
+    size_t i_;
+  };
+  const_iterator begin() const { return {this, 0}; }
+  const_iterator end() const { return {this, n_}; }
+
+ private:
+  size_t n_ = 0, stride_ = 0;
+  int axes_ = 0;
+  std::vector<double, AlignedAllocator<double>> numbers_;  // (axes + kFields) arrays of stride
+  std::vector<unsigned char, AlignedAllocator<unsigned char>> singular_;
 };
 
 struct PredictionFailure {
@@ -56,7 +113,7 @@ struct PredictionSummary {
 };
 
 struct PredictionResult {
-  std::vector<PredictedPoint> points;     // one per CL point; NaN where IK failed
+  PredictedPoints points;                 // one per CL point; NaN where IK failed
   std::vector<PredictionFailure> failures;  // the first max_failures
   int failed_points = 0;                  // all of them
   // Failing points per axis that breaks first (index as model.axes; the last entry counts the

@@ -8,7 +8,7 @@
 namespace tolver {
 
 std::string formatPointTable(const MachineModel& model, const std::vector<ClPoint>& nominal,
-                             const std::vector<PredictedPoint>& predicted,
+                             const PredictedPoints& predicted,
                              const std::vector<PoseUncertainty>* uncertainty) {
   TextOut out;
   writePointTable(out, model, nominal, predicted, uncertainty);
@@ -16,7 +16,7 @@ std::string formatPointTable(const MachineModel& model, const std::vector<ClPoin
 }
 
 void writePointTable(TextOut& out, const MachineModel& model, const std::vector<ClPoint>& nominal,
-                     const std::vector<PredictedPoint>& predicted,
+                     const PredictedPoints& predicted,
                      const std::vector<PoseUncertainty>* uncertainty) {
   out +=
       "index,line,rapid,nominal_x_mm,nominal_y_mm,nominal_z_mm,nominal_i,nominal_j,nominal_k";

@@ -21,11 +21,11 @@
 namespace tolver {
 
 std::string formatPointTable(const MachineModel& model, const std::vector<ClPoint>& nominal,
-                             const std::vector<PredictedPoint>& predicted,
+                             const PredictedPoints& predicted,
                              const std::vector<PoseUncertainty>* uncertainty = nullptr);
 // The same, written in pieces (into a file as it is made).
 void writePointTable(TextOut& out, const MachineModel& model, const std::vector<ClPoint>& nominal,
-                     const std::vector<PredictedPoint>& predicted,
+                     const PredictedPoints& predicted,
                      const std::vector<PoseUncertainty>* uncertainty = nullptr);
 
 }  // namespace tolver
