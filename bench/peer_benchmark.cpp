@@ -20,6 +20,7 @@
 // the covariance and the per-parameter uncertainties.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -215,19 +216,29 @@ void BM_Tolver_Calibrate600(benchmark::State& state) {
 }
 BENCHMARK(BM_Tolver_Calibrate600)->Unit(benchmark::kMillisecond);
 
-// Console output as usual, and each benchmark's items per second kept for the ratios.
+// Console output as usual, and each benchmark's items per second kept for the ratios: every
+// repetition's (--benchmark_repetitions, ideally with --benchmark_enable_random_interleaving,
+// so that a change of the machine's speed during the run falls on both sides of a ratio).
 class RateReporter : public benchmark::ConsoleReporter {
  public:
-  std::map<std::string, double> rate;
+  std::map<std::string, std::vector<double>> rates;
   void ReportRuns(const std::vector<Run>& runs) override {
     for (const Run& r : runs) {
+      if (r.run_type != Run::RT_Iteration) continue;  // (aggregates: computed below)
       const auto it = r.counters.find("items_per_second");
-      if (it != r.counters.end()) rate[r.benchmark_name()] = it->second;
-      else if (r.iterations > 0) rate[r.benchmark_name()] = r.iterations / r.real_accumulated_time;
+      if (it != r.counters.end()) rates[r.benchmark_name()].push_back(it->second);
+      else if (r.iterations > 0)
+        rates[r.benchmark_name()].push_back(r.iterations / r.real_accumulated_time);
     }
     ConsoleReporter::ReportRuns(runs);
   }
 };
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const size_t n = v.size();
+  return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
 
 }  // namespace
 
@@ -236,18 +247,32 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   RateReporter reporter;
   benchmark::RunSpecifiedBenchmarks(&reporter);
-  const auto find = [&](const char* prefix) {
-    for (const auto& [name, r] : reporter.rate)
+  const auto all = [&](const char* prefix) {
+    for (const auto& [name, r] : reporter.rates)
       if (name == prefix || name.rfind(std::string(prefix) + "/", 0) == 0) return r;
-    return 0.0;
+    return std::vector<double>{};
   };
+  const auto find = [&](const char* prefix) { return median(all(prefix)); };
   const double kdl = find("BM_Kdl_FullPose");
   if (kdl > 0) {
-    std::printf("\nratios to KDL's full poses per second (same run; KDL on one core):\n");
+    const size_t runs = all("BM_Kdl_FullPose").size();
+    std::printf("\nratios to KDL's full poses per second (same run; KDL on one core%s):\n",
+                runs > 1 ? "; medians of the repetitions, range in brackets" : "");
     for (const char* n : {"BM_Tolver_PredictedPoint", "BM_Tolver_PredictedPointTwoCores",
-                          "BM_Tolver_FullPose", "BM_Tolver_TipAndAxis", "BM_Tolver_BatchTipAndAxis"})
-      if (find(n) > 0) std::printf("  %-26s %6.2f M/s   %5.2fx KDL (%.2f M/s)\n", n, find(n) / 1e6,
-                                   find(n) / kdl, kdl / 1e6);
+                          "BM_Tolver_FullPose", "BM_Tolver_TipAndAxis", "BM_Tolver_BatchTipAndAxis"}) {
+      const std::vector<double> r = all(n);
+      if (r.empty()) continue;
+      std::printf("  %-26s %6.2f M/s   %5.2fx KDL (%.2f M/s)", n, find(n) / 1e6, find(n) / kdl,
+                  kdl / 1e6);
+      if (r.size() > 1) {
+        const auto [lo, hi] = std::minmax_element(r.begin(), r.end());
+        const std::vector<double> k = all("BM_Kdl_FullPose");
+        const auto [klo, khi] = std::minmax_element(k.begin(), k.end());
+        std::printf("   [tolver %.2f-%.2f, KDL %.2f-%.2f M/s]", *lo / 1e6, *hi / 1e6, *klo / 1e6,
+                    *khi / 1e6);
+      }
+      std::printf("\n");
+    }
   }
   const double ceres = find("BM_Ceres_Calibrate600"), own = find("BM_Tolver_Calibrate600");
   if (ceres > 0 && own > 0)
