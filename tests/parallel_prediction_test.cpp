@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <string>
@@ -31,44 +32,129 @@ std::vector<ClPoint> longPath(int n, std::mt19937& rng) {
   return out;
 }
 
+bool same(double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); }
+
+// Every number of every point, the failures and the summary, bit for bit.
+void expectSameBits(const PredictionResult& r, const PredictionResult& one,
+                    const std::string& what) {
+  ASSERT_EQ(r.points.size(), one.points.size()) << what;
+  for (size_t i = 0; i < r.points.size(); ++i) {
+    const PredictedPoint &x = r.points[i], &y = one.points[i];
+    const std::string where = what + " point " + std::to_string(i);
+    ASSERT_EQ(x.q.size(), y.q.size()) << where;
+    for (int k = 0; k < x.q.size(); ++k) ASSERT_TRUE(same(x.q[k], y.q[k])) << where;
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_TRUE(same(x.p_pred_w[k], y.p_pred_w[k])) << where;
+      ASSERT_TRUE(same(x.u_pred_w[k], y.u_pred_w[k])) << where;
+      ASSERT_TRUE(same(x.deviation_w[k], y.deviation_w[k])) << where;
+    }
+    ASSERT_TRUE(same(x.along_axis, y.along_axis) && same(x.across_axis, y.across_axis) &&
+                same(x.axis_angle, y.axis_angle))
+        << where;
+    ASSERT_EQ(x.singular, y.singular) << where;
+  }
+  EXPECT_EQ(r.failed_points, one.failed_points) << what;
+  ASSERT_EQ(r.failures.size(), one.failures.size()) << what;
+  for (size_t k = 0; k < r.failures.size(); ++k) {
+    EXPECT_EQ(r.failures[k].index, one.failures[k].index) << what;
+    EXPECT_EQ(r.failures[k].message, one.failures[k].message) << what;
+  }
+  EXPECT_EQ(r.failures_per_axis, one.failures_per_axis) << what;
+  EXPECT_EQ(r.summary.max_deviation, one.summary.max_deviation) << what;
+  EXPECT_EQ(r.summary.max_index, one.summary.max_index) << what;
+  EXPECT_EQ(r.summary.rms_deviation, one.summary.rms_deviation) << what;
+  EXPECT_EQ(r.summary.rms_axis_angle, one.summary.rms_axis_angle) << what;
+  EXPECT_EQ(r.summary.singular_points, one.summary.singular_points) << what;
+  EXPECT_EQ(r.summary.first_singular_line, one.summary.first_singular_line) << what;
+}
+
+Machine machineWithErrors(const char* file, std::mt19937& rng) {
+  std::normal_distribution<double> n(0.0, 1.0);
+  Machine m = readMachineFile(test::sourcePath(file));
+  m.model.setup.gauge_length = 100;
+  for (int i = 0; i < m.model.parameterCount(); ++i)
+    m.params[i] = n(rng) * (m.model.parameters[i].angular ? 30e-6 : 0.01);
+  return m;
+}
+
 // On several threads, the same bits as on one: every point, the failures and the summary, for
-// one, two and four threads (more threads than cores still keeps the order of the choices).
+// one, two and four threads (more threads than cores still keeps the order of the choices),
+// against the batch path and the one-point-at-a-time reference.
 TEST(ParallelPrediction, EqualsTheSingleThreadedPredictionBitForBit) {
   std::mt19937 rng(5);
-  std::normal_distribution<double> n(0.0, 1.0);
   for (const char* file : {test::shippedMachines()[0], test::shippedMachines()[5]}) {
-    Machine m = readMachineFile(test::sourcePath(file));
-    m.model.setup.gauge_length = 100;
-    for (int i = 0; i < m.model.parameterCount(); ++i)
-      m.params[i] = n(rng) * (m.model.parameters[i].angular ? 30e-6 : 0.01);
+    const Machine m = machineWithErrors(file, rng);
     const std::vector<ClPoint> path = longPath(20011, rng);
     const PredictionResult one = predictToolPath(m.model, m.params, path, 7);
+    PredictionResult reference;
+    predictToolPath(m.model, m.params, path, reference, 7, nullptr, false);
+    expectSameBits(one, reference, std::string(file) + " batch against one by one");
     ASSERT_GT(one.failed_points, 10) << file;
     for (int threads : {1, 2, 4}) {
-      const PredictionResult r = predictToolPathParallel(m.model, m.params, path, 7, nullptr, threads);
-      ASSERT_EQ(r.points.size(), one.points.size());
-      for (size_t i = 0; i < path.size(); ++i) {
-        const PredictedPoint &x = r.points[i], &y = one.points[i];
-        const std::string where = std::string(file) + " point " + std::to_string(i);
-        ASSERT_EQ(x.q.size(), y.q.size()) << where;
-        for (int k = 0; k < x.q.size(); ++k)
-          ASSERT_TRUE(x.q[k] == y.q[k] || (std::isnan(x.q[k]) && std::isnan(y.q[k]))) << where;
-        for (int k = 0; k < 3; ++k) {
-          ASSERT_TRUE(x.p_pred_w[k] == y.p_pred_w[k] || std::isnan(y.p_pred_w[k])) << where;
-          ASSERT_TRUE(x.deviation_w[k] == y.deviation_w[k] || std::isnan(y.deviation_w[k])) << where;
-        }
-        ASSERT_TRUE(x.axis_angle == y.axis_angle || std::isnan(y.axis_angle)) << where;
-      }
-      EXPECT_EQ(r.failed_points, one.failed_points);
-      ASSERT_EQ(r.failures.size(), one.failures.size());
-      for (size_t k = 0; k < r.failures.size(); ++k) EXPECT_EQ(r.failures[k].index, one.failures[k].index);
-      EXPECT_EQ(r.failures_per_axis, one.failures_per_axis);
-      EXPECT_EQ(r.summary.max_deviation, one.summary.max_deviation);
-      EXPECT_EQ(r.summary.max_index, one.summary.max_index);
-      EXPECT_EQ(r.summary.rms_deviation, one.summary.rms_deviation);
-      EXPECT_EQ(r.summary.rms_axis_angle, one.summary.rms_axis_angle);
+      PredictionResult r;
+      ParallelPredictionStats stats;
+      predictToolPathParallel(m.model, m.params, path, r, 7, nullptr, threads, &stats);
+      expectSameBits(r, one, std::string(file) + " " + std::to_string(threads) + " threads");
+      if (threads > 1) EXPECT_GT(stats.stretches, 1) << file;
     }
   }
+}
+
+// A smooth path: each speculative stretch agrees with the true one after its first block.
+TEST(ParallelPrediction, ASmoothPathIsPredictedAgainOneBlockPerStretch) {
+  std::mt19937 rng(8);
+  const Machine m = machineWithErrors(test::shippedMachines()[0], rng);
+  std::vector<ClPoint> path(30000);
+  for (size_t i = 0; i < path.size(); ++i) {
+    const double t = static_cast<double>(i) / path.size(), polar = 0.3 + 0.5 * t,
+                 az = 12.0 * M_PI * t;
+    const Eigen::Vector3d u(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az),
+                            std::cos(polar));
+    path[i].p_w = 60.0 * u;
+    path[i].u_w = u;
+    path[i].line = static_cast<int>(i) + 1;
+  }
+  const PredictionResult one = predictToolPath(m.model, m.params, path);
+  for (int threads : {2, 4}) {
+    PredictionResult r;
+    ParallelPredictionStats stats;
+    predictToolPathParallel(m.model, m.params, path, r, 20, nullptr, threads, &stats);
+    expectSameBits(r, one, std::to_string(threads) + " threads");
+    EXPECT_EQ(stats.stretches, threads);
+    EXPECT_EQ(stats.blocks_again, static_cast<size_t>(threads - 1));
+  }
+}
+
+// A speculation on the wrong candidate: a tool axis that both candidates of the Matsuura's A/C
+// table reach (tilt 10 deg, A = -10 or +10 deg), approached on one branch from a steep tilt
+// that only it reaches, while a start from nothing takes the other. The stretch is predicted
+// again to its end, and the result is still the single thread's.
+TEST(ParallelPrediction, ASpeculationOnTheOtherCandidateIsPredictedAgain) {
+  std::mt19937 rng(9);
+  const Machine m = machineWithErrors(test::shippedMachines()[0], rng);
+  size_t most_again = 0;
+  for (const double azimuth : {0.0, 0.5 * M_PI, M_PI, 1.5 * M_PI}) {
+    std::vector<ClPoint> path(3 * BlockPrediction::kExactEvery + 100);
+    for (size_t i = 0; i < path.size(); ++i) {
+      const double t = std::min(1.0, static_cast<double>(i) / BlockPrediction::kExactEvery);
+      const double polar = (50.0 - 40.0 * t) * M_PI / 180.0;
+      const double az = azimuth + 0.05 * std::sin(1e-3 * i);
+      const Eigen::Vector3d u(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az),
+                              std::cos(polar));
+      path[i].p_w = Eigen::Vector3d(20.0 * std::sin(1e-3 * i), 10.0, 30.0) + 40.0 * u;
+      path[i].u_w = u;
+      path[i].line = static_cast<int>(i) + 1;
+    }
+    const PredictionResult one = predictToolPath(m.model, m.params, path);
+    ASSERT_EQ(one.failed_points, 0);
+    PredictionResult r;
+    ParallelPredictionStats stats;
+    predictToolPathParallel(m.model, m.params, path, r, 20, nullptr, 2, &stats);
+    expectSameBits(r, one, "azimuth " + std::to_string(azimuth));
+    EXPECT_EQ(stats.stretches, 2);
+    most_again = std::max(most_again, stats.blocks_again);
+  }
+  EXPECT_GT(most_again, 16u);  // (a stretch of these paths: 96 blocks or more)
 }
 
 }  // namespace

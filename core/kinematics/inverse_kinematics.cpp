@@ -427,7 +427,7 @@ bool InverseKinematics::placeToolPoint(const Eigen::Vector3d& b_t, const Eigen::
 // over one stack frame so that nothing is allocated or copied between them.
 IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vector3d& u_w,
                                     const JointVector* previous, const double* previous_cos,
-                                    const double* previous_sin) const {
+                                    const double* previous_sin, bool exact_angles) const {
   IkSolution sol;
   const int n = static_cast<int>(model_->axes.size());
   if (rotary_.size() > 2 || prismatic_.size() != 3 || parallel_rotaries_) {
@@ -493,7 +493,7 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
       double v = std::numeric_limits<double>::quiet_NaN();
       const double dc = k.cos[r] * ref_cos[r] + k.sin[r] * ref_sin[r];
       const double ds = k.sin[r] * ref_cos[r] - k.cos[r] * ref_sin[r];
-      if (!k.known[r] && dc > 0.0 && std::abs(ds) <= kAtanSeriesMax * dc) {
+      if (!exact_angles && !k.known[r] && dc > 0.0 && std::abs(ds) <= kAtanSeriesMax * dc) {
         v = ref[r] + atanOfSmall(ds / dc);
         if (v < lo - kTravelEps || v > hi + kTravelEps)
           v = std::numeric_limits<double>::quiet_NaN();
@@ -753,8 +753,9 @@ void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
     last = -1;
   };
   for (int i = 0; i < n; ++i) {
+    const bool exact = i == 0 && b.exact_first;  // (solve() only)
     // The common case, tested in lanes: the branch continues, its steps give the values.
-    if (j >= 0 && b.common[j][i]) {
+    if (!exact && j >= 0 && b.common[j][i]) {
       const double v0 = ref[0] + b.delta[j][0][i], v1 = ref[1] + b.delta[j][1][i];
       if (!(v0 < lo[0] || v0 > hi[0] || v1 < lo[1] || v1 > hi[1])) {
         const double cost = std::abs(v0 - ref[0]) + std::abs(v1 - ref[1]);
@@ -772,7 +773,7 @@ void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
     // (a change of branch included).
     int chosen = -1;
     double value[2][2];
-    if (j >= 0 && !b.irregular[i]) {
+    if (!exact && j >= 0 && !b.irregular[i]) {
       double cost[2];
       auto evaluate = [&](int k) {
         cost[k] = 0.0;
@@ -818,7 +819,7 @@ void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
     const Eigen::Vector3d p(b.p[0][i], b.p[1][i], b.p[2][i]), u(b.u[0][i], b.u[1][i], b.u[2][i]);
     const IkSolution sol =
         solve(p, u, cursor.has_previous ? &cursor.previous : nullptr, cursor.previous_cos.data(),
-              cursor.previous_sin.data());
+              cursor.previous_sin.data(), exact);
     b.status[i] = sol.status;
     b.singular[i] = sol.singular;
     b.violated_axis[i] = sol.violated_axis;

@@ -56,9 +56,13 @@ class InverseKinematics {
   // at the start; when the nearest one puts a prismatic axis out of travel, the other.
   // previous_cos, previous_sin (optional, by axis index): cos and sin of previous's rotary
   // values, when the caller has them (IkSolution::cos_q and sin_q of the previous point).
+  // exact_angles: each rotary value from atan2, unwrapped by 2 pi to the representative nearest
+  // the previous one, never as the previous value plus a step (the usual case along a path,
+  // whose last bits then carry the rounding of every step before): the solution then depends on
+  // previous only through the choice of candidate and representative.
   IkSolution solve(const Eigen::Vector3d& p_w, const Eigen::Vector3d& u_w,
                    const JointVector* previous, const double* previous_cos = nullptr,
-                   const double* previous_sin = nullptr) const;
+                   const double* previous_sin = nullptr, bool exact_angles = false) const;
 
   // The batch path of prediction: solve() along consecutive CL points, bit for bit the same
   // as calling it point by point with the previous point's solution as reference (none at the
@@ -74,6 +78,7 @@ class InverseKinematics {
     double p[3][kBlock], u[3][kBlock];         // in: tip p_w (mm) and tool axis u_w, by coordinate
     bool has_before = false;                   // in: a point precedes the block on the path,
     double u_before[3] = {0, 0, 1};            // with this tool axis
+    bool exact_first = false;  // in: the first point solved with exact angles (solve())
     // out, by axis index: joint values (mm, rad), cos and sin of the rotary ones (0, 1, 0
     // where the point failed)
     // (q and singular start on cache lines: the prediction streams them out whole)

@@ -180,13 +180,23 @@ void deviationLanes(int n, const double* const in[4][3], double* const out[7]) {
 
 }  // namespace
 
-// The running figures of the summary, in path order: a value the block loop keeps in registers
-// (PredictionSummary lives behind a reference, which would make every sum a store and a load).
-struct RunningSummary {
+// The bookkeeping of one block of kBlock points (failures and the summary's figures), kept per
+// block so that blocks may be accounted in any order, on any thread, and merged in path order
+// (mergeTallies): the sums are block sums added block after block, the same on every path.
+struct BlockTally {
   double sum2 = 0.0, sum2_angle = 0.0;
   double max_deviation = 0.0, max_axis_angle = 0.0;
   int max_index = -1;
   int singular_points = 0, first_singular_line = 0;
+  int failed = 0;
+  std::array<int, kMaxAxes + 1> failed_per_axis{};  // by axis; the last: no axis to blame
+  struct Failure {
+    int index, line;
+    IkStatus status;
+    int axis;
+    double value;
+  };
+  std::vector<Failure> failures;  // the block's first max_failures
   TOLVER_LANE_INLINE void add(size_t i, const ClPoint& cl, bool singular, double d,
                               double angle) {
     if (singular) {
@@ -201,32 +211,52 @@ struct RunningSummary {
     }
     if (angle > max_axis_angle) max_axis_angle = angle;
   }
-};
-
-// The prediction's bookkeeping (file-local; outside the anonymous namespace because
-// BlockPrediction::State holds one).
-struct PredictionAccumulator {
-  PredictionResult& result;
-  const MachineModel& model;
-  int max_failures;
-  RunningSummary run;
   void fail(size_t i, const ClPoint& cl, IkStatus status, int violated_axis,
-            double violated_value) {
-    result.points.setFailed(i);
+            double violated_value, int max_failures, int axes) {
     const int axis = status == IkStatus::OutOfTravel ? violated_axis : -1;
-    ++result.failed_points;
-    ++result.failures_per_axis[axis >= 0 ? axis : model.axes.size()];
-    if (static_cast<int>(result.failures.size()) < max_failures) {
-      IkSolution sol;
-      sol.status = status;
-      sol.violated_axis = violated_axis;
-      sol.violated_value = violated_value;
-      result.failures.push_back(
-          {static_cast<int>(i), cl.line, status, axis, describeIkFailure(model, sol)});
-    }
+    ++failed;
+    ++failed_per_axis[axis >= 0 ? axis : axes];
+    if (static_cast<int>(failures.size()) < max_failures)
+      failures.push_back({static_cast<int>(i), cl.line, status, axis, violated_value});
   }
 };
 
+namespace {
+
+// The tallies of consecutive blocks, in path order, into the result's failures and summary.
+void mergeTallies(const MachineModel& model, const std::vector<BlockTally>& tallies,
+                  size_t points, int max_failures, PredictionResult& result) {
+  const int axes = static_cast<int>(model.axes.size());
+  PredictionSummary& s = result.summary;
+  double sum2 = 0.0, sum2_angle = 0.0;
+  for (const BlockTally& t : tallies) {
+    sum2 += t.sum2;
+    sum2_angle += t.sum2_angle;
+    if (t.max_index >= 0 && (t.max_deviation > s.max_deviation || s.max_index < 0)) {
+      s.max_deviation = t.max_deviation;
+      s.max_index = t.max_index;
+    }
+    if (t.max_axis_angle > s.max_axis_angle) s.max_axis_angle = t.max_axis_angle;
+    if (t.singular_points > 0 && s.singular_points == 0)
+      s.first_singular_line = t.first_singular_line;
+    s.singular_points += t.singular_points;
+    result.failed_points += t.failed;
+    for (int a = 0; a <= axes; ++a) result.failures_per_axis[a] += t.failed_per_axis[a];
+    for (const BlockTally::Failure& f : t.failures) {
+      if (static_cast<int>(result.failures.size()) >= max_failures) break;
+      IkSolution sol;
+      sol.status = f.status;
+      sol.violated_axis = f.axis;
+      sol.violated_value = f.value;
+      result.failures.push_back({f.index, f.line, f.status, f.axis, describeIkFailure(model, sol)});
+    }
+  }
+  if (points == 0) return;
+  s.rms_deviation = std::sqrt(sum2 / points);
+  s.rms_axis_angle = std::sqrt(sum2_angle / points);
+}
+
+}  // namespace
 
 // Each array of a block starts on a cache line and spans whole lines (kBlock doubles), so a
 // block's points are streamed into PredictedPoints array by array.
@@ -243,37 +273,32 @@ static_assert(InverseKinematics::kBlock % 64 == 0);
 struct BlockPrediction::State {
   State(const MachineModel& m, const Eigen::VectorXd& params, const std::vector<ClPoint>& p,
         PredictionResult& r, int max_failures)
-      : model(m), path(p), ik(m), actual(m, params), acc{r, m, max_failures, {}} {}
+      : model(m), path(p), ik(m), actual(m, params), result(r), max_failures(max_failures) {}
   const MachineModel& model;
   const std::vector<ClPoint>& path;
   const InverseKinematics ik;
   const ForwardKinematics actual;
-  PredictionAccumulator acc;
+  PredictionResult& result;
+  int max_failures;
+  std::vector<BlockTally> tallies;  // one per block
   InverseKinematics::Cursor cursor;
 };
 
 namespace {
 
+size_t blockCount(size_t points) {
+  return (points + InverseKinematics::kBlock - 1) / InverseKinematics::kBlock;
+}
+
 void prepare(const MachineModel& model, const std::vector<ClPoint>& path,
-             PredictionResult& result) {
+             PredictionResult& result, std::vector<BlockTally>& tallies) {
   result.failures.clear();
   result.failed_points = 0;
   result.failures_per_axis.assign(model.axes.size() + 1, 0);
   result.summary = PredictionSummary{};
   result.points.resize(path.size(), static_cast<int>(model.axes.size()));
   result.summary.points = static_cast<int>(path.size());
-}
-
-void finishSummary(const std::vector<ClPoint>& path, const RunningSummary& run,
-                   PredictionSummary& s) {
-  s.singular_points = run.singular_points;
-  s.first_singular_line = run.first_singular_line;
-  s.max_deviation = run.max_deviation;
-  s.max_index = run.max_index;
-  s.max_axis_angle = run.max_axis_angle;
-  if (path.empty()) return;
-  s.rms_deviation = std::sqrt(run.sum2 / path.size());
-  s.rms_axis_angle = std::sqrt(run.sum2_angle / path.size());
+  tallies.assign(blockCount(path.size()), BlockTally{});
 }
 
 }  // namespace
@@ -282,16 +307,14 @@ BlockPrediction::BlockPrediction(const MachineModel& model, const Eigen::VectorX
                                  const std::vector<ClPoint>& path, PredictionResult& result,
                                  int max_failures)
     : s_(std::make_unique<State>(model, params, path, result, max_failures)) {
-  prepare(model, path, result);
+  prepare(model, path, result, s_->tallies);
 }
 
 BlockPrediction::~BlockPrediction() = default;
 
 bool BlockPrediction::batchable() const { return s_->ik.batchable() && s_->actual.batchable(); }
 
-size_t BlockPrediction::blocks() const {
-  return (s_->path.size() + InverseKinematics::kBlock - 1) / InverseKinematics::kBlock;
-}
+size_t BlockPrediction::blocks() const { return blockCount(s_->path.size()); }
 
 std::shared_ptr<BlockPrediction::Work> BlockPrediction::newWork() const {
   return std::make_shared<Work>();
@@ -319,12 +342,31 @@ void BlockPrediction::lanes(size_t block, Work& w) const {
     }
   }
   b.has_before = w.start > 0;
+  b.exact_first = w.start % kExactEvery == 0;
   if (b.has_before)
     for (int k = 0; k < 3; ++k) b.u_before[k] = path[w.start - 1].u_w[k];
   s_->ik.blockLanes(b);
 }
 
 void BlockPrediction::choice(Work& w) { s_->ik.blockChoice(w.ik, s_->cursor); }
+
+void BlockPrediction::choice(Work& w, Cursor& cursor) const { s_->ik.blockChoice(w.ik, cursor); }
+
+BlockPrediction::Cursor& BlockPrediction::cursor() { return s_->cursor; }
+
+bool BlockPrediction::sameCursor(const Cursor& a, const Cursor& b) const {
+  if (a.has_previous != b.has_previous || a.previous_candidate != b.previous_candidate)
+    return false;
+  if (!a.has_previous) return true;  // (the rest is not read)
+  if (a.previous.size() != b.previous.size() ||
+      std::memcmp(a.previous.data(), b.previous.data(), a.previous.size() * sizeof(double)) != 0)
+    return false;
+  for (int r : s_->ik.rotaryAxes())
+    if (std::memcmp(&a.previous_cos[r], &b.previous_cos[r], sizeof(double)) != 0 ||
+        std::memcmp(&a.previous_sin[r], &b.previous_sin[r], sizeof(double)) != 0)
+      return false;
+  return true;
+}
 
 void BlockPrediction::forward(Work& w) const {
   InverseKinematics::Block& b = w.ik;
@@ -349,7 +391,7 @@ void BlockPrediction::forward(Work& w) const {
   deviationLanes(n, in, out);
   // The block into the result, whole lines per array (past n within the block's arrays and
   // the result's rounded length); account() then writes NaN over the points that failed.
-  PredictedPoints& points = s_->acc.result.points;
+  PredictedPoints& points = s_->result.points;
   const size_t bytes = static_cast<size_t>((n + 7) / 8 * 8) * sizeof(double);
   lanes::StreamCopy copies[kMaxAxes + PredictedPoints::kFields + 1];
   int m = 0;
@@ -363,21 +405,25 @@ void BlockPrediction::forward(Work& w) const {
   lanes::streamLines(copies, m);
 }
 
-void BlockPrediction::account(Work& w) {
+void BlockPrediction::account(Work& w) const {
   const InverseKinematics::Block& b = w.ik;
-  RunningSummary run = s_->acc.run;
+  const int axes = static_cast<int>(s_->model.axes.size());
+  BlockTally t;
   for (int i = 0; i < b.n; ++i) {
     const size_t at = w.start + i;
-    if (b.status[i] != IkStatus::Ok)
-      s_->acc.fail(at, s_->path[at], b.status[i], b.violated_axis[i], b.violated_value[i]);
-    else
-      run.add(at, s_->path[at], b.singular[i], w.dev[6][i], w.dev[5][i]);
+    if (b.status[i] != IkStatus::Ok) {
+      s_->result.points.setFailed(at);
+      t.fail(at, s_->path[at], b.status[i], b.violated_axis[i], b.violated_value[i],
+             s_->max_failures, axes);
+    } else {
+      t.add(at, s_->path[at], b.singular[i], w.dev[6][i], w.dev[5][i]);
+    }
   }
-  s_->acc.run = run;
+  s_->tallies[w.start / InverseKinematics::kBlock] = std::move(t);
 }
 
 void BlockPrediction::finish() {
-  finishSummary(s_->path, s_->acc.run, s_->acc.result.summary);
+  mergeTallies(s_->model, s_->tallies, s_->path.size(), s_->max_failures, s_->result);
 }
 
 PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
@@ -412,10 +458,11 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
       return;
     }
   }
-  prepare(model, path, result);
+  std::vector<BlockTally> tallies;
+  prepare(model, path, result, tallies);
   const InverseKinematics ik(model);
   const ForwardKinematics actual(model, params);
-  PredictionAccumulator acc{result, model, max_failures, {}};
+  const int axes = static_cast<int>(model.axes.size());
   JointVector previous_q;
   const JointVector* previous = nullptr;
   std::array<double, kMaxAxes> previous_cos, previous_sin;  // of previous's rotary values
@@ -428,9 +475,12 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
     const ClPoint& cl = path[i];
     const IkSolution sol =
         commanded ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
-                  : ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(), previous_sin.data());
+                  : ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(), previous_sin.data(),
+                             i % BlockPrediction::kExactEvery == 0);
     if (sol.status != IkStatus::Ok) {
-      acc.fail(i, cl, sol.status, sol.violated_axis, sol.violated_value);
+      result.points.setFailed(i);
+      tallies[i / InverseKinematics::kBlock].fail(i, cl, sol.status, sol.violated_axis,
+                                                  sol.violated_value, max_failures, axes);
       previous = nullptr;
       continue;
     }
@@ -445,13 +495,13 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
     out.across_axis = d.across;
     out.axis_angle = d.angle;
     result.points.set(i, out);
-    acc.run.add(i, cl, sol.singular, d.norm, d.angle);
+    tallies[i / InverseKinematics::kBlock].add(i, cl, sol.singular, d.norm, d.angle);
     previous_q = sol.q;
     previous = &previous_q;
     previous_cos = sol.cos_q;
     previous_sin = sol.sin_q;
   }
-  finishSummary(path, acc.run, result.summary);
+  mergeTallies(model, tallies, path.size(), max_failures, result);
 }
 
 std::vector<RotaryJump> findRotaryJumps(const MachineModel& model, const std::vector<ClPoint>& path,

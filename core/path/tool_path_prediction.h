@@ -146,13 +146,27 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                      const std::vector<JointVector>* commanded, bool batch);
 
 // The batch path in stages, for a driver that runs them on several threads
-// (pipeline/parallel_prediction.h): blocks of InverseKinematics::kBlock points. lanes() and
-// forward() of different blocks may run at the same time; choice() and account() run one block
-// at a time, in path order. predictToolPath runs the four in turn on one thread; any order
-// that keeps those rules gives its result, bit for bit.
+// (pipeline/parallel_prediction.h): blocks of InverseKinematics::kBlock points. For each block,
+// in turn: lanes(), choice(), forward(), account(). The continuity choice carries a cursor from
+// block to block: with the prediction's own cursor, blocks go through choice() in path order.
+// Everything else depends on the block alone: lanes(), forward() and account() of different
+// blocks may run at the same time, each writing its block's points and tally; finish() merges
+// the tallies in path order. predictToolPath runs the stages block after block on one thread;
+// any order that keeps those rules gives its result, bit for bit.
+//
+// A driver may also run a stretch of blocks speculatively with a cursor of its own (choice(w,
+// cursor), from an empty Cursor{}) from a point solved with exact angles (kExactEvery), then,
+// once the true cursor at the stretch's start is known, run its blocks again with it until the
+// two cursors agree (sameCursor): from there on the speculative blocks are the true ones.
 class BlockPrediction {
  public:
-  struct Work;  // one block's numbers (about 50 kB)
+  struct Work;  // one block's numbers (about 40 kB)
+  using Cursor = InverseKinematics::Cursor;
+  // Every kExactEvery-th point of a path (0 included) is solved with exact angles
+  // (InverseKinematics::solve's exact_angles), on every path through the prediction: after it
+  // the joint values no longer carry the rounding of the steps before, so a speculative stretch
+  // that starts there agrees with the true one as soon as both take the same candidate.
+  static constexpr size_t kExactEvery = 64 * InverseKinematics::kBlock;
   // Prepares result for path (its points resized, its failures and summary cleared).
   BlockPrediction(const MachineModel& model, const Eigen::VectorXd& params,
                   const std::vector<ClPoint>& path, PredictionResult& result, int max_failures);
@@ -162,10 +176,14 @@ class BlockPrediction {
   size_t blocks() const;
   std::shared_ptr<Work> newWork() const;  // (shared: Work is complete only in core)
   void lanes(size_t block, Work& w) const;  // the block's IK lane stage
-  void choice(Work& w);                     // the continuity choice, after the previous block's
+  void choice(Work& w);                     // the continuity choice, with cursor()
+  void choice(Work& w, Cursor& cursor) const;  // the same with another cursor
   void forward(Work& w) const;              // forward carry, deviations, the block's points
-  void account(Work& w);                    // failures and summary, after the previous block's
-  void finish();                            // after the last block
+  void account(Work& w) const;              // the block's failures and tally
+  void finish();                            // after the last block: failures and summary
+  Cursor& cursor();                         // the prediction's own
+  // The two cursors lead the choice of the blocks after them to the same bits.
+  bool sameCursor(const Cursor& a, const Cursor& b) const;
 
  private:
   struct State;
