@@ -62,7 +62,7 @@ void predictToolPathParallel(const MachineModel& model, const Eigen::VectorXd& p
       const std::shared_ptr<BlockPrediction::Work> w = bp.newWork();
       Cursor& cursor = c == 0 ? bp.cursor() : last[c];
       for (size_t k = begin[c]; k < begin[c + 1]; ++k) {
-        bp.lanes(k, *w);
+        bp.lanes(k, *w, cursor.previous_candidate);
         bp.choice(*w, cursor);
         bp.forward(*w);
         bp.account(*w);
@@ -80,7 +80,7 @@ void predictToolPathParallel(const MachineModel& model, const Eigen::VectorXd& p
       const size_t done = k - begin[c];  // blocks of this stretch already run again
       if (done <= kProbe && bp.sameCursor(cursor, done == 0 ? empty : probes[c][done - 1]))
         break;
-      bp.lanes(k, *w);
+      bp.lanes(k, *w, cursor.previous_candidate);
       bp.choice(*w, cursor);
       bp.forward(*w);
       bp.account(*w);

@@ -587,6 +587,36 @@ struct IkLaneKernels {
                                             InverseKinematics::Block& b);
   static void blockLanes4(const InverseKinematics& ik, InverseKinematics::Block& b);
   static void blockLanes8(const InverseKinematics& ik, InverseKinematics::Block& b);
+  // Candidate k's prismatic solution at points i.. (L's width of them) from its cos and sin
+  // (the sine's sign applied) into b.prism[k], and whether it lies inside travel into
+  // b.prism_ok[k].
+  template <typename L>
+  TOLVER_LANE_INLINE static void prism(const InverseKinematics& ik, InverseKinematics::Block& b,
+                                       int k, int i, L c0, L s0, L c1, L s1, const L p[3]) {
+    using M = decltype(L{} < L{});
+    const double m0[3] = {ik.t_end_.translation()[0], ik.t_end_.translation()[1],
+                          ik.t_end_.translation()[2]};
+    L cs[kMaxAxes], sn[kMaxAxes], out[3];
+    cs[ik.rotary_[0]] = c0;
+    sn[ik.rotary_[0]] = s0;
+    cs[ik.rotary_[1]] = c1;
+    sn[ik.rotary_[1]] = s1;
+    M ok = ik.prismaticL(cs, cs, sn, m0, p, out);  // (q is read only off +x/+y/+z)
+    for (int j = 0; j < 3; ++j) {
+      const Axis& ax = ik.model_->axes[ik.column_axis_[j]];
+      const double lo = ax.travel_min - kTravelEps, hi = ax.travel_max + kTravelEps;
+      lanes::storeL<L>(b.prism[k][j] + i, out[j]);
+      ok = ok & lanes::maskOf((out[j] - out[j]) == 0.0) & lanes::maskOf(!(out[j] < lo)) &
+           lanes::maskOf(!(out[j] > hi));
+    }
+    lanes::storeMask<M>(b.prism_ok[k] + i, ok);
+  }
+  // The same for one point, where the lane stage left it (Block::prism_only).
+  static void prismAt(const InverseKinematics& ik, InverseKinematics::Block& b, int k, int i) {
+    const double p[3] = {b.p[0][i], b.p[1][i], b.p[2][i]};
+    prism<double>(ik, b, k, i, b.cand_c[k][0][i + 1], b.cand_s[k][0][i + 1],
+                  b.cand_c[k][1][i + 1], b.cand_s[k][1][i + 1], p);
+  }
 };
 
 // solveBlock's lane stage: the candidates and both prismatic solutions of every point, then the
@@ -600,16 +630,8 @@ TOLVER_LANE_INLINE void IkLaneKernels::blockLanes(const InverseKinematics& ik,
   using lanes::storeL;
   using lanes::storeMask;
   const int n = b.n;
-  const int r0 = ik.rotary_[0], r1 = ik.rotary_[1];
   const double sign0 = ik.sign_[0], sign1 = ik.sign_[1];
-  const double m0[3] = {ik.t_end_.translation()[0], ik.t_end_.translation()[1],
-                        ik.t_end_.translation()[2]};
-  double lo[3], hi[3];
-  for (int j = 0; j < 3; ++j) {
-    const Axis& ax = ik.model_->axes[ik.column_axis_[j]];
-    lo[j] = ax.travel_min - kTravelEps;
-    hi[j] = ax.travel_max + kTravelEps;
-  }
+  const int only = b.prism_only;
   auto points = [&](auto lanes_tag, int i) TOLVER_LANE_LAMBDA {
     using L = decltype(lanes_tag);
     using M = decltype(L{} < L{});
@@ -625,18 +647,8 @@ TOLVER_LANE_INLINE void IkLaneKernels::blockLanes(const InverseKinematics& ik,
       storeL<L>(b.cand_s[k][0] + i + 1, s0);
       storeL<L>(b.cand_c[k][1] + i + 1, c[k][1]);
       storeL<L>(b.cand_s[k][1] + i + 1, s1);
-      L cs[kMaxAxes], sn[kMaxAxes], out[3];
-      cs[r0] = c[k][0];
-      sn[r0] = s0;
-      cs[r1] = c[k][1];
-      sn[r1] = s1;
-      M ok = ik.prismaticL(cs, cs, sn, m0, p, out);  // (q is read only off +x/+y/+z)
-      for (int j = 0; j < 3; ++j) {
-        storeL<L>(b.prism[k][j] + i, out[j]);
-        ok = ok & lanes::maskOf((out[j] - out[j]) == 0.0) & lanes::maskOf(!(out[j] < lo[j])) &
-             lanes::maskOf(!(out[j] > hi[j]));
-      }
-      storeMask<M>(b.prism_ok[k] + i, ok);
+      if (only < 0 || k == only) prism<L>(ik, b, k, i, c[k][0], s0, c[k][1], s1, p);
+      else storeMask<M>(b.prism_ok[k] + i, M{});  // (blockChoice computes it when needed)
     }
   };
   auto steps = [&](auto lanes_tag, int i) TOLVER_LANE_LAMBDA {
@@ -803,6 +815,8 @@ void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
       if (evaluate(first) &&
           cost[first] * cost[first] < b.chord2[j][1 - first][i] * (1.0 - 1e-9))
         chosen = first;
+      if (chosen >= 0 && b.prism_only >= 0 && chosen != b.prism_only)
+        IkLaneKernels::prismAt(*this, b, chosen, i);
       if (chosen >= 0 && !b.prism_ok[chosen][i]) chosen = -1;
     }
     if (chosen >= 0) {

@@ -79,6 +79,10 @@ class InverseKinematics {
     bool has_before = false;                   // in: a point precedes the block on the path,
     double u_before[3] = {0, 0, 1};            // with this tool axis
     bool exact_first = false;  // in: the first point solved with exact angles (solve())
+    // in: the lane stage solves the prismatic axes for this candidate only (-1: both); the
+    // choice solves them for the other where it takes it (a hint: the previous block's last
+    // candidate, which a smooth path keeps; the results are the same either way)
+    int prism_only = -1;
     // out, by axis index: joint values (mm, rad), cos and sin of the rotary ones (0, 1, 0
     // where the point failed)
     // (q and singular start on cache lines: the prediction streams them out whole)
@@ -114,6 +118,7 @@ class InverseKinematics {
   // The batch path applies: two rotary axes along +x, +y or +z, three prismatic axes.
   bool batchable() const { return batchable_; }
   void solveBlock(Block& b, Cursor& cursor) const {
+    b.prism_only = cursor.previous_candidate;
     blockLanes(b);
     blockChoice(b, cursor);
   }

@@ -320,7 +320,7 @@ std::shared_ptr<BlockPrediction::Work> BlockPrediction::newWork() const {
   return std::make_shared<Work>();
 }
 
-void BlockPrediction::lanes(size_t block, Work& w) const {
+void BlockPrediction::lanes(size_t block, Work& w, int hint) const {
   const std::vector<ClPoint>& path = s_->path;
   w.start = block * InverseKinematics::kBlock;
   InverseKinematics::Block& b = w.ik;
@@ -343,6 +343,7 @@ void BlockPrediction::lanes(size_t block, Work& w) const {
   }
   b.has_before = w.start > 0;
   b.exact_first = w.start % kExactEvery == 0;
+  b.prism_only = hint;
   if (b.has_before)
     for (int k = 0; k < 3; ++k) b.u_before[k] = path[w.start - 1].u_w[k];
   s_->ik.blockLanes(b);
@@ -449,7 +450,7 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
     if (bp.batchable()) {
       const std::shared_ptr<BlockPrediction::Work> w = bp.newWork();
       for (size_t k = 0; k < bp.blocks(); ++k) {
-        bp.lanes(k, *w);
+        bp.lanes(k, *w, bp.cursor().previous_candidate);
         bp.choice(*w);
         bp.forward(*w);
         bp.account(*w);

@@ -175,7 +175,10 @@ class BlockPrediction {
   bool batchable() const;
   size_t blocks() const;
   std::shared_ptr<Work> newWork() const;  // (shared: Work is complete only in core)
-  void lanes(size_t block, Work& w) const;  // the block's IK lane stage
+  // The block's IK lane stage; hint: the candidate the cursor the block will be chosen with
+  // holds (Cursor::previous_candidate, -1 for none), which a smooth path keeps: the stage then
+  // solves the prismatic axes for it alone (the result is the same with any hint).
+  void lanes(size_t block, Work& w, int hint = -1) const;
   void choice(Work& w);                     // the continuity choice, with cursor()
   void choice(Work& w, Cursor& cursor) const;  // the same with another cursor
   void forward(Work& w) const;              // forward carry, deviations, the block's points
