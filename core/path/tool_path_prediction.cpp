@@ -183,20 +183,11 @@ void deviationLanes(int n, const double* const in[4][3], double* const out[7]) {
 // The bookkeeping of one block of kBlock points (failures and the summary's figures), kept per
 // block so that blocks may be accounted in any order, on any thread, and merged in path order
 // (mergeTallies): the sums are block sums added block after block, the same on every path.
-struct BlockTally {
+struct BlockSums {  // (a value apart from the failures: the loop keeps it in registers)
   double sum2 = 0.0, sum2_angle = 0.0;
   double max_deviation = 0.0, max_axis_angle = 0.0;
   int max_index = -1;
   int singular_points = 0, first_singular_line = 0;
-  int failed = 0;
-  std::array<int, kMaxAxes + 1> failed_per_axis{};  // by axis; the last: no axis to blame
-  struct Failure {
-    int index, line;
-    IkStatus status;
-    int axis;
-    double value;
-  };
-  std::vector<Failure> failures;  // the block's first max_failures
   TOLVER_LANE_INLINE void add(size_t i, const ClPoint& cl, bool singular, double d,
                               double angle) {
     if (singular) {
@@ -211,6 +202,18 @@ struct BlockTally {
     }
     if (angle > max_axis_angle) max_axis_angle = angle;
   }
+};
+struct BlockTally {
+  BlockSums sums;
+  int failed = 0;
+  std::array<int, kMaxAxes + 1> failed_per_axis{};  // by axis; the last: no axis to blame
+  struct Failure {
+    int index, line;
+    IkStatus status;
+    int axis;
+    double value;
+  };
+  std::vector<Failure> failures;  // the block's first max_failures
   void fail(size_t i, const ClPoint& cl, IkStatus status, int violated_axis,
             double violated_value, int max_failures, int axes) {
     const int axis = status == IkStatus::OutOfTravel ? violated_axis : -1;
@@ -230,16 +233,17 @@ void mergeTallies(const MachineModel& model, const std::vector<BlockTally>& tall
   PredictionSummary& s = result.summary;
   double sum2 = 0.0, sum2_angle = 0.0;
   for (const BlockTally& t : tallies) {
-    sum2 += t.sum2;
-    sum2_angle += t.sum2_angle;
-    if (t.max_index >= 0 && (t.max_deviation > s.max_deviation || s.max_index < 0)) {
-      s.max_deviation = t.max_deviation;
-      s.max_index = t.max_index;
+    const BlockSums& b = t.sums;
+    sum2 += b.sum2;
+    sum2_angle += b.sum2_angle;
+    if (b.max_index >= 0 && (b.max_deviation > s.max_deviation || s.max_index < 0)) {
+      s.max_deviation = b.max_deviation;
+      s.max_index = b.max_index;
     }
-    if (t.max_axis_angle > s.max_axis_angle) s.max_axis_angle = t.max_axis_angle;
-    if (t.singular_points > 0 && s.singular_points == 0)
-      s.first_singular_line = t.first_singular_line;
-    s.singular_points += t.singular_points;
+    if (b.max_axis_angle > s.max_axis_angle) s.max_axis_angle = b.max_axis_angle;
+    if (b.singular_points > 0 && s.singular_points == 0)
+      s.first_singular_line = b.first_singular_line;
+    s.singular_points += b.singular_points;
     result.failed_points += t.failed;
     for (int a = 0; a <= axes; ++a) result.failures_per_axis[a] += t.failed_per_axis[a];
     for (const BlockTally::Failure& f : t.failures) {
@@ -409,7 +413,9 @@ void BlockPrediction::forward(Work& w) const {
 void BlockPrediction::account(Work& w) const {
   const InverseKinematics::Block& b = w.ik;
   const int axes = static_cast<int>(s_->model.axes.size());
-  BlockTally t;
+  BlockTally& t = s_->tallies[w.start / InverseKinematics::kBlock];
+  t = BlockTally{};
+  BlockSums sums;
   for (int i = 0; i < b.n; ++i) {
     const size_t at = w.start + i;
     if (b.status[i] != IkStatus::Ok) {
@@ -417,10 +423,10 @@ void BlockPrediction::account(Work& w) const {
       t.fail(at, s_->path[at], b.status[i], b.violated_axis[i], b.violated_value[i],
              s_->max_failures, axes);
     } else {
-      t.add(at, s_->path[at], b.singular[i], w.dev[6][i], w.dev[5][i]);
+      sums.add(at, s_->path[at], b.singular[i], w.dev[6][i], w.dev[5][i]);
     }
   }
-  s_->tallies[w.start / InverseKinematics::kBlock] = std::move(t);
+  t.sums = sums;
 }
 
 void BlockPrediction::finish() {
@@ -496,7 +502,7 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
     out.across_axis = d.across;
     out.axis_angle = d.angle;
     result.points.set(i, out);
-    tallies[i / InverseKinematics::kBlock].add(i, cl, sol.singular, d.norm, d.angle);
+    tallies[i / InverseKinematics::kBlock].sums.add(i, cl, sol.singular, d.norm, d.angle);
     previous_q = sol.q;
     previous = &previous_q;
     previous_cos = sol.cos_q;
