@@ -63,9 +63,5 @@ void streamLines(const StreamCopy* copies, int count) {
 #endif
 }
 
-void streamLines(void* dst, const void* src, size_t bytes) {
-  const StreamCopy copy{dst, src, bytes};
-  streamLines(&copy, 1);
-}
 
 }  // namespace tolver::lanes

@@ -64,10 +64,9 @@ constexpr int widthOf() {
 bool wideLanes();
 void setWideLanes(bool on);
 
-// Copies bytes (a multiple of 64) from src to dst, both 64-byte aligned, with non-temporal
-// full-line stores: dst's lines are not read into the caches first (long outputs).
-void streamLines(void* dst, const void* src, size_t bytes);
-// The same for several copies, with one store fence after the last.
+// Copies, each of bytes (a multiple of 64) from src to dst, both 64-byte aligned, with
+// non-temporal full-line stores (dst's lines are not read into the caches first: long outputs),
+// and one store fence after the last.
 struct StreamCopy {
   void* dst;
   const void* src;

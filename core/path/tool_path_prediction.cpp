@@ -276,8 +276,8 @@ static_assert(InverseKinematics::kBlock % 64 == 0);
 
 struct BlockPrediction::State {
   State(const MachineModel& m, const Eigen::VectorXd& params, const std::vector<ClPoint>& p,
-        PredictionResult& r, int max_failures)
-      : model(m), path(p), ik(m), actual(m, params), result(r), max_failures(max_failures) {}
+        PredictionResult& r, int most_failures)
+      : model(m), path(p), ik(m), actual(m, params), result(r), max_failures(most_failures) {}
   const MachineModel& model;
   const std::vector<ClPoint>& path;
   const InverseKinematics ik;
