@@ -55,7 +55,9 @@ void predictToolPathParallel(const MachineModel& model, const Eigen::VectorXd& p
   const size_t units = blocks / kUnit;
   for (size_t c = 0; c < stretches; ++c) begin[c] = units * c / stretches * kUnit;
   begin[stretches] = blocks;
-  std::vector<Cursor> last(stretches);  // each stretch's cursor after its last block
+  // Each speculative stretch's cursor after its last block (the first stretch's is
+  // bp.cursor()).
+  std::vector<Cursor> last(stretches);
   std::vector<std::vector<Cursor>> probes(stretches);
   arena.execute([&] {
     tbb::parallel_for(size_t{0}, stretches, [&](size_t c) {
@@ -68,7 +70,6 @@ void predictToolPathParallel(const MachineModel& model, const Eigen::VectorXd& p
         bp.account(*w);
         if (c > 0 && k - begin[c] < kProbe) probes[c].push_back(cursor);
       }
-      if (c == 0) last[0] = cursor;
     });
   });
   const std::shared_ptr<BlockPrediction::Work> w = bp.newWork();
