@@ -64,10 +64,7 @@ void predictToolPathParallel(const MachineModel& model, const Eigen::VectorXd& p
       const std::shared_ptr<BlockPrediction::Work> w = bp.newWork();
       Cursor& cursor = c == 0 ? bp.cursor() : last[c];
       for (size_t k = begin[c]; k < begin[c + 1]; ++k) {
-        bp.lanes(k, *w, cursor.previous_candidate);
-        bp.choice(*w, cursor);
-        bp.forward(*w);
-        bp.account(*w);
+        bp.predict(k, *w, cursor);
         if (c > 0 && k - begin[c] < kProbe) probes[c].push_back(cursor);
       }
     });
@@ -81,10 +78,7 @@ void predictToolPathParallel(const MachineModel& model, const Eigen::VectorXd& p
       const size_t done = k - begin[c];  // blocks of this stretch already run again
       if (done <= kProbe && bp.sameCursor(cursor, done == 0 ? empty : probes[c][done - 1]))
         break;
-      bp.lanes(k, *w, cursor.previous_candidate);
-      bp.choice(*w, cursor);
-      bp.forward(*w);
-      bp.account(*w);
+      bp.predict(k, *w, cursor);
       ++st.blocks_again;
     }
     if (k < begin[c + 1]) cursor = last[c];  // agreed: the speculative end is the true one

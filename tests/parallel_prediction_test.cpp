@@ -95,7 +95,9 @@ TEST(ParallelPrediction, EqualsTheSingleThreadedPredictionBitForBit) {
       ParallelPredictionStats stats;
       predictToolPathParallel(m.model, m.params, path, r, 7, nullptr, threads, &stats);
       expectSameBits(r, one, std::string(file) + " " + std::to_string(threads) + " threads");
-      if (threads > 1) EXPECT_GT(stats.stretches, 1) << file;
+      if (threads > 1) {
+        EXPECT_GT(stats.stretches, 1) << file;
+      }
     }
   }
 }

@@ -353,9 +353,12 @@ void BlockPrediction::lanes(size_t block, Work& w, int hint) const {
   s_->ik.blockLanes(b);
 }
 
-void BlockPrediction::choice(Work& w) { s_->ik.blockChoice(w.ik, s_->cursor); }
-
-void BlockPrediction::choice(Work& w, Cursor& cursor) const { s_->ik.blockChoice(w.ik, cursor); }
+void BlockPrediction::predict(size_t block, Work& w, Cursor& cursor) const {
+  lanes(block, w, cursor.previous_candidate);
+  s_->ik.blockChoice(w.ik, cursor);
+  forward(w);
+  account(w);
+}
 
 BlockPrediction::Cursor& BlockPrediction::cursor() { return s_->cursor; }
 
@@ -395,7 +398,7 @@ void BlockPrediction::forward(Work& w) const {
   double* const out[7] = {w.dev[0], w.dev[1], w.dev[2], w.dev[3], w.dev[4], w.dev[5], w.dev[6]};
   deviationLanes(n, in, out);
   // The block into the result, whole lines per array (past n within the block's arrays and
-  // the result's rounded length); account() then writes NaN over the points that failed.
+  // the result's rounded length); account then writes NaN over the points that failed.
   PredictedPoints& points = s_->result.points;
   const size_t bytes = static_cast<size_t>((n + 7) / 8 * 8) * sizeof(double);
   lanes::StreamCopy copies[kMaxAxes + PredictedPoints::kFields + 1];
@@ -455,12 +458,7 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
     BlockPrediction bp(model, params, path, result, max_failures);
     if (bp.batchable()) {
       const std::shared_ptr<BlockPrediction::Work> w = bp.newWork();
-      for (size_t k = 0; k < bp.blocks(); ++k) {
-        bp.lanes(k, *w, bp.cursor().previous_candidate);
-        bp.choice(*w);
-        bp.forward(*w);
-        bp.account(*w);
-      }
+      for (size_t k = 0; k < bp.blocks(); ++k) bp.predict(k, *w, bp.cursor());
       bp.finish();
       return;
     }

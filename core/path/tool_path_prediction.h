@@ -145,19 +145,19 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                      const std::vector<ClPoint>& path, PredictionResult& result, int max_failures,
                      const std::vector<JointVector>* commanded, bool batch);
 
-// The batch path in stages, for a driver that runs them on several threads
-// (pipeline/parallel_prediction.h): blocks of InverseKinematics::kBlock points. For each block,
-// in turn: lanes(), choice(), forward(), account(). The continuity choice carries a cursor from
-// block to block: with the prediction's own cursor, blocks go through choice() in path order.
-// Everything else depends on the block alone: lanes(), forward() and account() of different
-// blocks may run at the same time, each writing its block's points and tally; finish() merges
-// the tallies in path order. predictToolPath runs the stages block after block on one thread;
-// any order that keeps those rules gives its result, bit for bit.
+// The batch path block by block, for a driver that runs blocks on several threads
+// (pipeline/parallel_prediction.h): blocks of InverseKinematics::kBlock points. predict()
+// solves a block's inverse kinematics, chooses among the solutions with a cursor it carries
+// from the block before (continuity), runs the forward model and the deviations, writes the
+// block's points and its tally (failures and sums); finish() merges the tallies in path order.
+// With the prediction's own cursor, blocks go through predict() in path order; blocks with
+// other cursors may run at the same time. predictToolPath runs every block with cursor() on
+// one thread.
 //
-// A driver may also run a stretch of blocks speculatively with a cursor of its own (choice(w,
-// cursor), from an empty Cursor{}) from a point solved with exact angles (kExactEvery), then,
-// once the true cursor at the stretch's start is known, run its blocks again with it until the
-// two cursors agree (sameCursor): from there on the speculative blocks are the true ones.
+// A driver may also run a stretch of blocks speculatively with a cursor of its own (from an
+// empty Cursor{}) from a point solved with exact angles (kExactEvery), then, once the true
+// cursor at the stretch's start is known, run its blocks again with it until the two cursors
+// agree (sameCursor): from there on the speculative blocks are the true ones.
 class BlockPrediction {
  public:
   struct Work;  // one block's numbers (about 40 kB)
@@ -175,20 +175,22 @@ class BlockPrediction {
   bool batchable() const;
   size_t blocks() const;
   std::shared_ptr<Work> newWork() const;  // (shared: Work is complete only in core)
-  // The block's IK lane stage; hint: the candidate the cursor the block will be chosen with
-  // holds (Cursor::previous_candidate, -1 for none), which a smooth path keeps: the stage then
-  // solves the prismatic axes for it alone (the result is the same with any hint).
-  void lanes(size_t block, Work& w, int hint = -1) const;
-  void choice(Work& w);                     // the continuity choice, with cursor()
-  void choice(Work& w, Cursor& cursor) const;  // the same with another cursor
-  void forward(Work& w) const;              // forward carry, deviations, the block's points
-  void account(Work& w) const;              // the block's failures and tally
-  void finish();                            // after the last block: failures and summary
-  Cursor& cursor();                         // the prediction's own
+  // The block's points and tally, in w's scratch, from cursor, which is left as the block's
+  // last point leaves it.
+  void predict(size_t block, Work& w, Cursor& cursor) const;
+  void finish();  // after the last block: failures and summary
+  Cursor& cursor();  // the prediction's own
   // The two cursors lead the choice of the blocks after them to the same bits.
   bool sameCursor(const Cursor& a, const Cursor& b) const;
 
  private:
+  // predict's stages. lanes: the IK lane stage; hint: the cursor's candidate (-1 for none),
+  // which a smooth path keeps: the stage then solves the prismatic axes for it alone (the
+  // result is the same with any hint). forward: forward carry, deviations, the block's points.
+  // account: the block's failures and tally.
+  void lanes(size_t block, Work& w, int hint) const;
+  void forward(Work& w) const;
+  void account(Work& w) const;
   struct State;
   std::unique_ptr<State> s_;
 };
