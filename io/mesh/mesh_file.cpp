@@ -32,119 +32,229 @@ std::string lowerExtension(const std::string& path) {
   return ext;
 }
 
-// A PLY element as its header declares it: its count, and per property -1 (a scalar) or the
-// largest count its list's count type can hold.
-struct PlyElement {
-  unsigned long long count;
-  std::vector<long long> properties;
+// PLY's scalar types: their size in bytes, and for integers the largest count a list's count
+// of that type can hold. Size 0: not a PLY type.
+struct PlyType {
+  int size = 0;
+  bool integer = false, is_signed = false;
 };
 
-long long plyCountMax(const std::string& type) {
-  if (type == "char" || type == "int8") return 127;
-  if (type == "uchar" || type == "uint8") return 255;
-  if (type == "short" || type == "int16") return 32767;
-  if (type == "ushort" || type == "uint16") return 65535;
-  return 2147483647;  // int, uint and the rest: bounded by the file's size below
+PlyType plyType(std::string_view t) {
+  if (t == "char" || t == "int8") return {1, true, true};
+  if (t == "uchar" || t == "uint8") return {1, true, false};
+  if (t == "short" || t == "int16") return {2, true, true};
+  if (t == "ushort" || t == "uint16") return {2, true, false};
+  if (t == "int" || t == "int32") return {4, true, true};
+  if (t == "uint" || t == "uint32") return {4, true, false};
+  if (t == "float" || t == "float32") return {4, false, true};
+  if (t == "double" || t == "float64") return {8, false, true};
+  return {};
 }
 
-// An ASCII PLY's list counts, before assimp reads them: each must be digits, within its type and
-// within what the rest of the file can hold (the mesh harness: a face count of a run of 4s made
-// assimp allocate 477 million indices, 15 s and 7.5 GB, before it refused the face).
-void checkPlyAsciiLists(const std::string& path, const std::vector<PlyElement>& elements,
-                        int first_line, size_t body_offset) {
-  std::ifstream in(path, std::ios::binary);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  size_t at = std::min(body_offset, text.size());
-  int line = first_line;
-  auto token = [&]() {
-    while (at < text.size() && std::isspace(static_cast<unsigned char>(text[at]))) {
-      if (text[at] == '\n') ++line;
-      ++at;
-    }
-    const size_t from = at;
-    while (at < text.size() && !std::isspace(static_cast<unsigned char>(text[at]))) ++at;
-    return std::string_view(text).substr(from, at - from);
-  };
+// A property as its header line declares it: a scalar (count.size == 0) or a list.
+struct PlyProperty {
+  PlyType count, item;
+};
+
+struct PlyElement {
+  std::string name;
+  unsigned long long count;
+  int line;
+  std::vector<PlyProperty> properties;
+};
+
+std::vector<std::string_view> words(std::string_view text) {
+  std::vector<std::string_view> out;
+  size_t i = 0;
+  while (i < text.size()) {
+    while (i < text.size() && (text[i] == ' ' || text[i] == '\t')) ++i;
+    const size_t from = i;
+    while (i < text.size() && text[i] != ' ' && text[i] != '\t') ++i;
+    if (i > from) out.push_back(text.substr(from, i - from));
+  }
+  return out;
+}
+
+bool isCount(std::string_view t) {
+  return !t.empty() && t.size() < 19 &&
+         std::all_of(t.begin(), t.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
+}
+
+std::string printable(std::string_view text) {  // a binary file's bytes are not echoed
+  std::string out(text.substr(0, 80));
+  for (char& c : out)
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
+  return out;
+}
+
+// An ASCII PLY's body as assimp reads it: one line per element instance. Each line must hold
+// exactly the numbers its element's properties take, each list's count within its type.
+void checkPlyAsciiBody(const std::string& path, const std::string& text, size_t at, int line,
+                       const std::vector<PlyElement>& elements) {
+  std::vector<std::string_view> tokens;
   for (const PlyElement& e : elements)
-    for (unsigned long long i = 0; i < e.count && at < text.size(); ++i)
-      for (long long max : e.properties) {
-        const std::string_view t = token();
-        if (max < 0) continue;
-        const bool digits = !t.empty() && t.size() < 19 &&
-                            std::all_of(t.begin(), t.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
-        const long long n = digits ? std::stoll(std::string(t)) : -1;
-        if (!digits || n > max || static_cast<size_t>(n) > (text.size() - at) / 2 + 1)
-          throw InputError(path, line, 0, "PLY list",
-                           "list count '" + std::string(t) + "' is not a count the file can hold");
-        for (long long k = 0; k < n; ++k) token();
+    for (unsigned long long i = 0; i < e.count; ++i) {
+      // The instance's line: blank lines are skipped.
+      std::string_view row;
+      do {
+        if (at >= text.size())
+          throw InputError(path, line, 0, "PLY body",
+                           "the file ends before " + e.name + " " + std::to_string(i + 1) + " of the " +
+                               std::to_string(e.count) + " its header declares (line " +
+                               std::to_string(e.line) + ")");
+        size_t end = text.find('\n', at);
+        if (end == std::string::npos) end = text.size();
+        row = std::string_view(text).substr(at, end - at);
+        if (!row.empty() && row.back() == '\r') row.remove_suffix(1);
+        at = end + 1;
+        ++line;
+      } while (row.find_first_not_of(" \t") == std::string_view::npos);
+      tokens = words(row);
+      size_t k = 0;
+      auto fail = [&](const std::string& why) {
+        throw InputError(path, line - 1, 0, "PLY body",
+                         e.name + " " + std::to_string(i + 1) + " '" + printable(row) + "': " + why);
+      };
+      auto number = [&] {
+        if (k >= tokens.size()) fail("fewer numbers than the header's properties take");
+        const std::string_view t = tokens[k++];
+        char buf[64];
+        if (t.size() >= sizeof buf) fail("'" + printable(t) + "' is not a number");
+        std::memcpy(buf, t.data(), t.size());
+        buf[t.size()] = '\0';
+        char* end = nullptr;
+        std::strtod(buf, &end);
+        if (end != buf + t.size()) fail("'" + printable(t) + "' is not a number");
+      };
+      for (const PlyProperty& p : e.properties) {
+        if (p.count.size == 0) {
+          number();
+          continue;
+        }
+        if (k >= tokens.size()) fail("fewer numbers than the header's properties take");
+        const std::string_view t = tokens[k++];
+        const unsigned long long max =
+            (1ull << (8 * p.count.size - (p.count.is_signed ? 1 : 0))) - 1;
+        if (!isCount(t) || std::stoull(std::string(t)) > max)
+          fail("list count '" + printable(t) + "' is not a count its type can hold");
+        for (unsigned long long n = std::stoull(std::string(t)); n > 0; --n) number();
+      }
+      if (k != tokens.size()) fail("more numbers than the header's properties take");
+    }
+}
+
+// A binary PLY's body: every list's count read in the file's byte order, and every element
+// within the file.
+void checkPlyBinaryBody(const std::string& path, const std::string& bytes, size_t at,
+                        bool big_endian, const std::vector<PlyElement>& elements) {
+  for (const PlyElement& e : elements)
+    for (unsigned long long i = 0; i < e.count; ++i)
+      for (const PlyProperty& p : e.properties) {
+        auto ends = [&] {
+          throw InputError(path, 0, 0, "PLY body",
+                           "the file ends in " + e.name + " " + std::to_string(i + 1) + " of the " +
+                               std::to_string(e.count) + " its header declares (line " +
+                               std::to_string(e.line) + ")");
+        };
+        if (p.count.size == 0) {
+          if (bytes.size() - at < static_cast<size_t>(p.item.size)) ends();
+          at += p.item.size;
+          continue;
+        }
+        if (bytes.size() - at < static_cast<size_t>(p.count.size)) ends();
+        unsigned long long n = 0;
+        for (int b = 0; b < p.count.size; ++b) {
+          const auto byte = static_cast<unsigned char>(bytes[at + (big_endian ? b : p.count.size - 1 - b)]);
+          n = (n << 8) | byte;
+        }
+        at += p.count.size;
+        if (p.count.is_signed && (n >> (8 * p.count.size - 1)) != 0)
+          throw InputError(path, 0, 0, "PLY body",
+                           e.name + " " + std::to_string(i + 1) + " has a negative list count");
+        if (n > (bytes.size() - at) / p.item.size) ends();
+        at += n * p.item.size;
       }
 }
 
-// A PLY header is checked before assimp reads the file: Debian's assimp 5.2 loops for minutes,
-// allocating, on a header without its end_header line (found by the mesh fuzz harness: 'end_he'
-// cut short). Every header line must be one of PLY's keywords, and end_header must come within
-// the first 64 kB. An element's count must fit in the file, at least a byte per element in any
-// of PLY's formats: assimp allocates the count before reading (the harness again: 'element face
-// 7777...' asked for 26 GB).
-void checkPlyHeader(const std::string& path) {
-  std::error_code size_error;
-  const auto file_size = std::filesystem::file_size(path, size_error);
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw InputError(path, 0, 0, "mesh", "cannot open the file");
-  std::string head(65536, '\0');
-  head.resize(std::fread(head.data(), 1, head.size(), f));
-  std::fclose(f);
-  static const char* kKeywords[] = {"ply", "format", "comment", "obj_info", "element", "property"};
-  bool seen_vertex = false, ascii = false;
+// A PLY is checked whole before assimp reads it: Debian's assimp 5.2 trusts the counts it reads
+// and allocates from them, and reads past a header it does not understand. The mesh fuzz harness
+// found, one after another: a header without end_header (minutes of allocating), element counts
+// beyond the file (26 GB), faces before any vertex (50 s, 17 GB), a list count of a run of 4s
+// (7.5 GB), and zero bytes inside a property line (3.8 GB). So every header line must be one of
+// PLY's in its exact form (format, element <name> <count>, property <type> <name>, property
+// list <type> <type> <name>, comment, obj_info), in text, with end_header in the first 64 kB;
+// and the body must hold exactly what the header declares: in ASCII one line per element, in
+// binary every list's count within the file.
+void checkPly(const std::string& path) {
+  const std::string bytes = readFile(path);
+  const std::string_view head = std::string_view(bytes).substr(0, 65536);
+  bool seen_vertex = false, ascii = false, big_endian = false, seen_format = false;
   std::vector<PlyElement> elements;
   size_t start = 0;
   for (int line = 1; start < head.size(); ++line) {
     size_t end = head.find('\n', start);
     if (end == std::string::npos) break;
-    std::string text = head.substr(start, end - start);
-    if (!text.empty() && text.back() == '\r') text.pop_back();
-    const std::string word = text.substr(0, text.find_first_of(" \t"));
-    if (word == "end_header") {
+    std::string_view text = head.substr(start, end - start);
+    if (!text.empty() && text.back() == '\r') text.remove_suffix(1);
+    const std::vector<std::string_view> w = words(text);
+    const std::string_view word = w.empty() ? std::string_view() : w[0];
+    auto refuse = [&](const char* field, const std::string& why) {
+      throw InputError(path, line, 0, field, "'" + printable(text) + "' " + why);
+    };
+    const bool comment = word == "comment" || word == "obj_info";
+    for (char c : text)
+      if ((static_cast<unsigned char>(c) < 0x20 && c != '\t') ||
+          (!comment && static_cast<unsigned char>(c) >= 0x7f))
+        refuse("PLY header", "is not a PLY header line (it holds bytes that are not text)");
+    if (line == 1) {
+      if (w.size() != 1 || word != "ply") refuse("PLY header", "is not a PLY header line (a PLY starts with 'ply')");
+    } else if (word == "end_header" && w.size() == 1) {
+      if (!seen_format) throw InputError(path, line, 0, "PLY header", "no format line before end_header");
       if (!seen_vertex)
         throw InputError(path, line, 0, "PLY header", "no 'element vertex' before end_header");
-      if (ascii) checkPlyAsciiLists(path, elements, line + 1, end + 1);
+      if (ascii)
+        checkPlyAsciiBody(path, bytes, end + 1, line + 1, elements);
+      else
+        checkPlyBinaryBody(path, bytes, end + 1, big_endian, elements);
       return;
-    }
-    if (word == "format") ascii = text.rfind("format ascii", 0) == 0;
-    if (word == "property" && !elements.empty()) {
-      char kind[32] = {}, count_type[32] = {};
-      elements.back().properties.push_back(-1);
-      if (std::sscanf(text.c_str(), "property %31s %31s", kind, count_type) == 2 &&
-          std::string(kind) == "list")
-        elements.back().properties.back() = plyCountMax(count_type);
-    }
-    for (char& c : text)  // a binary file's bytes are not echoed
-      if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7f) c = '?';
-    if (line == 1 ? word != "ply"
-                  : std::none_of(std::begin(kKeywords), std::end(kKeywords),
-                                 [&](const char* k) { return word == k; }))
-      throw InputError(path, line, 0, "PLY header",
-                       "'" + text + "' is not a PLY header line (the header must end with end_header)");
-    if (word == "element") {
-      char name[64] = {}, count[32] = {}, rest[2] = {};
-      const int n = std::sscanf(text.c_str(), "element %63s %31s %1s", name, count, rest);
-      const std::string c = n >= 2 ? count : "";
-      const bool digits = !c.empty() && c.size() < 19 &&
-                          std::all_of(c.begin(), c.end(), [](char ch) { return ch >= '0' && ch <= '9'; });
-      if (n != 2 || !digits)
-        throw InputError(path, line, 0, "PLY element",
-                         "'" + text + "' is not 'element <name> <count>' with a count below 1e18");
+    } else if (word == "format") {
+      if (w.size() != 3 || w[2] != "1.0" ||
+          (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian"))
+        refuse("PLY format", "is not 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+      if (seen_format || !elements.empty()) refuse("PLY format", "comes after the format or an element");
+      seen_format = true;
+      ascii = w[1] == "ascii";
+      big_endian = w[1] == "binary_big_endian";
+    } else if (word == "element") {
+      if (w.size() != 3 || !isCount(w[2]))
+        refuse("PLY element", "is not 'element <name> <count>' with a count below 1e18");
+      const std::string name(w[1]);
+      const unsigned long long count = std::stoull(std::string(w[2]));
       // assimp reads faces against the vertices read before them; without them it spent 50 s
       // and 17 GB on a fuzzed file before saying so (an 'element vbspertex' in its place).
-      elements.push_back({std::stoull(c), {}});
-      if (std::string(name) == "vertex") seen_vertex = true;
-      if (std::string(name) == "face" && !seen_vertex)
-        throw InputError(path, line, 0, "PLY element",
-                         "'" + text + "' comes before any 'element vertex' (the vertices must come first)");
-      if (!size_error && std::stoull(c) > file_size)
-        throw InputError(path, line, 0, "PLY element",
-                         "'" + text + "' declares more " + name + " elements than the file's " +
-                             std::to_string(file_size) + " bytes can hold");
+      if (name == "vertex") seen_vertex = true;
+      if (name == "face" && !seen_vertex)
+        refuse("PLY element", "comes before any 'element vertex' (the vertices must come first)");
+      // At least a byte per element in any of PLY's formats.
+      if (count > bytes.size())
+        refuse("PLY element", "declares more " + name + " elements than the file's " +
+                                  std::to_string(bytes.size()) + " bytes can hold");
+      elements.push_back({name, count, line, {}});
+    } else if (word == "property") {
+      if (elements.empty()) refuse("PLY property", "comes before any element");
+      PlyProperty p;
+      if (w.size() == 3) {
+        p.item = plyType(w[1]);
+      } else if (w.size() == 5 && w[1] == "list") {
+        p.count = plyType(w[2]);
+        p.item = plyType(w[3]);
+        if (!p.count.integer) p.item.size = 0;
+      }
+      if (p.item.size == 0)
+        refuse("PLY property", "is not 'property <type> <name>' or 'property list <integer type> <type> <name>'");
+      elements.back().properties.push_back(p);
+    } else if (!comment) {
+      refuse("PLY header", "is not a PLY header line (the header must end with end_header)");
     }
     start = end + 1;
   }
@@ -166,7 +276,7 @@ void collect(const aiScene* scene, const aiNode* node, const Eigen::Matrix4d& pa
     const aiMesh* m = scene->mMeshes[mi];
     std::string name = m->mName.length > 0 ? m->mName.C_Str() : node->mName.C_Str();
     if (name.empty() || name == "defaultobject") name = "part";
-    if ((*seen_mesh)[mi]) name += "#" + std::to_string(out->group_names.size());
+    if ((*seen_mesh)[mi]) name.append(1, '#').append(std::to_string(out->group_names.size()));
     (*seen_mesh)[mi] = 1;
     int group;
     auto it = std::find(out->group_names.begin(), out->group_names.end(), name);
@@ -270,7 +380,7 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
     throw InputError(path, 0, 0, "units", "unknown length unit '" + part.units +
                                               "' (use mm, inch or m)");
 
-  if (part.format == "ply") checkPlyHeader(path);
+  if (part.format == "ply") checkPly(path);
   if (part.format == "off") checkOffHeader(path);
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
