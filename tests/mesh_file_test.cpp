@@ -468,6 +468,32 @@ TEST_F(MeshFileTest, APlyIsCheckedWholeBeforeAssimpReadsIt) {
   }
 }
 
+// The swept surfaces tolver writes (binary PLY with a per-vertex scalar) read back through the
+// part loader and its whole-file check: every triangle, every vertex to float precision.
+TEST_F(MeshFileTest, TheSweptSurfacePlyReadsBackThroughThePartLoader) {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Eigen::Vector3i> faces;
+  std::vector<double> scalar;
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 20; ++j) {
+      points.emplace_back(2.5 * i, 3.0 * j, 0.01 * i * j);
+      scalar.push_back(1e-3 * (i - j));
+    }
+  for (int i = 0; i + 1 < 20; ++i)
+    for (int j = 0; j + 1 < 20; ++j) {
+      const int a = 20 * i + j;
+      faces.emplace_back(a, a + 20, a + 1);
+      faces.emplace_back(a + 1, a + 20, a + 21);
+    }
+  const std::string ply = path("swept.ply");
+  writePlyWithScalar(ply, points, faces, scalar, "deviation_um");
+  const ImportedPart part = readPartMesh(ply);
+  ASSERT_EQ(part.mesh.faces.size(), faces.size());
+  ASSERT_EQ(part.mesh.vertices.size(), points.size());
+  for (size_t i = 0; i < points.size(); ++i)
+    EXPECT_LT((part.mesh.vertices[i] - points[i]).norm(), 1e-5) << i;
+}
+
 // The VTP surface (raw appended binary, no compression) reads back through VTK's own reader:
 // every point, triangle and scalar value exactly.
 TEST(SurfaceFiles, VtpSurfaceReadsBackExactly) {
