@@ -66,7 +66,7 @@ run_one() {
   fi
   # One line per run, so the totals over many runs can be summed (tests/fuzz/totals.sh).
   local execs cov crashes
-  execs=$(grep -oE "stat::number_of_executed_units: [0-9]+" "$out/$n/log.txt" | grep -oE "[0-9]+$" || echo 0)
+  execs=$(grep -oE "stat::number_of_executed_units: [0-9]+" "$out/$n/log.txt" | tail -1 | grep -oE "[0-9]+$" || echo 0)
   cov=$(grep -oE "cov: [0-9]+" "$out/$n/log.txt" | tail -1 | grep -oE "[0-9]+$" || echo 0)
   crashes=$(find "$out/$n" -maxdepth 1 -newer "$out/$n/.started" -regextype egrep -regex ".*/(crash|leak|timeout|oom)-.*" | wc -l)
   # Columns: when, harness, CPU seconds, executions, coverage, crash files, wall seconds (a
@@ -85,5 +85,20 @@ for n in "${names[@]}"; do
 done
 wait
 status=0
-for n in "${names[@]}"; do [ -f "$out/$n/.failed" ] && status=1; done
+for n in "${names[@]}"; do
+  [ -f "$out/$n/.failed" ] || continue
+  status=1
+  # What a failure was, said where CI shows it (the log stays on the machine that ran it): the
+  # sanitizer's or libFuzzer's own lines, and each input it left, in base64 when small, so that
+  # it can be replayed elsewhere (base64 -d > input; build-fuzz/tests/fuzz/fuzz_<name> input).
+  {
+    echo "fuzz $n: what it reported (whole log: $out/$n/log.txt)"
+    grep -E "^==[0-9]+==|^SUMMARY|^(ERROR|MS):|^    #[0-9] " "$out/$n/log.txt" | head -24 | sed 's/^/  /' || true
+    find "$out/$n" -maxdepth 1 -newer "$out/$n/.started" -regextype egrep \
+      -regex ".*/(crash|leak|timeout|oom)-.*" | while read -r f; do
+      echo "  input $(basename "$f"), $(stat -c %s "$f") bytes"
+      if [ "$(stat -c %s "$f")" -le 16384 ]; then echo "  base64: $(base64 -w0 "$f")"; fi
+    done || true
+  } >&2
+done
 exit $status
