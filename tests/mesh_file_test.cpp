@@ -494,6 +494,40 @@ TEST_F(MeshFileTest, TheSweptSurfacePlyReadsBackThroughThePartLoader) {
     EXPECT_LT((part.mesh.vertices[i] - points[i]).norm(), 1e-5) << i;
 }
 
+// A 3MF archive is checked before assimp reads it: Debian's assimp 5.2 aborted the process (an
+// ai_assert) on a model that does not inflate (the scene harness, one corrupt byte), on a
+// _rels/.rels naming a model not in the archive and on a _rels/.rels that is not XML. Each is
+// refused with a message, and the sound archive they were made from still reads.
+TEST_F(MeshFileTest, ADamaged3mfIsRefusedBeforeAssimpReadsIt) {
+  auto corpus = [](const std::string& name) {
+    std::ifstream in(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/scene_corpus/" + name, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_GT(bytes.size(), 100u) << name;
+    return bytes.substr(1);  // (the harness's first byte: the format)
+  };
+  const std::pair<const char*, const char*> refused[] = {
+      {"3mf_model_does_not_inflate", "'3D/3DModel.model' is damaged"},
+      {"3mf_rels_names_a_missing_model", "'3D/Other.model' that _rels/.rels names is not in the archive"},
+      {"3mf_rels_not_xml", "_rels/.rels is not XML"},
+      {"3mf_without_rels", "no _rels/.rels"}};
+  for (const auto& [name, why] : refused) {
+    try {
+      readPartMesh(write("damaged.3mf", corpus(name)));
+      ADD_FAILURE() << "accepted " << name;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("damaged.3mf: 3MF: "), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  }
+  try {
+    readPartMesh(write("text.3mf", "solid not a zip\n"));
+    ADD_FAILURE() << "accepted a text file";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not a zip archive"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(readPartMesh(write("sound.3mf", corpus("scene_3mf"))).mesh.faces.size(), 12u);
+}
+
 // The VTP surface (raw appended binary, no compression) reads back through VTK's own reader:
 // every point, triangle and scalar value exactly.
 TEST(SurfaceFiles, VtpSurfaceReadsBackExactly) {

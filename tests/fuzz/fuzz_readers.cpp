@@ -68,6 +68,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     tolver::PartImportOptions o;
     o.units = data[0] & 4 ? "inch" : "mm";
     tolver::readPartMesh(path, o);
+#elif TOLVER_FUZZ_TARGET == 11
+    // The scene formats of the same loader: the first byte chooses glTF binary, glTF text or 3MF
+    // (a zip), the rest is the file (tests/fuzz/scene_corpus: a cube exported by assimp).
+    if (size < 1) return 0;
+    static const char* ext[3] = {".glb", ".gltf", ".3mf"};
+    const std::string path = "/tmp/tolver-fuzz-" + std::to_string(::getpid()) + ext[data[0] % 3];
+    if (std::FILE* f = std::fopen(path.c_str(), "wb")) {
+      std::fwrite(data + 1, 1, size - 1, f);
+      std::fclose(f);
+    }
+    tolver::readPartMesh(path, tolver::PartImportOptions{});
 #endif
   } catch (const tolver::InputError&) {
   }

@@ -25,7 +25,8 @@ declare -A corpus=([apt]="tests/fixtures/cl samples/*.apt" [gcode]="tests/fixtur
                    [machine]="resources/machines tests/fixtures/machines samples/machines" [setup]="samples/*setup*.txt samples/gcode/*.txt"
                    [ballbar]="samples/ballbar/*.csv" [zones]="samples/sculptured_zones.csv"
                    [tolerances]="resources/allocation" [probe]="samples/matsuura_probed.csv"
-                   [jobs]="samples/verify_jobs.csv" [mesh]="tests/fuzz/mesh_corpus")
+                   [jobs]="samples/verify_jobs.csv" [mesh]="tests/fuzz/mesh_corpus"
+                   [scene]="tests/fuzz/scene_corpus")
 # One harness: its corpus seeded, its run, one line in history.tsv; a failure leaves a file.
 run_one() {
   local n="$1"
