@@ -526,6 +526,15 @@ TEST_F(MeshFileTest, ADamaged3mfIsRefusedBeforeAssimpReadsIt) {
     EXPECT_NE(std::string(e.what()).find("not a zip archive"), std::string::npos) << e.what();
   }
   EXPECT_EQ(readPartMesh(write("sound.3mf", corpus("scene_3mf"))).mesh.faces.size(), 12u);
+  // A .gltf holding a damaged zip (the harness again): assimp, failing to parse it as glTF,
+  // handed it to its 3MF reader, which aborted. Checked as a zip whatever its extension.
+  try {
+    readPartMesh(write("zip.gltf", corpus("gltf_holding_a_damaged_zip")));
+    ADD_FAILURE() << "accepted a .gltf holding a damaged zip";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("zip.gltf: zip archive read as 3MF: "), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(readPartMesh(write("sound.gltf", corpus("scene_gltf")), PartImportOptions{}).mesh.faces.size(), 12u);
 }
 
 // The VTP surface (raw appended binary, no compression) reads back through VTK's own reader:
