@@ -507,6 +507,7 @@ TEST_F(MeshFileTest, ADamaged3mfIsRefusedBeforeAssimpReadsIt) {
   };
   const std::pair<const char*, const char*> refused[] = {
       {"3mf_model_does_not_inflate", "'3D/3DModel.model' is damaged"},
+      {"3mf_model_inflates_short", "'3D/3DModel.model' is damaged (it inflates to 2183 of its 2188 bytes)"},
       {"3mf_rels_names_a_missing_model", "'3D/Other.model' that _rels/.rels names is not in the archive"},
       {"3mf_rels_not_xml", "_rels/.rels is not XML"},
       {"3mf_without_rels", "no _rels/.rels"}};

@@ -390,13 +390,22 @@ void check3mf(const std::string& path, bool required) {
     if (unzOpenCurrentFile(zip) != UNZ_OK)
       throw InputError(path, 0, 0, field, "entry '" + printable(name) + "' cannot be opened");
     int n;
-    while ((n = unzReadCurrentFile(zip, buffer.data(), static_cast<unsigned>(buffer.size()))) > 0)
+    unsigned long long size = 0;
+    while ((n = unzReadCurrentFile(zip, buffer.data(), static_cast<unsigned>(buffer.size()))) > 0) {
+      size += static_cast<unsigned>(n);
       if (is_rels && rels.size() < (1u << 20)) rels.append(buffer.data(), n);
+    }
+    // (minizip checks the CRC only when the entry inflated to its declared size: a stream that
+    // ends early is caught by its size; the harness found one.)
     const int closed = unzCloseCurrentFile(zip);
-    if (n < 0 || closed != UNZ_OK)
+    if (n < 0 || closed != UNZ_OK || size != info.uncompressed_size)
       throw InputError(path, 0, 0, field,
                        "entry '" + printable(name) + "' is damaged (" +
-                           (closed == UNZ_CRCERROR ? "its checksum is wrong" : "it does not inflate") + ")");
+                           (closed == UNZ_CRCERROR ? "its checksum is wrong"
+                            : n < 0               ? "it does not inflate"
+                                                  : "it inflates to " + std::to_string(size) + " of its " +
+                                                        std::to_string(info.uncompressed_size) + " bytes") +
+                           ")");
   }
   if (rc != UNZ_END_OF_LIST_OF_FILE) throw InputError(path, 0, 0, field, "the archive's directory is damaged");
   if (std::find(names.begin(), names.end(), "_rels/.rels") == names.end())
