@@ -536,6 +536,20 @@ TEST_F(MeshFileTest, ADamaged3mfIsRefusedBeforeAssimpReadsIt) {
     EXPECT_NE(std::string(e.what()).find("zip.gltf: zip archive read as 3MF: "), std::string::npos) << e.what();
   }
   EXPECT_EQ(readPartMesh(write("sound.gltf", corpus("scene_gltf")), PartImportOptions{}).mesh.faces.size(), 12u);
+  // A binary glTF whose JSON chunk declares 0xf8000000 bytes in a 3 kB file (the harness:
+  // assimp asked for 4.2 GB), and the sound one with its BIN chunk cut short: refused from the
+  // header; the sound one reads.
+  const std::string glb = corpus("scene_glb");
+  for (const std::string& text : {corpus("glb_json_chunk_beyond_the_file"), glb.substr(0, glb.size() - 4)}) {
+    try {
+      readPartMesh(write("damaged.glb", text));
+      ADD_FAILURE() << "accepted a damaged .glb";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("damaged.glb: glTF: "), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("bytes"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(readPartMesh(write("sound.glb", glb)).mesh.faces.size(), 12u);
 }
 
 // The VTP surface (raw appended binary, no compression) reads back through VTK's own reader:

@@ -431,6 +431,47 @@ void check3mf(const std::string& path, bool required) {
     throw InputError(path, 0, 0, field, "the 3D model '" + printable(target) + "' that _rels/.rels names is not in the archive");
 }
 
+// A binary glTF's header and chunk lengths must fit in the file: Debian's assimp 5.2 allocates
+// the JSON chunk's declared length before reading it (the scene harness: a length of 0xf8000000
+// in a 3 kB file asked for 4.2 GB). Layout (glTF 2.0, little-endian): 'glTF', version, total
+// length, then chunks of (length, type, data): JSON first, BIN optionally after it.
+void checkGlb(const std::string& path) {
+  std::error_code size_error;
+  const unsigned long long size = std::filesystem::file_size(path, size_error);
+  if (size_error) return;
+  std::ifstream in(path, std::ios::binary);
+  auto bytesAt = [&](unsigned long long at, size_t n) {
+    std::string b(n, '\0');
+    in.clear();
+    in.seekg(static_cast<std::streamoff>(at));
+    in.read(b.data(), static_cast<std::streamsize>(n));
+    b.resize(static_cast<size_t>(in.gcount()));
+    return b;
+  };
+  auto u32 = [](const std::string& b, size_t at) {
+    unsigned long long v = 0;
+    for (int k = 3; k >= 0; --k) v = (v << 8) | static_cast<unsigned char>(b[at + k]);
+    return v;
+  };
+  const std::string head = bytesAt(0, 20);
+  if (head.size() < 20 || head.compare(0, 4, "glTF") != 0)
+    throw InputError(path, 0, 0, "glTF", "not a binary glTF (it starts with 'glTF' and a 20-byte header)");
+  if (u32(head, 4) != 2)
+    throw InputError(path, 0, 0, "glTF", "version " + std::to_string(u32(head, 4)) + " (tolver reads glTF 2)");
+  if (u32(head, 8) > size)
+    throw InputError(path, 0, 0, "glTF", "the header declares " + std::to_string(u32(head, 8)) +
+                                             " bytes; the file has " + std::to_string(size));
+  const unsigned long long json = u32(head, 12);
+  if (head.compare(16, 4, "JSON") != 0 || 20 + json > size)
+    throw InputError(path, 0, 0, "glTF", "the first chunk is not JSON within the file (" + std::to_string(json) +
+                                             " bytes declared, " + std::to_string(size) + " in the file)");
+  const unsigned long long bin_at = 20 + ((json + 3) & ~3ull);
+  const std::string bin = bin_at + 8 <= size ? bytesAt(bin_at, 8) : std::string();
+  if (bin.size() == 8 && bin_at + 8 + u32(bin, 0) > size)
+    throw InputError(path, 0, 0, "glTF", "the binary chunk declares " + std::to_string(u32(bin, 0)) +
+                                             " bytes beyond the file's " + std::to_string(size));
+}
+
 }  // namespace
 
 ImportedPart readPartMesh(const std::string& path, const PartImportOptions& options) {
@@ -458,6 +499,7 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
   if (part.format == "ply") checkPly(path);
   if (part.format == "off") checkOffHeader(path);
   check3mf(path, part.format == "3mf");
+  if (part.format == "glb") checkGlb(path);
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   // Read and validated first, triangulated after: Debian's assimp 5.2 aborts the process (an
