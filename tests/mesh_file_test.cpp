@@ -552,6 +552,36 @@ TEST_F(MeshFileTest, ADamaged3mfIsRefusedBeforeAssimpReadsIt) {
   EXPECT_EQ(readPartMesh(write("sound.glb", glb)).mesh.faces.size(), 12u);
 }
 
+// The scene formats are read by assimp in a child process: a damaged binary glTF on which
+// Debian's assimp 5.2 crashes with a segmentation fault (the scene harness: a line loop whose
+// indices pass its vertices) is an error naming the file, and the process goes on to read a
+// sound one. (Under the sanitizers the child ends with the sanitizer's exit instead of the signal.)
+TEST_F(MeshFileTest, AssimpCrashingOnASceneFileIsAnErrorNotACrash) {
+  std::ifstream in(std::string(TOLVER_SOURCE_DIR) +
+                       "/tests/fuzz/open_findings/scene_glb_line_loop_index_past_vertices",
+                   std::ios::binary);
+  const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  ASSERT_GT(found.size(), 1000u);
+  try {
+    readPartMesh(write("crash.glb", found.substr(1)));
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("crash.glb: mesh: assimp stopped"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("a damaged file?"), std::string::npos) << e.what();
+  }
+  // The same reading path gives the sound file whole: its groups, faces and vertices.
+  std::ifstream in2(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/scene_corpus/scene_glb", std::ios::binary);
+  const std::string glb((std::istreambuf_iterator<char>(in2)), std::istreambuf_iterator<char>());
+  const ImportedPart part = readPartMesh(write("sound.glb", glb.substr(1)));
+  EXPECT_EQ(part.mesh.faces.size(), 12u);
+  EXPECT_EQ(part.mesh.face_group.size(), 12u);
+  ASSERT_EQ(part.mesh.group_names.size(), 1u);
+  EXPECT_EQ(part.mesh.group_names[0], "part");
+  Eigen::AlignedBox3d box;
+  for (const auto& v : part.mesh.vertices) box.extend(v);
+  EXPECT_TRUE(box.max().isApprox(Eigen::Vector3d(20000, 20000, 20000))) << box.max().transpose();  // m -> mm
+}
+
 // The VTP surface (raw appended binary, no compression) reads back through VTK's own reader:
 // every point, triangle and scalar value exactly.
 TEST(SurfaceFiles, VtpSurfaceReadsBackExactly) {

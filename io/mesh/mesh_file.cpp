@@ -20,6 +20,10 @@
 #include <filesystem>
 #include <vector>
 #include <string_view>
+#include <cerrno>
+#include <csignal>
+#include <sys/wait.h>
+#include <unistd.h>
 #include <fstream>
 
 #include "io/common/io_error.h"
@@ -472,6 +476,160 @@ void checkGlb(const std::string& path) {
                                              " bytes beyond the file's " + std::to_string(size));
 }
 
+// The file read by assimp into one mesh (its nodes' transforms applied, faces triangulated).
+TriangleMesh importWithAssimp(const std::string& path, const std::string& format) {
+  Assimp::Importer importer;
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  // Read and validated first, triangulated after: Debian's assimp 5.2 aborts the process (an
+  // ai_assert in its TriangulateProcess) on a face without vertices, which a malformed PLY makes
+  // (found by the mesh fuzz harness), so such faces are refused before triangulating.
+  // An OBJ is handed over from memory with a zero byte after it: Debian's assimp 5.2 parses
+  // numbers with strtol on its own copy of the file, which has no terminating zero, so a file
+  // ending in digits would be read past its end (the mesh fuzz harness,
+  // tests/fuzz/mesh_corpus/obj_strtol_unterminated).
+  const aiScene* scene = nullptr;
+  if (format == "obj") {
+    std::string text = readFile(path);
+    text.push_back('\n');
+    text.push_back('\0');
+    scene = importer.ReadFileFromMemory(text.data(), text.size(), aiProcess_ValidateDataStructure, "obj");
+  } else {
+    scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+  }
+  auto unreadable = [&] {
+    std::string why = importer.GetErrorString();
+    if (why.empty()) why = "not a readable mesh";
+    // assimp turns a failed allocation into its error string; said as what it means here.
+    if (why.find("bad_alloc") != std::string::npos)
+      why = "assimp ran out of memory reading it (a count in a damaged file beyond what the file holds?)";
+    throw InputError(path, 0, 0, "mesh", why);
+  };
+  if (!scene || !scene->mRootNode) unreadable();
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m)
+    for (unsigned f = 0; f < scene->mMeshes[m]->mNumFaces; ++f)
+      if (scene->mMeshes[m]->mFaces[f].mNumIndices == 0)
+        throw InputError(path, 0, 0, "mesh",
+                         "face " + std::to_string(f + 1) + " of mesh " + std::to_string(m + 1) +
+                             " has no vertex (a malformed face list)");
+  scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_SortByPType);
+  if (!scene || !scene->mRootNode) unreadable();
+  TriangleMesh raw;
+  std::vector<char> seen(scene->mNumMeshes, 0);
+  collect(scene, scene->mRootNode, Eigen::Matrix4d::Identity(), &raw, &seen);
+  return raw;
+}
+
+// The scene formats (glTF, 3MF) are read by assimp in a child process: Debian's assimp 5.2
+// crashes on damaged glTF files in ways no check before it can foresee (the scene fuzz harness:
+// a line loop whose indices pass its vertices, a segmentation fault; a strip without positions,
+// 2^32 faces allocated). The child sends the mesh, or the error, through a pipe; a child that
+// ends any other way (a signal, a sanitizer's exit) is said as a damaged file, and tolver goes
+// on. Under the fuzz harness (TOLVER_FUZZING) the read stays in the process, so that what
+// assimp does is seen.
+TriangleMesh importInChildProcess(const std::string& path, const std::string& format) {
+#ifdef TOLVER_FUZZING
+  return importWithAssimp(path, format);
+#else
+  int fds[2];
+  if (::pipe(fds) != 0) return importWithAssimp(path, format);
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fds[0]);
+    ::close(fds[1]);
+    return importWithAssimp(path, format);
+  }
+  auto putAll = [](int fd, const std::string& bytes) {
+    for (size_t at = 0; at < bytes.size();) {
+      const ssize_t n = ::write(fd, bytes.data() + at, bytes.size() - at);
+      if (n <= 0) return;
+      at += static_cast<size_t>(n);
+    }
+  };
+  if (pid == 0) {  // the child: read, send, and leave without running anything else
+    ::close(fds[0]);
+    std::string out;
+    auto add = [&](const void* p, size_t n) { out.append(static_cast<const char*>(p), n); };
+    try {
+      const TriangleMesh m = importWithAssimp(path, format);
+      const uint64_t counts[3] = {m.vertices.size(), m.faces.size(), m.group_names.size()};
+      out = "M";
+      add(counts, sizeof counts);
+      add(m.vertices.data(), m.vertices.size() * sizeof(Eigen::Vector3d));
+      add(m.faces.data(), m.faces.size() * sizeof(Eigen::Vector3i));
+      add(m.face_group.data(), m.face_group.size() * sizeof(int));
+      for (const std::string& g : m.group_names) {
+        const uint64_t n = g.size();
+        add(&n, sizeof n);
+        out += g;
+      }
+    } catch (const InputError& e) {
+      out = "E" + e.field() + '\n' + e.what();
+    } catch (const std::exception& e) {
+      out = std::string("E") + "mesh\n" + e.what();
+    }
+    putAll(fds[1], out);
+    ::close(fds[1]);
+    ::_exit(0);
+  }
+  ::close(fds[1]);
+  std::string in;
+  char buffer[1 << 16];
+  for (;;) {
+    const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
+    if (n > 0) in.append(buffer, static_cast<size_t>(n));
+    else if (n == 0 || errno != EINTR) break;
+  }
+  ::close(fds[0]);
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  const bool clean = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  if (clean && !in.empty() && in[0] == 'E') {
+    const size_t eol = in.find('\n');
+    const std::string field = in.substr(1, eol - 1);
+    std::string what = in.substr(eol + 1);
+    const std::string prefix = path + ": " + field + ": ";
+    if (what.rfind(prefix, 0) == 0) what.erase(0, prefix.size());
+    throw InputError(path, 0, 0, field, what);
+  }
+  TriangleMesh m;
+  uint64_t counts[3] = {0, 0, 0};
+  size_t at = 1;
+  auto take = [&](void* p, size_t n) {
+    if (in.size() - at < n) return false;
+    std::memcpy(p, in.data() + at, n);
+    at += n;
+    return true;
+  };
+  bool whole = clean && in.size() >= 1 + sizeof counts && in[0] == 'M' && take(counts, sizeof counts) &&
+               counts[0] <= in.size() && counts[1] <= in.size() && counts[2] <= in.size();
+  if (whole) {
+    m.vertices.resize(counts[0]);
+    m.faces.resize(counts[1]);
+    m.face_group.resize(counts[1]);
+    m.group_names.resize(counts[2]);
+    whole = take(m.vertices.data(), counts[0] * sizeof(Eigen::Vector3d)) &&
+            take(m.faces.data(), counts[1] * sizeof(Eigen::Vector3i)) &&
+            take(m.face_group.data(), counts[1] * sizeof(int));
+    for (std::string& g : m.group_names) {
+      uint64_t n = 0;
+      whole = whole && take(&n, sizeof n) && n <= in.size() - at;
+      if (!whole) break;
+      g = in.substr(at, n);
+      at += n;
+    }
+  }
+  if (!whole) {
+    std::string how = WIFSIGNALED(status) ? "stopped on signal " + std::to_string(WTERMSIG(status)) + " (" +
+                                                strsignal(WTERMSIG(status)) + ")"
+                      : WIFEXITED(status) ? "stopped with exit code " + std::to_string(WEXITSTATUS(status))
+                                          : "stopped";
+    throw InputError(path, 0, 0, "mesh", "assimp " + how + " reading it: a damaged file?");
+  }
+  return m;
+#endif
+}
+
 }  // namespace
 
 ImportedPart readPartMesh(const std::string& path, const PartImportOptions& options) {
@@ -500,41 +658,9 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
   if (part.format == "off") checkOffHeader(path);
   check3mf(path, part.format == "3mf");
   if (part.format == "glb") checkGlb(path);
-  Assimp::Importer importer;
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  // Read and validated first, triangulated after: Debian's assimp 5.2 aborts the process (an
-  // ai_assert in its TriangulateProcess) on a face without vertices, which a malformed PLY makes
-  // (found by the mesh fuzz harness), so such faces are refused before triangulating.
-  // An OBJ is handed over from memory with a zero byte after it: Debian's assimp 5.2 parses
-  // numbers with strtol on its own copy of the file, which has no terminating zero, so a file
-  // ending in digits would be read past its end (the mesh fuzz harness,
-  // tests/fuzz/mesh_corpus/obj_strtol_unterminated).
-  const aiScene* scene = nullptr;
-  if (part.format == "obj") {
-    std::string text = readFile(path);
-    text.push_back('\n');
-    text.push_back('\0');
-    scene = importer.ReadFileFromMemory(text.data(), text.size(), aiProcess_ValidateDataStructure, "obj");
-  } else {
-    scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
-  }
-  auto unreadable = [&] {
-    std::string why = importer.GetErrorString();
-    if (why.empty()) why = "not a readable mesh";
-    throw InputError(path, 0, 0, "mesh", why);
-  };
-  if (!scene || !scene->mRootNode) unreadable();
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m)
-    for (unsigned f = 0; f < scene->mMeshes[m]->mNumFaces; ++f)
-      if (scene->mMeshes[m]->mFaces[f].mNumIndices == 0)
-        throw InputError(path, 0, 0, "mesh",
-                         "face " + std::to_string(f + 1) + " of mesh " + std::to_string(m + 1) +
-                             " has no vertex (a malformed face list)");
-  scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_SortByPType);
-  if (!scene || !scene->mRootNode) unreadable();
-  TriangleMesh raw;
-  std::vector<char> seen(scene->mNumMeshes, 0);
-  collect(scene, scene->mRootNode, Eigen::Matrix4d::Identity(), &raw, &seen);
+  TriangleMesh raw = (part.format == "gltf" || part.format == "glb" || part.format == "3mf")
+                         ? importInChildProcess(path, part.format)
+                         : importWithAssimp(path, part.format);
   if (raw.faces.empty()) throw InputError(path, 0, 0, "mesh", "the file holds no triangles");
   for (auto& v : raw.vertices) v = options.w_T_file * (scale * v);
   // A vertex far beyond any part (a corrupt or mis-scaled file) would make the sampling and
