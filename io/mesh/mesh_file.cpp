@@ -38,8 +38,8 @@ std::string lowerExtension(const std::string& path) {
   return ext;
 }
 
-// PLY's scalar types: their size in bytes, and for integers the largest count a list's count
-// of that type can hold. Size 0: not a PLY type.
+// PLY's scalar types: their size in bytes, whether integer, whether signed (a list's count must be
+// of an integer type, and holds at most what its size and sign allow). Size 0: not a PLY type.
 struct PlyType {
   int size = 0;
   bool integer = false, is_signed = false;
