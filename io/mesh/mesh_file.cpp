@@ -191,8 +191,7 @@ void checkPlyBinaryBody(const std::string& path, const std::string& bytes, size_
 // list <type> <type> <name>, comment, obj_info), in text, with end_header in the first 64 kB;
 // and the body must hold exactly what the header declares: in ASCII one line per element, in
 // binary every list's count within the file.
-void checkPly(const std::string& path) {
-  const std::string bytes = readFile(path);
+void checkPly(const std::string& path, const std::string& bytes) {
   const std::string_view head = std::string_view(bytes).substr(0, 65536);
   bool seen_vertex = false, ascii = false, big_endian = false, seen_format = false;
   std::vector<PlyElement> elements;
@@ -477,7 +476,10 @@ void checkGlb(const std::string& path) {
 }
 
 // The file read by assimp into one mesh (its nodes' transforms applied, faces triangulated).
-TriangleMesh importWithAssimp(const std::string& path, const std::string& format) {
+// ply_bytes: the PLY's bytes as checkPly checked them, handed to assimp from memory (the file is
+// read once, and assimp reads what was checked).
+TriangleMesh importWithAssimp(const std::string& path, const std::string& format,
+                              const std::string* ply_bytes = nullptr) {
   Assimp::Importer importer;
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   // Read and validated first, triangulated after: Debian's assimp 5.2 aborts the process (an
@@ -493,6 +495,8 @@ TriangleMesh importWithAssimp(const std::string& path, const std::string& format
     text.push_back('\n');
     text.push_back('\0');
     scene = importer.ReadFileFromMemory(text.data(), text.size(), aiProcess_ValidateDataStructure, "obj");
+  } else if (ply_bytes) {
+    scene = importer.ReadFileFromMemory(ply_bytes->data(), ply_bytes->size(), aiProcess_ValidateDataStructure, "ply");
   } else {
     scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
   }
@@ -654,13 +658,17 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
     throw InputError(path, 0, 0, "units", "unknown length unit '" + part.units +
                                               "' (use mm, inch or m)");
 
-  if (part.format == "ply") checkPly(path);
+  std::string ply_bytes;
+  if (part.format == "ply") {
+    ply_bytes = readFile(path);
+    checkPly(path, ply_bytes);
+  }
   if (part.format == "off") checkOffHeader(path);
   check3mf(path, part.format == "3mf");
   if (part.format == "glb") checkGlb(path);
   TriangleMesh raw = (part.format == "gltf" || part.format == "glb" || part.format == "3mf")
                          ? importInChildProcess(path, part.format)
-                         : importWithAssimp(path, part.format);
+                         : importWithAssimp(path, part.format, part.format == "ply" ? &ply_bytes : nullptr);
   if (raw.faces.empty()) throw InputError(path, 0, 0, "mesh", "the file holds no triangles");
   for (auto& v : raw.vertices) v = options.w_T_file * (scale * v);
   // A vertex far beyond any part (a corrupt or mis-scaled file) would make the sampling and
