@@ -31,6 +31,9 @@ void addProgramOptions(CLI::App* cmd, ProgramOptions& o) {
   cmd->add_option("--lines", o.lines,
                   "only the tool positions of these program lines, 'first-last' (a piece that "
                   "tolver setup split off)");
+  cmd->add_flag("--absolute-msys", o.absolute_msys,
+                "NX CLSF: read every MSYS in the CAD's absolute frame (default: the first MSYS "
+                "is the part frame and later ones are 3+2 set-ups relative to it)");
 }
 
 void addProbedOption(CLI::App* cmd, std::string& path) {

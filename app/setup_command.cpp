@@ -1,5 +1,6 @@
 // tolver setup: the program's extent and joint ranges against the machine's travel, and a part
 // zero, rotation and gauge length that keep the whole program inside travel (core/setup_search).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -102,7 +103,7 @@ std::vector<ClPoint> partFramePoints(const ClProgram& program,
                                      std::vector<JointVector>* commanded) {
   std::vector<ClPoint> path;
   for (size_t i = 0; i < program.path.size(); ++i) {
-    if (!program.tcp.empty() && !program.tcp[i]) continue;
+    if (!program.tcp.empty() && program.tcp[i] != ClProgram::kTcpWords) continue;
     path.push_back(program.path[i]);
     if (!program.joints.empty()) commanded->push_back(program.joints[i]);
   }
@@ -209,6 +210,59 @@ void printSetupHeader(const SetupOptions& o, const ClProgram& program, const Mac
     std::fprintf(stderr, "tolver: note: %s: %s\n", program.file.c_str(), w.c_str());
 }
 
+// Set-up of a program posted outside TCP mode: the work offset that centres its joints.
+void runWorkOffsetSetup(const SetupOptions& o, const ClProgram& program, const MachineModel& model,
+                        int* exit_code) {
+  printSetupHeader(o, program, model, program.path);
+  int fixed = 0;
+  for (char k : program.tcp) fixed += k == ClProgram::kMachineCoordinates;
+  std::printf("  mode       every move in joint words: %zu in the work offset, %d in machine "
+              "coordinates (G53/G28/SUPA, fixed)\n",
+              program.path.size() - fixed, fixed);
+  const WorkOffsetSetup r =
+      proposeWorkOffset(model, program.joints, program.tcp, program.fixed_axes);
+  if (!std::isfinite(r.margin)) {
+    std::printf("  result     no move is given in a work offset: the set-up does not change where "
+                "the machine goes\n");
+    *exit_code = r.found ? 0 : 1;
+    return;
+  }
+  std::printf("  proposed   part_zero_mm = %.3f, %.3f, %.3f (the program's origin)\n",
+              r.part_zero_table.x(), r.part_zero_table.y(), r.part_zero_table.z());
+  std::printf("             work offset at the control (G54..., machine coordinates): X%.3f "
+              "Y%.3f Z%.3f\n",
+              r.work_offset_m.x(), r.work_offset_m.y(), r.work_offset_m.z());
+  std::printf("             gauge_length_mm = %.3f (tool length when the set-up gives none)\n",
+              model.setup.gauge_length);
+  printRanges(model, program, r.ranges);
+  if (r.found) {
+    std::printf("  result     every point inside travel, smallest margin %.3f mm (exact: each "
+                "axis's range centred)\n", r.margin);
+    *exit_code = 0;
+  } else {
+    const char* axis = r.limiting_axis >= 0 ? model.axes[r.limiting_axis].name.c_str() : "-";
+    if (r.limited_by_machine_coordinates)
+      std::printf("  result     a move in machine coordinates (G53/G28/SUPA) is outside %s's travel "
+                  "by %.3f mm: no work offset moves it; the program was posted for another "
+                  "machine's home or travel\n", axis, -r.margin);
+    else
+      std::printf("  result     the program does not fit this machine's travel with any work "
+                  "offset: %s needs %.3f mm more\n", axis, -r.margin);
+    *exit_code = 1;
+  }
+  if (o.output.empty()) return;
+  PartSetup b = model.setup;
+  b.part_zero_table = r.part_zero_table;
+  OutputSet files;
+  std::string text = setupFileText(program, model, b, r.margin, "");
+  text += "# at the control: G54 (and every work offset the program uses) = X" +
+          formatNumber(r.work_offset_m.x()) + " Y" + formatNumber(r.work_offset_m.y()) + " Z" +
+          formatNumber(r.work_offset_m.z()) + " (machine coordinates, mm)\n";
+  files.add(o.output, text);
+  files.commit();
+  std::printf("  wrote      %s (set-up file)\n", o.output.c_str());
+}
+
 void runSetup(const SetupOptions& o, int* exit_code) {
   Machine machine = loadMachine(o.machine);
   // The search moves the part frame with the program in it: a posted program's work offsets
@@ -227,6 +281,14 @@ void runSetup(const SetupOptions& o, int* exit_code) {
                        "expected lengths from 0 to 1e5 mm");
   const MachineModel& model = machine.model;
 
+  // A posted program with no point in TCP mode: its words are joints in a work offset, and the
+  // part zero (with the work offset at it) is proposed exactly, axis by axis.
+  if (program.dialect == "G-code" &&
+      std::none_of(program.tcp.begin(), program.tcp.end(),
+                   [](char k) { return k == ClProgram::kTcpWords; })) {
+    runWorkOffsetSetup(o, program, model, exit_code);
+    return;
+  }
   // Joint-mode G-code points are fixed in machine coordinates: the search moves the part under
   // the points given in the part frame (CL data, TCP G-code).
   std::vector<JointVector> commanded;

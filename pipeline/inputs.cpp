@@ -89,6 +89,7 @@ void keepLines(ClProgram& p, const std::string& spec) {
     if (i < p.point_frame.size()) p.point_frame[k] = p.point_frame[i];
     if (i < p.joints.size()) p.joints[k] = p.joints[i];
     if (i < p.tcp.size()) p.tcp[k] = p.tcp[i];
+    if (i < p.fixed_axes.size()) p.fixed_axes[k] = p.fixed_axes[i];
     ++k;
   }
   if (k == 0)
@@ -108,6 +109,7 @@ void keepLines(ClProgram& p, const std::string& spec) {
   if (p.point_frame.size() > k) p.point_frame.resize(k);
   if (p.joints.size() > k) p.joints.resize(k);
   if (p.tcp.size() > k) p.tcp.resize(k);
+  if (p.fixed_axes.size() > k) p.fixed_axes.resize(k);
 }
 
 bool hasGcodeExtension(const std::string& path) {
@@ -146,6 +148,7 @@ ClProgram readProgram(LineSource& source, const std::string& path, bool gcode, c
     AptReadOptions ro;
     ro.chordal_tolerance_mm = o.chordal_tolerance;
     ro.keep_motion_text = o.keep_motion_text;
+    ro.absolute_msys = o.absolute_msys;
     program = readApt(source, path, ro);
     if (program.path.empty())
       throw InputError(path, 0, 0, "GOTO", "the program has no tool positions");
@@ -261,14 +264,16 @@ std::vector<std::string> programNotes(const ClProgram& program) {
       const Eigen::Vector3d o = f.scale * f.T.translation();
       char buf[300];
       std::snprintf(buf, sizeof buf,
-                    "%s at line %d applied: the points are in the CAM system's absolute frame, "
-                    "where that system's origin is (%.3f, %.3f, %.3f) mm; the set-up's part zero "
-                    "places the absolute frame's origin",
+                    "%s at line %d applied: the points after it are moved into the part frame "
+                    "(that system's origin is at (%.3f, %.3f, %.3f) mm in it)",
                     st.major.c_str(), st.first_line, o.x(), o.y(), o.z());
       w.push_back(buf);
-      return w;
+      break;
     }
   }
+  if (program.cycle_holes > 0)
+    w.push_back(std::to_string(program.cycles) + " drilling cycle(s) expanded at " +
+                std::to_string(program.cycle_holes) + " holes (in, out along the tool axis)");
   if (program.unknown_count > 0) {
     std::string names;
     for (const auto& n : program.unknown_names) names += (names.empty() ? "" : ", ") + n;

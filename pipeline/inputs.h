@@ -42,6 +42,8 @@ struct ProgramOptions {
   // (compensate sets it); without it a long program costs its points, not its text
   // (AptReadOptions::keep_motion_text).
   bool keep_motion_text = false;
+  // NX MSYS in the CAD's absolute frame instead of relative to the first (AptReadOptions).
+  bool absolute_msys = false;
 };
 // Reads the CL or G-code program (G-code: --nc, a G-code extension, or content that reads as
 // G-code), as a stream of lines. Throws InputError.

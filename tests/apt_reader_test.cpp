@@ -29,8 +29,11 @@ void expectNear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double tol =
   EXPECT_LT((a - b).norm(), tol) << a.transpose() << " vs " << b.transpose();
 }
 
+// Read with --absolute-msys: the points in NX's absolute frame through the MSYS.
 TEST(AptReader, SiemensNxVariableContourWithMsysAndModalToolAxis) {
-  const ClProgram p = fixture("nx_ust_a.cls");
+  AptReadOptions absolute;
+  absolute.absolute_msys = true;
+  const ClProgram p = readAptFile(test::sourcePath("tests/fixtures/cl/nx_ust_a.cls"), absolute);
   EXPECT_EQ(p.path.size(), 546u);  // 546 GOTO, no arcs
   EXPECT_TRUE(p.multiax);
   // MSYS: origin (-120.2591, -1196.5, 142.5), x axis = j, y axis = i, so z = -k.
@@ -55,6 +58,7 @@ TEST(AptReader, SiemensNxVariableContourWithMsysAndModalToolAxis) {
 TEST(AptReader, SiemensNxCircleRecordsAreExpandedWithinTheChordalTolerance) {
   AptReadOptions opt;
   opt.chordal_tolerance_mm = 0.001;
+  opt.absolute_msys = true;  // the centre below is in NX's absolute frame
   const ClProgram p = readAptFile(test::sourcePath("tests/fixtures/cl/nx_cutcom.clsf"), opt);
   EXPECT_EQ(p.arcs_expanded, 140);
   EXPECT_EQ(statementEndPoints(p).size(), 566u);
@@ -124,9 +128,99 @@ TEST(AptReader, CreoPseudoCommentsContinuationsAndSpacesAroundSlash) {
   EXPECT_EQ(p.frames.size(), 3u);  // initial, UNITS, $$-> CSYS
   expectNear(p.path.front().p_w, Eigen::Vector3d(0, 1.5, 2.0));
   expectNear(p.path.back().p_w, statementEndPoints(p).back().p_w);
+  // CYCLE / DEEP, DEPTH 3.5, STEP 1, CLEAR 1 (continued with `$`) at two holes whose tops are
+  // at z 0.5: each expanded into clearance, depth and retract along the tool axis.
   const ClProgram d = fixture("creo_drilling.ncl");
-  EXPECT_EQ(d.path.size(), 4u);  // the CYCLE statement continues with `$`
+  EXPECT_EQ(d.cycles, 1);
+  EXPECT_EQ(d.cycle_holes, 2);
+  ASSERT_EQ(d.path.size(), 8u);
+  expectNear(d.path[1].p_w, Eigen::Vector3d(-7.2290790757, -23.0, 1.5));
+  EXPECT_TRUE(d.path[1].rapid);
+  expectNear(d.path[2].p_w, Eigen::Vector3d(-7.2290790757, -23.0, -3.0));
+  EXPECT_FALSE(d.path[2].rapid);
+  expectNear(d.path[3].p_w, Eigen::Vector3d(-7.2290790757, -23.0, 1.5));
+  expectNear(d.path[5].p_w, Eigen::Vector3d(-16.7803891180, -23.0, -3.0));
   expectNear(d.path.back().p_w, Eigen::Vector3d(-16.7803891180, -23.0, 2.0));
+}
+
+// NX writes the GOTOs in the MCS the MSYS names; the first MSYS is the part frame. A three-axis
+// operation in an MCS whose z points down in the CAD's absolute frame (x = j, y = i) keeps its
+// vertical tool axis and its numbers (issue 32: read through the MSYS it needed A = 180 deg).
+TEST(AptReader, NxPointsStayInTheMainMcs) {
+  const ClProgram p = fixture("nx_10_KONTUR_125_N2_162.cls");
+  expectNear(p.path.front().p_w, Eigen::Vector3d(650, -393, 964));
+  expectNear(p.path.front().u_w, Eigen::Vector3d(0, 0, 1));
+  for (const ClPoint& c : p.path) expectNear(c.u_w, Eigen::Vector3d(0, 0, 1));
+  // CIRCLE ... TIMES,2 at line 16: a helix of two full turns and the arc to its end point,
+  // from z 416 down to 413, every point on the circle of radius 56.25 about (1287.5, -341.25).
+  int helix = 0;
+  double turned = 0.0;
+  Eigen::Vector2d prev(1232.5388 - 1287.5, -353.2220 + 341.25);
+  for (const ClPoint& h : p.path) {
+    if (h.line != 17) continue;
+    ++helix;
+    const Eigen::Vector2d d(h.p_w.x() - 1287.5, h.p_w.y() + 341.25);
+    EXPECT_NEAR(d.norm(), 56.25, 2e-3);
+    EXPECT_GE(h.p_w.z(), 413.0 - 1e-9);
+    EXPECT_LE(h.p_w.z(), 416.0 + 1e-9);
+    turned += std::atan2(prev.x() * d.y() - prev.y() * d.x(), prev.dot(d));
+    prev = d;
+  }
+  EXPECT_GT(helix, 100);
+  // Clockwise seen from +z (axis -k): two turns and the 282 deg from start to end.
+  EXPECT_NEAR(turned, -(2 * 2 * M_PI + std::atan2(-11.972, -54.9612) -
+                       std::atan2(-56.25, -0.0108) + 2 * M_PI), 0.02);
+  // --absolute-msys: the same points through the MSYS (origin 393, -297.5, 3; z down).
+  AptReadOptions absolute;
+  absolute.absolute_msys = true;
+  const ClProgram a =
+      readAptFile(test::sourcePath("tests/fixtures/cl/nx_10_KONTUR_125_N2_162.cls"), absolute);
+  expectNear(a.path.front().p_w, Eigen::Vector3d(393 - 393, -297.5 + 650, 3 - 964));
+  expectNear(a.path.front().u_w, Eigen::Vector3d(0, 0, -1));
+}
+
+// A second MSYS is a 3+2 set-up relative to the first: its points are moved by the first's
+// inverse times its own; the first's points stay as written.
+TEST(AptReader, LaterMsysIsRelativeToTheMainMcs) {
+  const ClProgram p = parseApt(
+      "MSYS/100,0,0,1,0,0,0,1,0\n"
+      "GOTO/1,2,3,0,0,1\n"
+      "MSYS/100,0,50,1,0,0,0,0,1\n"  // x along x, y along z: the MCS turned -90 deg about x
+      "GOTO/1,2,3,0,0,1\n",
+      "two_msys.cls");
+  ASSERT_EQ(p.path.size(), 2u);
+  expectNear(p.path[0].p_w, Eigen::Vector3d(1, 2, 3));
+  expectNear(p.path[0].u_w, Eigen::Vector3d(0, 0, 1));
+  // main^-1 * second: origin (0, 0, 50), x = i, y = k, z = x cross y = -j.
+  expectNear(p.path[1].p_w, Eigen::Vector3d(1, -3, 52));
+  expectNear(p.path[1].u_w, Eigen::Vector3d(0, -1, 0));
+}
+
+// CL drilling cycles are expanded at each GOTO until CYCLE/OFF, along the tool axis: the
+// SolidWorks CAM part's 16 holes (FEDTO 10, RAPTO 3, RTRCTO 25) and NX's DEEP cycle.
+TEST(AptReader, DrillingCyclesAreExpandedNeverSkipped) {
+  const ClProgram p = fixture("swcam_basemach.apt");
+  EXPECT_EQ(p.cycles, 1);
+  EXPECT_EQ(p.cycle_holes, 16);
+  // The first hole: GOTO/29.06066,116.93934,0 with the tool along +z.
+  int k = 0;
+  while (p.path[k].line != 18) ++k;
+  expectNear(p.path[k].p_w, Eigen::Vector3d(29.06066, 116.93934, 25.0));
+  expectNear(p.path[k + 1].p_w, Eigen::Vector3d(29.06066, 116.93934, 3.0));
+  expectNear(p.path[k + 2].p_w, Eigen::Vector3d(29.06066, 116.93934, -10.0));
+  EXPECT_FALSE(p.path[k + 2].rapid);
+  expectNear(p.path[k + 3].p_w, Eigen::Vector3d(29.06066, 116.93934, 25.0));
+  EXPECT_TRUE(p.path[k + 3].rapid);
+  const ClProgram nx = fixture("nx_deep_drill.clsf");
+  EXPECT_EQ(nx.cycle_holes, 2);
+  // An unknown cycle is an error naming it.
+  try {
+    parseApt("GOTO/0,0,10\nCYCLE/SHAPE,FEDTO,5\nGOTO/0,0,0\n", "c.apt");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("SHAPE"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("c.apt:2"), std::string::npos) << e.what();
+  }
 }
 
 TEST(AptReader, ShortNxPathWithTldataAndEndOfPath) {

@@ -136,10 +136,10 @@ TEST_F(CompensateCli, TheConeOnTheMeasuredMatsuuraComesOutRight) {
 TEST_F(CompensateCli, ARealNxClsfPieceKeepsItsLinesAndItsFrame) {
   const std::string cl = src("tests/fixtures/cl/nx_ust_a.cls");
   auto r = test::runTolver("setup --machine " + src("resources/machines/matsuura_mc760vx.xml") + " --cl " + cl +
-                           " --gauge-length 100 -o " + path("s.txt"));
+                           " --absolute-msys --gauge-length 100 -o " + path("s.txt"));
   ASSERT_TRUE(fs::exists(path("s_part1.txt"))) << r.output;
   const nlohmann::json j = compensate(src("samples/machines/matsuura_mc760vx_measured.xml"), "--cl", cl,
-                                      "--setup " + path("s_part1.txt") + " --lines 11-578", path("u.cls"));
+                                      "--absolute-msys --setup " + path("s_part1.txt") + " --lines 11-578", path("u.cls"));
   ASSERT_FALSE(j.is_null());
   EXPECT_EQ(j["points"].get<int>(), 480);
   EXPECT_GT(j["before"]["tip_max_um"].get<double>(), 10.0);

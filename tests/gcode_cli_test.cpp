@@ -192,12 +192,13 @@ TEST_F(GcodeCli, VerifyRefusesImplausibleUnitsAndTolerances) {
 // A real NX CLSF (MSYS, 800 mm long, tool axes down to 4 deg from horizontal) on the Matsuura
 // (X 760, Y 510 mm of travel): no single set-up reaches it, which setup says with the lines the
 // best one leaves outside, and then splits it into two pieces whose set-up files each reach
-// every point of their lines; MSYS put the points in NX's absolute frame.
+// every point of their lines; --absolute-msys puts the points in NX's absolute frame (in its
+// MCS, whose z points down in that frame, every tool axis points down).
 TEST_F(GcodeCli, SetupOnARealClsfSplitsItIntoPiecesThatEachReach) {
   const std::string machine = src("resources/machines/matsuura_mc760vx.xml");
   const std::string cl = src("tests/fixtures/cl/nx_ust_a.cls");
   auto r = test::runTolver("setup --machine " + machine + " --cl " + cl +
-                           " --gauge-length 100 -o " + path("s.txt"));
+                           " --absolute-msys --gauge-length 100 -o " + path("s.txt"));
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("no single set-up reaches the whole program"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("MSYS at line 3 applied"), std::string::npos) << r.output;
@@ -210,7 +211,7 @@ TEST_F(GcodeCli, SetupOnARealClsfSplitsItIntoPiecesThatEachReach) {
   const size_t at = r.output.find("the best leaves ");
   ASSERT_NE(at, std::string::npos);
   const int outside = std::stoi(r.output.substr(at + 16));
-  auto p = test::runTolver("predict --machine " + machine + " --cl " + cl + " --setup " +
+  auto p = test::runTolver("predict --machine " + machine + " --cl " + cl + " --absolute-msys --setup " +
                            path("s.txt") + " -o " + path("p.apt"));
   EXPECT_EQ(p.exit_code, 2) << p.output;  // still out of travel, now by the figures setup gave
   EXPECT_NE(p.output.find("; " + std::to_string(outside) + " points fail"), std::string::npos)
@@ -218,7 +219,9 @@ TEST_F(GcodeCli, SetupOnARealClsfSplitsItIntoPiecesThatEachReach) {
   // Each piece's set-up file puts every point of its lines inside travel, and the pieces
   // cover the program.
   const Machine m = readMachineFile(machine);
-  const ClProgram program = readAptFile(cl);
+  AptReadOptions absolute;
+  absolute.absolute_msys = true;
+  const ClProgram program = readAptFile(cl, absolute);
   size_t covered = 0;
   for (int k = 1; k <= 2; ++k) {
     const std::string f = path("s_part" + std::to_string(k) + ".txt");
@@ -237,7 +240,7 @@ TEST_F(GcodeCli, SetupOnARealClsfSplitsItIntoPiecesThatEachReach) {
     EXPECT_TRUE(pred.ok()) << f << ": " << pred.failed_points << " points outside travel";
     // And as a planner runs it: predict the piece with its set-up file and --lines.
     const std::string lines = std::to_string(first) + "-" + std::to_string(last);
-    auto pr = test::runTolver("predict --machine " + machine + " --cl " + cl + " --setup " + f +
+    auto pr = test::runTolver("predict --machine " + machine + " --cl " + cl + " --absolute-msys --setup " + f +
                               " --lines " + lines + " -o " + path("piece.apt"));
     EXPECT_EQ(pr.exit_code, 0) << pr.output;
     EXPECT_NE(pr.output.find(std::to_string(piece.size()) + " tool positions"), std::string::npos) << pr.output;

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <random>
 
 #include "core/kinematics/forward_kinematics.h"
@@ -353,6 +354,182 @@ TEST(GcodeReader, DetectsGcodeAgainstApt) {
   EXPECT_FALSE(looksLikeGcode("PARTNO/X\nMULTAX\nGOTO/0,0,0,0,0,1\n"));
   EXPECT_FALSE(looksLikeGcode("$$ header\nTOOL PATH/A\nGOTO/1,2,3\n"));
   EXPECT_TRUE(looksLikeGcode(test::readText(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc"))));
+}
+
+// ---------------------------------------------------------------- issue 32: ISO as controls read it
+
+bool hasNote(const ClProgram& p, const std::string& text) {
+  for (const std::string& n : p.notes)
+    if (n.find(text) != std::string::npos) return true;
+  return false;
+}
+
+std::string refusal(const std::string& text, const MachineModel& model) {
+  try {
+    parseGcode(text, "r.nc", model);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "accepted";
+}
+
+// Text before the first '%' is the tape leader (NX writes its listing there); O numbers and
+// names, ':' numbers and a name at the program start are the program's name, not subprograms.
+TEST(GcodeReader, TapeLeaderAndProgramNamesAreNotBlocks) {
+  const Machine m = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  const ClProgram p = parseGcode(
+      "Information listing created by : someone\nDate : 1/2/2020\n\n%\nOFinal ToolPath\n"
+      "N10 G21 G90 G54\nN20 G0 X10 Y20 Z30\n/N30 G1 Z-1 F100 ; block delete: the control runs it\n%\n",
+      "leader.nc", m.model);
+  EXPECT_TRUE(hasNote(p, "tape leader")) << (p.notes.empty() ? "" : p.notes[0]);
+  EXPECT_EQ(p.part_name, "Final ToolPath");
+  ASSERT_EQ(p.path.size(), 2u);
+  EXPECT_EQ(p.path[0].line, 7);
+  EXPECT_EQ(p.path[1].line, 8);
+  // Lines that read as blocks before a closing '%' are the program, not a leader.
+  const ClProgram q = parseGcode("G21\nG0 X1 Y2 Z3\nG1 X2\n%\n", "noleader.nc", m.model);
+  EXPECT_EQ(q.path.size(), 2u);
+  EXPECT_FALSE(hasNote(q, "tape leader"));
+  EXPECT_EQ(parseGcode(":1234\nG21\nG0 X1 Y2 Z3\n", "colon.nc", m.model).path.size(), 1u);
+  EXPECT_EQ(parseGcode("O<boat>\nG21\nG0 X1 Y2 Z3\n", "named.nc", m.model).path.size(), 1u);
+  // Control flow is still refused, naming it; a name in the middle of the program too.
+  EXPECT_NE(refusal("G21\nO100 sub\n", m.model).find("O-word sub"), std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X1 Y2 Z3\nONAME\n", m.model).find("r.nc:3"), std::string::npos);
+}
+
+// Arc end points: the control's rule, never tighter than the program's printed resolution.
+TEST(GcodeReader, ArcEndPointChecksFollowTheControlAndThePrintedResolution) {
+  const Machine haas = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  // Four decimals in inches (2.54 um a step): an end radius 0.0002 in (5.08 um) off, as NX's
+  // HAAS post prints it, is read (RS274NGC alone would allow 0.0002 in exactly).
+  const ClProgram ok = parseGcode("G20\nG0 X0 Y0 Z0\nG2 X1.0002 Y-1.0000 I0 J-1.0000\n",
+                                  "inch.nc", haas.model);
+  EXPECT_GT(ok.path.size(), 10u);
+  EXPECT_LT((ok.path.back().p_w - Eigen::Vector3d(25.40508, -25.4, 0)).norm(), 1e-9);
+  EXPECT_NE(refusal("G20\nG0 X0 Y0 Z0\nG2 X1.0006 Y-1.0000 I0 J-1.0000\n", haas.model).find("15.24 um, more than the 10.16 um"),
+            std::string::npos);
+  // 0.05 mm off in a 3-decimal mm program: refused, with the figures.
+  const std::string bad = refusal("G21\nG0 X0 Y0 Z0\nG2 X10.050 Y-10.000 I0 J-10.000\n", haas.model);
+  EXPECT_NE(bad.find("r.nc:3"), std::string::npos) << bad;
+  EXPECT_NE(bad.find("differs from the start's by 50"), std::string::npos) << bad;
+  // LinuxCNC: 0.005 mm always, 0.1 % of the radius up to 0.5 mm.
+  const Machine lcnc = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  EXPECT_GT(parseGcode("G21\nG0 X0 Y0 Z0 A0 C0\nG2 X100.09 Y-100 I0 J-100\n", "l.ngc", lcnc.model).path.size(), 10u);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0 A0 C0\nG2 X10.02 Y-10 I0 J-10\n", lcnc.model).find("LinuxCNC's rule"),
+            std::string::npos);
+  // LinuxCNC's P: full turns of a helix.
+  const ClProgram helix = parseGcode("G21\nG0 X10 Y0 Z0 A0 C0\nG3 X10 Y0 Z-3 I-10 J0 P3\n", "h.ngc", lcnc.model);
+  double turned = 0.0;
+  for (size_t i = 1; i < helix.path.size(); ++i) {
+    const Eigen::Vector2d a = helix.path[i - 1].p_w.head<2>(), b = helix.path[i].p_w.head<2>();
+    turned += std::atan2(a.x() * b.y() - a.y() * b.x(), a.dot(b));
+  }
+  EXPECT_NEAR(turned, 3 * 2 * M_PI, 1e-6);
+  EXPECT_NEAR(helix.path.back().p_w.z(), -3.0, 1e-12);
+}
+
+// Modes end where the control ends them: a group-08 word ends G234 (G43 replaces it), HAAS G28
+// cancels tool length compensation and so TCP, M30 ends everything; G53 moves in machine
+// coordinates under DWO without ending it.
+TEST(GcodeReader, ModesEndWhereTheControlEndsThem) {
+  Machine m = machine("resources/machines/umc_bc_trunnion.xml", 76.2);
+  m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-381, 0, -300);
+  const ClProgram p = parseGcode(
+      "G20\nG0 G90 G54 X0 Y0 Z1. B0 C0\nG234 H1\nG1 X0.5 Y0 Z0.5 F10.\nG43 H1\nG1 X0.5 Y0 Z1.\n"
+      "G234 H1\nG1 X0 Y0 Z1.\nG28 G91 Z0\nG90 G0 X0 Y0 Z1.\nG0 B30. C0\nG254\nG0 X0 Y0 Z1.\n"
+      "G53 G0 Z0\nG0 X0.1 Y0 Z1.\nG255\nM30\n",
+      "modes.nc", m.model);
+  std::map<int, char> mode;
+  for (size_t i = 0; i < p.path.size(); ++i) mode[p.path[i].line] = p.tcp[i];
+  EXPECT_EQ(mode[4], ClProgram::kTcpWords);
+  EXPECT_EQ(mode[6], ClProgram::kJointWords);  // G43 ended G234
+  EXPECT_EQ(mode[8], ClProgram::kTcpWords);
+  EXPECT_EQ(mode[9], ClProgram::kMachineCoordinates);
+  EXPECT_EQ(mode[10], ClProgram::kJointWords);  // G28 cancelled G234
+  EXPECT_EQ(mode[13], ClProgram::kTcpWords);    // G254
+  EXPECT_EQ(mode[14], ClProgram::kMachineCoordinates);
+  EXPECT_EQ(mode[15], ClProgram::kTcpWords);    // G53 did not end G254
+}
+
+// Canned cycles G73, G81-G86, G88, G89 (and G74, G76 on ISO controls) are expanded; G87 (back
+// boring) is refused naming it.
+TEST(GcodeReader, CannedCyclesAreExpandedOrRefusedByName) {
+  const Machine m = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  for (const char* g : {"G73", "G81", "G82", "G83", "G84", "G85", "G86", "G88", "G89", "G74", "G76"}) {
+    const ClProgram p = parseGcode(std::string("G21\nG0 X0 Y0 Z20\nG99 ") + g +
+                                       " X5 Y6 Z-3 R2 Q1 P100 F100\nX8\nG80\n",
+                                   "c.nc", m.model);
+    ASSERT_EQ(p.path.size(), 9u) << g;
+    EXPECT_LT((p.path[3].p_w - Eigen::Vector3d(5, 6, -3)).norm(), 1e-12) << g;
+    EXPECT_LT((p.path[4].p_w - Eigen::Vector3d(5, 6, 2)).norm(), 1e-12) << g;  // G99: to R
+    EXPECT_EQ(p.cycle_holes, 2) << g;
+  }
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z20\nG87 X5 Y6 Z-3 R2 Q1\n", m.model).find("back boring"),
+            std::string::npos);
+  const Machine lcnc = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z20 A0 C0\nG76 P1 Z-3 I1 J1 K1\n", lcnc.model).find("threading"),
+            std::string::npos);
+}
+
+// A move before every axis has a commanded position is not a point of the path: the tool's
+// position there is not in the program (a first "G0 Z15" leaves X and Y wherever they were).
+TEST(GcodeReader, MovesBeforeEveryAxisIsKnownAreNotInventedPoints) {
+  const Machine m = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  const ClProgram p = parseGcode("G21\nG0 Z15\nG0 X1 Y2\nG1 Z-1\n", "start.nc", m.model);
+  ASSERT_EQ(p.path.size(), 2u);
+  EXPECT_EQ(p.path[0].line, 3);
+  EXPECT_TRUE(hasNote(p, "1 move(s) before every axis had a commanded position (lines 2-2)"));
+}
+
+// Sinumerik 840D as NX posts it: DEF, assignments, ADDR=expression, SUPA, TRAFOOF, T="name",
+// D0/D1, MSG, CYCLE832, MCALL CYCLE81: the real program reads, every construct carried out.
+TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
+  Machine m = machine("resources/machines/sinumerik_bc_table.xml", 0.0);
+  m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, 0, 200);
+  const ClProgram p = readGcodeFile(test::sourcePath("tests/fixtures/gcode/nx_sin840d_Keychain.mpf"), m.model);
+  EXPECT_EQ(p.cycles, 1);
+  EXPECT_EQ(p.cycle_holes, 1);
+  // N190 SUPA G0 X=_X_HOME Y=_Y_HOME ...: machine coordinates -365, 224 (Z=_Z_HOME 610 before).
+  bool supa = false;
+  for (size_t i = 0; i < p.path.size(); ++i)
+    if (p.path[i].line == 19) {
+      supa = true;
+      EXPECT_EQ(p.tcp[i], ClProgram::kMachineCoordinates);
+      EXPECT_NEAR(p.joints[i][0], -365.0, 1e-12);
+      EXPECT_NEAR(p.joints[i][1], 224.0, 1e-12);
+      EXPECT_NEAR(p.joints[i][2], 610.0, 1e-12);
+      EXPECT_EQ(p.fixed_axes[i], 7);
+    }
+  EXPECT_TRUE(supa);
+  // N330 G0 Y-22.721 Z16. in G54: the tip at (-10.46, -22.721, 16) in the part frame
+  // (part zero at the G54 origin), joints = word + offset.
+  for (size_t i = 0; i < p.path.size(); ++i)
+    if (p.path[i].line == 33) {
+      EXPECT_NEAR(p.joints[i][0], -10.46 - 300, 1e-9);
+      EXPECT_NEAR(p.joints[i][2], 16 + 200, 1e-9);
+    }
+  // The drilled hole: MCALL CYCLE81(10.,0.,3.,-6.1835) at Y-58.: in to -6.1835.
+  double deepest = 1e9;
+  for (const ClPoint& c : p.path)
+    if (c.line == 633) deepest = std::min(deepest, c.p_w.z());
+  EXPECT_NEAR(deepest, -6.1835 + (0.0), 1e-6);
+  EXPECT_TRUE(hasNote(p, "CYCLE832"));
+  // What it cannot carry out is refused naming the construct and the line.
+  const std::string base = "N10 DEF REAL _A\nN20 _A=5\n";
+  EXPECT_NE(refusal(base + "N30 GOTOF MARK\n", m.model).find("GOTOF"), std::string::npos);
+  EXPECT_NE(refusal(base + "N30 WHILE _A>0\n", m.model).find("WHILE"), std::string::npos);
+  EXPECT_NE(refusal(base + "N30 CYCLE800(1,\"TABLE\",0,57,0,0,0,0,30,0,0,0,0,1,100,1)\n", m.model).find("CYCLE800"),
+            std::string::npos);
+  EXPECT_NE(refusal(base + "N30 G0 X=SIN(30)\n", m.model).find("functions"), std::string::npos);
+  EXPECT_NE(refusal(base + "N30 G0 X=_B\n", m.model).find("_B has no value"), std::string::npos);
+  EXPECT_NE(refusal(base + "N30 CYCLE86(10,0,2,-5)\n", m.model).find("CYCLE86"), std::string::npos);
+  // TRANS moves the work frame; G0 X=_A*2 evaluates.
+  const ClProgram t = parseGcode(base + "N25 G54 G0 X0 Y0 Z50 D1\nN30 TRANS X10 Y5\nN40 G0 X=_A*2 Y0 Z10\n",
+                                 "t.mpf", m.model);
+  ASSERT_EQ(t.path.size(), 2u);
+  EXPECT_NEAR(t.joints[1][0], -300 + 10 + 10, 1e-9);  // G54 + TRANS + _A*2
+  EXPECT_NEAR(t.joints[1][1], 5, 1e-9);
+  EXPECT_LT((t.path[1].p_w - t.path[0].p_w - Eigen::Vector3d(20, 5, -40)).norm(), 1e-9);
 }
 
 }  // namespace

@@ -100,3 +100,23 @@ Eigen::Isometry3d MachineModel::spindle_T_t() const {
 }
 
 }  // namespace tolver
+
+namespace tolver {
+
+std::array<int, 3> prismaticWordOrder(const MachineModel& model) {
+  std::array<int, 3> order = {-1, -1, -1};
+  std::vector<int> prismatic;
+  for (size_t a = 0; a < model.axes.size(); ++a)
+    if (!model.axes[a].isRotary()) prismatic.push_back(static_cast<int>(a));
+  if (prismatic.size() != 3) return order;
+  std::array<int, 3> by_name = {-1, -1, -1};
+  for (int a : prismatic) {
+    const std::string& n = model.axes[a].name;
+    if (n.size() == 1 && (n[0] == 'X' || n[0] == 'Y' || n[0] == 'Z')) by_name[n[0] - 'X'] = a;
+  }
+  if (by_name[0] >= 0 && by_name[1] >= 0 && by_name[2] >= 0) return by_name;
+  for (int k = 0; k < 3; ++k) order[k] = prismatic[k];
+  return order;
+}
+
+}  // namespace tolver

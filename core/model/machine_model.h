@@ -133,6 +133,19 @@ struct NcControl {
   // Pairs of words (upper case, as written: "M428", "G43.4", "G234"): on switches TCP mode on,
   // off switches that same mode off. Several pairs may be active at once.
   std::vector<std::pair<std::string, std::string>> tcp_words;
+  // Further words that end a mode on this control, by its on word (<tcp ended_by="G28">: HAAS
+  // G28 cancels tool length compensation, and so G234, Mill Operator's Manual, G28). Besides
+  // these, a G word of modal group 08 (G43, G44, G49, G43.4, G43.5, G234) ends a group-08 TCP
+  // mode other than itself (Fanuc and HAAS group 08), and M2/M30 end every mode.
+  std::map<std::string, std::vector<std::string>> tcp_ended_by;
+  // How the control reads a program: "iso" (Fanuc, HAAS and other ISO 6983 controls),
+  // "linuxcnc" (RS274NGC as LinuxCNC 2.9 documents it) or "sinumerik" (Siemens 840D: DEF,
+  // assignments, ADDR=expression, SUPA, TRAORI, CYCLE800).
+  std::string dialect = "iso";
+  // The largest difference of an arc's start and end radius the control accepts (mm), when the
+  // machine file gives it (Fanuc parameter 3410); 0: the dialect's documented rule
+  // (LinuxCNC: 0.5 mm, or 0.005 mm and 0.1 % of the radius; RS274NGC v3: 0.002 mm).
+  double arc_radius_tolerance_mm = 0.0;
   // Values of named parameters the control supplies (LinuxCNC #<_hal[pin]>), by name.
   std::map<std::string, double> parameters;
   // Tool axes closer than this to a rotary axis keep that axis's previous angle (rad).
@@ -208,5 +221,10 @@ struct Machine {
   Eigen::VectorXd params;  // model.parameterCount() values
   IdentificationUncertainty identification;
 };
+
+// The machine's three prismatic axes in the order of the words X, Y, Z that drive them: by name
+// when they are named X, Y and Z (in any order in the file), else in the file's order;
+// {-1, -1, -1} unless there are exactly three.
+std::array<int, 3> prismaticWordOrder(const MachineModel& model);
 
 }  // namespace tolver

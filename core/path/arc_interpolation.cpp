@@ -11,7 +11,7 @@ namespace tolver {
 bool interpolateArc(const Eigen::Vector3d& start, const Eigen::Vector3d& end,
                     const Eigen::Vector3d& centre, const Eigen::Vector3d& axis,
                     double chordal_tolerance, double radius_tolerance,
-                    std::vector<Eigen::Vector3d>& out) {
+                    std::vector<Eigen::Vector3d>& out, int extra_turns) {
   const Eigen::Vector3d k = axis.normalized();
   const Eigen::Vector3d vs = start - centre, ve = end - centre;
   const double hs = vs.dot(k), he = ve.dot(k);
@@ -20,6 +20,7 @@ bool interpolateArc(const Eigen::Vector3d& start, const Eigen::Vector3d& end,
   if (r < 1e-12 || std::abs(re.norm() - r) > radius_tolerance) return false;
   double sweep = std::atan2(k.dot(rs.cross(re)), rs.dot(re));
   if (sweep <= 1e-12) sweep += 2.0 * kPi;  // counter-clockwise; equal points: full circle
+  sweep += 2.0 * kPi * std::max(0, extra_turns);
   // Sagitta r (1 - cos(dphi/2)) <= tol.
   const double tol = std::min(std::max(chordal_tolerance, 1e-9), r);
   const double dphi_max = 2.0 * std::acos(1.0 - tol / r);

@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <array>
+#include <map>
+#include <Eigen/LU>
 #include <cmath>
 #include <limits>
 
+#include "core/kinematics/forward_kinematics.h"
 #include "core/kinematics/inverse_kinematics.h"
 #include "core/numerics/max_min_affine.h"
 #include "core/numerics/units.h"
@@ -211,6 +214,14 @@ class ZeroSearch {
     // Nelder-Mead on the margin with every solution allowed finds other choices; it stalls at
     // the kinks of a piecewise-linear function, so it restarts from the best point with
     // shrinking simplices, and the exact step then polishes the choice it ends on.
+    // One solution per point (a three-axis machine, a posted program's rotary words): the
+    // margin is concave and the linear programme's optimum is the maximum; nothing to search.
+    bool single = true;
+    for (size_t i = 0; i < n && single; ++i) single = first[i + 1] - first[i] == 1;
+    if (single && std::isfinite(best1)) {
+      *x_best = x;
+      return best1;
+    }
     Eigen::Vector3d y_best = x;
     double v_best = best1;
     for (double size : {200.0, 50.0, 100.0, 10.0, 30.0, 2.0, 0.5}) {
@@ -289,7 +300,10 @@ class ZeroSearch {
           c[r + 1] = ax.travel_max - a.a[j];
         }
       }
-      const MaxMinResult lp = maximiseMinOfAffine(g, c);
+      // Rows with the same gradient (points the part zero moves alike: all of a three-axis
+      // program's) bind only at their smallest constant: one row each.
+      const auto [gu, cu] = uniqueRows(g, c);
+      const MaxMinResult lp = maximiseMinOfAffine(gu, cu);
       if (lp.status != MaxMinStatus::Optimal) break;
       const Eigen::Vector3d d = lp.x;
       const double v = margin(x0 + d);
@@ -308,6 +322,24 @@ class ZeroSearch {
       if (!changed) break;
     }
     return best;
+  }
+
+  static std::pair<Eigen::MatrixXd, Eigen::VectorXd> uniqueRows(const Eigen::MatrixXd& g,
+                                                               const Eigen::VectorXd& c) {
+    std::map<std::array<double, 3>, double> rows;
+    for (Eigen::Index r = 0; r < g.rows(); ++r) {
+      const std::array<double, 3> key = {g(r, 0), g(r, 1), g(r, 2)};
+      auto [it, inserted] = rows.emplace(key, c[r]);
+      if (!inserted) it->second = std::min(it->second, c[r]);
+    }
+    Eigen::MatrixXd gu(rows.size(), 3);
+    Eigen::VectorXd cu(rows.size());
+    Eigen::Index r = 0;
+    for (const auto& [key, value] : rows) {
+      gu.row(r) << key[0], key[1], key[2];
+      cu[r++] = value;
+    }
+    return {gu, cu};
   }
 
   const MachineModel& model_;
@@ -454,6 +486,132 @@ std::vector<SetupPiece> splitIntoSetups(const MachineModel& model, const std::ve
     pieces.push_back(std::move(p));
   }
   return pieces;
+}
+
+namespace {
+
+// What the G-code reader derives from the model (io/program/gcode_reader.cpp,
+// prepareMachineCoordinates): the gauge point at joints zero g0_w, and G_m, the prismatic
+// joints' effect on the tip times nc_sign, both seen from w.
+struct MachineFrame {
+  Eigen::Vector3d g0 = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d Gm = Eigen::Matrix3d::Identity();
+  std::array<int, 3> prismatic{};
+  bool ok = false;
+};
+
+MachineFrame machineFrame(const MachineModel& model) {
+  MachineFrame f;
+  const ForwardKinematics fk(model, Eigen::VectorXd::Zero(model.parameterCount()));
+  const JointVector q0 = JointVector::Zero(static_cast<int>(model.axes.size()));
+  Eigen::Vector3d tip0, axis0;
+  fk.tipAndAxis(q0, &tip0, &axis0);
+  f.g0 = tip0 + model.setup.gauge_length * axis0;
+  f.prismatic = prismaticWordOrder(model);
+  if (f.prismatic[0] < 0) return f;
+  for (int col = 0; col < 3; ++col) {
+    JointVector q = q0;
+    q[f.prismatic[col]] = 1.0;
+    Eigen::Vector3d tip, axis;
+    fk.tipAndAxis(q, &tip, &axis);
+    f.Gm.col(col) = (tip - tip0) * model.axes[f.prismatic[col]].nc_sign;
+  }
+  f.ok = std::abs(f.Gm.determinant()) > 1e-9;
+  return f;
+}
+
+}  // namespace
+
+Eigen::Vector3d workOffsetAtPartZero(const MachineModel& model) {
+  const MachineFrame f = machineFrame(model);
+  return f.ok ? Eigen::Vector3d(-f.Gm.inverse() * f.g0) : Eigen::Vector3d::Zero();
+}
+
+WorkOffsetSetup proposeWorkOffset(const MachineModel& model,
+                                  const std::vector<JointVector>& joints,
+                                  const std::vector<char>& kind,
+                                  const std::vector<unsigned char>& fixed) {
+  WorkOffsetSetup out;
+  out.part_zero_table = model.setup.part_zero_table;
+  const MachineFrame f = machineFrame(model);
+  if (!f.ok || joints.empty()) return out;
+  // How the prismatic joints of a work-offset point move with the part zero: q_j = nc_j (m_j +
+  // ...), m = word + offset, offset = -G_m^-1 g0(part zero) (the reader's default offset).
+  const Eigen::Vector3d off0 = workOffsetAtPartZero(model);
+  Eigen::Matrix3d A;
+  for (int k = 0; k < 3; ++k) {
+    MachineModel mk = model;
+    mk.setup.part_zero_table += Eigen::Vector3d::Unit(k);
+    const Eigen::Vector3d dm = workOffsetAtPartZero(mk) - off0;
+    for (int j = 0; j < 3; ++j) A(j, k) = model.axes[f.prismatic[j]].nc_sign * dm[j];
+  }
+  // Ranges of the moving (work offset) and fixed (machine coordinate) points.
+  const double inf = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d lo_m = Eigen::Vector3d::Constant(inf), hi_m = -lo_m;
+  Eigen::Vector3d lo_f = lo_m, hi_f = hi_m;
+  bool any_moving = false;
+  auto isFixed = [&](size_t i, int j) {
+    return i < fixed.size() ? ((fixed[i] >> j) & 1u) != 0 : (i < kind.size() && kind[i] == 2);
+  };
+  for (size_t i = 0; i < joints.size(); ++i) {
+    const char k = i < kind.size() ? kind[i] : 0;
+    if (k == 1) continue;
+    for (int j = 0; j < 3; ++j) {
+      const double q = joints[i][f.prismatic[j]];
+      if (isFixed(i, j)) {
+        lo_f[j] = std::min(lo_f[j], q), hi_f[j] = std::max(hi_f[j], q);
+      } else {
+        lo_m[j] = std::min(lo_m[j], q), hi_m[j] = std::max(hi_m[j], q);
+        any_moving = true;
+      }
+    }
+  }
+  if (!any_moving) return out;
+  // Centre each axis's range of the moving points in its travel.
+  Eigen::Vector3d shift;
+  out.margin = inf;
+  for (int j = 0; j < 3; ++j) {
+    const Axis& ax = model.axes[f.prismatic[j]];
+    shift[j] = 0.5 * (ax.travel_min + ax.travel_max) - 0.5 * (lo_m[j] + hi_m[j]);
+    const double m_moving = 0.5 * ((ax.travel_max - ax.travel_min) - (hi_m[j] - lo_m[j]));
+    double m = m_moving;
+    if (std::isfinite(lo_f[j])) m = std::min({m, lo_f[j] - ax.travel_min, ax.travel_max - hi_f[j]});
+    if (m < out.margin) {
+      out.margin = m;
+      out.limiting_axis = f.prismatic[j];
+      out.limited_by_machine_coordinates = m < m_moving;
+    }
+  }
+  const Eigen::FullPivLU<Eigen::Matrix3d> lu(A);
+  if (!lu.isInvertible()) return out;
+  const Eigen::Vector3d delta = lu.solve(shift);
+  out.part_zero_table = model.setup.part_zero_table + delta;
+  MachineModel best = model;
+  best.setup.part_zero_table = out.part_zero_table;
+  out.work_offset_m = workOffsetAtPartZero(best);
+  // The joint ranges with the proposal: the moving points shifted, the fixed ones as they are.
+  out.ranges.assign(model.axes.size(), AxisRange{});
+  for (size_t i = 0; i < joints.size(); ++i) {
+    const char k = i < kind.size() ? kind[i] : 0;
+    if (k == 1) continue;
+    JointVector q = joints[i];
+    for (int j = 0; j < 3; ++j)
+      if (!isFixed(i, j)) q[f.prismatic[j]] += shift[j];
+    for (size_t a = 0; a < model.axes.size(); ++a) {
+      AxisRange& r = out.ranges[a];
+      if (!r.known || q[a] < r.min) r.min = q[a], r.min_index = static_cast<int>(i);
+      if (!r.known || q[a] > r.max) r.max = q[a], r.max_index = static_cast<int>(i);
+      r.known = true;
+    }
+  }
+  out.found = out.margin >= -1e-9;  // a home position at the end of travel is inside
+  for (size_t a = 0; a < model.axes.size(); ++a) {
+    const Axis& ax = model.axes[a];
+    if (!ax.isRotary() || ax.endless || !out.ranges[a].known) continue;
+    out.found = out.found && out.ranges[a].min >= ax.travel_min - 1e-9 &&
+                out.ranges[a].max <= ax.travel_max + 1e-9;
+  }
+  return out;
 }
 
 }  // namespace tolver

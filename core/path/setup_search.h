@@ -14,6 +14,7 @@
 // gauge length; the proposal is then checked on every point with the real inverse kinematics.
 // Rotary travel does not depend on x; a rotation whose rotary angles leave travel is rejected.
 #include <Eigen/Core>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -66,5 +67,33 @@ std::vector<SetupPiece> splitIntoSetups(const MachineModel& model, const std::ve
                                         const std::vector<JointVector>* commanded,
                                         const SetupSearchOptions& options = {},
                                         int max_pieces = 8);
+
+// A posted program outside tool-centre-point mode gives joints, not tool tips: machine
+// coordinate = word + work offset (+ tool length along the spindle under G43). A work offset the
+// set-up does not give has its origin at the part zero (io/program/gcode_reader.h), so moving the
+// part zero moves the joints of every point given in a work offset by one affine map, and leaves
+// the points in machine coordinates (G53, G28, SUPA) where they are. The per-axis ranges then
+// fit travel exactly when each is centred: the proposal is exact, not searched.
+struct WorkOffsetSetup {
+  bool found = false;               // every point inside travel
+  double margin = -std::numeric_limits<double>::infinity();  // mm, smallest distance to a limit
+  int limiting_axis = -1;           // the axis with that margin
+  bool limited_by_machine_coordinates = false;  // by a G53/G28 move, which no offset moves
+  Eigen::Vector3d part_zero_table = Eigen::Vector3d::Zero();  // proposed part zero, table frame
+  // The work offset (G54...) the control needs for it: the machine coordinates (mm, X Y Z words
+  // with the control's senses) of the program's origin.
+  Eigen::Vector3d work_offset_m = Eigen::Vector3d::Zero();
+  std::vector<AxisRange> ranges;    // joint ranges with the proposal
+};
+// joints, kind and fixed: ClProgram::joints, ::tcp (points of kind 1, in TCP mode, are left
+// out) and ::fixed_axes (bit k: X, Y, Z in machine coordinates; when empty, every coordinate of
+// a kind-2 point, G53/G28, is fixed).
+WorkOffsetSetup proposeWorkOffset(const MachineModel& model,
+                                  const std::vector<JointVector>& joints,
+                                  const std::vector<char>& kind,
+                                  const std::vector<unsigned char>& fixed = {});
+// The work offset (machine coordinates, mm) whose origin is the model's part zero: what the
+// G-code reader uses for a work offset the set-up does not give.
+Eigen::Vector3d workOffsetAtPartZero(const MachineModel& model);
 
 }  // namespace tolver

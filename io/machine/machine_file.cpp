@@ -132,6 +132,14 @@ class Reader {
       if (!(b >= 0 && b <= 5)) fail(e, "control.singular_band_deg", "expected 0 to 5 degrees");
       c.singular_band = degToRad(b);
     }
+    c.dialect = attr(e, "dialect", false, "iso");
+    if (c.dialect != "iso" && c.dialect != "linuxcnc" && c.dialect != "sinumerik")
+      fail(e, "control.dialect", "expected iso, linuxcnc or sinumerik, found '" + c.dialect + "'");
+    if (e->Attribute("arc_radius_tolerance_mm")) {
+      const double t = number(e, "arc_radius_tolerance_mm");
+      if (!(t > 0 && t <= 10)) fail(e, "control.arc_radius_tolerance_mm", "expected 0 to 10 mm");
+      c.arc_radius_tolerance_mm = t;
+    }
     for (const XMLElement* t = e->FirstChildElement(); t; t = t->NextSiblingElement()) {
       const std::string tag = t->Name();
       if (tag == "tcp") {
@@ -139,6 +147,8 @@ class Reader {
         if (on.empty() || off.empty() || on == off)
           fail(t, "tcp.on", "expected two different words, e.g. on=\"G43.4\" off=\"G49\"");
         c.tcp_words.emplace_back(on, off);
+        std::istringstream ended(toUpper(attr(t, "ended_by", false, "")));
+        for (std::string w; ended >> w;) c.tcp_ended_by[on].push_back(w);
       } else if (tag == "parameter") {
         c.parameters[attr(t, "name")] = number(t, "value");
       } else {
@@ -555,10 +565,17 @@ class MachineXmlWriter {
     attr("name", c.name);
     attr("default_units", c.default_unit_mm == 25.4 ? "inch" : "mm");
     attr("singular_band_deg", radToDeg(c.singular_band));
+    if (c.dialect != "iso") attr("dialect", c.dialect);
+    if (c.arc_radius_tolerance_mm > 0) attr("arc_radius_tolerance_mm", c.arc_radius_tolerance_mm);
     for (const auto& [on, off] : c.tcp_words) {
       p_.OpenElement("tcp");
       attr("on", on);
       attr("off", off);
+      if (auto it = c.tcp_ended_by.find(on); it != c.tcp_ended_by.end()) {
+        std::string words;
+        for (const std::string& w : it->second) words += (words.empty() ? "" : " ") + w;
+        attr("ended_by", words);
+      }
       p_.CloseElement();
     }
     for (const auto& [name, value] : c.parameters) {

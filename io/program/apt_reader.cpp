@@ -31,7 +31,7 @@ struct Arg {
 const std::set<std::string>& noOpStatements() {
   static const std::set<std::string> s = {
       "SPINDL", "LOADTL", "LOAD",  "SELECT", "PPRINT",  "INSERT", "COOLNT",    "TOOL PATH",
-      "END-OF-PATH", "END", "PAINT", "CUTCOM", "CYCLE", "MACHIN", "DELAY",
+      "END-OF-PATH", "END", "PAINT", "CUTCOM", "MACHIN", "DELAY",
       "OPSTOP", "STOP", "CLRSRF", "FEATNO", "MFGNO", "OPERATION", "DISPLY", "AUTOPS", "PLABEL"};
   return s;
 }
@@ -82,6 +82,19 @@ class Parser {
       prog_.statements.push_back(st);
     }
     if (!any) fail(0, 0, "", "empty file: no statements");
+    // The main MCS read as the part frame while its z points down in the CAD's absolute frame
+    // and the tool axes point down in it: they point up in the absolute frame, so the part may
+    // be fixtured in that frame instead. Said, not guessed.
+    if (main_mcs_ && !opt_.absolute_msys && main_mcs_->linear()(2, 2) < -0.5 && !prog_.path.empty()) {
+      size_t down = 0;
+      for (const ClPoint& c : prog_.path) down += c.u_w.z() < -0.5;
+      if (2 * down > prog_.path.size())
+        prog_.notes.push_back(
+            "the tool axis points down (-z) in the main MCS on " + std::to_string(down) + " of " +
+            std::to_string(prog_.path.size()) + " points; that MCS's z points down in the CAD's "
+            "absolute frame, where the tool points up: if the part is fixtured in the absolute "
+            "frame, read the program with --absolute-msys");
+    }
     return std::move(prog_);
   }
 
@@ -295,7 +308,10 @@ class Parser {
         setAxis(Eigen::Vector3d(v[3], v[4], v[5]), line, args[3].column, major);
         prog_.multiax = true;
       }
-      addMotion(p, line, st);
+      if (cycle_.active && major == "GOTO") cycleMotion(p, line, st);
+      else addMotion(p, line, st);
+    } else if (major == "CYCLE") {
+      cycleStatement(args, line);
     } else if (major == "GODLTA") {
       const auto v = numbers(args, major, false);
       if (!have_point_) fail(line, 0, major, "incremental move before any position");
@@ -321,6 +337,20 @@ class Parser {
       const ClFrame& f = prog_.frames[frame_];
       Eigen::Vector3d axis(v[3], v[4], v[5]);
       if (axis.norm() < 1e-12) fail(line, 0, major, "zero-length circle axis");
+      // NX: CIRCLE/...,TIMES,n: n full turns before the end point (a helical ramp).
+      arc_turns_ = 0;
+      for (size_t k = 0; k + 1 < args.size(); ++k)
+        if (toUpper(args[k].text) == "TIMES") {
+          const auto n = parseNumber(args[k + 1].text);
+          if (!n || *n < 0 || *n > 1000 || *n != std::round(*n))
+            fail(args[k + 1].line, args[k + 1].column, major, "TIMES takes a whole number of turns");
+          arc_turns_ = static_cast<int>(*n);
+          if (!times_noted_) {
+            times_noted_ = true;
+            prog_.notes.push_back("CIRCLE ... TIMES,n (line " + std::to_string(line) +
+                                  ") read as n full turns before the end point");
+          }
+        }
       arc_centre_w_ = f.scale * (f.T * Eigen::Vector3d(v[0], v[1], v[2]));
       arc_axis_w_ = f.T.linear() * axis.normalized();
       arc_line_ = line;
@@ -385,9 +415,28 @@ class Parser {
         fail(line, 0, major, "the x and y axes must be non-zero and perpendicular");
       x.normalize();
       y = (y - x * x.dot(y)).normalized();
-      std::vector<double> rows = {x[0], y[0], x.cross(y)[0], v[0], x[1], y[1],
-                                  x.cross(y)[1], v[1], x[2], y[2], x.cross(y)[2], v[2]};
+      Eigen::Isometry3d abs_T_mcs = Eigen::Isometry3d::Identity();
+      abs_T_mcs.linear() << x, y, x.cross(y);
+      abs_T_mcs.translation() << v[0], v[1], v[2];
+      // NX writes the GOTOs in the MCS the MSYS names. The part frame is the program's first
+      // (main) MCS: a later MSYS is a 3+2 set-up relative to it (opt_.absolute_msys: the CAD's
+      // absolute frame instead, for a part fixtured in it).
+      if (!main_mcs_) main_mcs_ = abs_T_mcs;
+      const Eigen::Isometry3d w_T_mcs = opt_.absolute_msys ? abs_T_mcs : main_mcs_->inverse() * abs_T_mcs;
+      std::vector<double> rows;
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) rows.push_back(w_T_mcs.linear()(r, c));
+        rows.push_back(w_T_mcs.translation()[r]);
+      }
       setFrameFromRows(rows, line, major);
+      if (!opt_.absolute_msys && !first_msys_noted_) {
+        first_msys_noted_ = true;
+        if ((abs_T_mcs.linear() - Eigen::Matrix3d::Identity()).norm() > 1e-9 ||
+            abs_T_mcs.translation().norm() > 1e-9)
+          prog_.notes.push_back("MSYS at line " + std::to_string(line) +
+                                " is the main MCS: the part frame (--absolute-msys reads the "
+                                "points in the CAD's absolute frame instead)");
+      }
     } else if (major == "PARTNO") {
       prog_.part_name = args.empty() ? "" : args[0].text;
     } else if (major == "NURBS" || major == "KNOT" || major == "CNTRL") {
@@ -404,6 +453,93 @@ class Parser {
           prog_.unknown_names.end())
         prog_.unknown_names.push_back(name);
     }
+  }
+
+  // CYCLE/<type>, then pairs of a word and its value: FEDTO or DEPTH (depth below the GOTO
+  // point, the hole's top), RAPTO or CLEAR (clearance above it, reached in rapid), RTRCTO
+  // (retract above it; AUTO or absent: the clearance), peck, dwell and feed words (the motion
+  // stays on the hole's axis: STEP, INCR, 1STPECK, SUBPECK, DWELL, MMPM, IPM, MMPR, IPR, REV...).
+  // CYCLE/OFF ends it; CYCLE/INIT, /ON and /AUTO set nothing. The types are those NX, Creo,
+  // CATIA and SolidWorks CAM write; another is an error naming it, never skipped.
+  void cycleStatement(const std::vector<Arg>& args, int line) {
+    if (args.empty()) fail(line, 0, "CYCLE", "CYCLE needs a type or OFF");
+    const std::string type = toUpper(args[0].text);
+    if (type == "OFF") {
+      cycle_.active = false;
+      return;
+    }
+    if (type == "INIT" || type == "ON" || type == "AUTO") return;
+    static const std::set<std::string> types = {"DRILL", "DEEP", "DEEP2", "BRKCHP", "TAP",
+                                                "RGDTAP", "BORE", "BORE1", "BORE2", "REAM",
+                                                "FACE", "CSINK", "SPOT", "THRU", "MILL"};
+    if (!types.count(type))
+      fail(args[0].line, args[0].column, "CYCLE",
+           "the drilling cycle '" + args[0].text + "' is not known to tolver (DRILL, DEEP, "
+           "DEEP2, BRKCHP, TAP, BORE, REAM are expanded): post it as motion");
+    Cycle c;
+    c.active = true;
+    c.type = type;
+    c.line = line;
+    bool depth = false, clear = false, retract = false;
+    static const std::set<std::string> skipped = {
+        "STEP", "INCR", "1STPECK", "SUBPECK", "DWELL", "MMPM", "IPM", "MMPR", "IPR", "FPM", "FPR",
+        "REV", "RPM", "PECK", "MINPECK", "CHIP", "OFFSET", "ORIENT", "QUILL", "SHIFT", "TIMES"};
+    const double s = 1.0;  // distances in file units; the frame scales them with the point
+    for (size_t k = 1; k < args.size(); ++k) {
+      const std::string w = toUpper(args[k].text);
+      if (looksNumeric(w)) continue;  // a value already taken, or DRILL,DEEP's order
+      auto value = [&](double* out) {
+        if (k + 1 >= args.size()) fail(args[k].line, args[k].column, "CYCLE", w + " needs a value");
+        const std::string vt = toUpper(args[k + 1].text);
+        if (vt == "AUTO") {
+          ++k;
+          return false;
+        }
+        const auto x = parseNumber(vt);
+        if (!x || std::abs(*x) > 1e6)
+          fail(args[k + 1].line, args[k + 1].column, "CYCLE", w + ": expected a number, found '" + args[k + 1].text + "'");
+        *out = *x * s;
+        ++k;
+        return true;
+      };
+      if (w == "FEDTO" || w == "DEPTH") depth = value(&c.depth);
+      else if (w == "RAPTO" || w == "CLEAR") clear = value(&c.clearance);
+      else if (w == "RTRCTO") retract = value(&c.retract);
+      else if (skipped.count(w)) {
+        if (k + 1 < args.size() && looksNumeric(args[k + 1].text)) ++k;
+      } else if (types.count(w)) {
+        // DRILL,DEEP: the variant after the type
+      } else {
+        fail(args[k].line, args[k].column, "CYCLE", "unknown cycle parameter '" + args[k].text + "'");
+      }
+    }
+    if (!depth) fail(line, 0, "CYCLE", "the cycle gives no depth (FEDTO or DEPTH)");
+    c.depth = std::abs(c.depth);
+    if (!clear) c.clearance = 0.0;
+    if (!retract) c.retract = c.clearance;
+    cycle_ = c;
+    ++prog_.cycles;
+  }
+
+  // The motions the control makes at a hole while a cycle is in force: to the retract level
+  // and the clearance above the GOTO point in rapid, in to the depth along the tool axis, out to
+  // the retract level in rapid.
+  void cycleMotion(const Eigen::Vector3d& top, int line, AptStatement& st) {
+    const Eigen::Vector3d& u = axis_local_;
+    const int first = static_cast<int>(prog_.path.size());
+    const double up = std::max(cycle_.retract, cycle_.clearance);
+    rapid_next_ = true;
+    addMotion(top + up * u, line, st);
+    if (cycle_.clearance < up) {
+      rapid_next_ = true;
+      addMotion(top + cycle_.clearance * u, line, st);
+    }
+    addMotion(top - cycle_.depth * u, line, st);
+    rapid_next_ = true;
+    addMotion(top + cycle_.retract * u, line, st);
+    st.first_point = first;
+    st.point_count = static_cast<int>(prog_.path.size()) - first;
+    ++prog_.cycle_holes;
   }
 
   void setAxis(const Eigen::Vector3d& u, int line, int column, const std::string& field) {
@@ -426,13 +562,13 @@ class Parser {
       const double r = ((start - arc_centre_w_) -
                         arc_axis_w_ * arc_axis_w_.dot(start - arc_centre_w_)).norm();
       // Bounded work: a full turn's points, before anything is expanded.
-      if (!(arcPointsPerTurn(r, opt_.chordal_tolerance_mm) <= kMaxArcPoints))
+      if (!(arcPointsPerTurn(r, opt_.chordal_tolerance_mm) * (arc_turns_ + 1) <= kMaxArcPoints))
         fail(arc_line_, 0, "CIRCLE",
              "an arc of radius " + formatNumber(r) + " mm would expand into more than a million "
              "points at chordal tolerance " + formatNumber(opt_.chordal_tolerance_mm) +
                  " mm (raise --chordal-tol, or check the radius)");
       if (!interpolateArc(start, cl.p_w, arc_centre_w_, arc_axis_w_, opt_.chordal_tolerance_mm,
-                          std::max(0.005, 1e-4 * r), pts))
+                          std::max(0.005, 1e-4 * r), pts, arc_turns_))
         fail(arc_line_, 0, "CIRCLE",
              "the arc's start and end points (lines " + std::to_string(prog_.path.back().line) +
                  " and " + std::to_string(line) + ") are not on one circle about its centre");
@@ -466,6 +602,17 @@ class Parser {
   bool rapid_next_ = false;
   bool trntyp_world_ = false;
   bool arc_pending_ = false;
+  int arc_turns_ = 0;
+  std::optional<Eigen::Isometry3d> main_mcs_;  // the first MSYS: the part frame
+  bool first_msys_noted_ = false, times_noted_ = false;
+  // A CL drilling cycle in force (CYCLE/<type>,... until CYCLE/OFF): its type and distances
+  // along the tool axis from each GOTO point (the hole's top), mm in file units.
+  struct Cycle {
+    bool active = false;
+    std::string type;
+    double depth = 0.0, clearance = 0.0, retract = 0.0;
+    int line = 0;
+  } cycle_;
   int arc_line_ = 0;
   Eigen::Vector3d arc_centre_w_, arc_axis_w_;
 };

@@ -3,7 +3,8 @@
 // SolidWorks CAM, PTC Creo, CATIA, generic APT).
 //
 // Recognised: GOTO (3 or 6 values; the tool axis is modal), FROM, GODLTA, MULTAX, TLAXIS,
-// CUTTER (1-7 values), TLDATA, UNITS and UNIT, FEDRAT (unit before or after the value), RAPID,
+// CUTTER (1-7 values), TLDATA, UNITS and UNIT, CYCLE (drilling cycles expanded at each GOTO
+// until CYCLE/OFF), CIRCLE ... TIMES,n (n full turns), FEDRAT (unit before or after the value), RAPID,
 // SPINDL, LOADTL, LOAD/TOOL, SELECT, PARTNO, PPRINT, INSERT, COOLNT, CIRCLE and MOVARC (expanded
 // into points within a chordal tolerance, counter-clockwise about the circle axis), MSYS, CSYS
 // and $$*CATIA0 (coordinate systems applied to the points that follow; a CSYS after
@@ -62,14 +63,22 @@ struct ClProgram {
   bool multiax = false;                  // MULTAX/ON seen, or GOTO with six values
   int arcs_expanded = 0;
   int tool_planes = 0;                   // CSYS statements after TRNTYP/WORLD (not applied)
+  int cycles = 0;                        // drilling cycles (CL CYCLE/, G-code canned cycles)
+  int cycle_holes = 0;                   // holes they were expanded at
   int unknown_count = 0;                 // statements skipped as unknown
   std::vector<std::string> unknown_names;  // their major words, each once
   bool units_declared = false;           // UNITS / G20 / G21 seen (else the default was used)
   // G-code only: per point, the commanded joint values (mm, rad, model axis order; in TCP mode
   // the prismatic ones are those of the nominal inverse kinematics' reference, not commands),
-  // and whether the point was programmed in tool-centre-point mode.
+  // and how the point was programmed: kJointWords (work offset + tool length, no TCP),
+  // kTcpWords (tool-centre-point mode) or kMachineCoordinates (G53, G28, SUPA: no offset).
   std::vector<JointVector> joints;
   std::vector<char> tcp;
+  static constexpr char kJointWords = 0, kTcpWords = 1, kMachineCoordinates = 2;
+  // Per point outside TCP mode, bit k (X, Y, Z) set when that coordinate stands in machine
+  // coordinates (a G53/G28/SUPA move set it and no work-offset word has moved it since): a work
+  // offset does not move it.
+  std::vector<unsigned char> fixed_axes;
   std::vector<std::string> notes;        // what the reader assumed or ignored, one line each
 };
 
@@ -78,6 +87,9 @@ struct AptReadOptions {
   // Keep the text of GOTO and FROM statements in ClProgram::lines: the in-place compensated
   // writer edits it; the predicted-CL writer regenerates those lines and does not need it.
   bool keep_motion_text = true;
+  // NX MSYS in the CAD's absolute frame (the reading before issue 32); by default the first
+  // MSYS is the part frame and later ones are relative to it.
+  bool absolute_msys = false;
 };
 
 // Throws InputError naming file:line:column and the field on malformed input. The file is

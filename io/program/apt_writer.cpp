@@ -45,6 +45,8 @@ void writePredictedApt(TextOut& out, const ClProgram& program, const std::vector
     if (st.point_count > 0) {
       const char* word = st.major == "FROM" ? "FROM" : "GOTO";
       for (int k = st.first_point; k < st.first_point + st.point_count; ++k) {
+        // A drilling cycle's hole becomes its motions: RAPID before each positioning one.
+        if (st.point_count > 1 && program.path[k].rapid) out += "RAPID\n";
         const ClFrame& f = program.frames[program.point_frame[k]];
         const Eigen::Vector3d p = f.T.inverse(Eigen::Isometry) * (predicted[k].p_w / f.scale);
         const Eigen::Vector3d u = f.T.linear().transpose() * predicted[k].u_w.normalized();
@@ -57,7 +59,7 @@ void writePredictedApt(TextOut& out, const ClProgram& program, const std::vector
     }
     // A motion statement without points lies outside the lines predicted (--lines): left out.
     if ((st.major == "GOTO" || st.major == "FROM") && st.point_count == 0) continue;
-    if (st.major == "CIRCLE" || st.major == "MOVARC") {
+    if (st.major == "CIRCLE" || st.major == "MOVARC" || st.major == "CYCLE") {
       out += "$$ tolver: " + st.major + " of line " + std::to_string(st.first_line) +
              " expanded into the GOTO points that follow\n";
       continue;

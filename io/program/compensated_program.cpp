@@ -369,7 +369,8 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
     std::vector<double> target(n, 0.0);
     if (write) {
       const JointVector dq = restore ? JointVector::Zero(n) : JointVector(q[i] - q0[i]);
-      const bool tcp = i < static_cast<int>(program.tcp.size()) && program.tcp[i];
+      const bool tcp = i < static_cast<int>(program.tcp.size()) &&
+                       program.tcp[i] == ClProgram::kTcpWords;
       Eigen::Vector3d dxyz = Eigen::Vector3d::Zero();
       if (tcp && !restore) dxyz = Gm_inv * (corrected_p_w[i] - program.path[i].p_w) / unit;
       const char L[3] = {'X', 'Y', 'Z'};

@@ -54,15 +54,11 @@ const std::map<std::string, const char*>& refusedG() {
       {"G16", "polar coordinates (G16) are not supported"},
       {"G7", "lathe diameter mode (G7) is not supported"},
       {"G33", "threading (G33) is not supported"},
-      {"G76", "threading cycles (G76) are not supported"},
+      {"G76", "threading cycles (G76, LinuxCNC) are not supported"},
       {"G38.2", "probing moves are not supported"},
       {"G38.3", "probing moves are not supported"},
-      {"G84", "tapping cycles are not expanded"},
-      {"G85", "boring cycles are not expanded"},
-      {"G86", "boring cycles are not expanded"},
-      {"G87", "boring cycles are not expanded"},
-      {"G88", "boring cycles are not expanded"},
-      {"G89", "boring cycles are not expanded"},
+      {"G87", "back boring (G87) is not expanded: the tool passes the hole off-centre with the "
+              "spindle oriented; post it as motion"},
       {"G65", "macro calls (G65) are not supported"},
       {"G66", "modal macro calls (G66) are not supported"},
   };
@@ -112,31 +108,52 @@ class Reader {
   }
 
   ClProgram run() {
-    bool any = false;
-    int percent = 0;
-    // Read as a stream of lines; all their text is kept (the in-place compensated writer
-    // edits the blocks' words).
+    // Lines before the first '%' are held: when a '%' follows within kMaxLeaderLines they are
+    // the tape leader, which ISO 6983 controls skip (Fanuc: the leader before the first EOR is
+    // ignored; NX writes its listing there); otherwise they are blocks.
+    std::vector<std::string> held;
+    bool leader_decided = false;
     std::string text;
-    for (size_t i = 0; source_->next(text); ++i) {
-      line_ = static_cast<int>(i) + 1;
-      AptStatement st;
-      st.first_line = st.last_line = line_;
-      st.first_point = static_cast<int>(prog_.path.size());
-      const std::string_view t = trim(text);
-      any = any || !t.empty();
-      if (!ended_ && !t.empty() && t[0] == '%') {
-        if (++percent >= 2 && seen_block_) ended_ = true;
-      } else if (!ended_ && !t.empty()) {
-        st.major = block(text);
+    while (source_->next(text)) {
+      if (leader_decided) {
+        processLine(text);
+        continue;
       }
-      st.point_count = static_cast<int>(prog_.path.size()) - st.first_point;
-      if (st.point_count == 0) st.first_point = -1;
-      prog_.statements.push_back(st);
-      prog_.lines.push(text, true);
+      const std::string_view t = trim(text);
+      if (!t.empty() && t[0] == '%') {
+        // A leader holds text that is not a block (a listing, a title); lines that all read as
+        // blocks before a closing '%' are the program.
+        bool leader = false;
+        for (const std::string& h : held) leader = leader || !looksLikeBlock(h);
+        for (const std::string& h : held) {
+          if (leader) skipLine(h);
+          else processLine(h);
+        }
+        if (leader)
+          prog_.notes.push_back("lines 1-" + std::to_string(held.size()) +
+                                " before the first '%' are the tape leader: not read");
+        held.clear();
+        leader_decided = true;
+        processLine(text);
+        continue;
+      }
+      held.push_back(text);
+      if (held.size() >= kMaxLeaderLines) {
+        for (const std::string& h : held) processLine(h);
+        held.clear();
+        leader_decided = true;
+      }
     }
-    if (!any) fail(0, 0, "", "empty file: no blocks");
+    for (const std::string& h : held) processLine(h);
+    if (!any_) fail(0, 0, "", "empty file: no blocks");
     if (prog_.path.empty())
       fail(0, 0, "", "the program has no moves (no G0/G1/G2/G3 with axis words)");
+    if (unknown_moves_ > 0)
+      prog_.notes.push_back(std::to_string(unknown_moves_) + " move(s) before every axis had a "
+                            "commanded position (lines " + std::to_string(first_unknown_line_) +
+                            "-" + std::to_string(last_unknown_line_) +
+                            ") are not in the path: the tool's position there is not in the "
+                            "program");
     if (!units_seen_) {
       prog_.notes.push_back(std::string("no G20/G21: the control's default unit (") +
                             (unit_ == 25.4 ? "inch" : "mm") + ") was used");
@@ -154,6 +171,56 @@ class Reader {
       prog_.notes.push_back(word + " (first used at line " + std::to_string(first) +
                             ") is not in the set-up: its origin was put at the part zero");
     return std::move(prog_);
+  }
+
+  // One physical line: a block, a '%' or nothing; its statement and text kept.
+  void processLine(const std::string& text) {
+    line_ = static_cast<int>(prog_.statements.size()) + 1;
+    AptStatement st;
+    st.first_line = st.last_line = line_;
+    st.first_point = static_cast<int>(prog_.path.size());
+    const std::string_view t = trim(text);
+    any_ = any_ || !t.empty();
+    if (!ended_ && !t.empty() && t[0] == '%') {
+      if (++percent_ >= 2 && seen_block_) ended_ = true;
+    } else if (!ended_ && !t.empty()) {
+      st.major = block(text);
+    }
+    st.point_count = static_cast<int>(prog_.path.size()) - st.first_point;
+    if (st.point_count == 0) st.first_point = -1;
+    prog_.statements.push_back(st);
+    prog_.lines.push(text, true);
+  }
+
+  // True when a line can start a block: empty, a comment, '/', '#', ':' or 'O' or a word (a
+  // letter then a number, a sign, '[', '#' or '='), or (Sinumerik) a name followed by '=', '(' or
+  // an end of statement. An NX listing line ("Information listing created by") is not.
+  bool looksLikeBlock(std::string_view line) const {
+    line = trim(line);
+    if (line.rfind("\xEF\xBB\xBF", 0) == 0) line = trim(line.substr(3));
+    if (line.empty()) return true;
+    const char c = line[0];
+    if (c == '(' || c == ';' || c == '/' || c == '#' || c == ':' || c == '%') return true;
+    if (!std::isalpha(static_cast<unsigned char>(c))) return false;
+    if (line.size() == 1) return true;
+    const char d = line[1];
+    if (std::isdigit(static_cast<unsigned char>(d)) || d == '-' || d == '+' || d == '.' ||
+        d == '[' || d == '#' || d == '=' || d == ' ' || d == '<')
+      return c != 'I' || d != ' ';  // "I ..." is prose
+    if (model_.control.dialect == "sinumerik") {
+      size_t k = 0;
+      while (k < line.size() && (std::isalnum(static_cast<unsigned char>(line[k])) || line[k] == '_')) ++k;
+      return k == line.size() || line[k] == '=' || line[k] == '(' || line[k] == ' ' || line[k] == ';';
+    }
+    return (c == 'O' || c == 'o');  // a program name: "OFinal ToolPath"
+  }
+
+  // A line of the tape leader: kept as text, not read.
+  void skipLine(const std::string& text) {
+    AptStatement st;
+    st.first_line = st.last_line = static_cast<int>(prog_.statements.size()) + 1;
+    prog_.statements.push_back(st);
+    prog_.lines.push(text, true);
   }
 
  private:
@@ -177,18 +244,17 @@ class Reader {
     Eigen::Vector3d tip0, axis0;
     nominal_.tipAndAxis(q0, &tip0, &axis0);
     g0_ = tip0 + model_.setup.gauge_length * axis0;
-    int col = 0;
-    for (int a = 0; a < n; ++a) {
-      if (model_.axes[a].isRotary()) continue;
-      if (col >= 3) fail(0, 0, "machine", "G-code needs exactly three linear axes");
+    const std::array<int, 3> order = prismaticWordOrder(model_);
+    if (order[0] < 0) fail(0, 0, "machine", "G-code needs exactly three linear axes");
+    for (int col = 0; col < 3; ++col) {
+      const int a = order[col];
       JointVector q = q0;
       q[a] = 1.0;
       Eigen::Vector3d tip, axis;
       nominal_.tipAndAxis(q, &tip, &axis);
       Gm_.col(col) = (tip - tip0) * model_.axes[a].nc_sign;
-      prismatic_[col++] = a;
+      prismatic_[col] = a;
     }
-    if (col != 3) fail(0, 0, "machine", "G-code needs exactly three linear axes");
     if (std::abs(Gm_.determinant()) < 1e-9)
       fail(0, 0, "machine", "the linear axes of this machine are not independent");
     Gm_inv_ = Gm_.inverse();
@@ -198,6 +264,7 @@ class Reader {
   }
 
   Eigen::Vector3d workOffset(const std::string& name) {
+    if (name == "G500") return Eigen::Vector3d::Zero();  // Sinumerik: no settable offset
     auto set = set_offsets_.find(name);
     if (set != set_offsets_.end()) return set->second;
     auto it = model_.setup.work_offsets.find(name);
@@ -232,6 +299,253 @@ class Reader {
     Eigen::Vector3d m;
     for (int k = 0; k < 3; ++k) m[k] = model_.axes[prismatic_[k]].nc_sign * q[prismatic_[k]];
     return m - (tlc_ ? toolLength() : 0.0) * spindle_m_;
+  }
+
+  // ---------------------------------------------------------------- Sinumerik 840D
+  // A Sinumerik block (Siemens SINUMERIK 840D sl Programming Manual, Fundamentals and Job
+  // Planning) rewritten into ISO words that the rest of the reader carries out: DEF REAL/INT
+  // declarations and NAME=expression assignments of constants (kept as variables),
+  // ADDR=expression words (X=_X_HOME -> X[_X_HOME]), SUPA (non-modal machine coordinates, as
+  // G53), G500 (no settable offset), TRANS/ATRANS (programmable translation), T="name" and D
+  // (tool and its length offset; D0 switches it off), MCALL CYCLE81/82/83 (modal drilling, RTP,
+  // RFP, SDIS, DP, DPR), CYCLE800() (swivel reset); MSG, CYCLE832 and the path-control words
+  // listed as ignored. Loops, jumps, swivelling with CYCLE800(...) and frame rotations are
+  // refused naming the construct.
+  std::string sinumerikBlock(const std::string& upper, const std::vector<int>& col) {
+    // Tokens separated by spaces outside parentheses and strings; "NAME = expr" joined.
+    std::vector<std::string> tok;
+    std::vector<int> tcol;
+    {
+      std::string cur;
+      int depth = 0, start = 0;
+      bool str = false;
+      for (size_t k = 0; k <= upper.size(); ++k) {
+        const char c = k < upper.size() ? upper[k] : ' ';
+        if (c == '"') str = !str;
+        if (!str && c == '(') ++depth;
+        if (!str && c == ')') --depth;
+        if (c == ' ' && depth <= 0 && !str) {
+          if (!cur.empty()) {
+            if (!tok.empty() && (cur[0] == '=' || tok.back().back() == '=')) tok.back() += cur;
+            else {
+              tok.push_back(cur);
+              tcol.push_back(start);
+            }
+          }
+          cur.clear();
+          continue;
+        }
+        if (cur.empty()) start = k < col.size() ? col[k] : (col.empty() ? 1 : col.back());
+        cur += c;
+      }
+    }
+    auto refuse = [&](size_t t, const std::string& why) -> void {
+      fail(line_, tcol[t], tok[t].substr(0, tok[t].find_first_of("(=")), why);
+    };
+    std::string out;
+    size_t t = 0;
+    if (t < tok.size() && tok[t][0] == 'N' && tok[t].size() > 1 &&
+        std::isdigit(static_cast<unsigned char>(tok[t][1])))
+      ++t;  // the block number
+    if (t < tok.size() && tok[t] == "DEF") {
+      // DEF type name[=value], name2...: declared variables, 0 unless given.
+      if (t + 1 >= tok.size()) refuse(t, "DEF without a type");
+      const std::string type = tok[t + 1];
+      static const std::set<std::string> types = {"REAL", "INT", "BOOL", "CHAR", "STRING", "AXIS", "FRAME"};
+      if (!types.count(type.substr(0, type.find('[')))) refuse(t + 1, "unknown type in DEF");
+      std::string rest;
+      for (size_t k = t + 2; k < tok.size(); ++k) rest += tok[k];
+      size_t p = 0;
+      while (p < rest.size()) {
+        size_t e = rest.find(',', p);
+        if (e == std::string::npos) e = rest.size();
+        const std::string item = rest.substr(p, e - p);
+        const size_t eq = item.find('=');
+        const std::string name = item.substr(0, eq);
+        double v = 0.0;
+        if (eq != std::string::npos && type != "STRING" && type != "CHAR") v = sinExpression(item.substr(eq + 1), tcol[t]);
+        if (!name.empty()) sin_vars_[name] = v;
+        p = e + 1;
+      }
+      return "";
+    }
+    static const std::set<std::string> flow = {"GOTO", "GOTOF", "GOTOB", "GOTOC", "IF", "ELSE",
+                                               "ENDIF", "WHILE", "ENDWHILE", "LOOP", "ENDLOOP",
+                                               "FOR", "ENDFOR", "REPEAT", "UNTIL", "CASE", "CALL",
+                                               "PCALL", "RET", "M17", "PROC", "SAVE", "EXTERN"};
+    static const std::set<std::string> ignored = {
+        "FNORM",  "COMPOF", "COMPON", "COMPCURV", "COMPCAD", "SOFT",   "BRISK",  "SOFTA",
+        "BRISKA", "FFWON",  "FFWOF",  "CFC",      "CFTCP",   "CFIN",   "G60",    "G601",
+        "G602",   "G603",   "G64",    "G641",     "G642",    "G643",   "G644",   "G645",
+        "UPATH",  "SPATH",  "ORIWKS", "ORIMKS",   "ORIAXES", "ORIVECT", "STOPRE", "G153",
+        "G40",    "DIAMOF", "CUT2D",  "CUT2DF",   "CUT3DC",  "G450",   "G451",   "WAITM",
+        "ORIAXPOS", "ORIEULER", "ORIRPY", "ORIPATH", "TOFFOF", "G93", "G94", "G95", "M27", "M29",
+        "M50", "M51", "M65", "M7", "M8", "M9", "CYCLE832"};
+    for (; t < tok.size(); ++t) {
+      const std::string& k = tok[t];
+      const size_t paren = k.find('(');
+      const size_t eq = k.find('=');
+      const std::string head = k.substr(0, std::min(paren, eq));
+      if (flow.count(head) || k.back() == ':')
+        refuse(t, "Sinumerik " + (k.back() == ':' ? std::string("jump label") : head) +
+                      ": loops, jumps and subprograms are not supported: post the program "
+                      "without them (expanded)");
+      if (head == "MSG" || head == "G710" || head == "G700" ||
+          head == "SETMS" || head == "WORKPIECE" || head == "CYCLE800" || head == "MCALL" ||
+          head == "SUPA" || head == "G500" || head == "TRANS" || head == "ATRANS" || head == "ROT" ||
+          head == "AROT" || head == "T" || head == "D") {
+        // handled below
+      } else if (ignored.count(head)) {
+        ignored_.insert(head);
+        continue;
+      }
+      if (head == "MSG" || head == "SETMS" || head == "WORKPIECE") {
+        ignored_.insert(head);
+      } else if (head == "G710" || head == "G700") {
+        out += (head == "G710" ? " G21" : " G20");
+      } else if (head == "SUPA") {
+        out += " G53";
+      } else if (head == "G500") {
+        work_ = "G500";
+      } else if (head == "T") {
+        // T="name" or T=number or T5
+        const std::string v = eq == std::string::npos ? k.substr(1) : k.substr(eq + 1);
+        tool_name_ = v.size() >= 2 && v.front() == '"' ? v.substr(1, v.size() - 2) : v;
+        tool_changes_.insert(tool_name_);
+      } else if (head == "CYCLE800") {
+        const std::string args = paren == std::string::npos ? "" : k.substr(paren + 1, k.rfind(')') - paren - 1);
+        if (!trim(args).empty())
+          refuse(t, "CYCLE800 with arguments (a swivelled working plane) is not supported yet: "
+                    "post the 3+2 operations with TRAORI or with joint words");
+        ignored_.insert("CYCLE800()");
+      } else if (head == "MCALL") {
+        if (t + 1 >= tok.size()) {
+          sin_mcall_ = false;  // MCALL alone ends the modal call
+          cycle_ = false;
+          continue;
+        }
+        sinCycle(tok[t + 1], tcol[t + 1], /*modal=*/true);
+        ++t;
+      } else if (head.rfind("CYCLE", 0) == 0 && paren != std::string::npos) {
+        const bool was_modal = sin_mcall_;
+        sinCycle(k, tcol[t], /*modal=*/false);
+        sin_mcall_ = was_modal && false;
+        sin_cycle_here_ = true;
+      } else if (head == "TRANS" || head == "ATRANS" || head == "ROT" || head == "AROT") {
+        // The axis words that follow belong to the frame instruction.
+        Eigen::Vector3d v = Eigen::Vector3d::Zero();
+        bool any = false;
+        size_t u = t + 1;
+        for (; u < tok.size(); ++u) {
+          const std::string& a = tok[u];
+          const char l = a[0];
+          if (a.size() < 2 || (l != 'X' && l != 'Y' && l != 'Z' && l != 'A' && l != 'B' && l != 'C' && l != 'R')) break;
+          const std::string e = a[1] == '=' ? a.substr(2) : a.substr(1);
+          const double x = sinExpression(e, tcol[u]);
+          if (head == "ROT" || head == "AROT") {
+            if (x != 0.0) refuse(t, head + " (a rotated frame) is not supported: post the program without frame rotations");
+          } else if (l == 'X' || l == 'Y' || l == 'Z') {
+            v[l - 'X'] = x;
+            any = true;
+          } else {
+            refuse(t, head + " with " + std::string(1, l) + " is not supported");
+          }
+        }
+        if (head == "TRANS") prog_frame_ = v * unit_;
+        else if (head == "ATRANS") prog_frame_ += v * unit_;
+        else if (u == t + 1) prog_frame_.setZero();  // ROT alone resets the programmable frame
+        (void)any;
+        t = u - 1;
+      } else if (head == "D") {
+        out += " " + k;
+      } else if (eq != std::string::npos && (paren == std::string::npos || eq < paren)) {
+        const std::string name = k.substr(0, eq);
+        const std::string expr = k.substr(eq + 1);
+        const bool address = name.size() == 1 && std::isalpha(static_cast<unsigned char>(name[0]));
+        if (address) {
+          out += " " + name + "[" + sinBrackets(expr) + "]";
+        } else {
+          if (name.empty()) refuse(t, "an assignment without a name");
+          // An assignment: constant expressions only (a value computed from motion is refused
+          // by the expression's own check).
+          sin_vars_[name] = sinExpression(expr, tcol[t]);
+        }
+      } else if (paren != std::string::npos) {
+        refuse(t, "Sinumerik " + head + "(...) is not supported: a cycle or function tolver does "
+                  "not know (post it as motion)");
+      } else if (std::isalpha(static_cast<unsigned char>(k[0])) && k.size() > 1 &&
+                 std::isalpha(static_cast<unsigned char>(k[1])) && !tcpWordName(k)) {
+        if (k == "TRAORI" || k == "TRAFOOF") {
+          // a TCP name the machine file does not declare: let the ISO path say so
+          out += " " + k;
+        } else {
+          refuse(t, "Sinumerik instruction " + k + " is not supported");
+        }
+      } else {
+        out += " " + k;
+      }
+    }
+    return out;
+  }
+
+  bool tcpWordName(const std::string& k) const {
+    for (const auto& [on, off] : model_.control.tcp_words)
+      if (k == on || k == off) return true;
+    return false;
+  }
+
+  // A Sinumerik expression in the reader's bracket syntax: ( ) become [ ].
+  static std::string sinBrackets(std::string e) {
+    for (char& c : e) {
+      if (c == '(') c = '[';
+      else if (c == ')') c = ']';
+    }
+    return e;
+  }
+
+  double sinExpression(const std::string& e, int column) {
+    const std::string b = sinBrackets(e);
+    size_t i = 0;
+    const double v = expression(b, i, column - 1);
+    while (i < b.size() && b[i] == ' ') ++i;
+    if (i != b.size()) fail(line_, column, e.substr(0, 20), "unexpected text in the expression");
+    return v;
+  }
+
+  // CYCLE81/82/83(RTP, RFP, SDIS, DP, DPR, ...): the drilling motion at each position (modal
+  // under MCALL) or at the current one; RTP retract plane, RFP reference plane, SDIS safety
+  // distance, DP final depth (absolute) or DPR (relative to RFP).
+  void sinCycle(const std::string& k, int column, bool modal) {
+    const size_t paren = k.find('(');
+    const std::string name = k.substr(0, paren);
+    if (name != "CYCLE81" && name != "CYCLE82" && name != "CYCLE83")
+      fail(line_, column, name, "the Sinumerik cycle " + name + " is not expanded (drilling "
+                                "cycles CYCLE81, CYCLE82 and CYCLE83 are)");
+    if (paren == std::string::npos || k.back() != ')') fail(line_, column, name, "expected " + name + "(...)");
+    const std::string args = k.substr(paren + 1, k.size() - paren - 2);
+    std::vector<std::string> a;
+    size_t p = 0;
+    while (true) {
+      const size_t e = args.find(',', p);
+      a.push_back(std::string(trim(args.substr(p, e == std::string::npos ? std::string::npos : e - p))));
+      if (e == std::string::npos) break;
+      p = e + 1;
+    }
+    auto arg = [&](size_t n) -> std::optional<double> {
+      if (n >= a.size() || a[n].empty()) return std::nullopt;
+      return sinExpression(a[n], column);
+    };
+    const auto rtp = arg(0), rfp = arg(1), sdis = arg(2), dp = arg(3), dpr = arg(4);
+    if (!rtp || !rfp) fail(line_, column, name, name + " needs RTP and RFP (its first two values)");
+    if (!dp && !dpr) fail(line_, column, name, name + " needs DP or DPR (its fourth or fifth value)");
+    cycle_ = true;
+    ++prog_.cycles;
+    sin_mcall_ = modal;
+    cycle_code_ = name;
+    cycle_return_initial_ = true;
+    cycle_initial_z_ = *rtp * unit_;
+    cycle_r_ = (*rfp + sdis.value_or(0.0)) * unit_;
+    cycle_z_ = (dp ? *dp : *rfp - std::abs(*dpr)) * unit_;
   }
 
   // ---------------------------------------------------------------- expressions
@@ -297,6 +611,19 @@ class Reader {
       return c == '-' ? -v : v;
     }
     if (c == '#') return parameter(text, i, col_base);
+    if (model_.control.dialect == "sinumerik" &&
+        (std::isalpha(static_cast<unsigned char>(c)) || c == '_')) {
+      size_t j = i;
+      while (j < text.size() && (std::isalnum(static_cast<unsigned char>(text[j])) || text[j] == '_')) ++j;
+      const std::string name = text.substr(i, j - i);
+      if (j < text.size() && text[j] == '[')
+        fail(line_, col_base + i, name, "functions in expressions (" + name + ") are not supported");
+      auto it = sin_vars_.find(name);
+      if (it == sin_vars_.end())
+        fail(line_, col_base + i, name, "the variable " + name + " has no value (not assigned in the program)");
+      i = j;
+      return it->second;
+    }
     if (std::isalpha(static_cast<unsigned char>(c)))
       fail(line_, col_base + i, "", "functions in expressions are not supported");
     size_t j = i;
@@ -337,6 +664,35 @@ class Reader {
     }
   }
 
+  // The finest printed resolution of the program's coordinates: the most digits after the
+  // decimal point in a plain number of X Y Z I J K R (arc checks are never tighter than it).
+  void noteResolution(std::string_view v, char letter) {
+    if (std::string_view("XYZIJKR").find(letter) == std::string_view::npos) return;
+    const size_t dot = v.find('.');
+    if (dot == std::string_view::npos) return;
+    int digits = 0;
+    for (size_t k = dot + 1; k < v.size() && std::isdigit(static_cast<unsigned char>(v[k])); ++k)
+      ++digits;
+    max_decimals_ = std::max(max_decimals_, std::min(digits, 9));
+  }
+
+  // The largest difference of an arc's start and end radius (mm) the control accepts, never
+  // tighter than four steps of the program's printed resolution (the rounding of start, end and
+  // centre adds up to 2.9 steps): LinuxCNC 2.9 (G2/G3: an error if the radii differ by more
+  // than 0.5 mm, or by more than 0.005 mm and 0.1 % of the radius; 0.05 and 0.0005 inch);
+  // a given arc_radius_tolerance_mm (Fanuc parameter 3410); else RS274NGC v3's 0.002 mm
+  // (0.0002 inch).
+  double arcRadiusTolerance(double radius_mm) const {
+    const bool inch = unit_ == 25.4;
+    double rule;
+    if (model_.control.arc_radius_tolerance_mm > 0) rule = model_.control.arc_radius_tolerance_mm;
+    else if (model_.control.dialect == "linuxcnc")
+      rule = std::min(inch ? 1.27 : 0.5, std::max(inch ? 0.0127 : 0.005, 1e-3 * radius_mm));
+    else rule = inch ? 0.00508 : 0.002;
+    const double step = unit_ * std::pow(10.0, -max_decimals_);
+    return std::max(rule, 4.0 * step);
+  }
+
   static std::string clip(std::string s) {
     if (s.size() > 60) s = s.substr(0, 57) + "...";
     return s;
@@ -347,10 +703,21 @@ class Reader {
     // Strip comments, keep positions (1-based columns of the raw line).
     std::string text;
     std::vector<int> col;
+    const bool sinumerik = model_.control.dialect == "sinumerik";
     for (size_t i = 0; i < raw.size(); ++i) {
       const char c = raw[i];
       if (c == ';') break;
-      if (c == '(') {
+      if (sinumerik && c == '"') {  // a string: MSG("..."), T="name"
+        const size_t close = raw.find('"', i + 1);
+        if (close == std::string::npos) fail(line_, static_cast<int>(i) + 1, "\"", "unclosed string");
+        for (size_t k = i; k <= close; ++k) {
+          text += raw[k];
+          col.push_back(static_cast<int>(k) + 1);
+        }
+        i = close;
+        continue;
+      }
+      if (c == '(' && !sinumerik) {
         const size_t close = raw.find(')', i);
         if (close == std::string::npos) fail(line_, static_cast<int>(i) + 1, "(", "unclosed comment");
         i = close;
@@ -384,6 +751,17 @@ class Reader {
         tcpWord(*w);
         for (size_t k = at; k < end; ++k) upper[k] = ' ';
       }
+    if (sinumerik) {
+      upper = sinumerikBlock(upper, col);
+      if (trim(upper).empty()) return "";
+      col.assign(upper.size(), col.empty() ? 1 : col[0]);
+      if (upper[0] == ' ') {
+        const std::string_view u = trim(upper);
+        upper = std::string(u);
+        col.resize(upper.size());
+      }
+      text = upper;
+    }
     // Parameter assignment: #n = expr or #<name> = expr.
     if (upper[0] == '#') {
       const size_t eq = upper.find('=');
@@ -399,16 +777,35 @@ class Reader {
       }
       return "";
     }
-    // O words: a program number alone is a name; O-word subprograms and control flow are not
-    // supported.
-    if (upper[0] == 'O') {
+    // The program's number or name: O1234, O<name>, :1234 (ISO 6983's alternative), and at the
+    // program start OName ... (NX writes "OFinal ToolPath"). O-word subprograms and control flow
+    // (LinuxCNC "O100 sub", "O<x> if [...]") are refused naming the construct.
+    if (upper[0] == 'O' || upper[0] == ':') {
       size_t j = 1;
-      while (j < upper.size() && (std::isdigit(static_cast<unsigned char>(upper[j])) || upper[j] == ' ')) ++j;
-      if (j < upper.size() && upper[j] == '<') j = upper.find('>', j) == std::string::npos ? upper.size() : upper.find('>', j) + 1;
+      while (j < upper.size() && std::isdigit(static_cast<unsigned char>(upper[j]))) ++j;
+      if (j == 1 && j < upper.size() && upper[j] == '<')
+        j = upper.find('>', j) == std::string::npos ? upper.size() : upper.find('>', j) + 1;
       const std::string rest(trim(std::string_view(upper).substr(j)));
-      if (rest.empty()) return "";
-      fail(line_, col[0], "O", "O-word subprograms and control flow ('" + clip(rest) +
-                                   "') are not supported: expand them in the post-processor");
+      const bool numbered = j > 1;
+      if (rest.empty() && (numbered || upper[0] == 'O')) {
+        if (prog_.part_name.empty()) prog_.part_name = std::string(trim(text.substr(1)));
+        return "";
+      }
+      static const std::set<std::string> flow = {"SUB", "ENDSUB", "CALL", "IF", "ELSE", "ELSEIF",
+                                                 "ENDIF", "WHILE", "ENDWHILE", "DO", "REPEAT",
+                                                 "ENDREPEAT", "RETURN", "BREAK", "CONTINUE"};
+      const std::string keyword = rest.substr(0, rest.find_first_of(" [#"));
+      if (numbered && flow.count(keyword))
+        fail(line_, col[0], "O", "O-word " + toLower(keyword) + " ('" + clip(rest) +
+                                     "'): subprograms and control flow are not supported: "
+                                     "expand them in the post-processor");
+      if (!numbered && upper[0] == 'O' && !executed_block_) {
+        prog_.part_name = std::string(trim(text.substr(1)));  // a name at the program start
+        return "";
+      }
+      fail(line_, col[0], "O", "'" + clip(text) + "' is neither a program number nor a name at "
+                               "the program start: O-word subprograms and control flow are not "
+                               "supported");
     }
     // Words.
     std::vector<Word> words;
@@ -425,7 +822,9 @@ class Reader {
       w.letter = c;
       w.column = col[i];
       ++i;
+      const size_t value_at = i;
       w.value = expression(upper, i, 0);
+      noteResolution(std::string_view(upper).substr(value_at, i - value_at), c);
       if (!std::isfinite(w.value) || std::abs(w.value) > 1e7)
         fail(line_, w.column, std::string(1, c),
              "value " + clip(formatNumber(w.value)) + " is beyond any plausible length or angle");
@@ -437,12 +836,17 @@ class Reader {
 
   // ---------------------------------------------------------------- execution
   std::string execute(const std::vector<Word>& words) {
+    executed_block_ = true;
     std::map<char, const Word*> axis_words;  // X Y Z and rotary letters, I J K R, P Q L H
     std::vector<const Word*> g, m;
     for (const Word& w : words) {
       if (w.letter == 'G') g.push_back(&w);
       else if (w.letter == 'M') m.push_back(&w);
-      else if (w.letter == 'N' || w.letter == 'F' || w.letter == 'S' || w.letter == 'D') continue;
+      else if (w.letter == 'D' && model_.control.dialect == "sinumerik") {
+        // Sinumerik: D0 switches the tool length offset off, Dn on (cutting edge n).
+        tlc_ = w.value != 0.0;
+        if (tlc_) h_ = static_cast<int>(w.value);
+      } else if (w.letter == 'N' || w.letter == 'F' || w.letter == 'S' || w.letter == 'D') continue;
       else if (w.letter == 'T') tool_ = static_cast<int>(w.value);
       else {
         if (axis_words.count(w.letter))
@@ -457,7 +861,10 @@ class Reader {
     for (const Word* w : m) {
       if (w->code == "M98" || w->code == "M99" || w->code == "M97")
         fail(line_, w->column, w->code, "subprogram calls are not supported: expand them in the post");
-      if (w->code == "M2" || w->code == "M30") ended_ = true;
+      if (w->code == "M2" || w->code == "M30") {
+        ended_ = true;
+        endModes(w->code);
+      }
       else if (w->code == "M61" && has('Q')) tool_ = static_cast<int>(val('Q'));
       else if (!tcpWord(w->code) && !harmlessM().count(w->code)) ignored_.insert(w->code);
     }
@@ -466,6 +873,7 @@ class Reader {
     bool g53 = false, g28 = false, g10 = false;
     for (const Word* w : g) {
       const std::string& c = w->code;
+      endModes(c);
       if (tcpWord(c)) {
         if (c == "G49") tlc_ = false;
         if (c.rfind("G43", 0) == 0 || c == "G234") {
@@ -476,9 +884,9 @@ class Reader {
         continue;
       }
       auto refused = refusedG().find(c);
-      if (refused != refusedG().end()) fail(line_, w->column, c, refused->second);
+      if (refused != refusedG().end() && !isDrillingCycle(c)) fail(line_, w->column, c, refused->second);
       if (c == "G0" || c == "G1" || c == "G2" || c == "G3") motion_this_block = c;
-      else if (c == "G81" || c == "G82" || c == "G83" || c == "G73") motion_this_block = c;
+      else if (isDrillingCycle(c)) motion_this_block = c;
       else if (c == "G17") plane_ = 2;
       else if (c == "G18") plane_ = 1;
       else if (c == "G19") plane_ = 0;
@@ -531,7 +939,8 @@ class Reader {
       ignored_.insert(std::string(1, l) + " word");
     }
     if (!motion_this_block.empty()) {
-      if (motion_this_block[1] == '8' || motion_this_block == "G73") {
+      if (isDrillingCycle(motion_this_block)) {
+        if (!cycle_ || cycle_code_ != motion_this_block) ++prog_.cycles;
         cycle_ = true;
         cycle_code_ = motion_this_block;
         cycle_initial_z_ = cur_xyz_.z();
@@ -540,11 +949,30 @@ class Reader {
       }
       motion_ = motion_this_block;
     }
+    if (sin_mcall_) cycle_ = true;  // Sinumerik MCALL: modal until MCALL alone, whatever G0/G1
     if (g28) return homeMove(axis_words);
     if (g53) return machineMove(axis_words);
+    if (sin_cycle_here_) {  // Sinumerik CYCLE8x(...) without MCALL: once, where the block ends
+      sin_cycle_here_ = false;
+      if (any_axis) move(axis_words, motion_);
+      const std::string c = drillCycle({});
+      cycle_ = sin_mcall_;
+      return c;
+    }
     if (!any_axis) return "";
     if (cycle_) return drillCycle(axis_words);
     return move(axis_words, motion_);
+  }
+
+  // Canned cycles expanded into the motions the control makes along the tool axis (over the
+  // hole, down to R, in to Z, out to R or the initial level; pecks and dwells stay within that
+  // line): G73, G81-G86, G88, G89 (Fanuc, HAAS, LinuxCNC); G74 and G76 (counter tapping and
+  // fine boring) on ISO controls, where LinuxCNC's G76 is threading (refused).
+  bool isDrillingCycle(const std::string& c) const {
+    static const std::set<std::string> cycles = {"G73", "G81", "G82", "G83", "G84", "G85",
+                                                 "G86", "G88", "G89"};
+    if (cycles.count(c)) return true;
+    return (c == "G74" || c == "G76") && model_.control.dialect != "linuxcnc";
   }
 
   std::string axisList() const {
@@ -561,6 +989,27 @@ class Reader {
     units_seen_ = true;
     prog_.units_declared = true;
     prog_.units = u == 25.4 ? "INCH" : "MM";
+  }
+
+  // Modes the word c ends besides the declared off words: a G word of modal group 08 ends a
+  // group-08 TCP mode other than itself (Fanuc and HAAS: G43, G44, G49, G43.4, G43.5, G234 are
+  // one group, each replacing the other); the machine file's ended_by words (HAAS: G28 cancels
+  // tool length compensation, and with it G234); M2 and M30 end every mode.
+  void endModes(const std::string& c) {
+    static const std::set<std::string> group08 = {"G43", "G44", "G49", "G43.1", "G43.4", "G43.5",
+                                                  "G234"};
+    std::vector<std::string> ended;
+    for (const std::string& on : tcp_active_) {
+      bool ends = c == "M2" || c == "M30";
+      ends = ends || (group08.count(c) && group08.count(on) && c != on);
+      auto it = model_.control.tcp_ended_by.find(on);
+      if (it != model_.control.tcp_ended_by.end())
+        ends = ends || std::find(it->second.begin(), it->second.end(), c) != it->second.end();
+      if (ends) ended.push_back(on);
+    }
+    if (ended.empty()) return;
+    for (const std::string& on : ended) tcp_active_.erase(on);
+    cur_xyz_ = currentProgramXyz();  // the control converts its position into the new mode
   }
 
   // TCP words of the control: switches the state; true when c is one.
@@ -637,7 +1086,7 @@ class Reader {
 
   // Emits the point for program coordinates xyz (mm) in the current mode.
   void emit(const Eigen::Vector3d& xyz, bool rapid) {
-    const Eigen::Vector3d off = workOffset(work_);
+    const Eigen::Vector3d off = workOffset(work_) + prog_frame_;
     last_offset_ = off;
     ClPoint p;
     p.line = line_;
@@ -656,15 +1105,59 @@ class Reader {
         for (int k = 0; k < 3; ++k) q[prismatic_[k]] = sol.q[prismatic_[k]];
     } else {
       q = jointsFromMachine(xyz + off);
+      // A coordinate last set in machine coordinates stays where it is: a move that does not
+      // name it does not carry it into the work offset.
+      bool kept = false;
+      for (int k = 0; k < 3; ++k)
+        if (coord_[k] == kFixed) {
+          q[prismatic_[k]] = q_[prismatic_[k]];
+          kept = true;
+        }
       nominal_.tipAndAxis(q, &p.p_w, &p.u_w);
+      if (kept) {
+        q_ = q;
+        cur_xyz_ = machineOfJoints(q) - off;
+        pushPoint(p, q, ClProgram::kJointWords);
+        return;
+      }
     }
     q_ = q;
+    cur_xyz_ = xyz;
+    pushPoint(p, q, tcpMode() ? ClProgram::kTcpWords : ClProgram::kJointWords);
+  }
+
+  // The point into the path, unless a coordinate is still unknown.
+  void pushPoint(const ClPoint& p, const JointVector& q, char kind) {
+    if (!positionKnown()) return;
     last_tip_w_ = p.p_w;
     prog_.path.push_back(p);
     prog_.point_frame.push_back(0);
     prog_.joints.push_back(q);
-    prog_.tcp.push_back(tcpMode() ? 1 : 0);
-    cur_xyz_ = xyz;
+    prog_.tcp.push_back(kind);
+    prog_.fixed_axes.push_back(kind == ClProgram::kTcpWords ? 0 : fixedMask());
+  }
+
+  // Where each of X Y Z stands: given in the work offset (moves with it), in machine
+  // coordinates (G53, G28, SUPA: fixed), or not yet commanded (unknown: the control's position
+  // at the program start). A move made while a coordinate is unknown is not a point of the path
+  // (the tool's position there is not in the program): counted and said once.
+  enum Coordinate : char { kInOffset = 0, kFixed = 1, kUnknown = 2 };
+  bool positionKnown() {
+    if (coord_[0] != kUnknown && coord_[1] != kUnknown && coord_[2] != kUnknown) return true;
+    if (unknown_moves_++ == 0) first_unknown_line_ = line_;
+    last_unknown_line_ = line_;
+    return false;
+  }
+  unsigned char fixedMask() const {
+    unsigned char m = 0;
+    for (int k = 0; k < 3; ++k)
+      if (coord_[k] == kFixed) m |= static_cast<unsigned char>(1u << k);
+    return m;
+  }
+  void coordinatesGiven(const std::map<char, const Word*>& aw, Coordinate state) {
+    const char L[3] = {'X', 'Y', 'Z'};
+    for (int k = 0; k < 3; ++k)
+      if (aw.count(L[k])) coord_[k] = state;
   }
 
   // A joint-space point (G53, G28): machine coordinates of the gauge point as given.
@@ -674,17 +1167,14 @@ class Reader {
     p.rapid = true;
     nominal_.tipAndAxis(q, &p.p_w, &p.u_w);
     q_ = q;
-    last_tip_w_ = p.p_w;
-    prog_.path.push_back(p);
-    prog_.point_frame.push_back(0);
-    prog_.joints.push_back(q);
-    prog_.tcp.push_back(0);
+    pushPoint(p, q, ClProgram::kMachineCoordinates);
     cur_xyz_ = currentProgramXyz();
   }
 
   std::string move(const std::map<char, const Word*>& aw, const std::string& motion) {
     const Eigen::Vector3d start = cur_xyz_;
     const Eigen::Vector3d end = target(aw);
+    coordinatesGiven(aw, kInOffset);
     const bool rotary_words = std::any_of(aw.begin(), aw.end(), [&](const auto& kv) {
       auto it = letter_axis_.find(kv.first);
       return it != letter_axis_.end() && model_.axes[it->second].isRotary();
@@ -713,7 +1203,7 @@ class Reader {
       const double d = chord.norm();
       if (d < 1e-9) fail(line_, aw.at('R')->column, "R", "an R arc needs distinct end points");
       const double h2 = r * r - d * d / 4.0;
-      if (h2 < -1e-6 * r * r)
+      if (h2 < 0 && d / 2.0 - std::abs(r) > arcRadiusTolerance(std::abs(r)))
         fail(line_, aw.at('R')->column, "R", "radius " + formatNumber(std::abs(r / unit_)) +
                                                  " is shorter than half the chord");
       const double h = std::sqrt(std::max(0.0, h2));
@@ -733,17 +1223,37 @@ class Reader {
       centre = arc_absolute_ ? off : start + off;
       centre -= n * n.dot(centre - start);
     }
+    // Full turns before the end (LinuxCNC: P, the number of turns, 1 by default).
+    int turns = 0;
+    if (aw.count('P')) {
+      const Word& p = *aw.at('P');
+      if (model_.control.dialect != "linuxcnc")
+        fail(line_, p.column, "P", "a P word on an arc (LinuxCNC's turns) on a control that is "
+                                   "not declared dialect=\"linuxcnc\"");
+      if (!(p.value >= 1 && p.value <= 1000 && p.value == std::round(p.value)))
+        fail(line_, p.column, "P", "the number of turns must be a whole number from 1 to 1000");
+      turns = static_cast<int>(p.value) - 1;
+    }
     std::vector<Eigen::Vector3d> pts;
     const double tol = opt_.chordal_tolerance_mm;
     const double r0 = (start - centre - n * n.dot(start - centre)).norm();
     // Bounded work: a full turn at this radius and tolerance, before anything is expanded.
-    if (!(arcPointsPerTurn(r0, tol) <= kMaxArcPoints))
+    if (!(arcPointsPerTurn(r0, tol) * (turns + 1) <= kMaxArcPoints))
       fail(line_, 0, motion,
            "an arc of radius " + formatNumber(r0) + " mm would expand into more than a million "
            "points at chordal tolerance " + formatNumber(tol) + " mm (raise --chordal-tol)");
-    if (!interpolateArc(start, end, centre, axis, tol, std::max(0.002, 1e-4 * r0), pts))
-      fail(line_, 0, motion, "the end point is not on the arc's circle (radius differs by more "
-                             "than 0.002 mm)");
+    const double radius_tol = arcRadiusTolerance(r0);
+    if (!interpolateArc(start, end, centre, axis, tol, radius_tol, pts, turns)) {
+      const Eigen::Vector3d re = end - centre - n * n.dot(end - centre);
+      fail(line_, 0, motion,
+           "the end point is not on the arc's circle: its radius differs from the start's by " +
+               formatWith("%.2f", std::abs(re.norm() - r0) * 1000.0) + " um, more than the " +
+               formatWith("%.2f", radius_tol * 1000.0) + " um the control accepts (" +
+               (model_.control.dialect == "linuxcnc" ? "LinuxCNC's rule"
+                : model_.control.arc_radius_tolerance_mm > 0 ? "the machine file's arc_radius_tolerance_mm"
+                                                            : "RS274NGC's rule") +
+               ", or four steps of the program's " + std::to_string(max_decimals_) + " decimals)");
+    }
     ++prog_.arcs_expanded;
     for (const Eigen::Vector3d& p : pts) emit(p, false);
   }
@@ -759,6 +1269,8 @@ class Reader {
         q[it->second] = ax.nc_sign * w->value * kDegToRad;
       } else {
         q[it->second] = ax.nc_sign * w->value * unit_;
+        for (int k = 0; k < 3; ++k)
+          if (prismatic_[k] == it->second) coord_[k] = kFixed;
       }
     }
     emitJoints(q);
@@ -779,6 +1291,8 @@ class Reader {
       if (!named || (n.size() == 1 && aw.count(static_cast<char>(std::toupper(n[0]))))) {
         q[a] = 0.0;
         if (model_.axes[a].isRotary()) rot_word_[a] = 0.0;
+        for (int k = 0; k < 3; ++k)
+          if (prismatic_[k] == static_cast<int>(a)) coord_[k] = kFixed;
       }
     }
     emitJoints(q);
@@ -789,13 +1303,16 @@ class Reader {
     if (!absolute_) fail(line_, 0, cycle_code_, "drilling cycles in G91 are not expanded");
     if (aw.count('L') && aw.at('L')->value > 1)
       fail(line_, aw.at('L')->column, "L", "repeated drilling cycles (L) are not expanded");
-    if (aw.count('R')) cycle_r_ = aw.at('R')->value * unit_;
-    if (aw.count('Z')) cycle_z_ = aw.at('Z')->value * unit_;
+    const bool sinumerik_cycle = cycle_code_.rfind("CYCLE", 0) == 0;  // planes from its values
+    if (aw.count('R') && !sinumerik_cycle) cycle_r_ = aw.at('R')->value * unit_;
+    if (aw.count('Z') && !sinumerik_cycle) cycle_z_ = aw.at('Z')->value * unit_;
     if (std::isnan(cycle_r_) || std::isnan(cycle_z_))
       fail(line_, 0, cycle_code_, "a drilling cycle needs R and Z");
     updateRotaryWords(aw);
     Eigen::Vector3d xy = target(aw);
-    const double z_before = cur_xyz_.z();
+    coordinatesGiven(aw, kInOffset);
+    const double z_before = coord_[2] == kInOffset ? cur_xyz_.z() : cycle_initial_z_;
+    coord_[2] = kInOffset;
     const double clear = std::max(z_before, cycle_r_);
     xy.z() = clear;
     emit(xy, true);  // over the hole at the clearance height
@@ -805,6 +1322,7 @@ class Reader {
     emit(xy, false);
     xy.z() = cycle_return_initial_ ? std::max(cycle_initial_z_, cycle_r_) : cycle_r_;
     emit(xy, true);
+    ++prog_.cycle_holes;
     return cycle_code_;
   }
 
@@ -840,7 +1358,19 @@ class Reader {
   int nesting_ = 0;
   LineSource* source_ = nullptr;
   int line_ = 0;
-  bool ended_ = false, seen_block_ = false;
+  bool ended_ = false, seen_block_ = false, any_ = false;
+  int percent_ = 0;
+  std::array<char, 3> coord_ = {2, 2, 2};  // Coordinate per X Y Z
+  int unknown_moves_ = 0, first_unknown_line_ = 0, last_unknown_line_ = 0;
+  // Sinumerik state.
+  std::map<std::string, double> sin_vars_;
+  bool sin_mcall_ = false, sin_cycle_here_ = false;
+  Eigen::Vector3d prog_frame_ = Eigen::Vector3d::Zero();  // TRANS/ATRANS, mm
+  std::string tool_name_;
+  std::set<std::string> tool_changes_;
+  int max_decimals_ = 3;  // assumed until the program prints more
+  bool executed_block_ = false;  // a block of words was executed (O names come before)
+  static constexpr size_t kMaxLeaderLines = 2000;  // lines held while looking for a first '%'
   double unit_ = 1.0;
   bool units_seen_ = false;
   int plane_ = 2;  // normal index: 2 = G17 (XY), 1 = G18 (ZX), 0 = G19 (YZ)
