@@ -222,9 +222,15 @@ void runWorkOffsetSetup(const SetupOptions& o, const ClProgram& program, const M
   const WorkOffsetSetup r =
       proposeWorkOffset(model, program.joints, program.tcp, program.fixed_axes);
   if (!std::isfinite(r.margin)) {
-    std::printf("  result     no move is given in a work offset: the set-up does not change where "
-                "the machine goes\n");
-    *exit_code = r.found ? 0 : 1;
+    double margin = 0.0;
+    int limiting = -1;
+    const std::vector<AxisRange> ranges =
+        commandedJointRanges(model, program.joints, &margin, &limiting);
+    printRanges(model, program, ranges);
+    std::printf("  result     every move is in machine coordinates or in a work offset the program "
+                "sets itself (G10): the set-up does not change where the machine goes; %s\n",
+                margin >= -1e-9 ? "every point is inside travel" : "points are outside travel");
+    *exit_code = margin >= -1e-9 ? 0 : 1;
     return;
   }
   std::printf("  proposed   part_zero_mm = %.3f, %.3f, %.3f (the program's origin)\n",
@@ -234,11 +240,27 @@ void runWorkOffsetSetup(const SetupOptions& o, const ClProgram& program, const M
               r.work_offset_m.x(), r.work_offset_m.y(), r.work_offset_m.z());
   std::printf("             gauge_length_mm = %.3f (tool length when the set-up gives none)\n",
               model.setup.gauge_length);
-  printRanges(model, program, r.ranges);
-  if (r.found) {
+  // The reach check, exact: the program read again with the proposal, its joints against travel.
+  MachineModel best = model;
+  best.setup.part_zero_table = r.part_zero_table;
+  const ClProgram again = loadProgram(o.program, best);
+  double margin = 0.0;
+  int limiting = -1;
+  const std::vector<AxisRange> ranges = commandedJointRanges(best, again.joints, &margin, &limiting);
+  printRanges(best, again, ranges);
+  if (r.found && margin >= -1e-9) {
     std::printf("  result     every point inside travel, smallest margin %.3f mm (exact: each "
                 "axis's range centred)\n", r.margin);
     *exit_code = 0;
+  } else if (r.found) {
+    std::printf("  result     the program read again with this work offset leaves %s outside "
+                "travel (at line %d): not proposed\n",
+                model.axes[limiting].name.c_str(),
+                again.path[std::max(0, ranges[limiting].min - model.axes[limiting].travel_min < 0
+                                           ? ranges[limiting].min_index
+                                           : ranges[limiting].max_index)].line);
+    *exit_code = 1;
+    return;
   } else {
     const char* axis = r.limiting_axis >= 0 ? model.axes[r.limiting_axis].name.c_str() : "-";
     if (r.limited_by_machine_coordinates)

@@ -224,14 +224,28 @@ class ZeroSearch {
     }
     Eigen::Vector3d y_best = x;
     double v_best = best1;
-    for (double size : {200.0, 50.0, 100.0, 10.0, 30.0, 2.0, 0.5}) {
-      double v = 0.0;
-      const Eigen::Vector3d y =
-          maximise([this](const Eigen::Vector3d& p) { return margin(p); }, y_best, size, &v);
-      if (v > v_best) {
-        v_best = v;
-        y_best = y;
+    // The search runs on the points that bind (an active set: the smallest margins where it
+    // starts), each result checked on every point and the points that bind there added, until
+    // none is missing: the value it returns is always the margin over all points.
+    std::vector<int> active = smallestMargins(x, kActive);
+    for (int round = 0; round < 6; ++round) {
+      Eigen::Vector3d y_round = y_best;
+      double v_round = -std::numeric_limits<double>::infinity();
+      for (double size : {200.0, 50.0, 100.0, 10.0, 30.0, 2.0, 0.5}) {
+        double v = 0.0;
+        const Eigen::Vector3d y = maximise(
+            [this, &active](const Eigen::Vector3d& p) { return marginOn(p, active); }, y_round,
+            size, &v);
+        if (v > v_round) v_round = v, y_round = y;
       }
+      const double v_all = margin(y_round);
+      if (v_all > v_best) v_best = v_all, y_best = y_round;
+      if (v_all >= v_round - 1e-9 || active.size() >= n) break;
+      // Points outside the set bind at the result: add the smallest.
+      std::vector<char> in(n, 0);
+      for (int i : active) in[i] = 1;
+      for (int i : smallestMargins(y_round, kActive))
+        if (!in[i]) active.push_back(i);
     }
     if (v_best > best1) {
       std::vector<int> choice(n);
@@ -266,6 +280,33 @@ class ZeroSearch {
       tc = std::min(tc, std::min(q[j] - ax.travel_min, ax.travel_max - q[j]));
     }
     return tc;
+  }
+
+  static constexpr size_t kActive = 256;
+
+  double pointMargin(size_t i, const Eigen::Vector3d& d) const {
+    double best_c = -std::numeric_limits<double>::infinity();
+    for (int c = first[i]; c < first[i + 1]; ++c) best_c = std::max(best_c, candMargin(c, d));
+    return best_c;
+  }
+
+  double marginOn(const Eigen::Vector3d& x, const std::vector<int>& points) const {
+    double t = std::numeric_limits<double>::infinity();
+    const Eigen::Vector3d d = x - x0;
+    for (int i : points) t = std::min(t, pointMargin(i, d));
+    return t;
+  }
+
+  // The k points with the smallest margin at x.
+  std::vector<int> smallestMargins(const Eigen::Vector3d& x, size_t k) const {
+    std::vector<std::pair<double, int>> m(n);
+    const Eigen::Vector3d d = x - x0;
+    for (size_t i = 0; i < n; ++i) m[i] = {pointMargin(i, d), static_cast<int>(i)};
+    k = std::min(k, n);
+    std::partial_sort(m.begin(), m.begin() + k, m.end());
+    std::vector<int> out(k);
+    for (size_t j = 0; j < k; ++j) out[j] = m[j].second;
+    return out;
   }
 
   // The margin of a part zero: over the points, the best of their solutions' margins.
@@ -521,6 +562,30 @@ MachineFrame machineFrame(const MachineModel& model) {
 }
 
 }  // namespace
+
+std::vector<AxisRange> commandedJointRanges(const MachineModel& model,
+                                            const std::vector<JointVector>& joints,
+                                            double* margin, int* limiting_axis) {
+  std::vector<AxisRange> ranges(model.axes.size());
+  for (size_t i = 0; i < joints.size(); ++i)
+    for (size_t a = 0; a < model.axes.size(); ++a) {
+      AxisRange& r = ranges[a];
+      const double q = joints[i][static_cast<int>(a)];
+      if (!r.known || q < r.min) r.min = q, r.min_index = static_cast<int>(i);
+      if (!r.known || q > r.max) r.max = q, r.max_index = static_cast<int>(i);
+      r.known = true;
+    }
+  *margin = std::numeric_limits<double>::infinity();
+  *limiting_axis = -1;
+  for (size_t a = 0; a < model.axes.size(); ++a) {
+    const Axis& ax = model.axes[a];
+    if (ax.endless || !ranges[a].known) continue;
+    double m = std::min(ranges[a].min - ax.travel_min, ax.travel_max - ranges[a].max);
+    if (ax.isRotary()) m = m >= 0 ? std::numeric_limits<double>::infinity() : m * 1000.0;  // rotary overrun dominates
+    if (m < *margin) *margin = m, *limiting_axis = static_cast<int>(a);
+  }
+  return ranges;
+}
 
 Eigen::Vector3d workOffsetAtPartZero(const MachineModel& model) {
   const MachineFrame f = machineFrame(model);

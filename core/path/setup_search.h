@@ -92,6 +92,14 @@ WorkOffsetSetup proposeWorkOffset(const MachineModel& model,
                                   const std::vector<JointVector>& joints,
                                   const std::vector<char>& kind,
                                   const std::vector<unsigned char>& fixed = {});
+// The ranges of the joints a posted program commands (points in TCP mode included: their joints
+// are the reader's), and the smallest distance of any to its travel (negative when outside;
+// endless axes are not limits): the reach check of a work-offset proposal, on the program read
+// again with it.
+std::vector<AxisRange> commandedJointRanges(const MachineModel& model,
+                                            const std::vector<JointVector>& joints,
+                                            double* margin, int* limiting_axis);
+
 // The work offset (machine coordinates, mm) whose origin is the model's part zero: what the
 // G-code reader uses for a work offset the set-up does not give.
 Eigen::Vector3d workOffsetAtPartZero(const MachineModel& model);

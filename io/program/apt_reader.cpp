@@ -308,8 +308,31 @@ class Parser {
         setAxis(Eigen::Vector3d(v[3], v[4], v[5]), line, args[3].column, major);
         prog_.multiax = true;
       }
-      if (cycle_.active && major == "GOTO") cycleMotion(p, line, st);
-      else addMotion(p, line, st);
+      if (major == "FROM") {
+        // APT: FROM names where the tool already is (the start, NX's tool change position in
+        // the MCS); it is not a move, and the machine's home need not lie in the part's MCS.
+        const ClFrame& f = prog_.frames[frame_];
+        from_w_ = f.scale * (f.T * p);
+        last_local_ = p;
+        have_point_ = true;
+        if (!from_noted_) {
+          from_noted_ = true;
+          prog_.notes.push_back("FROM at line " + std::to_string(line) +
+                                " is the start position, not a move: not a point of the path");
+        }
+      } else if (cycle_.active) {
+        cycleMotion(p, line, st);
+      } else {
+        addMotion(p, line, st);
+      }
+    } else if (major == "GOHOME") {
+      // A return to the start position: posts make it the machine's home move (G28, G53).
+      if (!gohome_noted_) {
+        gohome_noted_ = true;
+        prog_.notes.push_back("GOHOME at line " + std::to_string(line) +
+                              " returns to the start position, which the post makes a home "
+                              "move: not a point of the path");
+      }
     } else if (major == "CYCLE") {
       cycleStatement(args, line);
     } else if (major == "GODLTA") {
@@ -558,7 +581,7 @@ class Parser {
     st.first_point = static_cast<int>(prog_.path.size());
     if (arc_pending_) {
       std::vector<Eigen::Vector3d> pts;
-      const Eigen::Vector3d start = prog_.path.back().p_w;
+      const Eigen::Vector3d start = prog_.path.empty() ? from_w_ : prog_.path.back().p_w;
       const double r = ((start - arc_centre_w_) -
                         arc_axis_w_ * arc_axis_w_.dot(start - arc_centre_w_)).norm();
       // Bounded work: a full turn's points, before anything is expanded.
@@ -604,7 +627,8 @@ class Parser {
   bool arc_pending_ = false;
   int arc_turns_ = 0;
   std::optional<Eigen::Isometry3d> main_mcs_;  // the first MSYS: the part frame
-  bool first_msys_noted_ = false, times_noted_ = false;
+  bool first_msys_noted_ = false, times_noted_ = false, from_noted_ = false, gohome_noted_ = false;
+  Eigen::Vector3d from_w_ = Eigen::Vector3d::Zero();
   // A CL drilling cycle in force (CYCLE/<type>,... until CYCLE/OFF): its type and distances
   // along the tool axis from each GOTO point (the hole's top), mm in file units.
   struct Cycle {

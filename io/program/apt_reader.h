@@ -2,7 +2,8 @@
 // Reader of APT / CLDATA cutter-location files as real CAM systems write them (Siemens NX CLSF,
 // SolidWorks CAM, PTC Creo, CATIA, generic APT).
 //
-// Recognised: GOTO (3 or 6 values; the tool axis is modal), FROM, GODLTA, MULTAX, TLAXIS,
+// Recognised: GOTO (3 or 6 values; the tool axis is modal), FROM (the start position: not a
+// point of the path), GOHOME (a home move: not a point either), GODLTA, MULTAX, TLAXIS,
 // CUTTER (1-7 values), TLDATA, UNITS and UNIT, CYCLE (drilling cycles expanded at each GOTO
 // until CYCLE/OFF), CIRCLE ... TIMES,n (n full turns), FEDRAT (unit before or after the value), RAPID,
 // SPINDL, LOADTL, LOAD/TOOL, SELECT, PARTNO, PPRINT, INSERT, COOLNT, CIRCLE and MOVARC (expanded

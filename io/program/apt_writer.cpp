@@ -58,7 +58,7 @@ void writePredictedApt(TextOut& out, const ClProgram& program, const std::vector
       continue;
     }
     // A motion statement without points lies outside the lines predicted (--lines): left out.
-    if ((st.major == "GOTO" || st.major == "FROM") && st.point_count == 0) continue;
+    if (st.major == "GOTO" && st.point_count == 0) continue;
     if (st.major == "CIRCLE" || st.major == "MOVARC" || st.major == "CYCLE") {
       out += "$$ tolver: " + st.major + " of line " + std::to_string(st.first_line) +
              " expanded into the GOTO points that follow\n";

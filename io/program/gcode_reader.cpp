@@ -1134,7 +1134,10 @@ class Reader {
     prog_.point_frame.push_back(0);
     prog_.joints.push_back(q);
     prog_.tcp.push_back(kind);
-    prog_.fixed_axes.push_back(kind == ClProgram::kTcpWords ? 0 : fixedMask());
+    // A work offset the program sets itself (G10) is fixed in machine coordinates: the set-up
+    // does not move the points given in it.
+    const bool own_offset = kind == ClProgram::kJointWords && set_offsets_.count(work_) > 0;
+    prog_.fixed_axes.push_back(kind == ClProgram::kTcpWords ? 0 : own_offset ? 7 : fixedMask());
   }
 
   // Where each of X Y Z stands: given in the work offset (moves with it), in machine
