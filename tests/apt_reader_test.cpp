@@ -148,7 +148,8 @@ TEST(AptReader, CreoPseudoCommentsContinuationsAndSpacesAroundSlash) {
 // vertical tool axis and its numbers (issue 32: read through the MSYS it needed A = 180 deg).
 TEST(AptReader, NxPointsStayInTheMainMcs) {
   const ClProgram p = fixture("nx_10_KONTUR_125_N2_162.cls");
-  expectNear(p.path.front().p_w, Eigen::Vector3d(650, -393, 964));
+  // FROM/650,-393,964 is the start, not a point; the first is line 10's GOTO.
+  expectNear(p.path.front().p_w, Eigen::Vector3d(1232.5388, -353.2220, 961));
   expectNear(p.path.front().u_w, Eigen::Vector3d(0, 0, 1));
   for (const ClPoint& c : p.path) expectNear(c.u_w, Eigen::Vector3d(0, 0, 1));
   // CIRCLE ... TIMES,2 at line 16: a helix of two full turns and the arc to its end point,
@@ -175,7 +176,7 @@ TEST(AptReader, NxPointsStayInTheMainMcs) {
   absolute.absolute_msys = true;
   const ClProgram a =
       readAptFile(test::sourcePath("tests/fixtures/cl/nx_10_KONTUR_125_N2_162.cls"), absolute);
-  expectNear(a.path.front().p_w, Eigen::Vector3d(393 - 393, -297.5 + 650, 3 - 964));
+  expectNear(a.path.front().p_w, Eigen::Vector3d(393 - 353.2220, -297.5 + 1232.5388, 3 - 961));
   expectNear(a.path.front().u_w, Eigen::Vector3d(0, 0, -1));
 }
 
@@ -268,10 +269,10 @@ TEST(AptReader, CsysWithoutTrntypWorldIsApplied) {
 TEST(AptReader, CaseSpacingGodltaFromAndTlaxis) {
   const ClProgram p = parseApt(
       "  from / 0 , 0 , 10\ntlaxis/0,0,2\ngoto/1,2,3\nGODLTA/1,1,1\nGodlta/-4\n", "mixed.apt");
-  ASSERT_EQ(p.path.size(), 4u);
-  expectNear(p.path[2].p_w, Eigen::Vector3d(2, 3, 4));
-  expectNear(p.path[3].p_w, Eigen::Vector3d(2, 3, 0));
-  expectNear(p.path[3].u_w, Eigen::Vector3d(0, 0, 1));
+  ASSERT_EQ(p.path.size(), 3u);  // FROM names the start: not a point of the path
+  expectNear(p.path[1].p_w, Eigen::Vector3d(2, 3, 4));
+  expectNear(p.path[2].p_w, Eigen::Vector3d(2, 3, 0));
+  expectNear(p.path[2].u_w, Eigen::Vector3d(0, 0, 1));
 }
 
 TEST(AptReader, UnknownStatementsAreCountedNotFatal) {

@@ -432,29 +432,35 @@ class Reader {
         sin_mcall_ = was_modal && false;
         sin_cycle_here_ = true;
       } else if (head == "TRANS" || head == "ATRANS" || head == "ROT" || head == "AROT") {
-        // The axis words that follow belong to the frame instruction.
+        // The programmable frame (SINUMERIK Fundamentals, "Frames"): TRANS and ROT replace it,
+        // ATRANS and AROT add to it; several angles in one ROT/AROT turn about Z, then Y, then X
+        // (RPY, the control's default); an angle turns the coordinate system counter-clockwise
+        // seen from the positive axis. Program coordinates x map into the settable frame as
+        // frame_ * x.
         Eigen::Vector3d v = Eigen::Vector3d::Zero();
-        bool any = false;
         size_t u = t + 1;
         for (; u < tok.size(); ++u) {
           const std::string& a = tok[u];
           const char l = a[0];
-          if (a.size() < 2 || (l != 'X' && l != 'Y' && l != 'Z' && l != 'A' && l != 'B' && l != 'C' && l != 'R')) break;
-          const std::string e = a[1] == '=' ? a.substr(2) : a.substr(1);
-          const double x = sinExpression(e, tcol[u]);
-          if (head == "ROT" || head == "AROT") {
-            if (x != 0.0) refuse(t, head + " (a rotated frame) is not supported: post the program without frame rotations");
-          } else if (l == 'X' || l == 'Y' || l == 'Z') {
-            v[l - 'X'] = x;
-            any = true;
-          } else {
-            refuse(t, head + " with " + std::string(1, l) + " is not supported");
+          if (a.size() < 2 || (l != 'X' && l != 'Y' && l != 'Z')) {
+            if (a.size() >= 2 && std::isalpha(static_cast<unsigned char>(l)) &&
+                (std::isdigit(static_cast<unsigned char>(a[1])) || a[1] == '=' || a[1] == '-'))
+              refuse(u, head + " with " + std::string(1, l) + " (not X, Y or Z) is not supported");
+            break;
           }
+          const std::string e = a[1] == '=' ? a.substr(2) : a.substr(1);
+          v[l - 'X'] = sinExpression(e, tcol[u]);
         }
-        if (head == "TRANS") prog_frame_ = v * unit_;
-        else if (head == "ATRANS") prog_frame_ += v * unit_;
-        else if (u == t + 1) prog_frame_.setZero();  // ROT alone resets the programmable frame
-        (void)any;
+        Eigen::Isometry3d change = Eigen::Isometry3d::Identity();
+        if (head == "TRANS" || head == "ATRANS") {
+          change.translation() = v * unit_;
+        } else {
+          change.linear() = (Eigen::AngleAxisd(v.z() * kDegToRad, Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(v.y() * kDegToRad, Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(v.x() * kDegToRad, Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+        }
+        setFrame(head[0] == 'A' ? Eigen::Isometry3d(frame_ * change) : change);
         t = u - 1;
       } else if (head == "D") {
         out += " " + k;
@@ -492,6 +498,14 @@ class Reader {
     for (const auto& [on, off] : model_.control.tcp_words)
       if (k == on || k == off) return true;
     return false;
+  }
+
+  // A new programmable frame: the current position kept, in the new frame's coordinates.
+  void setFrame(const Eigen::Isometry3d& f) {
+    const Eigen::Vector3d settable = frame_ * cur_xyz_;
+    frame_ = f;
+    cur_xyz_ = frame_.inverse() * settable;
+    frame_checked_ = false;
   }
 
   // A Sinumerik expression in the reader's bracket syntax: ( ) become [ ].
@@ -1049,9 +1063,9 @@ class Reader {
   Eigen::Vector3d currentProgramXyz() const {
     if (tcpMode()) {
       if (prog_.path.empty()) return Eigen::Vector3d::Zero();
-      return Gm_inv_ * (last_tip_w_ - g0_) - last_offset_;
+      return frame_.inverse() * Eigen::Vector3d(Gm_inv_ * (last_tip_w_ - g0_) - last_offset_);
     }
-    return machineOfJoints(q_) - last_offset_;
+    return frame_.inverse() * Eigen::Vector3d(machineOfJoints(q_) - last_offset_);
   }
 
   // The target of the block in program coordinates (mm), from the words present.
@@ -1086,8 +1100,9 @@ class Reader {
 
   // Emits the point for program coordinates xyz (mm) in the current mode.
   void emit(const Eigen::Vector3d& xyz, bool rapid) {
-    const Eigen::Vector3d off = workOffset(work_) + prog_frame_;
+    const Eigen::Vector3d off = workOffset(work_);
     last_offset_ = off;
+    const Eigen::Vector3d xyz_s = frame_ * xyz;  // in the settable frame (G54...)
     ClPoint p;
     p.line = line_;
     p.rapid = rapid;
@@ -1097,14 +1112,15 @@ class Reader {
       setRotaries(q);
       Eigen::Vector3d tip, axis;
       nominal_.tipAndAxis(q, &tip, &axis);
-      p.p_w = g0_ + Gm_ * (xyz + off);
+      p.p_w = g0_ + Gm_ * (xyz_s + off);
       p.u_w = axis;
+      checkFrameAxis(p.u_w);
       // The prismatic joints follow by inverse kinematics (the rotaries stay as commanded).
       const IkSolution sol = ik_.solve(p.p_w, p.u_w, &q);
       if (sol.status == IkStatus::Ok)
         for (int k = 0; k < 3; ++k) q[prismatic_[k]] = sol.q[prismatic_[k]];
     } else {
-      q = jointsFromMachine(xyz + off);
+      q = jointsFromMachine(xyz_s + off);
       // A coordinate last set in machine coordinates stays where it is: a move that does not
       // name it does not carry it into the work offset.
       bool kept = false;
@@ -1116,7 +1132,7 @@ class Reader {
       nominal_.tipAndAxis(q, &p.p_w, &p.u_w);
       if (kept) {
         q_ = q;
-        cur_xyz_ = machineOfJoints(q) - off;
+        cur_xyz_ = frame_.inverse() * Eigen::Vector3d(machineOfJoints(q) - off);
         pushPoint(p, q, ClProgram::kJointWords);
         return;
       }
@@ -1124,6 +1140,27 @@ class Reader {
     q_ = q;
     cur_xyz_ = xyz;
     pushPoint(p, q, tcpMode() ? ClProgram::kTcpWords : ClProgram::kJointWords);
+  }
+
+  // Under a rotated programmable frame in TCP mode (3+2 work as posts write it: the rotaries
+  // position the table, the frame turns the program's coordinates with it), the tool axis the
+  // rotary words give must be the frame's z: when it is not, the rotary senses or zeros of the
+  // machine file differ from the program's, and every point would be placed wrong.
+  void checkFrameAxis(const Eigen::Vector3d& u_w) {
+    if (frame_checked_ || frame_.linear().isIdentity(1e-12)) return;
+    frame_checked_ = true;
+    const Eigen::Vector3d z_w = Gm_ * frame_.linear() * Eigen::Vector3d::UnitZ();
+    const double angle = std::acos(std::clamp(z_w.normalized().dot(u_w.normalized()), -1.0, 1.0));
+    if (angle < degToRad(0.5)) return;
+    std::string words;
+    for (size_t a = 0; a < model_.axes.size(); ++a)
+      if (model_.axes[a].isRotary())
+        words += (words.empty() ? "" : " ") + model_.axes[a].name + formatNumber(rot_word_[a]);
+    fail(line_, 0, "frame",
+         "the tool axis the rotary words give (" + words + ") is " +
+             formatWith("%.1f", radToDeg(angle)) + " deg from the z axis of the rotated frame "
+             "the program works in: the machine file's rotary senses or zeros (nc_sign, "
+             "direction) differ from those the program was posted for");
   }
 
   // The point into the path, unless a coordinate is still unknown.
@@ -1368,7 +1405,8 @@ class Reader {
   // Sinumerik state.
   std::map<std::string, double> sin_vars_;
   bool sin_mcall_ = false, sin_cycle_here_ = false;
-  Eigen::Vector3d prog_frame_ = Eigen::Vector3d::Zero();  // TRANS/ATRANS, mm
+  Eigen::Isometry3d frame_ = Eigen::Isometry3d::Identity();  // programmable frame (mm)
+  bool frame_checked_ = true;  // the tool axis checked against a rotated frame's z
   std::string tool_name_;
   std::set<std::string> tool_changes_;
   int max_decimals_ = 3;  // assumed until the program prints more
