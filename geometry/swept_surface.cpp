@@ -240,4 +240,58 @@ void sweepSurface(const SurfaceSamples& samples, const Cutter& cutter,
   }
 }
 
+double ToolSet::maxLength() const {
+  double L = 0.0;
+  for (const Cutter& c : cutters) L = std::max(L, c.effectiveLength());
+  return L;
+}
+
+double ToolSet::maxRadius() const {
+  double R = 0.0;
+  for (const Cutter& c : cutters) R = std::max(R, c.maxRadius());
+  return R;
+}
+
+void sweepSurface(const SurfaceSamples& samples, const ToolSet& tools,
+                  const std::vector<ToolPlacement>& placements, const SweepOptions& options,
+                  SweepResult* result, const std::function<void(double)>& progress) {
+  if (tools.cutters.size() == 1 || tools.tool_of_cl.empty()) {
+    sweepSurface(samples, tools.cutters.front(), placements, options, result, progress);
+    return;
+  }
+  const size_t n = samples.size();
+  result->deviation.assign(n, options.excess_range);
+  result->machined.assign(n, 0);
+  result->placement.assign(n, -1);
+  const int tool_count = static_cast<int>(tools.cutters.size());
+  std::vector<std::vector<int>> of_tool(tool_count);
+  for (size_t k = 0; k < placements.size(); ++k) {
+    const int cl = placements[k].cl_index;
+    const int t = cl >= 0 && cl < static_cast<int>(tools.tool_of_cl.size()) ? tools.tool_of_cl[cl] : 0;
+    of_tool[std::clamp(t, 0, tool_count - 1)].push_back(static_cast<int>(k));
+  }
+  size_t done = 0;
+  for (int t = 0; t < tool_count; ++t) {
+    if (of_tool[t].empty()) continue;
+    std::vector<ToolPlacement> own;
+    own.reserve(of_tool[t].size());
+    for (int k : of_tool[t]) own.push_back(placements[k]);
+    SweepResult r;
+    const double share = static_cast<double>(own.size()) / static_cast<double>(placements.size());
+    const double before = static_cast<double>(done) / static_cast<double>(placements.size());
+    sweepSurface(samples, tools.cutters[t], own, options, &r, [&](double f) {
+      if (progress) progress(before + share * f);
+    });
+    done += own.size();
+    for (size_t i = 0; i < n; ++i) {
+      if (!r.machined[i]) continue;
+      if (!result->machined[i] || r.deviation[i] < result->deviation[i]) {
+        result->deviation[i] = r.deviation[i];
+        result->placement[i] = of_tool[t][r.placement[i]];
+      }
+      result->machined[i] = 1;
+    }
+  }
+}
+
 }  // namespace tolver

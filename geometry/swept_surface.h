@@ -34,4 +34,17 @@ void sweepSurface(const SurfaceSamples& samples, const Cutter& cutter,
                   const std::vector<ToolPlacement>& placements, const SweepOptions& options,
                   SweepResult* result, const std::function<void(double)>& progress = {});
 
+// A program that changes tools: cutter tool_of_cl[k] cuts along the moves that end at CL point k
+// (ToolPlacement::cl_index). Each tool's placements are swept with its own cutter and every
+// sample keeps the deepest cut of any; placement indices are into `placements`.
+struct ToolSet {
+  std::vector<Cutter> cutters;   // at least one
+  std::vector<int> tool_of_cl;   // #CL points; empty: cutters[0] everywhere
+  double maxLength() const;
+  double maxRadius() const;
+};
+void sweepSurface(const SurfaceSamples& samples, const ToolSet& tools,
+                  const std::vector<ToolPlacement>& placements, const SweepOptions& options,
+                  SweepResult* result, const std::function<void(double)>& progress = {});
+
 }  // namespace tolver

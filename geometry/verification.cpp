@@ -76,14 +76,24 @@ VerifyResult verifyPart(const SurfaceSamples& samples, const Cutter& cutter,
                         const std::vector<ToolPlacement>& predicted,
                         const std::vector<ToleranceZone>& zones, const SweepOptions& options,
                         const std::function<void(double)>& progress) {
+  ToolSet tools;
+  tools.cutters = {cutter};
+  return verifyPart(samples, tools, nominal, predicted, zones, options, progress);
+}
+
+VerifyResult verifyPart(const SurfaceSamples& samples, const ToolSet& tools,
+                        const std::vector<ToolPlacement>& nominal,
+                        const std::vector<ToolPlacement>& predicted,
+                        const std::vector<ToleranceZone>& zones, const SweepOptions& options,
+                        const std::function<void(double)>& progress) {
   SweepResult nom, pred;
   std::function<void(double)> first, second;
   if (progress) {
     first = [&](double f) { progress(0.5 * f); };
     second = [&](double f) { progress(0.5 + 0.5 * f); };
   }
-  sweepSurface(samples, cutter, nominal, options, &nom, first);
-  sweepSurface(samples, cutter, predicted, options, &pred, second);
+  sweepSurface(samples, tools, nominal, options, &nom, first);
+  sweepSurface(samples, tools, predicted, options, &pred, second);
   const size_t n = samples.size();
   VerifyResult r;
   r.total.assign(n, 0.0);
@@ -94,7 +104,7 @@ VerifyResult verifyPart(const SurfaceSamples& samples, const Cutter& cutter,
   r.machined.assign(n, 0);
   r.cl_index.assign(n, -1);
   const double floor_mm = -options.gouge_range + 1e-9;
-  const double L = cutter.effectiveLength(), R = cutter.maxRadius();
+  const double L = tools.maxLength(), R = tools.maxRadius();
   // How far placement k moves between the perfect and the real machine, seen at height h on the
   // tool (the tip plus the axis's turn over h and over the radius).
   auto moved = [&](int k, double h) {

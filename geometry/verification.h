@@ -60,6 +60,12 @@ VerifyResult verifyPart(const SurfaceSamples& samples, const Cutter& cutter,
                         const std::vector<ToolPlacement>& predicted,
                         const std::vector<ToleranceZone>& zones, const SweepOptions& options,
                         const std::function<void(double)>& progress = {});
+// The same for a program that changes tools (geometry/swept_surface.h: ToolSet).
+VerifyResult verifyPart(const SurfaceSamples& samples, const ToolSet& tools,
+                        const std::vector<ToolPlacement>& nominal,
+                        const std::vector<ToolPlacement>& predicted,
+                        const std::vector<ToleranceZone>& zones, const SweepOptions& options,
+                        const std::function<void(double)>& progress = {});
 
 // Conformance, statistics, regions and verdict from the three deviation fields (used by
 // verifyPart and by the CL-only mode).

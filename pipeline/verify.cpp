@@ -91,22 +91,43 @@ std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o) {
   return zones;
 }
 
-Cutter cutterFrom(const VerifyInputs& o, const ClProgram& program) {
+// The cutters the program cuts with: --cutter for every move, or each CUTTER/TLDATA of the
+// program for the moves after it (the first one also for the moves before it: a tool change
+// switches the cutter). A cutter statement that describes no cutter is an error naming it.
+ToolSet toolsFrom(const VerifyInputs& o, const ClProgram& program) {
+  ToolSet tools;
   Cutter c;
   if (!o.cutter.empty()) {
     std::vector<double> v = o.cutter;
     if (!cutterFromApt("TLDATA", v, &c))
       throw InputError("--cutter", 0, 0, "cutter", "expected d,r[,length,taper_deg] with 0 <= r <= d/2");
-    return c;
+    tools.cutters = {c};
+    return tools;
   }
   if (program.cutters.empty())
     throw InputError(program.file, 0, 0, "CUTTER",
                      "the program declares no cutter (CUTTER or TLDATA; G-code never does); give "
                      "--cutter d,r");
-  const CutterSpec& s = program.cutters.back();
-  if (!cutterFromApt(s.source, s.values, &c))
-    throw InputError(program.file, s.line, 0, s.source, "the values do not describe a cutter");
-  return c;
+  std::vector<int> lines;
+  for (const CutterSpec& s : program.cutters) {
+    if (!cutterFromApt(s.source, s.values, &c))
+      throw InputError(program.file, s.line, 0, s.source, "the values do not describe a cutter");
+    tools.cutters.push_back(c);
+    lines.push_back(s.line);
+  }
+  if (tools.cutters.size() == 1) return tools;
+  tools.tool_of_cl.resize(program.path.size());
+  size_t t = 0;
+  for (size_t i = 0; i < program.path.size(); ++i) {
+    while (t + 1 < lines.size() && lines[t + 1] < program.path[i].line) ++t;
+    tools.tool_of_cl[i] = static_cast<int>(t);
+  }
+  return tools;
+}
+
+std::string describeCutter(const Cutter& c) {
+  return c.describe() + ", length " + formatWith("%.4g", c.effectiveLength()) + " mm" +
+         (c.length > 0 ? "" : " (assumed: 3 D)");
 }
 
 // Renders the maps and the histogram; returns (caption, path) pairs.
@@ -341,7 +362,7 @@ ImportedPart readPart(const VerifyInputs& o, const ClProgram& program) {
 }
 
 // The nominal and the predicted tool placements along the program, swept over the samples.
-void sweepPart(const ProgramOnMachine& m, const Cutter& cutter, const std::vector<ToleranceZone>& zones,
+void sweepPart(const ProgramOnMachine& m, const ToolSet& tools, const std::vector<ToleranceZone>& zones,
                const MotionSampling& sampling, const SweepOptions& sweep, Verification& v, PhaseClock& phase,
                const std::function<void(double)>& progress) {
   const MachineModel& model = m.machine.model;
@@ -356,7 +377,7 @@ void sweepPart(const ProgramOnMachine& m, const Cutter& cutter, const std::vecto
     samplePlacements(fk_nominal, fk_actual, m.program.path, m.q_nominal, q, sampling, &nominal, &actual);
   v.report.placements = static_cast<int>(nominal.size());
   phase("placements");
-  v.result = verifyPart(v.samples, cutter, nominal, actual, zones, sweep, [&](double f) {
+  v.result = verifyPart(v.samples, tools, nominal, actual, zones, sweep, [&](double f) {
     if (progress) progress(f);
   });
   phase("swept_surfaces");
@@ -438,14 +459,16 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   const std::vector<ToleranceZone> zones = zonesFrom(o);
   const ProgramOnMachine m = predictOnMachine(o);
   const ClProgram& program = m.program;
-  const Cutter cutter = cutterFrom(o, program);
+  const ToolSet tools = toolsFrom(o, program);
   phase("read_and_predict");
   double t_min = INFINITY;
   for (const auto& z : zones) t_min = std::min(t_min, z.tolerance);
-  const double r_eff = cutter.corner_radius > 0 ? cutter.corner_radius : 0.5 * cutter.diameter;
+  double r_eff = INFINITY;  // the smallest cutter sets the step
+  for (const Cutter& c : tools.cutters)
+    r_eff = std::min(r_eff, c.corner_radius > 0 ? c.corner_radius : 0.5 * c.diameter);
   MotionSampling sampling;
   sampling.step = std::isnan(o.step_mm) ? std::clamp(std::sqrt(0.8 * r_eff * t_min), 0.005, 1.0) : o.step_mm;
-  sampling.reach = cutter.effectiveLength();
+  sampling.reach = tools.maxLength();
   SweepOptions sweep;
   sweep.excess_range = std::isnan(o.excess_range_mm) ? std::max(0.1, 5.0 * t_min) : o.excess_range_mm;
   sweep.gouge_range = std::isnan(o.gouge_range_mm) ? std::max(0.1, 5.0 * t_min) : o.gouge_range_mm;
@@ -455,8 +478,21 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   rep.machine_file = o.machine.machine;
   rep.program_file = program.file;
   rep.notes = m.warnings;
-  rep.cutter = cutter.describe() + ", length " + formatWith("%.4g", cutter.effectiveLength()) + " mm" +
-               (cutter.length > 0 ? "" : " (assumed: 3 D)");
+  // A drill's point (APT CUTTER alpha with no corner radius) is swept as a flat end.
+  for (const CutterSpec& c : program.cutters)
+    if (o.cutter.empty() && c.source == "CUTTER" && c.values.size() > 4 && c.values[4] > 0 &&
+        c.values[1] == 0)
+      rep.notes.push_back("the cutter of line " + std::to_string(c.line) + " has a point (alpha " +
+                          formatNumber(c.values[4]) + " deg): it is swept as a flat end, so the "
+                          "bottoms of its holes read as gouges up to its point's height");
+  if (tools.cutters.size() == 1) {
+    rep.cutter = describeCutter(tools.cutters[0]);
+  } else {
+    rep.cutter = std::to_string(tools.cutters.size()) + " tools, each from its line on:";
+    for (size_t k = 0; k < tools.cutters.size(); ++k)
+      rep.cutter += (k ? "; " : " ") + std::string("line ") +
+                    std::to_string(program.cutters[k].line) + " " + describeCutter(tools.cutters[k]);
+  }
   rep.cl_points = static_cast<int>(program.path.size());
   for (const auto& p : program.path) rep.cl_lines.push_back(p.line);
   rep.zones = zones;
@@ -485,7 +521,7 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
     v->samples = sampleSurface(part.mesh, o.spacing_mm);
     rep.spacing_mm = o.spacing_mm;
     phase("sample_surface");
-    sweepPart(m, cutter, zones, sampling, sweep, *v, phase, progress);
+    sweepPart(m, tools, zones, sampling, sweep, *v, phase, progress);
   }
   rep.samples = &v->samples;
   rep.result = &v->result;

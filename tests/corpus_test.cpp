@@ -162,6 +162,15 @@ TEST_F(Corpus, VerifyARealPartWithItsProgram) {
   EXPECT_EQ(v.exit_code, 0) << v.output;
   EXPECT_NE(v.output.find("tolver verify: PASS"), std::string::npos) << v.output;
   EXPECT_TRUE(fs::exists(dir_ / "report" / "report.json"));
+  // A program that changes tools is swept with each tool's own cutter, from its line on.
+  const fs::path glue = sharedData() / "cl/swcam_Interface-glue.apt";
+  const auto g = test::runTolver("verify --machine " + q(machine) + " --setup " + q(dir_ / "s.txt") +
+                                 " --cl " + q(glue) + " --part " +
+                                 q(sharedData() / "mesh/swcam_Interface-glue.stl") +
+                                 " --tolerance 0.1 --report-dir " + q(dir_ / "glue"));
+  EXPECT_NE(g.output.find("4 tools, each from its line on: line 4 flat end D6.5 mm"), std::string::npos)
+      << g.output;
+  EXPECT_NE(g.output.find("line 163 ball end D14 mm"), std::string::npos) << g.output;
 }
 
 }  // namespace

@@ -524,6 +524,20 @@ TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
   EXPECT_NE(refusal(base + "N30 G0 X=SIN(30)\n", m.model).find("functions"), std::string::npos);
   EXPECT_NE(refusal(base + "N30 G0 X=_B\n", m.model).find("_B has no value"), std::string::npos);
   EXPECT_NE(refusal(base + "N30 CYCLE86(10,0,2,-5)\n", m.model).find("CYCLE86"), std::string::npos);
+  // 3+2 as NX posts it: the table positioned, TRAORI, the frame turned with AROT: the tool axis
+  // B90 gives is the turned frame's z (this machine file's senses, ISO 841), and the program's
+  // Z words run along it. With the senses the other way the program is refused, naming them.
+  const std::string tilted = "N10 G54 G0 X0 Y0 Z50 B0 C0 D1\nN20 G0 B90. C0.0\nN30 TRAORI\n"
+                             "N40 AROT Y90.\nN50 G0 X5. Y-15. Z100.\nN60 G1 Z2.\n";
+  const ClProgram tp = parseGcode(tilted, "tilted.mpf", m.model);
+  ASSERT_EQ(tp.path.size(), 4u);
+  EXPECT_LT((tp.path[2].u_w - Eigen::Vector3d(1, 0, 0)).norm(), 1e-12);
+  // Z100 -> Z2 in the turned frame: 98 mm down its z, which is the part's +x.
+  EXPECT_LT((tp.path[3].p_w - tp.path[2].p_w - Eigen::Vector3d(-98, 0, 0)).norm(), 1e-9);
+  Machine flipped = m;
+  for (Axis& a : flipped.model.axes)
+    if (a.isRotary()) a.nc_sign = -a.nc_sign;
+  EXPECT_NE(refusal(tilted, flipped.model).find("rotary senses or zeros"), std::string::npos);
   // TRANS moves the work frame; G0 X=_A*2 evaluates.
   const ClProgram t = parseGcode(base + "N25 G54 G0 X0 Y0 Z50 D1\nN30 TRANS X10 Y5\nN40 G0 X=_A*2 Y0 Z10\n",
                                  "t.mpf", m.model);

@@ -188,6 +188,44 @@ TEST(SweptSurface, FlatEndBottomCutsAtItsHeight) {
   }
 }
 
+// A program that changes tools: each placement is swept with the cutter of its CL point, and a
+// sample keeps the deepest cut of any tool (a D10 at +0.1 mm over x 0..5, then a D2 at -0.05 mm
+// over x 0..1; one cutter for both would leave or gouge elsewhere).
+TEST(SweptSurface, EachToolCutsWithItsOwnCutter) {
+  Cutter big, small;
+  big.diameter = 10;
+  big.length = 30;
+  small.diameter = 2;
+  small.length = 30;
+  SurfaceSamples s;
+  s.group_names = {"plane"};
+  for (double x : {0.0, 3.0, 20.0}) {
+    s.p_w.push_back(Eigen::Vector3d(x, 0, 0));
+    s.n_w.push_back(Eigen::Vector3d::UnitZ());
+    s.area.push_back(1);
+    s.group.push_back(0);
+  }
+  ToolPlacement a, b;
+  a.tip_w = Eigen::Vector3d(0, 0, 0.1);
+  a.cl_index = 0;
+  b.tip_w = Eigen::Vector3d(0, 0, -0.05);
+  b.cl_index = 1;
+  ToolSet tools;
+  tools.cutters = {big, small};
+  tools.tool_of_cl = {0, 1};
+  SweepResult r;
+  sweepSurface(s, tools, {a, b}, SweepOptions(), &r);
+  EXPECT_NEAR(r.deviation[0], -0.05, 1e-12);
+  EXPECT_EQ(r.placement[0], 1);
+  EXPECT_NEAR(r.deviation[1], 0.1, 1e-12);  // the D2 does not reach x = 3
+  EXPECT_EQ(r.placement[1], 0);
+  EXPECT_FALSE(r.machined[2]);
+  // The same placements with the D10 for both: x = 3 is gouged.
+  tools.tool_of_cl = {0, 0};
+  sweepSurface(s, tools, {a, b}, SweepOptions(), &r);
+  EXPECT_NEAR(r.deviation[1], -0.05, 1e-12);
+}
+
 // The bull nose's corner: a vertical line at distance rho from the axis (in the corner ring,
 // R - rc < rho < R) enters the torus at h = rc - sqrt(rc^2 - (rho - (R - rc))^2).
 TEST(SweptSurface, BullNoseCornerEntryMatchesTheTorus) {

@@ -31,7 +31,7 @@ struct Arg {
 const std::set<std::string>& noOpStatements() {
   static const std::set<std::string> s = {
       "SPINDL", "LOADTL", "LOAD",  "SELECT", "PPRINT",  "INSERT", "COOLNT",    "TOOL PATH",
-      "END-OF-PATH", "END", "PAINT", "CUTCOM", "MACHIN", "DELAY",
+      "END-OF-PATH", "END", "PAINT", "MACHIN", "DELAY",
       "OPSTOP", "STOP", "CLRSRF", "FEATNO", "MFGNO", "OPERATION", "DISPLY", "AUTOPS", "PLABEL"};
   return s;
 }
@@ -335,6 +335,17 @@ class Parser {
       }
     } else if (major == "CYCLE") {
       cycleStatement(args, line);
+    } else if (major == "CUTCOM") {
+      // The points stay the tool centre; a post that writes the part contour for the control's
+      // own radius compensation (G41/G42 with the full radius) would be off by the radius.
+      const std::string side = args.empty() ? "" : toUpper(args[0].text);
+      if ((side == "LEFT" || side == "RIGHT") && !cutcom_noted_) {
+        cutcom_noted_ = true;
+        prog_.notes.push_back("CUTCOM/" + side + " at line " + std::to_string(line) +
+                              ": the points are read as the tool centre (the control adds only "
+                              "wear); if the CAM wrote the part contour for the control's radius "
+                              "compensation, the path there is off by the tool radius");
+      }
     } else if (major == "GODLTA") {
       const auto v = numbers(args, major, false);
       if (!have_point_) fail(line, 0, major, "incremental move before any position");
@@ -628,6 +639,7 @@ class Parser {
   int arc_turns_ = 0;
   std::optional<Eigen::Isometry3d> main_mcs_;  // the first MSYS: the part frame
   bool first_msys_noted_ = false, times_noted_ = false, from_noted_ = false, gohome_noted_ = false;
+  bool cutcom_noted_ = false;
   Eigen::Vector3d from_w_ = Eigen::Vector3d::Zero();
   // A CL drilling cycle in force (CYCLE/<type>,... until CYCLE/OFF): its type and distances
   // along the tool axis from each GOTO point (the hole's top), mm in file units.
