@@ -32,6 +32,12 @@ const tolver::Machine& machine() {
   return m;
 }
 
+const tolver::Machine& sinumerik() {
+  static const tolver::Machine m = tolver::readMachineFile(
+      std::string(TOLVER_SOURCE_DIR) + "/resources/machines/sinumerik_bc_table.xml");
+  return m;
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -40,7 +46,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 #if TOLVER_FUZZ_TARGET == 1
     tolver::parseApt(text, "fuzz.apt");
 #elif TOLVER_FUZZ_TARGET == 2
-    tolver::parseGcode(text, "fuzz.nc", machine().model);
+    // Each text as an ISO/LinuxCNC program and as a Sinumerik 840D one (DEF, assignments,
+    // frames, cycles: issue 32).
+    try {
+      tolver::parseGcode(text, "fuzz.nc", machine().model);
+    } catch (const tolver::InputError&) {
+    }
+    tolver::parseGcode(text, "fuzz.mpf", sinumerik().model);
 #elif TOLVER_FUZZ_TARGET == 3
     tolver::parseMachineXml(text, "fuzz.xml");
 #elif TOLVER_FUZZ_TARGET == 4
