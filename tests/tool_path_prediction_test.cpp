@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/kinematics/forward_kinematics.h"
+#include "core/kinematics/inverse_kinematics.h"
 #include "core/numerics/lanes.h"
 #include "io/program/apt_reader.h"
 #include "io/program/apt_writer.h"
@@ -281,6 +282,50 @@ TEST_P(EveryShippedMachine, PredictedClReadsBackWithTheSameSetup) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Shipped, EveryShippedMachine, ::testing::ValuesIn(test::shippedMachines()));
+
+// A posted program's rotary solution is the one predicted: when the commanded solution puts a
+// prismatic axis out of travel while the other would not, the point fails naming that axis (the
+// control would not run it), never silently predicted on the other solution (issue 32: an
+// impeller program's 105 points).
+TEST(ToolPathPrediction, ThePostsRotarySolutionIsKeptOrThePointFails) {
+  Machine m = readMachineFile(test::sourcePath("resources/machines/linuxcnc_xyzac_trt.xml"));
+  const MachineModel& model = m.model;
+  const InverseKinematics ik(model);
+  const Eigen::Vector3d u = Eigen::Vector3d(0.3, -0.4, 0.8).normalized();
+  InverseKinematics::RotaryCandidate rc[2];
+  bool singular = false;
+  ASSERT_EQ(ik.rotaryCandidates(u, rc, &singular), 2);
+  // A tip where one candidate reaches and the other does not.
+  for (double y = -150; y <= 150; y += 2.5) {
+    for (double z = -100; z <= 100; z += 2.5) {
+      const Eigen::Vector3d p(10, y, z);
+      JointVector q[2];
+      bool in[2];
+      for (int c = 0; c < 2; ++c) {
+        q[c] = JointVector::Zero(static_cast<int>(model.axes.size()));
+        for (size_t r = 0; r < ik.rotaryAxes().size(); ++r)
+          q[c][ik.rotaryAxes()[r]] = rc[c].angleOf(static_cast<int>(r));
+        int violated = -1;
+        in[c] = ik.placeToolPoint(Eigen::Vector3d::Zero(), p, q[c], &violated);
+      }
+      if (in[0] == in[1]) continue;
+      const int good = in[0] ? 0 : 1, bad = 1 - good;
+      ClPoint cl;
+      cl.p_w = p;
+      cl.u_w = u;
+      const std::vector<ClPoint> path = {cl};
+      const std::vector<JointVector> commanded_bad = {q[bad]}, commanded_good = {q[good]};
+      const PredictionResult rb = predictToolPath(model, m.params, path, 20, &commanded_bad);
+      ASSERT_FALSE(rb.ok()) << "the other solution was taken";
+      EXPECT_GE(rb.failures.front().axis, 0);
+      const PredictionResult rg = predictToolPath(model, m.params, path, 20, &commanded_good);
+      ASSERT_TRUE(rg.ok());
+      for (int r : ik.rotaryAxes()) EXPECT_NEAR(rg.points[0].q[r], q[good][r], 1e-9);
+      return;
+    }
+  }
+  FAIL() << "no tip found where only one solution reaches";
+}
 
 }  // namespace
 }  // namespace tolver

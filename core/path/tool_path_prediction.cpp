@@ -436,6 +436,35 @@ void BlockPrediction::finish() {
   mergeTallies(s_->model, s_->tallies, s_->path.size(), s_->max_failures, s_->result);
 }
 
+namespace {
+
+// A posted program's rotary solution is the program's: the control runs the rotary words it was
+// given. When the inverse kinematics took the other solution (the commanded one puts a prismatic
+// axis out of travel), the commanded one is kept if it is inside travel after all, and otherwise
+// the point fails naming the axis the commanded solution breaks and the value it would need.
+void keepCommanded(const InverseKinematics& ik, const ClPoint& cl, const JointVector& cmd,
+                   IkSolution& sol) {
+  bool replaced = false;
+  for (int r : ik.rotaryAxes()) replaced = replaced || std::abs(sol.q[r] - cmd[r]) > 1e-6;
+  if (!replaced) return;
+  JointVector q = sol.q;
+  for (int r : ik.rotaryAxes()) q[r] = cmd[r];
+  int violated = -1;
+  if (ik.placeToolPoint(Eigen::Vector3d::Zero(), cl.p_w, q, &violated)) {
+    sol.q = q;
+    for (int r : ik.rotaryAxes()) {
+      sol.cos_q[r] = std::cos(q[r]);
+      sol.sin_q[r] = std::sin(q[r]);
+    }
+    return;
+  }
+  sol.status = IkStatus::OutOfTravel;
+  sol.violated_axis = violated;
+  sol.violated_value = violated >= 0 ? q[violated] : 0.0;
+}
+
+}  // namespace
+
 PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                                  const std::vector<ClPoint>& path, int max_failures,
                                  const std::vector<JointVector>* commanded) {
@@ -478,10 +507,11 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
   PredictedPoint out;
   for (size_t i = 0; i < path.size(); ++i) {
     const ClPoint& cl = path[i];
-    const IkSolution sol =
+    IkSolution sol =
         commanded ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
                   : ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(), previous_sin.data(),
                              i % BlockPrediction::kExactEvery == 0);
+    if (commanded && sol.status == IkStatus::Ok) keepCommanded(ik, cl, (*commanded)[i], sol);
     if (sol.status != IkStatus::Ok) {
       result.points.setFailed(i);
       tallies[i / InverseKinematics::kBlock].fail(i, cl, sol.status, sol.violated_axis,
