@@ -60,6 +60,18 @@ void checkPartUnits(const VerifyInputs& o, const ClProgram& program, const Trian
                   1.0 / ratio, prog, part);
     throw InputError(program.file, 0, 0, "units", buf);
   }
+  // The cutting moves' tool tips must come near the part: boxes apart by more than a tenth of
+  // the larger one's diagonal mean the part is not where the program cuts (set-up, mesh frame).
+  const double gap = std::max({(lo - phi).maxCoeff(), (plo - hi).maxCoeff(), 0.0});
+  if (gap > 0.1 * std::max(part, prog) + 1.0) {
+    std::snprintf(buf, sizeof buf,
+                  "the part is not where the program cuts: %.1f mm between the part (x %.0f..%.0f, "
+                  "y %.0f..%.0f, z %.0f..%.0f mm) and the cutting moves (x %.0f..%.0f, y %.0f..%.0f, "
+                  "z %.0f..%.0f); check the set-up, --mesh-offset or the program's frame",
+                  gap, lo.x(), hi.x(), lo.y(), hi.y(), lo.z(), hi.z(), plo.x(), phi.x(), plo.y(),
+                  phi.y(), plo.z(), phi.z());
+    throw InputError(o.part, 0, 0, "position", buf);
+  }
 }
 
 std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o) {

@@ -221,6 +221,15 @@ TEST_F(VerifyCli, BadInputExitsTwoNamingTheFile) {
   EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
 }
 
+// A part that is not where the program cuts (here moved 500 mm by --mesh-offset) is an error
+// that says so, never a verdict on the few samples a rapid grazes (issue 32).
+TEST_F(VerifyCli, APartAwayFromTheProgramIsAnError) {
+  const auto r = runTolver(base("--tolerance 0.05 --mesh-offset 500,0,0 --report-dir " + path("away")));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("the part is not where the program cuts"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(path("away")));
+}
+
 TEST_F(VerifyCli, MalformedJobsFileExitsTwoNamingItsLine) {
   const std::string jobs = write("jobs.csv", "name,machine,cl,part,tolerance\nok/../x,m.xml,a.apt,,0.02\n");
   auto r = runTolver("verify --batch " + jobs + " --report-dir " + path("out"));
