@@ -184,14 +184,18 @@ void runPredict(const PredictOptions& o, int* exit_code) {
               radToDeg(setup.part_rotation), setup.gauge_length);
   if (cal.probed) std::printf("  probed     %s\n", probe_line.c_str());
   const PredictedPoint& worst = pts[s.max_index];
-  std::printf("  deviation  max %.3f um at point %d (line %d), RMS %.3f um\n",
+  std::printf("  deviation  max %.3f um at point %d (line %d), RMS %.3f um%s\n",
               mmToUm(s.max_deviation), s.max_index, program.path[s.max_index].line,
-              mmToUm(s.rms_deviation));
+              mmToUm(s.rms_deviation), s.rapid_points > 0 ? " (cutting moves)" : "");
   std::printf("             at the max: (%.3f, %.3f, %.3f) um in the part frame, %.3f um along the "
               "tool axis, %.3f um across\n",
               clean(mmToUm(worst.deviation_w.x())), clean(mmToUm(worst.deviation_w.y())),
               clean(mmToUm(worst.deviation_w.z())), clean(mmToUm(worst.along_axis)),
               clean(mmToUm(worst.across_axis)));
+  if (s.rapid_points > 0 && s.rapid_max_index >= 0)
+    std::printf("  rapids     %d positioning and home moves, apart: max %.3f um at line %d\n",
+                s.rapid_points, mmToUm(s.rapid_max_deviation),
+                program.path[s.rapid_max_index].line);
   std::printf("  tool axis  max %.3f urad, RMS %.3f urad\n", radToUrad(s.max_axis_angle),
               radToUrad(s.rms_axis_angle));
   if (!unc.empty()) printUncertainty(machine, program, cal);

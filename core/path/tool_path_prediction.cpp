@@ -188,11 +188,22 @@ struct BlockSums {  // (a value apart from the failures: the loop keeps it in re
   double max_deviation = 0.0, max_axis_angle = 0.0;
   int max_index = -1;
   int singular_points = 0, first_singular_line = 0;
+  // Rapids (positioning, home moves) are counted apart: the headline figures are the cut's.
+  int rapid_points = 0, rapid_max_index = -1;
+  double rapid_max_deviation = 0.0;
   TOLVER_LANE_INLINE void add(size_t i, const ClPoint& cl, bool singular, double d,
                               double angle) {
     if (singular) {
       if (singular_points == 0) first_singular_line = cl.line;
       ++singular_points;
+    }
+    if (cl.rapid) {
+      ++rapid_points;
+      if (d > rapid_max_deviation || rapid_max_index < 0) {
+        rapid_max_deviation = d;
+        rapid_max_index = static_cast<int>(i);
+      }
+      return;
     }
     sum2 += d * d;
     sum2_angle += angle * angle;
@@ -241,6 +252,12 @@ void mergeTallies(const MachineModel& model, const std::vector<BlockTally>& tall
       s.max_index = b.max_index;
     }
     if (b.max_axis_angle > s.max_axis_angle) s.max_axis_angle = b.max_axis_angle;
+    s.rapid_points += b.rapid_points;
+    if (b.rapid_max_index >= 0 &&
+        (b.rapid_max_deviation > s.rapid_max_deviation || s.rapid_max_index < 0)) {
+      s.rapid_max_deviation = b.rapid_max_deviation;
+      s.rapid_max_index = b.rapid_max_index;
+    }
     if (b.singular_points > 0 && s.singular_points == 0)
       s.first_singular_line = b.first_singular_line;
     s.singular_points += b.singular_points;
@@ -255,9 +272,15 @@ void mergeTallies(const MachineModel& model, const std::vector<BlockTally>& tall
       result.failures.push_back({f.index, f.line, f.status, f.axis, describeIkFailure(model, sol)});
     }
   }
-  if (points == 0) return;
-  s.rms_deviation = std::sqrt(sum2 / points);
-  s.rms_axis_angle = std::sqrt(sum2_angle / points);
+  // Over the cutting points that were predicted (failed points and rapids apart).
+  const long cutting = static_cast<long>(points) - result.failed_points - s.rapid_points;
+  if (cutting <= 0) {  // nothing but rapids: their figures are the only ones
+    s.max_deviation = s.rapid_max_deviation;
+    s.max_index = s.rapid_max_index;
+    return;
+  }
+  s.rms_deviation = std::sqrt(sum2 / static_cast<double>(cutting));
+  s.rms_axis_angle = std::sqrt(sum2_angle / static_cast<double>(cutting));
 }
 
 }  // namespace

@@ -101,15 +101,21 @@ struct PredictionFailure {
   std::string message;
 };
 
+// The headline figures are over the cutting points (ClPoint::rapid false) that were predicted:
+// rapids (positioning, home and machine-coordinate moves) are counted apart, with their own
+// largest deviation.
 struct PredictionSummary {
   int points = 0;
   int singular_points = 0;
   int first_singular_line = 0;
-  double max_deviation = 0.0;   // mm, |deviation_w|
-  double rms_deviation = 0.0;   // mm
-  int max_index = -1;           // point with the largest deviation
-  double max_axis_angle = 0.0;  // rad
+  double max_deviation = 0.0;   // mm, |deviation_w|, over cutting points
+  double rms_deviation = 0.0;   // mm, over cutting points
+  int max_index = -1;           // cutting point with the largest deviation
+  double max_axis_angle = 0.0;  // rad, over cutting points
   double rms_axis_angle = 0.0;  // rad
+  int rapid_points = 0;         // rapids predicted, not in the figures above
+  double rapid_max_deviation = 0.0;  // mm
+  int rapid_max_index = -1;
 };
 
 struct PredictionResult {
