@@ -185,6 +185,28 @@ TEST_F(CompensateCli, RealGcodeInTcpModeAndJointMode) {
   }
 }
 
+// A rapid keeps its kind: a rotary index after a cut is never given the linear words it did not
+// have (issue 32: "G00 B82.875 C-90. X-2.01280 Y-2.01190" after G53, a 234 mm move); it is left
+// as programmed and listed.
+TEST_F(CompensateCli, ARapidIsNeverGivenWordsItDidNotHave) {
+  const std::string m = withErrors("resources/machines/linuxcnc_xyzac_trt.xml", 5);
+  const std::string prog = path("index.ngc");
+  {
+    std::ofstream f(prog);
+    f << "G21\nM428\nG0 X0 Y0 Z10 A0 C0\nG1 X10 Y5 Z2 F500\nG1 X20\nG0 A-20 C30\nG1 X22\nM429\nM2\n";
+  }
+  const nlohmann::json j = compensate(m, "--nc", prog, "--setup " + src("samples/gcode/linuxcnc_setup.txt"),
+                                      path("index_c.ngc"));
+  ASSERT_FALSE(j.is_null());
+  bool seen = false;
+  for (const std::string& l : linesOf(path("index_c.ngc")))
+    if (l.rfind("G0 A", 0) == 0) {
+      seen = true;
+      EXPECT_EQ(l, "G0 A-20 C30");
+    }
+  EXPECT_TRUE(seen);
+}
+
 // --table: one pitch and straightness table per linear axis, with its grid in the header; the
 // console says what they remove and what they cannot carry.
 TEST_F(CompensateCli, LinearAxisTables) {

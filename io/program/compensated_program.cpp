@@ -296,7 +296,7 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
   std::vector<int> decimals(n, -1);
   int motion = 0;        // 0, 1, 2, 3, 80 (none), 81+ (cycles)
   bool absolute = true;
-  std::vector<int> arcs, cycles, incremental, machine_moves, expressions;
+  std::vector<int> arcs, cycles, incremental, machine_moves, expressions, rapid_kept;
   // The header after a leading '%' line.
   size_t first = 0;
   if (!program.lines.empty() && !program.lines[0].empty() && program.lines[0][0] == '%') {
@@ -390,6 +390,21 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
         if (restore) arc_starts.pop_back();
       }
     }
+    // A rapid (a rotary index, a retract) is never given words it did not have: its motion
+    // would change kind (issue 32: X Y added to "G00 B82.875 C-90." after G53). Such a block
+    // is left as programmed and listed.
+    if (write && motion == 0 && !restore) {
+      for (int a = 0; a < n && write; ++a) {
+        if (axis_words.count(a) || !known[a]) continue;
+        const int d = std::max(std::max(decimals[a], 0), model.axes[a].isRotary() ? rot_min : lin_min);
+        if (fixed(target[a], d) != fixed(new_word[a], d)) write = false;
+      }
+      if (!write) {
+        rapid_kept.push_back(line_no);
+        for (const auto& [a, w] : axis_words)
+          if (w->numeric) new_word[a] = w->value;  // the block as written
+      }
+    }
     if (write) {
       // Replace the words present (last first), then add the ones whose value in force differs.
       std::string added;
@@ -445,6 +460,7 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
   note(incremental, "incremental (G91) blocks");
   note(machine_moves, "moves in machine coordinates (G53, G28, ...)");
   note(expressions, "blocks with words given by expressions or parameters, or without the word in force");
+  note(rapid_kept, "rapid blocks that would need an axis they do not name (a rapid keeps its words)");
   return out;
 }
 
