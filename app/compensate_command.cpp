@@ -124,6 +124,26 @@ void runCompensate(const CompensateOptions& o, int* exit_code) {
   const CompensationRun run = runCompensation(o.in, o.output);
   writeCompensation(run, o.output, report, o.report_dir);
   printCompensation(run, o, report);
+  // The read-back check: a point further off after than before (by more than 1 um and 10 %)
+  // means the written program moves where the original did not: said, and exit 1.
+  std::vector<int> worse;
+  double worst = 0.0;
+  for (size_t i = 0; i < run.tip_after_um.size() && i < run.tip_before_um.size(); ++i) {
+    const double before = run.tip_before_um[i], after = run.tip_after_um[i];
+    if (!(after <= before + std::max(1.0, 0.1 * before))) {
+      if (worse.empty() || worse.back() != run.line[i]) worse.push_back(run.line[i]);
+      worst = std::max(worst, after);
+    }
+  }
+  if (!worse.empty()) {
+    std::string lines;
+    for (size_t k = 0; k < worse.size() && k < 8; ++k) lines += (k ? ", " : "") + std::to_string(worse[k]);
+    std::printf("  FAILED     the written program, read back, is further off than the original at %zu "
+                "lines (%s%s; up to %.3f um): it moves where the original did not; do not run it "
+                "as written\n",
+                worse.size(), lines.c_str(), worse.size() > 8 ? ", ..." : "", worst);
+    *exit_code = 1;
+  }
 }
 
 }  // namespace
