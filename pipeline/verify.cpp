@@ -118,8 +118,17 @@ ToolSet toolsFrom(const VerifyInputs& o, const ClProgram& program) {
   }
   if (program.cutters.empty())
     throw InputError(program.file, 0, 0, "CUTTER",
-                     "the program declares no cutter (CUTTER or TLDATA; G-code never does); give "
-                     "--cutter d,r");
+                     "the program declares no cutter (CUTTER or TLDATA; in G-code a tool comment "
+                     "such as Fusion's (T1 D=6 CR=0)); give --cutter d,r");
+  std::string unknown;
+  for (const CutterSpec& s : program.cutters)
+    if (s.values.empty())
+      unknown += (unknown.empty() ? "" : ", ") + s.kind + " (line " + std::to_string(s.line) + ")";
+  if (!unknown.empty())
+    throw InputError(program.file, 0, 0, "tool",
+                     "the program cuts with " + unknown + ", whose geometry it does not give (no "
+                     "tool comment): give --cutter d,r for all of them, or verify each tool's "
+                     "lines with --lines and its --cutter");
   std::vector<int> lines;
   for (const CutterSpec& s : program.cutters) {
     if (!cutterFromApt(s.source, s.values, &c))

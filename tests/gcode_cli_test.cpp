@@ -67,6 +67,34 @@ TEST_F(GcodeCli, PostedProgramPredictsAndItsPredictedClReadsBack) {
 
 // The LinuxCNC boat does not fit with the part zero at the C axis and a 75 mm tool... it does:
 // setup reports the ranges and a proposal inside travel, and writes a set-up predict accepts.
+// Three-axis posted G-code, as a planner runs it: setup proposes the work offset (G54 values to
+// enter at the control), verify then sweeps each tool with its own cutter; a tool the program
+// does not describe is an error listing the tools, never the last cutter for all.
+TEST_F(GcodeCli, ThreeAxisProgramSetupAndToolsPerOperation) {
+  const std::string m = src("resources/machines/vmc_3axis_iso.xml");
+  const std::string known = write("known.nc",
+      "(T1 D=6 CR=0 - flat end mill)\n(T2 D=3 CR=1.5 - ball end mill)\nG21 G90 G54\nT1 M6\n"
+      "G0 X0 Y0 Z10\nG1 Z-1 F100\nX20\nT2 M6\nG0 X5 Y5 Z10\nG1 Z-1\nX25\nG0 Z10\nM30\n");
+  auto s = test::runTolver("setup --machine " + m + " --nc " + known + " -o " + path("s.txt"));
+  ASSERT_EQ(s.exit_code, 0) << s.output;
+  // Each axis's range centred in its travel (machine coordinates X -762..0, Y -406..0, Z -508..0):
+  // X 0..25 -> -381 - 12.5, Y 0..5 -> -203 - 2.5, Z -1..10 -> -254 - 4.5 (no tool length given).
+  EXPECT_NE(s.output.find("work offset at the control (G54..., machine coordinates): X-393.500 "
+                          "Y-205.500 Z-258.500"),
+            std::string::npos) << s.output;
+  auto v = test::runTolver("verify --machine " + m + " --setup " + path("s.txt") + " --nc " + known +
+                           " --tolerance 0.1 --no-images --report-dir " + path("v"));
+  EXPECT_NE(v.output.find("2 tools, each from its line on: line 4 flat end D6 mm"), std::string::npos)
+      << v.output;
+  EXPECT_NE(v.output.find("line 8 ball end D3 mm"), std::string::npos) << v.output;
+  const std::string unknown = write("unknown.nc", "G21 G90 G54\nT1 M6\nG0 X0 Y0 Z10\nG1 Z-1 F100\n"
+                                                  "T2 M6\nG0 X5 Y5 Z10\nG1 Z-1\nM30\n");
+  v = test::runTolver("verify --machine " + m + " --setup " + path("s.txt") + " --nc " + unknown +
+                      " --tolerance 0.1 --no-images --report-dir " + path("u"));
+  EXPECT_EQ(v.exit_code, 2) << v.output;
+  EXPECT_NE(v.output.find("the program cuts with T1 (line 2), T2 (line 5)"), std::string::npos) << v.output;
+}
+
 TEST_F(GcodeCli, SetupReachesTheXyzbcBoatOnItsMachine) {
   auto r = test::runTolver("setup --machine " + src("resources/machines/linuxcnc_xyzbc_trt.xml") +
                            " --nc " + src("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc") +

@@ -547,5 +547,33 @@ TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
   EXPECT_LT((t.path[1].p_w - t.path[0].p_w - Eigen::Vector3d(20, 5, -40)).norm(), 1e-9);
 }
 
+// Tools per operation: M6 switches the cutter to the selected T; its geometry comes from the
+// post's tool comments (Fusion, LinuxCNC posts); posts that write no M6 change tools at T.
+TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {
+  const Machine m = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  const ClProgram p = parseGcode(
+      "(T1 D=6 CR=0 - flat end mill)\n(T2 D=3 CR=1.5 - ball end mill)\nG21\nT1 M6\n"
+      "G0 X0 Y0 Z10\nG1 Z-1 F100\nT3\nT2 M6\nG0 X5 Y5 Z10\nG1 Z-1\nT3 M6\nG0 Z20\nM30\n",
+      "tools.nc", m.model);
+  ASSERT_EQ(p.cutters.size(), 3u);
+  EXPECT_EQ(p.cutters[0].kind, "T1");
+  EXPECT_EQ(p.cutters[0].line, 4);
+  EXPECT_EQ(p.cutters[0].values, (std::vector<double>{6, 0}));
+  EXPECT_EQ(p.cutters[1].kind, "T2");  // T3 preselected at line 7 did not change the tool
+  EXPECT_EQ(p.cutters[1].line, 8);
+  EXPECT_EQ(p.cutters[1].values, (std::vector<double>{3, 1.5}));
+  EXPECT_EQ(p.cutters[2].kind, "T3");
+  EXPECT_TRUE(p.cutters[2].values.empty());  // no comment gives T3's geometry
+  // The real Fusion program: "T1" without M6, its tool in a comment.
+  const ClProgram f = readGcodeFile(test::sourcePath("tests/fixtures/gcode/fusion_led-floor_1124_jig.nc"), m.model);
+  ASSERT_EQ(f.cutters.size(), 1u);
+  EXPECT_EQ(f.cutters[0].values, (std::vector<double>{2.8, 0}));
+  // LinuxCNC's boat post: "( TOOL: T1 = 10.0 dia. ENDMILL... )" then T1 M6.
+  const Machine l = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const ClProgram b = readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzac.ngc"), l.model);
+  ASSERT_EQ(b.cutters.size(), 1u);
+  EXPECT_EQ(b.cutters[0].values, (std::vector<double>{10, 0}));
+}
+
 }  // namespace
 }  // namespace tolver

@@ -713,7 +713,54 @@ class Reader {
   }
 
   // ---------------------------------------------------------------- one block
+  // Tool geometry in the posts' comments: Fusion "(T1  D=2.8 CR=0 - ZMIN=... - flat end mill)",
+  // LinuxCNC posts "( TOOL: T1 = 10.0 dia. ... )". Read in the program's unit.
+  void toolComment(const std::string& raw) {
+    const std::string u = toUpper(raw);
+    for (size_t open = u.find('('); open != std::string::npos; open = u.find('(', open + 1)) {
+      const size_t close = u.find(')', open);
+      if (close == std::string::npos) return;
+      std::string c(trim(std::string_view(u).substr(open + 1, close - open - 1)));
+      if (c.rfind("TOOL:", 0) == 0) c = std::string(trim(std::string_view(c).substr(5)));
+      if (c.size() < 2 || c[0] != 'T' || !std::isdigit(static_cast<unsigned char>(c[1]))) continue;
+      size_t k = 1;
+      while (k < c.size() && std::isdigit(static_cast<unsigned char>(c[k]))) ++k;
+      const int number = std::atoi(c.substr(1, k - 1).c_str());
+      auto numberAfter = [&](const std::string& key) -> std::optional<double> {
+        const size_t at = c.find(key, k);
+        if (at == std::string::npos) return std::nullopt;
+        size_t b = at + key.size();
+        while (b < c.size() && c[b] == ' ') ++b;
+        size_t e = b;
+        while (e < c.size() && (std::isdigit(static_cast<unsigned char>(c[e])) || c[e] == '.' || c[e] == '-')) ++e;
+        return parseNumber(std::string_view(c).substr(b, e - b));
+      };
+      std::optional<double> d = numberAfter(" D=");
+      if (!d) d = numberAfter("=");  // "T1 = 10.0 dia."
+      if (!d || !(*d > 0)) continue;
+      const double r = numberAfter(" CR=").value_or(c.find("BALL") != std::string::npos ? *d / 2 : 0.0);
+      tool_table_[number] = {*d * unit_, std::clamp(r, 0.0, *d / 2) * unit_};
+    }
+  }
+
+  // The tool that cuts from here on: the program's cutters list gets its geometry (from the
+  // comments), or an empty entry naming the tool when the program does not give it.
+  void toolChange(int number, int column) {
+    if (number == active_tool_) return;
+    active_tool_ = number;
+    if (number == 0) return;
+    CutterSpec spec;
+    spec.source = "TLDATA";
+    spec.kind = "T" + std::to_string(number);
+    spec.line = line_;
+    auto it = tool_table_.find(number);
+    if (it != tool_table_.end()) spec.values = {it->second.first, it->second.second};
+    (void)column;
+    prog_.cutters.push_back(spec);
+  }
+
   std::string block(const std::string& raw) {
+    toolComment(raw);
     // Strip comments, keep positions (1-based columns of the raw line).
     std::string text;
     std::vector<int> col;
@@ -861,7 +908,11 @@ class Reader {
         tlc_ = w.value != 0.0;
         if (tlc_) h_ = static_cast<int>(w.value);
       } else if (w.letter == 'N' || w.letter == 'F' || w.letter == 'S' || w.letter == 'D') continue;
-      else if (w.letter == 'T') tool_ = static_cast<int>(w.value);
+      else if (w.letter == 'T') {
+        tool_ = static_cast<int>(w.value);
+        // Posts that write no M6 (Fusion for personal use, grbl): the T word changes the tool.
+        if (!seen_m6_ && !blockHasM6(words)) toolChange(tool_, w.column);
+      }
       else {
         if (axis_words.count(w.letter))
           fail(line_, w.column, std::string(1, w.letter), "the word appears twice in the block");
@@ -878,6 +929,9 @@ class Reader {
       if (w->code == "M2" || w->code == "M30") {
         ended_ = true;
         endModes(w->code);
+      } else if (w->code == "M6") {
+        seen_m6_ = true;
+        toolChange(tool_, w->column);
       }
       else if (w->code == "M61" && has('Q')) tool_ = static_cast<int>(val('Q'));
       else if (!tcpWord(w->code) && !harmlessM().count(w->code)) ignored_.insert(w->code);
@@ -987,6 +1041,12 @@ class Reader {
                                                  "G86", "G88", "G89"};
     if (cycles.count(c)) return true;
     return (c == "G74" || c == "G76") && model_.control.dialect != "linuxcnc";
+  }
+
+  static bool blockHasM6(const std::vector<Word>& words) {
+    for (const Word& w : words)
+      if (w.letter == 'M' && w.code == "M6") return true;
+    return false;
   }
 
   std::string axisList() const {
@@ -1420,6 +1480,9 @@ class Reader {
   std::string work_ = "G54";
   bool tlc_ = false, tcp_without_tlc_ = false;
   int h_ = 0, tool_ = 0;
+  int active_tool_ = 0;
+  bool seen_m6_ = false;
+  std::map<int, std::pair<double, double>> tool_table_;  // T -> diameter, corner radius (mm)
   std::set<std::string> tcp_active_;
   std::set<std::string> ignored_;
   std::map<std::string, int> missing_offsets_;  // work offset -> first line that used it
