@@ -330,7 +330,10 @@ void runSetup(const SetupOptions& o, int* exit_code) {
   // A posted program's rotary words assume the part as the post placed it: keep its rotation.
   if (program.dialect == "G-code") so.rotation_step = 0.0;
   so.gauge_lengths = o.gauge_lengths;
+  ProgressBar bar(true);  // on a terminal only (stderr)
+  so.progress = [&bar](double f) { bar("searching set-ups", f); };
   const SetupSearchResult r = findSetup(model, path, cmd, so);
+  bar("searching set-ups", 1.0);
   const PartSetup& b = r.setup;
   std::printf("  searched   %d part rotations (%d rejected: rotary travel)%s\n", r.rotations_tried,
               r.rotations_rejected,

@@ -422,8 +422,10 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
     return v;
   };
   std::vector<std::pair<double, double>> coarse;  // margin, rotation
+  const double total = static_cast<double>(rotations.size()) * (options.rotation_step > 0 ? 2.0 : 1.0);
   for (double rot : rotations) {
     if (options.stop_when_found && out.margin >= 0.0) break;
+    if (options.progress) options.progress(out.rotations_tried / total);
     ++out.rotations_tried;
     double v = -std::numeric_limits<double>::infinity();
     for (double L : gauges) v = std::max(v, consider(rot, L));
@@ -438,7 +440,10 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
     std::sort(coarse.begin(), coarse.end(),
               [](const auto& a, const auto& b) { return a.first > b.first; });
     if (coarse.size() > 3) coarse.resize(3);
+    int refined = 0;
     for (const auto& [v0, rot0] : coarse) {
+      if (options.progress)
+        options.progress(0.5 + 0.5 * refined++ / static_cast<double>(std::max<size_t>(1, coarse.size())));
       double rot = rot0, v = v0;
       for (double h = options.rotation_step / 2.0;
            h > degToRad(0.1) && !(options.stop_when_found && out.margin >= 0.0); h /= 2.0)

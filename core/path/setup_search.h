@@ -14,6 +14,7 @@
 // gauge length; the proposal is then checked on every point with the real inverse kinematics.
 // Rotary travel does not depend on x; a rotation whose rotary angles leave travel is rejected.
 #include <Eigen/Core>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -42,6 +43,8 @@ struct SetupSearchOptions {
   std::vector<double> gauge_lengths;   // candidates, mm; empty: the model's
   int max_points = 20000;              // points used in the search (evenly spaced subset)
   bool stop_when_found = false;        // return the first set-up that reaches every point
+  // Called with the fraction of the candidate rotations searched (0..1), from the calling thread.
+  std::function<void(double)> progress;
 };
 
 struct SetupSearchResult {
