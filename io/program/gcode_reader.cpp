@@ -523,6 +523,8 @@ class Reader {
     const double v = expression(b, i, column - 1);
     while (i < b.size() && b[i] == ' ') ++i;
     if (i != b.size()) fail(line_, column, e.substr(0, 20), "unexpected text in the expression");
+    if (!std::isfinite(v) || std::abs(v) > 1e9)
+      fail(line_, column, e.substr(0, 20), "value " + clip(formatNumber(v)) + " is beyond any plausible number");
     return v;
   }
 
@@ -725,6 +727,7 @@ class Reader {
       if (c.size() < 2 || c[0] != 'T' || !std::isdigit(static_cast<unsigned char>(c[1]))) continue;
       size_t k = 1;
       while (k < c.size() && std::isdigit(static_cast<unsigned char>(c[k]))) ++k;
+      if (k > 7) continue;  // not a tool number
       const int number = std::atoi(c.substr(1, k - 1).c_str());
       auto numberAfter = [&](const std::string& key) -> std::optional<double> {
         const size_t at = c.find(key, k);
