@@ -21,6 +21,7 @@
 #include "io/machine/zone_file.h"
 #include "io/mesh/mesh_file.h"
 #include "io/program/apt_reader.h"
+#include "io/program/compensated_program.h"
 #include "io/report/deviation_map.h"
 #include "io/report/offscreen_display.h"
 #include "core/numerics/units.h"
@@ -404,6 +405,74 @@ void sweepPart(const ProgramOnMachine& m, const ToolSet& tools, const std::vecto
   phase("swept_surfaces");
 }
 
+// The convention check (issue 32): a posted program's rotary words place the tool as the post
+// meant only if the machine file turns its rotary axes the same way. When most of the machined
+// surface is gouged beyond the search range, the program is read again with each rotary axis's
+// sense reversed (one at a time, then all), and its nominal sweep measured: a reversal under
+// which the cut fits names the axes that turn the other way, instead of a verdict that blames the
+// program or the machine.
+void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, const ToolSet& tools,
+                           const MotionSampling& sampling, const SweepOptions& sweep,
+                           const Verification& v) {
+  const ClProgram& program = m.program;
+  const MachineModel& model = m.machine.model;
+  if (program.dialect != "G-code" || !gcodeGivesRotaryWords(program, model)) return;
+  const VerifyResult& r = v.result;
+  size_t machined = 0, beyond = 0;
+  for (size_t i = 0; i < r.machined.size(); ++i)
+    if (r.machined[i]) ++machined, beyond += r.total_beyond[i] ? 1 : 0;
+  if (machined < 20 || beyond < 0.3 * static_cast<double>(machined)) return;
+  std::vector<int> rotary;
+  for (size_t a = 0; a < model.axes.size(); ++a)
+    if (model.axes[a].isRotary()) rotary.push_back(static_cast<int>(a));
+  std::vector<std::vector<int>> variants;
+  for (int a : rotary) variants.push_back({a});
+  if (rotary.size() > 1) variants.push_back(rotary);
+  const double floor_mm = -sweep.gouge_range + 1e-9;
+  double best_share = 1.0;
+  const std::vector<int>* best = nullptr;
+  for (const std::vector<int>& flip : variants) {
+    MachineModel mm = model;
+    for (int a : flip) {
+      Axis& ax = mm.axes[a];
+      ax.nc_sign = -ax.nc_sign;
+      const double lo = ax.travel_min;
+      ax.travel_min = -ax.travel_max;
+      ax.travel_max = -lo;
+    }
+    ClProgram p;
+    try {
+      p = loadProgram(o.program, mm);
+    } catch (const InputError&) {
+      continue;  // the program does not read with this convention (a rotary word out of travel)
+    }
+    if (p.path.size() != program.path.size()) continue;
+    const ForwardKinematics fk(mm, Eigen::VectorXd::Zero(mm.parameterCount()));
+    std::vector<ToolPlacement> nominal, unused;
+    samplePlacements(fk, fk, p.path, p.joints, sampling, &nominal, &unused);
+    SweepResult res;
+    sweepSurface(v.samples, tools, nominal, sweep, &res);
+    size_t machined2 = 0, beyond2 = 0;
+    for (size_t i = 0; i < res.machined.size(); ++i)
+      if (res.machined[i]) ++machined2, beyond2 += res.deviation[i] <= floor_mm ? 1 : 0;
+    if (machined2 < machined / 2) continue;
+    const double share = static_cast<double>(beyond2) / static_cast<double>(machined2);
+    if (share < best_share) best_share = share, best = &flip;
+  }
+  const double share0 = static_cast<double>(beyond) / static_cast<double>(machined);
+  if (!best || best_share > 0.1 || best_share > share0 / 3.0) return;
+  std::string axes;
+  for (size_t k = 0; k < best->size(); ++k)
+    axes += (k == 0 ? "" : k + 1 == best->size() ? " and " : ", ") + model.axes[(*best)[k]].name;
+  throw InputError(o.machine.machine, 0, 0, "convention",
+                   axes + (best->size() > 1 ? " turn" : " turns") + " the other way in this program "
+                   "than in the machine file: with " + axes + "'s sense reversed the program's cut "
+                   "fits the part (gouged beyond " + formatWith("%.3g", sweep.gouge_range) +
+                   " mm on " + formatWith("%.1f", 100.0 * best_share) + " % of the machined surface "
+                   "instead of " + formatWith("%.1f", 100.0 * share0) + " %): set nc_sign (or the "
+                   "direction) of the machine file's axes to the control's convention");
+}
+
 // The 95 % band of the machine's share at each verified sample (the prediction's uncertainty
 // at the nearest CL point, along the sample's normal), and the decision it allows: FAIL when
 // a sample is out of its zone by more than the band, UNDECIDED when a limit lies inside the
@@ -543,6 +612,7 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
     rep.spacing_mm = o.spacing_mm;
     phase("sample_surface");
     sweepPart(m, tools, zones, sampling, sweep, *v, phase, progress);
+    checkRotaryConvention(o, m, tools, sampling, sweep, *v);
   }
   rep.samples = &v->samples;
   rep.result = &v->result;

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -93,6 +94,63 @@ TEST_F(GcodeCli, ThreeAxisProgramSetupAndToolsPerOperation) {
                       " --tolerance 0.1 --no-images --report-dir " + path("u"));
   EXPECT_EQ(v.exit_code, 2) << v.output;
   EXPECT_NE(v.output.find("the program cuts with T1 (line 2), T2 (line 5)"), std::string::npos) << v.output;
+}
+
+// The convention check: a TCP program posted for LinuxCNC's xyzac-trt faces a 45-degree face
+// with A-45 (the flat end square on it). On the machine file it was posted for it passes; on a
+// file whose A turns the other way every point gouges, and verify says that A turns the other
+// way instead of a verdict (issue 32: a HAAS UMC program "gouged" by 0.5 mm and nothing noticed).
+TEST_F(GcodeCli, VerifyNamesARotaryAxisThatTurnsTheOtherWay) {
+  const std::string right = src("resources/machines/linuxcnc_xyzac_trt.xml");
+  const Machine mc = readMachineFile(right);
+  const ClProgram probe = parseGcode("G21\nM428\nG0 X0 Y0 Z0 A-45 C0\n", "probe.ngc", mc.model);
+  ASSERT_EQ(probe.path.size(), 1u);
+  const Eigen::Vector3d u = probe.path[0].u_w.normalized();
+  const Eigen::Vector3d e1 = Eigen::Vector3d::UnitX(), e2 = u.cross(e1).normalized();
+  ASSERT_LT(std::abs(u.dot(e1)), 1e-12);
+  // A slab whose top face, through the origin, is square to u.
+  std::string obj;
+  char buf[160];
+  for (int k = 0; k < 8; ++k) {
+    const double a = (k & 1) ? 20 : -20, b = (k & 2) ? 20 : -20, c = (k & 4) ? 0 : -10;
+    const Eigen::Vector3d v = a * e1 + b * e2 + c * u;
+    std::snprintf(buf, sizeof buf, "v %.9f %.9f %.9f\n", v.x(), v.y(), v.z());
+    obj += buf;
+  }
+  // Faces outward: the box's faces (vertex index = 1 + a + 2b + 4c), counter-clockwise seen from out.
+  obj += "f 5 6 8\nf 5 8 7\nf 1 3 4\nf 1 4 2\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\n"
+         "f 1 5 7\nf 1 7 3\nf 2 4 8\nf 2 8 6\n";
+  // Check the winding's orientation from e1 x e2 = u: the top (c=1) face 5 6 8 turns about +u.
+  write("slab.obj", obj);
+  std::string prog = "G21\nM428\nG43 H1\n";
+  auto tip = [&](double a, double b, double h) {
+    const Eigen::Vector3d p = a * e1 + b * e2 + h * u;
+    std::snprintf(buf, sizeof buf, "X%.4f Y%.4f Z%.4f", p.x(), p.y(), p.z());
+    return std::string(buf);
+  };
+  prog += "G0 " + tip(-15, -15, 10) + " A-45 C0\n";
+  for (int row = 0; row <= 10; ++row) {
+    const double b = -15 + 3 * row;
+    prog += "G1 " + tip(-15, b, 0) + " F500\nG1 " + tip(15, b, 0) + "\n";
+  }
+  prog += "G0 " + tip(15, 15, 10) + "\nM429\nM2\n";
+  write("face.ngc", prog);
+  const std::string setup = src("samples/gcode/linuxcnc_setup.txt");
+  const std::string common = " --setup " + setup + " --nc " + path("face.ngc") + " --part " + path("slab.obj") +
+                             " --cutter 4,0,30 --tolerance 0.1 --no-images --report-dir ";
+  auto ok = test::runTolver("verify --machine " + right + common + path("ok"));
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_NE(ok.output.find("tolver verify: PASS"), std::string::npos) << ok.output;
+  EXPECT_NE(ok.output.find("100.00 % of"), std::string::npos) << ok.output;
+  std::string text = test::readText(right);
+  const std::string from = "min=\"-100\" max=\"50\"  nc_sign=\"1\"";
+  ASSERT_NE(text.find(from), std::string::npos);
+  text.replace(text.find(from), from.size(), "min=\"-50\" max=\"100\"  nc_sign=\"-1\"");
+  const std::string wrong = write("a_reversed.xml", text);
+  auto bad = test::runTolver("verify --machine " + wrong + common + path("bad"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("A turns the other way in this program than in the machine file"),
+            std::string::npos) << bad.output;
 }
 
 TEST_F(GcodeCli, SetupReachesTheXyzbcBoatOnItsMachine) {
