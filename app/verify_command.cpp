@@ -224,6 +224,9 @@ void registerVerify(CLI::App& app, int* exit_code) {
   cmd->add_option("--gouge-range", o->in.gouge_range_mm, "depth searched for gouges, mm (default max(0.1, 5t))")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--max-hole", o->in.max_hole_mm, "largest mesh hole perimeter filled, mm (default 2 % of the size)");
+  cmd->add_option("--tools", o->in.tools,
+                  "tool file (CSV: tool,type,diameter_mm,corner_radius_mm,length_mm): the geometry "
+                  "of the tools a posted program selects (T1, T=\"name\"), over its comments");
   cmd->add_option("--cutter", o->in.cutter, "cutter d,r[,length,taper_deg] in mm, overriding the program's")
       ->delimiter(',');
   cmd->add_option("--line-pass", o->in.line_pass, "also a line profile along this pass (1-based)")

@@ -22,6 +22,7 @@
 #include "io/mesh/mesh_file.h"
 #include "io/program/apt_reader.h"
 #include "io/program/compensated_program.h"
+#include "io/program/tool_file.h"
 #include "io/report/deviation_map.h"
 #include "io/report/offscreen_display.h"
 #include "core/numerics/units.h"
@@ -121,17 +122,28 @@ ToolSet toolsFrom(const VerifyInputs& o, const ClProgram& program) {
     throw InputError(program.file, 0, 0, "CUTTER",
                      "the program declares no cutter (CUTTER or TLDATA; in G-code a tool comment "
                      "such as Fusion's (T1 D=6 CR=0)); give --cutter d,r");
+  // The shop's tool file describes the tools it names (over the program's comments).
+  std::vector<CutterSpec> specs = program.cutters;
+  if (!o.tools.empty()) {
+    const std::map<std::string, ToolEntry> file = readToolFile(o.tools);
+    for (CutterSpec& s : specs) {
+      auto it = file.find(toUpper(s.kind));
+      if (it != file.end()) {
+        s.values = it->second.values;
+        s.source = "TLDATA";
+      }
+    }
+  }
   std::string unknown;
-  for (const CutterSpec& s : program.cutters)
+  for (const CutterSpec& s : specs)
     if (s.values.empty())
       unknown += (unknown.empty() ? "" : ", ") + s.kind + " (line " + std::to_string(s.line) + ")";
   if (!unknown.empty())
     throw InputError(program.file, 0, 0, "tool",
                      "the program cuts with " + unknown + ", whose geometry it does not give (no "
-                     "tool comment): give --cutter d,r for all of them, or verify each tool's "
-                     "lines with --lines and its --cutter");
+                     "tool comment): describe them in a --tools file, or give --cutter d,r for all");
   std::vector<int> lines;
-  for (const CutterSpec& s : program.cutters) {
+  for (const CutterSpec& s : specs) {
     if (!cutterFromApt(s.source, s.values, &c))
       throw InputError(program.file, s.line, 0, s.source, "the values do not describe a cutter");
     tools.cutters.push_back(c);
@@ -630,6 +642,14 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
     rep.line_profile = lineProfile(v->samples, v->result, passes[o.line_pass - 1]);
   }
   reportHoles(o.allow_open, *v);
+  // A program that cuts none of the checked surface verifies nothing: INCOMPLETE, never PASS.
+  if (!o.part.empty() && v->samples.size() > 0 && !(v->result.area_machined > 0)) {
+    rep.incomplete = true;
+    rep.incomplete_text =
+        "INCOMPLETE: the program cuts none of the checked surface (" +
+        formatWith("%.1f", v->result.area) + " mm2 sampled, none machined): is this the part the "
+        "program makes, placed where it cuts (the set-up, --mesh-offset)?";
+  }
   return v;
 }
 

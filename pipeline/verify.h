@@ -31,6 +31,7 @@ struct VerifyInputs {
   double step_mm = NAN, excess_range_mm = NAN, gouge_range_mm = NAN;  // NAN: from t and the cutter
   double max_hole_mm = -1;                 // largest mesh hole perimeter filled; < 0: default
   std::vector<double> cutter;              // d, r[, length, taper_deg]; empty: the program's
+  std::string tools;                       // tool file (io/program/tool_file.h): posted tools' geometry
   int line_pass = 0;                       // 1-based pass for a line profile, 0 none
   bool absolute = false;                   // calibrated machine: no measured set-up
   std::string probed;                      // probed points (CSV)

@@ -94,6 +94,20 @@ TEST_F(GcodeCli, ThreeAxisProgramSetupAndToolsPerOperation) {
                       " --tolerance 0.1 --no-images --report-dir " + path("u"));
   EXPECT_EQ(v.exit_code, 2) << v.output;
   EXPECT_NE(v.output.find("the program cuts with T1 (line 2), T2 (line 5)"), std::string::npos) << v.output;
+  // A tool file describes them (by number, with or without its T).
+  const std::string tools = write("tools.csv", "tool,type,diameter_mm,corner_radius_mm,length_mm\n"
+                                               "1,flat,6,0,30\nT2,ball,3,,20\n");
+  v = test::runTolver("verify --machine " + m + " --setup " + path("s.txt") + " --nc " + unknown +
+                      " --tools " + tools + " --tolerance 0.1 --no-images --report-dir " + path("t"));
+  EXPECT_NE(v.output.find("2 tools, each from its line on: line 2 flat end D6 mm"), std::string::npos)
+      << v.output;
+  EXPECT_NE(v.output.find("line 5 ball end D3 mm, corner R1.5 mm, length 20 mm"), std::string::npos)
+      << v.output;
+  const std::string bad = write("bad_tools.csv", "tool,diameter_mm\n1,6\n2,-3\n");
+  v = test::runTolver("verify --machine " + m + " --setup " + path("s.txt") + " --nc " + unknown +
+                      " --tools " + bad + " --tolerance 0.1 --no-images --report-dir " + path("b"));
+  EXPECT_EQ(v.exit_code, 2) << v.output;
+  EXPECT_NE(v.output.find("bad_tools.csv:3"), std::string::npos) << v.output;
 }
 
 // The convention check: a TCP program posted for LinuxCNC's xyzac-trt faces a 45-degree face
@@ -135,6 +149,12 @@ TEST_F(GcodeCli, VerifyNamesARotaryAxisThatTurnsTheOtherWay) {
   }
   prog += "G0 " + tip(15, 15, 10) + "\nM429\nM2\n";
   write("face.ngc", prog);
+  // The same passes 5 mm above the face: nothing checked is cut, so INCOMPLETE, never PASS.
+  std::string lifted = "G21\nM428\nG43 H1\nG0 " + tip(-15, -15, 10) + " A-45 C0\n";
+  for (int row = 0; row <= 10; ++row)
+    lifted += "G1 " + tip(-15, -15 + 3 * row, 5) + " F500\nG1 " + tip(15, -15 + 3 * row, 5) + "\n";
+  lifted += "M429\nM2\n";
+  write("lifted.ngc", lifted);
   const std::string setup = src("samples/gcode/linuxcnc_setup.txt");
   const std::string common = " --setup " + setup + " --nc " + path("face.ngc") + " --part " + path("slab.obj") +
                              " --cutter 4,0,30 --tolerance 0.1 --no-images --report-dir ";
@@ -142,6 +162,12 @@ TEST_F(GcodeCli, VerifyNamesARotaryAxisThatTurnsTheOtherWay) {
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
   EXPECT_NE(ok.output.find("tolver verify: PASS"), std::string::npos) << ok.output;
   EXPECT_NE(ok.output.find("100.00 % of"), std::string::npos) << ok.output;
+  auto none = test::runTolver("verify --machine " + right + " --setup " + setup + " --nc " + path("lifted.ngc") +
+                               " --part " + path("slab.obj") + " --cutter 4,0,30 --tolerance 0.1 --no-images "
+                               "--report-dir " + path("none"));
+  EXPECT_EQ(none.exit_code, 1) << none.output;
+  EXPECT_NE(none.output.find("INCOMPLETE: the program cuts none of the checked surface"), std::string::npos)
+      << none.output;
   std::string text = test::readText(right);
   const std::string from = "min=\"-100\" max=\"50\"  nc_sign=\"1\"";
   ASSERT_NE(text.find(from), std::string::npos);

@@ -490,6 +490,10 @@ TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
   const ClProgram p = readGcodeFile(test::sourcePath("tests/fixtures/gcode/nx_sin840d_Keychain.mpf"), m.model);
   EXPECT_EQ(p.cycles, 1);
   EXPECT_EQ(p.cycle_holes, 1);
+  // T="name" then M6: the tools by their names (a --tools file gives their geometry).
+  ASSERT_GE(p.cutters.size(), 2u);
+  EXPECT_EQ(p.cutters[0].kind, "ENTFRAESER_D8_N_90GRAD");
+  EXPECT_EQ(p.cutters.back().kind, "BOHRER_D3.3_VHM");
   // N190 SUPA G0 X=_X_HOME Y=_Y_HOME ...: machine coordinates -365, 224 (Z=_Z_HOME 610 before).
   bool supa = false;
   for (size_t i = 0; i < p.path.size(); ++i)

@@ -411,7 +411,9 @@ class Reader {
         // T="name" or T=number or T5
         const std::string v = eq == std::string::npos ? k.substr(1) : k.substr(eq + 1);
         tool_name_ = v.size() >= 2 && v.front() == '"' ? v.substr(1, v.size() - 2) : v;
-        tool_changes_.insert(tool_name_);
+        bool digits = !tool_name_.empty() && tool_name_.size() < 8;
+        for (char ch : tool_name_) digits = digits && std::isdigit(static_cast<unsigned char>(ch));
+        selected_tool_ = digits ? "T" + std::to_string(std::stoi(tool_name_)) : tool_name_;
       } else if (head == "CYCLE800") {
         const std::string args = paren == std::string::npos ? "" : k.substr(paren + 1, k.rfind(')') - paren - 1);
         if (!trim(args).empty())
@@ -742,23 +744,22 @@ class Reader {
       if (!d) d = numberAfter("=");  // "T1 = 10.0 dia."
       if (!d || !(*d > 0)) continue;
       const double r = numberAfter(" CR=").value_or(c.find("BALL") != std::string::npos ? *d / 2 : 0.0);
-      tool_table_[number] = {*d * unit_, std::clamp(r, 0.0, *d / 2) * unit_};
+      tool_table_["T" + std::to_string(number)] = {*d * unit_, std::clamp(r, 0.0, *d / 2) * unit_};
     }
   }
 
   // The tool that cuts from here on: the program's cutters list gets its geometry (from the
   // comments), or an empty entry naming the tool when the program does not give it.
-  void toolChange(int number, int column) {
-    if (number == active_tool_) return;
-    active_tool_ = number;
-    if (number == 0) return;
+  void toolChange(const std::string& key) {
+    if (key == active_tool_) return;
+    active_tool_ = key;
+    if (key.empty() || key == "T0") return;
     CutterSpec spec;
     spec.source = "TLDATA";
-    spec.kind = "T" + std::to_string(number);
+    spec.kind = key;
     spec.line = line_;
-    auto it = tool_table_.find(number);
+    auto it = tool_table_.find(key);
     if (it != tool_table_.end()) spec.values = {it->second.first, it->second.second};
-    (void)column;
     prog_.cutters.push_back(spec);
   }
 
@@ -913,8 +914,9 @@ class Reader {
       } else if (w.letter == 'N' || w.letter == 'F' || w.letter == 'S' || w.letter == 'D') continue;
       else if (w.letter == 'T') {
         tool_ = static_cast<int>(w.value);
+        selected_tool_ = "T" + std::to_string(tool_);
         // Posts that write no M6 (Fusion for personal use, grbl): the T word changes the tool.
-        if (!seen_m6_ && !blockHasM6(words)) toolChange(tool_, w.column);
+        if (!seen_m6_ && !blockHasM6(words)) toolChange(selected_tool_);
       }
       else {
         if (axis_words.count(w.letter))
@@ -934,7 +936,7 @@ class Reader {
         endModes(w->code);
       } else if (w->code == "M6") {
         seen_m6_ = true;
-        toolChange(tool_, w->column);
+        toolChange(selected_tool_);
       }
       else if (w->code == "M61" && has('Q')) tool_ = static_cast<int>(val('Q'));
       else if (!tcpWord(w->code) && !harmlessM().count(w->code)) ignored_.insert(w->code);
@@ -1471,7 +1473,6 @@ class Reader {
   Eigen::Isometry3d frame_ = Eigen::Isometry3d::Identity();  // programmable frame (mm)
   bool frame_checked_ = true;  // the tool axis checked against a rotated frame's z
   std::string tool_name_;
-  std::set<std::string> tool_changes_;
   int max_decimals_ = 3;  // assumed until the program prints more
   bool executed_block_ = false;  // a block of words was executed (O names come before)
   static constexpr size_t kMaxLeaderLines = 2000;  // lines held while looking for a first '%'
@@ -1483,9 +1484,9 @@ class Reader {
   std::string work_ = "G54";
   bool tlc_ = false, tcp_without_tlc_ = false;
   int h_ = 0, tool_ = 0;
-  int active_tool_ = 0;
+  std::string active_tool_, selected_tool_;  // "T1" or a Sinumerik tool name
   bool seen_m6_ = false;
-  std::map<int, std::pair<double, double>> tool_table_;  // T -> diameter, corner radius (mm)
+  std::map<std::string, std::pair<double, double>> tool_table_;  // "T1" -> diameter, corner radius (mm)
   std::set<std::string> tcp_active_;
   std::set<std::string> ignored_;
   std::map<std::string, int> missing_offsets_;  // work offset -> first line that used it
