@@ -579,5 +579,69 @@ TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {
   EXPECT_EQ(b.cutters[0].values, (std::vector<double>{10, 0}));
 }
 
+// Every shipped machine with a control: a program in tool-centre-point mode and its joint-space
+// twin (the joints the TCP reading gives, posted as machine coordinates less the work offset,
+// rotary words in the control's sense) give the same tool path to 1 nm: TCP and joint words,
+// work offsets and the rotary senses agree in the reader (issue 32, point 4).
+TEST(GcodeReader, TcpProgramAndItsJointTwinGiveTheSamePath) {
+  struct Case {
+    const char* file;
+    const char* on;
+    const char* off;
+  };
+  const Case cases[] = {{"resources/machines/umc_bc_trunnion.xml", "G234 H1", "G49"},
+                        {"resources/machines/sinumerik_bc_table.xml", "TRAORI", "TRAFOOF"},
+                        {"resources/machines/linuxcnc_xyzac_trt.xml", "M428", "M429"},
+                        {"resources/machines/linuxcnc_xyzbc_trt.xml", "M428", "M429"}};
+  std::mt19937 rng(32);
+  std::uniform_real_distribution<double> xy(-20, 20), z(0, 30), tilt(-30, 30), turn(-170, 170);
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.file);
+    Machine m = machine(c.file, 50.0);
+    m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-3, 4, -5);
+    for (Axis& ax : m.model.axes)  // travel is not the subject here: every tip reachable
+      if (!ax.isRotary()) ax.travel_min = -1e4, ax.travel_max = 1e4;
+    std::vector<int> rotary;
+    for (size_t a = 0; a < m.model.axes.size(); ++a)
+      if (m.model.axes[a].isRotary()) rotary.push_back(static_cast<int>(a));
+    ASSERT_EQ(rotary.size(), 2u);
+    // The TCP program: tips and rotary words (the tilting axis first in the file's order).
+    std::string tcp = "G21\nG90 G54\n" + std::string(c.on) + "\n";
+    char buf[200];
+    for (int k = 0; k < 20; ++k) {
+      const double w0 = tilt(rng), w1 = turn(rng);
+      std::snprintf(buf, sizeof buf, "G1 X%.4f Y%.4f Z%.4f %s%.4f %s%.4f F500\n", xy(rng), xy(rng), z(rng),
+                    m.model.axes[rotary[0]].name.c_str(), w0, m.model.axes[rotary[1]].name.c_str(), w1);
+      tcp += buf;
+    }
+    tcp += std::string(c.off) + "\n";
+    const ClProgram a = parseGcode(tcp, "tcp.nc", m.model);
+    ASSERT_EQ(a.path.size(), 20u);
+    // Its twin in joint words: machine coordinates (nc_sign x joint) less G54, rotary words.
+    const std::array<int, 3> order = prismaticWordOrder(m.model);
+    std::string twin = "G21\nG90 G54\n";
+    for (size_t i = 0; i < a.path.size(); ++i) {
+      const JointVector& q = a.joints[i];
+      double w[3];
+      for (int k = 0; k < 3; ++k)
+        w[k] = m.model.axes[order[k]].nc_sign * q[order[k]] - m.model.setup.work_offsets["G54"][k];
+      std::snprintf(buf, sizeof buf, "G1 X%.9f Y%.9f Z%.9f %s%.9f %s%.9f\n", w[0], w[1], w[2],
+                    m.model.axes[rotary[0]].name.c_str(),
+                    m.model.axes[rotary[0]].nc_sign * q[rotary[0]] / kDeg,
+                    m.model.axes[rotary[1]].name.c_str(),
+                    m.model.axes[rotary[1]].nc_sign * q[rotary[1]] / kDeg);
+      twin += buf;
+    }
+    const ClProgram b = parseGcode(twin, "twin.nc", m.model);
+    ASSERT_EQ(b.path.size(), a.path.size());
+    for (size_t i = 0; i < a.path.size(); ++i) {
+      EXPECT_EQ(a.tcp[i], ClProgram::kTcpWords);
+      EXPECT_EQ(b.tcp[i], ClProgram::kJointWords);
+      EXPECT_LT((a.path[i].p_w - b.path[i].p_w).norm(), 1e-6) << i;
+      EXPECT_LT((a.path[i].u_w - b.path[i].u_w).norm(), 1e-9) << i;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace tolver
