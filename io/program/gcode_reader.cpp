@@ -429,9 +429,7 @@ class Reader {
         sinCycle(tok[t + 1], tcol[t + 1], /*modal=*/true);
         ++t;
       } else if (head.rfind("CYCLE", 0) == 0 && paren != std::string::npos) {
-        const bool was_modal = sin_mcall_;
-        sinCycle(k, tcol[t], /*modal=*/false);
-        sin_mcall_ = was_modal && false;
+        sinCycle(k, tcol[t], /*modal=*/false);  // once, where the block ends
         sin_cycle_here_ = true;
       } else if (head == "TRANS" || head == "ATRANS" || head == "ROT" || head == "AROT") {
         // The programmable frame (SINUMERIK Fundamentals, "Frames"): TRANS and ROT replace it,

@@ -17,17 +17,25 @@
 // joints' effect on the tip (times nc_sign), both seen from w. A work offset the set-up does not
 // give puts its origin at the part zero.
 //
-// Recognised: N numbers, ( ) and ; comments, % and O lines, a UTF-8 BOM, CRLF; G0 G1 G2 G3 with
-// G17/G18/G19, I J K (incremental; G90.1 absolute) and R, helical arcs; G90/G91; G20/G21 (the
-// control's default unit otherwise); G93/G94/G95 (feed kept out: not needed); G53 and G28 (moves
-// in machine coordinates; G28 via its intermediate point to machine zero); G54-G59, G54.1 Pn,
-// G59.1-G59.3 with offsets from the set-up; G10 L2/L20 (work offsets set by the program); G43 H
-// and G49; the control's TCP words; G81/G82/G83/G73 drilling cycles expanded into straight moves
-// (G98/G99, G80); T, M6, M61 Q; parameters (#1, #<name>, #<_hal[pin]> from the control) and
-// bracketed arithmetic. Refused with file:line and the reason: subprograms and macros (M98, M99,
-// O-word control flow), cutter radius compensation (G41/G42), G92, coordinate rotation and
-// scaling (G68, G51), polar coordinates (G16) and other words that change the geometry. Words
-// that do not (spindle, coolant, feed modes, path control...) are listed once as ignored.
+// Recognised (docs/programs.md lists each dialect's reading and refusals): a tape leader before
+// the first '%' (skipped, said once); N numbers, ( ) and ; comments, % lines, O and : program
+// numbers and a name at the start, a UTF-8 BOM, CRLF; G0 G1 G2 G3 with G17/G18/G19, I J K
+// (incremental; G90.1 absolute) and R, helical arcs, LinuxCNC's P turns, the end point checked by
+// the control's rule (NcControl::dialect, arc_radius_tolerance_mm) and never tighter than four
+// steps of the program's printed resolution; G90/G91; G20/G21 (the control's default unit
+// otherwise); G93/G94/G95; G53 and G28 (machine coordinates, which stay fixed until a work-offset
+// word moves them); G54-G59, G54.1 Pn, G59.1-G59.3 with offsets from the set-up; G10 L2/L20; G43 H
+// and G49; the control's TCP words, ended as the control ends them (modal group 08, the machine
+// file's ended_by, M2/M30); canned cycles G73, G81-G86, G88, G89 (G74, G76 on ISO controls)
+// expanded into straight moves; T, M6, M61 Q (the tool in force, its geometry from the post's
+// tool comments); parameters and bracketed arithmetic. Sinumerik 840D (dialect "sinumerik"):
+// DEF, assignments, ADDR=expression, SUPA, G500, T="name", D, MCALL CYCLE81-83, TRANS/ATRANS/
+// ROT/AROT frames (whose z must be the rotary words' tool axis in TCP mode). A move made before
+// every axis has a commanded position is not a point of the path. Refused with file:line and the
+// construct: subprograms, macros and control flow, cutter radius compensation (G41/G42), G92,
+// coordinate rotation and scaling (G68, G51), polar coordinates (G16), G87, Sinumerik loops,
+// jumps and CYCLE800 with arguments. Words that do not change the path are listed once as
+// ignored.
 #include <string>
 
 #include "core/model/machine_model.h"
