@@ -178,7 +178,9 @@ TEST(GcodeReader, InchHaasProgramWithTcpAndDwo) {
   // N100: C-400 is kept as a multi-turn joint value (the table turns +400: HAAS and ISO 841
   // give the tool's sense); the tool axis follows B30 C-400.
   for (size_t i = 0; i < p.path.size(); ++i)
-    if (p.path[i].line == 13) EXPECT_NEAR(p.joints[i][4], 400 * kDeg, 1e-12);  // nc_sign -1
+    if (p.path[i].line == 13) {
+      EXPECT_NEAR(p.joints[i][4], 400 * kDeg, 1e-12);  // nc_sign -1
+    }
   const PredictionResult r = predictToolPath(m.model, m.params, p.path, 20, &p.joints);
   EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.failures.front().message);
 }
