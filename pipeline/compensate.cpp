@@ -201,6 +201,9 @@ void fillReport(const CompensateInputs& in, const std::string& output, Compensat
   rep.after_compensated = figuresOf(t, a, at, 0, t.size());
   rep.setup_note = run.setup_note;
   rep.notes = run.text.notes;
+  if (const auto n = std::count(run.program.cycle_orientation.begin(), run.program.cycle_orientation.end(), 1))
+    rep.notes.push_back(std::to_string(n) + " points in a swivelled plane (CYCLE800): the tip compensated by the "
+                        "linear axes, the tool axis left where the cycle puts it");
   const MachineModel& model = run.machine.model;
   for (size_t k = 0; k < model.axes.size(); ++k) {
     double m = 0;
@@ -248,6 +251,8 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
   for (size_t i = 0; i < q0.size(); ++i) q0[i] = run.before.points[i].q;
   CompensationOptions co;
   co.max_condition = in.max_condition;
+  if (std::count(program.cycle_orientation.begin(), program.cycle_orientation.end(), 1) > 0)
+    co.tip_only = &program.cycle_orientation;
   run.compensation = compensateToolPath(run.machine.model, run.machine.params, program.path, q0, run.orientation,
                                         co, &run.before.points);
   run.text = correctedText(in, run);

@@ -90,6 +90,7 @@ void keepLines(ClProgram& p, const std::string& spec) {
     if (i < p.joints.size()) p.joints[k] = p.joints[i];
     if (i < p.tcp.size()) p.tcp[k] = p.tcp[i];
     if (i < p.fixed_axes.size()) p.fixed_axes[k] = p.fixed_axes[i];
+    if (i < p.cycle_orientation.size()) p.cycle_orientation[k] = p.cycle_orientation[i];
     ++k;
   }
   if (k == 0)
@@ -110,6 +111,7 @@ void keepLines(ClProgram& p, const std::string& spec) {
   if (p.joints.size() > k) p.joints.resize(k);
   if (p.tcp.size() > k) p.tcp.resize(k);
   if (p.fixed_axes.size() > k) p.fixed_axes.resize(k);
+  if (p.cycle_orientation.size() > k) p.cycle_orientation.resize(k);
 }
 
 bool hasGcodeExtension(const std::string& path) {

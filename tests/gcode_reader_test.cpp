@@ -525,8 +525,6 @@ TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
   const std::string base = "N10 DEF REAL _A\nN20 _A=5\n";
   EXPECT_NE(refusal(base + "N30 GOTOF MARK\n", m.model).find("GOTOF"), std::string::npos);
   EXPECT_NE(refusal(base + "N30 WHILE _A>0\n", m.model).find("WHILE"), std::string::npos);
-  EXPECT_NE(refusal(base + "N30 CYCLE800(1,\"TABLE\",0,57,0,0,0,0,30,0,0,0,0,1,100,1)\n", m.model).find("CYCLE800"),
-            std::string::npos);
   EXPECT_NE(refusal(base + "N30 G0 X=SIN(30)\n", m.model).find("functions"), std::string::npos);
   EXPECT_NE(refusal(base + "N30 G0 X=_B\n", m.model).find("_B has no value"), std::string::npos);
   EXPECT_NE(refusal(base + "N30 CYCLE86(10,0,2,-5)\n", m.model).find("CYCLE86"), std::string::npos);
@@ -551,6 +549,82 @@ TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
   EXPECT_NEAR(t.joints[1][0], -300 + 10 + 10, 1e-9);  // G54 + TRANS + _A*2
   EXPECT_NEAR(t.joints[1][1], 5, 1e-9);
   EXPECT_LT((t.path[1].p_w - t.path[0].p_w - Eigen::Vector3d(20, 5, -40)).norm(), 1e-9);
+}
+
+// CYCLE800 (SINUMERIK 840D sl, "Swivel plane - CYCLE800"): the swivel frame TRANS X0 : rotation :
+// TRANS X1, the rotaries turning the tool along its z, the points held in it, against the same
+// operation written with the frame instructions (TRANS, AROT, ATRANS) and TRAORI with the rotary
+// words posted by hand (ISO 841 senses: B+30 tilts the tool towards +x).
+TEST(GcodeReader, Cycle800SwivelsThePlaneAsTheFrameInstructionsDo) {
+  Machine m = machine("resources/machines/sinumerik_bc_table.xml", 0.0);
+  m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, 0, 200);
+  const std::string head = "N10 G54 G0 X0 Y0 Z80 B0 C0 D1\n";
+  const std::string ops = "N50 G0 X5 Y-15 Z40\nN60 G1 Z2 F500\nN70 X25 Y10\nN80 G0 Z40\n";
+  // The points from the first in the swivelled plane on (the frame version has one more: the
+  // rotary positioning block).
+  auto same = [](const ClProgram& a, const ClProgram& b) {
+    ASSERT_EQ(a.path.size() + 1, b.path.size());
+    for (size_t i = 1; i < a.path.size(); ++i) {
+      EXPECT_LT((a.path[i].p_w - b.path[i + 1].p_w).norm(), 1e-9) << i;
+      EXPECT_LT((a.path[i].u_w - b.path[i + 1].u_w).norm(), 1e-12) << i;
+    }
+  };
+  // Axis by axis X, Y, Z (_MODE 57), 30 deg about y, reference point X10 and zero point X5 Z-3.
+  const ClProgram c = parseGcode(head + "N20 CYCLE800(1,\"TC1\",0,57,10,0,0,0,30,0,5,0,-3,1,100,1)\n" + ops +
+                                     "N90 CYCLE800()\nN100 G0 X0 Y0 Z80\n",
+                                 "c800.mpf", m.model);
+  const ClProgram f = parseGcode(head + "N20 G0 B30 C0\nN25 TRAORI\nN30 TRANS X10\nN35 AROT Y30\n"
+                                     "N40 ATRANS X5 Z-3\n" + ops + "N90 TRAFOOF\nN95 TRANS\nN100 G0 X0 Y0 Z80\n",
+                                 "frames.mpf", m.model);
+  same(c, f);
+  ASSERT_EQ(c.path.size(), 6u);
+  const Eigen::Vector3d z30(std::sin(30 * kDeg), 0, std::cos(30 * kDeg));
+  EXPECT_LT((c.path[1].u_w - z30).norm(), 1e-12);
+  // Z40 -> Z2: 38 mm down the swivelled z; _DIR +1 took the higher B (B30 C0).
+  EXPECT_LT((c.path[2].p_w - c.path[1].p_w + 38 * z30).norm(), 1e-9);
+  EXPECT_NEAR(c.joints[1][3], -30 * kDeg, 1e-12);  // B word 30, nc_sign -1
+  EXPECT_EQ(c.tcp[1], ClProgram::kTcpWords);
+  // After CYCLE800() the plane is the settable frame again and the axes are joints (the
+  // rotaries stay where the swivel put them).
+  EXPECT_EQ(c.tcp[5], ClProgram::kJointWords);
+  EXPECT_NEAR(c.joints[5][0], -300, 1e-9);
+  EXPECT_NEAR(c.joints[5][2], 280, 1e-9);
+  // _DIR -1: the other solution (B-30, C turned half a turn), the same points.
+  const ClProgram d = parseGcode(head + "N20 CYCLE800(1,\"TC1\",0,57,10,0,0,0,30,0,5,0,-3,-1,100,1)\n" + ops,
+                                 "c800.mpf", m.model);
+  ASSERT_EQ(d.path.size(), 5u);
+  EXPECT_NEAR(d.joints[1][3], 30 * kDeg, 1e-12);
+  EXPECT_NEAR(std::abs(d.joints[1][4]), M_PI, 1e-12);
+  for (size_t i = 1; i < d.path.size(); ++i) EXPECT_LT((d.path[i].p_w - c.path[i].p_w).norm(), 1e-9);
+  // Z, Y, X (_MODE 27): 90 about z then 30 about the turned y, as AROT Z90 then AROT Y30.
+  const ClProgram zyx = parseGcode(head + "N20 CYCLE800(1,\"\",0,27,0,0,0,90,30,0,0,0,0,1,100,1)\n" + ops,
+                                   "zyx.mpf", m.model);
+  const ClProgram zyx_f = parseGcode(head + "N20 G0 B30 C90\nN25 TRAORI\nN30 AROT Z90\nN35 AROT Y30\n" + ops,
+                                     "zyx_f.mpf", m.model);
+  same(zyx, zyx_f);
+  // Rotary axes direct (_MODE 192): rotary axis 1 is the tilting B; the frame turns with it.
+  const ClProgram direct = parseGcode(head + "N20 CYCLE800(0,\"T\",0,192,0,0,0,30,0,0,0,0,0,0,100,1)\n" + ops,
+                                      "direct.mpf", m.model);
+  same(direct, parseGcode(head + "N20 G0 B30 C0\nN25 TRAORI\nN35 AROT Y30\n" + ops, "d.mpf", m.model));
+  // Additive (_ST 1): a second swivel turns the first one further.
+  const ClProgram add = parseGcode(head + "N20 CYCLE800(1,\"\",0,57,0,0,0,0,20,0,0,0,0,1,100,1)\n"
+                                       "N30 CYCLE800(1,\"\",1,57,0,0,0,0,10,0,0,0,0,1,100,1)\n" + ops,
+                                   "add.mpf", m.model);
+  const ClProgram once = parseGcode(head + "N20 CYCLE800(1,\"\",0,57,0,0,0,0,30,0,0,0,0,1,100,1)\n" + ops,
+                                    "once.mpf", m.model);
+  ASSERT_EQ(add.path.size(), once.path.size());
+  for (size_t i = 1; i < add.path.size(); ++i) EXPECT_LT((add.path[i].p_w - once.path[i].p_w).norm(), 1e-9);
+  // Refused by name: solid angles, a plane the rotaries cannot reach, a mode naming no axis.
+  EXPECT_NE(refusal(head + "N20 CYCLE800(1,\"\",0,64,0,0,0,0,30,0,0,0,0,1,100,1)\n", m.model).find("solid angles"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "N20 CYCLE800(1,\"\",0,57,0,0,0,0,120,0,0,0,0,1,100,1)\n", m.model).find("outside travel"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "N20 CYCLE800(1,\"\",0,3,0,0,0,0,30,0,0,0,0,1,100,1)\n", m.model).find("names no axis"),
+            std::string::npos);
+  // _DIR 0 leaves the rotaries where the program puts them: not turned, the check refuses.
+  EXPECT_NE(refusal(head + "N20 CYCLE800(1,\"\",0,57,0,0,0,0,30,0,0,0,0,0,100,1)\n" + ops, m.model)
+                .find("rotated frame"),
+            std::string::npos);
 }
 
 // Tools per operation: M6 switches the cutter to the selected T; its geometry comes from the

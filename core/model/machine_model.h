@@ -148,6 +148,9 @@ struct NcControl {
   double arc_radius_tolerance_mm = 0.0;
   // Values of named parameters the control supplies (LinuxCNC #<_hal[pin]>), by name.
   std::map<std::string, double> parameters;
+  // The rotary axes a swivel cycle calls 1 and 2, by name (Sinumerik CYCLE800: axis 1 is the
+  // direction reference of _DIR); empty: the tilting axis first.
+  std::vector<std::string> swivel_axes;
   // Tool axes closer than this to a rotary axis keep that axis's previous angle (rad).
   double singular_band = 1e-4;
 };

@@ -254,7 +254,8 @@ CompensationResult compensateToolPath(const MachineModel& model, const Eigen::Ve
       pc.fk().tipAndAxis(q0[i], &p0, &u0);
     }
     CompensatedPoint& c = out.points[i];
-    pc.compensate(path[i], q0[i], p0, u0, orientation, c);
+    const bool tip_only = opt.tip_only && i < opt.tip_only->size() && (*opt.tip_only)[i];
+    pc.compensate(path[i], q0[i], p0, u0, orientation && !tip_only, c);
     out.ill_conditioned += c.status == CompensationStatus::IllConditioned;
     out.out_of_travel += c.status == CompensationStatus::OutOfTravel;
     out.not_converged += c.status == CompensationStatus::NotConverged;

@@ -31,6 +31,10 @@ struct CompensationOptions {
   // The Jacobian (orientation rows times L) is ill-conditioned beyond this condition number: the
   // point's tool axis is left as programmed, its tip compensated, and it is reported.
   double max_condition = 1e6;
+  // Per point (optional): 1 where the tool axis is not the program's to change (a swivel cycle
+  // such as Sinumerik CYCLE800 set the rotaries): the tip compensated by the prismatic joints,
+  // the axis left as programmed.
+  const std::vector<char>* tip_only = nullptr;
 };
 
 enum class CompensationStatus {

@@ -140,6 +140,10 @@ class Reader {
       if (!(t > 0 && t <= 10)) fail(e, "control.arc_radius_tolerance_mm", "expected 0 to 10 mm");
       c.arc_radius_tolerance_mm = t;
     }
+    {
+      std::istringstream names(toUpper(attr(e, "swivel_axes", false, "")));
+      for (std::string w; names >> w;) c.swivel_axes.push_back(w);
+    }
     for (const XMLElement* t = e->FirstChildElement(); t; t = t->NextSiblingElement()) {
       const std::string tag = t->Name();
       if (tag == "tcp") {
@@ -276,7 +280,15 @@ class Reader {
       (p.axis.branch == Branch::Workpiece ? m.workpiece_chain : m.tool_chain).push_back(p.index);
     m.last_T_table = frame(root->FirstChildElement("table"), angle);
     m.last_T_spindle = frame(root->FirstChildElement("spindle"), angle);
-    if (const XMLElement* c = root->FirstChildElement("control")) control(c, m.control);
+    if (const XMLElement* c = root->FirstChildElement("control")) {
+      control(c, m.control);
+      for (const std::string& n : m.control.swivel_axes) {
+        bool rotary = false;
+        for (const Axis& ax : m.axes) rotary = rotary || (ax.isRotary() && toUpper(ax.name) == n);
+        if (!rotary || m.control.swivel_axes.size() != 2)
+          fail(c, "control.swivel_axes", "expected the names of the machine's two rotary axes, found '" + n + "'");
+      }
+    }
     // The prismatic axes must span their directions: two along one line leave the tool tip
     // unplaceable.
     {
@@ -567,6 +579,11 @@ class MachineXmlWriter {
     attr("singular_band_deg", radToDeg(c.singular_band));
     if (c.dialect != "iso") attr("dialect", c.dialect);
     if (c.arc_radius_tolerance_mm > 0) attr("arc_radius_tolerance_mm", c.arc_radius_tolerance_mm);
+    if (!c.swivel_axes.empty()) {
+      std::string names;
+      for (const std::string& n : c.swivel_axes) names += (names.empty() ? "" : " ") + n;
+      attr("swivel_axes", names);
+    }
     for (const auto& [on, off] : c.tcp_words) {
       p_.OpenElement("tcp");
       attr("on", on);

@@ -57,6 +57,9 @@ struct ClProgram {
   std::vector<AptStatement> statements;  // covering every line in order
   std::vector<ClPoint> path;             // tool positions in w, mm
   std::vector<int> point_frame;          // per point, index into frames
+  // APT: the coordinate system of the file's points (p_w = scale * T p_file). G-code: the
+  // control's frame in force (Sinumerik CYCLE800, TRANS, ROT...), T mapping the program's
+  // coordinates into the settable frame (G54...), in mm.
   std::vector<ClFrame> frames;
   std::vector<CutterSpec> cutters;
   std::string part_name;
@@ -80,6 +83,9 @@ struct ClProgram {
   // coordinates (a G53/G28/SUPA move set it and no work-offset word has moved it since): a work
   // offset does not move it.
   std::vector<unsigned char> fixed_axes;
+  // Per point, 1 where a swivel cycle (Sinumerik CYCLE800) set the rotary axes, not the
+  // program's words: a corrected program can move its tip, not its tool axis.
+  std::vector<char> cycle_orientation;
   std::vector<std::string> notes;        // what the reader assumed or ignored, one line each
 };
 

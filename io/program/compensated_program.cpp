@@ -305,8 +305,10 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
     out.source_line.push_back(1);
     first = 1;
   }
+  // A Sinumerik control reads "( )" as a call: its comments start with ';'.
+  const bool semicolon = model.control.dialect == "sinumerik";
   for (const std::string& h : header) {
-    out.text += "(" + withoutParentheses(h) + ")\n";
+    out.text += semicolon ? "; " + h + "\n" : "(" + withoutParentheses(h) + ")\n";
     out.source_line.push_back(0);
   }
   // Which blocks are arcs (the motion mode in force, modal): the block before an arc gives the
@@ -372,7 +374,12 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
       const bool tcp = i < static_cast<int>(program.tcp.size()) &&
                        program.tcp[i] == ClProgram::kTcpWords;
       Eigen::Vector3d dxyz = Eigen::Vector3d::Zero();
-      if (tcp && !restore) dxyz = Gm_inv * (corrected_p_w[i] - program.path[i].p_w) / unit;
+      if (tcp && !restore) {
+        // In the program's frame (a Sinumerik ROT or CYCLE800 frame turns its XYZ words).
+        dxyz = Gm_inv * (corrected_p_w[i] - program.path[i].p_w) / unit;
+        if (i < static_cast<int>(program.point_frame.size()))
+          dxyz = program.frames[program.point_frame[i]].T.linear().transpose() * dxyz;
+      }
       const char L[3] = {'X', 'Y', 'Z'};
       for (int a = 0; a < n; ++a) {
         const Axis& ax = model.axes[a];

@@ -415,11 +415,7 @@ class Reader {
         for (char ch : tool_name_) digits = digits && std::isdigit(static_cast<unsigned char>(ch));
         selected_tool_ = digits ? "T" + std::to_string(std::stoi(tool_name_)) : tool_name_;
       } else if (head == "CYCLE800") {
-        const std::string args = paren == std::string::npos ? "" : k.substr(paren + 1, k.rfind(')') - paren - 1);
-        if (!trim(args).empty())
-          refuse(t, "CYCLE800 with arguments (a swivelled working plane) is not supported yet: "
-                    "post the 3+2 operations with TRAORI or with joint words");
-        ignored_.insert("CYCLE800()");
+        cycle800(k, tcol[t]);
       } else if (head == "MCALL") {
         if (t + 1 >= tok.size()) {
           sin_mcall_ = false;  // MCALL alone ends the modal call
@@ -460,7 +456,8 @@ class Reader {
                              Eigen::AngleAxisd(v.x() * kDegToRad, Eigen::Vector3d::UnitX()))
                                 .toRotationMatrix();
         }
-        setFrame(head[0] == 'A' ? Eigen::Isometry3d(frame_ * change) : change);
+        pframe_ = head[0] == 'A' ? Eigen::Isometry3d(pframe_ * change) : change;
+        setFrame(swivel_ * pframe_);
         t = u - 1;
       } else if (head == "D") {
         out += " " + k;
@@ -500,12 +497,223 @@ class Reader {
     return false;
   }
 
-  // A new programmable frame: the current position kept, in the new frame's coordinates.
+  // A new frame (swivel and programmable frames composed): the current position kept, in the
+  // new frame's coordinates. The points after it carry it (ClProgram::frames).
   void setFrame(const Eigen::Isometry3d& f) {
     const Eigen::Vector3d settable = frame_ * cur_xyz_;
     frame_ = f;
     cur_xyz_ = frame_.inverse() * settable;
     frame_checked_ = false;
+    ClFrame c;
+    c.T = frame_;
+    prog_.frames.push_back(c);
+    frame_index_ = static_cast<int>(prog_.frames.size()) - 1;
+  }
+
+  // CYCLE800, swivel plane (SINUMERIK 840D sl Programming Manual, Job Planning / Cycles,
+  // "Swivel plane - CYCLE800"):
+  //   CYCLE800(_FR, _TC, _ST, _MODE, _X0, _Y0, _Z0, _A, _B, _C, _X1, _Y1, _Z1, _DIR, _FR_I, _DMODE)
+  // CYCLE800() and _TC="0" deselect the swivel frame. Otherwise the swivel frame becomes
+  //   TRANS X0 Y0 Z0 (reference point of the rotation) : rotation : TRANS X1 Y1 Z1 (zero point
+  //   of the swivelled plane),
+  // new (_ST units digit 0) or added to the one in force (1). _MODE bits 7-6 give the swivel
+  // mode: 00 axis by axis, the angles _A, _B, _C about the axes bits 1-0, 3-2, 5-4 name
+  // (01 X, 10 Y, 11 Z), each about the axis already turned (57: X, Y, Z; 27: Z, Y, X);
+  // 11 rotary axes direct, _A and _B the positions of rotary axes 1 and 2 (<control
+  // swivel_axes>, by default the tilting axis first), the frame the one they turn the tool
+  // frame by. Solid and projection angles are refused by name. The rotaries turn the tool
+  // along the new z: of the two solutions, _DIR -1 takes the lower value of rotary axis 1
+  // (the direction reference), +1 the higher, unless only one lies inside travel (as the
+  // control does); _DIR 0 leaves them where the program puts them. From here the machine
+  // holds the tool tip at the program's points in the swivelled frame (as in TCP mode), until
+  // CYCLE800() or a deselection. The retraction (_FR, _FR_I) and the swivel motion itself are
+  // not points of the path; the other digits of _ST (tool follow-up) do not change the points.
+  void cycle800(const std::string& k, int column) {
+    const size_t paren = k.find('(');
+    if (paren == std::string::npos || k.back() != ')') fail(line_, column, "CYCLE800", "expected CYCLE800(...)");
+    const std::string args = k.substr(paren + 1, k.size() - paren - 2);
+    std::vector<std::string> a;
+    {
+      std::string cur;
+      bool str = false;
+      for (char c : args) {
+        if (c == '"') str = !str;
+        if (c == ',' && !str) {
+          a.push_back(std::string(trim(cur)));
+          cur.clear();
+        } else {
+          cur += c;
+        }
+      }
+      a.push_back(std::string(trim(cur)));
+    }
+    auto num = [&](size_t n, const char* field) -> double {
+      if (n >= a.size() || a[n].empty()) return 0.0;
+      try {
+        return sinExpression(a[n], column);
+      } catch (const InputError&) {
+        fail(line_, column, std::string("CYCLE800 ") + field, "expected a number, found '" + a[n] + "'");
+      }
+      return 0.0;
+    };
+    bool any = false;
+    for (const std::string& v : a) any = any || !v.empty();
+    const std::string tc = a.size() > 1 ? a[1] : "";
+    if (!any || tc == "\"0\"" || tc == "0") {
+      swivel_ = Eigen::Isometry3d::Identity();
+      swivel_on_ = false;
+      setFrame(swivel_ * pframe_);
+      cur_xyz_ = currentProgramXyz();
+      prog_.notes.push_back("line " + std::to_string(line_) + ": CYCLE800 deselects the swivel frame");
+      return;
+    }
+    const double st = num(2, "_ST");
+    const int mode = static_cast<int>(num(3, "_MODE"));
+    const int dir = static_cast<int>(num(13, "_DIR"));
+    if (st < 0 || std::floor(st) != st) fail(line_, column, "CYCLE800 _ST", "expected a whole number");
+    const int st_units = static_cast<int>(std::fmod(st, 10.0));
+    if (st_units > 1)
+      fail(line_, column, "CYCLE800 _ST", "swivel type " + std::to_string(st_units) +
+                                              " (units digit) is not known: 0 new, 1 additive");
+    if (mode < 0 || mode > 255) fail(line_, column, "CYCLE800 _MODE", "expected 0 to 255");
+    if (dir < -1 || dir > 1) fail(line_, column, "CYCLE800 _DIR", "expected -1, 0 or +1");
+    const std::vector<int> rot = swivelAxes();
+    if (rot.size() != 2)
+      fail(line_, column, "CYCLE800", "swivelling needs a machine with two rotary axes");
+    const Eigen::Vector3d p0(num(4, "_X0"), num(5, "_Y0"), num(6, "_Z0"));
+    const Eigen::Vector3d p1(num(10, "_X1"), num(11, "_Y1"), num(12, "_Z1"));
+    const double A = num(7, "_A"), B = num(8, "_B"), C = num(9, "_C");
+    const int swivel_mode = (mode >> 6) & 3;
+    Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+    JointVector q = q_;
+    setRotaries(q);
+    bool positioned = false;
+    if (swivel_mode == 0) {
+      const double ang[3] = {A, B, C};
+      for (int r = 0; r < 3; ++r) {
+        const int code = (mode >> (2 * r)) & 3;
+        if (code == 0 && ang[r] != 0.0)
+          fail(line_, column, "CYCLE800 _MODE",
+               "_MODE " + std::to_string(mode) + " names no axis for angle " + "ABC"[r] + "");
+        if (code == 0) continue;
+        R = R * Eigen::AngleAxisd(ang[r] * kDegToRad, Eigen::Vector3d::Unit(code - 1)).toRotationMatrix();
+      }
+    } else if (swivel_mode == 3) {
+      // Rotary axes direct: the frame is the turn they give the tool frame.
+      const double words[2] = {A, B};
+      JointVector q0 = q;
+      for (int r = 0; r < 2; ++r) {
+        const Axis& ax = model_.axes[rot[r]];
+        q[rot[r]] = ax.nc_sign * words[r] * kDegToRad;
+        q0[rot[r]] = 0.0;
+        if (!ax.endless && (q[rot[r]] < ax.travel_min - 1e-9 || q[rot[r]] > ax.travel_max + 1e-9))
+          fail(line_, column, "CYCLE800", "rotary axis " + ax.name + " " + formatNumber(words[r]) +
+                                              " deg (direct mode) is outside its travel");
+      }
+      const Eigen::Matrix3d w_R_t = nominal_.w_T_t(q).linear(), w_R_t0 = nominal_.w_T_t(q0).linear();
+      R = Gm_inv_ * w_R_t * w_R_t0.transpose() * Gm_;
+      positioned = true;
+    } else {
+      fail(line_, column, "CYCLE800 _MODE",
+           std::string(swivel_mode == 1 ? "solid angles" : "projection angles") +
+               " (_MODE " + std::to_string(mode) + ") are not supported: post the swivel axis by "
+               "axis (_MODE 57 or 27) or with the rotary axes direct (_MODE 192)");
+    }
+    Eigen::Isometry3d S = Eigen::Isometry3d::Identity();
+    S.translation() = p0 * unit_;
+    S.linear() = R;
+    Eigen::Isometry3d T1 = Eigen::Isometry3d::Identity();
+    T1.translation() = p1 * unit_;
+    S = S * T1;
+    swivel_ = st_units == 1 && swivel_on_ ? Eigen::Isometry3d(swivel_ * S) : S;
+    swivel_on_ = true;
+    setFrame(swivel_ * pframe_);
+    if (!positioned && dir != 0) {
+      // The tool along the new z: the rotary solution the direction picks.
+      const Eigen::Vector3d u_w = Gm_ * frame_.linear() * Eigen::Vector3d::UnitZ();
+      InverseKinematics::RotaryCandidate cand[2];
+      bool singular = false;
+      const int n = ik_.rotaryCandidates(u_w, cand, &singular);
+      const std::vector<int>& order = ik_.rotaryAxes();
+      std::vector<JointVector> ok;
+      std::string outside;
+      for (int c = 0; c < n; ++c) {
+        JointVector qc = q;
+        bool inside = true;
+        for (size_t r = 0; r < order.size(); ++r) {
+          const int ax_i = order[r];
+          const Axis& ax = model_.axes[ax_i];
+          double v = cand[c].free[r] ? q[ax_i] : cand[c].angleOf(static_cast<int>(r));
+          if (ax.endless) {
+            v += 2 * kPi * std::round((q[ax_i] - v) / (2 * kPi));
+          } else {
+            double best = v;
+            bool found = false;
+            for (int turn = -2; turn <= 2; ++turn) {
+              const double w = v + 2 * kPi * turn;
+              if (w >= ax.travel_min - 1e-9 && w <= ax.travel_max + 1e-9 &&
+                  (!found || std::abs(w - q[ax_i]) < std::abs(best - q[ax_i]))) {
+                best = w;
+                found = true;
+              }
+            }
+            if (!found) {
+              inside = false;
+              outside += (outside.empty() ? "" : ", ") + ax.name + " " +
+                         formatWith("%.3f", ax.nc_sign * radToDeg(v)) + " deg";
+            }
+            v = best;
+          }
+          qc[ax_i] = v;
+        }
+        if (inside) ok.push_back(qc);
+      }
+      if (ok.empty())
+        fail(line_, column, "CYCLE800",
+             n == 0 ? "no rotary position of this machine turns the tool along the swivelled z"
+                    : "the swivelled plane needs " + outside + ", outside travel");
+      size_t pick = 0;
+      if (ok.size() == 2) {
+        const Axis& ref = model_.axes[rot[0]];
+        const double w0 = ref.nc_sign * ok[0][rot[0]], w1 = ref.nc_sign * ok[1][rot[0]];
+        if (std::abs(w0 - w1) > 1e-9) pick = (dir > 0) == (w1 > w0) ? 1 : 0;
+      }
+      q = ok[pick];
+      positioned = true;
+    }
+    if (positioned) {
+      for (int r : rot) rot_word_[r] = model_.axes[r].nc_sign * q[r] / kDegToRad;
+      setRotaries(q_);
+    }
+    cur_xyz_ = currentProgramXyz();
+    std::string words;
+    for (int r : rot) words += " " + model_.axes[r].name + formatWith("%.3f", rot_word_[r] + 0.0);
+    prog_.notes.push_back("line " + std::to_string(line_) + ": CYCLE800 swivels the working plane" +
+                          (positioned ? " (rotaries to" + words + ")" : " (rotaries as the program puts them)") +
+                          "; the points after it are held in the swivelled frame until CYCLE800()");
+  }
+
+  // The rotary axes CYCLE800 calls 1 and 2: <control swivel_axes="B C">, else the tilting axis
+  // (the one that turns the tool axis at zero) first.
+  std::vector<int> swivelAxes() const {
+    std::vector<int> rot;
+    for (const std::string& name : model_.control.swivel_axes)
+      for (size_t a = 0; a < model_.axes.size(); ++a)
+        if (toUpper(model_.axes[a].name) == name) rot.push_back(static_cast<int>(a));
+    if (!rot.empty()) return rot;
+    JointVector z = JointVector::Zero(static_cast<int>(model_.axes.size()));
+    Eigen::Vector3d p, u0;
+    nominal_.tipAndAxis(z, &p, &u0);
+    for (size_t a = 0; a < model_.axes.size(); ++a) {
+      if (!model_.axes[a].isRotary()) continue;
+      JointVector t = z;
+      t[a] = 0.5;
+      Eigen::Vector3d u;
+      nominal_.tipAndAxis(t, &p, &u);
+      const bool tilts = (u - u0).norm() > 1e-6;
+      rot.insert(tilts ? rot.begin() : rot.end(), static_cast<int>(a));
+    }
+    return rot;
   }
 
   // A Sinumerik expression in the reader's bracket syntax: ( ) become [ ].
@@ -1120,7 +1328,9 @@ class Reader {
     }
     return false;
   }
-  bool tcpMode() const { return !tcp_active_.empty(); }
+  // TCP mode, or a swivelled plane (CYCLE800), in which the control holds the tool tip at the
+  // program's points the same way.
+  bool tcpMode() const { return !tcp_active_.empty() || swivel_on_; }
 
   // The program coordinates (mm) of the current position in the current mode.
   Eigen::Vector3d currentProgramXyz() const {
@@ -1231,7 +1441,8 @@ class Reader {
     if (!positionKnown()) return;
     last_tip_w_ = p.p_w;
     prog_.path.push_back(p);
-    prog_.point_frame.push_back(0);
+    prog_.point_frame.push_back(frame_index_);
+    prog_.cycle_orientation.push_back(swivel_on_ ? 1 : 0);
     prog_.joints.push_back(q);
     prog_.tcp.push_back(kind);
     // A work offset the program sets itself (G10) is fixed in machine coordinates: the set-up
@@ -1468,7 +1679,13 @@ class Reader {
   // Sinumerik state.
   std::map<std::string, double> sin_vars_;
   bool sin_mcall_ = false, sin_cycle_here_ = false;
-  Eigen::Isometry3d frame_ = Eigen::Isometry3d::Identity();  // programmable frame (mm)
+  // Frames (mm): the swivel frame (CYCLE800), the programmable frame (TRANS, ROT, ...) and
+  // frame_ = swivel_ * pframe_, which maps program coordinates into the settable frame (G54...).
+  Eigen::Isometry3d swivel_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d pframe_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d frame_ = Eigen::Isometry3d::Identity();
+  bool swivel_on_ = false;
+  int frame_index_ = 0;  // into prog_.frames
   bool frame_checked_ = true;  // the tool axis checked against a rotated frame's z
   std::string tool_name_;
   int max_decimals_ = 3;  // assumed until the program prints more
