@@ -437,20 +437,36 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
   std::vector<int> rotary;
   for (size_t a = 0; a < model.axes.size(); ++a)
     if (model.axes[a].isRotary()) rotary.push_back(static_cast<int>(a));
-  std::vector<std::vector<int>> variants;
-  for (int a : rotary) variants.push_back({a});
-  if (rotary.size() > 1) variants.push_back(rotary);
+  // The conventions tried: each rotary axis as in the machine file, its sense reversed, its zero
+  // half a turn away, or both (every combination but the file's own).
+  struct Change {
+    int axis;
+    bool sense, zero;
+  };
+  std::vector<std::vector<Change>> variants;
+  const int combos = static_cast<int>(std::pow(4.0, static_cast<double>(rotary.size())));
+  for (int c = 1; c < combos; ++c) {
+    std::vector<Change> v;
+    for (size_t k = 0, code = static_cast<size_t>(c); k < rotary.size(); ++k, code /= 4)
+      if (code % 4) v.push_back({rotary[k], (code % 4 & 1) != 0, (code % 4 & 2) != 0});
+    variants.push_back(v);
+  }
   const double floor_mm = -sweep.gouge_range + 1e-9;
   double best_share = 1.0;
-  const std::vector<int>* best = nullptr;
-  for (const std::vector<int>& flip : variants) {
+  const std::vector<Change>* best = nullptr;
+  std::vector<std::pair<double, const std::vector<Change>*>> fits;
+  for (const std::vector<Change>& change : variants) {
     MachineModel mm = model;
-    for (int a : flip) {
-      Axis& ax = mm.axes[a];
-      ax.nc_sign = -ax.nc_sign;
-      const double lo = ax.travel_min;
-      ax.travel_min = -ax.travel_max;
-      ax.travel_max = -lo;
+    for (const Change& c : change) {
+      Axis& ax = mm.axes[c.axis];
+      if (c.sense) {
+        ax.nc_sign = -ax.nc_sign;
+        const double lo = ax.travel_min;
+        ax.travel_min = -ax.travel_max;
+        ax.travel_max = -lo;
+      }
+      // Zero half a turn away: joint q of the file's machine is q + pi of this one.
+      if (c.zero) ax.parent_T_joint = ax.parent_T_joint * Eigen::AngleAxisd(kPi, ax.direction);
     }
     ClProgram p;
     try {
@@ -469,20 +485,41 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
       if (res.machined[i]) ++machined2, beyond2 += res.deviation[i] <= floor_mm ? 1 : 0;
     if (machined2 < machined / 2) continue;
     const double share = static_cast<double>(beyond2) / static_cast<double>(machined2);
-    if (share < best_share) best_share = share, best = &flip;
+    fits.emplace_back(share, &change);
+    // A tie goes to the convention tried first (one axis before two).
+    if (share < best_share - 1e-12) best_share = share, best = &change;
   }
   const double share0 = static_cast<double>(beyond) / static_cast<double>(machined);
   if (!best || best_share > 0.1 || best_share > share0 / 3.0) return;
-  std::string axes;
-  for (size_t k = 0; k < best->size(); ++k)
-    axes += (k == 0 ? "" : k + 1 == best->size() ? " and " : ", ") + model.axes[(*best)[k]].name;
+  auto describe = [&](const std::vector<Change>& change, std::string* fix) {
+    std::string what;
+    for (size_t k = 0; k < change.size(); ++k) {
+      const Change& c = change[k];
+      const std::string& name = model.axes[c.axis].name;
+      what += std::string(k == 0 ? "" : k + 1 == change.size() ? " and " : ", ") +
+              (c.sense && c.zero ? name + " turns the other way from a zero half a turn away"
+               : c.sense         ? name + " turns the other way"
+                                 : "the zero of " + name + " is half a turn away");
+      if (fix)
+        *fix += std::string(k == 0 ? "" : ", ") + (c.sense ? "the nc_sign of " + name : "") +
+                (c.sense && c.zero ? " and " : "") + (c.zero ? "the zero of " + name + " (its link rotation)" : "");
+    }
+    return what;
+  };
+  std::string fix;
+  const std::string what = describe(*best, &fix);
+  // Conventions that fit as well cannot be told apart by this part: named, so the user checks.
+  std::string also;
+  for (const auto& [share, change] : fits)
+    if (change != best && share <= best_share + 0.005)
+      also += (also.empty() ? "" : "; or ") + describe(*change, nullptr);
   throw InputError(o.machine.machine, 0, 0, "convention",
-                   axes + (best->size() > 1 ? " turn" : " turns") + " the other way in this program "
-                   "than in the machine file: with " + axes + "'s sense reversed the program's cut "
-                   "fits the part (gouged beyond " + formatWith("%.3g", sweep.gouge_range) +
+                   what + " in this program compared with the machine file: with that convention "
+                   "the program's cut fits the part (gouged beyond " + formatWith("%.3g", sweep.gouge_range) +
                    " mm on " + formatWith("%.1f", 100.0 * best_share) + " % of the machined surface "
-                   "instead of " + formatWith("%.1f", 100.0 * share0) + " %): set nc_sign (or the "
-                   "direction) of the machine file's axes to the control's convention");
+                   "instead of " + formatWith("%.1f", 100.0 * share0) + " %)" +
+                   (also.empty() ? "" : " (it fits as well if " + also + ": the part cannot tell them apart)") +
+                   ": set " + fix + " in the machine file to the control's convention");
 }
 
 // The 95 % band of the machine's share at each verified sample (the prediction's uncertainty

@@ -382,6 +382,14 @@ TEST(AptReader, MessagesQuoteAtMostSixtyCharactersOfABadToken) {
     EXPECT_NE(m.find("long.apt:2"), std::string::npos) << m;
     EXPECT_NE(m.find(std::string(60, '9') + "..."), std::string::npos) << m;
   }
+  // An apostrophe inside a word opens no quotation: the sentence after it is kept whole.
+  const std::string sentence = "the program's cut fits the part with the zero of C half a turn away, "
+                               "so set the zero of C in the machine file to the control's convention";
+  const InputError e("m.xml", 0, 0, "convention", sentence + ": '" + token + "'");
+  const std::string m = e.what();
+  EXPECT_NE(m.find(sentence), std::string::npos) << m;
+  EXPECT_NE(m.find(std::string(60, '9') + "..."), std::string::npos) << m;
+  EXPECT_LT(m.size(), 400u);
 }
 
 }  // namespace

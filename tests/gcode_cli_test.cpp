@@ -1,6 +1,8 @@
 // The CLI on posted G-code and real CAM files: predict, setup and verify end to end.
 #include <gtest/gtest.h>
 
+#include <regex>
+
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -175,8 +177,17 @@ TEST_F(GcodeCli, VerifyNamesARotaryAxisThatTurnsTheOtherWay) {
   const std::string wrong = write("a_reversed.xml", text);
   auto bad = test::runTolver("verify --machine " + wrong + common + path("bad"));
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
-  EXPECT_NE(bad.output.find("A turns the other way in this program than in the machine file"),
+  EXPECT_NE(bad.output.find("A turns the other way in this program compared with the machine file"),
             std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find("set the nc_sign of A in the machine file"), std::string::npos) << bad.output;
+  // A file whose C zero is half a turn away (its link turned 180 deg about z): named as such.
+  text = test::readText(right);
+  const std::regex c_link("(<axis name=\"C\"[^>]*>\\s*<link [^>]*rotation=\")0 0 0\"");
+  ASSERT_TRUE(std::regex_search(text, c_link)) << text;
+  const std::string c_flipped = write("c_zero.xml", std::regex_replace(text, c_link, "$010 0 180\""));
+  auto zero = test::runTolver("verify --machine " + c_flipped + common + path("zero"));
+  EXPECT_EQ(zero.exit_code, 2) << zero.output;
+  EXPECT_NE(zero.output.find("the zero of C is half a turn away"), std::string::npos) << zero.output;
 }
 
 TEST_F(GcodeCli, SetupReachesTheXyzbcBoatOnItsMachine) {

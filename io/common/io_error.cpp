@@ -5,6 +5,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <filesystem>
 #include <cstdio>
@@ -20,8 +21,13 @@ std::string bounded(const std::string& text) {
   std::string out;
   bool quoted = false;
   size_t run = 0;
-  for (char c : text) {
-    if (c == '\'') {
+  for (size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    // An apostrophe inside a word ("the program's") does not open a quotation.
+    const bool in_word = !quoted && i > 0 && i + 1 < text.size() &&
+                         std::isalnum(static_cast<unsigned char>(text[i - 1])) &&
+                         std::isalpha(static_cast<unsigned char>(text[i + 1]));
+    if (c == '\'' && !in_word) {
       quoted = !quoted;
       run = 0;
       out += c;
