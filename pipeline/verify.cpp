@@ -417,26 +417,79 @@ void sweepPart(const ProgramOnMachine& m, const ToolSet& tools, const std::vecto
   phase("swept_surfaces");
 }
 
+// The operations of a program for the convention check: runs of CL points with one tool, one
+// frame and one kind of words, cut where a rapid turns a rotary axis (a 3+2 index).
+std::vector<std::pair<int, int>> programOperations(const ClProgram& p, const MachineModel& model,
+                                                   const ToolSet& tools) {
+  std::vector<std::pair<int, int>> ops;
+  const int n = static_cast<int>(p.path.size());
+  int first = 0;
+  for (int i = 1; i <= n; ++i) {
+    bool cut = i == n;
+    if (!cut && !tools.tool_of_cl.empty()) cut = tools.tool_of_cl[i] != tools.tool_of_cl[i - 1];
+    if (!cut && i < static_cast<int>(p.point_frame.size())) cut = p.point_frame[i] != p.point_frame[i - 1];
+    if (!cut && i < static_cast<int>(p.tcp.size())) cut = p.tcp[i] != p.tcp[i - 1];
+    if (!cut && p.path[i].rapid && i < static_cast<int>(p.joints.size()))
+      for (size_t a = 0; a < model.axes.size(); ++a)
+        if (model.axes[a].isRotary() && std::abs(p.joints[i][a] - p.joints[i - 1][a]) > 1e-3) cut = true;
+    if (cut) {
+      ops.emplace_back(first, i - 1);
+      first = i;
+    }
+  }
+  return ops;
+}
+
 // The convention check (issue 32): a posted program's rotary words place the tool as the post
-// meant only if the machine file turns its rotary axes the same way. When most of the machined
-// surface is gouged beyond the search range, the program is read again with each rotary axis's
-// sense reversed (one at a time, then all), and its nominal sweep measured: a reversal under
-// which the cut fits names the axes that turn the other way, instead of a verdict that blames the
-// program or the machine.
+// meant only if the machine file turns its rotary axes the same way and from the same zero.
+// When most of the machined surface is gouged beyond the search range, or most of what one
+// five-axis or indexed operation cuts, the program is read again under each other convention
+// of the rotary axes (each axis's sense reversed, its zero half a turn away, or both) and its
+// nominal sweep measured: a convention under which the cut fits names it, instead of a verdict
+// that blames the program or the machine.
 void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, const ToolSet& tools,
                            const MotionSampling& sampling, const SweepOptions& sweep,
                            const Verification& v) {
   const ClProgram& program = m.program;
   const MachineModel& model = m.machine.model;
   if (program.dialect != "G-code" || !gcodeGivesRotaryWords(program, model)) return;
+  if (program.joints.size() != program.path.size()) return;
   const VerifyResult& r = v.result;
-  size_t machined = 0, beyond = 0;
-  for (size_t i = 0; i < r.machined.size(); ++i)
-    if (r.machined[i]) ++machined, beyond += r.total_beyond[i] ? 1 : 0;
-  if (machined < 20 || beyond < 0.3 * static_cast<double>(machined)) return;
+  const std::vector<std::pair<int, int>> ops = programOperations(program, model, tools);
+  std::vector<int> op_of(program.path.size(), 0);
+  for (size_t k = 0; k < ops.size(); ++k)
+    for (int i = ops[k].first; i <= ops[k].second; ++i) op_of[i] = static_cast<int>(k);
   std::vector<int> rotary;
   for (size_t a = 0; a < model.axes.size(); ++a)
     if (model.axes[a].isRotary()) rotary.push_back(static_cast<int>(a));
+  // Samples cut (deepest) by each operation, and those beyond the gouge limit; index ops.size()
+  // is the whole program.
+  struct Count {
+    size_t machined = 0, beyond = 0;
+    double share() const { return machined ? static_cast<double>(beyond) / static_cast<double>(machined) : 0.0; }
+  };
+  std::vector<Count> before(ops.size() + 1);
+  for (size_t i = 0; i < r.machined.size(); ++i) {
+    if (!r.machined[i]) continue;
+    const int k = r.cl_index[i] >= 0 ? op_of[r.cl_index[i]] : -1;
+    for (int idx : {k, static_cast<int>(ops.size())}) {
+      if (idx < 0) continue;
+      ++before[idx].machined;
+      before[idx].beyond += r.total_beyond[i] ? 1 : 0;
+    }
+  }
+  // Suspect: the whole program gouged on 30 % of what it cuts, or an operation that turns a
+  // rotary axis gouged on half of what it cuts.
+  std::vector<int> suspects;
+  const Count& all = before.back();
+  if (all.machined >= 20 && all.share() >= 0.3) suspects.push_back(static_cast<int>(ops.size()));
+  for (size_t k = 0; k < ops.size() && ops.size() > 1; ++k) {
+    bool turned = false;
+    for (int i = ops[k].first; i <= ops[k].second && !turned; ++i)
+      for (int a : rotary) turned = turned || std::abs(program.joints[i][a]) > 1e-6;
+    if (turned && before[k].machined >= 20 && before[k].share() >= 0.5) suspects.push_back(static_cast<int>(k));
+  }
+  if (suspects.empty()) return;
   // The conventions tried: each rotary axis as in the machine file, its sense reversed, its zero
   // half a turn away, or both (every combination but the file's own).
   struct Change {
@@ -446,18 +499,17 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
   std::vector<std::vector<Change>> variants;
   const int combos = static_cast<int>(std::pow(4.0, static_cast<double>(rotary.size())));
   for (int c = 1; c < combos; ++c) {
-    std::vector<Change> v;
+    std::vector<Change> ch;
     for (size_t k = 0, code = static_cast<size_t>(c); k < rotary.size(); ++k, code /= 4)
-      if (code % 4) v.push_back({rotary[k], (code % 4 & 1) != 0, (code % 4 & 2) != 0});
-    variants.push_back(v);
+      if (code % 4) ch.push_back({rotary[k], (code % 4 & 1) != 0, (code % 4 & 2) != 0});
+    variants.push_back(ch);
   }
   const double floor_mm = -sweep.gouge_range + 1e-9;
-  double best_share = 1.0;
-  const std::vector<Change>* best = nullptr;
-  std::vector<std::pair<double, const std::vector<Change>*>> fits;
-  for (const std::vector<Change>& change : variants) {
+  // Per variant, the counts of every operation and the whole (empty: it does not read).
+  std::vector<std::vector<Count>> after(variants.size());
+  for (size_t vi = 0; vi < variants.size(); ++vi) {
     MachineModel mm = model;
-    for (const Change& c : change) {
+    for (const Change& c : variants[vi]) {
       Axis& ax = mm.axes[c.axis];
       if (c.sense) {
         ax.nc_sign = -ax.nc_sign;
@@ -480,17 +532,17 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
     samplePlacements(fk, fk, p.path, p.joints, sampling, &nominal, &unused);
     SweepResult res;
     sweepSurface(v.samples, tools, nominal, sweep, &res);
-    size_t machined2 = 0, beyond2 = 0;
-    for (size_t i = 0; i < res.machined.size(); ++i)
-      if (res.machined[i]) ++machined2, beyond2 += res.deviation[i] <= floor_mm ? 1 : 0;
-    if (machined2 < machined / 2) continue;
-    const double share = static_cast<double>(beyond2) / static_cast<double>(machined2);
-    fits.emplace_back(share, &change);
-    // A tie goes to the convention tried first (one axis before two).
-    if (share < best_share - 1e-12) best_share = share, best = &change;
+    std::vector<Count>& cnt = after[vi];
+    cnt.assign(ops.size() + 1, Count{});
+    for (size_t i = 0; i < res.machined.size(); ++i) {
+      if (!res.machined[i] || res.placement[i] < 0) continue;
+      const int k = op_of[nominal[res.placement[i]].cl_index];
+      for (int idx : {k, static_cast<int>(ops.size())}) {
+        ++cnt[idx].machined;
+        cnt[idx].beyond += res.deviation[i] <= floor_mm ? 1 : 0;
+      }
+    }
   }
-  const double share0 = static_cast<double>(beyond) / static_cast<double>(machined);
-  if (!best || best_share > 0.1 || best_share > share0 / 3.0) return;
   auto describe = [&](const std::vector<Change>& change, std::string* fix) {
     std::string what;
     for (size_t k = 0; k < change.size(); ++k) {
@@ -506,20 +558,46 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
     }
     return what;
   };
-  std::string fix;
-  const std::string what = describe(*best, &fix);
-  // Conventions that fit as well cannot be told apart by this part: named, so the user checks.
-  std::string also;
-  for (const auto& [share, change] : fits)
-    if (change != best && share <= best_share + 0.005)
-      also += (also.empty() ? "" : "; or ") + describe(*change, nullptr);
-  throw InputError(o.machine.machine, 0, 0, "convention",
-                   what + " in this program compared with the machine file: with that convention "
-                   "the program's cut fits the part (gouged beyond " + formatWith("%.3g", sweep.gouge_range) +
-                   " mm on " + formatWith("%.1f", 100.0 * best_share) + " % of the machined surface "
-                   "instead of " + formatWith("%.1f", 100.0 * share0) + " %)" +
-                   (also.empty() ? "" : " (it fits as well if " + also + ": the part cannot tell them apart)") +
-                   ": set " + fix + " in the machine file to the control's convention");
+  for (int s : suspects) {
+    const double share0 = before[s].share();
+    double best_share = 1.0;
+    int best = -1;
+    for (size_t vi = 0; vi < variants.size(); ++vi) {
+      if (after[vi].empty() || after[vi][s].machined < before[s].machined / 2) continue;
+      // A tie goes to the convention tried first (one axis before two).
+      if (after[vi][s].share() < best_share - 1e-12) best_share = after[vi][s].share(), best = static_cast<int>(vi);
+    }
+    if (best < 0 || best_share > 0.1 || best_share > share0 / 3.0) continue;
+    std::string fix;
+    const std::string what = describe(variants[best], &fix);
+    // Conventions that fit as well cannot be told apart by this part: named, so the user checks.
+    // (Not those that add changes to the best one: the program does not see what they add.)
+    auto adds = [&](const std::vector<Change>& a) {
+      for (const Change& b : variants[best]) {
+        bool in = false;
+        for (const Change& c : a) in = in || (c.axis == b.axis && c.sense == b.sense && c.zero == b.zero);
+        if (!in) return false;
+      }
+      return true;
+    };
+    std::string also;
+    for (size_t vi = 0; vi < variants.size(); ++vi)
+      if (static_cast<int>(vi) != best && !after[vi].empty() && after[vi][s].machined >= before[s].machined / 2 &&
+          after[vi][s].share() <= best_share + 0.005 && !adds(variants[vi]))
+        also += (also.empty() ? "" : "; or ") + describe(variants[vi], nullptr);
+    const bool whole = s == static_cast<int>(ops.size());
+    const std::string where =
+        whole ? "the program's cut fits the part"
+              : "the operation of lines " + std::to_string(program.path[ops[s].first].line) + "-" +
+                    std::to_string(program.path[ops[s].second].line) + " fits the part it cuts";
+    throw InputError(o.machine.machine, 0, 0, "convention",
+                     what + " in this program compared with the machine file: with that convention " +
+                         where + " (gouged beyond " + formatWith("%.3g", sweep.gouge_range) + " mm on " +
+                         formatWith("%.1f", 100.0 * best_share) + " % of the surface it cuts instead of " +
+                         formatWith("%.1f", 100.0 * share0) + " %)" +
+                         (also.empty() ? "" : " (it fits as well if " + also + ": the part cannot tell them apart)") +
+                         ": set " + fix + " in the machine file to the control's convention");
+  }
 }
 
 // The 95 % band of the machine's share at each verified sample (the prediction's uncertainty

@@ -190,6 +190,76 @@ TEST_F(GcodeCli, VerifyNamesARotaryAxisThatTurnsTheOtherWay) {
   EXPECT_NE(zero.output.find("the zero of C is half a turn away"), std::string::npos) << zero.output;
 }
 
+// Per operation: a three-axis facing at A0 and a chamfer faced square with A-45 in one program.
+// On a file whose A turns the other way only the chamfer's operation gouges (under 30 % of the
+// whole cut), and verify names A and that operation's lines.
+TEST_F(GcodeCli, VerifyNamesTheConventionOfOneOperation) {
+  const std::string right = src("resources/machines/linuxcnc_xyzac_trt.xml");
+  const Machine mc = readMachineFile(right);
+  const ClProgram probe = parseGcode("G21\nM428\nG0 X0 Y0 Z0 A-45 C0\n", "probe.ngc", mc.model);
+  ASSERT_EQ(probe.path.size(), 1u);
+  const Eigen::Vector3d u = probe.path[0].u_w.normalized();
+  ASSERT_NEAR(std::abs(u.y()), std::sqrt(0.5), 1e-12);
+  const double sy = u.y() > 0 ? 1.0 : -1.0;  // the chamfer on the side the tool leans to
+  // A prism along x: section (y, z) = (-20,-20) (20,-20) (20,-10) (10,0) (-20,0), y times sy.
+  const double Y[5] = {-20, 20, 20, 10, -20}, Z[5] = {-20, -20, -10, 0, 0};
+  std::string obj;
+  char buf[200];
+  for (int side = 0; side < 2; ++side)
+    for (int k = 0; k < 5; ++k) {
+      std::snprintf(buf, sizeof buf, "v %d %.9f %.9f\n", side ? 20 : -20, sy * Y[k], Z[k]);
+      obj += buf;
+    }
+  // Vertex k of the -x cap is k+1, of the +x cap k+6. The section is counter-clockwise seen from
+  // +x when sy = +1 (the caps and sides then face out as written); mirrored, every face turns.
+  auto face = [&](int a, int b, int c) {
+    if (sy > 0) std::snprintf(buf, sizeof buf, "f %d %d %d\n", a, b, c);
+    else std::snprintf(buf, sizeof buf, "f %d %d %d\n", a, c, b);
+    obj += buf;
+  };
+  for (int k = 1; k < 4; ++k) face(6, 6 + k, 7 + k);  // +x cap
+  for (int k = 1; k < 4; ++k) face(1, 2 + k, 1 + k);  // -x cap
+  for (int k = 0; k < 5; ++k) {
+    const int n = (k + 1) % 5;
+    face(1 + k, 1 + n, 6 + n);
+    face(1 + k, 6 + n, 6 + k);
+  }
+  write("roof.obj", obj);
+  std::string prog = "G21\nM428\nG43 H1\nG0 X-15 Y" + std::to_string(-18 * sy) + " Z10 A0 C0\n";
+  for (int row = 0; row <= 8; ++row) {
+    const double y = sy * (-18 + 3 * row);
+    std::snprintf(buf, sizeof buf, "G1 X-15 Y%.4f Z0 F500\nG1 X15 Y%.4f Z0\n", y, y);
+    prog += buf;
+  }
+  prog += "G0 Z20\n";
+  // The chamfer: centre (0, 15 sy, -5), across it e1 = x and e2 = u x e1, square to u.
+  const Eigen::Vector3d c(0, 15 * sy, -5), e1 = Eigen::Vector3d::UnitX(), e2 = u.cross(e1).normalized();
+  auto tip = [&](double a, double b, double h) {
+    const Eigen::Vector3d q = c + a * e1 + b * e2 + h * u;
+    std::snprintf(buf, sizeof buf, "X%.4f Y%.4f Z%.4f", q.x(), q.y(), q.z());
+    return std::string(buf);
+  };
+  prog += "G0 " + tip(-15, -2, 10) + " A-45 C0\n";
+  for (int row = 0; row <= 2; ++row)
+    prog += "G1 " + tip(-15, -2 + 2 * row, 0) + " F500\nG1 " + tip(15, -2 + 2 * row, 0) + "\n";
+  prog += "G0 " + tip(15, 2, 10) + "\nM429\nM2\n";
+  write("two_ops.ngc", prog);
+  const std::string common = " --setup " + src("samples/gcode/linuxcnc_setup.txt") + " --nc " + path("two_ops.ngc") +
+                             " --part " + path("roof.obj") + " --cutter 4,0,30 --tolerance 0.1 --no-images --report-dir ";
+  auto ok = test::runTolver("verify --machine " + right + common + path("ok"));
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  std::string text = test::readText(right);
+  const std::string from = "min=\"-100\" max=\"50\"  nc_sign=\"1\"";
+  ASSERT_NE(text.find(from), std::string::npos);
+  text.replace(text.find(from), from.size(), "min=\"-50\" max=\"100\"  nc_sign=\"-1\"");
+  const std::string wrong = write("a_reversed.xml", text);
+  auto bad = test::runTolver("verify --machine " + wrong + common + path("bad"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_NE(bad.output.find("A turns the other way in this program compared with the machine file: with that "
+                            "convention the operation of lines 24-"),
+            std::string::npos) << bad.output;
+}
+
 TEST_F(GcodeCli, SetupReachesTheXyzbcBoatOnItsMachine) {
   auto r = test::runTolver("setup --machine " + src("resources/machines/linuxcnc_xyzbc_trt.xml") +
                            " --nc " + src("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc") +
