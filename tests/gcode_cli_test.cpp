@@ -25,6 +25,15 @@ namespace {
 class GcodeCli : public test::TempDirTest {
  protected:
   static std::string src(const std::string& rel) { return test::sourcePath(rel); }
+  // The xyzac-trt machine file with A turning the other way (its travel mirrored).
+  std::string aReversed(const std::string& right) const {
+    std::string text = test::readText(right);
+    const std::string from = "min=\"-100\" max=\"50\"  nc_sign=\"1\"";
+    EXPECT_NE(text.find(from), std::string::npos);
+    if (text.find(from) != std::string::npos)
+      text.replace(text.find(from), from.size(), "min=\"-50\" max=\"100\"  nc_sign=\"-1\"");
+    return write("a_reversed.xml", text);
+  }
 };
 
 // A posted program end to end: predict on its machine, the predicted CL reads back with the same
@@ -170,18 +179,14 @@ TEST_F(GcodeCli, VerifyNamesARotaryAxisThatTurnsTheOtherWay) {
   EXPECT_EQ(none.exit_code, 1) << none.output;
   EXPECT_NE(none.output.find("INCOMPLETE: the program cuts none of the checked surface"), std::string::npos)
       << none.output;
-  std::string text = test::readText(right);
-  const std::string from = "min=\"-100\" max=\"50\"  nc_sign=\"1\"";
-  ASSERT_NE(text.find(from), std::string::npos);
-  text.replace(text.find(from), from.size(), "min=\"-50\" max=\"100\"  nc_sign=\"-1\"");
-  const std::string wrong = write("a_reversed.xml", text);
+  const std::string wrong = aReversed(right);
   auto bad = test::runTolver("verify --machine " + wrong + common + path("bad"));
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("A turns the other way in this program compared with the machine file"),
             std::string::npos) << bad.output;
   EXPECT_NE(bad.output.find("set the nc_sign of A in the machine file"), std::string::npos) << bad.output;
   // A file whose C zero is half a turn away (its link turned 180 deg about z): named as such.
-  text = test::readText(right);
+  std::string text = test::readText(right);
   const std::regex c_link("(<axis name=\"C\"[^>]*>\\s*<link [^>]*rotation=\")0 0 0\"");
   ASSERT_TRUE(std::regex_search(text, c_link)) << text;
   const std::string c_flipped = write("c_zero.xml", std::regex_replace(text, c_link, "$010 0 180\""));
@@ -248,11 +253,7 @@ TEST_F(GcodeCli, VerifyNamesTheConventionOfOneOperation) {
                              " --part " + path("roof.obj") + " --cutter 4,0,30 --tolerance 0.1 --no-images --report-dir ";
   auto ok = test::runTolver("verify --machine " + right + common + path("ok"));
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
-  std::string text = test::readText(right);
-  const std::string from = "min=\"-100\" max=\"50\"  nc_sign=\"1\"";
-  ASSERT_NE(text.find(from), std::string::npos);
-  text.replace(text.find(from), from.size(), "min=\"-50\" max=\"100\"  nc_sign=\"-1\"");
-  const std::string wrong = write("a_reversed.xml", text);
+  const std::string wrong = aReversed(right);
   auto bad = test::runTolver("verify --machine " + wrong + common + path("bad"));
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("A turns the other way in this program compared with the machine file: with that "
