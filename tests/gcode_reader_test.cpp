@@ -653,6 +653,19 @@ TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {
   const ClProgram b = readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzac.ngc"), l.model);
   ASSERT_EQ(b.cutters.size(), 1u);
   EXPECT_EQ(b.cutters[0].values, (std::vector<double>{10, 0}));
+  // Mastercam's Fanuc/HAAS posts, in inches: "( name TOOL - n DIA. OFF. - n LEN. - n DIA. - d )".
+  const ClProgram mc = parseGcode(
+      "%\nO0001\n( 1/16 FLAT ENDMILL TOOL - 1 DIA. OFF. - 1 LEN. - 1 DIA. - .0625)\n"
+      "( TOOL - 6 2\"  FACE MILL    DIA. OFF. - 6  LEN. - 6  DIA. - 2. )\n"
+      "( 1/8 BALL ENDMILL TOOL - 14 DIA. OFF. - 14 LEN. - 14 TOOL DIA. - .125 )\nG20\n"
+      "T1 M6\nG0 X0 Y0 Z1\nG1 Z-.01 F10\nT6 M6\nG0 Z1\nG1 Z-.01\nT14 M6\nG0 Z1\nG1 Z-.01\nM30\n%\n",
+      "mastercam.nc", m.model);
+  ASSERT_EQ(mc.cutters.size(), 3u);
+  EXPECT_NEAR(mc.cutters[0].values.at(0), 0.0625 * 25.4, 1e-12);
+  EXPECT_EQ(mc.cutters[0].values.at(1), 0.0);
+  EXPECT_NEAR(mc.cutters[1].values.at(0), 2 * 25.4, 1e-12);
+  EXPECT_NEAR(mc.cutters[2].values.at(0), 0.125 * 25.4, 1e-12);
+  EXPECT_NEAR(mc.cutters[2].values.at(1), 0.0625 * 25.4, 1e-12);  // a ball
 }
 
 // Every shipped machine with a control: a program in tool-centre-point mode and its joint-space

@@ -924,13 +924,16 @@ class Reader {
 
   // ---------------------------------------------------------------- one block
   // Tool geometry in the posts' comments: Fusion "(T1  D=2.8 CR=0 - ZMIN=... - flat end mill)",
-  // LinuxCNC posts "( TOOL: T1 = 10.0 dia. ... )". Read in the program's unit.
+  // LinuxCNC posts "( TOOL: T1 = 10.0 dia. ... )", Mastercam's Fanuc and HAAS posts
+  // "( 1/2 FLAT ENDMILL TOOL - 1 DIA. OFF. - 1 LEN. - 1 DIA. - .5 )" (a BALL in the name: the
+  // corner radius is half the diameter). In the program's unit, converted where the tool is used.
   void toolComment(const std::string& raw) {
     const std::string u = toUpper(raw);
     for (size_t open = u.find('('); open != std::string::npos; open = u.find('(', open + 1)) {
       const size_t close = u.find(')', open);
       if (close == std::string::npos) return;
       std::string c(trim(std::string_view(u).substr(open + 1, close - open - 1)));
+      if (mastercamToolComment(c)) continue;
       if (c.rfind("TOOL:", 0) == 0) c = std::string(trim(std::string_view(c).substr(5)));
       if (c.size() < 2 || c[0] != 'T' || !std::isdigit(static_cast<unsigned char>(c[1]))) continue;
       size_t k = 1;
@@ -950,8 +953,34 @@ class Reader {
       if (!d) d = numberAfter("=");  // "T1 = 10.0 dia."
       if (!d || !(*d > 0)) continue;
       const double r = numberAfter(" CR=").value_or(c.find("BALL") != std::string::npos ? *d / 2 : 0.0);
-      tool_table_["T" + std::to_string(number)] = {*d * unit_, std::clamp(r, 0.0, *d / 2) * unit_};
+      tool_table_["T" + std::to_string(number)] = {*d, std::clamp(r, 0.0, *d / 2)};
     }
+  }
+
+  // "TOOL - n ... DIA. - d" (Mastercam): true when read.
+  bool mastercamToolComment(const std::string& c) {
+    const size_t t = c.find("TOOL -");
+    if (t == std::string::npos) return false;
+    auto numberAt = [&](size_t b, bool integer) -> std::optional<double> {
+      while (b < c.size() && c[b] == ' ') ++b;
+      size_t e = b;
+      while (e < c.size() && (std::isdigit(static_cast<unsigned char>(c[e])) || (!integer && c[e] == '.'))) ++e;
+      if (e == b || e - b > 12) return std::nullopt;
+      return parseNumber(std::string_view(c).substr(b, e - b));
+    };
+    const auto number = numberAt(t + 6, true);
+    if (!number) return false;
+    // The diameter: "DIA." then '-' (the offset numbers read "DIA. OFF. - n").
+    std::optional<double> d;
+    for (size_t at = c.find("DIA.", t); at != std::string::npos; at = c.find("DIA.", at + 4)) {
+      size_t b = at + 4;
+      while (b < c.size() && c[b] == ' ') ++b;
+      if (b < c.size() && c[b] == '-') d = numberAt(b + 1, false);
+    }
+    if (!d || !(*d > 0)) return false;
+    const double r = c.find("BALL") != std::string::npos ? *d / 2 : 0.0;
+    tool_table_["T" + std::to_string(static_cast<long>(*number))] = {*d, r};
+    return true;
   }
 
   // The tool that cuts from here on: the program's cutters list gets its geometry (from the
@@ -965,7 +994,7 @@ class Reader {
     spec.kind = key;
     spec.line = line_;
     auto it = tool_table_.find(key);
-    if (it != tool_table_.end()) spec.values = {it->second.first, it->second.second};
+    if (it != tool_table_.end()) spec.values = {it->second.first * unit_, it->second.second * unit_};
     prog_.cutters.push_back(spec);
   }
 
@@ -1701,7 +1730,7 @@ class Reader {
   int h_ = 0, tool_ = 0;
   std::string active_tool_, selected_tool_;  // "T1" or a Sinumerik tool name
   bool seen_m6_ = false;
-  std::map<std::string, std::pair<double, double>> tool_table_;  // "T1" -> diameter, corner radius (mm)
+  std::map<std::string, std::pair<double, double>> tool_table_;  // "T1" -> diameter, corner radius (program unit: comments come before G20/G21)
   std::set<std::string> tcp_active_;
   std::set<std::string> ignored_;
   std::map<std::string, int> missing_offsets_;  // work offset -> first line that used it
