@@ -627,6 +627,41 @@ TEST(GcodeReader, Cycle800SwivelsThePlaneAsTheFrameInstructionsDo) {
             std::string::npos);
 }
 
+// Sinumerik orientation vectors (A3= B3= C3=, ORIWKS) under TRAORI give the tool direction in the
+// workpiece coordinates: the same path as the rotary words a post computes for it; CR= arcs are
+// the ISO R arcs; what changes the path unseen (RND=, orientation angles, ORIMKS vectors) is refused.
+TEST(GcodeReader, SinumerikOrientationVectorsAndRadiusArcs) {
+  Machine m = machine("resources/machines/sinumerik_bc_table.xml", 0.0);
+  m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, 0, 200);
+  const std::string head = "N10 G54 G0 X0 Y0 Z80 B0 C0 D1\nN20 TRAORI\n";
+  const double s30 = std::sin(30 * kDeg), c30 = std::cos(30 * kDeg);
+  char v[200];
+  std::snprintf(v, sizeof v, "N30 G1 X20 Y5 Z3 A3=%.12f B3=0 C3=%.12f F500\nN40 X25 Y0 A3=0 B3=%.12f C3=%.12f\n",
+                s30, c30, s30, c30);
+  const ClProgram vec = parseGcode(head + v, "vec.mpf", m.model);
+  // B+30 tilts the tool towards +x (ISO 841); towards +y it is C90 then B30 (C turns the tool about z).
+  const ClProgram words = parseGcode(head + "N30 G1 X20 Y5 Z3 B30 C0 F500\nN40 X25 Y0 B30 C90\n", "w.mpf", m.model);
+  ASSERT_EQ(vec.path.size(), words.path.size());
+  for (size_t i = 0; i < vec.path.size(); ++i) {
+    EXPECT_LT((vec.path[i].p_w - words.path[i].p_w).norm(), 1e-9) << i;
+    EXPECT_LT((vec.path[i].u_w - words.path[i].u_w).norm(), 1e-9) << i;
+  }
+  EXPECT_LT((vec.path.back().u_w - Eigen::Vector3d(0, s30, c30)).norm(), 1e-9);
+  // CR= is the radius form: a quarter circle as with I J.
+  const std::string arc0 = "N10 G54 G0 X10 Y0 Z5 D1\nN20 G17 G1 Z0 F100\n";
+  const ClProgram cr = parseGcode(arc0 + "N30 G3 X0 Y10 CR=10\n", "cr.mpf", m.model);
+  const ClProgram ij = parseGcode(arc0 + "N30 G3 X0 Y10 I-10 J0\n", "ij.mpf", m.model);
+  ASSERT_EQ(cr.path.size(), ij.path.size());
+  for (size_t i = 0; i < cr.path.size(); ++i) EXPECT_LT((cr.path[i].p_w - ij.path[i].p_w).norm(), 1e-9);
+  // Refused, named.
+  EXPECT_NE(refusal(arc0 + "N30 G1 X20 RND=2\nN40 Y20\n", m.model).find("RND"), std::string::npos);
+  EXPECT_NE(refusal(head + "N30 G1 X0 A2=10 B2=20 C2=0\n", m.model).find("A2"), std::string::npos);
+  EXPECT_NE(refusal(head + "N25 ORIMKS\nN30 G1 X0 A3=0 B3=0 C3=1\n", m.model).find("ORIMKS"), std::string::npos);
+  EXPECT_NE(refusal("N10 G54 G0 X0 Y0 Z80 D1\nN30 G1 X0 A3=0 B3=0 C3=1\n", m.model).find("outside TRAORI"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "N30 G1 X0 A3=1 B3=0 C3=-0.6\n", m.model).find("outside travel"), std::string::npos);
+}
+
 // Tools per operation: M6 switches the cutter to the selected T; its geometry comes from the
 // post's tool comments (Fusion, LinuxCNC posts); posts that write no M6 change tools at T.
 TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {

@@ -343,6 +343,9 @@ class Reader {
       fail(line_, tcol[t], tok[t].substr(0, tok[t].find_first_of("(=")), why);
     };
     std::string out;
+    Eigen::Vector3d orient = Eigen::Vector3d::Zero();  // A3= B3= C3= (0 where not given)
+    bool orient_given = false;
+    int orient_column = 0;
     size_t t = 0;
     if (t < tok.size() && tok[t][0] == 'N' && tok[t].size() > 1 &&
         std::isdigit(static_cast<unsigned char>(tok[t][1])))
@@ -377,7 +380,7 @@ class Reader {
         "FNORM",  "COMPOF", "COMPON", "COMPCURV", "COMPCAD", "SOFT",   "BRISK",  "SOFTA",
         "BRISKA", "FFWON",  "FFWOF",  "CFC",      "CFTCP",   "CFIN",   "G60",    "G601",
         "G602",   "G603",   "G64",    "G641",     "G642",    "G643",   "G644",   "G645",
-        "UPATH",  "SPATH",  "ORIWKS", "ORIMKS",   "ORIAXES", "ORIVECT", "STOPRE", "G153",
+        "UPATH",  "SPATH",  "ORIAXES", "ORIVECT", "STOPRE", "G153",
         "G40",    "DIAMOF", "CUT2D",  "CUT2DF",   "CUT3DC",  "G450",   "G451",   "WAITM",
         "ORIAXPOS", "ORIEULER", "ORIRPY", "ORIPATH", "TOFFOF", "G93", "G94", "G95", "M27", "M29",
         "M50", "M51", "M65", "M7", "M8", "M9", "CYCLE832"};
@@ -397,6 +400,10 @@ class Reader {
         // handled below
       } else if (ignored.count(head)) {
         ignored_.insert(head);
+        continue;
+      }
+      if (head == "ORIWKS" || head == "ORIMKS") {
+        orimks_ = head == "ORIMKS";
         continue;
       }
       if (head == "MSG" || head == "SETMS" || head == "WORKPIECE") {
@@ -465,6 +472,24 @@ class Reader {
         const std::string name = k.substr(0, eq);
         const std::string expr = k.substr(eq + 1);
         const bool address = name.size() == 1 && std::isalpha(static_cast<unsigned char>(name[0]));
+        if (name == "A3" || name == "B3" || name == "C3") {
+          orient[name[0] - 'A'] = sinExpression(expr, tcol[t]);
+          orient_given = true;
+          if (orient_column == 0) orient_column = tcol[t];
+          continue;
+        }
+        if (name == "CR") {
+          // Circle radius (G2/G3 ... CR=, negative beyond 180 deg): the ISO R form.
+          out += " R[" + sinBrackets(expr) + "]";
+          continue;
+        }
+        static const std::set<std::string> motion_names = {
+            "A2", "B2", "C2", "A4", "B4", "C4", "A5", "B5", "C5", "A6", "B6", "C6", "A7", "B7",
+            "C7", "LEAD", "TILT", "THETA", "PO", "PSI", "XH", "YH", "ZH", "RND", "RNDM", "CHR",
+            "CHF", "AP", "RP", "AR", "ANG", "TURN", "CIP", "I1", "J1", "K1", "SF"};
+        if (motion_names.count(name))
+          refuse(t, "Sinumerik " + name + "= (orientation angles, normals, rounding, chamfers, "
+                    "polar or circle-angle programming) changes the path and is not supported");
         if (address) {
           out += " " + name + "[" + sinBrackets(expr) + "]";
         } else {
@@ -488,6 +513,7 @@ class Reader {
         out += " " + k;
       }
     }
+    if (orient_given) out += orientationWords(orient, orient_column);
     return out;
   }
 
@@ -631,47 +657,7 @@ class Reader {
     if (!positioned && dir != 0) {
       // The tool along the new z: the rotary solution the direction picks.
       const Eigen::Vector3d u_w = Gm_ * frame_.linear() * Eigen::Vector3d::UnitZ();
-      InverseKinematics::RotaryCandidate cand[2];
-      bool singular = false;
-      const int n = ik_.rotaryCandidates(u_w, cand, &singular);
-      const std::vector<int>& order = ik_.rotaryAxes();
-      std::vector<JointVector> ok;
-      std::string outside;
-      for (int c = 0; c < n; ++c) {
-        JointVector qc = q;
-        bool inside = true;
-        for (size_t r = 0; r < order.size(); ++r) {
-          const int ax_i = order[r];
-          const Axis& ax = model_.axes[ax_i];
-          double v = cand[c].free[r] ? q[ax_i] : cand[c].angleOf(static_cast<int>(r));
-          if (ax.endless) {
-            v += 2 * kPi * std::round((q[ax_i] - v) / (2 * kPi));
-          } else {
-            double best = v;
-            bool found = false;
-            for (int turn = -2; turn <= 2; ++turn) {
-              const double w = v + 2 * kPi * turn;
-              if (w >= ax.travel_min - 1e-9 && w <= ax.travel_max + 1e-9 &&
-                  (!found || std::abs(w - q[ax_i]) < std::abs(best - q[ax_i]))) {
-                best = w;
-                found = true;
-              }
-            }
-            if (!found) {
-              inside = false;
-              outside += (outside.empty() ? "" : ", ") + ax.name + " " +
-                         formatWith("%.3f", ax.nc_sign * radToDeg(v)) + " deg";
-            }
-            v = best;
-          }
-          qc[ax_i] = v;
-        }
-        if (inside) ok.push_back(qc);
-      }
-      if (ok.empty())
-        fail(line_, column, "CYCLE800",
-             n == 0 ? "no rotary position of this machine turns the tool along the swivelled z"
-                    : "the swivelled plane needs " + outside + ", outside travel");
+      const std::vector<JointVector> ok = rotarySolutions(u_w, q, column, "CYCLE800", "the swivelled plane");
       size_t pick = 0;
       if (ok.size() == 2) {
         const Axis& ref = model_.axes[rot[0]];
@@ -691,6 +677,91 @@ class Reader {
     prog_.notes.push_back("line " + std::to_string(line_) + ": CYCLE800 swivels the working plane" +
                           (positioned ? " (rotaries to" + words + ")" : " (rotaries as the program puts them)") +
                           "; the points after it are held in the swivelled frame until CYCLE800()");
+  }
+
+  // The rotary solutions (at most two) that turn the tool along u_w, each inside travel, from
+  // joint values q (each angle unwrapped to the turn nearest q's); none is an error naming what
+  // (e.g. "the swivelled plane") needs which angles.
+  std::vector<JointVector> rotarySolutions(const Eigen::Vector3d& u_w, const JointVector& q, int column,
+                                           const std::string& field, const std::string& what) {
+    InverseKinematics::RotaryCandidate cand[2];
+    bool singular = false;
+    const int n = ik_.rotaryCandidates(u_w, cand, &singular);
+    const std::vector<int>& order = ik_.rotaryAxes();
+    std::vector<JointVector> ok;
+    std::string outside;
+    for (int c = 0; c < n; ++c) {
+      JointVector qc = q;
+      bool inside = true;
+      for (size_t r = 0; r < order.size(); ++r) {
+        const int ax_i = order[r];
+        const Axis& ax = model_.axes[ax_i];
+        double v = cand[c].free[r] ? q[ax_i] : cand[c].angleOf(static_cast<int>(r));
+        if (ax.endless) {
+          v += 2 * kPi * std::round((q[ax_i] - v) / (2 * kPi));
+        } else {
+          double best = v;
+          bool found = false;
+          for (int turn = -2; turn <= 2; ++turn) {
+            const double w = v + 2 * kPi * turn;
+            if (w >= ax.travel_min - 1e-9 && w <= ax.travel_max + 1e-9 &&
+                (!found || std::abs(w - q[ax_i]) < std::abs(best - q[ax_i]))) {
+              best = w;
+              found = true;
+            }
+          }
+          if (!found) {
+            inside = false;
+            outside += (outside.empty() ? "" : ", ") + ax.name + " " +
+                       formatWith("%.3f", ax.nc_sign * radToDeg(v)) + " deg";
+          }
+          v = best;
+        }
+        qc[ax_i] = v;
+      }
+      if (inside) ok.push_back(qc);
+    }
+    if (ok.empty())
+      fail(line_, column, field,
+           n == 0 ? "no rotary position of this machine turns the tool as " + what + " asks"
+                  : what + " needs " + outside + ", outside travel");
+    return ok;
+  }
+
+  // Sinumerik orientation vector A3= B3= C3= (SINUMERIK 840D sl Programming Manual, Job
+  // Planning, "Orientation programming with direction vectors"): under TRAORI the tool's
+  // direction in the workpiece coordinates (ORIWKS, the default), turned by the frame in force.
+  // Written back as the rotary words of the solution nearest the axes' positions (the control's
+  // choice of the shorter path), absolute.
+  std::string orientationWords(const Eigen::Vector3d& v, int column) {
+    if (!tcpMode())
+      fail(line_, column, "A3", "an orientation vector (A3= B3= C3=) outside TRAORI: the control "
+                                "has no tool orientation to program");
+    if (orimks_)
+      fail(line_, column, "A3", "orientation vectors under ORIMKS (machine coordinates) are not "
+                                "supported: post them in ORIWKS");
+    if (!absolute_) fail(line_, column, "A3", "orientation vectors in G91 are not supported");
+    if (!(v.norm() > 1e-12)) fail(line_, column, "A3", "the orientation vector is zero");
+    const Eigen::Vector3d u_w = Gm_ * frame_.linear() * v.normalized();
+    JointVector q = q_;
+    setRotaries(q);
+    const std::vector<JointVector> ok = rotarySolutions(u_w, q, column, "A3", "the orientation vector");
+    size_t pick = 0;
+    double best = INFINITY;
+    for (size_t k = 0; k < ok.size(); ++k) {
+      double d = 0;
+      for (int a : ik_.rotaryAxes()) d += std::abs(ok[k][a] - q[a]);
+      if (d < best) best = d, pick = k;
+    }
+    std::string out;
+    char buf[64];
+    for (int a : ik_.rotaryAxes()) {
+      const Axis& ax = model_.axes[a];
+      if (ax.name.size() != 1) fail(line_, column, "A3", "rotary axis " + ax.name + " has no one-letter word");
+      std::snprintf(buf, sizeof buf, " %s%.12g", ax.name.c_str(), ax.nc_sign * radToDeg(ok[pick][a]) + 0.0);
+      out += buf;
+    }
+    return out;
   }
 
   // The rotary axes CYCLE800 calls 1 and 2: <control swivel_axes="B C">, else the tilting axis
@@ -1714,6 +1785,7 @@ class Reader {
   Eigen::Isometry3d pframe_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d frame_ = Eigen::Isometry3d::Identity();
   bool swivel_on_ = false;
+  bool orimks_ = false;  // ORIMKS: orientation vectors in machine coordinates (refused)
   int frame_index_ = 0;  // into prog_.frames
   bool frame_checked_ = true;  // the tool axis checked against a rotated frame's z
   std::string tool_name_;
