@@ -486,9 +486,9 @@ class Reader {
         static const std::set<std::string> motion_names = {
             "A2", "B2", "C2", "A4", "B4", "C4", "A5", "B5", "C5", "A6", "B6", "C6", "A7", "B7",
             "C7", "LEAD", "TILT", "THETA", "PO", "PSI", "XH", "YH", "ZH", "RND", "RNDM", "CHR",
-            "CHF", "AP", "RP", "AR", "ANG", "TURN", "CIP", "I1", "J1", "K1", "SF"};
+            "CHF", "AP", "RP", "AR", "ANG", "TURN", "CIP", "I1", "J1", "K1", "SF", "OFFN", "DISC", "DISR"};
         if (motion_names.count(name))
-          refuse(t, "Sinumerik " + name + "= (orientation angles, normals, rounding, chamfers, "
+          refuse(t, "Sinumerik " + name + "= (orientation angles, normals, rounding, chamfers, contour offsets, "
                     "polar or circle-angle programming) changes the path and is not supported");
         if (address) {
           out += " " + name + "[" + sinBrackets(expr) + "]";
