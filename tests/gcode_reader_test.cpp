@@ -627,6 +627,52 @@ TEST(GcodeReader, Cycle800SwivelsThePlaneAsTheFrameInstructionsDo) {
             std::string::npos);
 }
 
+// G68.2 (Fanuc, HAAS NGC): the feature coordinate system X Y Z I J K (Euler Z, X, Z), G53.1
+// turns the tool along its Z, the points held in it until G69: the same path as G234 with the
+// rotary words and the XYZ words computed by the documented formula p = o + R p_feature.
+TEST(GcodeReader, TiltedWorkingPlaneG682AsItsTcpTwin) {
+  Machine m = machine("resources/machines/umc_bc_trunnion.xml", 76.2);
+  const std::string head = "G21 G90 G54\nT1 M6\nG0 G43 H1 X0 Y0 Z50 B0 C0\n";
+  const ClProgram a = parseGcode(head + "G68.2 X10 Y0 Z2 I20 J30 K-40\nG53.1\nG0 X5 Y5 Z20\nG1 Z0 F500\n"
+                                            "G1 X15 Y-5\nG69\nG0 Z200\nM30\n", "g682.nc", m.model);
+  ASSERT_EQ(a.path.size(), 5u);
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(20 * kDeg, Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(30 * kDeg, Eigen::Vector3d::UnitX()) *
+                             Eigen::AngleAxisd(-40 * kDeg, Eigen::Vector3d::UnitZ())).toRotationMatrix();
+  const Eigen::Vector3d o(10, 0, 2);
+  // The tool along the plane's Z.
+  EXPECT_LT((a.path[1].u_w - R.col(2)).norm(), 1e-12);
+  EXPECT_EQ(a.tcp[1], ClProgram::kTcpWords);
+  EXPECT_EQ(a.tcp[4], ClProgram::kJointWords);  // after G69
+  // The twin: G234 with the rotary words G53.1 chose and the XYZ words o + R p.
+  const double b = -a.joints[1][3] / kDeg, c = -a.joints[1][4] / kDeg;  // nc_sign -1
+  std::string twin = head + "G234 H1\n";
+  const Eigen::Vector3d pts[3] = {{5, 5, 20}, {5, 5, 0}, {15, -5, 0}};
+  char buf[200];
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d p = o + R * pts[k];
+    std::snprintf(buf, sizeof buf, "%s X%.12f Y%.12f Z%.12f B%.12f C%.12f\n", k == 0 ? "G0" : "G1", p.x(), p.y(),
+                  p.z(), b, c);
+    twin += buf;
+  }
+  const ClProgram t = parseGcode(twin, "twin.nc", m.model);
+  ASSERT_EQ(t.path.size(), 4u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_LT((a.path[k + 1].p_w - t.path[k + 1].p_w).norm(), 1e-9) << k;
+    EXPECT_LT((a.path[k + 1].u_w - t.path[k + 1].u_w).norm(), 1e-12) << k;
+  }
+  EXPECT_TRUE(hasNote(a, "G53.1 turns the rotaries"));
+  // P1: roll, pitch, yaw about the fixed axes.
+  const ClProgram rpy = parseGcode(head + "G68.2 P1 X0 Y0 Z0 I0 J30 K90\nG53.1\nG0 X5 Y5 Z20\n", "rpy.nc", m.model);
+  const Eigen::Matrix3d R1 = (Eigen::AngleAxisd(90 * kDeg, Eigen::Vector3d::UnitZ()) *
+                              Eigen::AngleAxisd(30 * kDeg, Eigen::Vector3d::UnitY())).toRotationMatrix();
+  EXPECT_LT((rpy.path.back().u_w - R1.col(2)).norm(), 1e-12);
+  // Refused: other forms, G53.1 without a plane, a plane the rotaries cannot reach.
+  EXPECT_NE(refusal(head + "G68.2 P2 X0 Y0 Z0 I0 J30 K0\n", m.model).find("G68.2 P2"), std::string::npos);
+  EXPECT_NE(refusal(head + "G53.1\n", m.model).find("without a tilted"), std::string::npos);
+  EXPECT_NE(refusal(head + "G68.2 X0 Y0 Z0 I0 J120 K0\nG53.1\n", m.model).find("outside travel"), std::string::npos);
+}
+
 // Sinumerik orientation vectors (A3= B3= C3=, ORIWKS) under TRAORI give the tool direction in the
 // workpiece coordinates: the same path as the rotary words a post computes for it; CR= arcs are
 // the ISO R arcs; what changes the path unseen (RND=, orientation angles, ORIMKS vectors) is refused.

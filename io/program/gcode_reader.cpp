@@ -48,7 +48,6 @@ const std::map<std::string, const char*>& refusedG() {
       {"G92", "G92 coordinate offsets are not supported: use work offsets (G54-G59)"},
       {"G52", "local coordinate systems (G52) are not supported"},
       {"G68", "coordinate rotation (G68) is not supported"},
-      {"G68.2", "tilted working planes (G68.2) are not supported: post with TCP or joint words"},
       {"G51", "scaling (G51) is not supported"},
       {"G51.1", "mirroring (G51.1) is not supported"},
       {"G16", "polar coordinates (G16) are not supported"},
@@ -68,7 +67,7 @@ const std::map<std::string, const char*>& refusedG() {
 // G words that do not change the tool path: accepted silently.
 const std::set<std::string>& harmlessG() {
   static const std::set<std::string> s = {"G4",  "G9",  "G40", "G61", "G61.1", "G64", "G93",
-                                          "G94", "G95", "G96", "G97", "G15", "G50", "G69",
+                                          "G94", "G95", "G96", "G97", "G15", "G50",
                                           "G5.1", "G8", "G187", "G50.1", "G98", "G99", "G80"};
   return s;
 }
@@ -679,6 +678,75 @@ class Reader {
                           "; the points after it are held in the swivelled frame until CYCLE800()");
   }
 
+  // G68.2, tilted working plane (Fanuc 30i-B Operator's Manual, "Tilted working plane indexing";
+  // HAAS NGC mill manual, G68.2): G68.2 X Y Z I J K, the feature coordinate system's origin in
+  // the workpiece coordinates and its Euler angles (P0, the default: I about Z, J about the new
+  // X, K about the new Z; P1: roll I about X, pitch J about Y, yaw K about Z, fixed axes). Other
+  // P forms are refused. G53.1 turns the rotaries so that the tool lies along the plane's +Z:
+  // of the two solutions, the one nearer the axes' positions (said in a note: the control's
+  // parameters may pick the other; the points are the same, the joints not). While the plane is
+  // active the machine holds the tool tip at the program's points in it (as in TCP mode); G69
+  // cancels it.
+  std::string tiltedPlane(const std::map<char, const Word*>& aw, const Word* g682, const Word* g531) {
+    auto value = [&](char l) { return aw.count(l) ? aw.at(l)->value : 0.0; };
+    if (g682) {
+      const int form = static_cast<int>(value('P'));
+      if (form != 0 && form != 1)
+        fail(line_, g682->column, "G68.2", "G68.2 P" + std::to_string(form) + " (three points, two vectors or "
+                                           "projection angles) is not supported: post Euler angles (P0) or "
+                                           "roll-pitch-yaw (P1)");
+      if (rotaryCount() != 2)
+        fail(line_, g682->column, "G68.2", "a tilted working plane needs a machine with two rotary axes");
+      const double I = value('I') * kDegToRad, J = value('J') * kDegToRad, K = value('K') * kDegToRad;
+      Eigen::Matrix3d R;
+      if (form == 0)
+        R = (Eigen::AngleAxisd(I, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(J, Eigen::Vector3d::UnitX()) *
+             Eigen::AngleAxisd(K, Eigen::Vector3d::UnitZ())).toRotationMatrix();
+      else
+        R = (Eigen::AngleAxisd(K, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(J, Eigen::Vector3d::UnitY()) *
+             Eigen::AngleAxisd(I, Eigen::Vector3d::UnitX())).toRotationMatrix();
+      Eigen::Isometry3d S = Eigen::Isometry3d::Identity();
+      S.translation() = Eigen::Vector3d(value('X'), value('Y'), value('Z')) * unit_;
+      S.linear() = R;
+      swivel_ = S;
+      swivel_on_ = true;
+      setFrame(swivel_ * pframe_);
+      cur_xyz_ = currentProgramXyz();
+    }
+    if (g531) {
+      if (!swivel_on_) fail(line_, g531->column, "G53.1", "G53.1 without a tilted working plane (G68.2)");
+      const Eigen::Vector3d u_w = Gm_ * frame_.linear() * Eigen::Vector3d::UnitZ();
+      JointVector q = q_;
+      setRotaries(q);
+      const std::vector<JointVector> ok = rotarySolutions(u_w, q, g531->column, "G53.1", "the tilted plane");
+      size_t pick = 0;
+      double best = INFINITY;
+      for (size_t k = 0; k < ok.size(); ++k) {
+        double d = 0;
+        for (int a : ik_.rotaryAxes()) d += std::abs(ok[k][a] - q[a]);
+        if (d < best) best = d, pick = k;
+      }
+      std::string words;
+      for (int a : ik_.rotaryAxes()) {
+        rot_word_[a] = model_.axes[a].nc_sign * ok[pick][a] / kDegToRad;
+        words += " " + model_.axes[a].name + formatWith("%.3f", rot_word_[a] + 0.0);
+      }
+      setRotaries(q_);
+      cur_xyz_ = currentProgramXyz();
+      prog_.notes.push_back("line " + std::to_string(line_) + ": G53.1 turns the rotaries to" + words +
+                            (ok.size() > 1 ? ", the solution nearer their positions (the control's parameters "
+                                             "may pick the other: the points are the same, the joints not)"
+                                           : ""));
+    }
+    return g682 ? "G68.2" : "G53.1";
+  }
+
+  int rotaryCount() const {
+    int n = 0;
+    for (const Axis& a : model_.axes) n += a.isRotary() ? 1 : 0;
+    return n;
+  }
+
   // The rotary solutions (at most two) that turn the tool along u_w, each inside travel, from
   // joint values q (each angle unwrapped to the turn nearest q's); none is an error naming what
   // (e.g. "the swivelled plane") needs which angles.
@@ -1250,6 +1318,7 @@ class Reader {
     // G words in modal-group order.
     std::string motion_this_block;
     bool g53 = false, g28 = false, g10 = false;
+    const Word *g682 = nullptr, *g531 = nullptr;
     for (const Word* w : g) {
       const std::string& c = w->code;
       endModes(c);
@@ -1283,7 +1352,16 @@ class Reader {
       } else if (c == "G53") g53 = true;
       else if (c == "G28" || c == "G30") g28 = true;
       else if (c == "G10") g10 = true;
-      else if (c == "G80") {
+      else if (c == "G68.2") g682 = w;
+      else if (c == "G53.1") g531 = w;
+      else if (c == "G69") {
+        if (swivel_on_) {
+          swivel_ = Eigen::Isometry3d::Identity();
+          swivel_on_ = false;
+          setFrame(swivel_ * pframe_);
+          cur_xyz_ = currentProgramXyz();
+        }
+      } else if (c == "G80") {
         motion_ = "G0";
         cycle_ = false;
       }
@@ -1300,6 +1378,7 @@ class Reader {
       }
     }
     if (g10) return setOffsetByG10(axis_words, g);
+    if (g682 || g531) return tiltedPlane(axis_words, g682, g531);
 
     // Axis words of this block (program units, absolute or incremental).
     bool any_axis = false;
