@@ -549,6 +549,17 @@ TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
   EXPECT_NEAR(t.joints[1][0], -300 + 10 + 10, 1e-9);  // G54 + TRANS + _A*2
   EXPECT_NEAR(t.joints[1][1], 5, 1e-9);
   EXPECT_LT((t.path[1].p_w - t.path[0].p_w - Eigen::Vector3d(20, 5, -40)).norm(), 1e-9);
+  // ROT RPL=90 turns the working plane (G17: about Z) as ROT Z90 does.
+  const ClProgram rpl = parseGcode(base + "N25 G54 G17 G0 X0 Y0 Z50 D1\nN30 ROT RPL=90\nN40 G0 X10 Y0 Z10\n", "r.mpf", m.model);
+  const ClProgram rz = parseGcode(base + "N25 G54 G17 G0 X0 Y0 Z50 D1\nN30 ROT Z90\nN40 G0 X10 Y0 Z10\n", "z.mpf", m.model);
+  ASSERT_EQ(rpl.path.size(), 2u);
+  EXPECT_LT((rpl.path[1].p_w - rz.path[1].p_w).norm(), 1e-12);
+  EXPECT_NEAR(rpl.path[1].p_w.y() - rpl.path[0].p_w.y(), 10, 1e-9);
+  EXPECT_NE(refusal(base + "N30 SCALE X2 Y2\n", m.model).find("SCALE"), std::string::npos);
+  EXPECT_NE(refusal(base + "N30 MIRROR X0\n", m.model).find("MIRROR"), std::string::npos);
+  EXPECT_NE(refusal(base + "N30 LIMS=3000\n", m.model).find("LIMS= is neither a variable"), std::string::npos);
+  EXPECT_EQ(parseGcode(base + "N30 R1=4 R2=R1*2\nN40 G54 G0 X=R2 Y0 Z10 D1\n", "r.mpf", m.model).joints[0][0],
+            -300 + 8);
 }
 
 // CYCLE800 (SINUMERIK 840D sl, "Swivel plane - CYCLE800"): the swivel frame TRANS X0 : rotation :

@@ -444,6 +444,11 @@ class Reader {
         for (; u < tok.size(); ++u) {
           const std::string& a = tok[u];
           const char l = a[0];
+          if (a.rfind("RPL=", 0) == 0 && head.find("ROT") != std::string::npos) {
+            // RPL: a rotation in the working plane, about its normal (G17: Z, G18: Y, G19: X).
+            v[plane_] += sinExpression(a.substr(4), tcol[u]);
+            continue;
+          }
           if (a.size() < 2 || (l != 'X' && l != 'Y' && l != 'Z')) {
             if (a.size() >= 2 && std::isalpha(static_cast<unsigned char>(l)) &&
                 (std::isdigit(static_cast<unsigned char>(a[1])) || a[1] == '=' || a[1] == '-'))
@@ -493,6 +498,14 @@ class Reader {
           out += " " + name + "[" + sinBrackets(expr) + "]";
         } else {
           if (name.empty()) refuse(t, "an assignment without a name");
+          // A name the program did not declare (DEF) and not an R parameter is an address with
+          // a meaning on the control (an orientation, path or spindle word): not a variable.
+          bool r_parameter = name.size() > 1 && name[0] == 'R';
+          for (size_t c = 1; c < name.size() && r_parameter; ++c)
+            r_parameter = std::isdigit(static_cast<unsigned char>(name[c])) != 0;
+          if (!sin_vars_.count(name) && !r_parameter)
+            refuse(t, "Sinumerik " + name + "= is neither a variable the program declares (DEF) nor an "
+                      "R parameter: an address tolver does not carry out");
           // An assignment: constant expressions only (a value computed from motion is refused
           // by the expression's own check).
           sin_vars_[name] = sinExpression(expr, tcol[t]);
