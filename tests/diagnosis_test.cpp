@@ -18,6 +18,69 @@
 namespace tolver {
 namespace {
 
+// Lack of fit by hand: residuals 1, 3 at one pose, 2, 2 at another, 0 alone; one unknown fitted.
+// SS_pe = 2 (df 2), RSS = 18, SS_lof = 16 (df 5 - 1 - 2 = 2), F = 8, and F(2, 2) has the tail
+// 1 / (1 + F) = 1/9.
+TEST(LackOfFit, ByHandWithTheFTail) {
+  BallbarTest t;
+  t.setups.resize(1);
+  const double x[5] = {1, 1, 2, 2, 3};
+  for (double v : x) {
+    BallbarReading r;
+    r.q = JointVector::Zero(2);
+    r.q[0] = v;
+    t.readings.push_back(r);
+  }
+  Eigen::VectorXd res(5);
+  res << 1, 3, 2, 2, 0;
+  const LackOfFit l = lackOfFit(t, res, 1);
+  ASSERT_TRUE(l.tested);
+  EXPECT_EQ(l.poses, 2);
+  EXPECT_EQ(l.repeats, 4);
+  EXPECT_DOUBLE_EQ(l.df_pure, 2);
+  EXPECT_DOUBLE_EQ(l.df_lack, 2);
+  EXPECT_NEAR(l.s_pure, 1.0, 1e-15);
+  EXPECT_NEAR(l.f, 8.0, 1e-12);
+  EXPECT_NEAR(l.p_value, 1.0 / 9.0, 1e-12);
+  EXPECT_NEAR(l.missing_rms, std::sqrt(18.0 / 4 - 1.0), 1e-12);
+  // The same pose in another set-up is another pose; no repeats: not tested.
+  t.readings[1].setup = 1;
+  t.setups.resize(2);
+  t.readings[3].q[0] = 2.5;
+  EXPECT_FALSE(lackOfFit(t, res, 1).tested);
+}
+
+// Simulated: a straight line fitted to a parabola with replicates fails the test; fitted to a
+// line it passes about as often as the level says.
+TEST(LackOfFit, DetectsAMissingTermAndNotAnAdequateOne) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  int rejected_adequate = 0, rejected_missing = 0;
+  for (int run = 0; run < 200; ++run) {
+    BallbarTest t;
+    t.setups.resize(1);
+    Eigen::VectorXd y_line(30), y_curve(30);
+    Eigen::MatrixXd X(30, 2);
+    for (int i = 0; i < 30; ++i) {
+      BallbarReading r;
+      r.q = JointVector::Zero(1);
+      r.q[0] = i % 10;  // ten poses, three readings each
+      t.readings.push_back(r);
+      const double xv = r.q[0];
+      X(i, 0) = 1;
+      X(i, 1) = xv;
+      y_line[i] = 2 + 0.5 * xv + noise(rng);
+      y_curve[i] = 2 + 0.5 * xv + 0.15 * (xv - 4.5) * (xv - 4.5) + noise(rng);
+    }
+    const Eigen::MatrixXd H = X * (X.transpose() * X).inverse() * X.transpose();
+    const Eigen::VectorXd r_line = y_line - H * y_line, r_curve = y_curve - H * y_curve;
+    rejected_adequate += lackOfFit(t, r_line, 2).p_value < 0.05;
+    rejected_missing += lackOfFit(t, r_curve, 2).p_value < 0.05;
+  }
+  EXPECT_LE(rejected_adequate, 20);  // about 5 % of 200
+  EXPECT_GE(rejected_missing, 180);
+}
+
 constexpr double kNoiseMm = 0.5e-3;
 
 struct Dataset {

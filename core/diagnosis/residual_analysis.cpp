@@ -49,7 +49,52 @@ double range(const std::vector<double>& v) {
   return *hi - *lo;
 }
 
+// Readings grouped by pose (same set-up, joint values equal to 1e-6 mm or rad), in order of
+// first appearance; poses measured once included.
+std::vector<RepeatedPose> repeatedPoses(const BallbarTest& test) {
+  std::vector<RepeatedPose> out;
+  std::map<std::vector<long long>, int> group;
+  for (int i = 0; i < static_cast<int>(test.readings.size()); ++i) {
+    const BallbarReading& rd = test.readings[i];
+    std::vector<long long> key{rd.setup};
+    for (int a = 0; a < rd.q.size(); ++a) key.push_back(std::llround(rd.q[a] * 1e6));
+    auto [it, fresh] = group.emplace(key, static_cast<int>(out.size()));
+    if (fresh) out.push_back({rd.setup, {}, 0.0});
+    out[it->second].readings.push_back(i);
+  }
+  return out;
+}
+
 }  // namespace
+
+LackOfFit lackOfFit(const BallbarTest& test, const Eigen::VectorXd& residuals, int fitted) {
+  LackOfFit out;
+  const int m = static_cast<int>(residuals.size());
+  if (m != static_cast<int>(test.readings.size()) || m - fitted < 1) return out;
+  const double rss = residuals.squaredNorm();
+  double ss_pe = 0;
+  for (const RepeatedPose& p : repeatedPoses(test)) {
+    if (p.readings.size() < 2) continue;
+    ++out.poses;
+    out.repeats += static_cast<int>(p.readings.size());
+    double mean = 0;
+    for (int i : p.readings) mean += residuals[i];
+    mean /= static_cast<double>(p.readings.size());
+    for (int i : p.readings) ss_pe += (residuals[i] - mean) * (residuals[i] - mean);
+    out.df_pure += static_cast<double>(p.readings.size()) - 1.0;
+  }
+  out.s_fit = std::sqrt(rss / (m - fitted));
+  out.df_lack = (m - fitted) - out.df_pure;
+  if (out.df_pure < 2 || out.df_lack < 1 || !(ss_pe > 0)) return out;
+  out.tested = true;
+  out.s_pure = std::sqrt(ss_pe / out.df_pure);
+  const double ss_lof = std::max(0.0, rss - ss_pe);
+  out.s_lack = std::sqrt(ss_lof / out.df_lack);
+  out.f = (ss_lof / out.df_lack) / (ss_pe / out.df_pure);
+  out.p_value = fSurvival(out.f, out.df_lack, out.df_pure);
+  out.missing_rms = std::sqrt(std::max(0.0, out.s_fit * out.s_fit - out.s_pure * out.s_pure));
+  return out;
+}
 
 // Long by design: the list of tests ([AM01] 4.9 and the periodogram [Lomb76]), one short block
 // each, ranked at the end.
@@ -89,6 +134,8 @@ ResidualAnalysis analyseResiduals(const MachineModel& model, const BallbarTest& 
     f.strength = std::clamp(2.0 * P[k] / (m - 1), 0.0, 1.0);
     f.p_value = periodogramFalseAlarm(P[k], independent);
     f.period = ax.isRotary() ? omega[k] : 2 * kPi / omega[k];
+    f.order = ax.isRotary();
+    if (!ax.isRotary()) f.period_uncertainty = f.period * f.period / (2.0 * range(s));
     out.findings.push_back(f);
     // Approach direction.
     Eigen::MatrixXd X(m, 2);
@@ -126,15 +173,7 @@ ResidualAnalysis analyseResiduals(const MachineModel& model, const BallbarTest& 
   }
 
   // Repeated poses.
-  std::map<std::vector<long long>, int> group;
-  for (int i = 0; i < m; ++i) {
-    const BallbarReading& rd = test.readings[i];
-    std::vector<long long> key{rd.setup};
-    for (int a = 0; a < rd.q.size(); ++a) key.push_back(std::llround(rd.q[a] * 1e6));
-    auto [it, fresh] = group.emplace(key, static_cast<int>(out.repeats.size()));
-    if (fresh) out.repeats.push_back({rd.setup, {}, 0.0});
-    out.repeats[it->second].readings.push_back(i);
-  }
+  out.repeats = repeatedPoses(test);
   out.repeats.erase(std::remove_if(out.repeats.begin(), out.repeats.end(),
                                    [](const RepeatedPose& p) { return p.readings.size() < 3; }),
                     out.repeats.end());
