@@ -73,27 +73,19 @@ void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o, const Dia
                      std::to_string(static_cast<int>(r.analysis_before.follows_strength * 100 + 0.5)) +
                      " % of its variance)")
                         .c_str());
+  std::printf("  lack of fit %s\n", describeLackOfFit(r.lack_of_fit_before, o.in.alpha).c_str());
   std::printf("  candidates %zu scored in %d round(s)\n", r.candidates.size(),
               r.candidates.empty() ? 0 : r.candidates.back().round);
   for (const CandidateScore& c : r.candidates)
     if (c.verdict == CandidateVerdict::RefitFailed)
       std::printf("  rejected   %s: %s\n", c.label.c_str(), c.reason.c_str());
-  if (!r.withdrawn.empty())
-    std::printf("  verdict    nothing added: %s\n", r.withdrawn_reason.c_str());
-  else if (r.added.empty())
-    std::printf("  verdict    nothing missing: no effect added\n");
+  // One verdict; what follows supports it.
+  std::printf("  verdict    %s\n", r.verdict_text.c_str());
   for (const AddedEffect& a : r.added) printAdded(m, a);
-  if (r.unexplained) {
-    const ResidualFinding& u = r.unexplained_finding;
-    char what[96] = "";
-    if (u.test == "periodogram")
-      std::snprintf(what, sizeof what, u.period < 9 ? ", order %.0f" : ", period %.2f mm", u.period);
-    std::printf("  unexplained the residual still follows %s (%s%s; %.0f %% of its variance, p %.1e): "
-                "structure no effect of the library removes (plot in the report)\n",
-                u.variable.c_str(), u.test.c_str(), what, u.strength * 100.0, u.p_value);
-  }
-  std::printf("  after      residual RMS %.3f um, cross-validated RMS %.3f um\n", mmToUm(r.rms_after),
-              mmToUm(r.cv_rms_after));
+  if (!r.where.empty()) std::printf("  where      %s\n", r.where.c_str());
+  if (!r.suggestion.empty()) std::printf("  to separate it: %s\n", r.suggestion.c_str());
+  std::printf("  after      residual RMS %.3f um, cross-validated RMS %.3f um; lack of fit %s\n", mmToUm(r.rms_after),
+              mmToUm(r.cv_rms_after), describeLackOfFit(r.lack_of_fit_after, o.in.alpha).c_str());
   if (r.heldout_before.readings > 0) {
     std::printf("  held-out   %d readings (%s): RMS %.3f -> %.3f um, max %.3f -> %.3f um\n",
                 r.heldout_before.readings, o.in.heldout.c_str(), mmToUm(r.heldout_before.rms),

@@ -624,7 +624,120 @@ void finalCheck(const Machine& machine, const DiagnosisOptions& opt, DiagnosisRe
   }
 }
 
+// The measurement that would separate what a finding points at.
+std::string suggestionFor(const MachineModel& model, const std::string& variable) {
+  if (variable.size() > 10 && variable.compare(variable.size() - 10, 10, " direction") == 0)
+    return "measure the same poses approached from both directions of " +
+           variable.substr(0, variable.size() - 10) + " (a bidirectional run)";
+  if (variable == "time")
+    return "return to the reference pose more often (every 4 readings) to map the change with time";
+  if (variable == "set-up")
+    return "a further set-up, or the balls' positions measured on a CMM, separates the balls from the machine";
+  for (const Axis& ax : model.axes)
+    if (ax.name == variable)
+      return ax.isRotary() ? "a run turning " + ax.name + " alone, with the table ball at two radii and two "
+                             "heights, separates its tilts from its offsets"
+                           : "a run along " + ax.name + " alone, with the tool ball at two lengths, separates "
+                             "its angular errors from its straightness";
+  return "a set-up with another tool-ball length separates tilts from offsets";
+}
+
+// Where the final residual is largest: the reading, its set-up and pose, and the strongest
+// structure the analysis found (significant or not).
+std::string whereLargest(const MachineModel& model, const BallbarTest& test, const DiagnosisResult& res) {
+  const Eigen::VectorXd& r = res.final_fit.residuals;
+  if (r.size() == 0 || r.size() != static_cast<Eigen::Index>(test.readings.size())) return "";
+  Eigen::Index i = 0;
+  r.cwiseAbs().maxCoeff(&i);
+  const BallbarReading& rd = test.readings[i];
+  std::string pose;
+  char buf[160];
+  for (size_t a = 0; a < model.axes.size(); ++a) {
+    const Axis& ax = model.axes[a];
+    std::snprintf(buf, sizeof buf, "%s%s %.1f%s", pose.empty() ? "" : ", ", ax.name.c_str(),
+                  ax.isRotary() ? radToDeg(rd.q[a]) : rd.q[a], ax.isRotary() ? " deg" : "");
+    pose += buf;
+  }
+  std::snprintf(buf, sizeof buf, "largest residual %+.3f um at reading %d (line %d, set-up %d: ",
+                mmToUm(r[i]), static_cast<int>(i) + 1, rd.line, test.setups[rd.setup].id);
+  std::string out = buf + pose + ")";
+  const auto& f = res.analysis_after.findings;
+  if (!f.empty()) {
+    std::snprintf(buf, sizeof buf, "; strongest structure: %s (%s, %.0f %% of the variance, p %.2g)",
+                  f.front().variable.c_str(), f.front().test.c_str(), 100.0 * f.front().strength,
+                  f.front().p_value);
+    out += buf;
+  }
+  return out;
+}
+
+// One verdict from the selection, the final check, the structure left and the lack of fit.
+void decideVerdict(DiagnosisResult& res, const MachineModel& model, const BallbarTest& test, double alpha) {
+  const LackOfFit& l = res.lack_of_fit_after;
+  const bool lacks = l.tested && l.p_value < alpha;
+  char lof[300] = "";
+  if (l.tested)
+    std::snprintf(lof, sizeof lof,
+                  "the fit's residual sigma %.3f um against the repeatability %.3f um of %d repeated poses "
+                  "(F %.2f, p %.2g)",
+                  mmToUm(l.s_fit), mmToUm(l.s_pure), l.poses, l.f, l.p_value);
+  char missing[200] = "";
+  if (lacks) std::snprintf(missing, sizeof missing, "the model misses %.3f um RMS beyond the repeatability", mmToUm(l.missing_rms));
+  const std::string n_added = std::to_string(res.added.size()) + (res.added.size() == 1 ? " effect" : " effects");
+  if (!res.withdrawn.empty()) {
+    res.verdict = lacks || res.unexplained ? DiagnosisVerdict::Incomplete : DiagnosisVerdict::NothingAdded;
+    res.verdict_text = "nothing added (" + res.withdrawn_reason + ")";
+    if (lacks) res.verdict_text += "; " + std::string(missing) + ": " + lof;
+  } else if (lacks || res.unexplained) {
+    res.verdict = DiagnosisVerdict::Incomplete;
+    res.verdict_text = (res.added.empty() ? std::string("incomplete: no effect of the library explains what is missing")
+                                          : "incomplete: " + n_added + " added, and something still missing");
+    if (lacks) res.verdict_text += "; " + std::string(missing) + ": " + lof;
+    if (res.unexplained) {
+      const ResidualFinding& u = res.unexplained_finding;
+      char what[200];
+      if (u.test == "periodogram" && u.order)
+        std::snprintf(what, sizeof what, "; the residual still follows %s (harmonic order %.0f, %.0f %% of its variance)",
+                      u.variable.c_str(), u.period, 100.0 * u.strength);
+      else if (u.test == "periodogram")
+        std::snprintf(what, sizeof what, "; the residual still follows %s (period %.2f +- %.2f mm, %.0f %% of its variance)",
+                      u.variable.c_str(), u.period, u.period_uncertainty, 100.0 * u.strength);
+      else
+        std::snprintf(what, sizeof what, "; the residual still follows %s (%s, %.0f %% of its variance)",
+                      u.variable.c_str(), u.test.c_str(), 100.0 * u.strength);
+      res.verdict_text += what;
+    }
+  } else if (!res.added.empty()) {
+    res.verdict = DiagnosisVerdict::EffectsAdded;
+    res.verdict_text = n_added + " added" + (l.tested ? "; no significant lack of fit left: " + std::string(lof)
+                                                      : "; adequacy not tested: no pose is measured twice");
+  } else {
+    res.verdict = DiagnosisVerdict::NothingMissing;
+    res.verdict_text = l.tested ? "nothing missing: no effect added, no structure left, no significant lack of fit: " +
+                                      std::string(lof)
+                                : "nothing found: no effect added and no structure left, but adequacy could not be "
+                                  "tested (no pose is measured twice: plan-ballbar's plans return to a reference pose)";
+  }
+  if (res.verdict == DiagnosisVerdict::Incomplete) {
+    res.where = whereLargest(model, test, res);
+    const auto& f = res.analysis_after.findings;
+    res.suggestion = suggestionFor(model, res.unexplained ? res.unexplained_finding.variable
+                                                          : (f.empty() ? std::string() : f.front().variable));
+  }
+  res.message = res.verdict_text;
+}
+
 }  // namespace
+
+const char* verdictName(DiagnosisVerdict v) {
+  switch (v) {
+    case DiagnosisVerdict::EffectsAdded: return "effects added";
+    case DiagnosisVerdict::NothingMissing: return "nothing missing";
+    case DiagnosisVerdict::Incomplete: return "incomplete";
+    case DiagnosisVerdict::NothingAdded: return "nothing added";
+  }
+  return "";
+}
 
 DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
                          const DiagnosisOptions& opt,
@@ -672,10 +785,11 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
     res.unexplained = true;
     res.unexplained_finding = res.analysis_after.findings.front();
   }
+  const int fitted_before = res.base_fit.unknowns, fitted_after = res.final_fit.unknowns;
+  res.lack_of_fit_before = lackOfFit(test, res.base_fit.residuals, fitted_before);
+  res.lack_of_fit_after = lackOfFit(test, res.final_fit.residuals, fitted_after);
+  decideVerdict(res, machine.model, test, opt.alpha);
   res.ok = true;
-  res.message = !res.withdrawn.empty() ? "nothing added: " + res.withdrawn_reason
-                : res.added.empty()     ? "nothing missing: no effect qualifies"
-                                  : std::to_string(res.added.size()) + " effect(s) added";
   return res;
 }
 

@@ -107,9 +107,26 @@ struct AddedEffect {
   std::vector<std::string> equivalent;
 };
 
+// The one verdict a diagnosis gives, which everything below it in a report supports.
+enum class DiagnosisVerdict {
+  EffectsAdded,    // effects added, and the model then fits to the repeatability (or untested)
+  NothingMissing,  // nothing added, and nothing left: no structure, no lack of fit
+  Incomplete,      // something is missing that the library does not explain (lack of fit, or
+                   // structure left), with or without effects added
+  NothingAdded,    // effects were found but the final check withdrew them
+};
+const char* verdictName(DiagnosisVerdict v);
+
 struct DiagnosisResult {
   bool ok = false;
   std::string message;
+  DiagnosisVerdict verdict = DiagnosisVerdict::NothingMissing;
+  std::string verdict_text;   // one line: what the verdict means here, with its figures
+  // Lack of fit of the base and the final fits (core/diagnosis/residual_analysis.h).
+  LackOfFit lack_of_fit_before, lack_of_fit_after;
+  // When the verdict is Incomplete: where the final residual is largest and what it follows
+  // most (even below significance), and the measurement that would separate it.
+  std::string where, suggestion;
   Machine machine;                 // augmented model with the final identified values
   CalibrationResult base_fit, final_fit;
   std::vector<AddedEffect> added;

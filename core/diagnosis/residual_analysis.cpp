@@ -49,8 +49,8 @@ double range(const std::vector<double>& v) {
   return *hi - *lo;
 }
 
-// Readings grouped by pose (same set-up, joint values equal to 1e-6 mm or rad), in order of
-// first appearance; poses measured once included.
+// Readings grouped by pose (same set-up, joint values equal to 1e-6 mm or rad, same approach
+// direction of every axis), in order of first appearance; poses measured once included.
 std::vector<RepeatedPose> repeatedPoses(const BallbarTest& test) {
   std::vector<RepeatedPose> out;
   std::map<std::vector<long long>, int> group;
@@ -58,6 +58,9 @@ std::vector<RepeatedPose> repeatedPoses(const BallbarTest& test) {
     const BallbarReading& rd = test.readings[i];
     std::vector<long long> key{rd.setup};
     for (int a = 0; a < rd.q.size(); ++a) key.push_back(std::llround(rd.q[a] * 1e6));
+    // Approached the same way: a backlash makes the same pose from the other side another one.
+    for (int a = 0; a < rd.q.size() && a < static_cast<int>(rd.context.direction.size()); ++a)
+      key.push_back(rd.context.direction[a]);
     auto [it, fresh] = group.emplace(key, static_cast<int>(out.size()));
     if (fresh) out.push_back({rd.setup, {}, 0.0});
     out[it->second].readings.push_back(i);

@@ -42,7 +42,7 @@ struct ResidualAnalysis {
 };
 
 // Lack of fit (the classical test of a regression with replicates): the residuals of readings
-// that repeat a pose (same set-up, same joint values) scatter about their pose's mean only by
+// that repeat a pose (same set-up, same joint values, approached the same way) scatter about their pose's mean only by
 // the measurement's repeatability, the pure error, with sum of squares
 //   SS_pe = sum over poses of sum (r_i - mean_pose)^2,  df_pe = sum (n_pose - 1);
 // what the fit leaves beyond it is the lack of fit, SS_lof = RSS - SS_pe with

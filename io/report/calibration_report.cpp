@@ -9,11 +9,34 @@
 #include <nlohmann/json.hpp>
 
 #include "io/common/json_text.h"
+#include "io/common/text_util.h"
 #include "core/numerics/units.h"
 
 namespace tolver {
 
 // Long by design: the JSON document's members in order, each a line or two.
+nlohmann::json lackOfFitJson(const LackOfFit& l) {
+  if (!l.tested)
+    return {{"tested", false}, {"reason", "no pose is measured twice (or too few degrees of freedom): the model's "
+                                          "adequacy cannot be tested"}};
+  return {{"tested", true},          {"repeated_poses", l.poses},     {"readings_at_them", l.repeats},
+          {"df_pure_error", l.df_pure}, {"df_lack_of_fit", l.df_lack}, {"repeatability_um", mmToUm(l.s_pure)},
+          {"fit_sigma_um", mmToUm(l.s_fit)}, {"f", l.f},              {"p_value", l.p_value},
+          {"missing_rms_um", mmToUm(l.missing_rms)}};
+}
+
+std::string describeLackOfFit(const LackOfFit& l, double alpha) {
+  if (!l.tested) return "not tested: no pose is measured twice, so the model's adequacy cannot be judged";
+  char buf[320];
+  std::snprintf(buf, sizeof buf, "repeatability %.3f um (%d poses, %.0f df) against the fit's %.3f um: F %.2f, p %.2g: %s",
+                mmToUm(l.s_pure), l.poses, l.df_pure, mmToUm(l.s_fit), l.f, l.p_value,
+                l.p_value < alpha ? "the model misses " : "no significant lack of fit (level ");
+  std::string out = buf;
+  if (l.p_value < alpha) out += formatWith("%.3f um RMS beyond the repeatability", mmToUm(l.missing_rms));
+  else out += formatWith("%.2g)", alpha);
+  return out;
+}
+
 std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test,
                                   const CalibrationResult& r, const CalibrationReportInputs& in) {
   using nlohmann::json;

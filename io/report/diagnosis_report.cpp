@@ -214,8 +214,10 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
       {"augmented_machine_file", in.output_file},
       {"readings", test.readings.size()},
       {"setups", test.setups.size()},
-      {"verdict", r.added.empty() ? "nothing missing" : "effects added"},
+      {"verdict", verdictName(r.verdict)},
+      {"verdict_text", r.verdict_text},
       {"message", r.message},
+      {"lack_of_fit", {{"before", lackOfFitJson(r.lack_of_fit_before)}, {"after", lackOfFitJson(r.lack_of_fit_after)}}},
       {"effects_added", added},
       {"rms_before_um", mmToUm(r.rms_before)},
       {"rms_after_um", mmToUm(r.rms_after)},
@@ -251,8 +253,14 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
         {"variable", u.variable}, {"test", u.test}, {"strength", u.strength}, {"p_value", u.p_value},
         {"description", "the residual after the selection still follows this variable, and no "
                         "effect of the library removes it"}};
-    if (u.test == "periodogram") out["unexplained_structure"]["period"] = u.period;
+    if (u.test == "periodogram" && u.order) out["unexplained_structure"]["harmonic_order"] = u.period;
+    if (u.test == "periodogram" && !u.order) {
+      out["unexplained_structure"]["period_mm"] = u.period;
+      out["unexplained_structure"]["period_uncertainty_mm"] = u.period_uncertainty;
+    }
   }
+  if (!r.where.empty()) out["where"] = r.where;
+  if (!r.suggestion.empty()) out["suggested_measurement"] = r.suggestion;
   if (!r.withdrawn.empty()) {
     json w = json::array();
     for (const AddedEffect& a : r.withdrawn) w.push_back(a.label);
@@ -291,10 +299,23 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
        std::to_string(test.readings.size()) + " in " + std::to_string(test.setups.size()) +
        " set-ups). Machine: " + xmlEscape(in.machine_file) + ". Augmented machine file: " +
        xmlEscape(in.output_file) + ".</p>\n";
-  h += "<h2>" + std::string(r.added.empty() ? "Nothing missing: no effect added" : "Effects added") + "</h2>\n";
+  {
+    std::string v = verdictName(r.verdict);
+    v[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(v[0])));
+    h += "<h2>" + xmlEscape(v) + "</h2>\n<p>" + xmlEscape(r.verdict_text) + "</p>\n";
+    if (!r.where.empty()) h += "<p>Where: " + xmlEscape(r.where) + ".</p>\n";
+    if (!r.suggestion.empty()) h += "<p>To separate it: " + xmlEscape(r.suggestion) + ".</p>\n";
+  }
   h += "<table><tr><th class=\"l\"></th><th>before</th><th>after</th></tr>";
   h += "<tr><td class=\"l\">residual RMS (µm)</td><td>" + formatWith("%.3f", mmToUm(r.rms_before)) + "</td><td>" +
        formatWith("%.3f", mmToUm(r.rms_after)) + "</td></tr>";
+  auto lof = [](const LackOfFit& l) {
+    return l.tested ? formatWith("F %.2f", l.f) + formatWith(", p %.2g", l.p_value) +
+                          formatWith(" (repeatability %.3f µm)", mmToUm(l.s_pure))
+                    : std::string("not tested");
+  };
+  h += "<tr><td class=\"l\">lack of fit (residual against the repeatability of repeated poses)</td><td>" +
+       lof(r.lack_of_fit_before) + "</td><td>" + lof(r.lack_of_fit_after) + "</td></tr>";
   h += "<tr><td class=\"l\">cross-validated RMS (µm, " + std::to_string(r.folds) +
        " contiguous blocks left out in turn)</td><td>" + formatWith("%.3f", mmToUm(r.cv_rms_before)) +
        "</td><td>" + formatWith("%.3f", mmToUm(r.cv_rms_after)) + "</td></tr>";
@@ -379,7 +400,10 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
     const ResidualFinding& u = r.unexplained_finding;
     h += "<h2>Structure the library does not explain</h2>\n<p>After the selection the residual "
          "still follows <b>" + xmlEscape(u.variable) + "</b> (" + xmlEscape(u.test) +
-         (u.test == "periodogram" ? formatWith(u.period < 9 ? ", order %.0f" : ", period %.2f mm", u.period) : "") +
+         (u.test == "periodogram" ? (u.order ? formatWith(", harmonic order %.0f", u.period)
+                                             : formatWith(", period %.2f", u.period) +
+                                                   formatWith(" ± %.2f mm", u.period_uncertainty))
+                                  : "") +
          ", " + formatWith("%.0f", u.strength * 100) + " % of its variance, p " + formatWith("%.1e", u.p_value) +
          "), and no effect of the library removes it.</p>\n";
     std::vector<double> x(test.readings.size());
