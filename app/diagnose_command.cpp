@@ -125,6 +125,20 @@ void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
   for (const std::string& w : testDesignWarnings(
            base, used, static_cast<int>(defaultCalibrationUnknowns(base).size() + 6 * used.setups.size())))
     std::fprintf(stderr, "tolver: warning: %s: %s\n", o.in.readings.c_str(), w.c_str());
+  if (!run.restored.empty() || !run.gross_t_after.empty()) {
+    std::string lines;
+    char buf[120];
+    for (size_t k = 0; k < run.gross.size() && k < run.gross_t_after.size(); ++k) {
+      bool back = false;
+      for (const GrossReading& x : run.restored) back = back || x.index == run.gross[k].index;
+      std::snprintf(buf, sizeof buf, "%sline %d t %.1f -> %.1f%s", k ? ", " : "",
+                    test.readings[run.gross[k].index].line, run.gross[k].studentized, run.gross_t_after[k],
+                    back ? " restored" : "");
+      lines += buf;
+    }
+    std::printf("  gross again against the final model: %s%s\n", lines.c_str(),
+                run.restored.empty() ? "" : " (the diagnosis was run again with the restored readings)");
+  }
   const DiagnosisWritten written = writeDiagnosis(run, o.in, out);
   printDiagnosis(run, o, out, written);
   *exit_code = 0;

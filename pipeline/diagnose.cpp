@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "core/model/effects.h"
+#include "core/numerics/statistics.h"
 #include "core/path/tool_path_prediction.h"
 #include "pipeline/parallel_prediction.h"
 #include "io/common/io_error.h"
@@ -60,6 +61,40 @@ DiagnosisOptions diagnosisOptions(const DiagnoseInputs& in) {
   return opt;
 }
 
+// Readings removed as gross by the base model, tested again against the final one (its
+// effects included: a warm-up's first readings, a reversal's): those it explains, by the same
+// criterion (Bonferroni over the test's readings, alpha 0.01), are restored and the diagnosis
+// runs again with them.
+void restoreExplainedGross(DiagnosisRun& run, const DiagnosisOptions& opt,
+                           const std::function<void(int, int)>& progress) {
+  if (run.robust.removed.empty()) return;
+  const DiagnosisResult& r = run.result;
+  const BallbarTest& all = run.file.test;
+  BallbarTest removed;
+  removed.setups = all.setups;
+  for (const GrossReading& g : run.robust.removed) removed.readings.push_back(all.readings[g.index]);
+  const ForwardKinematics fk(r.machine.model, r.machine.params);
+  const Eigen::VectorXd res = ballbarResiduals(fk, removed, r.final_fit.ball_errors);
+  const double s = r.final_fit.residual_sigma, m = static_cast<double>(all.readings.size());
+  std::vector<GrossReading> still;
+  for (size_t k = 0; k < run.robust.removed.size(); ++k) {
+    const double t = s > 0 ? res[static_cast<Eigen::Index>(k)] / s : INFINITY;
+    run.gross_t_after.push_back(t);
+    const GrossReading g{run.robust.removed[k].index, res[static_cast<Eigen::Index>(k)], t};
+    (2.0 * normalSurvival(std::abs(t)) * m >= 0.01 ? run.restored : still).push_back(g);
+  }
+  if (run.restored.empty()) return;
+  std::vector<char> out(all.readings.size(), 0);
+  for (const GrossReading& g : still) out[g.index] = 1;
+  BallbarTest used;
+  used.setups = all.setups;
+  for (size_t i = 0; i < all.readings.size(); ++i)
+    if (!out[i]) used.readings.push_back(all.readings[i]);
+  run.robust.test = used;
+  run.robust.removed = still;
+  run.result = diagnose(run.machine, run.robust.test, opt, progress);
+}
+
 }  // namespace
 
 DiagnosisOutputs diagnosisOutputs(const std::string& machine, const std::string& balls,
@@ -96,6 +131,7 @@ DiagnosisRun runDiagnosis(const DiagnoseInputs& in, const std::function<void(int
     run.gross = grossReadings(model, run.file.test, run.robust.with_all);
   }
   run.result = diagnose(run.machine, run.used(), opt, progress);
+  if (!in.keep_outliers && run.result.ok) restoreExplainedGross(run, opt, progress);
   const DiagnosisResult& r = run.result;
   if (!r.ok) throw InputError(in.readings, 0, 0, "diagnose", r.message);
   if (r.base_fit.status != CalibrationStatus::Converged) {
@@ -130,8 +166,14 @@ DiagnosisWritten writeDiagnosis(const DiagnosisRun& run, const DiagnoseInputs& i
   rin.seconds = seconds;
   rin.balls_file = out.balls;
   rin.heldout_file = in.heldout;
-  for (const GrossReading& g : run.robust.removed)
-    rin.removed.push_back({run.file.test.readings[g.index].line, g.residual, g.studentized});
+  // Removed by the base model: still removed, or restored, with t against the final model.
+  for (size_t k = 0; k < run.gross.size() && !in.keep_outliers; ++k) {
+    const GrossReading& g = run.gross[k];
+    RemovedReading e{run.file.test.readings[g.index].line, g.residual, g.studentized};
+    if (k < run.gross_t_after.size()) e.studentized_after = run.gross_t_after[k];
+    for (const GrossReading& x : run.restored) e.restored = e.restored || x.index == g.index;
+    rin.removed.push_back(e);
+  }
   // The report directory is staged and swapped in at the end (a concurrent run on it is refused),
   // taken before anything is written; the machine and ball files are renamed in after it.
   ReportDirectory report_dir(out.report_dir);

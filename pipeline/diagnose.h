@@ -42,6 +42,11 @@ struct DiagnosisRun {
   BallbarTest heldout;
   RobustCalibration robust;                 // the base fit with and without the gross readings
   std::vector<GrossReading> gross;          // found (removed, or kept with keep_outliers)
+  // Per reading of robust.removed as first removed: its studentised residual against the final
+  // model (effects included); and those restored because the final model explains them
+  // (indices into file.test, with that residual and t).
+  std::vector<double> gross_t_after;
+  std::vector<GrossReading> restored;
   DiagnosisResult result;
   std::unique_ptr<ProgramComparison> program;  // with a part program
   std::chrono::steady_clock::time_point started;

@@ -75,6 +75,41 @@ TEST_F(DiagnoseCli, CleanDatasetAddsNothing) {
   EXPECT_EQ(test::readText(path("augmented.xml")).find("<effect"), std::string::npos);
 }
 
+// The lack-of-fit test on the plan's repeated poses: the reversal data fail it with the base
+// model and pass it with the reversal added; the clean data pass it. One verdict line.
+TEST_F(DiagnoseCli, LackOfFitBeforeAndAfterAndOneVerdict) {
+  const auto r = test::runTolver("diagnose --machine " + nominal + " --readings " + readings("reversal") + " -o " +
+                                 path("aug.xml") + " --report-dir " + path("rev") + " --types reversal --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(path("rev/report.json"));
+  const nlohmann::json j = nlohmann::json::parse(in);
+  ASSERT_TRUE(j["lack_of_fit"]["before"]["tested"].get<bool>());
+  EXPECT_LT(j["lack_of_fit"]["before"]["p_value"].get<double>(), 1e-3);
+  EXPECT_GT(j["lack_of_fit"]["after"]["p_value"].get<double>(), 1e-3);
+  EXPECT_GT(j["lack_of_fit"]["before"]["repeated_poses"].get<int>(), 2);
+  EXPECT_EQ(j["verdict"], "effects added");
+  size_t verdicts = 0;
+  for (size_t at = r.output.find("  verdict "); at != std::string::npos; at = r.output.find("  verdict ", at + 1))
+    ++verdicts;
+  EXPECT_EQ(verdicts, 1u) << r.output;
+  EXPECT_NE(r.output.find("lack of fit repeatability"), std::string::npos) << r.output;
+}
+
+// A reading the base model calls gross but the final model explains (the warm-up's first) is
+// restored, the diagnosis run again with it, and listed with t before and after.
+TEST_F(DiagnoseCli, GrossReadingsTheFinalModelExplainsAreRestored) {
+  const auto r = test::runTolver("diagnose --machine " + nominal + " --readings " + readings("warmup") + " -o " +
+                                 path("aug.xml") + " --report-dir " + path("w") + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("restored (the diagnosis was run again"), std::string::npos) << r.output;
+  std::ifstream in(path("w/report.json"));
+  const nlohmann::json j = nlohmann::json::parse(in);
+  ASSERT_EQ(j["gross_readings_restored"].size(), 1u) << j.dump(1);
+  EXPECT_GT(std::abs(j["gross_readings_restored"][0]["studentized"].get<double>()), 5.0);
+  EXPECT_LT(std::abs(j["gross_readings_restored"][0]["studentized_against_final_model"].get<double>()), 4.0);
+  EXPECT_NE(j["effects_added"].dump().find("warmup"), std::string::npos);
+}
+
 TEST_F(DiagnoseCli, BadInputExitsTwoWithoutWriting) {
   const std::string out = " -o " + path("aug.xml") + " --report-dir " + path("out") + " --quiet";
   auto r = test::runTolver("diagnose --machine " + nominal + " --readings " + path("missing.csv") + out);

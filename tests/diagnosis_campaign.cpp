@@ -33,8 +33,9 @@ int main(int argc, char** argv) {
           if (o.unexplained) a += (a.empty() ? "" : ", ") + std::string("unexplained: ") + o.unexplained_variable;
           wrong += (wrong.empty() ? "" : "; ") + (a.empty() ? std::string("nothing") : a);
         }
-        std::fprintf(stderr, "%s %s seed %d: %s (%s)\n", c.name.c_str(), on_axis ? "on" : "off", s,
-                     o.named_right ? "right" : "WRONG", o.message.c_str());
+        std::fprintf(stderr, "%s %s seed %d: %s (%s; lack of fit p %.2g; held-out %.3f -> %.3f um)\n", c.name.c_str(),
+                     on_axis ? "on" : "off", s, o.named_right ? "right" : "WRONG", o.message.c_str(), o.lack_of_fit_p,
+                     o.heldout_before_um, o.heldout_after_um);
       }
       std::printf("| %s | %s | %d/%d | %.3f -> %.3f | %s |\n", c.name.c_str(),
                   on_axis ? "tool balls on the axis" : "off the axis", right, n, before, after,

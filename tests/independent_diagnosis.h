@@ -30,6 +30,8 @@ struct DiagnosisCase {
   // An effect the library does not have: right when diagnose adds nothing and says the residual
   // still follows `unexplained_variable`.
   std::string unexplained_variable;
+  // Outside the library and seen only as a lack of fit: right when the verdict is "incomplete".
+  bool lack_of_fit = false;
 };
 
 struct DiagnosisOutcome {
@@ -42,6 +44,8 @@ struct DiagnosisOutcome {
   double written_vs_memory_um = 0;                     // |RMS written - RMS in memory|
   int gross_removed = 0;
   bool withdrawn = false;       // the final check took the effects back
+  DiagnosisVerdict verdict = DiagnosisVerdict::NothingMissing;
+  double lack_of_fit_p = 1;     // of the final fit (1 when not tested)
   bool held_stayed_held = true; // parameters the base fit held are at their prior values
   int held = 0;                 // how many the base fit held
 };
@@ -104,7 +108,6 @@ inline Machine calibrateOnIndependent(const Machine& nominal, const std::vector<
 inline std::vector<DiagnosisCase> diagnosisCases() {
   using indep::Undeclared;
   const int X = indep::kX, Y = indep::kY, Z = indep::kZ, A = indep::kA, C = indep::kC;
-  (void)A;
   return {
       {"none", {}, {}},
       {"Y reversal 8 um", {{"reversal", Y, 1, 8e-3}}, {{"reversal", "Y", 1}}},
@@ -115,6 +118,7 @@ inline std::vector<DiagnosisCase> diagnosisCases() {
       {"Y drift 10 um/h", {{"drift", Y, 1, 10e-3}}, {{"drift", "Y", 1}}},
       {"Y pitch (gx) warm-up 60 urad, 1800 s", {{"warmup", Y, 3, 60e-6, 1800.0}}, {{"warmup", "Y", 3}}},
       {"outside the library: X periodic 4 um, 70 mm", {{"periodic", X, 0, 4e-3, 70.0, 0.2}}, {}, "X"},
+      {"outside the library: A tilt about y by direction, +-20 urad", {{"reversal", A, 4, 40e-6}}, {}, "", true},
       {"Y reversal + X periodic",
        {{"reversal", Y, 1, 8e-3}, {"periodic", X, 0, 4e-3, 16.0, 0.7}},
        {{"reversal", "Y", 1}, {"periodic", "X", 0}}},
@@ -183,6 +187,8 @@ inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, u
     out.held_stayed_held = out.held_stayed_held && r.machine.params[p] == nominal.params[p] &&
                            std::find(r.final_fit.identified.begin(), r.final_fit.identified.end(), p) ==
                                r.final_fit.identified.end();
+  out.verdict = r.verdict;
+  out.lack_of_fit_p = r.lack_of_fit_after.tested ? r.lack_of_fit_after.p_value : 1.0;
   out.unexplained = r.unexplained;
   if (r.unexplained) out.unexplained_variable = r.unexplained_finding.variable;
   for (const AddedEffect& a : r.added) out.added.push_back(a.label);
@@ -221,11 +227,13 @@ inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, u
   }
   out.named_right = matched == static_cast<int>(c.expected.size()) &&
                     r.added.size() == c.expected.size();
-  if (!c.unexplained_variable.empty())
+  if (c.lack_of_fit)
+    out.named_right = r.verdict == DiagnosisVerdict::Incomplete;
+  else if (!c.unexplained_variable.empty())
     out.named_right = r.added.empty() && r.unexplained &&
                       r.unexplained_finding.variable == c.unexplained_variable;
-  else if (r.unexplained)
-    out.named_right = false;  // structure left where the truth has none
+  else if (r.unexplained || r.verdict == DiagnosisVerdict::Incomplete)
+    out.named_right = false;  // something said to be missing where the truth has nothing more
   return out;
 }
 

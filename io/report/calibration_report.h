@@ -1,5 +1,6 @@
 #pragma once
 // Reports of a ball-bar calibration (JSON) and the NC program of a ball-bar plan (G-code).
+#include <cmath>
 #include <nlohmann/json_fwd.hpp>
 #include <string>
 #include <vector>
@@ -26,6 +27,10 @@ struct RemovedReading {
   int line = 0;
   double residual = 0.0;  // mm
   double studentized = 0.0;
+  // diagnose: the studentised residual against the final model (effects included), and
+  // whether that model explains the reading, which is then restored (NaN: not tested).
+  double studentized_after = NAN;
+  bool restored = false;
 };
 
 struct CalibrationReportInputs {

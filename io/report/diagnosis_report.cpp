@@ -266,10 +266,14 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
     for (const AddedEffect& a : r.withdrawn) w.push_back(a.label);
     out["withdrawn"] = {{"effects", w}, {"reason", r.withdrawn_reason}};
   }
-  json removed = json::array();
-  for (const RemovedReading& g : in.removed)
-    removed.push_back({{"line", g.line}, {"residual_um", mmToUm(g.residual)}, {"studentized", g.studentized}});
+  json removed = json::array(), restored = json::array();
+  for (const RemovedReading& g : in.removed) {
+    json e = {{"line", g.line}, {"residual_um", mmToUm(g.residual)}, {"studentized", g.studentized}};
+    if (std::isfinite(g.studentized_after)) e["studentized_against_final_model"] = g.studentized_after;
+    (g.restored ? restored : removed).push_back(e);
+  }
   out["gross_readings_removed"] = removed;
+  out["gross_readings_restored"] = restored;
   if (in.program) {
     const ProgramComparison& p = *in.program;
     out["program"] = {{"cl_file", p.cl_file},
@@ -335,9 +339,13 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
   if (!r.withdrawn.empty())
     h += "<p><b>Withdrawn:</b> " + xmlEscape(r.withdrawn_reason) + ".</p>\n";
   if (!in.removed.empty()) {
-    h += "<p><b>Gross readings removed</b> (deviation from the final fit):";
+    h += "<p><b>Readings the base model found gross</b> (studentised residual against the base fit, then "
+         "against the final model; restored when the final model explains them):";
     for (const RemovedReading& g : in.removed)
-      h += " line " + std::to_string(g.line) + " (" + formatWith("%+.2f", mmToUm(g.residual)) + " µm)";
+      h += " line " + std::to_string(g.line) + " (" + formatWith("%+.2f", mmToUm(g.residual)) + " µm, t " +
+           formatWith("%.1f", g.studentized) +
+           (std::isfinite(g.studentized_after) ? formatWith(" → %.1f", g.studentized_after) : std::string()) +
+           (g.restored ? ", restored)" : ", removed)");
     h += ".</p>\n";
   }
   if (!r.added.empty()) {
