@@ -364,6 +364,9 @@ void printCalibration(const CalibrationRun& run, const CalibrateOptions& o) {
   std::printf("  residual   RMS %.3f um, max %.3f um, sigma %.3f um (the %zu readings fitted)\n",
               mmToUm(r.rms_residual), mmToUm(r.max_residual), mmToUm(r.residual_sigma),
               run.used.readings.size());
+  std::printf("  lack of fit %s\n", describeLackOfFit(run.lack_of_fit, 1e-3).c_str());
+  if (run.lack_of_fit.tested && run.lack_of_fit.p_value < 1e-3)
+    std::printf("             the model lacks something the readings repeat: tolver diagnose looks for what\n");
   if (!r.held.empty()) {
     std::string names;
     for (int p : r.held) names += " " + m.parameters[p].iso_code;

@@ -129,6 +129,7 @@ CalibrationRun runCalibration(const CalibrateInputs& in) {
   run.identified.params = r.params;
   run.identified.model.errors_source = "identified";
   run.identified.identification = identificationUncertainty(r, run.used, static_cast<int>(m.axes.size()));
+  run.lack_of_fit = lackOfFit(run.used, run.fit.residuals, run.fit.unknowns);
   return run;
 }
 

@@ -46,6 +46,7 @@ struct CalibrationRun {
   std::string prior_text = "none";    // the prior used, in words
   HeldoutFigures heldout_figures;     // the held-out readings before and after
   Machine identified;                 // the machine with the identified values and covariance
+  LackOfFit lack_of_fit;              // the fit's residual against the repeated poses' scatter
 };
 
 // Reads the inputs and identifies. An unobservable test or no data is an InputError.

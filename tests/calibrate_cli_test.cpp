@@ -147,6 +147,23 @@ TEST_F(CalibrateCli, GrossReadingsAreNamedByLineAndRemoved) {
   EXPECT_EQ(k["gross_readings_removed"].size(), 0u);
 }
 
+// The lack-of-fit test: the reversal sample (a backlash the base model lacks) fails it and says
+// to diagnose; the clean sample passes it. Console and JSON.
+TEST_F(CalibrateCli, LackOfFitOnTheRepeatedPoses) {
+  const std::string samples = test::sourcePath("samples/ballbar/");
+  auto r = test::runTolver("calibrate --machine " + nominal + " --readings " + samples + "reversal.csv -o " + path("r.xml"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("the model misses"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("tolver diagnose looks for what"), std::string::npos) << r.output;
+  std::ifstream in(path("r.json"));
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_LT(j["lack_of_fit"]["p_value"].get<double>(), 1e-3);
+  EXPECT_GT(j["lack_of_fit"]["missing_rms_um"].get<double>(), 0.5);
+  auto c = test::runTolver("calibrate --machine " + nominal + " --readings " + samples + "clean.csv -o " + path("c.xml"));
+  ASSERT_EQ(c.exit_code, 0) << c.output;
+  EXPECT_NE(c.output.find("no significant lack of fit"), std::string::npos) << c.output;
+}
+
 TEST_F(CalibrateCli, BadHeldOutFilesExitTwoNamingTheLine) {
   simulate();
   const std::string base = "calibrate --machine " + nominal + " --readings " + path("fit.csv") + " -o " + path("x.xml");

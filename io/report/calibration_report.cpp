@@ -56,6 +56,7 @@ std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test
   j["residual_rms_um"] = mmToUm(r.rms_residual);
   j["residual_max_um"] = mmToUm(r.max_residual);
   j["residual_sigma_um"] = mmToUm(r.residual_sigma);
+  j["lack_of_fit"] = lackOfFitJson(lackOfFit(test, r.residuals, r.unknowns));
   j["method"] =
       "Gauss-Newton with the SVD pseudo-inverse of the column-scaled identification Jacobian "
       "(rank tolerance 1e-9 of the largest singular value); uncertainties from s^2 (J^T J)^-1; "
