@@ -17,6 +17,7 @@
 #include "io/machine/ballbar_file.h"
 #include "io/report/diagnosis_report.h"
 #include "io/common/io_error.h"
+#include "io/common/text_util.h"
 #include "io/machine/machine_file.h"
 #include "io/program/setup_file.h"
 #include "core/numerics/units.h"
@@ -77,15 +78,18 @@ void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o, const Dia
   std::printf("  candidates %zu scored in %d round(s)\n", r.candidates.size(),
               r.candidates.empty() ? 0 : r.candidates.back().round);
   for (const CandidateScore& c : r.candidates)
-    if (c.verdict == CandidateVerdict::RefitFailed)
+    if (c.verdict == CandidateVerdict::RefitFailed || c.verdict == CandidateVerdict::Implausible)
       std::printf("  rejected   %s: %s\n", c.label.c_str(), c.reason.c_str());
   // One verdict; what follows supports it.
   std::printf("  verdict    %s\n", r.verdict_text.c_str());
   for (const AddedEffect& a : r.added) printAdded(m, a);
   if (!r.where.empty()) std::printf("  where      %s\n", r.where.c_str());
   if (!r.suggestion.empty()) std::printf("  to separate it: %s\n", r.suggestion.c_str());
+  const LackOfFit& lof = r.lack_of_fit_after;
   std::printf("  after      residual RMS %.3f um, cross-validated RMS %.3f um; lack of fit %s\n", mmToUm(r.rms_after),
-              mmToUm(r.cv_rms_after), describeLackOfFit(r.lack_of_fit_after, o.in.alpha).c_str());
+              mmToUm(r.cv_rms_after),
+              lof.tested ? ("F " + formatWith("%.2f", lof.f) + ", p " + formatWith("%.2g", lof.p_value)).c_str()
+                         : "not tested");
   if (r.heldout_before.readings > 0) {
     std::printf("  held-out   %d readings (%s): RMS %.3f -> %.3f um, max %.3f -> %.3f um\n",
                 r.heldout_before.readings, o.in.heldout.c_str(), mmToUm(r.heldout_before.rms),

@@ -45,6 +45,7 @@ struct DiagnosisOutcome {
   int gross_removed = 0;
   bool withdrawn = false;       // the final check took the effects back
   DiagnosisVerdict verdict = DiagnosisVerdict::NothingMissing;
+  std::vector<std::string> implausible;  // candidates refused for their fitted value
   double lack_of_fit_p = 1;     // of the final fit (1 when not tested)
   bool held_stayed_held = true; // parameters the base fit held are at their prior values
   int held = 0;                 // how many the base fit held
@@ -188,6 +189,8 @@ inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, u
                            std::find(r.final_fit.identified.begin(), r.final_fit.identified.end(), p) ==
                                r.final_fit.identified.end();
   out.verdict = r.verdict;
+  for (const CandidateScore& cs : r.candidates)
+    if (cs.verdict == CandidateVerdict::Implausible) out.implausible.push_back(cs.label + ": " + cs.reason);
   out.lack_of_fit_p = r.lack_of_fit_after.tested ? r.lack_of_fit_after.p_value : 1.0;
   out.unexplained = r.unexplained;
   if (r.unexplained) out.unexplained_variable = r.unexplained_finding.variable;

@@ -153,5 +153,17 @@ TEST_F(IndependentDiagnosis, ALackOfFitIsNeverNothingMissing) {
   }
 }
 
+// A drift no machine has (Y at 300 um/h): diagnose does not add it as "drift Y ey" (its value
+// is beyond the plausible 50 um/h); the verdict says the model is incomplete.
+TEST_F(IndependentDiagnosis, AnImplausibleValueIsNotAdded) {
+  test::DiagnosisCase c{"Y drift 300 um/h", {{"reversal", indep::kY, 1, 0.0}}, {}};
+  c.truth = {{"drift", indep::kY, 1, 0.3}};
+  const test::DiagnosisOutcome o = test::runDiagnosisCase(c, false, 2, path("p"));
+  for (const std::string& a : o.added) EXPECT_EQ(a.find("drift Y ey"), std::string::npos) << a;
+  ASSERT_FALSE(o.implausible.empty()) << o.message;
+  EXPECT_NE(o.implausible.front().find("beyond the plausible"), std::string::npos) << o.implausible.front();
+  EXPECT_EQ(o.verdict, DiagnosisVerdict::Incomplete) << o.message;
+}
+
 }  // namespace
 }  // namespace tolver

@@ -23,6 +23,7 @@ const char* verdictName(CandidateVerdict v) {
     case CandidateVerdict::Confounded: return "confounded";
     case CandidateVerdict::NotIdentifiable: return "not identifiable";
     case CandidateVerdict::RefitFailed: return "refit failed";
+    case CandidateVerdict::Implausible: return "implausible value";
   }
   return "";
 }
@@ -557,6 +558,21 @@ bool tryToAdd(const Scorer& sc, const BallbarTest& test, std::vector<CandidateSc
     const auto it = std::find(fit.identified.begin(), fit.identified.end(), p);
     a.uncertainty[j] = fit.uncertainty[it - fit.identified.begin()];
   }
+  // A value no machine has (a drift of 100 urad/h): the effect stands in for something else.
+  const double limit = plausibleCoefficientLimit(c.spec);
+  for (size_t j = 0; j < a.parameters.size(); ++j)
+    if (std::abs(a.values[j]) - 2.0 * a.uncertainty[j] > limit) {
+      const bool angular = c.spec.component >= 3;
+      const double k = angular ? 1e6 : 1e3;
+      char why[200];
+      std::snprintf(why, sizeof why, "fitted %.3g +- %.2g %s%s, beyond the plausible %.3g", a.values[j] * k,
+                    a.uncertainty[j] * k, angular ? "urad" : "um", c.spec.type == EffectType::Drift ? "/h" : "",
+                    limit * k);
+      c.verdict = CandidateVerdict::Implausible;
+      c.reason = why;
+      rejected.push_back(c.spec);
+      return false;
+    }
   a.hyperparameter = hyperparameterValue(c.spec);
   a.hyperparameter_uncertainty =
       hyperparameterUncertainty(sc, c.spec, fit.residual_sigma * fit.residual_sigma);
@@ -671,6 +687,12 @@ std::string whereLargest(const MachineModel& model, const BallbarTest& test, con
   return out;
 }
 
+const CandidateScore* firstImplausible(const DiagnosisResult& res) {
+  for (const CandidateScore& c : res.candidates)
+    if (c.verdict == CandidateVerdict::Implausible) return &c;
+  return nullptr;
+}
+
 // One verdict from the selection, the final check, the structure left and the lack of fit.
 void decideVerdict(DiagnosisResult& res, const MachineModel& model, const BallbarTest& test, double alpha) {
   const LackOfFit& l = res.lack_of_fit_after;
@@ -707,6 +729,12 @@ void decideVerdict(DiagnosisResult& res, const MachineModel& model, const Ballba
                       u.variable.c_str(), u.test.c_str(), 100.0 * u.strength);
       res.verdict_text += what;
     }
+  } else if (const CandidateScore* odd = firstImplausible(res); odd && res.added.empty()) {
+    // The best explanation has a value no machine has: it stands in for something else.
+    res.verdict = DiagnosisVerdict::Incomplete;
+    res.verdict_text = "incomplete: the residual is best explained by " + odd->label + " with a value no machine has (" +
+                       odd->reason + "): something the library lacks";
+    if (l.tested) res.verdict_text += "; " + std::string(lof);
   } else if (!res.added.empty()) {
     res.verdict = DiagnosisVerdict::EffectsAdded;
     res.verdict_text = n_added + " added" + (l.tested ? "; no significant lack of fit left: " + std::string(lof)

@@ -61,6 +61,8 @@ enum class CandidateVerdict {
   Confounded,
   NotIdentifiable,
   RefitFailed,  // the nonlinear refit with it did not converge or did not lower the residual
+  Implausible,  // its fitted value lies beyond what the effect can be on a machine tool
+                // (plausibleCoefficientLimit, by more than twice its uncertainty)
 };
 const char* verdictName(CandidateVerdict v);
 

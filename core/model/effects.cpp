@@ -196,6 +196,20 @@ const std::vector<EffectTraits>& table() {
 
 }  // namespace
 
+double plausibleCoefficientLimit(const EffectSpec& spec) {
+  const bool angular = spec.component >= 3;
+  switch (spec.type) {
+    case EffectType::Chebyshev: return angular ? 1e-3 : 0.5;
+    case EffectType::Reversal: return angular ? 200e-6 : 0.05;
+    case EffectType::Periodic: return angular ? 50e-6 : 0.02;
+    case EffectType::Harmonics: return angular ? 200e-6 : 0.05;
+    case EffectType::Drift: return angular ? 50e-6 : 0.05;
+    case EffectType::Warmup: return angular ? 200e-6 : 0.1;
+    case EffectType::BarLength: return 0.05;
+  }
+  return INFINITY;
+}
+
 int principalComponent(const Axis& a) {
   for (int k = 0; k < 3; ++k)
     if (std::abs(a.direction[k]) == 1.0) return a.isRotary() ? k + 3 : k;

@@ -72,6 +72,13 @@ void updateDirections(MotionContext& ctx, const JointVector& q0, const JointVect
 // when its direction is not a coordinate axis.
 int principalComponent(const Axis& a);
 
+// The largest magnitude a coefficient of the effect can plausibly have on a machine tool (mm or
+// rad; drift: per hour), beyond which a fitted value says the effect is standing in for
+// something else (docs/diagnosis.md, "Plausible effects"): reversal 50 um / 200 urad, cyclic
+// error 20 um / 50 urad, rotary harmonics 50 um / 200 urad, drift 50 um/h / 50 urad/h,
+// warm-up 100 um / 200 urad, bar length 50 um, a higher Chebyshev degree 0.5 mm / 1 mrad.
+double plausibleCoefficientLimit(const EffectSpec& spec);
+
 // "reversal X ex", "periodic X ex (period 10.000 mm)", "bar_length".
 std::string describeEffect(const MachineModel& model, const EffectSpec& spec);
 
