@@ -58,19 +58,22 @@ void printCompensation(const CompensationRun& run, const CompensateOptions& o, c
   std::printf("  before     tip max %.3f um (line %d), RMS %.3f um; tool axis max %.2f urad, RMS %.2f urad\n",
               rep.before.tip_max_um, rep.before.tip_max_line, rep.before.tip_rms_um, rep.before.axis_max_urad,
               rep.before.axis_rms_urad);
-  std::printf("  after      tip max %.4f um (line %d), RMS %.4f um; tool axis max %.3f urad, RMS %.3f urad "
-              "(the written program, read back and predicted)\n",
-              rep.after.tip_max_um, rep.after.tip_max_line, rep.after.tip_rms_um, rep.after.axis_max_urad,
-              rep.after.axis_rms_urad);
+  // On a calibrated machine the after is the calibration's band (what the model cannot know);
+  // the model's own residual, read back, is given apart.
+  if (rep.after_band95_max_um >= 0)
+    std::printf("  after      within the calibration's 95 %% band: tip median %.3f um, max %.3f um; tool axis "
+                "median %.2f urad, max %.2f urad (the spindle's tilt, which a ball-bar cannot see, not included)\n",
+                rep.after_band95_median_um, rep.after_band95_max_um, rep.after_axis_band95_median_urad,
+                rep.after_axis_band95_max_urad);
+  std::printf("  %s tip max %.4f um (line %d), RMS %.4f um; tool axis max %.3f urad, RMS %.3f urad "
+              "(the written program, read back and predicted on the model)\n",
+              rep.after_band95_max_um >= 0 ? "model     " : "after     ", rep.after.tip_max_um,
+              rep.after.tip_max_line, rep.after.tip_rms_um, rep.after.axis_max_urad, rep.after.axis_rms_urad);
   if (rep.compensated_points < static_cast<int>(n))
     std::printf("             on the %d points the file compensates (the others are listed below): tip max "
                 "%.4f um, RMS %.4f um; tool axis max %.3f urad\n",
                 rep.compensated_points, rep.after_compensated.tip_max_um, rep.after_compensated.tip_rms_um,
                 rep.after_compensated.axis_max_urad);
-  if (rep.after_band95_max_um >= 0)
-    std::printf("  model      the after is zero only to within the calibration's uncertainty: 95 %% band median "
-                "%.3f um, max %.3f um (compensation removes what the model knows, not what it does not)\n",
-                rep.after_band95_median_um, rep.after_band95_max_um);
   std::string jc;
   char buf[96];
   for (size_t a = 0; a < rep.joint_correction_max.size(); ++a) {
@@ -105,7 +108,8 @@ void printCompensation(const CompensationRun& run, const CompensateOptions& o, c
                 rep.ill_conditioned, o.in.max_condition, lines(rep.ill_conditioned_lines).c_str());
   for (const std::string& note : run.text.notes) std::printf("  note       %s\n", note.c_str());
   for (const std::string& w : run.warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
-  std::printf("  wrote      %s (compensated program), %s (report)\n", o.output.c_str(), report.c_str());
+  std::printf("  wrote      %s (compensated program), %s (report), %s (the joints of every point)\n",
+              o.output.c_str(), report.c_str(), compensatedJointsPath(report).c_str());
   if (!o.report_dir.empty())
     std::printf("  report     %s/report.html (and report.json, tip_deviation.png, tool_axis.png)\n", o.report_dir.c_str());
 }

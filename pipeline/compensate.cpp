@@ -4,6 +4,7 @@
 #include "pipeline/parallel_prediction.h"
 
 #include <algorithm>
+#include <filesystem>
 #include <cmath>
 #include <cstdio>
 #include <set>
@@ -169,11 +170,19 @@ void afterBand(const CompensateInputs& in, const std::vector<ProbedPoint>& probe
     for (size_t i = 0; i < n; i += step) sub.push_back(run.after.points[i].q);
     pu.setupModulo(sub);
   }
-  std::vector<double> band(n);
-  for (size_t i = 0; i < n; ++i) band[i] = 1.96 * mmToUm(pu.at(run.after.points[i].q).tip);
-  run.report.after_band95_max_um = *std::max_element(band.begin(), band.end());
-  std::nth_element(band.begin(), band.begin() + static_cast<std::ptrdiff_t>(n / 2), band.end());
-  run.report.after_band95_median_um = band[n / 2];
+  std::vector<double> band(n), axis(n);
+  for (size_t i = 0; i < n; ++i) {
+    const PoseUncertainty u = pu.at(run.after.points[i].q);
+    band[i] = 1.96 * mmToUm(u.tip);
+    axis[i] = 1.96 * radToUrad(u.axis);
+  }
+  auto medianMax = [n](std::vector<double>& v, double* median, double* max) {
+    *max = *std::max_element(v.begin(), v.end());
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n / 2), v.end());
+    *median = v[n / 2];
+  };
+  medianMax(band, &run.report.after_band95_median_um, &run.report.after_band95_max_um);
+  medianMax(axis, &run.report.after_axis_band95_median_urad, &run.report.after_axis_band95_max_urad);
 }
 
 void fillReport(const CompensateInputs& in, const std::string& output, CompensationRun& run) {
@@ -268,11 +277,46 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
   return run;
 }
 
+std::string compensatedJointsPath(const std::string& report_json) {
+  std::filesystem::path p(report_json);
+  return (p.parent_path() / (p.stem().string() + "_joints.csv")).string();
+}
+
 void writeCompensation(const CompensationRun& run, const std::string& output, const std::string& report_json,
                        const std::string& report_dir_path) {
   OutputSet outputs;
   outputs.add(output, run.text.text);
-  outputs.add(report_json, formatCompensationJson(run.report));
+  // The joints of every point, before and after (the compensating ones where written).
+  {
+    const MachineModel& m = run.machine.model;
+    const std::vector<CompensatedPoint>& cp = run.compensation.points;
+    std::vector<std::string> names, status;
+    std::vector<bool> rotary;
+    for (const Axis& ax : m.axes) {
+      names.push_back(ax.name);
+      rotary.push_back(ax.isRotary());
+    }
+    std::vector<std::vector<double>> before(cp.size()), after(cp.size());
+    for (size_t i = 0; i < cp.size(); ++i) {
+      const bool written = i < run.text.written.size() && run.text.written[i];
+      status.push_back(!written ? "kept"
+                       : cp[i].status == CompensationStatus::Compensated    ? "compensated"
+                       : cp[i].status == CompensationStatus::IllConditioned ? "ill_conditioned"
+                       : cp[i].status == CompensationStatus::OutOfTravel    ? "out_of_travel"
+                                                                            : "not_converged");
+      for (size_t a = 0; a < m.axes.size(); ++a) {
+        const double k = m.axes[a].isRotary() ? radToDeg(1.0) : 1.0;
+        before[i].push_back(cp[i].q0[a] * k);
+        after[i].push_back((written ? cp[i].q[a] : cp[i].q0[a]) * k);
+      }
+    }
+    outputs.add(compensatedJointsPath(report_json),
+                formatCompensatedJointsCsv(names, rotary, run.line, status, before, after, run.tip_after_um,
+                                           run.axis_after_urad));
+  }
+  CompensationReport rep = run.report;
+  rep.joints_file = compensatedJointsPath(report_json);
+  outputs.add(report_json, formatCompensationJson(rep));
   outputs.commit();
   if (report_dir_path.empty()) return;
   ReportDirectory report_dir(report_dir_path);  // written as a whole, swapped in at the end

@@ -40,7 +40,10 @@ struct CompensationRun {
 // Reads, predicts, compensates, writes the text (named `output` in its notes) and measures it
 // read back. Throws InputError.
 CompensationRun runCompensation(const CompensateInputs& in, const std::string& output);
-// Writes the program and the JSON report as a set, then the report directory (when given).
+// Where the joints of every point go: beside the JSON report, <report stem>_joints.csv.
+std::string compensatedJointsPath(const std::string& report_json);
+// Writes the program, the JSON report and the joints (CSV) as a set, then the report directory
+// (when given).
 void writeCompensation(const CompensationRun& run, const std::string& output, const std::string& report_json,
                        const std::string& report_dir);
 

@@ -3,12 +3,15 @@
 // (--absolute keeps the raw prediction); verify turns a decision inside the 95 % band into
 // UNDECIDED (exit 4), one clear of it into PASS (0) or FAIL (1).
 #include <gtest/gtest.h>
+#include <algorithm>
+#include <Eigen/Eigenvalues>
 
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
 #include <sstream>
 
+#include "core/kinematics/forward_kinematics.h"
 #include "core/path/tool_path_prediction.h"
 #include "io/program/apt_reader.h"
 #include "io/common/io_error.h"
@@ -50,7 +53,33 @@ TEST_F(UncertaintyCli, PredictWritesTheUncertaintyAndAppliesTheMeasuredSetup) {
   std::ifstream in(path("p.csv"));
   std::string header;
   std::getline(in, header);
-  EXPECT_NE(header.find(",u_tip_um,u_along_axis_um,u_axis_urad,outside_calibrated"), std::string::npos);
+  EXPECT_NE(header.find(",u_tip_um,u_along_axis_um,u_axis_urad,outside_calibrated,cov_xx_um2"), std::string::npos);
+  // The band is checkable from the file: the tip covariance along the nominal tool axis gives
+  // u_along_axis_um, and its largest eigenvalue u_tip_um (to the printed digits).
+  {
+    std::vector<std::string> names;
+    std::stringstream hs(header);
+    for (std::string c; std::getline(hs, c, ',');) names.push_back(c);
+    auto col = [&](const std::string& n) {
+      return static_cast<size_t>(std::find(names.begin(), names.end(), n) - names.begin());
+    };
+    int rows = 0;
+    for (std::string line; std::getline(in, line) && rows < 200; ++rows) {
+      std::vector<double> v;
+      std::stringstream ls(line);
+      for (std::string c; std::getline(ls, c, ',');) v.push_back(std::stod(c));
+      ASSERT_EQ(v.size(), names.size());
+      Eigen::Matrix3d C;
+      C << v[col("cov_xx_um2")], v[col("cov_xy_um2")], v[col("cov_xz_um2")], v[col("cov_xy_um2")],
+          v[col("cov_yy_um2")], v[col("cov_yz_um2")], v[col("cov_xz_um2")], v[col("cov_yz_um2")], v[col("cov_zz_um2")];
+      const Eigen::Vector3d n = Eigen::Vector3d(v[col("nominal_i")], v[col("nominal_j")], v[col("nominal_k")]).normalized();
+      const double along = std::sqrt(n.dot(C * n));
+      EXPECT_NEAR(along, v[col("u_along_axis_um")], 1e-4 + 1e-5 * along) << rows;
+      const double worst = std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvalues().maxCoeff());
+      EXPECT_NEAR(worst, v[col("u_tip_um")], 1e-4 + 1e-5 * worst) << rows;
+    }
+    EXPECT_EQ(rows, 200);
+  }
   auto a = test::runTolver(base + " --absolute -o " + path("a.apt"));
   ASSERT_EQ(a.exit_code, 0) << a.output;
   EXPECT_NE(a.output.find("absolute prediction"), std::string::npos) << a.output;
@@ -117,8 +146,10 @@ TEST_F(UncertaintyCli, CompensationSaysHowMuchOfTheAfterIsModelUncertainty) {
   auto r = test::runTolver("compensate --machine " + id + " --cl " + test::sourcePath("samples/nas979_cone.apt") +
                            " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " -o " + path("c.apt"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("the after is zero only to within the calibration's uncertainty"), std::string::npos)
+  // The after is the band (tip and axis), the model's own residual apart.
+  EXPECT_NE(r.output.find("after      within the calibration's 95 % band: tip median"), std::string::npos)
       << r.output;
+  EXPECT_NE(r.output.find("model      tip max"), std::string::npos) << r.output;
   std::ifstream in(path("c.json"));
   const nlohmann::json j = nlohmann::json::parse(in);
   ASSERT_TRUE(j.contains("after_uncertainty")) << j.dump(1);
@@ -129,6 +160,42 @@ TEST_F(UncertaintyCli, CompensationSaysHowMuchOfTheAfterIsModelUncertainty) {
   // reported and left as programmed; the others come out on the nominal.
   EXPECT_EQ(j["uncompensated"]["out_of_travel_lines"], nlohmann::json::array({553}));
   EXPECT_LT(j["after_compensated_points"]["tip_max_um"].get<double>(), 0.01);
+  EXPECT_GT(j["after_uncertainty"]["axis_band95_max_urad"].get<double>(), 0.1);
+  // The joints of every point: a compensated point's after joints put the calibrated machine's
+  // tip on the program's point; the out-of-travel one keeps its joints.
+  ASSERT_EQ(j["joints_file"], path("c_joints.csv"));
+  const Machine m = readMachineFile(id);
+  const ForwardKinematics fk(m.model, m.params);
+  const ClProgram cl = readAptFile(test::sourcePath("samples/nas979_cone.apt"));
+  std::ifstream jin(path("c_joints.csv"));
+  std::string header;
+  std::getline(jin, header);
+  EXPECT_EQ(header.rfind("index,line,status,x_mm_before", 0), 0u) << header;
+  int rows = 0, checked = 0;
+  for (std::string line; std::getline(jin, line); ++rows) {
+    std::vector<std::string> c;
+    std::stringstream ls(line);
+    for (std::string x; std::getline(ls, x, ',');) c.push_back(x);
+    ASSERT_EQ(c.size(), 15u);
+    if (c[2] == "out_of_travel") {
+      EXPECT_EQ(c[1], "553");
+      for (int a = 0; a < 5; ++a) EXPECT_EQ(c[3 + a], c[8 + a]);
+    }
+    if (c[2] != "compensated" || rows % 50) continue;
+    JointVector q(5);
+    for (int a = 0; a < 5; ++a) q[a] = std::stod(c[8 + a]) * (a >= 3 ? M_PI / 180 : 1.0);
+    Eigen::Vector3d p, u;
+    fk.tipAndAxis(q, &p, &u);
+    // The machine after the measured set-up is not the file's: compare the change instead.
+    JointVector q0(5);
+    for (int a = 0; a < 5; ++a) q0[a] = std::stod(c[3 + a]) * (a >= 3 ? M_PI / 180 : 1.0);
+    Eigen::Vector3d p0, u0;
+    fk.tipAndAxis(q0, &p0, &u0);
+    EXPECT_LT((p - p0).norm(), 0.05) << rows;  // corrections of micrometres, not a different pose
+    ++checked;
+  }
+  EXPECT_EQ(rows, 723);
+  EXPECT_GT(checked, 5);
 }
 
 // plan-ballbar --volume: the same design for predictions anywhere in the travel; its expected

@@ -28,7 +28,9 @@ void writePointTable(TextOut& out, const MachineModel& model, const std::vector<
   out +=
       ",predicted_x_mm,predicted_y_mm,predicted_z_mm,predicted_i,predicted_j,predicted_k,"
       "dev_x_um,dev_y_um,dev_z_um,dev_um,along_axis_um,across_axis_um,axis_angle_urad,singular";
-  out += uncertainty ? ",u_tip_um,u_along_axis_um,u_axis_urad,outside_calibrated\n" : "\n";
+  out += uncertainty ? ",u_tip_um,u_along_axis_um,u_axis_urad,outside_calibrated,"
+                       "cov_xx_um2,cov_xy_um2,cov_xz_um2,cov_yy_um2,cov_yz_um2,cov_zz_um2\n"
+                     : "\n";
   char buf[512];
   for (size_t i = 0; i < nominal.size(); ++i) {
     const ClPoint& c = nominal[i];
@@ -53,6 +55,12 @@ void writePointTable(TextOut& out, const MachineModel& model, const std::vector<
       const PoseUncertainty& u = (*uncertainty)[i];
       std::snprintf(buf, sizeof buf, ",%.4f,%.4f,%.4f,%d", mmToUm(u.tip),
                     mmToUm(PredictionUncertainty::along(u, c.u_w)), radToUrad(u.axis), u.outside ? 1 : 0);
+      out += buf;
+      // The tip's covariance in the part frame (um^2): the band along any unit direction n is
+      // 1.96 sqrt(n^T C n).
+      const Eigen::Matrix3d C = u.tip_covariance_w * (mmToUm(1.0) * mmToUm(1.0));
+      std::snprintf(buf, sizeof buf, ",%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", C(0, 0), C(0, 1), C(0, 2), C(1, 1), C(1, 2),
+                    C(2, 2));
       out += buf;
     }
     out += "\n";

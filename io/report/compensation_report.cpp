@@ -23,6 +23,35 @@ nlohmann::json figures(const PathFigures& f) {
 
 }  // namespace
 
+std::string formatCompensatedJointsCsv(const std::vector<std::string>& axis_names,
+                                       const std::vector<bool>& rotary, const std::vector<int>& line,
+                                       const std::vector<std::string>& status,
+                                       const std::vector<std::vector<double>>& before,
+                                       const std::vector<std::vector<double>>& after,
+                                       const std::vector<double>& tip_after_um,
+                                       const std::vector<double>& axis_after_urad) {
+  std::string out = "index,line,status";
+  for (const char* when : {"_before", "_after"})
+    for (size_t a = 0; a < axis_names.size(); ++a) {
+      std::string n = axis_names[a];
+      for (char& c : n) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      out += "," + n + (rotary[a] ? "_deg" : "_mm") + when;
+    }
+  out += ",tip_after_um,axis_after_urad\n";
+  char buf[64];
+  for (size_t i = 0; i < line.size(); ++i) {
+    out += std::to_string(i) + "," + std::to_string(line[i]) + "," + status[i];
+    for (const auto* q : {&before, &after})
+      for (size_t a = 0; a < axis_names.size(); ++a) {
+        std::snprintf(buf, sizeof buf, ",%.9f", (*q)[i][a]);
+        out += buf;
+      }
+    std::snprintf(buf, sizeof buf, ",%.6f,%.6f\n", tip_after_um[i], axis_after_urad[i]);
+    out += buf;
+  }
+  return out;
+}
+
 std::string formatCompensationJson(const CompensationReport& r) {
   nlohmann::json j;
   j["machine"] = r.machine;
@@ -35,9 +64,12 @@ std::string formatCompensationJson(const CompensationReport& r) {
   j["after_compensated_points"] = figures(r.after_compensated);
   j["compensated_points"] = r.compensated_points;
   j["after_measured_on"] = "the written program, read back and predicted on the machine";
+  if (!r.joints_file.empty()) j["joints_file"] = r.joints_file;
   if (r.after_band95_max_um >= 0)
     j["after_uncertainty"] = {{"band95_max_um", r.after_band95_max_um},
                               {"band95_median_um", r.after_band95_median_um},
+                              {"axis_band95_max_urad", r.after_axis_band95_max_urad},
+                              {"axis_band95_median_urad", r.after_axis_band95_median_urad},
                               {"meaning", "the after is zero only to within the calibration's "
                                           "uncertainty: compensation removes what the model "
                                           "knows, not what it does not"}};
