@@ -136,6 +136,10 @@ TEST_F(UncertaintyCli, APlanForAProgramPredictsItBetter) {
       << r.output;
   EXPECT_LT(std::stod(m[1]), 0.9 * std::stod(m[3]));
   EXPECT_LT(std::stod(m[2]), std::stod(m[4]));
+  // It says what it buys, computed from the two medians.
+  const int gain = static_cast<int>(std::lround(100.0 * (1.0 - std::stod(m[1]) / std::stod(m[3]))));
+  EXPECT_NE(r.output.find("buys       an expected " + std::to_string(gain) + " % lower median"), std::string::npos)
+      << r.output;
 }
 
 // compensate on a calibrated machine: the after carries the model's 95 % band (from the
@@ -212,6 +216,9 @@ TEST_F(UncertaintyCli, APlanForTheWholeTravel) {
       << r.output;
   EXPECT_LT(std::stod(m[1]), std::stod(m[3]));
   EXPECT_LT(std::stod(m[2]), std::stod(m[4]));
+  // A gain under 10 % is said to buy little, with the default plan as good.
+  if (std::stod(m[1]) > 0.9 * std::stod(m[3]))
+    EXPECT_NE(r.output.find("buys       little"), std::string::npos) << r.output;
   auto both = test::runTolver(base + " --for " + test::sourcePath("samples/nas979_cone.apt"));
   EXPECT_EQ(both.exit_code, 2) << both.output;
 }
