@@ -521,6 +521,11 @@ void registerBallbar(CLI::App& app, int* exit_code) {
                     "regularisation towards zero: auto (default: its scale from the readings' "
                     "evidence), none, or 'um,urad' per linear and angular coefficient");
     cmd->add_flag("--strict", o->in.strict, "refuse when some parameters cannot be identified");
+    cmd->add_option("--spindle-tilt-urad", o->in.spindle_tilt_urad,
+                    "prior of the spindle's tilt against the machine's axes (urad, 1 sigma), which a "
+                    "ball-bar cannot see (e.g. the tram tolerance over 2): added to every prediction's "
+                    "tool-axis band")
+        ->check(CLI::Range(0.0, 1e5));
     cmd->add_flag("--keep-outliers", o->in.keep_outliers,
                   "fit every reading (gross readings are still named)");
     cmd->callback([o, exit_code] { runCalibrate(*o, exit_code); });

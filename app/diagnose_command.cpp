@@ -183,6 +183,11 @@ void registerDiagnose(CLI::App& app, int* exit_code) {
   cmd->add_option("--balls", o->balls,
                   "identified ball positions to write (CSV; default: the output path with "
                   "_balls.csv)");
+  cmd->add_option("--spindle-tilt-urad", o->in.spindle_tilt_urad,
+                    "prior of the spindle's tilt against the machine's axes (urad, 1 sigma), which a "
+                    "ball-bar cannot see (e.g. the tram tolerance over 2): added to every prediction's "
+                    "tool-axis band")
+      ->check(CLI::Range(0.0, 1e5));
   cmd->add_flag("--keep-outliers", o->in.keep_outliers,
                 "fit every reading (gross readings are still named)");
   cmd->add_flag("--quiet", o->quiet, "no progress bar");

@@ -7,6 +7,7 @@
 
 #include "app/commands.h"
 #include "app/common.h"
+#include "io/common/text_util.h"
 #include "core/path/prediction_uncertainty.h"
 #include "core/path/tool_path_prediction.h"
 #include "geometry/cutter.h"
@@ -66,12 +67,28 @@ void printUncertainty(const Machine& machine, const ClProgram& program, const Ca
   else
     std::printf("  set-up     absolute prediction (--absolute): it includes what probing the part "
                 "and presetting the tool would take up, which the calibration cannot see\n");
-  std::printf("  uncertainty (1 sigma) of the prediction, from the calibration's covariance of %zu "
-              "identified values: tip median %.3f um, max %.3f um; tool axis median %.3f urad, "
+  std::printf("  uncertainty (1 sigma) of the prediction (%zu identified values and what their "
+              "covariance does not hold, below): tip median %.3f um, max %.3f um; tool axis median %.3f urad, "
               "max %.3f urad\n",
               machine.identification.parameters.size(), mmToUm(median(tip)),
               mmToUm(*std::max_element(tip.begin(), tip.end())), radToUrad(median(axis)),
               radToUrad(*std::max_element(axis.begin(), axis.end())));
+  // Which parts of the band come from where.
+  const IdentificationUncertainty& id = machine.identification;
+  std::vector<double> cal_tip(unc.size()), cal_axis(unc.size());
+  for (size_t i = 0; i < unc.size(); ++i) {
+    cal_tip[i] = unc[i].calibration_tip;
+    cal_axis[i] = unc[i].calibration_axis;
+  }
+  std::printf("  band from  the covariance (tip median %.3f um, axis median %.3f urad); %s; %s\n",
+              mmToUm(median(cal_tip)), radToUrad(median(cal_axis)),
+              id.lack_of_fit_mm > 0 ? ("the calibration's lack of fit, " + formatWith("%.3f um", mmToUm(id.lack_of_fit_mm)) +
+                                       " per tip coordinate").c_str()
+                                    : "no lack of fit (the calibration's test passed, or it had no repeats)",
+              id.spindle_tilt_rad > 0
+                  ? ("the spindle tilt's prior, " + formatWith("%.1f urad", id.spindle_tilt_rad * 1e6) + " on the axis").c_str()
+                  : "the spindle's tilt, which a ball-bar cannot see, is not in the axis band (calibrate "
+                    "--spindle-tilt-urad states its prior; a tram measures it)");
   if (outside > 0) {
     std::string where;
     char buf[96];

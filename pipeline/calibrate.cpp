@@ -129,6 +129,13 @@ CalibrationRun runCalibration(const CalibrateInputs& in) {
   run.identified.params = r.params;
   run.identified.model.errors_source = "identified";
   run.identified.identification = identificationUncertainty(r, run.used, static_cast<int>(m.axes.size()));
+  // What the covariance does not hold: the model's lack of fit when its test fails, the spindle
+  // tilt's prior when the user states it.
+  {
+    const LackOfFit l = lackOfFit(run.used, r.residuals, r.unknowns);
+    if (l.tested && l.p_value < 1e-3) run.identified.identification.lack_of_fit_mm = l.missing_rms;
+    run.identified.identification.spindle_tilt_rad = in.spindle_tilt_urad * 1e-6;
+  }
   run.lack_of_fit = lackOfFit(run.used, run.fit.residuals, run.fit.unknowns);
   return run;
 }

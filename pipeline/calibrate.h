@@ -22,6 +22,10 @@ struct CalibrateInputs {
   std::string prior = "auto";   // "auto" (by the evidence), "none", or "um,urad"
   bool strict = false;          // refuse a fit whose rank falls short
   bool keep_outliers = false;   // fit every reading, gross ones included
+  // The prior of the spindle's tilt against the machine's axes (urad, 1 sigma per direction),
+  // which a ball-bar cannot see: written into the identification, added to the tool-axis band
+  // of every prediction (0: not stated).
+  double spindle_tilt_urad = 0.0;
 };
 
 // Where the outputs go: the identified machine, its ball positions and the JSON report.

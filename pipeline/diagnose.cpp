@@ -182,6 +182,9 @@ DiagnosisWritten writeDiagnosis(const DiagnosisRun& run, const DiagnoseInputs& i
   augmented.model.errors_source = "identified";
   augmented.identification =
       identificationUncertainty(r.final_fit, used, static_cast<int>(augmented.model.axes.size()));
+  if (r.lack_of_fit_after.tested && r.lack_of_fit_after.p_value < in.alpha)
+    augmented.identification.lack_of_fit_mm = r.lack_of_fit_after.missing_rms;
+  augmented.identification.spindle_tilt_rad = in.spindle_tilt_urad * 1e-6;
   OutputSet files;
   const std::string xml_tmp =
       files.add(out.machine, formatMachineXml(augmented, "augmented by tolver diagnose from " + in.readings + " (" +

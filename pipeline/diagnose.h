@@ -27,6 +27,7 @@ struct DiagnoseInputs {
   int max_effects = 4;
   int blocks_per_setup = 6;       // cross-validation blocks
   bool keep_outliers = false;
+  double spindle_tilt_urad = 0.0;  // as CalibrateInputs::spindle_tilt_urad
 };
 
 struct DiagnosisOutputs {

@@ -4,11 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <algorithm>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "io/common/text_util.h"
+#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {
@@ -159,6 +161,30 @@ TEST_F(CalibrateCli, LackOfFitOnTheRepeatedPoses) {
   const nlohmann::json j = nlohmann::json::parse(in);
   EXPECT_LT(j["lack_of_fit"]["p_value"].get<double>(), 1e-3);
   EXPECT_GT(j["lack_of_fit"]["missing_rms_um"].get<double>(), 0.5);
+  // What the covariance does not hold goes into the machine file and into every band: the lack
+  // of fit on the tip, the stated spindle-tilt prior on the axis.
+  auto t = test::runTolver("calibrate --machine " + nominal + " --readings " + samples + "reversal.csv -o " +
+                           path("t.xml") + " --spindle-tilt-urad 10");
+  ASSERT_EQ(t.exit_code, 0) << t.output;
+  const Machine id = readMachineFile(path("t.xml"));
+  EXPECT_NEAR(id.identification.lack_of_fit_mm * 1e3, j["lack_of_fit"]["missing_rms_um"].get<double>(), 1e-9);
+  EXPECT_NEAR(id.identification.spindle_tilt_rad, 10e-6, 1e-15);
+  auto p = test::runTolver("predict --machine " + path("t.xml") + " --cl " + test::sourcePath("samples/nas979_cone.apt") +
+                           " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " -o " + path("p.apt"));
+  ASSERT_EQ(p.exit_code, 0) << p.output;
+  EXPECT_NE(p.output.find("the calibration's lack of fit"), std::string::npos) << p.output;
+  EXPECT_NE(p.output.find("the spindle tilt's prior, 10.0 urad"), std::string::npos) << p.output;
+  std::ifstream csv(path("p.csv"));
+  std::string header, row;
+  std::getline(csv, header);
+  std::getline(csv, row);
+  std::vector<std::string> names, v;
+  std::stringstream hs(header), rs(row);
+  for (std::string c; std::getline(hs, c, ',');) names.push_back(c);
+  for (std::string c; std::getline(rs, c, ',');) v.push_back(c);
+  auto col = [&](const char* n) { return std::stod(v[std::find(names.begin(), names.end(), n) - names.begin()]); };
+  EXPECT_GE(col("u_tip_um"), id.identification.lack_of_fit_mm * 1e3 - 1e-4);
+  EXPECT_GE(col("u_axis_urad"), 10.0 - 1e-4);
   auto c = test::runTolver("calibrate --machine " + nominal + " --readings " + samples + "clean.csv -o " + path("c.xml"));
   ASSERT_EQ(c.exit_code, 0) << c.output;
   EXPECT_NE(c.output.find("no significant lack of fit"), std::string::npos) << c.output;

@@ -215,6 +215,13 @@ struct IdentificationUncertainty {
   Eigen::MatrixXd covariance;    // of those parameters, in mm and rad
   std::vector<double> covered_min, covered_max;  // per axis, mm or rad; empty: unknown
   int readings = 0;
+  // What the covariance does not hold, added to a prediction's band (core/path/prediction_
+  // uncertainty.h): the RMS the model misses beyond the readings' repeatability when the
+  // calibration's lack-of-fit test failed (mm, per coordinate of the tip), and the prior of the
+  // spindle's tilt against the machine's axes, which a ball-bar cannot see (rad, 1 sigma per
+  // direction across the tool axis; 0: not stated).
+  double lack_of_fit_mm = 0.0;
+  double spindle_tilt_rad = 0.0;
   bool empty() const { return parameters.empty(); }
 };
 

@@ -19,6 +19,9 @@ struct PoseUncertainty {
   Eigen::Matrix3d tip_covariance_w = Eigen::Matrix3d::Zero();  // mm^2
   double tip = 0.0;   // mm, 1 sigma along the worst direction (sqrt of the largest eigenvalue)
   double axis = 0.0;  // rad, 1 sigma of the tool axis's direction (worst direction)
+  // The shares of the calibration's covariance alone (mm, rad): tip and axis above add the
+  // identification's lack of fit (tip) and spindle-tilt prior (axis) in quadrature.
+  double calibration_tip = 0.0, calibration_axis = 0.0;
   // How far the joints lie outside the covered ranges (mm or rad, per axis; 0 inside; empty
   // when the machine file gives no ranges). Fixed capacity: a long program keeps one per point.
   JointVector beyond;

@@ -447,6 +447,16 @@ class Reader {
         fail(u, "identification_uncertainty.readings", "expected a whole number from 0 to 1e9");
       id.readings = static_cast<int>(n);
     }
+    if (u->Attribute("lack_of_fit_um")) {
+      const double v = number(u, "lack_of_fit_um");
+      if (!(v >= 0 && v <= 1e4)) fail(u, "identification_uncertainty.lack_of_fit_um", "expected 0 to 10000 um");
+      id.lack_of_fit_mm = umToMm(v);
+    }
+    if (u->Attribute("spindle_tilt_urad")) {
+      const double v = number(u, "spindle_tilt_urad");
+      if (!(v >= 0 && v <= 1e5)) fail(u, "identification_uncertainty.spindle_tilt_urad", "expected 0 to 100000 urad");
+      id.spindle_tilt_rad = v * 1e-6;
+    }
     for (const XMLElement* c = u->FirstChildElement("covered"); c; c = c->NextSiblingElement("covered")) {
       const int a = m.axisIndex(attr(c, "axis"));
       if (a < 0) fail(c, "covered.axis", "no axis named '" + attr(c, "axis") + "'");
@@ -700,6 +710,8 @@ class MachineXmlWriter {
     if (id.empty() && id.covered_min.empty()) return;
     p_.OpenElement("identification_uncertainty");
     attr("readings", std::to_string(id.readings));
+    if (id.lack_of_fit_mm > 0) attr("lack_of_fit_um", mmToUm(id.lack_of_fit_mm));
+    if (id.spindle_tilt_rad > 0) attr("spindle_tilt_urad", id.spindle_tilt_rad * 1e6);
     p_.PushComment(" the joint ranges the readings covered (mm, deg), and the covariance of the identified "
                    "values (um and urad) ");
     for (size_t a = 0; a < id.covered_min.size() && a < m_.axes.size(); ++a) {
