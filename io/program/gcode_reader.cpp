@@ -605,16 +605,16 @@ class Reader {
       prog_.notes.push_back("line " + std::to_string(line_) + ": CYCLE800 deselects the swivel frame");
       return;
     }
-    const double st = num(2, "_ST");
-    const int mode = static_cast<int>(num(3, "_MODE"));
-    const int dir = static_cast<int>(num(13, "_DIR"));
-    if (st < 0 || std::floor(st) != st) fail(line_, column, "CYCLE800 _ST", "expected a whole number");
+    const double st = num(2, "_ST"), mode_v = num(3, "_MODE"), dir_v = num(13, "_DIR");
+    if (!(st >= 0 && st < 1e9) || std::floor(st) != st) fail(line_, column, "CYCLE800 _ST", "expected a whole number");
+    if (!(mode_v >= 0 && mode_v <= 255) || std::floor(mode_v) != mode_v)
+      fail(line_, column, "CYCLE800 _MODE", "expected a whole number from 0 to 255");
+    if (!(dir_v == -1 || dir_v == 0 || dir_v == 1)) fail(line_, column, "CYCLE800 _DIR", "expected -1, 0 or +1");
+    const int mode = static_cast<int>(mode_v), dir = static_cast<int>(dir_v);
     const int st_units = static_cast<int>(std::fmod(st, 10.0));
     if (st_units > 1)
       fail(line_, column, "CYCLE800 _ST", "swivel type " + std::to_string(st_units) +
                                               " (units digit) is not known: 0 new, 1 additive");
-    if (mode < 0 || mode > 255) fail(line_, column, "CYCLE800 _MODE", "expected 0 to 255");
-    if (dir < -1 || dir > 1) fail(line_, column, "CYCLE800 _DIR", "expected -1, 0 or +1");
     const std::vector<int> rot = swivelAxes();
     if (rot.size() != 2)
       fail(line_, column, "CYCLE800", "swivelling needs a machine with two rotary axes");
@@ -703,9 +703,10 @@ class Reader {
   std::string tiltedPlane(const std::map<char, const Word*>& aw, const Word* g682, const Word* g531) {
     auto value = [&](char l) { return aw.count(l) ? aw.at(l)->value : 0.0; };
     if (g682) {
-      const int form = static_cast<int>(value('P'));
-      if (form != 0 && form != 1)
-        fail(line_, g682->column, "G68.2", "G68.2 P" + std::to_string(form) + " (three points, two vectors or "
+      const double form_v = value('P');
+      const int form = form_v == 0.0 ? 0 : form_v == 1.0 ? 1 : -1;
+      if (form < 0)
+        fail(line_, g682->column, "G68.2", "G68.2 P" + formatNumber(form_v) + " (three points, two vectors or "
                                            "projection angles) is not supported: post Euler angles (P0) or "
                                            "roll-pitch-yaw (P1)");
       if (rotaryCount() != 2)
