@@ -189,6 +189,14 @@ void runPlan(PlanOptions o) {
   if (o.lengths.size() == 1) o.plan.bar_length = o.lengths[0];
   if (o.lengths.size() > 1) o.plan.bar_lengths = o.lengths;
   const Machine machine = loadMachine(o.machine);
+  {
+    int prismatic = 0;
+    for (const Axis& ax : machine.model.axes) prismatic += ax.isRotary() ? 0 : 1;
+    if (prismatic != 3)
+      throw InputError(o.machine.machine, 0, 0, "axes",
+                       "plan-ballbar places the tool ball with three prismatic axes; this machine has " +
+                           std::to_string(prismatic));
+  }
   const std::string gcode = o.gcode.empty() ? replaceExtension(o.output, ".nc") : o.gcode;
   checkOutputDir(o.output, "-o");
   checkOutputDir(gcode, "--gcode");

@@ -64,6 +64,17 @@ TEST_F(BallbarCli, BadReadingsAndUnobservablePlans) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.output.find("bad.csv:3: c_deg: malformed number 'abc'"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(path("o.xml")));
+  // A machine with two axes (issue 37: a segfault in JacobiSVD): refused by name, exit 2.
+  std::ofstream(path("two.xml"))
+      << "<machine name=\"two\" length_unit=\"mm\" angle_unit=\"deg\">\n"
+         "<axis name=\"X\" type=\"prismatic\" branch=\"tool\" direction=\"1 0 0\" min=\"-100\" max=\"100\"/>\n"
+         "<axis name=\"Y\" type=\"prismatic\" branch=\"workpiece\" direction=\"0 1 0\" min=\"-100\" max=\"100\"/>\n"
+         "<table translation=\"0 0 0\" rotation=\"0 0 0\"/><spindle translation=\"0 0 0\" rotation=\"0 0 0\"/>\n"
+         "</machine>\n";
+  auto two = test::runTolver("plan-ballbar --machine " + path("two.xml") + " --poses 50 -o " + path("two.csv"));
+  EXPECT_EQ(two.exit_code, 2) << two.output;
+  EXPECT_NE(two.output.find("three prismatic axes; this machine has 2"), std::string::npos) << two.output;
+  EXPECT_FALSE(fs::exists(path("two.csv")));
   // Too few readings for the unknowns: refused, nothing written.
   std::ofstream(path("few.csv"))
       << "setup,table_ball_x_mm,table_ball_y_mm,table_ball_z_mm,tool_ball_x_mm,tool_ball_y_mm,"

@@ -81,6 +81,9 @@ Eigen::VectorXd scaledSingularValues(const Eigen::MatrixXd& A) {
 // largest) when the column-scaled matrix is well conditioned: for the unscaled condition numbers
 // (mm and rad mixed, 1e10 and more), which are reported, never decided on.
 Eigen::VectorXd unscaledSingularValues(const Eigen::MatrixXd& A) {
+  // Eigen 3.4's JacobiSVD reads out of bounds on an empty matrix, and NaNs have no singular
+  // values: none are returned (condition 0, rank 0).
+  if (A.rows() == 0 || A.cols() == 0 || !A.allFinite()) return Eigen::VectorXd();
   return Eigen::JacobiSVD<Eigen::MatrixXd>(A).singularValues();
 }
 
