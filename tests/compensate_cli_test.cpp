@@ -250,6 +250,12 @@ TEST_F(CompensateCli, BadInputIsExitTwoAndWritesNothing) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("bad.apt:3"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(path("o.apt")));
+  // Y1e5 (issue 37: exit 3, an internal error, while predict read it as Y1): exit 2 at its line.
+  std::ofstream(path("e.nc")) << "G21\nG90\nG1 X0 Y0 Z0 F100\nG1 Y1e5\nG1 X1\n";
+  r = test::runTolver("compensate --machine " + m + " --nc " + path("e.nc") + " -o " + path("e_c.nc"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("e.nc:4"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("e_c.nc")));
   r = test::runTolver("compensate --machine " + m + " --cl " + src("samples/nas979_cone.apt") +
                       " --setup " + src("samples/matsuura_setup.txt") + " -o " + path("o.apt") +
                       " --report /nonexistent/dir/r.json");

@@ -824,5 +824,14 @@ TEST(GcodeReader, TcpProgramAndItsJointTwinGiveTheSamePath) {
   }
 }
 
+// An exponent is not a G-code number (issue 37: Y1e5 was read as Y1 and E5 ignored): refused at
+// its line, by predict and compensate alike.
+TEST(GcodeReader, AnExponentIsRefusedNotReadAsItsMantissa) {
+  const Machine v = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  const std::string e = refusal("G21\nG90\nG1 X0 Y0 Z0 F100\nG1 Y1e5\n", v.model);
+  EXPECT_NE(e.find(":4:"), std::string::npos) << e;
+  EXPECT_NE(e.find("no exponent"), std::string::npos) << e;
+}
+
 }  // namespace
 }  // namespace tolver

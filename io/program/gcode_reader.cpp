@@ -1398,8 +1398,14 @@ class Reader {
     bool any_axis = false;
     for (char l : {'X', 'Y', 'Z'}) any_axis |= has(l);
     for (const auto& [l, w] : axis_words) {
+      // G-code numbers have no exponent: "Y1e5" is Y1 and an E word, which no milling control
+      // here reads (Fanuc's E is a thread lead). Refused, so that Y1e5 is never read as Y1.
+      if (l == 'E')
+        fail(line_, w->column, "E",
+             "an E word (E" + formatNumber(w->value) + "): G-code numbers have no exponent, so '1e5' reads "
+             "as 1 followed by E5; write the number out (100000)");
       if (l == 'X' || l == 'Y' || l == 'Z' || l == 'I' || l == 'J' || l == 'K' || l == 'R' ||
-          l == 'P' || l == 'Q' || l == 'L' || l == 'H' || l == 'E')
+          l == 'P' || l == 'Q' || l == 'L' || l == 'H')
         continue;
       if (letter_axis_.count(l) && model_.axes[letter_axis_.at(l)].isRotary()) {
         any_axis = true;
