@@ -179,7 +179,10 @@ void forEachCsvRow(const std::string& text, const std::string& file, const std::
     const std::string_view t = trim(lines[i]);
     if (t.empty() || t[0] == '#') continue;
     const int line = static_cast<int>(i) + 1;
-    const auto cells = splitCsvLine(lines[i]);
+    // A UTF-8 byte-order mark before the first line (as spreadsheets write it) is not text.
+    std::string_view raw = lines[i];
+    if (h.line == 0 && raw.substr(0, 3) == "\xEF\xBB\xBF") raw.remove_prefix(3);
+    const auto cells = splitCsvLine(std::string(raw));
     if (h.line == 0) {
       h.line = line;
       for (size_t k = 0; k < cells.size(); ++k) {
@@ -192,6 +195,13 @@ void forEachCsvRow(const std::string& text, const std::string& file, const std::
       if (header) header(h);
       continue;
     }
+    // A row with more cells than the header has columns: the cells beyond have no name (a
+    // shifted row, a comma in a value); refused unless empty (a trailing comma).
+    for (size_t k = h.columns.size(); k < cells.size(); ++k)
+      if (!trim(cells[k]).empty())
+        throw InputError(file, line, static_cast<int>(k) + 1, "cells",
+                         "the row has " + std::to_string(cells.size()) + " cells, the header " +
+                             std::to_string(h.columns.size()) + " columns");
     row(CsvRow{line, &cells, &h.columns});
   }
   if (h.line == 0) throw InputError(file, 0, 0, "", "empty file: no header line");

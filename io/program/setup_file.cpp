@@ -14,6 +14,7 @@ PartSetup parseSetup(const std::string& text, const std::string& file_name, Part
   const auto lines = splitLines(text);
   for (size_t i = 0; i < lines.size(); ++i) {
     std::string_view l = lines[i];
+    if (i == 0 && l.substr(0, 3) == "\xEF\xBB\xBF") l.remove_prefix(3);  // a UTF-8 byte-order mark
     const size_t hash = l.find('#');
     if (hash != std::string_view::npos) l = l.substr(0, hash);
     l = trim(l);
