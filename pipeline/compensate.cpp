@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <memory>
 #include <cmath>
 #include <cstdio>
 #include <set>
@@ -284,6 +285,9 @@ std::string compensatedJointsPath(const std::string& report_json) {
 
 void writeCompensation(const CompensationRun& run, const std::string& output, const std::string& report_json,
                        const std::string& report_dir_path) {
+  // The report directory is taken first: one that cannot be written leaves nothing written.
+  std::unique_ptr<ReportDirectory> report_dir;
+  if (!report_dir_path.empty()) report_dir = std::make_unique<ReportDirectory>(report_dir_path);
   OutputSet outputs;
   outputs.add(output, run.text.text);
   // The joints of every point, before and after (the compensating ones where written).
@@ -317,12 +321,12 @@ void writeCompensation(const CompensationRun& run, const std::string& output, co
   CompensationReport rep = run.report;
   rep.joints_file = compensatedJointsPath(report_json);
   outputs.add(report_json, formatCompensationJson(rep));
+  if (report_dir) {  // written as a whole before the set is committed, swapped in at the end
+    writeCompensationReport(report_dir->staging(), run.report, run.line, run.tip_before_um, run.tip_after_um,
+                            run.axis_before_urad, run.axis_after_urad);
+  }
   outputs.commit();
-  if (report_dir_path.empty()) return;
-  ReportDirectory report_dir(report_dir_path);  // written as a whole, swapped in at the end
-  writeCompensationReport(report_dir.staging(), run.report, run.line, run.tip_before_um, run.tip_after_um,
-                          run.axis_before_urad, run.axis_after_urad);
-  report_dir.commit();
+  if (report_dir) report_dir->commit();
 }
 
 TableRun runTables(const MachineOptions& machine_options, double step_mm, const std::string& table) {

@@ -256,6 +256,14 @@ TEST_F(CompensateCli, BadInputIsExitTwoAndWritesNothing) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("e.nc:4"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(path("e_c.nc")));
+  // A report directory that cannot be written (issue 37: exit 2 but the CL and JSON were left):
+  // nothing written.
+  r = test::runTolver("compensate --machine " + m + " --cl " + src("samples/nas979_cone.apt") + " --setup " +
+                      src("samples/matsuura_setup.txt") + " -o " + path("rd.apt") + " --report-dir /proc/x");
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_FALSE(fs::exists(path("rd.apt")));
+  EXPECT_FALSE(fs::exists(path("rd.json")));
+  EXPECT_FALSE(fs::exists(path("rd_joints.csv")));
   r = test::runTolver("compensate --machine " + m + " --cl " + src("samples/nas979_cone.apt") +
                       " --setup " + src("samples/matsuura_setup.txt") + " -o " + path("o.apt") +
                       " --report /nonexistent/dir/r.json");
