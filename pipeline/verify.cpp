@@ -80,12 +80,7 @@ std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o) {
   std::vector<ToleranceZone> zones;
   if (!std::isnan(o.tolerance_mm)) {
     // --tolerance is in mm: 30 meant as micrometres would accept gouges of tens of millimetres.
-    if (o.tolerance_mm > 1.0 && !o.tolerance_confirmed)
-      throw InputError("--tolerance", 0, 0, "tolerance",
-                       formatNumber(o.tolerance_mm) + " mm is not a plausible profile tolerance: "
-                       "--tolerance is in mm (" + formatNumber(o.tolerance_mm / 1000.0) +
-                       " for " + formatNumber(o.tolerance_mm) + " um); give --tolerance-units mm to "
-                       "confirm a tolerance above 1 mm");
+    checkToleranceSize(o.tolerance_mm, o.tolerance_confirmed, "--tolerance", 0, 0);
     if (!std::isnan(o.uz_mm) && !std::isnan(o.asme_u_mm))
       throw InputError("--uz", 0, 0, "zone", "give either --uz (ISO) or --asme-u (ASME), not both");
     try {
@@ -97,7 +92,7 @@ std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o) {
     }
   }
   if (!o.zones_file.empty()) {
-    auto more = readZoneFile(o.zones_file);
+    auto more = readZoneFile(o.zones_file, o.tolerance_confirmed);
     zones.insert(zones.end(), more.begin(), more.end());
   }
   if (zones.empty())

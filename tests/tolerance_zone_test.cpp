@@ -82,6 +82,16 @@ TEST(ToleranceZone, ZoneFileRowsRegionsAndErrors) {
     EXPECT_EQ(e.field(), "tolerance");
   }
   EXPECT_THROW(parseZoneCsv("region,tolerance,uz,u\n*,0.02,0.001,0.01\n", "z.csv"), InputError);
+  // One rule for a tolerance's size (issue 37: a 900 mm zone gave PASS where --tolerance 900 is
+  // refused): above 1 mm refused with the line, unless confirmed.
+  try {
+    parseZoneCsv("region,tolerance,uz,u\n*,0.05,,\ntop,900,,\n", "z.csv");
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("z.csv:3:2: tolerance: 900 mm is not a plausible"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(parseZoneCsv("region,tolerance,uz,u\ntop,900,,\n", "z.csv", true).size(), 1u);
   EXPECT_THROW(parseZoneCsv("region,tolerance,u\n*,0.02,0.05\n", "z.csv"), InputError);
 }
 

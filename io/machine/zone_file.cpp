@@ -8,7 +8,15 @@
 
 namespace tolver {
 
-std::vector<ToleranceZone> parseZoneCsv(const std::string& text, const std::string& file) {
+void checkToleranceSize(double tolerance_mm, bool confirmed, const std::string& file, int line, int column) {
+  if (tolerance_mm <= 1.0 || confirmed) return;
+  throw InputError(file, line, column, "tolerance",
+                   formatNumber(tolerance_mm) + " mm is not a plausible profile tolerance: tolerances are in "
+                   "mm (" + formatNumber(tolerance_mm / 1000.0) + " for " + formatNumber(tolerance_mm) +
+                   " um); give --tolerance-units mm to confirm a tolerance above 1 mm");
+}
+
+std::vector<ToleranceZone> parseZoneCsv(const std::string& text, const std::string& file, bool large_confirmed) {
   std::vector<ToleranceZone> zones;
   forEachCsvRow(text, file, {"region", "tolerance"}, "missing column (header: region,tolerance,uz,u)",
                 [&](const CsvRow& row) {
@@ -23,6 +31,7 @@ std::vector<ToleranceZone> parseZoneCsv(const std::string& text, const std::stri
     const std::string region = cell("region");
     if (region.empty()) throw InputError(file, line, column("region"), "region", "empty region");
     const double tol = number("tolerance");
+    checkToleranceSize(tol, large_confirmed, file, line, column("tolerance"));
     const bool has_uz = !cell("uz").empty(), has_u = !cell("u").empty();
     if (has_uz && has_u)
       throw InputError(file, line, column("u"), "u", "give either uz (ISO) or u (ASME), not both");
@@ -54,8 +63,8 @@ std::vector<ToleranceZone> parseZoneCsv(const std::string& text, const std::stri
   return zones;
 }
 
-std::vector<ToleranceZone> readZoneFile(const std::string& path) {
-  return parseZoneCsv(readFile(path), path);
+std::vector<ToleranceZone> readZoneFile(const std::string& path, bool large_confirmed) {
+  return parseZoneCsv(readFile(path), path, large_confirmed);
 }
 
 }  // namespace tolver

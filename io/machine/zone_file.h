@@ -16,8 +16,16 @@
 
 namespace tolver {
 
-// Throws InputError naming file, line and column.
-std::vector<ToleranceZone> parseZoneCsv(const std::string& text, const std::string& file);
-std::vector<ToleranceZone> readZoneFile(const std::string& path);
+// The one rule for a profile tolerance's size, wherever it is given (--tolerance, a zone file):
+// above 1 mm it is more likely micrometres written as millimetres (30 for 0.030) than meant, and
+// is refused unless confirmed (--tolerance-units mm). Throws InputError(file, line, column,
+// "tolerance", ...).
+void checkToleranceSize(double tolerance_mm, bool confirmed, const std::string& file, int line, int column);
+
+// Throws InputError naming file, line and column. large_confirmed: tolerances above 1 mm are
+// meant (checkToleranceSize).
+std::vector<ToleranceZone> parseZoneCsv(const std::string& text, const std::string& file,
+                                        bool large_confirmed = false);
+std::vector<ToleranceZone> readZoneFile(const std::string& path, bool large_confirmed = false);
 
 }  // namespace tolver
