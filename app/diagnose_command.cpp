@@ -91,9 +91,11 @@ void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o, const Dia
               lof.tested ? ("F " + formatWith("%.2f", lof.f) + ", p " + formatWith("%.2g", lof.p_value)).c_str()
                          : "not tested");
   if (r.heldout_before.readings > 0) {
-    std::printf("  held-out   %d readings (%s): RMS %.3f -> %.3f um, max %.3f -> %.3f um\n",
+    std::printf("  held-out   %d readings (%s): RMS %.3f -> %.3f um, max %.3f -> %.3f um; mean squared gain "
+                "%.3g +- %.2g um^2\n",
                 r.heldout_before.readings, o.in.heldout.c_str(), mmToUm(r.heldout_before.rms),
-                mmToUm(r.heldout_after.rms), mmToUm(r.heldout_before.max), mmToUm(r.heldout_after.max));
+                mmToUm(r.heldout_after.rms), mmToUm(r.heldout_before.max), mmToUm(r.heldout_after.max),
+                r.heldout_gain_mm2 * 1e6, r.heldout_gain_se_mm2 * 1e6);
     heldoutWarning(o.in.heldout, r.heldout_after, r.final_fit.rms_residual);
   }
   std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um", out.machine.c_str(),

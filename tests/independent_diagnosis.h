@@ -46,6 +46,7 @@ struct DiagnosisOutcome {
   bool withdrawn = false;       // the final check took the effects back
   DiagnosisVerdict verdict = DiagnosisVerdict::NothingMissing;
   std::vector<std::string> implausible;  // candidates refused for their fitted value
+  double heldout_gain_um2 = 0, heldout_gain_se_um2 = 0;  // mean squared held-out gain, its standard error
   double lack_of_fit_p = 1;     // of the final fit (1 when not tested)
   bool held_stayed_held = true; // parameters the base fit held are at their prior values
   int held = 0;                 // how many the base fit held
@@ -189,6 +190,8 @@ inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, u
                            std::find(r.final_fit.identified.begin(), r.final_fit.identified.end(), p) ==
                                r.final_fit.identified.end();
   out.verdict = r.verdict;
+  out.heldout_gain_um2 = r.heldout_gain_mm2 * 1e6;
+  out.heldout_gain_se_um2 = r.heldout_gain_se_mm2 * 1e6;
   for (const CandidateScore& cs : r.candidates)
     if (cs.verdict == CandidateVerdict::Implausible) out.implausible.push_back(cs.label + ": " + cs.reason);
   out.lack_of_fit_p = r.lack_of_fit_after.tested ? r.lack_of_fit_after.p_value : 1.0;

@@ -606,23 +606,39 @@ void finalValues(DiagnosisResult& res) {
 // well as the base model (the held-out readings when given, else cross-validation); otherwise
 // the effects are withdrawn.
 void finalCheck(const Machine& machine, const DiagnosisOptions& opt, DiagnosisResult& res) {
+  double gain = 0, gain_se = 0;  // held-out: mean of r_before^2 - r_after^2 and its standard error (mm^2)
   if (opt.heldout && !opt.heldout->readings.empty()) {
-    res.heldout_before = residualStats(ballbarResiduals(
-        ForwardKinematics(machine.model, res.base_fit.params), *opt.heldout, res.base_fit.ball_errors));
-    res.heldout_after = residualStats(ballbarResiduals(
-        ForwardKinematics(res.machine.model, res.final_fit.params), *opt.heldout,
-        res.final_fit.ball_errors));
+    const Eigen::VectorXd r0 = ballbarResiduals(ForwardKinematics(machine.model, res.base_fit.params), *opt.heldout,
+                                                res.base_fit.ball_errors);
+    const Eigen::VectorXd r1 = ballbarResiduals(ForwardKinematics(res.machine.model, res.final_fit.params),
+                                                *opt.heldout, res.final_fit.ball_errors);
+    res.heldout_before = residualStats(r0);
+    res.heldout_after = residualStats(r1);
+    const Eigen::ArrayXd d = r0.array().square() - r1.array().square();
+    const double n = static_cast<double>(d.size());
+    gain = d.mean();
+    gain_se = n > 1 ? std::sqrt((d - gain).square().sum() / (n - 1) / n) : INFINITY;
+    res.heldout_gain_mm2 = gain;
+    res.heldout_gain_se_mm2 = gain_se;
   }
   if (!res.added.empty()) {
     const bool with_heldout = res.heldout_before.readings > 0;
     const double before = with_heldout ? res.heldout_before.rms : res.cv_rms_before;
     const double after = with_heldout ? res.heldout_after.rms : res.cv_rms_after;
-    if (after > before) {
-      char why[200];
-      std::snprintf(why, sizeof why,
-                    "the augmented model predicted the %s readings worse than the base model "
-                    "(RMS %.3f um against %.3f um)",
-                    with_heldout ? "held-out" : "cross-validated", mmToUm(after), mmToUm(before));
+    // On held-out readings the gain must exceed twice its standard error to count.
+    const bool unconfirmed = with_heldout && after <= before && !(gain > 2.0 * gain_se);
+    if (after > before || unconfirmed) {
+      char why[300];
+      if (unconfirmed)
+        std::snprintf(why, sizeof why,
+                      "the held-out gain (RMS %.3f -> %.3f um; mean squared gain %.3g +- %.2g um^2) is within "
+                      "twice its uncertainty: not confirmed",
+                      mmToUm(before), mmToUm(after), gain * 1e6, gain_se * 1e6);
+      else
+        std::snprintf(why, sizeof why,
+                      "the augmented model predicted the %s readings worse than the base model "
+                      "(RMS %.3f um against %.3f um)",
+                      with_heldout ? "held-out" : "cross-validated", mmToUm(after), mmToUm(before));
       res.withdrawn_reason = why;
       res.withdrawn = res.added;
       res.added.clear();

@@ -138,6 +138,10 @@ struct DiagnosisResult {
   int folds = 0;
   // On options.heldout (readings == 0 when none): the base fit, and the final model.
   ResidualStats heldout_before, heldout_after;
+  // The held-out gain: mean over the held-out readings of r_before^2 - r_after^2, and its
+  // standard error (mm^2; 0 without held-out readings). A gain under twice its standard error
+  // is not confirmed, and the effects are withdrawn.
+  double heldout_gain_mm2 = 0, heldout_gain_se_mm2 = 0;
   // The effects the selection added but the final check rejected (the augmented model
   // predicted worse than the base one); then `added` is empty and `machine` the base model.
   std::vector<AddedEffect> withdrawn;

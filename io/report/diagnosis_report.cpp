@@ -240,7 +240,10 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
   if (r.heldout_before.readings > 0)
     out["heldout"] = {{"file", in.heldout_file},
                       {"before", stats(r.heldout_before)},
-                      {"after", stats(r.heldout_after)}};
+                      {"after", stats(r.heldout_after)},
+                      {"mean_squared_gain_um2", r.heldout_gain_mm2 * 1e6},
+                      {"mean_squared_gain_standard_error_um2", r.heldout_gain_se_mm2 * 1e6},
+                      {"gain_rule", "confirmed when above twice its standard error; else the effects are withdrawn"}};
   if (in.written.fit.readings > 0) {
     out["written_files_check"] = {
         {"description", "the written machine file and ball positions, read back, on the readings"},
