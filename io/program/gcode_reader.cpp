@@ -733,13 +733,7 @@ class Reader {
       JointVector q = q_;
       setRotaries(q);
       const std::vector<JointVector> ok = rotarySolutions(u_w, q, g531->column, "G53.1", "the tilted plane");
-      size_t pick = 0;
-      double best = INFINITY;
-      for (size_t k = 0; k < ok.size(); ++k) {
-        double d = 0;
-        for (int a : ik_.rotaryAxes()) d += std::abs(ok[k][a] - q[a]);
-        if (d < best) best = d, pick = k;
-      }
+      const size_t pick = nearestSolution(ok, q);
       std::string words;
       for (int a : ik_.rotaryAxes()) {
         rot_word_[a] = model_.axes[a].nc_sign * ok[pick][a] / kDegToRad;
@@ -759,6 +753,18 @@ class Reader {
     int n = 0;
     for (const Axis& a : model_.axes) n += a.isRotary() ? 1 : 0;
     return n;
+  }
+
+  // Of rotary solutions, the one nearest q (the sum of the rotary axes' moves).
+  size_t nearestSolution(const std::vector<JointVector>& ok, const JointVector& q) const {
+    size_t pick = 0;
+    double best = INFINITY;
+    for (size_t k = 0; k < ok.size(); ++k) {
+      double d = 0;
+      for (int a : ik_.rotaryAxes()) d += std::abs(ok[k][a] - q[a]);
+      if (d < best) best = d, pick = k;
+    }
+    return pick;
   }
 
   // The rotary solutions (at most two) that turn the tool along u_w, each inside travel, from
@@ -828,13 +834,7 @@ class Reader {
     JointVector q = q_;
     setRotaries(q);
     const std::vector<JointVector> ok = rotarySolutions(u_w, q, column, "A3", "the orientation vector");
-    size_t pick = 0;
-    double best = INFINITY;
-    for (size_t k = 0; k < ok.size(); ++k) {
-      double d = 0;
-      for (int a : ik_.rotaryAxes()) d += std::abs(ok[k][a] - q[a]);
-      if (d < best) best = d, pick = k;
-    }
+    const size_t pick = nearestSolution(ok, q);
     std::string out;
     char buf[64];
     for (int a : ik_.rotaryAxes()) {
