@@ -7,27 +7,20 @@
 
 #include "app/commands.h"
 #include "app/common.h"
-#include "pipeline/allocate.h"
-#include "core/allocation/tolerance_allocation.h"
-#include "io/report/allocation_report.h"
-#include "io/common/io_error.h"
 #include "io/machine/tolerance_file.h"
+#include "io/report/allocation_report.h"
+#include "pipeline/allocate.h"
 
 namespace tolver::app {
 namespace {
 
 struct AllocateOptions {
   AllocateInputs in;
-  std::string report_dir;
   std::string combination = "worst";
   std::string loss_distribution = "uniform";
 };
 
-void runAllocate(AllocateOptions& o, int* exit_code) {
-  o.in.rss = o.combination == "rss";
-  o.in.loss_normal = o.loss_distribution == "normal";
-  const AllocationRun run = runAllocation(o.in);
-  writeAllocation(run, o.in, o.report_dir);
+void printAllocation(const AllocationRun& run, const AllocateOptions& o) {
   const MachineModel& m = run.machine.model;
   const std::vector<ToleranceTerm>& terms = run.terms;
   const AllocationModel& a = run.model;
@@ -83,20 +76,18 @@ void runAllocate(AllocateOptions& o, int* exit_code) {
                 " (nonlinear check); Pareto front of %zu\n",
                 c->cost, -100.0 * (1.0 - c->cost / r.standard.cost), c->worst_exact[0], c->worst_exact[1],
                 c->worst_exact[2], r.front.size());
-    *exit_code = 0;
   } else {
     std::fprintf(stderr,
                  "tolver: no allocation within the bounds meets the limits; allow tighter tolerances "
                  "(--lower-factor) or loosen --limits\n");
-    *exit_code = 1;
   }
   std::printf("  wrote      %s/report.html, report.json, allocation.csv, pareto.csv, pareto.png\n",
-              o.report_dir.c_str());
+              o.in.report_dir.c_str());
 }
 
 }  // namespace
 
-void registerAllocate(CLI::App& app, int* exit_code) {
+void registerAllocate(CLI::App& app, Verdict* verdict) {
   auto o = std::make_shared<AllocateOptions>();
   CLI::App* cmd = app.add_subcommand(
       "allocate",
@@ -104,7 +95,7 @@ void registerAllocate(CLI::App& app, int* exit_code) {
       "cost + quality loss and tolerance spread).");
   addMachineOptions(cmd, o->in.machine, "machine file (XML)");
   cmd->add_option("--tolerances", o->in.tolerances, "tolerance file (CSV)")->required();
-  cmd->add_option("--report-dir", o->report_dir, "directory for the reports")->required();
+  cmd->add_option("--report-dir", o->in.report_dir, "directory for the reports")->required();
   cmd->add_option("--limits", o->in.limits_mm, "allowed |dx|,|dy|,|dz| of the tool tip, mm (default 0.015,0.015,0.010)")
       ->delimiter(',')
       ->expected(3);
@@ -125,7 +116,13 @@ void registerAllocate(CLI::App& app, int* exit_code) {
       ->check(CLI::Range(8, 100000));
   cmd->add_option("--generations", o->in.opt.generations, "NSGA-II generations (default 250)")->check(CLI::Range(1, 100000));
   cmd->add_option("--seed", o->in.opt.seed, "random seed (default 1)");
-  cmd->callback([o, exit_code] { runAllocate(*o, exit_code); });
+  cmd->callback([o, verdict] {
+    o->in.rss = o->combination == "rss";
+    o->in.loss_normal = o->loss_distribution == "normal";
+    const AllocationRun run = allocate(o->in);
+    printAllocation(run, *o);
+    *verdict = run.verdict;
+  });
 }
 
 }  // namespace tolver::app

@@ -6,23 +6,10 @@
 
 #include "app/commands.h"
 #include "app/common.h"
-#include "core/calibration/ballbar.h"
-#include "core/calibration/calibration.h"
-#include "core/calibration/identifiability.h"
-#include "io/machine/ballbar_file.h"
-#include "io/common/io_error.h"
+#include "pipeline/analyze.h"
 
 namespace tolver::app {
 namespace {
-
-struct AnalyzeOptions {
-  MachineOptions machine;
-  std::string model = "motion";
-  int degree = -1;
-  int poses = 0;
-  unsigned seed = 1;
-  std::string plan;
-};
 
 std::string cond(double c) {
   if (std::isinf(c)) return "inf";
@@ -31,14 +18,11 @@ std::string cond(double c) {
   return b;
 }
 
-void runAnalyze(const AnalyzeOptions& o) {
-  Machine machine = loadMachine(o.machine);
-  MachineModel m = o.degree >= 0 ? withMotionDegree(machine.model, o.degree) : machine.model;
-  const int poses = o.poses > 0 ? o.poses : (o.model == "link" ? 30 : 600);
-  const std::vector<int> cols = modelColumns(m, o.model);
-  auto pref = m.preferred.find(o.model);
-  const std::vector<int> preferred = pref == m.preferred.end() ? std::vector<int>{} : pref->second;
-  const MinimalSet ms = minimalSetForModel(m, randomPoses(m, poses, o.seed), cols, preferred);
+void printAnalysis(const AnalysisRun& run, const AnalyzeInputs& o) {
+  const MachineModel& m = run.model;
+  const MinimalSet& ms = run.minimal;
+  const std::vector<int>& cols = run.columns;
+  const int poses = run.poses;
   std::printf("tolver analyze: %s, %s model", m.name.c_str(), o.model.c_str());
   if (o.model == "motion") std::printf(" (Chebyshev degree %d)", m.blocks[cols.front()].degree);
   std::printf(": %zu parameters, %d random poses (seed %u)\n", cols.size(), poses, o.seed);
@@ -73,39 +57,26 @@ void runAnalyze(const AnalyzeOptions& o) {
   }
   std::printf("    machine:%s\n    set-up:%s\n", machine_part.c_str(), setup_part.c_str());
 
-  if (!o.plan.empty()) {
-    const BallbarFile plan = readBallbarFile(o.plan, machine.model, false);
-    std::vector<int> unknowns = defaultCalibrationUnknowns(machine.model);
-    const ForwardKinematics fk(machine.model, machine.params);
-    const int np = static_cast<int>(unknowns.size());
-    const int n = np + 6 * static_cast<int>(plan.test.setups.size());
-    const Eigen::MatrixXd J = identificationJacobian(
-        fk, plan.test, std::vector<BallErrors>(plan.test.setups.size()), unknowns);
-    std::vector<int> idx(n);
-    std::vector<bool> protect(n);
-    for (int c = 0; c < n; ++c) {
-      idx[c] = c;
-      protect[c] = c >= np;
-    }
-    const MinimalSet id = selectMinimalSet(J, idx, protect, {});
+  if (run.with_plan) {
+    const PlanIdentifiability& p = run.plan;
     std::printf("\n  ball-bar plan %s: %zu readings, %zu set-ups, %d unknowns (%d machine + 6 per set-up)\n",
-                o.plan.c_str(), plan.test.readings.size(), plan.test.setups.size(), n, np);
-    std::printf("  identification Jacobian: rank %d, condition %s column-scaled\n", id.initial.rank,
-                cond(id.initial.condition).c_str());
-    if (id.removed.empty()) {
+                p.file.c_str(), p.readings, p.setups, p.unknowns, p.machine_unknowns);
+    std::printf("  identification Jacobian: rank %d, condition %s column-scaled\n", p.minimal.initial.rank,
+                cond(p.minimal.initial.condition).c_str());
+    if (p.unobservable.empty()) {
       std::printf("  every unknown is observable\n");
     } else {
       std::string names;
-      for (int c : id.removed) names += " " + (c < np ? machine.model.parameters[unknowns[c]].iso_code : "ball");
-      std::printf("  unobservable with this plan (%zu):%s\n", id.removed.size(), names.c_str());
+      for (const std::string& c : p.unobservable) names += " " + c;
+      std::printf("  unobservable with this plan (%zu):%s\n", p.unobservable.size(), names.c_str());
     }
   }
 }
 
 }  // namespace
 
-void registerAnalyze(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<AnalyzeOptions>();
+void registerAnalyze(CLI::App& app, Verdict* verdict) {
+  auto o = std::make_shared<AnalyzeInputs>();
   CLI::App* cmd = app.add_subcommand(
       "analyze",
       "Identifiability of the machine's error model: rank, condition number, confounded groups "
@@ -119,9 +90,10 @@ void registerAnalyze(CLI::App& app, int* exit_code) {
       ->check(CLI::Range(1, 100000));
   cmd->add_option("--seed", o->seed, "random seed (default 1)");
   cmd->add_option("--plan", o->plan, "ball-bar plan or readings (CSV) to analyse as well");
-  cmd->callback([o, exit_code] {
-    runAnalyze(*o);
-    *exit_code = 0;
+  cmd->callback([o, verdict] {
+    const AnalysisRun run = analyze(*o);
+    printAnalysis(run, *o);
+    *verdict = run.verdict;
   });
 }
 

@@ -4,53 +4,22 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "core/calibration/ballbar_plan.h"
-#include "io/machine/ballbar_file.h"
-#include "io/common/io_error.h"
 #include "core/numerics/units.h"
 
 namespace tolver::app {
 
-void heldoutWarning(const std::string& file, const ResidualStats& after, double fit_rms) {
-  if (after.readings > 0 && after.rms > 3.0 * fit_rms && after.rms > 1e-3)
-    std::fprintf(stderr,
-                 "tolver: warning: %s: the identified machine predicts the held-out readings at "
-                 "RMS %.3f um, %.0f times its fit (%.3f um): were they measured on the same "
-                 "set-ups (ball positions untouched), in the same machine state?\n",
-                 file.c_str(), mmToUm(after.rms), after.rms / fit_rms, mmToUm(fit_rms));
-}
-
-std::vector<std::string> testDesignWarnings(const MachineModel& model, const BallbarTest& test,
-                                            int unknowns) {
-  std::vector<std::string> w;
-  const int m = static_cast<int>(test.readings.size());
-  char buf[400];
-  if (m < 3 * unknowns) {
-    std::snprintf(buf, sizeof buf,
-                  "%d readings for %d unknowns (fewer than 3 per unknown): the fit follows the "
-                  "noise and predicts other poses worse than its residual says; plan at least %d "
-                  "readings",
-                  m, unknowns, 3 * unknowns);
-    w.push_back(buf);
-  }
-  const TimeJointCorrelation c = timeJointCorrelation(model, test);
-  if (c.worst_axis < 0) {
+void printTimeLine(const MachineModel& model, const TestDesign& design) {
+  const TimeJointCorrelation& c = design.time;
+  if (c.worst_axis < 0)
     std::printf("  time       the readings have no time_s: drift and warm-up cannot be checked\n");
-  } else {
+  else
     std::printf("  time       largest correlation of time with a joint within the set-ups: "
                 "|r| = %.2f (%s)\n",
                 c.worst, model.axes[c.worst_axis].name.c_str());
-    if (c.worst > 0.5) {
-      std::snprintf(buf, sizeof buf,
-                    "time and %s move together in these readings (|r| = %.2f): a thermal drift "
-                    "and an error along %s cannot be told apart; order the poses at random "
-                    "(plan-ballbar does)",
-                    model.axes[c.worst_axis].name.c_str(), c.worst,
-                    model.axes[c.worst_axis].name.c_str());
-      w.push_back(buf);
-    }
-  }
-  return w;
+}
+
+void printWarnings(const std::vector<std::string>& warnings) {
+  for (const std::string& w : warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
 }
 
 void printGross(const std::string& readings_file, const BallbarTest& test,

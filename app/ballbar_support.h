@@ -1,25 +1,16 @@
 #pragma once
-// What calibrate and diagnose share: held-out readings, the ball-positions file beside a
-// machine file, warnings about the test's design, and the gross readings found.
+// What calibrate and diagnose print alike: the test's design and the gross readings found.
 #include <string>
 #include <vector>
 
-#include "core/calibration/ballbar.h"
-#include "core/calibration/calibration.h"
-#include "core/model/machine_model.h"
 #include "pipeline/calibrate.h"
 
 namespace tolver::app {
 
-// A warning when the identified model predicts the held-out readings much worse than it fits
-// its own (more than 3 times the fit's RMS and above 1 um): not the same set-ups or machine state.
-void heldoutWarning(const std::string& heldout_file, const ResidualStats& after, double fit_rms);
-
-// Too few readings for the unknowns (fewer than 3 per unknown), time correlated with a joint
-// (|r| > 0.5: a drift and an error along that axis cannot be told apart). Also prints the
-// correlation line.
-std::vector<std::string> testDesignWarnings(const MachineModel& model, const BallbarTest& test,
-                                            int unknowns);
+// The line on time against the joints (the test's design; its warnings are the run's).
+void printTimeLine(const MachineModel& model, const TestDesign& design);
+// Warnings to stderr, one line each.
+void printWarnings(const std::vector<std::string>& warnings);
 
 // Prints the gross readings (by file line) and, when they were removed, the fit with and without
 // them.

@@ -2,16 +2,19 @@
 // Each tolver command registers its options and its action on the CLI11 application.
 #include <CLI/CLI.hpp>
 
+#include "pipeline/command.h"
+
 namespace tolver::app {
 
-// The command sets *exit_code when it finishes (0 by default).
-void registerPredict(CLI::App& app, int* exit_code);
-void registerAnalyze(CLI::App& app, int* exit_code);
-void registerBallbar(CLI::App& app, int* exit_code);
-void registerAllocate(CLI::App& app, int* exit_code);
-void registerVerify(CLI::App& app, int* exit_code);
-void registerDiagnose(CLI::App& app, int* exit_code);
-void registerSetup(CLI::App& app, int* exit_code);
-void registerCompensate(CLI::App& app, int* exit_code);
+// The command sets *verdict when it finishes (Verdict::Ok by default); main maps it to the exit
+// code.
+void registerPredict(CLI::App& app, Verdict* verdict);
+void registerAnalyze(CLI::App& app, Verdict* verdict);
+void registerBallbar(CLI::App& app, Verdict* verdict);
+void registerAllocate(CLI::App& app, Verdict* verdict);
+void registerVerify(CLI::App& app, Verdict* verdict);
+void registerDiagnose(CLI::App& app, Verdict* verdict);
+void registerSetup(CLI::App& app, Verdict* verdict);
+void registerCompensate(CLI::App& app, Verdict* verdict);
 
 }  // namespace tolver::app

@@ -6,6 +6,37 @@
 
 namespace tolver::app {
 
+namespace {
+std::map<std::string, std::string>& commandSpellings() {
+  static std::map<std::string, std::string> m;
+  return m;
+}
+}  // namespace
+
+std::string optionForField(const std::string& field) {
+  const auto own = commandSpellings().find(field);
+  if (own != commandSpellings().end()) return own->second;
+  // Options whose name is not the field's: units in the option's own words.
+  static const std::map<std::string, std::string> spelled = {
+      {"output", "-o"},          {"units", "--cl-units"},        {"point_table", "--errors"},
+      {"zones_file", "--zones"}, {"tolerance_mm", "--tolerance"}, {"uz_mm", "--uz"},
+      {"asme_u_mm", "--asme-u"}, {"spacing_mm", "--spacing"},     {"step_mm", "--step"},
+      {"max_hole_mm", "--max-hole"}, {"limits_mm", "--limits"},  {"excess_range_mm", "--excess-range"},
+      {"gouge_range_mm", "--gouge-range"}, {"chordal_tolerance", "--chordal-tol"}};
+  const auto it = spelled.find(field);
+  if (it != spelled.end()) return it->second;
+  std::string option = "--" + field;
+  for (char& c : option)
+    if (c == '_') c = '-';
+  return option;
+}
+
+void useOptionNames(const std::map<std::string, std::string>& command_spellings) {
+  commandSpellings() = command_spellings;
+  setInputNamer([](const std::string& field) { return optionForField(field); });
+}
+
+
 void addMachineOptions(CLI::App* cmd, MachineOptions& o, const char* machine_help) {
   cmd->add_option("--machine", o.machine, machine_help)->required();
   cmd->add_option("--setup", o.setup, "set-up file (part zero, part rotation, gauge length)");

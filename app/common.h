@@ -2,8 +2,10 @@
 // Command-line options shared by the commands (CLI11), and the progress bar. The work behind
 // them is in pipeline/.
 #include <CLI/CLI.hpp>
+#include <map>
 #include <string>
 
+#include "pipeline/command.h"
 #include "pipeline/inputs.h"
 
 namespace tolver::app {
@@ -12,6 +14,13 @@ void addMachineOptions(CLI::App* cmd, MachineOptions& o, const char* machine_hel
 void addProgramOptions(CLI::App* cmd, ProgramOptions& o);
 // --probed FILE (predict, verify, compensate).
 void addProbedOption(CLI::App* cmd, std::string& path);
+
+// The option that sets an input field of a command's Inputs (pipeline/command.h): "--" and the
+// field with dashes, unless the option is spelled otherwise (tolerance_mm: --tolerance). The
+// command's own spellings (plan-ballbar: cl is --for) come first.
+std::string optionForField(const std::string& field);
+// Registers the command's spellings with the library (setInputNamer), before it runs.
+void useOptionNames(const std::map<std::string, std::string>& command_spellings = {});
 
 // A progress bar on stderr when it is a terminal (and enabled).
 class ProgressBar {

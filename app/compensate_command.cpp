@@ -8,29 +8,15 @@
 
 #include "app/commands.h"
 #include "app/common.h"
-#include "pipeline/compensate.h"
-#include "core/path/compensation.h"
-#include "core/path/prediction_uncertainty.h"
-#include "io/program/compensated_program.h"
-#include "io/report/compensation_report.h"
-#include "io/common/io_error.h"
-#include "io/common/text_util.h"
 #include "core/numerics/units.h"
+#include "pipeline/compensate.h"
 
 namespace tolver::app {
 namespace {
 
-struct CompensateOptions {
-  CompensateInputs in;
-  std::string output, report;
-  std::string report_dir;     // --report-dir: report.json, report.html, charts
-  std::string table;          // --table: linear-axis compensation tables
-  double table_step = 10.0;   // mm
-};
-
-void printTables(const TableRun& run, const CompensateOptions& o) {
+void printTables(const TableRun& run, const CompensateInputs& o) {
   std::printf("tolver compensate --table\n");
-  std::printf("  machine    %s (%s)\n", run.machine.model.name.c_str(), o.in.machine.machine.c_str());
+  std::printf("  machine    %s (%s)\n", run.machine.model.name.c_str(), o.machine.machine.c_str());
   std::printf("  tables     %zu linear axes, step %.3f mm, zero at %s\n", run.tables.size(), o.table_step,
               run.reference.c_str());
   std::printf("  effect     tool-tip error over the linear travel (relative to the reference pose, whose constant "
@@ -46,13 +32,13 @@ void printTables(const TableRun& run, const CompensateOptions& o) {
   for (const std::string& f : run.files) std::printf("  wrote      %s\n", f.c_str());
 }
 
-void printCompensation(const CompensationRun& run, const CompensateOptions& o, const std::string& report) {
+void printCompensation(const CompensationRun& run, const CompensateInputs& o, const std::string& report) {
   const CompensationReport& rep = run.report;
   const size_t n = run.program.path.size();
   std::printf("tolver compensate\n");
-  std::printf("  machine    %s (%s)\n", run.machine.model.name.c_str(), o.in.machine.machine.c_str());
+  std::printf("  machine    %s (%s)\n", run.machine.model.name.c_str(), o.machine.machine.c_str());
   std::printf("  program    %s (%s): %zu tool positions%s, %s\n", run.program.file.c_str(), run.program.dialect.c_str(), n,
-              o.in.program.lines.empty() ? "" : (" of lines " + o.in.program.lines + " (the other lines written as they are)").c_str(),
+              o.program.lines.empty() ? "" : (" of lines " + o.program.lines + " (the other lines written as they are)").c_str(),
               run.orientation ? "tool tip and tool axis compensated" : "3-axis: the tool tip compensated by the linear axes");
   if (!run.setup_note.empty()) std::printf("  set-up     %s\n", run.setup_note.c_str());
   std::printf("  before     tip max %.3f um (line %d), RMS %.3f um; tool axis max %.2f urad, RMS %.2f urad\n",
@@ -105,7 +91,7 @@ void printCompensation(const CompensationRun& run, const CompensateOptions& o, c
     std::printf("  singular   %d points near a singular pose (condition above %.0e): the tool tip "
                 "compensated, the tool axis left as programmed (correcting it would swing a rotary axis) "
                 "(lines %s)\n",
-                rep.ill_conditioned, o.in.max_condition, lines(rep.ill_conditioned_lines).c_str());
+                rep.ill_conditioned, o.max_condition, lines(rep.ill_conditioned_lines).c_str());
   for (const std::string& note : run.text.notes) std::printf("  note       %s\n", note.c_str());
   for (const std::string& w : run.warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
   std::printf("  wrote      %s (compensated program), %s (report), %s (the joints of every point)\n",
@@ -114,53 +100,31 @@ void printCompensation(const CompensationRun& run, const CompensateOptions& o, c
     std::printf("  report     %s/report.html (and report.json, tip_deviation.png, tool_axis.png)\n", o.report_dir.c_str());
 }
 
-void runCompensate(const CompensateOptions& o, int* exit_code) {
-  *exit_code = 0;
-  if (!o.table.empty()) {
-    printTables(runTables(o.in.machine, o.table_step, o.table), o);
-    if (o.in.program.cl.empty() && o.in.program.nc.empty()) return;
-  }
-  if (o.output.empty())
-    throw InputError("-o", 0, 0, "-o", "give the compensated program's path with -o (or only --table)");
-  const std::string report = o.report.empty() ? replaceExtension(o.output, ".json") : o.report;
-  checkOutputDir(o.output, "-o");
-  checkOutputDir(report, "--report");
-  const CompensationRun run = runCompensation(o.in, o.output);
-  writeCompensation(run, o.output, report, o.report_dir);
-  printCompensation(run, o, report);
-  // The read-back check: a point further off after than before (by more than 1 um and 10 %)
-  // means the written program moves where the original did not: said, and exit 1.
-  std::vector<int> worse;
-  double worst = 0.0;
-  for (size_t i = 0; i < run.tip_after_um.size() && i < run.tip_before_um.size(); ++i) {
-    const double before = run.tip_before_um[i], after = run.tip_after_um[i];
-    if (!(after <= before + std::max(1.0, 0.1 * before))) {
-      if (worse.empty() || worse.back() != run.line[i]) worse.push_back(run.line[i]);
-      worst = std::max(worst, after);
-    }
-  }
-  if (!worse.empty()) {
-    std::string lines;
-    for (size_t k = 0; k < worse.size() && k < 8; ++k) lines += (k ? ", " : "") + std::to_string(worse[k]);
-    std::printf("  FAILED     the written program, read back, is further off than the original at %zu "
-                "lines (%s%s; up to %.3f um): it moves where the original did not; do not run it "
-                "as written\n",
-                worse.size(), lines.c_str(), worse.size() > 8 ? ", ..." : "", worst);
-    *exit_code = 1;
-  }
+void printRun(const CompensateRun& run, const CompensateInputs& o) {
+  if (run.tables) printTables(*run.tables, o);
+  if (!run.compensation) return;
+  printCompensation(*run.compensation, o, run.report);
+  const std::vector<int>& worse = run.worse_lines;
+  if (worse.empty()) return;
+  std::string lines;
+  for (size_t k = 0; k < worse.size() && k < 8; ++k) lines += (k ? ", " : "") + std::to_string(worse[k]);
+  std::printf("  FAILED     the written program, read back, is further off than the original at %zu "
+              "lines (%s%s; up to %.3f um): it moves where the original did not; do not run it "
+              "as written\n",
+              worse.size(), lines.c_str(), worse.size() > 8 ? ", ..." : "", run.worse_max_um);
 }
 
 }  // namespace
 
-void registerCompensate(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<CompensateOptions>();
+void registerCompensate(CLI::App& app, Verdict* verdict) {
+  auto o = std::make_shared<CompensateInputs>();
   CLI::App* cmd = app.add_subcommand(
       "compensate",
       "Write the program that the machine, errors included, runs onto the nominal path: joints by "
       "Newton on the full error model, written back in the program's own dialect, with the "
       "predicted error before and after.");
-  addMachineOptions(cmd, o->in.machine, "machine file (XML) with the errors to compensate");
-  addProgramOptions(cmd, o->in.program);
+  addMachineOptions(cmd, o->machine, "machine file (XML) with the errors to compensate");
+  addProgramOptions(cmd, o->program);
   cmd->add_option("-o,--output", o->output, "compensated program to write (same dialect as the input)");
   cmd->add_option("--table", o->table,
                   "also (or only) write pitch and straightness tables for the linear axes: "
@@ -170,14 +134,18 @@ void registerCompensate(CLI::App& app, int* exit_code) {
   cmd->add_option("--report", o->report, "JSON report (default: the output path with .json)");
   cmd->add_option("--report-dir", o->report_dir,
                   "also write report.html with before/after charts (and report.json) in this directory");
-  cmd->add_option("--max-condition", o->in.max_condition,
+  cmd->add_option("--max-condition", o->max_condition,
                   "condition number beyond which a point counts as near a singular pose (default 1e6)")
       ->check(CLI::Range(10.0, 1e15));
-  cmd->add_flag("--absolute", o->in.absolute,
+  cmd->add_flag("--absolute", o->absolute,
                 "a calibrated machine: compensate its raw prediction, with what probing and presetting "
                 "would take up");
-  addProbedOption(cmd, o->in.probed);
-  cmd->callback([o, exit_code] { runCompensate(*o, exit_code); });
+  addProbedOption(cmd, o->probed);
+  cmd->callback([o, verdict] {
+    const CompensateRun run = compensateProgram(*o);
+    printRun(run, *o);
+    *verdict = run.verdict;
+  });
 }
 
 }  // namespace tolver::app

@@ -9,25 +9,16 @@
 #include "app/commands.h"
 #include "app/ballbar_support.h"
 #include "app/common.h"
-#include "pipeline/diagnose.h"
-#include "core/diagnosis/diagnosis.h"
 #include "core/model/effects.h"
-#include "core/path/tool_path_prediction.h"
-#include "io/program/apt_reader.h"
-#include "io/machine/ballbar_file.h"
-#include "io/report/diagnosis_report.h"
-#include "io/common/io_error.h"
-#include "io/common/text_util.h"
-#include "io/machine/machine_file.h"
-#include "io/program/setup_file.h"
 #include "core/numerics/units.h"
+#include "io/common/text_util.h"
+#include "pipeline/diagnose.h"
 
 namespace tolver::app {
 namespace {
 
 struct DiagnoseOptions {
   DiagnoseInputs in;
-  std::string output, report_dir, balls;
   bool quiet = false;
 };
 
@@ -60,8 +51,8 @@ void printAdded(const MachineModel& m, const AddedEffect& a) {
   }
 }
 
-void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o, const DiagnosisOutputs& out,
-                    const DiagnosisWritten& written) {
+void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o) {
+  const DiagnosisOutputs& out = run.outputs;
   const DiagnosisResult& r = run.result;
   const ProgramComparison* program = run.program.get();
   const MachineModel& m = r.machine.model;
@@ -96,12 +87,11 @@ void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o, const Dia
                 r.heldout_before.readings, o.in.heldout.c_str(), mmToUm(r.heldout_before.rms),
                 mmToUm(r.heldout_after.rms), mmToUm(r.heldout_before.max), mmToUm(r.heldout_after.max),
                 r.heldout_gain_mm2 * 1e6, r.heldout_gain_se_mm2 * 1e6);
-    heldoutWarning(o.in.heldout, r.heldout_after, r.final_fit.rms_residual);
   }
   std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um", out.machine.c_str(),
-              out.balls.c_str(), mmToUm(written.check.fit.rms));
-  if (written.check.heldout.readings > 0)
-    std::printf(", the held-out ones at %.3f um", mmToUm(written.check.heldout.rms));
+              out.balls.c_str(), mmToUm(run.written.fit.rms));
+  if (run.written.heldout.readings > 0)
+    std::printf(", the held-out ones at %.3f um", mmToUm(run.written.heldout.rms));
   std::printf("\n");
   if (program)
     std::printf("  program    %s: predicted error max %.3f -> %.3f um, RMS %.3f -> %.3f um "
@@ -110,49 +100,41 @@ void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o, const Dia
                 mmToUm(program->before.rms_deviation), mmToUm(program->after.rms_deviation),
                 mmToUm(program->change_max), program->change_max_line);
   std::printf("  wrote      %s (augmented machine), %s (ball positions), %s, %s\n", out.machine.c_str(),
-              out.balls.c_str(), written.json.c_str(), written.html.c_str());
+              out.balls.c_str(), run.json.c_str(), run.html.c_str());
 }
 
-void runDiagnose(const DiagnoseOptions& o, int* exit_code) {
-  const DiagnosisOutputs out = diagnosisOutputs(o.output, o.balls, o.report_dir);
-  ProgressBar bar(!o.quiet);
-  const DiagnosisRun run = runDiagnosis(o.in, [&](int done, int total) {
-    bar("scoring candidates", total > 0 ? static_cast<double>(done) / total : 1.0);
-  });
+void printGrossAgain(const DiagnosisRun& run) {
+  const BallbarTest& test = run.file.test;
+  if (run.restored.empty() && run.gross_t_after.empty()) return;
+  std::string lines;
+  char buf[120];
+  for (size_t k = 0; k < run.gross.size() && k < run.gross_t_after.size(); ++k) {
+    bool back = false;
+    for (const GrossReading& x : run.restored) back = back || x.index == run.gross[k].index;
+    std::snprintf(buf, sizeof buf, "%sline %d t %.1f -> %.1f%s", k ? ", " : "", test.readings[run.gross[k].index].line,
+                  run.gross[k].studentized, run.gross_t_after[k], back ? " restored" : "");
+    lines += buf;
+  }
+  std::printf("  gross again against the final model: %s%s\n", lines.c_str(),
+              run.restored.empty() ? "" : " (the diagnosis was run again with the restored readings)");
+}
+
+void printRun(const DiagnosisRun& run, const DiagnoseOptions& o) {
   const MachineModel& base = run.machine.model;
   const BallbarTest& test = run.file.test;
-  for (const std::string& w : run.file.warnings)
-    std::fprintf(stderr, "tolver: warning: %s: %s\n", o.in.readings.c_str(), w.c_str());
+  printWarnings(run.warnings);
   std::printf("tolver diagnose: %s from %zu readings in %zu set-ups\n", base.name.c_str(), test.readings.size(),
               test.setups.size());
   printGross(o.in.readings, test, run.gross, o.in.keep_outliers, run.robust.with_all, run.robust.fit,
              run.robust.limit_reached);
-  const BallbarTest& used = run.used();
-  for (const std::string& w : testDesignWarnings(
-           base, used, static_cast<int>(defaultCalibrationUnknowns(base).size() + 6 * used.setups.size())))
-    std::fprintf(stderr, "tolver: warning: %s: %s\n", o.in.readings.c_str(), w.c_str());
-  if (!run.restored.empty() || !run.gross_t_after.empty()) {
-    std::string lines;
-    char buf[120];
-    for (size_t k = 0; k < run.gross.size() && k < run.gross_t_after.size(); ++k) {
-      bool back = false;
-      for (const GrossReading& x : run.restored) back = back || x.index == run.gross[k].index;
-      std::snprintf(buf, sizeof buf, "%sline %d t %.1f -> %.1f%s", k ? ", " : "",
-                    test.readings[run.gross[k].index].line, run.gross[k].studentized, run.gross_t_after[k],
-                    back ? " restored" : "");
-      lines += buf;
-    }
-    std::printf("  gross again against the final model: %s%s\n", lines.c_str(),
-                run.restored.empty() ? "" : " (the diagnosis was run again with the restored readings)");
-  }
-  const DiagnosisWritten written = writeDiagnosis(run, o.in, out);
-  printDiagnosis(run, o, out, written);
-  *exit_code = 0;
+  printTimeLine(base, run.design);
+  printGrossAgain(run);
+  printDiagnosis(run, o);
 }
 
 }  // namespace
 
-void registerDiagnose(CLI::App& app, int* exit_code) {
+void registerDiagnose(CLI::App& app, Verdict* verdict) {
   auto o = std::make_shared<DiagnoseOptions>();
   CLI::App* cmd = app.add_subcommand(
       "diagnose",
@@ -161,8 +143,8 @@ void registerDiagnose(CLI::App& app, int* exit_code) {
       "degree), add it and report the error before and after.");
   addMachineOptions(cmd, o->in.machine, "base machine file (XML): link and motion errors, no effects");
   cmd->add_option("--readings", o->in.readings, "ball-bar readings (CSV)")->required();
-  cmd->add_option("-o,--output", o->output, "augmented machine file to write (XML)")->required();
-  cmd->add_option("--report-dir", o->report_dir, "directory for report.json, report.html and plots")
+  cmd->add_option("-o,--output", o->in.output, "augmented machine file to write (XML)")->required();
+  cmd->add_option("--report-dir", o->in.report_dir, "directory for report.json, report.html and plots")
       ->required();
   cmd->add_option("--cl", o->in.cl, "part program (APT): its predicted error before and after");
   cmd->add_option("--cl-setup", o->in.cl_setup,
@@ -182,7 +164,7 @@ void registerDiagnose(CLI::App& app, int* exit_code) {
   cmd->add_option("--heldout", o->in.heldout,
                   "held-out readings (CSV) of the same set-ups, never fitted: RMS before and "
                   "after, and the final check of the augmented model");
-  cmd->add_option("--balls", o->balls,
+  cmd->add_option("--balls", o->in.balls,
                   "identified ball positions to write (CSV; default: the output path with "
                   "_balls.csv)");
   cmd->add_option("--spindle-tilt-urad", o->in.spindle_tilt_urad,
@@ -193,7 +175,12 @@ void registerDiagnose(CLI::App& app, int* exit_code) {
   cmd->add_flag("--keep-outliers", o->in.keep_outliers,
                 "fit every reading (gross readings are still named)");
   cmd->add_flag("--quiet", o->quiet, "no progress bar");
-  cmd->callback([o, exit_code] { runDiagnose(*o, exit_code); });
+  cmd->callback([o, verdict] {
+    ProgressBar bar(!o->quiet);
+    const DiagnosisRun run = diagnoseMachine(o->in, [&bar](const std::string& phase, double f) { bar(phase, f); });
+    printRun(run, *o);
+    *verdict = run.verdict;
+  });
 }
 
 }  // namespace tolver::app

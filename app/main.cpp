@@ -1,10 +1,12 @@
 // tolver: will this five-axis machine make this part within tolerance?
-// Exit codes: 0 success, 1 out of tolerance (verify), 2 bad input or usage.
+// Exit codes (app/common.h, exitCode): 0 success, 1 not met (out of tolerance, no set-up, no
+// convergence), 2 bad input or usage, 3 internal error, 4 undecided (verify).
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <exception>
 
 #include "app/commands.h"
+#include "app/common.h"
 #include "io/common/io_error.h"
 
 int main(int argc, char** argv) {
@@ -13,15 +15,16 @@ int main(int argc, char** argv) {
       "along a part program."};
   app.require_subcommand(1);
   app.set_version_flag("--version", "tolver 0.1.0");
-  int exit_code = 0;
-  tolver::app::registerPredict(app, &exit_code);
-  tolver::app::registerAnalyze(app, &exit_code);
-  tolver::app::registerBallbar(app, &exit_code);
-  tolver::app::registerAllocate(app, &exit_code);
-  tolver::app::registerVerify(app, &exit_code);
-  tolver::app::registerDiagnose(app, &exit_code);
-  tolver::app::registerSetup(app, &exit_code);
-  tolver::app::registerCompensate(app, &exit_code);
+  tolver::Verdict verdict = tolver::Verdict::Ok;
+  tolver::app::useOptionNames();
+  tolver::app::registerPredict(app, &verdict);
+  tolver::app::registerAnalyze(app, &verdict);
+  tolver::app::registerBallbar(app, &verdict);
+  tolver::app::registerAllocate(app, &verdict);
+  tolver::app::registerVerify(app, &verdict);
+  tolver::app::registerDiagnose(app, &verdict);
+  tolver::app::registerSetup(app, &verdict);
+  tolver::app::registerCompensate(app, &verdict);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
@@ -33,6 +36,11 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     std::fprintf(stderr, "tolver: error: %s\n", e.what());
     return 2;
+  } catch (const tolver::FieldError& e) {
+    // An input the library names by its field: the option the user typed.
+    std::fprintf(stderr, "tolver: error: %s: %s\n", tolver::app::optionForField(e.field()).c_str(),
+                 e.message().c_str());
+    return 2;
   } catch (const tolver::InputError& e) {
     std::fprintf(stderr, "tolver: error: %s\n", e.what());
     return 2;
@@ -40,5 +48,5 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "tolver: internal error: %s\n", e.what());
     return 3;
   }
-  return exit_code;
+  return tolver::exitCode(verdict);
 }

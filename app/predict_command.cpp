@@ -7,27 +7,13 @@
 
 #include "app/commands.h"
 #include "app/common.h"
-#include "io/common/text_util.h"
-#include "core/path/prediction_uncertainty.h"
-#include "core/path/tool_path_prediction.h"
-#include "geometry/cutter.h"
-#include "io/program/apt_reader.h"
-#include "io/program/apt_writer.h"
-#include "io/common/io_error.h"
-#include "io/program/point_table.h"
 #include "core/numerics/units.h"
+#include "geometry/cutter.h"
+#include "io/common/text_util.h"
+#include "pipeline/predict.h"
 
 namespace tolver::app {
 namespace {
-
-struct PredictOptions {
-  MachineOptions machine;
-  ProgramOptions program;
-  std::string output, table;
-  double max_rotary_step_deg = 10.0;
-  bool absolute = false;
-  std::string probed;
-};
 
 // Rounds away "-0.000" in printed figures.
 double clean(double v) { return std::abs(v) < 5e-7 ? 0.0 : v; }
@@ -107,16 +93,15 @@ void printUncertainty(const Machine& machine, const ClProgram& program, const Ca
 }
 
 // Singular points and large rotary steps between cutting moves.
-void printRisks(const Machine& machine, const ClProgram& program, const PredictionResult& r,
-                double max_rotary_step_deg) {
-  const PredictionSummary& s = r.summary;
+void printRisks(const PredictionRun& run, double max_rotary_step_deg) {
+  const Machine& machine = run.machine;
+  const PredictionSummary& s = run.prediction.summary;
   if (s.singular_points > 0)
     std::printf("  note       %d points have the tool axis within %.4g deg of a rotary axis (first "
                 "at line %d); that axis kept its previous angle\n",
                 s.singular_points, radToDeg(machine.model.control.singular_band),
                 s.first_singular_line);
-  const auto jumps = findRotaryJumps(machine.model, program.path, r,
-                                     degToRad(max_rotary_step_deg));
+  const auto& jumps = run.jumps;
   if (!jumps.empty()) {
     std::printf("  risk       %zu rotary steps above %.1f deg between cutting moves:", jumps.size(),
                 max_rotary_step_deg);
@@ -127,66 +112,18 @@ void printRisks(const Machine& machine, const ClProgram& program, const Predicti
   }
 }
 
-void printWarnings(const Machine& machine, const ClProgram& program, const std::vector<std::string>& probe_warnings,
-                   const std::string& units_option) {
-  for (const std::string& w : probe_warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
-  for (const std::string& w : setupWarnings(machine.model))
-    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
-  for (const std::string& w : unitWarnings(program, machine.model, units_option))
-    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
-  for (const std::string& w : programNotes(program))
-    std::fprintf(stderr, "tolver: note: %s: %s\n", program.file.c_str(), w.c_str());
-}
-
-void runPredict(const PredictOptions& o, int* exit_code) {
-  Machine machine = loadMachine(o.machine);
+void printPrediction(const PredictionRun& run, const PredictInputs& in) {
+  const Machine& machine = run.machine;
+  const ClProgram& program = run.program;
   const PartSetup& setup = machine.model.setup;
-  const ClProgram program = loadProgram(o.program, machine.model);
-  const std::string table = o.table.empty() ? replaceExtension(o.output, ".csv") : o.table;
-  checkOutputDir(o.output, "-o");
-  checkOutputDir(table, "--errors");
-
-  PredictionResult r = predictProgram(machine, program);
-  // A calibrated machine: after the set-up a shop measures (unless --absolute), with each
-  // point's uncertainty.
-  const std::vector<ProbedPoint> probed = loadProbed(o.probed, machine.model);
-  const CalibratedPrediction cal = applyCalibration(machine, program, r, o.absolute, probed);
-  std::vector<std::string> probe_warnings;
-  const std::string probe_line =
-      cal.probed ? describeProbedSetup(o.probed, cal.probe, probed, &probe_warnings) : "";
-  const std::vector<PoseUncertainty>& unc = cal.uncertainty;
-
-  std::vector<ClPoint> predicted(program.path.size());
-  const PredictedPoints& pts = r.points;
-  for (size_t i = 0; i < predicted.size(); ++i) {
-    predicted[i] = program.path[i];
-    predicted[i].p_w = pts[i].p_pred_w;
-    predicted[i].u_w = pts[i].u_pred_w;
-  }
-  const std::vector<std::string> header = {
-      "tolver predicted CL: " + program.file + " on " + machine.model.name + " (" +
-          o.machine.machine + ")",
-      "each GOTO is the tool position the machine will really reach, in the program's frame"};
-  OutputSet outputs;  // both files, or neither
-  // Written as they are made: a long program's outputs never sit whole in memory.
-  outputs.addStreamed(o.output, [&](TextOut& out) { writePredictedApt(out, program, predicted, header); });
-  // The prediction's uncertainty, when the machine file carries its calibration's covariance.
-  outputs.addStreamed(table, [&](TextOut& out) {
-    writePointTable(out, machine.model, program.path, pts, unc.empty() ? nullptr : &unc);
-  });
-  outputs.commit();
-
-  // Summary.
-  const PredictionSummary& s = r.summary;
-  int nonzero = 0;
-  for (int i = 0; i < machine.params.size(); ++i) nonzero += machine.params[i] != 0.0;
+  const PredictionSummary& s = run.prediction.summary;
+  const PredictedPoints& pts = run.prediction.points;
+  const CalibratedPrediction& cal = run.calibration;
   std::printf("tolver predict\n");
   std::printf("  machine    %s (%s): %zu axes, %d error parameters, %d non-zero\n",
-              machine.model.name.c_str(), o.machine.machine.c_str(), machine.model.axes.size(),
-              machine.model.parameterCount(), nonzero);
-  bool no_errors = false;
-  const std::string errors = machineErrorsStatement(machine, &no_errors);
-  std::printf("             %s\n", errors.c_str());
+              machine.model.name.c_str(), in.machine.machine.c_str(), machine.model.axes.size(),
+              machine.model.parameterCount(), run.nonzero_parameters);
+  std::printf("             %s\n", run.errors_statement.c_str());
   std::printf("  program    %s (%s): %d tool positions (%d arcs expanded), units %s%s\n",
               program.file.c_str(), program.dialect.c_str(), s.points, program.arcs_expanded,
               program.units.c_str(), program.units_declared ? "" : " (assumed)");
@@ -199,7 +136,7 @@ void runPredict(const PredictOptions& o, int* exit_code) {
               "gauge length %.4f mm\n",
               setup.part_zero_table.x(), setup.part_zero_table.y(), setup.part_zero_table.z(),
               radToDeg(setup.part_rotation), setup.gauge_length);
-  if (cal.probed) std::printf("  probed     %s\n", probe_line.c_str());
+  if (cal.probed) std::printf("  probed     %s\n", run.probe_line.c_str());
   const PredictedPoint& worst = pts[s.max_index];
   std::printf("  deviation  max %.3f um at point %d (line %d), RMS %.3f um%s\n",
               mmToUm(s.max_deviation), s.max_index, program.path[s.max_index].line,
@@ -215,18 +152,18 @@ void runPredict(const PredictOptions& o, int* exit_code) {
                 program.path[s.rapid_max_index].line);
   std::printf("  tool axis  max %.3f urad, RMS %.3f urad\n", radToUrad(s.max_axis_angle),
               radToUrad(s.rms_axis_angle));
-  if (!unc.empty()) printUncertainty(machine, program, cal);
-  printRisks(machine, program, r, o.max_rotary_step_deg);
-  printWarnings(machine, program, probe_warnings, o.program.units);
-  std::printf("  wrote      %s (predicted CL), %s (per-point table)\n", o.output.c_str(),
-              table.c_str());
-  *exit_code = 0;
+  if (!cal.uncertainty.empty()) printUncertainty(machine, program, cal);
+  printRisks(run, in.max_rotary_step_deg);
+  for (const std::string& w : run.warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+  for (const std::string& n : run.notes) std::fprintf(stderr, "tolver: note: %s\n", n.c_str());
+  std::printf("  wrote      %s (predicted CL), %s (per-point table)\n", run.output.c_str(),
+              run.point_table.c_str());
 }
 
 }  // namespace
 
-void registerPredict(CLI::App& app, int* exit_code) {
-  auto o = std::make_shared<PredictOptions>();
+void registerPredict(CLI::App& app, Verdict* verdict) {
+  auto o = std::make_shared<PredictInputs>();
   CLI::App* cmd = app.add_subcommand(
       "predict",
       "Predict the real tool path of a CL program on a machine with errors: inverse kinematics "
@@ -237,13 +174,17 @@ void registerPredict(CLI::App& app, int* exit_code) {
   cmd->add_option("--max-rotary-step-deg", o->max_rotary_step_deg,
                   "report rotary steps above this between cutting moves, deg (default 10)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--errors", o->table,
+  cmd->add_option("--errors", o->point_table,
                   "per-point table to write (CSV; default: the output path with .csv)");
   cmd->add_flag("--absolute", o->absolute,
                 "a calibrated machine: predict without the set-up a shop measures (part probed, "
                 "tool preset), i.e. with what the calibration cannot see left in");
   addProbedOption(cmd, o->probed);
-  cmd->callback([o, exit_code] { runPredict(*o, exit_code); });
+  cmd->callback([o, verdict] {
+    const PredictionRun run = predict(*o);
+    printPrediction(run, *o);
+    *verdict = run.verdict;
+  });
 }
 
 }  // namespace tolver::app

@@ -1,47 +1,25 @@
 // tolver verify: will this program on this machine make this part within its profile tolerance?
 // ([AM01] 5.5.4-5.5.6, by swept surfaces; see geometry/verification.h.)
-#include <tbb/parallel_for.h>
-
-#include <atomic>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
-#include <map>
 #include <memory>
-#include <mutex>
 #include <string>
 
 #include "app/commands.h"
 #include "app/common.h"
-#include "io/common/io_error.h"
-#include "io/common/text_util.h"
-#include "io/program/jobs_file.h"
+#include "core/numerics/units.h"
 #include "io/report/verify_report.h"
 #include "pipeline/verify.h"
-#include "core/numerics/units.h"
 
 namespace tolver::app {
 namespace {
 
-namespace fs = std::filesystem;
-
 struct VerifyOptions {
   VerifyInputs in;
-  std::string report_dir, batch;
+  std::string batch;
   std::string tolerance_units;  // "", "mm" or "um" (of --tolerance)
   bool no_images = false;
   bool quiet = false;
-};
-
-struct JobOutcome {
-  std::string name;
-  bool ok = false, pass = false;
-  bool undecided = false;  // the decision lies within the prediction's 95 % band
-  bool incomplete = false;  // a hole in the checked surface (without --allow-open)
-  std::string error;
-  double max_um = 0, min_um = 0, machine_rms_um = 0, percent_in = 0;
-  int regions = 0;
-  std::string report;
 };
 
 void printVerification(const Verification& v, const VerifyOptions& o, const std::string& report) {
@@ -94,95 +72,41 @@ void printVerification(const Verification& v, const VerifyOptions& o, const std:
               report.c_str());
 }
 
-JobOutcome runJob(const VerifyOptions& o, const std::string& name, bool progress_bar) {
-  ProgressBar bar(progress_bar && !o.quiet);
-  const auto v = runVerification(o.in, name, [&](double f) { bar("sweeping " + name, f); });
-  JobOutcome out;
-  out.name = name;
-  out.report = writeVerification(*v, o.report_dir, !o.no_images);
-  const VerifyResult& result = v->result;
-  out.ok = true;
-  out.pass = verdictName(v->report) == "PASS";
-  out.undecided = verdictName(v->report) == "UNDECIDED";
-  out.incomplete = v->report.incomplete;
-  out.max_um = mmToUm(result.total_stats.max);
-  out.min_um = mmToUm(result.total_stats.min);
-  out.machine_rms_um = mmToUm(result.machine_stats.rms);
-  out.percent_in = result.percent_in;
-  out.regions = static_cast<int>(result.regions.size());
-  if (!o.quiet && o.batch.empty()) printVerification(*v, o, out.report);
-  return out;
-}
-
-// Batch: jobs.csv with columns name,machine,cl,part,tolerance[,setup,zones,probed]; paths relative to
-// the jobs file.
-int runBatch(const VerifyOptions& base) {
-  std::vector<VerifyOptions> jobs;
-  std::vector<std::string> names;
-  for (const VerifyJob& j : readJobsFile(base.batch)) {
-    VerifyOptions o = base;
-    o.batch.clear();
-    o.quiet = true;
-    o.in.machine.machine = j.machine;
-    o.in.machine.setup = j.setup;
-    o.in.probed = j.probed;
-    o.in.program.cl = j.cl;
-    o.in.program.nc.clear();
-    o.in.part = j.part;
-    o.in.zones_file = j.zones;
-    o.in.tolerance_mm = j.tolerance_mm;
-    o.report_dir = (fs::path(base.report_dir) / j.name).string();
-    jobs.push_back(o);
-    names.push_back(j.name);
-  }
-  makeReportDir(base.report_dir);
-  std::vector<JobOutcome> outcomes(jobs.size());
-  std::atomic<int> done{0};
-  std::mutex print;
-  tbb::parallel_for(size_t(0), jobs.size(), [&](size_t k) {
-    try {
-      outcomes[k] = runJob(jobs[k], names[k], false);
-    } catch (const InputError& e) {
-      outcomes[k].name = names[k];
-      outcomes[k].error = e.what();
-    } catch (const std::exception& e) {
-      outcomes[k].name = names[k];
-      outcomes[k].error = std::string("internal error: ") + e.what();
-    }
-    std::lock_guard<std::mutex> lock(print);
-    const int n = ++done;
-    if (!base.quiet)
-      std::fprintf(stderr, "  [%d/%zu] %s: %s\n", n, jobs.size(), names[k].c_str(),
-                   !outcomes[k].ok ? "error" : outcomes[k].pass ? "pass" : "fail");
-  });
-  std::string csv = "name,verdict,min_um,max_um,machine_rms_um,percent_in_tolerance,regions,report,error\n";
-  int code = 0;
-  std::printf("tolver verify --batch %s: %zu jobs\n", base.batch.c_str(), jobs.size());
-  std::printf("  %-20s %-7s %10s %10s %12s %8s %8s\n", "name", "verdict", "min um", "max um",
-              "machine RMS", "% in", "regions");
-  for (const auto& r : outcomes) {
-    const std::string verdict = !r.ok ? "error" : r.pass ? "pass" : r.incomplete ? "incomplete"
-                                : r.undecided ? "undecided" : "fail";
-    code = std::max(code, !r.ok ? 2 : r.pass ? 0 : 1);
-    csv += csvLine({r.name, verdict, formatWith("%.3f", r.min_um), formatWith("%.3f", r.max_um),
-                    formatWith("%.3f", r.machine_rms_um), formatWith("%.3f", r.percent_in), std::to_string(r.regions),
-                    r.report, r.error}) +
-           "\n";
-    if (r.ok)
-      std::printf("  %-20s %-7s %+10.2f %+10.2f %12.2f %8.2f %8d\n", r.name.c_str(), verdict.c_str(), r.min_um,
+void printBatch(const VerifyOptions& o, const BatchRun& run) {
+  std::printf("tolver verify --batch %s: %zu jobs\n", o.batch.c_str(), run.jobs.size());
+  std::printf("  %-20s %-7s %10s %10s %12s %8s %8s\n", "name", "verdict", "min um", "max um", "machine RMS", "% in",
+              "regions");
+  for (const JobOutcome& r : run.jobs)
+    if (r.error.empty())
+      std::printf("  %-20s %-7s %+10.2f %+10.2f %12.2f %8.2f %8d\n", r.name.c_str(), r.verdict_text.c_str(), r.min_um,
                   r.max_um, r.machine_rms_um, r.percent_in, r.regions);
     else
-      std::printf("  %-20s %-7s %s\n", r.name.c_str(), verdict.c_str(), r.error.c_str());
+      std::printf("  %-20s %-7s %s\n", r.name.c_str(), r.verdict_text.c_str(), r.error.c_str());
+  std::printf("  wrote      %s\n", run.summary.c_str());
+}
+
+Verdict runVerify(VerifyOptions& o) {
+  o.in.images = !o.no_images;
+  o.in.tolerance_confirmed = !o.tolerance_units.empty();
+  if (!o.batch.empty()) {
+    const BatchRun run = verifyBatch(o.in, o.batch, [&o](int n, size_t total, const JobOutcome& r) {
+      if (!o.quiet)
+        std::fprintf(stderr, "  [%d/%zu] %s: %s\n", n, total, r.name.c_str(),
+                     !r.error.empty() ? "error" : r.verdict == Verdict::Ok ? "pass" : "fail");
+    });
+    printBatch(o, run);
+    return run.verdict;
   }
-  const std::string summary = (fs::path(base.report_dir) / "summary.csv").string();
-  writeFileAtomically(summary, csv);
-  std::printf("  wrote      %s\n", summary.c_str());
-  return code;
+  if (o.tolerance_units == "um" && !std::isnan(o.in.tolerance_mm)) o.in.tolerance_mm = umToMm(o.in.tolerance_mm);
+  ProgressBar bar(!o.quiet);
+  const VerifyRun run = verifyPart(o.in, "", [&bar](const std::string& phase, double f) { bar(phase, f); });
+  if (!o.quiet) printVerification(*run.verification, o, run.report);
+  return run.verdict;
 }
 
 }  // namespace
 
-void registerVerify(CLI::App& app, int* exit_code) {
+void registerVerify(CLI::App& app, Verdict* verdict) {
   auto o = std::make_shared<VerifyOptions>();
   CLI::App* cmd = app.add_subcommand(
       "verify",
@@ -203,7 +127,7 @@ void registerVerify(CLI::App& app, int* exit_code) {
   cmd->add_option("--uz", o->in.uz_mm, "ISO 1101 UZ offset of that zone, mm (+ towards material left)");
   cmd->add_option("--asme-u", o->in.asme_u_mm, "ASME Y14.5 U: the part of t outside the material, mm");
   cmd->add_option("--zones", o->in.zones_file, "zones per region (CSV: region,tolerance,uz,u)");
-  cmd->add_option("--report-dir", o->report_dir, "directory for the report (created)")->required();
+  cmd->add_option("--report-dir", o->in.report_dir, "directory for the report (created)")->required();
   cmd->add_option("--batch", o->batch,
                   "jobs file (CSV: name,machine,cl,part,tolerance[,setup,zones,probed]); verifies them "
                   "in parallel, one report directory each, and writes summary.csv");
@@ -242,22 +166,7 @@ void registerVerify(CLI::App& app, int* exit_code) {
   cmd->add_option("--compensated-from", o->in.compensated_from,
                   "the program is the output of tolver compensate for this original: the nominal is "
                   "the original's path, the machine runs the compensated program's joints");
-  cmd->callback([o, exit_code] {
-    o->in.tolerance_confirmed = !o->tolerance_units.empty();
-    if (!o->batch.empty()) {
-      *exit_code = runBatch(*o);
-      return;
-    }
-    if (o->in.program.cl.empty() && o->in.program.nc.empty())
-      throw InputError("--cl", 0, 0, "cl", "give the program (--cl or --nc) or a jobs file (--batch)");
-    if (o->in.machine.machine.empty()) throw InputError("--machine", 0, 0, "machine", "give the machine file (--machine)");
-    if (o->tolerance_units == "um" && !std::isnan(o->in.tolerance_mm)) o->in.tolerance_mm = umToMm(o->in.tolerance_mm);
-    o->in.tolerance_confirmed = !o->tolerance_units.empty();
-    const std::string name =
-        fs::path(o->in.program.cl.empty() ? o->in.program.nc : o->in.program.cl).stem().string();
-    const JobOutcome r = runJob(*o, name, true);
-    *exit_code = r.pass ? 0 : r.undecided ? 4 : 1;
-  });
+  cmd->callback([o, verdict] { *verdict = runVerify(*o); });
 }
 
 }  // namespace tolver::app

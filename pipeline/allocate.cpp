@@ -19,8 +19,8 @@ AllocationRun runAllocation(const AllocateInputs& in) {
   }
   const std::vector<double>& l = in.limits_mm;
   if (l.size() != 3 || !(l[0] > 0 && l[1] > 0 && l[2] > 0))
-    throw InputError("--limits", 0, 0, "limits", "expected three positive values dx,dy,dz in mm");
-  if (in.cost.size() != 4) throw InputError("--cost", 0, 0, "cost", "expected h_p,h_a,h_d,r");
+    throw FieldError("limits_mm", "expected three positive values dx,dy,dz in mm");
+  if (in.cost.size() != 4) throw FieldError("cost", "expected h_p,h_a,h_d,r");
   AllocationModel& a = run.model;
   a.limits = Eigen::Vector3d(l[0], l[1], l[2]);
   a.h_p = in.cost[0];
@@ -43,6 +43,14 @@ AllocationRun runAllocation(const AllocateInputs& in) {
     run.reference_worst = verifyAccuracy(m, run.terms, run.accuracy, t_ref, a.rss);
     run.reference_cost = manufacturingCost(m, run.terms, t_ref, a);
   }
+  return run;
+}
+
+AllocationRun allocate(const AllocateInputs& in) {
+  if (in.report_dir.empty()) throw FieldError("report_dir", "give the report directory");
+  AllocationRun run = runAllocation(in);
+  writeAllocation(run, in, in.report_dir);
+  run.verdict = run.result.chosen >= 0 ? Verdict::Ok : Verdict::NotMet;
   return run;
 }
 

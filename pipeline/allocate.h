@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/allocation/tolerance_allocation.h"
+#include "pipeline/command.h"
 #include "pipeline/inputs.h"
 
 namespace tolver {
@@ -22,6 +23,7 @@ struct AllocateInputs {
   double lower_factor = NAN, upper_factor = NAN;  // bounds = factor x standard (NAN: the file's)
   int grid = 3, rotary_grid = 5, groups = 4;    // workspace grid, correlation groups
   AllocationOptions opt;                        // NSGA-II population, generations, seed
+  std::string report_dir;                       // where allocate() writes the reports
 };
 
 struct AllocationRun {
@@ -35,7 +37,11 @@ struct AllocationRun {
   bool reference_complete = false;
   double reference_cost = 0;
   Eigen::Vector3d reference_worst = Eigen::Vector3d::Zero();
+  Verdict verdict = Verdict::Ok;  // NotMet: no allocation within the bounds meets the limits
 };
+
+// tolver allocate: allocates and writes the report directory. Throws InputError.
+AllocationRun allocate(const AllocateInputs& in);
 
 // Reads the machine and the tolerance file and allocates. Throws InputError.
 AllocationRun runAllocation(const AllocateInputs& in);

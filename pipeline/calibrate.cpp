@@ -24,7 +24,7 @@ void parsePrior(const std::string& prior, double* um, double* urad) {
   const auto a = cells.size() == 2 ? parseNumber(cells[0]) : std::nullopt;
   const auto b = cells.size() == 2 ? parseNumber(cells[1]) : std::nullopt;
   if (!a || !b || !(*a > 0) || !(*b > 0) || *a > 1e4 || *b > 1e5)
-    throw InputError("--prior", 0, 0, "prior",
+    throw FieldError("prior",
                      "expected auto, none, or 'um,urad' (the standard deviation of a linear and "
                      "an angular error coefficient on this machine's class, e.g. 3,10)");
   *um = *a;
@@ -82,13 +82,61 @@ CalibrationOutputs calibrationOutputs(const std::string& machine, const std::str
   out.machine = machine;
   out.report = report.empty() ? replaceExtension(machine, ".json") : report;
   out.balls = balls.empty() ? ballsPathFor(machine) : balls;
-  checkOutputDir(out.machine, "-o");
-  checkOutputDir(out.report, "--report");
-  checkOutputDir(out.balls, "--balls");
+  checkOutputDir(out.machine, "output");
+  checkOutputDir(out.report, "report");
+  checkOutputDir(out.balls, "balls");
   return out;
 }
 
+TestDesign testDesign(const MachineModel& model, const BallbarTest& test, int unknowns) {
+  TestDesign d;
+  const int m = static_cast<int>(test.readings.size());
+  char buf[400];
+  if (m < 3 * unknowns) {
+    std::snprintf(buf, sizeof buf,
+                  "%d readings for %d unknowns (fewer than 3 per unknown): the fit follows the "
+                  "noise and predicts other poses worse than its residual says; plan at least %d "
+                  "readings",
+                  m, unknowns, 3 * unknowns);
+    d.warnings.push_back(buf);
+  }
+  d.time = timeJointCorrelation(model, test);
+  if (d.time.worst_axis >= 0 && d.time.worst > 0.5) {
+    const char* axis = model.axes[d.time.worst_axis].name.c_str();
+    std::snprintf(buf, sizeof buf,
+                  "time and %s move together in these readings (|r| = %.2f): a thermal drift "
+                  "and an error along %s cannot be told apart; order the poses at random "
+                  "(plan-ballbar does)",
+                  axis, d.time.worst, axis);
+    d.warnings.push_back(buf);
+  }
+  return d;
+}
+
+std::string heldoutWarning(const std::string& file, const ResidualStats& after, double fit_rms) {
+  if (!(after.readings > 0 && after.rms > 3.0 * fit_rms && after.rms > 1e-3)) return "";
+  char buf[400];
+  std::snprintf(buf, sizeof buf,
+                "%s: the identified machine predicts the held-out readings at RMS %.3f um, %.0f times its "
+                "fit (%.3f um): were they measured on the same set-ups (ball positions untouched), in the "
+                "same machine state?",
+                file.c_str(), mmToUm(after.rms), after.rms / fit_rms, mmToUm(fit_rms));
+  return buf;
+}
+
+CalibrationRun calibrateMachine(const CalibrateInputs& in) {
+  const CalibrationOutputs out = calibrationOutputs(in.output, in.balls, in.report);
+  CalibrationRun run = runCalibration(in);
+  run.outputs = out;
+  // The machine, its ball positions and the report as a set: all three or none.
+  run.written = writeCalibration(run, in, out);
+  run.verdict = run.fit.status == CalibrationStatus::Converged ? Verdict::Ok : Verdict::NotMet;
+  return run;
+}
+
 CalibrationRun runCalibration(const CalibrateInputs& in) {
+  if (!(in.spindle_tilt_urad >= 0 && in.spindle_tilt_urad <= 1e5))
+    throw FieldError("spindle_tilt_urad", "expected 0 to 1e5 urad");
   CalibrationRun run;
   run.machine = loadMachine(in.machine);
   const MachineModel& m = run.machine.model;
@@ -137,6 +185,13 @@ CalibrationRun runCalibration(const CalibrateInputs& in) {
     run.identified.identification.spindle_tilt_rad = in.spindle_tilt_urad * 1e-6;
   }
   run.lack_of_fit = lackOfFit(run.used, run.fit.residuals, run.fit.unknowns);
+  for (const std::string& w : run.file.warnings) run.warnings.push_back(in.readings + ": " + w);
+  run.design = testDesign(m, run.file.test, r.unknowns);
+  for (const std::string& w : run.design.warnings) run.warnings.push_back(in.readings + ": " + w);
+  if (!run.heldout.readings.empty()) {
+    const std::string w = heldoutWarning(in.heldout, run.heldout_figures.after, r.rms_residual);
+    if (!w.empty()) run.warnings.push_back(w);
+  }
   return run;
 }
 

@@ -7,10 +7,12 @@
 #include <vector>
 
 #include "core/calibration/ballbar.h"
+#include "core/calibration/ballbar_plan.h"
 #include "core/calibration/calibration.h"
 #include "core/calibration/identifiability.h"
 #include "io/machine/ballbar_file.h"
 #include "io/report/calibration_report.h"
+#include "pipeline/command.h"
 #include "pipeline/inputs.h"
 
 namespace tolver {
@@ -26,7 +28,20 @@ struct CalibrateInputs {
   // which a ball-bar cannot see: written into the identification, added to the tool-axis band
   // of every prediction (0: not stated).
   double spindle_tilt_urad = 0.0;
+  // The outputs (calibrateMachine): the identified machine (XML); its ball positions (CSV) and
+  // the JSON report, beside it unless given.
+  std::string output, balls, report;
 };
+
+// The test's design, judged before the fit.
+struct TestDesign {
+  TimeJointCorrelation time;          // worst_axis < 0: the readings have no time_s
+  std::vector<std::string> warnings;  // too few readings for the unknowns; time moving with a joint
+};
+TestDesign testDesign(const MachineModel& model, const BallbarTest& test, int unknowns);
+// A warning when the identified model predicts the held-out readings much worse than it fits its
+// own (more than 3 times the fit's RMS and above 1 um); empty otherwise.
+std::string heldoutWarning(const std::string& heldout_file, const ResidualStats& after, double fit_rms);
 
 // Where the outputs go: the identified machine, its ball positions and the JSON report.
 struct CalibrationOutputs {
@@ -51,7 +66,17 @@ struct CalibrationRun {
   HeldoutFigures heldout_figures;     // the held-out readings before and after
   Machine identified;                 // the machine with the identified values and covariance
   LackOfFit lack_of_fit;              // the fit's residual against the repeated poses' scatter
+  TestDesign design;                  // of the readings as read
+  std::vector<std::string> warnings;  // the reader's, the design's, the held-out readings'
+  // calibrateMachine: where the outputs went, and what they predict read back.
+  CalibrationOutputs outputs;
+  WrittenCheck written;
+  Verdict verdict = Verdict::Ok;      // NotMet: the fit did not converge
 };
+
+// tolver calibrate: checks the outputs' places, identifies, writes the machine, its ball
+// positions and the report as a set, and reads them back. Throws InputError.
+CalibrationRun calibrateMachine(const CalibrateInputs& in);
 
 // Reads the inputs and identifies. An unobservable test or no data is an InputError.
 CalibrationRun runCalibration(const CalibrateInputs& in);

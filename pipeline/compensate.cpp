@@ -251,7 +251,7 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
     run.setup_note = describeProbedSetup(in.probed, cal.probe, probed, &run.warnings);
   else if (!run.machine.identification.empty())
     run.setup_note = in.absolute
-                         ? "absolute (--absolute): what probing and presetting would take up is compensated too"
+                         ? "absolute (" + inputName("absolute") + "): what probing and presetting would take up is compensated too"
                          : "after the set-up a shop measures (part probed, tool preset), which the calibration cannot see";
   for (const std::string& w : setupWarnings(run.machine.model)) run.warnings.push_back(w);
   const ClProgram& program = run.program;
@@ -360,7 +360,7 @@ TableRun runTables(const MachineOptions& machine_options, double step_mm, const 
     std::snprintf(buf, sizeof buf, "grid: %s from %.3f mm, step %.3f mm, %zu points", names[k].c_str(), t.start,
                   t.step, t.position.size());
     const std::vector<std::string> header = {
-        "tolver compensate --table: " + model.name + " (" + machine_options.machine + "), axis " + names[k] +
+        "tolver compensate, axis tables: " + model.name + " (" + machine_options.machine + "), axis " + names[k] +
             " (pitch and straightness)",
         buf,
         "corrections: the joint changes to command (machine-file joint convention; NC values: times nc_sign), "
@@ -368,7 +368,7 @@ TableRun runTables(const MachineOptions& machine_options, double step_mm, const 
         "zero at the reference pose " + run.reference + "; tool tip " + formatNumber(model.setup.gauge_length) +
             " mm below the gauge point (the constant goes into the work offset)"};
     const std::string file = stem + "_" + names[k] + ".csv";
-    checkOutputDir(file, "--table");
+    checkOutputDir(file, "table");
     outputs.add(file, formatAxisTableCsv(names, static_cast<int>(k), t.position, um, header));
     run.files.push_back(file);
   }
@@ -385,6 +385,39 @@ TableRun runTables(const MachineOptions& machine_options, double step_mm, const 
         run.rotary_names += (run.rotary_names.empty() ? "" : ", ") + model.parameters[idx].iso_code;
     }
   }
+  return run;
+}
+
+CompensateRun compensateProgram(const CompensateInputs& in) {
+  if (!(in.table_step >= 0.1 && in.table_step <= 1000.0)) throw FieldError("table_step", "expected 0.1 to 1000 mm");
+  if (!(in.max_condition >= 10.0 && in.max_condition <= 1e15)) throw FieldError("max_condition", "expected 10 to 1e15");
+  CompensateRun run;
+  const bool program = !in.program.cl.empty() || !in.program.nc.empty();
+  if (!in.table.empty()) {
+    run.tables = runTables(in.machine, in.table_step, in.table);
+    if (!program) return run;
+  }
+  if (in.output.empty())
+    throw FieldError("output", "give the compensated program's path with " + inputName("output") + " (or only " +
+                                   inputName("table") + ")");
+  run.output = in.output;
+  run.report = in.report.empty() ? replaceExtension(in.output, ".json") : in.report;
+  run.joints = compensatedJointsPath(run.report);
+  checkOutputDir(run.output, "output");
+  checkOutputDir(run.report, "report");
+  run.compensation = runCompensation(in, in.output);
+  const CompensationRun& c = *run.compensation;
+  writeCompensation(c, in.output, run.report, in.report_dir);
+  // The read-back check: a point further off after than before means the written program moves
+  // where the original did not.
+  for (size_t i = 0; i < c.tip_after_um.size() && i < c.tip_before_um.size(); ++i) {
+    const double before = c.tip_before_um[i], after = c.tip_after_um[i];
+    if (!(after <= before + std::max(1.0, 0.1 * before))) {
+      if (run.worse_lines.empty() || run.worse_lines.back() != c.line[i]) run.worse_lines.push_back(c.line[i]);
+      run.worse_max_um = std::max(run.worse_max_um, after);
+    }
+  }
+  if (!run.worse_lines.empty()) run.verdict = Verdict::NotMet;
   return run;
 }
 

@@ -4,12 +4,14 @@
 // the source's dialect, with the predicted error before and after, the after measured on the
 // written text read back; and the linear-axis tables (--table). `tolver compensate` parses and
 // prints.
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/path/compensation.h"
 #include "io/program/compensated_program.h"
 #include "io/report/compensation_report.h"
+#include "pipeline/command.h"
 #include "pipeline/inputs.h"
 
 namespace tolver {
@@ -20,6 +22,12 @@ struct CompensateInputs {
   std::string probed;           // probed points (CSV)
   bool absolute = false;        // calibrated machine: no measured set-up
   double max_condition = 1e6;   // beyond it, a point is near a singular pose
+  // The outputs (compensateProgram): the compensated program (same dialect), its JSON report
+  // (default: beside it, .json), an HTML report directory (or empty); and the linear-axis tables
+  // (<stem>_<axis>.csv per axis, or empty) at their grid step.
+  std::string output, report, report_dir;
+  std::string table;
+  double table_step = 10.0;     // mm
 };
 
 struct CompensationRun {
@@ -59,5 +67,20 @@ struct TableRun {
 };
 // Computes the tables and writes <stem>_<axis>.csv for each (stem: `table` without extension).
 TableRun runTables(const MachineOptions& machine, double step_mm, const std::string& table);
+
+// tolver compensate: the tables (when asked) and the compensated program (when a program is
+// given), written; then the read-back check.
+struct CompensateRun {
+  std::optional<TableRun> tables;
+  std::optional<CompensationRun> compensation;
+  std::string output, report, joints;  // written with the program
+  // The read-back check: lines whose point is further off after than before (by more than 1 um
+  // and 10 %): the written program moves where the original did not (verdict NotMet).
+  std::vector<int> worse_lines;
+  double worse_max_um = 0.0;
+  Verdict verdict = Verdict::Ok;
+};
+// Throws InputError (FieldError "output": neither a program's output nor tables asked for).
+CompensateRun compensateProgram(const CompensateInputs& in);
 
 }  // namespace tolver

@@ -55,7 +55,7 @@ DiagnosisOptions diagnosisOptions(const DiagnoseInputs& in) {
   opt.blocks_per_setup = in.blocks_per_setup;
   for (const std::string& t : in.types) {
     const EffectTraits* tr = findEffectType(t);
-    if (!tr) throw InputError("--types", 0, 0, "type", "unknown effect type '" + t + "'");
+    if (!tr) throw FieldError("types", "unknown effect type '" + t + "'");
     opt.types.push_back(tr->type);
   }
   return opt;
@@ -100,12 +100,14 @@ void restoreExplainedGross(DiagnosisRun& run, const DiagnosisOptions& opt,
 DiagnosisOutputs diagnosisOutputs(const std::string& machine, const std::string& balls,
                                   const std::string& report_dir) {
   DiagnosisOutputs out{machine, balls.empty() ? ballsPathFor(machine) : balls, report_dir};
-  checkOutputDir(out.balls, "--balls");
-  checkOutputDir(out.machine, "-o");
+  checkOutputDir(out.balls, "balls");
+  checkOutputDir(out.machine, "output");
   return out;
 }
 
 DiagnosisRun runDiagnosis(const DiagnoseInputs& in, const std::function<void(int, int)>& progress) {
+  if (!(in.spindle_tilt_urad >= 0 && in.spindle_tilt_urad <= 1e5))
+    throw FieldError("spindle_tilt_urad", "expected 0 to 1e5 urad");
   DiagnosisRun run;
   run.started = std::chrono::steady_clock::now();
   run.machine = loadMachine(in.machine);
@@ -116,7 +118,7 @@ DiagnosisRun runDiagnosis(const DiagnoseInputs& in, const std::function<void(int
                      "(link and motion errors only)");
   run.file = readBallbarFile(in.readings, model, true);
   run.heldout = loadHeldout(in.heldout, model, run.file.test, in.readings);
-  if (!in.cl.empty() && !std::filesystem::exists(in.cl)) throw InputError(in.cl, 0, 0, "--cl", "no such file");
+  if (!in.cl.empty() && !std::filesystem::exists(in.cl)) throw InputError(in.cl, 0, 0, "program", "no such file");
   DiagnosisOptions opt = diagnosisOptions(in);
   // Gross readings first: the base fit without them is what the diagnosis starts from.
   opt.base_unknowns = defaultCalibrationUnknowns(model);
@@ -151,6 +153,27 @@ DiagnosisRun runDiagnosis(const DiagnoseInputs& in, const std::function<void(int
     }
     run.program = std::make_unique<ProgramComparison>(compareProgram(in.cl, before, after));
   }
+  for (const std::string& w : run.file.warnings) run.warnings.push_back(in.readings + ": " + w);
+  const BallbarTest& used = run.used();
+  run.design = testDesign(model, used, static_cast<int>(opt.base_unknowns.size() + 6 * used.setups.size()));
+  for (const std::string& w : run.design.warnings) run.warnings.push_back(in.readings + ": " + w);
+  if (r.heldout_before.readings > 0) {
+    const std::string w = heldoutWarning(in.heldout, r.heldout_after, r.final_fit.rms_residual);
+    if (!w.empty()) run.warnings.push_back(w);
+  }
+  return run;
+}
+
+DiagnosisRun diagnoseMachine(const DiagnoseInputs& in, const Progress& progress) {
+  const DiagnosisOutputs out = diagnosisOutputs(in.output, in.balls, in.report_dir);
+  DiagnosisRun run = runDiagnosis(in, [&](int done, int total) {
+    if (progress) progress("scoring candidates", total > 0 ? static_cast<double>(done) / total : 1.0);
+  });
+  run.outputs = out;
+  const DiagnosisWritten w = writeDiagnosis(run, in, out);
+  run.written = w.check;
+  run.json = w.json;
+  run.html = w.html;
   return run;
 }
 

@@ -13,6 +13,8 @@
 #include "core/diagnosis/diagnosis.h"
 #include "io/machine/ballbar_file.h"
 #include "io/report/diagnosis_report.h"
+#include "pipeline/calibrate.h"
+#include "pipeline/command.h"
 #include "pipeline/inputs.h"
 
 namespace tolver {
@@ -28,6 +30,9 @@ struct DiagnoseInputs {
   int blocks_per_setup = 6;       // cross-validation blocks
   bool keep_outliers = false;
   double spindle_tilt_urad = 0.0;  // as CalibrateInputs::spindle_tilt_urad
+  // The outputs (diagnoseMachine): the augmented machine (XML), its ball positions (beside it
+  // unless given) and the report directory.
+  std::string output, balls, report_dir;
 };
 
 struct DiagnosisOutputs {
@@ -51,8 +56,19 @@ struct DiagnosisRun {
   DiagnosisResult result;
   std::unique_ptr<ProgramComparison> program;  // with a part program
   std::chrono::steady_clock::time_point started;
+  TestDesign design;                        // of the readings fitted
+  std::vector<std::string> warnings;        // the reader's, the design's, the held-out readings'
   const BallbarTest& used() const { return robust.test; }  // the readings fitted
+  // diagnoseMachine: where the outputs went, and what they predict read back.
+  DiagnosisOutputs outputs;
+  WrittenCheck written;
+  std::string json, html;
+  Verdict verdict = Verdict::Ok;
 };
+
+// tolver diagnose: checks the outputs' places, diagnoses, writes the augmented machine, its ball
+// positions and the report directory as a set. Progress: "scoring candidates". Throws InputError.
+DiagnosisRun diagnoseMachine(const DiagnoseInputs& in, const Progress& progress = {});
 
 // Reads the inputs, removes gross readings, diagnoses (progress: candidates scored of the
 // round's total). A failed diagnosis or a base fit that does not converge is an InputError.

@@ -25,7 +25,7 @@ Machine loadMachine(const MachineOptions& o) {
   if (!o.setup.empty()) setup = readSetupFile(o.setup);
   if (!o.part_zero.empty()) {
     if (o.part_zero.size() != 3)
-      throw InputError("--part-zero", 0, 0, "part zero", "expected x,y,z in mm");
+      throw FieldError("part_zero", "expected x,y,z in mm");
     setup.part_zero_table = Eigen::Vector3d(o.part_zero[0], o.part_zero[1], o.part_zero[2]);
   }
   if (!o.part_zero.empty()) setup.part_zero_given = true;
@@ -35,7 +35,7 @@ Machine loadMachine(const MachineOptions& o) {
   }
   if (!std::isnan(o.gauge_length)) {
     if (!(o.gauge_length >= 0) || o.gauge_length > 1e5)
-      throw InputError("--gauge-length", 0, 0, "gauge length",
+      throw FieldError("gauge_length",
                        "expected a length from 0 to 1e5 mm, found " + formatNumber(o.gauge_length));
     setup.gauge_length = o.gauge_length;
     setup.gauge_length_given = true;
@@ -52,8 +52,8 @@ std::vector<std::string> setupWarnings(const MachineModel& model) {
   if (!s.part_rotation_given) missing += std::string(missing.empty() ? "" : ", ") + "part rotation 0 deg";
   if (!s.gauge_length_given) missing += std::string(missing.empty() ? "" : ", ") + "gauge length 0 mm (the tool tip at the spindle gauge point)";
   if (!missing.empty())
-    w.push_back("no set-up given for " + missing + ": the defaults were used (--setup, "
-                "--part-zero, --part-rotation-deg, --gauge-length)");
+    w.push_back("no set-up given for " + missing + ": the defaults were used (" + inputName("setup") + ", " + inputName("part_zero") +
+                ", " + inputName("part_rotation_deg") + ", " + inputName("gauge_length") + ")");
   return w;
 }
 
@@ -79,7 +79,7 @@ void keepLines(ClProgram& p, const std::string& spec) {
   const auto a = dash == std::string::npos ? std::nullopt : parseNumber(spec.substr(0, dash));
   const auto b = dash == std::string::npos ? std::nullopt : parseNumber(spec.substr(dash + 1));
   if (!a || !b || *a < 1 || *b < *a || *a != std::floor(*a) || *b != std::floor(*b))
-    throw InputError("--lines", 0, 0, "lines", "expected 'first-last', e.g. 11-578");
+    throw FieldError("lines", "expected 'first-last', e.g. 11-578");
   size_t k = 0;
   std::vector<int> kept_index(p.path.size(), -1);  // old point -> new point
   for (size_t i = 0; i < p.path.size(); ++i) {
@@ -94,7 +94,7 @@ void keepLines(ClProgram& p, const std::string& spec) {
     ++k;
   }
   if (k == 0)
-    throw InputError(p.file, 0, 0, "--lines", "no tool position on lines " + spec);
+    throw FieldError("lines", p.file + " has no tool position on lines " + spec);
   // The statements own the kept points only (writers index the path through them).
   for (AptStatement& st : p.statements) {
     int first = -1, count = 0;
@@ -157,7 +157,7 @@ ClProgram readProgram(LineSource& source, const std::string& path, bool gcode, c
     if (o.units == "inch") {
       if (program.units_declared && program.units != "INCH")
         throw InputError(path, 0, 0, "UNITS",
-                         "--cl-units inch, but the file declares UNITS/MM");
+                         inputName("units") + " inch, but the file declares UNITS/MM");
       if (!program.units_declared) scaleToInches(program);
     }
   }
@@ -169,8 +169,8 @@ ClProgram readProgram(LineSource& source, const std::string& path, bool gcode, c
 
 ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model) {
   if (o.cl.empty() == o.nc.empty())
-    throw InputError(o.cl.empty() ? "--cl" : o.cl, 0, 0, "program",
-                     "give the program with --cl (CL data) or --nc (G-code), one of them");
+    throw FieldError("cl", "give the program with " + inputName("cl") + " (CL data) or " + inputName("nc") +
+                               " (G-code), one of them");
   const std::string path = o.nc.empty() ? o.cl : o.nc;
   // The dialect from the option, the extension, or the first statements (looksLikeGcode reads
   // twenty non-blank lines; 64 kB hold them in any real program).
@@ -212,13 +212,13 @@ std::vector<std::string> unitWarnings(const ClProgram& program, const MachineMod
   if (inch_fits && (small_tool || (small_part && tool_d < 3.0))) {
     std::snprintf(buf, sizeof buf,
                   "%s declares no units and looks like inches (extent %.3f, tool diameter %.3f, "
-                  "read as mm): use --cl-units inch if it is",
-                  program.file.c_str(), extent, tool_d);
+                  "read as mm): use %s inch if it is",
+                  program.file.c_str(), extent, tool_d, inputName("units").c_str());
     w.push_back(buf);
   } else {
     std::snprintf(buf, sizeof buf, "%s declares no units: read as %s (extent %.1f mm%s)",
                   program.file.c_str(), program.units == "INCH" ? "inches" : "mm", extent,
-                  inch_fits ? "; --cl-units inch if it is in inches" : "");
+                  inch_fits ? ("; " + inputName("units") + " inch if it is in inches").c_str() : "");
     w.push_back(buf);
   }
   return w;
@@ -285,10 +285,10 @@ std::vector<std::string> programNotes(const ClProgram& program) {
   return w;
 }
 
-void checkOutputDir(const std::string& path, const char* option) {
+void checkOutputDir(const std::string& path, const char* field) {
   const auto dir = std::filesystem::path(path).parent_path();
   if (!dir.empty() && !std::filesystem::is_directory(dir))
-    throw InputError(path, 0, 0, option, "directory " + dir.string() + " does not exist");
+    throw FieldError(field, path + ": directory " + dir.string() + " does not exist");
 }
 
 CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program,
@@ -400,12 +400,11 @@ std::string describeProbedSetup(const std::string& path, const ProbedSetupFit& f
   return line;
 }
 
-void makeReportDir(const std::string& dir, const char* option) {
+void makeReportDir(const std::string& dir, const char* field) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec || !std::filesystem::is_directory(dir, ec))
-    throw InputError(dir, 0, 0, option,
-                     "cannot create the directory" + (ec ? ": " + ec.message() : std::string()));
+    throw FieldError(field, dir + ": cannot create the directory" + (ec ? ": " + ec.message() : std::string()));
 }
 
 std::string replaceExtension(const std::string& path, const std::string& ext) {

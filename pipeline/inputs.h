@@ -12,6 +12,7 @@
 #include "core/path/probed_setup.h"
 #include "core/path/tool_path_prediction.h"
 #include "io/program/apt_reader.h"
+#include "pipeline/command.h"
 
 namespace tolver {
 
@@ -64,8 +65,8 @@ PredictionResult predictProgram(const Machine& machine, const ClProgram& program
 // What the reader assumed or skipped, one line each.
 std::vector<std::string> programNotes(const ClProgram& program);
 
-// Throws InputError when the directory of `path` does not exist.
-void checkOutputDir(const std::string& path, const char* option);
+// Throws FieldError(field) when the directory of `path` does not exist.
+void checkOutputDir(const std::string& path, const char* field);
 // A prediction on a calibrated machine (one whose file carries its calibration's covariance):
 // unless `absolute`, the set-up a shop measures (part probed, tool preset), which the calibration
 // cannot see, is fitted to the prediction and applied to the machine, and `pred` redone with it;
@@ -92,8 +93,8 @@ std::string describeProbedSetup(const std::string& path, const ProbedSetupFit& f
                                 std::vector<std::string>* warnings);
 
 // Creates a report directory (and its parents); an unwritable place, a path below a regular
-// file or naming one is InputError (exit 2), never an internal error.
-void makeReportDir(const std::string& dir, const char* option = "--report-dir");
+// file or naming one is FieldError(field) (exit 2), never an internal error.
+void makeReportDir(const std::string& dir, const char* field = "report_dir");
 
 // `path` with its extension replaced (or `suffix` appended when it has none).
 std::string replaceExtension(const std::string& path, const std::string& ext);

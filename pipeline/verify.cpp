@@ -51,15 +51,15 @@ void checkPartUnits(const VerifyInputs& o, const ClProgram& program, const Trian
   if (ratio > 12.0 && ratio < 60.0 && o.mesh_units.empty()) {
     std::snprintf(buf, sizeof buf,
                   "the part (diagonal %.3f mm as read) is %.1f times smaller than the program "
-                  "(%.1f mm): it looks like inches; give --mesh-units inch",
-                  part, ratio, prog);
+                  "(%.1f mm): it looks like inches; give %s inch",
+                  part, ratio, prog, inputName("mesh_units").c_str());
     throw InputError(o.part, 0, 0, "units", buf);
   }
   if (ratio < 1.0 / 12.0 && ratio > 1.0 / 60.0 && !program.units_declared && o.program.units.empty()) {
     std::snprintf(buf, sizeof buf,
                   "the program declares no units and is %.1f times smaller than the part "
-                  "(diagonal %.3f against %.1f mm): it looks like inches; give --cl-units inch",
-                  1.0 / ratio, prog, part);
+                  "(diagonal %.3f against %.1f mm): it looks like inches; give %s inch",
+                  1.0 / ratio, prog, part, inputName("units").c_str());
     throw InputError(program.file, 0, 0, "units", buf);
   }
   // The cutting moves' tool tips must come near the part: boxes apart by more than a tenth of
@@ -69,9 +69,9 @@ void checkPartUnits(const VerifyInputs& o, const ClProgram& program, const Trian
     std::snprintf(buf, sizeof buf,
                   "the part is not where the program cuts: %.1f mm between the part (x %.0f..%.0f, "
                   "y %.0f..%.0f, z %.0f..%.0f mm) and the cutting moves (x %.0f..%.0f, y %.0f..%.0f, "
-                  "z %.0f..%.0f); check the set-up, --mesh-offset or the program's frame",
+                  "z %.0f..%.0f); check the set-up, %s or the program's frame",
                   gap, lo.x(), hi.x(), lo.y(), hi.y(), lo.z(), hi.z(), plo.x(), phi.x(), plo.y(),
-                  phi.y(), plo.z(), phi.z());
+                  phi.y(), plo.z(), phi.z(), inputName("mesh_offset").c_str());
     throw InputError(o.part, 0, 0, "position", buf);
   }
 }
@@ -79,16 +79,21 @@ void checkPartUnits(const VerifyInputs& o, const ClProgram& program, const Trian
 std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o) {
   std::vector<ToleranceZone> zones;
   if (!std::isnan(o.tolerance_mm)) {
-    // --tolerance is in mm: 30 meant as micrometres would accept gouges of tens of millimetres.
-    checkToleranceSize(o.tolerance_mm, o.tolerance_confirmed, "--tolerance", 0, 0);
+    // The tolerance is in mm: 30 meant as micrometres would accept gouges of tens of millimetres.
+    try {
+      checkToleranceSize(o.tolerance_mm, o.tolerance_confirmed, "", 0, 0);
+    } catch (const InputError& e) {
+      throw FieldError("tolerance_mm", e.message());
+    }
     if (!std::isnan(o.uz_mm) && !std::isnan(o.asme_u_mm))
-      throw InputError("--uz", 0, 0, "zone", "give either --uz (ISO) or --asme-u (ASME), not both");
+      throw FieldError("uz_mm", "give either " + inputName("uz_mm") + " (ISO) or " + inputName("asme_u_mm") +
+                                    " (ASME), not both");
     try {
       zones.push_back(!std::isnan(o.uz_mm)       ? isoUzZone(o.tolerance_mm, o.uz_mm)
                       : !std::isnan(o.asme_u_mm) ? asmeUZone(o.tolerance_mm, o.asme_u_mm)
                                               : bilateralZone(o.tolerance_mm));
     } catch (const std::invalid_argument& e) {
-      throw InputError("--tolerance", 0, 0, "tolerance", e.what());
+      throw FieldError("tolerance_mm", e.what());
     }
   }
   if (!o.zones_file.empty()) {
@@ -96,7 +101,8 @@ std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o) {
     zones.insert(zones.end(), more.begin(), more.end());
   }
   if (zones.empty())
-    throw InputError("--tolerance", 0, 0, "tolerance", "give --tolerance (mm) or --zones (file)");
+    throw FieldError("tolerance_mm",
+                     "give " + inputName("tolerance_mm") + " (mm) or " + inputName("zones_file") + " (file)");
   return zones;
 }
 
@@ -109,14 +115,14 @@ ToolSet toolsFrom(const VerifyInputs& o, const ClProgram& program) {
   if (!o.cutter.empty()) {
     std::vector<double> v = o.cutter;
     if (!cutterFromApt("TLDATA", v, &c))
-      throw InputError("--cutter", 0, 0, "cutter", "expected d,r[,length,taper_deg] with 0 <= r <= d/2");
+      throw FieldError("cutter", "expected d,r[,length,taper_deg] with 0 <= r <= d/2");
     tools.cutters = {c};
     return tools;
   }
   if (program.cutters.empty())
     throw InputError(program.file, 0, 0, "CUTTER",
                      "the program declares no cutter (CUTTER or TLDATA; in G-code a tool comment "
-                     "such as Fusion's (T1 D=6 CR=0)); give --cutter d,r");
+                     "such as Fusion's (T1 D=6 CR=0)); give " + inputName("cutter") + " d,r");
   // The shop's tool file describes the tools it names (over the program's comments).
   std::vector<CutterSpec> specs = program.cutters;
   if (!o.tools.empty()) {
@@ -136,7 +142,8 @@ ToolSet toolsFrom(const VerifyInputs& o, const ClProgram& program) {
   if (!unknown.empty())
     throw InputError(program.file, 0, 0, "tool",
                      "the program cuts with " + unknown + ", whose geometry it does not give (no "
-                     "tool comment): describe them in a --tools file, or give --cutter d,r for all");
+                     "tool comment): describe them in a tool file (" + inputName("tools") + "), or give " +
+                         inputName("cutter") + " d,r for all");
   std::vector<int> lines;
   for (const CutterSpec& s : specs) {
     if (!cutterFromApt(s.source, s.values, &c))
@@ -271,10 +278,10 @@ void checkSampleBudget(const VerifyInputs& o, const TriangleMesh& mesh) {
   const double qa = area / (std::sqrt(3.0) / 2.0), qb = 0.5 * perimeter / (4.0 / 3.0);
   const double fitting = (qb + std::sqrt(qb * qb + 4.0 * qa * kMaxSamples)) / (2.0 * kMaxSamples) * 1.001;
   if (samples > kMaxSamples)
-    throw InputError("--spacing", 0, 0, "spacing",
+    throw FieldError("spacing_mm",
                      formatWith("the part, %.0f mm2 of surface at ", area) + formatWith("%g mm spacing", s) +
                          formatWith(" make about %.3g surface samples, above the budget of ", samples) +
-                         formatWith("%.0f: give --spacing ", kMaxSamples) + formatWith("%.3g or more", fitting));
+                         formatWith("%.0f: give ", kMaxSamples) + inputName("spacing_mm") + " " + formatWith("%.3g or more", fitting));
 }
 
 // The placements of a sweep, from the path's length at the step.
@@ -283,11 +290,11 @@ void checkPlacementBudget(const ClProgram& program, const MotionSampling& sampli
   for (size_t i = 1; i < program.path.size(); ++i) length += (program.path[i].p_w - program.path[i - 1].p_w).norm();
   const double placements = length / sampling.step;
   if (placements > kMaxPlacements)
-    throw InputError("--step", 0, 0, "step",
+    throw FieldError("step_mm",
                      formatWith("the program, %.0f mm of tool path at ", length) +
                          formatWith("a %g mm step make about ", sampling.step) +
                          formatWith("%.3g tool placements, above the budget of ", placements) +
-                         formatWith("%.0f: give --step ", kMaxPlacements) +
+                         formatWith("%.0f: give ", kMaxPlacements) + inputName("step_mm") + " " +
                          formatWith("%.3g or more (or a larger tolerance)", length / kMaxPlacements));
 }
 
@@ -326,8 +333,8 @@ void useOriginalAsNominal(const VerifyInputs& o, ProgramOnMachine& m) {
   (po.nc.empty() ? po.cl : po.nc) = o.compensated_from;
   const ClProgram original = loadProgram(po, m.machine.model);
   if (original.path.size() != m.program.path.size())
-    throw InputError(o.compensated_from, 0, 0, "--compensated-from",
-                     "the original has " + std::to_string(original.path.size()) + " tool positions, the "
+    throw FieldError("compensated_from",
+                     o.compensated_from + ": the original has " + std::to_string(original.path.size()) + " tool positions, the "
                      "compensated program " + std::to_string(m.program.path.size()) +
                      ": give the program compensate read");
   const PredictionResult op = predictProgram(m.machine, original);
@@ -353,7 +360,7 @@ ProgramOnMachine predictOnMachine(const VerifyInputs& o) {
     m.setup_note = describeProbedSetup(o.probed, m.cal.probe, probed, &probe_warnings);
   else if (!m.cal.uncertainty.empty())
     m.setup_note = o.absolute
-                       ? "--absolute: the machine's share includes what probing the part and "
+                       ? inputName("absolute") + ": the machine's share includes what probing the part and "
                          "presetting the tool would take up, which the calibration cannot see"
                        : "the machine's share is after the set-up a shop measures (the part probed, "
                          "the tool preset): the ball-bar calibration cannot see either";
@@ -651,10 +658,10 @@ void reportHoles(bool allow_open, Verification& v) {
   std::snprintf(text, sizeof text,
                 "%zu holes in the part's surface are not covered by its mesh: %.1f mm2 not verified "
                 "(the first, %.1f mm2, at (%.2f, %.2f, %.2f)); holes with a border shorter than %.2f mm "
-                "are filled (--max-hole)%s",
+                "are filled (%s)%s",
                 rep.repair.holes.size(), rep.repair.hole_area, h.area, h.centre_w.x(), h.centre_w.y(),
-                h.centre_w.z(), rep.repair.max_hole_perimeter,
-                allow_open ? "; --allow-open: not part of the verdict" : "; --allow-open accepts them");
+                h.centre_w.z(), rep.repair.max_hole_perimeter, inputName("max_hole_mm").c_str(),
+                ("; " + inputName("allow_open") + (allow_open ? ": not part of the verdict" : " accepts them")).c_str());
   rep.incomplete_text = std::string("INCOMPLETE: ") + text;
   rep.incomplete = !allow_open && result.pass;
   if (allow_open || !result.pass) rep.notes.push_back(text);
@@ -745,7 +752,7 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   if (o.line_pass > 0) {
     const auto passes = clPasses(program.path);
     if (o.line_pass > static_cast<int>(passes.size()))
-      throw InputError("--line-pass", 0, 0, "line pass",
+      throw FieldError("line_pass",
                        "the program has " + std::to_string(passes.size()) + " passes, not " +
                            std::to_string(o.line_pass));
     rep.line_pass = o.line_pass;
@@ -758,8 +765,13 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
     rep.incomplete_text =
         "INCOMPLETE: the program cuts none of the checked surface (" +
         formatWith("%.1f", v->result.area) + " mm2 sampled, none machined): is this the part the "
-        "program makes, placed where it cuts (the set-up, --mesh-offset)?";
+        "program makes, placed where it cuts (the set-up, " + inputName("mesh_offset") + ")?";
   }
+  v->verdict = v->report.incomplete ? Verdict::NotMet
+               : v->report.undecided ? Verdict::Undecided
+               : v->result.pass      ? Verdict::Ok
+                                     : Verdict::NotMet;
+  rep.exit_code = exitCode(v->verdict);
   return v;
 }
 

@@ -12,6 +12,7 @@
 
 #include "geometry/verification.h"
 #include "io/report/verify_report.h"
+#include "pipeline/command.h"
 #include "pipeline/inputs.h"
 
 namespace tolver {
@@ -37,6 +38,9 @@ struct VerifyInputs {
   std::string probed;                      // probed points (CSV)
   std::string compensated_from;            // the original of a compensated program
   bool allow_open = false;                 // holes in the checked surface do not make INCOMPLETE
+  // The outputs (verifyPart, verifyBatch): the report directory, with images or without.
+  std::string report_dir;
+  bool images = true;
 };
 
 // What a verification computed. Not copyable: `report` points at `samples` and `result`.
@@ -47,6 +51,8 @@ struct Verification {
   std::string machine_file, program_dialect;
   bool banded = false;  // a calibrated machine: report.band95_* hold the prediction's band
   std::chrono::steady_clock::time_point started;
+  // PASS: Ok; FAIL and INCOMPLETE: NotMet; UNDECIDED: Undecided (report.exit_code says the same).
+  Verdict verdict = Verdict::Ok;
 
   Verification() = default;
   Verification(const Verification&) = delete;
@@ -62,5 +68,35 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& in, const std:
 // no display: then a note), report.json and report.html into `report_dir`, staged and swapped in
 // as a whole (ReportDirectory). Returns the path of report.html. Throws InputError.
 std::string writeVerification(Verification& v, const std::string& report_dir, bool images);
+
+// tolver verify on one program: runVerification, then writeVerification into in.report_dir.
+// name: the report's (empty: the program's stem). progress: "sweeping <name>".
+struct VerifyRun {
+  std::unique_ptr<Verification> verification;
+  std::string report;  // report.html
+  Verdict verdict = Verdict::Ok;
+};
+VerifyRun verifyPart(const VerifyInputs& in, const std::string& name = "", const Progress& progress = {});
+
+// tolver verify --batch: the jobs of a jobs file (io/program/jobs_file.h; paths relative to it),
+// each over `base` with its own machine, set-up, probed points, program, part, zones and
+// tolerance, verified in parallel into <base.report_dir>/<name>; summary.csv beside them.
+struct JobOutcome {
+  std::string name;
+  Verdict verdict = Verdict::BadInput;
+  std::string verdict_text;  // pass, fail, incomplete, undecided, error
+  std::string error;         // the refusal of a job whose inputs are bad
+  double max_um = 0, min_um = 0, machine_rms_um = 0, percent_in = 0;
+  int regions = 0;
+  std::string report;
+};
+struct BatchRun {
+  std::vector<JobOutcome> jobs;
+  std::string summary;        // summary.csv
+  Verdict verdict = Verdict::Ok;  // the worst of the jobs'
+};
+// done(k, n, outcome): job k finished (from a worker thread, serialised), n jobs in all.
+BatchRun verifyBatch(const VerifyInputs& base, const std::string& jobs_file,
+                     const std::function<void(int, size_t, const JobOutcome&)>& done = {});
 
 }  // namespace tolver

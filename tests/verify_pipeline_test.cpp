@@ -76,17 +76,18 @@ TEST_F(VerifyPipeline, AMissingPartIsAnInputErrorAndWritesNothing) {
 }
 
 // Work budgets: a spacing that would make tens of millions of samples, or a step that would
-// make tens of millions of placements, is refused before the work, naming the option and a value
-// that fits; nothing is written.
+// make tens of millions of placements, is refused before the work, naming the input's field (the
+// CLI turns it into the option) and a value that fits; nothing is written.
 TEST_F(VerifyPipeline, WorkBeyondTheBudgetsIsRefusedBeforeItStarts) {
   VerifyInputs in = sculptured("samples/machines/matsuura_mc760vx_measured.xml");
   in.spacing_mm = 0.005;  // about 9e8 samples on this part
   try {
     runVerification(in, "fine");
     FAIL() << "no error";
-  } catch (const InputError& e) {
+  } catch (const FieldError& e) {
     const std::string w = e.what();
-    EXPECT_NE(w.find("--spacing"), std::string::npos) << w;
+    EXPECT_EQ(e.field(), "spacing_mm");
+    EXPECT_EQ(w.find("--"), std::string::npos) << w;  // no option names in the library
     EXPECT_NE(w.find("budget"), std::string::npos) << w;
   }
   in.spacing_mm = 1.5;
@@ -94,8 +95,8 @@ TEST_F(VerifyPipeline, WorkBeyondTheBudgetsIsRefusedBeforeItStarts) {
   try {
     runVerification(in, "tiny-step");
     FAIL() << "no error";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("--step"), std::string::npos) << e.what();
+  } catch (const FieldError& e) {
+    EXPECT_EQ(e.field(), "step_mm") << e.what();
   }
   EXPECT_FALSE(std::filesystem::exists(path("report")));
 }
@@ -119,9 +120,9 @@ TEST_F(VerifyPipeline, TheSampleBudgetCountsTheEdgePoints) {
     w = e.what();
   }
   EXPECT_NE(w.find("budget"), std::string::npos) << w;
-  const size_t at = w.find("give --spacing ");
+  const size_t at = w.find("give spacing_mm ");
   ASSERT_NE(at, std::string::npos) << w;
-  const double suggested = std::stod(w.substr(at + 15));
+  const double suggested = std::stod(w.substr(at + 16));
   EXPECT_GT(suggested, 0.015) << w;  // the area alone: 0.0058
   EXPECT_LT(suggested, 0.017) << w;
   // At the suggested spacing the budget holds (the check comes before any work: 10 % above it,

@@ -60,9 +60,17 @@ std::string format(const std::string& file, int line, int column, const std::str
 InputError::InputError(const std::string& file, int line, int column, const std::string& field,
                        const std::string& message)
     : std::runtime_error(format(file, line, column, field, message)),
+      message_(bounded(message)),
       file_(file),
       line_(line),
       column_(column),
+      field_(field) {}
+
+InputError::InputError(const std::string& field, const std::string& message)
+    : std::runtime_error(bounded(field) + ": " + bounded(message)),
+      message_(bounded(message)),
+      line_(0),
+      column_(0),
       field_(field) {}
 
 namespace {

@@ -20,12 +20,27 @@ class InputError : public std::runtime_error {
   int line() const { return line_; }
   int column() const { return column_; }
   const std::string& field() const { return field_; }
+  // The message alone, without file, line and field.
+  const std::string& message() const { return message_; }
+
+ protected:
+  // An error of no file: what() is "field: message".
+  InputError(const std::string& field, const std::string& message);
 
  private:
+  std::string message_;
   std::string file_;
   int line_;
   int column_;
   std::string field_;
+};
+
+// An invalid value of a command's input that no file holds: `field` is the name of the input
+// (the member of the command's Inputs struct, e.g. "tolerance_mm"), never a command-line option;
+// the CLI turns it back into the option the user typed (app/common.h, optionForField).
+class FieldError : public InputError {
+ public:
+  FieldError(const std::string& field, const std::string& message) : InputError(field, message) {}
 };
 
 // Writes content to path atomically: a temporary file beside it, then rename. Throws InputError

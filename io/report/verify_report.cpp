@@ -40,10 +40,6 @@ std::string verdictName(const VerifyReport& r) {
   return r.result->pass ? "PASS" : "FAIL";
 }
 
-int verdictExitCode(const VerifyReport& r) {
-  const std::string v = verdictName(r);
-  return v == "PASS" ? 0 : v == "UNDECIDED" ? 4 : 1;
-}
 
 static bool attributable(const VerifyResult& v, int i) {
   return v.split.empty() || v.split[i] == Split::Attributable;
@@ -80,7 +76,7 @@ std::string formatVerifyJson(const VerifyReport& r) {
                                    "along each sample's normal (nearest CL point), k = 1.96"}};
     if (r.undecided) j["uncertainty"]["undecided"] = r.undecided_text;
   }
-  j["exit_code"] = verdictExitCode(r);
+  j["exit_code"] = r.exit_code;
   j["mode"] = r.mode;
   j["machine"] = {{"name", r.machine_name}, {"file", r.machine_file}};
   j["program"] = {{"file", r.program_file}, {"cl_points", r.cl_points}, {"placements", r.placements},

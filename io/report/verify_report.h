@@ -40,12 +40,12 @@ struct VerifyReport {
   std::string incomplete_text;
   double seconds = 0;
   std::vector<std::pair<std::string, double>> timings;  // phase, seconds
+  int exit_code = 0;  // the command's, as the pipeline decided it (pipeline/command.h, exitCode)
 };
 
 // The verdict: INCOMPLETE (holes in the checked surface, nothing out of tolerance), UNDECIDED
-// (a limit within the band, nothing clearly out), PASS, FAIL; and its exit code (1, 4, 0, 1).
+// (a limit within the band, nothing clearly out), PASS, FAIL.
 std::string verdictName(const VerifyReport& r);
-int verdictExitCode(const VerifyReport& r);
 
 // The cause of an out-of-tolerance region at its worst sample: "program" when the program on a
 // perfect machine is already out of the zone there, "machine" when it is in and the machine's
