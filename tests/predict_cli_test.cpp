@@ -125,6 +125,9 @@ TEST_F(PredictCli, BadInputsExitWithCode2AndOneLine) {
       {"--cl " + src("tests/fixtures/cl/nx_nurbs.clsf"), "nx_nurbs.clsf:13: NURBS"},
       {"--cl " + write("f.apt", "GOTO/1,2,3\n") + " --setup " + write("s.txt", "gauge = 3\n"),
        "s.txt:1: gauge: unknown key"},
+      // The library names the input's field (gauge_length, point_table); the CLI, the option.
+      {"--cl " + path("f.apt") + " --gauge-length -3", "error: --gauge-length: expected a length from 0"},
+      {"--cl " + path("f.apt") + " --errors " + path("nodir/t.csv"), "error: --errors: " + path("nodir/t.csv")},
   };
   for (const Case& c : cases) {
     const auto r = test::runTolver("predict --machine " + m + " " + c.args + " -o " + path("o.apt"));
@@ -141,6 +144,7 @@ TEST_F(PredictCli, BadInputsExitWithCode2AndOneLine) {
   const auto no_dir = test::runTolver("predict --machine " + m + " --cl " + path("g.apt") +
                                       " -o " + path("nodir/o.apt"));
   EXPECT_EQ(no_dir.exit_code, 2);
+  EXPECT_NE(no_dir.output.find("error: -o: "), std::string::npos) << no_dir.output;
   EXPECT_EQ(test::runTolver("predict --machine " + m).exit_code, 2);  // missing options
   EXPECT_EQ(test::runTolver("frobnicate").exit_code, 2);
 }

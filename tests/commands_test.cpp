@@ -1,0 +1,295 @@
+// Every command as a library function (pipeline/<command>.h), called without the binary: typed
+// inputs in, a typed run with its Verdict out, files written as the run says, and an invalid
+// input refused as a FieldError naming the input's field (never a command-line option).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "io/common/io_error.h"
+#include "pipeline/allocate.h"
+#include "pipeline/analyze.h"
+#include "pipeline/ballbar.h"
+#include "pipeline/calibrate.h"
+#include "pipeline/compensate.h"
+#include "pipeline/diagnose.h"
+#include "pipeline/predict.h"
+#include "pipeline/setup.h"
+#include "pipeline/verify.h"
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+namespace fs = std::filesystem;
+using test::sourcePath;
+
+const char* kNominal = "resources/machines/matsuura_mc760vx.xml";
+const char* kMeasured = "samples/machines/matsuura_mc760vx_measured.xml";
+
+class Commands : public test::TempDirTest {
+ protected:
+  static MachineOptions machine(const char* file, bool with_setup = true) {
+    MachineOptions m;
+    m.machine = sourcePath(file);
+    if (with_setup) m.setup = sourcePath("samples/matsuura_setup.txt");
+    return m;
+  }
+  static ProgramOptions cone() {
+    ProgramOptions p;
+    p.cl = sourcePath("samples/nas979_cone.apt");
+    return p;
+  }
+};
+
+// The field an input error names, and that it names no option.
+template <typename F>
+std::string refusedField(F&& f) {
+  try {
+    f();
+  } catch (const FieldError& e) {
+    EXPECT_EQ(std::string(e.what()).find(" --"), std::string::npos) << e.what();
+    return e.field();
+  }
+  return "(not refused)";
+}
+
+// A machine without errors reaches every point of the program: deviation zero, both files written
+// with one row per point.
+TEST_F(Commands, PredictOnAPerfectMachineIsTheProgram) {
+  PredictInputs in;
+  in.machine = machine(kNominal);
+  in.program = cone();
+  in.output = path("p.apt");
+  const PredictionRun run = predict(in);
+  EXPECT_EQ(run.verdict, Verdict::Ok);
+  EXPECT_LT(run.prediction.summary.max_deviation, 1e-9);
+  EXPECT_EQ(run.nonzero_parameters, 0);
+  EXPECT_EQ(run.point_table, path("p.csv"));
+  ASSERT_TRUE(fs::exists(path("p.apt")));
+  std::ifstream table(path("p.csv"));
+  std::string line;
+  size_t rows = 0;
+  while (std::getline(table, line))
+    if (!line.empty() && line[0] != '#') ++rows;
+  EXPECT_EQ(rows, run.program.path.size() + 1);  // and the header
+
+  in.machine = machine(kMeasured);
+  const PredictionRun real = predict(in);
+  EXPECT_GT(real.prediction.summary.max_deviation, 1e-3);  // the measured machine's errors show
+
+  in.output = path("no/such/dir/p.apt");
+  EXPECT_EQ(refusedField([&] { predict(in); }), "output");
+  in.output = path("p.apt");
+  in.machine.part_zero = {1, 2};
+  EXPECT_EQ(refusedField([&] { predict(in); }), "part_zero");
+}
+
+// The link model of the thesis's machine: the minimal-complete set has as many parameters as the
+// rank of the sensitivity Jacobian (every dependent column removed, none more).
+TEST_F(Commands, AnalyzeKeepsTheRankOfTheModel) {
+  AnalyzeInputs in;
+  in.machine = machine(kNominal, false);
+  in.model = "link";
+  const AnalysisRun run = analyze(in);
+  EXPECT_EQ(run.verdict, Verdict::Ok);
+  EXPECT_EQ(static_cast<int>(run.minimal.kept.size()), run.minimal.initial.rank);
+  EXPECT_EQ(run.minimal.reduced.rank, static_cast<int>(run.minimal.kept.size()));
+  in.model = "spline";
+  EXPECT_EQ(refusedField([&] { analyze(in); }), "model");
+}
+
+// Plan, simulate on the true machine without noise, calibrate on the nominal one: the identified
+// machine reproduces the readings (the written files read back), and a plan the readings then
+// analyse is fully observable.
+TEST_F(Commands, PlanSimulateCalibrateRoundTrip) {
+  PlanBallbarInputs plan;
+  plan.machine = machine(kNominal, false);
+  plan.output = path("plan.csv");
+  plan.heldout = 30;
+  const PlanRun p = planBallbar(plan);
+  EXPECT_EQ(p.verdict, Verdict::Ok);
+  EXPECT_EQ(p.gcode, path("plan.nc"));
+  EXPECT_EQ(p.heldout_output, path("plan_heldout.csv"));
+  for (const std::string& f : {p.output, p.gcode, p.heldout_output, p.heldout_gcode}) EXPECT_TRUE(fs::exists(f)) << f;
+  EXPECT_EQ(p.plan.rank, p.plan.unknowns);
+  EXPECT_GE(p.plan.test.readings.size(), 180u);  // the poses and the reference returns
+
+  SimulateBallbarInputs sim;
+  sim.machine = machine(kMeasured, false);
+  sim.plan = p.output;
+  sim.heldout_plan = p.heldout_output;
+  sim.output = path("readings.csv");
+  const SimulationRun s = simulateBallbar(sim);
+  EXPECT_EQ(s.readings, p.plan.test.readings.size());
+  EXPECT_EQ(s.heldout_readings, 30u);
+  EXPECT_EQ(s.heldout_output, path("readings_heldout.csv"));
+
+  CalibrateInputs cal;
+  cal.machine = machine(kNominal, false);
+  cal.readings = s.output;
+  cal.heldout = s.heldout_output;
+  cal.prior = "none";
+  cal.output = path("identified.xml");
+  const CalibrationRun c = calibrateMachine(cal);
+  EXPECT_EQ(c.verdict, Verdict::Ok);
+  EXPECT_LT(c.fit.rms_residual, 1e-6);
+  EXPECT_LT(c.written.fit.rms, 1e-6);       // the written files, read back
+  EXPECT_LT(c.written.heldout.rms, 1e-4);   // and poses they were not fitted to
+  EXPECT_EQ(c.outputs.balls, path("identified_balls.csv"));
+  EXPECT_TRUE(fs::exists(c.outputs.report));
+
+  cal.spindle_tilt_urad = -1;
+  EXPECT_EQ(refusedField([&] { calibrateMachine(cal); }), "spindle_tilt_urad");
+  plan.program = cone();
+  plan.volume = true;
+  EXPECT_EQ(refusedField([&] { planBallbar(plan); }), "volume");
+}
+
+// Diagnose on readings of a machine with a reversal error adds the reversal; on clean readings,
+// nothing. The augmented machine and the report directory are written as the run says.
+TEST_F(Commands, DiagnoseAddsWhatIsMissingAndNothingElse) {
+  DiagnoseInputs in;
+  in.machine = machine(kNominal, false);
+  in.readings = sourcePath("samples/ballbar/reversal.csv");
+  in.output = path("augmented.xml");
+  in.report_dir = path("out");
+  const DiagnosisRun run = diagnoseMachine(in);
+  EXPECT_EQ(run.verdict, Verdict::Ok);
+  ASSERT_EQ(run.result.added.size(), 1u);
+  EXPECT_NE(run.result.added[0].label.find("reversal"), std::string::npos) << run.result.added[0].label;
+  EXPECT_TRUE(fs::exists(run.json));
+  EXPECT_TRUE(fs::exists(path("augmented_balls.csv")));
+
+  in.readings = sourcePath("samples/ballbar/clean.csv");
+  in.report_dir = path("clean");
+  const DiagnosisRun clean = diagnoseMachine(in);
+  EXPECT_TRUE(clean.result.added.empty());
+  EXPECT_EQ(clean.result.verdict, DiagnosisVerdict::NothingMissing);
+
+  in.types = {"backlash-ish"};
+  EXPECT_EQ(refusedField([&] { diagnoseMachine(in); }), "types");
+}
+
+// The set-up search on the cone: a set-up that keeps every point inside travel, with the margin
+// the proposal states; the set-up file it writes, read back by predict, reaches every point.
+TEST_F(Commands, SetupProposesAReachableSetUp) {
+  SetupInputs in;
+  in.machine = machine(kNominal, false);
+  in.program = cone();
+  in.output = path("setup.txt");
+  const SetupRun run = proposeSetup(in);
+  ASSERT_EQ(run.verdict, Verdict::Ok);
+  EXPECT_EQ(run.mode, SetupMode::PartFrame);
+  EXPECT_TRUE(run.search.found);
+  EXPECT_GE(run.search.margin, 0.0);
+  ASSERT_EQ(run.written.size(), 1u);
+  PredictInputs p;
+  p.machine = machine(kNominal, false);
+  p.machine.setup = run.written[0].first;
+  p.program = cone();
+  p.output = path("p.apt");
+  EXPECT_NO_THROW(predict(p));
+
+  in.gauge_lengths = {-5};
+  EXPECT_EQ(refusedField([&] { proposeSetup(in); }), "gauge_lengths");
+}
+
+// Compensation on the measured machine: the written program, read back and predicted, is closer
+// to the nominal path than the original; no output and no tables is refused by field.
+TEST_F(Commands, CompensateWritesACloserProgram) {
+  CompensateInputs in;
+  in.machine = machine(kMeasured);
+  in.program = cone();
+  in.output = path("c.apt");
+  const CompensateRun run = compensateProgram(in);
+  EXPECT_EQ(run.verdict, Verdict::Ok);
+  ASSERT_TRUE(run.compensation);
+  EXPECT_TRUE(run.worse_lines.empty());
+  EXPECT_LT(run.compensation->report.after.tip_max_um, 0.05 * run.compensation->report.before.tip_max_um);
+  EXPECT_EQ(run.report, path("c.json"));
+  EXPECT_TRUE(fs::exists(run.joints));
+  in.output.clear();
+  EXPECT_EQ(refusedField([&] { compensateProgram(in); }), "output");
+}
+
+// verifyPart's verdict is the report's, and report.json's exit code is the verdict's.
+TEST_F(Commands, VerifyVerdictIsTheReportsAndItsExitCode) {
+  VerifyInputs in;
+  in.machine = machine(kMeasured);
+  in.program.cl = sourcePath("samples/sculptured_finish.apt");
+  in.part = sourcePath("samples/sculptured_part.obj");
+  in.spacing_mm = 1.5;
+  in.images = false;
+  for (double t : {0.002, 0.5}) {
+    in.tolerance_mm = t;
+    in.report_dir = path("t" + std::to_string(static_cast<int>(t * 1000)));
+    const VerifyRun run = verifyPart(in);
+    std::ifstream f(fs::path(in.report_dir) / "report.json");
+    const nlohmann::json j = nlohmann::json::parse(f);
+    EXPECT_EQ(j["exit_code"], exitCode(run.verdict));
+    EXPECT_EQ(run.verdict, t < 0.01 ? Verdict::NotMet : Verdict::Ok) << j["verdict"];
+    EXPECT_EQ(j["verdict"], t < 0.01 ? "fail" : "pass");
+  }
+  in.tolerance_mm = NAN;
+  EXPECT_EQ(refusedField([&] { verifyPart(in); }), "tolerance_mm");
+}
+
+// A batch's verdict is its worst job's; a job with bad input is reported, the others still run.
+TEST_F(Commands, VerifyBatchTakesTheWorstJob) {
+  VerifyInputs base;
+  base.spacing_mm = 1.5;
+  base.images = false;
+  base.report_dir = path("batch");
+  const BatchRun run = verifyBatch(base, sourcePath("samples/verify_jobs.csv"));
+  ASSERT_FALSE(run.jobs.empty());
+  Verdict worst = Verdict::Ok;
+  for (const JobOutcome& j : run.jobs) worst = worse(worst, j.verdict);
+  EXPECT_EQ(run.verdict, worst);
+  EXPECT_TRUE(fs::exists(run.summary));
+
+  std::ofstream(path("jobs.csv")) << "name,machine,cl,part,tolerance\nbad,nowhere.xml,nothing.apt,,0.05\n";
+  const BatchRun bad = verifyBatch(base, path("jobs.csv"));
+  ASSERT_EQ(bad.jobs.size(), 1u);
+  EXPECT_EQ(bad.verdict, Verdict::BadInput);
+  EXPECT_EQ(exitCode(bad.verdict), 2);
+  EXPECT_FALSE(bad.jobs[0].error.empty());
+}
+
+// Allocation on the XKH800: the standard tolerances break the limits and no tightening is
+// allowed, so nothing meets them (NotMet); allowing tighter tolerances finds one that does.
+TEST_F(Commands, AllocateMeetsTheLimitsOrSaysItCannot) {
+  AllocateInputs in;
+  in.machine.machine = sourcePath("resources/machines/xkh800.xml");
+  in.machine.gauge_length = 150;
+  in.tolerances = sourcePath("resources/allocation/xkh800_standard.csv");
+  in.opt.generations = 40;
+  in.report_dir = path("a");
+  const AllocationRun none = allocate(in);
+  EXPECT_EQ(none.verdict, Verdict::NotMet);
+  in.lower_factor = 0.25;
+  in.report_dir = path("b");
+  const AllocationRun run = allocate(in);
+  ASSERT_EQ(run.verdict, Verdict::Ok);
+  const AllocationSolution& c = run.result.front[run.result.chosen];
+  for (int k = 0; k < 3; ++k) EXPECT_LE(c.worst_exact[k], in.limits_mm[k] * (1 + 1e-9));
+  EXPECT_TRUE(fs::exists(path("b/report.json")));
+  in.limits_mm = {0.01, 0.01};
+  EXPECT_EQ(refusedField([&] { allocate(in); }), "limits_mm");
+}
+
+// The verdict's exit codes, and the worse of two.
+TEST(Verdicts, ExitCodesAndOrder) {
+  EXPECT_EQ(exitCode(Verdict::Ok), 0);
+  EXPECT_EQ(exitCode(Verdict::NotMet), 1);
+  EXPECT_EQ(exitCode(Verdict::BadInput), 2);
+  EXPECT_EQ(exitCode(Verdict::Undecided), 4);
+  EXPECT_EQ(worse(Verdict::Ok, Verdict::Undecided), Verdict::Undecided);
+  EXPECT_EQ(worse(Verdict::NotMet, Verdict::Undecided), Verdict::NotMet);
+  EXPECT_EQ(worse(Verdict::NotMet, Verdict::BadInput), Verdict::BadInput);
+}
+
+}  // namespace
+}  // namespace tolver
