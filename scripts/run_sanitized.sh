@@ -12,11 +12,13 @@ cd "$here/build-asan"
 # allocations to the end by design.
 export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:strict_string_checks=1"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
-# Left out here (they run in the normal suite): the two statistical campaigns, which repeat code
+# Left out here (they run in the normal suite): the doc-test and the two statistical campaigns, which repeat code
 # the rest of the suite covers on twenty seeds each and would take a quarter of an hour under
 # the sanitizers.
 campaigns="IndependentDiagnosis.TwentyCleanSeedsInBothSetupStylesAddNothing"
 campaigns+="|Diagnosis.OverTwentyNoiseSeedsCleanDataAddsAtMostOnce"
+# and the doc-test, whose commands the suite's own command tests cover
+campaigns+="|Docs.CommandsRun"
 ctest --output-on-failure -j"$(nproc)" --timeout 1800 -E "^($campaigns)\$"
 # A fixed libFuzzer seed: the same clone fuzzes the same inputs first (a CI run is repeatable);
 # longer runs (tests/fuzz/run.sh 3600) use random seeds.

@@ -1,4 +1,4 @@
-// The measurement behind the README's table of diagnoses on independent data: every case of
+// The measurement behind docs/validation.md's table of diagnoses on independent data: every case of
 // tests/independent_diagnosis.h x both set-up styles x seeds, printed as a Markdown table.
 // Not a test: run by hand, `./build/tests/diagnosis_campaign [seeds] [clean_seeds] [case]`.
 #include <cstdio>

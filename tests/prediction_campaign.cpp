@@ -1,4 +1,4 @@
-// The measurement behind the README's "Predictions on independent data": machines simulated by
+// The measurement behind docs/validation.md's "Predictions on independent data": machines simulated by
 // the independent implementation (tests/independent_ballbar.h, seeds the tests do not use),
 // calibrated by tolver from a three-set-up ball-bar test, then the tool tip (gauge length 100 mm)
 // and tool axis predicted at random poses over the whole travel and inside the calibrated volume,

@@ -107,7 +107,7 @@ TEST_F(PredictionUncertaintyTest, ExtrapolationIsFlaggedAndCostsUncertainty) {
 // the tip and the tool axis predicted over the whole travel (after each prediction's own best
 // set-up) are closer to the truth than the nominal machine's; inside the calibrated volume the
 // tip error is at most 0.4 of the machine's own, and the axis error at most 0.8 (the goal
-// is 0.7: seed 12 gives 0.74, the README's five machines 0.41-0.74).
+// is 0.7: seed 12 gives 0.74, docs/validation.md's five machines 0.41-0.74).
 TEST_F(PredictionUncertaintyTest, RegularisedPredictionsAreNeverWorseThanAPerfectMachine) {
   for (unsigned seed : {11u, 12u}) {
     Calibrated c = calibrateIndependent(seed, path(""), true);

@@ -1,5 +1,5 @@
 #pragma once
-// Machine description files (XML). Format (see README, "Machine file"):
+// Machine description files (XML). Format (see docs/formats.md, "Machine file"):
 //
 // <machine name="..." length_unit="mm|inch" angle_unit="deg|rad">
 //   <axis name="X" type="prismatic|rotary" branch="workpiece|tool" direction="1 0 0"

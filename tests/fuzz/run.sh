@@ -11,7 +11,7 @@ seconds="${1:-30}"
 shift || true
 names=("$@")
 # The default list (CI's) leaves out the scene harness (glTF, 3MF) until its open finding is fixed
-# (tests/fuzz/open_findings; README, Fuzzing): name it to run it.
+# (tests/fuzz/open_findings; docs/validation.md, Fuzzing): name it to run it.
 [ ${#names[@]} -eq 0 ] && names=(apt gcode machine setup ballbar zones tolerances probe jobs mesh)
 out="$here/build/fuzz"
 # As for the sanitized suite (scripts/run_sanitized.sh): leaks are not checked, since the
