@@ -199,6 +199,9 @@ class Reader {
     return spec;
   }
 
+  // The machine file, element by element: the root, the axes and their chains, the table and
+  // spindle frames, the control, the error model (its units, its elements, the aliases, the
+  // values), the identification preferences and uncertainty.
   Machine read(const std::string& xml) {
     tinyxml2::XMLDocument doc;
     if (doc.Parse(xml.data(), xml.size()) != tinyxml2::XML_SUCCESS)
@@ -212,9 +215,27 @@ class Reader {
     bool ok;
     length_scale_ = lengthUnit(attr(root, "length_unit", false, "mm"), &ok);
     if (!ok || length_scale_ == 1e-3) fail(root, "machine.length_unit", "expected mm or inch");
-    const double angle = angleUnit(attr(root, "angle_unit", false, "deg"), &ok);
+    angle_scale_ = angleUnit(attr(root, "angle_unit", false, "deg"), &ok);
     if (!ok) fail(root, "machine.angle_unit", "expected deg or rad");
+    axes(root, m);
+    m.last_T_table = frame(root->FirstChildElement("table"), angle_scale_);
+    m.last_T_spindle = frame(root->FirstChildElement("spindle"), angle_scale_);
+    if (const XMLElement* c = root->FirstChildElement("control")) control(c, m);
+    checkPrismaticSpan(root, m);
+    const ErrorElements errors = errorElements(root->FirstChildElement("errors"), m);
+    m.buildParameterLayout(errors.degrees);
+    out.params = Eigen::VectorXd::Zero(m.parameterCount());
+    if (const XMLElement* al = root->FirstChildElement("aliases")) aliases(al, m);
+    errorValues(errors, out);
+    if (const XMLElement* id = root->FirstChildElement("identification")) preferences(id, m);
+    namedValues(errors, out);
+    if (const XMLElement* u = root->FirstChildElement("identification_uncertainty"))
+      identification(u, angle_scale_, out);
+    return out;
+  }
 
+  // <axis> elements, in file order, and the two chains in their `order`.
+  void axes(const XMLElement* root, MachineModel& m) {
     struct Pending {
       Axis axis;
       double order;
@@ -222,50 +243,17 @@ class Reader {
       bool explicit_order = false;
     };
     std::vector<Pending> pending;
-    for (const XMLElement* e = root->FirstChildElement("axis"); e;
-         e = e->NextSiblingElement("axis")) {
-      Axis ax;
-      ax.name = attr(e, "name");
-      if (ax.name.empty()) fail(e, "axis.name", "empty name");
+    for (const XMLElement* e = root->FirstChildElement("axis"); e; e = e->NextSiblingElement("axis")) {
+      Axis ax = axis(e);
       for (const auto& p : pending)
         if (toUpper(p.axis.name) == toUpper(ax.name)) fail(e, "axis.name", "duplicate axis " + ax.name);
-      const std::string type = attr(e, "type");
-      if (type == "prismatic") ax.type = JointType::Prismatic;
-      else if (type == "rotary") ax.type = JointType::Rotary;
-      else fail(e, "axis.type", "expected prismatic or rotary, found '" + type + "'");
-      const std::string branch = attr(e, "branch");
-      if (branch == "workpiece") ax.branch = Branch::Workpiece;
-      else if (branch == "tool") ax.branch = Branch::Tool;
-      else fail(e, "axis.branch", "expected workpiece or tool, found '" + branch + "'");
-      const auto d = numbers(e, "direction", 3);
-      Eigen::Vector3d dir(d[0], d[1], d[2]);
-      if (dir.norm() < 1e-9) fail(e, "axis.direction", "zero vector");
-      ax.direction = dir.normalized();
-      const double k = ax.isRotary() ? angle : length_scale_;
-      ax.travel_min = number(e, "min") * k;
-      ax.travel_max = number(e, "max") * k;
-      // A rotary axis's travel may run many turns (LinuxCNC's XYZAC table: C within 36 000 deg).
-      const double bound = ax.isRotary() ? 1e6 * M_PI / 180.0 : 1e6;
-      if (std::abs(ax.travel_min) > bound) fail(e, "axis.min", ax.isRotary() ? "beyond 1e6 deg" : "beyond 1e6 mm");
-      if (std::abs(ax.travel_max) > bound) fail(e, "axis.max", ax.isRotary() ? "beyond 1e6 deg" : "beyond 1e6 mm");
-      if (!(ax.travel_min < ax.travel_max)) fail(e, "axis.max", "max must exceed min");
-      const std::string endless = attr(e, "endless", false, "false");
-      if (endless != "true" && endless != "false") fail(e, "axis.endless", "expected true or false");
-      ax.endless = endless == "true";
-      if (ax.endless && !ax.isRotary()) fail(e, "axis.endless", "only a rotary axis can be endless");
-      const std::string sign = attr(e, "nc_sign", false, "1");
-      if (sign == "1" || sign == "+1") ax.nc_sign = 1;
-      else if (sign == "-1") ax.nc_sign = -1;
-      else fail(e, "axis.nc_sign", "expected +1 or -1");
-      ax.parent_T_joint = frame(e->FirstChildElement("link"), angle);
       double order = static_cast<double>(pending.size());
       if (e->Attribute("order")) {
         order = number(e, "order");
         // Two axes at one place in a branch leave the chain's order to chance.
         for (const Pending& p : pending)
           if (p.axis.branch == ax.branch && p.order == order && p.explicit_order)
-            fail(e, "axis.order", "order " + formatNumber(order) + " is also axis " + p.axis.name +
-                                      "'s in the " +
+            fail(e, "axis.order", "order " + formatNumber(order) + " is also axis " + p.axis.name + "'s in the " +
                                       (ax.branch == Branch::Workpiece ? "workpiece" : "tool") + " branch");
       }
       pending.push_back({ax, order, static_cast<int>(pending.size()), e->Attribute("order") != nullptr});
@@ -274,165 +262,209 @@ class Reader {
     if (pending.empty()) fail(root, "axis", "the machine has no axes");
     for (const auto& p : pending) m.axes.push_back(p.axis);
     std::vector<Pending> sorted = pending;
-    std::stable_sort(sorted.begin(), sorted.end(),
-                     [](const Pending& a, const Pending& b) { return a.order < b.order; });
-    for (const auto& p : sorted)
-      (p.axis.branch == Branch::Workpiece ? m.workpiece_chain : m.tool_chain).push_back(p.index);
-    m.last_T_table = frame(root->FirstChildElement("table"), angle);
-    m.last_T_spindle = frame(root->FirstChildElement("spindle"), angle);
-    if (const XMLElement* c = root->FirstChildElement("control")) {
-      control(c, m.control);
-      for (const std::string& n : m.control.swivel_axes) {
-        bool rotary = false;
-        for (const Axis& ax : m.axes) rotary = rotary || (ax.isRotary() && toUpper(ax.name) == n);
-        if (!rotary || m.control.swivel_axes.size() != 2)
-          fail(c, "control.swivel_axes", "expected the names of the machine's two rotary axes, found '" + n + "'");
-      }
-    }
-    // The prismatic axes must span their directions: two along one line leave the tool tip
-    // unplaceable.
-    {
-      std::vector<int> prismatic;
-      for (size_t a = 0; a < m.axes.size(); ++a)
-        if (!m.axes[a].isRotary()) prismatic.push_back(static_cast<int>(a));
-      Eigen::MatrixXd D(3, prismatic.size());
-      for (size_t k = 0; k < prismatic.size(); ++k) D.col(k) = m.axes[prismatic[k]].direction.normalized();
-      if (!prismatic.empty() && Eigen::FullPivLU<Eigen::MatrixXd>(D).setThreshold(1e-6).rank() <
-                                    static_cast<Eigen::Index>(std::min<size_t>(3, prismatic.size()))) {
-        const XMLElement* e = root->FirstChildElement("axis");
-        fail(e, "axis.direction", "the prismatic axes' directions are dependent (two along one line?)");
-      }
-    }
+    std::stable_sort(sorted.begin(), sorted.end(), [](const Pending& a, const Pending& b) { return a.order < b.order; });
+    for (const auto& p : sorted) (p.axis.branch == Branch::Workpiece ? m.workpiece_chain : m.tool_chain).push_back(p.index);
+  }
 
-    // Error model.
-    const XMLElement* errs = root->FirstChildElement("errors");
-    int default_degree = 3;
-    double e_len = 1.0, e_ang = 1.0;
-    if (errs) {
-      m.errors_source = attr(errs, "source", false, "");
-      static const char* sources[] = {"", "none", "measured", "identified", "simulated"};
-      if (std::find_if(std::begin(sources), std::end(sources),
-                       [&](const char* x) { return m.errors_source == x; }) == std::end(sources))
-        fail(errs, "errors.source", "expected none, measured, identified or simulated");
-      e_len = lengthUnit(attr(errs, "length_unit", false, "mm"), &ok);
-      if (!ok) fail(errs, "errors.length_unit", "expected mm, um or inch");
-      e_ang = angleUnit(attr(errs, "angle_unit", false, "rad"), &ok);
-      if (!ok) fail(errs, "errors.angle_unit", "expected rad, urad, mrad, deg or arcsec");
-      if (errs->Attribute("default_degree")) {
-        const double d = number(errs, "default_degree");
-        if (d < 0 || d > 20 || d != std::floor(d))
-          fail(errs, "errors.default_degree", "expected an integer from 0 to 20");
-        default_degree = static_cast<int>(d);
-      }
+  // One <axis>: name, type, branch, direction, travel, endless, nc_sign, its <link>.
+  Axis axis(const XMLElement* e) {
+    Axis ax;
+    ax.name = attr(e, "name");
+    if (ax.name.empty()) fail(e, "axis.name", "empty name");
+    const std::string type = attr(e, "type");
+    if (type == "prismatic") ax.type = JointType::Prismatic;
+    else if (type == "rotary") ax.type = JointType::Rotary;
+    else fail(e, "axis.type", "expected prismatic or rotary, found '" + type + "'");
+    const std::string branch = attr(e, "branch");
+    if (branch == "workpiece") ax.branch = Branch::Workpiece;
+    else if (branch == "tool") ax.branch = Branch::Tool;
+    else fail(e, "axis.branch", "expected workpiece or tool, found '" + branch + "'");
+    const auto d = numbers(e, "direction", 3);
+    Eigen::Vector3d dir(d[0], d[1], d[2]);
+    if (dir.norm() < 1e-9) fail(e, "axis.direction", "zero vector");
+    ax.direction = dir.normalized();
+    const double k = ax.isRotary() ? angle_scale_ : length_scale_;
+    ax.travel_min = number(e, "min") * k;
+    ax.travel_max = number(e, "max") * k;
+    // A rotary axis's travel may run many turns (LinuxCNC's XYZAC table: C within 36 000 deg).
+    const double bound = ax.isRotary() ? 1e6 * M_PI / 180.0 : 1e6;
+    if (std::abs(ax.travel_min) > bound) fail(e, "axis.min", ax.isRotary() ? "beyond 1e6 deg" : "beyond 1e6 mm");
+    if (std::abs(ax.travel_max) > bound) fail(e, "axis.max", ax.isRotary() ? "beyond 1e6 deg" : "beyond 1e6 mm");
+    if (!(ax.travel_min < ax.travel_max)) fail(e, "axis.max", "max must exceed min");
+    const std::string endless = attr(e, "endless", false, "false");
+    if (endless != "true" && endless != "false") fail(e, "axis.endless", "expected true or false");
+    ax.endless = endless == "true";
+    if (ax.endless && !ax.isRotary()) fail(e, "axis.endless", "only a rotary axis can be endless");
+    const std::string sign = attr(e, "nc_sign", false, "1");
+    if (sign == "1" || sign == "+1") ax.nc_sign = 1;
+    else if (sign == "-1") ax.nc_sign = -1;
+    else fail(e, "axis.nc_sign", "expected +1 or -1");
+    ax.parent_T_joint = frame(e->FirstChildElement("link"), angle_scale_);
+    return ax;
+  }
+
+  // <control> and its swivel axes, which must name the machine's two rotary axes.
+  void control(const XMLElement* c, MachineModel& m) {
+    control(c, m.control);
+    for (const std::string& n : m.control.swivel_axes) {
+      bool rotary = false;
+      for (const Axis& ax : m.axes) rotary = rotary || (ax.isRotary() && toUpper(ax.name) == n);
+      if (!rotary || m.control.swivel_axes.size() != 2)
+        fail(c, "control.swivel_axes", "expected the names of the machine's two rotary axes, found '" + n + "'");
     }
-    std::vector<std::array<int, 6>> degrees(m.axes.size());
-    for (auto& d : degrees) d.fill(default_degree);
-    struct Value {
-      const XMLElement* e;
-      int axis, component;
-      std::vector<double> v;
-    };
-    std::vector<Value> links, motions, setups;
+  }
+
+  // The prismatic axes must span their directions: two along one line leave the tool tip
+  // unplaceable.
+  void checkPrismaticSpan(const XMLElement* root, const MachineModel& m) {
+    std::vector<int> prismatic;
+    for (size_t a = 0; a < m.axes.size(); ++a)
+      if (!m.axes[a].isRotary()) prismatic.push_back(static_cast<int>(a));
+    Eigen::MatrixXd D(3, prismatic.size());
+    for (size_t k = 0; k < prismatic.size(); ++k) D.col(k) = m.axes[prismatic[k]].direction.normalized();
+    if (!prismatic.empty() && Eigen::FullPivLU<Eigen::MatrixXd>(D).setThreshold(1e-6).rank() <
+                                  static_cast<Eigen::Index>(std::min<size_t>(3, prismatic.size())))
+      fail(root->FirstChildElement("axis"), "axis.direction",
+           "the prismatic axes' directions are dependent (two along one line?)");
+  }
+
+  // What <errors> holds, read before the parameter layout exists (the motion degrees set it).
+  struct ErrorValue {
+    const XMLElement* e;
+    int axis, component;
+    std::vector<double> v;
+  };
+  struct ErrorElements {
+    double length = 1.0, angle = 1.0;  // the values' units, in mm and rad
+    std::vector<std::array<int, 6>> degrees;
+    std::vector<ErrorValue> links, motions, setups;
     std::vector<std::pair<const XMLElement*, double>> named;
     std::vector<const XMLElement*> effects;
+    double scale(int component) const { return isAngularComponent(component) ? angle : length; }
+  };
+
+  // <errors>: its source, units and default degree, then its elements.
+  ErrorElements errorElements(const XMLElement* errs, MachineModel& m) {
+    ErrorElements out;
+    int default_degree = 3;
     if (errs) {
-      for (const XMLElement* e = errs->FirstChildElement(); e; e = e->NextSiblingElement()) {
-        const std::string tag = e->Name();
-        if (tag == "link") {
-          links.push_back({e, axisRef(e, m), component(e), {number(e, "value")}});
-        } else if (tag == "motion") {
-          Value v{e, axisRef(e, m), component(e), numbers(e, "coefficients", 0)};
-          int deg = std::max<int>(default_degree, static_cast<int>(v.v.size()) - 1);
-          if (e->Attribute("degree")) {
-            const double d = number(e, "degree");
-            if (d < 0 || d > 20 || d != std::floor(d))
-              fail(e, "motion.degree", "expected an integer from 0 to 20");
-            deg = static_cast<int>(d);
-            if (static_cast<int>(v.v.size()) > deg + 1)
-              fail(e, "motion.coefficients", "more coefficients than degree + 1");
-          }
-          degrees[v.axis][v.component] = deg;
-          motions.push_back(v);
-        } else if (tag == "setup") {
-          const std::string f = attr(e, "frame");
-          if (f != "workpiece" && f != "tool")
-            fail(e, "setup.frame", "expected workpiece or tool, found '" + f + "'");
-          setups.push_back({e, f == "workpiece" ? 0 : 1, component(e), {number(e, "value")}});
-        } else if (tag == "param") {
-          named.emplace_back(e, number(e, "value"));
-        } else if (tag == "effect") {
-          effects.push_back(e);
-        } else {
-          fail(e, "errors", "unknown element <" + tag + ">");
+      bool ok;
+      const std::string source = attr(errs, "source", false, "");
+      static const char* sources[] = {"", "none", "measured", "identified", "simulated"};
+      if (std::find_if(std::begin(sources), std::end(sources), [&](const char* x) { return source == x; }) ==
+          std::end(sources))
+        fail(errs, "errors.source", "expected none, measured, identified or simulated");
+      m.errors_source = source;
+      out.length = lengthUnit(attr(errs, "length_unit", false, "mm"), &ok);
+      if (!ok) fail(errs, "errors.length_unit", "expected mm, um or inch");
+      out.angle = angleUnit(attr(errs, "angle_unit", false, "rad"), &ok);
+      if (!ok) fail(errs, "errors.angle_unit", "expected rad, urad, mrad, deg or arcsec");
+      if (errs->Attribute("default_degree")) default_degree = degree(errs, "errors.default_degree", "default_degree");
+    }
+    out.degrees.resize(m.axes.size());
+    for (auto& d : out.degrees) d.fill(default_degree);
+    for (const XMLElement* e = errs ? errs->FirstChildElement() : nullptr; e; e = e->NextSiblingElement()) {
+      const std::string tag = e->Name();
+      if (tag == "link") {
+        out.links.push_back({e, axisRef(e, m), component(e), {number(e, "value")}});
+      } else if (tag == "motion") {
+        ErrorValue v{e, axisRef(e, m), component(e), numbers(e, "coefficients", 0)};
+        int deg = std::max<int>(default_degree, static_cast<int>(v.v.size()) - 1);
+        if (e->Attribute("degree")) {
+          deg = degree(e, "motion.degree", "degree");
+          if (static_cast<int>(v.v.size()) > deg + 1) fail(e, "motion.coefficients", "more coefficients than degree + 1");
         }
+        out.degrees[v.axis][v.component] = deg;
+        out.motions.push_back(v);
+      } else if (tag == "setup") {
+        const std::string f = attr(e, "frame");
+        if (f != "workpiece" && f != "tool") fail(e, "setup.frame", "expected workpiece or tool, found '" + f + "'");
+        out.setups.push_back({e, f == "workpiece" ? 0 : 1, component(e), {number(e, "value")}});
+      } else if (tag == "param") {
+        out.named.emplace_back(e, number(e, "value"));
+      } else if (tag == "effect") {
+        out.effects.push_back(e);
+      } else {
+        fail(e, "errors", "unknown element <" + tag + ">");
       }
     }
-    m.buildParameterLayout(degrees);
-    out.params = Eigen::VectorXd::Zero(m.parameterCount());
-    if (const XMLElement* al = root->FirstChildElement("aliases")) {
-      for (const XMLElement* e = al->FirstChildElement("alias"); e;
-           e = e->NextSiblingElement("alias")) {
-        const std::string name = attr(e, "name"), target = attr(e, "parameter");
-        const int p = m.findParameter(target);
-        if (p < 0) fail(e, "alias.parameter", "no parameter named '" + target + "'");
-        if (m.findParameter(name) >= 0) fail(e, "alias.name", "'" + name + "' is already a name");
-        m.aliases.push_back({name, p, attr(e, "description", false, "")});
-      }
+    return out;
+  }
+
+  // A Chebyshev degree attribute: an integer from 0 to 20.
+  int degree(const XMLElement* e, const char* field, const char* name) {
+    const double d = number(e, name);
+    if (d < 0 || d > 20 || d != std::floor(d)) fail(e, field, "expected an integer from 0 to 20");
+    return static_cast<int>(d);
+  }
+
+  // <aliases>: other names for parameters.
+  void aliases(const XMLElement* al, MachineModel& m) {
+    for (const XMLElement* e = al->FirstChildElement("alias"); e; e = e->NextSiblingElement("alias")) {
+      const std::string name = attr(e, "name"), target = attr(e, "parameter");
+      const int p = m.findParameter(target);
+      if (p < 0) fail(e, "alias.parameter", "no parameter named '" + target + "'");
+      if (m.findParameter(name) >= 0) fail(e, "alias.name", "'" + name + "' is already a name");
+      m.aliases.push_back({name, p, attr(e, "description", false, "")});
     }
-    auto scaleOf = [&](int c) { return isAngularComponent(c) ? e_ang : e_len; };
-    for (const XMLElement* e : effects) {
+  }
+
+  // The effects (appended to the layout), the link and the motion errors' values.
+  void errorValues(const ErrorElements& errors, Machine& out) {
+    MachineModel& m = out.model;
+    for (const XMLElement* e : errors.effects) {
       const int first = m.parameterCount();
       const EffectSpec spec = effect(e, m);
       m.addEffect(spec);
       const int size = m.parameterCount() - first;
       const std::vector<double> v = numbers(e, "values", 0);
       if (static_cast<int>(v.size()) != size)
-        fail(e, "effect.values",
-             "expected " + std::to_string(size) + " values, found " + std::to_string(v.size()));
+        fail(e, "effect.values", "expected " + std::to_string(size) + " values, found " + std::to_string(v.size()));
       out.params.conservativeResize(m.parameterCount());
       for (int k = 0; k < size; ++k)
-        out.params[first + k] = v[k] * (spec.axis < 0 ? e_len : scaleOf(spec.component));
+        out.params[first + k] = v[k] * (spec.axis < 0 ? errors.length : errors.scale(spec.component));
     }
-    for (const Value& v : links) {
+    for (const ErrorValue& v : errors.links) {
       const int b = std::find_if(m.blocks.begin(), m.blocks.end(), [&](const ParameterBlock& x) {
                       return x.kind == BlockKind::LinkError && x.axis == v.axis;
                     }) - m.blocks.begin();
-      out.params[m.blocks[b].offset + v.component] = v.v[0] * scaleOf(v.component);
+      out.params[m.blocks[b].offset + v.component] = v.v[0] * errors.scale(v.component);
     }
-    for (const Value& v : motions) {
+    for (const ErrorValue& v : errors.motions) {
       const ParameterBlock& b = m.blocks[m.motionBlock(v.axis, v.component)];
-      for (size_t k = 0; k < v.v.size(); ++k)
-        out.params[b.offset + k] = v.v[k] * scaleOf(v.component);
+      for (size_t k = 0; k < v.v.size(); ++k) out.params[b.offset + k] = v.v[k] * errors.scale(v.component);
     }
-    if (const XMLElement* id = root->FirstChildElement("identification")) {
-      for (const XMLElement* e = id->FirstChildElement("prefer"); e;
-           e = e->NextSiblingElement("prefer")) {
-        const std::string model = attr(e, "model");
-        if (model != "link" && model != "motion")
-          fail(e, "prefer.model", "expected link or motion, found '" + model + "'");
-        std::istringstream in(attr(e, "parameters"));
-        std::string name;
-        while (in >> name) {
-          const int p = m.findParameter(name);
-          if (p < 0) fail(e, "prefer.parameters", "no parameter named '" + name + "'");
-          m.preferred[model].push_back(p);
-        }
+  }
+
+  // <identification><prefer model= parameters=/>: the parameters a minimal set keeps first.
+  void preferences(const XMLElement* id, MachineModel& m) {
+    for (const XMLElement* e = id->FirstChildElement("prefer"); e; e = e->NextSiblingElement("prefer")) {
+      const std::string model = attr(e, "model");
+      if (model != "link" && model != "motion") fail(e, "prefer.model", "expected link or motion, found '" + model + "'");
+      std::istringstream in(attr(e, "parameters"));
+      std::string name;
+      while (in >> name) {
+        const int p = m.findParameter(name);
+        if (p < 0) fail(e, "prefer.parameters", "no parameter named '" + name + "'");
+        m.preferred[model].push_back(p);
       }
     }
-    for (const auto& [e, value] : named) {
+  }
+
+  // <param name=> values (after the aliases exist) and the set-up errors.
+  void namedValues(const ErrorElements& errors, Machine& out) {
+    const MachineModel& m = out.model;
+    for (const auto& [e, value] : errors.named) {
       const std::string name = attr(e, "name");
       const int p = m.findParameter(name);
       if (p < 0) fail(e, "param.name", "no parameter named '" + name + "'");
-      out.params[p] = value * (m.parameters[p].angular ? e_ang : e_len);
+      out.params[p] = value * (m.parameters[p].angular ? errors.angle : errors.length);
     }
-    for (const Value& v : setups) {
+    for (const ErrorValue& v : errors.setups) {
       const BlockKind kind = v.axis == 0 ? BlockKind::WorkpieceSetup : BlockKind::ToolSetup;
       for (const ParameterBlock& b : m.blocks)
-        if (b.kind == kind) out.params[b.offset + v.component] = v.v[0] * scaleOf(v.component);
+        if (b.kind == kind) out.params[b.offset + v.component] = v.v[0] * errors.scale(v.component);
     }
-    if (const XMLElement* u = root->FirstChildElement("identification_uncertainty"))
-      identification(u, angle, out);
-    return out;
   }
 
   // <identification_uncertainty readings="n"> with <covered axis= min= max=/> (machine units)
@@ -506,6 +538,7 @@ class Reader {
  private:
   std::string file_;
   double length_scale_ = 1.0;
+  double angle_scale_ = 1.0;  // of the machine's own angles (deg or rad), in rad
 };
 
 }  // namespace

@@ -13,10 +13,6 @@
 #include "io/machine/tolerance_file.h"
 
 namespace tolver {
-namespace {
-
-
-}  // namespace
 
 double displayValue(const MachineModel& m, const ToleranceTerm& t, double v) {
   return m.parameters[t.parameter].angular ? v * 1e3 : v;
@@ -25,14 +21,23 @@ const char* displayUnit(const MachineModel& m, const ToleranceTerm& t) {
   return m.parameters[t.parameter].angular ? "mm/m" : "mm";
 }
 
-// Long by design: the report's files (allocation.csv, pareto.csv, pareto.png, report.json,
-// report.html) in the order they are written, each a few lines over the same figures.
-void writeAllocationReport(const std::string& dir, const MachineModel& m,
-                           const std::vector<ToleranceTerm>& terms, const AllocationModel& a,
-                           const AllocationResult& r, const AllocationReportInputs& in) {
-  using nlohmann::json;
-  const AllocationSolution* chosen = r.chosen >= 0 ? &r.front[r.chosen] : nullptr;
-  // allocation.csv: the Table 4 of this machine.
+namespace {
+
+// The figures every file of the report shows.
+struct AllocationView {
+  const MachineModel& m;
+  const std::vector<ToleranceTerm>& terms;
+  const AllocationModel& a;
+  const AllocationResult& r;
+  const AllocationReportInputs& in;
+  const AllocationSolution* chosen;  // null when no allocation meets the limits
+};
+
+// allocation.csv: the Table 4 of this machine.
+void writeAllocationCsv(const AllocationView& v, const std::string& dir) {
+  const MachineModel& m = v.m;
+  const std::vector<ToleranceTerm>& terms = v.terms;
+  const AllocationSolution* chosen = v.chosen;
   std::string table = "term,parameter,category,unit,standard,optimised,lower,upper,reference\n";
   for (size_t i = 0; i < terms.size(); ++i) {
     const ToleranceTerm& t = terms[i];
@@ -43,7 +48,13 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
              "," + (std::isnan(t.reference) ? "" : formatWith("%.6g", displayValue(m, t, t.reference))) + "\n";
   }
   writeFileAtomically(dir + "/allocation.csv", table);
-  // pareto.csv
+}
+
+// pareto.csv: the front, one solution a row.
+void writeParetoCsv(const AllocationView& v, const std::string& dir) {
+  const MachineModel& m = v.m;
+  const std::vector<ToleranceTerm>& terms = v.terms;
+  const AllocationResult& r = v.r;
   std::string front = "m1,m2,cost,loss,worst_dx_mm,worst_dy_mm,worst_dz_mm,chosen";
   for (const auto& t : terms) front += "," + csvField(t.name);
   front += "\n";
@@ -57,7 +68,16 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
     front += "\n";
   }
   writeFileAtomically(dir + "/pareto.csv", front);
-  // pareto.png: M1 (x) against M2 (y); the standard in grey, the chosen point in red.
+}
+
+// pareto.png: M1 (x) against M2 (y); the standard in grey, the chosen point in red, the published
+// allocation in orange when the tolerance file gives every term's.
+void writeParetoPng(const AllocationView& v, const std::string& dir) {
+  const MachineModel& m = v.m;
+  const std::vector<ToleranceTerm>& terms = v.terms;
+  const AllocationModel& a = v.a;
+  const AllocationResult& r = v.r;
+  const AllocationSolution* chosen = v.chosen;
   ScatterSeries all, std_pt, ch;
   for (const auto& s : r.front) {
     all.x.push_back(s.m1);
@@ -102,6 +122,17 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
   chart.series = {all, std_pt, ch, pub};
   writeScatterPng(dir + "/pareto.png", chart);
 
+}
+
+// report.json.
+std::string allocationJson(const AllocationView& v) {
+  const MachineModel& m = v.m;
+  const std::vector<ToleranceTerm>& terms = v.terms;
+  const AllocationModel& a = v.a;
+  const AllocationResult& r = v.r;
+  const AllocationReportInputs& in = v.in;
+  const AllocationSolution* chosen = v.chosen;
+  using nlohmann::json;
   json j;
   j["machine_file"] = in.machine_file;
   j["tolerance_file"] = in.tolerance_file;
@@ -148,9 +179,17 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
     j["chosen"] = nullptr;
     j["message"] = "no allocation within the bounds meets the limits";
   }
-  writeFileAtomically(dir + "/report.json", jsonText(j));
 
-  // report.html, self-contained.
+  return jsonText(j);
+}
+
+// report.html: the head, the inputs, the standard and the chosen allocation.
+std::string htmlSummary(const AllocationView& v) {
+  const MachineModel& m = v.m;
+  const AllocationModel& a = v.a;
+  const AllocationResult& r = v.r;
+  const AllocationReportInputs& in = v.in;
+  const AllocationSolution* chosen = v.chosen;
   std::string h = "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>tolver allocation</title>"
                   "<style>body{font-family:sans-serif;max-width:60em;margin:2em auto}"
                   "table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:2px 8px;text-align:right}"
@@ -176,8 +215,23 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
          worst(chosen->worst_exact) + "mm, checked with the nonlinear model.</p>";
   else
     h += "<p class=\"bad\">No allocation within the bounds meets the limits: loosen the limits or allow tighter tolerances (lower bounds).</p>";
+  return h;
+}
+
+// The Pareto front (the PNG embedded).
+std::string htmlFront(const AllocationView& v, const std::string& dir) {
+  std::string h;
   h += "<h2>Pareto front</h2><p>M1 = cost + quality loss (x, minimised) against M2 (y, maximised); grey: the standard tolerances, red: the chosen compromise, orange: the published allocation (when the tolerance file gives it).</p>";
   h += "<img alt=\"Pareto front\" src=\"data:image/png;base64," + base64Encode(readFile(dir + "/pareto.png")) + "\">";
+  return h;
+}
+
+// The tolerances, like the paper's Table 4.
+std::string htmlTolerances(const AllocationView& v) {
+  const MachineModel& m = v.m;
+  const std::vector<ToleranceTerm>& terms = v.terms;
+  const AllocationSolution* chosen = v.chosen;
+  std::string h;
   h += "<h2>Tolerances (like the paper's Table 4)</h2><table><tr><th>term</th><th>category</th><th>unit</th><th>standard</th><th>optimised</th><th>paper</th></tr>";
   for (size_t i = 0; i < terms.size(); ++i) {
     const auto& t = terms[i];
@@ -187,6 +241,15 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
          (std::isnan(t.reference) ? "" : formatWith("%.5g", displayValue(m, t, t.reference))) + "</td></tr>";
   }
   h += "</table>";
+  return h;
+}
+
+// The comparison with the published allocation, when the tolerance file gives one.
+std::string htmlComparison(const AllocationView& v) {
+  const MachineModel& m = v.m;
+  const std::vector<ToleranceTerm>& terms = v.terms;
+  const AllocationModel& a = v.a;
+  std::string h;
   bool has_reference = false;
   for (const auto& t : terms) has_reference |= !std::isnan(t.reference);
   if (has_reference) {
@@ -211,6 +274,14 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
          "or change their reference length between columns; they are shown as printed, converted "
          "to mm/m.</p>";
   }
+  return h;
+}
+
+// The correlation groups, and the published classes.
+std::string htmlGroups(const AllocationView& v) {
+  const std::vector<ToleranceTerm>& terms = v.terms;
+  const AllocationResult& r = v.r;
+  std::string h;
   h += "<h2>Correlation groups</h2><ol>";
   for (const auto& g : r.correlation.members) {
     h += "<li>";
@@ -230,6 +301,14 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
     }
     h += "</ol>";
   }
+  return h;
+}
+
+// The method, with this run's constants.
+std::string htmlMethod(const AllocationView& v) {
+  const AllocationModel& a = v.a;
+  const AllocationResult& r = v.r;
+  std::string h;
   h += "<h2>Method</h2><p>Cost C = &Sigma; (h<sub>i</sub> t<sub>i</sub>)<sup>-r</sup> with t = T/2 "
        "in mm for lengths and mm/m for angles; h<sub>p</sub> = " + formatWith("%g", a.h_p) + ", h<sub>a</sub> = " +
        formatWith("%g", a.h_a) + ", h<sub>d</sub> = " + formatWith("%g", a.h_d) + ", r = " + formatWith("%g", a.r) +
@@ -241,7 +320,23 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
        "spread over the correlation groups) maximised by NSGA-II; the chosen compromise is the front "
        "point closest to the ideal point, both objectives normalised over the front. " +
        r.constraint_handling + ".</p></body></html>\n";
-  writeFileAtomically(dir + "/report.html", h);
+  return h;
+}
+
+}  // namespace
+
+// The report's files in the order they are written: allocation.csv, pareto.csv, pareto.png,
+// report.json, report.html (one section after another).
+void writeAllocationReport(const std::string& dir, const MachineModel& m,
+                           const std::vector<ToleranceTerm>& terms, const AllocationModel& a,
+                           const AllocationResult& r, const AllocationReportInputs& in) {
+  const AllocationView v{m, terms, a, r, in, r.chosen >= 0 ? &r.front[r.chosen] : nullptr};
+  writeAllocationCsv(v, dir);
+  writeParetoCsv(v, dir);
+  writeParetoPng(v, dir);
+  writeFileAtomically(dir + "/report.json", allocationJson(v));
+  writeFileAtomically(dir + "/report.html", htmlSummary(v) + htmlFront(v, dir) + htmlTolerances(v) + htmlComparison(v) +
+                                                htmlGroups(v) + htmlMethod(v));
 }
 
 }  // namespace tolver
