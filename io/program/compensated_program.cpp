@@ -254,221 +254,307 @@ std::vector<GWord> gcodeWords(const std::string& s) {
 
 }  // namespace
 
-// Long by design: one pass over the source's blocks carrying the control's modal state (units,
-// G90/G91, TCP, arcs, the block before an arc); split up, every part would take that state.
+namespace {
+
+// The compensated G-code, block by block: one pass over the source carrying the control's modal
+// state (motion mode, G90/G91, the words in force and their decimals), each block scanned,
+// judged (written or left as programmed, and why), given its target words, edited in place.
+class GcodeEditor {
+ public:
+  GcodeEditor(const ClProgram& program, const MachineModel& model, const std::vector<JointVector>& q0,
+              const std::vector<JointVector>& q, const std::vector<Eigen::Vector3d>& corrected_p_w)
+      : program_(program),
+        model_(model),
+        q0_(q0),
+        q_(q),
+        corrected_p_w_(corrected_p_w),
+        unit_(program.units == "INCH" ? 25.4 : 1.0),
+        lin_min_(unit_ == 25.4 ? 5 : 4),
+        n_(static_cast<int>(model.axes.size())),
+        old_word_(n_, 0.0),
+        new_word_(n_, 0.0),
+        known_(n_, 0),
+        decimals_(n_, -1) {
+    for (int a = 0; a < n_; ++a)
+      if (model.axes[a].name.size() == 1)
+        axis_of_[static_cast<char>(std::toupper(static_cast<unsigned char>(model.axes[a].name[0])))] = a;
+    gm_inv_ = tcpWordMatrix().inverse();
+    markArcBlocks();
+    out_.written.assign(program.path.size(), 0);
+  }
+
+  CompensatedProgramText run(const std::vector<std::string>& header) {
+    size_t first = 0;
+    // The header after a leading '%' line.
+    if (!program_.lines.empty() && !program_.lines[0].empty() && program_.lines[0][0] == '%') {
+      out_.text += program_.lines[0];
+      out_.text += '\n';
+      out_.source_line.push_back(1);
+      first = 1;
+    }
+    // A Sinumerik control reads "( )" as a call: its comments start with ';'.
+    const bool semicolon = model_.control.dialect == "sinumerik";
+    for (const std::string& h : header) {
+      out_.text += semicolon ? "; " + h + "\n" : "(" + withoutParentheses(h) + ")\n";
+      out_.source_line.push_back(0);
+    }
+    for (size_t li = first; li < program_.lines.size(); ++li) {
+      out_.text += block(li) + "\n";
+      out_.source_line.push_back(static_cast<int>(li) + 1);
+    }
+    notes();
+    return std::move(out_);
+  }
+
+ private:
+  static constexpr int kRotMin = 4;  // decimals written at least, rotary words
+
+  // A block's words: the axis words by axis, and whether it moves in machine coordinates (or
+  // sets an offset) or gives an axis word by an expression.
+  struct Block {
+    std::string line;
+    std::vector<GWord> words;
+    std::map<int, const GWord*> axis_words;
+    bool special = false, expression = false;
+    int point = -1;  // its program point when it has exactly one, else -1
+    int line_no = 0;
+    bool write = false, restore = false;
+    std::vector<double> target;
+  };
+
+  // In TCP mode X Y Z are program coordinates of the tip: p_w = g0 + Gm (xyz + offset), Gm the
+  // prismatic joints' effect (times nc_sign) at rotaries zero.
+  Eigen::Matrix3d tcpWordMatrix() const {
+    Eigen::Matrix3d gm = Eigen::Matrix3d::Identity();
+    const ForwardKinematics nominal(model_, Eigen::VectorXd::Zero(model_.parameterCount()));
+    const char L[3] = {'X', 'Y', 'Z'};
+    const JointVector z = JointVector::Zero(n_);
+    Eigen::Vector3d p0, u;
+    nominal.tipAndAxis(z, &p0, &u);
+    for (int k = 0; k < 3; ++k) {
+      auto it = axis_of_.find(L[k]);
+      if (it == axis_of_.end()) continue;
+      JointVector qk = z;
+      qk[it->second] += model_.axes[it->second].nc_sign;
+      Eigen::Vector3d pk;
+      nominal.tipAndAxis(qk, &pk, &u);
+      gm.col(k) = pk - p0;
+    }
+    return gm;
+  }
+
+  // Which blocks are arcs (the motion mode in force, modal): the block before an arc gives the
+  // arc's start, which must stay on the arc's circle, so it is left as programmed too.
+  void markArcBlocks() {
+    arc_block_.assign(program_.lines.size(), 0);
+    int mode = 0;
+    for (size_t li = 0; li < program_.lines.size(); ++li) {
+      for (const GWord& w : gcodeWords(std::string(program_.lines[li])))
+        if (w.letter == 'G' && w.numeric && (w.value == 0 || w.value == 1 || w.value == 2 || w.value == 3))
+          mode = static_cast<int>(w.value);
+      arc_block_[li] = (mode == 2 || mode == 3) && li < program_.statements.size() &&
+                       program_.statements[li].point_count > 0;
+    }
+  }
+
+  bool startsArc(size_t li) const {
+    for (size_t k = li + 1; k < program_.lines.size() && k < program_.statements.size(); ++k)
+      if (program_.statements[k].point_count > 0) return arc_block_[k] != 0;
+    return false;
+  }
+
+  std::string block(size_t li) {
+    Block b;
+    b.line = std::string(program_.lines[li]);
+    b.line_no = static_cast<int>(li) + 1;
+    scan(b, li);
+    judge(b, li);
+    if (b.write) targets(b);
+    if (b.write && motion_ == 0 && !b.restore) keepRapidWords(b);
+    if (b.write) {
+      edit(b);
+    } else {
+      for (const auto& [a, w] : b.axis_words)
+        if (w->numeric) new_word_[a] = w->value;  // the block as written
+    }
+    updateWordsInForce(b);
+    return b.line;
+  }
+
+  // The block's words and the modal state they set.
+  void scan(Block& b, size_t li) {
+    b.words = gcodeWords(b.line);
+    for (const GWord& w : b.words) {
+      if (w.letter == 'G' && w.numeric) {
+        const double g = w.value;
+        if (g == 0 || g == 1 || g == 2 || g == 3) motion_ = static_cast<int>(g);
+        else if (g == 80) motion_ = 80;
+        else if (g >= 73 && g <= 89 && g != 80) motion_ = static_cast<int>(g);
+        else if (g == 90) absolute_ = true;
+        else if (g == 91) absolute_ = false;
+        else if (g == 53 || g == 28 || g == 30 || g == 10 || g == 92) b.special = true;
+      }
+      auto it = axis_of_.find(w.letter);
+      if (it != axis_of_.end()) {
+        b.axis_words[it->second] = &w;
+        if (!w.numeric) b.expression = true;
+      }
+    }
+    const AptStatement* st = li < program_.statements.size() ? &program_.statements[li] : nullptr;
+    const int points = st ? st->point_count : 0;
+    if (points == 1) b.point = st->first_point;
+    b.write = points == 1 && (motion_ == 0 || motion_ == 1) && absolute_ && !b.special && !b.expression;
+    if (points > 1) b.point = -2;  // several points: listed below as left as programmed
+  }
+
+  // Written or left as programmed, and why. The block before an arc is written back to the
+  // program's own position, all axes (the values in force may carry earlier corrections): the
+  // arc starts where it was programmed.
+  void judge(Block& b, size_t li) {
+    b.restore = b.write && startsArc(li);
+    if (b.restore) {
+      arc_starts_.push_back(b.line_no);
+    } else if (b.point != -1 && !b.write) {
+      (motion_ == 2 || motion_ == 3)    ? arcs_.push_back(b.line_no)
+      : motion_ >= 73 && motion_ != 80  ? cycles_.push_back(b.line_no)
+      : !absolute_                      ? incremental_.push_back(b.line_no)
+      : b.special                       ? machine_moves_.push_back(b.line_no)
+                                        : expressions_.push_back(b.line_no);
+    }
+  }
+
+  // Each axis's new word: the word (or the one in force) plus the joint's correction, or in TCP
+  // mode the tip's correction in the program's frame (a Sinumerik ROT or CYCLE800 frame turns its
+  // XYZ words). A correction to an axis the block does not name and whose word in force is
+  // unknown cannot be written.
+  void targets(Block& b) {
+    const int i = b.point;
+    const JointVector dq = b.restore ? JointVector::Zero(n_) : JointVector(q_[i] - q0_[i]);
+    const bool tcp = i < static_cast<int>(program_.tcp.size()) && program_.tcp[i] == ClProgram::kTcpWords;
+    Eigen::Vector3d dxyz = Eigen::Vector3d::Zero();
+    if (tcp && !b.restore) {
+      dxyz = gm_inv_ * (corrected_p_w_[i] - program_.path[i].p_w) / unit_;
+      if (i < static_cast<int>(program_.point_frame.size()))
+        dxyz = program_.frames[program_.point_frame[i]].T.linear().transpose() * dxyz;
+    }
+    const char L[3] = {'X', 'Y', 'Z'};
+    b.target.assign(n_, 0.0);
+    for (int a = 0; a < n_; ++a) {
+      const Axis& ax = model_.axes[a];
+      const auto w = b.axis_words.find(a);
+      const double old = w != b.axis_words.end() ? w->second->value : old_word_[a];
+      double delta = ax.isRotary() ? ax.nc_sign * radToDeg(dq[a]) : ax.nc_sign * dq[a] / unit_;
+      if (tcp && !ax.isRotary())
+        for (int k = 0; k < 3; ++k)
+          if (axis_of_.count(L[k]) && axis_of_.at(L[k]) == a) delta = dxyz[k];
+      b.target[a] = old + delta;
+      if (w == b.axis_words.end() && !known_[a] && std::abs(delta) > 0) b.write = false;
+    }
+    if (!b.write) {
+      expressions_.push_back(b.line_no);
+      if (b.restore) arc_starts_.pop_back();
+    }
+  }
+
+  // A rapid (a rotary index, a retract) is never given words it did not have: its motion would
+  // change kind (issue 32: X Y added to "G00 B82.875 C-90." after G53). Such a block is left as
+  // programmed and listed.
+  void keepRapidWords(Block& b) {
+    for (int a = 0; a < n_ && b.write; ++a) {
+      if (b.axis_words.count(a) || !known_[a]) continue;
+      const int d = std::max(std::max(decimals_[a], 0), model_.axes[a].isRotary() ? kRotMin : lin_min_);
+      if (fixed(b.target[a], d) != fixed(new_word_[a], d)) b.write = false;
+    }
+    if (!b.write) rapid_kept_.push_back(b.line_no);
+  }
+
+  // Replaces the words present (last first), then adds the ones whose value in force differs.
+  void edit(Block& b) {
+    std::string added;
+    size_t insert_at = 0;
+    for (const auto& [a, w] : b.axis_words) insert_at = std::max(insert_at, w->end);
+    std::vector<std::pair<size_t, std::pair<size_t, std::string>>> edits;
+    for (int a = 0; a < n_; ++a) {
+      const Axis& ax = model_.axes[a];
+      const auto w = b.axis_words.find(a);
+      const int d = std::max(w != b.axis_words.end() ? w->second->decimals : std::max(decimals_[a], 0),
+                             ax.isRotary() ? kRotMin : lin_min_);
+      const std::string text = fixed(b.target[a], d);
+      if (w != b.axis_words.end()) {
+        edits.push_back({w->second->start, {w->second->end - w->second->start, text}});
+        decimals_[a] = std::max(decimals_[a], w->second->decimals);
+      } else if (known_[a] && text != fixed(new_word_[a], d)) {
+        const char letter = static_cast<char>(std::toupper(static_cast<unsigned char>(ax.name[0])));
+        added += std::string(" ") + letter + text;
+      }
+      new_word_[a] = std::strtod(text.c_str(), nullptr);
+    }
+    std::sort(edits.begin(), edits.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+    if (!added.empty()) b.line.insert(insert_at, added);
+    for (const auto& [start, e] : edits) b.line.replace(start, e.first, e.second);
+    out_.written[b.point] = !b.restore;
+  }
+
+  // The program's words in force after the block.
+  void updateWordsInForce(const Block& b) {
+    for (const auto& [a, w] : b.axis_words) {
+      if (w->numeric && absolute_ && !b.special) {
+        old_word_[a] = w->value;
+        known_[a] = 1;
+        decimals_[a] = std::max(decimals_[a], w->decimals);
+      } else {
+        known_[a] = 0;
+      }
+    }
+    if (b.special)
+      for (const auto& [a, w] : b.axis_words) known_[a] = 0;
+  }
+
+  // What was left as programmed, by reason.
+  void notes() {
+    auto note = [&](const std::vector<int>& lines, const char* what) {
+      if (!lines.empty())
+        out_.notes.push_back(std::to_string(lines.size()) + " " + what + " left as programmed, uncompensated (lines " +
+                             lineList(lines) + ")");
+    };
+    note(arcs_, "arc blocks (G2/G3)");
+    note(arc_starts_, "blocks that start an arc (written back to their programmed position: the arc's start must stay on its circle)");
+    note(cycles_, "drilling-cycle blocks");
+    note(incremental_, "incremental (G91) blocks");
+    note(machine_moves_, "moves in machine coordinates (G53, G28, ...)");
+    note(expressions_, "blocks with words given by expressions or parameters, or without the word in force");
+    note(rapid_kept_, "rapid blocks that would need an axis they do not name (a rapid keeps its words)");
+  }
+
+  const ClProgram& program_;
+  const MachineModel& model_;
+  const std::vector<JointVector>& q0_;
+  const std::vector<JointVector>& q_;
+  const std::vector<Eigen::Vector3d>& corrected_p_w_;
+  const double unit_;
+  const int lin_min_;
+  const int n_;
+  std::map<char, int> axis_of_;  // word letter -> axis
+  Eigen::Matrix3d gm_inv_;
+  std::vector<char> arc_block_;
+  // Modal state: the program's word in force per axis, the compensated program's, their decimals.
+  std::vector<double> old_word_, new_word_;
+  std::vector<char> known_;
+  std::vector<int> decimals_;
+  int motion_ = 0;  // 0, 1, 2, 3, 80 (none), 81+ (cycles)
+  bool absolute_ = true;
+  std::vector<int> arcs_, arc_starts_, cycles_, incremental_, machine_moves_, expressions_, rapid_kept_;
+  CompensatedProgramText out_;
+};
+
+}  // namespace
+
 CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const MachineModel& model,
                                               const std::vector<JointVector>& q0,
                                               const std::vector<JointVector>& q,
                                               const std::vector<Eigen::Vector3d>& corrected_p_w,
                                               const std::vector<std::string>& header) {
-  CompensatedProgramText out;
-  out.written.assign(program.path.size(), 0);
-  const double unit = program.units == "INCH" ? 25.4 : 1.0;
-  const int lin_min = unit == 25.4 ? 5 : 4, rot_min = 4;
-  const int n = static_cast<int>(model.axes.size());
-  std::map<char, int> axis_of;  // word letter -> axis
-  for (int a = 0; a < n; ++a)
-    if (model.axes[a].name.size() == 1)
-      axis_of[static_cast<char>(std::toupper(static_cast<unsigned char>(model.axes[a].name[0])))] = a;
-  // In TCP mode X Y Z are program coordinates of the tip: p_w = g0 + Gm (xyz + offset), Gm the
-  // prismatic joints' effect (times nc_sign) at rotaries zero.
-  Eigen::Matrix3d Gm = Eigen::Matrix3d::Identity();
-  {
-    const ForwardKinematics nominal(model, Eigen::VectorXd::Zero(model.parameterCount()));
-    const char L[3] = {'X', 'Y', 'Z'};
-    const JointVector z = JointVector::Zero(n);
-    Eigen::Vector3d p0, u;
-    nominal.tipAndAxis(z, &p0, &u);
-    for (int k = 0; k < 3; ++k) {
-      auto it = axis_of.find(L[k]);
-      if (it == axis_of.end()) continue;
-      JointVector qk = z;
-      qk[it->second] += model.axes[it->second].nc_sign;
-      Eigen::Vector3d pk;
-      nominal.tipAndAxis(qk, &pk, &u);
-      Gm.col(k) = pk - p0;
-    }
-  }
-  const Eigen::Matrix3d Gm_inv = Gm.inverse();
-  // The program's word in force per axis, the compensated program's, and their decimals.
-  std::vector<double> old_word(n, 0.0), new_word(n, 0.0);
-  std::vector<char> known(n, 0);
-  std::vector<int> decimals(n, -1);
-  int motion = 0;        // 0, 1, 2, 3, 80 (none), 81+ (cycles)
-  bool absolute = true;
-  std::vector<int> arcs, cycles, incremental, machine_moves, expressions, rapid_kept;
-  // The header after a leading '%' line.
-  size_t first = 0;
-  if (!program.lines.empty() && !program.lines[0].empty() && program.lines[0][0] == '%') {
-    out.text += program.lines[0];
-    out.text += '\n';
-    out.source_line.push_back(1);
-    first = 1;
-  }
-  // A Sinumerik control reads "( )" as a call: its comments start with ';'.
-  const bool semicolon = model.control.dialect == "sinumerik";
-  for (const std::string& h : header) {
-    out.text += semicolon ? "; " + h + "\n" : "(" + withoutParentheses(h) + ")\n";
-    out.source_line.push_back(0);
-  }
-  // Which blocks are arcs (the motion mode in force, modal): the block before an arc gives the
-  // arc's start, which must stay on the arc's circle, so it is left as programmed too.
-  std::vector<char> arc_block(program.lines.size(), 0);
-  {
-    int mode = 0;
-    for (size_t li = 0; li < program.lines.size(); ++li) {
-      for (const GWord& w : gcodeWords(std::string(program.lines[li])))
-        if (w.letter == 'G' && w.numeric && (w.value == 0 || w.value == 1 || w.value == 2 || w.value == 3))
-          mode = static_cast<int>(w.value);
-      arc_block[li] = (mode == 2 || mode == 3) && li < program.statements.size() &&
-                      program.statements[li].point_count > 0;
-    }
-  }
-  auto startsArc = [&](size_t li) {
-    for (size_t k = li + 1; k < program.lines.size() && k < program.statements.size(); ++k)
-      if (program.statements[k].point_count > 0) return arc_block[k] != 0;
-    return false;
-  };
-  std::vector<int> arc_starts;
-  for (size_t li = first; li < program.lines.size(); ++li) {
-    std::string line(program.lines[li]);
-    const AptStatement* st = li < program.statements.size() ? &program.statements[li] : nullptr;
-    const std::vector<GWord> words = gcodeWords(line);
-    bool special = false, expression = false;
-    std::map<int, const GWord*> axis_words;
-    for (const GWord& w : words) {
-      if (w.letter == 'G' && w.numeric) {
-        const double g = w.value;
-        if (g == 0 || g == 1 || g == 2 || g == 3) motion = static_cast<int>(g);
-        else if (g == 80) motion = 80;
-        else if (g >= 73 && g <= 89 && g != 80) motion = static_cast<int>(g);
-        else if (g == 90) absolute = true;
-        else if (g == 91) absolute = false;
-        else if (g == 53 || g == 28 || g == 30 || g == 10 || g == 92) special = true;
-      }
-      auto it = axis_of.find(w.letter);
-      if (it != axis_of.end()) {
-        axis_words[it->second] = &w;
-        if (!w.numeric) expression = true;
-      }
-    }
-    const int points = st ? st->point_count : 0;
-    const int i = points > 0 ? st->first_point : -1;
-    const int line_no = static_cast<int>(li) + 1;
-    bool write = points == 1 && (motion == 0 || motion == 1) && absolute && !special && !expression;
-    // The block before an arc is written back to the program's own position, all axes (the
-    // values in force may carry earlier corrections): the arc starts where it was programmed.
-    const bool restore = write && startsArc(li);
-    if (restore) {
-      arc_starts.push_back(line_no);
-    } else if (points > 0 && !write) {
-      (motion == 2 || motion == 3)   ? arcs.push_back(line_no)
-      : motion >= 73 && motion != 80 ? cycles.push_back(line_no)
-      : !absolute                    ? incremental.push_back(line_no)
-      : special                      ? machine_moves.push_back(line_no)
-                                     : expressions.push_back(line_no);
-    }
-    std::vector<double> target(n, 0.0);
-    if (write) {
-      const JointVector dq = restore ? JointVector::Zero(n) : JointVector(q[i] - q0[i]);
-      const bool tcp = i < static_cast<int>(program.tcp.size()) &&
-                       program.tcp[i] == ClProgram::kTcpWords;
-      Eigen::Vector3d dxyz = Eigen::Vector3d::Zero();
-      if (tcp && !restore) {
-        // In the program's frame (a Sinumerik ROT or CYCLE800 frame turns its XYZ words).
-        dxyz = Gm_inv * (corrected_p_w[i] - program.path[i].p_w) / unit;
-        if (i < static_cast<int>(program.point_frame.size()))
-          dxyz = program.frames[program.point_frame[i]].T.linear().transpose() * dxyz;
-      }
-      const char L[3] = {'X', 'Y', 'Z'};
-      for (int a = 0; a < n; ++a) {
-        const Axis& ax = model.axes[a];
-        const auto w = axis_words.find(a);
-        const double old = w != axis_words.end() ? w->second->value : old_word[a];
-        double delta = ax.isRotary() ? ax.nc_sign * radToDeg(dq[a]) : ax.nc_sign * dq[a] / unit;
-        if (tcp && !ax.isRotary())
-          for (int k = 0; k < 3; ++k)
-            if (axis_of.count(L[k]) && axis_of[L[k]] == a) delta = dxyz[k];
-        target[a] = old + delta;
-        if (w == axis_words.end() && !known[a] && std::abs(delta) > 0) write = false;
-      }
-      if (!write) {
-        expressions.push_back(line_no);
-        if (restore) arc_starts.pop_back();
-      }
-    }
-    // A rapid (a rotary index, a retract) is never given words it did not have: its motion
-    // would change kind (issue 32: X Y added to "G00 B82.875 C-90." after G53). Such a block
-    // is left as programmed and listed.
-    if (write && motion == 0 && !restore) {
-      for (int a = 0; a < n && write; ++a) {
-        if (axis_words.count(a) || !known[a]) continue;
-        const int d = std::max(std::max(decimals[a], 0), model.axes[a].isRotary() ? rot_min : lin_min);
-        if (fixed(target[a], d) != fixed(new_word[a], d)) write = false;
-      }
-      if (!write) {
-        rapid_kept.push_back(line_no);
-        for (const auto& [a, w] : axis_words)
-          if (w->numeric) new_word[a] = w->value;  // the block as written
-      }
-    }
-    if (write) {
-      // Replace the words present (last first), then add the ones whose value in force differs.
-      std::string added;
-      size_t insert_at = 0;
-      for (const auto& [a, w] : axis_words) insert_at = std::max(insert_at, w->end);
-      std::vector<std::pair<size_t, std::pair<size_t, std::string>>> edits;
-      for (int a = 0; a < n; ++a) {
-        const Axis& ax = model.axes[a];
-        const auto w = axis_words.find(a);
-        const int d = std::max(w != axis_words.end() ? w->second->decimals : std::max(decimals[a], 0),
-                               ax.isRotary() ? rot_min : lin_min);
-        const std::string text = fixed(target[a], d);
-        if (w != axis_words.end()) {
-          edits.push_back({w->second->start, {w->second->end - w->second->start, text}});
-          decimals[a] = std::max(decimals[a], w->second->decimals);
-        } else if (known[a] && text != fixed(new_word[a], d)) {
-          char letter = static_cast<char>(std::toupper(static_cast<unsigned char>(ax.name[0])));
-          added += std::string(" ") + letter + text;
-        }
-        new_word[a] = std::strtod(text.c_str(), nullptr);
-      }
-      std::sort(edits.begin(), edits.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
-      if (!added.empty()) line.insert(insert_at, added);
-      for (const auto& [start, e] : edits) line.replace(start, e.first, e.second);
-      out.written[i] = !restore;
-    } else {
-      for (const auto& [a, w] : axis_words)
-        if (w->numeric) new_word[a] = w->value;  // the block as written
-    }
-    // The program's words in force after this block.
-    for (const auto& [a, w] : axis_words) {
-      if (w->numeric && absolute && !special) {
-        old_word[a] = w->value;
-        known[a] = 1;
-        decimals[a] = std::max(decimals[a], w->decimals);
-      } else {
-        known[a] = 0;
-      }
-    }
-    if (special)
-      for (const auto& [a, w] : axis_words) known[a] = 0;
-    out.text += line + "\n";
-    out.source_line.push_back(static_cast<int>(li) + 1);
-  }
-  auto note = [&](const std::vector<int>& lines, const char* what) {
-    if (!lines.empty())
-      out.notes.push_back(std::to_string(lines.size()) + " " + what + " left as programmed, uncompensated (lines " +
-                          lineList(lines) + ")");
-  };
-  note(arcs, "arc blocks (G2/G3)");
-  note(arc_starts, "blocks that start an arc (written back to their programmed position: the arc's start must stay on its circle)");
-  note(cycles, "drilling-cycle blocks");
-  note(incremental, "incremental (G91) blocks");
-  note(machine_moves, "moves in machine coordinates (G53, G28, ...)");
-  note(expressions, "blocks with words given by expressions or parameters, or without the word in force");
-  note(rapid_kept, "rapid blocks that would need an axis they do not name (a rapid keeps its words)");
-  return out;
+  return GcodeEditor(program, model, q0, q, corrected_p_w).run(header);
 }
 
 bool gcodeGivesRotaryWords(const ClProgram& program, const MachineModel& model) {

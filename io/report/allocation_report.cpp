@@ -219,7 +219,7 @@ std::string htmlSummary(const AllocationView& v) {
 }
 
 // The Pareto front (the PNG embedded).
-std::string htmlFront(const AllocationView& v, const std::string& dir) {
+std::string htmlFront(const std::string& dir) {
   std::string h;
   h += "<h2>Pareto front</h2><p>M1 = cost + quality loss (x, minimised) against M2 (y, maximised); grey: the standard tolerances, red: the chosen compromise, orange: the published allocation (when the tolerance file gives it).</p>";
   h += "<img alt=\"Pareto front\" src=\"data:image/png;base64," + base64Encode(readFile(dir + "/pareto.png")) + "\">";
@@ -335,7 +335,7 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
   writeParetoCsv(v, dir);
   writeParetoPng(v, dir);
   writeFileAtomically(dir + "/report.json", allocationJson(v));
-  writeFileAtomically(dir + "/report.html", htmlSummary(v) + htmlFront(v, dir) + htmlTolerances(v) + htmlComparison(v) +
+  writeFileAtomically(dir + "/report.html", htmlSummary(v) + htmlFront(dir) + htmlTolerances(v) + htmlComparison(v) +
                                                 htmlGroups(v) + htmlMethod(v));
 }
 
