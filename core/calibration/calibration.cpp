@@ -111,10 +111,187 @@ void residualsAndUncertainties(const Eigen::VectorXd& r, const Eigen::MatrixXd& 
   }
 }
 
+
+// Step 2 of calibrate: Gauss-Newton with the pseudo-inverse of the column-scaled Jacobian A
+// (prior rows included). Two factorisations, chosen at the first pass:
+//  * normal equations, N = A^T A by Cholesky, when N's eigenvalues give kappa(A)^2 below
+//    kNormalConditionMax (kappa below 1e5): the usual case, the unknowns having been reduced
+//    to a full-rank set (step 1); a step's relative error is then at most about
+//    eps kappa^2 = 2e-6, and the residuals are evaluated exactly at every pass, so the
+//    iteration reaches the same fixed point, J^T r = 0;
+//  * otherwise Householder J = QR, the step R^-1 Q^T r when R has full rank (its singular
+//    values decide, by bidiagonalisation), the rank-truncated pseudo-inverse by the SVD of R
+//    otherwise.
+// The last factorisation also gives the covariance.
+class GaussNewton {
+ public:
+  GaussNewton(const MachineModel& model, const BallbarTest& test, const std::vector<int>& unknown_params,
+              const std::vector<int>& keep_cols, const std::vector<int>& unknowns, const CalibrationOptions& opt,
+              CalibrationResult& res)
+      : model_(model),
+        test_(test),
+        unknown_params_(unknown_params),
+        keep_cols_(keep_cols),
+        unknowns_(unknowns),
+        opt_(opt),
+        res_(res),
+        np_all_(static_cast<int>(unknown_params.size())),
+        np_(static_cast<int>(unknowns.size())),
+        n_(static_cast<int>(keep_cols.size())),
+        m_(static_cast<int>(test.readings.size())),
+        regularised_(opt.prior_linear > 0 && opt.prior_angular > 0),
+        mp_(regularised_ ? m_ + np_ : m_),
+        normal_(opt.normal_equations) {
+    // Prior rows (regularisation towards zero): w_k = s / sigma_k on each machine parameter.
+    w_ = Eigen::VectorXd::Zero(np_);
+    if (regularised_)
+      for (int k = 0; k < np_; ++k)
+        w_[k] = opt.prior_noise / (model.parameters[unknowns[k]].angular ? opt.prior_angular : opt.prior_linear);
+  }
+
+  // Iterates from the linearisation (r, J0) at the prior; returns the scaled covariance of the
+  // last factorisation.
+  Eigen::MatrixXd run(Eigen::VectorXd& r, const Eigen::MatrixXd& J0) {
+    J_.resize(m_, n_);
+    for (int k = 0; k < n_; ++k) J_.col(k) = J0.col(keep_cols_[k]);
+    res_.status = CalibrationStatus::NotConverged;
+    double previous_step = std::numeric_limits<double>::infinity();
+    for (int it = 0; it < opt_.max_iterations; ++it) {
+      Eigen::VectorXd step_s;
+      double reducible2 = 0.0;  // |the part of r a step can remove|^2
+      double r2 = 0.0;          // |r_a|^2
+      if (normal_) normal_ = normalStep(r, it, &step_s, &reducible2, &r2);
+      if (!normal_) qrStep(r, &step_s, &reducible2, &r2);
+      // The step's size in column-scaled units, against what no step can remove: the
+      // least-squares residual of the linearised problem.
+      const double sn = step_s.norm();
+      const double irreducible = std::sqrt(std::max(0.0, r2 - reducible2));
+      const bool done = sn < opt_.step_tolerance || sn < opt_.relative_tolerance * irreducible ||
+                        (sn < opt_.floor_tolerance && sn > 0.5 * previous_step);
+      previous_step = sn;
+      if (done) {
+        res_.status = CalibrationStatus::Converged;
+        res_.iterations = it;
+        break;
+      }
+      apply(step_s.cwiseQuotient(scale_));
+      res_.iterations = it + 1;
+      Eigen::MatrixXd Jall;
+      linearise(model_, res_.params, test_, res_.ball_errors, unknown_params_, &r, &Jall);
+      for (int k = 0; k < n_; ++k) J_.col(k) = Jall.col(keep_cols_[k]);
+    }
+    if (!normal_) return scaledCovariance(R_, res_.rank);
+    // The condition at the last factorisation, reported; the covariance N^-1.
+    res_.condition = std::sqrt(normalConditionSquared(N_));
+    return llt_.solve(Eigen::MatrixXd::Identity(n_, n_));
+  }
+
+  const Eigen::VectorXd& scale() const { return scale_; }
+
+ private:
+  static constexpr double kNormalConditionMax = 1e10;  // of N = A^T A
+
+  // N, g and |r_a|^2 at the current point (N and g column-scaled); false when a column is zero.
+  bool normalEquations(const Eigen::VectorXd& r) {
+    N_.setZero(n_, n_);
+    N_.selfadjointView<Eigen::Lower>().rankUpdate(J_.transpose());
+    g_ = J_.transpose() * r;
+    ra2_ = r.squaredNorm();
+    for (int k = 0; k < np_ && regularised_; ++k) {
+      const double rk = -w_[k] * res_.params[unknowns_[k]];
+      N_(k, k) += w_[k] * w_[k];
+      g_[k] += w_[k] * rk;
+      ra2_ += rk * rk;
+    }
+    if (!scaleNormalMatrix(N_, &scale_)) return false;
+    g_ = g_.cwiseQuotient(scale_);
+    return true;
+  }
+
+  // The step by the normal equations; false when they are not to be used (a zero column, a
+  // condition above kNormalConditionMax at the first pass, Cholesky failing).
+  bool normalStep(const Eigen::VectorXd& r, int it, Eigen::VectorXd* step_s, double* reducible2, double* r2) {
+    bool ok = normalEquations(r);
+    if (ok && it == 0) ok = normalConditionSquared(N_) < kNormalConditionMax;
+    if (ok) llt_.compute(N_);
+    if (!ok || llt_.info() != Eigen::Success) return false;
+    *step_s = llt_.solve(g_);
+    *reducible2 = g_.dot(*step_s);
+    *r2 = ra2_;
+    res_.rank = n_;
+    return true;
+  }
+
+  // The step by Householder QR of the column-scaled augmented Jacobian (the SVD of R when it
+  // has not full rank).
+  void qrStep(const Eigen::VectorXd& r, Eigen::VectorXd* step_s, double* reducible2, double* r2) {
+    Eigen::MatrixXd Ja;
+    Eigen::VectorXd ra;
+    augmented(r, &Ja, &ra);
+    Eigen::HouseholderQR<Eigen::MatrixXd> qr(scaleColumns(Ja, &scale_));
+    R_ = qr.matrixQR().topRows(n_).triangularView<Eigen::Upper>();
+    const Eigen::VectorXd Qtr = (qr.householderQ().transpose() * ra).head(n_);
+    const Eigen::VectorXd sv = summariseScaled(R_, mp_).singular_values;
+    res_.rank = numericalRank(sv);
+    res_.condition = sv[0] / sv[res_.rank - 1];
+    if (res_.rank == n_) {
+      *step_s = R_.triangularView<Eigen::Upper>().solve(Qtr);
+      *reducible2 = Qtr.squaredNorm();
+    } else {
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(R_, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Eigen::VectorXd inv = Eigen::VectorXd::Zero(n_);
+      for (int k = 0; k < res_.rank; ++k) inv[k] = 1.0 / svd.singularValues()[k];
+      const Eigen::VectorXd Utr = svd.matrixU().transpose() * Qtr;
+      *step_s = svd.matrixV() * inv.asDiagonal() * Utr;
+      *reducible2 = Utr.head(res_.rank).squaredNorm();
+    }
+    *r2 = ra.squaredNorm();
+  }
+
+  // The Jacobian and residuals with the prior rows below them.
+  void augmented(const Eigen::VectorXd& r, Eigen::MatrixXd* Ja, Eigen::VectorXd* ra) const {
+    Ja->setZero(mp_, n_);
+    ra->resize(mp_);
+    Ja->topRows(m_) = J_;
+    ra->head(m_) = r;
+    if (regularised_)
+      for (int k = 0; k < np_; ++k) {
+        (*Ja)(m_ + k, k) = w_[k];
+        (*ra)[m_ + k] = -w_[k] * res_.params[unknowns_[k]];
+      }
+  }
+
+  // The step added to the machine parameters and the ball positions.
+  void apply(const Eigen::VectorXd& step) {
+    for (int k = 0; k < np_; ++k) res_.params[unknowns_[k]] += step[k];
+    for (int k = np_; k < n_; ++k) {
+      const int c = keep_cols_[k] - np_all_;  // ball column: set-up, table/tool, xyz
+      BallErrors& b = res_.ball_errors[c / 6];
+      (c % 6 < 3 ? b.table_w : b.tool_t)[c % 3] += step[k];
+    }
+  }
+
+  const MachineModel& model_;
+  const BallbarTest& test_;
+  const std::vector<int>& unknown_params_;
+  const std::vector<int>& keep_cols_;
+  const std::vector<int>& unknowns_;
+  const CalibrationOptions& opt_;
+  CalibrationResult& res_;
+  const int np_all_, np_, n_, m_;
+  const bool regularised_;
+  const int mp_;
+  bool normal_;  // the normal-equations path
+  Eigen::VectorXd w_;
+  Eigen::MatrixXd J_, N_, R_;
+  Eigen::VectorXd g_, scale_;  // g = A^T r_a, scaled
+  double ra2_ = 0.0;           // |r_a|^2
+  Eigen::LLT<Eigen::MatrixXd> llt_;
+};
+
 }  // namespace
 
-// Long by design: the Gauss-Newton loop of [AM01] 3.7 with its stopping rules; the steps
-// before and after it are functions (observableColumns, residualsAndUncertainties).
+// [AM01] 3.7: which unknowns the readings can see, Gauss-Newton, residuals and uncertainties.
 CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& prior,
                             const BallbarTest& test, const std::vector<int>& unknown_params,
                             const CalibrationOptions& opt) {
@@ -138,149 +315,18 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
   for (int c : keep_cols)
     if (c < np_all) unknowns.push_back(unknown_params[c]);
   res.identified = unknowns;
-  const int np = static_cast<int>(unknowns.size());
   const int n = static_cast<int>(keep_cols.size());
   res.unknowns = n;
-  const int m = static_cast<int>(test.readings.size());
-  if (m <= n) {
+  if (static_cast<int>(test.readings.size()) <= n) {
     res.status = CalibrationStatus::Unobservable;
     res.message = "fewer readings than unknowns";
     return res;
   }
-  Eigen::MatrixXd J(m, n);
-  for (int k = 0; k < n; ++k) J.col(k) = J0.col(keep_cols[k]);
-  // Prior rows (regularisation towards zero): w_k = s / sigma_k on each machine parameter.
-  const bool regularised = opt.prior_linear > 0 && opt.prior_angular > 0;
-  Eigen::VectorXd w = Eigen::VectorXd::Zero(np);
-  if (regularised)
-    for (int k = 0; k < np; ++k)
-      w[k] = opt.prior_noise /
-             (model.parameters[unknowns[k]].angular ? opt.prior_angular : opt.prior_linear);
-  const int mp = regularised ? m + np : m;
-  auto augmented = [&](const Eigen::MatrixXd& Jr, const Eigen::VectorXd& rr, Eigen::MatrixXd* Ja,
-                       Eigen::VectorXd* ra) {
-    Ja->setZero(mp, n);
-    ra->resize(mp);
-    Ja->topRows(m) = Jr;
-    ra->head(m) = rr;
-    if (regularised)
-      for (int k = 0; k < np; ++k) {
-        (*Ja)(m + k, k) = w[k];
-        (*ra)[m + k] = -w[k] * res.params[unknowns[k]];
-      }
-  };
-
-  // 2. Gauss-Newton with the pseudo-inverse of the column-scaled Jacobian A (prior rows
-  //    included). Two factorisations, chosen at the first pass:
-  //    * normal equations, N = A^T A by Cholesky, when N's eigenvalues give kappa(A)^2 below
-  //      kNormalConditionMax (kappa below 1e5): the usual case, the unknowns having been reduced
-  //      to a full-rank set (step 1); a step's relative error is then at most about
-  //      eps kappa^2 = 2e-6, and the residuals are evaluated exactly at every pass, so the
-  //      iteration reaches the same fixed point, J^T r = 0;
-  //    * otherwise Householder J = QR, the step R^-1 Q^T r when R has full rank (its singular
-  //      values decide, by bidiagonalisation), the rank-truncated pseudo-inverse by the SVD of R
-  //      otherwise.
-  //    The last factorisation also gives the covariance.
-  constexpr double kNormalConditionMax = 1e10;  // of N = A^T A
-  Eigen::VectorXd scale;
-  Eigen::MatrixXd R;
-  res.status = CalibrationStatus::NotConverged;
-  double previous_step = std::numeric_limits<double>::infinity();
-  Eigen::MatrixXd Ja, N;
-  Eigen::VectorXd ra;
-  Eigen::LLT<Eigen::MatrixXd> llt;
-  bool normal = opt.normal_equations;  // the normal-equations path
-  Eigen::VectorXd g;  // A^T r_a, scaled
-  double ra2 = 0.0;   // |r_a|^2
-  // N, g and ra2 at the current point (N and g column-scaled); false when a column is zero.
-  auto normalEquations = [&]() {
-    N.setZero(n, n);
-    N.selfadjointView<Eigen::Lower>().rankUpdate(J.transpose());
-    g = J.transpose() * r;
-    ra2 = r.squaredNorm();
-    for (int k = 0; k < np && regularised; ++k) {
-      const double rk = -w[k] * res.params[unknowns[k]];
-      N(k, k) += w[k] * w[k];
-      g[k] += w[k] * rk;
-      ra2 += rk * rk;
-    }
-    if (!scaleNormalMatrix(N, &scale)) return false;
-    g = g.cwiseQuotient(scale);
-    return true;
-  };
-  for (int it = 0; it < opt.max_iterations; ++it) {
-    Eigen::VectorXd step_s;
-    double reducible2 = 0.0;  // |the part of r a step can remove|^2
-    double r2 = 0.0;          // |r_a|^2
-    if (normal) {
-      normal = normalEquations();
-      if (normal && it == 0) normal = normalConditionSquared(N) < kNormalConditionMax;
-      if (normal) llt.compute(N);
-      normal = normal && llt.info() == Eigen::Success;
-      if (normal) {
-        step_s = llt.solve(g);
-        reducible2 = g.dot(step_s);
-        r2 = ra2;
-        res.rank = n;
-      }
-    }
-    if (!normal) {
-      augmented(J, r, &Ja, &ra);
-      Eigen::HouseholderQR<Eigen::MatrixXd> qr(scaleColumns(Ja, &scale));
-      R = qr.matrixQR().topRows(n).triangularView<Eigen::Upper>();
-      const Eigen::VectorXd Qtr = (qr.householderQ().transpose() * ra).head(n);
-      const Eigen::VectorXd sv = summariseScaled(R, mp).singular_values;
-      res.rank = numericalRank(sv);
-      res.condition = sv[0] / sv[res.rank - 1];
-      if (res.rank == n) {
-        step_s = R.triangularView<Eigen::Upper>().solve(Qtr);
-        reducible2 = Qtr.squaredNorm();
-      } else {
-        const Eigen::JacobiSVD<Eigen::MatrixXd> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
-        Eigen::VectorXd inv = Eigen::VectorXd::Zero(n);
-        for (int k = 0; k < res.rank; ++k) inv[k] = 1.0 / svd.singularValues()[k];
-        const Eigen::VectorXd Utr = svd.matrixU().transpose() * Qtr;
-        step_s = svd.matrixV() * inv.asDiagonal() * Utr;
-        reducible2 = Utr.head(res.rank).squaredNorm();
-      }
-      r2 = ra.squaredNorm();
-    }
-    // The step's size in column-scaled units.
-    const double sn = step_s.norm();
-    // What no step can remove: the least-squares residual of the linearised problem.
-    const double irreducible = std::sqrt(std::max(0.0, r2 - reducible2));
-    const bool done = sn < opt.step_tolerance || sn < opt.relative_tolerance * irreducible ||
-                      (sn < opt.floor_tolerance && sn > 0.5 * previous_step);
-    previous_step = sn;
-    if (done) {
-      res.status = CalibrationStatus::Converged;
-      res.iterations = it;
-      break;
-    }
-    const Eigen::VectorXd step = step_s.cwiseQuotient(scale);
-    for (int k = 0; k < np; ++k) res.params[unknowns[k]] += step[k];
-    for (int k = np; k < n; ++k) {
-      const int c = keep_cols[k] - np_all;  // ball column: set-up, table/tool, xyz
-      BallErrors& b = res.ball_errors[c / 6];
-      (c % 6 < 3 ? b.table_w : b.tool_t)[c % 3] += step[k];
-    }
-    res.iterations = it + 1;
-    Eigen::MatrixXd Jall;
-    linearise(model, res.params, test, res.ball_errors, unknown_params, &r, &Jall);
-    for (int k = 0; k < n; ++k) J.col(k) = Jall.col(keep_cols[k]);
-  }
-  Eigen::MatrixXd C;  // the scaled covariance
-  if (normal) {
-    // The condition at the last factorisation, reported; the covariance N^-1.
-    const double kappa2 = normalConditionSquared(N);
-    res.condition = std::sqrt(kappa2);
-    C = llt.solve(Eigen::MatrixXd::Identity(n, n));
-  } else {
-    C = scaledCovariance(R, res.rank);
-  }
-
+  // 2. Gauss-Newton.
+  GaussNewton gn(model, test, unknown_params, keep_cols, unknowns, opt, res);
+  const Eigen::MatrixXd C = gn.run(r, J0);
   // 3. Residuals and uncertainties from the last factorisation.
-  residualsAndUncertainties(r, C, scale, keep_cols, np_all, np, res);
+  residualsAndUncertainties(r, C, gn.scale(), keep_cols, np_all, static_cast<int>(unknowns.size()), res);
   res.message = res.status == CalibrationStatus::Converged ? "converged" : "did not converge";
   return res;
 }
