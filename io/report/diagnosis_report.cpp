@@ -289,11 +289,23 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
   return jsonText(out);
 }
 
-// Long by design: the report's sections in the order the reader meets them, each a few lines.
-std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
-                               const BallbarTest& test, const DiagnosisResult& r,
-                               const DiagnosisReportInputs& in) {
-  const MachineModel& m = r.machine.model;
+namespace {
+
+// What every section of the HTML report reads.
+struct DiagnosisView {
+  const std::string& dir;  // where the plots go
+  const MachineModel& base;
+  const BallbarTest& test;
+  const DiagnosisResult& r;
+  const DiagnosisReportInputs& in;
+};
+
+// The head, the inputs and the verdict with where and what would separate it.
+std::string htmlVerdict(const DiagnosisView& v) {
+  const MachineModel& m = v.r.machine.model;
+  const DiagnosisResult& r = v.r;
+  const DiagnosisReportInputs& in = v.in;
+  const BallbarTest& test = v.test;
   std::string h =
       "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>tolver diagnose: " +
       xmlEscape(m.name) +
@@ -307,12 +319,20 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
        " set-ups). Machine: " + xmlEscape(in.machine_file) + ". Augmented machine file: " +
        xmlEscape(in.output_file) + ".</p>\n";
   {
-    std::string v = verdictName(r.verdict);
-    v[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(v[0])));
-    h += "<h2>" + xmlEscape(v) + "</h2>\n<p>" + xmlEscape(r.verdict_text) + "</p>\n";
+    std::string title = verdictName(r.verdict);
+    title[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(title[0])));
+    h += "<h2>" + xmlEscape(title) + "</h2>\n<p>" + xmlEscape(r.verdict_text) + "</p>\n";
     if (!r.where.empty()) h += "<p>Where: " + xmlEscape(r.where) + ".</p>\n";
     if (!r.suggestion.empty()) h += "<p>To separate it: " + xmlEscape(r.suggestion) + ".</p>\n";
   }
+  return h;
+}
+
+// Residual, lack of fit, cross-validated and held-out RMS before and after; the written files.
+std::string htmlBeforeAfter(const DiagnosisView& v) {
+  const DiagnosisResult& r = v.r;
+  const DiagnosisReportInputs& in = v.in;
+  std::string h;
   h += "<table><tr><th class=\"l\"></th><th>before</th><th>after</th></tr>";
   h += "<tr><td class=\"l\">residual RMS (µm)</td><td>" + formatWith("%.3f", mmToUm(r.rms_before)) + "</td><td>" +
        formatWith("%.3f", mmToUm(r.rms_after)) + "</td></tr>";
@@ -339,6 +359,14 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
            formatWith("%.3f", mmToUm(in.written.heldout.rms)) + "</td></tr>";
   }
   h += "</table>\n";
+  return h;
+}
+
+// Effects withdrawn, and readings found gross (with t before and after, restored or not).
+std::string htmlRemoved(const DiagnosisView& v) {
+  const DiagnosisResult& r = v.r;
+  const DiagnosisReportInputs& in = v.in;
+  std::string h;
   if (!r.withdrawn.empty())
     h += "<p><b>Withdrawn:</b> " + xmlEscape(r.withdrawn_reason) + ".</p>\n";
   if (!in.removed.empty()) {
@@ -351,6 +379,14 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
            (g.restored ? ", restored)" : ", removed)");
     h += ".</p>\n";
   }
+  return h;
+}
+
+// The effects added, with their values and uncertainties.
+std::string htmlAdded(const DiagnosisView& v) {
+  const MachineModel& m = v.r.machine.model;
+  const DiagnosisResult& r = v.r;
+  std::string h;
   if (!r.added.empty()) {
     h += "<table><tr><th class=\"l\">effect</th><th class=\"l\">parameter</th><th>value</th>"
          "<th>standard uncertainty</th><th class=\"l\">unit</th></tr>";
@@ -369,6 +405,16 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
     }
     h += "</table>\n";
   }
+  return h;
+}
+
+// Residual plots against the variable each effect follows, before and after on one scale.
+std::string htmlResidualPlots(const DiagnosisView& v) {
+  const MachineModel& m = v.r.machine.model;
+  const DiagnosisResult& r = v.r;
+  const BallbarTest& test = v.test;
+  const std::string& dir = v.dir;
+  std::string h;
   // Residual plots against the variable each effect follows.
   std::vector<EffectSpec> shown;
   for (const AddedEffect& a : r.added) shown.push_back(a.spec);
@@ -406,6 +452,16 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
            "</figcaption></figure>\n";
     }
   }
+  return h;
+}
+
+// Structure the library does not explain: the residual after, against that variable.
+std::string htmlUnexplained(const DiagnosisView& v) {
+  const MachineModel& m = v.r.machine.model;
+  const DiagnosisResult& r = v.r;
+  const BallbarTest& test = v.test;
+  const std::string& dir = v.dir;
+  std::string h;
   // Structure the library does not explain: the residual after, against that variable.
   if (r.unexplained) {
     const ResidualFinding& u = r.unexplained_finding;
@@ -443,6 +499,13 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
     h += "<figure>" + imageTag(path, "residual_unexplained.png") + "<figcaption>residual (µm) after, against " +
          xmlEscape(label) + "</figcaption></figure>\n";
   }
+  return h;
+}
+
+// The residual analysis: every variable and test, before and after.
+std::string htmlResidualAnalysis(const DiagnosisView& v) {
+  const DiagnosisResult& r = v.r;
+  std::string h;
   // Residual analysis.
   h += "<h2>Residual analysis</h2>\n<table><tr><th class=\"l\">variable</th><th class=\"l\">test</th>"
        "<th>strength before</th><th>p before</th><th>strength after</th><th>p after</th></tr>";
@@ -461,6 +524,13 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
        "</b> before, <b>" +
        xmlEscape(r.analysis_after.follows.empty() ? "nothing in particular" : r.analysis_after.follows) +
        "</b> after.</p>\n";
+  return h;
+}
+
+// The part program's predicted error before and after.
+std::string htmlProgram(const DiagnosisView& v) {
+  const DiagnosisReportInputs& in = v.in;
+  std::string h;
   if (in.program) {
     const ProgramComparison& p = *in.program;
     h += "<h2>Predicted error of " + xmlEscape(p.cl_file) + "</h2>\n<table><tr><th></th><th>max (µm)</th>"
@@ -470,6 +540,15 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
          "</td></tr><tr><td class=\"l\">change</td><td>" + formatWith("%.3f", mmToUm(p.change_max)) + "</td><td>" +
          formatWith("%.3f", mmToUm(p.change_rms)) + "</td></tr></table>\n";
   }
+  return h;
+}
+
+// Every candidate tried, and the page's end.
+std::string htmlCandidates(const DiagnosisView& v) {
+  const DiagnosisResult& r = v.r;
+  const DiagnosisReportInputs& in = v.in;
+  const MachineModel& base = v.base;
+  std::string h;
   // Candidates.
   h += "<h2>Every candidate tried</h2>\n<table><tr><th>round</th><th class=\"l\">candidate</th>"
        "<th>ΔIC</th><th>p (adjusted)</th><th>m_eff</th><th>held-out before (µm)</th>"
@@ -487,6 +566,17 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
   h += "</table>\n<p class=\"note\">" + xmlEscape(base.name) + "; " + formatWith("%.2f", in.seconds) +
        " s.</p></body></html>\n";
   return h;
+}
+
+}  // namespace
+
+// The report's sections in the order the reader meets them.
+std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
+                               const BallbarTest& test, const DiagnosisResult& r,
+                               const DiagnosisReportInputs& in) {
+  const DiagnosisView v{dir, base, test, r, in};
+  return htmlVerdict(v) + htmlBeforeAfter(v) + htmlRemoved(v) + htmlAdded(v) + htmlResidualPlots(v) +
+         htmlUnexplained(v) + htmlResidualAnalysis(v) + htmlProgram(v) + htmlCandidates(v);
 }
 
 }  // namespace tolver
