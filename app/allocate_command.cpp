@@ -1,4 +1,6 @@
-// tolver allocate: tolerance allocation for machine builders (Cai, Li, Cheng, Sun, Wang: "A method to optimize geometric errors of machine tool based on SNR quality loss function and correlation analysis").
+// tolver allocate: tolerance allocation for machine builders (Cai, Li, Cheng, Sun, Wang: "A method
+// to optimize geometric errors of machine tool based on SNR quality loss function and correlation
+// analysis").
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -39,19 +41,23 @@ void printAllocation(const AllocationRun& run, const AllocateOptions& o) {
     std::printf("  %-7s %-24s %-5s %10.5g %10s %10s\n", t.name.c_str(), categoryName(t.category),
                 displayUnit(m, t), displayValue(m, t, t.standard),
                 c ? std::to_string(displayValue(m, t, c->T[i])).substr(0, 9).c_str() : "-",
-                std::isnan(t.reference) ? "" : std::to_string(displayValue(m, t, t.reference)).substr(0, 9).c_str());
+                std::isnan(t.reference)
+                    ? ""
+                    : std::to_string(displayValue(m, t, t.reference)).substr(0, 9).c_str());
   }
   std::printf("  standard   cost %.5g, worst |dx| %.4f |dy| %.4f |dz| %.4f mm%s\n", r.standard.cost,
               r.standard.worst_exact[0], r.standard.worst_exact[1], r.standard.worst_exact[2],
               r.standard_feasible ? "" : "  (breaks the limits)");
   if (run.reference_complete)
-    std::printf("  reference  cost %.5g, worst |dx| %.4f |dy| %.4f |dz| %.4f mm%s\n", run.reference_cost,
-                run.reference_worst[0], run.reference_worst[1], run.reference_worst[2],
-                (run.reference_worst.array() <= a.limits.array()).all() ? "" : "  (breaks the limits)");
+    std::printf(
+        "  reference  cost %.5g, worst |dx| %.4f |dy| %.4f |dz| %.4f mm%s\n", run.reference_cost,
+        run.reference_worst[0], run.reference_worst[1], run.reference_worst[2],
+        (run.reference_worst.array() <= a.limits.array()).all() ? "" : "  (breaks the limits)");
   std::printf("  groups    ");
   for (const auto& g : corr.members) {
     std::printf(" {");
-    for (size_t k = 0; k < g.size(); ++k) std::printf("%s%s", k ? " " : "", terms[g[k]].name.c_str());
+    for (size_t k = 0; k < g.size(); ++k)
+      std::printf("%s%s", k ? " " : "", terms[g[k]].name.c_str());
     std::printf("}");
   }
   std::printf("\n");
@@ -72,14 +78,17 @@ void printAllocation(const AllocationRun& run, const AllocateOptions& o) {
     std::printf("\n");
   }
   if (c) {
-    std::printf("  optimised  cost %.5g (%+.1f %% against the standard), worst |dx| %.4f |dy| %.4f |dz| %.4f mm"
-                " (nonlinear check); Pareto front of %zu\n",
-                c->cost, -100.0 * (1.0 - c->cost / r.standard.cost), c->worst_exact[0], c->worst_exact[1],
-                c->worst_exact[2], r.front.size());
+    std::printf(
+        "  optimised  cost %.5g (%+.1f %% against the standard), worst |dx| %.4f |dy| %.4f |dz| "
+        "%.4f mm"
+        " (nonlinear check); Pareto front of %zu\n",
+        c->cost, -100.0 * (1.0 - c->cost / r.standard.cost), c->worst_exact[0], c->worst_exact[1],
+        c->worst_exact[2], r.front.size());
   } else {
-    std::fprintf(stderr,
-                 "tolver: no allocation within the bounds meets the limits; allow tighter tolerances "
-                 "(--lower-factor) or loosen --limits\n");
+    std::fprintf(
+        stderr,
+        "tolver: no allocation within the bounds meets the limits; allow tighter tolerances "
+        "(--lower-factor) or loosen --limits\n");
   }
   std::printf("  wrote      %s/report.html, report.json, allocation.csv, pareto.csv, pareto.png\n",
               o.in.report_dir.c_str());
@@ -96,25 +105,38 @@ void registerAllocate(CLI::App& app, Verdict* verdict) {
   addMachineOptions(cmd, o->in.machine, "machine file (XML)");
   cmd->add_option("--tolerances", o->in.tolerances, "tolerance file (CSV)")->required();
   cmd->add_option("--report-dir", o->in.report_dir, "directory for the reports")->required();
-  cmd->add_option("--limits", o->in.limits_mm, "allowed |dx|,|dy|,|dz| of the tool tip, mm (default 0.015,0.015,0.010)")
+  cmd->add_option("--limits", o->in.limits_mm,
+                  "allowed |dx|,|dy|,|dz| of the tool tip, mm (default 0.015,0.015,0.010)")
       ->delimiter(',')
       ->expected(3);
-  cmd->add_option("--cost", o->in.cost, "h_p,h_a,h_d,r of the cost model (default 3,4,5,2)")->delimiter(',')->expected(4);
-  cmd->add_option("--combination", o->combination, "worst (default) or rss")->check(CLI::IsMember({"worst", "rss"}));
-  cmd->add_option("--loss-weight", o->in.loss_weight, "weight of the quality loss in M1 (default 1)")
+  cmd->add_option("--cost", o->in.cost, "h_p,h_a,h_d,r of the cost model (default 3,4,5,2)")
+      ->delimiter(',')
+      ->expected(4);
+  cmd->add_option("--combination", o->combination, "worst (default) or rss")
+      ->check(CLI::IsMember({"worst", "rss"}));
+  cmd->add_option("--loss-weight", o->in.loss_weight,
+                  "weight of the quality loss in M1 (default 1)")
       ->check(CLI::NonNegativeNumber);
-  cmd->add_option("--loss-distribution", o->loss_distribution, "uniform (default) or normal (t = 3 sigma)")
+  cmd->add_option("--loss-distribution", o->loss_distribution,
+                  "uniform (default) or normal (t = 3 sigma)")
       ->check(CLI::IsMember({"uniform", "normal"}));
-  cmd->add_option("--lower-factor", o->in.lower_factor, "lower bounds = factor x standard (default: the file's, or 1)")
+  cmd->add_option("--lower-factor", o->in.lower_factor,
+                  "lower bounds = factor x standard (default: the file's, or 1)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--upper-factor", o->in.upper_factor, "upper bounds = factor x standard (default: the file's, or 3)")
+  cmd->add_option("--upper-factor", o->in.upper_factor,
+                  "upper bounds = factor x standard (default: the file's, or 3)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--grid", o->in.grid, "values per linear axis in the workspace grid (default 3)")->check(CLI::Range(1, 20));
-  cmd->add_option("--rotary-grid", o->in.rotary_grid, "values per rotary axis (default 5)")->check(CLI::Range(1, 72));
-  cmd->add_option("--groups", o->in.groups, "correlation groups (default 4)")->check(CLI::Range(1, 100));
-  cmd->add_option("--population", o->in.opt.population, "NSGA-II population, a multiple of 4 (default 100)")
+  cmd->add_option("--grid", o->in.grid, "values per linear axis in the workspace grid (default 3)")
+      ->check(CLI::Range(1, 20));
+  cmd->add_option("--rotary-grid", o->in.rotary_grid, "values per rotary axis (default 5)")
+      ->check(CLI::Range(1, 72));
+  cmd->add_option("--groups", o->in.groups, "correlation groups (default 4)")
+      ->check(CLI::Range(1, 100));
+  cmd->add_option("--population", o->in.opt.population,
+                  "NSGA-II population, a multiple of 4 (default 100)")
       ->check(CLI::Range(8, 100000));
-  cmd->add_option("--generations", o->in.opt.generations, "NSGA-II generations (default 250)")->check(CLI::Range(1, 100000));
+  cmd->add_option("--generations", o->in.opt.generations, "NSGA-II generations (default 250)")
+      ->check(CLI::Range(1, 100000));
   cmd->add_option("--seed", o->in.opt.seed, "random seed (default 1)");
   cmd->callback([o, verdict] {
     o->in.rss = o->combination == "rss";

@@ -27,12 +27,15 @@ void printAnalysis(const AnalysisRun& run, const AnalyzeInputs& o) {
   if (o.model == "motion") std::printf(" (Chebyshev degree %d)", m.blocks[cols.front()].degree);
   std::printf(": %zu parameters, %d random poses (seed %u)\n", cols.size(), poses, o.seed);
   std::printf("  sensitivity Jacobian %d x %d: rank %d, condition %s column-scaled\n",
-              ms.initial.rows, ms.initial.cols, ms.initial.rank, cond(ms.initial.condition).c_str());
-  std::printf("  (columns scaled to unit norm; a singular value counts when above %.0e of the largest)\n",
-              kRankTolerance);
+              ms.initial.rows, ms.initial.cols, ms.initial.rank,
+              cond(ms.initial.condition).c_str());
+  std::printf(
+      "  (columns scaled to unit norm; a singular value counts when above %.0e of the largest)\n",
+      kRankTolerance);
   if (!ms.steps.empty()) {
-    std::printf("\n  confounded groups and removals (strategies: I keep set-up, II keep recognised link\n"
-                "  errors, III smallest condition number)\n");
+    std::printf(
+        "\n  confounded groups and removals (strategies: I keep set-up, II keep recognised link\n"
+        "  errors, III smallest condition number)\n");
     std::printf("  %4s  %-12s %-10s %5s %5s %10s  %s\n", "step", "removed", "strategy", "size",
                 "rank", "condition", "group (largest weight first)");
     for (size_t k = 0; k < ms.steps.size(); ++k) {
@@ -46,23 +49,28 @@ void printAnalysis(const AnalysisRun& run, const AnalyzeInputs& o) {
                   s.rank_after, cond(s.condition_after).c_str(), group.c_str());
     }
   }
-  std::printf("\n  minimal-complete set: %zu parameters, condition %s column-scaled, %s unscaled (mm, rad)\n",
-              ms.kept.size(), cond(ms.reduced.condition).c_str(),
-              cond(ms.reduced.condition_unscaled).c_str());
+  std::printf(
+      "\n  minimal-complete set: %zu parameters, condition %s column-scaled, %s unscaled (mm, "
+      "rad)\n",
+      ms.kept.size(), cond(ms.reduced.condition).c_str(),
+      cond(ms.reduced.condition_unscaled).c_str());
   std::string machine_part, setup_part;
   for (int p : ms.kept) {
     const BlockKind k = m.blocks[m.parameters[p].block].kind;
-    std::string& dst = (k == BlockKind::WorkpieceSetup || k == BlockKind::ToolSetup) ? setup_part : machine_part;
+    std::string& dst =
+        (k == BlockKind::WorkpieceSetup || k == BlockKind::ToolSetup) ? setup_part : machine_part;
     dst += " " + m.parameters[p].iso_code + " (" + m.parameters[p].thesis_name + ")";
   }
   std::printf("    machine:%s\n    set-up:%s\n", machine_part.c_str(), setup_part.c_str());
 
   if (run.with_plan) {
     const PlanIdentifiability& p = run.plan;
-    std::printf("\n  ball-bar plan %s: %zu readings, %zu set-ups, %d unknowns (%d machine + 6 per set-up)\n",
-                p.file.c_str(), p.readings, p.setups, p.unknowns, p.machine_unknowns);
-    std::printf("  identification Jacobian: rank %d, condition %s column-scaled\n", p.minimal.initial.rank,
-                cond(p.minimal.initial.condition).c_str());
+    std::printf(
+        "\n  ball-bar plan %s: %zu readings, %zu set-ups, %d unknowns (%d machine + 6 per "
+        "set-up)\n",
+        p.file.c_str(), p.readings, p.setups, p.unknowns, p.machine_unknowns);
+    std::printf("  identification Jacobian: rank %d, condition %s column-scaled\n",
+                p.minimal.initial.rank, cond(p.minimal.initial.condition).c_str());
     if (p.unobservable.empty()) {
       std::printf("  every unknown is observable\n");
     } else {
@@ -82,9 +90,11 @@ void registerAnalyze(CLI::App& app, Verdict* verdict) {
       "Identifiability of the machine's error model: rank, condition number, confounded groups "
       "and the minimal-complete parameter set; with --plan, of a ball-bar plan.");
   addMachineOptions(cmd, o->machine, "machine file (XML)");
-  cmd->add_option("--model", o->model, "link (link errors, thesis ch. 3) or motion (Chebyshev motion errors, ch. 4)")
+  cmd->add_option("--model", o->model,
+                  "link (link errors, thesis ch. 3) or motion (Chebyshev motion errors, ch. 4)")
       ->check(CLI::IsMember({"link", "motion"}));
-  cmd->add_option("--degree", o->degree, "Chebyshev degree of every motion error (default: the file's)")
+  cmd->add_option("--degree", o->degree,
+                  "Chebyshev degree of every motion error (default: the file's)")
       ->check(CLI::Range(0, 20));
   cmd->add_option("--poses", o->poses, "random poses (default 30 for link, 600 for motion)")
       ->check(CLI::Range(1, 100000));

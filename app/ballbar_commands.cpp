@@ -21,8 +21,9 @@ void printPlan(const PlanBallbarInputs& o, const PlanRun& run) {
   const Machine& machine = run.machine;
   const BallbarPlan& plan = run.plan;
   std::printf("tolver plan-ballbar: %s\n", machine.model.name.c_str());
-  std::printf("  bar %s, %zu set-ups, %zu poses (%d sampled, %d outside travel)\n", run.lengths_text.c_str(),
-              plan.test.setups.size(), plan.test.readings.size(), plan.sampled, plan.rejected);
+  std::printf("  bar %s, %zu set-ups, %zu poses (%d sampled, %d outside travel)\n",
+              run.lengths_text.c_str(), plan.test.setups.size(), plan.test.readings.size(),
+              plan.sampled, plan.rejected);
   for (const BallbarSetup& s : plan.test.setups)
     std::printf(
         "  set-up %d: table ball (%.3f, %.3f, %.3f) mm in w, tool ball (%.3f, %.3f, %.3f) mm in "
@@ -34,7 +35,8 @@ void printPlan(const PlanBallbarInputs& o, const PlanRun& run) {
       "%.3g\n",
       plan.unknowns, run.unknowns.size(), plan.rank, plan.condition);
   if (plan.rank < plan.unknowns)
-    std::printf("  warning: %d unknowns are not observable with this plan\n", plan.unknowns - plan.rank);
+    std::printf("  warning: %d unknowns are not observable with this plan\n",
+                plan.unknowns - plan.rank);
   if (plan.time_correlation_axis >= 0)
     std::printf(
         "  order      largest correlation of the measurement order with a joint within a "
@@ -47,10 +49,11 @@ void printPlan(const PlanBallbarInputs& o, const PlanRun& run) {
     std::printf("  drift      each set-up's first pose measured again after every %d poses\n",
                 o.plan.reference_every);
   if (run.too_few_readings)
-    std::fprintf(stderr,
-                 "tolver: warning: %zu readings for %d unknowns (fewer than 3 per unknown): the fit "
-                 "will follow the noise; ask for at least --poses %d\n",
-                 plan.test.readings.size(), plan.unknowns, 3 * plan.unknowns);
+    std::fprintf(
+        stderr,
+        "tolver: warning: %zu readings for %d unknowns (fewer than 3 per unknown): the fit "
+        "will follow the noise; ask for at least --poses %d\n",
+        plan.test.readings.size(), plan.unknowns, 3 * plan.unknowns);
 }
 
 // What the plan would give at the target, before anyone measures; and what the default plan
@@ -64,19 +67,24 @@ void printExpected(const PlanBallbarInputs& o, const PlanRun& run) {
       "  expected   tip uncertainty %s (1 sigma, %.2f um readings, after the measured "
       "set-up, at %zu poses): median %.3f um, max %.3f um; the D-optimal plan of the same "
       "size: median %.3f um, max %.3f um\n",
-      o.volume ? "over the whole travel" : "where the program cuts", o.noise_um, run.target_q.size(),
-      run.expected.median_um, run.expected.max_um, run.expected_default.median_um, run.expected_default.max_um);
+      o.volume ? "over the whole travel" : "where the program cuts", o.noise_um,
+      run.target_q.size(), run.expected.median_um, run.expected.max_um,
+      run.expected_default.median_um, run.expected_default.max_um);
   // What the targeted plan buys, and when it buys little: the expected figures are those of a
   // model that fits (a real machine's realised uncertainty varies more from machine to machine
   // than a gain of a few per cent).
   if (run.gain >= 0.1)
-    std::printf("  buys       an expected %.0f %% lower median tip uncertainty at the target than the default plan\n",
-                100.0 * run.gain);
+    std::printf(
+        "  buys       an expected %.0f %% lower median tip uncertainty at the target than the "
+        "default plan\n",
+        100.0 * run.gain);
   else
-    std::printf("  buys       little: the expected median tip uncertainty at the target is %.0f %% %s than the "
-                "default plan's, less than the spread between machines; the default plan (without --for or "
-                "--volume) is as good here\n",
-                100.0 * std::abs(run.gain), run.gain >= 0 ? "lower" : "higher");
+    std::printf(
+        "  buys       little: the expected median tip uncertainty at the target is %.0f %% %s than "
+        "the "
+        "default plan's, less than the spread between machines; the default plan (without --for or "
+        "--volume) is as good here\n",
+        100.0 * std::abs(run.gain), run.gain >= 0 ? "lower" : "higher");
 }
 
 void printPlanRun(const PlanBallbarInputs& o, const PlanRun& run) {
@@ -157,7 +165,9 @@ void printCalibration(const CalibrationRun& run, const CalibrateInputs& in) {
               run.used.readings.size());
   std::printf("  lack of fit %s\n", describeLackOfFit(run.lack_of_fit, 1e-3).c_str());
   if (run.lack_of_fit.tested && run.lack_of_fit.p_value < 1e-3)
-    std::printf("             the model lacks something the readings repeat: tolver diagnose looks for what\n");
+    std::printf(
+        "             the model lacks something the readings repeat: tolver diagnose looks for "
+        "what\n");
   if (!r.held.empty()) {
     std::string names;
     for (int p : r.held) names += " " + m.parameters[p].iso_code;
@@ -189,12 +199,13 @@ void printCalibrationRun(const CalibrationRun& run, const CalibrateInputs& in) {
   printWarnings(run.warnings);
   printCalibration(run, in);
   const CalibrationOutputs& out = run.outputs;
-  std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um", out.machine.c_str(),
-              out.balls.c_str(), mmToUm(run.written.fit.rms));
-  if (run.written.heldout.readings > 0) std::printf(", the held-out ones at %.3f um", mmToUm(run.written.heldout.rms));
+  std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um",
+              out.machine.c_str(), out.balls.c_str(), mmToUm(run.written.fit.rms));
+  if (run.written.heldout.readings > 0)
+    std::printf(", the held-out ones at %.3f um", mmToUm(run.written.heldout.rms));
   std::printf("\n");
-  std::printf("  wrote      %s (identified machine), %s (ball positions), %s (report)\n", out.machine.c_str(),
-              out.balls.c_str(), out.report.c_str());
+  std::printf("  wrote      %s (identified machine), %s (ball positions), %s (report)\n",
+              out.machine.c_str(), out.balls.c_str(), out.report.c_str());
 }
 
 }  // namespace
@@ -296,10 +307,11 @@ void registerBallbar(CLI::App& app, Verdict* verdict) {
                     "regularisation towards zero: auto (default: its scale from the readings' "
                     "evidence), none, or 'um,urad' per linear and angular coefficient");
     cmd->add_flag("--strict", o->strict, "refuse when some parameters cannot be identified");
-    cmd->add_option("--spindle-tilt-urad", o->spindle_tilt_urad,
-                    "prior of the spindle's tilt against the machine's axes (urad, 1 sigma), which a "
-                    "ball-bar cannot see (e.g. the tram tolerance over 2): added to every prediction's "
-                    "tool-axis band")
+    cmd->add_option(
+           "--spindle-tilt-urad", o->spindle_tilt_urad,
+           "prior of the spindle's tilt against the machine's axes (urad, 1 sigma), which a "
+           "ball-bar cannot see (e.g. the tram tolerance over 2): added to every prediction's "
+           "tool-axis band")
         ->check(CLI::Range(0.0, 1e5));
     cmd->add_flag("--keep-outliers", o->keep_outliers,
                   "fit every reading (gross readings are still named)");

@@ -13,9 +13,10 @@ void printTimeLine(const MachineModel& model, const TestDesign& design) {
   if (c.worst_axis < 0)
     std::printf("  time       the readings have no time_s: drift and warm-up cannot be checked\n");
   else
-    std::printf("  time       largest correlation of time with a joint within the set-ups: "
-                "|r| = %.2f (%s)\n",
-                c.worst, model.axes[c.worst_axis].name.c_str());
+    std::printf(
+        "  time       largest correlation of time with a joint within the set-ups: "
+        "|r| = %.2f (%s)\n",
+        c.worst, model.axes[c.worst_axis].name.c_str());
 }
 
 void printWarnings(const std::vector<std::string>& warnings) {
@@ -23,8 +24,9 @@ void printWarnings(const std::vector<std::string>& warnings) {
 }
 
 void printGross(const std::string& readings_file, const BallbarTest& test,
-                const std::vector<GrossReading>& gross, bool kept, const CalibrationResult& with_all,
-                const CalibrationResult& fit, bool limit_reached) {
+                const std::vector<GrossReading>& gross, bool kept,
+                const CalibrationResult& with_all, const CalibrationResult& fit,
+                bool limit_reached) {
   if (gross.empty()) {
     std::printf("  gross      none: every reading is consistent with the rest\n");
     return;
@@ -33,7 +35,8 @@ void printGross(const std::string& readings_file, const BallbarTest& test,
   char buf[96];
   for (size_t k = 0; k < gross.size() && k < 12; ++k) {
     std::snprintf(buf, sizeof buf, "%sline %d (%+.2f um, t = %.1f)", k ? ", " : "",
-                  test.readings[gross[k].index].line, mmToUm(gross[k].residual), gross[k].studentized);
+                  test.readings[gross[k].index].line, mmToUm(gross[k].residual),
+                  gross[k].studentized);
     lines += buf;
   }
   if (gross.size() > 12) lines += ", ...";
@@ -43,13 +46,15 @@ void printGross(const std::string& readings_file, const BallbarTest& test,
     std::printf("             kept in the fit (--keep-outliers)\n");
     return;
   }
-  std::printf("             removed and refitted: residual RMS %.3f um with them, %.3f um without\n",
-              mmToUm(with_all.rms_residual), mmToUm(fit.rms_residual));
+  std::printf(
+      "             removed and refitted: residual RMS %.3f um with them, %.3f um without\n",
+      mmToUm(with_all.rms_residual), mmToUm(fit.rms_residual));
   if (limit_reached)
-    std::fprintf(stderr,
-                 "tolver: warning: %s: more readings look gross than 5 %% of the test: the model or "
-                 "the set-up is more likely wrong than the readings; the rest were kept\n",
-                 readings_file.c_str());
+    std::fprintf(
+        stderr,
+        "tolver: warning: %s: more readings look gross than 5 %% of the test: the model or "
+        "the set-up is more likely wrong than the readings; the rest were kept\n",
+        readings_file.c_str());
 }
 
 }  // namespace tolver::app

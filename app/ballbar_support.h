@@ -15,7 +15,8 @@ void printWarnings(const std::vector<std::string>& warnings);
 // Prints the gross readings (by file line) and, when they were removed, the fit with and without
 // them.
 void printGross(const std::string& readings_file, const BallbarTest& test,
-                const std::vector<GrossReading>& gross, bool kept, const CalibrationResult& with_all,
-                const CalibrationResult& fit, bool limit_reached);
+                const std::vector<GrossReading>& gross, bool kept,
+                const CalibrationResult& with_all, const CalibrationResult& fit,
+                bool limit_reached);
 
 }  // namespace tolver::app

@@ -18,11 +18,20 @@ std::string optionForField(const std::string& field) {
   if (own != commandSpellings().end()) return own->second;
   // Options whose name is not the field's: units in the option's own words.
   static const std::map<std::string, std::string> spelled = {
-      {"output", "-o"},          {"units", "--cl-units"},        {"point_table", "--errors"},
-      {"zones_file", "--zones"}, {"tolerance_mm", "--tolerance"}, {"uz_mm", "--uz"},
-      {"asme_u_mm", "--asme-u"}, {"spacing_mm", "--spacing"},     {"step_mm", "--step"},
-      {"max_hole_mm", "--max-hole"}, {"limits_mm", "--limits"},  {"excess_range_mm", "--excess-range"},
-      {"gouge_range_mm", "--gouge-range"}, {"chordal_tolerance", "--chordal-tol"}};
+      {"output", "-o"},
+      {"units", "--cl-units"},
+      {"point_table", "--errors"},
+      {"zones_file", "--zones"},
+      {"tolerance_mm", "--tolerance"},
+      {"uz_mm", "--uz"},
+      {"asme_u_mm", "--asme-u"},
+      {"spacing_mm", "--spacing"},
+      {"step_mm", "--step"},
+      {"max_hole_mm", "--max-hole"},
+      {"limits_mm", "--limits"},
+      {"excess_range_mm", "--excess-range"},
+      {"gouge_range_mm", "--gouge-range"},
+      {"chordal_tolerance", "--chordal-tol"}};
   const auto it = spelled.find(field);
   if (it != spelled.end()) return it->second;
   std::string option = "--" + field;
@@ -36,7 +45,6 @@ void useOptionNames(const std::map<std::string, std::string>& command_spellings)
   setInputNamer([](const std::string& field) { return optionForField(field); });
 }
 
-
 void addMachineOptions(CLI::App* cmd, MachineOptions& o, const char* machine_help) {
   cmd->add_option("--machine", o.machine, machine_help)->required();
   cmd->add_option("--setup", o.setup, "set-up file (part zero, part rotation, gauge length)");
@@ -49,8 +57,9 @@ void addMachineOptions(CLI::App* cmd, MachineOptions& o, const char* machine_hel
 }
 
 void addProgramOptions(CLI::App* cmd, ProgramOptions& o) {
-  cmd->add_option("--cl", o.cl, "CL program (APT/CLDATA: .apt, .cls, .clsf, .ncl); posted "
-                                "G-code is detected");
+  cmd->add_option("--cl", o.cl,
+                  "CL program (APT/CLDATA: .apt, .cls, .clsf, .ncl); posted "
+                  "G-code is detected");
   cmd->add_option("--nc", o.nc, "posted G-code program (ISO 6983: .nc, .ngc, .tap, .gcode)");
   cmd->add_option("--cl-units", o.units,
                   "unit of a program that declares none: mm or inch (a CL without UNITS, a "

@@ -6,8 +6,8 @@
 #include <filesystem>
 #include <memory>
 
-#include "app/commands.h"
 #include "app/ballbar_support.h"
+#include "app/commands.h"
 #include "app/common.h"
 #include "core/model/effects.h"
 #include "core/numerics/units.h"
@@ -36,7 +36,8 @@ void printAdded(const MachineModel& m, const AddedEffect& a) {
   std::printf("\n");
   if (!a.equivalent.empty()) {
     std::printf("             the readings cannot tell it from:");
-    for (size_t k = 0; k < a.equivalent.size(); ++k) std::printf("%s %s", k ? "," : "", a.equivalent[k].c_str());
+    for (size_t k = 0; k < a.equivalent.size(); ++k)
+      std::printf("%s %s", k ? "," : "", a.equivalent[k].c_str());
     std::printf(" (the same motion seen from the part)\n");
   }
   if (!a.confounded_with.empty()) {
@@ -44,8 +45,8 @@ void printAdded(const MachineModel& m, const AddedEffect& a) {
     for (size_t k = 0; k < a.confounded_with.size(); ++k) {
       const AddedEffect::Confounding& c = a.confounded_with[k];
       const double f = c.angular ? radToUrad(1.0) : mmToUm(1.0);
-      std::printf("%s %s (|cos| %.2f: %.3f -> %.3f %s)", k ? "," : "", c.name.c_str(), c.cosine, c.before * f,
-                  c.after * f, c.angular ? "urad" : "um");
+      std::printf("%s %s (|cos| %.2f: %.3f -> %.3f %s)", k ? "," : "", c.name.c_str(), c.cosine,
+                  c.before * f, c.after * f, c.angular ? "urad" : "um");
     }
     std::printf("\n");
   }
@@ -56,15 +57,17 @@ void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o) {
   const DiagnosisResult& r = run.result;
   const ProgramComparison* program = run.program.get();
   const MachineModel& m = r.machine.model;
-  std::printf("  base fit   residual RMS %.3f um, cross-validated RMS %.3f um (%d contiguous blocks)\n",
-              mmToUm(r.rms_before), mmToUm(r.cv_rms_before), r.folds);
-  std::printf("  residual   follows %s\n",
-              r.analysis_before.follows.empty()
-                  ? "nothing in particular"
-                  : (r.analysis_before.follows + " (" +
-                     std::to_string(static_cast<int>(r.analysis_before.follows_strength * 100 + 0.5)) +
-                     " % of its variance)")
-                        .c_str());
+  std::printf(
+      "  base fit   residual RMS %.3f um, cross-validated RMS %.3f um (%d contiguous blocks)\n",
+      mmToUm(r.rms_before), mmToUm(r.cv_rms_before), r.folds);
+  std::printf(
+      "  residual   follows %s\n",
+      r.analysis_before.follows.empty()
+          ? "nothing in particular"
+          : (r.analysis_before.follows + " (" +
+             std::to_string(static_cast<int>(r.analysis_before.follows_strength * 100 + 0.5)) +
+             " % of its variance)")
+                .c_str());
   std::printf("  lack of fit %s\n", describeLackOfFit(r.lack_of_fit_before, o.in.alpha).c_str());
   std::printf("  candidates %zu scored in %d round(s)\n", r.candidates.size(),
               r.candidates.empty() ? 0 : r.candidates.back().round);
@@ -77,30 +80,36 @@ void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o) {
   if (!r.where.empty()) std::printf("  where      %s\n", r.where.c_str());
   if (!r.suggestion.empty()) std::printf("  to separate it: %s\n", r.suggestion.c_str());
   const LackOfFit& lof = r.lack_of_fit_after;
-  std::printf("  after      residual RMS %.3f um, cross-validated RMS %.3f um; lack of fit %s\n", mmToUm(r.rms_after),
-              mmToUm(r.cv_rms_after),
-              lof.tested ? ("F " + formatWith("%.2f", lof.f) + ", p " + formatWith("%.2g", lof.p_value)).c_str()
-                         : "not tested");
+  std::printf(
+      "  after      residual RMS %.3f um, cross-validated RMS %.3f um; lack of fit %s\n",
+      mmToUm(r.rms_after), mmToUm(r.cv_rms_after),
+      lof.tested
+          ? ("F " + formatWith("%.2f", lof.f) + ", p " + formatWith("%.2g", lof.p_value)).c_str()
+          : "not tested");
   if (r.heldout_before.readings > 0) {
-    std::printf("  held-out   %d readings (%s): RMS %.3f -> %.3f um, max %.3f -> %.3f um; mean squared gain "
-                "%.3g +- %.2g um^2\n",
-                r.heldout_before.readings, o.in.heldout.c_str(), mmToUm(r.heldout_before.rms),
-                mmToUm(r.heldout_after.rms), mmToUm(r.heldout_before.max), mmToUm(r.heldout_after.max),
-                r.heldout_gain_mm2 * 1e6, r.heldout_gain_se_mm2 * 1e6);
+    std::printf(
+        "  held-out   %d readings (%s): RMS %.3f -> %.3f um, max %.3f -> %.3f um; mean squared "
+        "gain "
+        "%.3g +- %.2g um^2\n",
+        r.heldout_before.readings, o.in.heldout.c_str(), mmToUm(r.heldout_before.rms),
+        mmToUm(r.heldout_after.rms), mmToUm(r.heldout_before.max), mmToUm(r.heldout_after.max),
+        r.heldout_gain_mm2 * 1e6, r.heldout_gain_se_mm2 * 1e6);
   }
-  std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um", out.machine.c_str(),
-              out.balls.c_str(), mmToUm(run.written.fit.rms));
+  std::printf("  written    %s + %s reproduce the fitted readings at RMS %.3f um",
+              out.machine.c_str(), out.balls.c_str(), mmToUm(run.written.fit.rms));
   if (run.written.heldout.readings > 0)
     std::printf(", the held-out ones at %.3f um", mmToUm(run.written.heldout.rms));
   std::printf("\n");
   if (program)
-    std::printf("  program    %s: predicted error max %.3f -> %.3f um, RMS %.3f -> %.3f um "
-                "(change up to %.3f um, line %d)\n",
-                o.in.cl.c_str(), mmToUm(program->before.max_deviation), mmToUm(program->after.max_deviation),
-                mmToUm(program->before.rms_deviation), mmToUm(program->after.rms_deviation),
-                mmToUm(program->change_max), program->change_max_line);
-  std::printf("  wrote      %s (augmented machine), %s (ball positions), %s, %s\n", out.machine.c_str(),
-              out.balls.c_str(), run.json.c_str(), run.html.c_str());
+    std::printf(
+        "  program    %s: predicted error max %.3f -> %.3f um, RMS %.3f -> %.3f um "
+        "(change up to %.3f um, line %d)\n",
+        o.in.cl.c_str(), mmToUm(program->before.max_deviation),
+        mmToUm(program->after.max_deviation), mmToUm(program->before.rms_deviation),
+        mmToUm(program->after.rms_deviation), mmToUm(program->change_max),
+        program->change_max_line);
+  std::printf("  wrote      %s (augmented machine), %s (ball positions), %s, %s\n",
+              out.machine.c_str(), out.balls.c_str(), run.json.c_str(), run.html.c_str());
 }
 
 void printGrossAgain(const DiagnosisRun& run) {
@@ -111,22 +120,24 @@ void printGrossAgain(const DiagnosisRun& run) {
   for (size_t k = 0; k < run.gross.size() && k < run.gross_t_after.size(); ++k) {
     bool back = false;
     for (const GrossReading& x : run.restored) back = back || x.index == run.gross[k].index;
-    std::snprintf(buf, sizeof buf, "%sline %d t %.1f -> %.1f%s", k ? ", " : "", test.readings[run.gross[k].index].line,
-                  run.gross[k].studentized, run.gross_t_after[k], back ? " restored" : "");
+    std::snprintf(buf, sizeof buf, "%sline %d t %.1f -> %.1f%s", k ? ", " : "",
+                  test.readings[run.gross[k].index].line, run.gross[k].studentized,
+                  run.gross_t_after[k], back ? " restored" : "");
     lines += buf;
   }
-  std::printf("  gross again against the final model: %s%s\n", lines.c_str(),
-              run.restored.empty() ? "" : " (the diagnosis was run again with the restored readings)");
+  std::printf(
+      "  gross again against the final model: %s%s\n", lines.c_str(),
+      run.restored.empty() ? "" : " (the diagnosis was run again with the restored readings)");
 }
 
 void printRun(const DiagnosisRun& run, const DiagnoseOptions& o) {
   const MachineModel& base = run.machine.model;
   const BallbarTest& test = run.file.test;
   printWarnings(run.warnings);
-  std::printf("tolver diagnose: %s from %zu readings in %zu set-ups\n", base.name.c_str(), test.readings.size(),
-              test.setups.size());
-  printGross(o.in.readings, test, run.gross, o.in.keep_outliers, run.robust.with_all, run.robust.fit,
-             run.robust.limit_reached);
+  std::printf("tolver diagnose: %s from %zu readings in %zu set-ups\n", base.name.c_str(),
+              test.readings.size(), test.setups.size());
+  printGross(o.in.readings, test, run.gross, o.in.keep_outliers, run.robust.with_all,
+             run.robust.fit, run.robust.limit_reached);
   printTimeLine(base, run.design);
   printGrossAgain(run);
   printDiagnosis(run, o);
@@ -141,10 +152,12 @@ void registerDiagnose(CLI::App& app, Verdict* verdict) {
       "Find what a ball-bar calibration leaves unexplained, trace it to an effect the model "
       "lacks (backlash, cyclic error, rotary harmonics, thermal drift, bar length, a higher "
       "degree), add it and report the error before and after.");
-  addMachineOptions(cmd, o->in.machine, "base machine file (XML): link and motion errors, no effects");
+  addMachineOptions(cmd, o->in.machine,
+                    "base machine file (XML): link and motion errors, no effects");
   cmd->add_option("--readings", o->in.readings, "ball-bar readings (CSV)")->required();
   cmd->add_option("-o,--output", o->in.output, "augmented machine file to write (XML)")->required();
-  cmd->add_option("--report-dir", o->in.report_dir, "directory for report.json, report.html and plots")
+  cmd->add_option("--report-dir", o->in.report_dir,
+                  "directory for report.json, report.html and plots")
       ->required();
   cmd->add_option("--cl", o->in.cl, "part program (APT): its predicted error before and after");
   cmd->add_option("--cl-setup", o->in.cl_setup,
@@ -154,7 +167,8 @@ void registerDiagnose(CLI::App& app, Verdict* verdict) {
                   "effect types to try (default all): chebyshev, reversal, periodic, harmonics, "
                   "drift, warmup, bar_length")
       ->delimiter(',');
-  cmd->add_option("--alpha", o->in.alpha, "family-wise significance level per round (default 0.001)")
+  cmd->add_option("--alpha", o->in.alpha,
+                  "family-wise significance level per round (default 0.001)")
       ->check(CLI::Range(1e-12, 0.5));
   cmd->add_option("--max-effects", o->in.max_effects, "most effects to add (default 4)")
       ->check(CLI::Range(0, 20));
@@ -167,17 +181,19 @@ void registerDiagnose(CLI::App& app, Verdict* verdict) {
   cmd->add_option("--balls", o->in.balls,
                   "identified ball positions to write (CSV; default: the output path with "
                   "_balls.csv)");
-  cmd->add_option("--spindle-tilt-urad", o->in.spindle_tilt_urad,
-                    "prior of the spindle's tilt against the machine's axes (urad, 1 sigma), which a "
-                    "ball-bar cannot see (e.g. the tram tolerance over 2): added to every prediction's "
-                    "tool-axis band")
+  cmd->add_option(
+         "--spindle-tilt-urad", o->in.spindle_tilt_urad,
+         "prior of the spindle's tilt against the machine's axes (urad, 1 sigma), which a "
+         "ball-bar cannot see (e.g. the tram tolerance over 2): added to every prediction's "
+         "tool-axis band")
       ->check(CLI::Range(0.0, 1e5));
   cmd->add_flag("--keep-outliers", o->in.keep_outliers,
                 "fit every reading (gross readings are still named)");
   cmd->add_flag("--quiet", o->quiet, "no progress bar");
   cmd->callback([o, verdict] {
     ProgressBar bar(!o->quiet);
-    const DiagnosisRun run = diagnoseMachine(o->in, [&bar](const std::string& phase, double f) { bar(phase, f); });
+    const DiagnosisRun run =
+        diagnoseMachine(o->in, [&bar](const std::string& phase, double f) { bar(phase, f); });
     printRun(run, *o);
     *verdict = run.verdict;
   });

@@ -20,7 +20,8 @@ double clean(double v) { return std::abs(v) < 5e-7 ? 0.0 : v; }
 
 // The prediction's uncertainty on a calibrated machine: the set-up it is taken after, the 1-sigma
 // band, and the points beyond the calibrated ranges.
-void printUncertainty(const Machine& machine, const ClProgram& program, const CalibratedPrediction& cal) {
+void printUncertainty(const Machine& machine, const ClProgram& program,
+                      const CalibratedPrediction& cal) {
   const std::vector<PoseUncertainty>& unc = cal.uncertainty;
   const Eigen::VectorXd& measured_setup = cal.measured_setup;
   std::vector<double> tip(unc.size()), axis(unc.size());
@@ -40,25 +41,30 @@ void printUncertainty(const Machine& machine, const ClProgram& program, const Ca
     return v[v.size() / 2];
   };
   if (cal.probed)
-    std::printf("  set-up     probed: the calibration cannot see the part's pose on the table; "
-                "predicted with the set-up fitted to the probed points, uncertainty included\n");
+    std::printf(
+        "  set-up     probed: the calibration cannot see the part's pose on the table; "
+        "predicted with the set-up fitted to the probed points, uncertainty included\n");
   else if (measured_setup.size() == 9)
-    std::printf("  set-up     the calibration cannot see the part's pose on the table or the tool "
-                "tip's offset from the spindle: predicted after the set-up a shop measures (part "
-                "probed: %+.2f %+.2f %+.2f um, %+.1f %+.1f %+.1f urad; tool preset: %+.2f %+.2f "
-                "%+.2f um taken up); --absolute for the raw prediction\n",
-                mmToUm(measured_setup[0]), mmToUm(measured_setup[1]), mmToUm(measured_setup[2]),
-                radToUrad(measured_setup[3]), radToUrad(measured_setup[4]), radToUrad(measured_setup[5]),
-                mmToUm(measured_setup[6]), mmToUm(measured_setup[7]), mmToUm(measured_setup[8]));
+    std::printf(
+        "  set-up     the calibration cannot see the part's pose on the table or the tool "
+        "tip's offset from the spindle: predicted after the set-up a shop measures (part "
+        "probed: %+.2f %+.2f %+.2f um, %+.1f %+.1f %+.1f urad; tool preset: %+.2f %+.2f "
+        "%+.2f um taken up); --absolute for the raw prediction\n",
+        mmToUm(measured_setup[0]), mmToUm(measured_setup[1]), mmToUm(measured_setup[2]),
+        radToUrad(measured_setup[3]), radToUrad(measured_setup[4]), radToUrad(measured_setup[5]),
+        mmToUm(measured_setup[6]), mmToUm(measured_setup[7]), mmToUm(measured_setup[8]));
   else
-    std::printf("  set-up     absolute prediction (--absolute): it includes what probing the part "
-                "and presetting the tool would take up, which the calibration cannot see\n");
-  std::printf("  uncertainty (1 sigma) of the prediction (%zu identified values and what their "
-              "covariance does not hold, below): tip median %.3f um, max %.3f um; tool axis median %.3f urad, "
-              "max %.3f urad\n",
-              machine.identification.parameters.size(), mmToUm(median(tip)),
-              mmToUm(*std::max_element(tip.begin(), tip.end())), radToUrad(median(axis)),
-              radToUrad(*std::max_element(axis.begin(), axis.end())));
+    std::printf(
+        "  set-up     absolute prediction (--absolute): it includes what probing the part "
+        "and presetting the tool would take up, which the calibration cannot see\n");
+  std::printf(
+      "  uncertainty (1 sigma) of the prediction (%zu identified values and what their "
+      "covariance does not hold, below): tip median %.3f um, max %.3f um; tool axis median %.3f "
+      "urad, "
+      "max %.3f urad\n",
+      machine.identification.parameters.size(), mmToUm(median(tip)),
+      mmToUm(*std::max_element(tip.begin(), tip.end())), radToUrad(median(axis)),
+      radToUrad(*std::max_element(axis.begin(), axis.end())));
   // Which parts of the band come from where.
   const IdentificationUncertainty& id = machine.identification;
   std::vector<double> cal_tip(unc.size()), cal_axis(unc.size());
@@ -66,15 +72,20 @@ void printUncertainty(const Machine& machine, const ClProgram& program, const Ca
     cal_tip[i] = unc[i].calibration_tip;
     cal_axis[i] = unc[i].calibration_axis;
   }
-  std::printf("  band from  the covariance (tip median %.3f um, axis median %.3f urad); %s; %s\n",
-              mmToUm(median(cal_tip)), radToUrad(median(cal_axis)),
-              id.lack_of_fit_mm > 0 ? ("the calibration's lack of fit, " + formatWith("%.3f um", mmToUm(id.lack_of_fit_mm)) +
-                                       " per tip coordinate").c_str()
-                                    : "no lack of fit (the calibration's test passed, or it had no repeats)",
-              id.spindle_tilt_rad > 0
-                  ? ("the spindle tilt's prior, " + formatWith("%.1f urad", id.spindle_tilt_rad * 1e6) + " on the axis").c_str()
-                  : "the spindle's tilt, which a ball-bar cannot see, is not in the axis band (calibrate "
-                    "--spindle-tilt-urad states its prior; a tram measures it)");
+  std::printf(
+      "  band from  the covariance (tip median %.3f um, axis median %.3f urad); %s; %s\n",
+      mmToUm(median(cal_tip)), radToUrad(median(cal_axis)),
+      id.lack_of_fit_mm > 0
+          ? ("the calibration's lack of fit, " + formatWith("%.3f um", mmToUm(id.lack_of_fit_mm)) +
+             " per tip coordinate")
+                .c_str()
+          : "no lack of fit (the calibration's test passed, or it had no repeats)",
+      id.spindle_tilt_rad > 0
+          ? ("the spindle tilt's prior, " + formatWith("%.1f urad", id.spindle_tilt_rad * 1e6) +
+             " on the axis")
+                .c_str()
+          : "the spindle's tilt, which a ball-bar cannot see, is not in the axis band (calibrate "
+            "--spindle-tilt-urad states its prior; a tram measures it)");
   if (outside > 0) {
     std::string where;
     char buf[96];
@@ -86,9 +97,10 @@ void printUncertainty(const Machine& machine, const ClProgram& program, const Ca
                       rot ? "deg" : "mm");
         where += buf;
       }
-    std::printf("  calibrated %d points lie outside the joint ranges the calibration readings "
-                "covered (first at line %d; %s): there the errors are extrapolated\n",
-                outside, program.path[first_outside].line, where.c_str());
+    std::printf(
+        "  calibrated %d points lie outside the joint ranges the calibration readings "
+        "covered (first at line %d; %s): there the errors are extrapolated\n",
+        outside, program.path[first_outside].line, where.c_str());
   }
 }
 
@@ -97,10 +109,10 @@ void printRisks(const PredictionRun& run, double max_rotary_step_deg) {
   const Machine& machine = run.machine;
   const PredictionSummary& s = run.prediction.summary;
   if (s.singular_points > 0)
-    std::printf("  note       %d points have the tool axis within %.4g deg of a rotary axis (first "
-                "at line %d); that axis kept its previous angle\n",
-                s.singular_points, radToDeg(machine.model.control.singular_band),
-                s.first_singular_line);
+    std::printf(
+        "  note       %d points have the tool axis within %.4g deg of a rotary axis (first "
+        "at line %d); that axis kept its previous angle\n",
+        s.singular_points, radToDeg(machine.model.control.singular_band), s.first_singular_line);
   const auto& jumps = run.jumps;
   if (!jumps.empty()) {
     std::printf("  risk       %zu rotary steps above %.1f deg between cutting moves:", jumps.size(),
@@ -132,20 +144,22 @@ void printPrediction(const PredictionRun& run, const PredictInputs& in) {
       cutterFromApt(program.cutters.back().source, program.cutters.back().values, &cutter))
     std::printf("  tool       %s (line %d)\n", cutter.describe().c_str(),
                 program.cutters.back().line);
-  std::printf("  set-up     part zero (%.4f, %.4f, %.4f) mm in the table frame, rotation %.4f deg, "
-              "gauge length %.4f mm\n",
-              setup.part_zero_table.x(), setup.part_zero_table.y(), setup.part_zero_table.z(),
-              radToDeg(setup.part_rotation), setup.gauge_length);
+  std::printf(
+      "  set-up     part zero (%.4f, %.4f, %.4f) mm in the table frame, rotation %.4f deg, "
+      "gauge length %.4f mm\n",
+      setup.part_zero_table.x(), setup.part_zero_table.y(), setup.part_zero_table.z(),
+      radToDeg(setup.part_rotation), setup.gauge_length);
   if (cal.probed) std::printf("  probed     %s\n", run.probe_line.c_str());
   const PredictedPoint& worst = pts[s.max_index];
   std::printf("  deviation  max %.3f um at point %d (line %d), RMS %.3f um%s\n",
               mmToUm(s.max_deviation), s.max_index, program.path[s.max_index].line,
               mmToUm(s.rms_deviation), s.rapid_points > 0 ? " (cutting moves)" : "");
-  std::printf("             at the max: (%.3f, %.3f, %.3f) um in the part frame, %.3f um along the "
-              "tool axis, %.3f um across\n",
-              clean(mmToUm(worst.deviation_w.x())), clean(mmToUm(worst.deviation_w.y())),
-              clean(mmToUm(worst.deviation_w.z())), clean(mmToUm(worst.along_axis)),
-              clean(mmToUm(worst.across_axis)));
+  std::printf(
+      "             at the max: (%.3f, %.3f, %.3f) um in the part frame, %.3f um along the "
+      "tool axis, %.3f um across\n",
+      clean(mmToUm(worst.deviation_w.x())), clean(mmToUm(worst.deviation_w.y())),
+      clean(mmToUm(worst.deviation_w.z())), clean(mmToUm(worst.along_axis)),
+      clean(mmToUm(worst.across_axis)));
   if (s.rapid_points > 0 && s.rapid_max_index >= 0)
     std::printf("  rapids     %d positioning and home moves, apart: max %.3f um at line %d\n",
                 s.rapid_points, mmToUm(s.rapid_max_deviation),
@@ -154,7 +168,8 @@ void printPrediction(const PredictionRun& run, const PredictInputs& in) {
               radToUrad(s.rms_axis_angle));
   if (!cal.uncertainty.empty()) printUncertainty(machine, program, cal);
   printRisks(run, in.max_rotary_step_deg);
-  for (const std::string& w : run.warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+  for (const std::string& w : run.warnings)
+    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
   for (const std::string& n : run.notes) std::fprintf(stderr, "tolver: note: %s\n", n.c_str());
   std::printf("  wrote      %s (predicted CL), %s (per-point table)\n", run.output.c_str(),
               run.point_table.c_str());

@@ -104,7 +104,8 @@ void printSetupHeader(const SetupInputs& o, const SetupRun& run) {
       s.part_zero_table.x(), s.part_zero_table.y(), s.part_zero_table.z(),
       radToDeg(s.part_rotation), s.gauge_length,
       o.machine.setup.empty() ? " (defaults: no --setup)" : "");
-  for (const std::string& w : run.warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+  for (const std::string& w : run.warnings)
+    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
   for (const std::string& n : run.notes) std::fprintf(stderr, "tolver: note: %s\n", n.c_str());
 }
 
@@ -114,40 +115,50 @@ void printWorkOffset(const SetupInputs& o, const SetupRun& run) {
   const ClProgram& program = run.program;
   const WorkOffsetSetup& r = run.offset;
   printSetupHeader(o, run);
-  std::printf("  mode       every move in joint words: %zu in the work offset, %d in machine "
-              "coordinates (G53/G28/SUPA, fixed)\n",
-              program.path.size() - run.fixed_moves, run.fixed_moves);
+  std::printf(
+      "  mode       every move in joint words: %zu in the work offset, %d in machine "
+      "coordinates (G53/G28/SUPA, fixed)\n",
+      program.path.size() - run.fixed_moves, run.fixed_moves);
   if (run.mode == SetupMode::Fixed) {
     printRanges(model, program, run.ranges_again);
-    std::printf("  result     every move is in machine coordinates or in a work offset the program "
-                "sets itself (G10): the set-up does not change where the machine goes; %s\n",
-                run.margin_again >= -1e-9 ? "every point is inside travel" : "points are outside travel");
+    std::printf(
+        "  result     every move is in machine coordinates or in a work offset the program "
+        "sets itself (G10): the set-up does not change where the machine goes; %s\n",
+        run.margin_again >= -1e-9 ? "every point is inside travel" : "points are outside travel");
     return;
   }
-  std::printf("  proposed   part_zero_mm = %.3f, %.3f, %.3f (the program's origin)\n", r.part_zero_table.x(),
-              r.part_zero_table.y(), r.part_zero_table.z());
-  std::printf("             work offset at the control (G54..., machine coordinates): X%.3f "
-              "Y%.3f Z%.3f\n",
-              r.work_offset_m.x(), r.work_offset_m.y(), r.work_offset_m.z());
+  std::printf("  proposed   part_zero_mm = %.3f, %.3f, %.3f (the program's origin)\n",
+              r.part_zero_table.x(), r.part_zero_table.y(), r.part_zero_table.z());
+  std::printf(
+      "             work offset at the control (G54..., machine coordinates): X%.3f "
+      "Y%.3f Z%.3f\n",
+      r.work_offset_m.x(), r.work_offset_m.y(), r.work_offset_m.z());
   std::printf("             gauge_length_mm = %.3f (tool length when the set-up gives none)\n",
               model.setup.gauge_length);
   printRanges(run.best, program, run.ranges_again);
   if (r.found && run.margin_again >= -1e-9) {
-    std::printf("  result     every point inside travel, smallest margin %.3f mm (exact: each "
-                "axis's range centred)\n", r.margin);
+    std::printf(
+        "  result     every point inside travel, smallest margin %.3f mm (exact: each "
+        "axis's range centred)\n",
+        r.margin);
   } else if (r.found) {
-    std::printf("  result     the program read again with this work offset leaves %s outside "
-                "travel (at line %d): not proposed\n",
-                model.axes[run.limiting_axis].name.c_str(), run.limiting_line);
+    std::printf(
+        "  result     the program read again with this work offset leaves %s outside "
+        "travel (at line %d): not proposed\n",
+        model.axes[run.limiting_axis].name.c_str(), run.limiting_line);
   } else {
     const char* axis = r.limiting_axis >= 0 ? model.axes[r.limiting_axis].name.c_str() : "-";
     if (r.limited_by_machine_coordinates)
-      std::printf("  result     a move in machine coordinates (G53/G28/SUPA) is outside %s's travel "
-                  "by %.3f mm: no work offset moves it; the program was posted for another "
-                  "machine's home or travel\n", axis, -r.margin);
+      std::printf(
+          "  result     a move in machine coordinates (G53/G28/SUPA) is outside %s's travel "
+          "by %.3f mm: no work offset moves it; the program was posted for another "
+          "machine's home or travel\n",
+          axis, -r.margin);
     else
-      std::printf("  result     the program does not fit this machine's travel with any work "
-                  "offset: %s needs %.3f mm more\n", axis, -r.margin);
+      std::printf(
+          "  result     the program does not fit this machine's travel with any work "
+          "offset: %s needs %.3f mm more\n",
+          axis, -r.margin);
   }
 }
 
@@ -159,10 +170,11 @@ void printSearch(const SetupInputs& o, const SetupRun& run) {
   printSetupHeader(o, run);
   printRanges(model, program, run.ranges_now);
   if (run.unreachable > 0)
-    std::printf("  rotary     %d points need rotary angles outside travel (first at line %d)\n", run.unreachable,
-                run.path[run.first_unreachable].line);
+    std::printf("  rotary     %d points need rotary angles outside travel (first at line %d)\n",
+                run.unreachable, run.path[run.first_unreachable].line);
   std::printf("  searched   %d part rotations (%d rejected: rotary travel)%s\n", r.rotations_tried,
-              r.rotations_rejected, o.gauge_lengths.size() > 1 ? ", gauge lengths given with --gauge-lengths" : "");
+              r.rotations_rejected,
+              o.gauge_lengths.size() > 1 ? ", gauge lengths given with --gauge-lengths" : "");
   if (run.rotations_exhausted) {
     std::printf(
         "  result     no rotation keeps the rotary axes inside travel: the program cannot "
@@ -170,8 +182,8 @@ void printSearch(const SetupInputs& o, const SetupRun& run) {
     return;
   }
   const PartSetup& b = r.setup;
-  std::printf("  proposed   part_zero_mm = %.3f, %.3f, %.3f\n", b.part_zero_table.x(), b.part_zero_table.y(),
-              b.part_zero_table.z());
+  std::printf("  proposed   part_zero_mm = %.3f, %.3f, %.3f\n", b.part_zero_table.x(),
+              b.part_zero_table.y(), b.part_zero_table.z());
   std::printf("             part_rotation_deg = %.3f\n", radToDeg(b.part_rotation));
   std::printf("             gauge_length_mm = %.3f\n", b.gauge_length);
   printRanges(run.best, program, r.ranges);
@@ -190,7 +202,8 @@ void printSetupRun(const SetupInputs& o, const SetupRun& run) {
     printSearch(o, run);
   else
     printWorkOffset(o, run);
-  for (const auto& [path, what] : run.written) std::printf("  wrote      %s (%s)\n", path.c_str(), what.c_str());
+  for (const auto& [path, what] : run.written)
+    std::printf("  wrote      %s (%s)\n", path.c_str(), what.c_str());
 }
 
 }  // namespace
@@ -213,7 +226,8 @@ void registerSetup(CLI::App& app, Verdict* verdict) {
       ->delimiter(',');
   cmd->callback([o, verdict] {
     ProgressBar bar(true);  // on a terminal only (stderr)
-    const SetupRun run = proposeSetup(*o, [&bar](const std::string& phase, double f) { bar(phase, f); });
+    const SetupRun run =
+        proposeSetup(*o, [&bar](const std::string& phase, double f) { bar(phase, f); });
     printSetupRun(*o, run);
     *verdict = run.verdict;
   });

@@ -27,8 +27,10 @@ void printVerification(const Verification& v, const VerifyOptions& o, const std:
   const SurfaceSamples& samples = v.samples;
   const VerifyResult& result = v.result;
   std::printf("tolver verify: %s\n", verdictName(r).c_str());
-  if (r.incomplete) std::printf("  %s\n", r.incomplete_text.c_str());
-  else if (r.undecided) std::printf("  %s\n", r.undecided_text.c_str());
+  if (r.incomplete)
+    std::printf("  %s\n", r.incomplete_text.c_str());
+  else if (r.undecided)
+    std::printf("  %s\n", r.undecided_text.c_str());
   std::printf("  machine    %s (%s)\n", r.machine_name.c_str(), v.machine_file.c_str());
   std::printf("  program    %s (%s): %d CL points, %d tool placements (step %.3g mm), %s\n",
               r.program_file.c_str(), v.program_dialect.c_str(), r.cl_points, r.placements,
@@ -36,37 +38,43 @@ void printVerification(const Verification& v, const VerifyOptions& o, const std:
   if (r.mode == "cl-only")
     std::printf("  part       none: CL-only mode, %zu points\n", samples.size());
   else
-    std::printf("  part       %s: %zu samples at %.3g mm%s\n", r.part_file.c_str(), samples.size(), r.spacing_mm,
-                r.repair.notes.empty() ? "" : " (mesh repaired: see the report)");
+    std::printf("  part       %s: %zu samples at %.3g mm%s\n", r.part_file.c_str(), samples.size(),
+                r.spacing_mm, r.repair.notes.empty() ? "" : " (mesh repaired: see the report)");
   for (const auto& z : r.zones)
     std::printf("  zone       %s: %s mm [%+.1f, %+.1f] um\n", z.region.c_str(), z.spec.c_str(),
                 mmToUm(z.lower), mmToUm(z.upper));
   std::printf("  total      %+.2f .. %+.2f um, RMS %.2f um (+ material left, - gouge)\n",
-              mmToUm(result.total_stats.min), mmToUm(result.total_stats.max), mmToUm(result.total_stats.rms));
+              mmToUm(result.total_stats.min), mmToUm(result.total_stats.max),
+              mmToUm(result.total_stats.rms));
   if (r.mode != "cl-only")
-    std::printf("  program    %+.2f .. %+.2f um (nominal swept - CAD)\n", mmToUm(result.program_stats.min),
-                mmToUm(result.program_stats.max));
+    std::printf("  program    %+.2f .. %+.2f um (nominal swept - CAD)\n",
+                mmToUm(result.program_stats.min), mmToUm(result.program_stats.max));
   std::printf("  machine    %+.2f .. %+.2f um, RMS %.2f um (predicted - nominal swept)\n",
-              mmToUm(result.machine_stats.min), mmToUm(result.machine_stats.max), mmToUm(result.machine_stats.rms));
+              mmToUm(result.machine_stats.min), mmToUm(result.machine_stats.max),
+              mmToUm(result.machine_stats.rms));
   if (result.split_beyond + result.split_boundary > 0)
-    std::printf("  split      total = program + machine at every other machined sample; not split: %d "
-                "samples beyond the search range, %d on a cut's boundary (a micrometre of the tool's "
-                "shift moves the boundary across them)\n",
-                result.split_beyond, result.split_boundary);
+    std::printf(
+        "  split      total = program + machine at every other machined sample; not split: %d "
+        "samples beyond the search range, %d on a cut's boundary (a micrometre of the tool's "
+        "shift moves the boundary across them)\n",
+        result.split_beyond, result.split_boundary);
   if (v.banded)
-    std::printf("  band       the machine's share is known to +- %.2f um at most (95 %%, from the "
-                "calibration's covariance)%s\n",
-                r.band95_max_um, o.in.absolute ? "" : ", after the set-up a shop measures");
-  std::printf("  area       %.2f %% of %.1f mm2 machined in tolerance; %.1f mm2 not machined; "
-              "%.1f mm2 on edges not verified\n",
-              result.percent_in, result.area_machined, result.area_unmachined, result.area_edge);
+    std::printf(
+        "  band       the machine's share is known to +- %.2f um at most (95 %%, from the "
+        "calibration's covariance)%s\n",
+        r.band95_max_um, o.in.absolute ? "" : ", after the set-up a shop measures");
+  std::printf(
+      "  area       %.2f %% of %.1f mm2 machined in tolerance; %.1f mm2 not machined; "
+      "%.1f mm2 on edges not verified\n",
+      result.percent_in, result.area_machined, result.area_unmachined, result.area_edge);
   for (size_t k = 0; k < result.regions.size() && k < 5; ++k) {
     const auto& g = result.regions[k];
     std::printf("  region %zu   %s %.3f mm2, worst %s at (%.2f, %.2f, %.2f), cause: %s\n", k + 1,
-                conformanceName(g.kind), g.area_mm2, worstDeviationText(result, g).c_str(), g.where_w.x(),
-                g.where_w.y(), g.where_w.z(), regionCause(r, g).c_str());
+                conformanceName(g.kind), g.area_mm2, worstDeviationText(result, g).c_str(),
+                g.where_w.x(), g.where_w.y(), g.where_w.z(), regionCause(r, g).c_str());
   }
-  if (result.regions.size() > 5) std::printf("  ...        %zu regions in all\n", result.regions.size());
+  if (result.regions.size() > 5)
+    std::printf("  ...        %zu regions in all\n", result.regions.size());
   for (const auto& n : r.notes) std::fprintf(stderr, "tolver: note: %s\n", n.c_str());
   std::printf("  report     %s (and report.json, deviations.csv, swept_*.ply/.vtp, *.png)\n",
               report.c_str());
@@ -74,12 +82,13 @@ void printVerification(const Verification& v, const VerifyOptions& o, const std:
 
 void printBatch(const VerifyOptions& o, const BatchRun& run) {
   std::printf("tolver verify --batch %s: %zu jobs\n", o.batch.c_str(), run.jobs.size());
-  std::printf("  %-20s %-7s %10s %10s %12s %8s %8s\n", "name", "verdict", "min um", "max um", "machine RMS", "% in",
-              "regions");
+  std::printf("  %-20s %-7s %10s %10s %12s %8s %8s\n", "name", "verdict", "min um", "max um",
+              "machine RMS", "% in", "regions");
   for (const JobOutcome& r : run.jobs)
     if (r.error.empty())
-      std::printf("  %-20s %-7s %+10.2f %+10.2f %12.2f %8.2f %8d\n", r.name.c_str(), r.verdict_text.c_str(), r.min_um,
-                  r.max_um, r.machine_rms_um, r.percent_in, r.regions);
+      std::printf("  %-20s %-7s %+10.2f %+10.2f %12.2f %8.2f %8d\n", r.name.c_str(),
+                  r.verdict_text.c_str(), r.min_um, r.max_um, r.machine_rms_um, r.percent_in,
+                  r.regions);
     else
       std::printf("  %-20s %-7s %s\n", r.name.c_str(), r.verdict_text.c_str(), r.error.c_str());
   std::printf("  wrote      %s\n", run.summary.c_str());
@@ -92,14 +101,18 @@ Verdict runVerify(VerifyOptions& o) {
     const BatchRun run = verifyBatch(o.in, o.batch, [&o](int n, size_t total, const JobOutcome& r) {
       if (!o.quiet)
         std::fprintf(stderr, "  [%d/%zu] %s: %s\n", n, total, r.name.c_str(),
-                     !r.error.empty() ? "error" : r.verdict == Verdict::Ok ? "pass" : "fail");
+                     !r.error.empty()           ? "error"
+                     : r.verdict == Verdict::Ok ? "pass"
+                                                : "fail");
     });
     printBatch(o, run);
     return run.verdict;
   }
-  if (o.tolerance_units == "um" && !std::isnan(o.in.tolerance_mm)) o.in.tolerance_mm = umToMm(o.in.tolerance_mm);
+  if (o.tolerance_units == "um" && !std::isnan(o.in.tolerance_mm))
+    o.in.tolerance_mm = umToMm(o.in.tolerance_mm);
   ProgressBar bar(!o.quiet);
-  const VerifyRun run = verifyPart(o.in, "", [&bar](const std::string& phase, double f) { bar(phase, f); });
+  const VerifyRun run =
+      verifyPart(o.in, "", [&bar](const std::string& phase, double f) { bar(phase, f); });
   if (!o.quiet) printVerification(*run.verification, o, run.report);
   return run.verdict;
 }
@@ -123,35 +136,50 @@ void registerVerify(CLI::App& app, Verdict* verdict) {
       ->check(CLI::IsMember({"mm", "um"}));
   cmd->add_option("--part", o->in.part,
                   "part model (STL, OBJ, PLY, OFF, 3MF, glTF); without it: CL-only mode");
-  cmd->add_option("--tolerance", o->in.tolerance_mm, "profile tolerance all over, mm (zone width t)");
-  cmd->add_option("--uz", o->in.uz_mm, "ISO 1101 UZ offset of that zone, mm (+ towards material left)");
-  cmd->add_option("--asme-u", o->in.asme_u_mm, "ASME Y14.5 U: the part of t outside the material, mm");
+  cmd->add_option("--tolerance", o->in.tolerance_mm,
+                  "profile tolerance all over, mm (zone width t)");
+  cmd->add_option("--uz", o->in.uz_mm,
+                  "ISO 1101 UZ offset of that zone, mm (+ towards material left)");
+  cmd->add_option("--asme-u", o->in.asme_u_mm,
+                  "ASME Y14.5 U: the part of t outside the material, mm");
   cmd->add_option("--zones", o->in.zones_file, "zones per region (CSV: region,tolerance,uz,u)");
-  cmd->add_option("--report-dir", o->in.report_dir, "directory for the report (created)")->required();
-  cmd->add_option("--batch", o->batch,
-                  "jobs file (CSV: name,machine,cl,part,tolerance[,setup,zones,probed]); verifies them "
-                  "in parallel, one report directory each, and writes summary.csv");
-  cmd->add_option("--mesh-units", o->in.mesh_units, "length unit of the part file: mm, inch or m "
-                                                  "(default mm; m for glTF)");
-  cmd->add_option("--mesh-offset", o->in.mesh_offset, "placement of the part file in the part frame, mm (x,y,z)")
+  cmd->add_option("--report-dir", o->in.report_dir, "directory for the report (created)")
+      ->required();
+  cmd->add_option(
+      "--batch", o->batch,
+      "jobs file (CSV: name,machine,cl,part,tolerance[,setup,zones,probed]); verifies them "
+      "in parallel, one report directory each, and writes summary.csv");
+  cmd->add_option("--mesh-units", o->in.mesh_units,
+                  "length unit of the part file: mm, inch or m "
+                  "(default mm; m for glTF)");
+  cmd->add_option("--mesh-offset", o->in.mesh_offset,
+                  "placement of the part file in the part frame, mm (x,y,z)")
       ->delimiter(',')
       ->expected(3);
-  cmd->add_option("--mesh-rotation-deg", o->in.mesh_rotation_deg,
-                  "rotation of the part file about x, then y, then z of the part frame, deg (a,b,c)")
+  cmd->add_option(
+         "--mesh-rotation-deg", o->in.mesh_rotation_deg,
+         "rotation of the part file about x, then y, then z of the part frame, deg (a,b,c)")
       ->delimiter(',')
       ->expected(3);
-  cmd->add_option("--spacing", o->in.spacing_mm, "surface sample spacing (remeshing target edge), mm (default 0.5)")->check(CLI::PositiveNumber);
-  cmd->add_option("--step", o->in.step_mm, "largest tool advance between placements, mm (default sqrt(0.8 R t))")
+  cmd->add_option("--spacing", o->in.spacing_mm,
+                  "surface sample spacing (remeshing target edge), mm (default 0.5)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--excess-range", o->in.excess_range_mm, "stock above the surface considered, mm (default max(0.1, 5t))")
+  cmd->add_option("--step", o->in.step_mm,
+                  "largest tool advance between placements, mm (default sqrt(0.8 R t))")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--gouge-range", o->in.gouge_range_mm, "depth searched for gouges, mm (default max(0.1, 5t))")
+  cmd->add_option("--excess-range", o->in.excess_range_mm,
+                  "stock above the surface considered, mm (default max(0.1, 5t))")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--max-hole", o->in.max_hole_mm, "largest mesh hole perimeter filled, mm (default 2 % of the size)");
+  cmd->add_option("--gouge-range", o->in.gouge_range_mm,
+                  "depth searched for gouges, mm (default max(0.1, 5t))")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--max-hole", o->in.max_hole_mm,
+                  "largest mesh hole perimeter filled, mm (default 2 % of the size)");
   cmd->add_option("--tools", o->in.tools,
                   "tool file (CSV: tool,type,diameter_mm,corner_radius_mm,length_mm): the geometry "
                   "of the tools a posted program selects (T1, T=\"name\"), over its comments");
-  cmd->add_option("--cutter", o->in.cutter, "cutter d,r[,length,taper_deg] in mm, overriding the program's")
+  cmd->add_option("--cutter", o->in.cutter,
+                  "cutter d,r[,length,taper_deg] in mm, overriding the program's")
       ->delimiter(',');
   cmd->add_option("--line-pass", o->in.line_pass, "also a line profile along this pass (1-based)")
       ->check(CLI::PositiveNumber);
@@ -161,11 +189,13 @@ void registerVerify(CLI::App& app, Verdict* verdict) {
                 "a calibrated machine: verify without the set-up a shop measures (part probed, "
                 "tool preset), i.e. with what the calibration cannot see left in");
   addProbedOption(cmd, o->in.probed);
-  cmd->add_flag("--allow-open", o->in.allow_open,
-                "holes in the part's surface (not covered by its mesh) do not make the verdict INCOMPLETE");
-  cmd->add_option("--compensated-from", o->in.compensated_from,
-                  "the program is the output of tolver compensate for this original: the nominal is "
-                  "the original's path, the machine runs the compensated program's joints");
+  cmd->add_flag(
+      "--allow-open", o->in.allow_open,
+      "holes in the part's surface (not covered by its mesh) do not make the verdict INCOMPLETE");
+  cmd->add_option(
+      "--compensated-from", o->in.compensated_from,
+      "the program is the output of tolver compensate for this original: the nominal is "
+      "the original's path, the machine runs the compensated program's joints");
   cmd->callback([o, verdict] { *verdict = runVerify(*o); });
 }
 

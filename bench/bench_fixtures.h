@@ -46,12 +46,14 @@ inline std::vector<ClPoint> path(size_t n) {
 // and axis out, by coordinate): the batch forward benchmarks' input.
 struct BatchJoints {
   static constexpr int n = 1024;
-  std::vector<double> q = std::vector<double>(5 * n), c = q, s = q, out = std::vector<double>(6 * n);
+  std::vector<double> q = std::vector<double>(5 * n), c = q, s = q,
+                      out = std::vector<double>(6 * n);
   const double *qp[5], *cp[5], *sp[5];
   double *pp[3], *up[3];
   BatchJoints() {
     for (int i = 0; i < n; ++i) {
-      const double v[5] = {100.0 - 0.1 * i, -50.0 + 0.05 * i, 80.0, -0.5 + 1e-3 * i, 1.0 - 2e-3 * i};
+      const double v[5] = {100.0 - 0.1 * i, -50.0 + 0.05 * i, 80.0, -0.5 + 1e-3 * i,
+                           1.0 - 2e-3 * i};
       for (int a = 0; a < 5; ++a) {
         q[a * n + i] = v[a];
         c[a * n + i] = std::cos(v[a]);
@@ -85,7 +87,7 @@ inline const Data& data() {
   static const Data d = [] {
     Data x;
     x.m = readMachineFile(std::string(TOLVER_SOURCE_DIR) +
-                                  "/resources/machines/matsuura_mc760vx.xml");
+                          "/resources/machines/matsuura_mc760vx.xml");
     x.unknowns = defaultCalibrationUnknowns(x.m.model);
     BallbarPlanOptions o;
     o.poses = 600;

@@ -1,18 +1,19 @@
-// Ball-bar calibration and diagnosis on one core. One calibration solve: Matsuura MC-760VX, full minimal-complete cubic
-// model (92 coefficients + 18 ball positions), three set-ups, 600 readings, 0.5 um noise.
+// Ball-bar calibration and diagnosis on one core. One calibration solve: Matsuura MC-760VX, full
+// minimal-complete cubic model (92 coefficients + 18 ball positions), three set-ups, 600 readings,
+// 0.5 um noise.
 //   ./build/bench/calibration_benchmark
 #include <benchmark/benchmark.h>
 
 #include <random>
 
+#include "bench_fixtures.h"
+#include "core/allocation/tolerance_allocation.h"
 #include "core/calibration/ballbar_plan.h"
 #include "core/calibration/calibration.h"
 #include "core/diagnosis/diagnosis.h"
 #include "io/machine/ballbar_file.h"
-#include "core/allocation/tolerance_allocation.h"
 #include "io/machine/machine_file.h"
 #include "io/machine/tolerance_file.h"
-#include "bench_fixtures.h"
 
 namespace {
 
@@ -36,7 +37,8 @@ void BM_IdentificationJacobian600(benchmark::State& state) {
   const Data& d = data();
   const tolver::ForwardKinematics fk(d.m.model, Eigen::VectorXd::Zero(d.m.model.parameterCount()));
   const std::vector<tolver::BallErrors> balls(3);
-  for (auto _ : state) benchmark::DoNotOptimize(tolver::identificationJacobian(fk, d.test, balls, d.unknowns));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(tolver::identificationJacobian(fk, d.test, balls, d.unknowns));
 }
 BENCHMARK(BM_IdentificationJacobian600)->Unit(benchmark::kMillisecond);
 
@@ -67,18 +69,21 @@ BENCHMARK(BM_Diagnose360Readings)->Unit(benchmark::kMillisecond)->Iterations(3);
 // tolver allocate's optimisation on the XKH800 (README's root-sum-square run: 675 poses, 100 x 250
 // NSGA-II, limits 15/15/10 um, lower bounds a quarter of the standard), both cores.
 void BM_AllocateXkh800Rss(benchmark::State& state) {
-  tolver::Machine m = tolver::readMachineFile(std::string(TOLVER_SOURCE_DIR) + "/resources/machines/xkh800.xml");
+  tolver::Machine m =
+      tolver::readMachineFile(std::string(TOLVER_SOURCE_DIR) + "/resources/machines/xkh800.xml");
   m.model.setup.gauge_length = 150;
-  std::vector<tolver::ToleranceTerm> terms =
-      tolver::readToleranceFile(std::string(TOLVER_SOURCE_DIR) + "/resources/allocation/xkh800_standard.csv", m.model);
+  std::vector<tolver::ToleranceTerm> terms = tolver::readToleranceFile(
+      std::string(TOLVER_SOURCE_DIR) + "/resources/allocation/xkh800_standard.csv", m.model);
   for (auto& t : terms) t.lower = 0.25 * t.standard;
   tolver::AllocationModel a;
   a.limits = Eigen::Vector3d(0.015, 0.015, 0.010);
   a.rss = true;
-  const tolver::AccuracyModel acc = tolver::buildAccuracyModel(m.model, terms, tolver::workspaceGrid(m.model, 3, 5));
+  const tolver::AccuracyModel acc =
+      tolver::buildAccuracyModel(m.model, terms, tolver::workspaceGrid(m.model, 3, 5));
   const tolver::CorrelationAnalysis corr = tolver::correlateTerms(acc, 4);
   for (auto _ : state) {
-    const auto r = tolver::allocateTolerances(m.model, terms, a, acc, corr, tolver::AllocationOptions{});
+    const auto r =
+        tolver::allocateTolerances(m.model, terms, a, acc, corr, tolver::AllocationOptions{});
     benchmark::DoNotOptimize(r.front.size());
   }
 }

@@ -19,19 +19,18 @@
 // includes what Ceres does not do: the rank decisions (which unknowns the readings can see),
 // the covariance and the per-parameter uncertainties.
 #include <benchmark/benchmark.h>
+#include <ceres/ceres.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <vector>
-#include <map>
-#include <string>
-
 #include <kdl/chain.hpp>
 #include <kdl/chainfksolverpos_recursive.hpp>
 #include <kdl/frames.hpp>
 #include <kdl/jntarray.hpp>
-#include <ceres/ceres.h>
+#include <map>
+#include <string>
+#include <vector>
 
 #include "bench_fixtures.h"
 #include "core/calibration/ballbar.h"
@@ -227,7 +226,8 @@ class RateReporter : public benchmark::ConsoleReporter {
     for (const Run& r : runs) {
       if (r.run_type != Run::RT_Iteration) continue;  // (aggregates: computed below)
       const auto it = r.counters.find("items_per_second");
-      if (it != r.counters.end()) rates[r.benchmark_name()].push_back(it->second);
+      if (it != r.counters.end())
+        rates[r.benchmark_name()].push_back(it->second);
       else if (r.iterations > 0)
         rates[r.benchmark_name()].push_back(r.iterations / r.real_accumulated_time);
     }
@@ -259,8 +259,9 @@ int main(int argc, char** argv) {
     const size_t runs = all("BM_Kdl_FullPose").size();
     std::printf("\nratios to KDL's full poses per second (same run; KDL on one core%s):\n",
                 runs > 1 ? "; medians of the repetitions, range in brackets" : "");
-    for (const char* n : {"BM_Tolver_PredictedPoint", "BM_Tolver_PredictedPointTwoCores",
-                          "BM_Tolver_FullPose", "BM_Tolver_TipAndAxis", "BM_Tolver_BatchTipAndAxis"}) {
+    for (const char* n :
+         {"BM_Tolver_PredictedPoint", "BM_Tolver_PredictedPointTwoCores", "BM_Tolver_FullPose",
+          "BM_Tolver_TipAndAxis", "BM_Tolver_BatchTipAndAxis"}) {
       const std::vector<double> r = all(n);
       if (r.empty()) continue;
       std::printf("  %-26s %6.2f M/s   %5.2fx KDL (%.2f M/s)", n, find(n) / 1e6, find(n) / kdl,
@@ -277,8 +278,9 @@ int main(int argc, char** argv) {
   }
   const double ceres = find("BM_Ceres_Calibrate600"), own = find("BM_Tolver_Calibrate600");
   if (ceres > 0 && own > 0)
-    std::printf("\ncalibration, 600 readings, 110 unknowns: tolver %.1f ms, Ceres %.1f ms: %.2fx Ceres\n",
-                1e3 / own, 1e3 / ceres, own / ceres);
+    std::printf(
+        "\ncalibration, 600 readings, 110 unknowns: tolver %.1f ms, Ceres %.1f ms: %.2fx Ceres\n",
+        1e3 / own, 1e3 / ceres, own / ceres);
   benchmark::Shutdown();
   return 0;
 }

@@ -6,16 +6,16 @@
 #include <cmath>
 #include <random>
 
-#include "core/path/compensation.h"
+#include "bench_fixtures.h"
 #include "core/kinematics/forward_kinematics.h"
 #include "core/kinematics/inverse_kinematics.h"
+#include "core/path/compensation.h"
 #include "core/path/tool_path_prediction.h"
-#include "pipeline/parallel_prediction.h"
-#include "io/program/apt_reader.h"
-#include "io/program/gcode_reader.h"
 #include "io/common/io_error.h"
 #include "io/machine/machine_file.h"
-#include "bench_fixtures.h"
+#include "io/program/apt_reader.h"
+#include "io/program/gcode_reader.h"
+#include "pipeline/parallel_prediction.h"
 
 namespace {
 
@@ -142,7 +142,8 @@ BENCHMARK(BM_InverseKinematics);
 // on its machine; lines per second.
 void BM_ReadGcodeBoat(benchmark::State& state) {
   const std::string dir = std::string(TOLVER_SOURCE_DIR);
-  const tolver::Machine m = tolver::readMachineFile(dir + "/resources/machines/linuxcnc_xyzac_trt.xml");
+  const tolver::Machine m =
+      tolver::readMachineFile(dir + "/resources/machines/linuxcnc_xyzac_trt.xml");
   const std::string text = tolver::readFile(dir + "/samples/gcode/boat-xyzac.ngc");
   size_t lines = 0;
   for (auto _ : state) {
@@ -150,7 +151,8 @@ void BM_ReadGcodeBoat(benchmark::State& state) {
     lines += p.lines.size();
     benchmark::DoNotOptimize(p.path.data());
   }
-  state.counters["lines/s"] = benchmark::Counter(static_cast<double>(lines), benchmark::Counter::kIsRate);
+  state.counters["lines/s"] =
+      benchmark::Counter(static_cast<double>(lines), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_ReadGcodeBoat)->Unit(benchmark::kMillisecond);
 
@@ -164,7 +166,8 @@ void BM_ReadAptSculptured(benchmark::State& state) {
     lines += p.lines.size();
     benchmark::DoNotOptimize(p.path.data());
   }
-  state.counters["lines/s"] = benchmark::Counter(static_cast<double>(lines), benchmark::Counter::kIsRate);
+  state.counters["lines/s"] =
+      benchmark::Counter(static_cast<double>(lines), benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_ReadAptSculptured)->Unit(benchmark::kMillisecond);
 

@@ -7,9 +7,9 @@
 #include "core/kinematics/forward_kinematics.h"
 #include "core/path/tool_motion.h"
 #include "geometry/swept_surface.h"
-#include "io/program/apt_reader.h"
 #include "io/machine/machine_file.h"
 #include "io/mesh/mesh_file.h"
+#include "io/program/apt_reader.h"
 #include "io/program/setup_file.h"
 
 namespace tolver {

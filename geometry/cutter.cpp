@@ -1,10 +1,11 @@
 #include "geometry/cutter.h"
-#include "core/numerics/units.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+
+#include "core/numerics/units.h"
 
 namespace tolver {
 
@@ -52,10 +53,14 @@ bool cutterFromApt(const std::string& source, const std::vector<double>& v, Cutt
   }
   if (c.corner_radius < 0 || c.corner_radius > 0.5 * c.diameter + 1e-9) return false;
   if (c.taper_angle < 0 || c.taper_angle >= kPi / 2) return false;
-  if (c.taper_angle > 0) c.type = CutterType::Tapered;
-  else if (std::abs(c.corner_radius - 0.5 * c.diameter) < 1e-9) c.type = CutterType::BallEnd;
-  else if (c.corner_radius > 0) c.type = CutterType::BullNose;
-  else c.type = CutterType::FlatEnd;
+  if (c.taper_angle > 0)
+    c.type = CutterType::Tapered;
+  else if (std::abs(c.corner_radius - 0.5 * c.diameter) < 1e-9)
+    c.type = CutterType::BallEnd;
+  else if (c.corner_radius > 0)
+    c.type = CutterType::BullNose;
+  else
+    c.type = CutterType::FlatEnd;
   *out = c;
   return true;
 }
@@ -190,10 +195,14 @@ double Cutter::lineEntry(const Eigen::Vector3d& a_w, const Eigen::Vector3d& d_w,
     }
   }
   double inside;
-  if (f1 <= 0) inside = x1;
-  else if (f2 <= 0) inside = x2;
-  else if (excess(hi) <= 0) inside = hi;
-  else return entry;
+  if (f1 <= 0)
+    inside = x1;
+  else if (f2 <= 0)
+    inside = x2;
+  else if (excess(hi) <= 0)
+    inside = hi;
+  else
+    return entry;
   // Bisection between lo (outside) and inside.
   double l = lo, r = inside;
   for (int k = 0; k < 60 && r - l > 1e-10; ++k) {

@@ -31,7 +31,8 @@ void refineMesh(TriangleMesh* mesh, double max_edge) {
   PMP::detect_sharp_edges(sm, 30.0, constrained);
   for (auto e : sm.edges()) {
     const auto h = sm.halfedge(e);
-    if (sm.is_border(e) || patch[sm.face(h)] != patch[sm.face(sm.opposite(h))]) constrained[e] = true;
+    if (sm.is_border(e) || patch[sm.face(h)] != patch[sm.face(sm.opposite(h))])
+      constrained[e] = true;
   }
   // Target edge length max_edge (the remesher keeps edges between 4/5 and 4/3 of it).
   PMP::isotropic_remeshing(faces(sm), max_edge, sm,
@@ -50,7 +51,8 @@ void refineMesh(TriangleMesh* mesh, double max_edge) {
   for (auto f : sm.faces()) {
     Eigen::Vector3i t;
     int k = 0;
-    for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm)) t[k++] = static_cast<int>(v.idx());
+    for (auto v : CGAL::vertices_around_face(sm.halfedge(f), sm))
+      t[k++] = static_cast<int>(v.idx());
     mesh->faces.push_back(t);
     mesh->face_group.push_back(patch[f]);
   }

@@ -66,7 +66,6 @@ int faceComponents(const std::vector<Eigen::Vector3i>& faces, std::vector<int>* 
   return static_cast<int>(ids.size());
 }
 
-
 // A hole's border loop kept open (longer than the largest filled), for the coverage report.
 struct OpenLoop {
   Eigen::Vector3d centre;
@@ -79,14 +78,14 @@ struct Repair {
   const TriangleMesh& input;
   MeshRepairReport rep;
   std::vector<Eigen::Vector3d> points;
-  std::vector<int> remap;                      // input vertex -> merged point
-  int merged = 0;                              // distinct positions
+  std::vector<int> remap;  // input vertex -> merged point
+  int merged = 0;          // distinct positions
   Eigen::AlignedBox3d box;
   double diag = 0, max_hole = 0;
-  std::vector<std::vector<size_t>> polygons;   // faces kept, as CGAL's polygon soup
-  std::vector<int> groups;                     // per face
+  std::vector<std::vector<size_t>> polygons;  // faces kept, as CGAL's polygon soup
+  std::vector<int> groups;                    // per face
   std::vector<Point> cgal_points;
-  std::vector<Eigen::Vector3i> faces;          // after orientation and hole filling
+  std::vector<Eigen::Vector3i> faces;  // after orientation and hole filling
   std::vector<OpenLoop> open_loops;
 };
 
@@ -127,9 +126,11 @@ void removeDegenerateFaces(Repair& r) {
       t[k] = r.remap[v];
     }
     const Eigen::Vector3d c = (points[t[0]] + points[t[1]] + points[t[2]]) / 3.0;
-    const double twice_area = (points[t[1]] - points[t[0]]).cross(points[t[2]] - points[t[0]]).norm();
+    const double twice_area =
+        (points[t[1]] - points[t[0]]).cross(points[t[2]] - points[t[0]]).norm();
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(twice_area > 1e-14 * diag * diag)) {
-      if (rep.degenerate_faces++ < 3) rep.notes.push_back("removed a degenerate (zero-area) face at " + at(c));
+      if (rep.degenerate_faces++ < 3)
+        rep.notes.push_back("removed a degenerate (zero-area) face at " + at(c));
       continue;
     }
     std::array<int, 3> sorted = {t[0], t[1], t[2]};
@@ -138,7 +139,8 @@ void removeDegenerateFaces(Repair& r) {
       if (rep.duplicate_faces++ < 3) rep.notes.push_back("removed a duplicate face at " + at(c));
       continue;
     }
-    r.polygons.push_back({static_cast<size_t>(t[0]), static_cast<size_t>(t[1]), static_cast<size_t>(t[2])});
+    r.polygons.push_back(
+        {static_cast<size_t>(t[0]), static_cast<size_t>(t[1]), static_cast<size_t>(t[2])});
     r.groups.push_back(input.face_group.empty() ? 0 : input.face_group[f]);
   }
   if (rep.degenerate_faces > 3)
@@ -152,7 +154,8 @@ void removeDegenerateFaces(Repair& r) {
 void refuseNonManifoldEdges(const Repair& r) {
   std::unordered_map<uint64_t, int> count;
   for (const auto& p : r.polygons)
-    for (int e = 0; e < 3; ++e) ++count[edgeKey(static_cast<int>(p[e]), static_cast<int>(p[(e + 1) % 3]))];
+    for (int e = 0; e < 3; ++e)
+      ++count[edgeKey(static_cast<int>(p[e]), static_cast<int>(p[(e + 1) % 3]))];
   int bad = 0;
   uint64_t first = 0;
   int first_count = 0;
@@ -195,7 +198,6 @@ void orientConsistently(Repair& r) {
   if (rep.split_vertices > 0)
     rep.notes.push_back("split " + std::to_string(rep.split_vertices) +
                         " non-manifold vertices (surfaces touching at a point)");
-
 }
 
 // The border loops of the faces: vertex -> next vertex along the border (opposite to the face's
@@ -205,7 +207,8 @@ void borderLoops(const std::vector<Eigen::Vector3i>& faces, std::unordered_map<i
   std::unordered_map<uint64_t, int> directed;  // directed edge -> face
   for (int f = 0; f < static_cast<int>(faces.size()); ++f)
     for (int e = 0; e < 3; ++e)
-      directed[(static_cast<uint64_t>(faces[f][e]) << 32) | static_cast<uint32_t>(faces[f][(e + 1) % 3])] = f;
+      directed[(static_cast<uint64_t>(faces[f][e]) << 32) |
+               static_cast<uint32_t>(faces[f][(e + 1) % 3])] = f;
   for (const auto& [k, f] : directed) {
     const int a = static_cast<int>(k >> 32), b = static_cast<int>(k & 0xffffffffu);
     if (!directed.count((static_cast<uint64_t>(b) << 32) | static_cast<uint32_t>(a))) {
@@ -266,8 +269,8 @@ void fillHoles(Repair& r) {
       built = true;
     }
     // The border halfedge from loop[0] to loop[1] (no face on its side).
-    const auto h = CGAL::halfedge(SurfaceMesh::Vertex_index(loop[0]),
-                                  SurfaceMesh::Vertex_index(loop[1]), sm);
+    const auto h =
+        CGAL::halfedge(SurfaceMesh::Vertex_index(loop[0]), SurfaceMesh::Vertex_index(loop[1]), sm);
     if (!h.second || !sm.is_border(h.first)) {
       ++rep.open_borders;
       continue;
@@ -289,8 +292,8 @@ void fillHoles(Repair& r) {
     ++rep.holes_filled;
     rep.hole_faces_added += static_cast<int>(added.size());
     if (rep.holes_filled <= 3)
-      rep.notes.push_back("filled a hole of " + std::to_string(loop.size()) +
-                          " edges at " + at(centre));
+      rep.notes.push_back("filled a hole of " + std::to_string(loop.size()) + " edges at " +
+                          at(centre));
   }
   if (rep.open_borders > 0)
     rep.notes.push_back("open surface: " + std::to_string(rep.open_borders) +
@@ -327,9 +330,11 @@ void orientOutwards(Repair& r) {
     std::vector<double> surface(rep.components, 0.0), largest(rep.components, 0.0);
     for (int f = 0; f < static_cast<int>(faces.size()); ++f) {
       const auto& t = faces[f];
-      surface[comp[f]] += 0.5 * (points[t[1]] - points[t[0]]).cross(points[t[2]] - points[t[0]]).norm();
+      surface[comp[f]] +=
+          0.5 * (points[t[1]] - points[t[0]]).cross(points[t[2]] - points[t[0]]).norm();
     }
-    for (const OpenLoop& l : open_loops) largest[comp[l.face]] = std::max(largest[comp[l.face]], l.area);
+    for (const OpenLoop& l : open_loops)
+      largest[comp[l.face]] = std::max(largest[comp[l.face]], l.area);
     for (const OpenLoop& l : open_loops) {
       const int c = comp[l.face];
       const bool sheet = largest[c] >= 0.3 * surface[c];
@@ -340,7 +345,8 @@ void orientOutwards(Repair& r) {
     if (!rep.holes.empty())
       rep.notes.push_back(std::to_string(rep.holes.size()) + " holes in the surface left open (" +
                           std::to_string(static_cast<int>(std::round(rep.hole_area))) +
-                          " mm2 not covered by the mesh; the first at " + at(rep.holes.front().centre_w) + ")");
+                          " mm2 not covered by the mesh; the first at " +
+                          at(rep.holes.front().centre_w) + ")");
   }
   int turned = 0;
   for (int f = 0; f < static_cast<int>(faces.size()); ++f)
@@ -353,7 +359,6 @@ void orientOutwards(Repair& r) {
     rep.notes.push_back("turned " + std::to_string(turned) +
                         " faces of closed components inside out to face outwards");
   }
-
 }
 
 }  // namespace
@@ -377,7 +382,8 @@ TriangleMesh repairMesh(const TriangleMesh& input, const MeshRepairOptions& opti
   out.vertices = std::move(r.points);
   out.faces = std::move(r.faces);
   out.face_group = std::move(r.groups);
-  out.group_names = input.group_names.empty() ? std::vector<std::string>{"part"} : input.group_names;
+  out.group_names =
+      input.group_names.empty() ? std::vector<std::string>{"part"} : input.group_names;
   r.rep.merged_vertices = r.rep.input_vertices - r.merged;
   if (report) *report = r.rep;
   return out;

@@ -40,18 +40,18 @@ struct MeshRepairReport {
   int merged_vertices = 0;
   int degenerate_faces = 0;
   int duplicate_faces = 0;
-  int reoriented_faces = 0;      // faces turned to agree with their neighbours or to face out
-  int split_vertices = 0;        // non-manifold vertices split by orient_polygon_soup
+  int reoriented_faces = 0;  // faces turned to agree with their neighbours or to face out
+  int split_vertices = 0;    // non-manifold vertices split by orient_polygon_soup
   int holes_filled = 0, hole_faces_added = 0;
-  int open_borders = 0;          // borders left open (an open surface's edges)
-  double max_hole_perimeter = 0; // mm: the borders filled were shorter than this
+  int open_borders = 0;           // borders left open (an open surface's edges)
+  double max_hole_perimeter = 0;  // mm: the borders filled were shorter than this
   // The open borders that are holes: every border of a component whose largest border spans
   // less than 0.3 of its surface (a solid with holes), else all but that largest one (a sheet
   // with holes in it).
   std::vector<MeshHole> holes;
-  double hole_area = 0;          // mm^2, summed
+  double hole_area = 0;  // mm^2, summed
   int components = 0;
-  bool closed = false;           // every component closed after repair
+  bool closed = false;             // every component closed after repair
   std::vector<std::string> notes;  // one line per repair made, with a location
 };
 

@@ -38,7 +38,8 @@ struct FaceInfo {
 using Fbb = CGAL::Triangulation_face_base_with_info_2<FaceInfo, K>;
 using Fb = CGAL::Constrained_triangulation_face_base_2<K, Fbb>;
 using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
-using Cdt = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::No_constraint_intersection_tag>;
+using Cdt =
+    CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::No_constraint_intersection_tag>;
 
 // One face's share of the result: its lattice points (3D) and its triangles, whose indices are
 // global for vertices and edge points (>= 0) and -1 - i for its own lattice point i.
@@ -59,8 +60,10 @@ void markInside(Cdt& cdt) {
     for (int i = 0; i < 3; ++i) {
       const Cdt::Face_handle n = f->neighbor(i);
       if (n->info().nesting != -1) continue;
-      if (cdt.is_constrained(Cdt::Edge(f, i))) queue.emplace_back(n, level + 1);
-      else queue.emplace_front(n, level);
+      if (cdt.is_constrained(Cdt::Edge(f, i)))
+        queue.emplace_back(n, level + 1);
+      else
+        queue.emplace_front(n, level);
     }
   }
 }
@@ -83,7 +86,8 @@ constexpr double kJitter = 0.3;  // of a piece along an edge, of the spacing ins
 void fan(const std::vector<int>& cycle, FacePiece* piece) {
   piece->inner.clear();
   piece->triangles.clear();
-  for (size_t i = 1; i + 1 < cycle.size(); ++i) piece->triangles.emplace_back(cycle[0], cycle[i], cycle[i + 1]);
+  for (size_t i = 1; i + 1 < cycle.size(); ++i)
+    piece->triangles.emplace_back(cycle[0], cycle[i], cycle[i + 1]);
 }
 
 }  // namespace
@@ -120,7 +124,8 @@ void resampleFaces(TriangleMesh* mesh, double spacing) {
   for (const auto& [key, e] : edge_id) {
     const int a = static_cast<int>(key >> 32), b = static_cast<int>(key & 0xffffffffu);
     for (int j = 1; j < pieces[e]; ++j) {
-      const double t = (j + kJitter * jitter(key * 0x100000001b3ULL + static_cast<uint64_t>(j))) / pieces[e];
+      const double t =
+          (j + kJitter * jitter(key * 0x100000001b3ULL + static_cast<uint64_t>(j))) / pieces[e];
       V[first_point[e] + j - 1] = V[a] + t * (V[b] - V[a]);
     }
   }
@@ -139,12 +144,14 @@ void resampleFaces(TriangleMesh* mesh, double spacing) {
         const int a = t[k], b = t[(k + 1) % 3], e = face_edges[f][k];
         cycle.push_back(a);
         const int inner = pieces[e] - 1;
-        for (int j = 0; j < inner; ++j) cycle.push_back(first_point[e] + (a < b ? j : inner - 1 - j));
+        for (int j = 0; j < inner; ++j)
+          cycle.push_back(first_point[e] + (a < b ? j : inner - 1 - j));
       }
       const Eigen::Vector3d& p0 = V[t[0]];
       const Eigen::Vector3d e1 = V[t[1]] - p0, e2 = V[t[2]] - p0;
       const Eigen::Vector3d normal = e1.cross(e2);
-      const double scale2 = std::max({e1.squaredNorm(), e2.squaredNorm(), (V[t[2]] - V[t[1]]).squaredNorm()});
+      const double scale2 =
+          std::max({e1.squaredNorm(), e2.squaredNorm(), (V[t[2]] - V[t[1]]).squaredNorm()});
       if (cycle.size() == 3) {  // nothing to add: the face as it is
         piece.triangles.push_back(t);
         continue;
@@ -157,7 +164,9 @@ void resampleFaces(TriangleMesh* mesh, double spacing) {
       // counter-clockwise seen from the normal's side.
       const Eigen::Vector3d u = e1.normalized();
       const Eigen::Vector3d v = normal.normalized().cross(u);
-      auto to2d = [&](const Eigen::Vector3d& p) { return K::Point_2((p - p0).dot(u), (p - p0).dot(v)); };
+      auto to2d = [&](const Eigen::Vector3d& p) {
+        return K::Point_2((p - p0).dot(u), (p - p0).dot(v));
+      };
       // The lattice: rows parallel to the first edge (y = 0), the third corner at y = ymax.
       const Eigen::Vector2d c1(e1.dot(u), 0.0), c2(e2.dot(u), e2.dot(v));
       lattice.clear();
@@ -176,12 +185,14 @@ void resampleFaces(TriangleMesh* mesh, double spacing) {
         for (double x = xmin + std::fmod(x0 - xmin, spacing) - spacing; x <= xmax; x += spacing) {
           const uint64_t key = (static_cast<uint64_t>(f) << 24) ^ (static_cast<uint64_t>(j) << 12) ^
                                static_cast<uint64_t>((x - xmin) / spacing + 1.5);
-          const Eigen::Vector2d q(x + kJitter * spacing * jitter(2 * key), y + kJitter * spacing * jitter(2 * key + 1));
+          const Eigen::Vector2d q(x + kJitter * spacing * jitter(2 * key),
+                                  y + kJitter * spacing * jitter(2 * key + 1));
           bool inside = true;
           for (int k = 0; k < 3 && inside; ++k) inside = (q - corner[k]).dot(inward[k]) >= margin;
           if (!inside) continue;
           piece.inner.push_back(p0 + q.x() * u + q.y() * v);
-          lattice.emplace_back(K::Point_2(q.x(), q.y()), -1 - static_cast<int>(piece.inner.size() - 1));
+          lattice.emplace_back(K::Point_2(q.x(), q.y()),
+                               -1 - static_cast<int>(piece.inner.size() - 1));
         }
       }
       try {
@@ -196,11 +207,13 @@ void resampleFaces(TriangleMesh* mesh, double spacing) {
         for (size_t i = 0; i < boundary.size(); ++i)
           cdt.insert_constraint(boundary[i], boundary[(i + 1) % boundary.size()]);
         cdt.insert(lattice.begin(), lattice.end());
-        if (cdt.number_of_vertices() != cycle.size() + lattice.size()) throw std::runtime_error("merged");
+        if (cdt.number_of_vertices() != cycle.size() + lattice.size())
+          throw std::runtime_error("merged");
         markInside(cdt);
         for (auto fh : cdt.finite_face_handles())
           if (fh->info().nesting % 2 == 1)
-            piece.triangles.emplace_back(fh->vertex(0)->info(), fh->vertex(1)->info(), fh->vertex(2)->info());
+            piece.triangles.emplace_back(fh->vertex(0)->info(), fh->vertex(1)->info(),
+                                         fh->vertex(2)->info());
       } catch (const std::exception&) {  // points merged or constraints crossing: a sliver
         fan(cycle, &piece);
       }

@@ -30,8 +30,8 @@ std::vector<int> nearestPointIndices(const std::vector<Eigen::Vector3d>& points,
   pts.reserve(points.size());
   for (const Eigen::Vector3d& p : points) pts.emplace_back(p.x(), p.y(), p.z());
   const PointMap map = CGAL::make_property_map(pts);
-  Tree tree(boost::counting_iterator<std::size_t>(0), boost::counting_iterator<std::size_t>(pts.size()),
-            Splitter(), Traits(map));
+  Tree tree(boost::counting_iterator<std::size_t>(0),
+            boost::counting_iterator<std::size_t>(pts.size()), Splitter(), Traits(map));
   const Distance distance(map);
   std::vector<int> out(queries.size());
   for (size_t i = 0; i < queries.size(); ++i) {

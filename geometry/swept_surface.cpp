@@ -31,13 +31,15 @@ class BoxTree {
   // changes them): what is left to visit is tested against them as they are.
   template <class F>
   void query(const Eigen::Array3d& lo, const Eigen::Array3d& hi, F&& f) const {
-    visit([&](const Eigen::Array3d& a, const Eigen::Array3d& b) { return !((a > hi).any() || (b < lo).any()); },
+    visit([&](const Eigen::Array3d& a,
+              const Eigen::Array3d& b) { return !((a > hi).any() || (b < lo).any()); },
           f);
   }
   // Calls f(id) for each box within Euclidean distance sqrt(r2) of the box [lo, hi] (both may
   // shrink while it runs, as above).
   template <class F>
-  void queryNear(const Eigen::Array3d& lo, const Eigen::Array3d& hi, const double& r2, F&& f) const {
+  void queryNear(const Eigen::Array3d& lo, const Eigen::Array3d& hi, const double& r2,
+                 F&& f) const {
     visit(
         [&](const Eigen::Array3d& a, const Eigen::Array3d& b) {
           return ((a - hi).max(lo - b).max(0.0)).square().sum() <= r2;
@@ -132,7 +134,8 @@ void sweepSurface(const SurfaceSamples& samples, const Cutter& cutter,
   const double from = ball ? rc : 0.0;  // where the boxes start along the axis
   // One box per chunk of the cutter no longer than its diameter: a tilted tool's single box would
   // hold much empty space, and every blade inside it would test the tool for nothing.
-  const int chunks = std::max(1, static_cast<int>(std::ceil((L - from) / std::max(2.0 * Rmax, 1e-6))));
+  const int chunks =
+      std::max(1, static_cast<int>(std::ceil((L - from) / std::max(2.0 * Rmax, 1e-6))));
   std::vector<BoxTree::Box> boxes, centres;
   boxes.reserve(placements.size() * chunks);
   for (size_t k = 0; k < placements.size(); ++k) {
@@ -267,7 +270,8 @@ void sweepSurface(const SurfaceSamples& samples, const ToolSet& tools,
   std::vector<std::vector<int>> of_tool(tool_count);
   for (size_t k = 0; k < placements.size(); ++k) {
     const int cl = placements[k].cl_index;
-    const int t = cl >= 0 && cl < static_cast<int>(tools.tool_of_cl.size()) ? tools.tool_of_cl[cl] : 0;
+    const int t =
+        cl >= 0 && cl < static_cast<int>(tools.tool_of_cl.size()) ? tools.tool_of_cl[cl] : 0;
     of_tool[std::clamp(t, 0, tool_count - 1)].push_back(static_cast<int>(k));
   }
   size_t done = 0;

@@ -38,8 +38,8 @@ void sweepSurface(const SurfaceSamples& samples, const Cutter& cutter,
 // (ToolPlacement::cl_index). Each tool's placements are swept with its own cutter and every
 // sample keeps the deepest cut of any; placement indices are into `placements`.
 struct ToolSet {
-  std::vector<Cutter> cutters;   // at least one
-  std::vector<int> tool_of_cl;   // #CL points; empty: cutters[0] everywhere
+  std::vector<Cutter> cutters;  // at least one
+  std::vector<int> tool_of_cl;  // #CL points; empty: cutters[0] everywhere
   double maxLength() const;
   double maxRadius() const;
 };

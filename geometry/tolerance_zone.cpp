@@ -58,11 +58,16 @@ ToleranceZone asmeUZone(double t, double u) {
 
 const char* conformanceName(Conformance c) {
   switch (c) {
-    case Conformance::In: return "in";
-    case Conformance::Excess: return "excess";
-    case Conformance::Gouge: return "gouge";
-    case Conformance::Unmachined: return "unmachined";
-    case Conformance::Unchecked: return "unchecked";
+    case Conformance::In:
+      return "in";
+    case Conformance::Excess:
+      return "excess";
+    case Conformance::Gouge:
+      return "gouge";
+    case Conformance::Unmachined:
+      return "unmachined";
+    case Conformance::Unchecked:
+      return "unchecked";
   }
   return "?";
 }
@@ -81,8 +86,10 @@ std::vector<int> assignZones(const SurfaceSamples& samples,
     const ToleranceZone& zone = zones[z];
     int group = -2;  // -2: any
     if (!zone.has_box && zone.region != "*" && !zone.region.empty()) {
-      const auto it = std::find(samples.group_names.begin(), samples.group_names.end(), zone.region);
-      group = it == samples.group_names.end() ? -3 : static_cast<int>(it - samples.group_names.begin());
+      const auto it =
+          std::find(samples.group_names.begin(), samples.group_names.end(), zone.region);
+      group =
+          it == samples.group_names.end() ? -3 : static_cast<int>(it - samples.group_names.begin());
     }
     for (size_t i = 0; i < samples.size(); ++i) {
       const bool in = zone.has_box ? zone.box_w.contains(samples.p_w[i])
@@ -93,10 +100,11 @@ std::vector<int> assignZones(const SurfaceSamples& samples,
   return zone_of;
 }
 
-std::vector<OutOfToleranceRegion> outOfToleranceRegions(
-    const SurfaceSamples& samples, const std::vector<double>& deviation,
-    const std::vector<Conformance>& conformance, const std::vector<int>& zone_of,
-    const std::vector<ToleranceZone>& zones) {
+std::vector<OutOfToleranceRegion> outOfToleranceRegions(const SurfaceSamples& samples,
+                                                        const std::vector<double>& deviation,
+                                                        const std::vector<Conformance>& conformance,
+                                                        const std::vector<int>& zone_of,
+                                                        const std::vector<ToleranceZone>& zones) {
   const size_t n = samples.size();
   std::vector<int> parent(n);
   std::iota(parent.begin(), parent.end(), 0);

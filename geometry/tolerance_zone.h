@@ -14,12 +14,12 @@
 namespace tolver {
 
 struct ToleranceZone {
-  std::string region = "*";     // "*": every sample; else a mesh group (region) name
-  bool has_box = false;         // or the samples inside box_w (mm, part frame)
+  std::string region = "*";  // "*": every sample; else a mesh group (region) name
+  bool has_box = false;      // or the samples inside box_w (mm, part frame)
   Eigen::AlignedBox3d box_w;
-  double tolerance = 0.02;      // t, mm
+  double tolerance = 0.02;             // t, mm
   double lower = -0.01, upper = 0.01;  // mm along the outward normal
-  std::string spec;             // as it reads on a drawing, e.g. "profile 0.02 UZ+0.005"
+  std::string spec;                    // as it reads on a drawing, e.g. "profile 0.02 UZ+0.005"
 };
 
 // Throw std::invalid_argument on a tolerance <= 0, or u outside [0, t].
@@ -33,7 +33,8 @@ const char* conformanceName(Conformance c);  // "in", "excess", "gouge", "unmach
 Conformance classify(double deviation, bool machined, const ToleranceZone& zone);
 
 // The zone of each sample: the last zone whose region holds it, -1 when none does.
-std::vector<int> assignZones(const SurfaceSamples& samples, const std::vector<ToleranceZone>& zones);
+std::vector<int> assignZones(const SurfaceSamples& samples,
+                             const std::vector<ToleranceZone>& zones);
 
 // A connected set of out-of-tolerance samples of one kind (excess or gouge), connected through
 // the surface's faces.
@@ -45,14 +46,15 @@ struct OutOfToleranceRegion {
   double worst_deviation = 0.0;  // mm, signed
   double worst_excursion = 0.0;  // mm beyond the nearer limit, > 0
   int worst_sample = -1;
-  Eigen::Vector3d where_w = Eigen::Vector3d::Zero();   // the worst sample
+  Eigen::Vector3d where_w = Eigen::Vector3d::Zero();  // the worst sample
   Eigen::Vector3d normal_w = Eigen::Vector3d::UnitZ();
 };
 
 // Regions sorted by worst excursion, largest first.
-std::vector<OutOfToleranceRegion> outOfToleranceRegions(
-    const SurfaceSamples& samples, const std::vector<double>& deviation,
-    const std::vector<Conformance>& conformance, const std::vector<int>& zone_of,
-    const std::vector<ToleranceZone>& zones);
+std::vector<OutOfToleranceRegion> outOfToleranceRegions(const SurfaceSamples& samples,
+                                                        const std::vector<double>& deviation,
+                                                        const std::vector<Conformance>& conformance,
+                                                        const std::vector<int>& zone_of,
+                                                        const std::vector<ToleranceZone>& zones);
 
 }  // namespace tolver

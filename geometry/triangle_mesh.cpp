@@ -126,8 +126,10 @@ SurfaceSamples sampleSurface(const TriangleMesh& input, double spacing, double f
     for (int f = 0; f < nf; ++f)
       for (int k = 0; k < 3; ++k) {
         const int v = mesh.faces[f][k], si = s.faces[f][k];
-        if (first_sample[v] < 0) first_sample[v] = si;
-        else if (first_sample[v] != si) s.on_edge[si] = s.on_edge[first_sample[v]] = 1;
+        if (first_sample[v] < 0)
+          first_sample[v] = si;
+        else if (first_sample[v] != si)
+          s.on_edge[si] = s.on_edge[first_sample[v]] = 1;
       }
   }
   for (auto& n : s.n_w) {

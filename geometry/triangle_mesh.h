@@ -40,15 +40,15 @@ void resampleFaces(TriangleMesh* mesh, double spacing);
 // (dihedral angle above feature_angle) a vertex is split into one sample per side, each with
 // the normal of its own side, so a vector grown from a sample never leans across an edge.
 struct SurfaceSamples {
-  std::vector<Eigen::Vector3d> p_w;     // #S sample points, mm
-  std::vector<Eigen::Vector3d> n_w;     // #S outward unit normals
-  std::vector<double> area;             // #S area each sample stands for (a third of its faces), mm^2
-  std::vector<int> group;               // #S region (group of its faces; the first one met)
+  std::vector<Eigen::Vector3d> p_w;  // #S sample points, mm
+  std::vector<Eigen::Vector3d> n_w;  // #S outward unit normals
+  std::vector<double> area;          // #S area each sample stands for (a third of its faces), mm^2
+  std::vector<int> group;            // #S region (group of its faces; the first one met)
   // #S: 1 on a sharp edge or a border. The normal deviation is undefined there (the point
   // belongs to two faces and a tool grazing the edge decides it), so such samples are not
   // verified; their neighbours, one spacing away, are (as inspection software excludes edges).
   std::vector<char> on_edge;
-  std::vector<Eigen::Vector3i> faces;   // the mesh's faces re-indexed into samples
+  std::vector<Eigen::Vector3i> faces;  // the mesh's faces re-indexed into samples
   std::vector<int> face_group;
   std::vector<std::string> group_names;
   size_t size() const { return p_w.size(); }

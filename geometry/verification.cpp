@@ -1,10 +1,11 @@
 #include "geometry/verification.h"
-#include "core/numerics/units.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
+
+#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -65,8 +66,8 @@ void evaluateZones(const SurfaceSamples& samples, const std::vector<ToleranceZon
     if (r->conformance[i] == Conformance::In) r->area_in += samples.area[i];
   }
   r->percent_in = r->area_machined > 0 ? 100.0 * r->area_in / r->area_machined : 0.0;
-  r->total_stats = statistics(samples, r->total,
-                              [&](size_t i) { return r->machined[i] && r->zone[i] >= 0; });
+  r->total_stats =
+      statistics(samples, r->total, [&](size_t i) { return r->machined[i] && r->zone[i] >= 0; });
   r->regions = outOfToleranceRegions(samples, r->total, r->conformance, r->zone, zones);
   r->pass = r->regions.empty() && r->total_stats.samples > 0;
 }
@@ -149,9 +150,12 @@ VerifyResult verifyPart(const SurfaceSamples& samples, const ToolSet& tools,
 
 const char* splitName(Split s) {
   switch (s) {
-    case Split::Attributable: return "split";
-    case Split::BeyondRange: return "beyond range";
-    case Split::CutBoundary: return "cut boundary";
+    case Split::Attributable:
+      return "split";
+    case Split::BeyondRange:
+      return "beyond range";
+    case Split::CutBoundary:
+      return "cut boundary";
   }
   return "";
 }
@@ -212,8 +216,8 @@ std::vector<LineProfilePoint> lineProfile(const SurfaceSamples& samples, const V
     p.total = r.total[p.sample];
     p.machine = r.machine[p.sample];
     if (!out.empty())
-      p.arc_length = out.back().arc_length +
-                     (samples.p_w[p.sample] - samples.p_w[out.back().sample]).norm();
+      p.arc_length =
+          out.back().arc_length + (samples.p_w[p.sample] - samples.p_w[out.back().sample]).norm();
     out.push_back(p);
   }
   return out;
@@ -266,8 +270,8 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
     size_t i = 0, j = 0;
     while (i + 1 < A.size() || j + 1 < B.size()) {
       int a = A[i], b = B[j], c;
-      if (i + 1 == A.size() || (j + 1 < B.size() && (P(A[i]) - P(B[j + 1])).norm() <
-                                                        (P(A[i + 1]) - P(B[j])).norm())) {
+      if (i + 1 == A.size() ||
+          (j + 1 < B.size() && (P(A[i]) - P(B[j + 1])).norm() < (P(A[i + 1]) - P(B[j])).norm())) {
         c = B[++j];
       } else {
         c = A[++i];

@@ -19,7 +19,7 @@
 namespace tolver {
 
 struct DeviationStats {
-  int samples = 0;          // machined samples with a zone
+  int samples = 0;                             // machined samples with a zone
   double min = 0, max = 0, mean = 0, rms = 0;  // mm, area-weighted mean and RMS
   int min_sample = -1, max_sample = -1;
 };
@@ -42,14 +42,14 @@ struct VerifyResult {
   int split_beyond = 0, split_boundary = 0;     // machined samples not attributable, by reason
   std::vector<char> machined;                   // #S: cut on both machines
   std::vector<int> zone;                        // #S, -1: no zone holds it
-  std::vector<Conformance> conformance;         // #S, of `total` (Unchecked: no zone, or on an edge)
-  std::vector<int> cl_index;                    // #S, CL point whose move cut it (predicted), -1
+  std::vector<Conformance> conformance;  // #S, of `total` (Unchecked: no zone, or on an edge)
+  std::vector<int> cl_index;             // #S, CL point whose move cut it (predicted), -1
   DeviationStats total_stats, program_stats, machine_stats;
   double area = 0, area_machined = 0, area_in = 0, area_unmachined = 0;  // mm^2
-  double area_edge = 0;  // mm^2 of samples on sharp edges and borders (not verified)
-  double percent_in = 0;                        // of the machined area with a zone
+  double area_edge = 0;   // mm^2 of samples on sharp edges and borders (not verified)
+  double percent_in = 0;  // of the machined area with a zone
   std::vector<OutOfToleranceRegion> regions;
-  bool pass = false;                            // machined area nonempty and no region
+  bool pass = false;  // machined area nonempty and no region
 };
 
 // progress(fraction) over both sweeps. The machine's share at a sample is bounded by how far the

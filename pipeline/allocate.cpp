@@ -15,7 +15,8 @@ AllocationRun runAllocation(const AllocateInputs& in) {
   for (auto& t : run.terms) {
     if (!std::isnan(in.lower_factor)) t.lower = in.lower_factor * t.standard;
     if (!std::isnan(in.upper_factor)) t.upper = in.upper_factor * t.standard;
-    if (t.lower > t.upper) throw InputError(in.tolerances, 0, 0, "bounds", t.name + ": lower bound above upper bound");
+    if (t.lower > t.upper)
+      throw InputError(in.tolerances, 0, 0, "bounds", t.name + ": lower bound above upper bound");
   }
   const std::vector<double>& l = in.limits_mm;
   if (l.size() != 3 || !(l[0] > 0 && l[1] > 0 && l[2] > 0))
@@ -54,7 +55,8 @@ AllocationRun allocate(const AllocateInputs& in) {
   return run;
 }
 
-void writeAllocation(const AllocationRun& run, const AllocateInputs& in, const std::string& report_dir_path) {
+void writeAllocation(const AllocationRun& run, const AllocateInputs& in,
+                     const std::string& report_dir_path) {
   const MachineModel& m = run.machine.model;
   ReportDirectory report_dir(report_dir_path);  // written as a whole, swapped in at the end
   writeAllocationReport(report_dir.staging(), m, run.terms, run.model, run.result,

@@ -14,16 +14,16 @@ namespace tolver {
 
 struct AllocateInputs {
   MachineOptions machine;
-  std::string tolerances;                       // tolerance file (CSV)
+  std::string tolerances;                              // tolerance file (CSV)
   std::vector<double> limits_mm{0.015, 0.015, 0.010};  // allowed |dx|, |dy|, |dz| of the tool tip
-  std::vector<double> cost{3, 4, 5, 2};         // h_p, h_a, h_d, r of the cost model
-  bool rss = false;                             // errors combined root-sum-square (else worst case)
-  bool loss_normal = false;                     // quality loss for t = 3 sigma (else uniform)
+  std::vector<double> cost{3, 4, 5, 2};                // h_p, h_a, h_d, r of the cost model
+  bool rss = false;          // errors combined root-sum-square (else worst case)
+  bool loss_normal = false;  // quality loss for t = 3 sigma (else uniform)
   double loss_weight = 1.0;
   double lower_factor = NAN, upper_factor = NAN;  // bounds = factor x standard (NAN: the file's)
-  int grid = 3, rotary_grid = 5, groups = 4;    // workspace grid, correlation groups
-  AllocationOptions opt;                        // NSGA-II population, generations, seed
-  std::string report_dir;                       // where allocate() writes the reports
+  int grid = 3, rotary_grid = 5, groups = 4;      // workspace grid, correlation groups
+  AllocationOptions opt;                          // NSGA-II population, generations, seed
+  std::string report_dir;                         // where allocate() writes the reports
 };
 
 struct AllocationRun {
@@ -47,6 +47,7 @@ AllocationRun allocate(const AllocateInputs& in);
 AllocationRun runAllocation(const AllocateInputs& in);
 // Writes report.json, report.html, allocation.csv, pareto.csv and pareto.png into report_dir,
 // staged and swapped in as a whole.
-void writeAllocation(const AllocationRun& run, const AllocateInputs& in, const std::string& report_dir);
+void writeAllocation(const AllocationRun& run, const AllocateInputs& in,
+                     const std::string& report_dir);
 
 }  // namespace tolver

@@ -8,7 +8,8 @@
 namespace tolver {
 
 AnalysisRun analyze(const AnalyzeInputs& in) {
-  if (in.model != "link" && in.model != "motion") throw FieldError("model", "expected link or motion");
+  if (in.model != "link" && in.model != "motion")
+    throw FieldError("model", "expected link or motion");
   if (in.degree > 20) throw FieldError("degree", "expected a degree from 0 to 20");
   if (in.poses < 0 || in.poses > 100000) throw FieldError("poses", "expected 1 to 100000 poses");
   AnalysisRun run;

@@ -12,11 +12,12 @@ namespace tolver {
 
 struct AnalyzeInputs {
   MachineOptions machine;
-  std::string model = "motion";  // "link" (thesis ch. 3) or "motion" (Chebyshev motion errors, ch. 4)
-  int degree = -1;               // Chebyshev degree of every motion error; < 0: the file's
-  int poses = 0;                 // random poses; 0: 30 for link, 600 for motion
+  std::string model =
+      "motion";     // "link" (thesis ch. 3) or "motion" (Chebyshev motion errors, ch. 4)
+  int degree = -1;  // Chebyshev degree of every motion error; < 0: the file's
+  int poses = 0;    // random poses; 0: 30 for link, 600 for motion
   unsigned seed = 1;
-  std::string plan;              // a ball-bar plan or readings (CSV) to analyse as well, or empty
+  std::string plan;  // a ball-bar plan or readings (CSV) to analyse as well, or empty
 };
 
 struct PlanIdentifiability {
@@ -28,10 +29,10 @@ struct PlanIdentifiability {
 };
 
 struct AnalysisRun {
-  MachineModel model;            // at the asked degree
+  MachineModel model;  // at the asked degree
   int poses = 0;
-  std::vector<int> columns;      // the parameters of the asked model
-  MinimalSet minimal;            // confounded groups, removals, the minimal-complete set
+  std::vector<int> columns;  // the parameters of the asked model
+  MinimalSet minimal;        // confounded groups, removals, the minimal-complete set
   bool with_plan = false;
   PlanIdentifiability plan;
   Verdict verdict = Verdict::Ok;

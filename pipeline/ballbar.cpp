@@ -68,13 +68,16 @@ std::vector<JointVector> volumeTargets(const Machine& machine, BallbarPlanOption
     }
     program_q.push_back(q);
   }
-  for (size_t i = 0; i < program_q.size(); i += program_q.size() / 60) plan.target_poses.push_back(program_q[i]);
+  for (size_t i = 0; i < program_q.size(); i += program_q.size() / 60)
+    plan.target_poses.push_back(program_q[i]);
   return program_q;
 }
 
-ExpectedUncertainty expectedAt(const Machine& machine, const std::vector<int>& unknowns, const BallbarPlan& p,
-                               double noise_um, const std::vector<JointVector>& q) {
-  std::vector<double> u = expectedTipUncertainty(machine.model, unknowns, p.test, umToMm(noise_um), q);
+ExpectedUncertainty expectedAt(const Machine& machine, const std::vector<int>& unknowns,
+                               const BallbarPlan& p, double noise_um,
+                               const std::vector<JointVector>& q) {
+  std::vector<double> u =
+      expectedTipUncertainty(machine.model, unknowns, p.test, umToMm(noise_um), q);
   std::sort(u.begin(), u.end());
   return {mmToUm(u[u.size() / 2]), mmToUm(u.back())};
 }
@@ -87,17 +90,20 @@ PlanRun planBallbar(const PlanBallbarInputs& in) {
   if (in.lengths_mm.size() == 1) opt.bar_length = in.lengths_mm[0];
   if (in.lengths_mm.size() > 1) opt.bar_lengths = in.lengths_mm;
   for (double l : in.lengths_mm)
-    if (!(l > 0 && l < 1e5)) throw FieldError("lengths_mm", "expected bar lengths above 0 and below 1e5 mm");
+    if (!(l > 0 && l < 1e5))
+      throw FieldError("lengths_mm", "expected bar lengths above 0 and below 1e5 mm");
   if (!in.program.cl.empty() && in.volume)
-    throw FieldError("volume", "give a program (" + inputName("cl") + ") or " + inputName("volume") + ", not both");
+    throw FieldError("volume", "give a program (" + inputName("cl") + ") or " +
+                                   inputName("volume") + ", not both");
   run.machine = loadMachine(in.machine);
   const Machine& machine = run.machine;
   int prismatic = 0;
   for (const Axis& ax : machine.model.axes) prismatic += ax.isRotary() ? 0 : 1;
   if (prismatic != 3)
-    throw InputError(in.machine.machine, 0, 0, "axes",
-                     "plan-ballbar places the tool ball with three prismatic axes; this machine has " +
-                         std::to_string(prismatic));
+    throw InputError(
+        in.machine.machine, 0, 0, "axes",
+        "plan-ballbar places the tool ball with three prismatic axes; this machine has " +
+            std::to_string(prismatic));
   run.output = in.output;
   run.gcode = in.gcode.empty() ? replaceExtension(in.output, ".nc") : in.gcode;
   checkOutputDir(run.output, "output");
@@ -106,7 +112,7 @@ PlanRun planBallbar(const PlanBallbarInputs& in) {
   run.lengths_text = lengthText(opt);
   // A target: poses chosen by the prediction variance of the tool tip at the program's poses
   // (I-optimal), modulo the set-up a shop measures; or over the whole travel.
-  run.target_q = in.volume ? volumeTargets(machine, opt)
+  run.target_q = in.volume                ? volumeTargets(machine, opt)
                  : !in.program.cl.empty() ? programTargets(in.program, machine, opt)
                                           : std::vector<JointVector>{};
   run.target_text = in.volume ? "the whole travel" : in.program.cl;
@@ -120,9 +126,10 @@ PlanRun planBallbar(const PlanBallbarInputs& in) {
                          " bar; try another length or set-up");
   run.too_few_readings = static_cast<int>(plan.test.readings.size()) < 3 * plan.unknowns;
   char head[256];
-  std::snprintf(head, sizeof head, "tolver ball-bar plan for %s: bar %s, %d set-ups, %zu poses, seed %u",
-                machine.model.name.c_str(), run.lengths_text.c_str(), static_cast<int>(plan.test.setups.size()),
-                plan.test.readings.size(), opt.seed);
+  std::snprintf(head, sizeof head,
+                "tolver ball-bar plan for %s: bar %s, %d set-ups, %zu poses, seed %u",
+                machine.model.name.c_str(), run.lengths_text.c_str(),
+                static_cast<int>(plan.test.setups.size()), plan.test.readings.size(), opt.seed);
   // Held-out poses: other poses of the same set-ups (random, not chosen for the fit), in a plan
   // of their own, measured after the fit's.
   if (in.heldout > 0) {
@@ -141,9 +148,9 @@ PlanRun planBallbar(const PlanBallbarInputs& in) {
   files.add(run.output, formatBallbarCsv(machine.model, plan.test, false, {head}));
   files.add(run.gcode, formatBallbarGcode(machine.model, plan.test, in.feed, 2.0));
   if (in.heldout > 0) {
-    files.add(run.heldout_output,
-              formatBallbarCsv(machine.model, run.held.test, false,
-                               {"held-out poses for " + in.output + " (measure them too; calibrate --heldout)"}));
+    files.add(run.heldout_output, formatBallbarCsv(machine.model, run.held.test, false,
+                                                   {"held-out poses for " + in.output +
+                                                    " (measure them too; calibrate --heldout)"}));
     files.add(run.heldout_gcode, formatBallbarGcode(machine.model, run.held.test, in.feed, 2.0));
   }
   files.commit();
@@ -156,15 +163,20 @@ PlanRun planBallbar(const PlanBallbarInputs& in) {
     const BallbarPlan general = planBallbarTest(machine.model, run.unknowns, whole);
     run.expected = expectedAt(machine, run.unknowns, plan, in.noise_um, run.target_q);
     run.expected_default = expectedAt(machine, run.unknowns, general, in.noise_um, run.target_q);
-    run.gain = run.expected_default.median_um > 0 ? 1.0 - run.expected.median_um / run.expected_default.median_um : 0.0;
+    run.gain = run.expected_default.median_um > 0
+                   ? 1.0 - run.expected.median_um / run.expected_default.median_um
+                   : 0.0;
   }
   return run;
 }
 
 SimulationRun simulateBallbar(const SimulateBallbarInputs& in) {
-  if (!(in.noise_um >= 0 && in.noise_um < 1e4)) throw FieldError("noise_um", "expected 0 to 1e4 um");
-  if (!(in.ball_error_um >= 0 && in.ball_error_um < 1e4)) throw FieldError("ball_error_um", "expected 0 to 1e4 um");
-  if (!(std::abs(in.seconds_per_reading) < 1e6)) throw FieldError("seconds_per_reading", "expected a finite step below 1e6 s");
+  if (!(in.noise_um >= 0 && in.noise_um < 1e4))
+    throw FieldError("noise_um", "expected 0 to 1e4 um");
+  if (!(in.ball_error_um >= 0 && in.ball_error_um < 1e4))
+    throw FieldError("ball_error_um", "expected 0 to 1e4 um");
+  if (!(std::abs(in.seconds_per_reading) < 1e6))
+    throw FieldError("seconds_per_reading", "expected a finite step below 1e6 s");
   SimulationRun run;
   run.machine = loadMachine(in.machine);
   const Machine& machine = run.machine;
@@ -172,7 +184,8 @@ SimulationRun simulateBallbar(const SimulateBallbarInputs& in) {
   run.output = in.output;
   checkOutputDir(run.output, "output");
   std::mt19937 rng(in.seed);
-  std::normal_distribution<double> noise(0.0, umToMm(in.noise_um)), ball(0.0, umToMm(in.ball_error_um));
+  std::normal_distribution<double> noise(0.0, umToMm(in.noise_um)),
+      ball(0.0, umToMm(in.ball_error_um));
   // Ball positions: the plan's nominal ones, or those of `balls` (identified by calibrate), plus
   // the random errors asked for.
   std::vector<BallErrors> balls = in.balls.empty() ? std::vector<BallErrors>(f.test.setups.size())
@@ -184,36 +197,43 @@ SimulationRun simulateBallbar(const SimulateBallbarInputs& in) {
   const ForwardKinematics fk(machine.model, machine.params);
   for (size_t i = 0; i < f.test.readings.size(); ++i) {
     BallbarReading& r = f.test.readings[i];
-    if (std::isnan(r.context.time_s)) r.context.time_s = in.seconds_per_reading * static_cast<double>(i);
-    r.length = ballbarLength(fk, r.q, f.test.setups[r.setup], balls[r.setup], &r.context) + noise(rng);
+    if (std::isnan(r.context.time_s))
+      r.context.time_s = in.seconds_per_reading * static_cast<double>(i);
+    r.length =
+        ballbarLength(fk, r.q, f.test.setups[r.setup], balls[r.setup], &r.context) + noise(rng);
   }
   run.readings = f.test.readings.size();
   // Held-out poses: measured after the plan, on the same set-ups (the same ball errors), time
   // running on.
   BallbarTest held;
   if (!in.heldout_plan.empty()) {
-    run.heldout_output =
-        in.heldout_output.empty() ? replaceExtension(in.output, "") + "_heldout.csv" : in.heldout_output;
+    run.heldout_output = in.heldout_output.empty()
+                             ? replaceExtension(in.output, "") + "_heldout.csv"
+                             : in.heldout_output;
     held = readBallbarFile(in.heldout_plan, machine.model, false).test;
     alignHeldout(held, f.test, in.heldout_plan, in.plan);
     checkOutputDir(run.heldout_output, "heldout_output");
     const size_t n = f.test.readings.size();
     for (size_t i = 0; i < held.readings.size(); ++i) {
       BallbarReading& r = held.readings[i];
-      if (std::isnan(r.context.time_s)) r.context.time_s = in.seconds_per_reading * static_cast<double>(n + i);
-      r.length = ballbarLength(fk, r.q, held.setups[r.setup], balls[r.setup], &r.context) + noise(rng);
+      if (std::isnan(r.context.time_s))
+        r.context.time_s = in.seconds_per_reading * static_cast<double>(n + i);
+      r.length =
+          ballbarLength(fk, r.q, held.setups[r.setup], balls[r.setup], &r.context) + noise(rng);
     }
     run.heldout_readings = held.readings.size();
   }
   char head[256];
-  std::snprintf(head, sizeof head, "simulated by tolver from %s: noise %.3f um, ball errors %.3f um, seed %u",
+  std::snprintf(head, sizeof head,
+                "simulated by tolver from %s: noise %.3f um, ball errors %.3f um, seed %u",
                 in.machine.machine.c_str(), in.noise_um, in.ball_error_um, in.seed);
   OutputSet files;  // the readings and the held-out ones: both or neither
   files.add(run.output, formatBallbarCsv(machine.model, f.test, true, {head}));
   if (!in.heldout_plan.empty())
     files.add(run.heldout_output,
               formatBallbarCsv(machine.model, held, true,
-                               {std::string(head) + "; held-out poses of " + in.heldout_plan + ", measured after the plan"}));
+                               {std::string(head) + "; held-out poses of " + in.heldout_plan +
+                                ", measured after the plan"}));
   files.commit();
   return run;
 }

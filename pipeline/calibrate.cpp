@@ -7,10 +7,10 @@
 #include <optional>
 
 #include "core/kinematics/forward_kinematics.h"
+#include "core/numerics/units.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
 #include "io/machine/machine_file.h"
-#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -52,12 +52,13 @@ void refitWithPrior(const CalibrateInputs& in, const CalibrationOptions& opt, Ca
     ro.prior_angular = uradToRad(prior_urad);
     ro.prior_noise = std::max(r.residual_sigma, 1e-12);
   }
-  const CalibrationResult rr = calibrate(run.machine.model, run.machine.params, run.used, run.unknowns, ro);
+  const CalibrationResult rr =
+      calibrate(run.machine.model, run.machine.params, run.used, run.unknowns, ro);
   if (rr.status != CalibrationStatus::Converged) return;
   run.fit = rr;
   char buf[160];
-  std::snprintf(buf, sizeof buf, "%.3g um per linear, %.3g urad per angular coefficient%s", prior_um,
-                prior_urad, prior_auto ? " (chosen by the readings' evidence)" : "");
+  std::snprintf(buf, sizeof buf, "%.3g um per linear, %.3g urad per angular coefficient%s",
+                prior_um, prior_urad, prior_auto ? " (chosen by the readings' evidence)" : "");
   run.prior_text = buf;
 }
 
@@ -116,11 +117,12 @@ TestDesign testDesign(const MachineModel& model, const BallbarTest& test, int un
 std::string heldoutWarning(const std::string& file, const ResidualStats& after, double fit_rms) {
   if (!(after.readings > 0 && after.rms > 3.0 * fit_rms && after.rms > 1e-3)) return "";
   char buf[400];
-  std::snprintf(buf, sizeof buf,
-                "%s: the identified machine predicts the held-out readings at RMS %.3f um, %.0f times its "
-                "fit (%.3f um): were they measured on the same set-ups (ball positions untouched), in the "
-                "same machine state?",
-                file.c_str(), mmToUm(after.rms), after.rms / fit_rms, mmToUm(fit_rms));
+  std::snprintf(
+      buf, sizeof buf,
+      "%s: the identified machine predicts the held-out readings at RMS %.3f um, %.0f times its "
+      "fit (%.3f um): were they measured on the same set-ups (ball positions untouched), in the "
+      "same machine state?",
+      file.c_str(), mmToUm(after.rms), after.rms / fit_rms, mmToUm(fit_rms));
   return buf;
 }
 
@@ -162,21 +164,25 @@ CalibrationRun runCalibration(const CalibrateInputs& in) {
   if (r.status == CalibrationStatus::Unobservable || r.status == CalibrationStatus::NoData) {
     std::string names;
     for (int p : r.held) names += " " + m.parameters[p].iso_code;
-    throw InputError(in.readings, 0, 0, "calibrate", r.message + (names.empty() ? "" : ":" + names));
+    throw InputError(in.readings, 0, 0, "calibrate",
+                     r.message + (names.empty() ? "" : ":" + names));
   }
   run.absorbed = calibrationAbsorbed(m, run.unknowns);
   // Held-out readings: the prior machine with nominal balls, then the identified one.
   if (!run.heldout.readings.empty()) {
     const std::vector<BallErrors> nominal(run.file.test.setups.size());
     HeldoutFigures& ho = run.heldout_figures;
-    ho.before = residualStats(ballbarResiduals(ForwardKinematics(m, run.machine.params), run.heldout, nominal));
-    ho.after = residualStats(ballbarResiduals(ForwardKinematics(m, r.params), run.heldout, r.ball_errors));
+    ho.before = residualStats(
+        ballbarResiduals(ForwardKinematics(m, run.machine.params), run.heldout, nominal));
+    ho.after =
+        residualStats(ballbarResiduals(ForwardKinematics(m, r.params), run.heldout, r.ball_errors));
     ho.file = in.heldout;
   }
   run.identified = run.machine;
   run.identified.params = r.params;
   run.identified.model.errors_source = "identified";
-  run.identified.identification = identificationUncertainty(r, run.used, static_cast<int>(m.axes.size()));
+  run.identified.identification =
+      identificationUncertainty(r, run.used, static_cast<int>(m.axes.size()));
   // What the covariance does not hold: the model's lack of fit when its test fails, the spindle
   // tilt's prior when the user states it.
   {
@@ -200,8 +206,9 @@ WrittenCheck writeCalibration(const CalibrationRun& run, const CalibrateInputs& 
   const CalibrationResult& r = run.fit;
   OutputSet outputs;
   const std::string xml_tmp = outputs.add(
-      out.machine, formatMachineXml(run.identified, "identified by tolver calibrate from " + in.readings + " (" +
-                                                        r.message + "); ball positions in " + out.balls));
+      out.machine,
+      formatMachineXml(run.identified, "identified by tolver calibrate from " + in.readings + " (" +
+                                           r.message + "); ball positions in " + out.balls));
   const std::string balls_tmp = outputs.add(
       out.balls, formatBallPositionsCsv(run.file.test, r.ball_errors, &r.ball_uncertainty,
                                         {"identified ball positions of " + in.readings +

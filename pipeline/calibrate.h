@@ -19,11 +19,11 @@ namespace tolver {
 
 struct CalibrateInputs {
   MachineOptions machine;
-  std::string readings;         // ball-bar readings (CSV)
-  std::string heldout;          // held-out readings on the same set-ups (CSV), or empty
-  std::string prior = "auto";   // "auto" (by the evidence), "none", or "um,urad"
-  bool strict = false;          // refuse a fit whose rank falls short
-  bool keep_outliers = false;   // fit every reading, gross ones included
+  std::string readings;        // ball-bar readings (CSV)
+  std::string heldout;         // held-out readings on the same set-ups (CSV), or empty
+  std::string prior = "auto";  // "auto" (by the evidence), "none", or "um,urad"
+  bool strict = false;         // refuse a fit whose rank falls short
+  bool keep_outliers = false;  // fit every reading, gross ones included
   // The prior of the spindle's tilt against the machine's axes (urad, 1 sigma per direction),
   // which a ball-bar cannot see: written into the identification, added to the tool-axis band
   // of every prediction (0: not stated).
@@ -41,7 +41,8 @@ struct TestDesign {
 TestDesign testDesign(const MachineModel& model, const BallbarTest& test, int unknowns);
 // A warning when the identified model predicts the held-out readings much worse than it fits its
 // own (more than 3 times the fit's RMS and above 1 um); empty otherwise.
-std::string heldoutWarning(const std::string& heldout_file, const ResidualStats& after, double fit_rms);
+std::string heldoutWarning(const std::string& heldout_file, const ResidualStats& after,
+                           double fit_rms);
 
 // Where the outputs go: the identified machine, its ball positions and the JSON report.
 struct CalibrationOutputs {
@@ -53,17 +54,17 @@ CalibrationOutputs calibrationOutputs(const std::string& machine, const std::str
                                       const std::string& report);
 
 struct CalibrationRun {
-  Machine machine;                    // as read: the prior values
-  BallbarFile file;                   // the readings as read, with the reader's warnings
-  BallbarTest heldout;                // aligned to the fit's set-ups (empty: none)
-  BallbarTest used;                   // the readings fitted (gross readings removed)
-  RobustCalibration robust;           // the fit with and without the gross readings
-  std::vector<GrossReading> gross;    // found (removed, or kept with --keep-outliers)
+  Machine machine;                  // as read: the prior values
+  BallbarFile file;                 // the readings as read, with the reader's warnings
+  BallbarTest heldout;              // aligned to the fit's set-ups (empty: none)
+  BallbarTest used;                 // the readings fitted (gross readings removed)
+  RobustCalibration robust;         // the fit with and without the gross readings
+  std::vector<GrossReading> gross;  // found (removed, or kept with --keep-outliers)
   CalibrationResult fit;
-  std::vector<int> unknowns;          // the machine parameters identified
+  std::vector<int> unknowns;                        // the machine parameters identified
   std::vector<std::vector<AbsorbedTerm>> absorbed;  // what each unknown stands for
-  std::string prior_text = "none";    // the prior used, in words
-  HeldoutFigures heldout_figures;     // the held-out readings before and after
+  std::string prior_text = "none";                  // the prior used, in words
+  HeldoutFigures heldout_figures;                   // the held-out readings before and after
   Machine identified;                 // the machine with the identified values and covariance
   LackOfFit lack_of_fit;              // the fit's residual against the repeated poses' scatter
   TestDesign design;                  // of the readings as read
@@ -71,7 +72,7 @@ struct CalibrationRun {
   // calibrateMachine: where the outputs went, and what they predict read back.
   CalibrationOutputs outputs;
   WrittenCheck written;
-  Verdict verdict = Verdict::Ok;      // NotMet: the fit did not converge
+  Verdict verdict = Verdict::Ok;  // NotMet: the fit did not converge
 };
 
 // tolver calibrate: checks the outputs' places, identifies, writes the machine, its ball

@@ -1,13 +1,11 @@
 // The compensate pipeline: see pipeline/compensate.h.
 #include "pipeline/compensate.h"
 
-#include "pipeline/parallel_prediction.h"
-
 #include <algorithm>
-#include <filesystem>
-#include <memory>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
+#include <memory>
 #include <set>
 #include <stdexcept>
 
@@ -15,11 +13,14 @@
 #include "core/path/prediction_uncertainty.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "pipeline/parallel_prediction.h"
 
 namespace tolver {
 namespace {
 
-double angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
+double angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
 
 // Figures over points [from, to): tip deviations (um) and axis angles (urad).
 PathFigures figuresOf(const std::vector<double>& tip_um, const std::vector<double>& axis_urad,
@@ -45,7 +46,8 @@ CompensatedProgramText correctedText(const CompensateInputs& in, const Compensat
   const ClProgram& program = run.program;
   const std::vector<CompensatedPoint>& cp = run.compensation.points;
   const std::vector<std::string> header = {
-      "tolver compensate: " + program.file + " for " + run.machine.model.name + " (" + in.machine.machine +
+      "tolver compensate: " + program.file + " for " + run.machine.model.name + " (" +
+      in.machine.machine +
       "): the machine with its errors runs this program onto the original's nominal path"};
   CompensatedProgramText text;
   if (program.dialect == "G-code") {
@@ -81,7 +83,8 @@ CompensatedProgramText correctedText(const CompensateInputs& in, const Compensat
 
 // The written text read back as the next command will, whole, then the points of the source
 // lines compensated (--lines); one point per program point, or an internal error.
-ClProgram readBack(const CompensateInputs& in, const CompensationRun& run, const std::string& output) {
+ClProgram readBack(const CompensateInputs& in, const CompensationRun& run,
+                   const std::string& output) {
   ProgramOptions whole = in.program;
   whole.lines.clear();
   ClProgram back = parseProgram(run.text.text, output, whole, run.machine.model);
@@ -106,9 +109,10 @@ ClProgram readBack(const CompensateInputs& in, const CompensationRun& run, const
   if (back.path.size() != program.path.size()) {
     size_t k = 0;
     while (k < back.path.size() && back.path[k].line == program.path[k].line) ++k;
-    throw std::runtime_error("the compensated program reads back with " + std::to_string(back.path.size()) +
-                             " points instead of " + std::to_string(program.path.size()) + " (from line " +
-                             std::to_string(k < program.path.size() ? program.path[k].line : 0) + ")");
+    throw std::runtime_error(
+        "the compensated program reads back with " + std::to_string(back.path.size()) +
+        " points instead of " + std::to_string(program.path.size()) + " (from line " +
+        std::to_string(k < program.path.size() ? program.path[k].line : 0) + ")");
   }
   return back;
 }
@@ -130,7 +134,8 @@ void pointFigures(CompensationRun& run) {
     run.tip_before_um[i] = mmToUm((b.p_pred_w - path[i].p_w).norm());
     run.tip_after_um[i] = mmToUm((a.p_pred_w - path[i].p_w).norm());
     run.axis_before_urad[i] = radToUrad(angle(b.u_pred_w, u_t));
-    run.axis_after_urad[i] = run.orientation ? radToUrad(angle(a.u_pred_w, u_t)) : run.axis_before_urad[i];
+    run.axis_after_urad[i] =
+        run.orientation ? radToUrad(angle(a.u_pred_w, u_t)) : run.axis_before_urad[i];
   }
 }
 
@@ -183,7 +188,8 @@ void afterBand(const CompensateInputs& in, const std::vector<ProbedPoint>& probe
     *median = v[n / 2];
   };
   medianMax(band, &run.report.after_band95_median_um, &run.report.after_band95_max_um);
-  medianMax(axis, &run.report.after_axis_band95_median_urad, &run.report.after_axis_band95_max_urad);
+  medianMax(axis, &run.report.after_axis_band95_median_urad,
+            &run.report.after_axis_band95_max_urad);
 }
 
 void fillReport(const CompensateInputs& in, const std::string& output, CompensationRun& run) {
@@ -201,8 +207,8 @@ void fillReport(const CompensateInputs& in, const std::string& output, Compensat
   std::vector<double> t, a;
   std::vector<int> at;
   for (size_t i = 0; i < n; ++i)
-    if (run.text.written[i] &&
-        (cp[i].status == CompensationStatus::Compensated || cp[i].status == CompensationStatus::IllConditioned)) {
+    if (run.text.written[i] && (cp[i].status == CompensationStatus::Compensated ||
+                                cp[i].status == CompensationStatus::IllConditioned)) {
       t.push_back(run.tip_after_um[i]);
       a.push_back(run.axis_after_urad[i]);
       at.push_back(run.line[i]);
@@ -211,8 +217,10 @@ void fillReport(const CompensateInputs& in, const std::string& output, Compensat
   rep.after_compensated = figuresOf(t, a, at, 0, t.size());
   rep.setup_note = run.setup_note;
   rep.notes = run.text.notes;
-  if (const auto n = std::count(run.program.cycle_orientation.begin(), run.program.cycle_orientation.end(), 1))
-    rep.notes.push_back(std::to_string(n) + " points in a swivelled plane (CYCLE800): the tip compensated by the "
+  if (const auto n =
+          std::count(run.program.cycle_orientation.begin(), run.program.cycle_orientation.end(), 1))
+    rep.notes.push_back(std::to_string(n) +
+                        " points in a swivelled plane (CYCLE800): the tip compensated by the "
                         "linear axes, the tool axis left where the cycle puts it");
   const MachineModel& model = run.machine.model;
   for (size_t k = 0; k < model.axes.size(); ++k) {
@@ -226,8 +234,10 @@ void fillReport(const CompensateInputs& in, const std::string& output, Compensat
   rep.out_of_travel = run.compensation.out_of_travel;
   rep.not_converged = run.compensation.not_converged;
   for (size_t i = 0; i < n; ++i) {
-    if (cp[i].status == CompensationStatus::IllConditioned) rep.ill_conditioned_lines.push_back(run.line[i]);
-    if (cp[i].status == CompensationStatus::OutOfTravel) rep.out_of_travel_lines.push_back(run.line[i]);
+    if (cp[i].status == CompensationStatus::IllConditioned)
+      rep.ill_conditioned_lines.push_back(run.line[i]);
+    if (cp[i].status == CompensationStatus::OutOfTravel)
+      rep.out_of_travel_lines.push_back(run.line[i]);
     rep.left_by_writer += !run.text.written[i] && cp[i].status != CompensationStatus::OutOfTravel &&
                           cp[i].status != CompensationStatus::NotConverged;
   }
@@ -246,32 +256,36 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
   // A calibrated machine: its share after the set-up the shop measures (the calibration cannot
   // see the rest), as predict takes it.
   const std::vector<ProbedPoint> probed = loadProbed(in.probed, run.machine.model);
-  const CalibratedPrediction cal = applyCalibration(run.machine, run.program, run.before, in.absolute, probed);
+  const CalibratedPrediction cal =
+      applyCalibration(run.machine, run.program, run.before, in.absolute, probed);
   if (cal.probed)
     run.setup_note = describeProbedSetup(in.probed, cal.probe, probed, &run.warnings);
   else if (!run.machine.identification.empty())
     run.setup_note = in.absolute
-                         ? "absolute (" + inputName("absolute") + "): what probing and presetting would take up is compensated too"
-                         : "after the set-up a shop measures (part probed, tool preset), which the calibration cannot see";
+                         ? "absolute (" + inputName("absolute") +
+                               "): what probing and presetting would take up is compensated too"
+                         : "after the set-up a shop measures (part probed, tool preset), which the "
+                           "calibration cannot see";
   for (const std::string& w : setupWarnings(run.machine.model)) run.warnings.push_back(w);
   const ClProgram& program = run.program;
-  run.orientation =
-      program.dialect == "G-code" ? gcodeGivesRotaryWords(program, run.machine.model) : program.multiax;
+  run.orientation = program.dialect == "G-code" ? gcodeGivesRotaryWords(program, run.machine.model)
+                                                : program.multiax;
   std::vector<JointVector> q0(run.before.points.size());
   for (size_t i = 0; i < q0.size(); ++i) q0[i] = run.before.points[i].q;
   CompensationOptions co;
   co.max_condition = in.max_condition;
   if (std::count(program.cycle_orientation.begin(), program.cycle_orientation.end(), 1) > 0)
     co.tip_only = &program.cycle_orientation;
-  run.compensation = compensateToolPath(run.machine.model, run.machine.params, program.path, q0, run.orientation,
-                                        co, &run.before.points);
+  run.compensation = compensateToolPath(run.machine.model, run.machine.params, program.path, q0,
+                                        run.orientation, co, &run.before.points);
   run.text = correctedText(in, run);
   // The after, measured on the file as written: read back, predicted on the machine.
   const ClProgram back = readBack(in, run, output);
   run.after = predictToolPathParallel(run.machine.model, run.machine.params, back.path, 20,
-                              back.joints.empty() ? nullptr : &back.joints);
+                                      back.joints.empty() ? nullptr : &back.joints);
   if (!run.after.ok())
-    throw std::runtime_error("the compensated program does not predict: " + run.after.failures.front().message);
+    throw std::runtime_error("the compensated program does not predict: " +
+                             run.after.failures.front().message);
   pointFigures(run);
   fillReport(in, output, run);
   if (!cal.uncertainty.empty()) afterBand(in, probed, cal.probed, run);
@@ -283,8 +297,8 @@ std::string compensatedJointsPath(const std::string& report_json) {
   return (p.parent_path() / (p.stem().string() + "_joints.csv")).string();
 }
 
-void writeCompensation(const CompensationRun& run, const std::string& output, const std::string& report_json,
-                       const std::string& report_dir_path) {
+void writeCompensation(const CompensationRun& run, const std::string& output,
+                       const std::string& report_json, const std::string& report_dir_path) {
   // The report directory is taken first: one that cannot be written leaves nothing written.
   std::unique_ptr<ReportDirectory> report_dir;
   if (!report_dir_path.empty()) report_dir = std::make_unique<ReportDirectory>(report_dir_path);
@@ -303,7 +317,7 @@ void writeCompensation(const CompensationRun& run, const std::string& output, co
     std::vector<std::vector<double>> before(cp.size()), after(cp.size());
     for (size_t i = 0; i < cp.size(); ++i) {
       const bool written = i < run.text.written.size() && run.text.written[i];
-      status.push_back(!written ? "kept"
+      status.push_back(!written                                             ? "kept"
                        : cp[i].status == CompensationStatus::Compensated    ? "compensated"
                        : cp[i].status == CompensationStatus::IllConditioned ? "ill_conditioned"
                        : cp[i].status == CompensationStatus::OutOfTravel    ? "out_of_travel"
@@ -315,21 +329,22 @@ void writeCompensation(const CompensationRun& run, const std::string& output, co
       }
     }
     outputs.add(compensatedJointsPath(report_json),
-                formatCompensatedJointsCsv(names, rotary, run.line, status, before, after, run.tip_after_um,
-                                           run.axis_after_urad));
+                formatCompensatedJointsCsv(names, rotary, run.line, status, before, after,
+                                           run.tip_after_um, run.axis_after_urad));
   }
   CompensationReport rep = run.report;
   rep.joints_file = compensatedJointsPath(report_json);
   outputs.add(report_json, formatCompensationJson(rep));
   if (report_dir) {  // written as a whole before the set is committed, swapped in at the end
-    writeCompensationReport(report_dir->staging(), run.report, run.line, run.tip_before_um, run.tip_after_um,
-                            run.axis_before_urad, run.axis_after_urad);
+    writeCompensationReport(report_dir->staging(), run.report, run.line, run.tip_before_um,
+                            run.tip_after_um, run.axis_before_urad, run.axis_after_urad);
   }
   outputs.commit();
   if (report_dir) report_dir->commit();
 }
 
-TableRun runTables(const MachineOptions& machine_options, double step_mm, const std::string& table) {
+TableRun runTables(const MachineOptions& machine_options, double step_mm,
+                   const std::string& table) {
   TableRun run;
   run.machine = loadMachine(machine_options);
   const MachineModel& model = run.machine.model;
@@ -354,18 +369,21 @@ TableRun runTables(const MachineOptions& machine_options, double step_mm, const 
     std::vector<std::vector<double>> um;
     for (const Eigen::Vector3d& d : t.correction) {
       std::vector<double> row;
-      for (size_t j = 0; j < names.size(); ++j) row.push_back(mmToUm(d[static_cast<Eigen::Index>(j)]));
+      for (size_t j = 0; j < names.size(); ++j)
+        row.push_back(mmToUm(d[static_cast<Eigen::Index>(j)]));
       um.push_back(row);
     }
-    std::snprintf(buf, sizeof buf, "grid: %s from %.3f mm, step %.3f mm, %zu points", names[k].c_str(), t.start,
-                  t.step, t.position.size());
+    std::snprintf(buf, sizeof buf, "grid: %s from %.3f mm, step %.3f mm, %zu points",
+                  names[k].c_str(), t.start, t.step, t.position.size());
     const std::vector<std::string> header = {
-        "tolver compensate, axis tables: " + model.name + " (" + machine_options.machine + "), axis " + names[k] +
-            " (pitch and straightness)",
+        "tolver compensate, axis tables: " + model.name + " (" + machine_options.machine +
+            "), axis " + names[k] + " (pitch and straightness)",
         buf,
-        "corrections: the joint changes to command (machine-file joint convention; NC values: times nc_sign), "
+        "corrections: the joint changes to command (machine-file joint convention; NC values: "
+        "times nc_sign), "
         "um, added to those of the other axes' tables",
-        "zero at the reference pose " + run.reference + "; tool tip " + formatNumber(model.setup.gauge_length) +
+        "zero at the reference pose " + run.reference + "; tool tip " +
+            formatNumber(model.setup.gauge_length) +
             " mm below the gauge point (the constant goes into the work offset)"};
     const std::string file = stem + "_" + names[k] + ".csv";
     checkOutputDir(file, "table");
@@ -389,8 +407,10 @@ TableRun runTables(const MachineOptions& machine_options, double step_mm, const 
 }
 
 CompensateRun compensateProgram(const CompensateInputs& in) {
-  if (!(in.table_step >= 0.1 && in.table_step <= 1000.0)) throw FieldError("table_step", "expected 0.1 to 1000 mm");
-  if (!(in.max_condition >= 10.0 && in.max_condition <= 1e15)) throw FieldError("max_condition", "expected 10 to 1e15");
+  if (!(in.table_step >= 0.1 && in.table_step <= 1000.0))
+    throw FieldError("table_step", "expected 0.1 to 1000 mm");
+  if (!(in.max_condition >= 10.0 && in.max_condition <= 1e15))
+    throw FieldError("max_condition", "expected 10 to 1e15");
   CompensateRun run;
   const bool program = !in.program.cl.empty() || !in.program.nc.empty();
   if (!in.table.empty()) {
@@ -398,8 +418,8 @@ CompensateRun compensateProgram(const CompensateInputs& in) {
     if (!program) return run;
   }
   if (in.output.empty())
-    throw FieldError("output", "give the compensated program's path with " + inputName("output") + " (or only " +
-                                   inputName("table") + ")");
+    throw FieldError("output", "give the compensated program's path with " + inputName("output") +
+                                   " (or only " + inputName("table") + ")");
   run.output = in.output;
   run.report = in.report.empty() ? replaceExtension(in.output, ".json") : in.report;
   run.joints = compensatedJointsPath(run.report);
@@ -413,7 +433,8 @@ CompensateRun compensateProgram(const CompensateInputs& in) {
   for (size_t i = 0; i < c.tip_after_um.size() && i < c.tip_before_um.size(); ++i) {
     const double before = c.tip_before_um[i], after = c.tip_after_um[i];
     if (!(after <= before + std::max(1.0, 0.1 * before))) {
-      if (run.worse_lines.empty() || run.worse_lines.back() != c.line[i]) run.worse_lines.push_back(c.line[i]);
+      if (run.worse_lines.empty() || run.worse_lines.back() != c.line[i])
+        run.worse_lines.push_back(c.line[i]);
       run.worse_max_um = std::max(run.worse_max_um, after);
     }
   }

@@ -19,19 +19,19 @@ namespace tolver {
 struct CompensateInputs {
   MachineOptions machine;
   ProgramOptions program;
-  std::string probed;           // probed points (CSV)
-  bool absolute = false;        // calibrated machine: no measured set-up
-  double max_condition = 1e6;   // beyond it, a point is near a singular pose
+  std::string probed;          // probed points (CSV)
+  bool absolute = false;       // calibrated machine: no measured set-up
+  double max_condition = 1e6;  // beyond it, a point is near a singular pose
   // The outputs (compensateProgram): the compensated program (same dialect), its JSON report
   // (default: beside it, .json), an HTML report directory (or empty); and the linear-axis tables
   // (<stem>_<axis>.csv per axis, or empty) at their grid step.
   std::string output, report, report_dir;
   std::string table;
-  double table_step = 10.0;     // mm
+  double table_step = 10.0;  // mm
 };
 
 struct CompensationRun {
-  Machine machine;              // after the measured set-up (calibrated machine)
+  Machine machine;  // after the measured set-up (calibrated machine)
   ClProgram program;
   PredictionResult before, after;  // after: the written text read back and predicted
   CompensationResult compensation;
@@ -52,17 +52,17 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
 std::string compensatedJointsPath(const std::string& report_json);
 // Writes the program, the JSON report and the joints (CSV) as a set, then the report directory
 // (when given).
-void writeCompensation(const CompensationRun& run, const std::string& output, const std::string& report_json,
-                       const std::string& report_dir);
+void writeCompensation(const CompensationRun& run, const std::string& output,
+                       const std::string& report_json, const std::string& report_dir);
 
 // --table: one CSV per linear axis (pitch and straightness), and what such tables leave.
 struct TableRun {
   Machine machine;
   std::vector<AxisTable> tables;
-  std::string reference;        // the reference pose, in words ("X=0 mm Y=0 mm ...")
-  TableEffect flat, full;       // rotary axes at the reference; whole travel, rotaries moving
-  int rotary_terms = 0;         // non-zero error terms of the rotary axes (no table carries them)
-  std::string rotary_names;     // the first of them
+  std::string reference;     // the reference pose, in words ("X=0 mm Y=0 mm ...")
+  TableEffect flat, full;    // rotary axes at the reference; whole travel, rotaries moving
+  int rotary_terms = 0;      // non-zero error terms of the rotary axes (no table carries them)
+  std::string rotary_names;  // the first of them
   std::vector<std::string> files;
 };
 // Computes the tables and writes <stem>_<axis>.csv for each (stem: `table` without extension).

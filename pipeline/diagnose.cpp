@@ -7,26 +7,29 @@
 
 #include "core/model/effects.h"
 #include "core/numerics/statistics.h"
+#include "core/numerics/units.h"
 #include "core/path/tool_path_prediction.h"
-#include "pipeline/parallel_prediction.h"
 #include "io/common/io_error.h"
 #include "io/machine/machine_file.h"
 #include "io/program/apt_reader.h"
 #include "io/program/setup_file.h"
 #include "pipeline/calibrate.h"
-#include "core/numerics/units.h"
+#include "pipeline/parallel_prediction.h"
 
 namespace tolver {
 namespace {
 
-PredictionResult predictOrThrow(const Machine& m, const ClProgram& program, const std::string& file) {
+PredictionResult predictOrThrow(const Machine& m, const ClProgram& program,
+                                const std::string& file) {
   PredictionResult r = predictToolPathParallel(m.model, m.params, program.path);
-  if (!r.ok()) throw InputError(file, r.failures.front().line, 0, "unreachable", r.failures.front().message);
+  if (!r.ok())
+    throw InputError(file, r.failures.front().line, 0, "unreachable", r.failures.front().message);
   return r;
 }
 
 // The part program's predicted error on the base machine and on the augmented one.
-ProgramComparison compareProgram(const std::string& cl, const Machine& before, const Machine& after) {
+ProgramComparison compareProgram(const std::string& cl, const Machine& before,
+                                 const Machine& after) {
   const ClProgram program = readAptFile(cl, AptReadOptions{});
   if (program.path.empty()) throw InputError(cl, 0, 0, "GOTO", "the program has no tool positions");
   const PredictionResult a = predictOrThrow(before, program, cl);
@@ -72,7 +75,8 @@ void restoreExplainedGross(DiagnosisRun& run, const DiagnosisOptions& opt,
   const BallbarTest& all = run.file.test;
   BallbarTest removed;
   removed.setups = all.setups;
-  for (const GrossReading& g : run.robust.removed) removed.readings.push_back(all.readings[g.index]);
+  for (const GrossReading& g : run.robust.removed)
+    removed.readings.push_back(all.readings[g.index]);
   const ForwardKinematics fk(r.machine.model, r.machine.params);
   const Eigen::VectorXd res = ballbarResiduals(fk, removed, r.final_fit.ball_errors);
   const double s = r.final_fit.residual_sigma, m = static_cast<double>(all.readings.size());
@@ -118,7 +122,8 @@ DiagnosisRun runDiagnosis(const DiagnoseInputs& in, const std::function<void(int
                      "(link and motion errors only)");
   run.file = readBallbarFile(in.readings, model, true);
   run.heldout = loadHeldout(in.heldout, model, run.file.test, in.readings);
-  if (!in.cl.empty() && !std::filesystem::exists(in.cl)) throw InputError(in.cl, 0, 0, "program", "no such file");
+  if (!in.cl.empty() && !std::filesystem::exists(in.cl))
+    throw InputError(in.cl, 0, 0, "program", "no such file");
   DiagnosisOptions opt = diagnosisOptions(in);
   // Gross readings first: the base fit without them is what the diagnosis starts from.
   opt.base_unknowns = defaultCalibrationUnknowns(model);
@@ -155,7 +160,8 @@ DiagnosisRun runDiagnosis(const DiagnoseInputs& in, const std::function<void(int
   }
   for (const std::string& w : run.file.warnings) run.warnings.push_back(in.readings + ": " + w);
   const BallbarTest& used = run.used();
-  run.design = testDesign(model, used, static_cast<int>(opt.base_unknowns.size() + 6 * used.setups.size()));
+  run.design =
+      testDesign(model, used, static_cast<int>(opt.base_unknowns.size() + 6 * used.setups.size()));
   for (const std::string& w : run.design.warnings) run.warnings.push_back(in.readings + ": " + w);
   if (r.heldout_before.readings > 0) {
     const std::string w = heldoutWarning(in.heldout, r.heldout_after, r.final_fit.rms_residual);
@@ -167,7 +173,8 @@ DiagnosisRun runDiagnosis(const DiagnoseInputs& in, const std::function<void(int
 DiagnosisRun diagnoseMachine(const DiagnoseInputs& in, const Progress& progress) {
   const DiagnosisOutputs out = diagnosisOutputs(in.output, in.balls, in.report_dir);
   DiagnosisRun run = runDiagnosis(in, [&](int done, int total) {
-    if (progress) progress("scoring candidates", total > 0 ? static_cast<double>(done) / total : 1.0);
+    if (progress)
+      progress("scoring candidates", total > 0 ? static_cast<double>(done) / total : 1.0);
   });
   run.outputs = out;
   const DiagnosisWritten w = writeDiagnosis(run, in, out);
@@ -177,10 +184,12 @@ DiagnosisRun diagnoseMachine(const DiagnoseInputs& in, const Progress& progress)
   return run;
 }
 
-DiagnosisWritten writeDiagnosis(const DiagnosisRun& run, const DiagnoseInputs& in, const DiagnosisOutputs& out) {
+DiagnosisWritten writeDiagnosis(const DiagnosisRun& run, const DiagnoseInputs& in,
+                                const DiagnosisOutputs& out) {
   const DiagnosisResult& r = run.result;
   const BallbarTest& used = run.used();
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - run.started).count();
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - run.started).count();
   DiagnosisReportInputs rin;
   rin.machine_file = in.machine.machine;
   rin.readings_file = in.readings;
@@ -210,16 +219,20 @@ DiagnosisWritten writeDiagnosis(const DiagnosisRun& run, const DiagnoseInputs& i
   augmented.identification.spindle_tilt_rad = in.spindle_tilt_urad * 1e-6;
   OutputSet files;
   const std::string xml_tmp =
-      files.add(out.machine, formatMachineXml(augmented, "augmented by tolver diagnose from " + in.readings + " (" +
-                                                             r.message + "); ball positions in " + out.balls));
+      files.add(out.machine, formatMachineXml(augmented, "augmented by tolver diagnose from " +
+                                                             in.readings + " (" + r.message +
+                                                             "); ball positions in " + out.balls));
   const std::string balls_tmp =
-      files.add(out.balls, formatBallPositionsCsv(used, r.final_fit.ball_errors, &r.final_fit.ball_uncertainty,
-                                                  {"identified ball positions of " + in.readings +
-                                                   " by tolver diagnose (machine " + out.machine + ")"}));
+      files.add(out.balls,
+                formatBallPositionsCsv(used, r.final_fit.ball_errors, &r.final_fit.ball_uncertainty,
+                                       {"identified ball positions of " + in.readings +
+                                        " by tolver diagnose (machine " + out.machine + ")"}));
   // What the written files predict, read back as the next command will: the report states it.
   rin.written = checkWrittenFiles(xml_tmp, balls_tmp, used, run.heldout);
-  const std::string html = writeDiagnosisHtml(report_dir.staging(), run.machine.model, used, r, rin);
-  writeFileAtomically((staging / "report.json").string(), formatDiagnosisJson(run.machine.model, used, r, rin));
+  const std::string html =
+      writeDiagnosisHtml(report_dir.staging(), run.machine.model, used, r, rin);
+  writeFileAtomically((staging / "report.json").string(),
+                      formatDiagnosisJson(run.machine.model, used, r, rin));
   writeFileAtomically((staging / "report.html").string(), html);
   report_dir.commit();
   files.commit();

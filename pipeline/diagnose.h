@@ -20,14 +20,14 @@
 namespace tolver {
 
 struct DiagnoseInputs {
-  MachineOptions machine;         // the base model: link and motion errors, no effects
-  std::string readings;           // ball-bar readings (CSV)
-  std::string heldout;            // held-out readings on the same set-ups, or empty
-  std::string cl, cl_setup;       // a part program (APT) to predict before and after, its set-up
-  std::vector<std::string> types; // effect types to try (empty: all)
-  double alpha = 1e-3;            // family-wise significance level per round
+  MachineOptions machine;          // the base model: link and motion errors, no effects
+  std::string readings;            // ball-bar readings (CSV)
+  std::string heldout;             // held-out readings on the same set-ups, or empty
+  std::string cl, cl_setup;        // a part program (APT) to predict before and after, its set-up
+  std::vector<std::string> types;  // effect types to try (empty: all)
+  double alpha = 1e-3;             // family-wise significance level per round
   int max_effects = 4;
-  int blocks_per_setup = 6;       // cross-validation blocks
+  int blocks_per_setup = 6;  // cross-validation blocks
   bool keep_outliers = false;
   double spindle_tilt_urad = 0.0;  // as CalibrateInputs::spindle_tilt_urad
   // The outputs (diagnoseMachine): the augmented machine (XML), its ball positions (beside it
@@ -43,11 +43,11 @@ DiagnosisOutputs diagnosisOutputs(const std::string& machine, const std::string&
                                   const std::string& report_dir);
 
 struct DiagnosisRun {
-  Machine machine;                          // the base machine as read
-  BallbarFile file;                         // the readings as read, with the reader's warnings
+  Machine machine;   // the base machine as read
+  BallbarFile file;  // the readings as read, with the reader's warnings
   BallbarTest heldout;
-  RobustCalibration robust;                 // the base fit with and without the gross readings
-  std::vector<GrossReading> gross;          // found (removed, or kept with keep_outliers)
+  RobustCalibration robust;         // the base fit with and without the gross readings
+  std::vector<GrossReading> gross;  // found (removed, or kept with keep_outliers)
   // Per reading of robust.removed as first removed: its studentised residual against the final
   // model (effects included); and those restored because the final model explains them
   // (indices into file.test, with that residual and t).
@@ -56,8 +56,8 @@ struct DiagnosisRun {
   DiagnosisResult result;
   std::unique_ptr<ProgramComparison> program;  // with a part program
   std::chrono::steady_clock::time_point started;
-  TestDesign design;                        // of the readings fitted
-  std::vector<std::string> warnings;        // the reader's, the design's, the held-out readings'
+  TestDesign design;                  // of the readings fitted
+  std::vector<std::string> warnings;  // the reader's, the design's, the held-out readings'
   const BallbarTest& used() const { return robust.test; }  // the readings fitted
   // diagnoseMachine: where the outputs went, and what they predict read back.
   DiagnosisOutputs outputs;
@@ -72,14 +72,16 @@ DiagnosisRun diagnoseMachine(const DiagnoseInputs& in, const Progress& progress 
 
 // Reads the inputs, removes gross readings, diagnoses (progress: candidates scored of the
 // round's total). A failed diagnosis or a base fit that does not converge is an InputError.
-DiagnosisRun runDiagnosis(const DiagnoseInputs& in, const std::function<void(int, int)>& progress = {});
+DiagnosisRun runDiagnosis(const DiagnoseInputs& in,
+                          const std::function<void(int, int)>& progress = {});
 
 struct DiagnosisWritten {
-  WrittenCheck check;       // what the written machine and ball files predict, read back
-  std::string json, html;   // the report's final paths
+  WrittenCheck check;      // what the written machine and ball files predict, read back
+  std::string json, html;  // the report's final paths
 };
 // Writes the augmented machine, the ball positions and the report directory (report.json,
 // report.html, plots) as a set: all or none.
-DiagnosisWritten writeDiagnosis(const DiagnosisRun& run, const DiagnoseInputs& in, const DiagnosisOutputs& out);
+DiagnosisWritten writeDiagnosis(const DiagnosisRun& run, const DiagnoseInputs& in,
+                                const DiagnosisOutputs& out);
 
 }  // namespace tolver

@@ -3,19 +3,18 @@
 #include <unistd.h>
 
 #include <cstdio>
-
 #include <filesystem>
 
+#include "core/numerics/units.h"
 #include "core/path/tool_path_prediction.h"
-#include "pipeline/parallel_prediction.h"
-#include "io/program/gcode_reader.h"
 #include "io/common/io_error.h"
 #include "io/common/line_source.h"
+#include "io/common/text_util.h"
 #include "io/machine/machine_file.h"
+#include "io/program/gcode_reader.h"
 #include "io/program/probe_file.h"
 #include "io/program/setup_file.h"
-#include "io/common/text_util.h"
-#include "core/numerics/units.h"
+#include "pipeline/parallel_prediction.h"
 
 namespace tolver {
 
@@ -24,8 +23,7 @@ Machine loadMachine(const MachineOptions& o) {
   PartSetup setup;
   if (!o.setup.empty()) setup = readSetupFile(o.setup);
   if (!o.part_zero.empty()) {
-    if (o.part_zero.size() != 3)
-      throw FieldError("part_zero", "expected x,y,z in mm");
+    if (o.part_zero.size() != 3) throw FieldError("part_zero", "expected x,y,z in mm");
     setup.part_zero_table = Eigen::Vector3d(o.part_zero[0], o.part_zero[1], o.part_zero[2]);
   }
   if (!o.part_zero.empty()) setup.part_zero_given = true;
@@ -49,11 +47,15 @@ std::vector<std::string> setupWarnings(const MachineModel& model) {
   const PartSetup& s = model.setup;
   std::string missing;
   if (!s.part_zero_given) missing += "part zero (0, 0, 0) in the table frame";
-  if (!s.part_rotation_given) missing += std::string(missing.empty() ? "" : ", ") + "part rotation 0 deg";
-  if (!s.gauge_length_given) missing += std::string(missing.empty() ? "" : ", ") + "gauge length 0 mm (the tool tip at the spindle gauge point)";
+  if (!s.part_rotation_given)
+    missing += std::string(missing.empty() ? "" : ", ") + "part rotation 0 deg";
+  if (!s.gauge_length_given)
+    missing += std::string(missing.empty() ? "" : ", ") +
+               "gauge length 0 mm (the tool tip at the spindle gauge point)";
   if (!missing.empty())
-    w.push_back("no set-up given for " + missing + ": the defaults were used (" + inputName("setup") + ", " + inputName("part_zero") +
-                ", " + inputName("part_rotation_deg") + ", " + inputName("gauge_length") + ")");
+    w.push_back("no set-up given for " + missing + ": the defaults were used (" +
+                inputName("setup") + ", " + inputName("part_zero") + ", " +
+                inputName("part_rotation_deg") + ", " + inputName("gauge_length") + ")");
   return w;
 }
 
@@ -63,8 +65,9 @@ std::string machineErrorsStatement(const Machine& machine, bool* none) {
   *none = !any;
   if (!any)
     return "the machine file carries no errors (" +
-           std::string(machine.model.errors_source.empty() ? "nominal geometry"
-                                                           : "errors: " + machine.model.errors_source) +
+           std::string(machine.model.errors_source.empty()
+                           ? "nominal geometry"
+                           : "errors: " + machine.model.errors_source) +
            "): the machine's share is zero by construction; give a measured or identified "
            "machine file (tolver calibrate) to predict the machine's errors";
   return "errors: " + (machine.model.errors_source.empty() ? std::string("given, source not stated")
@@ -93,8 +96,7 @@ void keepLines(ClProgram& p, const std::string& spec) {
     if (i < p.cycle_orientation.size()) p.cycle_orientation[k] = p.cycle_orientation[i];
     ++k;
   }
-  if (k == 0)
-    throw FieldError("lines", p.file + " has no tool position on lines " + spec);
+  if (k == 0) throw FieldError("lines", p.file + " has no tool position on lines " + spec);
   // The statements own the kept points only (writers index the path through them).
   for (AptStatement& st : p.statements) {
     int first = -1, count = 0;
@@ -137,8 +139,8 @@ void scaleToInches(ClProgram& p) {
 
 namespace {
 
-ClProgram readProgram(LineSource& source, const std::string& path, bool gcode, const ProgramOptions& o,
-                      const MachineModel& model) {
+ClProgram readProgram(LineSource& source, const std::string& path, bool gcode,
+                      const ProgramOptions& o, const MachineModel& model) {
   ClProgram program;
   if (gcode) {
     GcodeReadOptions go;
@@ -169,12 +171,13 @@ ClProgram readProgram(LineSource& source, const std::string& path, bool gcode, c
 
 ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model) {
   if (o.cl.empty() == o.nc.empty())
-    throw FieldError("cl", "give the program with " + inputName("cl") + " (CL data) or " + inputName("nc") +
-                               " (G-code), one of them");
+    throw FieldError("cl", "give the program with " + inputName("cl") + " (CL data) or " +
+                               inputName("nc") + " (G-code), one of them");
   const std::string path = o.nc.empty() ? o.cl : o.nc;
   // The dialect from the option, the extension, or the first statements (looksLikeGcode reads
   // twenty non-blank lines; 64 kB hold them in any real program).
-  const bool gcode = !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(readFilePrefix(path, 65536));
+  const bool gcode =
+      !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(readFilePrefix(path, 65536));
   LineSource source = LineSource::file(path);
   return readProgram(source, path, gcode, o, model);
 }
@@ -216,9 +219,10 @@ std::vector<std::string> unitWarnings(const ClProgram& program, const MachineMod
                   program.file.c_str(), extent, tool_d, inputName("units").c_str());
     w.push_back(buf);
   } else {
-    std::snprintf(buf, sizeof buf, "%s declares no units: read as %s (extent %.1f mm%s)",
-                  program.file.c_str(), program.units == "INCH" ? "inches" : "mm", extent,
-                  inch_fits ? ("; " + inputName("units") + " inch if it is in inches").c_str() : "");
+    std::snprintf(
+        buf, sizeof buf, "%s declares no units: read as %s (extent %.1f mm%s)",
+        program.file.c_str(), program.units == "INCH" ? "inches" : "mm", extent,
+        inch_fits ? ("; " + inputName("units") + " inch if it is in inches").c_str() : "");
     w.push_back(buf);
   }
   return w;
@@ -235,15 +239,16 @@ std::string describeUnreachable(const MachineModel& model, const PredictionResul
                   (a < model.axes.size() ? model.axes[a].name : std::string("orientation")) + " " +
                   std::to_string(r.failures_per_axis[a]);
     }
-    msg += "; " + std::to_string(r.failed_points) + " points fail (first axis to break: " +
-           per_axis + "): run 'tolver setup' to find a set-up that reaches the whole program";
+    msg += "; " + std::to_string(r.failed_points) +
+           " points fail (first axis to break: " + per_axis +
+           "): run 'tolver setup' to find a set-up that reaches the whole program";
   }
   return msg;
 }
 
 PredictionResult predictProgram(const Machine& machine, const ClProgram& program) {
   PredictionResult r = predictToolPathParallel(machine.model, machine.params, program.path, 20,
-                                       program.joints.empty() ? nullptr : &program.joints);
+                                               program.joints.empty() ? nullptr : &program.joints);
   if (!r.ok())
     throw InputError(program.file, r.failures.front().line, 0, "unreachable",
                      describeUnreachable(machine.model, r));
@@ -349,11 +354,12 @@ std::string describeProbedSetup(const std::string& path, const ProbedSetupFit& f
                 "offset (%+.2f, %+.2f, %+.2f) um; the points disagree with the file's set-up by "
                 "%.2f um RMS before, %.2f um after (max %.2f um, line %d); the cutter's length "
                 "relative to the probe is taken as preset",
-                points.size() - fit.trams, path.c_str(), fit.observed, fit.columns, mmToUm(fit.change[0]),
-                mmToUm(fit.change[1]), mmToUm(fit.change[2]), radToUrad(fit.change[3]), radToUrad(fit.change[4]),
-                radToUrad(fit.change[5]), mmToUm(fit.spindle_change[0]), mmToUm(fit.spindle_change[1]),
-                mmToUm(fit.spindle_change[2]), mmToUm(fit.rms_before), mmToUm(fit.rms), mmToUm(fit.max),
-                points[worst].line);
+                points.size() - fit.trams, path.c_str(), fit.observed, fit.columns,
+                mmToUm(fit.change[0]), mmToUm(fit.change[1]), mmToUm(fit.change[2]),
+                radToUrad(fit.change[3]), radToUrad(fit.change[4]), radToUrad(fit.change[5]),
+                mmToUm(fit.spindle_change[0]), mmToUm(fit.spindle_change[1]),
+                mmToUm(fit.spindle_change[2]), mmToUm(fit.rms_before), mmToUm(fit.rms),
+                mmToUm(fit.max), points[worst].line);
   // Touches no rigid set-up explains to a millimetre belong to another part or set-up: refused
   // before anything is predicted or written (a fit on them moves the part by metres).
   if (fit.max > 1.0)
@@ -366,13 +372,14 @@ std::string describeProbedSetup(const std::string& path, const ProbedSetupFit& f
     std::snprintf(buf, sizeof buf,
                   "; spindle tilted (%+.1f, %+.1f) urad about x and y by %d tram%s, which disagree "
                   "with the file's spindle by %.1f urad before, %.1f urad after (line %d)",
-                  radToUrad(fit.spindle_tilt_change[0]), radToUrad(fit.spindle_tilt_change[1]), fit.trams,
-                  fit.trams > 1 ? "s" : "", radToUrad(fit.tram_before), radToUrad(fit.tram_max),
-                  points[worst_tram].line);
+                  radToUrad(fit.spindle_tilt_change[0]), radToUrad(fit.spindle_tilt_change[1]),
+                  fit.trams, fit.trams > 1 ? "s" : "", radToUrad(fit.tram_before),
+                  radToUrad(fit.tram_max), points[worst_tram].line);
     line += buf;
   } else {
-    line += "; no tram: the tool axis against the part keeps the machine file's spindle tilt, which "
-            "a ball-bar cannot see (add a tram row)";
+    line +=
+        "; no tram: the tool axis against the part keeps the machine file's spindle tilt, which "
+        "a ball-bar cannot see (add a tram row)";
   }
   if (warnings) {
     if (!fit.unobserved.empty()) {
@@ -404,7 +411,8 @@ void makeReportDir(const std::string& dir, const char* field) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec || !std::filesystem::is_directory(dir, ec))
-    throw FieldError(field, dir + ": cannot create the directory" + (ec ? ": " + ec.message() : std::string()));
+    throw FieldError(
+        field, dir + ": cannot create the directory" + (ec ? ": " + ec.message() : std::string()));
 }
 
 std::string replaceExtension(const std::string& path, const std::string& ext) {

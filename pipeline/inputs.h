@@ -76,10 +76,10 @@ void checkOutputDir(const std::string& path, const char* field);
 // instead (fitProbedSetup, on any machine, calibrated or not), the tool taken as preset, and the
 // uncertainty is modulo that fit.
 struct CalibratedPrediction {
-  Eigen::VectorXd measured_setup;          // part x y z (mm), rotations (rad), tool x y z (mm)
+  Eigen::VectorXd measured_setup;            // part x y z (mm), rotations (rad), tool x y z (mm)
   std::vector<PoseUncertainty> uncertainty;  // per program point
   bool probed = false;
-  ProbedSetupFit probe;                    // when probed
+  ProbedSetupFit probe;  // when probed
 };
 CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program,
                                       PredictionResult& pred, bool absolute,

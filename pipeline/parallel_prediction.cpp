@@ -26,8 +26,7 @@ void predictToolPathParallel(const MachineModel& model, const Eigen::VectorXd& p
   tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
   // Stretches start on points solved with exact angles: whole numbers of kUnit blocks.
   constexpr size_t kUnit = BlockPrediction::kExactEvery / InverseKinematics::kBlock;
-  const size_t blocks =
-      (path.size() + InverseKinematics::kBlock - 1) / InverseKinematics::kBlock;
+  const size_t blocks = (path.size() + InverseKinematics::kBlock - 1) / InverseKinematics::kBlock;
   const size_t stretches =
       std::min<size_t>(static_cast<size_t>(arena.max_concurrency()), blocks / kUnit);
   if (commanded || stretches < 2) {
@@ -76,8 +75,7 @@ void predictToolPathParallel(const MachineModel& model, const Eigen::VectorXd& p
     size_t k = begin[c];
     for (; k < begin[c + 1]; ++k) {
       const size_t done = k - begin[c];  // blocks of this stretch already run again
-      if (done <= kProbe && bp.sameCursor(cursor, done == 0 ? empty : probes[c][done - 1]))
-        break;
+      if (done <= kProbe && bp.sameCursor(cursor, done == 0 ? empty : probes[c][done - 1])) break;
       bp.predict(k, *w, cursor);
       ++st.blocks_again;
     }

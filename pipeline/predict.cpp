@@ -40,19 +40,23 @@ PredictionRun predict(const PredictInputs& in) {
       "each GOTO is the tool position the machine will really reach, in the program's frame"};
   OutputSet outputs;  // both files, or neither
   // Written as they are made: a long program's outputs never sit whole in memory.
-  outputs.addStreamed(run.output, [&](TextOut& out) { writePredictedApt(out, program, predicted, header); });
+  outputs.addStreamed(run.output,
+                      [&](TextOut& out) { writePredictedApt(out, program, predicted, header); });
   // The prediction's uncertainty, when the machine file carries its calibration's covariance.
   outputs.addStreamed(run.point_table, [&](TextOut& out) {
     writePointTable(out, machine.model, program.path, pts, unc.empty() ? nullptr : &unc);
   });
   outputs.commit();
 
-  for (int i = 0; i < machine.params.size(); ++i) run.nonzero_parameters += machine.params[i] != 0.0;
+  for (int i = 0; i < machine.params.size(); ++i)
+    run.nonzero_parameters += machine.params[i] != 0.0;
   bool no_errors = false;
   run.errors_statement = machineErrorsStatement(machine, &no_errors);
-  run.jumps = findRotaryJumps(machine.model, program.path, run.prediction, degToRad(in.max_rotary_step_deg));
+  run.jumps = findRotaryJumps(machine.model, program.path, run.prediction,
+                              degToRad(in.max_rotary_step_deg));
   for (const std::string& w : setupWarnings(machine.model)) run.warnings.push_back(w);
-  for (const std::string& w : unitWarnings(program, machine.model, in.program.units)) run.warnings.push_back(w);
+  for (const std::string& w : unitWarnings(program, machine.model, in.program.units))
+    run.warnings.push_back(w);
   for (const std::string& w : programNotes(program)) run.notes.push_back(program.file + ": " + w);
   return run;
 }

@@ -27,13 +27,13 @@ struct PredictionRun {
   ClProgram program;
   PredictionResult prediction;
   CalibratedPrediction calibration;
-  std::string probe_line;              // the probed set-up fit, in words (with --probed)
-  std::vector<RotaryJump> jumps;       // rotary steps above max_rotary_step_deg
-  std::vector<std::string> warnings;   // set-up defaults, units, probed set-up
-  std::vector<std::string> notes;      // what the program reader assumed or skipped
+  std::string probe_line;             // the probed set-up fit, in words (with --probed)
+  std::vector<RotaryJump> jumps;      // rotary steps above max_rotary_step_deg
+  std::vector<std::string> warnings;  // set-up defaults, units, probed set-up
+  std::vector<std::string> notes;     // what the program reader assumed or skipped
   int nonzero_parameters = 0;
-  std::string errors_statement;        // what the machine file says of its errors
-  std::string output, point_table;     // the files written
+  std::string errors_statement;     // what the machine file says of its errors
+  std::string output, point_table;  // the files written
   Verdict verdict = Verdict::Ok;
 };
 

@@ -13,8 +13,8 @@ namespace tolver {
 namespace {
 
 // The set-up file's text for a proposed set-up (the format setup_file.h reads).
-std::string setupFileText(const ClProgram& program, const MachineModel& model, const PartSetup& b, double margin,
-                          const std::string& what) {
+std::string setupFileText(const ClProgram& program, const MachineModel& model, const PartSetup& b,
+                          double margin, const std::string& what) {
   char buf[768];
   std::snprintf(
       buf, sizeof buf,
@@ -41,11 +41,14 @@ std::string setupFileText(const ClProgram& program, const MachineModel& model, c
 // s.txt -> s_part2.txt
 std::string pieceFileName(const std::string& output, size_t k) {
   const std::filesystem::path p(output);
-  return (p.parent_path() / (p.stem().string() + "_part" + std::to_string(k + 1) + p.extension().string())).string();
+  return (p.parent_path() /
+          (p.stem().string() + "_part" + std::to_string(k + 1) + p.extension().string()))
+      .string();
 }
 
 // The program's points given in the part frame (CL data, TCP G-code) and their commanded joints.
-std::vector<ClPoint> partFramePoints(const ClProgram& program, std::vector<JointVector>* commanded) {
+std::vector<ClPoint> partFramePoints(const ClProgram& program,
+                                     std::vector<JointVector>* commanded) {
   std::vector<ClPoint> path;
   for (size_t i = 0; i < program.path.size(); ++i) {
     if (!program.tcp.empty() && program.tcp[i] != ClProgram::kTcpWords) continue;
@@ -60,7 +63,8 @@ std::vector<ClPoint> partFramePoints(const ClProgram& program, std::vector<Joint
 }
 
 // The lines of the points outside travel, as runs ("12-40, 77"), at most 8 runs.
-std::string outsideLines(const std::vector<ClPoint>& path, const std::vector<int>& outside, int* runs) {
+std::string outsideLines(const std::vector<ClPoint>& path, const std::vector<int>& outside,
+                         int* runs) {
   std::string lines;
   *runs = 0;
   for (size_t k = 0; k < outside.size() && *runs < 8; ++k) {
@@ -68,7 +72,8 @@ std::string outsideLines(const std::vector<ClPoint>& path, const std::vector<int
     size_t e = k;
     while (e + 1 < outside.size() && outside[e + 1] == outside[e] + 1) ++e;
     const int last = path[outside[e]].line;
-    lines += (lines.empty() ? "" : ", ") + std::to_string(first) + (last != first ? "-" + std::to_string(last) : "");
+    lines += (lines.empty() ? "" : ", ") + std::to_string(first) +
+             (last != first ? "-" + std::to_string(last) : "");
     k = e;
     ++*runs;
   }
@@ -80,14 +85,15 @@ void writeSetupFiles(const std::string& output, SetupRun& run) {
   const SetupSearchResult& r = run.search;
   OutputSet files;  // all the set-up files, or none
   files.add(output, setupFileText(run.program, run.model, r.setup, r.margin, ""));
-  run.written.push_back({output, r.found ? "set-up file" : "set-up file: the best single set-up, which leaves "
-                                                           "points outside travel"});
+  run.written.push_back({output, r.found ? "set-up file"
+                                         : "set-up file: the best single set-up, which leaves "
+                                           "points outside travel"});
   for (size_t k = 0; k < run.pieces.size(); ++k) {
     const SetupPiece& p = run.pieces[k];
     if (!p.result.found) continue;
     const std::string f = pieceFileName(output, k);
-    const std::string what =
-        ", lines " + std::to_string(run.path[p.first].line) + "-" + std::to_string(run.path[p.last].line);
+    const std::string what = ", lines " + std::to_string(run.path[p.first].line) + "-" +
+                             std::to_string(run.path[p.last].line);
     files.add(f, setupFileText(run.program, run.model, p.result.setup, p.result.margin, what));
     run.written.push_back({f, "set-up file for piece " + std::to_string(k + 1) + what});
   }
@@ -106,14 +112,16 @@ void proposeWorkOffsetSetup(const SetupInputs& in, SetupRun& run) {
   const WorkOffsetSetup& r = run.offset;
   if (!std::isfinite(r.margin)) {
     run.mode = SetupMode::Fixed;
-    run.ranges_again = commandedJointRanges(model, program.joints, &run.margin_again, &run.limiting_axis);
+    run.ranges_again =
+        commandedJointRanges(model, program.joints, &run.margin_again, &run.limiting_axis);
     run.verdict = run.margin_again >= -1e-9 ? Verdict::Ok : Verdict::NotMet;
     return;
   }
   run.best = model;
   run.best.setup.part_zero_table = r.part_zero_table;
   const ClProgram again = loadProgram(in.program, run.best);
-  run.ranges_again = commandedJointRanges(run.best, again.joints, &run.margin_again, &run.limiting_axis);
+  run.ranges_again =
+      commandedJointRanges(run.best, again.joints, &run.margin_again, &run.limiting_axis);
   if (r.found && run.margin_again >= -1e-9) {
     run.verdict = Verdict::Ok;
   } else {
@@ -121,7 +129,8 @@ void proposeWorkOffsetSetup(const SetupInputs& in, SetupRun& run) {
     if (r.found) {
       const AxisRange& lr = run.ranges_again[run.limiting_axis];
       const Axis& ax = run.best.axes[run.limiting_axis];
-      run.limiting_line = again.path[std::max(0, lr.min - ax.travel_min < 0 ? lr.min_index : lr.max_index)].line;
+      run.limiting_line =
+          again.path[std::max(0, lr.min - ax.travel_min < 0 ? lr.min_index : lr.max_index)].line;
     }
   }
   if (in.output.empty() || (r.found && run.margin_again < -1e-9)) return;
@@ -129,9 +138,9 @@ void proposeWorkOffsetSetup(const SetupInputs& in, SetupRun& run) {
   b.part_zero_table = r.part_zero_table;
   OutputSet files;
   std::string text = setupFileText(program, model, b, r.margin, "");
-  text += "# at the control: G54 (and every work offset the program uses) = X" + formatNumber(r.work_offset_m.x()) +
-          " Y" + formatNumber(r.work_offset_m.y()) + " Z" + formatNumber(r.work_offset_m.z()) +
-          " (machine coordinates, mm)\n";
+  text += "# at the control: G54 (and every work offset the program uses) = X" +
+          formatNumber(r.work_offset_m.x()) + " Y" + formatNumber(r.work_offset_m.y()) + " Z" +
+          formatNumber(r.work_offset_m.z()) + " (machine coordinates, mm)\n";
   files.add(in.output, text);
   files.commit();
   run.written.push_back({in.output, "set-up file"});
@@ -143,7 +152,8 @@ SetupRun proposeSetup(const SetupInputs& in, const Progress& progress) {
   if (!(in.rotation_step_deg >= 0 && in.rotation_step_deg <= 180))
     throw FieldError("rotation_step_deg", "expected 0 to 180 deg");
   for (double L : in.gauge_lengths)
-    if (!(L >= 0 && L < 1e5)) throw FieldError("gauge_lengths", "expected lengths from 0 to 1e5 mm");
+    if (!(L >= 0 && L < 1e5))
+      throw FieldError("gauge_lengths", "expected lengths from 0 to 1e5 mm");
   SetupRun run;
   Machine machine = loadMachine(in.machine);
   // The search moves the part frame with the program in it: a posted program's work offsets
@@ -156,16 +166,20 @@ SetupRun proposeSetup(const SetupInputs& in, const Progress& progress) {
   const ClProgram& program = run.program;
   run.offsets_set_aside = had_offsets && program.dialect == "G-code";
   if (run.offsets_set_aside)
-    run.notes.push_back("the set-up's work offsets are set aside: the search puts G54... at the part zero it proposes");
+    run.notes.push_back(
+        "the set-up's work offsets are set aside: the search puts G54... at the part zero it "
+        "proposes");
   if (!in.output.empty()) checkOutputDir(in.output, "output");
   for (const std::string& w : setupWarnings(model)) run.warnings.push_back(w);
-  for (const std::string& w : unitWarnings(program, model, in.program.units)) run.warnings.push_back(w);
+  for (const std::string& w : unitWarnings(program, model, in.program.units))
+    run.warnings.push_back(w);
   for (const std::string& w : programNotes(program)) run.notes.push_back(program.file + ": " + w);
 
   // A posted program with no point in TCP mode: its words are joints in a work offset, and the
   // part zero (with the work offset at it) is proposed exactly, axis by axis.
   if (program.dialect == "G-code" &&
-      std::none_of(program.tcp.begin(), program.tcp.end(), [](char k) { return k == ClProgram::kTcpWords; })) {
+      std::none_of(program.tcp.begin(), program.tcp.end(),
+                   [](char k) { return k == ClProgram::kTcpWords; })) {
     proposeWorkOffsetSetup(in, run);
     return run;
   }

@@ -27,10 +27,10 @@ enum class SetupMode {
 };
 
 struct SetupRun {
-  MachineModel model;                 // as read (a posted program's work offsets set aside)
+  MachineModel model;  // as read (a posted program's work offsets set aside)
   ClProgram program;
-  std::vector<ClPoint> path;          // the points the set-up moves (PartFrame: part-frame ones)
-  bool offsets_set_aside = false;     // the set-up's work offsets were set aside (G-code)
+  std::vector<ClPoint> path;       // the points the set-up moves (PartFrame: part-frame ones)
+  bool offsets_set_aside = false;  // the set-up's work offsets were set aside (G-code)
   std::vector<std::string> warnings, notes;
   SetupMode mode = SetupMode::PartFrame;
 
@@ -38,15 +38,15 @@ struct SetupRun {
   std::vector<AxisRange> ranges_now;
   int unreachable = 0, first_unreachable = -1;  // points whose rotaries leave travel now
   SetupSearchResult search;
-  bool rotations_exhausted = false;   // no rotation keeps the rotary axes inside travel
-  MachineModel best;                  // the model with the proposed set-up
-  std::string outside_lines;          // the best set-up's points outside travel, as line runs
+  bool rotations_exhausted = false;  // no rotation keeps the rotary axes inside travel
+  MachineModel best;                 // the model with the proposed set-up
+  std::string outside_lines;         // the best set-up's points outside travel, as line runs
   int outside_runs = 0;
-  std::vector<SetupPiece> pieces;     // when no single set-up reaches the program
+  std::vector<SetupPiece> pieces;  // when no single set-up reaches the program
 
   // WorkOffset and Fixed: the proposal, and the program read again with it (its joints against
   // travel).
-  int fixed_moves = 0;                // moves in machine coordinates
+  int fixed_moves = 0;  // moves in machine coordinates
   WorkOffsetSetup offset;
   std::vector<AxisRange> ranges_again;
   double margin_again = 0.0;

@@ -11,6 +11,7 @@
 #include <mutex>
 #include <string>
 
+#include "core/numerics/units.h"
 #include "core/path/prediction_uncertainty.h"
 #include "core/path/tool_motion.h"
 #include "core/path/tool_path_prediction.h"
@@ -25,7 +26,6 @@
 #include "io/program/tool_file.h"
 #include "io/report/deviation_map.h"
 #include "io/report/offscreen_display.h"
-#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -55,7 +55,8 @@ void checkPartUnits(const VerifyInputs& o, const ClProgram& program, const Trian
                   part, ratio, prog, inputName("mesh_units").c_str());
     throw InputError(o.part, 0, 0, "units", buf);
   }
-  if (ratio < 1.0 / 12.0 && ratio > 1.0 / 60.0 && !program.units_declared && o.program.units.empty()) {
+  if (ratio < 1.0 / 12.0 && ratio > 1.0 / 60.0 && !program.units_declared &&
+      o.program.units.empty()) {
     std::snprintf(buf, sizeof buf,
                   "the program declares no units and is %.1f times smaller than the part "
                   "(diagonal %.3f against %.1f mm): it looks like inches; give %s inch",
@@ -66,12 +67,13 @@ void checkPartUnits(const VerifyInputs& o, const ClProgram& program, const Trian
   // the larger one's diagonal mean the part is not where the program cuts (set-up, mesh frame).
   const double gap = std::max({(lo - phi).maxCoeff(), (plo - hi).maxCoeff(), 0.0});
   if (gap > 0.1 * std::max(part, prog) + 1.0) {
-    std::snprintf(buf, sizeof buf,
-                  "the part is not where the program cuts: %.1f mm between the part (x %.0f..%.0f, "
-                  "y %.0f..%.0f, z %.0f..%.0f mm) and the cutting moves (x %.0f..%.0f, y %.0f..%.0f, "
-                  "z %.0f..%.0f); check the set-up, %s or the program's frame",
-                  gap, lo.x(), hi.x(), lo.y(), hi.y(), lo.z(), hi.z(), plo.x(), phi.x(), plo.y(),
-                  phi.y(), plo.z(), phi.z(), inputName("mesh_offset").c_str());
+    std::snprintf(
+        buf, sizeof buf,
+        "the part is not where the program cuts: %.1f mm between the part (x %.0f..%.0f, "
+        "y %.0f..%.0f, z %.0f..%.0f mm) and the cutting moves (x %.0f..%.0f, y %.0f..%.0f, "
+        "z %.0f..%.0f); check the set-up, %s or the program's frame",
+        gap, lo.x(), hi.x(), lo.y(), hi.y(), lo.z(), hi.z(), plo.x(), phi.x(), plo.y(), phi.y(),
+        plo.z(), phi.z(), inputName("mesh_offset").c_str());
     throw InputError(o.part, 0, 0, "position", buf);
   }
 }
@@ -86,12 +88,12 @@ std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o) {
       throw FieldError("tolerance_mm", e.message());
     }
     if (!std::isnan(o.uz_mm) && !std::isnan(o.asme_u_mm))
-      throw FieldError("uz_mm", "give either " + inputName("uz_mm") + " (ISO) or " + inputName("asme_u_mm") +
-                                    " (ASME), not both");
+      throw FieldError("uz_mm", "give either " + inputName("uz_mm") + " (ISO) or " +
+                                    inputName("asme_u_mm") + " (ASME), not both");
     try {
       zones.push_back(!std::isnan(o.uz_mm)       ? isoUzZone(o.tolerance_mm, o.uz_mm)
                       : !std::isnan(o.asme_u_mm) ? asmeUZone(o.tolerance_mm, o.asme_u_mm)
-                                              : bilateralZone(o.tolerance_mm));
+                                                 : bilateralZone(o.tolerance_mm));
     } catch (const std::invalid_argument& e) {
       throw FieldError("tolerance_mm", e.what());
     }
@@ -101,8 +103,8 @@ std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o) {
     zones.insert(zones.end(), more.begin(), more.end());
   }
   if (zones.empty())
-    throw FieldError("tolerance_mm",
-                     "give " + inputName("tolerance_mm") + " (mm) or " + inputName("zones_file") + " (file)");
+    throw FieldError("tolerance_mm", "give " + inputName("tolerance_mm") + " (mm) or " +
+                                         inputName("zones_file") + " (file)");
   return zones;
 }
 
@@ -122,7 +124,8 @@ ToolSet toolsFrom(const VerifyInputs& o, const ClProgram& program) {
   if (program.cutters.empty())
     throw InputError(program.file, 0, 0, "CUTTER",
                      "the program declares no cutter (CUTTER or TLDATA; in G-code a tool comment "
-                     "such as Fusion's (T1 D=6 CR=0)); give " + inputName("cutter") + " d,r");
+                     "such as Fusion's (T1 D=6 CR=0)); give " +
+                         inputName("cutter") + " d,r");
   // The shop's tool file describes the tools it names (over the program's comments).
   std::vector<CutterSpec> specs = program.cutters;
   if (!o.tools.empty()) {
@@ -141,9 +144,10 @@ ToolSet toolsFrom(const VerifyInputs& o, const ClProgram& program) {
       unknown += (unknown.empty() ? "" : ", ") + s.kind + " (line " + std::to_string(s.line) + ")";
   if (!unknown.empty())
     throw InputError(program.file, 0, 0, "tool",
-                     "the program cuts with " + unknown + ", whose geometry it does not give (no "
-                     "tool comment): describe them in a tool file (" + inputName("tools") + "), or give " +
-                         inputName("cutter") + " d,r for all");
+                     "the program cuts with " + unknown +
+                         ", whose geometry it does not give (no "
+                         "tool comment): describe them in a tool file (" +
+                         inputName("tools") + "), or give " + inputName("cutter") + " d,r for all");
   std::vector<int> lines;
   for (const CutterSpec& s : specs) {
     if (!cutterFromApt(s.source, s.values, &c))
@@ -184,9 +188,12 @@ std::vector<std::pair<std::string, std::string>> renderImages(
   map.faces = &s.faces;
   map.colours.resize(s.size());
   for (size_t i = 0; i < s.size(); ++i) {
-    if (r.conformance[i] == Conformance::Unmachined) map.colours[i] = kUnmachinedColour;
-    else if (r.conformance[i] == Conformance::Unchecked) map.colours[i] = kUncheckedColour;
-    else map.colours[i] = deviationColour(r.total[i], zones[r.zone[i]].lower, zones[r.zone[i]].upper);
+    if (r.conformance[i] == Conformance::Unmachined)
+      map.colours[i] = kUnmachinedColour;
+    else if (r.conformance[i] == Conformance::Unchecked)
+      map.colours[i] = kUncheckedColour;
+    else
+      map.colours[i] = deviationColour(r.total[i], zones[r.zone[i]].lower, zones[r.zone[i]].upper);
   }
   map.bar_lower = zones.front().lower;
   map.bar_upper = zones.front().upper;
@@ -194,12 +201,14 @@ std::vector<std::pair<std::string, std::string>> renderImages(
   // Callouts: the three worst regions (number, kind, value, where, CL line), or the largest
   // deviation when in tolerance.
   int worst = r.total_stats.max_sample;
-  if (r.total_stats.min_sample >= 0 &&
-      std::abs(r.total_stats.min) > std::abs(r.total_stats.max))
+  if (r.total_stats.min_sample >= 0 && std::abs(r.total_stats.min) > std::abs(r.total_stats.max))
     worst = r.total_stats.min_sample;
-  auto where = [](const Eigen::Vector3d& p) { return formatWith("(%.1f, ", p.x()) + formatWith("%.1f, ", p.y()) + formatWith("%.1f)", p.z()); };
-  std::vector<MapView> views = {{"isometric", Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d::UnitZ(), false, {}},
-                                {"top", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitY(), false, {}}};
+  auto where = [](const Eigen::Vector3d& p) {
+    return formatWith("(%.1f, ", p.x()) + formatWith("%.1f, ", p.y()) + formatWith("%.1f)", p.z());
+  };
+  std::vector<MapView> views = {
+      {"isometric", Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d::UnitZ(), false, {}},
+      {"top", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitY(), false, {}}};
   auto upFor = [](const Eigen::Vector3d& n) {
     return std::abs(n.z()) > 0.9 ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitZ();
   };
@@ -209,21 +218,27 @@ std::vector<std::pair<std::string, std::string>> renderImages(
       const int line = g.worst_sample >= 0 && r.cl_index[g.worst_sample] >= 0 && cl_lines
                            ? (*cl_lines)[r.cl_index[g.worst_sample]]
                            : 0;
-      map.callouts.push_back({g.where_w, "R" + std::to_string(k + 1) + " " + conformanceName(g.kind) + " " +
-                                             formatWith("%+.1f um", mmToUm(g.worst_deviation)) + "\n" + where(g.where_w) +
-                                             (line > 0 ? " line " + std::to_string(line) : std::string())});
+      map.callouts.push_back(
+          {g.where_w, "R" + std::to_string(k + 1) + " " + conformanceName(g.kind) + " " +
+                          formatWith("%+.1f um", mmToUm(g.worst_deviation)) + "\n" +
+                          where(g.where_w) +
+                          (line > 0 ? " line " + std::to_string(line) : std::string())});
       // The views that show the worst regions: along each one's normal, the whole part.
-      views.push_back({k == 0 ? "worst" : "region" + std::to_string(k + 1), -g.normal_w, upFor(g.normal_w), true,
-                       g.where_w});
+      views.push_back({k == 0 ? "worst" : "region" + std::to_string(k + 1), -g.normal_w,
+                       upFor(g.normal_w), true, g.where_w});
     }
   } else if (worst >= 0) {
-    map.callouts.push_back({s.p_w[worst], "largest " + formatWith("%+.1f um", mmToUm(r.total[worst])) + "\n" + where(s.p_w[worst])});
+    map.callouts.push_back(
+        {s.p_w[worst],
+         "largest " + formatWith("%+.1f um", mmToUm(r.total[worst])) + "\n" + where(s.p_w[worst])});
     views.push_back({"worst", -s.n_w[worst], upFor(s.n_w[worst]), true, s.p_w[worst]});
   }
   for (const auto& v : views) {
     const std::string path = (fs::path(dir) / ("map_" + v.name + ".png")).string();
     renderDeviationMap(path, map, v);
-    images.push_back({"deviation map, " + (v.focus ? v.name + " (along the region's normal)" : v.name) + " view", path});
+    images.push_back(
+        {"deviation map, " + (v.focus ? v.name + " (along the region's normal)" : v.name) + " view",
+         path});
   }
   std::vector<double> dev, w;
   for (size_t i = 0; i < s.size(); ++i)
@@ -252,11 +267,10 @@ std::vector<std::pair<std::string, std::string>> renderImages(
   return images;
 }
 
-
 // Work budgets, so that no input makes verify run for hours or exhaust memory: an input that
 // would exceed one is refused, saying which budget and what to change.
-constexpr double kMaxSamples = 5e6;      // surface samples (the remeshed part at --spacing)
-constexpr double kMaxPlacements = 2e7;   // tool placements per sweep (the path at --step)
+constexpr double kMaxSamples = 5e6;     // surface samples (the remeshed part at --spacing)
+constexpr double kMaxPlacements = 2e7;  // tool placements per sweep (the path at --step)
 
 // The remeshed part's sample count, from its area: isotropic triangles of edge s have area
 // (sqrt(3)/4) s^2, and a closed mesh has half as many vertices as faces; plus the points its
@@ -276,26 +290,30 @@ void checkSampleBudget(const VerifyInputs& o, const TriangleMesh& mesh) {
   // (b + sqrt(b^2 + 4 a N)) / 2N (this form holds for a part of no area too); 0.1 % above it, so
   // that the three digits printed still fit.
   const double qa = area / (std::sqrt(3.0) / 2.0), qb = 0.5 * perimeter / (4.0 / 3.0);
-  const double fitting = (qb + std::sqrt(qb * qb + 4.0 * qa * kMaxSamples)) / (2.0 * kMaxSamples) * 1.001;
+  const double fitting =
+      (qb + std::sqrt(qb * qb + 4.0 * qa * kMaxSamples)) / (2.0 * kMaxSamples) * 1.001;
   if (samples > kMaxSamples)
-    throw FieldError("spacing_mm",
-                     formatWith("the part, %.0f mm2 of surface at ", area) + formatWith("%g mm spacing", s) +
-                         formatWith(" make about %.3g surface samples, above the budget of ", samples) +
-                         formatWith("%.0f: give ", kMaxSamples) + inputName("spacing_mm") + " " + formatWith("%.3g or more", fitting));
+    throw FieldError(
+        "spacing_mm",
+        formatWith("the part, %.0f mm2 of surface at ", area) + formatWith("%g mm spacing", s) +
+            formatWith(" make about %.3g surface samples, above the budget of ", samples) +
+            formatWith("%.0f: give ", kMaxSamples) + inputName("spacing_mm") + " " +
+            formatWith("%.3g or more", fitting));
 }
 
 // The placements of a sweep, from the path's length at the step.
 void checkPlacementBudget(const ClProgram& program, const MotionSampling& sampling) {
   double length = 0;
-  for (size_t i = 1; i < program.path.size(); ++i) length += (program.path[i].p_w - program.path[i - 1].p_w).norm();
+  for (size_t i = 1; i < program.path.size(); ++i)
+    length += (program.path[i].p_w - program.path[i - 1].p_w).norm();
   const double placements = length / sampling.step;
   if (placements > kMaxPlacements)
-    throw FieldError("step_mm",
-                     formatWith("the program, %.0f mm of tool path at ", length) +
-                         formatWith("a %g mm step make about ", sampling.step) +
-                         formatWith("%.3g tool placements, above the budget of ", placements) +
-                         formatWith("%.0f: give ", kMaxPlacements) + inputName("step_mm") + " " +
-                         formatWith("%.3g or more (or a larger tolerance)", length / kMaxPlacements));
+    throw FieldError(
+        "step_mm", formatWith("the program, %.0f mm of tool path at ", length) +
+                       formatWith("a %g mm step make about ", sampling.step) +
+                       formatWith("%.3g tool placements, above the budget of ", placements) +
+                       formatWith("%.0f: give ", kMaxPlacements) + inputName("step_mm") + " " +
+                       formatWith("%.3g or more (or a larger tolerance)", length / kMaxPlacements));
 }
 
 // Phase timings: the seconds since the previous lap, by name.
@@ -333,10 +351,12 @@ void useOriginalAsNominal(const VerifyInputs& o, ProgramOnMachine& m) {
   (po.nc.empty() ? po.cl : po.nc) = o.compensated_from;
   const ClProgram original = loadProgram(po, m.machine.model);
   if (original.path.size() != m.program.path.size())
-    throw FieldError("compensated_from",
-                     o.compensated_from + ": the original has " + std::to_string(original.path.size()) + " tool positions, the "
-                     "compensated program " + std::to_string(m.program.path.size()) +
-                     ": give the program compensate read");
+    throw FieldError("compensated_from", o.compensated_from + ": the original has " +
+                                             std::to_string(original.path.size()) +
+                                             " tool positions, the "
+                                             "compensated program " +
+                                             std::to_string(m.program.path.size()) +
+                                             ": give the program compensate read");
   const PredictionResult op = predictProgram(m.machine, original);
   for (size_t i = 0; i < m.program.path.size(); ++i) {
     m.program.path[i].p_w = original.path[i].p_w;
@@ -359,23 +379,27 @@ ProgramOnMachine predictOnMachine(const VerifyInputs& o) {
   if (m.cal.probed)
     m.setup_note = describeProbedSetup(o.probed, m.cal.probe, probed, &probe_warnings);
   else if (!m.cal.uncertainty.empty())
-    m.setup_note = o.absolute
-                       ? inputName("absolute") + ": the machine's share includes what probing the part and "
+    m.setup_note =
+        o.absolute ? inputName("absolute") +
+                         ": the machine's share includes what probing the part and "
                          "presetting the tool would take up, which the calibration cannot see"
-                       : "the machine's share is after the set-up a shop measures (the part probed, "
-                         "the tool preset): the ball-bar calibration cannot see either";
+                   : "the machine's share is after the set-up a shop measures (the part probed, "
+                     "the tool preset): the ball-bar calibration cannot see either";
   if (!o.compensated_from.empty()) useOriginalAsNominal(o, m);
   const MachineModel& model = m.machine.model;
   m.warnings = setupWarnings(model);
-  for (const std::string& w : unitWarnings(m.program, model, o.program.units)) m.warnings.push_back(w);
-  for (const std::string& w : programNotes(m.program)) m.warnings.push_back(m.program.file + ": " + w);
+  for (const std::string& w : unitWarnings(m.program, model, o.program.units))
+    m.warnings.push_back(w);
+  for (const std::string& w : programNotes(m.program))
+    m.warnings.push_back(m.program.file + ": " + w);
   for (const std::string& w : probe_warnings) m.warnings.push_back(w);
   bool no_errors = false;
   const std::string errors = machineErrorsStatement(m.machine, &no_errors);
   if (no_errors) m.warnings.push_back(errors);
   for (const RotaryJump& j : findRotaryJumps(model, m.program.path, m.pred, degToRad(10.0)))
-    m.warnings.push_back(formatWith("program risk: rotary step of %+.1f deg of ", radToDeg(j.step)) +
-                         model.axes[j.axis].name + " between cutting moves at line " + std::to_string(j.line));
+    m.warnings.push_back(
+        formatWith("program risk: rotary step of %+.1f deg of ", radToDeg(j.step)) +
+        model.axes[j.axis].name + " between cutting moves at line " + std::to_string(j.line));
   return m;
 }
 
@@ -383,13 +407,16 @@ ProgramOnMachine predictOnMachine(const VerifyInputs& o) {
 ImportedPart readPart(const VerifyInputs& o, const ClProgram& program) {
   PartImportOptions io;
   io.units = o.mesh_units;
-  if (!o.mesh_offset.empty()) io.w_T_file.translation() = Eigen::Vector3d(o.mesh_offset[0], o.mesh_offset[1], o.mesh_offset[2]);
+  if (!o.mesh_offset.empty())
+    io.w_T_file.translation() =
+        Eigen::Vector3d(o.mesh_offset[0], o.mesh_offset[1], o.mesh_offset[2]);
   if (!o.mesh_rotation_deg.empty()) {
     const double k = degToRad(1.0);
-    io.w_T_file.linear() = (Eigen::AngleAxisd(o.mesh_rotation_deg[2] * k, Eigen::Vector3d::UnitZ()) *
-                            Eigen::AngleAxisd(o.mesh_rotation_deg[1] * k, Eigen::Vector3d::UnitY()) *
-                            Eigen::AngleAxisd(o.mesh_rotation_deg[0] * k, Eigen::Vector3d::UnitX()))
-                               .toRotationMatrix();
+    io.w_T_file.linear() =
+        (Eigen::AngleAxisd(o.mesh_rotation_deg[2] * k, Eigen::Vector3d::UnitZ()) *
+         Eigen::AngleAxisd(o.mesh_rotation_deg[1] * k, Eigen::Vector3d::UnitY()) *
+         Eigen::AngleAxisd(o.mesh_rotation_deg[0] * k, Eigen::Vector3d::UnitX()))
+            .toRotationMatrix();
   }
   io.repair.max_hole_perimeter = o.max_hole_mm;
   ImportedPart part = readPartMesh(o.part, io);
@@ -398,8 +425,9 @@ ImportedPart readPart(const VerifyInputs& o, const ClProgram& program) {
 }
 
 // The nominal and the predicted tool placements along the program, swept over the samples.
-void sweepPart(const ProgramOnMachine& m, const ToolSet& tools, const std::vector<ToleranceZone>& zones,
-               const MotionSampling& sampling, const SweepOptions& sweep, Verification& v, PhaseClock& phase,
+void sweepPart(const ProgramOnMachine& m, const ToolSet& tools,
+               const std::vector<ToleranceZone>& zones, const MotionSampling& sampling,
+               const SweepOptions& sweep, Verification& v, PhaseClock& phase,
                const std::function<void(double)>& progress) {
   const MachineModel& model = m.machine.model;
   ForwardKinematics fk_nominal(model, Eigen::VectorXd::Zero(model.parameterCount()));
@@ -410,7 +438,8 @@ void sweepPart(const ProgramOnMachine& m, const ToolSet& tools, const std::vecto
   if (m.q_nominal.empty())
     samplePlacements(fk_nominal, fk_actual, m.program.path, q, sampling, &nominal, &actual);
   else
-    samplePlacements(fk_nominal, fk_actual, m.program.path, m.q_nominal, q, sampling, &nominal, &actual);
+    samplePlacements(fk_nominal, fk_actual, m.program.path, m.q_nominal, q, sampling, &nominal,
+                     &actual);
   v.report.placements = static_cast<int>(nominal.size());
   phase("placements");
   v.result = verifyPart(v.samples, tools, nominal, actual, zones, sweep, [&](double f) {
@@ -429,11 +458,13 @@ std::vector<std::pair<int, int>> programOperations(const ClProgram& p, const Mac
   for (int i = 1; i <= n; ++i) {
     bool cut = i == n;
     if (!cut && !tools.tool_of_cl.empty()) cut = tools.tool_of_cl[i] != tools.tool_of_cl[i - 1];
-    if (!cut && i < static_cast<int>(p.point_frame.size())) cut = p.point_frame[i] != p.point_frame[i - 1];
+    if (!cut && i < static_cast<int>(p.point_frame.size()))
+      cut = p.point_frame[i] != p.point_frame[i - 1];
     if (!cut && i < static_cast<int>(p.tcp.size())) cut = p.tcp[i] != p.tcp[i - 1];
     if (!cut && p.path[i].rapid && i < static_cast<int>(p.joints.size()))
       for (size_t a = 0; a < model.axes.size(); ++a)
-        if (model.axes[a].isRotary() && std::abs(p.joints[i][a] - p.joints[i - 1][a]) > 1e-3) cut = true;
+        if (model.axes[a].isRotary() && std::abs(p.joints[i][a] - p.joints[i - 1][a]) > 1e-3)
+          cut = true;
     if (cut) {
       ops.emplace_back(first, i - 1);
       first = i;
@@ -468,7 +499,9 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
   // is the whole program.
   struct Count {
     size_t machined = 0, beyond = 0;
-    double share() const { return machined ? static_cast<double>(beyond) / static_cast<double>(machined) : 0.0; }
+    double share() const {
+      return machined ? static_cast<double>(beyond) / static_cast<double>(machined) : 0.0;
+    }
   };
   std::vector<Count> before(ops.size() + 1);
   for (size_t i = 0; i < r.machined.size(); ++i) {
@@ -489,7 +522,8 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
     bool turned = false;
     for (int i = ops[k].first; i <= ops[k].second && !turned; ++i)
       for (int a : rotary) turned = turned || std::abs(program.joints[i][a]) > 1e-6;
-    if (turned && before[k].machined >= 20 && before[k].share() >= 0.5) suspects.push_back(static_cast<int>(k));
+    if (turned && before[k].machined >= 20 && before[k].share() >= 0.5)
+      suspects.push_back(static_cast<int>(k));
   }
   if (suspects.empty()) return;
   // The conventions tried: each rotary axis as in the machine file, its sense reversed, its zero
@@ -550,13 +584,16 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
     for (size_t k = 0; k < change.size(); ++k) {
       const Change& c = change[k];
       const std::string& name = model.axes[c.axis].name;
-      what += std::string(k == 0 ? "" : k + 1 == change.size() ? " and " : ", ") +
+      what += std::string(k == 0                   ? ""
+                          : k + 1 == change.size() ? " and "
+                                                   : ", ") +
               (c.sense && c.zero ? name + " turns the other way from a zero half a turn away"
                : c.sense         ? name + " turns the other way"
                                  : "the zero of " + name + " is half a turn away");
       if (fix)
         *fix += std::string(k == 0 ? "" : ", ") + (c.sense ? "the nc_sign of " + name : "") +
-                (c.sense && c.zero ? " and " : "") + (c.zero ? "the zero of " + name + " (its link rotation)" : "");
+                (c.sense && c.zero ? " and " : "") +
+                (c.zero ? "the zero of " + name + " (its link rotation)" : "");
     }
     return what;
   };
@@ -567,7 +604,8 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
     for (size_t vi = 0; vi < variants.size(); ++vi) {
       if (after[vi].empty() || after[vi][s].machined < before[s].machined / 2) continue;
       // A tie goes to the convention tried first (one axis before two).
-      if (after[vi][s].share() < best_share - 1e-12) best_share = after[vi][s].share(), best = static_cast<int>(vi);
+      if (after[vi][s].share() < best_share - 1e-12)
+        best_share = after[vi][s].share(), best = static_cast<int>(vi);
     }
     if (best < 0 || best_share > 0.1 || best_share > share0 / 3.0) continue;
     std::string fix;
@@ -577,14 +615,16 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
     auto adds = [&](const std::vector<Change>& a) {
       for (const Change& b : variants[best]) {
         bool in = false;
-        for (const Change& c : a) in = in || (c.axis == b.axis && c.sense == b.sense && c.zero == b.zero);
+        for (const Change& c : a)
+          in = in || (c.axis == b.axis && c.sense == b.sense && c.zero == b.zero);
         if (!in) return false;
       }
       return true;
     };
     std::string also;
     for (size_t vi = 0; vi < variants.size(); ++vi)
-      if (static_cast<int>(vi) != best && !after[vi].empty() && after[vi][s].machined >= before[s].machined / 2 &&
+      if (static_cast<int>(vi) != best && !after[vi].empty() &&
+          after[vi][s].machined >= before[s].machined / 2 &&
           after[vi][s].share() <= best_share + 0.005 && !adds(variants[vi]))
         also += (also.empty() ? "" : "; or ") + describe(variants[vi], nullptr);
     const bool whole = s == static_cast<int>(ops.size());
@@ -592,13 +632,15 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
         whole ? "the program's cut fits the part"
               : "the operation of lines " + std::to_string(program.path[ops[s].first].line) + "-" +
                     std::to_string(program.path[ops[s].second].line) + " fits the part it cuts";
-    throw InputError(o.machine.machine, 0, 0, "convention",
-                     what + " in this program compared with the machine file: with that convention " +
-                         where + " (gouged beyond " + formatWith("%.3g", sweep.gouge_range) + " mm on " +
-                         formatWith("%.1f", 100.0 * best_share) + " % of the surface it cuts instead of " +
-                         formatWith("%.1f", 100.0 * share0) + " %)" +
-                         (also.empty() ? "" : " (it fits as well if " + also + ": the part cannot tell them apart)") +
-                         ": set " + fix + " in the machine file to the control's convention");
+    throw InputError(
+        o.machine.machine, 0, 0, "convention",
+        what + " in this program compared with the machine file: with that convention " + where +
+            " (gouged beyond " + formatWith("%.3g", sweep.gouge_range) + " mm on " +
+            formatWith("%.1f", 100.0 * best_share) + " % of the surface it cuts instead of " +
+            formatWith("%.1f", 100.0 * share0) + " %)" +
+            (also.empty() ? ""
+                          : " (it fits as well if " + also + ": the part cannot tell them apart)") +
+            ": set " + fix + " in the machine file to the control's convention");
   }
 }
 
@@ -627,7 +669,8 @@ void decideWithinBand(const std::vector<PoseUncertainty>& cl_unc, const ClProgra
     const ToleranceZone& z = zones[zone_of[i]];
     const double t = result.total[i];
     const double beyond = std::max(t - z.upper, z.lower - t);  // > 0: outside the zone
-    if (beyond > u95) ++definite_fail;
+    if (beyond > u95)
+      ++definite_fail;
     else if (std::abs(beyond) <= u95) {
       if (undecided++ == 0 || std::abs(beyond) < 1e-12) undecided_at = static_cast<int>(i);
     }
@@ -655,13 +698,16 @@ void reportHoles(bool allow_open, Verification& v) {
   if (!rep.has_repair || rep.repair.holes.empty()) return;
   const MeshHole& h = rep.repair.holes.front();
   char text[400];
-  std::snprintf(text, sizeof text,
-                "%zu holes in the part's surface are not covered by its mesh: %.1f mm2 not verified "
-                "(the first, %.1f mm2, at (%.2f, %.2f, %.2f)); holes with a border shorter than %.2f mm "
-                "are filled (%s)%s",
-                rep.repair.holes.size(), rep.repair.hole_area, h.area, h.centre_w.x(), h.centre_w.y(),
-                h.centre_w.z(), rep.repair.max_hole_perimeter, inputName("max_hole_mm").c_str(),
-                ("; " + inputName("allow_open") + (allow_open ? ": not part of the verdict" : " accepts them")).c_str());
+  std::snprintf(
+      text, sizeof text,
+      "%zu holes in the part's surface are not covered by its mesh: %.1f mm2 not verified "
+      "(the first, %.1f mm2, at (%.2f, %.2f, %.2f)); holes with a border shorter than %.2f mm "
+      "are filled (%s)%s",
+      rep.repair.holes.size(), rep.repair.hole_area, h.area, h.centre_w.x(), h.centre_w.y(),
+      h.centre_w.z(), rep.repair.max_hole_perimeter, inputName("max_hole_mm").c_str(),
+      ("; " + inputName("allow_open") +
+       (allow_open ? ": not part of the verdict" : " accepts them"))
+          .c_str());
   rep.incomplete_text = std::string("INCOMPLETE: ") + text;
   rep.incomplete = !allow_open && result.pass;
   if (allow_open || !result.pass) rep.notes.push_back(text);
@@ -686,10 +732,12 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   for (const Cutter& c : tools.cutters)
     r_eff = std::min(r_eff, c.corner_radius > 0 ? c.corner_radius : 0.5 * c.diameter);
   MotionSampling sampling;
-  sampling.step = std::isnan(o.step_mm) ? std::clamp(std::sqrt(0.8 * r_eff * t_min), 0.005, 1.0) : o.step_mm;
+  sampling.step =
+      std::isnan(o.step_mm) ? std::clamp(std::sqrt(0.8 * r_eff * t_min), 0.005, 1.0) : o.step_mm;
   sampling.reach = tools.maxLength();
   SweepOptions sweep;
-  sweep.excess_range = std::isnan(o.excess_range_mm) ? std::max(0.1, 5.0 * t_min) : o.excess_range_mm;
+  sweep.excess_range =
+      std::isnan(o.excess_range_mm) ? std::max(0.1, 5.0 * t_min) : o.excess_range_mm;
   sweep.gouge_range = std::isnan(o.gouge_range_mm) ? std::max(0.1, 5.0 * t_min) : o.gouge_range_mm;
 
   rep.name = name;
@@ -702,7 +750,8 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
     if (o.cutter.empty() && c.source == "CUTTER" && c.values.size() > 4 && c.values[4] > 0 &&
         c.values[1] == 0)
       rep.notes.push_back("the cutter of line " + std::to_string(c.line) + " has a point (alpha " +
-                          formatNumber(c.values[4]) + " deg): it is swept as a flat end, so the "
+                          formatNumber(c.values[4]) +
+                          " deg): it is swept as a flat end, so the "
                           "bottoms of its holes read as gouges up to its point's height");
   if (tools.cutters.size() == 1) {
     rep.cutter = describeCutter(tools.cutters[0]);
@@ -710,7 +759,8 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
     rep.cutter = std::to_string(tools.cutters.size()) + " tools, each from its line on:";
     for (size_t k = 0; k < tools.cutters.size(); ++k)
       rep.cutter += (k ? "; " : " ") + std::string("line ") +
-                    std::to_string(program.cutters[k].line) + " " + describeCutter(tools.cutters[k]);
+                    std::to_string(program.cutters[k].line) + " " +
+                    describeCutter(tools.cutters[k]);
   }
   rep.cl_points = static_cast<int>(program.path.size());
   for (const auto& p : program.path) rep.cl_lines.push_back(p.line);
@@ -727,8 +777,9 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
       predicted[i].u_w = m.pred.points[i].u_pred_w;
     }
     clOnlyDeviation(program.path, predicted, zones, &v->samples, &v->result);
-    rep.notes.push_back("CL-only mode: no part model; the surfaces are built through the CL points "
-                        "(thesis 5.5.4-5.5.5) and the deviation is the machine's alone");
+    rep.notes.push_back(
+        "CL-only mode: no part model; the surfaces are built through the CL points "
+        "(thesis 5.5.4-5.5.5) and the deviation is the machine's alone");
   } else {
     const ImportedPart part = readPart(o, program);
     checkSampleBudget(o, part.mesh);
@@ -752,9 +803,8 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   if (o.line_pass > 0) {
     const auto passes = clPasses(program.path);
     if (o.line_pass > static_cast<int>(passes.size()))
-      throw FieldError("line_pass",
-                       "the program has " + std::to_string(passes.size()) + " passes, not " +
-                           std::to_string(o.line_pass));
+      throw FieldError("line_pass", "the program has " + std::to_string(passes.size()) +
+                                        " passes, not " + std::to_string(o.line_pass));
     rep.line_pass = o.line_pass;
     rep.line_profile = lineProfile(v->samples, v->result, passes[o.line_pass - 1]);
   }
@@ -762,12 +812,13 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   // A program that cuts none of the checked surface verifies nothing: INCOMPLETE, never PASS.
   if (!o.part.empty() && v->samples.size() > 0 && !(v->result.area_machined > 0)) {
     rep.incomplete = true;
-    rep.incomplete_text =
-        "INCOMPLETE: the program cuts none of the checked surface (" +
-        formatWith("%.1f", v->result.area) + " mm2 sampled, none machined): is this the part the "
-        "program makes, placed where it cuts (the set-up, " + inputName("mesh_offset") + ")?";
+    rep.incomplete_text = "INCOMPLETE: the program cuts none of the checked surface (" +
+                          formatWith("%.1f", v->result.area) +
+                          " mm2 sampled, none machined): is this the part the "
+                          "program makes, placed where it cuts (the set-up, " +
+                          inputName("mesh_offset") + ")?";
   }
-  v->verdict = v->report.incomplete ? Verdict::NotMet
+  v->verdict = v->report.incomplete  ? Verdict::NotMet
                : v->report.undecided ? Verdict::Undecided
                : v->result.pass      ? Verdict::Ok
                                      : Verdict::NotMet;
@@ -792,8 +843,8 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
     lap = now;
   };
   std::vector<Eigen::Vector3d> nominal_swept(samples.size()), predicted_swept(samples.size());
-  std::vector<double> total_um(samples.size()), machine_um(samples.size()), program_um(samples.size()),
-      state(samples.size());
+  std::vector<double> total_um(samples.size()), machine_um(samples.size()),
+      program_um(samples.size()), state(samples.size());
   for (size_t i = 0; i < samples.size(); ++i) {
     const bool cut = result.machined[i];
     predicted_swept[i] = samples.p_w[i] + (cut ? result.total[i] : 0.0) * samples.n_w[i];
@@ -808,26 +859,29 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
   auto tables = std::async(std::launch::async, [&] {
     const auto start = std::chrono::steady_clock::now();
     writeFileAtomically((dir / "deviations.csv").string(), formatDeviationsCsv(r));
-    writePlyWithScalar((dir / "swept_predicted.ply").string(), predicted_swept, samples.faces, total_um,
-                       "deviation_um");
-    writePlyWithScalar((dir / "swept_nominal.ply").string(), nominal_swept, samples.faces, program_um,
-                       "deviation_um");
+    writePlyWithScalar((dir / "swept_predicted.ply").string(), predicted_swept, samples.faces,
+                       total_um, "deviation_um");
+    writePlyWithScalar((dir / "swept_nominal.ply").string(), nominal_swept, samples.faces,
+                       program_um, "deviation_um");
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   });
   try {
     {
       std::lock_guard<std::mutex> lock(g_vtk_mutex);
       writeVtpWithScalars((dir / "swept_predicted.vtp").string(), predicted_swept, samples.faces,
-                          {{"total_um", &total_um}, {"machine_um", &machine_um}, {"program_um", &program_um},
+                          {{"total_um", &total_um},
+                           {"machine_um", &machine_um},
+                           {"program_um", &program_um},
                            {"state", &state}});
       writeVtpWithScalars((dir / "swept_nominal.vtp").string(), nominal_swept, samples.faces,
                           {{"program_um", &program_um}});
     }
     phase("write_surfaces");
-    const std::string title = verdictName(r) + "  " + r.name + ": total deviation (predicted swept - CAD)";
+    const std::string title =
+        verdictName(r) + "  " + r.name + ": total deviation (predicted swept - CAD)";
     if (images)
-      r.images = renderImages(r.line_pass, dir.string(), samples, result, r.zones, r.line_profile, title, &r.notes,
-                              &r.cl_lines);
+      r.images = renderImages(r.line_pass, dir.string(), samples, result, r.zones, r.line_profile,
+                              title, &r.notes, &r.cl_lines);
     phase("images");
   } catch (...) {
     tables.wait();  // it writes into the staging directory: let it finish before that goes

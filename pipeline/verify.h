@@ -20,24 +20,24 @@ namespace tolver {
 struct VerifyInputs {
   MachineOptions machine;
   ProgramOptions program;
-  std::string part;        // part model; empty: CL-only mode
-  std::string zones_file;  // zones per region (CSV)
-  std::string mesh_units;  // "", "mm", "inch", "m"
+  std::string part;                       // part model; empty: CL-only mode
+  std::string zones_file;                 // zones per region (CSV)
+  std::string mesh_units;                 // "", "mm", "inch", "m"
   std::vector<double> mesh_offset;        // placement of the part file in w, mm (x, y, z)
   std::vector<double> mesh_rotation_deg;  // about x, then y, then z of w, deg
-  double tolerance_mm = NAN;               // profile tolerance all over (zone width t)
-  bool tolerance_confirmed = false;        // a tolerance above 1 mm was meant (else refused)
-  double uz_mm = NAN, asme_u_mm = NAN;     // ISO 1101 UZ offset, or ASME Y14.5 U
-  double spacing_mm = 0.5;                 // surface sample spacing
+  double tolerance_mm = NAN;              // profile tolerance all over (zone width t)
+  bool tolerance_confirmed = false;       // a tolerance above 1 mm was meant (else refused)
+  double uz_mm = NAN, asme_u_mm = NAN;    // ISO 1101 UZ offset, or ASME Y14.5 U
+  double spacing_mm = 0.5;                // surface sample spacing
   double step_mm = NAN, excess_range_mm = NAN, gouge_range_mm = NAN;  // NAN: from t and the cutter
-  double max_hole_mm = -1;                 // largest mesh hole perimeter filled; < 0: default
-  std::vector<double> cutter;              // d, r[, length, taper_deg]; empty: the program's
-  std::string tools;                       // tool file (io/program/tool_file.h): posted tools' geometry
-  int line_pass = 0;                       // 1-based pass for a line profile, 0 none
-  bool absolute = false;                   // calibrated machine: no measured set-up
-  std::string probed;                      // probed points (CSV)
-  std::string compensated_from;            // the original of a compensated program
-  bool allow_open = false;                 // holes in the checked surface do not make INCOMPLETE
+  double max_hole_mm = -1;       // largest mesh hole perimeter filled; < 0: default
+  std::vector<double> cutter;    // d, r[, length, taper_deg]; empty: the program's
+  std::string tools;             // tool file (io/program/tool_file.h): posted tools' geometry
+  int line_pass = 0;             // 1-based pass for a line profile, 0 none
+  bool absolute = false;         // calibrated machine: no measured set-up
+  std::string probed;            // probed points (CSV)
+  std::string compensated_from;  // the original of a compensated program
+  bool allow_open = false;       // holes in the checked surface do not make INCOMPLETE
   // The outputs (verifyPart, verifyBatch): the report directory, with images or without.
   std::string report_dir;
   bool images = true;
@@ -76,7 +76,8 @@ struct VerifyRun {
   std::string report;  // report.html
   Verdict verdict = Verdict::Ok;
 };
-VerifyRun verifyPart(const VerifyInputs& in, const std::string& name = "", const Progress& progress = {});
+VerifyRun verifyPart(const VerifyInputs& in, const std::string& name = "",
+                     const Progress& progress = {});
 
 // tolver verify --batch: the jobs of a jobs file (io/program/jobs_file.h; paths relative to it),
 // each over `base` with its own machine, set-up, probed points, program, part, zones and
@@ -92,7 +93,7 @@ struct JobOutcome {
 };
 struct BatchRun {
   std::vector<JobOutcome> jobs;
-  std::string summary;        // summary.csv
+  std::string summary;            // summary.csv
   Verdict verdict = Verdict::Ok;  // the worst of the jobs'
 };
 // done(k, n, outcome): job k finished (from a worker thread, serialised), n jobs in all.

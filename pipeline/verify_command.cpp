@@ -16,14 +16,17 @@ namespace tolver {
 
 namespace fs = std::filesystem;
 
-VerifyRun verifyPart(const VerifyInputs& in, const std::string& name_given, const Progress& progress) {
+VerifyRun verifyPart(const VerifyInputs& in, const std::string& name_given,
+                     const Progress& progress) {
   if (in.program.cl.empty() && in.program.nc.empty())
-    throw FieldError("cl", "give the program (" + inputName("cl") + " or " + inputName("nc") + ") or a jobs file (" +
-                               inputName("batch") + ")");
+    throw FieldError("cl", "give the program (" + inputName("cl") + " or " + inputName("nc") +
+                               ") or a jobs file (" + inputName("batch") + ")");
   if (in.machine.machine.empty()) throw FieldError("machine", "give the machine file");
   if (in.report_dir.empty()) throw FieldError("report_dir", "give the report directory");
   const std::string name =
-      !name_given.empty() ? name_given : fs::path(in.program.cl.empty() ? in.program.nc : in.program.cl).stem().string();
+      !name_given.empty()
+          ? name_given
+          : fs::path(in.program.cl.empty() ? in.program.nc : in.program.cl).stem().string();
   VerifyRun run;
   run.verification = runVerification(in, name, [&](double f) {
     if (progress) progress("sweeping " + name, f);
@@ -96,13 +99,15 @@ BatchRun verifyBatch(const VerifyInputs& base, const std::string& jobs_file,
     const int n = ++finished;
     if (done) done(n, jobs.size(), out);
   });
-  std::string csv = "name,verdict,min_um,max_um,machine_rms_um,percent_in_tolerance,regions,report,error\n";
+  std::string csv =
+      "name,verdict,min_um,max_um,machine_rms_um,percent_in_tolerance,regions,report,error\n";
   for (const JobOutcome& r : run.jobs) {
     run.verdict = worse(run.verdict, r.verdict);
-    csv += csvLine({r.name, r.verdict_text, formatWith("%.3f", r.min_um), formatWith("%.3f", r.max_um),
-                    formatWith("%.3f", r.machine_rms_um), formatWith("%.3f", r.percent_in), std::to_string(r.regions),
-                    r.report, r.error}) +
-           "\n";
+    csv +=
+        csvLine({r.name, r.verdict_text, formatWith("%.3f", r.min_um), formatWith("%.3f", r.max_um),
+                 formatWith("%.3f", r.machine_rms_um), formatWith("%.3f", r.percent_in),
+                 std::to_string(r.regions), r.report, r.error}) +
+        "\n";
   }
   run.summary = (fs::path(base.report_dir) / "summary.csv").string();
   writeFileAtomically(run.summary, csv);

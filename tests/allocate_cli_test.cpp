@@ -13,7 +13,8 @@ namespace {
 class AllocateCli : public test::TempDirTest {};
 
 TEST_F(AllocateCli, Xkh800ReportsAndExitCodes) {
-  const std::string base = "allocate --machine " + test::sourcePath("resources/machines/xkh800.xml") +
+  const std::string base = "allocate --machine " +
+                           test::sourcePath("resources/machines/xkh800.xml") +
                            " --gauge-length 150 --tolerances " +
                            test::sourcePath("resources/allocation/xkh800_standard.csv") +
                            " --limits 0.015,0.015,0.010 --generations 60 ";
@@ -32,7 +33,8 @@ TEST_F(AllocateCli, Xkh800ReportsAndExitCodes) {
   EXPECT_EQ(j["terms"].size(), 37u);
   EXPECT_EQ(j["correlation_groups"].size(), 4u);
   for (int d = 0; d < 3; ++d)
-    EXPECT_LE(j["chosen"]["worst_mm"][d].get<double>(), j["limits_mm"][d].get<double>() * (1 + 1e-9));
+    EXPECT_LE(j["chosen"]["worst_mm"][d].get<double>(),
+              j["limits_mm"][d].get<double>() * (1 + 1e-9));
   std::ifstream html(path("b/report.html"));
   const std::string page((std::istreambuf_iterator<char>(html)), std::istreambuf_iterator<char>());
   EXPECT_NE(page.find("data:image/png;base64,iVBORw0KGgo"), std::string::npos);  // embedded PNG
@@ -48,16 +50,19 @@ TEST_F(AllocateCli, Xkh800ReportsAndExitCodes) {
 TEST_F(AllocateCli, BadToleranceFilesExitWithCode2) {
   const std::string machine = test::sourcePath("resources/machines/xkh800.xml");
   const std::vector<std::pair<std::string, std::string>> cases = {
-      {"term,category,standard,unit\ndq_q,positional,0.005,mm\n", "t.csv:2: term: no parameter named 'dq_q'"},
-      {"term,category,standard,unit\ndx_x,sideways,0.005,mm\n", "t.csv:2: category: unknown category"},
-      {"term,category,standard,unit\ndx_x,linear_positioning,abc,mm\n", "t.csv:2: standard: expected a positive number"},
+      {"term,category,standard,unit\ndq_q,positional,0.005,mm\n",
+       "t.csv:2: term: no parameter named 'dq_q'"},
+      {"term,category,standard,unit\ndx_x,sideways,0.005,mm\n",
+       "t.csv:2: category: unknown category"},
+      {"term,category,standard,unit\ndx_x,linear_positioning,abc,mm\n",
+       "t.csv:2: standard: expected a positive number"},
       {"term,category,standard,unit\ndx_x,linear_positioning,0.005,urad\n", "t.csv:2: unit:"},
       {"term,category,standard\ndx_x,linear_positioning,0.005\n", "t.csv:1: unit: missing column"},
   };
   for (const auto& [text, needle] : cases) {
     write("t.csv", text);
-    const auto r = test::runTolver("allocate --machine " + machine + " --tolerances " + path("t.csv") +
-                                   " --report-dir " + path("out"));
+    const auto r = test::runTolver("allocate --machine " + machine + " --tolerances " +
+                                   path("t.csv") + " --report-dir " + path("out"));
     EXPECT_EQ(r.exit_code, 2) << r.output;
     EXPECT_NE(r.output.find(needle), std::string::npos) << r.output;
   }

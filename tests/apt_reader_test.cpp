@@ -169,8 +169,10 @@ TEST(AptReader, NxPointsStayInTheMainMcs) {
   }
   EXPECT_GT(helix, 100);
   // Clockwise seen from +z (axis -k): two turns and the 282 deg from start to end.
-  EXPECT_NEAR(turned, -(2 * 2 * M_PI + std::atan2(-11.972, -54.9612) -
-                       std::atan2(-56.25, -0.0108) + 2 * M_PI), 0.02);
+  EXPECT_NEAR(
+      turned,
+      -(2 * 2 * M_PI + std::atan2(-11.972, -54.9612) - std::atan2(-56.25, -0.0108) + 2 * M_PI),
+      0.02);
   // --absolute-msys: the same points through the MSYS (origin 393, -297.5, 3; z down).
   AptReadOptions absolute;
   absolute.absolute_msys = true;
@@ -291,7 +293,7 @@ struct BadCase {
 
 TEST(AptReader, BadInputNamesFileLineAndColumn) {
   const BadCase cases[] = {
-      {"GOTO/1.0,2.0,\n", 1, 14, "missing value"},             // truncated line
+      {"GOTO/1.0,2.0,\n", 1, 14, "missing value"},                   // truncated line
       {"GOTO/1,2,3\nGOTO/1.0,2.x5,3\n", 2, 10, "malformed number"},  // letters in a number
       {"", 0, 0, "empty file"},
       {"  \n\n", 0, 0, "empty file"},
@@ -301,7 +303,8 @@ TEST(AptReader, BadInputNamesFileLineAndColumn) {
       {"GOTO/1,2, $\n", 1, 0, "past the end"},
       {"GOTO/1,2,3\nCIRCLE/0,0,0,0,0,1,1\nGOTO/5,0,0\n", 2, 0, "not on one circle"},
       // A circle of 9e8 mm: refused before any point is expanded.
-      {"GOTO/900000000,0,0\nCIRCLE/0,0,0,0,0,1,900000000\nGOTO/0,900000000,0\n", 2, 0, "more than a million"},
+      {"GOTO/900000000,0,0\nCIRCLE/0,0,0,0,0,1,900000000\nGOTO/0,900000000,0\n", 2, 0,
+       "more than a million"},
       {"CSYS/1,0,0,0,0,2,0,0,0,0,1,0\n", 1, 0, "orthonormal"},
       {"UNITS/INCHES\nGOTO/1e300,0,0\n", 2, 6, "out of range"},
       {"GOTO/1,2,3\nNURBS/\nKNOT/0,1\n", 2, 0, "NURBS"},
@@ -325,7 +328,8 @@ TEST(AptReader, MutatedFilesFailCleanly) {
   std::mt19937 rng(2024);
   const char* alphabet = "GOTO/,.$-+e0123456789 \n\tCIRCLE";
   for (const char* name : {"nx_ust_a.cls", "creo_profile_milling.ncl", "swcam_RotateThick.apt"}) {
-    const std::string original = readFile(test::sourcePath(std::string("tests/fixtures/cl/") + name));
+    const std::string original =
+        readFile(test::sourcePath(std::string("tests/fixtures/cl/") + name));
     int failed = 0;
     for (int n = 0; n < 300; ++n) {
       std::string text = original;
@@ -334,10 +338,18 @@ TEST(AptReader, MutatedFilesFailCleanly) {
         std::uniform_int_distribution<size_t> at(0, text.size() - 1);
         const size_t i = at(rng);
         switch (rng() % 4) {
-          case 0: text.erase(i, 1 + rng() % 5); break;
-          case 1: text.insert(i, 1, alphabet[rng() % std::strlen(alphabet)]); break;
-          case 2: text[i] = static_cast<char>(rng() % 256); break;
-          default: text.resize(i); break;
+          case 0:
+            text.erase(i, 1 + rng() % 5);
+            break;
+          case 1:
+            text.insert(i, 1, alphabet[rng() % std::strlen(alphabet)]);
+            break;
+          case 2:
+            text[i] = static_cast<char>(rng() % 256);
+            break;
+          default:
+            text.resize(i);
+            break;
         }
         if (text.empty()) text = "X";
       }
@@ -364,7 +376,8 @@ namespace {
 
 // A UTF-8 byte-order mark before a leading UNITS/INCHES: the units hold.
 TEST(AptReader, ByteOrderMarkBeforeTheFirstStatementIsSkipped) {
-  const ClProgram p = parseApt("\xEF\xBB\xBFUNITS/INCHES\nMULTAX\nGOTO/0.5,0.5,0.2,0,0,1\n", "bom.apt", {});
+  const ClProgram p =
+      parseApt("\xEF\xBB\xBFUNITS/INCHES\nMULTAX\nGOTO/0.5,0.5,0.2,0,0,1\n", "bom.apt", {});
   ASSERT_EQ(p.path.size(), 1u);
   EXPECT_EQ(p.units, "INCH");
   EXPECT_NEAR(p.path[0].p_w.x(), 0.5 * 25.4, 1e-12);
@@ -383,8 +396,9 @@ TEST(AptReader, MessagesQuoteAtMostSixtyCharactersOfABadToken) {
     EXPECT_NE(m.find(std::string(60, '9') + "..."), std::string::npos) << m;
   }
   // An apostrophe inside a word opens no quotation: the sentence after it is kept whole.
-  const std::string sentence = "the program's cut fits the part with the zero of C half a turn away, "
-                               "so set the zero of C in the machine file to the control's convention";
+  const std::string sentence =
+      "the program's cut fits the part with the zero of C half a turn away, "
+      "so set the zero of C in the machine file to the control's convention";
   const InputError e("m.xml", 0, 0, "convention", sentence + ": '" + token + "'");
   const std::string m = e.what();
   EXPECT_NE(m.find(sentence), std::string::npos) << m;

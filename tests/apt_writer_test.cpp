@@ -63,7 +63,8 @@ TEST_P(RoundTrip, StreamedWithoutMotionTextWritesTheSameFile) {
     }
   EXPECT_GT(dropped, 0u);
   const std::vector<std::string> header = {"streamed"};
-  EXPECT_EQ(formatPredictedApt(streamed, streamed.path, header), formatPredictedApt(whole, whole.path, header));
+  EXPECT_EQ(formatPredictedApt(streamed, streamed.path, header),
+            formatPredictedApt(whole, whole.path, header));
 }
 
 INSTANTIATE_TEST_SUITE_P(Dialects, RoundTrip,
@@ -73,14 +74,16 @@ INSTANTIATE_TEST_SUITE_P(Dialects, RoundTrip,
                                            "creo_drilling.ncl"));
 
 TEST(AptWriter, KeepsNonMotionStatementsVerbatimAndUnits) {
-  const ClProgram p = parseApt("PARTNO/P1\nUNITS/INCHES\nFEDRAT/IPM,20\nGOTO/1,2,3\nFINI\n", "in.apt");
+  const ClProgram p =
+      parseApt("PARTNO/P1\nUNITS/INCHES\nFEDRAT/IPM,20\nGOTO/1,2,3\nFINI\n", "in.apt");
   std::vector<ClPoint> q = p.path;
   q[0].p_w += Eigen::Vector3d(0.0254, 0, 0);
   const std::string text = formatPredictedApt(p, q, {"hdr"});
   EXPECT_NE(text.find("$$ hdr\n"), std::string::npos);
   EXPECT_NE(text.find("PARTNO/P1\nUNITS/INCHES\nFEDRAT/IPM,20\n"), std::string::npos);
   EXPECT_NE(text.find("GOTO/1.00100000,2.00000000,3.00000000,0.000000000,0.000000000,1.000000000"),
-            std::string::npos) << text;
+            std::string::npos)
+      << text;
   EXPECT_NE(text.find("FINI"), std::string::npos);
 }
 

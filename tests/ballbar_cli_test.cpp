@@ -19,10 +19,11 @@ class BallbarCli : public test::TempDirTest {};
 TEST_F(BallbarCli, PlanSimulateCalibratePredict) {
   const std::string nominal = test::sourcePath("resources/machines/matsuura_mc760vx.xml");
   const std::string truth = test::sourcePath("samples/machines/matsuura_mc760vx_measured.xml");
-  auto r = test::runTolver("plan-ballbar --machine " + nominal + " --length 150 --setups 3 --poses 180 -o " +
-                           path("plan.csv"));
+  auto r = test::runTolver("plan-ballbar --machine " + nominal +
+                           " --length 150 --setups 3 --poses 180 -o " + path("plan.csv"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("110 unknowns (92 machine + 6 per set-up), rank 110"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("110 unknowns (92 machine + 6 per set-up), rank 110"), std::string::npos)
+      << r.output;
   EXPECT_TRUE(fs::exists(path("plan.nc")));
   r = test::runTolver("simulate-ballbar --machine " + truth + " --plan " + path("plan.csv") +
                       " --noise-um 0 --ball-error-um 10 -o " + path("readings.csv"));
@@ -59,21 +60,26 @@ TEST_F(BallbarCli, BadReadingsAndUnobservablePlans) {
          "tool_ball_z_mm,x_mm,y_mm,z_mm,a_deg,c_deg,length_mm\n"
          "1,0,0,0,25,0,0,10,20,30,-45,90,150\n"
          "1,0,0,0,25,0,0,10,20,30,-45,abc,150\n";
-  auto r = test::runTolver("calibrate --machine " + nominal + " --readings " + path("bad.csv") + " -o " +
-                           path("o.xml"));
+  auto r = test::runTolver("calibrate --machine " + nominal + " --readings " + path("bad.csv") +
+                           " -o " + path("o.xml"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.output.find("bad.csv:3: c_deg: malformed number 'abc'"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("bad.csv:3: c_deg: malformed number 'abc'"), std::string::npos)
+      << r.output;
   EXPECT_FALSE(fs::exists(path("o.xml")));
   // A machine with two axes (issue 37: a segfault in JacobiSVD): refused by name, exit 2.
-  std::ofstream(path("two.xml"))
-      << "<machine name=\"two\" length_unit=\"mm\" angle_unit=\"deg\">\n"
-         "<axis name=\"X\" type=\"prismatic\" branch=\"tool\" direction=\"1 0 0\" min=\"-100\" max=\"100\"/>\n"
-         "<axis name=\"Y\" type=\"prismatic\" branch=\"workpiece\" direction=\"0 1 0\" min=\"-100\" max=\"100\"/>\n"
-         "<table translation=\"0 0 0\" rotation=\"0 0 0\"/><spindle translation=\"0 0 0\" rotation=\"0 0 0\"/>\n"
-         "</machine>\n";
-  auto two = test::runTolver("plan-ballbar --machine " + path("two.xml") + " --poses 50 -o " + path("two.csv"));
+  std::ofstream(path("two.xml")) << "<machine name=\"two\" length_unit=\"mm\" angle_unit=\"deg\">\n"
+                                    "<axis name=\"X\" type=\"prismatic\" branch=\"tool\" "
+                                    "direction=\"1 0 0\" min=\"-100\" max=\"100\"/>\n"
+                                    "<axis name=\"Y\" type=\"prismatic\" branch=\"workpiece\" "
+                                    "direction=\"0 1 0\" min=\"-100\" max=\"100\"/>\n"
+                                    "<table translation=\"0 0 0\" rotation=\"0 0 0\"/><spindle "
+                                    "translation=\"0 0 0\" rotation=\"0 0 0\"/>\n"
+                                    "</machine>\n";
+  auto two = test::runTolver("plan-ballbar --machine " + path("two.xml") + " --poses 50 -o " +
+                             path("two.csv"));
   EXPECT_EQ(two.exit_code, 2) << two.output;
-  EXPECT_NE(two.output.find("three prismatic axes; this machine has 2"), std::string::npos) << two.output;
+  EXPECT_NE(two.output.find("three prismatic axes; this machine has 2"), std::string::npos)
+      << two.output;
   EXPECT_FALSE(fs::exists(path("two.csv")));
   // Too few readings for the unknowns: refused, nothing written.
   std::ofstream(path("few.csv"))
@@ -84,7 +90,10 @@ TEST_F(BallbarCli, BadReadingsAndUnobservablePlans) {
                       path("o.xml"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_FALSE(fs::exists(path("o.xml")));
-  EXPECT_EQ(test::runTolver("plan-ballbar --machine " + nominal + " --length -3 -o " + path("p.csv")).exit_code, 2);
+  EXPECT_EQ(
+      test::runTolver("plan-ballbar --machine " + nominal + " --length -3 -o " + path("p.csv"))
+          .exit_code,
+      2);
 }
 
 TEST_F(BallbarCli, AnalyzeReproducesTheThesisTables) {

@@ -3,8 +3,8 @@
 // the two files), gross readings named by their line and removed, and bad held-out files.
 #include <gtest/gtest.h>
 
-#include <filesystem>
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -24,8 +24,8 @@ class CalibrateCli : public test::TempDirTest {
   const std::string truth = test::sourcePath("samples/machines/matsuura_mc760vx_measured.xml");
   // A fit plan and its held-out poses (plan-ballbar --heldout), simulated with noise.
   void simulate() {
-    auto r = test::runTolver("plan-ballbar --machine " + nominal + " --poses 360 --heldout 60 --seed 3 -o " +
-                             path("fit_plan.csv"));
+    auto r = test::runTolver("plan-ballbar --machine " + nominal +
+                             " --poses 360 --heldout 60 --seed 3 -o " + path("fit_plan.csv"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     ASSERT_NE(r.output.find("60 held-out poses"), std::string::npos) << r.output;
     // The measurement order does not follow a joint (a drift cannot pass for an axis error).
@@ -69,7 +69,8 @@ TEST_F(CalibrateCli, HeldOutReadingsAndTheWrittenFilesReproduceTheReport) {
   EXPECT_NE(r.output.find("gross      none"), std::string::npos) << r.output;
   // What the test cannot see is named, with what a shop measures instead.
   EXPECT_NE(r.output.find("its three rotations"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("the spindle's tilt against the machine's axes"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the spindle's tilt against the machine's axes"), std::string::npos)
+      << r.output;
   EXPECT_NE(r.output.find("a tram row"), std::string::npos) << r.output;
   ASSERT_TRUE(fs::exists(path("id_balls.csv")));
   std::ifstream in(path("id.json"));
@@ -89,7 +90,8 @@ TEST_F(CalibrateCli, HeldOutReadingsAndTheWrittenFilesReproduceTheReport) {
   EXPECT_LT(held_after, j["heldout"]["before"]["rms_um"].get<double>() / 5);
   EXPECT_LT(held_after, 1.5);  // 0.5 um noise
   // The report's written-files figures are the fit's.
-  EXPECT_NEAR(j["written_files_check"]["fit"]["rms_um"].get<double>(), j["residual_rms_um"].get<double>(), 1e-3);
+  EXPECT_NEAR(j["written_files_check"]["fit"]["rms_um"].get<double>(),
+              j["residual_rms_um"].get<double>(), 1e-3);
   EXPECT_NEAR(j["written_files_check"]["heldout"]["rms_um"].get<double>(), held_after, 1e-3);
   // simulate-ballbar with the two written files reproduces every fitted reading to the fit's
   // residual, and the held-out ones to the reported held-out RMS.
@@ -104,7 +106,8 @@ TEST_F(CalibrateCli, HeldOutReadingsAndTheWrittenFilesReproduceTheReport) {
     double sum = 0;
     for (size_t i = 0; i < a.size(); ++i) sum += (a[i] - b[i]) * (a[i] - b[i]);
     const double rms_um = std::sqrt(sum / a.size()) * 1e3;
-    EXPECT_NEAR(rms_um, std::string(name) == "fit" ? j["residual_rms_um"].get<double>() : held_after, 2e-3)
+    EXPECT_NEAR(rms_um,
+                std::string(name) == "fit" ? j["residual_rms_um"].get<double>() : held_after, 2e-3)
         << name;
   }
 }
@@ -136,7 +139,8 @@ TEST_F(CalibrateCli, GrossReadingsAreNamedByLineAndRemoved) {
   std::ifstream jin(path("g.json"));
   const nlohmann::json j = nlohmann::json::parse(jin);
   ASSERT_EQ(j["gross_readings_removed"].size(), 3u);
-  for (const auto& g : j["gross_readings_removed"]) EXPECT_NEAR(g["residual_um"].get<double>(), 20.0, 2.0);
+  for (const auto& g : j["gross_readings_removed"])
+    EXPECT_NEAR(g["residual_um"].get<double>(), 20.0, 2.0);
   const double clean = j["heldout"]["after"]["rms_um"].get<double>();
   // Kept, they spoil the held-out prediction.
   r = test::runTolver("calibrate --machine " + nominal + " --readings " + path("gross.csv") +
@@ -153,7 +157,8 @@ TEST_F(CalibrateCli, GrossReadingsAreNamedByLineAndRemoved) {
 // to diagnose; the clean sample passes it. Console and JSON.
 TEST_F(CalibrateCli, LackOfFitOnTheRepeatedPoses) {
   const std::string samples = test::sourcePath("samples/ballbar/");
-  auto r = test::runTolver("calibrate --machine " + nominal + " --readings " + samples + "reversal.csv -o " + path("r.xml"));
+  auto r = test::runTolver("calibrate --machine " + nominal + " --readings " + samples +
+                           "reversal.csv -o " + path("r.xml"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("the model misses"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("tolver diagnose looks for what"), std::string::npos) << r.output;
@@ -163,14 +168,16 @@ TEST_F(CalibrateCli, LackOfFitOnTheRepeatedPoses) {
   EXPECT_GT(j["lack_of_fit"]["missing_rms_um"].get<double>(), 0.5);
   // What the covariance does not hold goes into the machine file and into every band: the lack
   // of fit on the tip, the stated spindle-tilt prior on the axis.
-  auto t = test::runTolver("calibrate --machine " + nominal + " --readings " + samples + "reversal.csv -o " +
-                           path("t.xml") + " --spindle-tilt-urad 10");
+  auto t = test::runTolver("calibrate --machine " + nominal + " --readings " + samples +
+                           "reversal.csv -o " + path("t.xml") + " --spindle-tilt-urad 10");
   ASSERT_EQ(t.exit_code, 0) << t.output;
   const Machine id = readMachineFile(path("t.xml"));
-  EXPECT_NEAR(id.identification.lack_of_fit_mm * 1e3, j["lack_of_fit"]["missing_rms_um"].get<double>(), 1e-9);
+  EXPECT_NEAR(id.identification.lack_of_fit_mm * 1e3,
+              j["lack_of_fit"]["missing_rms_um"].get<double>(), 1e-9);
   EXPECT_NEAR(id.identification.spindle_tilt_rad, 10e-6, 1e-15);
-  auto p = test::runTolver("predict --machine " + path("t.xml") + " --cl " + test::sourcePath("samples/nas979_cone.apt") +
-                           " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " -o " + path("p.apt"));
+  auto p = test::runTolver("predict --machine " + path("t.xml") + " --cl " +
+                           test::sourcePath("samples/nas979_cone.apt") + " --setup " +
+                           test::sourcePath("samples/matsuura_setup.txt") + " -o " + path("p.apt"));
   ASSERT_EQ(p.exit_code, 0) << p.output;
   EXPECT_NE(p.output.find("the calibration's lack of fit"), std::string::npos) << p.output;
   EXPECT_NE(p.output.find("the spindle tilt's prior, 10.0 urad"), std::string::npos) << p.output;
@@ -182,17 +189,21 @@ TEST_F(CalibrateCli, LackOfFitOnTheRepeatedPoses) {
   std::stringstream hs(header), rs(row);
   for (std::string c; std::getline(hs, c, ',');) names.push_back(c);
   for (std::string c; std::getline(rs, c, ',');) v.push_back(c);
-  auto col = [&](const char* n) { return std::stod(v[std::find(names.begin(), names.end(), n) - names.begin()]); };
+  auto col = [&](const char* n) {
+    return std::stod(v[std::find(names.begin(), names.end(), n) - names.begin()]);
+  };
   EXPECT_GE(col("u_tip_um"), id.identification.lack_of_fit_mm * 1e3 - 1e-4);
   EXPECT_GE(col("u_axis_urad"), 10.0 - 1e-4);
-  auto c = test::runTolver("calibrate --machine " + nominal + " --readings " + samples + "clean.csv -o " + path("c.xml"));
+  auto c = test::runTolver("calibrate --machine " + nominal + " --readings " + samples +
+                           "clean.csv -o " + path("c.xml"));
   ASSERT_EQ(c.exit_code, 0) << c.output;
   EXPECT_NE(c.output.find("no significant lack of fit"), std::string::npos) << c.output;
 }
 
 TEST_F(CalibrateCli, BadHeldOutFilesExitTwoNamingTheLine) {
   simulate();
-  const std::string base = "calibrate --machine " + nominal + " --readings " + path("fit.csv") + " -o " + path("x.xml");
+  const std::string base =
+      "calibrate --machine " + nominal + " --readings " + path("fit.csv") + " -o " + path("x.xml");
   // An empty held-out file.
   write("empty.csv", "");
   auto r = test::runTolver(base + " --heldout " + path("empty.csv"));
@@ -205,7 +216,8 @@ TEST_F(CalibrateCli, BadHeldOutFilesExitTwoNamingTheLine) {
   std::istringstream ls(text);
   for (std::string l; std::getline(ls, l);) lines.push_back(l);
   std::string other;
-  for (size_t i = 0; i < lines.size(); ++i) other += (i == 2 ? "7" + lines[i].substr(1) : lines[i]) + "\n";
+  for (size_t i = 0; i < lines.size(); ++i)
+    other += (i == 2 ? "7" + lines[i].substr(1) : lines[i]) + "\n";
   write("other.csv", other);
   r = test::runTolver(base + " --heldout " + path("other.csv"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
@@ -214,7 +226,8 @@ TEST_F(CalibrateCli, BadHeldOutFilesExitTwoNamingTheLine) {
   // A pose the fit measured (the fit's first reading copied in as line 3).
   std::ifstream fin(path("fit.csv"));
   std::string fit_line;
-  for (int k = 0; k < 3 && std::getline(fin, fit_line);) if (!fit_line.empty() && fit_line[0] != '#') ++k, (void)0;
+  for (int k = 0; k < 3 && std::getline(fin, fit_line);)
+    if (!fit_line.empty() && fit_line[0] != '#') ++k, (void)0;
   std::string dup;
   for (size_t i = 0; i < lines.size(); ++i) dup += (i == 2 ? fit_line : lines[i]) + "\n";
   write("dup.csv", dup);
@@ -229,8 +242,9 @@ TEST_F(CalibrateCli, BadHeldOutFilesExitTwoNamingTheLine) {
 // predicts them far worse than it fits, and calibrate says what to check.
 TEST_F(CalibrateCli, HeldOutReadingsOfOtherSetupsAreFlagged) {
   simulate();
-  auto r = test::runTolver("simulate-ballbar --machine " + truth + " --plan " + path("held_plan.csv") +
-                           " --noise-um 0.5 --ball-error-um 10 --seed 99 -o " + path("other.csv"));
+  auto r =
+      test::runTolver("simulate-ballbar --machine " + truth + " --plan " + path("held_plan.csv") +
+                      " --noise-um 0.5 --ball-error-um 10 --seed 99 -o " + path("other.csv"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   r = test::runTolver("calibrate --machine " + nominal + " --readings " + path("fit.csv") +
                       " --heldout " + path("other.csv") + " -o " + path("o.xml"));

@@ -45,7 +45,8 @@ BallbarTest simulate(const MachineModel& m, const Eigen::VectorXd& truth, const 
   std::mt19937 rng(seed);
   std::normal_distribution<double> n(0.0, noise_mm);
   for (BallbarReading& r : t.readings)
-    r.length = ballbarLength(fk, r.q, t.setups[r.setup], balls[r.setup]) + (noise_mm > 0 ? n(rng) : 0.0);
+    r.length =
+        ballbarLength(fk, r.q, t.setups[r.setup], balls[r.setup]) + (noise_mm > 0 ? n(rng) : 0.0);
   return t;
 }
 
@@ -59,7 +60,7 @@ struct HeldOut {
 // calibration, after fitting the 12 part and tool set-up parameters (which a ball-bar cannot see
 // and a set-up procedure measures).
 HeldOut heldOutPoseError(const MachineModel& m, const Eigen::VectorXd& identified,
-                                           const Eigen::VectorXd& truth) {
+                         const Eigen::VectorXd& truth) {
   const auto poses = randomPoses(m, 60, 99);
   const ForwardKinematics truth_fk(m, truth);
   std::vector<int> setup_cols;
@@ -87,7 +88,8 @@ HeldOut heldOutPoseError(const MachineModel& m, const Eigen::VectorXd& identifie
     const double d = (a.translation() - b.translation()).norm();
     sum2 += d * d;
     h.worst_position = std::max(h.worst_position, d);
-    h.worst_rotation = std::max(h.worst_rotation, Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle());
+    h.worst_rotation =
+        std::max(h.worst_rotation, Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle());
     const Eigen::Vector3d ua = a.linear().col(2), ub = b.linear().col(2);
     h.worst_axis = std::max(h.worst_axis, std::atan2(ua.cross(ub).norm(), ua.dot(ub)));
   }
@@ -139,7 +141,8 @@ TEST(Calibration, SimulationBRecoversTheMinimalSetExactly) {
   for (int p : f.unknowns) truth[p] = n(rng) * scaleOf(f.m.model, p);
   const auto balls = randomBalls(3, rng);
   const BallbarTest data = simulate(f.m.model, truth, f.plan.test, balls, 0.0, 1);
-  const CalibrationResult r = calibrate(f.m.model, Eigen::VectorXd::Zero(truth.size()), data, f.unknowns);
+  const CalibrationResult r =
+      calibrate(f.m.model, Eigen::VectorXd::Zero(truth.size()), data, f.unknowns);
   ASSERT_EQ(r.status, CalibrationStatus::Converged) << r.message;
   EXPECT_TRUE(r.held.empty());
   double err2[2] = {0, 0}, norm2[2] = {0, 0}, largest[2] = {0, 0};
@@ -202,7 +205,7 @@ TEST(Calibration, Table35LinkModelSimulationB) {
   const double in = 25.4;
   Eigen::VectorXd truth = Eigen::VectorXd::Zero(m.parameterCount());
   const std::pair<const char*, double> table35[] = {
-      {"COX", -0.0060}, {"AOA", 0.0500}, {"BOA", 0.0060}, {"COA", -0.0040},
+      {"COX", -0.0060},     {"AOA", 0.0500}, {"BOA", 0.0060}, {"COA", -0.0040},
       {"YOC", 0.0030 * in}, {"BOC", 0.0110}, {"AOZ", 0.0300}, {"BOZ", 0.0350}};
   for (const auto& [code, v] : table35) truth[m.findParameter(code)] = v;
   std::vector<BallErrors> balls(1);
@@ -210,10 +213,13 @@ TEST(Calibration, Table35LinkModelSimulationB) {
   balls[0].tool_t = Eigen::Vector3d(0.0040, 0.0070, 0.0090) * in;   // e_x,t e_y,t e_z,t
   const BallbarTest data = simulate(m, truth, plan.test, balls, 0.0, 1);
   const CalibrationResult r = calibrate(m, Eigen::VectorXd::Zero(truth.size()), data, unknowns);
-  ASSERT_EQ(r.status, CalibrationStatus::Converged) << r.message << " " << r.iterations << " " << r.rms_residual;
+  ASSERT_EQ(r.status, CalibrationStatus::Converged)
+      << r.message << " " << r.iterations << " " << r.rms_residual;
   EXPECT_EQ(r.rank, 14);
   for (const auto& [code, v] : table35)
-    EXPECT_NEAR(r.params[m.findParameter(code)], truth[m.findParameter(code)], 1e-9 * std::abs(v) + 1e-14) << code;
+    EXPECT_NEAR(r.params[m.findParameter(code)], truth[m.findParameter(code)],
+                1e-9 * std::abs(v) + 1e-14)
+        << code;
   EXPECT_LT((r.ball_errors[0].table_w - balls[0].table_w).norm(), 1e-9 * balls[0].table_w.norm());
   EXPECT_LT((r.ball_errors[0].tool_t - balls[0].tool_t).norm(), 1e-9 * balls[0].tool_t.norm());
 }
@@ -230,7 +236,8 @@ TEST(Calibration, NoisyReadingsGiveAReducedChiSquareNearOne) {
   o.poses = 600;
   const BallbarPlan big = planBallbarTest(f.m.model, f.unknowns, o);
   const BallbarTest data = simulate(f.m.model, truth, big.test, balls, 0.5e-3, 3);
-  const CalibrationResult r = calibrate(f.m.model, Eigen::VectorXd::Zero(truth.size()), data, f.unknowns);
+  const CalibrationResult r =
+      calibrate(f.m.model, Eigen::VectorXd::Zero(truth.size()), data, f.unknowns);
   ASSERT_EQ(r.status, CalibrationStatus::Converged);
   const double chi2 = std::pow(r.residual_sigma / 0.5e-3, 2);
   EXPECT_GT(chi2, 0.7);
@@ -241,9 +248,10 @@ TEST(Calibration, NoisyReadingsGiveAReducedChiSquareNearOne) {
   RecordProperty("heldout_tip_rms_um", std::to_string(h.rms_position * 1e3));
   RecordProperty("heldout_tip_worst_um", std::to_string(h.worst_position * 1e3));
   RecordProperty("reduced_chi2", std::to_string(chi2));
-  std::printf("[ held-out ] 0.5 um noise, 600 readings, reduced chi2 %.3f: tool tip error at 60 "
-              "other poses RMS %.3f um, worst %.3f um; tool axis worst %.2f urad\n",
-              chi2, h.rms_position * 1e3, h.worst_position * 1e3, h.worst_axis * 1e6);
+  std::printf(
+      "[ held-out ] 0.5 um noise, 600 readings, reduced chi2 %.3f: tool tip error at 60 "
+      "other poses RMS %.3f um, worst %.3f um; tool axis worst %.2f urad\n",
+      chi2, h.rms_position * 1e3, h.worst_position * 1e3, h.worst_axis * 1e6);
   EXPECT_LT(h.rms_position, 20e-3);
   // Identified within a few standard uncertainties of the truth.
   int outside = 0;
@@ -268,7 +276,8 @@ TEST(Calibration, NormalEquationsReachTheFixedPointOfQr) {
   const BallbarTest data = simulate(f.m.model, truth, f.plan.test, randomBalls(3, rng), 0.5e-3, 5);
   for (const bool regularised : {false, true}) {
     CalibrationOptions fast, qr;
-    if (regularised) fast.prior_linear = qr.prior_linear = 5e-3, fast.prior_angular = qr.prior_angular = 20e-6;
+    if (regularised)
+      fast.prior_linear = qr.prior_linear = 5e-3, fast.prior_angular = qr.prior_angular = 20e-6;
     qr.normal_equations = false;
     const Eigen::VectorXd prior = Eigen::VectorXd::Zero(truth.size());
     const CalibrationResult a = calibrate(f.m.model, prior, data, f.unknowns, fast);
@@ -315,8 +324,8 @@ TEST(Calibration, ToolBallsOnTheSpindleAxisLeaveParametersUnobservable) {
   EXPECT_LT(plan.rank, 110);
   const BallbarTest data = simulate(f.m.model, Eigen::VectorXd::Zero(f.m.model.parameterCount()),
                                     plan.test, std::vector<BallErrors>(3), 0.0, 1);
-  const CalibrationResult r = calibrate(f.m.model, Eigen::VectorXd::Zero(f.m.model.parameterCount()),
-                                        data, f.unknowns);
+  const CalibrationResult r =
+      calibrate(f.m.model, Eigen::VectorXd::Zero(f.m.model.parameterCount()), data, f.unknowns);
   EXPECT_EQ(static_cast<int>(r.held.size()), 110 - plan.rank);
   // What cannot be seen: the roll of the Z ram about the spindle axis (gamma_z(Z), every
   // position-dependent term): a ball on that axis does not move when the ram turns about it.
@@ -329,8 +338,9 @@ TEST(Calibration, ToolBallsOnTheSpindleAxisLeaveParametersUnobservable) {
     EXPECT_NE(std::find(held.begin(), held.end(), c), held.end()) << c;
   CalibrationOptions strict;
   strict.strict = true;
-  EXPECT_EQ(calibrate(f.m.model, Eigen::VectorXd::Zero(f.m.model.parameterCount()), data, f.unknowns,
-                      strict).status,
+  EXPECT_EQ(calibrate(f.m.model, Eigen::VectorXd::Zero(f.m.model.parameterCount()), data,
+                      f.unknowns, strict)
+                .status,
             CalibrationStatus::Unobservable);
 }
 
@@ -359,7 +369,8 @@ TEST(Calibration, AnIdentifiedParameterShowsTheRemovedOnesItStandsFor) {
   Eigen::VectorXd truth = Eigen::VectorXd::Zero(m.parameterCount());
   truth[eay] = 30e-6;
   const BallbarTest data = simulate(m, truth, f.plan.test, std::vector<BallErrors>(3), 0.0, 1);
-  const CalibrationResult r = calibrate(m, Eigen::VectorXd::Zero(m.parameterCount()), data, f.unknowns);
+  const CalibrationResult r =
+      calibrate(m, Eigen::VectorXd::Zero(m.parameterCount()), data, f.unknowns);
   ASSERT_EQ(r.status, CalibrationStatus::Converged);
   EXPECT_NEAR(r.params[eax], coefficient * 30e-6, 1e-9);
 }

@@ -113,7 +113,8 @@ TEST_F(Commands, PlanSimulateCalibrateRoundTrip) {
   EXPECT_EQ(p.verdict, Verdict::Ok);
   EXPECT_EQ(p.gcode, path("plan.nc"));
   EXPECT_EQ(p.heldout_output, path("plan_heldout.csv"));
-  for (const std::string& f : {p.output, p.gcode, p.heldout_output, p.heldout_gcode}) EXPECT_TRUE(fs::exists(f)) << f;
+  for (const std::string& f : {p.output, p.gcode, p.heldout_output, p.heldout_gcode})
+    EXPECT_TRUE(fs::exists(f)) << f;
   EXPECT_EQ(p.plan.rank, p.plan.unknowns);
   EXPECT_GE(p.plan.test.readings.size(), 180u);  // the poses and the reference returns
 
@@ -136,8 +137,8 @@ TEST_F(Commands, PlanSimulateCalibrateRoundTrip) {
   const CalibrationRun c = calibrateMachine(cal);
   EXPECT_EQ(c.verdict, Verdict::Ok);
   EXPECT_LT(c.fit.rms_residual, 1e-6);
-  EXPECT_LT(c.written.fit.rms, 1e-6);       // the written files, read back
-  EXPECT_LT(c.written.heldout.rms, 1e-4);   // and poses they were not fitted to
+  EXPECT_LT(c.written.fit.rms, 1e-6);      // the written files, read back
+  EXPECT_LT(c.written.heldout.rms, 1e-4);  // and poses they were not fitted to
   EXPECT_EQ(c.outputs.balls, path("identified_balls.csv"));
   EXPECT_TRUE(fs::exists(c.outputs.report));
 
@@ -159,7 +160,8 @@ TEST_F(Commands, DiagnoseAddsWhatIsMissingAndNothingElse) {
   const DiagnosisRun run = diagnoseMachine(in);
   EXPECT_EQ(run.verdict, Verdict::Ok);
   ASSERT_EQ(run.result.added.size(), 1u);
-  EXPECT_NE(run.result.added[0].label.find("reversal"), std::string::npos) << run.result.added[0].label;
+  EXPECT_NE(run.result.added[0].label.find("reversal"), std::string::npos)
+      << run.result.added[0].label;
   EXPECT_TRUE(fs::exists(run.json));
   EXPECT_TRUE(fs::exists(path("augmented_balls.csv")));
 
@@ -208,7 +210,8 @@ TEST_F(Commands, CompensateWritesACloserProgram) {
   EXPECT_EQ(run.verdict, Verdict::Ok);
   ASSERT_TRUE(run.compensation);
   EXPECT_TRUE(run.worse_lines.empty());
-  EXPECT_LT(run.compensation->report.after.tip_max_um, 0.05 * run.compensation->report.before.tip_max_um);
+  EXPECT_LT(run.compensation->report.after.tip_max_um,
+            0.05 * run.compensation->report.before.tip_max_um);
   EXPECT_EQ(run.report, path("c.json"));
   EXPECT_TRUE(fs::exists(run.joints));
   in.output.clear();
@@ -250,7 +253,8 @@ TEST_F(Commands, VerifyBatchTakesTheWorstJob) {
   EXPECT_EQ(run.verdict, worst);
   EXPECT_TRUE(fs::exists(run.summary));
 
-  std::ofstream(path("jobs.csv")) << "name,machine,cl,part,tolerance\nbad,nowhere.xml,nothing.apt,,0.05\n";
+  std::ofstream(path("jobs.csv"))
+      << "name,machine,cl,part,tolerance\nbad,nowhere.xml,nothing.apt,,0.05\n";
   const BatchRun bad = verifyBatch(base, path("jobs.csv"));
   ASSERT_EQ(bad.jobs.size(), 1u);
   EXPECT_EQ(bad.verdict, Verdict::BadInput);

@@ -46,9 +46,10 @@ class CompensateCli : public test::TempDirTest {
   }
   // Runs compensate; checks the kept lines and returns the JSON report.
   nlohmann::json compensate(const std::string& machine, const std::string& program_option,
-                            const std::string& program, const std::string& rest, const std::string& out) {
-    auto r = test::runTolver("compensate --machine " + machine + " " + program_option + " " + program + " " +
-                             rest + " -o " + out);
+                            const std::string& program, const std::string& rest,
+                            const std::string& out) {
+    auto r = test::runTolver("compensate --machine " + machine + " " + program_option + " " +
+                             program + " " + rest + " -o " + out);
     EXPECT_EQ(r.exit_code, 0) << r.output;
     if (r.exit_code != 0) return {};
     const auto a = linesOf(program), b = linesOf(out);
@@ -64,7 +65,8 @@ class CompensateCli : public test::TempDirTest {
       };
       size_t j = 0;
       for (size_t i = 0; i < a.size(); ++i, ++j) {
-        while (j < b.size() && (b[j].rfind("(tolver", 0) == 0 || b[j].rfind("; tolver", 0) == 0)) ++j;
+        while (j < b.size() && (b[j].rfind("(tolver", 0) == 0 || b[j].rfind("; tolver", 0) == 0))
+          ++j;
         if (j >= b.size()) {
           ADD_FAILURE() << "output ends at source line " << i + 1;
           break;
@@ -89,7 +91,8 @@ class CompensateCli : public test::TempDirTest {
           const std::string sb = std::regex_replace(b[j], number, "#");
           if (b[j].rfind("$$ tolver", 0) != 0) {
             ++changed;
-            EXPECT_TRUE(std::regex_search(b[j], motion)) << "source line " << i + 1 << " (" << a[i] << ") not found; got " << b[j];
+            EXPECT_TRUE(std::regex_search(b[j], motion))
+                << "source line " << i + 1 << " (" << a[i] << ") not found; got " << b[j];
           }
           ++j;
         }
@@ -106,8 +109,8 @@ class CompensateCli : public test::TempDirTest {
 TEST_F(CompensateCli, TheConeOnTheMeasuredMatsuuraComesOutRight) {
   const std::string m = src("samples/machines/matsuura_mc760vx_measured.xml");
   const std::string setup = " --setup " + src("samples/matsuura_setup.txt");
-  const nlohmann::json j = compensate(m, "--cl", src("samples/nas979_cone.apt"), setup + " --report-dir " + path("rep"),
-                                      path("c.apt"));
+  const nlohmann::json j = compensate(m, "--cl", src("samples/nas979_cone.apt"),
+                                      setup + " --report-dir " + path("rep"), path("c.apt"));
   ASSERT_FALSE(j.is_null());
   // The report directory: the HTML with its two charts embedded, and the same JSON.
   const std::string html = test::readText(path("rep/report.html"));
@@ -121,13 +124,13 @@ TEST_F(CompensateCli, TheConeOnTheMeasuredMatsuuraComesOutRight) {
   // verify with the original as the nominal: the machine's share is gone.
   const std::regex share("machine    ([-+0-9.]+) \\.\\. ([-+0-9.]+) um");
   std::smatch s;
-  auto v0 = test::runTolver("verify --machine " + m + " --cl " + src("samples/nas979_cone.apt") + setup +
-                            " --tolerance 0.01 --no-images --report-dir " + path("v0"));
+  auto v0 = test::runTolver("verify --machine " + m + " --cl " + src("samples/nas979_cone.apt") +
+                            setup + " --tolerance 0.01 --no-images --report-dir " + path("v0"));
   ASSERT_TRUE(std::regex_search(v0.output, s, share)) << v0.output;
   EXPECT_GT(std::max(-std::stod(s[1]), std::stod(s[2])), 5.0);
-  auto v1 = test::runTolver("verify --machine " + m + " --cl " + path("c.apt") + " --compensated-from " +
-                            src("samples/nas979_cone.apt") + setup + " --tolerance 0.01 --no-images --report-dir " +
-                            path("v1"));
+  auto v1 = test::runTolver("verify --machine " + m + " --cl " + path("c.apt") +
+                            " --compensated-from " + src("samples/nas979_cone.apt") + setup +
+                            " --tolerance 0.01 --no-images --report-dir " + path("v1"));
   EXPECT_EQ(v1.exit_code, 0) << v1.output;
   ASSERT_TRUE(std::regex_search(v1.output, s, share)) << v1.output;
   EXPECT_LT(std::max(-std::stod(s[1]), std::stod(s[2])), 0.1);
@@ -135,18 +138,21 @@ TEST_F(CompensateCli, TheConeOnTheMeasuredMatsuuraComesOutRight) {
 
 TEST_F(CompensateCli, ARealNxClsfPieceKeepsItsLinesAndItsFrame) {
   const std::string cl = src("tests/fixtures/cl/nx_ust_a.cls");
-  auto r = test::runTolver("setup --machine " + src("resources/machines/matsuura_mc760vx.xml") + " --cl " + cl +
-                           " --absolute-msys --gauge-length 100 -o " + path("s.txt"));
+  auto r =
+      test::runTolver("setup --machine " + src("resources/machines/matsuura_mc760vx.xml") +
+                      " --cl " + cl + " --absolute-msys --gauge-length 100 -o " + path("s.txt"));
   ASSERT_TRUE(fs::exists(path("s_part1.txt"))) << r.output;
-  const nlohmann::json j = compensate(src("samples/machines/matsuura_mc760vx_measured.xml"), "--cl", cl,
-                                      "--absolute-msys --setup " + path("s_part1.txt") + " --lines 11-578", path("u.cls"));
+  const nlohmann::json j = compensate(
+      src("samples/machines/matsuura_mc760vx_measured.xml"), "--cl", cl,
+      "--absolute-msys --setup " + path("s_part1.txt") + " --lines 11-578", path("u.cls"));
   ASSERT_FALSE(j.is_null());
   EXPECT_EQ(j["points"].get<int>(), 480);
   EXPECT_GT(j["before"]["tip_max_um"].get<double>(), 10.0);
   EXPECT_LT(j["after"]["tip_max_um"].get<double>(), 0.01);
   // Near the pole the axis is left as programmed, never made worse.
   EXPECT_GT(j["ill_conditioned"]["points"].get<int>(), 0);
-  EXPECT_LE(j["after"]["axis_max_urad"].get<double>(), j["before"]["axis_max_urad"].get<double>() + 1e-3);
+  EXPECT_LE(j["after"]["axis_max_urad"].get<double>(),
+            j["before"]["axis_max_urad"].get<double>() + 1e-3);
   // Lines outside the piece are the original's.
   const auto a = linesOf(cl), b = linesOf(path("u.cls"));
   for (size_t i = 578; i < a.size(); ++i) EXPECT_EQ(a[i], b[i + 1]) << i + 1;
@@ -164,8 +170,9 @@ TEST_F(CompensateCli, RealGcodeInTcpModeAndJointMode) {
   // LinuxCNC boat, TCP (M428): X Y Z are tip positions, A C joints.
   {
     const std::string m = withErrors("resources/machines/linuxcnc_xyzac_trt.xml", 5);
-    const nlohmann::json j = compensate(m, "--nc", src("samples/gcode/boat-xyzac.ngc"),
-                                        "--setup " + src("samples/gcode/linuxcnc_setup.txt"), path("boat.ngc"));
+    const nlohmann::json j =
+        compensate(m, "--nc", src("samples/gcode/boat-xyzac.ngc"),
+                   "--setup " + src("samples/gcode/linuxcnc_setup.txt"), path("boat.ngc"));
     ASSERT_FALSE(j.is_null());
     EXPECT_GT(j["before"]["tip_max_um"].get<double>(), 5.0);
     // Four decimals in mm: the tip to the 0.05 um the format holds, on the points compensated
@@ -176,23 +183,26 @@ TEST_F(CompensateCli, RealGcodeInTcpModeAndJointMode) {
   // A posted inch program in joint words.
   {
     const std::string m = withErrors("resources/machines/umc_bc_trunnion.xml", 7);
-    const nlohmann::json j = compensate(m, "--nc", src("samples/gcode/umc_bc_inch.nc"), "--gauge-length 76.2",
-                                        path("umc.nc"));
+    const nlohmann::json j = compensate(m, "--nc", src("samples/gcode/umc_bc_inch.nc"),
+                                        "--gauge-length 76.2", path("umc.nc"));
     ASSERT_FALSE(j.is_null());
     EXPECT_GT(j["before"]["tip_max_um"].get<double>(), 5.0);
     EXPECT_LT(j["after_compensated_points"]["tip_max_um"].get<double>(), 0.2) << j.dump(1);
-    EXPECT_GE(j["compensated_points"].get<int>(), 3);  // a short sample: mostly arcs and machine moves, listed
+    EXPECT_GE(j["compensated_points"].get<int>(),
+              3);  // a short sample: mostly arcs and machine moves, listed
   }
   // Sinumerik 3+2 in a swivelled plane (CYCLE800, 30 deg about y): the corrected XYZ words are
   // in the swivelled frame, and the read-back check holds them to the printed resolution.
   {
     const std::string m = withErrors("resources/machines/sinumerik_bc_table.xml", 11);
     const std::string prog = path("swivel.mpf"), setup = path("swivel_setup.txt");
-    std::ofstream(prog) << "N10 G54 G0 X0 Y0 Z80 B0 C0 D1\n"
-                           "N20 CYCLE800(1,\"TC1\",0,57,10,0,0,0,30,0,5,0,-3,1,100,1)\n"
-                           "N50 G0 X5 Y-15 Z40\nN60 G1 Z2 F500\nN70 X25.000 Y10.000\nN72 X25.000 Y-10.000\n"
-                           "N74 X5.000 Y-10.000\nN80 G0 Z40\nN90 CYCLE800()\nN100 G0 X0 Y0 Z80\nM30\n";
-    std::ofstream(setup) << "part_zero_mm = 0, 0, 0\ng54_mm = -310, 0, 200\ngauge_length_mm = 100\n";
+    std::ofstream(prog)
+        << "N10 G54 G0 X0 Y0 Z80 B0 C0 D1\n"
+           "N20 CYCLE800(1,\"TC1\",0,57,10,0,0,0,30,0,5,0,-3,1,100,1)\n"
+           "N50 G0 X5 Y-15 Z40\nN60 G1 Z2 F500\nN70 X25.000 Y10.000\nN72 X25.000 Y-10.000\n"
+           "N74 X5.000 Y-10.000\nN80 G0 Z40\nN90 CYCLE800()\nN100 G0 X0 Y0 Z80\nM30\n";
+    std::ofstream(setup)
+        << "part_zero_mm = 0, 0, 0\ng54_mm = -310, 0, 200\ngauge_length_mm = 100\n";
     const nlohmann::json j = compensate(m, "--nc", prog, "--setup " + setup, path("swivel_c.mpf"));
     ASSERT_FALSE(j.is_null());
     EXPECT_GT(j["before"]["tip_max_um"].get<double>(), 5.0);
@@ -209,10 +219,11 @@ TEST_F(CompensateCli, ARapidIsNeverGivenWordsItDidNotHave) {
   const std::string prog = path("index.ngc");
   {
     std::ofstream f(prog);
-    f << "G21\nM428\nG0 X0 Y0 Z10 A0 C0\nG1 X10 Y5 Z2 F500\nG1 X20\nG0 A-20 C30\nG1 X22\nM429\nM2\n";
+    f << "G21\nM428\nG0 X0 Y0 Z10 A0 C0\nG1 X10 Y5 Z2 F500\nG1 X20\nG0 A-20 C30\nG1 "
+         "X22\nM429\nM2\n";
   }
-  const nlohmann::json j = compensate(m, "--nc", prog, "--setup " + src("samples/gcode/linuxcnc_setup.txt"),
-                                      path("index_c.ngc"));
+  const nlohmann::json j = compensate(
+      m, "--nc", prog, "--setup " + src("samples/gcode/linuxcnc_setup.txt"), path("index_c.ngc"));
   ASSERT_FALSE(j.is_null());
   bool seen = false;
   for (const std::string& l : linesOf(path("index_c.ngc")))
@@ -226,8 +237,9 @@ TEST_F(CompensateCli, ARapidIsNeverGivenWordsItDidNotHave) {
 // --table: one pitch and straightness table per linear axis, with its grid in the header; the
 // console says what they remove and what they cannot carry.
 TEST_F(CompensateCli, LinearAxisTables) {
-  auto r = test::runTolver("compensate --machine " + src("samples/machines/matsuura_mc760vx_measured.xml") +
-                           " --setup " + src("samples/matsuura_setup.txt") + " --table " + path("t.csv") +
+  auto r = test::runTolver("compensate --machine " +
+                           src("samples/machines/matsuura_mc760vx_measured.xml") + " --setup " +
+                           src("samples/matsuura_setup.txt") + " --table " + path("t.csv") +
                            " --table-step 20");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   for (const char* axis : {"X", "Y", "Z"}) {
@@ -237,7 +249,8 @@ TEST_F(CompensateCli, LinearAxisTables) {
     EXPECT_EQ(lines[4], std::string("position_") + axis + "_mm,dX_um,dY_um,dZ_um");
   }
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("rotary axes at the reference: RMS ([0-9.]+) -> ([0-9.]+) um")))
+  ASSERT_TRUE(std::regex_search(
+      r.output, m, std::regex("rotary axes at the reference: RMS ([0-9.]+) -> ([0-9.]+) um")))
       << r.output;
   EXPECT_LT(std::stod(m[2]), 0.2 * std::stod(m[1]));
   EXPECT_NE(r.output.find("error terms of the rotary axes"), std::string::npos) << r.output;
@@ -246,20 +259,23 @@ TEST_F(CompensateCli, LinearAxisTables) {
 TEST_F(CompensateCli, BadInputIsExitTwoAndWritesNothing) {
   const std::string m = src("samples/machines/matsuura_mc760vx_measured.xml");
   std::ofstream(path("bad.apt")) << "UNITS/MM\nMULTAX/ON\nGOTO/1,2,abc,0,0,1\n";
-  auto r = test::runTolver("compensate --machine " + m + " --cl " + path("bad.apt") + " -o " + path("o.apt"));
+  auto r = test::runTolver("compensate --machine " + m + " --cl " + path("bad.apt") + " -o " +
+                           path("o.apt"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("bad.apt:3"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(path("o.apt")));
   // Y1e5 (issue 37: exit 3, an internal error, while predict read it as Y1): exit 2 at its line.
   std::ofstream(path("e.nc")) << "G21\nG90\nG1 X0 Y0 Z0 F100\nG1 Y1e5\nG1 X1\n";
-  r = test::runTolver("compensate --machine " + m + " --nc " + path("e.nc") + " -o " + path("e_c.nc"));
+  r = test::runTolver("compensate --machine " + m + " --nc " + path("e.nc") + " -o " +
+                      path("e_c.nc"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("e.nc:4"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(path("e_c.nc")));
   // A report directory that cannot be written (issue 37: exit 2 but the CL and JSON were left):
   // nothing written.
-  r = test::runTolver("compensate --machine " + m + " --cl " + src("samples/nas979_cone.apt") + " --setup " +
-                      src("samples/matsuura_setup.txt") + " -o " + path("rd.apt") + " --report-dir /proc/x");
+  r = test::runTolver("compensate --machine " + m + " --cl " + src("samples/nas979_cone.apt") +
+                      " --setup " + src("samples/matsuura_setup.txt") + " -o " + path("rd.apt") +
+                      " --report-dir /proc/x");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_FALSE(fs::exists(path("rd.apt")));
   EXPECT_FALSE(fs::exists(path("rd.json")));
@@ -271,10 +287,10 @@ TEST_F(CompensateCli, BadInputIsExitTwoAndWritesNothing) {
   EXPECT_FALSE(fs::exists(path("o.apt")));
   // verify --compensated-from with an original that is not the compensated program's: exit 2,
   // no report directory.
-  r = test::runTolver("verify --machine " + m + " --cl " + src("samples/nas979_cone.apt") + " --setup " +
-                      src("samples/matsuura_setup.txt") + " --compensated-from " +
-                      src("samples/sculptured_finish.apt") + " --tolerance 0.02 --no-images --report-dir " +
-                      path("v"));
+  r = test::runTolver("verify --machine " + m + " --cl " + src("samples/nas979_cone.apt") +
+                      " --setup " + src("samples/matsuura_setup.txt") + " --compensated-from " +
+                      src("samples/sculptured_finish.apt") +
+                      " --tolerance 0.02 --no-images --report-dir " + path("v"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("--compensated-from"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(path("v")));

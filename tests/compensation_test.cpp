@@ -64,8 +64,10 @@ TEST(Compensation, AConstantRotaryPositioningErrorIsTakenOffThatAxisAlone) {
     EXPECT_LT(p.after_w.norm(), 1e-7);
     EXPECT_LT(p.after_axis, 1e-9);
     for (int a = 0; a < 5; ++a)
-      // To what the stopping rule (1e-7 mm, 1e-9 rad) pins the joints: C is weakly seen near the pole.
-      EXPECT_NEAR(p.q[a] - p.q0[a], a == c ? -delta : 0.0, a == c ? 1e-8 : 5e-7) << "point " << i << " axis " << a;
+      // To what the stopping rule (1e-7 mm, 1e-9 rad) pins the joints: C is weakly seen near the
+      // pole.
+      EXPECT_NEAR(p.q[a] - p.q0[a], a == c ? -delta : 0.0, a == c ? 1e-8 : 5e-7)
+          << "point " << i << " axis " << a;
   }
 }
 
@@ -76,7 +78,8 @@ TEST(Compensation, AScaleErrorOfALinearAxisHasItsClosedForm) {
   const Axis& ax = m.model.axes[x];
   const double c1 = 0.02;  // e_x(X) = c1 * s_N, s_N = (X - mid) / half: 20 um at the ends
   m.params[m.model.findParameter("EXX.c1")] = c1;
-  const double mid = 0.5 * (ax.travel_min + ax.travel_max), half = 0.5 * (ax.travel_max - ax.travel_min);
+  const double mid = 0.5 * (ax.travel_min + ax.travel_max),
+               half = 0.5 * (ax.travel_max - ax.travel_min);
   std::vector<JointVector> q0;
   const std::vector<ClPoint> path = pathOn(m.model, &q0, 50, 0.05, 0.95);
   const CompensationResult r = compensateToolPath(m.model, m.params, path, q0, false);
@@ -112,7 +115,8 @@ TEST_P(EveryKinematicsMachine, CompensatedPosesPutTheToolOnTheProgramAndAreAFixe
   for (size_t i = 0; i < path.size(); ++i) {
     const CompensatedPoint& c = r.points[i];
     again_from.push_back(c.q);
-    if (c.status == CompensationStatus::OutOfTravel || c.status == CompensationStatus::NotConverged) {
+    if (c.status == CompensationStatus::OutOfTravel ||
+        c.status == CompensationStatus::NotConverged) {
       EXPECT_EQ(c.q, c.q0);  // left as programmed, never clipped
       continue;
     }
@@ -123,7 +127,8 @@ TEST_P(EveryKinematicsMachine, CompensatedPosesPutTheToolOnTheProgramAndAreAFixe
     real.tipAndAxis(c.q, &p, &u);
     EXPECT_LT((p - path[i].p_w).norm(), 1e-6) << GetParam() << " point " << i;
     if (five && c.status == CompensationStatus::Compensated)
-      EXPECT_LT(std::atan2(u.cross(path[i].u_w).norm(), u.dot(path[i].u_w)), 1e-8) << GetParam() << " point " << i;
+      EXPECT_LT(std::atan2(u.cross(path[i].u_w).norm(), u.dot(path[i].u_w)), 1e-8)
+          << GetParam() << " point " << i;
   }
   EXPECT_GT(compensated, static_cast<int>(path.size()) * 9 / 10) << GetParam();
   // A fixed point: compensating again from the compensating joints changes nothing.
@@ -173,7 +178,8 @@ TEST(CompensationTables, PitchAndStraightnessOfALinearAxis) {
   const std::vector<AxisTable> tables = linearAxisTables(m.model, m.params, q_ref, 20.0);
   ASSERT_EQ(tables.size(), 3u);
   const AxisTable& tx = tables[x];
-  const double mid = 0.5 * (ax.travel_min + ax.travel_max), half = 0.5 * (ax.travel_max - ax.travel_min);
+  const double mid = 0.5 * (ax.travel_min + ax.travel_max),
+               half = 0.5 * (ax.travel_max - ax.travel_min);
   auto xOf = [&](double X) { return (X + c1 * mid / half) / (1.0 + c1 / half); };  // X' + e(X') = X
   for (size_t k = 0; k < tx.position.size(); ++k) {
     const double X = tx.position[k];
@@ -183,7 +189,8 @@ TEST(CompensationTables, PitchAndStraightnessOfALinearAxis) {
       const double sn = (Xc - mid) / half;
       return s2 * (2 * sn * sn - 1);
     };
-    EXPECT_NEAR(std::abs(tx.correction[k][y]), std::abs(ey(xOf(X)) - ey(xOf(0))), 1e-7) << X;  // the stopping rule
+    EXPECT_NEAR(std::abs(tx.correction[k][y]), std::abs(ey(xOf(X)) - ey(xOf(0))), 1e-7)
+        << X;  // the stopping rule
   }
   // Tables of the other axes are zero (their errors are zero).
   for (const Eigen::Vector3d& d : tables[y].correction) EXPECT_LT(d.norm(), 1e-12);

@@ -25,7 +25,7 @@ struct Expected {
   const char* options;  // more options for setup and predict
   int setup_exit;
   const char* setup_says;
-  int predict_exit;     // with the set-up setup wrote (or the defaults when it wrote none)
+  int predict_exit;  // with the set-up setup wrote (or the defaults when it wrote none)
   const char* predict_says;
 };
 
@@ -36,15 +36,16 @@ constexpr const char* kSinumerik = "resources/machines/sinumerik_bc_table.xml";
 const Expected kCorpus[] = {
     // Three-axis posted G-code: the part zero is the work offset; setup proposes it exactly.
     {"corpus/cambam_contour1.nc", kVmc, "", 0, "exact: each axis's range centred", 0, "deviation"},
-    {"corpus/fabex_Op_Plane_1.tap", kVmc, "", 0, "exact: each axis's range centred", 0, "deviation"},
+    {"corpus/fabex_Op_Plane_1.tap", kVmc, "", 0, "exact: each axis's range centred", 0,
+     "deviation"},
     {"corpus/freecad_grbl_platteyz-helix.nc", kVmc, "", 0, "exact: each axis's range centred", 0,
      "deviation"},
     {"corpus/fusion_led-floor_1124_jig.nc", kVmc, "", 0, "exact: each axis's range centred", 0,
      "deviation"},
     // G10 L2 sets the work offsets in machine coordinates for CAMotics' own machine, whose
     // travel is centred on zero: no set-up moves them, and they are outside this machine's.
-    {"corpus/camotics-ex_botomata_bottom.nc", kVmc, "", 1, "a work offset the program sets itself (G10)",
-     2, "unreachable: axis"},
+    {"corpus/camotics-ex_botomata_bottom.nc", kVmc, "", 1,
+     "a work offset the program sets itself (G10)", 2, "unreachable: axis"},
     // G53 X10 Y-10 at the end: a home position beyond this machine's X travel.
     {"corpus/linuxcnc-tests_Cereal.ngc", kVmc, "", 1,
      "a move in machine coordinates (G53/G28/SUPA) is outside X's travel by 10.000 mm", 2,
@@ -57,23 +58,25 @@ const Expected kCorpus[] = {
     {"corpus/swcam_basemach.apt", kMatsuura, "", 0, "every point inside travel", 0, "deviation"},
     {"corpus/creo_schruppen_1.ncl", kVmc, "", 0, "every point inside travel", 0, "deviation"},
     // Its rapids rise 548 mm above the cut (Z travel 508): split into pieces, each named.
-    {"corpus/nx_10_KONTUR_125_N2_162.cls", kVmc, "", 1, "no single set-up reaches the whole program",
-     2, "unreachable: axis Z"},
+    {"corpus/nx_10_KONTUR_125_N2_162.cls", kVmc, "", 1,
+     "no single set-up reaches the whole program", 2, "unreachable: axis Z"},
     {"cl/nx_ust_a.cls", kMatsuura, "", 1, "--absolute-msys", 2, "unreachable"},
-    {"cl/nx_ust_a.cls", kMatsuura, "--absolute-msys", 1, "2 set-ups reach the program, one piece each",
-     2, "unreachable"},
-    {"cl/nx_nurbs.clsf", kMatsuura, "", 2, "nx_nurbs.clsf:13: NURBS: NURBS motion is not supported", 2,
-     "NURBS motion is not supported"},
+    {"cl/nx_ust_a.cls", kMatsuura, "--absolute-msys", 1,
+     "2 set-ups reach the program, one piece each", 2, "unreachable"},
+    {"cl/nx_nurbs.clsf", kMatsuura, "", 2, "nx_nurbs.clsf:13: NURBS: NURBS motion is not supported",
+     2, "NURBS motion is not supported"},
     {"cl/nx_cutcom.clsf", kMatsuura, "", 0, "every point inside travel", 0, "deviation"},
     {"cl/nx_TORETC_250_BOK.cls", kMatsuura, "", 0, "every point inside travel", 0, "deviation"},
-    {"cl/swcam_Teste-Metrologia.apt", kMatsuura, "", 0, "every point inside travel", 0, "deviation"},
+    {"cl/swcam_Teste-Metrologia.apt", kMatsuura, "", 0, "every point inside travel", 0,
+     "deviation"},
     {"cl/swcam_RotateThick.apt", kMatsuura, "", 0, "every point inside travel", 0, "deviation"},
     {"cl/swcam_Interface-glue.apt", kMatsuura, "", 0, "every point inside travel", 0, "deviation"},
     {"cl/creo_profile_milling.ncl", kMatsuura, "", 0, "every point inside travel", 0, "deviation"},
     {"cl/creo_drilling.ncl", kMatsuura, "", 0, "every point inside travel", 0, "deviation"},
     // LinuxCNC's simulated trt machines (small travel: the xyzac boat needs two set-ups).
-    {"gcode/linuxcnc_boat-xyzac.ngc", "resources/machines/linuxcnc_xyzac_trt.xml", "--gauge-lengths 100",
-     1, "no single set-up reaches the whole program", 2, "unreachable: axis Y"},
+    {"gcode/linuxcnc_boat-xyzac.ngc", "resources/machines/linuxcnc_xyzac_trt.xml",
+     "--gauge-lengths 100", 1, "no single set-up reaches the whole program", 2,
+     "unreachable: axis Y"},
     {"gcode/linuxcnc_boat-xyzbc.ngc", "resources/machines/linuxcnc_xyzbc_trt.xml", "", 0,
      "every point inside travel", 0, "deviation"},
     {"gcode/linuxcnc_xyzab-tdr-demo.ngc", "tests/fixtures/machines/xyzab_tdr_like.xml", "", 0,
@@ -115,9 +118,9 @@ TEST_F(Corpus, EveryProgramIsPredictedSplitOrRefusedForItsOwnReason) {
     if (fs::exists(setup)) with_setup = " --setup " + q(setup);
     std::string options = e.options;
     if (options.find("--gauge-lengths") != std::string::npos) options.clear();
-    const auto p = test::runTolver("predict --machine " + q(machine) + " --cl " + q(program) +
-                                   with_setup + " " + options + " -o " +
-                                   q(dir_ / ("p" + std::to_string(k) + ".apt")));
+    const auto p =
+        test::runTolver("predict --machine " + q(machine) + " --cl " + q(program) + with_setup +
+                        " " + options + " -o " + q(dir_ / ("p" + std::to_string(k) + ".apt")));
     EXPECT_EQ(p.exit_code, e.predict_exit) << p.output;
     EXPECT_NE(p.output.find(e.predict_says), std::string::npos) << p.output;
   }
@@ -128,7 +131,7 @@ TEST_F(Corpus, EveryProgramIsPredictedSplitOrRefusedForItsOwnReason) {
 TEST_F(Corpus, AProgramTheTableDoesNotNameIsReadOrRefusedWithItsLine) {
   std::set<std::string> named;
   for (const Expected& e : kCorpus) named.insert(e.file);
-  static const std::set<std::string> programs = {".nc", ".ngc", ".tap", ".mpf", ".apt", ".cls",
+  static const std::set<std::string> programs = {".nc",   ".ngc", ".tap",   ".mpf", ".apt", ".cls",
                                                  ".clsf", ".ncl", ".gcode", ".cnc", ".eia", ".h"};
   for (const char* sub : {"corpus", "cl", "gcode"}) {
     if (!fs::is_directory(sharedData() / sub)) continue;
@@ -156,19 +159,20 @@ TEST_F(Corpus, VerifyARealPartWithItsProgram) {
   const auto s = test::runTolver("setup --machine " + q(machine) + " --cl " + q(cl) + " -o " +
                                  q(dir_ / "s.txt"));
   ASSERT_EQ(s.exit_code, 0) << s.output;
-  const auto v = test::runTolver("verify --machine " + q(machine) + " --setup " + q(dir_ / "s.txt") +
-                                 " --cl " + q(cl) + " --part " + q(part) +
+  const auto v = test::runTolver("verify --machine " + q(machine) + " --setup " +
+                                 q(dir_ / "s.txt") + " --cl " + q(cl) + " --part " + q(part) +
                                  " --tolerance 0.1 --report-dir " + q(dir_ / "report"));
   EXPECT_EQ(v.exit_code, 0) << v.output;
   EXPECT_NE(v.output.find("tolver verify: PASS"), std::string::npos) << v.output;
   EXPECT_TRUE(fs::exists(dir_ / "report" / "report.json"));
   // A program that changes tools is swept with each tool's own cutter, from its line on.
   const fs::path glue = sharedData() / "cl/swcam_Interface-glue.apt";
-  const auto g = test::runTolver("verify --machine " + q(machine) + " --setup " + q(dir_ / "s.txt") +
-                                 " --cl " + q(glue) + " --part " +
+  const auto g = test::runTolver("verify --machine " + q(machine) + " --setup " +
+                                 q(dir_ / "s.txt") + " --cl " + q(glue) + " --part " +
                                  q(sharedData() / "mesh/swcam_Interface-glue.stl") +
                                  " --tolerance 0.1 --report-dir " + q(dir_ / "glue"));
-  EXPECT_NE(g.output.find("4 tools, each from its line on: line 4 flat end D6.5 mm"), std::string::npos)
+  EXPECT_NE(g.output.find("4 tools, each from its line on: line 4 flat end D6.5 mm"),
+            std::string::npos)
       << g.output;
   EXPECT_NE(g.output.find("line 163 ball end D14 mm"), std::string::npos) << g.output;
 }

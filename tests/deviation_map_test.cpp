@@ -2,10 +2,11 @@
 #include "io/report/deviation_map.h"
 
 #include <gtest/gtest.h>
-#include <set>
 #include <vtkImageData.h>
 #include <vtkNew.h>
 #include <vtkPNGReader.h>
+
+#include <set>
 
 #include "io/report/offscreen_display.h"
 #include "test_support.h"
@@ -53,8 +54,8 @@ TEST(DeviationMap, CalloutsArePlacedWithoutOverlap) {
       EXPECT_GE(p[a].y(), 0);
       EXPECT_LE(p[a].y() + h, 837 + 1e-9);
       for (size_t b = a + 1; b < p.size(); ++b) {
-        const bool apart = p[a].x() + w <= p[b].x() || p[b].x() + w <= p[a].x() || p[a].y() + h <= p[b].y() ||
-                           p[b].y() + h <= p[a].y();
+        const bool apart = p[a].x() + w <= p[b].x() || p[b].x() + w <= p[a].x() ||
+                           p[a].y() + h <= p[b].y() || p[b].y() + h <= p[a].y();
         EXPECT_TRUE(apart) << a << " " << b;
       }
     }
@@ -86,7 +87,8 @@ TEST_F(RenderTest, TopViewShowsAPlantedGougeRedOnGreen) {
     map.colours.push_back(deviationColour(p.head<2>().norm() < 15.0 ? -0.05 : 0.002, -0.01, 0.01));
   map.title = "test";
   const std::string png = path("map.png");
-  renderDeviationMap(png, map, {"top", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitY(), false, {}}, 1200, 900);
+  renderDeviationMap(
+      png, map, {"top", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitY(), false, {}}, 1200, 900);
 
   vtkNew<vtkPNGReader> reader;
   reader->SetFileName(png.c_str());

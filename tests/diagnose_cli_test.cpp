@@ -14,14 +14,17 @@ namespace {
 class DiagnoseCli : public test::TempDirTest {
  protected:
   const std::string nominal = test::sourcePath("resources/machines/matsuura_mc760vx.xml");
-  std::string readings(const std::string& name) { return test::sourcePath("samples/ballbar/" + name + ".csv"); }
+  std::string readings(const std::string& name) {
+    return test::sourcePath("samples/ballbar/" + name + ".csv");
+  }
 };
 
 TEST_F(DiagnoseCli, ReversalDatasetEndToEnd) {
-  const auto r = test::runTolver("diagnose --machine " + nominal + " --readings " + readings("reversal") +
-                                 " -o " + path("augmented.xml") + " --report-dir " + path("out") +
-                                 " --cl " + test::sourcePath("samples/nas979_cone.apt") + " --cl-setup " +
-                                 test::sourcePath("samples/matsuura_setup.txt") + " --quiet");
+  const auto r =
+      test::runTolver("diagnose --machine " + nominal + " --readings " + readings("reversal") +
+                      " -o " + path("augmented.xml") + " --report-dir " + path("out") + " --cl " +
+                      test::sourcePath("samples/nas979_cone.apt") + " --cl-setup " +
+                      test::sourcePath("samples/matsuura_setup.txt") + " --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("added      reversal Y ey"), std::string::npos) << r.output;
   std::ifstream in(path("out/report.json"));
@@ -30,7 +33,8 @@ TEST_F(DiagnoseCli, ReversalDatasetEndToEnd) {
   const auto& e = j["effects_added"][0];
   EXPECT_EQ(e["type"], "reversal");
   EXPECT_EQ(e["axis"], "Y");
-  EXPECT_NEAR(e["parameters"]["EYY.rev"].get<double>(), 4.0, 3 * e["uncertainty"]["EYY.rev"].get<double>());
+  EXPECT_NEAR(e["parameters"]["EYY.rev"].get<double>(), 4.0,
+              3 * e["uncertainty"]["EYY.rev"].get<double>());
   EXPECT_LT(j["rms_after_um"].get<double>(), j["rms_before_um"].get<double>());
   EXPECT_LT(j["cv_rms_after_um"].get<double>(), j["cv_rms_before_um"].get<double>());
   EXPECT_LE(j["cv_rms_after_um"].get<double>(), 0.75);
@@ -48,24 +52,30 @@ TEST_F(DiagnoseCli, ReversalDatasetEndToEnd) {
   EXPECT_TRUE(std::filesystem::exists(path("out/residual_reversal_Y_ey_before.png")));
   EXPECT_TRUE(std::filesystem::exists(path("out/residual_reversal_Y_ey_after.png")));
   // The augmented machine file works as it is.
-  EXPECT_NE(test::readText(path("augmented.xml")).find("<effect type=\"reversal\" axis=\"Y\""), std::string::npos);
-  auto p = test::runTolver("predict --machine " + path("augmented.xml") + " --cl " +
-                           test::sourcePath("samples/nas979_cone.apt") + " --setup " +
-                           test::sourcePath("samples/matsuura_setup.txt") + " -o " + path("cone.apt"));
+  EXPECT_NE(test::readText(path("augmented.xml")).find("<effect type=\"reversal\" axis=\"Y\""),
+            std::string::npos);
+  auto p =
+      test::runTolver("predict --machine " + path("augmented.xml") + " --cl " +
+                      test::sourcePath("samples/nas979_cone.apt") + " --setup " +
+                      test::sourcePath("samples/matsuura_setup.txt") + " -o " + path("cone.apt"));
   EXPECT_EQ(p.exit_code, 0) << p.output;
-  auto s = test::runTolver("simulate-ballbar --machine " + path("augmented.xml") + " --plan " +
-                           test::sourcePath("samples/ballbar/plan.csv") + " -o " + path("again.csv"));
+  auto s =
+      test::runTolver("simulate-ballbar --machine " + path("augmented.xml") + " --plan " +
+                      test::sourcePath("samples/ballbar/plan.csv") + " -o " + path("again.csv"));
   EXPECT_EQ(s.exit_code, 0) << s.output;
-  // Diagnosing the data again on the augmented model's readings (no noise) finds the reversal again.
-  auto d = test::runTolver("diagnose --machine " + nominal + " --readings " + path("again.csv") + " -o " +
-                           path("again.xml") + " --report-dir " + path("again") + " --types reversal --quiet");
+  // Diagnosing the data again on the augmented model's readings (no noise) finds the reversal
+  // again.
+  auto d = test::runTolver("diagnose --machine " + nominal + " --readings " + path("again.csv") +
+                           " -o " + path("again.xml") + " --report-dir " + path("again") +
+                           " --types reversal --quiet");
   EXPECT_EQ(d.exit_code, 0) << d.output;
   EXPECT_NE(d.output.find("added      reversal Y ey"), std::string::npos) << d.output;
 }
 
 TEST_F(DiagnoseCli, CleanDatasetAddsNothing) {
-  const auto r = test::runTolver("diagnose --machine " + nominal + " --readings " + readings("clean") + " -o " +
-                                 path("augmented.xml") + " --report-dir " + path("out") + " --quiet");
+  const auto r =
+      test::runTolver("diagnose --machine " + nominal + " --readings " + readings("clean") +
+                      " -o " + path("augmented.xml") + " --report-dir " + path("out") + " --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("nothing missing"), std::string::npos) << r.output;
   std::ifstream in(path("out/report.json"));
@@ -78,8 +88,9 @@ TEST_F(DiagnoseCli, CleanDatasetAddsNothing) {
 // The lack-of-fit test on the plan's repeated poses: the reversal data fail it with the base
 // model and pass it with the reversal added; the clean data pass it. One verdict line.
 TEST_F(DiagnoseCli, LackOfFitBeforeAndAfterAndOneVerdict) {
-  const auto r = test::runTolver("diagnose --machine " + nominal + " --readings " + readings("reversal") + " -o " +
-                                 path("aug.xml") + " --report-dir " + path("rev") + " --types reversal --quiet");
+  const auto r = test::runTolver("diagnose --machine " + nominal + " --readings " +
+                                 readings("reversal") + " -o " + path("aug.xml") +
+                                 " --report-dir " + path("rev") + " --types reversal --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::ifstream in(path("rev/report.json"));
   const nlohmann::json j = nlohmann::json::parse(in);
@@ -89,7 +100,8 @@ TEST_F(DiagnoseCli, LackOfFitBeforeAndAfterAndOneVerdict) {
   EXPECT_GT(j["lack_of_fit"]["before"]["repeated_poses"].get<int>(), 2);
   EXPECT_EQ(j["verdict"], "effects added");
   size_t verdicts = 0;
-  for (size_t at = r.output.find("  verdict "); at != std::string::npos; at = r.output.find("  verdict ", at + 1))
+  for (size_t at = r.output.find("  verdict "); at != std::string::npos;
+       at = r.output.find("  verdict ", at + 1))
     ++verdicts;
   EXPECT_EQ(verdicts, 1u) << r.output;
   EXPECT_NE(r.output.find("lack of fit repeatability"), std::string::npos) << r.output;
@@ -98,35 +110,42 @@ TEST_F(DiagnoseCli, LackOfFitBeforeAndAfterAndOneVerdict) {
 // A reading the base model calls gross but the final model explains (the warm-up's first) is
 // restored, the diagnosis run again with it, and listed with t before and after.
 TEST_F(DiagnoseCli, GrossReadingsTheFinalModelExplainsAreRestored) {
-  const auto r = test::runTolver("diagnose --machine " + nominal + " --readings " + readings("warmup") + " -o " +
-                                 path("aug.xml") + " --report-dir " + path("w") + " --quiet");
+  const auto r =
+      test::runTolver("diagnose --machine " + nominal + " --readings " + readings("warmup") +
+                      " -o " + path("aug.xml") + " --report-dir " + path("w") + " --quiet");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("restored (the diagnosis was run again"), std::string::npos) << r.output;
   std::ifstream in(path("w/report.json"));
   const nlohmann::json j = nlohmann::json::parse(in);
   ASSERT_EQ(j["gross_readings_restored"].size(), 1u) << j.dump(1);
   EXPECT_GT(std::abs(j["gross_readings_restored"][0]["studentized"].get<double>()), 5.0);
-  EXPECT_LT(std::abs(j["gross_readings_restored"][0]["studentized_against_final_model"].get<double>()), 4.0);
+  EXPECT_LT(
+      std::abs(j["gross_readings_restored"][0]["studentized_against_final_model"].get<double>()),
+      4.0);
   EXPECT_NE(j["effects_added"].dump().find("warmup"), std::string::npos);
 }
 
 TEST_F(DiagnoseCli, BadInputExitsTwoWithoutWriting) {
   const std::string out = " -o " + path("aug.xml") + " --report-dir " + path("out") + " --quiet";
-  auto r = test::runTolver("diagnose --machine " + nominal + " --readings " + path("missing.csv") + out);
+  auto r =
+      test::runTolver("diagnose --machine " + nominal + " --readings " + path("missing.csv") + out);
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  const std::string bad = write("bad.csv", test::readText(readings("clean")).substr(0, 600) + "1,80,0,20,12.5,21.6,0,x,1,2,3,4,5,150\n");
+  const std::string bad = write("bad.csv", test::readText(readings("clean")).substr(0, 600) +
+                                               "1,80,0,20,12.5,21.6,0,x,1,2,3,4,5,150\n");
   r = test::runTolver("diagnose --machine " + nominal + " --readings " + bad + out);
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("bad.csv:"), std::string::npos) << r.output;
-  r = test::runTolver("diagnose --machine " + test::sourcePath("samples/ballbar/truth_reversal.xml") +
-                      " --readings " + readings("clean") + out);
+  r = test::runTolver("diagnose --machine " +
+                      test::sourcePath("samples/ballbar/truth_reversal.xml") + " --readings " +
+                      readings("clean") + out);
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("already has effects"), std::string::npos) << r.output;
   r = test::runTolver("diagnose --machine " + nominal + " --readings " + readings("clean") + out +
                       " --types backlash");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   // Readings that the machine and set-up cannot explain: refused, not diagnosed.
-  r = test::runTolver("diagnose --machine " + nominal + " --gauge-length 200 --readings " + readings("clean") + out);
+  r = test::runTolver("diagnose --machine " + nominal + " --gauge-length 200 --readings " +
+                      readings("clean") + out);
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("did not converge"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(path("aug.xml")));

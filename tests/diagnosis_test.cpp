@@ -92,13 +92,14 @@ Dataset load(const std::string& name) {
   Dataset d;
   d.nominal = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
   d.truth = readMachineFile(test::sourcePath("samples/ballbar/truth_" + name + ".xml"));
-  d.readings = readBallbarFile(test::sourcePath("samples/ballbar/" + name + ".csv"), d.nominal.model, true);
+  d.readings =
+      readBallbarFile(test::sourcePath("samples/ballbar/" + name + ".csv"), d.nominal.model, true);
   return d;
 }
 
 void printResult(const std::string& name, const DiagnosisResult& r, double seconds) {
-  std::printf("[ %s ] %.2f s: rms %.3f -> %.3f um, held-out %.3f -> %.3f um\n", name.c_str(), seconds,
-              r.rms_before * 1e3, r.rms_after * 1e3, r.cv_rms_before * 1e3,
+  std::printf("[ %s ] %.2f s: rms %.3f -> %.3f um, held-out %.3f -> %.3f um\n", name.c_str(),
+              seconds, r.rms_before * 1e3, r.rms_after * 1e3, r.cv_rms_before * 1e3,
               r.cv_rms_after * 1e3);
   for (const AddedEffect& a : r.added) {
     std::printf("    added %s:", a.label.c_str());
@@ -111,13 +112,12 @@ void printResult(const std::string& name, const DiagnosisResult& r, double secon
   std::vector<CandidateScore> c = r.candidates;
   std::sort(c.begin(), c.end(), [](auto& a, auto& b) { return a.delta_ic > b.delta_ic; });
   for (size_t i = 0; i < std::min<size_t>(4, c.size()); ++i)
-    std::printf("    r%d %-40s dIC %8.1f p %.2g info %.3f cv %.3f->%.3f %s\n", c[i].round, c[i].label.c_str(),
-                c[i].delta_ic, c[i].p_value, c[i].new_information, c[i].cv_rms_before * 1e3,
-                c[i].cv_rms_after * 1e3, verdictName(c[i].verdict));
+    std::printf("    r%d %-40s dIC %8.1f p %.2g info %.3f cv %.3f->%.3f %s\n", c[i].round,
+                c[i].label.c_str(), c[i].delta_ic, c[i].p_value, c[i].new_information,
+                c[i].cv_rms_before * 1e3, c[i].cv_rms_after * 1e3, verdictName(c[i].verdict));
   std::printf("    residual follows: '%s' (%.2f)\n", r.analysis_before.follows.c_str(),
               r.analysis_before.follows_strength);
 }
-
 
 // The effects of the truth machine (type, axis, component) and their values.
 struct TruthEffect {
@@ -142,7 +142,8 @@ void expectFindsTruth(const std::string& name) {
   const Dataset d = load(name);
   const auto t0 = std::chrono::steady_clock::now();
   const DiagnosisResult r = diagnose(d.nominal, d.readings.test);
-  printResult(name, r, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  printResult(name, r,
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   ASSERT_TRUE(r.ok) << r.message;
   const std::vector<TruthEffect> truth = truthEffects(d.truth);
   ASSERT_FALSE(truth.empty());
@@ -206,7 +207,8 @@ BallbarTest simulate(const Machine& truth, BallbarTest plan, unsigned seed) {
   }
   const ForwardKinematics fk(truth.model, truth.params);
   for (BallbarReading& r : plan.readings)
-    r.length = ballbarLength(fk, r.q, plan.setups[r.setup], balls[r.setup], &r.context) + noise(rng);
+    r.length =
+        ballbarLength(fk, r.q, plan.setups[r.setup], balls[r.setup], &r.context) + noise(rng);
   return plan;
 }
 

@@ -1,5 +1,5 @@
-// Effects (core/model/effects.h) in the forward model, the sensitivity Jacobian, the ball-bar model,
-// prediction and machine files: analytic cases, finite differences and round trips.
+// Effects (core/model/effects.h) in the forward model, the sensitivity Jacobian, the ball-bar
+// model, prediction and machine files: analytic cases, finite differences and round trips.
 #include "core/model/effects.h"
 
 #include <gtest/gtest.h>
@@ -19,7 +19,9 @@ namespace {
 
 using test::twistBetween;
 
-Machine matsuura() { return readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml")); }
+Machine matsuura() {
+  return readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
+}
 
 int addEffect(Machine& m, const EffectSpec& e, const std::vector<double>& values) {
   const int first = m.model.parameterCount();
@@ -66,7 +68,8 @@ TEST(Effects, ReversalShiftsTheToolByHalfTheValueAgainstTheApproach) {
   Machine m = matsuura();
   const double B = 4e-3;
   addEffect(m, spec(EffectType::Reversal, 0, 0), {B});  // X positioning
-  const ForwardKinematics fk(m.model, m.params), nominal(m.model, Eigen::VectorXd::Zero(m.params.size()));
+  const ForwardKinematics fk(m.model, m.params),
+      nominal(m.model, Eigen::VectorXd::Zero(m.params.size()));
   JointVector q = JointVector::Zero(5);
   q << 100, -50, 30, 0, 0;
   for (int d : {1, -1, 0}) {
@@ -86,16 +89,19 @@ TEST(Effects, TimeEffectsFollowTheirLaws) {
   EffectSpec warm = spec(EffectType::Warmup, 2, 2);
   warm.tau = 1200;
   addEffect(m, warm, {5e-3});
-  const ForwardKinematics fk(m.model, m.params), nominal(m.model, Eigen::VectorXd::Zero(m.params.size()));
+  const ForwardKinematics fk(m.model, m.params),
+      nominal(m.model, Eigen::VectorXd::Zero(m.params.size()));
   const JointVector q = JointVector::Zero(5);
   for (double t : {0.0, 600.0, 3600.0, 7200.0}) {
     MotionContext ctx;
     ctx.time_s = t;
     const double dz = fk.w_T_t(q, &ctx).translation().z() - nominal.w_T_t(q).translation().z();
-    EXPECT_NEAR(dz, 2e-3 * t / 3600 + 5e-3 * (1 - std::exp(-t / 1200)), 1e-12);  // Z on the tool branch
+    EXPECT_NEAR(dz, 2e-3 * t / 3600 + 5e-3 * (1 - std::exp(-t / 1200)),
+                1e-12);  // Z on the tool branch
   }
   MotionContext unknown;  // no time: nothing
-  EXPECT_NEAR((fk.w_T_t(q, &unknown).translation() - nominal.w_T_t(q).translation()).norm(), 0, 1e-15);
+  EXPECT_NEAR((fk.w_T_t(q, &unknown).translation() - nominal.w_T_t(q).translation()).norm(), 0,
+              1e-15);
 }
 
 TEST(Effects, HarmonicsAndPeriodicBasesAreTheirFourierTerms) {
@@ -117,7 +123,7 @@ TEST(Effects, HarmonicsAndPeriodicBasesAreTheirFourierTerms) {
   c.first_order = 4;
   c.last_order = 5;
   traitsOf(c.type).basis(c, 0.0, 0.5, nullptr, phi);
-  EXPECT_NEAR(phi[0], 8 * std::pow(0.5, 4) - 8 * 0.25 + 1, 1e-15);           // T4(x)
+  EXPECT_NEAR(phi[0], 8 * std::pow(0.5, 4) - 8 * 0.25 + 1, 1e-15);                      // T4(x)
   EXPECT_NEAR(phi[1], 16 * std::pow(0.5, 5) - 20 * std::pow(0.5, 3) + 5 * 0.5, 1e-15);  // T5(x)
 }
 
@@ -129,7 +135,8 @@ TEST(Effects, JacobianColumnsMatchFiniteDifferences) {
   for (int pose = 0; pose < 10; ++pose) {
     JointVector q(5);
     for (int a = 0; a < 5; ++a)
-      q[a] = std::uniform_real_distribution<double>(m.model.axes[a].travel_min, m.model.axes[a].travel_max)(rng);
+      q[a] = std::uniform_real_distribution<double>(m.model.axes[a].travel_min,
+                                                    m.model.axes[a].travel_max)(rng);
     MotionContext ctx;
     for (int a = 0; a < 5; ++a) ctx.direction[a] = static_cast<signed char>(pose % 2 ? 1 : -1);
     ctx.time_s = 500.0 * pose;
@@ -144,8 +151,10 @@ TEST(Effects, JacobianColumnsMatchFiniteDifferences) {
         pp[i] += h;
         pm[i] -= h;
         const Vector6d fd = (twistBetween(T0, ForwardKinematics(m.model, pp).w_T_t(q, &ctx)) -
-                             twistBetween(T0, ForwardKinematics(m.model, pm).w_T_t(q, &ctx))) / (2 * h);
-        EXPECT_LT((fd - J.col(i)).norm(), 1e-6 * (1.0 + J.col(i).norm())) << m.model.parameters[i].iso_code;
+                             twistBetween(T0, ForwardKinematics(m.model, pm).w_T_t(q, &ctx))) /
+                            (2 * h);
+        EXPECT_LT((fd - J.col(i)).norm(), 1e-6 * (1.0 + J.col(i).norm()))
+            << m.model.parameters[i].iso_code;
       }
     }
   }
@@ -173,17 +182,24 @@ TEST(Effects, BallbarGradientMatchesFiniteDifferences) {
     const EffectSpec& e = m.model.effects[b.effect];
     double phi[8];
     const Axis* ax = e.axis >= 0 ? &m.model.axes[e.axis] : nullptr;
-    if (ax) traitsOf(e.type).basis(e, q[e.axis], 2 * (q[e.axis] - 0.5 * (ax->travel_min + ax->travel_max)) / (ax->travel_max - ax->travel_min), &ctx, phi);
+    if (ax)
+      traitsOf(e.type).basis(e, q[e.axis],
+                             2 * (q[e.axis] - 0.5 * (ax->travel_min + ax->travel_max)) /
+                                 (ax->travel_max - ax->travel_min),
+                             &ctx, phi);
     for (int i = b.offset; i < b.offset + b.size; ++i) {
       const double h = 1e-6;
       Eigen::VectorXd pp = m.params, pm = m.params;
       pp[i] += h;
       pm[i] -= h;
       const double fd = (ballbarLength(ForwardKinematics(m.model, pp), q, s, {}, &ctx) -
-                         ballbarLength(ForwardKinematics(m.model, pm), q, s, {}, &ctx)) / (2 * h);
+                         ballbarLength(ForwardKinematics(m.model, pm), q, s, {}, &ctx)) /
+                        (2 * h);
       EXPECT_NEAR(row[i], fd, 1e-7) << m.model.parameters[i].iso_code;
-      if (ax) EXPECT_NEAR(comp[6 * e.axis + e.component] * phi[i - b.offset], row[i], 1e-12);
-      else EXPECT_EQ(row[i], 1.0);
+      if (ax)
+        EXPECT_NEAR(comp[6 * e.axis + e.component] * phi[i - b.offset], row[i], 1e-12);
+      else
+        EXPECT_EQ(row[i], 1.0);
     }
   }
 }
@@ -221,8 +237,8 @@ std::string machineWithEffect(const std::string& effect) {
   const size_t at = xml.find(errors);
   EXPECT_NE(at, std::string::npos);
   return xml.replace(at, errors.size(),
-                     "<errors length_unit=\"um\" angle_unit=\"urad\" default_degree=\"3\">\n" + effect +
-                         "\n</errors>");
+                     "<errors length_unit=\"um\" angle_unit=\"urad\" default_degree=\"3\">\n" +
+                         effect + "\n</errors>");
 }
 
 TEST(Effects, MalformedEffectElementsNameLineAndField) {
@@ -232,12 +248,15 @@ TEST(Effects, MalformedEffectElementsNameLineAndField) {
   } cases[] = {
       {R"(<effect type="backlash" axis="X" component="ex" values="3"/>)", "effect.type"},
       {R"(<effect type="periodic" axis="X" component="ex" values="1 2"/>)", "effect.period_mm"},
-      {R"(<effect type="periodic" axis="X" component="ex" period_mm="-4" values="1 2"/>)", "effect.period_mm"},
+      {R"(<effect type="periodic" axis="X" component="ex" period_mm="-4" values="1 2"/>)",
+       "effect.period_mm"},
       {R"(<effect type="reversal" axis="X" component="ex" values="1 2"/>)", "effect.values"},
       {R"(<effect type="reversal" axis="W" component="ex" values="1"/>)", "effect.axis"},
       {R"(<effect type="warmup" axis="Z" component="ez" tau_s="x" values="1"/>)", "effect.tau_s"},
-      {R"(<effect type="harmonics" axis="C" component="gz" orders="4 2" values="1 2"/>)", "effect.orders"},
-      {R"(<effect type="reversal" axis="X" component="ex" varying="maybe" values="1"/>)", "effect.varying"},
+      {R"(<effect type="harmonics" axis="C" component="gz" orders="4 2" values="1 2"/>)",
+       "effect.orders"},
+      {R"(<effect type="reversal" axis="X" component="ex" varying="maybe" values="1"/>)",
+       "effect.varying"},
   };
   for (const auto& c : cases) {
     try {

@@ -1,11 +1,11 @@
 #include "core/kinematics/forward_kinematics.h"
-#include "core/numerics/lanes.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
+#include "core/numerics/lanes.h"
 #include "io/machine/machine_file.h"
 #include "test_support.h"
 
@@ -43,7 +43,8 @@ TEST(ForwardKinematics, ZeroErrorsReproduceTheNominalPoseExactly) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int n = 0; n < 500; ++n) {
-    const JointVector q = joints(380 * u(rng), 255 * u(rng), 200 * u(rng), 1.5 * u(rng), 3 * u(rng));
+    const JointVector q =
+        joints(380 * u(rng), 255 * u(rng), 200 * u(rng), 1.5 * u(rng), 3 * u(rng));
     const Eigen::Isometry3d a = fk.w_T_t(q), b = handNominal(q, m.model.setup);
     EXPECT_LT((a.matrix() - b.matrix()).cwiseAbs().maxCoeff(), 1e-12);
   }
@@ -64,7 +65,8 @@ TEST(ForwardKinematics, TipAndAxisMatchTheComposedPose) {
     for (int k = 0; k < 200; ++k) {
       JointVector q(m.model.axes.size());
       for (size_t a = 0; a < m.model.axes.size(); ++a) {
-        std::uniform_real_distribution<double> u(m.model.axes[a].travel_min, m.model.axes[a].travel_max);
+        std::uniform_real_distribution<double> u(m.model.axes[a].travel_min,
+                                                 m.model.axes[a].travel_max);
         q[a] = u(rng);
       }
       Eigen::Vector3d p, u;

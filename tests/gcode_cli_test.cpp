@@ -1,19 +1,18 @@
 // The CLI on posted G-code and real CAM files: predict, setup and verify end to end.
 #include <gtest/gtest.h>
 
-#include <regex>
-
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <string>
 
 #include "core/kinematics/inverse_kinematics.h"
 #include "core/path/tool_path_prediction.h"
+#include "io/machine/machine_file.h"
 #include "io/program/apt_reader.h"
 #include "io/program/gcode_reader.h"
-#include "io/machine/machine_file.h"
 #include "io/program/setup_file.h"
 #include "test_support.h"
 
@@ -41,8 +40,9 @@ class GcodeCli : public test::TempDirTest {
 // the machine without errors says its share is zero by construction.
 TEST_F(GcodeCli, PostedProgramPredictsAndItsPredictedClReadsBack) {
   const std::string m = src("resources/machines/umc_bc_trunnion.xml");
-  auto r = test::runTolver("predict --machine " + m + " --nc " + src("samples/gcode/umc_bc_inch.nc") +
-                           " --gauge-length 76.2 -o " + path("umc.apt"));
+  auto r =
+      test::runTolver("predict --machine " + m + " --nc " + src("samples/gcode/umc_bc_inch.nc") +
+                      " --gauge-length 76.2 -o " + path("umc.apt"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("(G-code)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("units INCH"), std::string::npos) << r.output;
@@ -84,33 +84,41 @@ TEST_F(GcodeCli, PostedProgramPredictsAndItsPredictedClReadsBack) {
 // does not describe is an error listing the tools, never the last cutter for all.
 TEST_F(GcodeCli, ThreeAxisProgramSetupAndToolsPerOperation) {
   const std::string m = src("resources/machines/vmc_3axis_iso.xml");
-  const std::string known = write("known.nc",
-      "(T1 D=6 CR=0 - flat end mill)\n(T2 D=3 CR=1.5 - ball end mill)\nG21 G90 G54\nT1 M6\n"
-      "G0 X0 Y0 Z10\nG1 Z-1 F100\nX20\nT2 M6\nG0 X5 Y5 Z10\nG1 Z-1\nX25\nG0 Z10\nM30\n");
+  const std::string known =
+      write("known.nc",
+            "(T1 D=6 CR=0 - flat end mill)\n(T2 D=3 CR=1.5 - ball end mill)\nG21 G90 G54\nT1 M6\n"
+            "G0 X0 Y0 Z10\nG1 Z-1 F100\nX20\nT2 M6\nG0 X5 Y5 Z10\nG1 Z-1\nX25\nG0 Z10\nM30\n");
   auto s = test::runTolver("setup --machine " + m + " --nc " + known + " -o " + path("s.txt"));
   ASSERT_EQ(s.exit_code, 0) << s.output;
   // Each axis's range centred in its travel (machine coordinates X -762..0, Y -406..0, Z -508..0):
   // X 0..25 -> -381 - 12.5, Y 0..5 -> -203 - 2.5, Z -1..10 -> -254 - 4.5 (no tool length given).
   EXPECT_NE(s.output.find("work offset at the control (G54..., machine coordinates): X-393.500 "
                           "Y-205.500 Z-258.500"),
-            std::string::npos) << s.output;
-  auto v = test::runTolver("verify --machine " + m + " --setup " + path("s.txt") + " --nc " + known +
-                           " --tolerance 0.1 --no-images --report-dir " + path("v"));
-  EXPECT_NE(v.output.find("2 tools, each from its line on: line 4 flat end D6 mm"), std::string::npos)
+            std::string::npos)
+      << s.output;
+  auto v = test::runTolver("verify --machine " + m + " --setup " + path("s.txt") + " --nc " +
+                           known + " --tolerance 0.1 --no-images --report-dir " + path("v"));
+  EXPECT_NE(v.output.find("2 tools, each from its line on: line 4 flat end D6 mm"),
+            std::string::npos)
       << v.output;
   EXPECT_NE(v.output.find("line 8 ball end D3 mm"), std::string::npos) << v.output;
-  const std::string unknown = write("unknown.nc", "G21 G90 G54\nT1 M6\nG0 X0 Y0 Z10\nG1 Z-1 F100\n"
-                                                  "T2 M6\nG0 X5 Y5 Z10\nG1 Z-1\nM30\n");
+  const std::string unknown = write("unknown.nc",
+                                    "G21 G90 G54\nT1 M6\nG0 X0 Y0 Z10\nG1 Z-1 F100\n"
+                                    "T2 M6\nG0 X5 Y5 Z10\nG1 Z-1\nM30\n");
   v = test::runTolver("verify --machine " + m + " --setup " + path("s.txt") + " --nc " + unknown +
                       " --tolerance 0.1 --no-images --report-dir " + path("u"));
   EXPECT_EQ(v.exit_code, 2) << v.output;
-  EXPECT_NE(v.output.find("the program cuts with T1 (line 2), T2 (line 5)"), std::string::npos) << v.output;
+  EXPECT_NE(v.output.find("the program cuts with T1 (line 2), T2 (line 5)"), std::string::npos)
+      << v.output;
   // A tool file describes them (by number, with or without its T).
-  const std::string tools = write("tools.csv", "tool,type,diameter_mm,corner_radius_mm,length_mm\n"
-                                               "1,flat,6,0,30\nT2,ball,3,,20\n");
+  const std::string tools = write("tools.csv",
+                                  "tool,type,diameter_mm,corner_radius_mm,length_mm\n"
+                                  "1,flat,6,0,30\nT2,ball,3,,20\n");
   v = test::runTolver("verify --machine " + m + " --setup " + path("s.txt") + " --nc " + unknown +
-                      " --tools " + tools + " --tolerance 0.1 --no-images --report-dir " + path("t"));
-  EXPECT_NE(v.output.find("2 tools, each from its line on: line 2 flat end D6 mm"), std::string::npos)
+                      " --tools " + tools + " --tolerance 0.1 --no-images --report-dir " +
+                      path("t"));
+  EXPECT_NE(v.output.find("2 tools, each from its line on: line 2 flat end D6 mm"),
+            std::string::npos)
       << v.output;
   EXPECT_NE(v.output.find("line 5 ball end D3 mm, corner R1.5 mm, length 20 mm"), std::string::npos)
       << v.output;
@@ -142,9 +150,11 @@ TEST_F(GcodeCli, VerifyNamesARotaryAxisThatTurnsTheOtherWay) {
     std::snprintf(buf, sizeof buf, "v %.9f %.9f %.9f\n", v.x(), v.y(), v.z());
     obj += buf;
   }
-  // Faces outward: the box's faces (vertex index = 1 + a + 2b + 4c), counter-clockwise seen from out.
-  obj += "f 5 6 8\nf 5 8 7\nf 1 3 4\nf 1 4 2\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\n"
-         "f 1 5 7\nf 1 7 3\nf 2 4 8\nf 2 8 6\n";
+  // Faces outward: the box's faces (vertex index = 1 + a + 2b + 4c), counter-clockwise seen from
+  // out.
+  obj +=
+      "f 5 6 8\nf 5 8 7\nf 1 3 4\nf 1 4 2\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\n"
+      "f 1 5 7\nf 1 7 3\nf 2 4 8\nf 2 8 6\n";
   // Check the winding's orientation from e1 x e2 = u: the top (c=1) face 5 6 8 turns about +u.
   write("slab.obj", obj);
   std::string prog = "G21\nM428\nG43 H1\n";
@@ -167,32 +177,40 @@ TEST_F(GcodeCli, VerifyNamesARotaryAxisThatTurnsTheOtherWay) {
   lifted += "M429\nM2\n";
   write("lifted.ngc", lifted);
   const std::string setup = src("samples/gcode/linuxcnc_setup.txt");
-  const std::string common = " --setup " + setup + " --nc " + path("face.ngc") + " --part " + path("slab.obj") +
+  const std::string common = " --setup " + setup + " --nc " + path("face.ngc") + " --part " +
+                             path("slab.obj") +
                              " --cutter 4,0,30 --tolerance 0.1 --no-images --report-dir ";
   auto ok = test::runTolver("verify --machine " + right + common + path("ok"));
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
   EXPECT_NE(ok.output.find("tolver verify: PASS"), std::string::npos) << ok.output;
   EXPECT_NE(ok.output.find("100.00 % of"), std::string::npos) << ok.output;
-  auto none = test::runTolver("verify --machine " + right + " --setup " + setup + " --nc " + path("lifted.ngc") +
-                               " --part " + path("slab.obj") + " --cutter 4,0,30 --tolerance 0.1 --no-images "
-                               "--report-dir " + path("none"));
+  auto none = test::runTolver("verify --machine " + right + " --setup " + setup + " --nc " +
+                              path("lifted.ngc") + " --part " + path("slab.obj") +
+                              " --cutter 4,0,30 --tolerance 0.1 --no-images "
+                              "--report-dir " +
+                              path("none"));
   EXPECT_EQ(none.exit_code, 1) << none.output;
-  EXPECT_NE(none.output.find("INCOMPLETE: the program cuts none of the checked surface"), std::string::npos)
+  EXPECT_NE(none.output.find("INCOMPLETE: the program cuts none of the checked surface"),
+            std::string::npos)
       << none.output;
   const std::string wrong = aReversed(right);
   auto bad = test::runTolver("verify --machine " + wrong + common + path("bad"));
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("A turns the other way in this program compared with the machine file"),
-            std::string::npos) << bad.output;
-  EXPECT_NE(bad.output.find("set the nc_sign of A in the machine file"), std::string::npos) << bad.output;
+            std::string::npos)
+      << bad.output;
+  EXPECT_NE(bad.output.find("set the nc_sign of A in the machine file"), std::string::npos)
+      << bad.output;
   // A file whose C zero is half a turn away (its link turned 180 deg about z): named as such.
   std::string text = test::readText(right);
   const std::regex c_link("(<axis name=\"C\"[^>]*>\\s*<link [^>]*rotation=\")0 0 0\"");
   ASSERT_TRUE(std::regex_search(text, c_link)) << text;
-  const std::string c_flipped = write("c_zero.xml", std::regex_replace(text, c_link, "$010 0 180\""));
+  const std::string c_flipped =
+      write("c_zero.xml", std::regex_replace(text, c_link, "$010 0 180\""));
   auto zero = test::runTolver("verify --machine " + c_flipped + common + path("zero"));
   EXPECT_EQ(zero.exit_code, 2) << zero.output;
-  EXPECT_NE(zero.output.find("the zero of C is half a turn away"), std::string::npos) << zero.output;
+  EXPECT_NE(zero.output.find("the zero of C is half a turn away"), std::string::npos)
+      << zero.output;
 }
 
 // Per operation: a three-axis facing at A0 and a chamfer faced square with A-45 in one program.
@@ -218,8 +236,10 @@ TEST_F(GcodeCli, VerifyNamesTheConventionOfOneOperation) {
   // Vertex k of the -x cap is k+1, of the +x cap k+6. The section is counter-clockwise seen from
   // +x when sy = +1 (the caps and sides then face out as written); mirrored, every face turns.
   auto face = [&](int a, int b, int c) {
-    if (sy > 0) std::snprintf(buf, sizeof buf, "f %d %d %d\n", a, b, c);
-    else std::snprintf(buf, sizeof buf, "f %d %d %d\n", a, c, b);
+    if (sy > 0)
+      std::snprintf(buf, sizeof buf, "f %d %d %d\n", a, b, c);
+    else
+      std::snprintf(buf, sizeof buf, "f %d %d %d\n", a, c, b);
     obj += buf;
   };
   for (int k = 1; k < 4; ++k) face(6, 6 + k, 7 + k);  // +x cap
@@ -238,7 +258,8 @@ TEST_F(GcodeCli, VerifyNamesTheConventionOfOneOperation) {
   }
   prog += "G0 Z20\n";
   // The chamfer: centre (0, 15 sy, -5), across it e1 = x and e2 = u x e1, square to u.
-  const Eigen::Vector3d c(0, 15 * sy, -5), e1 = Eigen::Vector3d::UnitX(), e2 = u.cross(e1).normalized();
+  const Eigen::Vector3d c(0, 15 * sy, -5), e1 = Eigen::Vector3d::UnitX(),
+                                           e2 = u.cross(e1).normalized();
   auto tip = [&](double a, double b, double h) {
     const Eigen::Vector3d q = c + a * e1 + b * e2 + h * u;
     std::snprintf(buf, sizeof buf, "X%.4f Y%.4f Z%.4f", q.x(), q.y(), q.z());
@@ -249,16 +270,19 @@ TEST_F(GcodeCli, VerifyNamesTheConventionOfOneOperation) {
     prog += "G1 " + tip(-15, -2 + 2 * row, 0) + " F500\nG1 " + tip(15, -2 + 2 * row, 0) + "\n";
   prog += "G0 " + tip(15, 2, 10) + "\nM429\nM2\n";
   write("two_ops.ngc", prog);
-  const std::string common = " --setup " + src("samples/gcode/linuxcnc_setup.txt") + " --nc " + path("two_ops.ngc") +
-                             " --part " + path("roof.obj") + " --cutter 4,0,30 --tolerance 0.1 --no-images --report-dir ";
+  const std::string common = " --setup " + src("samples/gcode/linuxcnc_setup.txt") + " --nc " +
+                             path("two_ops.ngc") + " --part " + path("roof.obj") +
+                             " --cutter 4,0,30 --tolerance 0.1 --no-images --report-dir ";
   auto ok = test::runTolver("verify --machine " + right + common + path("ok"));
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
   const std::string wrong = aReversed(right);
   auto bad = test::runTolver("verify --machine " + wrong + common + path("bad"));
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
-  EXPECT_NE(bad.output.find("A turns the other way in this program compared with the machine file: with that "
-                            "convention the operation of lines 24-"),
-            std::string::npos) << bad.output;
+  EXPECT_NE(bad.output.find(
+                "A turns the other way in this program compared with the machine file: with that "
+                "convention the operation of lines 24-"),
+            std::string::npos)
+      << bad.output;
 }
 
 TEST_F(GcodeCli, SetupReachesTheXyzbcBoatOnItsMachine) {
@@ -268,8 +292,8 @@ TEST_F(GcodeCli, SetupReachesTheXyzbcBoatOnItsMachine) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("every point inside travel"), std::string::npos) << r.output;
   r = test::runTolver("predict --machine " + src("resources/machines/linuxcnc_xyzbc_trt.xml") +
-                      " --nc " + src("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc") +
-                      " --setup " + path("bc.txt") + " -o " + path("bc.apt"));
+                      " --nc " + src("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc") + " --setup " +
+                      path("bc.txt") + " -o " + path("bc.apt"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
 }
 
@@ -310,7 +334,6 @@ TEST_F(GcodeCli, BadGcodeExitsWithCode2NamingTheLine) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
 }
 
-
 // The cone finish posted as TCP G-code for the LinuxCNC xyzac-trt machine (rotary words from
 // the nominal inverse kinematics, 6 decimals on X Y Z and 9 on the angles), as a post would.
 std::string postCone(const std::string& machine_file, const ClProgram& cl) {
@@ -345,7 +368,8 @@ TEST_F(GcodeCli, VerifyOnPostedGcodeWithAPartMeshMatchesTheClRun) {
                              " --tolerance 0.05 --cutter 10,0,50 --no-images --spacing 1";
   auto a = test::runTolver("verify --cl " + src("samples/nas979_cone.apt") + common +
                            " --report-dir " + path("cl"));
-  auto b = test::runTolver("verify --nc " + path("cone.ngc") + common + " --report-dir " + path("nc"));
+  auto b =
+      test::runTolver("verify --nc " + path("cone.ngc") + common + " --report-dir " + path("nc"));
   ASSERT_LE(a.exit_code, 1) << a.output;
   ASSERT_EQ(b.exit_code, a.exit_code) << b.output;
   EXPECT_NE(b.output.find("(G-code)"), std::string::npos) << b.output;
@@ -382,7 +406,6 @@ TEST_F(GcodeCli, VerifyRefusesImplausibleUnitsAndTolerances) {
   EXPECT_FALSE(fs::exists(path("b")));
 }
 
-
 // A real NX CLSF (MSYS, 800 mm long, tool axes down to 4 deg from horizontal) on the Matsuura
 // (X 760, Y 510 mm of travel): no single set-up reaches it, which setup says with the lines the
 // best one leaves outside, and then splits it into two pieces whose set-up files each reach
@@ -394,7 +417,8 @@ TEST_F(GcodeCli, SetupOnARealClsfSplitsItIntoPiecesThatEachReach) {
   auto r = test::runTolver("setup --machine " + machine + " --cl " + cl +
                            " --absolute-msys --gauge-length 100 -o " + path("s.txt"));
   EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_NE(r.output.find("no single set-up reaches the whole program"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("no single set-up reaches the whole program"), std::string::npos)
+      << r.output;
   EXPECT_NE(r.output.find("MSYS at line 3 applied"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("-120.259, -1196.500, 142.500"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("extent     x -189.770 .. 130.866"), std::string::npos) << r.output;
@@ -405,8 +429,8 @@ TEST_F(GcodeCli, SetupOnARealClsfSplitsItIntoPiecesThatEachReach) {
   const size_t at = r.output.find("the best leaves ");
   ASSERT_NE(at, std::string::npos);
   const int outside = std::stoi(r.output.substr(at + 16));
-  auto p = test::runTolver("predict --machine " + machine + " --cl " + cl + " --absolute-msys --setup " +
-                           path("s.txt") + " -o " + path("p.apt"));
+  auto p = test::runTolver("predict --machine " + machine + " --cl " + cl +
+                           " --absolute-msys --setup " + path("s.txt") + " -o " + path("p.apt"));
   EXPECT_EQ(p.exit_code, 2) << p.output;  // still out of travel, now by the figures setup gave
   EXPECT_NE(p.output.find("; " + std::to_string(outside) + " points fail"), std::string::npos)
       << outside << ": " << p.output;
@@ -434,20 +458,23 @@ TEST_F(GcodeCli, SetupOnARealClsfSplitsItIntoPiecesThatEachReach) {
     EXPECT_TRUE(pred.ok()) << f << ": " << pred.failed_points << " points outside travel";
     // And as a planner runs it: predict the piece with its set-up file and --lines.
     const std::string lines = std::to_string(first) + "-" + std::to_string(last);
-    auto pr = test::runTolver("predict --machine " + machine + " --cl " + cl + " --absolute-msys --setup " + f +
-                              " --lines " + lines + " -o " + path("piece.apt"));
+    auto pr = test::runTolver("predict --machine " + machine + " --cl " + cl +
+                              " --absolute-msys --setup " + f + " --lines " + lines + " -o " +
+                              path("piece.apt"));
     EXPECT_EQ(pr.exit_code, 0) << pr.output;
-    EXPECT_NE(pr.output.find(std::to_string(piece.size()) + " tool positions"), std::string::npos) << pr.output;
+    EXPECT_NE(pr.output.find(std::to_string(piece.size()) + " tool positions"), std::string::npos)
+        << pr.output;
   }
-  auto bad = test::runTolver("predict --machine " + machine + " --cl " + cl + " --lines 9-x -o " + path("b.apt"));
+  auto bad = test::runTolver("predict --machine " + machine + " --cl " + cl + " --lines 9-x -o " +
+                             path("b.apt"));
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_NE(bad.output.find("--lines"), std::string::npos) << bad.output;
-  bad = test::runTolver("predict --machine " + machine + " --cl " + cl + " --lines 1-5 -o " + path("b.apt"));
+  bad = test::runTolver("predict --machine " + machine + " --cl " + cl + " --lines 1-5 -o " +
+                        path("b.apt"));
   EXPECT_EQ(bad.exit_code, 2) << bad.output;
   EXPECT_FALSE(fs::exists(path("b.apt")));
   EXPECT_EQ(covered, program.path.size());
 }
-
 
 // A CL without UNITS whose tool and extent look like inches: predict says so and names the
 // option; with --cl-units inch the points are scaled.
@@ -455,7 +482,8 @@ TEST_F(GcodeCli, ClWithoutUnitsThatLooksLikeInches) {
   std::ofstream(path("inch.apt")) << "MULTAX\nCUTTER/0.75\nGOTO/0.5,0.5,0.2,0,0,1\n"
                                      "GOTO/1.5,0.5,0.2,0,0,1\nGOTO/1.5,1.2,0.2,0,0,1\n";
   const std::string base = "predict --machine " + src("resources/machines/matsuura_mc760vx.xml") +
-                           " --setup " + src("samples/matsuura_setup.txt") + " --cl " + path("inch.apt");
+                           " --setup " + src("samples/matsuura_setup.txt") + " --cl " +
+                           path("inch.apt");
   auto r = test::runTolver(base + " -o " + path("a.apt"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("looks like inches"), std::string::npos) << r.output;

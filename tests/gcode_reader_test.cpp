@@ -71,7 +71,8 @@ Machine machine(const char* rel, double gauge = 0.0) {
 TEST(GcodeReader, BoatXyzacMatchesLinuxCncKinematics) {
   for (double dt : {0.0, 25.0}) {
     const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", dt);
-    const ClProgram p = readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzac.ngc"), m.model);
+    const ClProgram p =
+        readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzac.ngc"), m.model);
     ASSERT_GT(p.path.size(), 1800u);
     EXPECT_EQ(p.units, "MM");
     EXPECT_FALSE(p.units_declared);
@@ -100,7 +101,8 @@ TEST(GcodeReader, BoatXyzacMatchesLinuxCncKinematics) {
 
 TEST(GcodeReader, BoatXyzbcMatchesLinuxCncKinematics) {
   const Machine m = machine("resources/machines/linuxcnc_xyzbc_trt.xml", 50.0);
-  const ClProgram p = readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc"), m.model);
+  const ClProgram p =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc"), m.model);
   const PredictionResult r = predictToolPath(m.model, m.params, p.path, 20, &p.joints);
   ASSERT_TRUE(r.ok()) << r.failures.front().message;
   double worst = 0.0;
@@ -123,13 +125,15 @@ TEST(GcodeReader, JointWordsGiveLinuxCncForwardKinematics) {
       "G21 G90\nM429\nG43 H1\nG0 X10 Y-20 Z30 A-25 C40\nG1 X-15 Y5 Z-12 A10 C-130\nG1 A-60 C400\n",
       "joint.ngc", m.model);
   ASSERT_EQ(p.path.size(), 3u);
-  const double words[3][5] = {{10, -20, 30, -25, 40}, {-15, 5, -12, 10, -130}, {-15, 5, -12, -60, 400}};
+  const double words[3][5] = {
+      {10, -20, 30, -25, 40}, {-15, 5, -12, 10, -130}, {-15, 5, -12, -60, 400}};
   for (int k = 0; k < 3; ++k) {
     const double a = words[k][3] * kDeg, c = words[k][4] * kDeg;
     // G43 H1 with no tool table: H1 is the gauge length, so the joint is word + 40 on Z and the
     // controlled point (the tip) is the word.
     const Eigen::Vector3d J(words[k][0], words[k][1], words[k][2] + 40.0);
-    const Eigen::Vector3d tip = xyzacForward(J, a, c, 20, 10, 40.0) - 40.0 * Eigen::Vector3d::UnitZ();
+    const Eigen::Vector3d tip =
+        xyzacForward(J, a, c, 20, 10, 40.0) - 40.0 * Eigen::Vector3d::UnitZ();
     EXPECT_LT((tip - p.path[k].p_w).norm(), 1e-9) << k;
     EXPECT_NEAR(p.joints[k][2], J.z(), 1e-12);
     EXPECT_NEAR(p.joints[k][4], c, 1e-12);
@@ -139,7 +143,8 @@ TEST(GcodeReader, JointWordsGiveLinuxCncForwardKinematics) {
 // The table-dual-rotary demo: parameters from the control, G10 L2/L20, G53, M61, G43.
 TEST(GcodeReader, ReadsTheTableDualRotaryDemoWithControlParameters) {
   const Machine m = machine("tests/fixtures/machines/xyzab_tdr_like.xml", 30.0);
-  const ClProgram p = readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_xyzab-tdr-demo.ngc"), m.model);
+  const ClProgram p =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_xyzab-tdr-demo.ngc"), m.model);
   EXPECT_GT(p.path.size(), 25u);
   EXPECT_TRUE(p.units_declared);
   // Without the control's HAL pins the same program names the line and the pin.
@@ -150,7 +155,8 @@ TEST(GcodeReader, ReadsTheTableDualRotaryDemoWithControlParameters) {
     FAIL() << "expected an error";
   } catch (const InputError& e) {
     EXPECT_EQ(e.line(), 10);
-    EXPECT_NE(std::string(e.what()).find("_hal[xyzab_tdr_kins.x-rot-point]"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("_hal[xyzab_tdr_kins.x-rot-point]"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -158,7 +164,8 @@ TEST(GcodeReader, ReadsTheTableDualRotaryDemoWithControlParameters) {
 // forms, multi-turn C on an endless axis, G53 and G28.
 TEST(GcodeReader, InchHaasProgramWithTcpAndDwo) {
   Machine m = machine("resources/machines/umc_bc_trunnion.xml", 76.2);
-  const ClProgram p = readGcodeFile(test::sourcePath("tests/fixtures/gcode/umc_bc_inch.nc"), m.model);
+  const ClProgram p =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/umc_bc_inch.nc"), m.model);
   EXPECT_EQ(p.units, "INCH");
   // N70 G02 X0.5 Y0.5 I0.5 J0: a quarter circle about (0.5, 0) in the part frame, clockwise.
   int arc_points = 0;
@@ -187,11 +194,15 @@ TEST(GcodeReader, InchHaasProgramWithTcpAndDwo) {
 
 TEST(GcodeReader, ArcFormsAgreeAndIncrementalMovesAdd) {
   const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
-  const ClProgram ijk = parseGcode("G21 M428\nG0 X0 Y0 Z0 A0 C0\nG3 X-10 Y10 I-10 J0\n", "a.ngc", m.model);
-  const ClProgram r = parseGcode("G21 M428\nG0 X0 Y0 Z0 A0 C0\nG3 X-10 Y10 R10\n", "b.ngc", m.model);
+  const ClProgram ijk =
+      parseGcode("G21 M428\nG0 X0 Y0 Z0 A0 C0\nG3 X-10 Y10 I-10 J0\n", "a.ngc", m.model);
+  const ClProgram r =
+      parseGcode("G21 M428\nG0 X0 Y0 Z0 A0 C0\nG3 X-10 Y10 R10\n", "b.ngc", m.model);
   ASSERT_EQ(ijk.path.size(), r.path.size());
-  for (size_t i = 0; i < r.path.size(); ++i) EXPECT_LT((ijk.path[i].p_w - r.path[i].p_w).norm(), 1e-9);
-  const ClProgram inc = parseGcode("G21 M428\nG0 X1 Y2 Z3 A0 C0\nG91 G1 X1 Y1 Z-1\nX1\n", "c.ngc", m.model);
+  for (size_t i = 0; i < r.path.size(); ++i)
+    EXPECT_LT((ijk.path[i].p_w - r.path[i].p_w).norm(), 1e-9);
+  const ClProgram inc =
+      parseGcode("G21 M428\nG0 X1 Y2 Z3 A0 C0\nG91 G1 X1 Y1 Z-1\nX1\n", "c.ngc", m.model);
   EXPECT_LT((inc.path.back().p_w - Eigen::Vector3d(3, 3, 2)).norm(), 1e-12);
 }
 
@@ -209,8 +220,8 @@ TEST(GcodeReader, NamedTcpWords) {
 
 TEST(GcodeReader, DrillingCycleBecomesStraightMoves) {
   const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
-  const ClProgram p = parseGcode("G21 M428\nG0 X0 Y0 Z20 A0 C0\nG98 G81 X5 Y6 Z-3 R2 F100\nX8\nG80\n",
-                                 "d.ngc", m.model);
+  const ClProgram p = parseGcode(
+      "G21 M428\nG0 X0 Y0 Z20 A0 C0\nG98 G81 X5 Y6 Z-3 R2 F100\nX8\nG80\n", "d.ngc", m.model);
   // Per hole: over it at the clearance, down to R, feed to Z, back to the initial height.
   ASSERT_EQ(p.path.size(), 9u);
   EXPECT_LT((p.path[3].p_w - Eigen::Vector3d(5, 6, -3)).norm(), 1e-12);
@@ -243,7 +254,8 @@ TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
       {"G21\nG1 X[1/0]\n", 2, "division by zero"},
       // The fuzzer's input (tests/fuzz): thousands of signs made the expression parser's
       // recursion overflow the stack.
-      {"G21\ng2++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++\n", 2, "nested deeper"},
+      {"G21\ng2++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++++\n", 2,
+       "nested deeper"},
   };
   for (const Case& c : cases) {
     try {
@@ -284,9 +296,11 @@ TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
 // The fuzzer's input itself (5 kB of '+' after a BOM and a comment): an error naming the line.
 TEST(GcodeReader, DeepExpressionNestingIsAnErrorNotAStackOverflow) {
   const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
-  const std::string text = test::readText(test::sourcePath("tests/fuzz/gcode_corpus/deep_signs.ngc"));
-  for (const std::string& t : {text, "G21\nG0 X" + std::string(100000, '[') + "1\n",
-                               "G21\nG0 X" + std::string(100000, '-') + "1\n", "#1=" + std::string(100000, '#') + "1\n"}) {
+  const std::string text =
+      test::readText(test::sourcePath("tests/fuzz/gcode_corpus/deep_signs.ngc"));
+  for (const std::string& t :
+       {text, "G21\nG0 X" + std::string(100000, '[') + "1\n",
+        "G21\nG0 X" + std::string(100000, '-') + "1\n", "#1=" + std::string(100000, '#') + "1\n"}) {
     try {
       parseGcode(t, "deep.ngc", m.model);
       FAIL() << "no error";
@@ -301,7 +315,8 @@ TEST(GcodeReader, DeepExpressionNestingIsAnErrorNotAStackOverflow) {
 // behaviour). Now each such number is an error naming the line; good numbers still read.
 TEST(GcodeReader, AParameterNumberOutOfRangeOrNotAnIntegerIsAnError) {
   const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
-  const std::string found = test::readText(test::sourcePath("tests/fuzz/gcode_corpus/huge_parameter_number.ngc"));
+  const std::string found =
+      test::readText(test::sourcePath("tests/fuzz/gcode_corpus/huge_parameter_number.ngc"));
   const std::vector<std::pair<std::string, std::string>> bad = {
       {found, "out of range"},
       {"G21\nG0 X#" + std::string(35, '1') + "\n", "out of range"},
@@ -323,13 +338,15 @@ TEST(GcodeReader, AParameterNumberOutOfRangeOrNotAnIntegerIsAnError) {
       EXPECT_LT(w.size(), 300u) << w;
     }
   }
-  const ClProgram p = parseGcode("G21\n#5601=2\n#1=3.00001\nG0 X#5601 Y#1 Z0 A0 C0\n", "ok.ngc", m.model);
+  const ClProgram p =
+      parseGcode("G21\n#5601=2\n#1=3.00001\nG0 X#5601 Y#1 Z0 A0 C0\n", "ok.ngc", m.model);
   ASSERT_FALSE(p.path.empty());
 }
 
 TEST(GcodeReader, MutatedProgramsFailCleanly) {
   const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
-  const std::string base = test::readText(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzac.ngc"));
+  const std::string base =
+      test::readText(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzac.ngc"));
   std::mt19937 rng(7);
   const std::string junk = "XYZACGMIJKR#[]()-+.;/%0123456789eE\xff\x00 ";
   int errors = 0;
@@ -356,10 +373,12 @@ TEST(GcodeReader, DetectsGcodeAgainstApt) {
   EXPECT_TRUE(looksLikeGcode("\xEF\xBB\xBF; comment\nM428\nG0 X0\n"));
   EXPECT_FALSE(looksLikeGcode("PARTNO/X\nMULTAX\nGOTO/0,0,0,0,0,1\n"));
   EXPECT_FALSE(looksLikeGcode("$$ header\nTOOL PATH/A\nGOTO/1,2,3\n"));
-  EXPECT_TRUE(looksLikeGcode(test::readText(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc"))));
+  EXPECT_TRUE(looksLikeGcode(
+      test::readText(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc"))));
 }
 
-// ---------------------------------------------------------------- issue 32: ISO as controls read it
+// ---------------------------------------------------------------- issue 32: ISO as controls read
+// it
 
 bool hasNote(const ClProgram& p, const std::string& text) {
   for (const std::string& n : p.notes)
@@ -382,7 +401,8 @@ TEST(GcodeReader, TapeLeaderAndProgramNamesAreNotBlocks) {
   const Machine m = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
   const ClProgram p = parseGcode(
       "Information listing created by : someone\nDate : 1/2/2020\n\n%\nOFinal ToolPath\n"
-      "N10 G21 G90 G54\nN20 G0 X10 Y20 Z30\n/N30 G1 Z-1 F100 ; block delete: the control runs it\n%\n",
+      "N10 G21 G90 G54\nN20 G0 X10 Y20 Z30\n/N30 G1 Z-1 F100 ; block delete: the control runs "
+      "it\n%\n",
       "leader.nc", m.model);
   EXPECT_TRUE(hasNote(p, "tape leader")) << (p.notes.empty() ? "" : p.notes[0]);
   EXPECT_EQ(p.part_name, "Final ToolPath");
@@ -405,23 +425,29 @@ TEST(GcodeReader, ArcEndPointChecksFollowTheControlAndThePrintedResolution) {
   const Machine haas = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
   // Four decimals in inches (2.54 um a step): an end radius 0.0002 in (5.08 um) off, as NX's
   // HAAS post prints it, is read (RS274NGC alone would allow 0.0002 in exactly).
-  const ClProgram ok = parseGcode("G20\nG0 X0 Y0 Z0\nG2 X1.0002 Y-1.0000 I0 J-1.0000\n",
-                                  "inch.nc", haas.model);
+  const ClProgram ok =
+      parseGcode("G20\nG0 X0 Y0 Z0\nG2 X1.0002 Y-1.0000 I0 J-1.0000\n", "inch.nc", haas.model);
   EXPECT_GT(ok.path.size(), 10u);
   EXPECT_LT((ok.path.back().p_w - Eigen::Vector3d(25.40508, -25.4, 0)).norm(), 1e-9);
-  EXPECT_NE(refusal("G20\nG0 X0 Y0 Z0\nG2 X1.0006 Y-1.0000 I0 J-1.0000\n", haas.model).find("15.24 um, more than the 10.16 um"),
+  EXPECT_NE(refusal("G20\nG0 X0 Y0 Z0\nG2 X1.0006 Y-1.0000 I0 J-1.0000\n", haas.model)
+                .find("15.24 um, more than the 10.16 um"),
             std::string::npos);
   // 0.05 mm off in a 3-decimal mm program: refused, with the figures.
-  const std::string bad = refusal("G21\nG0 X0 Y0 Z0\nG2 X10.050 Y-10.000 I0 J-10.000\n", haas.model);
+  const std::string bad =
+      refusal("G21\nG0 X0 Y0 Z0\nG2 X10.050 Y-10.000 I0 J-10.000\n", haas.model);
   EXPECT_NE(bad.find("r.nc:3"), std::string::npos) << bad;
   EXPECT_NE(bad.find("differs from the start's by 50"), std::string::npos) << bad;
   // LinuxCNC: 0.005 mm always, 0.1 % of the radius up to 0.5 mm.
   const Machine lcnc = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
-  EXPECT_GT(parseGcode("G21\nG0 X0 Y0 Z0 A0 C0\nG2 X100.09 Y-100 I0 J-100\n", "l.ngc", lcnc.model).path.size(), 10u);
-  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0 A0 C0\nG2 X10.02 Y-10 I0 J-10\n", lcnc.model).find("LinuxCNC's rule"),
+  EXPECT_GT(parseGcode("G21\nG0 X0 Y0 Z0 A0 C0\nG2 X100.09 Y-100 I0 J-100\n", "l.ngc", lcnc.model)
+                .path.size(),
+            10u);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0 A0 C0\nG2 X10.02 Y-10 I0 J-10\n", lcnc.model)
+                .find("LinuxCNC's rule"),
             std::string::npos);
   // LinuxCNC's P: full turns of a helix.
-  const ClProgram helix = parseGcode("G21\nG0 X10 Y0 Z0 A0 C0\nG3 X10 Y0 Z-3 I-10 J0 P3\n", "h.ngc", lcnc.model);
+  const ClProgram helix =
+      parseGcode("G21\nG0 X10 Y0 Z0 A0 C0\nG3 X10 Y0 Z-3 I-10 J0 P3\n", "h.ngc", lcnc.model);
   double turned = 0.0;
   for (size_t i = 1; i < helix.path.size(); ++i) {
     const Eigen::Vector2d a = helix.path[i - 1].p_w.head<2>(), b = helix.path[i].p_w.head<2>();
@@ -451,17 +477,18 @@ TEST(GcodeReader, ModesEndWhereTheControlEndsThem) {
   EXPECT_EQ(mode[10], ClProgram::kJointWords);  // G28 cancelled G234
   EXPECT_EQ(mode[13], ClProgram::kTcpWords);    // G254
   EXPECT_EQ(mode[14], ClProgram::kMachineCoordinates);
-  EXPECT_EQ(mode[15], ClProgram::kTcpWords);    // G53 did not end G254
+  EXPECT_EQ(mode[15], ClProgram::kTcpWords);  // G53 did not end G254
 }
 
 // Canned cycles G73, G81-G86, G88, G89 (and G74, G76 on ISO controls) are expanded; G87 (back
 // boring) is refused naming it.
 TEST(GcodeReader, CannedCyclesAreExpandedOrRefusedByName) {
   const Machine m = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
-  for (const char* g : {"G73", "G81", "G82", "G83", "G84", "G85", "G86", "G88", "G89", "G74", "G76"}) {
-    const ClProgram p = parseGcode(std::string("G21\nG0 X0 Y0 Z20\nG99 ") + g +
-                                       " X5 Y6 Z-3 R2 Q1 P100 F100\nX8\nG80\n",
-                                   "c.nc", m.model);
+  for (const char* g :
+       {"G73", "G81", "G82", "G83", "G84", "G85", "G86", "G88", "G89", "G74", "G76"}) {
+    const ClProgram p = parseGcode(
+        std::string("G21\nG0 X0 Y0 Z20\nG99 ") + g + " X5 Y6 Z-3 R2 Q1 P100 F100\nX8\nG80\n",
+        "c.nc", m.model);
     ASSERT_EQ(p.path.size(), 9u) << g;
     EXPECT_LT((p.path[3].p_w - Eigen::Vector3d(5, 6, -3)).norm(), 1e-12) << g;
     EXPECT_LT((p.path[4].p_w - Eigen::Vector3d(5, 6, 2)).norm(), 1e-12) << g;  // G99: to R
@@ -489,7 +516,8 @@ TEST(GcodeReader, MovesBeforeEveryAxisIsKnownAreNotInventedPoints) {
 TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
   Machine m = machine("resources/machines/sinumerik_bc_table.xml", 0.0);
   m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, 0, 200);
-  const ClProgram p = readGcodeFile(test::sourcePath("tests/fixtures/gcode/nx_sin840d_Keychain.mpf"), m.model);
+  const ClProgram p =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/nx_sin840d_Keychain.mpf"), m.model);
   EXPECT_EQ(p.cycles, 1);
   EXPECT_EQ(p.cycle_holes, 1);
   // T="name" then M6: the tools by their names (a --tools file gives their geometry).
@@ -531,8 +559,9 @@ TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
   // 3+2 as NX posts it: the table positioned, TRAORI, the frame turned with AROT: the tool axis
   // B90 gives is the turned frame's z (this machine file's senses, ISO 841), and the program's
   // Z words run along it. With the senses the other way the program is refused, naming them.
-  const std::string tilted = "N10 G54 G0 X0 Y0 Z50 B0 C0 D1\nN20 G0 B90. C0.0\nN30 TRAORI\n"
-                             "N40 AROT Y90.\nN50 G0 X5. Y-15. Z100.\nN60 G1 Z2.\n";
+  const std::string tilted =
+      "N10 G54 G0 X0 Y0 Z50 B0 C0 D1\nN20 G0 B90. C0.0\nN30 TRAORI\n"
+      "N40 AROT Y90.\nN50 G0 X5. Y-15. Z100.\nN60 G1 Z2.\n";
   const ClProgram tp = parseGcode(tilted, "tilted.mpf", m.model);
   ASSERT_EQ(tp.path.size(), 4u);
   EXPECT_LT((tp.path[2].u_w - Eigen::Vector3d(1, 0, 0)).norm(), 1e-12);
@@ -543,22 +572,26 @@ TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
     if (a.isRotary()) a.nc_sign = -a.nc_sign;
   EXPECT_NE(refusal(tilted, flipped.model).find("rotary senses or zeros"), std::string::npos);
   // TRANS moves the work frame; G0 X=_A*2 evaluates.
-  const ClProgram t = parseGcode(base + "N25 G54 G0 X0 Y0 Z50 D1\nN30 TRANS X10 Y5\nN40 G0 X=_A*2 Y0 Z10\n",
-                                 "t.mpf", m.model);
+  const ClProgram t = parseGcode(
+      base + "N25 G54 G0 X0 Y0 Z50 D1\nN30 TRANS X10 Y5\nN40 G0 X=_A*2 Y0 Z10\n", "t.mpf", m.model);
   ASSERT_EQ(t.path.size(), 2u);
   EXPECT_NEAR(t.joints[1][0], -300 + 10 + 10, 1e-9);  // G54 + TRANS + _A*2
   EXPECT_NEAR(t.joints[1][1], 5, 1e-9);
   EXPECT_LT((t.path[1].p_w - t.path[0].p_w - Eigen::Vector3d(20, 5, -40)).norm(), 1e-9);
   // ROT RPL=90 turns the working plane (G17: about Z) as ROT Z90 does.
-  const ClProgram rpl = parseGcode(base + "N25 G54 G17 G0 X0 Y0 Z50 D1\nN30 ROT RPL=90\nN40 G0 X10 Y0 Z10\n", "r.mpf", m.model);
-  const ClProgram rz = parseGcode(base + "N25 G54 G17 G0 X0 Y0 Z50 D1\nN30 ROT Z90\nN40 G0 X10 Y0 Z10\n", "z.mpf", m.model);
+  const ClProgram rpl = parseGcode(
+      base + "N25 G54 G17 G0 X0 Y0 Z50 D1\nN30 ROT RPL=90\nN40 G0 X10 Y0 Z10\n", "r.mpf", m.model);
+  const ClProgram rz = parseGcode(
+      base + "N25 G54 G17 G0 X0 Y0 Z50 D1\nN30 ROT Z90\nN40 G0 X10 Y0 Z10\n", "z.mpf", m.model);
   ASSERT_EQ(rpl.path.size(), 2u);
   EXPECT_LT((rpl.path[1].p_w - rz.path[1].p_w).norm(), 1e-12);
   EXPECT_NEAR(rpl.path[1].p_w.y() - rpl.path[0].p_w.y(), 10, 1e-9);
   EXPECT_NE(refusal(base + "N30 SCALE X2 Y2\n", m.model).find("SCALE"), std::string::npos);
   EXPECT_NE(refusal(base + "N30 MIRROR X0\n", m.model).find("MIRROR"), std::string::npos);
-  EXPECT_NE(refusal(base + "N30 LIMS=3000\n", m.model).find("LIMS= is neither a variable"), std::string::npos);
-  EXPECT_EQ(parseGcode(base + "N30 R1=4 R2=R1*2\nN40 G54 G0 X=R2 Y0 Z10 D1\n", "r.mpf", m.model).joints[0][0],
+  EXPECT_NE(refusal(base + "N30 LIMS=3000\n", m.model).find("LIMS= is neither a variable"),
+            std::string::npos);
+  EXPECT_EQ(parseGcode(base + "N30 R1=4 R2=R1*2\nN40 G54 G0 X=R2 Y0 Z10 D1\n", "r.mpf", m.model)
+                .joints[0][0],
             -300 + 8);
 }
 
@@ -581,11 +614,14 @@ TEST(GcodeReader, Cycle800SwivelsThePlaneAsTheFrameInstructionsDo) {
     }
   };
   // Axis by axis X, Y, Z (_MODE 57), 30 deg about y, reference point X10 and zero point X5 Z-3.
-  const ClProgram c = parseGcode(head + "N20 CYCLE800(1,\"TC1\",0,57,10,0,0,0,30,0,5,0,-3,1,100,1)\n" + ops +
-                                     "N90 CYCLE800()\nN100 G0 X0 Y0 Z80\n",
-                                 "c800.mpf", m.model);
-  const ClProgram f = parseGcode(head + "N20 G0 B30 C0\nN25 TRAORI\nN30 TRANS X10\nN35 AROT Y30\n"
-                                     "N40 ATRANS X5 Z-3\n" + ops + "N90 TRAFOOF\nN95 TRANS\nN100 G0 X0 Y0 Z80\n",
+  const ClProgram c =
+      parseGcode(head + "N20 CYCLE800(1,\"TC1\",0,57,10,0,0,0,30,0,5,0,-3,1,100,1)\n" + ops +
+                     "N90 CYCLE800()\nN100 G0 X0 Y0 Z80\n",
+                 "c800.mpf", m.model);
+  const ClProgram f = parseGcode(head +
+                                     "N20 G0 B30 C0\nN25 TRAORI\nN30 TRANS X10\nN35 AROT Y30\n"
+                                     "N40 ATRANS X5 Z-3\n" +
+                                     ops + "N90 TRAFOOF\nN95 TRANS\nN100 G0 X0 Y0 Z80\n",
                                  "frames.mpf", m.model);
   same(c, f);
   ASSERT_EQ(c.path.size(), 6u);
@@ -601,36 +637,47 @@ TEST(GcodeReader, Cycle800SwivelsThePlaneAsTheFrameInstructionsDo) {
   EXPECT_NEAR(c.joints[5][0], -300, 1e-9);
   EXPECT_NEAR(c.joints[5][2], 280, 1e-9);
   // _DIR -1: the other solution (B-30, C turned half a turn), the same points.
-  const ClProgram d = parseGcode(head + "N20 CYCLE800(1,\"TC1\",0,57,10,0,0,0,30,0,5,0,-3,-1,100,1)\n" + ops,
-                                 "c800.mpf", m.model);
+  const ClProgram d =
+      parseGcode(head + "N20 CYCLE800(1,\"TC1\",0,57,10,0,0,0,30,0,5,0,-3,-1,100,1)\n" + ops,
+                 "c800.mpf", m.model);
   ASSERT_EQ(d.path.size(), 5u);
   EXPECT_NEAR(d.joints[1][3], 30 * kDeg, 1e-12);
   EXPECT_NEAR(std::abs(d.joints[1][4]), M_PI, 1e-12);
-  for (size_t i = 1; i < d.path.size(); ++i) EXPECT_LT((d.path[i].p_w - c.path[i].p_w).norm(), 1e-9);
+  for (size_t i = 1; i < d.path.size(); ++i)
+    EXPECT_LT((d.path[i].p_w - c.path[i].p_w).norm(), 1e-9);
   // Z, Y, X (_MODE 27): 90 about z then 30 about the turned y, as AROT Z90 then AROT Y30.
-  const ClProgram zyx = parseGcode(head + "N20 CYCLE800(1,\"\",0,27,0,0,0,90,30,0,0,0,0,1,100,1)\n" + ops,
-                                   "zyx.mpf", m.model);
-  const ClProgram zyx_f = parseGcode(head + "N20 G0 B30 C90\nN25 TRAORI\nN30 AROT Z90\nN35 AROT Y30\n" + ops,
-                                     "zyx_f.mpf", m.model);
+  const ClProgram zyx = parseGcode(
+      head + "N20 CYCLE800(1,\"\",0,27,0,0,0,90,30,0,0,0,0,1,100,1)\n" + ops, "zyx.mpf", m.model);
+  const ClProgram zyx_f =
+      parseGcode(head + "N20 G0 B30 C90\nN25 TRAORI\nN30 AROT Z90\nN35 AROT Y30\n" + ops,
+                 "zyx_f.mpf", m.model);
   same(zyx, zyx_f);
   // Rotary axes direct (_MODE 192): rotary axis 1 is the tilting B; the frame turns with it.
-  const ClProgram direct = parseGcode(head + "N20 CYCLE800(0,\"T\",0,192,0,0,0,30,0,0,0,0,0,0,100,1)\n" + ops,
-                                      "direct.mpf", m.model);
-  same(direct, parseGcode(head + "N20 G0 B30 C0\nN25 TRAORI\nN35 AROT Y30\n" + ops, "d.mpf", m.model));
+  const ClProgram direct =
+      parseGcode(head + "N20 CYCLE800(0,\"T\",0,192,0,0,0,30,0,0,0,0,0,0,100,1)\n" + ops,
+                 "direct.mpf", m.model);
+  same(direct,
+       parseGcode(head + "N20 G0 B30 C0\nN25 TRAORI\nN35 AROT Y30\n" + ops, "d.mpf", m.model));
   // Additive (_ST 1): a second swivel turns the first one further.
-  const ClProgram add = parseGcode(head + "N20 CYCLE800(1,\"\",0,57,0,0,0,0,20,0,0,0,0,1,100,1)\n"
-                                       "N30 CYCLE800(1,\"\",1,57,0,0,0,0,10,0,0,0,0,1,100,1)\n" + ops,
+  const ClProgram add = parseGcode(head +
+                                       "N20 CYCLE800(1,\"\",0,57,0,0,0,0,20,0,0,0,0,1,100,1)\n"
+                                       "N30 CYCLE800(1,\"\",1,57,0,0,0,0,10,0,0,0,0,1,100,1)\n" +
+                                       ops,
                                    "add.mpf", m.model);
-  const ClProgram once = parseGcode(head + "N20 CYCLE800(1,\"\",0,57,0,0,0,0,30,0,0,0,0,1,100,1)\n" + ops,
-                                    "once.mpf", m.model);
+  const ClProgram once = parseGcode(
+      head + "N20 CYCLE800(1,\"\",0,57,0,0,0,0,30,0,0,0,0,1,100,1)\n" + ops, "once.mpf", m.model);
   ASSERT_EQ(add.path.size(), once.path.size());
-  for (size_t i = 1; i < add.path.size(); ++i) EXPECT_LT((add.path[i].p_w - once.path[i].p_w).norm(), 1e-9);
+  for (size_t i = 1; i < add.path.size(); ++i)
+    EXPECT_LT((add.path[i].p_w - once.path[i].p_w).norm(), 1e-9);
   // Refused by name: solid angles, a plane the rotaries cannot reach, a mode naming no axis.
-  EXPECT_NE(refusal(head + "N20 CYCLE800(1,\"\",0,64,0,0,0,0,30,0,0,0,0,1,100,1)\n", m.model).find("solid angles"),
+  EXPECT_NE(refusal(head + "N20 CYCLE800(1,\"\",0,64,0,0,0,0,30,0,0,0,0,1,100,1)\n", m.model)
+                .find("solid angles"),
             std::string::npos);
-  EXPECT_NE(refusal(head + "N20 CYCLE800(1,\"\",0,57,0,0,0,0,120,0,0,0,0,1,100,1)\n", m.model).find("outside travel"),
+  EXPECT_NE(refusal(head + "N20 CYCLE800(1,\"\",0,57,0,0,0,0,120,0,0,0,0,1,100,1)\n", m.model)
+                .find("outside travel"),
             std::string::npos);
-  EXPECT_NE(refusal(head + "N20 CYCLE800(1,\"\",0,3,0,0,0,0,30,0,0,0,0,1,100,1)\n", m.model).find("names no axis"),
+  EXPECT_NE(refusal(head + "N20 CYCLE800(1,\"\",0,3,0,0,0,0,30,0,0,0,0,1,100,1)\n", m.model)
+                .find("names no axis"),
             std::string::npos);
   // _DIR 0 leaves the rotaries where the program puts them: not turned, the check refuses.
   EXPECT_NE(refusal(head + "N20 CYCLE800(1,\"\",0,57,0,0,0,0,30,0,0,0,0,0,100,1)\n" + ops, m.model)
@@ -644,12 +691,16 @@ TEST(GcodeReader, Cycle800SwivelsThePlaneAsTheFrameInstructionsDo) {
 TEST(GcodeReader, TiltedWorkingPlaneG682AsItsTcpTwin) {
   Machine m = machine("resources/machines/umc_bc_trunnion.xml", 76.2);
   const std::string head = "G21 G90 G54\nT1 M6\nG0 G43 H1 X0 Y0 Z50 B0 C0\n";
-  const ClProgram a = parseGcode(head + "G68.2 X10 Y0 Z2 I20 J30 K-40\nG53.1\nG0 X5 Y5 Z20\nG1 Z0 F500\n"
-                                            "G1 X15 Y-5\nG69\nG0 Z200\nM30\n", "g682.nc", m.model);
+  const ClProgram a =
+      parseGcode(head +
+                     "G68.2 X10 Y0 Z2 I20 J30 K-40\nG53.1\nG0 X5 Y5 Z20\nG1 Z0 F500\n"
+                     "G1 X15 Y-5\nG69\nG0 Z200\nM30\n",
+                 "g682.nc", m.model);
   ASSERT_EQ(a.path.size(), 5u);
   const Eigen::Matrix3d R = (Eigen::AngleAxisd(20 * kDeg, Eigen::Vector3d::UnitZ()) *
                              Eigen::AngleAxisd(30 * kDeg, Eigen::Vector3d::UnitX()) *
-                             Eigen::AngleAxisd(-40 * kDeg, Eigen::Vector3d::UnitZ())).toRotationMatrix();
+                             Eigen::AngleAxisd(-40 * kDeg, Eigen::Vector3d::UnitZ()))
+                                .toRotationMatrix();
   const Eigen::Vector3d o(10, 0, 2);
   // The tool along the plane's Z.
   EXPECT_LT((a.path[1].u_w - R.col(2)).norm(), 1e-12);
@@ -662,8 +713,8 @@ TEST(GcodeReader, TiltedWorkingPlaneG682AsItsTcpTwin) {
   char buf[200];
   for (int k = 0; k < 3; ++k) {
     const Eigen::Vector3d p = o + R * pts[k];
-    std::snprintf(buf, sizeof buf, "%s X%.12f Y%.12f Z%.12f B%.12f C%.12f\n", k == 0 ? "G0" : "G1", p.x(), p.y(),
-                  p.z(), b, c);
+    std::snprintf(buf, sizeof buf, "%s X%.12f Y%.12f Z%.12f B%.12f C%.12f\n", k == 0 ? "G0" : "G1",
+                  p.x(), p.y(), p.z(), b, c);
     twin += buf;
   }
   const ClProgram t = parseGcode(twin, "twin.nc", m.model);
@@ -674,30 +725,38 @@ TEST(GcodeReader, TiltedWorkingPlaneG682AsItsTcpTwin) {
   }
   EXPECT_TRUE(hasNote(a, "G53.1 turns the rotaries"));
   // P1: roll, pitch, yaw about the fixed axes.
-  const ClProgram rpy = parseGcode(head + "G68.2 P1 X0 Y0 Z0 I0 J30 K90\nG53.1\nG0 X5 Y5 Z20\n", "rpy.nc", m.model);
+  const ClProgram rpy =
+      parseGcode(head + "G68.2 P1 X0 Y0 Z0 I0 J30 K90\nG53.1\nG0 X5 Y5 Z20\n", "rpy.nc", m.model);
   const Eigen::Matrix3d R1 = (Eigen::AngleAxisd(90 * kDeg, Eigen::Vector3d::UnitZ()) *
-                              Eigen::AngleAxisd(30 * kDeg, Eigen::Vector3d::UnitY())).toRotationMatrix();
+                              Eigen::AngleAxisd(30 * kDeg, Eigen::Vector3d::UnitY()))
+                                 .toRotationMatrix();
   EXPECT_LT((rpy.path.back().u_w - R1.col(2)).norm(), 1e-12);
   // Refused: other forms, G53.1 without a plane, a plane the rotaries cannot reach.
-  EXPECT_NE(refusal(head + "G68.2 P2 X0 Y0 Z0 I0 J30 K0\n", m.model).find("G68.2 P2"), std::string::npos);
+  EXPECT_NE(refusal(head + "G68.2 P2 X0 Y0 Z0 I0 J30 K0\n", m.model).find("G68.2 P2"),
+            std::string::npos);
   EXPECT_NE(refusal(head + "G53.1\n", m.model).find("without a tilted"), std::string::npos);
-  EXPECT_NE(refusal(head + "G68.2 X0 Y0 Z0 I0 J120 K0\nG53.1\n", m.model).find("outside travel"), std::string::npos);
+  EXPECT_NE(refusal(head + "G68.2 X0 Y0 Z0 I0 J120 K0\nG53.1\n", m.model).find("outside travel"),
+            std::string::npos);
 }
 
 // Sinumerik orientation vectors (A3= B3= C3=, ORIWKS) under TRAORI give the tool direction in the
 // workpiece coordinates: the same path as the rotary words a post computes for it; CR= arcs are
-// the ISO R arcs; what changes the path unseen (RND=, orientation angles, ORIMKS vectors) is refused.
+// the ISO R arcs; what changes the path unseen (RND=, orientation angles, ORIMKS vectors) is
+// refused.
 TEST(GcodeReader, SinumerikOrientationVectorsAndRadiusArcs) {
   Machine m = machine("resources/machines/sinumerik_bc_table.xml", 0.0);
   m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, 0, 200);
   const std::string head = "N10 G54 G0 X0 Y0 Z80 B0 C0 D1\nN20 TRAORI\n";
   const double s30 = std::sin(30 * kDeg), c30 = std::cos(30 * kDeg);
   char v[200];
-  std::snprintf(v, sizeof v, "N30 G1 X20 Y5 Z3 A3=%.12f B3=0 C3=%.12f F500\nN40 X25 Y0 A3=0 B3=%.12f C3=%.12f\n",
+  std::snprintf(v, sizeof v,
+                "N30 G1 X20 Y5 Z3 A3=%.12f B3=0 C3=%.12f F500\nN40 X25 Y0 A3=0 B3=%.12f C3=%.12f\n",
                 s30, c30, s30, c30);
   const ClProgram vec = parseGcode(head + v, "vec.mpf", m.model);
-  // B+30 tilts the tool towards +x (ISO 841); towards +y it is C90 then B30 (C turns the tool about z).
-  const ClProgram words = parseGcode(head + "N30 G1 X20 Y5 Z3 B30 C0 F500\nN40 X25 Y0 B30 C90\n", "w.mpf", m.model);
+  // B+30 tilts the tool towards +x (ISO 841); towards +y it is C90 then B30 (C turns the tool about
+  // z).
+  const ClProgram words =
+      parseGcode(head + "N30 G1 X20 Y5 Z3 B30 C0 F500\nN40 X25 Y0 B30 C90\n", "w.mpf", m.model);
   ASSERT_EQ(vec.path.size(), words.path.size());
   for (size_t i = 0; i < vec.path.size(); ++i) {
     EXPECT_LT((vec.path[i].p_w - words.path[i].p_w).norm(), 1e-9) << i;
@@ -709,14 +768,18 @@ TEST(GcodeReader, SinumerikOrientationVectorsAndRadiusArcs) {
   const ClProgram cr = parseGcode(arc0 + "N30 G3 X0 Y10 CR=10\n", "cr.mpf", m.model);
   const ClProgram ij = parseGcode(arc0 + "N30 G3 X0 Y10 I-10 J0\n", "ij.mpf", m.model);
   ASSERT_EQ(cr.path.size(), ij.path.size());
-  for (size_t i = 0; i < cr.path.size(); ++i) EXPECT_LT((cr.path[i].p_w - ij.path[i].p_w).norm(), 1e-9);
+  for (size_t i = 0; i < cr.path.size(); ++i)
+    EXPECT_LT((cr.path[i].p_w - ij.path[i].p_w).norm(), 1e-9);
   // Refused, named.
   EXPECT_NE(refusal(arc0 + "N30 G1 X20 RND=2\nN40 Y20\n", m.model).find("RND"), std::string::npos);
   EXPECT_NE(refusal(head + "N30 G1 X0 A2=10 B2=20 C2=0\n", m.model).find("A2"), std::string::npos);
-  EXPECT_NE(refusal(head + "N25 ORIMKS\nN30 G1 X0 A3=0 B3=0 C3=1\n", m.model).find("ORIMKS"), std::string::npos);
-  EXPECT_NE(refusal("N10 G54 G0 X0 Y0 Z80 D1\nN30 G1 X0 A3=0 B3=0 C3=1\n", m.model).find("outside TRAORI"),
+  EXPECT_NE(refusal(head + "N25 ORIMKS\nN30 G1 X0 A3=0 B3=0 C3=1\n", m.model).find("ORIMKS"),
             std::string::npos);
-  EXPECT_NE(refusal(head + "N30 G1 X0 A3=1 B3=0 C3=-0.6\n", m.model).find("outside travel"), std::string::npos);
+  EXPECT_NE(refusal("N10 G54 G0 X0 Y0 Z80 D1\nN30 G1 X0 A3=0 B3=0 C3=1\n", m.model)
+                .find("outside TRAORI"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "N30 G1 X0 A3=1 B3=0 C3=-0.6\n", m.model).find("outside travel"),
+            std::string::npos);
 }
 
 // Tools per operation: M6 switches the cutter to the selected T; its geometry comes from the
@@ -737,12 +800,14 @@ TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {
   EXPECT_EQ(p.cutters[2].kind, "T3");
   EXPECT_TRUE(p.cutters[2].values.empty());  // no comment gives T3's geometry
   // The real Fusion program: "T1" without M6, its tool in a comment.
-  const ClProgram f = readGcodeFile(test::sourcePath("tests/fixtures/gcode/fusion_led-floor_1124_jig.nc"), m.model);
+  const ClProgram f =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/fusion_led-floor_1124_jig.nc"), m.model);
   ASSERT_EQ(f.cutters.size(), 1u);
   EXPECT_EQ(f.cutters[0].values, (std::vector<double>{2.8, 0}));
   // LinuxCNC's boat post: "( TOOL: T1 = 10.0 dia. ENDMILL... )" then T1 M6.
   const Machine l = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
-  const ClProgram b = readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzac.ngc"), l.model);
+  const ClProgram b =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzac.ngc"), l.model);
   ASSERT_EQ(b.cutters.size(), 1u);
   EXPECT_EQ(b.cutters[0].values, (std::vector<double>{10, 0}));
   // Mastercam's Fanuc/HAAS posts, in inches: "( name TOOL - n DIA. OFF. - n LEN. - n DIA. - d )".
@@ -791,8 +856,9 @@ TEST(GcodeReader, TcpProgramAndItsJointTwinGiveTheSamePath) {
     char buf[200];
     for (int k = 0; k < 20; ++k) {
       const double w0 = tilt(rng), w1 = turn(rng);
-      std::snprintf(buf, sizeof buf, "G1 X%.4f Y%.4f Z%.4f %s%.4f %s%.4f F500\n", xy(rng), xy(rng), z(rng),
-                    m.model.axes[rotary[0]].name.c_str(), w0, m.model.axes[rotary[1]].name.c_str(), w1);
+      std::snprintf(buf, sizeof buf, "G1 X%.4f Y%.4f Z%.4f %s%.4f %s%.4f F500\n", xy(rng), xy(rng),
+                    z(rng), m.model.axes[rotary[0]].name.c_str(), w0,
+                    m.model.axes[rotary[1]].name.c_str(), w1);
       tcp += buf;
     }
     tcp += std::string(c.off) + "\n";

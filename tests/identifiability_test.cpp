@@ -20,8 +20,8 @@ std::vector<std::string> codes(const MachineModel& m, const std::vector<int>& id
 }
 
 int countKinds(const MachineModel& m, JointType t) {
-  return static_cast<int>(std::count_if(m.axes.begin(), m.axes.end(),
-                                        [&](const Axis& a) { return a.type == t; }));
+  return static_cast<int>(
+      std::count_if(m.axes.begin(), m.axes.end(), [&](const Axis& a) { return a.type == t; }));
 }
 
 // Thesis 3.6.2: 42 link-error parameters, rank 20 over 30 random poses.
@@ -47,9 +47,9 @@ TEST(Identifiability, MatsuuraLinkMinimalSetIsTable34) {
   EXPECT_EQ(ms.kept.size(), 20u);
   EXPECT_EQ(ms.reduced.rank, 20);
   auto kept = codes(m.model, ms.kept);
-  for (const char* c : {"COX", "AOA", "BOA", "COA", "YOC", "BOC", "AOZ", "BOZ", "part.X", "part.Y",
-                        "part.Z", "part.A", "part.B", "part.C", "tool.X", "tool.Y", "tool.Z",
-                        "tool.A", "tool.B", "tool.C"})
+  for (const char* c : {"COX",    "AOA",    "BOA",    "COA",    "YOC",    "BOC",    "AOZ",
+                        "BOZ",    "part.X", "part.Y", "part.Z", "part.A", "part.B", "part.C",
+                        "tool.X", "tool.Y", "tool.Z", "tool.A", "tool.B", "tool.C"})
     EXPECT_NE(std::find(kept.begin(), kept.end(), c), kept.end()) << c;
   EXPECT_GT(ms.reduced.condition, 1.0);
   EXPECT_LT(ms.reduced.condition, 10.0);
@@ -57,8 +57,8 @@ TEST(Identifiability, MatsuuraLinkMinimalSetIsTable34) {
   EXPECT_LT(ms.reduced.condition_unscaled, 2e3);
   EXPECT_TRUE(std::isinf(ms.initial.condition));
   // Without the preferred list (strategy III alone) the set is still complete: rank 20.
-  const MinimalSet alone = minimalSetForModel(m.model, randomPoses(m.model, 30, 1),
-                                              modelColumns(m.model, "link"), {});
+  const MinimalSet alone =
+      minimalSetForModel(m.model, randomPoses(m.model, 30, 1), modelColumns(m.model, "link"), {});
   EXPECT_EQ(alone.kept.size(), 20u);
   EXPECT_EQ(alone.reduced.rank, 20);
 }

@@ -28,8 +28,8 @@ constexpr double kTravelMax[5] = {380, 255, 360, 30 * M_PI / 180, M_PI};
 
 // What the machine has that a cubic motion model lacks.
 struct Undeclared {
-  std::string type;   // "none", "reversal", "periodic", "harmonic", "straightness6",
-                      // "warmup", "drift"
+  std::string type;             // "none", "reversal", "periodic", "harmonic", "straightness6",
+                                // "warmup", "drift"
   int axis = 0, component = 0;  // component 0-2: ex ey ez (mm), 3-5: gx gy gz (rad)
   double amplitude = 0;         // mm or rad (reversal: the full reversal value)
   double period = 0;            // periodic: mm; harmonic: the order k; warmup: tau in s
@@ -37,11 +37,11 @@ struct Undeclared {
 };
 
 struct Pose {
-  int setup = 0;       // 0-based
-  double q[5] = {};    // mm, rad
-  double t = 0;        // s since the test began
-  int dir[5] = {};     // approach direction of each axis (+1 / -1)
-  double length = 0;   // mm
+  int setup = 0;      // 0-based
+  double q[5] = {};   // mm, rad
+  double t = 0;       // s since the test began
+  int dir[5] = {};    // approach direction of each axis (+1 / -1)
+  double length = 0;  // mm
   bool heldout = false;
 };
 
@@ -68,19 +68,26 @@ class Machine {
   // The six error values of axis a at a pose.
   void errors(int a, const Pose& p, double e[6]) const {
     const double s = p.q[a];
-    const double mid = 0.5 * (kTravelMin[a] + kTravelMax[a]), half = 0.5 * (kTravelMax[a] - kTravelMin[a]);
+    const double mid = 0.5 * (kTravelMin[a] + kTravelMax[a]),
+                 half = 0.5 * (kTravelMax[a] - kTravelMin[a]);
     const double u = (s - mid) / half;
     for (int c = 0; c < 6; ++c)
       e[c] = poly_[a][c][0] + u * (poly_[a][c][1] + u * (poly_[a][c][2] + u * poly_[a][c][3]));
     for (const Undeclared& x : effects) {
       if (x.axis != a || x.type == "none") continue;
       double v = 0;
-      if (x.type == "reversal") v = 0.5 * x.amplitude * p.dir[a];
-      else if (x.type == "periodic") v = x.amplitude * std::sin(2 * M_PI * s / x.period + x.phase);
-      else if (x.type == "harmonic") v = x.amplitude * std::cos(x.period * s + x.phase);
-      else if (x.type == "straightness6") v = x.amplitude * std::cos(6.0 * std::acos(std::clamp(u, -1.0, 1.0)));
-      else if (x.type == "warmup") v = x.amplitude * (1.0 - std::exp(-p.t / x.period));
-      else if (x.type == "drift") v = x.amplitude * p.t / 3600.0;
+      if (x.type == "reversal")
+        v = 0.5 * x.amplitude * p.dir[a];
+      else if (x.type == "periodic")
+        v = x.amplitude * std::sin(2 * M_PI * s / x.period + x.phase);
+      else if (x.type == "harmonic")
+        v = x.amplitude * std::cos(x.period * s + x.phase);
+      else if (x.type == "straightness6")
+        v = x.amplitude * std::cos(6.0 * std::acos(std::clamp(u, -1.0, 1.0)));
+      else if (x.type == "warmup")
+        v = x.amplitude * (1.0 - std::exp(-p.t / x.period));
+      else if (x.type == "drift")
+        v = x.amplitude * p.t / 3600.0;
       e[x.component] += v;
     }
   }
@@ -105,24 +112,32 @@ class Machine {
     if (a == kY) M(1, 3) = s;
     if (a == kZ) M(2, 3) = s;
     if (a == kA) {  // about x
-      M(1, 1) = std::cos(s); M(1, 2) = -std::sin(s);
-      M(2, 1) = std::sin(s); M(2, 2) = std::cos(s);
+      M(1, 1) = std::cos(s);
+      M(1, 2) = -std::sin(s);
+      M(2, 1) = std::sin(s);
+      M(2, 2) = std::cos(s);
     }
     if (a == kC) {  // about z
-      M(0, 0) = std::cos(s); M(0, 1) = -std::sin(s);
-      M(1, 0) = std::sin(s); M(1, 1) = std::cos(s);
+      M(0, 0) = std::cos(s);
+      M(0, 1) = -std::sin(s);
+      M(1, 0) = std::sin(s);
+      M(1, 1) = std::cos(s);
     }
     double e[6];
     errors(a, p, e);
     const auto rot = [](int axis, double g) {
       Eigen::Matrix4d R = Eigen::Matrix4d::Identity();
       const int i = (axis + 1) % 3, j = (axis + 2) % 3;
-      R(i, i) = std::cos(g); R(i, j) = -std::sin(g);
-      R(j, i) = std::sin(g); R(j, j) = std::cos(g);
+      R(i, i) = std::cos(g);
+      R(i, j) = -std::sin(g);
+      R(j, i) = std::sin(g);
+      R(j, j) = std::cos(g);
       return R;
     };
     Eigen::Matrix4d E = rot(2, e[5]) * rot(1, e[4]) * rot(0, e[3]);
-    E(0, 3) = e[0]; E(1, 3) = e[1]; E(2, 3) = e[2];
+    E(0, 3) = e[0];
+    E(1, 3) = e[1];
+    E(2, 3) = e[2];
     return M * E;
   }
   double poly_[5][6][4];
@@ -138,7 +153,10 @@ inline void measure(const Machine& m, std::vector<Pose>& poses, const std::vecto
     Pose& p = poses[i];
     p.t = seconds_per_reading * static_cast<double>(i);
     for (int a = 0; a < 5; ++a) {
-      if (i == 0) { p.dir[a] = 1; continue; }  // homed moving positive
+      if (i == 0) {
+        p.dir[a] = 1;
+        continue;
+      }  // homed moving positive
       const double d = p.q[a] - poses[i - 1].q[a];
       p.dir[a] = std::abs(d) < 1e-12 ? poses[i - 1].dir[a] : (d > 0 ? 1 : -1);
     }
@@ -159,11 +177,12 @@ inline void writeCsv(const std::string& file, const std::vector<Pose>& poses,
     const Setup& s = setups[p.setup];
     int d[5];
     for (int a = 0; a < 5; ++a) d[a] = p.dir[a];
-    std::snprintf(buf, sizeof buf,
-                  "%d,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.12f,%.12f,%d,%d,%d,%d,%d,%.3f,%.9f\n",
-                  s.id, s.table_ball_w.x(), s.table_ball_w.y(), s.table_ball_w.z(), s.tool_ball_t.x(),
-                  s.tool_ball_t.y(), s.tool_ball_t.z(), p.q[0], p.q[1], p.q[2], p.q[3] * 180 / M_PI,
-                  p.q[4] * 180 / M_PI, d[0], d[1], d[2], d[3], d[4], p.t, p.length);
+    std::snprintf(
+        buf, sizeof buf,
+        "%d,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.12f,%.12f,%d,%d,%d,%d,%d,%.3f,%.9f\n",
+        s.id, s.table_ball_w.x(), s.table_ball_w.y(), s.table_ball_w.z(), s.tool_ball_t.x(),
+        s.tool_ball_t.y(), s.tool_ball_t.z(), p.q[0], p.q[1], p.q[2], p.q[3] * 180 / M_PI,
+        p.q[4] * 180 / M_PI, d[0], d[1], d[2], d[3], d[4], p.t, p.length);
     o << buf;
   }
 }

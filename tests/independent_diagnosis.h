@@ -14,10 +14,10 @@
 #include "core/diagnosis/diagnosis.h"
 #include "core/model/effects.h"
 #include "independent_ballbar.h"
-#include "io/machine/ballbar_file.h"
-#include "io/report/calibration_report.h"
 #include "io/common/io_error.h"
+#include "io/machine/ballbar_file.h"
 #include "io/machine/machine_file.h"
+#include "io/report/calibration_report.h"
 #include "test_support.h"
 
 namespace tolver::test {
@@ -38,18 +38,19 @@ struct DiagnosisOutcome {
   bool named_right = false;  // every expected effect added, nothing else (clean: nothing)
   std::vector<std::string> added;
   std::string message;
-  bool unexplained = false;                           // diagnose said so
+  bool unexplained = false;  // diagnose said so
   std::string unexplained_variable;
   double heldout_before_um = 0, heldout_after_um = 0;  // through the written files
   double written_vs_memory_um = 0;                     // |RMS written - RMS in memory|
   int gross_removed = 0;
-  bool withdrawn = false;       // the final check took the effects back
+  bool withdrawn = false;  // the final check took the effects back
   DiagnosisVerdict verdict = DiagnosisVerdict::NothingMissing;
   std::vector<std::string> implausible;  // candidates refused for their fitted value
-  double heldout_gain_um2 = 0, heldout_gain_se_um2 = 0;  // mean squared held-out gain, its standard error
-  double lack_of_fit_p = 1;     // of the final fit (1 when not tested)
-  bool held_stayed_held = true; // parameters the base fit held are at their prior values
-  int held = 0;                 // how many the base fit held
+  double heldout_gain_um2 = 0,
+         heldout_gain_se_um2 = 0;  // mean squared held-out gain, its standard error
+  double lack_of_fit_p = 1;        // of the final fit (1 when not tested)
+  bool held_stayed_held = true;    // parameters the base fit held are at their prior values
+  int held = 0;                    // how many the base fit held
 };
 
 // The independent simulator's set-ups for a plan's (ball position errors of 10 um, 1 sigma, drawn
@@ -100,7 +101,8 @@ inline Machine calibrateOnIndependent(const Machine& nominal, const std::vector<
                   evidencePrior(nominal.model, f.test, r, CalibrationOptions{}));
   Machine id = nominal;
   id.params = r.params;
-  id.identification = identificationUncertainty(r, f.test, static_cast<int>(nominal.model.axes.size()));
+  id.identification =
+      identificationUncertainty(r, f.test, static_cast<int>(nominal.model.axes.size()));
   writeFileAtomically(dir + "/id.xml", formatMachineXml(id, "independent calibration"));
   if (fit) *fit = r;
   return readMachineFile(dir + "/id.xml");
@@ -116,16 +118,29 @@ inline std::vector<DiagnosisCase> diagnosisCases() {
       {"X periodic 4 um, 16 mm", {{"periodic", X, 0, 4e-3, 16.0, 0.7}}, {{"periodic", "X", 0}}},
       {"C 2nd harmonic 5 um (ex)", {{"harmonic", C, 0, 5e-3, 2.0, 0.4}}, {{"harmonics", "C", 0}}},
       {"Z warm-up 20 um, 1200 s", {{"warmup", Z, 2, 20e-3, 1200.0}}, {{"warmup", "Z", 2}}},
-      {"X straightness in Y, 6th order, 6 um", {{"straightness6", X, 1, 6e-3}}, {{"chebyshev", "X", 1}}},
+      {"X straightness in Y, 6th order, 6 um",
+       {{"straightness6", X, 1, 6e-3}},
+       {{"chebyshev", "X", 1}}},
       {"Y drift 10 um/h", {{"drift", Y, 1, 10e-3}}, {{"drift", "Y", 1}}},
-      {"Y pitch (gx) warm-up 60 urad, 1800 s", {{"warmup", Y, 3, 60e-6, 1800.0}}, {{"warmup", "Y", 3}}},
-      {"outside the library: X periodic 4 um, 70 mm", {{"periodic", X, 0, 4e-3, 70.0, 0.2}}, {}, "X"},
-      {"outside the library: A tilt about y by direction, +-20 urad", {{"reversal", A, 4, 40e-6}}, {}, "", true},
+      {"Y pitch (gx) warm-up 60 urad, 1800 s",
+       {{"warmup", Y, 3, 60e-6, 1800.0}},
+       {{"warmup", "Y", 3}}},
+      {"outside the library: X periodic 4 um, 70 mm",
+       {{"periodic", X, 0, 4e-3, 70.0, 0.2}},
+       {},
+       "X"},
+      {"outside the library: A tilt about y by direction, +-20 urad",
+       {{"reversal", A, 4, 40e-6}},
+       {},
+       "",
+       true},
       {"Y reversal + X periodic",
        {{"reversal", Y, 1, 8e-3}, {"periodic", X, 0, 4e-3, 16.0, 0.7}},
        {{"reversal", "Y", 1}, {"periodic", "X", 0}}},
       {"Y reversal + X periodic + Z warm-up",
-       {{"reversal", Y, 1, 8e-3}, {"periodic", X, 0, 4e-3, 16.0, 0.7}, {"warmup", Z, 2, 20e-3, 1200.0}},
+       {{"reversal", Y, 1, 8e-3},
+        {"periodic", X, 0, 4e-3, 16.0, 0.7},
+        {"warmup", Z, 2, 20e-3, 1200.0}},
        {{"reversal", "Y", 1}, {"periodic", "X", 0}, {"warmup", "Z", 2}}},
   };
 }
@@ -134,7 +149,8 @@ inline std::vector<DiagnosisCase> diagnosisCases() {
 // heldout_without_effects: the held-out readings come from the machine without the undeclared
 // effects (a test of the final check: the augmented model must then be withdrawn).
 inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, unsigned seed,
-                                         const std::string& dir, bool heldout_without_effects = false) {
+                                         const std::string& dir,
+                                         bool heldout_without_effects = false) {
   DiagnosisOutcome out;
   const Machine nominal = readMachineFile(sourcePath("resources/machines/matsuura_mc760vx.xml"));
   const std::vector<int> unknowns = defaultCalibrationUnknowns(nominal.model);
@@ -176,7 +192,8 @@ inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, u
   const BallbarFile f = readBallbarFile(fit_csv, nominal.model, true);
   BallbarTest held = readBallbarFile(held_csv, nominal.model, true).test;
   alignHeldout(held, f.test, held_csv, fit_csv);
-  const RobustCalibration rc = calibrateWithoutGross(nominal.model, nominal.params, f.test, unknowns);
+  const RobustCalibration rc =
+      calibrateWithoutGross(nominal.model, nominal.params, f.test, unknowns);
   out.gross_removed = static_cast<int>(rc.removed.size());
   DiagnosisOptions opt;
   opt.base_unknowns = unknowns;
@@ -187,29 +204,33 @@ inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, u
   out.held = static_cast<int>(r.base_fit.held.size());
   for (int p : r.base_fit.held)
     out.held_stayed_held = out.held_stayed_held && r.machine.params[p] == nominal.params[p] &&
-                           std::find(r.final_fit.identified.begin(), r.final_fit.identified.end(), p) ==
-                               r.final_fit.identified.end();
+                           std::find(r.final_fit.identified.begin(), r.final_fit.identified.end(),
+                                     p) == r.final_fit.identified.end();
   out.verdict = r.verdict;
   out.heldout_gain_um2 = r.heldout_gain_mm2 * 1e6;
   out.heldout_gain_se_um2 = r.heldout_gain_se_mm2 * 1e6;
   for (const CandidateScore& cs : r.candidates)
-    if (cs.verdict == CandidateVerdict::Implausible) out.implausible.push_back(cs.label + ": " + cs.reason);
+    if (cs.verdict == CandidateVerdict::Implausible)
+      out.implausible.push_back(cs.label + ": " + cs.reason);
   out.lack_of_fit_p = r.lack_of_fit_after.tested ? r.lack_of_fit_after.p_value : 1.0;
   out.unexplained = r.unexplained;
   if (r.unexplained) out.unexplained_variable = r.unexplained_finding.variable;
   for (const AddedEffect& a : r.added) out.added.push_back(a.label);
   Machine augmented = r.machine;
   writeFileAtomically(dir + "/aug.xml", formatMachineXml(augmented, "campaign"));
-  writeFileAtomically(dir + "/aug_balls.csv",
-                      formatBallPositionsCsv(rc.test, r.final_fit.ball_errors, nullptr, {"campaign"}));
+  writeFileAtomically(
+      dir + "/aug_balls.csv",
+      formatBallPositionsCsv(rc.test, r.final_fit.ball_errors, nullptr, {"campaign"}));
   const WrittenCheck w = checkWrittenFiles(dir + "/aug.xml", dir + "/aug_balls.csv", rc.test, held);
   // Before: the base fit, through its own written files.
   Machine base = nominal;
   base.params = r.base_fit.params;
   writeFileAtomically(dir + "/base.xml", formatMachineXml(base, "campaign"));
-  writeFileAtomically(dir + "/base_balls.csv",
-                      formatBallPositionsCsv(rc.test, r.base_fit.ball_errors, nullptr, {"campaign"}));
-  const WrittenCheck wb = checkWrittenFiles(dir + "/base.xml", dir + "/base_balls.csv", rc.test, held);
+  writeFileAtomically(
+      dir + "/base_balls.csv",
+      formatBallPositionsCsv(rc.test, r.base_fit.ball_errors, nullptr, {"campaign"}));
+  const WrittenCheck wb =
+      checkWrittenFiles(dir + "/base.xml", dir + "/base_balls.csv", rc.test, held);
   out.heldout_before_um = wb.heldout.rms * 1e3;
   out.heldout_after_um = w.heldout.rms * 1e3;
   out.written_vs_memory_um = std::abs(w.heldout.rms - r.heldout_after.rms) * 1e3;
@@ -231,8 +252,8 @@ inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, u
       }
     }
   }
-  out.named_right = matched == static_cast<int>(c.expected.size()) &&
-                    r.added.size() == c.expected.size();
+  out.named_right =
+      matched == static_cast<int>(c.expected.size()) && r.added.size() == c.expected.size();
   if (c.lack_of_fit)
     out.named_right = r.verdict == DiagnosisVerdict::Incomplete;
   else if (!c.unexplained_variable.empty())

@@ -38,8 +38,8 @@ TEST(IndependentSimulator, AgreesWithTolversModelOnCubicErrors) {
       }
       const Eigen::Vector4d poly = V.fullPivLu().solve(y);
       for (int k = 0; k < 4; ++k) coeffs[k] = poly[k];
-      const double cheb[4] = {coeffs[0] + coeffs[2] / 2, coeffs[1] + 0.75 * coeffs[3], coeffs[2] / 2,
-                              coeffs[3] / 4};
+      const double cheb[4] = {coeffs[0] + coeffs[2] / 2, coeffs[1] + 0.75 * coeffs[3],
+                              coeffs[2] / 2, coeffs[3] / 4};
       for (int k = 0; k < 4; ++k) {
         const std::string code = std::string("E") + comps[c] + axes[a] + ".c" + std::to_string(k);
         const int idx = m.model.findParameter(code);
@@ -78,7 +78,8 @@ TEST_F(IndependentDiagnosis, TwentyCleanSeedsInBothSetupStylesAddNothing) {
     for (unsigned seed = 1; seed <= 20; ++seed) {
       SCOPED_TRACE(std::string(on_axis ? "on axis" : "off axis") + " seed " + std::to_string(seed));
       const test::DiagnosisOutcome o = test::runDiagnosisCase(clean, on_axis, seed, path("c"));
-      EXPECT_TRUE(o.named_right) << o.message << (o.unexplained ? " unexplained " + o.unexplained_variable : "");
+      EXPECT_TRUE(o.named_right) << o.message
+                                 << (o.unexplained ? " unexplained " + o.unexplained_variable : "");
       EXPECT_LT(o.written_vs_memory_um, 1e-3);
       EXPECT_LT(o.heldout_after_um, 1.0);  // 0.5 um noise
     }
@@ -104,7 +105,8 @@ TEST_F(IndependentDiagnosis, AnUndeclaredEffectIsNamedAndTheWrittenFilesPredictB
 // With every tool ball on the spindle axis the base fit holds parameters it cannot see; they stay
 // held (at their prior values) in the augmented model the diagnosis writes.
 TEST_F(IndependentDiagnosis, HeldParametersStayHeld) {
-  const test::DiagnosisOutcome o = test::runDiagnosisCase(test::diagnosisCases()[1], true, 4, path("h"));
+  const test::DiagnosisOutcome o =
+      test::runDiagnosisCase(test::diagnosisCases()[1], true, 4, path("h"));
   EXPECT_GT(o.held, 0);
   EXPECT_TRUE(o.held_stayed_held);
   EXPECT_TRUE(o.named_right) << o.message;
@@ -118,7 +120,8 @@ TEST_F(IndependentDiagnosis, AnAugmentedModelThatPredictsWorseIsWithdrawn) {
       test::runDiagnosisCase(test::diagnosisCases()[1], false, 5, path("w"), true);
   EXPECT_TRUE(o.withdrawn) << o.message;
   EXPECT_TRUE(o.added.empty());
-  EXPECT_NE(o.message.find("predicted the held-out readings worse"), std::string::npos) << o.message;
+  EXPECT_NE(o.message.find("predicted the held-out readings worse"), std::string::npos)
+      << o.message;
 }
 
 // An effect the library does not have (a 70 mm cyclic error; periods are searched from 5 to
@@ -159,7 +162,8 @@ TEST_F(IndependentDiagnosis, ALackOfFitIsNeverNothingMissing) {
 // without it, the augmented model a hair better on them (RMS 0.723 -> 0.710 um, mean squared
 // gain 0.018 +- 0.048 um^2): withdrawn, never written as an improvement.
 TEST_F(IndependentDiagnosis, AGainWithinItsUncertaintyIsNotConfirmed) {
-  test::DiagnosisCase c{"Y reversal 1.5 um", {{"reversal", indep::kY, 1, 1.5e-3}}, {{"reversal", "Y", 1}}};
+  test::DiagnosisCase c{
+      "Y reversal 1.5 um", {{"reversal", indep::kY, 1, 1.5e-3}}, {{"reversal", "Y", 1}}};
   const test::DiagnosisOutcome o = test::runDiagnosisCase(c, false, 2, path("n"), true);
   EXPECT_TRUE(o.withdrawn) << o.message;
   EXPECT_TRUE(o.added.empty());
@@ -176,7 +180,8 @@ TEST_F(IndependentDiagnosis, AnImplausibleValueIsNotAdded) {
   const test::DiagnosisOutcome o = test::runDiagnosisCase(c, false, 2, path("p"));
   for (const std::string& a : o.added) EXPECT_EQ(a.find("drift Y ey"), std::string::npos) << a;
   ASSERT_FALSE(o.implausible.empty()) << o.message;
-  EXPECT_NE(o.implausible.front().find("beyond the plausible"), std::string::npos) << o.implausible.front();
+  EXPECT_NE(o.implausible.front().find("beyond the plausible"), std::string::npos)
+      << o.implausible.front();
   EXPECT_EQ(o.verdict, DiagnosisVerdict::Incomplete) << o.message;
 }
 

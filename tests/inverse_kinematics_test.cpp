@@ -7,8 +7,8 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <string>
 #include <random>
+#include <string>
 
 #include "io/machine/machine_file.h"
 #include "test_support.h"
@@ -147,8 +147,8 @@ TEST_P(EveryMachine, ChoiceIsTheCheapestFeasibleCandidate) {
     best = std::min(costs[0], costs[1]);
     if (costs[1] < costs[0]) ++second_cheaper;
     for (bool with_trig : {false, true}) {
-      const IkSolution s = with_trig ? ik.solve(p, u, &prev, pc.data(), ps.data())
-                                     : ik.solve(p, u, &prev);
+      const IkSolution s =
+          with_trig ? ik.solve(p, u, &prev, pc.data(), ps.data()) : ik.solve(p, u, &prev);
       if (!std::isfinite(best)) {
         EXPECT_NE(s.status, IkStatus::Ok) << GetParam() << " point " << n;
         continue;
@@ -189,9 +189,9 @@ TEST_P(EveryMachine, BlockEqualsPointByPointBitForBit) {
       for (size_t a = 0; a < m.model.axes.size(); ++a) {
         const Axis& ax = m.model.axes[a];
         const double span = ax.travel_max - ax.travel_min;
-        q[a] = std::clamp(q[a] + 0.003 * (ax.isRotary() ? std::min(span, 2 * M_PI) : span) *
-                                     (unit(rng) - 0.5),
-                          ax.travel_min, ax.travel_max);
+        q[a] = std::clamp(
+            q[a] + 0.003 * (ax.isRotary() ? std::min(span, 2 * M_PI) : span) * (unit(rng) - 0.5),
+            ax.travel_min, ax.travel_max);
       }
     } else if (kind < 0.95) {
       q = randomJoints(m.model, rng);  // a jump
@@ -199,10 +199,14 @@ TEST_P(EveryMachine, BlockEqualsPointByPointBitForBit) {
     const Eigen::Isometry3d T = fk.w_T_t(q);
     Eigen::Vector3d p = T.translation(), u = T.linear().col(2);
     const double odd = unit(rng);
-    if (odd < 0.01) p.x() += 1e4;                       // beyond the stroke
-    else if (odd < 0.02) u = -u;                        // often unreachable
-    else if (odd < 0.04) u = Eigen::Vector3d(std::pow(10.0, -9 * unit(rng)), 0, 1).normalized();
-    else if (odd < 0.05) u = Eigen::Vector3d::UnitZ();  // along a rotary axis on most machines
+    if (odd < 0.01)
+      p.x() += 1e4;  // beyond the stroke
+    else if (odd < 0.02)
+      u = -u;  // often unreachable
+    else if (odd < 0.04)
+      u = Eigen::Vector3d(std::pow(10.0, -9 * unit(rng)), 0, 1).normalized();
+    else if (odd < 0.05)
+      u = Eigen::Vector3d::UnitZ();  // along a rotary axis on most machines
     ps.push_back(p);
     us.push_back(u);
   }
@@ -210,8 +214,7 @@ TEST_P(EveryMachine, BlockEqualsPointByPointBitForBit) {
   std::vector<IkSolution> ref;
   const JointVector* previous = nullptr;
   for (size_t i = 0; i < ps.size(); ++i) {
-    ref.push_back(ik.solve(ps[i], us[i], previous,
-                           previous ? ref[i - 1].cos_q.data() : nullptr,
+    ref.push_back(ik.solve(ps[i], us[i], previous, previous ? ref[i - 1].cos_q.data() : nullptr,
                            previous ? ref[i - 1].sin_q.data() : nullptr));
     previous = ref.back().status == IkStatus::Ok ? &ref.back().q : nullptr;
   }
@@ -253,7 +256,8 @@ TEST_P(EveryMachine, BlockEqualsPointByPointBitForBit) {
   EXPECT_GT(from_lanes, 0.8 * solved);  // the lane stage's numbers were used, not only solve()
 }
 
-INSTANTIATE_TEST_SUITE_P(Shipped, EveryMachine, ::testing::ValuesIn(test::kinematicsTestMachines()));
+INSTANTIATE_TEST_SUITE_P(Shipped, EveryMachine,
+                         ::testing::ValuesIn(test::kinematicsTestMachines()));
 
 TEST(InverseKinematics, ToolAxisBeyondTheTiltRangeIsOutOfTravel) {
   const Machine m = readMachineFile(test::sourcePath(test::shippedMachines()[0]));
@@ -298,7 +302,8 @@ TEST(InverseKinematics, MicroRadianTiltNearThePoleKeepsTheFreeAngle) {
   }
   // Beyond the band the angle follows the tool axis again.
   const double t = 2.0 * m.model.control.singular_band;
-  const IkSolution s = ik.solve(Eigen::Vector3d(10, 20, 5), Eigen::Vector3d(0, std::sin(t), std::cos(t)), &first.q);
+  const IkSolution s =
+      ik.solve(Eigen::Vector3d(10, 20, 5), Eigen::Vector3d(0, std::sin(t), std::cos(t)), &first.q);
   EXPECT_FALSE(s.singular);
 }
 

@@ -36,19 +36,23 @@ TEST(JobsFile, BadRowsNameLineAndColumn) {
     }
     return std::string("no error");
   };
-  EXPECT_NE(error("name,machine,cl,tolerance\na,m,c,0.1\na,m,c,0.1\n").find("jobs.csv:3:1"), std::string::npos)
+  EXPECT_NE(error("name,machine,cl,tolerance\na,m,c,0.1\na,m,c,0.1\n").find("jobs.csv:3:1"),
+            std::string::npos)
       << error("name,machine,cl,tolerance\na,m,c,0.1\na,m,c,0.1\n");
   EXPECT_NE(error("name,machine,cl,tolerance\na,m,c,x\n").find("not a number"), std::string::npos);
-  EXPECT_NE(error("name,machine,cl,tolerance\n../up,m,c,0.1\n").find("plain file name"), std::string::npos);
+  EXPECT_NE(error("name,machine,cl,tolerance\n../up,m,c,0.1\n").find("plain file name"),
+            std::string::npos);
   EXPECT_NE(error("name,machine,tolerance\na,m,0.1\n").find("cl"), std::string::npos);
   EXPECT_NE(error("name,machine,cl,tolerance\n").find("no job"), std::string::npos);
   // A row with more cells than the header (issue 37: accepted): named with its line; a trailing
   // comma is not a cell.
-  EXPECT_NE(error("name,machine,cl,tolerance\na,m,c,0.1,extra\n").find("jobs.csv:2:5"), std::string::npos)
+  EXPECT_NE(error("name,machine,cl,tolerance\na,m,c,0.1,extra\n").find("jobs.csv:2:5"),
+            std::string::npos)
       << error("name,machine,cl,tolerance\na,m,c,0.1,extra\n");
   EXPECT_EQ(parseJobsCsv("name,machine,cl,tolerance\na,m,c,0.1,\n", "jobs.csv").size(), 1u);
   // A byte-order mark before the header is not part of the first column's name.
-  EXPECT_EQ(parseJobsCsv("\xEF\xBB\xBFname,machine,cl,tolerance\na,m,c,0.1\n", "jobs.csv").size(), 1u);
+  EXPECT_EQ(parseJobsCsv("\xEF\xBB\xBFname,machine,cl,tolerance\na,m,c,0.1\n", "jobs.csv").size(),
+            1u);
 }
 
 }  // namespace

@@ -75,7 +75,8 @@ TEST(MachineFile, WriterRoundTripsEveryShippedMachine) {
     EXPECT_EQ(back.model.aliases.size(), m.model.aliases.size());
     EXPECT_EQ(back.model.preferred, m.model.preferred);
     for (size_t a = 0; a < m.model.axes.size(); ++a) {
-      EXPECT_TRUE(back.model.axes[a].parent_T_joint.isApprox(m.model.axes[a].parent_T_joint, 1e-12));
+      EXPECT_TRUE(
+          back.model.axes[a].parent_T_joint.isApprox(m.model.axes[a].parent_T_joint, 1e-12));
       EXPECT_NEAR(back.model.axes[a].travel_max, m.model.axes[a].travel_max, 1e-12);
       EXPECT_EQ(back.model.axes[a].nc_sign, m.model.axes[a].nc_sign);
     }
@@ -122,8 +123,10 @@ TEST(MachineFile, MalformedFilesNameLineAndField) {
        "min='0' max='1'/></machine>",
        2, "axis.direction"},
       // Two axes at one order in a branch.
-      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' order='1' direction='1 0 0' "
-       "min='0' max='1'/>\n<axis name='Y' type='prismatic' branch='tool' order='1' direction='0 1 0' "
+      {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' order='1' direction='1 0 "
+       "0' "
+       "min='0' max='1'/>\n<axis name='Y' type='prismatic' branch='tool' order='1' direction='0 1 "
+       "0' "
        "min='0' max='1'/></machine>",
        3, "axis.order"},
       // A covariance that is not symmetric.
@@ -133,11 +136,13 @@ TEST(MachineFile, MalformedFilesNameLineAndField) {
        4, "covariance"},
       // A count of readings an int cannot hold (1e300 was cast to int: undefined behaviour).
       {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
-       "min='0' max='1'/>\n<identification_uncertainty readings='1e300'>\n<covariance parameters='EXX.c1'>"
+       "min='0' max='1'/>\n<identification_uncertainty readings='1e300'>\n<covariance "
+       "parameters='EXX.c1'>"
        "<row>1</row></covariance></identification_uncertainty></machine>",
        3, "identification_uncertainty.readings"},
       {"<machine name='m'>\n<axis name='X' type='prismatic' branch='tool' direction='1 0 0' "
-       "min='0' max='1'/>\n<identification_uncertainty readings='2.5'>\n<covariance parameters='EXX.c1'>"
+       "min='0' max='1'/>\n<identification_uncertainty readings='2.5'>\n<covariance "
+       "parameters='EXX.c1'>"
        "<row>1</row></covariance></identification_uncertainty></machine>",
        3, "identification_uncertainty.readings"},
       // Absurd numbers (issue 17's policy): a link 1e300 mm away, a travel beyond 1e6 mm or 1e6

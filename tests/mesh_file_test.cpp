@@ -1,25 +1,23 @@
 // Part meshes in every supported format, and the repairs.
 #include "io/mesh/mesh_file.h"
 
-#include <gtest/gtest.h>
-
-#include <chrono>
-
-#include <assimp/Exporter.hpp>
-#include <assimp/Importer.hpp>
 #include <assimp/scene.h>
-#include <cmath>
-#include <fstream>
-#include <filesystem>
-#include <iterator>
-#include <random>
-
+#include <gtest/gtest.h>
 #include <vtkCellArray.h>
 #include <vtkDataArray.h>
 #include <vtkPointData.h>
 #include <vtkPolyData.h>
 #include <vtkSmartPointer.h>
 #include <vtkXMLPolyDataReader.h>
+
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <random>
 
 #include "io/common/io_error.h"
 #include "test_support.h"
@@ -101,7 +99,8 @@ TEST_F(MeshFileTest, ReadsEveryFormat) {
   {
     std::ofstream ply(path("cube.ply")), off(path("cube.off"));
     ply << "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
-           "property float z\nelement face 12\nproperty list uchar int vertex_indices\nend_header\n";
+           "property float z\nelement face 12\nproperty list uchar int "
+           "vertex_indices\nend_header\n";
     off << "OFF\n8 12 0\n";
     for (const auto& c : kCorner) {
       ply << c[0] * kSide << " " << c[1] * kSide << " " << c[2] * kSide << "\n";
@@ -121,8 +120,10 @@ TEST_F(MeshFileTest, ReadsEveryFormat) {
   const aiScene* scene = importer.ReadFile(obj, 0);
   ASSERT_NE(scene, nullptr);
   Assimp::Exporter exporter;
-  ASSERT_EQ(exporter.Export(scene, "3mf", path("cube.3mf")), aiReturn_SUCCESS) << exporter.GetErrorString();
-  ASSERT_EQ(exporter.Export(scene, "glb2", path("cube.glb")), aiReturn_SUCCESS) << exporter.GetErrorString();
+  ASSERT_EQ(exporter.Export(scene, "3mf", path("cube.3mf")), aiReturn_SUCCESS)
+      << exporter.GetErrorString();
+  ASSERT_EQ(exporter.Export(scene, "glb2", path("cube.glb")), aiReturn_SUCCESS)
+      << exporter.GetErrorString();
   expectCube(readPartMesh(path("cube.3mf")));
   // glTF's unit is the metre: 20 "m" read as 20000 mm unless told otherwise.
   expectCube(readPartMesh(path("cube.glb")), 1000.0);
@@ -183,7 +184,9 @@ TEST_F(MeshFileTest, RefusesWhatIsNot) {
     const std::string what = e.what();
     EXPECT_NE(what.find("fin.obj"), std::string::npos) << what;
     EXPECT_NE(what.find("non-manifold edge"), std::string::npos) << what;
-    EXPECT_NE(what.find("(0.0000, 0.0000, 0.0000) mm to (20.0000, 0.0000, 0.0000) mm"), std::string::npos) << what;
+    EXPECT_NE(what.find("(0.0000, 0.0000, 0.0000) mm to (20.0000, 0.0000, 0.0000) mm"),
+              std::string::npos)
+        << what;
   }
   EXPECT_THROW(readPartMesh(write("empty.stl", "solid x\nendsolid x\n")), InputError);
   EXPECT_THROW(readPartMesh(write("garbage.off", "this is not a mesh\n")), InputError);
@@ -199,20 +202,23 @@ TEST_F(MeshFileTest, RefusesWhatIsNot) {
   // A PLY header cut short before end_header (the mesh fuzz harness's input, found in CI's 30 s):
   // Debian's assimp looped for minutes on it, allocating; refused at once, naming the line.
   try {
-    readPartMesh(write("no_end_header.ply",
-                       "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
-                       "property float z\nelement face 12\nproperty list uchar int vertex_indices\n"
-                       "end_he0 10 0\n10 10 10\n3 0 1 3\n3 0 3 2\n"));
+    readPartMesh(
+        write("no_end_header.ply",
+              "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n"
+              "property float z\nelement face 12\nproperty list uchar int vertex_indices\n"
+              "end_he0 10 0\n10 10 10\n3 0 1 3\n3 0 3 2\n"));
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("no_end_header.ply:9"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("is not a PLY header line"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("is not a PLY header line"), std::string::npos)
+        << e.what();
   }
   // A binary PLY with a proper header still reads (the header check stops at end_header).
   {
-    std::string bin = "ply\r\nformat binary_little_endian 1.0\r\nelement vertex 3\r\nproperty float x\r\n"
-                      "property float y\r\nproperty float z\r\nelement face 1\r\n"
-                      "property list uchar int vertex_indices\r\nend_header\r\n";
+    std::string bin =
+        "ply\r\nformat binary_little_endian 1.0\r\nelement vertex 3\r\nproperty float x\r\n"
+        "property float y\r\nproperty float z\r\nelement face 1\r\n"
+        "property list uchar int vertex_indices\r\nend_header\r\n";
     const float v[9] = {0, 0, 0, 10, 0, 0, 0, 10, 0};
     bin.append(reinterpret_cast<const char*>(v), sizeof v);
     bin.push_back(3);
@@ -267,11 +273,13 @@ TEST_F(MeshFileTest, AFuzzedBorderDoesNotMakeHoleFillingWalk) {
 // byte after it), and a valid OBJ ending in digits without a line end: read or refused with the
 // file's name, never a read past the buffer.
 TEST_F(MeshFileTest, AnObjEndingInDigitsIsReadWithinItsBuffer) {
-  std::ifstream in(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/mesh_corpus/obj_strtol_unterminated",
-                   std::ios::binary);
+  std::ifstream in(
+      std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/mesh_corpus/obj_strtol_unterminated",
+      std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   ASSERT_GT(bytes.size(), 1u);
-  for (const std::string& text : {bytes.substr(1), std::string("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3")}) {
+  for (const std::string& text :
+       {bytes.substr(1), std::string("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3")}) {
     const std::string obj = write("digits.obj", text);
     try {
       const ImportedPart part = readPartMesh(obj);
@@ -290,13 +298,15 @@ TEST_F(MeshFileTest, APlyElementCountBeyondTheFileIsRefused) {
                    std::ios::binary);
   const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   ASSERT_GT(found.size(), 100u);
-  const std::string header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
-                             "property float y\nproperty float z\nelement face ";
-  const std::string body = "\nproperty list uchar int vertex_indices\nend_header\n"
-                           "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+      "property float y\nproperty float z\nelement face ";
+  const std::string body =
+      "\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
   // (The harness takes the first byte as the format.)
   for (const std::string& text : {found.substr(1), header + "4000" + body, header + "12x" + body,
-                                   header + std::string(40, '9') + body}) {
+                                  header + std::string(40, '9') + body}) {
     const std::string ply = write("huge.ply", text);
     try {
       readPartMesh(ply);
@@ -320,17 +330,19 @@ TEST_F(MeshFileTest, AnOffCountBeyondTheFileIsRefused) {
                    std::ios::binary);
   const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   ASSERT_GT(found.size(), 100u);
-  std::ifstream in2(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/mesh_corpus/off_keyword_glued_count",
-                    std::ios::binary);
+  std::ifstream in2(
+      std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/mesh_corpus/off_keyword_glued_count",
+      std::ios::binary);
   const std::string glued((std::istreambuf_iterator<char>(in2)), std::istreambuf_iterator<char>());
   ASSERT_GT(glued.size(), 50u);
   const std::string body = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
   // The second found input: 'OFF8' then a count of 2222222223222222220 on the next line.
-  for (const std::string& text : {found.substr(1), glued.substr(1), "OFF3 4000000 0\n" + body,
-                                   "OFF\n3 4000000 0\n" + body, "OFF\n4000000 1 0\n" + body,
-                                   "# a comment\nOFF\n# another\n3 " + std::string(40, '9') + " 0\n" + body,
-                                   "nOFF 3\n3 4000000 0\n" + body, "3 4000000 0\n" + body,
-                                   "C3 4000000 0\n" + body, "OFF\n#3 1 0\n3 4000000 0\n" + body}) {
+  for (const std::string& text :
+       {found.substr(1), glued.substr(1), "OFF3 4000000 0\n" + body, "OFF\n3 4000000 0\n" + body,
+        "OFF\n4000000 1 0\n" + body,
+        "# a comment\nOFF\n# another\n3 " + std::string(40, '9') + " 0\n" + body,
+        "nOFF 3\n3 4000000 0\n" + body, "3 4000000 0\n" + body, "C3 4000000 0\n" + body,
+        "OFF\n#3 1 0\n3 4000000 0\n" + body}) {
     const std::string off = write("huge.off", text);
     const auto t0 = std::chrono::steady_clock::now();
     try {
@@ -347,15 +359,18 @@ TEST_F(MeshFileTest, AnOffCountBeyondTheFileIsRefused) {
   const ImportedPart part = readPartMesh(write("fits.off", "OFF\n# c\n3 1 0\n" + body));
   EXPECT_EQ(part.mesh.faces.size(), 1u);
   // A coordinate is no count, even a large one in a short file.
-  EXPECT_EQ(readPartMesh(write("far.off", "OFF\n3 1 0\n900 0 0\n901 0 0\n900 1 0\n3 0 1 2\n")).mesh.faces.size(), 1u);
+  EXPECT_EQ(readPartMesh(write("far.off", "OFF\n3 1 0\n900 0 0\n901 0 0\n900 1 0\n3 0 1 2\n"))
+                .mesh.faces.size(),
+            1u);
 }
 
 // Faces need the vertices declared before them (the mesh harness: an 'element vbspertex' in
 // place of the vertices, with garbage in the face list, took assimp 50 s and 17 GB before it
 // said so): refused from the header, at once.
 TEST_F(MeshFileTest, APlyWithoutVerticesBeforeItsFacesIsRefusedFromItsHeader) {
-  std::ifstream in(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/mesh_corpus/ply_faces_without_vertices",
-                   std::ios::binary);
+  std::ifstream in(
+      std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/mesh_corpus/ply_faces_without_vertices",
+      std::ios::binary);
   const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   ASSERT_GT(found.size(), 100u);
   const std::string faces_first =
@@ -383,11 +398,12 @@ TEST_F(MeshFileTest, AnAsciiPlyListCountBeyondItsTypeIsRefused) {
                    std::ios::binary);
   const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   ASSERT_GT(found.size(), 100u);
-  const std::string header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
-                             "property float y\nproperty float z\nelement face 1\n"
-                             "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+      "property float y\nproperty float z\nelement face 1\n"
+      "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
   for (const std::string& text : {found.substr(1), header + std::string(58, '4') + " 0 1 2\n",
-                                   header + "256 0 1 2\n", header + "x 0 1 2\n"}) {
+                                  header + "256 0 1 2\n", header + "x 0 1 2\n"}) {
     const auto t0 = std::chrono::steady_clock::now();
     try {
       readPartMesh(write("count.ply", text));
@@ -410,14 +426,16 @@ TEST_F(MeshFileTest, AnAsciiPlyListCountBeyondItsTypeIsRefused) {
 // Each malformed form is refused with its line and field, at once; the same triangle written in
 // ASCII, binary little-endian and binary big-endian still reads.
 TEST_F(MeshFileTest, APlyIsCheckedWholeBeforeAssimpReadsIt) {
-  std::ifstream in(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/mesh_corpus/ply_zero_bytes_in_header",
-                   std::ios::binary);
+  std::ifstream in(
+      std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/mesh_corpus/ply_zero_bytes_in_header",
+      std::ios::binary);
   const std::string found((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   ASSERT_GT(found.size(), 300u);
   auto header = [](const std::string& format, const std::string& list = "uchar int") {
-    return "ply\nformat " + format + " 1.0\ncomment made by hand\nelement vertex 3\nproperty float x\n"
-           "property float y\nproperty float z\nelement face 1\nproperty list " + list +
-           " vertex_indices\nend_header\n";
+    return "ply\nformat " + format +
+           " 1.0\ncomment made by hand\nelement vertex 3\nproperty float x\n"
+           "property float y\nproperty float z\nelement face 1\nproperty list " +
+           list + " vertex_indices\nend_header\n";
   };
   const std::string ascii = header("ascii") + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
   auto binary = [&](bool big, unsigned char count) {
@@ -438,10 +456,12 @@ TEST_F(MeshFileTest, APlyIsCheckedWholeBeforeAssimpReadsIt) {
   const std::vector<Case> refused = {
       {found.substr(1), "bad.ply:5", "PLY header"},  // (the harness's first byte: the format)
       {"ply\nformat ascii 2.0\n" + ascii.substr(21), "bad.ply:2", "PLY format"},
-      {header("ascii", "float int") + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "bad.ply:9", "PLY property"},
+      {header("ascii", "float int") + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", "bad.ply:9",
+       "PLY property"},
       {"ply\nformat ascii 1.0\nproperty float x\n" + ascii.substr(21), "bad.ply:3", "PLY property"},
-      {header("ascii") + "0 0 0\n1 0 0\n0 1 0\n", "bad.ply:", "PLY body"},           // a face short
-      {header("ascii") + "0 0 0\n1 0\n0 1 0\n3 0 1 2\n", "bad.ply:12", "PLY body"},  // a number short
+      {header("ascii") + "0 0 0\n1 0 0\n0 1 0\n", "bad.ply:", "PLY body"},  // a face short
+      {header("ascii") + "0 0 0\n1 0\n0 1 0\n3 0 1 2\n", "bad.ply:12",
+       "PLY body"},  // a number short
       {header("ascii") + "0 0 0\n1 0 x\n0 1 0\n3 0 1 2\n", "bad.ply:12", "PLY body"},
       {binary(false, 3).substr(0, binary(false, 3).size() - 1), "bad.ply", "PLY body"},
       {binary(false, 200), "bad.ply", "PLY body"},  // a list count beyond the file
@@ -500,15 +520,18 @@ TEST_F(MeshFileTest, TheSweptSurfacePlyReadsBackThroughThePartLoader) {
 // refused with a message, and the sound archive they were made from still reads.
 TEST_F(MeshFileTest, ADamaged3mfIsRefusedBeforeAssimpReadsIt) {
   auto corpus = [](const std::string& name) {
-    std::ifstream in(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/scene_corpus/" + name, std::ios::binary);
+    std::ifstream in(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/scene_corpus/" + name,
+                     std::ios::binary);
     const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     EXPECT_GT(bytes.size(), 100u) << name;
     return bytes.substr(1);  // (the harness's first byte: the format)
   };
   const std::pair<const char*, const char*> refused[] = {
       {"3mf_model_does_not_inflate", "'3D/3DModel.model' is damaged"},
-      {"3mf_model_inflates_short", "'3D/3DModel.model' is damaged (it inflates to 2183 of its 2188 bytes)"},
-      {"3mf_rels_names_a_missing_model", "'3D/Other.model' that _rels/.rels names is not in the archive"},
+      {"3mf_model_inflates_short",
+       "'3D/3DModel.model' is damaged (it inflates to 2183 of its 2188 bytes)"},
+      {"3mf_rels_names_a_missing_model",
+       "'3D/Other.model' that _rels/.rels names is not in the archive"},
       {"3mf_rels_not_xml", "_rels/.rels is not XML"},
       {"3mf_without_rels", "no _rels/.rels"}};
   for (const auto& [name, why] : refused) {
@@ -533,14 +556,18 @@ TEST_F(MeshFileTest, ADamaged3mfIsRefusedBeforeAssimpReadsIt) {
     readPartMesh(write("zip.gltf", corpus("gltf_holding_a_damaged_zip")));
     ADD_FAILURE() << "accepted a .gltf holding a damaged zip";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("zip.gltf: zip archive read as 3MF: "), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("zip.gltf: zip archive read as 3MF: "), std::string::npos)
+        << e.what();
   }
-  EXPECT_EQ(readPartMesh(write("sound.gltf", corpus("scene_gltf")), PartImportOptions{}).mesh.faces.size(), 12u);
+  EXPECT_EQ(readPartMesh(write("sound.gltf", corpus("scene_gltf")), PartImportOptions{})
+                .mesh.faces.size(),
+            12u);
   // A binary glTF whose JSON chunk declares 0xf8000000 bytes in a 3 kB file (the harness:
   // assimp asked for 4.2 GB), and the sound one with its BIN chunk cut short: refused from the
   // header; the sound one reads.
   const std::string glb = corpus("scene_glb");
-  for (const std::string& text : {corpus("glb_json_chunk_beyond_the_file"), glb.substr(0, glb.size() - 4)}) {
+  for (const std::string& text :
+       {corpus("glb_json_chunk_beyond_the_file"), glb.substr(0, glb.size() - 4)}) {
     try {
       readPartMesh(write("damaged.glb", text));
       ADD_FAILURE() << "accepted a damaged .glb";
@@ -566,11 +593,13 @@ TEST_F(MeshFileTest, AssimpCrashingOnASceneFileIsAnErrorNotACrash) {
     readPartMesh(write("crash.glb", found.substr(1)));
     ADD_FAILURE() << "accepted";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("crash.glb: mesh: assimp stopped"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("crash.glb: mesh: assimp stopped"), std::string::npos)
+        << e.what();
     EXPECT_NE(std::string(e.what()).find("a damaged file?"), std::string::npos) << e.what();
   }
   // The same reading path gives the sound file whole: its groups, faces and vertices.
-  std::ifstream in2(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/scene_corpus/scene_glb", std::ios::binary);
+  std::ifstream in2(std::string(TOLVER_SOURCE_DIR) + "/tests/fuzz/scene_corpus/scene_glb",
+                    std::ios::binary);
   const std::string glb((std::istreambuf_iterator<char>(in2)), std::istreambuf_iterator<char>());
   const ImportedPart part = readPartMesh(write("sound.glb", glb.substr(1)));
   EXPECT_EQ(part.mesh.faces.size(), 12u);
@@ -579,7 +608,8 @@ TEST_F(MeshFileTest, AssimpCrashingOnASceneFileIsAnErrorNotACrash) {
   EXPECT_EQ(part.mesh.group_names[0], "part");
   Eigen::AlignedBox3d box;
   for (const auto& v : part.mesh.vertices) box.extend(v);
-  EXPECT_TRUE(box.max().isApprox(Eigen::Vector3d(20000, 20000, 20000))) << box.max().transpose();  // m -> mm
+  EXPECT_TRUE(box.max().isApprox(Eigen::Vector3d(20000, 20000, 20000)))
+      << box.max().transpose();  // m -> mm
 }
 
 // The VTP surface (raw appended binary, no compression) reads back through VTK's own reader:
@@ -596,7 +626,8 @@ TEST(SurfaceFiles, VtpSurfaceReadsBackExactly) {
     a[i] = U(rng) * 1e-3;
     b[i] = static_cast<double>(i % 4);
   }
-  const std::string path = (std::filesystem::temp_directory_path() / "tolver_vtp_test.vtp").string();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "tolver_vtp_test.vtp").string();
   writeVtpWithScalars(path, points, faces, {{"total_um", &a}, {"state", &b}});
   vtkNew<vtkXMLPolyDataReader> reader;
   reader->SetFileName(path.c_str());

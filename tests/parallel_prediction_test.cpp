@@ -26,8 +26,10 @@ std::vector<ClPoint> longPath(int n, std::mt19937& rng) {
     out[i].u_w = u;
     out[i].line = i + 1;
     const double odd = unit(rng);
-    if (odd < 0.002) out[i].p_w.x() += 1e4;
-    else if (odd < 0.004) out[i].u_w = -u;
+    if (odd < 0.002)
+      out[i].p_w.x() += 1e4;
+    else if (odd < 0.004)
+      out[i].u_w = -u;
   }
   return out;
 }

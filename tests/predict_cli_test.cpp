@@ -66,13 +66,14 @@ TEST_F(PredictCli, SampleRunWritesBothOutputsAndASummary) {
     ++rows;
   }
   EXPECT_EQ(rows, nominal.path.size());
-  EXPECT_GT(max_dev, 1.0);   // the sample machine has errors of several micrometres
+  EXPECT_GT(max_dev, 1.0);  // the sample machine has errors of several micrometres
   EXPECT_LT(max_dev, 100.0);
 }
 
 TEST_F(PredictCli, ZeroErrorMachineReproducesTheProgram) {
-  const auto r = test::runTolver("predict --machine " + src("resources/machines/trunnion_ac_trt.xml") +
-                                 " --cl " + src("samples/nas979_cone.apt") + " -o " + path("p.apt"));
+  const auto r =
+      test::runTolver("predict --machine " + src("resources/machines/trunnion_ac_trt.xml") +
+                      " --cl " + src("samples/nas979_cone.apt") + " -o " + path("p.apt"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const ClProgram back = readAptFile(path("p.apt"));
   const ClProgram nominal = readAptFile(src("samples/nas979_cone.apt"));
@@ -103,7 +104,8 @@ TEST_F(PredictCli, UnreachablePointNamesTheLineAndWritesNothing) {
   const std::string cl = write("p.apt", "GOTO/0,0,0,0,0,1\n$$ far away\nGOTO/500,0,0\n");
   const auto r = test::runTolver("predict --machine " + m + " --cl " + cl + " -o " + path("o.apt"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.output.find("p.apt:3: unreachable: axis X would need -500.0000 mm"), std::string::npos)
+  EXPECT_NE(r.output.find("p.apt:3: unreachable: axis X would need -500.0000 mm"),
+            std::string::npos)
       << r.output;
   EXPECT_FALSE(fs::exists(path("o.apt")));
   EXPECT_FALSE(fs::exists(path("o.csv")));
@@ -126,11 +128,14 @@ TEST_F(PredictCli, BadInputsExitWithCode2AndOneLine) {
       {"--cl " + write("f.apt", "GOTO/1,2,3\n") + " --setup " + write("s.txt", "gauge = 3\n"),
        "s.txt:1: gauge: unknown key"},
       // The library names the input's field (gauge_length, point_table); the CLI, the option.
-      {"--cl " + path("f.apt") + " --gauge-length -3", "error: --gauge-length: expected a length from 0"},
-      {"--cl " + path("f.apt") + " --errors " + path("nodir/t.csv"), "error: --errors: " + path("nodir/t.csv")},
+      {"--cl " + path("f.apt") + " --gauge-length -3",
+       "error: --gauge-length: expected a length from 0"},
+      {"--cl " + path("f.apt") + " --errors " + path("nodir/t.csv"),
+       "error: --errors: " + path("nodir/t.csv")},
   };
   for (const Case& c : cases) {
-    const auto r = test::runTolver("predict --machine " + m + " " + c.args + " -o " + path("o.apt"));
+    const auto r =
+        test::runTolver("predict --machine " + m + " " + c.args + " -o " + path("o.apt"));
     EXPECT_EQ(r.exit_code, 2) << c.args << "\n" << r.output;
     EXPECT_NE(r.output.find(c.needle), std::string::npos) << r.output;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
@@ -140,9 +145,10 @@ TEST_F(PredictCli, BadInputsExitWithCode2AndOneLine) {
   const auto r = test::runTolver("predict --machine " + bad_machine + " --cl " +
                                  write("g.apt", "GOTO/1,2,3\n") + " -o " + path("o.apt"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.output.find("bad.xml:1: axis.type: missing attribute"), std::string::npos) << r.output;
-  const auto no_dir = test::runTolver("predict --machine " + m + " --cl " + path("g.apt") +
-                                      " -o " + path("nodir/o.apt"));
+  EXPECT_NE(r.output.find("bad.xml:1: axis.type: missing attribute"), std::string::npos)
+      << r.output;
+  const auto no_dir = test::runTolver("predict --machine " + m + " --cl " + path("g.apt") + " -o " +
+                                      path("nodir/o.apt"));
   EXPECT_EQ(no_dir.exit_code, 2);
   EXPECT_NE(no_dir.output.find("error: -o: "), std::string::npos) << no_dir.output;
   EXPECT_EQ(test::runTolver("predict --machine " + m).exit_code, 2);  // missing options
@@ -175,16 +181,18 @@ class PredictOutputs : public test::TempDirTest {};
 // The second output cannot be written: neither is left, exit 2; the same
 // for calibrate's machine file when its report cannot be written.
 TEST_F(PredictOutputs, ASecondOutputThatFailsLeavesNoFirst) {
-  auto r = test::runTolver("predict --machine " + test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
+  auto r = test::runTolver("predict --machine " +
+                           test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
                            " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " --cl " +
                            test::sourcePath("samples/nas979_cone.apt") + " -o " + path("ok.apt") +
                            " --errors /proc/tolver_cannot_write.csv");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_FALSE(std::filesystem::exists(path("ok.apt")));
   EXPECT_FALSE(std::filesystem::exists(path("ok.apt.tmp-tolver")));
-  r = test::runTolver("calibrate --machine " + test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
-                      " --readings " + test::sourcePath("samples/ballbar/clean.csv") + " -o " +
-                      path("ok.xml") + " --report /proc/tolver_cannot_write.json");
+  r = test::runTolver("calibrate --machine " +
+                      test::sourcePath("resources/machines/matsuura_mc760vx.xml") + " --readings " +
+                      test::sourcePath("samples/ballbar/clean.csv") + " -o " + path("ok.xml") +
+                      " --report /proc/tolver_cannot_write.json");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_FALSE(std::filesystem::exists(path("ok.xml")));
   EXPECT_FALSE(std::filesystem::exists(path("ok_balls.csv")));

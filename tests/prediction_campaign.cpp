@@ -1,21 +1,22 @@
-// The measurement behind docs/validation.md's "Predictions on independent data": machines simulated by
-// the independent implementation (tests/independent_ballbar.h, seeds the tests do not use),
+// The measurement behind docs/validation.md's "Predictions on independent data": machines simulated
+// by the independent implementation (tests/independent_ballbar.h, seeds the tests do not use),
 // calibrated by tolver from a three-set-up ball-bar test, then the tool tip (gauge length 100 mm)
 // and tool axis predicted at random poses over the whole travel and inside the calibrated volume,
 // after the set-up a shop measures (fitted over the poses, as predict does). Reported against the
 // machine's own error (the truth against the nominal machine, after its own set-up fit) and the
-// coverage of the 95 % band. Not a test: `./build/tests/prediction_campaign [machines] [prior_um prior_urad] [cone]`
-// (prior -1 -1: chosen by the readings' evidence; cone: a D-optimal plan against a --for plan,
-// judged at the cone sample's poses; probed: the set-up fitted to 12 probed points instead of the
-// best fit to the truth, the prediction compared with the truth as it is; tram: probed, and a
-// spindle tram at the middle of the volume).
+// coverage of the 95 % band. Not a test: `./build/tests/prediction_campaign [machines] [prior_um
+// prior_urad] [cone]` (prior -1 -1: chosen by the readings' evidence; cone: a D-optimal plan
+// against a --for plan, judged at the cone sample's poses; probed: the set-up fitted to 12 probed
+// points instead of the best fit to the truth, the prediction compared with the truth as it is;
+// tram: probed, and a spindle tram at the middle of the volume).
+#include <unistd.h>
+
 #include <cstdio>
 #include <cstdlib>
-#include <unistd.h>
+#include <memory>
 
 #include "core/path/prediction_uncertainty.h"
 #include "core/path/probed_setup.h"
-#include <memory>
 #include "independent_diagnosis.h"
 #include "io/program/apt_reader.h"
 #include "io/program/setup_file.h"
@@ -31,7 +32,8 @@ struct Figures {
 // Truth and prediction at the poses, each after its own best set-up (applyMeasuredSetup, as
 // predict does): the identified machine's prediction, and the nominal machine's (what assuming
 // no errors predicts: the machine's own error).
-Figures measure(const indep::Machine& truth, Machine identified, const std::vector<JointVector>& qs) {
+Figures measure(const indep::Machine& truth, Machine identified,
+                const std::vector<JointVector>& qs) {
   identified.model.setup.gauge_length = 100;
   Machine nominal = identified;
   nominal.params.setZero();
@@ -69,7 +71,8 @@ Figures measure(const indep::Machine& truth, Machine identified, const std::vect
   for (size_t i = 0; i < qs.size(); ++i) {
     const Eigen::Vector3d d = tip[i] - fk.w_T_t(qs[i]).translation();
     const PoseUncertainty u = pu.at(qs[i]);
-    for (int k = 0; k < 3; ++k) inside += std::abs(d[k]) <= 1.96 * std::sqrt(u.tip_covariance_w(k, k));
+    for (int k = 0; k < 3; ++k)
+      inside += std::abs(d[k]) <= 1.96 * std::sqrt(u.tip_covariance_w(k, k));
   }
   auto rms = [](const std::vector<double>& v, double k) {
     double s = 0;
@@ -90,11 +93,13 @@ Figures measure(const indep::Machine& truth, Machine identified, const std::vect
 // where the truth puts the probe tip; the prediction then compared with the truth as it is.
 // tram: also a spindle tram at the middle of the volume, rotaries at zero (the truth's tool axis
 // in its table frame, which is its w).
-Figures measureProbed(const indep::Machine& truth, Machine identified, const std::vector<JointVector>& qs,
-                      bool tram) {
+Figures measureProbed(const indep::Machine& truth, Machine identified,
+                      const std::vector<JointVector>& qs, bool tram) {
   identified.model.setup.gauge_length = 100;
   const IdentificationUncertainty& id = identified.identification;
-  auto mid = [&](int a, double f) { return id.covered_min[a] + f * (id.covered_max[a] - id.covered_min[a]); };
+  auto mid = [&](int a, double f) {
+    return id.covered_min[a] + f * (id.covered_max[a] - id.covered_min[a]);
+  };
   std::vector<ProbedPoint> probes;
   for (int k = 0; k < 12; ++k) {
     ProbedPoint pp;
@@ -149,7 +154,8 @@ Figures measureProbed(const indep::Machine& truth, Machine identified, const std
       a += ang * ang;
       if (pu) {
         const PoseUncertainty u = pu->at(qs[i]);
-        for (int k = 0; k < 3; ++k) inside += std::abs(d[k]) <= 1.96 * std::sqrt(u.tip_covariance_w(k, k));
+        for (int k = 0; k < 3; ++k)
+          inside += std::abs(d[k]) <= 1.96 * std::sqrt(u.tip_covariance_w(k, k));
       }
     }
     (m == &identified ? f.tip_rms : f.own_tip_rms) = std::sqrt(t / qs.size()) * 1e3;
@@ -164,12 +170,17 @@ Figures measureProbed(const indep::Machine& truth, Machine identified, const std
 int main(int argc, char** argv) {
   const int machines = argc > 1 ? std::atoi(argv[1]) : 3;
   // Optional prior (regularisation): linear um and angular urad per coefficient.
-  const double prior_um = argc > 3 ? std::atof(argv[2]) : 0.0, prior_urad = argc > 3 ? std::atof(argv[3]) : 0.0;
+  const double prior_um = argc > 3 ? std::atof(argv[2]) : 0.0,
+               prior_urad = argc > 3 ? std::atof(argv[3]) : 0.0;
   const std::string dir = "/tmp/tolver_prediction_campaign_" + std::to_string(::getpid());
   std::filesystem::create_directories(dir);
-  const Machine nominal = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
+  const Machine nominal =
+      readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
   const std::vector<int> unknowns = defaultCalibrationUnknowns(nominal.model);
-  std::printf("| machine (seed) | where | tip error after set-up, RMS (um) | machine's own (um) | ratio | tool axis RMS (urad) | own (urad) | 95 %% band coverage |\n|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "| machine (seed) | where | tip error after set-up, RMS (um) | machine's own (um) | ratio | "
+      "tool axis RMS (urad) | own (urad) | 95 %% band coverage "
+      "|\n|---|---|---|---|---|---|---|---|\n");
   // The cone sample's poses on the Matsuura (its set-up file): where a --for plan aims.
   std::vector<JointVector> cone;
   {
@@ -188,9 +199,11 @@ int main(int argc, char** argv) {
     auto calibrateWith = [&](const BallbarPlanOptions& po) {
       const BallbarPlan plan = planBallbarTest(nominal.model, unknowns, po);
       if (prior_um < 0)  // auto: as calibrate --prior auto
-        return test::calibrateOnIndependent(nominal, unknowns, truth, plan.test, seed, 700 + seed, true, dir);
+        return test::calibrateOnIndependent(nominal, unknowns, truth, plan.test, seed, 700 + seed,
+                                            true, dir);
       if (prior_um == 0)
-        return test::calibrateOnIndependent(nominal, unknowns, truth, plan.test, seed, 700 + seed, false, dir);
+        return test::calibrateOnIndependent(nominal, unknowns, truth, plan.test, seed, 700 + seed,
+                                            false, dir);
       // A fixed prior: measure, then calibrate with it.
       const std::vector<indep::Setup> setups = test::independentSetups(plan.test, seed);
       std::vector<indep::Pose> poses = test::independentPoses(plan.test);
@@ -214,11 +227,12 @@ int main(int argc, char** argv) {
       for (bool aimed : {false, true}) {
         BallbarPlanOptions pa = po;
         if (aimed)
-          for (size_t i = 0; i < cone.size(); i += std::max<size_t>(1, cone.size() / 60)) pa.target_poses.push_back(cone[i]);
+          for (size_t i = 0; i < cone.size(); i += std::max<size_t>(1, cone.size() / 60))
+            pa.target_poses.push_back(cone[i]);
         const Figures g = measure(truth, calibrateWith(pa), cone);
-        std::printf("| %u | %s | the cone's poses | %.2f | %.2f | %.2f | %.1f | %.1f | %.3f |\n", seed,
-                    aimed ? "--for the cone" : "D-optimal", g.tip_rms, g.own_tip_rms, g.tip_rms / g.own_tip_rms,
-                    g.axis_rms, g.own_axis_rms, g.coverage);
+        std::printf("| %u | %s | the cone's poses | %.2f | %.2f | %.2f | %.1f | %.1f | %.3f |\n",
+                    seed, aimed ? "--for the cone" : "D-optimal", g.tip_rms, g.own_tip_rms,
+                    g.tip_rms / g.own_tip_rms, g.axis_rms, g.own_axis_rms, g.coverage);
         std::fflush(stdout);
       }
       continue;
@@ -231,16 +245,19 @@ int main(int argc, char** argv) {
       for (int i = 0; i < 500; ++i) {
         JointVector q(5);
         for (int a = 0; a < 5; ++a) {
-          const double lo = inside ? id.identification.covered_min[a] : nominal.model.axes[a].travel_min;
-          const double hi = inside ? id.identification.covered_max[a] : nominal.model.axes[a].travel_max;
+          const double lo =
+              inside ? id.identification.covered_min[a] : nominal.model.axes[a].travel_min;
+          const double hi =
+              inside ? id.identification.covered_max[a] : nominal.model.axes[a].travel_max;
           q[a] = lo + (hi - lo) * u(prng);
         }
         qs.push_back(q);
       }
-      const Figures g = probed_mode ? measureProbed(truth, id, qs, tram_mode) : measure(truth, id, qs);
+      const Figures g =
+          probed_mode ? measureProbed(truth, id, qs, tram_mode) : measure(truth, id, qs);
       std::printf("| %u | %s | %.2f | %.2f | %.2f | %.1f | %.1f | %.3f |\n", seed,
-                  inside ? "inside the calibrated volume" : "whole travel", g.tip_rms, g.own_tip_rms,
-                  g.tip_rms / g.own_tip_rms, g.axis_rms, g.own_axis_rms, g.coverage);
+                  inside ? "inside the calibrated volume" : "whole travel", g.tip_rms,
+                  g.own_tip_rms, g.tip_rms / g.own_tip_rms, g.axis_rms, g.own_axis_rms, g.coverage);
       std::fflush(stdout);
     }
   }

@@ -1,5 +1,5 @@
-// The part set-up from probed points (core/probed_setup, io/program/probe_file): a set-up error and a
-// spindle offset built into a machine are recovered exactly from touches at several table
+// The part set-up from probed points (core/probed_setup, io/program/probe_file): a set-up error and
+// a spindle offset built into a machine are recovered exactly from touches at several table
 // orientations, also when only the coordinate along each probing direction is measured; what
 // the touches cannot see is named and left where the file put it; the CSV reads back what
 // formatProbeCsv wrote and names the line and column of bad input.
@@ -123,7 +123,8 @@ TEST(ProbedSetup, WhatTheTouchesCannotSeeIsNamedAndKept) {
     EXPECT_EQ(fit.observed, 6);
     ASSERT_EQ(fit.unobserved.size(), 3u);
     EXPECT_NE(fit.unobserved[0].find("spindle offset x"), std::string::npos);
-    EXPECT_LT(fit.spindle_change.norm(), 1e-7);  // nanometres: the minimum-norm step prefers the part
+    EXPECT_LT(fit.spindle_change.norm(),
+              1e-7);  // nanometres: the minimum-norm step prefers the part
     EXPECT_LT(fit.rms, 1e-9);
   }
   // Every touch along z: x, y and the rotation about z are not seen (and the spindle offsets).
@@ -186,7 +187,7 @@ TEST(ProbedSetup, ATramRecoversTheSpindleTilt) {
     Machine m = c.nominal;
     const ProbedSetupFit fit = fitProbedSetup(m, pts);
     EXPECT_EQ(fit.columns, 9);
-    EXPECT_LT(fit.rms, 1e-9);      // the touches are explained...
+    EXPECT_LT(fit.rms, 1e-9);        // the touches are explained...
     EXPECT_GT(axisError(m), 50e-6);  // ...but the tool axis is off by the tilt
   }
   pts.push_back(tram);
@@ -250,16 +251,20 @@ TEST(ProbeFile, BadInputNamesTheLineAndColumn) {
   };
   const std::string h = "part_x_mm,part_y_mm,part_z_mm,x_mm,y_mm,z_mm,a_deg,c_deg";
   EXPECT_NE(message("x_mm,y_mm\n1,2\n").find("part_x_mm"), std::string::npos);
-  EXPECT_NE(message("part_x_mm,part_y_mm,part_z_mm,x_mm\n1,2,3,4\n").find("y_mm: missing column"), std::string::npos)
+  EXPECT_NE(message("part_x_mm,part_y_mm,part_z_mm,x_mm\n1,2,3,4\n").find("y_mm: missing column"),
+            std::string::npos)
       << message("part_x_mm,part_y_mm,part_z_mm,x_mm\n1,2,3,4\n");
   EXPECT_NE(message(h + "\n1,2,3,4,5,6,7,abc\n").find("p.csv:2"), std::string::npos);
-  EXPECT_NE(message(h + ",part_nx,part_ny,part_nz\n1,2,3,4,5,6,7,8,1,,\n").find("none"), std::string::npos);
-  EXPECT_NE(message(h + ",part_nx,part_ny,part_nz\n1,2,3,4,5,6,7,8,0,0,0\n").find("zero"), std::string::npos);
+  EXPECT_NE(message(h + ",part_nx,part_ny,part_nz\n1,2,3,4,5,6,7,8,1,,\n").find("none"),
+            std::string::npos);
+  EXPECT_NE(message(h + ",part_nx,part_ny,part_nz\n1,2,3,4,5,6,7,8,0,0,0\n").find("zero"),
+            std::string::npos);
   EXPECT_NE(message(h + "\n1e300,2,3,4,5,6,7,8\n").find("out of range"), std::string::npos);
   EXPECT_NE(message(h + "\n").find("no probed point"), std::string::npos);
   // A tram row takes joints only; its tilt is a bounded number.
   const std::string t = h + ",tram_x_urad,tram_y_urad\n";
-  EXPECT_NE(message(t + "1,,,4,5,6,7,8,3,4\n").find("p.csv:2:1: part_x_mm: a tram row"), std::string::npos)
+  EXPECT_NE(message(t + "1,,,4,5,6,7,8,3,4\n").find("p.csv:2:1: part_x_mm: a tram row"),
+            std::string::npos)
       << message(t + "1,,,4,5,6,7,8,3,4\n");
   EXPECT_NE(message(t + ",,,4,5,6,7,8,3,\n").find("tram_y_urad: missing value"), std::string::npos);
   EXPECT_NE(message(t + ",,,4,5,6,7,8,3,1e9\n").find("out of range"), std::string::npos);

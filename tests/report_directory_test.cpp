@@ -1,6 +1,6 @@
-// Report directories written as a whole (io/common/io_error.h ReportDirectory): a run killed with SIGKILL
-// while writing leaves the previous report as it was; a second run on the same directory at the
-// same time is refused (also a tolver verify started while one holds it: exit 2).
+// Report directories written as a whole (io/common/io_error.h ReportDirectory): a run killed with
+// SIGKILL while writing leaves the previous report as it was; a second run on the same directory at
+// the same time is refused (also a tolver verify started while one holds it: exit 2).
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -72,12 +72,14 @@ TEST_F(ReportDirectoryTest, ASecondRunOnTheSameDirectoryIsRefused) {
   const std::string dir = path("r");
   ReportDirectory held(dir);
   EXPECT_THROW(ReportDirectory second(dir), InputError);
-  const auto r = test::runTolver("verify --machine " + test::sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
-                                 " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " --cl " +
-                                 test::sourcePath("samples/nas979_cone.apt") +
-                                 " --tolerance 0.02 --no-images --report-dir " + dir);
+  const auto r = test::runTolver(
+      "verify --machine " + test::sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
+      " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " --cl " +
+      test::sourcePath("samples/nas979_cone.apt") + " --tolerance 0.02 --no-images --report-dir " +
+      dir);
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("another tolver run is writing this report directory"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("another tolver run is writing this report directory"), std::string::npos)
+      << r.output;
   EXPECT_FALSE(fs::exists(dir + "/report.json"));
 }
 

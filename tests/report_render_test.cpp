@@ -21,9 +21,11 @@ class ReportRender : public test::TempDirTest {
  protected:
   // Runs Chromium headless on a file with the given extra arguments; returns its stdout.
   std::string chromium(const std::string& args) {
-    const std::string cmd = "timeout 120 /usr/bin/chromium --headless --no-sandbox --disable-gpu --disable-quic "
-                            "--no-first-run --disable-background-networking --disable-component-update "
-                            "--disable-sync --user-data-dir=" + path("profile") + " " + args + " 2>/dev/null";
+    const std::string cmd =
+        "timeout 120 /usr/bin/chromium --headless --no-sandbox --disable-gpu --disable-quic "
+        "--no-first-run --disable-background-networking --disable-component-update "
+        "--disable-sync --user-data-dir=" +
+        path("profile") + " " + args + " 2>/dev/null";
     std::string out;
     if (FILE* p = popen(cmd.c_str(), "r")) {
       char buf[4096];
@@ -36,12 +38,14 @@ class ReportRender : public test::TempDirTest {
 };
 
 TEST_F(ReportRender, TheReportOpensOnTheVerdictWithItsImagesAndTables) {
-  ASSERT_TRUE(fs::exists("/usr/bin/chromium")) << "chromium is missing: run scripts/install_deps.sh";
+  ASSERT_TRUE(fs::exists("/usr/bin/chromium"))
+      << "chromium is missing: run scripts/install_deps.sh";
   const auto r = test::runTolver(
-      "verify --machine " + test::sourcePath("samples/machines/matsuura_mc760vx_measured.xml") + " --setup " +
-      test::sourcePath("samples/matsuura_setup.txt") + " --cl " + test::sourcePath("samples/sculptured_finish.apt") +
-      " --part " + test::sourcePath("samples/sculptured_part.obj") + " --spacing 1.2 --tolerance 0.012 --report-dir " +
-      path("rep"));
+      "verify --machine " + test::sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
+      " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " --cl " +
+      test::sourcePath("samples/sculptured_finish.apt") + " --part " +
+      test::sourcePath("samples/sculptured_part.obj") +
+      " --spacing 1.2 --tolerance 0.012 --report-dir " + path("rep"));
   ASSERT_EQ(r.exit_code, 1) << r.output;
   const std::string url = "file://" + path("rep/report.html");
   const std::string dom = chromium("--dump-dom " + url);
@@ -65,13 +69,15 @@ TEST_F(ReportRender, TheReportOpensOnTheVerdictWithItsImagesAndTables) {
     for (int y = y0; y < y1; ++y)
       for (int x = 0; x < dims[0]; ++x) {
         int c[3];
-        for (int k = 0; k < 3; ++k) c[k] = static_cast<int>(img->GetScalarComponentAsDouble(x, y, 0, k));
+        for (int k = 0; k < 3; ++k)
+          c[k] = static_cast<int>(img->GetScalarComponentAsDouble(x, y, 0, k));
         n += match(c);
       }
     return n;
   };
   // PNG rows from the bottom in VTK: the top 150 px of the page hold the red badge.
-  const int badge = count(dims[1] - 150, dims[1], [](const int* c) { return c[0] > 170 && c[1] < 30 && c[2] < 30; });
+  const int badge = count(dims[1] - 150, dims[1],
+                          [](const int* c) { return c[0] > 170 && c[1] < 30 && c[2] < 30; });
   EXPECT_GT(badge, 500);
   // The thumbnails below it: the map's in-tolerance green.
   const int green = count(0, dims[1] - 150, [](const int* c) {

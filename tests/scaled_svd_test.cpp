@@ -1,12 +1,12 @@
 // Column scaling, rank and condition (core/numerics/scaled_svd.h) against closed forms.
+#include "core/numerics/scaled_svd.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <cmath>
 #include <cstdlib>
-
-#include "core/numerics/scaled_svd.h"
 
 namespace tolver {
 namespace {
@@ -78,14 +78,17 @@ TEST(ScaledSvd, NormalMatrixConditionAgreesWithJacobi) {
   int clear = 0, unclear = 0;  // both answers met
   for (const double kappa : {1.0e1, 1.0e3, 3.0e4, 1.0e6, 1.0e8}) {
     // Columns in mm and rad (scales 1 and 1e-4), with singular values spread to kappa.
-    const Eigen::MatrixXd U = Eigen::HouseholderQR<Eigen::MatrixXd>(Eigen::MatrixXd::Random(300, 40)).householderQ() *
-                              Eigen::MatrixXd::Identity(300, 40);
-    const Eigen::MatrixXd V = Eigen::HouseholderQR<Eigen::MatrixXd>(Eigen::MatrixXd::Random(40, 40)).householderQ();
+    const Eigen::MatrixXd U =
+        Eigen::HouseholderQR<Eigen::MatrixXd>(Eigen::MatrixXd::Random(300, 40)).householderQ() *
+        Eigen::MatrixXd::Identity(300, 40);
+    const Eigen::MatrixXd V =
+        Eigen::HouseholderQR<Eigen::MatrixXd>(Eigen::MatrixXd::Random(40, 40)).householderQ();
     Eigen::VectorXd sv(40);
     for (int k = 0; k < 40; ++k) sv[k] = std::pow(kappa, -k / 39.0);
     Eigen::MatrixXd J = U * sv.asDiagonal() * V.transpose();
     for (int c = 0; c < 40; c += 2) J.col(c) *= 1e-4;
-    const Eigen::VectorXd truth = Eigen::JacobiSVD<Eigen::MatrixXd>(scaleColumns(J)).singularValues();
+    const Eigen::VectorXd truth =
+        Eigen::JacobiSVD<Eigen::MatrixXd>(scaleColumns(J)).singularValues();
     const double truth2 = std::pow(truth[0] / truth[39], 2);
     Eigen::MatrixXd N = Eigen::MatrixXd::Zero(40, 40);
     N.selfadjointView<Eigen::Lower>().rankUpdate(J.transpose());

@@ -30,7 +30,8 @@ TEST_P(EveryMachine, MatchesCentralFiniteDifferences) {
   for (int pose = 0; pose < 20; ++pose) {
     JointVector q(m.model.axes.size());
     for (size_t a = 0; a < m.model.axes.size(); ++a) {
-      std::uniform_real_distribution<double> u(m.model.axes[a].travel_min, m.model.axes[a].travel_max);
+      std::uniform_real_distribution<double> u(m.model.axes[a].travel_min,
+                                               m.model.axes[a].travel_max);
       q[a] = u(rng);
     }
     const ForwardKinematics fk(m.model, m.params);
@@ -67,7 +68,8 @@ TEST_P(EveryMachine, RowIsTheJacobianContracted) {
   for (int pose = 0; pose < 20; ++pose) {
     JointVector q(m.model.axes.size());
     for (size_t a = 0; a < m.model.axes.size(); ++a) {
-      std::uniform_real_distribution<double> u(m.model.axes[a].travel_min, m.model.axes[a].travel_max);
+      std::uniform_real_distribution<double> u(m.model.axes[a].travel_min,
+                                               m.model.axes[a].travel_max);
       q[a] = u(rng);
     }
     Eigen::Matrix<double, 1, 6> w;
@@ -75,7 +77,8 @@ TEST_P(EveryMachine, RowIsTheJacobianContracted) {
     sensitivityJacobian(fk, q, J);
     sensitivityRow(fk, q, w, row);
     const Eigen::RowVectorXd truth = w * J;
-    EXPECT_LT((row - truth).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + truth.cwiseAbs().maxCoeff())) << GetParam();
+    EXPECT_LT((row - truth).cwiseAbs().maxCoeff(), 1e-12 * (1.0 + truth.cwiseAbs().maxCoeff()))
+        << GetParam();
   }
 }
 

@@ -5,8 +5,8 @@
 
 #include <gtest/gtest.h>
 
-#include "io/program/apt_reader.h"
 #include "io/machine/machine_file.h"
+#include "io/program/apt_reader.h"
 #include "test_support.h"
 
 namespace tolver {
@@ -67,7 +67,8 @@ TEST(SetupSearch, VerticalToolMarginIsHalfTheSmallestSlack) {
   for (int i = 0; i < 40; ++i) {
     ClPoint c;
     c.p_w = Eigen::Vector3d(span.x() * ((i * 7) % 40) / 39.0, span.y() * ((i * 13) % 40) / 39.0,
-                            span.z() * ((i * 3) % 40) / 39.0) - Eigen::Vector3d(50, 20, 0);
+                            span.z() * ((i * 3) % 40) / 39.0) -
+            Eigen::Vector3d(50, 20, 0);
     c.u_w = Eigen::Vector3d::UnitZ();
     c.line = i + 1;
     path.push_back(c);

@@ -24,7 +24,8 @@ TEST(Statistics, IncompleteBetaClosedForms) {
 
 TEST(Statistics, FSurvivalClosedForms) {
   // d1 = 2: P(F > f) = (1 + 2 f / d2)^(-d2 / 2).
-  for (double f : {0.5, 3.0, 12.0}) EXPECT_NEAR(fSurvival(f, 2, 10), std::pow(1 + 2 * f / 10, -5), 1e-13);
+  for (double f : {0.5, 3.0, 12.0})
+    EXPECT_NEAR(fSurvival(f, 2, 10), std::pow(1 + 2 * f / 10, -5), 1e-13);
   // d1 = 1, d2 large: F = Z^2.
   EXPECT_NEAR(fSurvival(4.0, 1, 1e7), 2 * normalSurvival(2.0), 1e-6);
   EXPECT_EQ(fSurvival(0.0, 3, 10), 1.0);
@@ -76,8 +77,11 @@ TEST(Statistics, RunsTestAndAutocorrelation) {
 class Analysis : public ::testing::Test {
  protected:
   void SetUp() override {
-    machine_ = readMachineFile(std::string(TOLVER_SOURCE_DIR) + "/resources/machines/matsuura_mc760vx.xml");
-    test_ = readBallbarFile(std::string(TOLVER_SOURCE_DIR) + "/samples/ballbar/clean.csv", machine_.model, true).test;
+    machine_ = readMachineFile(std::string(TOLVER_SOURCE_DIR) +
+                               "/resources/machines/matsuura_mc760vx.xml");
+    test_ = readBallbarFile(std::string(TOLVER_SOURCE_DIR) + "/samples/ballbar/clean.csv",
+                            machine_.model, true)
+                .test;
     std::mt19937 rng(9);
     std::normal_distribution<double> n(0, 0.5e-3);
     noise_.resize(test_.readings.size());
@@ -97,7 +101,8 @@ TEST_F(Analysis, WhiteNoiseFollowsNothing) {
 
 TEST_F(Analysis, ACyclicResidualFollowsItsAxisAndPeriod) {
   Eigen::VectorXd r = noise_;
-  for (size_t i = 0; i < test_.readings.size(); ++i) r[i] += 2e-3 * std::sin(2 * M_PI * test_.readings[i].q[1] / 15.0);
+  for (size_t i = 0; i < test_.readings.size(); ++i)
+    r[i] += 2e-3 * std::sin(2 * M_PI * test_.readings[i].q[1] / 15.0);
   const ResidualAnalysis a = analyseResiduals(machine_.model, test_, r);
   EXPECT_EQ(a.follows, "Y");
   EXPECT_EQ(a.findings[0].test, "periodogram");
@@ -107,14 +112,16 @@ TEST_F(Analysis, ACyclicResidualFollowsItsAxisAndPeriod) {
 
 TEST_F(Analysis, AReversalResidualFollowsTheApproachDirection) {
   Eigen::VectorXd r = noise_;
-  for (size_t i = 0; i < test_.readings.size(); ++i) r[i] += 1.5e-3 * test_.readings[i].context.direction[0];
+  for (size_t i = 0; i < test_.readings.size(); ++i)
+    r[i] += 1.5e-3 * test_.readings[i].context.direction[0];
   const ResidualAnalysis a = analyseResiduals(machine_.model, test_, r);
   EXPECT_EQ(a.follows, "X direction");
 }
 
 TEST_F(Analysis, ADriftFollowsTime) {
   Eigen::VectorXd r = noise_;
-  for (size_t i = 0; i < test_.readings.size(); ++i) r[i] += 2e-3 * test_.readings[i].context.time_s / 7200.0;
+  for (size_t i = 0; i < test_.readings.size(); ++i)
+    r[i] += 2e-3 * test_.readings[i].context.time_s / 7200.0;
   const ResidualAnalysis a = analyseResiduals(machine_.model, test_, r);
   EXPECT_EQ(a.follows, "time");
   double span = 0;

@@ -1,6 +1,7 @@
 // Surface sampling: the faces re-triangulated at the spacing (resampleFaces) against the input's
 // own geometry (area, enclosed volume, every point on an input face, a closed mesh staying
 // closed), the spacing reached, determinism, and no regular grid.
+#include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
 #include <Eigen/Geometry>
@@ -8,8 +9,6 @@
 #include <cmath>
 #include <map>
 #include <utility>
-
-#include <gtest/gtest.h>
 
 #include "geometry/triangle_mesh.h"
 
@@ -23,7 +22,8 @@ TriangleMesh fannedCube(double a, int n) {
   for (int s = 0; s < 6; ++s) m.group_names.push_back("side" + std::to_string(s));
   std::map<std::tuple<long, long, long>, int> index;
   auto vertex = [&](const Eigen::Vector3d& p) {
-    const auto key = std::make_tuple(std::lround(p.x() * 1e6), std::lround(p.y() * 1e6), std::lround(p.z() * 1e6));
+    const auto key = std::make_tuple(std::lround(p.x() * 1e6), std::lround(p.y() * 1e6),
+                                     std::lround(p.z() * 1e6));
     const auto [it, inserted] = index.try_emplace(key, static_cast<int>(m.vertices.size()));
     if (inserted) m.vertices.push_back(p);
     return it->second;
@@ -43,7 +43,8 @@ TriangleMesh fannedCube(double a, int n) {
       const Eigen::Vector3d corner[4] = {c, c + d1, c + d1 + d2, c + d2};
       std::vector<int> ring;
       for (int k = 0; k < 4; ++k)
-        for (int i = 0; i < n; ++i) ring.push_back(vertex(corner[k] + (double(i) / n) * (corner[(k + 1) % 4] - corner[k])));
+        for (int i = 0; i < n; ++i)
+          ring.push_back(vertex(corner[k] + (double(i) / n) * (corner[(k + 1) % 4] - corner[k])));
       const int centre = vertex(c + 0.5 * (d1 + d2));
       for (size_t i = 0; i < ring.size(); ++i) {
         m.faces.emplace_back(centre, ring[i], ring[(i + 1) % ring.size()]);
@@ -55,12 +56,13 @@ TriangleMesh fannedCube(double a, int n) {
 
 double volume(const TriangleMesh& m) {
   double v = 0;
-  for (const auto& t : m.faces) v += m.vertices[t[0]].dot(m.vertices[t[1]].cross(m.vertices[t[2]])) / 6.0;
+  for (const auto& t : m.faces)
+    v += m.vertices[t[0]].dot(m.vertices[t[1]].cross(m.vertices[t[2]])) / 6.0;
   return v;
 }
 
-double distanceToTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                          const Eigen::Vector3d& c) {
+double distanceToTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                          const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
   // Inside the prism over the triangle: the plane distance; else the nearest edge.
   const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
   const Eigen::Vector3d q = p - n.dot(p - a) * n;
@@ -89,7 +91,8 @@ TEST(ResampleFaces, KeepsTheGeometryAndStaysClosed) {
     for (int k = 0; k < 3; ++k) ++directed[{t[k], t[(k + 1) % 3]}];
   for (const auto& [e, count] : directed) {
     ASSERT_EQ(count, 1) << e.first << "-" << e.second;
-    ASSERT_EQ(directed.count({e.second, e.first}), 1u) << "open edge " << e.first << "-" << e.second;
+    ASSERT_EQ(directed.count({e.second, e.first}), 1u)
+        << "open edge " << e.first << "-" << e.second;
   }
   // Every point on an input face of its own group.
   for (size_t f = 0; f < out.faces.size(); f += 7) {
@@ -99,8 +102,9 @@ TEST(ResampleFaces, KeepsTheGeometryAndStaysClosed) {
       double d = 1e9;
       for (size_t i = 0; i < in.faces.size(); ++i)
         if (in.face_group[i] == g)
-          d = std::min(d, distanceToTriangle(p, in.vertices[in.faces[i][0]], in.vertices[in.faces[i][1]],
-                                             in.vertices[in.faces[i][2]]));
+          d = std::min(
+              d, distanceToTriangle(p, in.vertices[in.faces[i][0]], in.vertices[in.faces[i][1]],
+                                    in.vertices[in.faces[i][2]]));
       ASSERT_LT(d, 1e-9) << "face " << f;
     }
   }
@@ -113,7 +117,8 @@ TEST(ResampleFaces, ReachesTheSpacingOnLongThinTriangles) {
   resampleFaces(&out, h);
   std::vector<double> edges;
   for (const auto& t : out.faces)
-    for (int k = 0; k < 3; ++k) edges.push_back((out.vertices[t[k]] - out.vertices[t[(k + 1) % 3]]).norm());
+    for (int k = 0; k < 3; ++k)
+      edges.push_back((out.vertices[t[k]] - out.vertices[t[(k + 1) % 3]]).norm());
   std::sort(edges.begin(), edges.end());
   const double median = edges[edges.size() / 2];
   EXPECT_GT(median, 0.8 * h);
@@ -136,7 +141,8 @@ TEST(ResampleFaces, IsTheSameOnOneThreadAsOnMany) {
   }
   ASSERT_EQ(one.vertices.size(), many.vertices.size());
   ASSERT_EQ(one.faces.size(), many.faces.size());
-  for (size_t i = 0; i < one.vertices.size(); ++i) ASSERT_EQ(one.vertices[i], many.vertices[i]) << i;
+  for (size_t i = 0; i < one.vertices.size(); ++i)
+    ASSERT_EQ(one.vertices[i], many.vertices[i]) << i;
   for (size_t i = 0; i < one.faces.size(); ++i) ASSERT_EQ(one.faces[i], many.faces[i]) << i;
   EXPECT_EQ(one.face_group, many.face_group);
 }
@@ -196,11 +202,14 @@ TEST(SampleSurface, MarksTheSamplesOnSharpEdgesAndBorders) {
   int marked = 0;
   for (size_t i = 0; i < cube.size(); ++i) {
     int on = 0;
-    for (int k = 0; k < 3; ++k) on += std::abs(cube.p_w[i][k]) < 1e-9 || std::abs(cube.p_w[i][k] - a) < 1e-9;
+    for (int k = 0; k < 3; ++k)
+      on += std::abs(cube.p_w[i][k]) < 1e-9 || std::abs(cube.p_w[i][k] - a) < 1e-9;
     ASSERT_EQ(cube.on_edge[i] != 0, on >= 2) << cube.p_w[i].transpose();
     marked += cube.on_edge[i];
   }
-  EXPECT_GE(marked, 12 * 31 * 2);  // each of the 12 edges in 16 input pieces, each cut in two; a sample per side
+  EXPECT_GE(
+      marked,
+      12 * 31 * 2);  // each of the 12 edges in 16 input pieces, each cut in two; a sample per side
   TriangleMesh m;
   m.group_names = {"plane"};
   m.vertices = {{0, 0, 0}, {10, 0, 0}, {0, 10, 0}};
@@ -209,7 +218,8 @@ TEST(SampleSurface, MarksTheSamplesOnSharpEdgesAndBorders) {
   const SurfaceSamples s = sampleSurface(m, 0.5);
   for (size_t i = 0; i < s.size(); ++i) {
     const Eigen::Vector3d& p = s.p_w[i];
-    const bool on_side = std::abs(p.x()) < 1e-9 || std::abs(p.y()) < 1e-9 || std::abs(p.x() + p.y() - 10) < 1e-9;
+    const bool on_side =
+        std::abs(p.x()) < 1e-9 || std::abs(p.y()) < 1e-9 || std::abs(p.x() + p.y() - 10) < 1e-9;
     ASSERT_EQ(s.on_edge[i] != 0, on_side) << p.transpose();
   }
 }

@@ -54,7 +54,8 @@ TEST(SweptSurface, BallEndOnCylinderLeavesTheAnalyticScallop) {
   SweepResult res;
   sweepSurface(s, cutter, placements, opt, &res);
   const double D = Rc + r, h = 0.5 * dtheta;
-  const double scallop = D * std::cos(h) - std::sqrt(r * r - D * D * std::sin(h) * std::sin(h)) - Rc;
+  const double scallop =
+      D * std::cos(h) - std::sqrt(r * r - D * D * std::sin(h) * std::sin(h)) - Rc;
   EXPECT_NEAR(scallop, 0.0508, 1e-4);  // about 51 um
   for (size_t i = 0; i < s.size(); ++i) {
     ASSERT_TRUE(res.machined[i]) << i;
@@ -122,8 +123,9 @@ TEST(SweptSurface, EqualsTestingEveryPlacement) {
     for (int i = 0; i < 3000; ++i) {
       const double x = 9 * U(rng), y = 9 * U(rng);
       s.p_w.push_back(Eigen::Vector3d(x, y, 0.3 * std::sin(x) + 0.05 * U(rng)));
-      const Eigen::Vector3d n = i % 5 == 0 ? Eigen::Vector3d(U(rng), U(rng), U(rng))
-                                           : Eigen::Vector3d(-0.3 * std::cos(x) + 0.2 * U(rng), 0.2 * U(rng), 1.0);
+      const Eigen::Vector3d n =
+          i % 5 == 0 ? Eigen::Vector3d(U(rng), U(rng), U(rng))
+                     : Eigen::Vector3d(-0.3 * std::cos(x) + 0.2 * U(rng), 0.2 * U(rng), 1.0);
       s.n_w.push_back(n.normalized());
       s.area.push_back(1.0);
       s.group.push_back(0);
@@ -139,8 +141,8 @@ TEST(SweptSurface, EqualsTestingEveryPlacement) {
       double top = opt.excess_range;
       int who = -1;
       for (size_t k = 0; k < placements.size(); ++k) {
-        const double e = cutter.lineEntry(s.p_w[i] - placements[k].tip_w, s.n_w[i], placements[k].axis_w,
-                                          -opt.gouge_range, top);
+        const double e = cutter.lineEntry(s.p_w[i] - placements[k].tip_w, s.n_w[i],
+                                          placements[k].axis_w, -opt.gouge_range, top);
         if (e < top) {  // strictly deeper: the earliest of equal ones stays
           top = e;
           who = static_cast<int>(k);
@@ -241,9 +243,12 @@ TEST(SweptSurface, BullNoseCornerEntryMatchesTheTorus) {
     EXPECT_NEAR(s - 1.0, expected, 1e-9) << rho;
   }
   // Inside the flat bottom: enters at the tip plane.
-  EXPECT_NEAR(c.lineEntry(Eigen::Vector3d(3, 0, -1), Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitZ(), 0, 5), 1.0, 1e-9);
+  EXPECT_NEAR(c.lineEntry(Eigen::Vector3d(3, 0, -1), Eigen::Vector3d::UnitZ(),
+                          Eigen::Vector3d::UnitZ(), 0, 5),
+              1.0, 1e-9);
   // Beyond the radius: never.
-  EXPECT_TRUE(std::isinf(c.lineEntry(Eigen::Vector3d(8.5, 0, -1), Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitZ(), 0, 5)));
+  EXPECT_TRUE(std::isinf(c.lineEntry(Eigen::Vector3d(8.5, 0, -1), Eigen::Vector3d::UnitZ(),
+                                     Eigen::Vector3d::UnitZ(), 0, 5)));
 }
 
 }  // namespace

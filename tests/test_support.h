@@ -18,24 +18,25 @@ inline std::string sourcePath(const std::string& rel) {
 }
 
 inline const std::array<const char*, 6>& shippedMachines() {
-  static const std::array<const char*, 6> m = {"resources/machines/matsuura_mc760vx.xml",
-                                               "resources/machines/xkh800.xml",
-                                               "resources/machines/trunnion_ac_trt.xml",
-                                               "resources/machines/linuxcnc_xyzac_trt.xml",
-                                               "resources/machines/linuxcnc_xyzbc_trt.xml",
-                                               "resources/machines/umc_bc_trunnion.xml"};
+  static const std::array<const char*, 6> m = {
+      "resources/machines/matsuura_mc760vx.xml",   "resources/machines/xkh800.xml",
+      "resources/machines/trunnion_ac_trt.xml",    "resources/machines/linuxcnc_xyzac_trt.xml",
+      "resources/machines/linuxcnc_xyzbc_trt.xml", "resources/machines/umc_bc_trunnion.xml"};
   return m;
 }
 
 // The shipped machines and the test fixtures for what they do not cover (a rotary axis along
 // no coordinate axis, rotated links, one and no rotary axis): for the kinematics tests.
 inline const std::array<const char*, 9>& kinematicsTestMachines() {
-  static const std::array<const char*, 9> m = {
-      shippedMachines()[0], shippedMachines()[1], shippedMachines()[2], shippedMachines()[3],
-      shippedMachines()[4], shippedMachines()[5],
-      "tests/fixtures/machines/nutating_head_bc.xml",
-      "tests/fixtures/machines/four_axis_a_table.xml",
-      "tests/fixtures/machines/three_axis.xml"};
+  static const std::array<const char*, 9> m = {shippedMachines()[0],
+                                               shippedMachines()[1],
+                                               shippedMachines()[2],
+                                               shippedMachines()[3],
+                                               shippedMachines()[4],
+                                               shippedMachines()[5],
+                                               "tests/fixtures/machines/nutating_head_bc.xml",
+                                               "tests/fixtures/machines/four_axis_a_table.xml",
+                                               "tests/fixtures/machines/three_axis.xml"};
   return m;
 }
 

@@ -8,9 +8,8 @@
 #include <fstream>
 #include <random>
 
-#include "io/common/line_source.h"
-
 #include "io/common/io_error.h"
+#include "io/common/line_source.h"
 
 namespace tolver {
 namespace {
@@ -23,7 +22,8 @@ std::vector<std::string> streamedLines(LineSource source) {
 }
 
 std::vector<std::string> fileLines(const std::string& text) {
-  const std::string path = (std::filesystem::temp_directory_path() / "tolver_line_source.txt").string();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "tolver_line_source.txt").string();
   std::ofstream(path, std::ios::binary) << text;
   std::vector<std::string> lines = streamedLines(LineSource::file(path));
   std::filesystem::remove(path);
@@ -89,7 +89,8 @@ TEST(TextUtil, Base64MatchesRfc4648) {
 // RFC 4180 quoting: what csvField writes, splitCsvLine reads back, cell for cell, for cells with
 // commas, quotes, edge spaces and nothing special; unquoted cells are trimmed.
 TEST(TextUtil, CsvCellsRoundTripThroughQuoting) {
-  const std::vector<std::string> cells = {"plain", "a,b", "say \"hi\"", "  edge ", "", "x\"\"y", "1.5"};
+  const std::vector<std::string> cells = {"plain", "a,b",    "say \"hi\"", "  edge ",
+                                          "",      "x\"\"y", "1.5"};
   EXPECT_EQ(splitCsvLine(csvLine(cells)), cells);
   EXPECT_EQ(csvField("plain"), "plain");
   EXPECT_EQ(csvField("a,b"), "\"a,b\"");
@@ -108,7 +109,8 @@ TEST(TextUtil, FormatNumberRoundTripsWithTheShortestText) {
   unsigned s = 12345;
   for (int i = 0; i < 20000; ++i) {
     s = s * 1103515245u + 12345u;
-    const double v = (static_cast<double>(s % 100000) / 7.0 - 7000.0) * std::pow(10.0, static_cast<int>(s % 21) - 10);
+    const double v = (static_cast<double>(s % 100000) / 7.0 - 7000.0) *
+                     std::pow(10.0, static_cast<int>(s % 21) - 10);
     EXPECT_EQ(std::stod(formatNumber(v)), v) << formatNumber(v);
   }
 }
@@ -120,7 +122,8 @@ TEST(TextUtil, CsvHeaderIsReadOnePolicy) {
   std::vector<std::string> got;
   int header_line = 0;
   forEachCsvRow(
-      text, "t.csv", {"name", "value"}, "missing", [&](const CsvRow& r) { got.push_back(r.cell("name") + r.cell("value")); },
+      text, "t.csv", {"name", "value"}, "missing",
+      [&](const CsvRow& r) { got.push_back(r.cell("name") + r.cell("value")); },
       [&](const CsvHeader& h) { header_line = h.line; });
   EXPECT_EQ(got, (std::vector<std::string>{"a1", "b2"}));
   EXPECT_EQ(header_line, 3);
@@ -130,7 +133,8 @@ TEST(TextUtil, CsvHeaderIsReadOnePolicy) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("named twice"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(forEachCsvRow("a\n1\n", "t.csv", {"b"}, "missing", [](const CsvRow&) {}), InputError);
+  EXPECT_THROW(forEachCsvRow("a\n1\n", "t.csv", {"b"}, "missing", [](const CsvRow&) {}),
+               InputError);
   EXPECT_THROW(forEachCsvRow("# only\n", "t.csv", {}, "missing", [](const CsvRow&) {}), InputError);
 }
 

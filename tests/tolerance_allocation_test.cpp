@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "io/machine/machine_file.h"
 #include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
 #include "io/machine/tolerance_file.h"
 #include "test_support.h"
 
@@ -48,7 +48,8 @@ TEST(ToleranceAllocation, WorstCaseOfTheTwoTermMachineIsTheSum) {
   EXPECT_NEAR(verifyAccuracy(f.m.model, f.terms, f.acc, T)[0], 0.005, 1e-15);
   EXPECT_NEAR(worstCaseLinear(f.acc, T, true)[0], std::hypot(0.002, 0.003), 1e-15);
   // Cost of eq. 8 with h = 1 and 5, r = 2, half bands.
-  EXPECT_NEAR(manufacturingCost(f.m.model, f.terms, T, f.a), std::pow(0.002, -2) + std::pow(5 * 0.003, -2), 1e-6);
+  EXPECT_NEAR(manufacturingCost(f.m.model, f.terms, T, f.a),
+              std::pow(0.002, -2) + std::pow(5 * 0.003, -2), 1e-6);
 }
 
 TEST(ToleranceAllocation, FindsTheAnalyticOptimum) {
@@ -95,7 +96,8 @@ TEST(ToleranceAllocation, SolutionsMeetTheLimitsAndBoundsAndRepeat) {
 TEST(ToleranceAllocation, Xkh800StandardToleranceBreaksTheLimitsUnderWorstCaseStacking) {
   Machine m = readMachineFile(test::sourcePath("resources/machines/xkh800.xml"));
   m.model.setup.gauge_length = 150;
-  auto terms = readToleranceFile(test::sourcePath("resources/allocation/xkh800_standard.csv"), m.model);
+  auto terms =
+      readToleranceFile(test::sourcePath("resources/allocation/xkh800_standard.csv"), m.model);
   ASSERT_EQ(terms.size(), 37u);
   const AccuracyModel acc = buildAccuracyModel(m.model, terms, workspaceGrid(m.model, 3, 5));
   const CorrelationAnalysis corr = correlateTerms(acc, 4);
@@ -140,17 +142,19 @@ TEST(ToleranceFile, ImplausibleValuesAndEmptyBandsAreRefused) {
   const std::string with_group = "term,category,standard,unit,reference_group\n";
   for (const char* group : {"1e300", "0", "2.5", "-1", "1000001", "x"}) {
     try {
-      parseToleranceCsv(with_group + "EXX.c0,linear_positioning,0.005,mm," + group + "\n", "t.csv", m.model);
+      parseToleranceCsv(with_group + "EXX.c0,linear_positioning,0.005,mm," + group + "\n", "t.csv",
+                        m.model);
       ADD_FAILURE() << group;
     } catch (const InputError& e) {
       EXPECT_EQ(e.line(), 2) << e.what();
       EXPECT_NE(std::string(e.what()).find("reference_group"), std::string::npos) << e.what();
     }
   }
-  EXPECT_EQ(parseToleranceCsv(with_group + "EXX.c0,linear_positioning,0.005,mm,3\n", "t.csv", m.model)
-                .at(0)
-                .reference_group,
-            3);
+  EXPECT_EQ(
+      parseToleranceCsv(with_group + "EXX.c0,linear_positioning,0.005,mm,3\n", "t.csv", m.model)
+          .at(0)
+          .reference_group,
+      3);
 }
 
 }  // namespace

@@ -28,7 +28,7 @@ TEST(ToleranceZone, UnequalZonesIsoUzAndAsmeU) {
   EXPECT_NEAR(iso.upper, 0.015, 1e-15);
   EXPECT_EQ(classify(0.012, true, iso), Conformance::In);      // out of a bilateral +-10 zone
   EXPECT_EQ(classify(-0.006, true, iso), Conformance::Gouge);  // in a bilateral one
-  const ToleranceZone asme = asmeUZone(0.03, 0.01);  // 10 of 30 um outside the material
+  const ToleranceZone asme = asmeUZone(0.03, 0.01);            // 10 of 30 um outside the material
   EXPECT_NEAR(asme.lower, -0.02, 1e-15);
   EXPECT_NEAR(asme.upper, 0.01, 1e-15);
   EXPECT_EQ(classify(-0.019, true, asme), Conformance::In);
@@ -67,7 +67,8 @@ TEST(ToleranceZone, RegionsAreConnectedComponentsWithAreaAndWorstPoint) {
 
 TEST(ToleranceZone, ZoneFileRowsRegionsAndErrors) {
   const auto zones = parseZoneCsv(
-      "# zones\nregion,tolerance,uz,u\n*,0.05,,\ntop,0.02,+0.005,\nbox 0 0 0 10 10 10,0.03,,0.01\n", "z.csv");
+      "# zones\nregion,tolerance,uz,u\n*,0.05,,\ntop,0.02,+0.005,\nbox 0 0 0 10 10 10,0.03,,0.01\n",
+      "z.csv");
   ASSERT_EQ(zones.size(), 3u);
   EXPECT_NEAR(zones[0].upper, 0.025, 1e-15);
   EXPECT_EQ(zones[1].region, "top");
@@ -88,7 +89,8 @@ TEST(ToleranceZone, ZoneFileRowsRegionsAndErrors) {
     parseZoneCsv("region,tolerance,uz,u\n*,0.05,,\ntop,900,,\n", "z.csv");
     ADD_FAILURE() << "accepted";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("z.csv:3:2: tolerance: 900 mm is not a plausible"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("z.csv:3:2: tolerance: 900 mm is not a plausible"),
+              std::string::npos)
         << e.what();
   }
   EXPECT_EQ(parseZoneCsv("region,tolerance,uz,u\ntop,900,,\n", "z.csv", true).size(), 1u);
@@ -100,7 +102,8 @@ TEST(ToleranceZone, LastMatchingZoneWins) {
   s.group_names = {"top", "sides"};
   s.p_w = {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(5, 5, 5), Eigen::Vector3d(50, 0, 0)};
   s.group = {0, 1, 1};
-  const auto zones = parseZoneCsv("region,tolerance\n*,0.05\nsides,0.02\nbox 4 4 4 6 6 6,0.01\n", "z");
+  const auto zones =
+      parseZoneCsv("region,tolerance\n*,0.05\nsides,0.02\nbox 4 4 4 6 6 6,0.01\n", "z");
   EXPECT_EQ(assignZones(s, zones), (std::vector<int>{0, 2, 1}));
 }
 

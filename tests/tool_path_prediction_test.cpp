@@ -9,9 +9,9 @@
 #include "core/kinematics/forward_kinematics.h"
 #include "core/kinematics/inverse_kinematics.h"
 #include "core/numerics/lanes.h"
+#include "io/machine/machine_file.h"
 #include "io/program/apt_reader.h"
 #include "io/program/apt_writer.h"
-#include "io/machine/machine_file.h"
 #include "test_support.h"
 
 namespace tolver {
@@ -21,7 +21,8 @@ std::vector<ClPoint> hemisphere(int n) {
   std::vector<ClPoint> out(n);
   for (int i = 0; i < n; ++i) {
     const double t = static_cast<double>(i) / n, polar = 0.05 + 0.9 * t, az = 20.0 * M_PI * t;
-    const Eigen::Vector3d u(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az), std::cos(polar));
+    const Eigen::Vector3d u(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az),
+                            std::cos(polar));
     out[i].p_w = 50.0 * u;
     out[i].u_w = u;
     out[i].line = i + 1;
@@ -45,10 +46,14 @@ TEST(ToolPathPrediction, BatchEqualsOneByOneBitForBit) {
     std::vector<ClPoint> path = hemisphere(1500);
     for (size_t i = 0; i < path.size(); ++i) {
       const double odd = unit(rng);
-      if (odd < 0.01) path[i].p_w.x() += 1e4;
-      else if (odd < 0.02) path[i].u_w = -path[i].u_w;
-      else if (odd < 0.03) path[i].u_w = Eigen::Vector3d(std::pow(10.0, -9 * unit(rng)), 0, 1);
-      else if (odd < 0.04) path[i].u_w = 2.5 * path[(i * 7919) % path.size()].u_w;  // a jump
+      if (odd < 0.01)
+        path[i].p_w.x() += 1e4;
+      else if (odd < 0.02)
+        path[i].u_w = -path[i].u_w;
+      else if (odd < 0.03)
+        path[i].u_w = Eigen::Vector3d(std::pow(10.0, -9 * unit(rng)), 0, 1);
+      else if (odd < 0.04)
+        path[i].u_w = 2.5 * path[(i * 7919) % path.size()].u_w;  // a jump
     }
     PredictionResult b;
     predictToolPath(m.model, m.params, path, b, 5, nullptr, false);
@@ -68,14 +73,17 @@ TEST(ToolPathPrediction, BatchEqualsOneByOneBitForBit) {
         ASSERT_EQ(x.q.size(), y.q.size()) << where;
         for (int k = 0; k < x.q.size(); ++k)
           ASSERT_TRUE(x.q[k] == y.q[k] || (std::isnan(x.q[k]) && std::isnan(y.q[k]))) << where;
-        const double xs[] = {x.p_pred_w.x(), x.p_pred_w.y(), x.p_pred_w.z(), x.u_pred_w.x(),
-                             x.u_pred_w.y(), x.u_pred_w.z(), x.deviation_w.x(), x.deviation_w.y(),
-                             x.deviation_w.z(), x.along_axis, x.across_axis, x.axis_angle};
-        const double ys[] = {y.p_pred_w.x(), y.p_pred_w.y(), y.p_pred_w.z(), y.u_pred_w.x(),
-                             y.u_pred_w.y(), y.u_pred_w.z(), y.deviation_w.x(), y.deviation_w.y(),
-                             y.deviation_w.z(), y.along_axis, y.across_axis, y.axis_angle};
+        const double xs[] = {x.p_pred_w.x(),    x.p_pred_w.y(),    x.p_pred_w.z(),
+                             x.u_pred_w.x(),    x.u_pred_w.y(),    x.u_pred_w.z(),
+                             x.deviation_w.x(), x.deviation_w.y(), x.deviation_w.z(),
+                             x.along_axis,      x.across_axis,     x.axis_angle};
+        const double ys[] = {y.p_pred_w.x(),    y.p_pred_w.y(),    y.p_pred_w.z(),
+                             y.u_pred_w.x(),    y.u_pred_w.y(),    y.u_pred_w.z(),
+                             y.deviation_w.x(), y.deviation_w.y(), y.deviation_w.z(),
+                             y.along_axis,      y.across_axis,     y.axis_angle};
         for (int k = 0; k < 12; ++k)
-          ASSERT_TRUE(xs[k] == ys[k] || (std::isnan(xs[k]) && std::isnan(ys[k]))) << where << " field " << k;
+          ASSERT_TRUE(xs[k] == ys[k] || (std::isnan(xs[k]) && std::isnan(ys[k])))
+              << where << " field " << k;
         ASSERT_EQ(x.singular, y.singular) << where;
       }
       EXPECT_GT(a.failed_points, 0) << file;
@@ -224,7 +232,6 @@ TEST(ToolPathPrediction, ZeroErrorsGiveZeroDeviationAndFailuresAreNaN) {
   }
 }
 
-
 // The predicted CL reads back with the same set-up on every shipped machine: a path through the
 // singular pole (tool axis along a rotary axis) and to the travel limits of the prismatic axes,
 // on the machine with errors of a machine in service, predicted, written as APT to six
@@ -274,14 +281,16 @@ TEST_P(EveryShippedMachine, PredictedClReadsBackWithTheSameSetup) {
     predicted[i].p_w = r.points[i].p_pred_w;
     predicted[i].u_w = r.points[i].u_pred_w;
   }
-  const ClProgram back = parseApt(formatPredictedApt(program, predicted, {"round trip"}), "back.apt");
+  const ClProgram back =
+      parseApt(formatPredictedApt(program, predicted, {"round trip"}), "back.apt");
   ASSERT_EQ(back.path.size(), path.size());
   const PredictionResult again = predictToolPath(m.model, m.params, back.path);
   EXPECT_TRUE(again.ok()) << GetParam() << ": "
                           << (again.ok() ? "" : again.failures.front().message);
 }
 
-INSTANTIATE_TEST_SUITE_P(Shipped, EveryShippedMachine, ::testing::ValuesIn(test::shippedMachines()));
+INSTANTIATE_TEST_SUITE_P(Shipped, EveryShippedMachine,
+                         ::testing::ValuesIn(test::shippedMachines()));
 
 // A posted program's rotary solution is the one predicted: when the commanded solution puts a
 // prismatic axis out of travel while the other would not, the point fails naming that axis (the

@@ -3,9 +3,9 @@
 // (--absolute keeps the raw prediction); verify turns a decision inside the 95 % band into
 // UNDECIDED (exit 4), one clear of it into PASS (0) or FAIL (1).
 #include <gtest/gtest.h>
-#include <algorithm>
-#include <Eigen/Eigenvalues>
 
+#include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <regex>
@@ -13,9 +13,9 @@
 
 #include "core/kinematics/forward_kinematics.h"
 #include "core/path/tool_path_prediction.h"
-#include "io/program/apt_reader.h"
 #include "io/common/io_error.h"
 #include "io/machine/machine_file.h"
+#include "io/program/apt_reader.h"
 #include "io/program/probe_file.h"
 #include "io/program/setup_file.h"
 #include "test_support.h"
@@ -28,12 +28,14 @@ class UncertaintyCli : public test::TempDirTest {
   std::string identified() {
     const std::string nominal = test::sourcePath("resources/machines/matsuura_mc760vx.xml");
     const std::string truth = test::sourcePath("samples/machines/matsuura_mc760vx_measured.xml");
-    auto r = test::runTolver("plan-ballbar --machine " + nominal + " --poses 360 --seed 5 -o " + path("plan.csv"));
+    auto r = test::runTolver("plan-ballbar --machine " + nominal + " --poses 360 --seed 5 -o " +
+                             path("plan.csv"));
     EXPECT_EQ(r.exit_code, 0) << r.output;
     r = test::runTolver("simulate-ballbar --machine " + truth + " --plan " + path("plan.csv") +
                         " --noise-um 0.5 --ball-error-um 10 --seed 5 -o " + path("r.csv"));
     EXPECT_EQ(r.exit_code, 0) << r.output;
-    r = test::runTolver("calibrate --machine " + nominal + " --readings " + path("r.csv") + " -o " + path("id.xml"));
+    r = test::runTolver("calibrate --machine " + nominal + " --readings " + path("r.csv") + " -o " +
+                        path("id.xml"));
     EXPECT_EQ(r.exit_code, 0) << r.output;
     return path("id.xml");
   }
@@ -44,16 +46,20 @@ TEST_F(UncertaintyCli, PredictWritesTheUncertaintyAndAppliesTheMeasuredSetup) {
   const Machine m = readMachineFile(id);
   ASSERT_EQ(m.identification.parameters.size(), 92u);
   ASSERT_EQ(m.identification.covered_min.size(), 5u);
-  const std::string base = "predict --machine " + id + " --cl " + test::sourcePath("samples/nas979_cone.apt") +
-                           " --setup " + test::sourcePath("samples/matsuura_setup.txt");
+  const std::string base = "predict --machine " + id + " --cl " +
+                           test::sourcePath("samples/nas979_cone.apt") + " --setup " +
+                           test::sourcePath("samples/matsuura_setup.txt");
   auto r = test::runTolver(base + " -o " + path("p.apt"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  EXPECT_NE(r.output.find("predicted after the set-up a shop measures"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("uncertainty (1 sigma) of the prediction"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("predicted after the set-up a shop measures"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("uncertainty (1 sigma) of the prediction"), std::string::npos)
+      << r.output;
   std::ifstream in(path("p.csv"));
   std::string header;
   std::getline(in, header);
-  EXPECT_NE(header.find(",u_tip_um,u_along_axis_um,u_axis_urad,outside_calibrated,cov_xx_um2"), std::string::npos);
+  EXPECT_NE(header.find(",u_tip_um,u_along_axis_um,u_axis_urad,outside_calibrated,cov_xx_um2"),
+            std::string::npos);
   // The band is checkable from the file: the tip covariance along the nominal tool axis gives
   // u_along_axis_um, and its largest eigenvalue u_tip_um (to the printed digits).
   {
@@ -71,11 +77,15 @@ TEST_F(UncertaintyCli, PredictWritesTheUncertaintyAndAppliesTheMeasuredSetup) {
       ASSERT_EQ(v.size(), names.size());
       Eigen::Matrix3d C;
       C << v[col("cov_xx_um2")], v[col("cov_xy_um2")], v[col("cov_xz_um2")], v[col("cov_xy_um2")],
-          v[col("cov_yy_um2")], v[col("cov_yz_um2")], v[col("cov_xz_um2")], v[col("cov_yz_um2")], v[col("cov_zz_um2")];
-      const Eigen::Vector3d n = Eigen::Vector3d(v[col("nominal_i")], v[col("nominal_j")], v[col("nominal_k")]).normalized();
+          v[col("cov_yy_um2")], v[col("cov_yz_um2")], v[col("cov_xz_um2")], v[col("cov_yz_um2")],
+          v[col("cov_zz_um2")];
+      const Eigen::Vector3d n =
+          Eigen::Vector3d(v[col("nominal_i")], v[col("nominal_j")], v[col("nominal_k")])
+              .normalized();
       const double along = std::sqrt(n.dot(C * n));
       EXPECT_NEAR(along, v[col("u_along_axis_um")], 1e-4 + 1e-5 * along) << rows;
-      const double worst = std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvalues().maxCoeff());
+      const double worst =
+          std::sqrt(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C).eigenvalues().maxCoeff());
       EXPECT_NEAR(worst, v[col("u_tip_um")], 1e-4 + 1e-5 * worst) << rows;
     }
     EXPECT_EQ(rows, 200);
@@ -84,7 +94,8 @@ TEST_F(UncertaintyCli, PredictWritesTheUncertaintyAndAppliesTheMeasuredSetup) {
   ASSERT_EQ(a.exit_code, 0) << a.output;
   EXPECT_NE(a.output.find("absolute prediction"), std::string::npos) << a.output;
   // The raw prediction carries what the set-up takes up: a larger RMS deviation.
-  const std::regex rms("deviation  max [0-9.]+ um at point [0-9]+ \\(line [0-9]+\\), RMS ([0-9.]+) um");
+  const std::regex rms(
+      "deviation  max [0-9.]+ um at point [0-9]+ \\(line [0-9]+\\), RMS ([0-9.]+) um");
   std::smatch s1, s2;
   ASSERT_TRUE(std::regex_search(r.output, s1, rms)) << r.output;
   ASSERT_TRUE(std::regex_search(a.output, s2, rms)) << a.output;
@@ -93,12 +104,15 @@ TEST_F(UncertaintyCli, PredictWritesTheUncertaintyAndAppliesTheMeasuredSetup) {
 
 TEST_F(UncertaintyCli, VerifySaysUndecidedWhenTheLimitIsInsideTheBand) {
   const std::string id = identified();
-  const std::string base = "verify --machine " + id + " --cl " + test::sourcePath("samples/nas979_cone.apt") +
-                           " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " --no-images";
+  const std::string base = "verify --machine " + id + " --cl " +
+                           test::sourcePath("samples/nas979_cone.apt") + " --setup " +
+                           test::sourcePath("samples/matsuura_setup.txt") + " --no-images";
   auto r = test::runTolver(base + " --tolerance 0.05 --report-dir " + path("v0"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.output, m, std::regex("total +([-+0-9.]+) \\.\\. ([-+0-9.]+) um"))) << r.output;
+  ASSERT_TRUE(
+      std::regex_search(r.output, m, std::regex("total +([-+0-9.]+) \\.\\. ([-+0-9.]+) um")))
+      << r.output;
   const double worst = std::max(std::abs(std::stod(m[1])), std::abs(std::stod(m[2])));  // um
   ASSERT_TRUE(std::regex_search(r.output, m, std::regex("known to \\+- ([0-9.]+) um"))) << r.output;
   const double band = std::stod(m[1]);
@@ -125,21 +139,25 @@ TEST_F(UncertaintyCli, VerifySaysUndecidedWhenTheLimitIsInsideTheBand) {
 // smaller expected tip uncertainty there than the D-optimal plan of the same size (the
 // comparison plan-ballbar prints, recomputed here from its output).
 TEST_F(UncertaintyCli, APlanForAProgramPredictsItBetter) {
-  auto r = test::runTolver("plan-ballbar --machine " + test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
-                           " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " --for " +
-                           test::sourcePath("samples/nas979_cone.apt") + " --poses 360 -o " + path("p.csv"));
+  auto r = test::runTolver(
+      "plan-ballbar --machine " + test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
+      " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " --for " +
+      test::sourcePath("samples/nas979_cone.apt") + " --poses 360 -o " + path("p.csv"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.output, m,
-                                std::regex("median ([0-9.]+) um, max ([0-9.]+) um; the D-optimal plan of "
-                                           "the same size: median ([0-9.]+) um, max ([0-9.]+) um")))
+  ASSERT_TRUE(
+      std::regex_search(r.output, m,
+                        std::regex("median ([0-9.]+) um, max ([0-9.]+) um; the D-optimal plan of "
+                                   "the same size: median ([0-9.]+) um, max ([0-9.]+) um")))
       << r.output;
   EXPECT_LT(std::stod(m[1]), 0.9 * std::stod(m[3]));
   EXPECT_LT(std::stod(m[2]), std::stod(m[4]));
   // It says what it buys: the two medians' ratio (to the printed digits).
   const double gain = 100.0 * (1.0 - std::stod(m[1]) / std::stod(m[3]));
   std::smatch b;
-  ASSERT_TRUE(std::regex_search(r.output, b, std::regex("buys       an expected ([0-9]+) % lower median"))) << r.output;
+  ASSERT_TRUE(
+      std::regex_search(r.output, b, std::regex("buys       an expected ([0-9]+) % lower median")))
+      << r.output;
   EXPECT_NEAR(std::stod(b[1]), gain, 2.0);
 }
 
@@ -148,11 +166,13 @@ TEST_F(UncertaintyCli, APlanForAProgramPredictsItBetter) {
 // own prediction) is zero to the stopping rule.
 TEST_F(UncertaintyCli, CompensationSaysHowMuchOfTheAfterIsModelUncertainty) {
   const std::string id = identified();
-  auto r = test::runTolver("compensate --machine " + id + " --cl " + test::sourcePath("samples/nas979_cone.apt") +
-                           " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " -o " + path("c.apt"));
+  auto r = test::runTolver("compensate --machine " + id + " --cl " +
+                           test::sourcePath("samples/nas979_cone.apt") + " --setup " +
+                           test::sourcePath("samples/matsuura_setup.txt") + " -o " + path("c.apt"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   // The after is the band (tip and axis), the model's own residual apart.
-  EXPECT_NE(r.output.find("after      within the calibration's 95 % band: tip median"), std::string::npos)
+  EXPECT_NE(r.output.find("after      within the calibration's 95 % band: tip median"),
+            std::string::npos)
       << r.output;
   EXPECT_NE(r.output.find("model      tip max"), std::string::npos) << r.output;
   std::ifstream in(path("c.json"));
@@ -206,14 +226,16 @@ TEST_F(UncertaintyCli, CompensationSaysHowMuchOfTheAfterIsModelUncertainty) {
 // plan-ballbar --volume: the same design for predictions anywhere in the travel; its expected
 // uncertainty over the travel is below the D-optimal plan's. With --for as well: exit 2.
 TEST_F(UncertaintyCli, APlanForTheWholeTravel) {
-  const std::string base = "plan-ballbar --machine " + test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
+  const std::string base = "plan-ballbar --machine " +
+                           test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
                            " --volume --poses 360 -o " + path("p.csv");
   auto r = test::runTolver(base);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.output, m,
-                                std::regex("over the whole travel .* median ([0-9.]+) um, max ([0-9.]+) um; the "
-                                           "D-optimal plan of the same size: median ([0-9.]+) um, max ([0-9.]+) um")))
+  ASSERT_TRUE(std::regex_search(
+      r.output, m,
+      std::regex("over the whole travel .* median ([0-9.]+) um, max ([0-9.]+) um; the "
+                 "D-optimal plan of the same size: median ([0-9.]+) um, max ([0-9.]+) um")))
       << r.output;
   EXPECT_LT(std::stod(m[1]), std::stod(m[3]));
   EXPECT_LT(std::stod(m[2]), std::stod(m[4]));
@@ -228,14 +250,17 @@ TEST_F(UncertaintyCli, APlanForTheWholeTravel) {
 // machine (the measured sample, where its tip really is at 12 of the cone's poses), given to
 // predict --probed with the identified machine: the predicted deviations follow the truth's,
 // and a bad probe file is exit 2 naming its line.
-std::vector<std::vector<double>> columns(const std::string& csv, const char* a, const char* b, const char* c) {
+std::vector<std::vector<double>> columns(const std::string& csv, const char* a, const char* b,
+                                         const char* c) {
   std::ifstream in(csv);
   std::string line;
   std::getline(in, line);
   std::vector<std::string> names;
   std::stringstream hs(line);
   for (std::string c; std::getline(hs, c, ',');) names.push_back(c);
-  const auto col = [&](const char* n) { return std::find(names.begin(), names.end(), n) - names.begin(); };
+  const auto col = [&](const char* n) {
+    return std::find(names.begin(), names.end(), n) - names.begin();
+  };
   const long x = col(a), y = col(b), z = col(c);
   std::vector<std::vector<double>> out;
   while (std::getline(in, line)) {
@@ -269,11 +294,14 @@ TEST_F(UncertaintyCli, PredictWithProbedPointsFollowsTheTruth) {
   const std::string base = "predict --cl " + cone + " --setup " + setup;
   auto t = test::runTolver(base + " --machine " + truth_file + " -o " + path("t.apt"));
   ASSERT_EQ(t.exit_code, 0) << t.output;
-  auto r = test::runTolver(base + " --machine " + id + " --probed " + path("probed.csv") + " -o " + path("p.apt"));
+  auto r = test::runTolver(base + " --machine " + id + " --probed " + path("probed.csv") + " -o " +
+                           path("p.apt"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("part set-up fitted to"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("uncertainty (1 sigma)"), std::string::npos) << r.output;
-  auto deviations = [](const std::string& csv) { return columns(csv, "dev_x_um", "dev_y_um", "dev_z_um"); };
+  auto deviations = [](const std::string& csv) {
+    return columns(csv, "dev_x_um", "dev_y_um", "dev_z_um");
+  };
   const auto dt = deviations(path("t.csv")), dp = deviations(path("p.csv"));
   ASSERT_EQ(dt.size(), dp.size());
   double own = 0, err = 0;
@@ -292,12 +320,17 @@ TEST_F(UncertaintyCli, PredictWithProbedPointsFollowsTheTruth) {
   q.tail<2>().setZero();
   probes.push_back(simulatedTram(truth, q));
   writeFileAtomically(path("tram.csv"), formatProbeCsv(truth.model, probes));
-  auto w = test::runTolver(base + " --machine " + id + " --probed " + path("tram.csv") + " -o " + path("w.apt"));
+  auto w = test::runTolver(base + " --machine " + id + " --probed " + path("tram.csv") + " -o " +
+                           path("w.apt"));
   ASSERT_EQ(w.exit_code, 0) << w.output;
   EXPECT_NE(w.output.find("spindle tilted"), std::string::npos) << w.output;
   EXPECT_NE(r.output.find("no tram"), std::string::npos) << r.output;
-  auto axes = [](const std::string& csv) { return columns(csv, "predicted_i", "predicted_j", "predicted_k"); };
-  auto nominalAxes = [](const std::string& csv) { return columns(csv, "nominal_i", "nominal_j", "nominal_k"); };
+  auto axes = [](const std::string& csv) {
+    return columns(csv, "predicted_i", "predicted_j", "predicted_k");
+  };
+  auto nominalAxes = [](const std::string& csv) {
+    return columns(csv, "nominal_i", "nominal_j", "nominal_k");
+  };
   const auto at = axes(path("t.csv")), ap = axes(path("p.csv")), aw = axes(path("w.csv")),
              an = nominalAxes(path("t.csv"));
   auto rmsAngle = [&](const std::vector<std::vector<double>>& u) {
@@ -309,8 +342,9 @@ TEST_F(UncertaintyCli, PredictWithProbedPointsFollowsTheTruth) {
     return std::sqrt(s / u.size());
   };
   const double axis_own = rmsAngle(an), axis_probed = rmsAngle(ap), axis_tram = rmsAngle(aw);
-  std::printf("[ tram ] tool axis against the truth: nominal %.1f urad, probed %.1f, probed + tram %.1f\n",
-              axis_own * 1e6, axis_probed * 1e6, axis_tram * 1e6);
+  std::printf(
+      "[ tram ] tool axis against the truth: nominal %.1f urad, probed %.1f, probed + tram %.1f\n",
+      axis_own * 1e6, axis_probed * 1e6, axis_tram * 1e6);
   EXPECT_LT(axis_tram, 0.5 * axis_own);
   EXPECT_LT(axis_tram, axis_probed);
   // Touches no rigid set-up explains (every other part point moved 30 mm): refused, nothing
@@ -318,13 +352,17 @@ TEST_F(UncertaintyCli, PredictWithProbedPointsFollowsTheTruth) {
   std::vector<ProbedPoint> moved(probes.begin(), probes.end() - 1);
   for (size_t i = 0; i < moved.size(); i += 2) moved[i].p_w.x() += 30.0;
   writeFileAtomically(path("moved.csv"), formatProbeCsv(truth.model, moved));
-  auto mv = test::runTolver(base + " --machine " + id + " --probed " + path("moved.csv") + " -o " + path("m.apt"));
+  auto mv = test::runTolver(base + " --machine " + id + " --probed " + path("moved.csv") + " -o " +
+                            path("m.apt"));
   EXPECT_EQ(mv.exit_code, 2) << mv.output;
-  EXPECT_NE(mv.output.find("do not belong to this part and set-up"), std::string::npos) << mv.output;
+  EXPECT_NE(mv.output.find("do not belong to this part and set-up"), std::string::npos)
+      << mv.output;
   EXPECT_FALSE(std::filesystem::exists(path("m.apt")));
   // A bad row: exit 2, the file and line named.
-  std::ofstream(path("bad.csv")) << "part_x_mm,part_y_mm,part_z_mm,x_mm,y_mm,z_mm,a_deg,c_deg\n1,2,3,4,5,6,x,8\n";
-  auto b = test::runTolver(base + " --machine " + id + " --probed " + path("bad.csv") + " -o " + path("b.apt"));
+  std::ofstream(path("bad.csv"))
+      << "part_x_mm,part_y_mm,part_z_mm,x_mm,y_mm,z_mm,a_deg,c_deg\n1,2,3,4,5,6,x,8\n";
+  auto b = test::runTolver(base + " --machine " + id + " --probed " + path("bad.csv") + " -o " +
+                           path("b.apt"));
   EXPECT_EQ(b.exit_code, 2);
   EXPECT_NE(b.output.find("bad.csv:2"), std::string::npos) << b.output;
 }

@@ -171,7 +171,8 @@ TEST(Verification, ACutBoundaryIsNotAMachineShare) {
       samples.group.push_back(0);
       samples.on_edge.push_back(0);
     }
-  const VerifyResult r = verifyPart(samples, c, nominal, actual, {bilateralZone(0.5)}, SweepOptions());
+  const VerifyResult r =
+      verifyPart(samples, c, nominal, actual, {bilateralZone(0.5)}, SweepOptions());
   int boundary = 0, split = 0;
   for (size_t i = 0; i < samples.size(); ++i) {
     ASSERT_TRUE(r.machined[i]) << samples.p_w[i].transpose();
@@ -188,7 +189,8 @@ TEST(Verification, ACutBoundaryIsNotAMachineShare) {
   EXPECT_GT(boundary, 0);
   EXPECT_GT(split, boundary);
   EXPECT_EQ(r.split_boundary, boundary);
-  EXPECT_LE(std::max(std::abs(r.machine_stats.min), std::abs(r.machine_stats.max)), shift.norm() + 1e-12);
+  EXPECT_LE(std::max(std::abs(r.machine_stats.min), std::abs(r.machine_stats.max)),
+            shift.norm() + 1e-12);
 }
 
 // Beyond the gouge search range: a tool 1 mm below the floor cuts every blade at its lower end;
@@ -215,7 +217,8 @@ TEST(Verification, BeyondTheSearchRangeIsFlagged) {
     samples.group.push_back(0);
     samples.on_edge.push_back(0);
   }
-  const VerifyResult r = verifyPart(samples, c, nominal, actual, {bilateralZone(0.02)}, SweepOptions());
+  const VerifyResult r =
+      verifyPart(samples, c, nominal, actual, {bilateralZone(0.02)}, SweepOptions());
   for (size_t i = 0; i < samples.size(); ++i) {
     EXPECT_EQ(r.split[i], Split::BeyondRange);
     EXPECT_TRUE(r.total_beyond[i]);

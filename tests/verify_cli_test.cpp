@@ -109,10 +109,11 @@ TEST_F(VerifyCli, AHoleInTheCheckedFaceMakesTheVerdictIncomplete) {
   }
   out.close();
   ASSERT_GT(removed, 100);
-  const std::string job = "verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
+  const std::string job = "verify --machine " +
+                          sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
                           " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
-                          sourcePath("samples/sculptured_finish.apt") + " --part " + path("holed.obj") +
-                          " --spacing 1.2 --tolerance 0.05 --no-images";
+                          sourcePath("samples/sculptured_finish.apt") + " --part " +
+                          path("holed.obj") + " --spacing 1.2 --tolerance 0.05 --no-images";
   auto r = runTolver(job + " --report-dir " + path("h"));
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("tolver verify: INCOMPLETE"), std::string::npos) << r.output;
@@ -147,11 +148,13 @@ TEST_F(VerifyCli, InToleranceExitsZeroAndWritesTheReport) {
   const std::string html = slurp(path("out/report.html"));
   EXPECT_NE(html.find("PASS"), std::string::npos);
   EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
-  EXPECT_EQ(slurp(path("out/swept_predicted.ply")).rfind("ply\nformat binary_little_endian", 0), 0u);
+  EXPECT_EQ(slurp(path("out/swept_predicted.ply")).rfind("ply\nformat binary_little_endian", 0),
+            0u);
 }
 
 TEST_F(VerifyCli, OutOfToleranceExitsOneWithRegionsAndTheirCause) {
-  const auto r = runTolver(base("--tolerance 0.01 --no-images --line-pass 3 --report-dir " + path("out")));
+  const auto r =
+      runTolver(base("--tolerance 0.01 --no-images --line-pass 3 --report-dir " + path("out")));
   ASSERT_EQ(r.exit_code, 1) << r.output;
   const auto j = nlohmann::json::parse(slurp(path("out/report.json")));
   EXPECT_EQ(j["verdict"], "fail");
@@ -167,10 +170,12 @@ TEST_F(VerifyCli, OutOfToleranceExitsOneWithRegionsAndTheirCause) {
 // where the cut goes deeper than the gouge search range (a 0.3 um range here): "-0.3 um or
 // deeper (beyond the search range)", never "... deeper) um" nor "-0 um".
 TEST_F(VerifyCli, ARegionsWorstDeviationReadsWithItsUnitOnce) {
-  const auto r = runTolver(base("--tolerance 0.0004 --gouge-range 0.0003 --no-images --report-dir " + path("out")));
+  const auto r = runTolver(
+      base("--tolerance 0.0004 --gouge-range 0.0003 --no-images --report-dir " + path("out")));
   ASSERT_EQ(r.exit_code, 1) << r.output;
   const std::regex plain(R"(region 1   (excess|gouge) [0-9.]+ mm2, worst [+-][0-9.]+ um at \()");
-  const std::regex beyond(R"(region [0-9]   gouge [0-9.]+ mm2, worst -0\.3 um or deeper \(beyond the search range\) at \()");
+  const std::regex beyond(
+      R"(region [0-9]   gouge [0-9.]+ mm2, worst -0\.3 um or deeper \(beyond the search range\) at \()");
   EXPECT_TRUE(std::regex_search(r.output, plain)) << r.output;
   EXPECT_TRUE(std::regex_search(r.output, beyond)) << r.output;
   EXPECT_EQ(r.output.find(") um"), std::string::npos) << r.output;
@@ -190,8 +195,8 @@ TEST_F(VerifyCli, UnequalZonesFromAFile) {
 }
 
 TEST_F(VerifyCli, BadInputExitsTwoNamingTheFile) {
-  auto r = runTolver(base("--tolerance 0.02 --report-dir " + path("out")).replace(
-      base("").find("sculptured_part.obj"), 19, "missing_part.stl"));
+  auto r = runTolver(base("--tolerance 0.02 --report-dir " + path("out"))
+                         .replace(base("").find("sculptured_part.obj"), 19, "missing_part.stl"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("missing_part.stl"), std::string::npos) << r.output;
   const std::string zones = write("bad.csv", "region,tolerance\n*,0.02\ntop,-1\n");
@@ -203,19 +208,21 @@ TEST_F(VerifyCli, BadInputExitsTwoNamingTheFile) {
   EXPECT_NE(r.output.find("--tolerance"), std::string::npos) << r.output;
   // A zone name with an invalid UTF-8 byte: the report is written and
   // reads back as JSON.
-  const std::string zbad = write("zbad.csv", "region,tolerance\n*,0.05\n\xcb" "bad,0.03\n");
+  const std::string zbad = write("zbad.csv",
+                                 "region,tolerance\n*,0.05\n\xcb"
+                                 "bad,0.03\n");
   r = runTolver("verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
                 " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
-                sourcePath("samples/nas979_cone.apt") + " --zones " + zbad + " --no-images --report-dir " +
-                path("z"));
+                sourcePath("samples/nas979_cone.apt") + " --zones " + zbad +
+                " --no-images --report-dir " + path("z"));
   EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
   EXPECT_NO_THROW(nlohmann::json::parse(slurp(path("z") + "/report.json")));
   // A report directory below a regular file: exit 2 naming it, not 3.
   const std::string file = write("plain.txt", "x");
   r = runTolver("verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
                 " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
-                sourcePath("samples/nas979_cone.apt") + " --tolerance 0.05 --no-images --report-dir " +
-                file + "/out");
+                sourcePath("samples/nas979_cone.apt") +
+                " --tolerance 0.05 --no-images --report-dir " + file + "/out");
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("--report-dir"), std::string::npos) << r.output;
   EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
@@ -224,25 +231,30 @@ TEST_F(VerifyCli, BadInputExitsTwoNamingTheFile) {
 // A part that is not where the program cuts (here moved 500 mm by --mesh-offset) is an error
 // that says so, never a verdict on the few samples a rapid grazes (issue 32).
 TEST_F(VerifyCli, APartAwayFromTheProgramIsAnError) {
-  const auto r = runTolver(base("--tolerance 0.05 --mesh-offset 500,0,0 --report-dir " + path("away")));
+  const auto r =
+      runTolver(base("--tolerance 0.05 --mesh-offset 500,0,0 --report-dir " + path("away")));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("the part is not where the program cuts"), std::string::npos) << r.output;
   EXPECT_FALSE(std::filesystem::exists(path("away")));
 }
 
 TEST_F(VerifyCli, MalformedJobsFileExitsTwoNamingItsLine) {
-  const std::string jobs = write("jobs.csv", "name,machine,cl,part,tolerance\nok/../x,m.xml,a.apt,,0.02\n");
+  const std::string jobs =
+      write("jobs.csv", "name,machine,cl,part,tolerance\nok/../x,m.xml,a.apt,,0.02\n");
   auto r = runTolver("verify --batch " + jobs + " --report-dir " + path("out"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("jobs.csv:2"), std::string::npos) << r.output;
   r = runTolver("verify --batch " + write("empty.csv", "") + " --report-dir " + path("out"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
-  r = runTolver("verify --batch " + write("nocol.csv", "name,cl\nx,a.apt\n") + " --report-dir " + path("out"));
+  r = runTolver("verify --batch " + write("nocol.csv", "name,cl\nx,a.apt\n") + " --report-dir " +
+                path("out"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   // Two jobs of one name: the second named by its line.
-  r = runTolver("verify --batch " +
-                write("twice.csv", "name,machine,cl,part,tolerance\nj,m.xml,a.apt,,0.02\nj,m.xml,b.apt,,0.02\n") +
-                " --report-dir " + path("out"));
+  r = runTolver(
+      "verify --batch " +
+      write("twice.csv",
+            "name,machine,cl,part,tolerance\nj,m.xml,a.apt,,0.02\nj,m.xml,b.apt,,0.02\n") +
+      " --report-dir " + path("out"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("twice.csv:3"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("named twice"), std::string::npos) << r.output;
@@ -250,26 +262,35 @@ TEST_F(VerifyCli, MalformedJobsFileExitsTwoNamingItsLine) {
 }
 
 TEST_F(VerifyCli, ClOnlyModeWithoutAPart) {
-  const auto r = runTolver("verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
-                           " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
-                           sourcePath("samples/nas979_cone.apt") + " --tolerance 0.05 --no-images --report-dir " +
-                           path("out"));
+  const auto r =
+      runTolver("verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
+                " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
+                sourcePath("samples/nas979_cone.apt") +
+                " --tolerance 0.05 --no-images --report-dir " + path("out"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto j = nlohmann::json::parse(slurp(path("out/report.json")));
   EXPECT_EQ(j["mode"], "cl-only");
   // The machine moves the tool about 10 um (tolver predict's figure for this program).
-  EXPECT_GT(j["deviation"]["machine"]["max_um"].get<double>() - j["deviation"]["machine"]["min_um"].get<double>(), 1.0);
+  EXPECT_GT(j["deviation"]["machine"]["max_um"].get<double>() -
+                j["deviation"]["machine"]["min_um"].get<double>(),
+            1.0);
 }
 
 TEST_F(VerifyCli, BatchVerifiesJobsInParallelAndSummarises) {
   const std::string m = sourcePath("samples/machines/matsuura_mc760vx_measured.xml");
-  const std::string jobs = write(
-      "jobs.csv", "name,machine,cl,part,tolerance,setup\n"
-                  "loose," + m + "," + sourcePath("samples/sculptured_finish.apt") + "," +
-                  sourcePath("samples/sculptured_part.obj") + ",0.05," + sourcePath("samples/matsuura_setup.txt") + "\n"
-                  "tight," + m + "," + sourcePath("samples/sculptured_finish.apt") + "," +
-                  sourcePath("samples/sculptured_part.obj") + ",0.01," + sourcePath("samples/matsuura_setup.txt") + "\n");
-  const auto r = runTolver("verify --batch " + jobs + " --spacing 1.5 --no-images --report-dir " + path("out"));
+  const std::string jobs = write("jobs.csv",
+                                 "name,machine,cl,part,tolerance,setup\n"
+                                 "loose," +
+                                     m + "," + sourcePath("samples/sculptured_finish.apt") + "," +
+                                     sourcePath("samples/sculptured_part.obj") + ",0.05," +
+                                     sourcePath("samples/matsuura_setup.txt") +
+                                     "\n"
+                                     "tight," +
+                                     m + "," + sourcePath("samples/sculptured_finish.apt") + "," +
+                                     sourcePath("samples/sculptured_part.obj") + ",0.01," +
+                                     sourcePath("samples/matsuura_setup.txt") + "\n");
+  const auto r = runTolver("verify --batch " + jobs + " --spacing 1.5 --no-images --report-dir " +
+                           path("out"));
   EXPECT_EQ(r.exit_code, 1) << r.output;  // one job fails
   const std::string summary = slurp(path("out/summary.csv"));
   EXPECT_NE(summary.find("loose,pass"), std::string::npos) << summary;

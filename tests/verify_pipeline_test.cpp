@@ -48,15 +48,18 @@ TEST_F(VerifyPipeline, AMachineWithoutErrorsHasNoShare) {
 // The measured machine moves the surface; the report directory written holds the figures of
 // the result in memory (verdict, extremes, sample count), and report.html names the verdict.
 TEST_F(VerifyPipeline, TheWrittenReportIsTrueOfTheResult) {
-  const auto v = runVerification(sculptured("samples/machines/matsuura_mc760vx_measured.xml"), "measured");
+  const auto v =
+      runVerification(sculptured("samples/machines/matsuura_mc760vx_measured.xml"), "measured");
   EXPECT_GT(v->result.machine_stats.rms, 1e-4);  // above 0.1 um: the machine's errors show
   const std::string html = writeVerification(*v, path("report"), false);
   EXPECT_EQ(html, path("report") + "/report.html");
   std::ifstream in(path("report") + "/report.json");
   const auto j = nlohmann::json::parse(in);
   EXPECT_EQ(j["verdict"], verdictName(v->report) == "PASS" ? "pass" : "fail");
-  EXPECT_NEAR(j["deviation"]["total"]["max_um"].get<double>(), v->result.total_stats.max * 1e3, 1e-3);
-  EXPECT_NEAR(j["deviation"]["total"]["min_um"].get<double>(), v->result.total_stats.min * 1e3, 1e-3);
+  EXPECT_NEAR(j["deviation"]["total"]["max_um"].get<double>(), v->result.total_stats.max * 1e3,
+              1e-3);
+  EXPECT_NEAR(j["deviation"]["total"]["min_um"].get<double>(), v->result.total_stats.min * 1e3,
+              1e-3);
   EXPECT_EQ(j["deviation"]["total"]["samples"].get<int>(), v->result.total_stats.samples);
   EXPECT_TRUE(std::filesystem::exists(path("report") + "/deviations.csv"));
   EXPECT_FALSE(std::filesystem::exists(path("report") + "/map_isometric.png"));  // no images asked
@@ -130,7 +133,8 @@ TEST_F(VerifyPipeline, TheSampleBudgetCountsTheEdgePoints) {
   const double area = 50.0 + 0.5 * 90000 * 0.001;
   const double perimeter = 20 + std::sqrt(200.0) + 50000.00000001 + 40000.0000000125 + 90000;
   const double s = suggested;
-  EXPECT_LE(area / (std::sqrt(3.0) / 2.0 * s * s) + 0.5 * perimeter / (4.0 / 3.0 * s), 5e6 * 1.0001);
+  EXPECT_LE(area / (std::sqrt(3.0) / 2.0 * s * s) + 0.5 * perimeter / (4.0 / 3.0 * s),
+            5e6 * 1.0001);
   EXPECT_FALSE(std::filesystem::exists(path("report")));
 }
 

@@ -8,10 +8,10 @@
 
 #include "core/calibration/ballbar_plan.h"
 #include "core/calibration/calibration.h"
-#include "io/machine/ballbar_file.h"
-#include "io/report/calibration_report.h"
 #include "io/common/io_error.h"
+#include "io/machine/ballbar_file.h"
 #include "io/machine/machine_file.h"
+#include "io/report/calibration_report.h"
 #include "test_support.h"
 
 namespace tolver {
@@ -36,7 +36,8 @@ TEST_P(WrittenFiles, ReproduceTheFitAndTheHeldOutReadings) {
   std::mt19937 rng(5);
   std::normal_distribution<double> n(0.0, 1.0);
   Eigen::VectorXd truth(m.model.parameterCount());
-  for (int p = 0; p < truth.size(); ++p) truth[p] = n(rng) * (m.model.parameters[p].angular ? 5e-6 : 3e-3);
+  for (int p = 0; p < truth.size(); ++p)
+    truth[p] = n(rng) * (m.model.parameters[p].angular ? 5e-6 : 3e-3);
   std::vector<BallErrors> balls(3);
   for (BallErrors& b : balls) {
     b.table_w = Eigen::Vector3d(n(rng), n(rng), n(rng)) * 0.01;
@@ -44,12 +45,14 @@ TEST_P(WrittenFiles, ReproduceTheFitAndTheHeldOutReadings) {
   }
   const ForwardKinematics fk(m.model, truth);
   for (BallbarReading& r : all.readings)
-    r.length = ballbarLength(fk, r.q, all.setups[r.setup], balls[r.setup], &r.context) + 0.5e-3 * n(rng);
+    r.length =
+        ballbarLength(fk, r.q, all.setups[r.setup], balls[r.setup], &r.context) + 0.5e-3 * n(rng);
   // Every fifth reading held out.
   BallbarTest fit = all, held = all;
   fit.readings.clear();
   held.readings.clear();
-  for (size_t i = 0; i < all.readings.size(); ++i) (i % 5 == 4 ? held : fit).readings.push_back(all.readings[i]);
+  for (size_t i = 0; i < all.readings.size(); ++i)
+    (i % 5 == 4 ? held : fit).readings.push_back(all.readings[i]);
   const CalibrationResult r = calibrate(m.model, m.params, fit, unknowns);
   ASSERT_TRUE(r.status == CalibrationStatus::Converged) << r.message;
   if (on_axis) EXPECT_FALSE(r.held.empty());  // the spindle's roll is not seen
@@ -57,7 +60,8 @@ TEST_P(WrittenFiles, ReproduceTheFitAndTheHeldOutReadings) {
   Machine identified = m;
   identified.params = r.params;
   writeFileAtomically(path("m.xml"), formatMachineXml(identified, "test"));
-  writeFileAtomically(path("b.csv"), formatBallPositionsCsv(fit, r.ball_errors, &r.ball_uncertainty, {"test"}));
+  writeFileAtomically(path("b.csv"),
+                      formatBallPositionsCsv(fit, r.ball_errors, &r.ball_uncertainty, {"test"}));
   const WrittenCheck c = checkWrittenFiles(path("m.xml"), path("b.csv"), fit, held);
   const ForwardKinematics fk_mem(m.model, r.params);
   const Eigen::VectorXd held_mem = ballbarResiduals(fk_mem, held, r.ball_errors);
@@ -67,22 +71,24 @@ TEST_P(WrittenFiles, ReproduceTheFitAndTheHeldOutReadings) {
   // Per reading, too.
   const Machine back = readMachineFile(path("m.xml"));
   const std::vector<BallErrors> b_back = readBallPositionsFile(path("b.csv"), fit);
-  const Eigen::VectorXd fit_back = ballbarResiduals(ForwardKinematics(back.model, back.params), fit, b_back);
+  const Eigen::VectorXd fit_back =
+      ballbarResiduals(ForwardKinematics(back.model, back.params), fit, b_back);
   EXPECT_LT((fit_back - r.residuals).cwiseAbs().maxCoeff(), 1e-6);
   // And the held-out readings are predicted near the noise (the fit generalises), not at the
   // machine's error.
   EXPECT_LT(c.heldout.rms, 3 * 0.5e-3) << machine_file;
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    ShippedMachines, WrittenFiles,
-    ::testing::Combine(::testing::ValuesIn(test::shippedMachines()), ::testing::Bool()),
-    [](const auto& info) {
-      std::string s = std::get<0>(info.param);
-      s = s.substr(s.rfind('/') + 1);
-      s = s.substr(0, s.find('.'));
-      return s + (std::get<1>(info.param) ? "_tool_balls_on_axis" : "_tool_balls_off_axis");
-    });
+INSTANTIATE_TEST_SUITE_P(ShippedMachines, WrittenFiles,
+                         ::testing::Combine(::testing::ValuesIn(test::shippedMachines()),
+                                            ::testing::Bool()),
+                         [](const auto& info) {
+                           std::string s = std::get<0>(info.param);
+                           s = s.substr(s.rfind('/') + 1);
+                           s = s.substr(0, s.find('.'));
+                           return s + (std::get<1>(info.param) ? "_tool_balls_on_axis"
+                                                               : "_tool_balls_off_axis");
+                         });
 
 }  // namespace
 }  // namespace tolver

@@ -8,9 +8,9 @@
 #include <string>
 
 #include "core/path/tool_path_prediction.h"
-#include "io/program/apt_reader.h"
 #include "io/common/io_error.h"
 #include "io/machine/machine_file.h"
+#include "io/program/apt_reader.h"
 #include "io/program/probe_file.h"
 #include "io/program/setup_file.h"
 
@@ -40,11 +40,12 @@ int main(int argc, char** argv) {
   JointVector q = probes.front().q;
   q.tail<2>().setZero();
   probes.push_back(simulatedTram(truth, q));
-  writeFileAtomically(src + "/samples/matsuura_probed.csv",
-                      "# touches on the cone sample's part (samples/nas979_cone.apt, matsuura_setup.txt)\n"
-                      "# made by tools/make_probed_sample from the measured Matsuura: the part point\n"
-                      "# the probe tip touched (part frame) and the joint values recorded; the last\n"
-                      "# row is a spindle tram: the tool axis against the table at its joints (urad)\n" +
-                          formatProbeCsv(truth.model, probes));
+  writeFileAtomically(
+      src + "/samples/matsuura_probed.csv",
+      "# touches on the cone sample's part (samples/nas979_cone.apt, matsuura_setup.txt)\n"
+      "# made by tools/make_probed_sample from the measured Matsuura: the part point\n"
+      "# the probe tip touched (part frame) and the joint values recorded; the last\n"
+      "# row is a spindle tram: the tool axis against the table at its joints (urad)\n" +
+          formatProbeCsv(truth.model, probes));
   return 0;
 }

@@ -4,11 +4,11 @@
 #include <cmath>
 #include <limits>
 #include <pagmo/algorithms/nsga2.hpp>
-#include <stdexcept>
 #include <pagmo/batch_evaluators/thread_bfe.hpp>
 #include <pagmo/bfe.hpp>
 #include <pagmo/population.hpp>
 #include <pagmo/problem.hpp>
+#include <stdexcept>
 
 #include "core/kinematics/forward_kinematics.h"
 #include "core/kinematics/sensitivity_jacobian.h"
@@ -21,11 +21,16 @@ double costUnitValue(const MachineModel& m, const ToleranceTerm& t, double value
 
 double categoryWeight(const AllocationModel& a, ToleranceCategory c) {
   switch (c) {
-    case ToleranceCategory::Positional: return a.h_p;
-    case ToleranceCategory::LinearPositioning: return 1.0;
-    case ToleranceCategory::AngularPositioning: return a.h_a;
-    case ToleranceCategory::LinearNonPositioning: return a.h_d;
-    case ToleranceCategory::AngularNonPositioning: return a.h_a * a.h_d;
+    case ToleranceCategory::Positional:
+      return a.h_p;
+    case ToleranceCategory::LinearPositioning:
+      return 1.0;
+    case ToleranceCategory::AngularPositioning:
+      return a.h_a;
+    case ToleranceCategory::LinearNonPositioning:
+      return a.h_d;
+    case ToleranceCategory::AngularNonPositioning:
+      return a.h_a * a.h_d;
   }
   return 1.0;
 }
@@ -71,8 +76,9 @@ std::vector<JointVector> workspaceGrid(const MachineModel& m, int levels, int ro
     JointVector q(n);
     for (int a = 0; a < n; ++a) {
       const Axis& ax = m.axes[a];
-      q[a] = count[a] == 1 ? 0.5 * (ax.travel_min + ax.travel_max)
-                           : ax.travel_min + (ax.travel_max - ax.travel_min) * idx[a] / (count[a] - 1);
+      q[a] = count[a] == 1
+                 ? 0.5 * (ax.travel_min + ax.travel_max)
+                 : ax.travel_min + (ax.travel_max - ax.travel_min) * idx[a] / (count[a] - 1);
     }
     out.push_back(q);
     int a = 0;
@@ -108,7 +114,8 @@ Eigen::Vector3d worstCaseLinear(const AccuracyModel& acc, const Eigen::VectorXd&
     e = cached ? Eigen::VectorXd((acc.J2 * (0.25 * T.cwiseAbs2())).cwiseSqrt())
                : Eigen::VectorXd((acc.J * (0.5 * T).asDiagonal()).rowwise().norm());
   else
-    e = cached ? Eigen::VectorXd(acc.absJ * (0.5 * T)) : Eigen::VectorXd(acc.J.cwiseAbs() * (0.5 * T));
+    e = cached ? Eigen::VectorXd(acc.absJ * (0.5 * T))
+               : Eigen::VectorXd(acc.J.cwiseAbs() * (0.5 * T));
   Eigen::Vector3d w = Eigen::Vector3d::Zero();
   for (int r = 0; r < e.size(); ++r) w[r % 3] = std::max(w[r % 3], e[r]);
   return w;
@@ -219,9 +226,9 @@ struct Evaluator {
   const AllocationModel* a;
   const AccuracyModel* acc;
   const CorrelationAnalysis* corr;
-  Eigen::MatrixXd absJ;    // |J|
-  Eigen::VectorXd T_lo;    // lower bounds of T
-  Eigen::VectorXd base;    // |J| t_lo per row
+  Eigen::MatrixXd absJ;  // |J|
+  Eigen::VectorXd T_lo;  // lower bounds of T
+  Eigen::VectorXd base;  // |J| t_lo per row
   double penalty_scale = 0;
   Eigen::Vector3d limit_scale = Eigen::Vector3d::Ones();  // < 1 to leave room for 2nd-order terms
 
@@ -361,8 +368,9 @@ AllocationResult allocateTolerances(const MachineModel& m, const std::vector<Tol
     for (const auto& f : res.front) duplicate |= (f.T - all[i].T).norm() == 0.0;
     if (!duplicate) res.front.push_back(all[i]);
   }
-  std::sort(res.front.begin(), res.front.end(),
-            [](const AllocationSolution& a1, const AllocationSolution& a2) { return a1.m1 < a2.m1; });
+  std::sort(
+      res.front.begin(), res.front.end(),
+      [](const AllocationSolution& a1, const AllocationSolution& a2) { return a1.m1 < a2.m1; });
   // The nonlinear check: where second-order terms push a solution past a limit, repair it again
   // against limits tightened by the excess, until the forward model agrees.
   for (auto& sol : res.front) {

@@ -1,7 +1,8 @@
 #pragma once
-// Tolerance allocation for machine builders (Cai, Li, Cheng, Sun, Wang: "A method to optimize geometric errors of machine tool based on SNR quality loss function and correlation analysis"): how loose can each geometric
-// error be toleranced so that the machine costs least while its tool-tip error stays within the
-// accuracy limits?
+// Tolerance allocation for machine builders (Cai, Li, Cheng, Sun, Wang: "A method to optimize
+// geometric errors of machine tool based on SNR quality loss function and correlation analysis"):
+// how loose can each geometric error be toleranced so that the machine costs least while its
+// tool-tip error stays within the accuracy limits?
 //
 // Terms: each toleranced error is one machine parameter with a full tolerance band T (mm or rad)
 // between bounds; t = T/2 is the half band.
@@ -39,11 +40,11 @@ enum class ToleranceCategory {
 };
 
 struct ToleranceTerm {
-  std::string name;        // e.g. "dx_x"
-  int parameter = -1;      // index into the machine's parameter vector
+  std::string name;    // e.g. "dx_x"
+  int parameter = -1;  // index into the machine's parameter vector
   ToleranceCategory category = ToleranceCategory::LinearNonPositioning;
-  double standard = 0.0;   // full band T, mm or rad
-  double lower = 0.0;      // bounds of T
+  double standard = 0.0;  // full band T, mm or rad
+  double lower = 0.0;     // bounds of T
   double upper = 0.0;
   double reference = std::numeric_limits<double>::quiet_NaN();  // e.g. a published allocation
   int reference_group = 0;  // a published correlation class (1..), 0 if none
@@ -51,9 +52,9 @@ struct ToleranceTerm {
 
 struct AllocationModel {
   double h_p = 3.0, h_a = 4.0, h_d = 5.0;
-  double r = 2.0;                    // cost characteristic index (all terms)
-  double loss_weight = 1.0;          // w_L; 0 leaves the quality loss out
-  bool loss_normal = false;          // false: uniform within +-t; true: normal with t = 3 sigma
+  double r = 2.0;            // cost characteristic index (all terms)
+  double loss_weight = 1.0;  // w_L; 0 leaves the quality loss out
+  bool loss_normal = false;  // false: uniform within +-t; true: normal with t = 3 sigma
   Eigen::Vector3d limits{0.015, 0.015, 0.010};  // |dx|, |dy|, |dz| allowed, mm
   // How the terms' effects combine at a pose: worst case over the signs (sum of |effects|,
   // the default) or root-sum-square (statistical stacking of independent errors).
@@ -84,19 +85,21 @@ AccuracyModel buildAccuracyModel(const MachineModel& m, const std::vector<Tolera
                                  const std::vector<JointVector>& poses);
 // Largest |dx|, |dy|, |dz| over the poses for half bands t = T/2, to first order: worst case
 // sum_i |J_ki| t_i, or with rss sqrt(sum_i (J_ki t_i)^2). The optimiser's constraint.
-Eigen::Vector3d worstCaseLinear(const AccuracyModel& acc, const Eigen::VectorXd& T, bool rss = false);
+Eigen::Vector3d worstCaseLinear(const AccuracyModel& acc, const Eigen::VectorXd& T,
+                                bool rss = false);
 // The same with the nonlinear forward model, independent of the linearisation (the check of a
 // returned solution): worst case evaluates each pose's worst sign vertex (both signs); rss
 // combines each term's exact effect alone.
 Eigen::Vector3d verifyAccuracy(const MachineModel& m, const std::vector<ToleranceTerm>& terms,
-                               const AccuracyModel& acc, const Eigen::VectorXd& T, bool rss = false);
+                               const AccuracyModel& acc, const Eigen::VectorXd& T,
+                               bool rss = false);
 
 // Correlation of the terms' effects on the tool tip over the working volume (Pearson correlation
 // of the columns of J) and agglomerative clustering (average linkage, distance 1 - |r|) into
 // `groups` groups ([Cai] 4.1).
 struct CorrelationAnalysis {
-  Eigen::MatrixXd correlation;       // terms x terms
-  std::vector<int> group;            // per term, 0 .. groups-1
+  Eigen::MatrixXd correlation;  // terms x terms
+  std::vector<int> group;       // per term, 0 .. groups-1
   std::vector<std::vector<int>> members;
 };
 CorrelationAnalysis correlateTerms(const AccuracyModel& acc, int groups);
@@ -104,7 +107,7 @@ double spreadObjective(const std::vector<ToleranceTerm>& terms, const Correlatio
                        const Eigen::VectorXd& T);  // M2
 
 struct AllocationOptions {
-  int population = 100;     // a multiple of 4
+  int population = 100;  // a multiple of 4
   int generations = 250;
   unsigned seed = 1;
 };
@@ -118,9 +121,9 @@ struct AllocationSolution {
 };
 
 struct AllocationResult {
-  AllocationSolution standard;          // the standard tolerances
+  AllocationSolution standard;            // the standard tolerances
   std::vector<AllocationSolution> front;  // Pareto front, by increasing M1
-  int chosen = -1;                      // index into front (rule: closest to the ideal point)
+  int chosen = -1;                        // index into front (rule: closest to the ideal point)
   bool standard_feasible = true;
   CorrelationAnalysis correlation;
   std::string constraint_handling;

@@ -6,8 +6,9 @@
 //   L = | w_T_t(q) (b_t + db_t) - (b_w + db_w) | + dL,
 // where db_t (in t) and db_w (in w) are the position errors of the two balls in one set-up
 // (unknowns of a calibration, three each per set-up), and dL the bar's own length error (the
-// bar_length effect of core/model/effects.h, zero unless the model has it). Its gradient orients the error twist
-// along the bar: with n the unit vector from the table ball to the tool ball (in w),
+// bar_length effect of core/model/effects.h, zero unless the model has it). Its gradient orients
+// the error twist along the bar: with n the unit vector from the table ball to the tool ball (in
+// w),
 //   dL = n^T R_wt (d + theta x b_t) + n^T R_wt db_t - n^T db_w.
 #include <Eigen/Core>
 #include <array>
@@ -19,17 +20,17 @@
 namespace tolver {
 
 struct BallbarSetup {
-  int id = 0;                                           // as numbered in the file
+  int id = 0;                                              // as numbered in the file
   Eigen::Vector3d table_ball_w = Eigen::Vector3d::Zero();  // nominal, mm
   Eigen::Vector3d tool_ball_t = Eigen::Vector3d::Zero();   // nominal, mm
 };
 
 struct BallbarReading {
-  int setup = 0;                  // index into BallbarTest::setups
-  JointVector q;                  // joint values (mm, rad), model axis order
-  double length = NAN;            // measured ball-to-ball distance, mm (NaN in a plan)
-  MotionContext context;          // time_s and approach directions, passed to the model
-  int line = 0;                   // source line, for messages
+  int setup = 0;          // index into BallbarTest::setups
+  JointVector q;          // joint values (mm, rad), model axis order
+  double length = NAN;    // measured ball-to-ball distance, mm (NaN in a plan)
+  MotionContext context;  // time_s and approach directions, passed to the model
+  int line = 0;           // source line, for messages
 };
 
 struct BallbarTest {

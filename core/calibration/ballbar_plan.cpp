@@ -155,7 +155,8 @@ std::vector<int> chooseIOptimal(const MachineModel& model, const std::vector<int
   Eigen::VectorXd d = rows.rowwise().squaredNorm() / eps;
   Eigen::MatrixXd Y = (rows * G.transpose()) / eps;  // X M^-1 G^T
   for (int k = 0; k < opt.poses; ++k) {
-    const int best = g.pick(k % nsetups, [&](size_t i) { return Y.row(i).squaredNorm() / (1.0 + d[i]); });
+    const int best =
+        g.pick(k % nsetups, [&](size_t i) { return Y.row(i).squaredNorm() / (1.0 + d[i]); });
     if (best < 0) continue;
     const Eigen::VectorXd Mx = V.row(best).transpose();  // M^-1 x
     const double denom = 1.0 + d[best];
@@ -176,7 +177,8 @@ std::vector<int> chooseDOptimal(const BallbarPlanOptions& opt, int nsetups, Gree
   Eigen::MatrixXd Minv = Eigen::MatrixXd::Identity(rows.cols(), rows.cols()) / 1e-6;
   std::vector<int> picks;
   for (int k = 0; k < opt.poses; ++k) {
-    const int best = g.pick(k % nsetups, [&](size_t i) { return rows.row(i) * Minv * rows.row(i).transpose(); });
+    const int best =
+        g.pick(k % nsetups, [&](size_t i) { return rows.row(i) * Minv * rows.row(i).transpose(); });
     if (best < 0) continue;
     const Eigen::VectorXd x = rows.row(best).transpose();
     const Eigen::VectorXd Mx = Minv * x;

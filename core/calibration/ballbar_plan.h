@@ -12,14 +12,14 @@
 namespace tolver {
 
 struct BallbarPlanOptions {
-  double bar_length = 150.0;    // mm
+  double bar_length = 150.0;  // mm
   // Per set-up bar lengths (mm), cycled over the set-ups; empty: bar_length for every set-up.
   // Two or more lengths let a calibration tell the bar's own length error from machine scale.
   std::vector<double> bar_lengths;
   int setups = 3;
-  int poses = 180;              // in all, shared equally between the set-ups
+  int poses = 180;  // in all, shared equally between the set-ups
   unsigned seed = 1;
-  int candidates_per_pose = 5;  // sampled configurations per selected one
+  int candidates_per_pose = 5;      // sampled configurations per selected one
   double min_elevation_deg = 10.0;  // bar elevation above the machine's xy plane
   // A drift check: after every `reference_every` poses of a set-up, the set-up's first pose is
   // measured again (0: never). These repeats come on top of `poses`.
@@ -44,10 +44,10 @@ struct BallbarPlanOptions {
 };
 
 struct BallbarPlan {
-  BallbarTest test;       // readings without lengths
-  int unknowns = 0;       // machine parameters + 6 per set-up
+  BallbarTest test;  // readings without lengths
+  int unknowns = 0;  // machine parameters + 6 per set-up
   int rank = 0;
-  double condition = 0;   // column-scaled identification Jacobian at the nominal machine
+  double condition = 0;  // column-scaled identification Jacobian at the nominal machine
   int sampled = 0, rejected = 0;
   double time_correlation = 0;     // |r| of the measurement order (reading index vs joint)
   int time_correlation_axis = -1;  // the axis it is largest for
@@ -61,9 +61,9 @@ BallbarPlan planBallbarTest(const MachineModel& model, const std::vector<int>& u
 // correlation of time with the joint value within the set-ups (both centred on each set-up's
 // mean, then pooled). NaN for an axis when the readings have no time or the axis never moves.
 struct TimeJointCorrelation {
-  std::vector<double> r;   // per axis, model order
-  int worst_axis = -1;     // largest |r|
-  double worst = 0.0;      // |r| of that axis
+  std::vector<double> r;  // per axis, model order
+  int worst_axis = -1;    // largest |r|
+  double worst = 0.0;     // |r| of that axis
 };
 TimeJointCorrelation timeJointCorrelation(const MachineModel& model, const BallbarTest& test);
 
@@ -72,7 +72,8 @@ TimeJointCorrelation timeJointCorrelation(const MachineModel& model, const Ballb
 // the nominal machine with readings of standard deviation noise_mm gives the covariance of the
 // machine parameters (ball positions free), carried to the tip modulo the measured set-up (see
 // core/path/prediction_uncertainty.h).
-std::vector<double> expectedTipUncertainty(const MachineModel& model, const std::vector<int>& unknowns,
+std::vector<double> expectedTipUncertainty(const MachineModel& model,
+                                           const std::vector<int>& unknowns,
                                            const BallbarTest& plan, double noise_mm,
                                            const std::vector<JointVector>& poses);
 

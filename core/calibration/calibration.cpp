@@ -31,7 +31,8 @@ void linearise(const MachineModel& m, const Eigen::VectorXd& params, const Ballb
 // *keep_cols, the machine parameters left out in res.held. False (res says why) when a ball
 // position cannot be seen, or, strict, when a parameter cannot.
 bool observableColumns(const Eigen::MatrixXd& J0, const std::vector<int>& unknown_params,
-                       const CalibrationOptions& opt, CalibrationResult& res, std::vector<int>* keep_cols) {
+                       const CalibrationOptions& opt, CalibrationResult& res,
+                       std::vector<int>* keep_cols) {
   const int np_all = static_cast<int>(unknown_params.size());
   std::vector<int> cols(J0.cols());
   std::vector<bool> protect(J0.cols(), false);
@@ -56,7 +57,8 @@ bool observableColumns(const Eigen::MatrixXd& J0, const std::vector<int>& unknow
   std::sort(res.held.begin(), res.held.end());
   if (!res.held.empty() && opt.strict) {
     res.status = CalibrationStatus::Unobservable;
-    res.message = std::to_string(res.held.size()) + " parameters cannot be identified from these readings";
+    res.message =
+        std::to_string(res.held.size()) + " parameters cannot be identified from these readings";
     return false;
   }
   for (int c = 0; c < J0.cols(); ++c)
@@ -85,8 +87,8 @@ Eigen::MatrixXd scaledCovariance(const Eigen::MatrixXd& R, int rank) {
 // 3. Residuals and uncertainties from the last factorisation (C: scaledCovariance, `scale` the
 // column scales): cov = s^2 (J^T J)^-1.
 void residualsAndUncertainties(const Eigen::VectorXd& r, const Eigen::MatrixXd& C,
-                               const Eigen::VectorXd& scale, const std::vector<int>& keep_cols, int np_all, int np,
-                               CalibrationResult& res) {
+                               const Eigen::VectorXd& scale, const std::vector<int>& keep_cols,
+                               int np_all, int np, CalibrationResult& res) {
   const int m = static_cast<int>(r.size()), n = static_cast<int>(keep_cols.size());
   res.residuals = r;
   res.rms_residual = std::sqrt(r.squaredNorm() / m);
@@ -111,7 +113,6 @@ void residualsAndUncertainties(const Eigen::VectorXd& r, const Eigen::MatrixXd& 
   }
 }
 
-
 // Step 2 of calibrate: Gauss-Newton with the pseudo-inverse of the column-scaled Jacobian A
 // (prior rows included). Two factorisations, chosen at the first pass:
 //  * normal equations, N = A^T A by Cholesky, when N's eigenvalues give kappa(A)^2 below
@@ -125,8 +126,9 @@ void residualsAndUncertainties(const Eigen::VectorXd& r, const Eigen::MatrixXd& 
 // The last factorisation also gives the covariance.
 class GaussNewton {
  public:
-  GaussNewton(const MachineModel& model, const BallbarTest& test, const std::vector<int>& unknown_params,
-              const std::vector<int>& keep_cols, const std::vector<int>& unknowns, const CalibrationOptions& opt,
+  GaussNewton(const MachineModel& model, const BallbarTest& test,
+              const std::vector<int>& unknown_params, const std::vector<int>& keep_cols,
+              const std::vector<int>& unknowns, const CalibrationOptions& opt,
               CalibrationResult& res)
       : model_(model),
         test_(test),
@@ -146,7 +148,8 @@ class GaussNewton {
     w_ = Eigen::VectorXd::Zero(np_);
     if (regularised_)
       for (int k = 0; k < np_; ++k)
-        w_[k] = opt.prior_noise / (model.parameters[unknowns[k]].angular ? opt.prior_angular : opt.prior_linear);
+        w_[k] = opt.prior_noise /
+                (model.parameters[unknowns[k]].angular ? opt.prior_angular : opt.prior_linear);
   }
 
   // Iterates from the linearisation (r, J0) at the prior; returns the scaled covariance of the
@@ -210,7 +213,8 @@ class GaussNewton {
 
   // The step by the normal equations; false when they are not to be used (a zero column, a
   // condition above kNormalConditionMax at the first pass, Cholesky failing).
-  bool normalStep(const Eigen::VectorXd& r, int it, Eigen::VectorXd* step_s, double* reducible2, double* r2) {
+  bool normalStep(const Eigen::VectorXd& r, int it, Eigen::VectorXd* step_s, double* reducible2,
+                  double* r2) {
     bool ok = normalEquations(r);
     if (ok && it == 0) ok = normalConditionSquared(N_) < kNormalConditionMax;
     if (ok) llt_.compute(N_);
@@ -326,7 +330,8 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
   GaussNewton gn(model, test, unknown_params, keep_cols, unknowns, opt, res);
   const Eigen::MatrixXd C = gn.run(r, J0);
   // 3. Residuals and uncertainties from the last factorisation.
-  residualsAndUncertainties(r, C, gn.scale(), keep_cols, np_all, static_cast<int>(unknowns.size()), res);
+  residualsAndUncertainties(r, C, gn.scale(), keep_cols, np_all, static_cast<int>(unknowns.size()),
+                            res);
   res.message = res.status == CalibrationStatus::Converged ? "converged" : "did not converge";
   return res;
 }
@@ -355,7 +360,8 @@ std::vector<GrossReading> grossReadings(const MachineModel& model, const Ballbar
   // J has full rank, else the leading left singular vectors.
   const int n = static_cast<int>(J.cols());
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(J);
-  const Eigen::MatrixXd R = m >= n ? Eigen::MatrixXd(qr.matrixQR().topRows(n).triangularView<Eigen::Upper>()) : J;
+  const Eigen::MatrixXd R =
+      m >= n ? Eigen::MatrixXd(qr.matrixQR().topRows(n).triangularView<Eigen::Upper>()) : J;
   const int rank = numericalRank(summariseScaled(R, m).singular_values);
   if (m - rank < 2) return out;  // no redundancy: nothing can be inconsistent
   const double s = std::sqrt(r.squaredNorm() / (m - rank));
@@ -425,13 +431,14 @@ std::vector<std::vector<AbsorbedTerm>> calibrationAbsorbed(const MachineModel& m
                                                            int poses, unsigned seed) {
   std::vector<int> removed;
   for (int p : modelColumns(model, "motion"))
-    if (!isSetupParameter(model, p) && std::find(unknowns.begin(), unknowns.end(), p) == unknowns.end())
+    if (!isSetupParameter(model, p) &&
+        std::find(unknowns.begin(), unknowns.end(), p) == unknowns.end())
       removed.push_back(p);
   return absorbedParameters(model, randomPoses(model, poses, seed), unknowns, removed);
 }
 
-IdentificationUncertainty identificationUncertainty(const CalibrationResult& fit, const BallbarTest& test,
-                                                    int axes) {
+IdentificationUncertainty identificationUncertainty(const CalibrationResult& fit,
+                                                    const BallbarTest& test, int axes) {
   IdentificationUncertainty u;
   u.parameters = fit.identified;
   u.covariance = fit.covariance;

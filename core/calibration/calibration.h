@@ -53,12 +53,12 @@ struct CalibrationResult {
   Eigen::VectorXd observability;        // per identified parameter, in (0, 1]: 1 = independent
   std::vector<BallErrors> ball_errors;  // per set-up
   std::vector<BallErrors> ball_uncertainty;
-  Eigen::VectorXd residuals;            // measured - model, mm, per reading
+  Eigen::VectorXd residuals;                      // measured - model, mm, per reading
   double rms_residual = 0.0, max_residual = 0.0;  // mm
-  double residual_sigma = 0.0;          // s = sqrt(rss / (m - n)), mm
+  double residual_sigma = 0.0;                    // s = sqrt(rss / (m - n)), mm
   int rank = 0;
-  double condition = 0.0;               // column-scaled
-  int iterations = 0;                   // Gauss-Newton steps taken
+  double condition = 0.0;  // column-scaled
+  int iterations = 0;      // Gauss-Newton steps taken
   int unknowns = 0;
 };
 
@@ -74,8 +74,8 @@ CalibrationResult calibrate(const MachineModel& model, const Eigen::VectorXd& pr
 // gross when its two-sided normal tail, Bonferroni-multiplied by the number of readings, is
 // below alpha. Sorted by |t|, largest first.
 struct GrossReading {
-  int index = 0;             // into the test's readings
-  double residual = 0.0;     // mm
+  int index = 0;          // into the test's readings
+  double residual = 0.0;  // mm
   double studentized = 0.0;
 };
 std::vector<GrossReading> grossReadings(const MachineModel& model, const BallbarTest& test,
@@ -85,19 +85,19 @@ std::vector<GrossReading> grossReadings(const MachineModel& model, const Ballbar
 // none is left, at most max_fraction of the readings; the fit with every reading is kept for
 // the report.
 struct RobustCalibration {
-  CalibrationResult with_all;        // every reading
-  CalibrationResult fit;             // without the removed ones (= with_all when none)
-  BallbarTest test;                  // the readings of `fit`
+  CalibrationResult with_all;  // every reading
+  CalibrationResult fit;       // without the removed ones (= with_all when none)
+  BallbarTest test;            // the readings of `fit`
   // Index into the original test; residual: the reading's deviation from the final fit (mm),
   // studentized: that over the final fit's residual sigma.
   std::vector<GrossReading> removed;
-  bool limit_reached = false;        // more readings were gross than max_fraction allows
+  bool limit_reached = false;  // more readings were gross than max_fraction allows
 };
 RobustCalibration calibrateWithoutGross(const MachineModel& model, const Eigen::VectorXd& prior,
                                         const BallbarTest& test,
                                         const std::vector<int>& unknown_params,
-                                        const CalibrationOptions& options = {},
-                                        double alpha = 0.01, double max_fraction = 0.05);
+                                        const CalibrationOptions& options = {}, double alpha = 0.01,
+                                        double max_fraction = 0.05);
 
 // The scale of the prior (regularisation) chosen by the readings themselves (empirical Bayes):
 // with each machine parameter ~ N(0, (k sigma_unit)^2) (sigma_unit = unit_linear mm or
@@ -119,8 +119,8 @@ CalibrationOptions evidencePrior(const MachineModel& model, const BallbarTest& t
 
 // The identification uncertainty of a fit for a machine file: the covariance of the identified
 // parameters and the joint ranges the readings covered.
-IdentificationUncertainty identificationUncertainty(const CalibrationResult& fit, const BallbarTest& test,
-                                                    int axes);
+IdentificationUncertainty identificationUncertainty(const CalibrationResult& fit,
+                                                    const BallbarTest& test, int axes);
 
 // The machine parameters a ball-bar calibration identifies by default: the minimal-complete set
 // of the motion model (strategies I-III with the model's preferred list) without the part and

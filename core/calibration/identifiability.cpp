@@ -36,7 +36,8 @@ std::vector<int> modelColumns(const MachineModel& m, const std::string& model) {
   std::vector<int> cols;
   for (const ParameterBlock& b : m.blocks) {
     const bool setup = b.kind == BlockKind::WorkpieceSetup || b.kind == BlockKind::ToolSetup;
-    const bool take = model == "all" || setup || (model == "link" && b.kind == BlockKind::LinkError) ||
+    const bool take = model == "all" || setup ||
+                      (model == "link" && b.kind == BlockKind::LinkError) ||
                       (model == "motion" && b.kind == BlockKind::MotionError);
     if (take)
       for (int i = 0; i < b.size; ++i) cols.push_back(b.offset + i);
@@ -49,7 +50,8 @@ MachineModel withMotionDegree(const MachineModel& m, int degree) {
   std::vector<std::array<int, 6>> d(m.axes.size());
   for (auto& x : d) x.fill(degree);
   std::vector<std::pair<std::string, std::string>> aliases;
-  for (const ParameterAlias& a : m.aliases) aliases.emplace_back(a.name, m.parameters[a.parameter].iso_code);
+  for (const ParameterAlias& a : m.aliases)
+    aliases.emplace_back(a.name, m.parameters[a.parameter].iso_code);
   out.aliases.clear();
   out.buildParameterLayout(d);
   for (const auto& [name, code] : aliases) {
@@ -196,7 +198,8 @@ std::vector<std::vector<AbsorbedTerm>> absorbedParameters(const MachineModel& m,
     }
   }
   for (auto& v : out)
-    std::sort(v.begin(), v.end(), [](const AbsorbedTerm& x, const AbsorbedTerm& y) { return x.share > y.share; });
+    std::sort(v.begin(), v.end(),
+              [](const AbsorbedTerm& x, const AbsorbedTerm& y) { return x.share > y.share; });
   return out;
 }
 

@@ -30,16 +30,16 @@ std::vector<int> modelColumns(const MachineModel& m, const std::string& model);
 MachineModel withMotionDegree(const MachineModel& m, int degree);
 
 struct ReductionStep {
-  std::vector<int> group;   // confounded parameters (parameter indices), largest weight first
-  int removed = -1;         // parameter index
-  std::string strategy;     // what decided: "no effect", "I", "II", "III" or a chain "I+III"
+  std::vector<int> group;  // confounded parameters (parameter indices), largest weight first
+  int removed = -1;        // parameter index
+  std::string strategy;    // what decided: "no effect", "I", "II", "III" or a chain "I+III"
   int size_after = 0;
   int rank_after = 0;
   double condition_after = 0.0;
 };
 
 struct MinimalSet {
-  std::vector<int> kept;      // parameter indices, in the order given
+  std::vector<int> kept;  // parameter indices, in the order given
   std::vector<int> removed;
   std::vector<ReductionStep> steps;
   SvdSummary initial, reduced;

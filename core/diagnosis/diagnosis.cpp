@@ -2,13 +2,13 @@
 
 #include <Eigen/QR>
 #include <Eigen/SVD>
-#include <boost/math/tools/minima.hpp>
 #include <algorithm>
+#include <boost/math/tools/minima.hpp>
 #include <cmath>
 #include <cstdio>
 
-#include "core/numerics/chebyshev.h"
 #include "core/model/effects.h"
+#include "core/numerics/chebyshev.h"
 #include "core/numerics/statistics.h"
 #include "core/numerics/units.h"
 
@@ -16,14 +16,22 @@ namespace tolver {
 
 const char* verdictName(CandidateVerdict v) {
   switch (v) {
-    case CandidateVerdict::Added: return "added";
-    case CandidateVerdict::Outscored: return "significant, outscored";
-    case CandidateVerdict::NotSignificant: return "not significant";
-    case CandidateVerdict::NoPredictiveGain: return "no cross-validated gain";
-    case CandidateVerdict::Confounded: return "confounded";
-    case CandidateVerdict::NotIdentifiable: return "not identifiable";
-    case CandidateVerdict::RefitFailed: return "refit failed";
-    case CandidateVerdict::Implausible: return "implausible value";
+    case CandidateVerdict::Added:
+      return "added";
+    case CandidateVerdict::Outscored:
+      return "significant, outscored";
+    case CandidateVerdict::NotSignificant:
+      return "not significant";
+    case CandidateVerdict::NoPredictiveGain:
+      return "no cross-validated gain";
+    case CandidateVerdict::Confounded:
+      return "confounded";
+    case CandidateVerdict::NotIdentifiable:
+      return "not identifiable";
+    case CandidateVerdict::RefitFailed:
+      return "refit failed";
+    case CandidateVerdict::Implausible:
+      return "implausible value";
   }
   return "";
 }
@@ -91,7 +99,8 @@ class Scorer {
       Gc_.row(i) = row;
     }
     same_run_.assign(m_, false);
-    for (int i = 1; i < m_; ++i) same_run_[i] = test.readings[i].setup == test.readings[i - 1].setup;
+    for (int i = 1; i < m_; ++i)
+      same_run_[i] = test.readings[i].setup == test.readings[i - 1].setup;
     // Folds: the base fit without each block.
     folds_.resize(folds);
     for (int f = 0; f < folds; ++f) {
@@ -109,14 +118,16 @@ class Scorer {
 
   // Unknowns of the fit whose (unit) columns have |cosine| >= min_cosine with one of G's, by
   // column index of the identification Jacobian, largest first.
-  std::vector<std::pair<int, double>> similarColumns(const Eigen::MatrixXd& G, double min_cosine) const {
+  std::vector<std::pair<int, double>> similarColumns(const Eigen::MatrixXd& G,
+                                                     double min_cosine) const {
     std::vector<std::pair<int, double>> out;
     const Eigen::MatrixXd C = J_.transpose() * scaleColumns(G);  // J_ columns are unit (scaled)
     for (Eigen::Index j = 0; j < C.rows(); ++j) {
       const double cj = C.row(j).cwiseAbs().maxCoeff();
       if (cj >= min_cosine) out.emplace_back(static_cast<int>(j), cj);
     }
-    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.second > b.second; });
+    std::sort(out.begin(), out.end(),
+              [](const auto& a, const auto& b) { return a.second > b.second; });
     return out;
   }
 
@@ -227,7 +238,9 @@ class Scorer {
 template <class F>
 double minimiseOn(F f, double a, double b) {
   std::uintmax_t iterations = 100;
-  return boost::math::tools::brent_find_minima(f, a, b, std::numeric_limits<double>::digits / 2, iterations).first;
+  return boost::math::tools::brent_find_minima(f, a, b, std::numeric_limits<double>::digits / 2,
+                                               iterations)
+      .first;
 }
 
 // Finds the hyperparameter of spec (period or time constant) that minimises the RSS; returns the
@@ -252,8 +265,8 @@ int searchHyperparameter(const Scorer& sc, const BallbarTest& test, EffectSpec& 
         best_f = f;
       }
     }
-    const double f = minimiseOn([&](double x) { return rssAt(1.0 / x); },
-                                   std::max(f0, best_f - df), std::min(f1, best_f + df));
+    const double f = minimiseOn([&](double x) { return rssAt(1.0 / x); }, std::max(f0, best_f - df),
+                                std::min(f1, best_f + df));
     *h = 1.0 / f;
     // Independent trials: one per cycle of phase change, twice over for the refined peak.
     return std::max(1, static_cast<int>(std::lround(2.0 * (f1 - f0) * span)));
@@ -262,7 +275,8 @@ int searchHyperparameter(const Scorer& sc, const BallbarTest& test, EffectSpec& 
   double t_end = 0;
   for (const BallbarReading& r : test.readings)
     if (std::isfinite(r.context.time_s)) t_end = std::max(t_end, r.context.time_s);
-  const double lo = std::log(range.min), hi = std::log(std::max(range.min * 2, std::min(range.max, 2 * t_end)));
+  const double lo = std::log(range.min),
+               hi = std::log(std::max(range.min * 2, std::min(range.max, 2 * t_end)));
   const int n = 24;
   double best = INFINITY, best_x = lo;
   for (int i = 0; i <= n; ++i) {
@@ -275,7 +289,7 @@ int searchHyperparameter(const Scorer& sc, const BallbarTest& test, EffectSpec& 
   }
   const double step = (hi - lo) / n;
   *h = std::exp(minimiseOn([&](double x) { return rssAt(std::exp(x)); },
-                              std::max(lo, best_x - step), std::min(hi, best_x + step)));
+                           std::max(lo, best_x - step), std::min(hi, best_x + step)));
   return 3;
 }
 
@@ -340,14 +354,18 @@ bool sameEffect(const EffectSpec& a, const EffectSpec& b) {
          a.varying == b.varying;
 }
 
-
 // The candidates of a round: every effect of the types asked for that the model lacks.
-std::vector<CandidateScore> candidatesOf(const MachineModel& model, const DiagnosisOptions& opt, int round) {
+std::vector<CandidateScore> candidatesOf(const MachineModel& model, const DiagnosisOptions& opt,
+                                         int round) {
   std::vector<CandidateScore> scores;
   for (const EffectTraits& t : effectTypes()) {
-    if (!opt.types.empty() && std::find(opt.types.begin(), opt.types.end(), t.type) == opt.types.end()) continue;
+    if (!opt.types.empty() &&
+        std::find(opt.types.begin(), opt.types.end(), t.type) == opt.types.end())
+      continue;
     for (const EffectSpec& spec : t.candidates(model)) {
-      auto present = [&](const EffectSpec& e) { return spec.type != EffectType::Chebyshev && sameEffect(e, spec); };
+      auto present = [&](const EffectSpec& e) {
+        return spec.type != EffectType::Chebyshev && sameEffect(e, spec);
+      };
       if (std::any_of(model.effects.begin(), model.effects.end(), present)) continue;
       CandidateScore c;
       c.spec = spec;
@@ -361,8 +379,9 @@ std::vector<CandidateScore> candidatesOf(const MachineModel& model, const Diagno
 // Scores each candidate (hyperparameter search, RSS with and without it, F test on the
 // effective readings, information criterion, cross-validated RMS); returns the number of
 // independent tests made (for the Bonferroni factor).
-int scoreCandidates(const Scorer& sc, const BallbarTest& test, const MachineModel& model, double cv_base,
-                    std::vector<CandidateScore>& scores, const std::function<void(int, int)>& progress) {
+int scoreCandidates(const Scorer& sc, const BallbarTest& test, const MachineModel& model,
+                    double cv_base, std::vector<CandidateScore>& scores,
+                    const std::function<void(int, int)>& progress) {
   int tests = 0;
   const int m = sc.readings(), n = sc.unknowns();
   for (size_t i = 0; i < scores.size(); ++i) {
@@ -402,8 +421,9 @@ int scoreCandidates(const Scorer& sc, const BallbarTest& test, const MachineMode
 
 // The verdict of each scored candidate; returns the qualified ones, best (largest information
 // gain) first.
-std::vector<size_t> qualify(const Scorer& sc, const DiagnosisOptions& opt, const std::vector<EffectSpec>& rejected,
-                            int tests, std::vector<CandidateScore>& scores) {
+std::vector<size_t> qualify(const Scorer& sc, const DiagnosisOptions& opt,
+                            const std::vector<EffectSpec>& rejected, int tests,
+                            std::vector<CandidateScore>& scores) {
   std::vector<size_t> qualified;
   for (size_t i = 0; i < scores.size(); ++i) {
     CandidateScore& c = scores[i];
@@ -435,7 +455,8 @@ std::vector<size_t> qualify(const Scorer& sc, const DiagnosisOptions& opt, const
 // Candidates the readings cannot tell from scores[i]: same type and size, columns (at its
 // hyperparameter) spanning the same space to 0.1 % (the machine's own errors tilt the frames by
 // micro-radians, so exact equivalents differ at that level).
-std::vector<size_t> equivalentsOf(const Scorer& sc, const std::vector<CandidateScore>& scores, size_t i) {
+std::vector<size_t> equivalentsOf(const Scorer& sc, const std::vector<CandidateScore>& scores,
+                                  size_t i) {
   std::vector<size_t> out;
   const CandidateScore& c = scores[i];
   const Eigen::MatrixXd G = sc.columns(c.spec);
@@ -462,7 +483,8 @@ std::vector<size_t> equivalentsOf(const Scorer& sc, const std::vector<CandidateS
 // (|cosine| >= 0.5), at most 4, with their values before and after the refit.
 std::vector<AddedEffect::Confounding> confoundings(const Scorer& sc, const MachineModel& aug_model,
                                                    const BallbarTest& test, const EffectSpec& spec,
-                                                   const CalibrationResult& before, const CalibrationResult& fit) {
+                                                   const CalibrationResult& before,
+                                                   const CalibrationResult& fit) {
   std::vector<AddedEffect::Confounding> out;
   const int np = static_cast<int>(before.identified.size());
   const auto similar = sc.similarColumns(sc.columns(spec), 0.5);
@@ -492,8 +514,9 @@ std::vector<AddedEffect::Confounding> confoundings(const Scorer& sc, const Machi
 
 // Adds the qualified candidate scores[qi] (or an equivalent along an axis's own motion) when
 // the nonlinear refit sees it, converges and lowers the residual; otherwise records why not.
-bool tryToAdd(const Scorer& sc, const BallbarTest& test, std::vector<CandidateScore>& scores, size_t qi,
-              std::vector<int>& unknowns, std::vector<EffectSpec>& rejected, DiagnosisResult& res) {
+bool tryToAdd(const Scorer& sc, const BallbarTest& test, std::vector<CandidateScore>& scores,
+              size_t qi, std::vector<int>& unknowns, std::vector<EffectSpec>& rejected,
+              DiagnosisResult& res) {
   auto principal = [&](const EffectSpec& e) {
     return e.axis >= 0 && e.component == principalComponent(res.machine.model.axes[e.axis]);
   };
@@ -536,10 +559,11 @@ bool tryToAdd(const Scorer& sc, const BallbarTest& test, std::vector<CandidateSc
   }
   if (fit.status != CalibrationStatus::Converged || !fit.held.empty()) {
     c.verdict = CandidateVerdict::RefitFailed;
-    c.reason = fit.status != CalibrationStatus::Converged
-                   ? "the refit did not converge in " + std::to_string(fit.iterations) + " iterations"
-                   : "the refit could not see " + std::to_string(fit.held.size()) +
-                         " parameter(s) the base fit identified";
+    c.reason =
+        fit.status != CalibrationStatus::Converged
+            ? "the refit did not converge in " + std::to_string(fit.iterations) + " iterations"
+            : "the refit could not see " + std::to_string(fit.held.size()) +
+                  " parameter(s) the base fit identified";
     rejected.push_back(c.spec);
     return false;
   }
@@ -565,9 +589,9 @@ bool tryToAdd(const Scorer& sc, const BallbarTest& test, std::vector<CandidateSc
       const bool angular = c.spec.component >= 3;
       const double k = angular ? 1e6 : 1e3;
       char why[200];
-      std::snprintf(why, sizeof why, "fitted %.3g +- %.2g %s%s, beyond the plausible %.3g", a.values[j] * k,
-                    a.uncertainty[j] * k, angular ? "urad" : "um", c.spec.type == EffectType::Drift ? "/h" : "",
-                    limit * k);
+      std::snprintf(why, sizeof why, "fitted %.3g +- %.2g %s%s, beyond the plausible %.3g",
+                    a.values[j] * k, a.uncertainty[j] * k, angular ? "urad" : "um",
+                    c.spec.type == EffectType::Drift ? "/h" : "", limit * k);
       c.verdict = CandidateVerdict::Implausible;
       c.reason = why;
       rejected.push_back(c.spec);
@@ -597,7 +621,8 @@ void finalValues(DiagnosisResult& res) {
       const int p = a.parameters[j];
       a.values[j] = fit.params[p];
       const auto it = std::find(fit.identified.begin(), fit.identified.end(), p);
-      a.uncertainty[j] = it == fit.identified.end() ? NAN : fit.uncertainty[it - fit.identified.begin()];
+      a.uncertainty[j] =
+          it == fit.identified.end() ? NAN : fit.uncertainty[it - fit.identified.begin()];
     }
   }
 }
@@ -606,12 +631,15 @@ void finalValues(DiagnosisResult& res) {
 // well as the base model (the held-out readings when given, else cross-validation); otherwise
 // the effects are withdrawn.
 void finalCheck(const Machine& machine, const DiagnosisOptions& opt, DiagnosisResult& res) {
-  double gain = 0, gain_se = 0;  // held-out: mean of r_before^2 - r_after^2 and its standard error (mm^2)
+  double gain = 0,
+         gain_se = 0;  // held-out: mean of r_before^2 - r_after^2 and its standard error (mm^2)
   if (opt.heldout && !opt.heldout->readings.empty()) {
-    const Eigen::VectorXd r0 = ballbarResiduals(ForwardKinematics(machine.model, res.base_fit.params), *opt.heldout,
-                                                res.base_fit.ball_errors);
-    const Eigen::VectorXd r1 = ballbarResiduals(ForwardKinematics(res.machine.model, res.final_fit.params),
-                                                *opt.heldout, res.final_fit.ball_errors);
+    const Eigen::VectorXd r0 =
+        ballbarResiduals(ForwardKinematics(machine.model, res.base_fit.params), *opt.heldout,
+                         res.base_fit.ball_errors);
+    const Eigen::VectorXd r1 =
+        ballbarResiduals(ForwardKinematics(res.machine.model, res.final_fit.params), *opt.heldout,
+                         res.final_fit.ball_errors);
     res.heldout_before = residualStats(r0);
     res.heldout_after = residualStats(r1);
     const Eigen::ArrayXd d = r0.array().square() - r1.array().square();
@@ -631,7 +659,8 @@ void finalCheck(const Machine& machine, const DiagnosisOptions& opt, DiagnosisRe
       char why[300];
       if (unconfirmed)
         std::snprintf(why, sizeof why,
-                      "the held-out gain (RMS %.3f -> %.3f um; mean squared gain %.3g +- %.2g um^2) is within "
+                      "the held-out gain (RMS %.3f -> %.3f um; mean squared gain %.3g +- %.2g "
+                      "um^2) is within "
                       "twice its uncertainty: not confirmed",
                       mmToUm(before), mmToUm(after), gain * 1e6, gain_se * 1e6);
       else
@@ -664,19 +693,23 @@ std::string suggestionFor(const MachineModel& model, const std::string& variable
   if (variable == "time")
     return "return to the reference pose more often (every 4 readings) to map the change with time";
   if (variable == "set-up")
-    return "a further set-up, or the balls' positions measured on a CMM, separates the balls from the machine";
+    return "a further set-up, or the balls' positions measured on a CMM, separates the balls from "
+           "the machine";
   for (const Axis& ax : model.axes)
     if (ax.name == variable)
-      return ax.isRotary() ? "a run turning " + ax.name + " alone, with the table ball at two radii and two "
-                             "heights, separates its tilts from its offsets"
-                           : "a run along " + ax.name + " alone, with the tool ball at two lengths, separates "
-                             "its angular errors from its straightness";
+      return ax.isRotary() ? "a run turning " + ax.name +
+                                 " alone, with the table ball at two radii and two "
+                                 "heights, separates its tilts from its offsets"
+                           : "a run along " + ax.name +
+                                 " alone, with the tool ball at two lengths, separates "
+                                 "its angular errors from its straightness";
   return "a set-up with another tool-ball length separates tilts from offsets";
 }
 
 // Where the final residual is largest: the reading, its set-up and pose, and the strongest
 // structure the analysis found (significant or not).
-std::string whereLargest(const MachineModel& model, const BallbarTest& test, const DiagnosisResult& res) {
+std::string whereLargest(const MachineModel& model, const BallbarTest& test,
+                         const DiagnosisResult& res) {
   const Eigen::VectorXd& r = res.final_fit.residuals;
   if (r.size() == 0 || r.size() != static_cast<Eigen::Index>(test.readings.size())) return "";
   Eigen::Index i = 0;
@@ -690,12 +723,14 @@ std::string whereLargest(const MachineModel& model, const BallbarTest& test, con
                   ax.isRotary() ? radToDeg(rd.q[a]) : rd.q[a], ax.isRotary() ? " deg" : "");
     pose += buf;
   }
-  std::snprintf(buf, sizeof buf, "largest residual %+.3f um at reading %d (line %d, set-up %d: ",
-                mmToUm(r[i]), static_cast<int>(i) + 1, rd.line, test.setups[rd.setup].id);
+  std::snprintf(buf, sizeof buf,
+                "largest residual %+.3f um at reading %d (line %d, set-up %d: ", mmToUm(r[i]),
+                static_cast<int>(i) + 1, rd.line, test.setups[rd.setup].id);
   std::string out = buf + pose + ")";
   const auto& f = res.analysis_after.findings;
   if (!f.empty()) {
-    std::snprintf(buf, sizeof buf, "; strongest structure: %s (%s, %.0f %% of the variance, p %.2g)",
+    std::snprintf(buf, sizeof buf,
+                  "; strongest structure: %s (%s, %.0f %% of the variance, p %.2g)",
                   f.front().variable.c_str(), f.front().test.c_str(), 100.0 * f.front().strength,
                   f.front().p_value);
     out += buf;
@@ -710,63 +745,81 @@ const CandidateScore* firstImplausible(const DiagnosisResult& res) {
 }
 
 // One verdict from the selection, the final check, the structure left and the lack of fit.
-void decideVerdict(DiagnosisResult& res, const MachineModel& model, const BallbarTest& test, double alpha) {
+void decideVerdict(DiagnosisResult& res, const MachineModel& model, const BallbarTest& test,
+                   double alpha) {
   const LackOfFit& l = res.lack_of_fit_after;
   const bool lacks = l.tested && l.p_value < alpha;
   char lof[300] = "";
   if (l.tested)
-    std::snprintf(lof, sizeof lof,
-                  "the fit's residual sigma %.3f um against the repeatability %.3f um of %d repeated poses "
-                  "(F %.2f, p %.2g)",
-                  mmToUm(l.s_fit), mmToUm(l.s_pure), l.poses, l.f, l.p_value);
+    std::snprintf(
+        lof, sizeof lof,
+        "the fit's residual sigma %.3f um against the repeatability %.3f um of %d repeated poses "
+        "(F %.2f, p %.2g)",
+        mmToUm(l.s_fit), mmToUm(l.s_pure), l.poses, l.f, l.p_value);
   char missing[200] = "";
-  if (lacks) std::snprintf(missing, sizeof missing, "the model misses %.3f um RMS beyond the repeatability", mmToUm(l.missing_rms));
-  const std::string n_added = std::to_string(res.added.size()) + (res.added.size() == 1 ? " effect" : " effects");
+  if (lacks)
+    std::snprintf(missing, sizeof missing, "the model misses %.3f um RMS beyond the repeatability",
+                  mmToUm(l.missing_rms));
+  const std::string n_added =
+      std::to_string(res.added.size()) + (res.added.size() == 1 ? " effect" : " effects");
   if (!res.withdrawn.empty()) {
-    res.verdict = lacks || res.unexplained ? DiagnosisVerdict::Incomplete : DiagnosisVerdict::NothingAdded;
+    res.verdict =
+        lacks || res.unexplained ? DiagnosisVerdict::Incomplete : DiagnosisVerdict::NothingAdded;
     res.verdict_text = "nothing added (" + res.withdrawn_reason + ")";
     if (lacks) res.verdict_text += "; " + std::string(missing) + ": " + lof;
   } else if (lacks || res.unexplained) {
     res.verdict = DiagnosisVerdict::Incomplete;
-    res.verdict_text = (res.added.empty() ? std::string("incomplete: no effect of the library explains what is missing")
-                                          : "incomplete: " + n_added + " added, and something still missing");
+    res.verdict_text =
+        (res.added.empty()
+             ? std::string("incomplete: no effect of the library explains what is missing")
+             : "incomplete: " + n_added + " added, and something still missing");
     if (lacks) res.verdict_text += "; " + std::string(missing) + ": " + lof;
     if (res.unexplained) {
       const ResidualFinding& u = res.unexplained_finding;
       char what[200];
       if (u.test == "periodogram" && u.order)
-        std::snprintf(what, sizeof what, "; the residual still follows %s (harmonic order %.0f, %.0f %% of its variance)",
-                      u.variable.c_str(), u.period, 100.0 * u.strength);
+        std::snprintf(
+            what, sizeof what,
+            "; the residual still follows %s (harmonic order %.0f, %.0f %% of its variance)",
+            u.variable.c_str(), u.period, 100.0 * u.strength);
       else if (u.test == "periodogram")
-        std::snprintf(what, sizeof what, "; the residual still follows %s (period %.2f +- %.2f mm, %.0f %% of its variance)",
-                      u.variable.c_str(), u.period, u.period_uncertainty, 100.0 * u.strength);
+        std::snprintf(
+            what, sizeof what,
+            "; the residual still follows %s (period %.2f +- %.2f mm, %.0f %% of its variance)",
+            u.variable.c_str(), u.period, u.period_uncertainty, 100.0 * u.strength);
       else
-        std::snprintf(what, sizeof what, "; the residual still follows %s (%s, %.0f %% of its variance)",
+        std::snprintf(what, sizeof what,
+                      "; the residual still follows %s (%s, %.0f %% of its variance)",
                       u.variable.c_str(), u.test.c_str(), 100.0 * u.strength);
       res.verdict_text += what;
     }
   } else if (const CandidateScore* odd = firstImplausible(res); odd && res.added.empty()) {
     // The best explanation has a value no machine has: it stands in for something else.
     res.verdict = DiagnosisVerdict::Incomplete;
-    res.verdict_text = "incomplete: the residual is best explained by " + odd->label + " with a value no machine has (" +
-                       odd->reason + "): something the library lacks";
+    res.verdict_text = "incomplete: the residual is best explained by " + odd->label +
+                       " with a value no machine has (" + odd->reason +
+                       "): something the library lacks";
     if (l.tested) res.verdict_text += "; " + std::string(lof);
   } else if (!res.added.empty()) {
     res.verdict = DiagnosisVerdict::EffectsAdded;
-    res.verdict_text = n_added + " added" + (l.tested ? "; no significant lack of fit left: " + std::string(lof)
-                                                      : "; adequacy not tested: no pose is measured twice");
+    res.verdict_text = n_added + " added" +
+                       (l.tested ? "; no significant lack of fit left: " + std::string(lof)
+                                 : "; adequacy not tested: no pose is measured twice");
   } else {
     res.verdict = DiagnosisVerdict::NothingMissing;
-    res.verdict_text = l.tested ? "nothing missing: no effect added, no structure left, no significant lack of fit: " +
-                                      std::string(lof)
-                                : "nothing found: no effect added and no structure left, but adequacy could not be "
-                                  "tested (no pose is measured twice: plan-ballbar's plans return to a reference pose)";
+    res.verdict_text =
+        l.tested
+            ? "nothing missing: no effect added, no structure left, no significant lack of fit: " +
+                  std::string(lof)
+            : "nothing found: no effect added and no structure left, but adequacy could not be "
+              "tested (no pose is measured twice: plan-ballbar's plans return to a reference pose)";
   }
   if (res.verdict == DiagnosisVerdict::Incomplete) {
     res.where = whereLargest(model, test, res);
     const auto& f = res.analysis_after.findings;
-    res.suggestion = suggestionFor(model, res.unexplained ? res.unexplained_finding.variable
-                                                          : (f.empty() ? std::string() : f.front().variable));
+    res.suggestion =
+        suggestionFor(model, res.unexplained ? res.unexplained_finding.variable
+                                             : (f.empty() ? std::string() : f.front().variable));
   }
   res.message = res.verdict_text;
 }
@@ -775,10 +828,14 @@ void decideVerdict(DiagnosisResult& res, const MachineModel& model, const Ballba
 
 const char* verdictName(DiagnosisVerdict v) {
   switch (v) {
-    case DiagnosisVerdict::EffectsAdded: return "effects added";
-    case DiagnosisVerdict::NothingMissing: return "nothing missing";
-    case DiagnosisVerdict::Incomplete: return "incomplete";
-    case DiagnosisVerdict::NothingAdded: return "nothing added";
+    case DiagnosisVerdict::EffectsAdded:
+      return "effects added";
+    case DiagnosisVerdict::NothingMissing:
+      return "nothing missing";
+    case DiagnosisVerdict::Incomplete:
+      return "incomplete";
+    case DiagnosisVerdict::NothingAdded:
+      return "nothing added";
   }
   return "";
 }

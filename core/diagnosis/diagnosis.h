@@ -1,7 +1,7 @@
 #pragma once
 // Closing the loop: after a ball-bar calibration, find what the model failed to
-// explain, trace it to an effect the model lacks (core/model/effects.h), add it, refit, and report the
-// error before and after. Nothing is added when nothing is missing.
+// explain, trace it to an effect the model lacks (core/model/effects.h), add it, refit, and report
+// the error before and after. Nothing is added when nothing is missing.
 //
 // Forward stepwise selection. Each round linearises the fit at its solution (identification
 // Jacobian J of the identified unknowns, residual r) and scores every candidate effect by the
@@ -30,22 +30,22 @@
 
 #include "core/calibration/ballbar.h"
 #include "core/calibration/calibration.h"
-#include "core/model/machine_model.h"
 #include "core/diagnosis/residual_analysis.h"
+#include "core/model/machine_model.h"
 
 namespace tolver {
 
 struct DiagnosisOptions {
-  int blocks_per_setup = 6;           // cross-validation: contiguous runs per set-up
-  double alpha = 1e-3;                // family-wise significance level of a round
+  int blocks_per_setup = 6;  // cross-validation: contiguous runs per set-up
+  double alpha = 1e-3;       // family-wise significance level of a round
   // Confounded (no new information) below this: the part of the candidate's unit columns the
   // base model cannot produce. A partly confounded effect (above it) is judged like any other,
   // by its significance and its cross-validated gain, and reported with what it is confounded
   // with.
   double min_new_information = 1e-3;
-  double max_condition = 1e8;         // column-scaled, of the augmented identification Jacobian
+  double max_condition = 1e8;  // column-scaled, of the augmented identification Jacobian
   int max_effects = 4;
-  std::vector<EffectType> types;      // candidate types; empty: every type
+  std::vector<EffectType> types;  // candidate types; empty: every type
   // Parameters to identify in the base fit; empty: defaultCalibrationUnknowns(model).
   std::vector<int> base_unknowns;
   // Readings of the same set-ups that no fit uses (aligned to the test's set-ups); when given,
@@ -67,21 +67,21 @@ enum class CandidateVerdict {
 const char* verdictName(CandidateVerdict v);
 
 struct CandidateScore {
-  EffectSpec spec;            // with the hyperparameter found by search
-  std::string label;          // describeEffect()
-  int round = 0;              // selection round (1-based)
+  EffectSpec spec;    // with the hyperparameter found by search
+  std::string label;  // describeEffect()
+  int round = 0;      // selection round (1-based)
   int coefficients = 0;
-  int trials = 1;             // independent trials of its hyperparameter search
+  int trials = 1;                            // independent trials of its hyperparameter search
   double rss_before = 0.0, rss_after = 0.0;  // mm^2
   double f_statistic = 0.0;
-  double p_value = 1.0;       // Bonferroni-adjusted over the round
+  double p_value = 1.0;  // Bonferroni-adjusted over the round
   double effective_readings = 0.0;
   double delta_ic = 0.0;
   double cv_rms_before = 0.0, cv_rms_after = 0.0;  // mm
   double new_information = 0.0;
-  double condition = 0.0;     // computed for candidates that pass the other tests
+  double condition = 0.0;  // computed for candidates that pass the other tests
   CandidateVerdict verdict = CandidateVerdict::NotSignificant;
-  std::string reason;         // why a refit rejected it
+  std::string reason;  // why a refit rejected it
 };
 
 struct AddedEffect {
@@ -98,7 +98,7 @@ struct AddedEffect {
   // is the part of its columns the base model cannot produce (1: independent).
   double new_information = 1.0;
   struct Confounding {
-    std::string name;     // ISO code, or "ball 2 tool z"
+    std::string name;  // ISO code, or "ball 2 tool z"
     bool angular = false;
     double cosine = 0.0;
     double before = 0.0, after = 0.0;
@@ -123,17 +123,17 @@ struct DiagnosisResult {
   bool ok = false;
   std::string message;
   DiagnosisVerdict verdict = DiagnosisVerdict::NothingMissing;
-  std::string verdict_text;   // one line: what the verdict means here, with its figures
+  std::string verdict_text;  // one line: what the verdict means here, with its figures
   // Lack of fit of the base and the final fits (core/diagnosis/residual_analysis.h).
   LackOfFit lack_of_fit_before, lack_of_fit_after;
   // When the verdict is Incomplete: where the final residual is largest and what it follows
   // most (even below significance), and the measurement that would separate it.
   std::string where, suggestion;
-  Machine machine;                 // augmented model with the final identified values
+  Machine machine;  // augmented model with the final identified values
   CalibrationResult base_fit, final_fit;
   std::vector<AddedEffect> added;
   std::vector<CandidateScore> candidates;
-  double rms_before = 0.0, rms_after = 0.0;                  // mm, in-sample
+  double rms_before = 0.0, rms_after = 0.0;        // mm, in-sample
   double cv_rms_before = 0.0, cv_rms_after = 0.0;  // mm, cross-validated
   int folds = 0;
   // On options.heldout (readings == 0 when none): the base fit, and the final model.

@@ -26,7 +26,8 @@ ResidualFinding explain(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, std:
   if (!(tss > 0)) return f;
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(X);
   const double rss = (y - X * qr.solve(y)).squaredNorm();
-  const int df1 = std::max(1, static_cast<int>(qr.rank()) - 1), df2 = m - static_cast<int>(qr.rank());
+  const int df1 = std::max(1, static_cast<int>(qr.rank()) - 1),
+            df2 = m - static_cast<int>(qr.rank());
   f.strength = std::clamp(1.0 - rss / tss, 0.0, 1.0);
   f.p_value = fSurvival(((tss - rss) / df1) / (rss / df2), df1, df2);
   return f;
@@ -168,8 +169,9 @@ ResidualAnalysis analyseResiduals(const MachineModel& model, const BallbarTest& 
   rf.test = "runs";
   rf.p_value = runs.z < 0 ? runs.p_value : 1.0;  // only too few runs mean structure
   out.findings.push_back(rf);
-  std::stable_sort(out.findings.begin(), out.findings.end(),
-                   [](const ResidualFinding& a, const ResidualFinding& b) { return a.p_value < b.p_value; });
+  std::stable_sort(
+      out.findings.begin(), out.findings.end(),
+      [](const ResidualFinding& a, const ResidualFinding& b) { return a.p_value < b.p_value; });
   if (!out.findings.empty() && out.findings[0].p_value < 1e-3) {
     out.follows = out.findings[0].variable;
     out.follows_strength = out.findings[0].strength;

@@ -4,10 +4,10 @@
 #include <cassert>
 #include <cmath>
 
+#include "core/model/effects.h"
+#include "core/model/rigid_transform.h"
 #include "core/numerics/chebyshev.h"
 #include "core/numerics/lanes.h"
-#include "core/model/rigid_transform.h"
-#include "core/model/effects.h"
 
 namespace tolver {
 
@@ -171,8 +171,7 @@ void ForwardKinematics::composeJoint(int a, double s, Pose& T, const MotionConte
   }
 }
 
-ForwardKinematics::Pose ForwardKinematics::chain(const std::vector<int>& axes,
-                                                 const JointVector& q,
+ForwardKinematics::Pose ForwardKinematics::chain(const std::vector<int>& axes, const JointVector& q,
                                                  const MotionContext* ctx) const {
   Pose T{Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
   for (int a : axes) composeJoint(a, q[a], T, ctx);
@@ -249,9 +248,12 @@ TOLVER_LANE_INLINE void rotateRows(L c, L s, L M[3][2]) {
 }
 template <typename L>
 TOLVER_LANE_INLINE void rotateRows(int k, L c, L s, L M[3][2]) {
-  if (k == 0) rotateRows<0>(c, s, M);
-  else if (k == 1) rotateRows<1>(c, s, M);
-  else rotateRows<2>(c, s, M);
+  if (k == 0)
+    rotateRows<0>(c, s, M);
+  else if (k == 1)
+    rotateRows<1>(c, s, M);
+  else
+    rotateRows<2>(c, s, M);
 }
 
 // M <- R M (R 3 x 3, column-major doubles).
@@ -267,7 +269,7 @@ TOLVER_LANE_INLINE void multiply(const double* R, L M[3][2]) {
 
 template <typename L>
 TOLVER_LANE_INLINE auto ForwardKinematics::carry(const L* q, const L* c, const L* sn, L M[3][2],
-                              const MotionContext* ctx) const {
+                                                 const MotionContext* ctx) const {
   using Mask = decltype(q[0] < q[0]);
   Mask big{};
   constexpr bool scalar = sizeof(L) == sizeof(double);
@@ -302,8 +304,10 @@ TOLVER_LANE_INLINE auto ForwardKinematics::carry(const L* q, const L* c, const L
   auto motion = [&](const Axis& ax, const AxisTerms& t, int a, bool inverse) TOLVER_LANE_LAMBDA {
     if (ax.type == JointType::Prismatic) {
       for (int k = 0; k < 3; ++k) {
-        if (inverse) M[k][0] -= ax.direction[k] * q[a];
-        else M[k][0] += ax.direction[k] * q[a];
+        if (inverse)
+          M[k][0] -= ax.direction[k] * q[a];
+        else
+          M[k][0] += ax.direction[k] * q[a];
       }
     } else if (t.principal >= 0) {
       rotateRows(t.principal, c[a], inverse ? -sn[a] : sn[a], M);
@@ -344,9 +348,9 @@ TOLVER_LANE_INLINE auto ForwardKinematics::carry(const L* q, const L* c, const L
   return big;
 }
 
-void ForwardKinematics::tipAndAxis(const JointVector& q, Eigen::Vector3d* p_w,
-                                   Eigen::Vector3d* u_w, const double* cos_q,
-                                   const double* sin_q, const MotionContext* ctx) const {
+void ForwardKinematics::tipAndAxis(const JointVector& q, Eigen::Vector3d* p_w, Eigen::Vector3d* u_w,
+                                   const double* cos_q, const double* sin_q,
+                                   const MotionContext* ctx) const {
   const int n = static_cast<int>(q.size());
   double c[kMaxAxes], s[kMaxAxes];
   for (int a = 0; a < n; ++a) {
@@ -367,21 +371,20 @@ struct FkLaneKernels {
                                             const double* const sq[], double* const p_w[3],
                                             double* const u_w[3]);
   static void tipAndAxis4(const ForwardKinematics& fk, int n, const double* const q[],
-                          const double* const cq[], const double* const sq[],
-                          double* const p_w[3], double* const u_w[3]);
+                          const double* const cq[], const double* const sq[], double* const p_w[3],
+                          double* const u_w[3]);
   static void tipAndAxis8(const ForwardKinematics& fk, int n, const double* const q[],
-                          const double* const cq[], const double* const sq[],
-                          double* const p_w[3], double* const u_w[3]);
+                          const double* const cq[], const double* const sq[], double* const p_w[3],
+                          double* const u_w[3]);
 };
 
 // V's width of configurations at a time; the lanes flagged by carry, and a tail shorter than
 // the width, one at a time.
 template <typename V>
 TOLVER_LANE_INLINE void FkLaneKernels::tipAndAxis(const ForwardKinematics& fk, int n,
-                                                  const double* const q[],
-                                                  const double* const cq[],
-                                                  const double* const sq[],
-                                                  double* const p_w[3], double* const u_w[3]) {
+                                                  const double* const q[], const double* const cq[],
+                                                  const double* const sq[], double* const p_w[3],
+                                                  double* const u_w[3]) {
   using lanes::loadL;
   using lanes::storeL;
   constexpr int width = lanes::widthOf<V>();
@@ -451,8 +454,10 @@ void ForwardKinematics::tipAndAxisBatch(int n, const double* const q[], const do
                                         const double* const sq[], double* const p_w[3],
                                         double* const u_w[3]) const {
   assert(batchable_);
-  if (lanes::wideLanes()) FkLaneKernels::tipAndAxis8(*this, n, q, cq, sq, p_w, u_w);
-  else FkLaneKernels::tipAndAxis4(*this, n, q, cq, sq, p_w, u_w);
+  if (lanes::wideLanes())
+    FkLaneKernels::tipAndAxis8(*this, n, q, cq, sq, p_w, u_w);
+  else
+    FkLaneKernels::tipAndAxis4(*this, n, q, cq, sq, p_w, u_w);
 }
 
 void ForwardKinematics::chainFrames(const JointVector& q, ChainFrames* out,
@@ -474,8 +479,10 @@ void ForwardKinematics::chainFrames(const JointVector& q, ChainFrames* out,
       if (axis_[a].has_errors) T = T * linkTransform(motionErrors(a, q[a], ctx));
       out->after_joint[a] = T;
     }
-    if (b == 0) out->F_T_w = T * w_end_;
-    else out->F_T_t = T * t_end_;
+    if (b == 0)
+      out->F_T_w = T * w_end_;
+    else
+      out->F_T_t = T * t_end_;
   }
 }
 

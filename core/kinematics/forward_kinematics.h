@@ -65,7 +65,8 @@ class ForwardKinematics {
     std::vector<Eigen::Isometry3d> after_link, after_joint;
     Eigen::Isometry3d F_T_w, F_T_t;
   };
-  void chainFrames(const JointVector& q, ChainFrames* out, const MotionContext* ctx = nullptr) const;
+  void chainFrames(const JointVector& q, ChainFrames* out,
+                   const MotionContext* ctx = nullptr) const;
 
  private:
   // A rigid pose as rotation and translation: cheaper to compose than Isometry3d in the hot loop.
@@ -79,15 +80,15 @@ class ForwardKinematics {
   friend struct FkLaneKernels;  // tipAndAxisBatch's kernels (forward_kinematics.cpp)
 
   struct AxisTerms {
-    Eigen::Isometry3d fixed;     // D1 * L (nominal link with link errors)
+    Eigen::Isometry3d fixed;            // D1 * L (nominal link with link errors)
     Eigen::Matrix3d fixed_R, fixed_Rt;  // its rotation and transpose, contiguous for the hot path
     Eigen::Vector3d fixed_p;
-    bool fixed_identity = false;  // no nominal offset and no link errors: D1 L = I
+    bool fixed_identity = false;    // no nominal offset and no link errors: D1 L = I
     bool fixed_R_identity = false;  // D1 L a pure translation
-    std::array<int, 6> offset;   // motion-error coefficient offsets, -1 if none
+    std::array<int, 6> offset;      // motion-error coefficient offsets, -1 if none
     std::array<int, 6> degree;
-    int max_degree = -1;         // -1: no Chebyshev motion errors on this axis
-    bool has_errors = false;     // Chebyshev motion errors or effects on this axis
+    int max_degree = -1;      // -1: no Chebyshev motion errors on this axis
+    bool has_errors = false;  // Chebyshev motion errors or effects on this axis
     struct Effect {
       const EffectSpec* spec;
       int component;
@@ -95,8 +96,8 @@ class ForwardKinematics {
       std::array<double, 8> coef;
     };
     std::vector<Effect> effects;  // effect blocks acting on this axis (core/model/effects.h)
-    int principal = -1;          // 0/1/2 when the joint direction is +x/+y/+z
-    double mid = 0.0;            // travel midpoint and 2 / travel range, for eq. 58
+    int principal = -1;           // 0/1/2 when the joint direction is +x/+y/+z
+    double mid = 0.0;             // travel midpoint and 2 / travel range, for eq. 58
     double inv_half_range = 1.0;
     Eigen::Matrix<double, 6, Eigen::Dynamic> coef;  // column k: c_k of the six components
   };
@@ -116,11 +117,11 @@ class ForwardKinematics {
   const MachineModel* model_;
   Eigen::VectorXd params_;
   std::vector<AxisTerms> axis_;
-  Eigen::Isometry3d table_T_w_err_;     // nominal set-up times workpiece set-up errors
-  Eigen::Isometry3d spindle_T_t_err_;   // nominal tool frame times tool set-up errors
-  Eigen::Isometry3d w_end_;             // last workpiece joint -> w (table, set-up, errors)
-  Eigen::Matrix3d w_end_Rt_;            // the transpose of its rotation
-  Eigen::Isometry3d t_end_;             // last tool joint -> t
+  Eigen::Isometry3d table_T_w_err_;    // nominal set-up times workpiece set-up errors
+  Eigen::Isometry3d spindle_T_t_err_;  // nominal tool frame times tool set-up errors
+  Eigen::Isometry3d w_end_;            // last workpiece joint -> w (table, set-up, errors)
+  Eigen::Matrix3d w_end_Rt_;           // the transpose of its rotation
+  Eigen::Isometry3d t_end_;            // last tool joint -> t
   double bar_length_error_ = 0.0;
   bool batchable_ = false;
 };

@@ -14,7 +14,7 @@ namespace tolver {
 namespace {
 
 constexpr double kTwoPi = 2.0 * kPi;
-constexpr double kSingularEps = 1e-9;   // |component of a unit vector normal to an axis|
+constexpr double kSingularEps = 1e-9;  // |component of a unit vector normal to an axis|
 // (numerical floor; the control's singular band, NcControl::singular_band, widens it)
 constexpr double kTravelEps = 1e-6;  // mm or rad of tolerance on travel limits: a CL file
                                      // written to 6 decimals may round a point at a limit over
@@ -42,8 +42,10 @@ double unwrapInto(double angle, double lo, double hi, double ref) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const double lo_e = lo - kTravelEps, hi_e = hi + kTravelEps;
   double v = angle + kTwoPi * std::round((ref - angle) / kTwoPi);
-  if (v < lo_e) v = angle + kTwoPi * std::ceil((lo_e - angle) / kTwoPi);
-  else if (v > hi_e) v = angle + kTwoPi * std::floor((hi_e - angle) / kTwoPi);
+  if (v < lo_e)
+    v = angle + kTwoPi * std::ceil((lo_e - angle) / kTwoPi);
+  else if (v > hi_e)
+    v = angle + kTwoPi * std::floor((hi_e - angle) / kTwoPi);
   return (v >= lo_e && v <= hi_e) ? v : nan;
 }
 
@@ -64,8 +66,7 @@ double InverseKinematics::RotaryCandidate::angleOf(int r) const {
 
 // Long by design: the topology's classification once per model (axes, chains, the closed-form
 // case), so that solve() is free of it.
-InverseKinematics::InverseKinematics(const MachineModel& model)
-    : model_(&model) {
+InverseKinematics::InverseKinematics(const MachineModel& model) : model_(&model) {
   {
     const double sb = std::sin(std::clamp(model.control.singular_band, 0.0, 0.1));
     band_sq_ = std::max(kSingularEps * kSingularEps, sb * sb);
@@ -155,8 +156,7 @@ InverseKinematics::InverseKinematics(const MachineModel& model)
     sub1_.v2_w12 = v2.dot(w12_);
   }
   // Two parallel rotary axes cannot orient the tool independently (sub-problem 2 degenerates).
-  parallel_rotaries_ =
-      rotary_.size() == 2 && std::abs(a_[0].dot(C1_ * a_[1])) > 1.0 - 1e-12;
+  parallel_rotaries_ = rotary_.size() == 2 && std::abs(a_[0].dot(C1_ * a_[1])) > 1.0 - 1e-12;
   batchable_ = rotary_.size() == 2 && prismatic_.size() == 3 && !parallel_rotaries_ &&
                sub1_.pp2_sq >= band_sq_;
   for (int b = 0; b < 2; ++b)
@@ -165,9 +165,9 @@ InverseKinematics::InverseKinematics(const MachineModel& model)
 }
 
 template <typename L, typename M>
-TOLVER_LANE_INLINE void InverseKinematics::candidatesL(const L u_w[3], L c[2][2], L s[2][2], L* g_out,
-                                                 M* unreachable, M* free1, M* free2,
-                                                 M* refine) const {
+TOLVER_LANE_INLINE void InverseKinematics::candidatesL(const L u_w[3], L c[2][2], L s[2][2],
+                                                       L* g_out, M* unreachable, M* free1, M* free2,
+                                                       M* refine) const {
   using lanes::select;
   using lanes::sqrtL;
   // u = u_w normalised (as Eigen's normalized(): unchanged when zero), q = C0^T u.
@@ -194,9 +194,8 @@ TOLVER_LANE_INLINE void InverseKinematics::candidatesL(const L u_w[3], L c[2][2]
   // subproblem1(w2, p, z).
   L qp1[3];
   for (int k = 0; k < 3; ++k) qp1[k] = q[k] - w1_[k] * w1q;
-  const auto dot = [&](const L* a, const Eigen::Vector3d& b) TOLVER_LANE_LAMBDA {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-  };
+  const auto dot = [&](const L* a, const Eigen::Vector3d& b)
+                       TOLVER_LANE_LAMBDA { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
   const L qp1_w12 = dot(qp1, w12_), qp1_v1 = dot(qp1, sub1_.v1), qp1_u1 = dot(qp1, sub1_.u1);
   const L qp1_sq = qp1[0] * qp1[0] + qp1[1] * qp1[1] + qp1[2] * qp1[2];
   const double eps2 = band_sq_;
@@ -222,8 +221,8 @@ TOLVER_LANE_INLINE void InverseKinematics::candidatesL(const L u_w[3], L c[2][2]
 
 template <typename L>
 TOLVER_LANE_INLINE auto InverseKinematics::prismaticL(const L* q, const L* c, const L* sn,
-                                                const double m0[3], const L p_w[3],
-                                                L out[3]) const {
+                                                      const double m0[3], const L p_w[3],
+                                                      L out[3]) const {
   // With the rotary angles fixed the tip is affine in the prismatic joints: p_w = p0 + G s.
   // One nominal pass with s = 0 carries the tool point (column 0) and each prismatic joint's
   // direction (its column, from the joint on) along the chains into w: the tool branch from its
@@ -257,7 +256,8 @@ TOLVER_LANE_INLINE auto InverseKinematics::prismaticL(const L* q, const L* c, co
   const auto& tool = chains_[1];
   for (auto it = tool.rbegin(); it != tool.rend(); ++it) {
     const ChainLink& l = *it;
-    if (l.rotary) rotate(l, false);
+    if (l.rotary)
+      rotate(l, false);
     else
       for (int i = 0; i < 3; ++i) M[i][l.column] = lanes::splat<L>(l.direction[i]);
     if (!l.identity_link) {
@@ -270,7 +270,8 @@ TOLVER_LANE_INLINE auto InverseKinematics::prismaticL(const L* q, const L* c, co
       for (int i = 0; i < 3; ++i) M[i][0] -= l.link_p[i];
       if (!l.identity_rotation) multiply(l.link_Rt);
     }
-    if (l.rotary) rotate(l, true);
+    if (l.rotary)
+      rotate(l, true);
     else
       for (int i = 0; i < 3; ++i) M[i][l.column] = lanes::splat<L>(-l.direction[i]);
   }
@@ -383,9 +384,8 @@ int InverseKinematics::rotaryCandidates(const Eigen::Vector3d& u_w, RotaryCandid
   return count;
 }
 
-bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& q,
-                                       IkSolution* trig, const Eigen::Vector3d& b_t,
-                                       bool trig_given) const {
+bool InverseKinematics::solvePrismatic(const Eigen::Vector3d& p_w, JointVector& q, IkSolution* trig,
+                                       const Eigen::Vector3d& b_t, bool trig_given) const {
   double qv[kMaxAxes], c[kMaxAxes], sn[kMaxAxes];
   for (int b = 0; b < 2; ++b)
     for (const ChainLink& l : chains_[b]) {
@@ -555,7 +555,8 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
       }
     const int first = chord2[1] < chord2[0] ? 1 : 0;
     evaluate(first);
-    if (std::isfinite(cost[first]) && cost[first] * cost[first] < chord2[1 - first] * (1.0 - 1e-9)) {
+    if (std::isfinite(cost[first]) &&
+        cost[first] * cost[first] < chord2[1 - first] * (1.0 - 1e-9)) {
       order[0] = first;
       order[1] = 1 - first;
     } else {
@@ -614,8 +615,8 @@ struct IkLaneKernels {
   // The same for one point, where the lane stage left it (Block::prism_only).
   static void prismAt(const InverseKinematics& ik, InverseKinematics::Block& b, int k, int i) {
     const double p[3] = {b.p[0][i], b.p[1][i], b.p[2][i]};
-    prism<double>(ik, b, k, i, b.cand_c[k][0][i + 1], b.cand_s[k][0][i + 1],
-                  b.cand_c[k][1][i + 1], b.cand_s[k][1][i + 1], p);
+    prism<double>(ik, b, k, i, b.cand_c[k][0][i + 1], b.cand_s[k][0][i + 1], b.cand_c[k][1][i + 1],
+                  b.cand_s[k][1][i + 1], p);
   }
 };
 
@@ -647,8 +648,10 @@ TOLVER_LANE_INLINE void IkLaneKernels::blockLanes(const InverseKinematics& ik,
       storeL<L>(b.cand_s[k][0] + i + 1, s0);
       storeL<L>(b.cand_c[k][1] + i + 1, c[k][1]);
       storeL<L>(b.cand_s[k][1] + i + 1, s1);
-      if (only < 0 || k == only) prism<L>(ik, b, k, i, c[k][0], s0, c[k][1], s1, p);
-      else storeMask<M>(b.prism_ok[k] + i, M{});  // (blockChoice computes it when needed)
+      if (only < 0 || k == only)
+        prism<L>(ik, b, k, i, c[k][0], s0, c[k][1], s1, p);
+      else
+        storeMask<M>(b.prism_ok[k] + i, M{});  // (blockChoice computes it when needed)
     }
   };
   auto steps = [&](auto lanes_tag, int i) TOLVER_LANE_LAMBDA {
@@ -728,8 +731,10 @@ void InverseKinematics::blockLanes(Block& b) const {
       b.cand_c[k][r][0] = cc[k][r];
       b.cand_s[k][r][0] = ss[k][r];
     }
-  if (lanes::wideLanes()) IkLaneKernels::blockLanes8(*this, b);
-  else IkLaneKernels::blockLanes4(*this, b);
+  if (lanes::wideLanes())
+    IkLaneKernels::blockLanes8(*this, b);
+  else
+    IkLaneKernels::blockLanes4(*this, b);
 }
 
 void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
@@ -812,8 +817,7 @@ void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
       const int first = b.chord2[j][1][i] < b.chord2[j][0][i] ? 1 : 0;
       // solve()'s shortcut: the candidate nearer by chords, when it costs less than the other
       // could (two candidates that near each other are near the pole: left to solve()).
-      if (evaluate(first) &&
-          cost[first] * cost[first] < b.chord2[j][1 - first][i] * (1.0 - 1e-9))
+      if (evaluate(first) && cost[first] * cost[first] < b.chord2[j][1 - first][i] * (1.0 - 1e-9))
         chosen = first;
       if (chosen >= 0 && b.prism_only >= 0 && chosen != b.prism_only)
         IkLaneKernels::prismAt(*this, b, chosen, i);
@@ -831,9 +835,8 @@ void InverseKinematics::blockChoice(Block& b, Cursor& cursor) const {
     b.taken[i] = -1;
     writeCursor();
     const Eigen::Vector3d p(b.p[0][i], b.p[1][i], b.p[2][i]), u(b.u[0][i], b.u[1][i], b.u[2][i]);
-    const IkSolution sol =
-        solve(p, u, cursor.has_previous ? &cursor.previous : nullptr, cursor.previous_cos.data(),
-              cursor.previous_sin.data(), exact);
+    const IkSolution sol = solve(p, u, cursor.has_previous ? &cursor.previous : nullptr,
+                                 cursor.previous_cos.data(), cursor.previous_sin.data(), exact);
     b.status[i] = sol.status;
     b.singular[i] = sol.singular;
     b.violated_axis[i] = sol.violated_axis;

@@ -74,11 +74,11 @@ class InverseKinematics {
   // 0.1 rad, a travel limit in play) is handed to solve().
   static constexpr int kBlock = 64;
   struct Block {
-    int n = 0;                                 // points in this block, <= kBlock
-    double p[3][kBlock], u[3][kBlock];         // in: tip p_w (mm) and tool axis u_w, by coordinate
-    bool has_before = false;                   // in: a point precedes the block on the path,
-    double u_before[3] = {0, 0, 1};            // with this tool axis
-    bool exact_first = false;  // in: the first point solved with exact angles (solve())
+    int n = 0;                          // points in this block, <= kBlock
+    double p[3][kBlock], u[3][kBlock];  // in: tip p_w (mm) and tool axis u_w, by coordinate
+    bool has_before = false;            // in: a point precedes the block on the path,
+    double u_before[3] = {0, 0, 1};     // with this tool axis
+    bool exact_first = false;           // in: the first point solved with exact angles (solve())
     // in: the lane stage solves the prismatic axes for this candidate only (-1: both); the
     // choice solves them for the other where it takes it (a hint: the previous block's last
     // candidate, which a smooth path keeps; the results are the same either way)
@@ -161,8 +161,8 @@ class InverseKinematics {
   // value in candidate k (+g, -g) into c[k][r], s[k][r]; g; and masks: unreachable, the two
   // axes free, and g < 1e-2 (refined by Gauss-Newton).
   template <typename L, typename M>
-  void candidatesL(const L u_w[3], L c[2][2], L s[2][2], L* g, M* unreachable, M* free1,
-                   M* free2, M* refine) const;
+  void candidatesL(const L u_w[3], L c[2][2], L s[2][2], L* g, M* unreachable, M* free1, M* free2,
+                   M* refine) const;
   // The prismatic solution (solvePrismatic) over L: c, sn the cos and sin of the rotary joints
   // by axis index (q their values, for axes off +x/+y/+z, scalar only), m0 the tool point
   // t_end * b_t, p_w the target. Writes the three prismatic values in column order; returns
@@ -176,11 +176,11 @@ class InverseKinematics {
   const MachineModel* model_;
   bool batchable_ = false;
   int column_axis_[3] = {-1, -1, -1};  // the prismatic axis of each column of the solution
-  std::vector<int> rotary_;     // rotary axis indices in w->t chain order
-  std::vector<int> prismatic_;  // prismatic axis indices
+  std::vector<int> rotary_;            // rotary axis indices in w->t chain order
+  std::vector<int> prismatic_;         // prismatic axis indices
   Eigen::Matrix3d C0_, C1_, C2_;
-  Eigen::Vector3d a_[2];        // rotary directions in the sub-problem frames
-  double sign_[2] = {1, 1};     // -1 for workpiece-branch joints
+  Eigen::Vector3d a_[2];     // rotary directions in the sub-problem frames
+  double sign_[2] = {1, 1};  // -1 for workpiece-branch joints
   bool parallel_rotaries_ = false;
   // The constants of sub-problem 2 (two rotary axes): Rot(w1, phi1) Rot(w2, phi2) p2 = C0^T u.
   Eigen::Vector3d w1_, w2_, w12_, p2_;
@@ -205,7 +205,7 @@ class InverseKinematics {
   };
   std::vector<ChainLink> chains_[2];
   Eigen::Isometry3d w_end_, t_end_;  // last joint -> w, last joint -> t (nominal)
-  double band_sq_ = 1e-18;  // sin^2 of the singular band (NcControl::singular_band)
+  double band_sq_ = 1e-18;           // sin^2 of the singular band (NcControl::singular_band)
 };
 
 }  // namespace tolver

@@ -3,8 +3,8 @@
 #include <array>
 #include <cassert>
 
-#include "core/numerics/chebyshev.h"
 #include "core/model/effects.h"
+#include "core/numerics/chebyshev.h"
 
 namespace tolver {
 
@@ -49,7 +49,8 @@ void forEachSensitivity(const ForwardKinematics& fk, const JointVector& q, const
   std::array<bool, kMaxAxes> composed{};
   auto motionMap = [&](int a) -> const Matrix6d& {
     if (!composed[a]) {
-      motion[a] = sideOf(a) * transportToTool(fr.after_joint[a]) * linkTwistMap(fk.motionErrors(a, q[a], ctx));
+      motion[a] = sideOf(a) * transportToTool(fr.after_joint[a]) *
+                  linkTwistMap(fk.motionErrors(a, q[a], ctx));
       composed[a] = true;
     }
     return motion[a];
@@ -58,7 +59,8 @@ void forEachSensitivity(const ForwardKinematics& fk, const JointVector& q, const
     switch (b.kind) {
       case BlockKind::LinkError: {
         const Vector6d v = p.segment<6>(b.offset);
-        sink.block(b.offset, sideOf(b.axis) * transportToTool(fr.after_link[b.axis]) * linkTwistMap(v));
+        sink.block(b.offset,
+                   sideOf(b.axis) * transportToTool(fr.after_link[b.axis]) * linkTwistMap(v));
         break;
       }
       case BlockKind::MotionError: {

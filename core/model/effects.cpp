@@ -27,7 +27,8 @@ std::vector<EffectSpec> alongEachAxis(const MachineModel& m, EffectType type, bo
                                       bool rotary_only) {
   std::vector<EffectSpec> out;
   for (int a = 0; a < static_cast<int>(m.axes.size()); ++a) {
-    if ((prismatic_only && m.axes[a].isRotary()) || (rotary_only && !m.axes[a].isRotary())) continue;
+    if ((prismatic_only && m.axes[a].isRotary()) || (rotary_only && !m.axes[a].isRotary()))
+      continue;
     const int c = principalComponent(m.axes[a]);
     if (c < 0) continue;
     EffectSpec e;
@@ -124,8 +125,10 @@ std::vector<EffectSpec> barCandidates(const MachineModel&) {
 
 const std::vector<EffectTraits>& table() {
   static const std::vector<EffectTraits> types = {
-      {EffectType::Chebyshev, "chebyshev",
-       "a higher Chebyshev degree of one motion-error component", "position",
+      {EffectType::Chebyshev,
+       "chebyshev",
+       "a higher Chebyshev degree of one motion-error component",
+       "position",
        [](const EffectSpec& e) { return e.last_order - e.first_order + 1; },
        [](const EffectSpec& e, double, double x, const MotionContext*, double* phi) {
          double T[32];
@@ -133,9 +136,12 @@ const std::vector<EffectTraits>& table() {
          for (int k = e.first_order; k <= e.last_order; ++k) phi[k - e.first_order] = T[k];
        },
        [](const EffectSpec& e, int k) { return order("c", e.first_order + k); },
-       chebyshevCandidates, {}},
-      {EffectType::Reversal, "reversal",
-       "reversal (backlash): an offset that depends on the approach direction", "direction",
+       chebyshevCandidates,
+       {}},
+      {EffectType::Reversal,
+       "reversal",
+       "reversal (backlash): an offset that depends on the approach direction",
+       "direction",
        [](const EffectSpec& e) { return e.varying ? 2 : 1; },
        [](const EffectSpec& e, double, double x, const MotionContext* ctx, double* phi) {
          const double d = direction(e, ctx);
@@ -143,9 +149,12 @@ const std::vector<EffectTraits>& table() {
          if (e.varying) phi[1] = 0.5 * d * x;
        },
        [](const EffectSpec&, int k) { return std::string(k == 0 ? "rev" : "rev.x"); },
-       [](const MachineModel& m) { return reversalCandidates(m); }, {}},
-      {EffectType::Periodic, "periodic",
-       "a cyclic error of a prismatic axis (ball-screw lead), sine and cosine", "position",
+       [](const MachineModel& m) { return reversalCandidates(m); },
+       {}},
+      {EffectType::Periodic,
+       "periodic",
+       "a cyclic error of a prismatic axis (ball-screw lead), sine and cosine",
+       "position",
        [](const EffectSpec&) { return 2; },
        [](const EffectSpec& e, double s, double, const MotionContext*, double* phi) {
          const double w = kTwoPi * s / e.period;
@@ -155,8 +164,10 @@ const std::vector<EffectTraits>& table() {
        [](const EffectSpec&, int k) { return std::string(k == 0 ? "cyc.sin" : "cyc.cos"); },
        [](const MachineModel& m) { return alongEachAxis(m, EffectType::Periodic, true, false); },
        {"period_mm", 5.0, 40.0, true}},
-      {EffectType::Harmonics, "harmonics",
-       "rotary-axis harmonics: Fourier terms of the angle", "angle",
+      {EffectType::Harmonics,
+       "harmonics",
+       "rotary-axis harmonics: Fourier terms of the angle",
+       "angle",
        [](const EffectSpec& e) { return 2 * (e.last_order - e.first_order + 1); },
        [](const EffectSpec& e, double s, double, const MotionContext*, double* phi) {
          for (int k = e.first_order; k <= e.last_order; ++k) {
@@ -167,17 +178,24 @@ const std::vector<EffectTraits>& table() {
        [](const EffectSpec& e, int k) {
          return order("h", e.first_order + k / 2) + (k % 2 == 0 ? "c" : "s");
        },
-       harmonicCandidates, {}},
-      {EffectType::Drift, "drift", "thermal drift, linear in time", "time",
+       harmonicCandidates,
+       {}},
+      {EffectType::Drift,
+       "drift",
+       "thermal drift, linear in time",
+       "time",
        [](const EffectSpec&) { return 1; },
        [](const EffectSpec&, double, double, const MotionContext* ctx, double* phi) {
          const double t_s = time(ctx);
          phi[0] = std::isfinite(t_s) ? t_s / 3600.0 : 0.0;
        },
        [](const EffectSpec&, int) { return std::string("drift"); },
-       [](const MachineModel& m) { return everyComponent(m, EffectType::Drift); }, {}},
-      {EffectType::Warmup, "warmup",
-       "thermal drift settling as a first-order exponential (time constant by search)", "time",
+       [](const MachineModel& m) { return everyComponent(m, EffectType::Drift); },
+       {}},
+      {EffectType::Warmup,
+       "warmup",
+       "thermal drift settling as a first-order exponential (time constant by search)",
+       "time",
        [](const EffectSpec&) { return 1; },
        [](const EffectSpec& e, double, double, const MotionContext* ctx, double* phi) {
          const double t_s = time(ctx);
@@ -186,10 +204,15 @@ const std::vector<EffectTraits>& table() {
        [](const EffectSpec&, int) { return std::string("warm"); },
        [](const MachineModel& m) { return everyComponent(m, EffectType::Warmup); },
        {"tau_s", 300.0, 4.0 * 3600.0, false}},
-      {EffectType::BarLength, "bar_length", "an error of the ball-bar's own length", "reading",
+      {EffectType::BarLength,
+       "bar_length",
+       "an error of the ball-bar's own length",
+       "reading",
        [](const EffectSpec&) { return 1; },
        [](const EffectSpec&, double, double, const MotionContext*, double* phi) { phi[0] = 1.0; },
-       [](const EffectSpec&, int) { return std::string("L"); }, barCandidates, {}},
+       [](const EffectSpec&, int) { return std::string("L"); },
+       barCandidates,
+       {}},
   };
   return types;
 }
@@ -199,13 +222,20 @@ const std::vector<EffectTraits>& table() {
 double plausibleCoefficientLimit(const EffectSpec& spec) {
   const bool angular = spec.component >= 3;
   switch (spec.type) {
-    case EffectType::Chebyshev: return angular ? 1e-3 : 0.5;
-    case EffectType::Reversal: return angular ? 200e-6 : 0.05;
-    case EffectType::Periodic: return angular ? 50e-6 : 0.02;
-    case EffectType::Harmonics: return angular ? 200e-6 : 0.05;
-    case EffectType::Drift: return angular ? 50e-6 : 0.05;
-    case EffectType::Warmup: return angular ? 200e-6 : 0.1;
-    case EffectType::BarLength: return 0.05;
+    case EffectType::Chebyshev:
+      return angular ? 1e-3 : 0.5;
+    case EffectType::Reversal:
+      return angular ? 200e-6 : 0.05;
+    case EffectType::Periodic:
+      return angular ? 50e-6 : 0.02;
+    case EffectType::Harmonics:
+      return angular ? 200e-6 : 0.05;
+    case EffectType::Drift:
+      return angular ? 50e-6 : 0.05;
+    case EffectType::Warmup:
+      return angular ? 200e-6 : 0.1;
+    case EffectType::BarLength:
+      return 0.05;
   }
   return INFINITY;
 }
@@ -245,8 +275,10 @@ double hyperparameterValue(const EffectSpec& spec) {
 void updateDirections(MotionContext& ctx, const JointVector& q0, const JointVector& q1) {
   for (int a = 0; a < q1.size(); ++a) {
     const double d = q1[a] - q0[a];
-    if (d > 0) ctx.direction[a] = 1;
-    else if (d < 0) ctx.direction[a] = -1;
+    if (d > 0)
+      ctx.direction[a] = 1;
+    else if (d < 0)
+      ctx.direction[a] = -1;
   }
 }
 

@@ -46,7 +46,8 @@ struct EffectTraits {
   EffectType type;
   const char* name;         // as in machine files and reports: "reversal"
   const char* description;  // one line, for reports
-  const char* variable;     // what the effect follows: "position", "direction", "angle", "time", "reading"
+  const char*
+      variable;  // what the effect follows: "position", "direction", "angle", "time", "reading"
   int (*size)(const EffectSpec&);
   // phi: size() values.
   void (*basis)(const EffectSpec&, double s, double x, const MotionContext* ctx, double* phi);

@@ -46,22 +46,22 @@ void MachineModel::buildParameterLayout(const std::vector<std::array<int, 6>>& m
       if (d < 0) continue;
       const int bi = addBlock({BlockKind::MotionError, a, c, d, 0, d + 1});
       for (int k = 0; k <= d; ++k) {
-        parameters.push_back({thesisLetter(c) + "(" + S + ").c" + std::to_string(k),
-                              std::string("E") + kComponentIsoLetters[c] + S + ".c" +
-                                  std::to_string(k),
-                              isAngularComponent(c), bi});
+        parameters.push_back(
+            {thesisLetter(c) + "(" + S + ").c" + std::to_string(k),
+             std::string("E") + kComponentIsoLetters[c] + S + ".c" + std::to_string(k),
+             isAngularComponent(c), bi});
       }
     }
   }
   const char* frames[2] = {"w", "t"};
   const char* codes[2] = {"part.", "tool."};
   for (int f = 0; f < 2; ++f) {
-    const int bi = addBlock(
-        {f == 0 ? BlockKind::WorkpieceSetup : BlockKind::ToolSetup, -1, -1, 0, 0, 6});
+    const int bi =
+        addBlock({f == 0 ? BlockKind::WorkpieceSetup : BlockKind::ToolSetup, -1, -1, 0, 0, 6});
     for (int c = 0; c < 6; ++c) {
       parameters.push_back({thesisLetter(c) + "," + frames[f],
-                            std::string(codes[f]) + kComponentIsoLetters[c],
-                            isAngularComponent(c), bi});
+                            std::string(codes[f]) + kComponentIsoLetters[c], isAngularComponent(c),
+                            bi});
     }
   }
 }

@@ -32,9 +32,9 @@
 #include <array>
 #include <limits>
 #include <map>
-#include <utility>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "core/model/rigid_transform.h"
@@ -54,15 +54,15 @@ constexpr std::array<char, 6> kComponentIsoLetters = {'X', 'Y', 'Z', 'A', 'B', '
 inline bool isAngularComponent(int component) { return component >= 3; }
 
 struct Axis {
-  std::string name;                 // "X", "C", ...
+  std::string name;  // "X", "C", ...
   JointType type = JointType::Prismatic;
   Branch branch = Branch::Workpiece;
   Eigen::Vector3d direction = Eigen::Vector3d::UnitX();  // unit, in the joint frame at s = 0
   Eigen::Isometry3d parent_T_joint = Eigen::Isometry3d::Identity();  // nominal link D1
-  double travel_min = 0.0;          // mm or rad
+  double travel_min = 0.0;                                           // mm or rad
   double travel_max = 0.0;
-  int nc_sign = 1;                  // NC axis command = nc_sign * joint value (ISO 841)
-  bool endless = false;             // rotary without stops: travel_min/max bound multi-turn words
+  int nc_sign = 1;       // NC axis command = nc_sign * joint value (ISO 841)
+  bool endless = false;  // rotary without stops: travel_min/max bound multi-turn words
   bool isRotary() const { return type == JointType::Rotary; }
 };
 
@@ -90,7 +90,7 @@ struct ParameterBlock {
   int degree = 0;      // Chebyshev degree of a MotionError block
   int offset = 0;      // first index in the flat parameter vector
   int size = 0;
-  int effect = -1;     // index into MachineModel::effects for an Effect block
+  int effect = -1;  // index into MachineModel::effects for an Effect block
 };
 
 struct ParameterInfo {
@@ -110,8 +110,8 @@ struct ParameterAlias {
 // Part and tool placement chosen by the process planner.
 struct PartSetup {
   Eigen::Vector3d part_zero_table = Eigen::Vector3d::Zero();  // part zero in the table frame, mm
-  double part_rotation = 0.0;   // rotation of w about the table z axis, rad
-  double gauge_length = 0.0;    // tool tip to spindle gauge point along the spindle axis, mm
+  double part_rotation = 0.0;  // rotation of w about the table z axis, rad
+  double gauge_length = 0.0;   // tool tip to spindle gauge point along the spindle axis, mm
   // For G-code programs: work offsets (G54, G55, G54.1P1, ...: upper case, no spaces) in machine
   // coordinates, mm; a work offset not given here puts its origin at the part zero. Tool lengths
   // by H number, mm; an H not given here is the gauge length.
@@ -127,9 +127,9 @@ struct PartSetup {
 // In TCP mode XYZ is the tool tip in the part frame and the rotary words are joint values;
 // outside it every axis word is a joint (machine coordinate plus the active offsets).
 struct NcControl {
-  bool declared = false;        // the machine file has a <control> element
-  std::string name;             // e.g. "LinuxCNC xyzac-trt-kins"
-  double default_unit_mm = 1.0; // 25.4 for a control that defaults to inches
+  bool declared = false;         // the machine file has a <control> element
+  std::string name;              // e.g. "LinuxCNC xyzac-trt-kins"
+  double default_unit_mm = 1.0;  // 25.4 for a control that defaults to inches
   // Pairs of words (upper case, as written: "M428", "G43.4", "G234"): on switches TCP mode on,
   // off switches that same mode off. Several pairs may be active at once.
   std::vector<std::pair<std::string, std::string>> tcp_words;
@@ -172,7 +172,7 @@ class MachineModel {
   std::vector<ParameterBlock> blocks;
   std::vector<ParameterInfo> parameters;  // one per entry of the flat parameter vector
   std::vector<ParameterAlias> aliases;
-  std::vector<EffectSpec> effects;        // one per Effect block, in block order
+  std::vector<EffectSpec> effects;  // one per Effect block, in block order
   // Parameters kept by strategy II when choosing a minimal-complete set, per model name
   // ("link", "motion"): the recognised link errors ([AM01] Tables 3.4 and 4.2).
   std::map<std::string, std::vector<int>> preferred;
@@ -211,8 +211,8 @@ struct MotionContext {
 // is this covariance carried through the sensitivity Jacobian (core/path/prediction_uncertainty.h);
 // outside the covered ranges the fitted polynomials extrapolate.
 struct IdentificationUncertainty {
-  std::vector<int> parameters;   // indices into the parameter vector
-  Eigen::MatrixXd covariance;    // of those parameters, in mm and rad
+  std::vector<int> parameters;                   // indices into the parameter vector
+  Eigen::MatrixXd covariance;                    // of those parameters, in mm and rad
   std::vector<double> covered_min, covered_max;  // per axis, mm or rad; empty: unknown
   int readings = 0;
   // What the covariance does not hold, added to a prediction's band (core/path/prediction_

@@ -7,9 +7,9 @@
 //  * A "twist" here is the 6-vector [ex ey ez gx gy gz]: three small translations (mm)
 //    followed by three small rotations (rad) about x, y, z.
 #include <Eigen/Geometry>
+#include <cmath>
 
 #include "core/numerics/lanes.h"
-#include <cmath>
 
 namespace tolver {
 
@@ -44,8 +44,12 @@ constexpr double kAtanSeriesMax = 0.1;
 template <typename L>
 TOLVER_LANE_INLINE L atanOfSmallL(L t) {
   const L t2 = t * t;
-  return t * (1.0 + t2 * (-1.0 / 3.0 + t2 * (1.0 / 5.0 + t2 * (-1.0 / 7.0 + t2 * (1.0 / 9.0 +
-         t2 * (-1.0 / 11.0 + t2 * (1.0 / 13.0 - t2 * (1.0 / 15.0))))))));
+  return t * (1.0 +
+              t2 * (-1.0 / 3.0 +
+                    t2 * (1.0 / 5.0 +
+                          t2 * (-1.0 / 7.0 +
+                                t2 * (1.0 / 9.0 + t2 * (-1.0 / 11.0 +
+                                                        t2 * (1.0 / 13.0 - t2 * (1.0 / 15.0))))))));
 }
 inline double atanOfSmall(double t) { return atanOfSmallL(t); }
 
@@ -63,9 +67,12 @@ inline void rotateRowsAbout(double c, double s, Matrix& M) {
 }
 template <typename Matrix>
 inline void rotateRowsAbout(int k, double c, double s, Matrix& M) {
-  if (k == 0) rotateRowsAbout<0>(c, s, M);
-  else if (k == 1) rotateRowsAbout<1>(c, s, M);
-  else rotateRowsAbout<2>(c, s, M);
+  if (k == 0)
+    rotateRowsAbout<0>(c, s, M);
+  else if (k == 1)
+    rotateRowsAbout<1>(c, s, M);
+  else
+    rotateRowsAbout<2>(c, s, M);
 }
 
 // trans(dir, d): a pure translation by d (mm) along the unit vector dir.

@@ -55,13 +55,13 @@ void streamLines(const StreamCopy* copies, int count) {
   for (int k = 0; k < count; ++k) {
     auto* d = static_cast<__m128i*>(copies[k].dst);
     const auto* s = static_cast<const __m128i*>(copies[k].src);
-    for (size_t i = 0; i < copies[k].bytes / 16; ++i) _mm_stream_si128(d + i, _mm_load_si128(s + i));
+    for (size_t i = 0; i < copies[k].bytes / 16; ++i)
+      _mm_stream_si128(d + i, _mm_load_si128(s + i));
   }
   _mm_sfence();
 #else
   for (int k = 0; k < count; ++k) std::memcpy(copies[k].dst, copies[k].src, copies[k].bytes);
 #endif
 }
-
 
 }  // namespace tolver::lanes

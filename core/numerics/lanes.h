@@ -55,8 +55,10 @@ using Mask8 = decltype(Lane8{} < Lane8{});
 // The lanes of a number type or of its mask: 1 for double and bool.
 template <typename V>
 constexpr int widthOf() {
-  if constexpr (sizeof(V) <= sizeof(double)) return 1;
-  else return static_cast<int>(sizeof(V) / sizeof(double));
+  if constexpr (sizeof(V) <= sizeof(double))
+    return 1;
+  else
+    return static_cast<int>(sizeof(V) / sizeof(double));
 }
 
 // The Lane8 forms run (an AVX-512 processor and a build with them); setWideLanes(false) keeps
@@ -149,7 +151,9 @@ TOLVER_LANE_INLINE bool all(Mask8 m) {
   return (h[0] & h[1] & h[2] & h[3]) != 0;
 }
 template <typename M>
-TOLVER_LANE_INLINE bool lane(M m, int i) { return m[i] != 0; }
+TOLVER_LANE_INLINE bool lane(M m, int i) {
+  return m[i] != 0;
+}
 TOLVER_LANE_INLINE bool lane(bool m, int) { return m; }
 
 // Loads and stores for L = double (one value) or lanes (widthOf<L>() values), and a mask
@@ -166,13 +170,17 @@ TOLVER_LANE_INLINE L loadL(const double* p) {
 }
 template <typename L>
 TOLVER_LANE_INLINE void storeL(double* p, L v) {
-  if constexpr (sizeof(L) == sizeof(double)) p[0] = v;
-  else std::memcpy(p, &v, sizeof v);
+  if constexpr (sizeof(L) == sizeof(double))
+    p[0] = v;
+  else
+    std::memcpy(p, &v, sizeof v);
 }
 template <typename M>
 TOLVER_LANE_INLINE void storeMask(long long* p, M m) {
-  if constexpr (sizeof(M) == sizeof(bool)) p[0] = m ? -1 : 0;
-  else std::memcpy(p, &m, sizeof m);
+  if constexpr (sizeof(M) == sizeof(bool))
+    p[0] = m ? -1 : 0;
+  else
+    std::memcpy(p, &m, sizeof m);
 }
 template <typename M>
 TOLVER_LANE_INLINE M loadMask(const long long* p) {
@@ -187,7 +195,9 @@ TOLVER_LANE_INLINE M loadMask(const long long* p) {
 // The mask's complement (for bool, !m: ~ on a bool would give a non-zero int).
 TOLVER_LANE_INLINE bool notMask(bool m) { return !m; }
 template <typename M>
-TOLVER_LANE_INLINE M notMask(M m) { return ~m; }
+TOLVER_LANE_INLINE M notMask(M m) {
+  return ~m;
+}
 // A constant as L: the double itself, or in every lane.
 template <typename L>
 TOLVER_LANE_INLINE L splat(double x) {

@@ -18,8 +18,8 @@ enum class MaxMinStatus {
 
 struct MaxMinResult {
   MaxMinStatus status = MaxMinStatus::Optimal;
-  Eigen::VectorXd x;  // the maximiser
-  double value = 0.0; // min_k (c_k + g_k . x) at x
+  Eigen::VectorXd x;   // the maximiser
+  double value = 0.0;  // min_k (c_k + g_k . x) at x
   int iterations = 0;
 };
 

@@ -89,7 +89,8 @@ Eigen::VectorXd unscaledSingularValues(const Eigen::MatrixXd& A) {
 
 double conditionOf(const Eigen::VectorXd& sv) {
   if (sv.size() == 0) return 0.0;
-  return sv[sv.size() - 1] > 0 ? sv[0] / sv[sv.size() - 1] : std::numeric_limits<double>::infinity();
+  return sv[sv.size() - 1] > 0 ? sv[0] / sv[sv.size() - 1]
+                               : std::numeric_limits<double>::infinity();
 }
 
 }  // namespace
@@ -127,7 +128,8 @@ bool scaleNormalMatrix(Eigen::MatrixXd& N, Eigen::VectorXd* scale) {
   *scale = N.diagonal().cwiseSqrt();
   if (n == 0 || !(scale->minCoeff() > kNegligibleColumn * scale->maxCoeff())) return false;
   const Eigen::VectorXd inv = scale->cwiseInverse();
-  for (Eigen::Index c = 0; c < n; ++c) N.col(c).tail(n - c).array() *= inv[c] * inv.tail(n - c).array();
+  for (Eigen::Index c = 0; c < n; ++c)
+    N.col(c).tail(n - c).array() *= inv[c] * inv.tail(n - c).array();
   return true;
 }
 

@@ -9,9 +9,10 @@ namespace tolver {
 namespace {
 
 // Domain and overflow errors give NaN or infinity instead of exceptions; the callers decide.
-using QuietPolicy = boost::math::policies::policy<boost::math::policies::domain_error<boost::math::policies::ignore_error>,
-                                                  boost::math::policies::overflow_error<boost::math::policies::ignore_error>,
-                                                  boost::math::policies::evaluation_error<boost::math::policies::ignore_error>>;
+using QuietPolicy = boost::math::policies::policy<
+    boost::math::policies::domain_error<boost::math::policies::ignore_error>,
+    boost::math::policies::overflow_error<boost::math::policies::ignore_error>,
+    boost::math::policies::evaluation_error<boost::math::policies::ignore_error>>;
 
 }  // namespace
 

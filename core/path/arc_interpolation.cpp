@@ -1,10 +1,11 @@
 #include "core/path/arc_interpolation.h"
-#include "core/numerics/units.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
+
+#include "core/numerics/units.h"
 
 namespace tolver {
 

@@ -30,9 +30,16 @@ double angleOf(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 // (corrections vary slowly along a path).
 class PathCompensator {
  public:
-  PathCompensator(const MachineModel& model, const Eigen::VectorXd& params, const CompensationOptions& opt)
-      : model_(model), opt_(opt), fk_(model, params), nominal_(model, Eigen::VectorXd::Zero(params.size())),
-        n_(static_cast<int>(model.axes.size())), r_(5), r_new_(5), J_(5, n_) {
+  PathCompensator(const MachineModel& model, const Eigen::VectorXd& params,
+                  const CompensationOptions& opt)
+      : model_(model),
+        opt_(opt),
+        fk_(model, params),
+        nominal_(model, Eigen::VectorXd::Zero(params.size())),
+        n_(static_cast<int>(model.axes.size())),
+        r_(5),
+        r_new_(5),
+        J_(5, n_) {
     for (int a = 0; a < n_; ++a) {
       all_.push_back(a);
       if (!model.axes[a].isRotary()) prismatic_.push_back(a);
@@ -41,8 +48,8 @@ class PathCompensator {
 
   // One point: the joints from q0 (where the machine is at p0, u0) that put the tip (and the axis
   // when `orientation`) on the target.
-  void compensate(const ClPoint& target, const JointVector& q0, const Eigen::Vector3d& p0, const Eigen::Vector3d& u0,
-                  bool orientation, CompensatedPoint& c) {
+  void compensate(const ClPoint& target, const JointVector& q0, const Eigen::Vector3d& p0,
+                  const Eigen::Vector3d& u0, bool orientation, CompensatedPoint& c) {
     target_ = &target;
     u_t_ = target.u_w.normalized();
     const Eigen::Vector3d t = e1_ - e1_.dot(u_t_) * u_t_;
@@ -68,11 +75,13 @@ class PathCompensator {
     }
     if (c.status != CompensationStatus::NotConverged) c.axis_out = axisOutOfTravel(q);
     if (c.axis_out >= 0) c.status = CompensationStatus::OutOfTravel;
-    if (c.status == CompensationStatus::OutOfTravel || c.status == CompensationStatus::NotConverged) {
+    if (c.status == CompensationStatus::OutOfTravel ||
+        c.status == CompensationStatus::NotConverged) {
       q = q0;
       fk_.tipAndAxis(q, &p, &u);
     }
-    warm_ok_ = c.status == CompensationStatus::Compensated || c.status == CompensationStatus::IllConditioned;
+    warm_ok_ = c.status == CompensationStatus::Compensated ||
+               c.status == CompensationStatus::IllConditioned;
     warm_axis_ = orientation && c.status == CompensationStatus::Compensated;
     warm_q0_ = q0;
     warm_dq_ = q - q0;
@@ -85,7 +94,8 @@ class PathCompensator {
   const ForwardKinematics& fk() const { return fk_; }
 
  private:
-  using Lu = Eigen::PartialPivLU<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxRows, kMaxRows>>;
+  using Lu = Eigen::PartialPivLU<
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxRows, kMaxRows>>;
 
   // The first axis beyond its travel (endless axes excepted), -1 when none.
   int axisOutOfTravel(const JointVector& q) const {
@@ -99,7 +109,8 @@ class PathCompensator {
   }
 
   // Tip error (mm), and the axis across the target axis scaled to tip-like units.
-  void toResidual(bool with_axis, const Eigen::Vector3d& pp, const Eigen::Vector3d& uu, Residual& res) const {
+  void toResidual(bool with_axis, const Eigen::Vector3d& pp, const Eigen::Vector3d& uu,
+                  Residual& res) const {
     res.head<3>() = pp - target_->p_w;
     if (with_axis) {
       res[3] = kLever * e1_.dot(uu);
@@ -145,8 +156,9 @@ class PathCompensator {
   }
 
   // Newton from q0 (warm-started) on the chosen joints and rows; returns whether it converged.
-  bool solve(bool with_axis, const JointVector& q0, const Eigen::Vector3d& p0, const Eigen::Vector3d& u0,
-             JointVector& q, Eigen::Vector3d& p, Eigen::Vector3d& u, double* cond, int* iterations) {
+  bool solve(bool with_axis, const JointVector& q0, const Eigen::Vector3d& p0,
+             const Eigen::Vector3d& u0, JointVector& q, Eigen::Vector3d& p, Eigen::Vector3d& u,
+             double* cond, int* iterations) {
     const std::vector<int>& vars = with_axis ? all_ : prismatic_;
     const int rows = with_axis ? 5 : 3, nv = static_cast<int>(vars.size());
     r_.resize(rows);
@@ -177,12 +189,15 @@ class PathCompensator {
     for (int it = 0; it <= opt_.max_iterations; ++it) {
       // |u x u_t| is the angle to 1e-18 here (and u . u_t > 0: the axis is never reversed).
       const double ang_err = with_axis ? u.cross(u_t_).norm() : 0.0;
-      if (r_.head<3>().norm() <= opt_.tolerance && ang_err <= opt_.angle_tolerance && u.dot(u_t_) > 0) return true;
+      if (r_.head<3>().norm() <= opt_.tolerance && ang_err <= opt_.angle_tolerance &&
+          u.dot(u_t_) > 0)
+        return true;
       if (it == opt_.max_iterations) return false;
       *iterations = it + 1;
       if (J_cond_ > opt_.max_condition) {
         if (fresh) return false;
-        freshJacobian(with_axis, q);  // the kept one may be the ill-conditioned one: look again here
+        freshJacobian(with_axis,
+                      q);  // the kept one may be the ill-conditioned one: look again here
         fresh = true;
         *cond = J_cond_;
         --it;
@@ -298,7 +313,8 @@ std::vector<AxisTable> linearAxisTables(const MachineModel& model, const Eigen::
     for (const CompensatedPoint& c : r.points) {
       Eigen::Vector3d d = Eigen::Vector3d::Zero();
       for (size_t k = 0; k < prismatic.size() && k < 3; ++k)
-        d[k] = (c.q[prismatic[k]] - c.q0[prismatic[k]]) - (zero.q[prismatic[k]] - zero.q0[prismatic[k]]);
+        d[k] = (c.q[prismatic[k]] - c.q0[prismatic[k]]) -
+               (zero.q[prismatic[k]] - zero.q0[prismatic[k]]);
       t.correction.push_back(d);
     }
     out.push_back(t);
@@ -349,7 +365,8 @@ TableEffect tableEffect(const MachineModel& model, const Eigen::VectorXd& params
     JointVector qc = q;
     const Eigen::Vector3d d = tableCorrection(tables, q);
     if (!tables.empty())
-      for (size_t k = 0; k < tables[0].prismatic.size() && k < 3; ++k) qc[tables[0].prismatic[k]] += d[k];
+      for (size_t k = 0; k < tables[0].prismatic.size() && k < 3; ++k)
+        qc[tables[0].prismatic[k]] += d[k];
     fk.tipAndAxis(qc, &p, &u);
     e.after_rms += (p - p_nom - d_ref).squaredNorm();
   }

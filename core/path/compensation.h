@@ -46,16 +46,18 @@ enum class CompensationStatus {
 
 struct CompensatedPoint {
   CompensationStatus status = CompensationStatus::Compensated;
-  JointVector q0;                  // the program's joints (nominal inverse kinematics)
-  JointVector q;                   // the compensating joints (q0 when left uncompensated)
-  Eigen::Vector3d nominal_p_w = Eigen::Vector3d::Zero();  // nominal machine's tip at q: the corrected CL
+  JointVector q0;  // the program's joints (nominal inverse kinematics)
+  JointVector q;   // the compensating joints (q0 when left uncompensated)
+  Eigen::Vector3d nominal_p_w =
+      Eigen::Vector3d::Zero();  // nominal machine's tip at q: the corrected CL
   Eigen::Vector3d nominal_u_w = Eigen::Vector3d::UnitZ();
-  Eigen::Vector3d before_w = Eigen::Vector3d::Zero();  // tip deviation at q0 (machine - program), mm
-  Eigen::Vector3d after_w = Eigen::Vector3d::Zero();   // at q
-  double before_axis = 0, after_axis = 0;              // tool-axis angle to the program's, rad
-  double condition = 1;            // of the final Jacobian
+  Eigen::Vector3d before_w =
+      Eigen::Vector3d::Zero();                        // tip deviation at q0 (machine - program), mm
+  Eigen::Vector3d after_w = Eigen::Vector3d::Zero();  // at q
+  double before_axis = 0, after_axis = 0;             // tool-axis angle to the program's, rad
+  double condition = 1;                               // of the final Jacobian
   int iterations = 0;
-  int axis_out = -1;               // OutOfTravel: the first axis beyond travel
+  int axis_out = -1;  // OutOfTravel: the first axis beyond travel
 };
 
 struct CompensationResult {
@@ -82,11 +84,11 @@ CompensationResult compensateToolPath(const MachineModel& model, const Eigen::Ve
 // offsets), and every error of a rotary axis, a linear table cannot carry.
 struct AxisTable {
   int axis = 0;
-  double start = 0, step = 0;                   // mm
-  std::vector<double> position;                 // mm
-  std::vector<Eigen::Vector3d> correction;      // per position: the changes of the prismatic
-                                                // joints (in prismatic-axis order), mm
-  std::vector<int> prismatic;                   // the prismatic axes' indices
+  double start = 0, step = 0;               // mm
+  std::vector<double> position;             // mm
+  std::vector<Eigen::Vector3d> correction;  // per position: the changes of the prismatic
+                                            // joints (in prismatic-axis order), mm
+  std::vector<int> prismatic;               // the prismatic axes' indices
 };
 std::vector<AxisTable> linearAxisTables(const MachineModel& model, const Eigen::VectorXd& params,
                                         const JointVector& q_ref, double step);

@@ -14,7 +14,8 @@ namespace tolver {
 PredictionUncertainty::PredictionUncertainty(const Machine& machine)
     : machine_(machine), fk_(machine.model, machine.params) {
   const IdentificationUncertainty& id = machine.identification;
-  if (id.empty()) throw std::invalid_argument("PredictionUncertainty: the machine has no covariance");
+  if (id.empty())
+    throw std::invalid_argument("PredictionUncertainty: the machine has no covariance");
   // A square root that tolerates a semi-definite covariance.
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(id.covariance);
   const Eigen::VectorXd d = es.eigenvalues().cwiseMax(0.0).cwiseSqrt();
@@ -99,18 +100,23 @@ PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionCont
   PoseUncertainty u;
   u.tip_covariance_w = R * S.topLeftCorner<3, 3>() * R.transpose();
   u.calibration_tip = std::sqrt(std::max(0.0, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
-                                                  u.tip_covariance_w, Eigen::EigenvaluesOnly).eigenvalues()[2]));
+                                                  u.tip_covariance_w, Eigen::EigenvaluesOnly)
+                                                  .eigenvalues()[2]));
   // What the covariance does not hold: the model's lack of fit (each coordinate), the spindle's
   // tilt (the tool axis, each direction across it).
   u.tip_covariance_w.diagonal().array() += id.lack_of_fit_mm * id.lack_of_fit_mm;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> tip(u.tip_covariance_w, Eigen::EigenvaluesOnly);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> tip(u.tip_covariance_w,
+                                                           Eigen::EigenvaluesOnly);
   u.tip = std::sqrt(std::max(0.0, tip.eigenvalues()[2]));
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> ax(S.block<2, 2>(3, 3), Eigen::EigenvaluesOnly);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> ax(S.block<2, 2>(3, 3),
+                                                          Eigen::EigenvaluesOnly);
   u.calibration_axis = std::sqrt(std::max(0.0, ax.eigenvalues()[1]));
-  u.axis = std::sqrt(u.calibration_axis * u.calibration_axis + id.spindle_tilt_rad * id.spindle_tilt_rad);
+  u.axis = std::sqrt(u.calibration_axis * u.calibration_axis +
+                     id.spindle_tilt_rad * id.spindle_tilt_rad);
   if (!id.covered_min.empty()) {
     u.beyond = JointVector::Zero(q.size());
-    for (Eigen::Index a = 0; a < q.size() && a < static_cast<Eigen::Index>(id.covered_min.size()); ++a) {
+    for (Eigen::Index a = 0; a < q.size() && a < static_cast<Eigen::Index>(id.covered_min.size());
+         ++a) {
       const double b = std::max(id.covered_min[a] - q[a], q[a] - id.covered_max[a]);
       if (b > 1e-9) {
         u.beyond[a] = b;

@@ -71,11 +71,11 @@ class PredictionUncertainty {
 
   const Machine& machine_;
   ForwardKinematics fk_;
-  Eigen::MatrixXd root_;     // Sigma_params = root root^T
-  mutable Eigen::MatrixXd J_;  // 6 x parameterCount work matrix
-  std::vector<int> setup_;   // the part's pose (6), the tool tip's offset (3)
+  Eigen::MatrixXd root_;             // Sigma_params = root root^T
+  mutable Eigen::MatrixXd J_;        // 6 x parameterCount work matrix
+  std::vector<int> setup_;           // the part's pose (6), the tool tip's offset (3)
   std::vector<int> modulo_columns_;  // the set-up values B_ fits (all of setup_, or the part's)
-  Eigen::MatrixXd B_;        // modulo x identified: the set-up fit of each identified column
+  Eigen::MatrixXd B_;  // modulo x identified: the set-up fit of each identified column
   bool modulo_ = false;
 };
 

@@ -120,8 +120,9 @@ std::vector<double> perPoint(const std::vector<ProbedPoint>& points, const Eigen
   int row = 0;
   for (const ProbedPoint& p : points) {
     const int k = rowsOf(p);
-    out.push_back(p.tram ? r.segment<2>(row).norm() / kTramLever
-                  : k == 3 ? r.segment<3>(row).norm() : std::abs(r[row]));
+    out.push_back(p.tram   ? r.segment<2>(row).norm() / kTramLever
+                  : k == 3 ? r.segment<3>(row).norm()
+                           : std::abs(r[row]));
     row += k;
   }
   return out;
@@ -165,7 +166,8 @@ bool hasTram(const std::vector<ProbedPoint>& points) {
   return std::any_of(points.begin(), points.end(), [](const ProbedPoint& p) { return p.tram; });
 }
 
-std::vector<int> probedSetupColumns(const MachineModel& model, Eigen::VectorXd* scale, bool with_tram) {
+std::vector<int> probedSetupColumns(const MachineModel& model, Eigen::VectorXd* scale,
+                                    bool with_tram) {
   std::vector<int> cols;
   std::vector<double> sc;
   for (const ParameterBlock& b : model.blocks)
@@ -200,7 +202,8 @@ void probedRows(const Machine& machine, const std::vector<ProbedPoint>& points,
 ProbedSetupFit fitProbedSetup(Machine& machine, const std::vector<ProbedPoint>& points) {
   Eigen::VectorXd scale;
   const std::vector<int> cols = probedSetupColumns(machine.model, &scale, hasTram(points));
-  if (cols.empty()) throw std::invalid_argument("fitProbedSetup: the machine has no part set-up block");
+  if (cols.empty())
+    throw std::invalid_argument("fitProbedSetup: the machine has no part set-up block");
   if (points.empty()) throw std::invalid_argument("fitProbedSetup: no probed point");
   const int n = static_cast<int>(cols.size());
   ProbedSetupFit fit;
@@ -216,16 +219,16 @@ ProbedSetupFit fitProbedSetup(Machine& machine, const std::vector<ProbedPoint>& 
   fit.observed = static_cast<int>(svd.rank());
   if (fit.observed < n) {
     static const char* names[11] = {"x",
-                                   "y",
-                                   "z",
-                                   "rotation about x",
-                                   "rotation about y",
-                                   "rotation about z",
-                                   "spindle offset x (touch at other table orientations)",
-                                   "spindle offset y (touch at other table orientations)",
-                                   "spindle offset z (touch at other table orientations)",
-                                   "spindle tilt about x (tram at other positions)",
-                                   "spindle tilt about y (tram at other positions)"};
+                                    "y",
+                                    "z",
+                                    "rotation about x",
+                                    "rotation about y",
+                                    "rotation about z",
+                                    "spindle offset x (touch at other table orientations)",
+                                    "spindle offset y (touch at other table orientations)",
+                                    "spindle offset z (touch at other table orientations)",
+                                    "spindle tilt about x (tram at other positions)",
+                                    "spindle tilt about y (tram at other positions)"};
     // A set-up value is unobserved when its unit vector lies (mostly) in the null space.
     const Eigen::MatrixXd N = svd.matrixV().rightCols(n - fit.observed);
     for (int c = 0; c < n; ++c)
@@ -247,8 +250,8 @@ ProbedSetupFit fitProbedSetup(Machine& machine, const std::vector<ProbedPoint>& 
   }
   fit.residual = perPoint(points, r);
   summarise(points, r, &fit.rms, &fit.max, &fit.tram_max);
-  fit.trams = static_cast<int>(std::count_if(points.begin(), points.end(),
-                                             [](const ProbedPoint& p) { return p.tram; }));
+  fit.trams = static_cast<int>(
+      std::count_if(points.begin(), points.end(), [](const ProbedPoint& p) { return p.tram; }));
   return fit;
 }
 

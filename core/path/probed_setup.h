@@ -55,15 +55,15 @@ struct ProbedSetupFit {
   Vector6d change = Vector6d::Zero();  // added to the WorkpieceSetup block: x y z mm, rx ry rz rad
   Eigen::Vector3d spindle_change = Eigen::Vector3d::Zero();  // added to the ToolSetup x y z, mm
   Eigen::Vector2d spindle_tilt_change = Eigen::Vector2d::Zero();  // ToolSetup rx ry, rad (trams)
-  int trams = 0;                       // tram rows among the points
-  int observed = 0;                    // set-up directions the touches constrain
-  int columns = 0;                     // of these many (6; 9 with the spindle offset; 11 with
-                                       // its tilt, when a tram is given)
-  std::vector<std::string> unobserved; // names of those they do not ("rotation about z", ...)
-  std::vector<double> residual;        // per touch, mm (along n_i, or the distance); per tram,
-                                       // the tilt's disagreement, rad
-  double rms = 0.0, max = 0.0;         // of the touches' residuals after the fit, mm
-  double rms_before = 0.0;             // with the machine file's set-up, mm
+  int trams = 0;                                                  // tram rows among the points
+  int observed = 0;                     // set-up directions the touches constrain
+  int columns = 0;                      // of these many (6; 9 with the spindle offset; 11 with
+                                        // its tilt, when a tram is given)
+  std::vector<std::string> unobserved;  // names of those they do not ("rotation about z", ...)
+  std::vector<double> residual;         // per touch, mm (along n_i, or the distance); per tram,
+                                        // the tilt's disagreement, rad
+  double rms = 0.0, max = 0.0;          // of the touches' residuals after the fit, mm
+  double rms_before = 0.0;              // with the machine file's set-up, mm
   double tram_max = 0.0, tram_before = 0.0;  // largest tram disagreement after / before, rad
   int iterations = 0;
 };

@@ -1,11 +1,11 @@
 #include "core/path/setup_search.h"
 
+#include <Eigen/LU>
 #include <algorithm>
 #include <array>
-#include <map>
-#include <Eigen/LU>
 #include <cmath>
 #include <limits>
+#include <map>
 
 #include "core/kinematics/forward_kinematics.h"
 #include "core/kinematics/inverse_kinematics.h"
@@ -233,9 +233,9 @@ class ZeroSearch {
       double v_round = -std::numeric_limits<double>::infinity();
       for (double size : {200.0, 50.0, 100.0, 10.0, 30.0, 2.0, 0.5}) {
         double v = 0.0;
-        const Eigen::Vector3d y = maximise(
-            [this, &active](const Eigen::Vector3d& p) { return marginOn(p, active); }, y_round,
-            size, &v);
+        const Eigen::Vector3d y =
+            maximise([this, &active](const Eigen::Vector3d& p) { return marginOn(p, active); },
+                     y_round, size, &v);
         if (v > v_round) v_round = v, y_round = y;
       }
       const double v_all = margin(y_round);
@@ -366,7 +366,7 @@ class ZeroSearch {
   }
 
   static std::pair<Eigen::MatrixXd, Eigen::VectorXd> uniqueRows(const Eigen::MatrixXd& g,
-                                                               const Eigen::VectorXd& c) {
+                                                                const Eigen::VectorXd& c) {
     std::map<std::array<double, 3>, double> rows;
     for (Eigen::Index r = 0; r < g.rows(); ++r) {
       const std::array<double, 3> key = {g(r, 0), g(r, 1), g(r, 2)};
@@ -422,7 +422,8 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
     return v;
   };
   std::vector<std::pair<double, double>> coarse;  // margin, rotation
-  const double total = static_cast<double>(rotations.size()) * (options.rotation_step > 0 ? 2.0 : 1.0);
+  const double total =
+      static_cast<double>(rotations.size()) * (options.rotation_step > 0 ? 2.0 : 1.0);
   for (double rot : rotations) {
     if (options.stop_when_found && out.margin >= 0.0) break;
     if (options.progress) options.progress(out.rotations_tried / total);
@@ -443,7 +444,8 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
     int refined = 0;
     for (const auto& [v0, rot0] : coarse) {
       if (options.progress)
-        options.progress(0.5 + 0.5 * refined++ / static_cast<double>(std::max<size_t>(1, coarse.size())));
+        options.progress(0.5 +
+                         0.5 * refined++ / static_cast<double>(std::max<size_t>(1, coarse.size())));
       double rot = rot0, v = v0;
       for (double h = options.rotation_step / 2.0;
            h > degToRad(0.1) && !(options.stop_when_found && out.margin >= 0.0); h /= 2.0)
@@ -569,8 +571,8 @@ MachineFrame machineFrame(const MachineModel& model) {
 }  // namespace
 
 std::vector<AxisRange> commandedJointRanges(const MachineModel& model,
-                                            const std::vector<JointVector>& joints,
-                                            double* margin, int* limiting_axis) {
+                                            const std::vector<JointVector>& joints, double* margin,
+                                            int* limiting_axis) {
   std::vector<AxisRange> ranges(model.axes.size());
   for (size_t i = 0; i < joints.size(); ++i)
     for (size_t a = 0; a < model.axes.size(); ++a) {
@@ -586,7 +588,9 @@ std::vector<AxisRange> commandedJointRanges(const MachineModel& model,
     const Axis& ax = model.axes[a];
     if (ax.endless || !ranges[a].known) continue;
     double m = std::min(ranges[a].min - ax.travel_min, ax.travel_max - ranges[a].max);
-    if (ax.isRotary()) m = m >= 0 ? std::numeric_limits<double>::infinity() : m * 1000.0;  // rotary overrun dominates
+    if (ax.isRotary())
+      m = m >= 0 ? std::numeric_limits<double>::infinity()
+                 : m * 1000.0;  // rotary overrun dominates
     if (m < *margin) *margin = m, *limiting_axis = static_cast<int>(a);
   }
   return ranges;
@@ -597,8 +601,7 @@ Eigen::Vector3d workOffsetAtPartZero(const MachineModel& model) {
   return f.ok ? Eigen::Vector3d(-f.Gm.inverse() * f.g0) : Eigen::Vector3d::Zero();
 }
 
-WorkOffsetSetup proposeWorkOffset(const MachineModel& model,
-                                  const std::vector<JointVector>& joints,
+WorkOffsetSetup proposeWorkOffset(const MachineModel& model, const std::vector<JointVector>& joints,
                                   const std::vector<char>& kind,
                                   const std::vector<unsigned char>& fixed) {
   WorkOffsetSetup out;

@@ -20,13 +20,13 @@
 #include <vector>
 
 #include "core/model/machine_model.h"
-#include "core/path/tool_path_prediction.h"
 #include "core/numerics/units.h"
+#include "core/path/tool_path_prediction.h"
 
 namespace tolver {
 
 struct AxisRange {
-  double min = 0.0, max = 0.0;  // joint values the program needs (mm, rad)
+  double min = 0.0, max = 0.0;         // joint values the program needs (mm, rad)
   int min_index = -1, max_index = -1;  // points where they occur
   bool known = false;
 };
@@ -40,19 +40,19 @@ std::vector<AxisRange> jointRanges(const MachineModel& model, const std::vector<
 
 struct SetupSearchOptions {
   double rotation_step = degToRad(15.0);  // candidate part rotations, rad (0 to keep the given one)
-  std::vector<double> gauge_lengths;   // candidates, mm; empty: the model's
-  int max_points = 20000;              // points used in the search (evenly spaced subset)
-  bool stop_when_found = false;        // return the first set-up that reaches every point
+  std::vector<double> gauge_lengths;      // candidates, mm; empty: the model's
+  int max_points = 20000;                 // points used in the search (evenly spaced subset)
+  bool stop_when_found = false;           // return the first set-up that reaches every point
   // Called with the fraction of the candidate rotations searched (0..1), from the calling thread.
   std::function<void(double)> progress;
 };
 
 struct SetupSearchResult {
-  bool found = false;    // a set-up with every point inside travel (margin >= 0)
-  PartSetup setup;       // the best one (largest margin), even when not found
-  double margin = 0.0;   // mm: the smallest distance of a prismatic joint to its travel limit
-  std::vector<AxisRange> ranges;     // with the best set-up
-  std::vector<int> outside;          // with the best set-up: points outside travel
+  bool found = false;   // a set-up with every point inside travel (margin >= 0)
+  PartSetup setup;      // the best one (largest margin), even when not found
+  double margin = 0.0;  // mm: the smallest distance of a prismatic joint to its travel limit
+  std::vector<AxisRange> ranges;  // with the best set-up
+  std::vector<int> outside;       // with the best set-up: points outside travel
   int rotations_tried = 0, rotations_rejected = 0;
 };
 
@@ -63,13 +63,12 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
 // A program no single set-up reaches, cut into consecutive pieces that each one set-up
 // reaches: greedily the longest reachable piece from the start, found by bisection on its end.
 struct SetupPiece {
-  int first = 0, last = 0;  // indices into the path, inclusive
-  SetupSearchResult result; // its set-up (found is false for a single point no set-up reaches)
+  int first = 0, last = 0;   // indices into the path, inclusive
+  SetupSearchResult result;  // its set-up (found is false for a single point no set-up reaches)
 };
 std::vector<SetupPiece> splitIntoSetups(const MachineModel& model, const std::vector<ClPoint>& path,
                                         const std::vector<JointVector>* commanded,
-                                        const SetupSearchOptions& options = {},
-                                        int max_pieces = 8);
+                                        const SetupSearchOptions& options = {}, int max_pieces = 8);
 
 // A posted program outside tool-centre-point mode gives joints, not tool tips: machine
 // coordinate = word + work offset (+ tool length along the spindle under G43). A work offset the
@@ -78,21 +77,20 @@ std::vector<SetupPiece> splitIntoSetups(const MachineModel& model, const std::ve
 // the points in machine coordinates (G53, G28, SUPA) where they are. The per-axis ranges then
 // fit travel exactly when each is centred: the proposal is exact, not searched.
 struct WorkOffsetSetup {
-  bool found = false;               // every point inside travel
+  bool found = false;                                        // every point inside travel
   double margin = -std::numeric_limits<double>::infinity();  // mm, smallest distance to a limit
-  int limiting_axis = -1;           // the axis with that margin
+  int limiting_axis = -1;                                    // the axis with that margin
   bool limited_by_machine_coordinates = false;  // by a G53/G28 move, which no offset moves
   Eigen::Vector3d part_zero_table = Eigen::Vector3d::Zero();  // proposed part zero, table frame
   // The work offset (G54...) the control needs for it: the machine coordinates (mm, X Y Z words
   // with the control's senses) of the program's origin.
   Eigen::Vector3d work_offset_m = Eigen::Vector3d::Zero();
-  std::vector<AxisRange> ranges;    // joint ranges with the proposal
+  std::vector<AxisRange> ranges;  // joint ranges with the proposal
 };
 // joints, kind and fixed: ClProgram::joints, ::tcp (points of kind 1, in TCP mode, are left
 // out) and ::fixed_axes (bit k: X, Y, Z in machine coordinates; when empty, every coordinate of
 // a kind-2 point, G53/G28, is fixed).
-WorkOffsetSetup proposeWorkOffset(const MachineModel& model,
-                                  const std::vector<JointVector>& joints,
+WorkOffsetSetup proposeWorkOffset(const MachineModel& model, const std::vector<JointVector>& joints,
                                   const std::vector<char>& kind,
                                   const std::vector<unsigned char>& fixed = {});
 // The ranges of the joints a posted program commands (points in TCP mode included: their joints
@@ -100,8 +98,8 @@ WorkOffsetSetup proposeWorkOffset(const MachineModel& model,
 // endless axes are not limits): the reach check of a work-offset proposal, on the program read
 // again with it.
 std::vector<AxisRange> commandedJointRanges(const MachineModel& model,
-                                            const std::vector<JointVector>& joints,
-                                            double* margin, int* limiting_axis);
+                                            const std::vector<JointVector>& joints, double* margin,
+                                            int* limiting_axis);
 
 // The work offset (machine coordinates, mm) whose origin is the model's part zero: what the
 // G-code reader uses for a work offset the set-up does not give.

@@ -1,9 +1,9 @@
 #include "core/path/tool_motion.h"
 
-#include "core/model/effects.h"
-
 #include <algorithm>
 #include <cmath>
+
+#include "core/model/effects.h"
 
 namespace tolver {
 namespace {
@@ -31,7 +31,8 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
 void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics& actual,
                       const std::vector<ClPoint>& path, const std::vector<JointVector>& q,
                       const std::vector<JointVector>& qa, const MotionSampling& sampling,
-                      std::vector<ToolPlacement>* nominal_out, std::vector<ToolPlacement>* actual_out) {
+                      std::vector<ToolPlacement>* nominal_out,
+                      std::vector<ToolPlacement>* actual_out) {
   nominal_out->clear();
   actual_out->clear();
   const size_t n = std::min({path.size(), q.size(), qa.size()});
@@ -60,8 +61,8 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
     nominal.tipAndAxis(qm, &pm, &um);
     nominal.tipAndAxis(q[i], &p1, &u1);
     const double len = moveLength(p0, u0, pm, um, p1, u1, sampling.reach);
-    const int m = std::clamp(static_cast<int>(std::ceil(len / sampling.step)), 1,
-                             sampling.max_substeps);
+    const int m =
+        std::clamp(static_cast<int>(std::ceil(len / sampling.step)), 1, sampling.max_substeps);
     for (int k = 1; k <= m; ++k) {
       const double f = static_cast<double>(k) / m;
       qm = (1.0 - f) * q[i - 1] + f * q[i];

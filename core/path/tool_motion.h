@@ -43,6 +43,7 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
 void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics& actual,
                       const std::vector<ClPoint>& path, const std::vector<JointVector>& q_nominal,
                       const std::vector<JointVector>& q_actual, const MotionSampling& sampling,
-                      std::vector<ToolPlacement>* nominal_out, std::vector<ToolPlacement>* actual_out);
+                      std::vector<ToolPlacement>* nominal_out,
+                      std::vector<ToolPlacement>* actual_out);
 
 }  // namespace tolver

@@ -1,15 +1,14 @@
 #include "core/path/tool_path_prediction.h"
 
-#include "core/model/effects.h"
-
 #include <algorithm>
 #include <array>
-#include <cstring>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 
 #include "core/kinematics/forward_kinematics.h"
+#include "core/model/effects.h"
 #include "core/model/rigid_transform.h"
 #include "core/numerics/lanes.h"
 #include "core/numerics/units.h"
@@ -191,8 +190,7 @@ struct BlockSums {  // (a value apart from the failures: the loop keeps it in re
   // Rapids (positioning, home moves) are counted apart: the headline figures are the cut's.
   int rapid_points = 0, rapid_max_index = -1;
   double rapid_max_deviation = 0.0;
-  TOLVER_LANE_INLINE void add(size_t i, const ClPoint& cl, bool singular, double d,
-                              double angle) {
+  TOLVER_LANE_INLINE void add(size_t i, const ClPoint& cl, bool singular, double d, double angle) {
     if (singular) {
       if (singular_points == 0) first_singular_line = cl.line;
       ++singular_points;
@@ -225,8 +223,8 @@ struct BlockTally {
     double value;
   };
   std::vector<Failure> failures;  // the block's first max_failures
-  void fail(size_t i, const ClPoint& cl, IkStatus status, int violated_axis,
-            double violated_value, int max_failures, int axes) {
+  void fail(size_t i, const ClPoint& cl, IkStatus status, int violated_axis, double violated_value,
+            int max_failures, int axes) {
     const int axis = status == IkStatus::OutOfTravel ? violated_axis : -1;
     ++failed;
     ++failed_per_axis[axis >= 0 ? axis : axes];
@@ -238,8 +236,8 @@ struct BlockTally {
 namespace {
 
 // The tallies of consecutive blocks, in path order, into the result's failures and summary.
-void mergeTallies(const MachineModel& model, const std::vector<BlockTally>& tallies,
-                  size_t points, int max_failures, PredictionResult& result) {
+void mergeTallies(const MachineModel& model, const std::vector<BlockTally>& tallies, size_t points,
+                  int max_failures, PredictionResult& result) {
   const int axes = static_cast<int>(model.axes.size());
   PredictionSummary& s = result.summary;
   double sum2 = 0.0, sum2_angle = 0.0;
@@ -317,8 +315,8 @@ size_t blockCount(size_t points) {
   return (points + InverseKinematics::kBlock - 1) / InverseKinematics::kBlock;
 }
 
-void prepare(const MachineModel& model, const std::vector<ClPoint>& path,
-             PredictionResult& result, std::vector<BlockTally>& tallies) {
+void prepare(const MachineModel& model, const std::vector<ClPoint>& path, PredictionResult& result,
+             std::vector<BlockTally>& tallies) {
   result.failures.clear();
   result.failed_points = 0;
   result.failures_per_axis.assign(model.axes.size() + 1, 0);
@@ -530,10 +528,10 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
   PredictedPoint out;
   for (size_t i = 0; i < path.size(); ++i) {
     const ClPoint& cl = path[i];
-    IkSolution sol =
-        commanded ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
-                  : ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(), previous_sin.data(),
-                             i % BlockPrediction::kExactEvery == 0);
+    IkSolution sol = commanded
+                         ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
+                         : ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(),
+                                    previous_sin.data(), i % BlockPrediction::kExactEvery == 0);
     if (commanded && sol.status == IkStatus::Ok) keepCommanded(ik, cl, (*commanded)[i], sol);
     if (sol.status != IkStatus::Ok) {
       result.points.setFailed(i);

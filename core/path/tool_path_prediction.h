@@ -18,19 +18,19 @@ namespace tolver {
 struct ClPoint {
   Eigen::Vector3d p_w = Eigen::Vector3d::Zero();
   Eigen::Vector3d u_w = Eigen::Vector3d::UnitZ();
-  int line = 0;  // source line in the CL file (1-based), for messages
+  int line = 0;        // source line in the CL file (1-based), for messages
   bool rapid = false;  // a positioning move (APT RAPID), not a cutting move
 };
 
 // One predicted point, as a value: PredictedPoints assembles it from its arrays.
 struct PredictedPoint {
-  JointVector q;                       // joint values from nominal IK (mm, rad)
-  Eigen::Vector3d p_pred_w;            // predicted tool tip (mm)
-  Eigen::Vector3d u_pred_w;            // predicted unit tool axis
-  Eigen::Vector3d deviation_w;         // p_pred_w - p_w (mm)
-  double along_axis = 0.0;             // deviation . u_w (mm)
-  double across_axis = 0.0;            // |deviation - along u_w| (mm)
-  double axis_angle = 0.0;             // angle between u_w and u_pred_w (rad)
+  JointVector q;                // joint values from nominal IK (mm, rad)
+  Eigen::Vector3d p_pred_w;     // predicted tool tip (mm)
+  Eigen::Vector3d u_pred_w;     // predicted unit tool axis
+  Eigen::Vector3d deviation_w;  // p_pred_w - p_w (mm)
+  double along_axis = 0.0;      // deviation . u_w (mm)
+  double across_axis = 0.0;     // |deviation - along u_w| (mm)
+  double axis_angle = 0.0;      // angle between u_w and u_pred_w (rad)
   bool singular = false;
 };
 
@@ -41,8 +41,21 @@ struct PredictedPoint {
 class PredictedPoints {
  public:
   // The numbers of a point after its joint values, one array each.
-  enum Field { kTipX, kTipY, kTipZ, kAxisX, kAxisY, kAxisZ, kDevX, kDevY, kDevZ, kAlong,
-               kAcross, kAngle, kFields };
+  enum Field {
+    kTipX,
+    kTipY,
+    kTipZ,
+    kAxisX,
+    kAxisY,
+    kAxisZ,
+    kDevX,
+    kDevY,
+    kDevZ,
+    kAlong,
+    kAcross,
+    kAngle,
+    kFields
+  };
   size_t size() const { return n_; }
   bool empty() const { return n_ == 0; }
   int axes() const { return axes_; }
@@ -94,10 +107,10 @@ class PredictedPoints {
 };
 
 struct PredictionFailure {
-  int index = 0;       // CL point index
-  int line = 0;        // CL file line
+  int index = 0;  // CL point index
+  int line = 0;   // CL file line
   IkStatus status = IkStatus::Ok;
-  int axis = -1;       // with OutOfTravel: the axis that breaks its travel first
+  int axis = -1;  // with OutOfTravel: the axis that breaks its travel first
   std::string message;
 };
 
@@ -108,20 +121,20 @@ struct PredictionSummary {
   int points = 0;
   int singular_points = 0;
   int first_singular_line = 0;
-  double max_deviation = 0.0;   // mm, |deviation_w|, over cutting points
-  double rms_deviation = 0.0;   // mm, over cutting points
-  int max_index = -1;           // cutting point with the largest deviation
-  double max_axis_angle = 0.0;  // rad, over cutting points
-  double rms_axis_angle = 0.0;  // rad
-  int rapid_points = 0;         // rapids predicted, not in the figures above
+  double max_deviation = 0.0;        // mm, |deviation_w|, over cutting points
+  double rms_deviation = 0.0;        // mm, over cutting points
+  int max_index = -1;                // cutting point with the largest deviation
+  double max_axis_angle = 0.0;       // rad, over cutting points
+  double rms_axis_angle = 0.0;       // rad
+  int rapid_points = 0;              // rapids predicted, not in the figures above
   double rapid_max_deviation = 0.0;  // mm
   int rapid_max_index = -1;
 };
 
 struct PredictionResult {
-  PredictedPoints points;                 // one per CL point; NaN where IK failed
+  PredictedPoints points;                   // one per CL point; NaN where IK failed
   std::vector<PredictionFailure> failures;  // the first max_failures
-  int failed_points = 0;                  // all of them
+  int failed_points = 0;                    // all of them
   // Failing points per axis that breaks first (index as model.axes; the last entry counts the
   // points with no axis to blame: unreachable orientation, singular prismatic system).
   std::vector<int> failures_per_axis;
@@ -141,8 +154,7 @@ PredictionResult predictToolPath(const MachineModel& model, const Eigen::VectorX
 // many points): for batch work over many programs.
 void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                      const std::vector<ClPoint>& path, PredictionResult& result,
-                     int max_failures = 20,
-                     const std::vector<JointVector>* commanded = nullptr);
+                     int max_failures = 20, const std::vector<JointVector>* commanded = nullptr);
 
 // batch: false takes the reference path, one point at a time, that the batch path (four
 // or eight points side by side, when the model allows: InverseKinematics and ForwardKinematics
@@ -184,7 +196,7 @@ class BlockPrediction {
   // The block's points and tally, in w's scratch, from cursor, which is left as the block's
   // last point leaves it.
   void predict(size_t block, Work& w, Cursor& cursor) const;
-  void finish();  // after the last block: failures and summary
+  void finish();     // after the last block: failures and summary
   Cursor& cursor();  // the prediction's own
   // The two cursors lead the choice of the blocks after them to the same bits.
   bool sameCursor(const Cursor& a, const Cursor& b) const;

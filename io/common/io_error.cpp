@@ -7,9 +7,9 @@
 
 #include <cctype>
 #include <cerrno>
-#include <filesystem>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -76,7 +76,8 @@ InputError::InputError(const std::string& field, const std::string& message)
 namespace {
 void writeTemporary(const std::string& path, const std::string& tmp, const std::string& content) {
   std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-  if (!out) throw InputError(path, 0, 0, "output", std::string("cannot write: ") + std::strerror(errno));
+  if (!out)
+    throw InputError(path, 0, 0, "output", std::string("cannot write: ") + std::strerror(errno));
   out << content;
   out.flush();
   if (!out) {
@@ -113,7 +114,8 @@ void writeFileAtomically(const std::string& path, const std::string& content) {
   one.commit();
 }
 
-std::string OutputSet::addWritten(const std::string& path, const std::function<bool(const std::string&)>& write) {
+std::string OutputSet::addWritten(const std::string& path,
+                                  const std::function<bool(const std::string&)>& write) {
   const std::string tmp = path + ".tmp-tolver";
   pending_.emplace_back(tmp, path);  // removed by the destructor if anything below fails
   if (!write(tmp)) throw InputError(path, 0, 0, "output", "cannot write the file");
@@ -128,7 +130,8 @@ bool TextOut::flush() {
   return ok_;
 }
 
-std::string OutputSet::addStreamed(const std::string& path, const std::function<void(TextOut&)>& fill) {
+std::string OutputSet::addStreamed(const std::string& path,
+                                   const std::function<void(TextOut&)>& fill) {
   return addWritten(path, [&](const std::string& tmp) {
     std::FILE* f = std::fopen(tmp.c_str(), "wb");
     if (!f) return false;
@@ -169,17 +172,22 @@ ReportDirectory::ReportDirectory(const std::string& dir, const char* option) : o
   std::error_code ec;
   fs::create_directories(parent, ec);
   if (ec || !fs::is_directory(parent, ec))
-    throw InputError(dir, 0, 0, option_, "cannot create the directory" + (ec ? ": " + ec.message() : std::string()));
+    throw InputError(dir, 0, 0, option_,
+                     "cannot create the directory" + (ec ? ": " + ec.message() : std::string()));
   if (fs::exists(final_path, ec) && !fs::is_directory(final_path, ec))
     throw InputError(dir, 0, 0, option_, "names a file, not a directory");
   const std::string name = final_path.filename().string();
   const std::string lock = (parent / ("." + name + ".lock")).string();
   lock_fd_ = ::open(lock.c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
-  if (lock_fd_ < 0) throw InputError(dir, 0, 0, option_, std::string("cannot write beside it: ") + std::strerror(errno));
+  if (lock_fd_ < 0)
+    throw InputError(dir, 0, 0, option_,
+                     std::string("cannot write beside it: ") + std::strerror(errno));
   if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
     ::close(lock_fd_);
     lock_fd_ = -1;
-    throw InputError(dir, 0, 0, option_, "another tolver run is writing this report directory now; wait for it or give another");
+    throw InputError(
+        dir, 0, 0, option_,
+        "another tolver run is writing this report directory now; wait for it or give another");
   }
   // Staging directories a killed run left behind (the lock is ours: nobody is writing them).
   const std::string stale = "." + name + ".tmp-";
@@ -197,10 +205,12 @@ void ReportDirectory::commit() {
   if (fs::is_directory(final_, ec)) {
     // Swap the new report in with one atomic step; the old one is then at the staging name.
     if (::renameat2(AT_FDCWD, staging_.c_str(), AT_FDCWD, final_.c_str(), RENAME_EXCHANGE) != 0)
-      throw InputError(final_, 0, 0, option_, std::string("cannot replace the directory: ") + std::strerror(errno));
+      throw InputError(final_, 0, 0, option_,
+                       std::string("cannot replace the directory: ") + std::strerror(errno));
     fs::remove_all(staging_, ec);
   } else if (::rename(staging_.c_str(), final_.c_str()) != 0) {
-    throw InputError(final_, 0, 0, option_, std::string("cannot create the directory: ") + std::strerror(errno));
+    throw InputError(final_, 0, 0, option_,
+                     std::string("cannot create the directory: ") + std::strerror(errno));
   }
   committed_ = true;
 }

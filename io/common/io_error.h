@@ -2,8 +2,8 @@
 // Errors in files and options: thrown at the io boundary, caught once by the CLI, which prints
 // what() as one line and exits with code 2.
 #include <cstdio>
-#include <stdexcept>
 #include <functional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <utility>
@@ -84,7 +84,8 @@ class OutputSet {
   std::string add(const std::string& path, const std::string& content);
   // The same for a file a library writes itself (VTK, assimp): write(temporary) returns false
   // when it failed.
-  std::string addWritten(const std::string& path, const std::function<bool(const std::string&)>& write);
+  std::string addWritten(const std::string& path,
+                         const std::function<bool(const std::string&)>& write);
   // The same for text made in pieces (TextOut), written as it is made.
   std::string addStreamed(const std::string& path, const std::function<void(TextOut&)>& fill);
   void commit();

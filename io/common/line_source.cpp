@@ -14,7 +14,8 @@ constexpr size_t kBlockBytes = size_t{1} << 16;
 
 std::unique_ptr<std::FILE, void (*)(std::FILE*)> openOrThrow(const std::string& path) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (f == nullptr) throw InputError(path, 0, 0, "", std::string("cannot open: ") + std::strerror(errno));
+  if (f == nullptr)
+    throw InputError(path, 0, 0, "", std::string("cannot open: ") + std::strerror(errno));
   return {f, [](std::FILE* g) { std::fclose(g); }};
 }
 }  // namespace

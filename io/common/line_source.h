@@ -36,8 +36,8 @@ class LineSource {
   };
   std::unique_ptr<std::FILE, FileCloser> file_;
   std::string name_;
-  std::string buf_;         // the file's block being read
-  std::string_view rest_;   // what is left to read: of buf_, or of the caller's text
+  std::string buf_;        // the file's block being read
+  std::string_view rest_;  // what is left to read: of buf_, or of the caller's text
   bool first_ = true;
   size_t size_hint_ = 0;
 };

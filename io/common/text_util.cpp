@@ -49,7 +49,7 @@ std::vector<std::string> splitLines(const std::string& text) {
 std::vector<std::string> splitCsvLine(const std::string& line) {
   std::vector<std::string> out;
   std::string cur;
-  bool quoted = false;     // inside a quoted cell
+  bool quoted = false;      // inside a quoted cell
   bool was_quoted = false;  // the current cell was quoted: keep its inner spaces
   for (size_t i = 0; i < line.size(); ++i) {
     const char c = line[i];
@@ -78,9 +78,10 @@ std::vector<std::string> splitCsvLine(const std::string& line) {
 }
 
 std::string csvField(std::string_view cell) {
-  const bool edge_space = !cell.empty() && (cell.front() == ' ' || cell.back() == ' ' || cell.front() == '\t' ||
-                                            cell.back() == '\t');
-  if (cell.find_first_of(",\"\r\n") == std::string_view::npos && !edge_space) return std::string(cell);
+  const bool edge_space = !cell.empty() && (cell.front() == ' ' || cell.back() == ' ' ||
+                                            cell.front() == '\t' || cell.back() == '\t');
+  if (cell.find_first_of(",\"\r\n") == std::string_view::npos && !edge_space)
+    return std::string(cell);
   std::string out = "\"";
   for (char c : cell) {
     if (c == '"') out += '"';
@@ -125,11 +126,20 @@ std::string xmlEscape(std::string_view s) {
   std::string o;
   for (char c : s) {
     switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
+      case '&':
+        o += "&amp;";
+        break;
+      case '<':
+        o += "&lt;";
+        break;
+      case '>':
+        o += "&gt;";
+        break;
+      case '"':
+        o += "&quot;";
+        break;
+      default:
+        o += c;
     }
   }
   return o;
@@ -142,7 +152,8 @@ std::string base64Encode(const std::string& in) {
   size_t i = 0;
   for (; i + 2 < in.size(); i += 3) {
     const unsigned v = (static_cast<unsigned char>(in[i]) << 16) |
-                       (static_cast<unsigned char>(in[i + 1]) << 8) | static_cast<unsigned char>(in[i + 2]);
+                       (static_cast<unsigned char>(in[i + 1]) << 8) |
+                       static_cast<unsigned char>(in[i + 2]);
     out += k[v >> 18];
     out += k[(v >> 12) & 63];
     out += k[(v >> 6) & 63];
@@ -170,8 +181,9 @@ int CsvRow::column(const std::string& name) const {
   return it == columns->end() ? 0 : it->second + 1;
 }
 
-void forEachCsvRow(const std::string& text, const std::string& file, const std::vector<std::string>& required,
-                   const std::string& missing_message, const std::function<void(const CsvRow&)>& row,
+void forEachCsvRow(const std::string& text, const std::string& file,
+                   const std::vector<std::string>& required, const std::string& missing_message,
+                   const std::function<void(const CsvRow&)>& row,
                    const std::function<void(const CsvHeader&)>& header) {
   const auto lines = splitLines(text);
   CsvHeader h;
@@ -187,7 +199,8 @@ void forEachCsvRow(const std::string& text, const std::string& file, const std::
       h.line = line;
       for (size_t k = 0; k < cells.size(); ++k) {
         const std::string name = toLower(cells[k]);
-        if (h.columns.count(name)) throw InputError(file, line, static_cast<int>(k) + 1, name, "column named twice");
+        if (h.columns.count(name))
+          throw InputError(file, line, static_cast<int>(k) + 1, name, "column named twice");
         h.columns[name] = static_cast<int>(k);
       }
       for (const std::string& r : required)

@@ -35,7 +35,7 @@ struct CsvHeader {
 };
 // One data line of a headered CSV table (forEachCsvRow).
 struct CsvRow {
-  int line = 0;                                // 1-based line in the file
+  int line = 0;  // 1-based line in the file
   const std::vector<std::string>* cells = nullptr;
   const std::map<std::string, int>* columns = nullptr;  // header name -> 0-based index
   // The cell under the header name, "" when the column or the cell is absent.
@@ -46,8 +46,9 @@ struct CsvRow {
 // Reads a headered CSV table (see above): the header is passed to `header` (when given), every
 // later line to `row`. No header line, a column named twice, or a required column missing throws
 // InputError(file, header line, 0, column, missing_message for the last).
-void forEachCsvRow(const std::string& text, const std::string& file, const std::vector<std::string>& required,
-                   const std::string& missing_message, const std::function<void(const CsvRow&)>& row,
+void forEachCsvRow(const std::string& text, const std::string& file,
+                   const std::vector<std::string>& required, const std::string& missing_message,
+                   const std::function<void(const CsvRow&)>& row,
                    const std::function<void(const CsvHeader&)>& header = {});
 // Strict number: the whole (trimmed) token must be a finite decimal number ("1.", "-.5",
 // "1.0E-3", "+2"); returns nullopt otherwise.

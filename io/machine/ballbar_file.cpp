@@ -5,9 +5,9 @@
 #include <cstdio>
 #include <map>
 
+#include "core/numerics/units.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
-#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -32,7 +32,7 @@ std::string axisColumn(const Axis& ax) { return lower(ax.name) + (ax.isRotary() 
 BallbarFile parseBallbarCsv(const std::string& text, const std::string& file, const MachineModel& m,
                             bool require_length) {
   BallbarFile out;
-  std::vector<std::string> required = {"setup",          "table_ball_x_mm", "table_ball_y_mm",
+  std::vector<std::string> required = {"setup",           "table_ball_x_mm", "table_ball_y_mm",
                                        "table_ball_z_mm", "tool_ball_x_mm",  "tool_ball_y_mm",
                                        "tool_ball_z_mm"};
   for (const Axis& ax : m.axes) required.push_back(axisColumn(ax));
@@ -74,15 +74,20 @@ BallbarFile parseBallbarCsv(const std::string& text, const std::string& file, co
       if (!(std::abs(*v) <= limit) || (name == "time_s" && *v < 0))
         throw InputError(file, line, k + 1, name,
                          "'" + cells[k] + "' is out of range (" +
-                             (name == "time_s" ? std::string("0 to 1e9 s") : deg ? "within 1e4 deg" : "within 1e6 mm") + ")");
+                             (name == "time_s" ? std::string("0 to 1e9 s")
+                              : deg            ? "within 1e4 deg"
+                                               : "within 1e6 mm") +
+                             ")");
       return *v;
     };
     BallbarReading r;
     r.line = line;
     const double sid = value("setup");
     if (sid != std::floor(sid)) throw InputError(file, line, 0, "setup", "expected an integer");
-    const Eigen::Vector3d bw(value("table_ball_x_mm"), value("table_ball_y_mm"), value("table_ball_z_mm"));
-    const Eigen::Vector3d bt(value("tool_ball_x_mm"), value("tool_ball_y_mm"), value("tool_ball_z_mm"));
+    const Eigen::Vector3d bw(value("table_ball_x_mm"), value("table_ball_y_mm"),
+                             value("table_ball_z_mm"));
+    const Eigen::Vector3d bt(value("tool_ball_x_mm"), value("tool_ball_y_mm"),
+                             value("tool_ball_z_mm"));
     const int id = static_cast<int>(sid);
     auto it = setup_index.find(id);
     if (it == setup_index.end()) {
@@ -125,7 +130,8 @@ BallbarFile parseBallbarCsv(const std::string& text, const std::string& file, co
   return out;
 }
 
-BallbarFile readBallbarFile(const std::string& path, const MachineModel& model, bool require_length) {
+BallbarFile readBallbarFile(const std::string& path, const MachineModel& model,
+                            bool require_length) {
   return parseBallbarCsv(readFile(path), path, model, require_length);
 }
 
@@ -133,9 +139,13 @@ std::string formatBallbarCsv(const MachineModel& m, const BallbarTest& test, boo
                              const std::vector<std::string>& comments) {
   std::string out;
   for (const std::string& c : comments) out += "# " + c + "\n";
-  out += "setup,table_ball_x_mm,table_ball_y_mm,table_ball_z_mm,tool_ball_x_mm,tool_ball_y_mm,"
-         "tool_ball_z_mm";
-  for (const Axis& ax : m.axes) { out += ","; out += axisColumn(ax); }
+  out +=
+      "setup,table_ball_x_mm,table_ball_y_mm,table_ball_z_mm,tool_ball_x_mm,tool_ball_y_mm,"
+      "tool_ball_z_mm";
+  for (const Axis& ax : m.axes) {
+    out += ",";
+    out += axisColumn(ax);
+  }
   bool any_time = false;
   for (const BallbarReading& r : test.readings) any_time |= !std::isnan(r.context.time_s);
   if (any_time) out += ",time_s";
@@ -180,7 +190,8 @@ void alignHeldout(BallbarTest& heldout, const BallbarTest& fit, const std::strin
                        setupText(h.id) + " is not in the fit readings " + fit_file +
                            ": held-out readings must come from the fit's set-ups");
     const BallbarSetup& f = fit.setups[to_fit[k]];
-    if ((f.table_ball_w - h.table_ball_w).norm() > 1e-6 || (f.tool_ball_t - h.tool_ball_t).norm() > 1e-6)
+    if ((f.table_ball_w - h.table_ball_w).norm() > 1e-6 ||
+        (f.tool_ball_t - h.tool_ball_t).norm() > 1e-6)
       throw InputError(file, first_line, 0, "setup",
                        setupText(h.id) + " has other nominal ball positions than in " + fit_file);
   }
@@ -200,8 +211,9 @@ std::string formatBallPositionsCsv(const BallbarTest& test, const std::vector<Ba
                                    const std::vector<std::string>& comments) {
   std::string out;
   for (const std::string& c : comments) out += "# " + c + "\n";
-  out += "setup,table_ball_x_mm,table_ball_y_mm,table_ball_z_mm,tool_ball_x_mm,tool_ball_y_mm,"
-         "tool_ball_z_mm";
+  out +=
+      "setup,table_ball_x_mm,table_ball_y_mm,table_ball_z_mm,tool_ball_x_mm,tool_ball_y_mm,"
+      "tool_ball_z_mm";
   if (uncertainty)
     out += ",u_table_x_um,u_table_y_um,u_table_z_um,u_tool_x_um,u_tool_y_um,u_tool_z_um";
   out += "\n";
@@ -209,7 +221,8 @@ std::string formatBallPositionsCsv(const BallbarTest& test, const std::vector<Ba
   for (size_t k = 0; k < test.setups.size(); ++k) {
     const BallbarSetup& s = test.setups[k];
     out += std::to_string(s.id);
-    const Eigen::Vector3d w = s.table_ball_w + balls[k].table_w, t = s.tool_ball_t + balls[k].tool_t;
+    const Eigen::Vector3d w = s.table_ball_w + balls[k].table_w,
+                          t = s.tool_ball_t + balls[k].tool_t;
     for (int i = 0; i < 3; ++i) (out += ",") += formatNumber(w[i]);
     for (int i = 0; i < 3; ++i) (out += ",") += formatNumber(t[i]);
     if (uncertainty) {
@@ -269,9 +282,9 @@ std::vector<BallErrors> parseBallPositionsCsv(const std::string& text, const std
                 });
   for (size_t k = 0; k < seen.size(); ++k)
     if (!seen[k])
-      throw InputError(file, 0, 0, "setup",
-                       "no ball positions for set-up " + std::to_string(test.setups[k].id) +
-                           " of the readings");
+      throw InputError(
+          file, 0, 0, "setup",
+          "no ball positions for set-up " + std::to_string(test.setups[k].id) + " of the readings");
   return out;
 }
 

@@ -25,7 +25,8 @@ struct BallbarFile {
 };
 
 // Throws InputError naming file, line and column on a bad row.
-BallbarFile readBallbarFile(const std::string& path, const MachineModel& model, bool require_length);
+BallbarFile readBallbarFile(const std::string& path, const MachineModel& model,
+                            bool require_length);
 BallbarFile parseBallbarCsv(const std::string& text, const std::string& file_name,
                             const MachineModel& model, bool require_length);
 

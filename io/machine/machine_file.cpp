@@ -3,17 +3,16 @@
 #include <tinyxml2.h>
 
 #include <Eigen/LU>
-
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <limits>
+#include <map>
 #include <sstream>
 
 #include "core/model/effects.h"
+#include "core/numerics/units.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
-#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -124,9 +123,12 @@ class Reader {
     c.declared = true;
     c.name = attr(e, "name", false, "");
     const std::string u = attr(e, "default_units", false, "mm");
-    if (u == "mm") c.default_unit_mm = 1.0;
-    else if (u == "inch") c.default_unit_mm = 25.4;
-    else fail(e, "control.default_units", "expected mm or inch, found '" + u + "'");
+    if (u == "mm")
+      c.default_unit_mm = 1.0;
+    else if (u == "inch")
+      c.default_unit_mm = 25.4;
+    else
+      fail(e, "control.default_units", "expected mm or inch, found '" + u + "'");
     if (e->Attribute("singular_band_deg")) {
       const double b = number(e, "singular_band_deg");
       if (!(b >= 0 && b <= 5)) fail(e, "control.singular_band_deg", "expected 0 to 5 degrees");
@@ -166,7 +168,8 @@ class Reader {
     const EffectTraits* t = findEffectType(type);
     if (!t) {
       std::string names;
-      for (const EffectTraits& x : effectTypes()) names += std::string(names.empty() ? "" : ", ") + x.name;
+      for (const EffectTraits& x : effectTypes())
+        names += std::string(names.empty() ? "" : ", ") + x.name;
       fail(e, "effect.type", "unknown effect type '" + type + "' (expected " + names + ")");
     }
     EffectSpec spec;
@@ -177,8 +180,9 @@ class Reader {
     }
     if (spec.type == EffectType::Chebyshev || spec.type == EffectType::Harmonics) {
       const std::vector<double> o = numbers(e, "orders", 2);
-      if (o[0] != std::floor(o[0]) || o[1] != std::floor(o[1]) || o[0] < (spec.type == EffectType::Harmonics ? 1 : 0) ||
-          o[1] < o[0] || o[1] - o[0] > 7 || o[1] > 30)
+      if (o[0] != std::floor(o[0]) || o[1] != std::floor(o[1]) ||
+          o[0] < (spec.type == EffectType::Harmonics ? 1 : 0) || o[1] < o[0] || o[1] - o[0] > 7 ||
+          o[1] > 30)
         fail(e, "effect.orders", "expected two integers 'first last' with at most eight orders");
       spec.first_order = static_cast<int>(o[0]);
       spec.last_order = static_cast<int>(o[1]);
@@ -243,27 +247,33 @@ class Reader {
       bool explicit_order = false;
     };
     std::vector<Pending> pending;
-    for (const XMLElement* e = root->FirstChildElement("axis"); e; e = e->NextSiblingElement("axis")) {
+    for (const XMLElement* e = root->FirstChildElement("axis"); e;
+         e = e->NextSiblingElement("axis")) {
       Axis ax = axis(e);
       for (const auto& p : pending)
-        if (toUpper(p.axis.name) == toUpper(ax.name)) fail(e, "axis.name", "duplicate axis " + ax.name);
+        if (toUpper(p.axis.name) == toUpper(ax.name))
+          fail(e, "axis.name", "duplicate axis " + ax.name);
       double order = static_cast<double>(pending.size());
       if (e->Attribute("order")) {
         order = number(e, "order");
         // Two axes at one place in a branch leave the chain's order to chance.
         for (const Pending& p : pending)
           if (p.axis.branch == ax.branch && p.order == order && p.explicit_order)
-            fail(e, "axis.order", "order " + formatNumber(order) + " is also axis " + p.axis.name + "'s in the " +
-                                      (ax.branch == Branch::Workpiece ? "workpiece" : "tool") + " branch");
+            fail(e, "axis.order",
+                 "order " + formatNumber(order) + " is also axis " + p.axis.name + "'s in the " +
+                     (ax.branch == Branch::Workpiece ? "workpiece" : "tool") + " branch");
       }
-      pending.push_back({ax, order, static_cast<int>(pending.size()), e->Attribute("order") != nullptr});
+      pending.push_back(
+          {ax, order, static_cast<int>(pending.size()), e->Attribute("order") != nullptr});
       if (pending.size() > static_cast<size_t>(kMaxAxes)) fail(e, "axis", "too many axes");
     }
     if (pending.empty()) fail(root, "axis", "the machine has no axes");
     for (const auto& p : pending) m.axes.push_back(p.axis);
     std::vector<Pending> sorted = pending;
-    std::stable_sort(sorted.begin(), sorted.end(), [](const Pending& a, const Pending& b) { return a.order < b.order; });
-    for (const auto& p : sorted) (p.axis.branch == Branch::Workpiece ? m.workpiece_chain : m.tool_chain).push_back(p.index);
+    std::stable_sort(sorted.begin(), sorted.end(),
+                     [](const Pending& a, const Pending& b) { return a.order < b.order; });
+    for (const auto& p : sorted)
+      (p.axis.branch == Branch::Workpiece ? m.workpiece_chain : m.tool_chain).push_back(p.index);
   }
 
   // One <axis>: name, type, branch, direction, travel, endless, nc_sign, its <link>.
@@ -272,13 +282,19 @@ class Reader {
     ax.name = attr(e, "name");
     if (ax.name.empty()) fail(e, "axis.name", "empty name");
     const std::string type = attr(e, "type");
-    if (type == "prismatic") ax.type = JointType::Prismatic;
-    else if (type == "rotary") ax.type = JointType::Rotary;
-    else fail(e, "axis.type", "expected prismatic or rotary, found '" + type + "'");
+    if (type == "prismatic")
+      ax.type = JointType::Prismatic;
+    else if (type == "rotary")
+      ax.type = JointType::Rotary;
+    else
+      fail(e, "axis.type", "expected prismatic or rotary, found '" + type + "'");
     const std::string branch = attr(e, "branch");
-    if (branch == "workpiece") ax.branch = Branch::Workpiece;
-    else if (branch == "tool") ax.branch = Branch::Tool;
-    else fail(e, "axis.branch", "expected workpiece or tool, found '" + branch + "'");
+    if (branch == "workpiece")
+      ax.branch = Branch::Workpiece;
+    else if (branch == "tool")
+      ax.branch = Branch::Tool;
+    else
+      fail(e, "axis.branch", "expected workpiece or tool, found '" + branch + "'");
     const auto d = numbers(e, "direction", 3);
     Eigen::Vector3d dir(d[0], d[1], d[2]);
     if (dir.norm() < 1e-9) fail(e, "axis.direction", "zero vector");
@@ -288,17 +304,22 @@ class Reader {
     ax.travel_max = number(e, "max") * k;
     // A rotary axis's travel may run many turns (LinuxCNC's XYZAC table: C within 36 000 deg).
     const double bound = ax.isRotary() ? 1e6 * M_PI / 180.0 : 1e6;
-    if (std::abs(ax.travel_min) > bound) fail(e, "axis.min", ax.isRotary() ? "beyond 1e6 deg" : "beyond 1e6 mm");
-    if (std::abs(ax.travel_max) > bound) fail(e, "axis.max", ax.isRotary() ? "beyond 1e6 deg" : "beyond 1e6 mm");
+    if (std::abs(ax.travel_min) > bound)
+      fail(e, "axis.min", ax.isRotary() ? "beyond 1e6 deg" : "beyond 1e6 mm");
+    if (std::abs(ax.travel_max) > bound)
+      fail(e, "axis.max", ax.isRotary() ? "beyond 1e6 deg" : "beyond 1e6 mm");
     if (!(ax.travel_min < ax.travel_max)) fail(e, "axis.max", "max must exceed min");
     const std::string endless = attr(e, "endless", false, "false");
     if (endless != "true" && endless != "false") fail(e, "axis.endless", "expected true or false");
     ax.endless = endless == "true";
     if (ax.endless && !ax.isRotary()) fail(e, "axis.endless", "only a rotary axis can be endless");
     const std::string sign = attr(e, "nc_sign", false, "1");
-    if (sign == "1" || sign == "+1") ax.nc_sign = 1;
-    else if (sign == "-1") ax.nc_sign = -1;
-    else fail(e, "axis.nc_sign", "expected +1 or -1");
+    if (sign == "1" || sign == "+1")
+      ax.nc_sign = 1;
+    else if (sign == "-1")
+      ax.nc_sign = -1;
+    else
+      fail(e, "axis.nc_sign", "expected +1 or -1");
     ax.parent_T_joint = frame(e->FirstChildElement("link"), angle_scale_);
     return ax;
   }
@@ -310,7 +331,8 @@ class Reader {
       bool rotary = false;
       for (const Axis& ax : m.axes) rotary = rotary || (ax.isRotary() && toUpper(ax.name) == n);
       if (!rotary || m.control.swivel_axes.size() != 2)
-        fail(c, "control.swivel_axes", "expected the names of the machine's two rotary axes, found '" + n + "'");
+        fail(c, "control.swivel_axes",
+             "expected the names of the machine's two rotary axes, found '" + n + "'");
     }
   }
 
@@ -321,7 +343,8 @@ class Reader {
     for (size_t a = 0; a < m.axes.size(); ++a)
       if (!m.axes[a].isRotary()) prismatic.push_back(static_cast<int>(a));
     Eigen::MatrixXd D(3, prismatic.size());
-    for (size_t k = 0; k < prismatic.size(); ++k) D.col(k) = m.axes[prismatic[k]].direction.normalized();
+    for (size_t k = 0; k < prismatic.size(); ++k)
+      D.col(k) = m.axes[prismatic[k]].direction.normalized();
     if (!prismatic.empty() && Eigen::FullPivLU<Eigen::MatrixXd>(D).setThreshold(1e-6).rank() <
                                   static_cast<Eigen::Index>(std::min<size_t>(3, prismatic.size())))
       fail(root->FirstChildElement("axis"), "axis.direction",
@@ -351,19 +374,21 @@ class Reader {
       bool ok;
       const std::string source = attr(errs, "source", false, "");
       static const char* sources[] = {"", "none", "measured", "identified", "simulated"};
-      if (std::find_if(std::begin(sources), std::end(sources), [&](const char* x) { return source == x; }) ==
-          std::end(sources))
+      if (std::find_if(std::begin(sources), std::end(sources),
+                       [&](const char* x) { return source == x; }) == std::end(sources))
         fail(errs, "errors.source", "expected none, measured, identified or simulated");
       m.errors_source = source;
       out.length = lengthUnit(attr(errs, "length_unit", false, "mm"), &ok);
       if (!ok) fail(errs, "errors.length_unit", "expected mm, um or inch");
       out.angle = angleUnit(attr(errs, "angle_unit", false, "rad"), &ok);
       if (!ok) fail(errs, "errors.angle_unit", "expected rad, urad, mrad, deg or arcsec");
-      if (errs->Attribute("default_degree")) default_degree = degree(errs, "errors.default_degree", "default_degree");
+      if (errs->Attribute("default_degree"))
+        default_degree = degree(errs, "errors.default_degree", "default_degree");
     }
     out.degrees.resize(m.axes.size());
     for (auto& d : out.degrees) d.fill(default_degree);
-    for (const XMLElement* e = errs ? errs->FirstChildElement() : nullptr; e; e = e->NextSiblingElement()) {
+    for (const XMLElement* e = errs ? errs->FirstChildElement() : nullptr; e;
+         e = e->NextSiblingElement()) {
       const std::string tag = e->Name();
       if (tag == "link") {
         out.links.push_back({e, axisRef(e, m), component(e), {number(e, "value")}});
@@ -372,13 +397,15 @@ class Reader {
         int deg = std::max<int>(default_degree, static_cast<int>(v.v.size()) - 1);
         if (e->Attribute("degree")) {
           deg = degree(e, "motion.degree", "degree");
-          if (static_cast<int>(v.v.size()) > deg + 1) fail(e, "motion.coefficients", "more coefficients than degree + 1");
+          if (static_cast<int>(v.v.size()) > deg + 1)
+            fail(e, "motion.coefficients", "more coefficients than degree + 1");
         }
         out.degrees[v.axis][v.component] = deg;
         out.motions.push_back(v);
       } else if (tag == "setup") {
         const std::string f = attr(e, "frame");
-        if (f != "workpiece" && f != "tool") fail(e, "setup.frame", "expected workpiece or tool, found '" + f + "'");
+        if (f != "workpiece" && f != "tool")
+          fail(e, "setup.frame", "expected workpiece or tool, found '" + f + "'");
         out.setups.push_back({e, f == "workpiece" ? 0 : 1, component(e), {number(e, "value")}});
       } else if (tag == "param") {
         out.named.emplace_back(e, number(e, "value"));
@@ -400,7 +427,8 @@ class Reader {
 
   // <aliases>: other names for parameters.
   void aliases(const XMLElement* al, MachineModel& m) {
-    for (const XMLElement* e = al->FirstChildElement("alias"); e; e = e->NextSiblingElement("alias")) {
+    for (const XMLElement* e = al->FirstChildElement("alias"); e;
+         e = e->NextSiblingElement("alias")) {
       const std::string name = attr(e, "name"), target = attr(e, "parameter");
       const int p = m.findParameter(target);
       if (p < 0) fail(e, "alias.parameter", "no parameter named '" + target + "'");
@@ -419,28 +447,35 @@ class Reader {
       const int size = m.parameterCount() - first;
       const std::vector<double> v = numbers(e, "values", 0);
       if (static_cast<int>(v.size()) != size)
-        fail(e, "effect.values", "expected " + std::to_string(size) + " values, found " + std::to_string(v.size()));
+        fail(e, "effect.values",
+             "expected " + std::to_string(size) + " values, found " + std::to_string(v.size()));
       out.params.conservativeResize(m.parameterCount());
       for (int k = 0; k < size; ++k)
-        out.params[first + k] = v[k] * (spec.axis < 0 ? errors.length : errors.scale(spec.component));
+        out.params[first + k] =
+            v[k] * (spec.axis < 0 ? errors.length : errors.scale(spec.component));
     }
     for (const ErrorValue& v : errors.links) {
-      const int b = std::find_if(m.blocks.begin(), m.blocks.end(), [&](const ParameterBlock& x) {
-                      return x.kind == BlockKind::LinkError && x.axis == v.axis;
-                    }) - m.blocks.begin();
+      const int b = std::find_if(m.blocks.begin(), m.blocks.end(),
+                                 [&](const ParameterBlock& x) {
+                                   return x.kind == BlockKind::LinkError && x.axis == v.axis;
+                                 }) -
+                    m.blocks.begin();
       out.params[m.blocks[b].offset + v.component] = v.v[0] * errors.scale(v.component);
     }
     for (const ErrorValue& v : errors.motions) {
       const ParameterBlock& b = m.blocks[m.motionBlock(v.axis, v.component)];
-      for (size_t k = 0; k < v.v.size(); ++k) out.params[b.offset + k] = v.v[k] * errors.scale(v.component);
+      for (size_t k = 0; k < v.v.size(); ++k)
+        out.params[b.offset + k] = v.v[k] * errors.scale(v.component);
     }
   }
 
   // <identification><prefer model= parameters=/>: the parameters a minimal set keeps first.
   void preferences(const XMLElement* id, MachineModel& m) {
-    for (const XMLElement* e = id->FirstChildElement("prefer"); e; e = e->NextSiblingElement("prefer")) {
+    for (const XMLElement* e = id->FirstChildElement("prefer"); e;
+         e = e->NextSiblingElement("prefer")) {
       const std::string model = attr(e, "model");
-      if (model != "link" && model != "motion") fail(e, "prefer.model", "expected link or motion, found '" + model + "'");
+      if (model != "link" && model != "motion")
+        fail(e, "prefer.model", "expected link or motion, found '" + model + "'");
       std::istringstream in(attr(e, "parameters"));
       std::string name;
       while (in >> name) {
@@ -481,15 +516,18 @@ class Reader {
     }
     if (u->Attribute("lack_of_fit_um")) {
       const double v = number(u, "lack_of_fit_um");
-      if (!(v >= 0 && v <= 1e4)) fail(u, "identification_uncertainty.lack_of_fit_um", "expected 0 to 10000 um");
+      if (!(v >= 0 && v <= 1e4))
+        fail(u, "identification_uncertainty.lack_of_fit_um", "expected 0 to 10000 um");
       id.lack_of_fit_mm = umToMm(v);
     }
     if (u->Attribute("spindle_tilt_urad")) {
       const double v = number(u, "spindle_tilt_urad");
-      if (!(v >= 0 && v <= 1e5)) fail(u, "identification_uncertainty.spindle_tilt_urad", "expected 0 to 100000 urad");
+      if (!(v >= 0 && v <= 1e5))
+        fail(u, "identification_uncertainty.spindle_tilt_urad", "expected 0 to 100000 urad");
       id.spindle_tilt_rad = v * 1e-6;
     }
-    for (const XMLElement* c = u->FirstChildElement("covered"); c; c = c->NextSiblingElement("covered")) {
+    for (const XMLElement* c = u->FirstChildElement("covered"); c;
+         c = c->NextSiblingElement("covered")) {
       const int a = m.axisIndex(attr(c, "axis"));
       if (a < 0) fail(c, "covered.axis", "no axis named '" + attr(c, "axis") + "'");
       if (id.covered_min.empty()) {
@@ -507,20 +545,23 @@ class Reader {
     std::vector<double> unit;
     for (std::string name; names >> name;) {
       const int p = m.findParameter(name);
-      if (p < 0) fail(cov, "covariance.parameters", "no parameter named '" + name.substr(0, 60) + "'");
+      if (p < 0)
+        fail(cov, "covariance.parameters", "no parameter named '" + name.substr(0, 60) + "'");
       id.parameters.push_back(p);
       unit.push_back(m.parameters[p].angular ? uradToRad(1.0) : umToMm(1.0));
     }
     const size_t n = id.parameters.size();
     id.covariance.resize(n, n);
     size_t r = 0;
-    for (const XMLElement* row = cov->FirstChildElement("row"); row; row = row->NextSiblingElement("row"), ++r) {
+    for (const XMLElement* row = cov->FirstChildElement("row"); row;
+         row = row->NextSiblingElement("row"), ++r) {
       if (r >= n) fail(row, "covariance.row", "more rows than parameters");
       std::istringstream in(row->GetText() ? row->GetText() : "");
       size_t c = 0;
       for (std::string tok; in >> tok; ++c) {
         const auto x = parseNumber(tok);
-        if (!x || c >= n) fail(row, "covariance.row", x ? "more values than parameters" : "malformed number");
+        if (!x || c >= n)
+          fail(row, "covariance.row", x ? "more values than parameters" : "malformed number");
         id.covariance(r, c) = *x * unit[r] * unit[c];
       }
       if (c != n) fail(row, "covariance.row", "expected " + std::to_string(n) + " values");
@@ -554,7 +595,8 @@ class MachineXmlWriter {
     p_.PushDeclaration("xml version=\"1.0\" encoding=\"UTF-8\"");
     if (!comment.empty()) {
       std::string text = comment;  // XML forbids "--" inside a comment
-      for (size_t k = text.find("--"); k != std::string::npos; k = text.find("--", k)) text.replace(k, 2, "- -");
+      for (size_t k = text.find("--"); k != std::string::npos; k = text.find("--", k))
+        text.replace(k, 2, "- -");
       p_.PushComment((" " + text + " ").c_str());
     }
     p_.OpenElement("machine");
@@ -588,7 +630,8 @@ class MachineXmlWriter {
     const double rx = std::atan2(R(2, 1), R(2, 2)), rz = std::atan2(R(1, 0), R(0, 0));
     const Eigen::Vector3d t = T.translation();
     attr("translation", joined({formatNumber(t.x()), formatNumber(t.y()), formatNumber(t.z())}));
-    attr("rotation", joined({formatNumber(radToDeg(rx)), formatNumber(radToDeg(ry)), formatNumber(radToDeg(rz))}));
+    attr("rotation", joined({formatNumber(radToDeg(rx)), formatNumber(radToDeg(ry)),
+                             formatNumber(radToDeg(rz))}));
   }
   void frame(const char* element, const Eigen::Isometry3d& T) {
     p_.OpenElement(element);
@@ -598,7 +641,8 @@ class MachineXmlWriter {
   void axis(int a) {
     const Axis& ax = m_.axes[a];
     const auto& chain = ax.branch == Branch::Workpiece ? m_.workpiece_chain : m_.tool_chain;
-    const int order = static_cast<int>(std::find(chain.begin(), chain.end(), a) - chain.begin()) + 1;
+    const int order =
+        static_cast<int>(std::find(chain.begin(), chain.end(), a) - chain.begin()) + 1;
     const double k = ax.isRotary() ? radToDeg(1.0) : 1.0;
     p_.OpenElement("axis");
     attr("name", ax.name);
@@ -648,7 +692,8 @@ class MachineXmlWriter {
   }
   // A value in the file's error units: um, urad.
   std::string value(int p) const {
-    return formatNumber(m_.parameters[p].angular ? radToUrad(machine_.params[p]) : mmToUm(machine_.params[p]));
+    return formatNumber(m_.parameters[p].angular ? radToUrad(machine_.params[p])
+                                                 : mmToUm(machine_.params[p]));
   }
   std::string values(int offset, int count) const {
     std::vector<std::string> v;
@@ -699,7 +744,8 @@ class MachineXmlWriter {
       switch (b.kind) {
         case BlockKind::LinkError:
           for (int c = 0; c < 6; ++c)
-            if (q[b.offset + c] != 0.0) component("link", "axis", m_.axes[b.axis].name, c, b.offset + c);
+            if (q[b.offset + c] != 0.0)
+              component("link", "axis", m_.axes[b.axis].name, c, b.offset + c);
           break;
         case BlockKind::MotionError: {
           bool any = b.degree != def;
@@ -717,7 +763,9 @@ class MachineXmlWriter {
         case BlockKind::ToolSetup:
           for (int c = 0; c < 6; ++c)
             if (q[b.offset + c] != 0.0)
-              component("setup", "frame", b.kind == BlockKind::WorkpieceSetup ? "workpiece" : "tool", c, b.offset + c);
+              component("setup", "frame",
+                        b.kind == BlockKind::WorkpieceSetup ? "workpiece" : "tool", c,
+                        b.offset + c);
           break;
         case BlockKind::Effect:
           effect(b);
@@ -745,8 +793,9 @@ class MachineXmlWriter {
     attr("readings", std::to_string(id.readings));
     if (id.lack_of_fit_mm > 0) attr("lack_of_fit_um", mmToUm(id.lack_of_fit_mm));
     if (id.spindle_tilt_rad > 0) attr("spindle_tilt_urad", id.spindle_tilt_rad * 1e6);
-    p_.PushComment(" the joint ranges the readings covered (mm, deg), and the covariance of the identified "
-                   "values (um and urad) ");
+    p_.PushComment(
+        " the joint ranges the readings covered (mm, deg), and the covariance of the identified "
+        "values (um and urad) ");
     for (size_t a = 0; a < id.covered_min.size() && a < m_.axes.size(); ++a) {
       const double k = m_.axes[a].isRotary() ? radToDeg(1.0) : 1.0;
       p_.OpenElement("covered");
@@ -805,8 +854,6 @@ Machine parseMachineXml(const std::string& xml, const std::string& file_name) {
   return Reader(file_name).read(xml);
 }
 
-Machine readMachineFile(const std::string& path) {
-  return parseMachineXml(readFile(path), path);
-}
+Machine readMachineFile(const std::string& path) { return parseMachineXml(readFile(path), path); }
 
 }  // namespace tolver

@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "core/model/machine_model.h"
 #include "core/allocation/tolerance_allocation.h"
+#include "core/model/machine_model.h"
 
 namespace tolver {
 

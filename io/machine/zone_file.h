@@ -20,7 +20,8 @@ namespace tolver {
 // above 1 mm it is more likely micrometres written as millimetres (30 for 0.030) than meant, and
 // is refused unless confirmed (--tolerance-units mm). Throws InputError(file, line, column,
 // "tolerance", ...).
-void checkToleranceSize(double tolerance_mm, bool confirmed, const std::string& file, int line, int column);
+void checkToleranceSize(double tolerance_mm, bool confirmed, const std::string& file, int line,
+                        int column);
 
 // Throws InputError naming file, line and column. large_confirmed: tolerances above 1 mm are
 // meant (checkToleranceSize).

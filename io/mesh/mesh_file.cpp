@@ -1,9 +1,11 @@
 #include "io/mesh/mesh_file.h"
 
 #include <assimp/postprocess.h>
-#include <tinyxml2.h>
-#include <unzip.h>
 #include <assimp/scene.h>
+#include <sys/wait.h>
+#include <tinyxml2.h>
+#include <unistd.h>
+#include <unzip.h>
 #include <vtkCellArray.h>
 #include <vtkDoubleArray.h>
 #include <vtkNew.h>
@@ -15,16 +17,14 @@
 #include <algorithm>
 #include <assimp/Importer.hpp>
 #include <cctype>
+#include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <vector>
-#include <string_view>
-#include <cerrno>
-#include <csignal>
-#include <sys/wait.h>
-#include <unistd.h>
 #include <fstream>
+#include <string_view>
+#include <vector>
 
 #include "io/common/io_error.h"
 
@@ -34,7 +34,8 @@ namespace {
 std::string lowerExtension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   if (!ext.empty() && ext[0] == '.') ext.erase(0, 1);
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return std::tolower(c); });
   return ext;
 }
 
@@ -105,9 +106,9 @@ void checkPlyAsciiBody(const std::string& path, const std::string& text, size_t 
       do {
         if (at >= text.size())
           throw InputError(path, line, 0, "PLY body",
-                           "the file ends before " + e.name + " " + std::to_string(i + 1) + " of the " +
-                               std::to_string(e.count) + " its header declares (line " +
-                               std::to_string(e.line) + ")");
+                           "the file ends before " + e.name + " " + std::to_string(i + 1) +
+                               " of the " + std::to_string(e.count) +
+                               " its header declares (line " + std::to_string(e.line) + ")");
         size_t end = text.find('\n', at);
         if (end == std::string::npos) end = text.size();
         row = std::string_view(text).substr(at, end - at);
@@ -118,8 +119,9 @@ void checkPlyAsciiBody(const std::string& path, const std::string& text, size_t 
       tokens = words(row);
       size_t k = 0;
       auto fail = [&](const std::string& why) {
-        throw InputError(path, line - 1, 0, "PLY body",
-                         e.name + " " + std::to_string(i + 1) + " '" + printable(row) + "': " + why);
+        throw InputError(
+            path, line - 1, 0, "PLY body",
+            e.name + " " + std::to_string(i + 1) + " '" + printable(row) + "': " + why);
       };
       auto number = [&] {
         if (k >= tokens.size()) fail("fewer numbers than the header's properties take");
@@ -170,7 +172,8 @@ void checkPlyBinaryBody(const std::string& path, const std::string& bytes, size_
         if (bytes.size() - at < static_cast<size_t>(p.count.size)) ends();
         unsigned long long n = 0;
         for (int b = 0; b < p.count.size; ++b) {
-          const auto byte = static_cast<unsigned char>(bytes[at + (big_endian ? b : p.count.size - 1 - b)]);
+          const auto byte =
+              static_cast<unsigned char>(bytes[at + (big_endian ? b : p.count.size - 1 - b)]);
           n = (n << 8) | byte;
         }
         at += p.count.size;
@@ -212,9 +215,11 @@ void checkPly(const std::string& path, const std::string& bytes) {
           (!comment && static_cast<unsigned char>(c) >= 0x7f))
         refuse("PLY header", "is not a PLY header line (it holds bytes that are not text)");
     if (line == 1) {
-      if (w.size() != 1 || word != "ply") refuse("PLY header", "is not a PLY header line (a PLY starts with 'ply')");
+      if (w.size() != 1 || word != "ply")
+        refuse("PLY header", "is not a PLY header line (a PLY starts with 'ply')");
     } else if (word == "end_header" && w.size() == 1) {
-      if (!seen_format) throw InputError(path, line, 0, "PLY header", "no format line before end_header");
+      if (!seen_format)
+        throw InputError(path, line, 0, "PLY header", "no format line before end_header");
       if (!seen_vertex)
         throw InputError(path, line, 0, "PLY header", "no 'element vertex' before end_header");
       if (ascii)
@@ -226,7 +231,8 @@ void checkPly(const std::string& path, const std::string& bytes) {
       if (w.size() != 3 || w[2] != "1.0" ||
           (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian"))
         refuse("PLY format", "is not 'format ascii|binary_little_endian|binary_big_endian 1.0'");
-      if (seen_format || !elements.empty()) refuse("PLY format", "comes after the format or an element");
+      if (seen_format || !elements.empty())
+        refuse("PLY format", "comes after the format or an element");
       seen_format = true;
       ascii = w[1] == "ascii";
       big_endian = w[1] == "binary_big_endian";
@@ -256,7 +262,8 @@ void checkPly(const std::string& path, const std::string& bytes) {
         if (!p.count.integer) p.item.size = 0;
       }
       if (p.item.size == 0)
-        refuse("PLY property", "is not 'property <type> <name>' or 'property list <integer type> <type> <name>'");
+        refuse("PLY property",
+               "is not 'property <type> <name>' or 'property list <integer type> <type> <name>'");
       elements.back().properties.push_back(p);
     } else if (!comment) {
       refuse("PLY header", "is not a PLY header line (the header must end with end_header)");
@@ -328,7 +335,8 @@ void checkOffHeader(const std::string& path) {
   int line = 1;
   auto next = [&] {
     for (;;) {
-      while (i < head.size() && (head[i] == ' ' || head[i] == '\t' || head[i] == '\r' || head[i] == '\n'))
+      while (i < head.size() &&
+             (head[i] == ' ' || head[i] == '\t' || head[i] == '\r' || head[i] == '\n'))
         if (head[i++] == '\n') ++line;
       if (i < head.size() && head[i] == '#') {
         while (i < head.size() && head[i] != '\n') ++i;
@@ -354,8 +362,8 @@ void checkOffHeader(const std::string& path) {
     const std::string number = head.substr(i, j - i);
     if (number.size() >= 19 || std::stoull(number) > file_size)
       throw InputError(path, line, 0, "OFF header",
-                       "count '" + number + "' is more than the file's " + std::to_string(file_size) +
-                           " bytes can hold");
+                       "count '" + number + "' is more than the file's " +
+                           std::to_string(file_size) + " bytes can hold");
     i = j;
     next();
   }
@@ -386,7 +394,8 @@ void check3mf(const std::string& path, bool required) {
   for (; rc == UNZ_OK; rc = unzGoToNextFile(zip)) {
     char name[1024] = {};
     unz_file_info64 info;
-    if (unzGetCurrentFileInfo64(zip, &info, name, sizeof name - 1, nullptr, 0, nullptr, 0) != UNZ_OK)
+    if (unzGetCurrentFileInfo64(zip, &info, name, sizeof name - 1, nullptr, 0, nullptr, 0) !=
+        UNZ_OK)
       throw InputError(path, 0, 0, field, "the archive's directory is damaged");
     names.emplace_back(name);
     const bool is_rels = names.back() == "_rels/.rels";
@@ -405,12 +414,13 @@ void check3mf(const std::string& path, bool required) {
       throw InputError(path, 0, 0, field,
                        "entry '" + printable(name) + "' is damaged (" +
                            (closed == UNZ_CRCERROR ? "its checksum is wrong"
-                            : n < 0               ? "it does not inflate"
-                                                  : "it inflates to " + std::to_string(size) + " of its " +
-                                                        std::to_string(info.uncompressed_size) + " bytes") +
+                            : n < 0                ? "it does not inflate"
+                                    : "it inflates to " + std::to_string(size) + " of its " +
+                                          std::to_string(info.uncompressed_size) + " bytes") +
                            ")");
   }
-  if (rc != UNZ_END_OF_LIST_OF_FILE) throw InputError(path, 0, 0, field, "the archive's directory is damaged");
+  if (rc != UNZ_END_OF_LIST_OF_FILE)
+    throw InputError(path, 0, 0, field, "the archive's directory is damaged");
   if (std::find(names.begin(), names.end(), "_rels/.rels") == names.end())
     throw InputError(path, 0, 0, field, "no _rels/.rels in the archive (it names the 3D model)");
   tinyxml2::XMLDocument doc;
@@ -421,7 +431,8 @@ void check3mf(const std::string& path, bool required) {
        r = r->NextSiblingElement("Relationship")) {
     const char* type = r->Attribute("Type");
     const char* to = r->Attribute("Target");
-    if (type && to && std::string(type) == "http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel") {
+    if (type && to &&
+        std::string(type) == "http://schemas.microsoft.com/3dmanufacturing/2013/01/3dmodel") {
       target = to;
       break;
     }
@@ -429,9 +440,12 @@ void check3mf(const std::string& path, bool required) {
   // As assimp reads it: up to two leading slashes dropped.
   for (int k = 0; k < 2 && !target.empty() && target[0] == '/'; ++k) target.erase(0, 1);
   if (target.empty())
-    throw InputError(path, 0, 0, field, "_rels/.rels names no 3D model (a Relationship of type .../3dmodel)");
+    throw InputError(path, 0, 0, field,
+                     "_rels/.rels names no 3D model (a Relationship of type .../3dmodel)");
   if (std::find(names.begin(), names.end(), target) == names.end())
-    throw InputError(path, 0, 0, field, "the 3D model '" + printable(target) + "' that _rels/.rels names is not in the archive");
+    throw InputError(
+        path, 0, 0, field,
+        "the 3D model '" + printable(target) + "' that _rels/.rels names is not in the archive");
 }
 
 // A binary glTF's header and chunk lengths must fit in the file: Debian's assimp 5.2 allocates
@@ -458,21 +472,26 @@ void checkGlb(const std::string& path) {
   };
   const std::string head = bytesAt(0, 20);
   if (head.size() < 20 || head.compare(0, 4, "glTF") != 0)
-    throw InputError(path, 0, 0, "glTF", "not a binary glTF (it starts with 'glTF' and a 20-byte header)");
+    throw InputError(path, 0, 0, "glTF",
+                     "not a binary glTF (it starts with 'glTF' and a 20-byte header)");
   if (u32(head, 4) != 2)
-    throw InputError(path, 0, 0, "glTF", "version " + std::to_string(u32(head, 4)) + " (tolver reads glTF 2)");
+    throw InputError(path, 0, 0, "glTF",
+                     "version " + std::to_string(u32(head, 4)) + " (tolver reads glTF 2)");
   if (u32(head, 8) > size)
-    throw InputError(path, 0, 0, "glTF", "the header declares " + std::to_string(u32(head, 8)) +
-                                             " bytes; the file has " + std::to_string(size));
+    throw InputError(path, 0, 0, "glTF",
+                     "the header declares " + std::to_string(u32(head, 8)) +
+                         " bytes; the file has " + std::to_string(size));
   const unsigned long long json = u32(head, 12);
   if (head.compare(16, 4, "JSON") != 0 || 20 + json > size)
-    throw InputError(path, 0, 0, "glTF", "the first chunk is not JSON within the file (" + std::to_string(json) +
-                                             " bytes declared, " + std::to_string(size) + " in the file)");
+    throw InputError(path, 0, 0, "glTF",
+                     "the first chunk is not JSON within the file (" + std::to_string(json) +
+                         " bytes declared, " + std::to_string(size) + " in the file)");
   const unsigned long long bin_at = 20 + ((json + 3) & ~3ull);
   const std::string bin = bin_at + 8 <= size ? bytesAt(bin_at, 8) : std::string();
   if (bin.size() == 8 && bin_at + 8 + u32(bin, 0) > size)
-    throw InputError(path, 0, 0, "glTF", "the binary chunk declares " + std::to_string(u32(bin, 0)) +
-                                             " bytes beyond the file's " + std::to_string(size));
+    throw InputError(path, 0, 0, "glTF",
+                     "the binary chunk declares " + std::to_string(u32(bin, 0)) +
+                         " bytes beyond the file's " + std::to_string(size));
 }
 
 // The file read by assimp into one mesh (its nodes' transforms applied, faces triangulated).
@@ -481,7 +500,8 @@ void checkGlb(const std::string& path) {
 TriangleMesh importWithAssimp(const std::string& path, const std::string& format,
                               const std::string* ply_bytes = nullptr) {
   Assimp::Importer importer;
-  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE,
+                              aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   // Read and validated first, triangulated after: Debian's assimp 5.2 aborts the process (an
   // ai_assert in its TriangulateProcess) on a face without vertices, which a malformed PLY makes
   // (found by the mesh fuzz harness), so such faces are refused before triangulating.
@@ -494,9 +514,11 @@ TriangleMesh importWithAssimp(const std::string& path, const std::string& format
     std::string text = readFile(path);
     text.push_back('\n');
     text.push_back('\0');
-    scene = importer.ReadFileFromMemory(text.data(), text.size(), aiProcess_ValidateDataStructure, "obj");
+    scene = importer.ReadFileFromMemory(text.data(), text.size(), aiProcess_ValidateDataStructure,
+                                        "obj");
   } else if (ply_bytes) {
-    scene = importer.ReadFileFromMemory(ply_bytes->data(), ply_bytes->size(), aiProcess_ValidateDataStructure, "ply");
+    scene = importer.ReadFileFromMemory(ply_bytes->data(), ply_bytes->size(),
+                                        aiProcess_ValidateDataStructure, "ply");
   } else {
     scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
   }
@@ -505,7 +527,9 @@ TriangleMesh importWithAssimp(const std::string& path, const std::string& format
     if (why.empty()) why = "not a readable mesh";
     // assimp turns a failed allocation into its error string; said as what it means here.
     if (why.find("bad_alloc") != std::string::npos)
-      why = "assimp ran out of memory reading it (a count in a damaged file beyond what the file holds?)";
+      why =
+          "assimp ran out of memory reading it (a count in a damaged file beyond what the file "
+          "holds?)";
     throw InputError(path, 0, 0, "mesh", why);
   };
   if (!scene || !scene->mRootNode) unreadable();
@@ -580,8 +604,10 @@ TriangleMesh importInChildProcess(const std::string& path, const std::string& fo
   char buffer[1 << 16];
   for (;;) {
     const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
-    if (n > 0) in.append(buffer, static_cast<size_t>(n));
-    else if (n == 0 || errno != EINTR) break;
+    if (n > 0)
+      in.append(buffer, static_cast<size_t>(n));
+    else if (n == 0 || errno != EINTR)
+      break;
   }
   ::close(fds[0]);
   int status = 0;
@@ -605,8 +631,9 @@ TriangleMesh importInChildProcess(const std::string& path, const std::string& fo
     at += n;
     return true;
   };
-  bool whole = clean && in.size() >= 1 + sizeof counts && in[0] == 'M' && take(counts, sizeof counts) &&
-               counts[0] <= in.size() && counts[1] <= in.size() && counts[2] <= in.size();
+  bool whole = clean && in.size() >= 1 + sizeof counts && in[0] == 'M' &&
+               take(counts, sizeof counts) && counts[0] <= in.size() && counts[1] <= in.size() &&
+               counts[2] <= in.size();
   if (whole) {
     m.vertices.resize(counts[0]);
     m.faces.resize(counts[1]);
@@ -624,10 +651,11 @@ TriangleMesh importInChildProcess(const std::string& path, const std::string& fo
     }
   }
   if (!whole) {
-    std::string how = WIFSIGNALED(status) ? "stopped on signal " + std::to_string(WTERMSIG(status)) + " (" +
-                                                strsignal(WTERMSIG(status)) + ")"
-                      : WIFEXITED(status) ? "stopped with exit code " + std::to_string(WEXITSTATUS(status))
-                                          : "stopped";
+    std::string how =
+        WIFSIGNALED(status) ? "stopped on signal " + std::to_string(WTERMSIG(status)) + " (" +
+                                  strsignal(WTERMSIG(status)) + ")"
+        : WIFEXITED(status) ? "stopped with exit code " + std::to_string(WEXITSTATUS(status))
+                            : "stopped";
     throw InputError(path, 0, 0, "mesh", "assimp " + how + " reading it: a damaged file?");
   }
   return m;
@@ -648,15 +676,19 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
   if (!std::filesystem::is_regular_file(path))
     throw InputError(path, 0, 0, "mesh", "cannot open the file");
 
-  part.units = options.units.empty() ? ((part.format == "gltf" || part.format == "glb") ? "m" : "mm")
-                                     : options.units;
+  part.units = options.units.empty()
+                   ? ((part.format == "gltf" || part.format == "glb") ? "m" : "mm")
+                   : options.units;
   double scale;
-  if (part.units == "mm") scale = 1.0;
-  else if (part.units == "inch" || part.units == "in") scale = 25.4;
-  else if (part.units == "m") scale = 1000.0;
+  if (part.units == "mm")
+    scale = 1.0;
+  else if (part.units == "inch" || part.units == "in")
+    scale = 25.4;
+  else if (part.units == "m")
+    scale = 1000.0;
   else
-    throw InputError(path, 0, 0, "units", "unknown length unit '" + part.units +
-                                              "' (use mm, inch or m)");
+    throw InputError(path, 0, 0, "units",
+                     "unknown length unit '" + part.units + "' (use mm, inch or m)");
 
   std::string ply_bytes;
   if (part.format == "ply") {
@@ -666,9 +698,10 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
   if (part.format == "off") checkOffHeader(path);
   check3mf(path, part.format == "3mf");
   if (part.format == "glb") checkGlb(path);
-  TriangleMesh raw = (part.format == "gltf" || part.format == "glb" || part.format == "3mf")
-                         ? importInChildProcess(path, part.format)
-                         : importWithAssimp(path, part.format, part.format == "ply" ? &ply_bytes : nullptr);
+  TriangleMesh raw =
+      (part.format == "gltf" || part.format == "glb" || part.format == "3mf")
+          ? importInChildProcess(path, part.format)
+          : importWithAssimp(path, part.format, part.format == "ply" ? &ply_bytes : nullptr);
   if (raw.faces.empty()) throw InputError(path, 0, 0, "mesh", "the file holds no triangles");
   for (auto& v : raw.vertices) v = options.w_T_file * (scale * v);
   // A vertex far beyond any part (a corrupt or mis-scaled file) would make the sampling and
@@ -736,7 +769,8 @@ void writeVtpWithScalars(
     vtkNew<vtkDoubleArray> a;
     a->SetName(name.c_str());
     a->SetNumberOfValues(static_cast<vtkIdType>(values->size()));
-    for (size_t i = 0; i < values->size(); ++i) a->SetValue(static_cast<vtkIdType>(i), (*values)[i]);
+    for (size_t i = 0; i < values->size(); ++i)
+      a->SetValue(static_cast<vtkIdType>(i), (*values)[i]);
     poly->GetPointData()->AddArray(a);
   }
   OutputSet out;

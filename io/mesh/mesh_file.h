@@ -21,8 +21,8 @@ struct PartImportOptions {
 struct ImportedPart {
   TriangleMesh mesh;  // repaired, in w, mm
   MeshRepairReport repair;
-  std::string units;  // the unit applied
-  std::string format; // file extension, lower case
+  std::string units;   // the unit applied
+  std::string format;  // file extension, lower case
 };
 
 // Throws InputError naming the file (field "mesh") when the file cannot be read or the mesh has a
@@ -35,8 +35,9 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
 void writePlyWithScalar(const std::string& path, const std::vector<Eigen::Vector3d>& points,
                         const std::vector<Eigen::Vector3i>& faces,
                         const std::vector<double>& scalar, const std::string& scalar_name);
-void writeVtpWithScalars(const std::string& path, const std::vector<Eigen::Vector3d>& points,
-                         const std::vector<Eigen::Vector3i>& faces,
-                         const std::vector<std::pair<std::string, const std::vector<double>*>>& scalars);
+void writeVtpWithScalars(
+    const std::string& path, const std::vector<Eigen::Vector3d>& points,
+    const std::vector<Eigen::Vector3i>& faces,
+    const std::vector<std::pair<std::string, const std::vector<double>*>>& scalars);
 
 }  // namespace tolver

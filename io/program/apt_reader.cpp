@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <optional>
 #include <deque>
+#include <optional>
 #include <set>
 
 #include "core/path/arc_interpolation.h"
@@ -30,9 +30,9 @@ struct Arg {
 
 const std::set<std::string>& noOpStatements() {
   static const std::set<std::string> s = {
-      "SPINDL", "LOADTL", "LOAD",  "SELECT", "PPRINT",  "INSERT", "COOLNT",    "TOOL PATH",
-      "END-OF-PATH", "END", "PAINT", "MACHIN", "DELAY",
-      "OPSTOP", "STOP", "CLRSRF", "FEATNO", "MFGNO", "OPERATION", "DISPLY", "AUTOPS", "PLABEL"};
+      "SPINDL",      "LOADTL", "LOAD",      "SELECT", "PPRINT", "INSERT", "COOLNT", "TOOL PATH",
+      "END-OF-PATH", "END",    "PAINT",     "MACHIN", "DELAY",  "OPSTOP", "STOP",   "CLRSRF",
+      "FEATNO",      "MFGNO",  "OPERATION", "DISPLY", "AUTOPS", "PLABEL"};
   return s;
 }
 
@@ -85,13 +85,15 @@ class Parser {
     // The main MCS read as the part frame while its z points down in the CAD's absolute frame
     // and the tool axes point down in it: they point up in the absolute frame, so the part may
     // be fixtured in that frame instead. Said, not guessed.
-    if (main_mcs_ && !opt_.absolute_msys && main_mcs_->linear()(2, 2) < -0.5 && !prog_.path.empty()) {
+    if (main_mcs_ && !opt_.absolute_msys && main_mcs_->linear()(2, 2) < -0.5 &&
+        !prog_.path.empty()) {
       size_t down = 0;
       for (const ClPoint& c : prog_.path) down += c.u_w.z() < -0.5;
       if (2 * down > prog_.path.size())
         prog_.notes.push_back(
             "the tool axis points down (-z) in the main MCS on " + std::to_string(down) + " of " +
-            std::to_string(prog_.path.size()) + " points; that MCS's z points down in the CAD's "
+            std::to_string(prog_.path.size()) +
+            " points; that MCS's z points down in the CAD's "
             "absolute frame, where the tool points up: if the part is fixtured in the absolute "
             "frame, read the program with --absolute-msys");
     }
@@ -109,8 +111,10 @@ class Parser {
         l = std::move(spare_.back());
         spare_.pop_back();
       }
-      if (source_.next(l)) window_.push_back(std::move(l));
-      else at_end_ = true;
+      if (source_.next(l))
+        window_.push_back(std::move(l));
+      else
+        at_end_ = true;
     }
     return i < window_first_ + window_.size() ? &window_[i - window_first_] : nullptr;
   }
@@ -183,8 +187,10 @@ class Parser {
         while (q < s.size() && !std::isspace(static_cast<unsigned char>(s[q]))) ++q;
         if (q > p) {
           auto v = parseNumber(std::string_view(s).substr(p, q - p));
-          if (!v) numeric = false;
-          else row.push_back(*v);
+          if (!v)
+            numeric = false;
+          else
+            row.push_back(*v);
         }
         p = q;
       }
@@ -252,15 +258,16 @@ class Parser {
   }
 
   // All arguments as numbers; words are allowed only where `words_ok`, and are skipped.
-  std::vector<double> numbers(const std::vector<Arg>& args, const std::string& field,
-                              bool words_ok, std::vector<std::string>* words = nullptr) {
+  std::vector<double> numbers(const std::vector<Arg>& args, const std::string& field, bool words_ok,
+                              std::vector<std::string>* words = nullptr) {
     std::vector<double> v;
     for (const Arg& a : args) {
       if (a.text.empty()) fail(a.line, a.column, field, "missing value");
       if (looksNumeric(a.text)) {
         auto x = parseNumber(a.text);
         if (!x) fail(a.line, a.column, field, "malformed number '" + a.text + "'");
-        if (std::abs(*x) > 1e9) fail(a.line, a.column, field, "value out of range '" + a.text + "'");
+        if (std::abs(*x) > 1e9)
+          fail(a.line, a.column, field, "value out of range '" + a.text + "'");
         v.push_back(*x);
       } else if (words_ok) {
         if (words) words->push_back(toUpper(a.text));
@@ -350,9 +357,12 @@ class Parser {
       const auto v = numbers(args, major, false);
       if (!have_point_) fail(line, 0, major, "incremental move before any position");
       Eigen::Vector3d p = last_local_;
-      if (v.size() == 3) p += Eigen::Vector3d(v[0], v[1], v[2]);
-      else if (v.size() == 1) p += v[0] * axis_local_;
-      else fail(line, 0, major, "takes 1 or 3 values, found " + std::to_string(v.size()));
+      if (v.size() == 3)
+        p += Eigen::Vector3d(v[0], v[1], v[2]);
+      else if (v.size() == 1)
+        p += v[0] * axis_local_;
+      else
+        fail(line, 0, major, "takes 1 or 3 values, found " + std::to_string(v.size()));
       addMotion(p, line, st);
     } else if (major == "TLAXIS") {
       std::vector<std::string> words;
@@ -365,8 +375,8 @@ class Parser {
       std::vector<std::string> words;
       const auto v = numbers(args, major, true, &words);
       if (v.size() < 6)
-        fail(line, 0, major, "needs the centre and axis (6 values), found " +
-                                 std::to_string(v.size()));
+        fail(line, 0, major,
+             "needs the centre and axis (6 values), found " + std::to_string(v.size()));
       if (!have_point_) fail(line, 0, major, "arc before any position");
       const ClFrame& f = prog_.frames[frame_];
       Eigen::Vector3d axis(v[3], v[4], v[5]);
@@ -377,7 +387,8 @@ class Parser {
         if (toUpper(args[k].text) == "TIMES") {
           const auto n = parseNumber(args[k + 1].text);
           if (!n || *n < 0 || *n > 1000 || *n != std::round(*n))
-            fail(args[k + 1].line, args[k + 1].column, major, "TIMES takes a whole number of turns");
+            fail(args[k + 1].line, args[k + 1].column, major,
+                 "TIMES takes a whole number of turns");
           arc_turns_ = static_cast<int>(*n);
           if (!times_noted_) {
             times_noted_ = true;
@@ -433,7 +444,8 @@ class Parser {
       trntyp_world_ = !args.empty() && toUpper(args[0].text) == "WORLD";
     } else if (major == "CSYS") {
       const auto v = numbers(args, major, false);
-      if (v.size() != 12) fail(line, 0, major, "takes 12 values, found " + std::to_string(v.size()));
+      if (v.size() != 12)
+        fail(line, 0, major, "takes 12 values, found " + std::to_string(v.size()));
       if (trntyp_world_) {
         // SolidWorks CAM: after TRNTYP/WORLD the points stay in world coordinates and CSYS only
         // names the tool plane (a 3+2 orientation); recorded, not applied.
@@ -456,7 +468,8 @@ class Parser {
       // (main) MCS: a later MSYS is a 3+2 set-up relative to it (opt_.absolute_msys: the CAD's
       // absolute frame instead, for a part fixtured in it).
       if (!main_mcs_) main_mcs_ = abs_T_mcs;
-      const Eigen::Isometry3d w_T_mcs = opt_.absolute_msys ? abs_T_mcs : main_mcs_->inverse() * abs_T_mcs;
+      const Eigen::Isometry3d w_T_mcs =
+          opt_.absolute_msys ? abs_T_mcs : main_mcs_->inverse() * abs_T_mcs;
       std::vector<double> rows;
       for (int r = 0; r < 3; ++r) {
         for (int c = 0; c < 3; ++c) rows.push_back(w_T_mcs.linear()(r, c));
@@ -477,8 +490,7 @@ class Parser {
       fail(line, 0, major,
            "NURBS motion is not supported; post the operation with linear (GOTO) output "
            "(in NX: Output Contour Type = Linear)");
-    } else if (major == "FINI" || noOpStatements().count(major) ||
-               major.rfind("CSI_", 0) == 0) {
+    } else if (major == "FINI" || noOpStatements().count(major) || major.rfind("CSI_", 0) == 0) {
       // recognised; nothing to do for the tool positions
     } else {
       ++prog_.unknown_count;
@@ -503,21 +515,23 @@ class Parser {
       return;
     }
     if (type == "INIT" || type == "ON" || type == "AUTO") return;
-    static const std::set<std::string> types = {"DRILL", "DEEP", "DEEP2", "BRKCHP", "TAP",
-                                                "RGDTAP", "BORE", "BORE1", "BORE2", "REAM",
-                                                "FACE", "CSINK", "SPOT", "THRU", "MILL"};
+    static const std::set<std::string> types = {"DRILL",  "DEEP",  "DEEP2", "BRKCHP", "TAP",
+                                                "RGDTAP", "BORE",  "BORE1", "BORE2",  "REAM",
+                                                "FACE",   "CSINK", "SPOT",  "THRU",   "MILL"};
     if (!types.count(type))
       fail(args[0].line, args[0].column, "CYCLE",
-           "the drilling cycle '" + args[0].text + "' is not known to tolver (DRILL, DEEP, "
-           "DEEP2, BRKCHP, TAP, BORE, REAM are expanded): post it as motion");
+           "the drilling cycle '" + args[0].text +
+               "' is not known to tolver (DRILL, DEEP, "
+               "DEEP2, BRKCHP, TAP, BORE, REAM are expanded): post it as motion");
     Cycle c;
     c.active = true;
     c.type = type;
     c.line = line;
     bool depth = false, clear = false, retract = false;
     static const std::set<std::string> skipped = {
-        "STEP", "INCR", "1STPECK", "SUBPECK", "DWELL", "MMPM", "IPM", "MMPR", "IPR", "FPM", "FPR",
-        "REV", "RPM", "PECK", "MINPECK", "CHIP", "OFFSET", "ORIENT", "QUILL", "SHIFT", "TIMES"};
+        "STEP",    "INCR", "1STPECK", "SUBPECK", "DWELL", "MMPM",  "IPM",
+        "MMPR",    "IPR",  "FPM",     "FPR",     "REV",   "RPM",   "PECK",
+        "MINPECK", "CHIP", "OFFSET",  "ORIENT",  "QUILL", "SHIFT", "TIMES"};
     const double s = 1.0;  // distances in file units; the frame scales them with the point
     for (size_t k = 1; k < args.size(); ++k) {
       const std::string w = toUpper(args[k].text);
@@ -531,20 +545,25 @@ class Parser {
         }
         const auto x = parseNumber(vt);
         if (!x || std::abs(*x) > 1e6)
-          fail(args[k + 1].line, args[k + 1].column, "CYCLE", w + ": expected a number, found '" + args[k + 1].text + "'");
+          fail(args[k + 1].line, args[k + 1].column, "CYCLE",
+               w + ": expected a number, found '" + args[k + 1].text + "'");
         *out = *x * s;
         ++k;
         return true;
       };
-      if (w == "FEDTO" || w == "DEPTH") depth = value(&c.depth);
-      else if (w == "RAPTO" || w == "CLEAR") clear = value(&c.clearance);
-      else if (w == "RTRCTO") retract = value(&c.retract);
+      if (w == "FEDTO" || w == "DEPTH")
+        depth = value(&c.depth);
+      else if (w == "RAPTO" || w == "CLEAR")
+        clear = value(&c.clearance);
+      else if (w == "RTRCTO")
+        retract = value(&c.retract);
       else if (skipped.count(w)) {
         if (k + 1 < args.size() && looksNumeric(args[k + 1].text)) ++k;
       } else if (types.count(w)) {
         // DRILL,DEEP: the variant after the type
       } else {
-        fail(args[k].line, args[k].column, "CYCLE", "unknown cycle parameter '" + args[k].text + "'");
+        fail(args[k].line, args[k].column, "CYCLE",
+             "unknown cycle parameter '" + args[k].text + "'");
       }
     }
     if (!depth) fail(line, 0, "CYCLE", "the cycle gives no depth (FEDTO or DEPTH)");
@@ -593,13 +612,15 @@ class Parser {
     if (arc_pending_) {
       std::vector<Eigen::Vector3d> pts;
       const Eigen::Vector3d start = prog_.path.empty() ? from_w_ : prog_.path.back().p_w;
-      const double r = ((start - arc_centre_w_) -
-                        arc_axis_w_ * arc_axis_w_.dot(start - arc_centre_w_)).norm();
+      const double r =
+          ((start - arc_centre_w_) - arc_axis_w_ * arc_axis_w_.dot(start - arc_centre_w_)).norm();
       // Bounded work: a full turn's points, before anything is expanded.
       if (!(arcPointsPerTurn(r, opt_.chordal_tolerance_mm) * (arc_turns_ + 1) <= kMaxArcPoints))
         fail(arc_line_, 0, "CIRCLE",
-             "an arc of radius " + formatNumber(r) + " mm would expand into more than a million "
-             "points at chordal tolerance " + formatNumber(opt_.chordal_tolerance_mm) +
+             "an arc of radius " + formatNumber(r) +
+                 " mm would expand into more than a million "
+                 "points at chordal tolerance " +
+                 formatNumber(opt_.chordal_tolerance_mm) +
                  " mm (raise --chordal-tol, or check the radius)");
       if (!interpolateArc(start, cl.p_w, arc_centre_w_, arc_axis_w_, opt_.chordal_tolerance_mm,
                           std::max(0.005, 1e-4 * r), pts, arc_turns_))

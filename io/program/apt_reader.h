@@ -5,10 +5,10 @@
 // Recognised: GOTO (3 or 6 values; the tool axis is modal), FROM (the start position: not a
 // point of the path), GOHOME (a home move: not a point either), GODLTA, MULTAX, TLAXIS,
 // CUTTER (1-7 values), TLDATA, UNITS and UNIT, CYCLE (drilling cycles expanded at each GOTO
-// until CYCLE/OFF), CIRCLE ... TIMES,n (n full turns), FEDRAT (unit before or after the value), RAPID,
-// SPINDL, LOADTL, LOAD/TOOL, SELECT, PARTNO, PPRINT, INSERT, COOLNT, CIRCLE and MOVARC (expanded
-// into points within a chordal tolerance, counter-clockwise about the circle axis), MSYS, CSYS
-// and $$*CATIA0 (coordinate systems applied to the points that follow; a CSYS after
+// until CYCLE/OFF), CIRCLE ... TIMES,n (n full turns), FEDRAT (unit before or after the value),
+// RAPID, SPINDL, LOADTL, LOAD/TOOL, SELECT, PARTNO, PPRINT, INSERT, COOLNT, CIRCLE and MOVARC
+// (expanded into points within a chordal tolerance, counter-clockwise about the circle axis), MSYS,
+// CSYS and $$*CATIA0 (coordinate systems applied to the points that follow; a CSYS after
 // TRNTYP/WORLD, as SolidWorks CAM writes it, only names the tool plane of points that are already
 // in world coordinates, and is not applied), TOOL PATH, END-OF-PATH,
 // END, FINI; `$` continuation lines; `$$` comments (Creo's `$$->` lines carry CUTTER and CSYS).
@@ -28,10 +28,10 @@ namespace tolver {
 
 // A cutter as the file gives it, lengths converted to mm.
 struct CutterSpec {
-  std::string source;           // "CUTTER" or "TLDATA"
-  std::string kind;             // TLDATA's first word (MILL, DRILL...), empty for CUTTER
-  std::vector<double> values;   // CUTTER: d, r, e, f, alpha, beta, h (as many as given);
-                                // TLDATA/MILL: d, r, length, taper, tip angle (angles in deg)
+  std::string source;          // "CUTTER" or "TLDATA"
+  std::string kind;            // TLDATA's first word (MILL, DRILL...), empty for CUTTER
+  std::vector<double> values;  // CUTTER: d, r, e, f, alpha, beta, h (as many as given);
+                               // TLDATA/MILL: d, r, length, taper, tip angle (angles in deg)
   int line = 0;
 };
 
@@ -39,7 +39,7 @@ struct CutterSpec {
 struct AptStatement {
   int first_line = 0;  // 1-based, inclusive
   int last_line = 0;
-  std::string major;   // upper case ("GOTO", "CIRCLE"); empty for comments and blank lines
+  std::string major;  // upper case ("GOTO", "CIRCLE"); empty for comments and blank lines
   int first_point = -1;
   int point_count = 0;
 };
@@ -52,8 +52,8 @@ struct ClFrame {
 
 struct ClProgram {
   std::string file;
-  std::string dialect = "APT";           // "APT" (CL data) or "G-code" (io/program/gcode_reader.h)
-  SourceLines lines;                     // the file's physical lines (the text kept: AptReadOptions)
+  std::string dialect = "APT";  // "APT" (CL data) or "G-code" (io/program/gcode_reader.h)
+  SourceLines lines;            // the file's physical lines (the text kept: AptReadOptions)
   std::vector<AptStatement> statements;  // covering every line in order
   std::vector<ClPoint> path;             // tool positions in w, mm
   std::vector<int> point_frame;          // per point, index into frames
@@ -63,15 +63,15 @@ struct ClProgram {
   std::vector<ClFrame> frames;
   std::vector<CutterSpec> cutters;
   std::string part_name;
-  std::string units = "MM";              // as the file declares: MM or INCH
-  bool multiax = false;                  // MULTAX/ON seen, or GOTO with six values
+  std::string units = "MM";  // as the file declares: MM or INCH
+  bool multiax = false;      // MULTAX/ON seen, or GOTO with six values
   int arcs_expanded = 0;
-  int tool_planes = 0;                   // CSYS statements after TRNTYP/WORLD (not applied)
-  int cycles = 0;                        // drilling cycles (CL CYCLE/, G-code canned cycles)
-  int cycle_holes = 0;                   // holes they were expanded at
-  int unknown_count = 0;                 // statements skipped as unknown
+  int tool_planes = 0;                     // CSYS statements after TRNTYP/WORLD (not applied)
+  int cycles = 0;                          // drilling cycles (CL CYCLE/, G-code canned cycles)
+  int cycle_holes = 0;                     // holes they were expanded at
+  int unknown_count = 0;                   // statements skipped as unknown
   std::vector<std::string> unknown_names;  // their major words, each once
-  bool units_declared = false;           // UNITS / G20 / G21 seen (else the default was used)
+  bool units_declared = false;             // UNITS / G20 / G21 seen (else the default was used)
   // G-code only: per point, the commanded joint values (mm, rad, model axis order; in TCP mode
   // the prismatic ones are those of the nominal inverse kinematics' reference, not commands),
   // and how the point was programmed: kJointWords (work offset + tool length, no TCP),
@@ -86,7 +86,7 @@ struct ClProgram {
   // Per point, 1 where a swivel cycle (Sinumerik CYCLE800) set the rotary axes, not the
   // program's words: a corrected program can move its tip, not its tool axis.
   std::vector<char> cycle_orientation;
-  std::vector<std::string> notes;        // what the reader assumed or ignored, one line each
+  std::vector<std::string> notes;  // what the reader assumed or ignored, one line each
 };
 
 struct AptReadOptions {

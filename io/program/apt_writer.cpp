@@ -12,7 +12,8 @@ std::string formatPredictedApt(const ClProgram& program, const std::vector<ClPoi
   return out.take();
 }
 
-void writePredictedApt(TextOut& out, const ClProgram& program, const std::vector<ClPoint>& predicted,
+void writePredictedApt(TextOut& out, const ClProgram& program,
+                       const std::vector<ClPoint>& predicted,
                        const std::vector<std::string>& header) {
   assert(predicted.size() == program.path.size());
   for (const std::string& h : header) out += "$$ " + h + "\n";
@@ -28,8 +29,8 @@ void writePredictedApt(TextOut& out, const ClProgram& program, const std::vector
         if (program.path[k].rapid) out += "RAPID\n";
         const Eigen::Vector3d& p = predicted[k].p_w;
         const Eigen::Vector3d u = predicted[k].u_w.normalized();
-        std::snprintf(buf, sizeof buf, "GOTO/%.6f,%.6f,%.6f,%.9f,%.9f,%.9f\n", p.x(), p.y(),
-                      p.z(), u.x(), u.y(), u.z());
+        std::snprintf(buf, sizeof buf, "GOTO/%.6f,%.6f,%.6f,%.9f,%.9f,%.9f\n", p.x(), p.y(), p.z(),
+                      u.x(), u.y(), u.z());
         out += buf;
       }
     }
@@ -50,9 +51,10 @@ void writePredictedApt(TextOut& out, const ClProgram& program, const std::vector
         const ClFrame& f = program.frames[program.point_frame[k]];
         const Eigen::Vector3d p = f.T.inverse(Eigen::Isometry) * (predicted[k].p_w / f.scale);
         const Eigen::Vector3d u = f.T.linear().transpose() * predicted[k].u_w.normalized();
-        std::snprintf(buf, sizeof buf, inch ? "%s/%.8f,%.8f,%.8f,%.9f,%.9f,%.9f\n"
-                                            : "%s/%.6f,%.6f,%.6f,%.9f,%.9f,%.9f\n",
-                      word, p.x(), p.y(), p.z(), u.x(), u.y(), u.z());
+        std::snprintf(
+            buf, sizeof buf,
+            inch ? "%s/%.8f,%.8f,%.8f,%.9f,%.9f,%.9f\n" : "%s/%.6f,%.6f,%.6f,%.9f,%.9f,%.9f\n",
+            word, p.x(), p.y(), p.z(), u.x(), u.y(), u.z());
         out += buf;
       }
       continue;

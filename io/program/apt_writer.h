@@ -15,7 +15,8 @@ namespace tolver {
 std::string formatPredictedApt(const ClProgram& program, const std::vector<ClPoint>& predicted,
                                const std::vector<std::string>& header);
 // The same, written in pieces (into a file as it is made).
-void writePredictedApt(TextOut& out, const ClProgram& program, const std::vector<ClPoint>& predicted,
+void writePredictedApt(TextOut& out, const ClProgram& program,
+                       const std::vector<ClPoint>& predicted,
                        const std::vector<std::string>& header);
 
 }  // namespace tolver

@@ -81,7 +81,8 @@ std::string withoutParentheses(std::string s) {
 
 std::string lineList(const std::vector<int>& lines) {
   std::string s;
-  for (size_t k = 0; k < lines.size() && k < 8; ++k) s += (k ? ", " : "") + std::to_string(lines[k]);
+  for (size_t k = 0; k < lines.size() && k < 8; ++k)
+    s += (k ? ", " : "") + std::to_string(lines[k]);
   if (lines.size() > 8) s += ", ...";
   return s;
 }
@@ -153,15 +154,18 @@ CompensatedProgramText formatCompensatedApt(const ClProgram& program,
       // Points the reader expanded (an arc, a curve): GOTOs of their compensated points.
       ++expanded;
       expanded_lines.push_back(st.first_line);
-      out.text += "$$ tolver: " + (st.major.empty() ? std::string("statement") : st.major) + " of line " +
-                  std::to_string(st.first_line) + " as the GOTOs of its compensated points\n";
+      out.text += "$$ tolver: " + (st.major.empty() ? std::string("statement") : st.major) +
+                  " of line " + std::to_string(st.first_line) +
+                  " as the GOTOs of its compensated points\n";
       out.source_line.push_back(st.first_line);
       for (int k = st.first_point; k < st.first_point + st.point_count; ++k) {
         Eigen::Vector3d p, u;
         inFile(k, &p, &u);
-        out.text += "GOTO/" + fixed(p.x(), pos_min) + "," + fixed(p.y(), pos_min) + "," + fixed(p.z(), pos_min);
+        out.text += "GOTO/" + fixed(p.x(), pos_min) + "," + fixed(p.y(), pos_min) + "," +
+                    fixed(p.z(), pos_min);
         if (program.multiax)
-          out.text += "," + fixed(u.x(), axis_min) + "," + fixed(u.y(), axis_min) + "," + fixed(u.z(), axis_min);
+          out.text += "," + fixed(u.x(), axis_min) + "," + fixed(u.y(), axis_min) + "," +
+                      fixed(u.z(), axis_min);
         out.text += "\n";
         out.source_line.push_back(st.first_line);
       }
@@ -241,7 +245,8 @@ std::vector<GWord> gcodeWords(const std::string& s) {
           const size_t close = s.find('>', k);
           k = close == std::string::npos ? s.size() : close + 1;
         } else {
-          while (k < s.size() && (std::isdigit(static_cast<unsigned char>(s[k])) || s[k] == '.')) ++k;
+          while (k < s.size() && (std::isdigit(static_cast<unsigned char>(s[k])) || s[k] == '.'))
+            ++k;
         }
       }
       w.end = std::min(k, s.size());
@@ -261,8 +266,9 @@ namespace {
 // judged (written or left as programmed, and why), given its target words, edited in place.
 class GcodeEditor {
  public:
-  GcodeEditor(const ClProgram& program, const MachineModel& model, const std::vector<JointVector>& q0,
-              const std::vector<JointVector>& q, const std::vector<Eigen::Vector3d>& corrected_p_w)
+  GcodeEditor(const ClProgram& program, const MachineModel& model,
+              const std::vector<JointVector>& q0, const std::vector<JointVector>& q,
+              const std::vector<Eigen::Vector3d>& corrected_p_w)
       : program_(program),
         model_(model),
         q0_(q0),
@@ -277,7 +283,8 @@ class GcodeEditor {
         decimals_(n_, -1) {
     for (int a = 0; a < n_; ++a)
       if (model.axes[a].name.size() == 1)
-        axis_of_[static_cast<char>(std::toupper(static_cast<unsigned char>(model.axes[a].name[0])))] = a;
+        axis_of_[static_cast<char>(
+            std::toupper(static_cast<unsigned char>(model.axes[a].name[0])))] = a;
     gm_inv_ = tcpWordMatrix().inverse();
     markArcBlocks();
     out_.written.assign(program.path.size(), 0);
@@ -350,7 +357,8 @@ class GcodeEditor {
     int mode = 0;
     for (size_t li = 0; li < program_.lines.size(); ++li) {
       for (const GWord& w : gcodeWords(std::string(program_.lines[li])))
-        if (w.letter == 'G' && w.numeric && (w.value == 0 || w.value == 1 || w.value == 2 || w.value == 3))
+        if (w.letter == 'G' && w.numeric &&
+            (w.value == 0 || w.value == 1 || w.value == 2 || w.value == 3))
           mode = static_cast<int>(w.value);
       arc_block_[li] = (mode == 2 || mode == 3) && li < program_.statements.size() &&
                        program_.statements[li].point_count > 0;
@@ -387,12 +395,18 @@ class GcodeEditor {
     for (const GWord& w : b.words) {
       if (w.letter == 'G' && w.numeric) {
         const double g = w.value;
-        if (g == 0 || g == 1 || g == 2 || g == 3) motion_ = static_cast<int>(g);
-        else if (g == 80) motion_ = 80;
-        else if (g >= 73 && g <= 89 && g != 80) motion_ = static_cast<int>(g);
-        else if (g == 90) absolute_ = true;
-        else if (g == 91) absolute_ = false;
-        else if (g == 53 || g == 28 || g == 30 || g == 10 || g == 92) b.special = true;
+        if (g == 0 || g == 1 || g == 2 || g == 3)
+          motion_ = static_cast<int>(g);
+        else if (g == 80)
+          motion_ = 80;
+        else if (g >= 73 && g <= 89 && g != 80)
+          motion_ = static_cast<int>(g);
+        else if (g == 90)
+          absolute_ = true;
+        else if (g == 91)
+          absolute_ = false;
+        else if (g == 53 || g == 28 || g == 30 || g == 10 || g == 92)
+          b.special = true;
       }
       auto it = axis_of_.find(w.letter);
       if (it != axis_of_.end()) {
@@ -403,7 +417,8 @@ class GcodeEditor {
     const AptStatement* st = li < program_.statements.size() ? &program_.statements[li] : nullptr;
     const int points = st ? st->point_count : 0;
     if (points == 1) b.point = st->first_point;
-    b.write = points == 1 && (motion_ == 0 || motion_ == 1) && absolute_ && !b.special && !b.expression;
+    b.write =
+        points == 1 && (motion_ == 0 || motion_ == 1) && absolute_ && !b.special && !b.expression;
     if (points > 1) b.point = -2;  // several points: listed below as left as programmed
   }
 
@@ -415,11 +430,11 @@ class GcodeEditor {
     if (b.restore) {
       arc_starts_.push_back(b.line_no);
     } else if (b.point != -1 && !b.write) {
-      (motion_ == 2 || motion_ == 3)    ? arcs_.push_back(b.line_no)
-      : motion_ >= 73 && motion_ != 80  ? cycles_.push_back(b.line_no)
-      : !absolute_                      ? incremental_.push_back(b.line_no)
-      : b.special                       ? machine_moves_.push_back(b.line_no)
-                                        : expressions_.push_back(b.line_no);
+      (motion_ == 2 || motion_ == 3)   ? arcs_.push_back(b.line_no)
+      : motion_ >= 73 && motion_ != 80 ? cycles_.push_back(b.line_no)
+      : !absolute_                     ? incremental_.push_back(b.line_no)
+      : b.special                      ? machine_moves_.push_back(b.line_no)
+                                       : expressions_.push_back(b.line_no);
     }
   }
 
@@ -430,7 +445,8 @@ class GcodeEditor {
   void targets(Block& b) {
     const int i = b.point;
     const JointVector dq = b.restore ? JointVector::Zero(n_) : JointVector(q_[i] - q0_[i]);
-    const bool tcp = i < static_cast<int>(program_.tcp.size()) && program_.tcp[i] == ClProgram::kTcpWords;
+    const bool tcp =
+        i < static_cast<int>(program_.tcp.size()) && program_.tcp[i] == ClProgram::kTcpWords;
     Eigen::Vector3d dxyz = Eigen::Vector3d::Zero();
     if (tcp && !b.restore) {
       dxyz = gm_inv_ * (corrected_p_w_[i] - program_.path[i].p_w) / unit_;
@@ -462,7 +478,8 @@ class GcodeEditor {
   void keepRapidWords(Block& b) {
     for (int a = 0; a < n_ && b.write; ++a) {
       if (b.axis_words.count(a) || !known_[a]) continue;
-      const int d = std::max(std::max(decimals_[a], 0), model_.axes[a].isRotary() ? kRotMin : lin_min_);
+      const int d =
+          std::max(std::max(decimals_[a], 0), model_.axes[a].isRotary() ? kRotMin : lin_min_);
       if (fixed(b.target[a], d) != fixed(new_word_[a], d)) b.write = false;
     }
     if (!b.write) rapid_kept_.push_back(b.line_no);
@@ -477,8 +494,9 @@ class GcodeEditor {
     for (int a = 0; a < n_; ++a) {
       const Axis& ax = model_.axes[a];
       const auto w = b.axis_words.find(a);
-      const int d = std::max(w != b.axis_words.end() ? w->second->decimals : std::max(decimals_[a], 0),
-                             ax.isRotary() ? kRotMin : lin_min_);
+      const int d =
+          std::max(w != b.axis_words.end() ? w->second->decimals : std::max(decimals_[a], 0),
+                   ax.isRotary() ? kRotMin : lin_min_);
       const std::string text = fixed(b.target[a], d);
       if (w != b.axis_words.end()) {
         edits.push_back({w->second->start, {w->second->end - w->second->start, text}});
@@ -489,7 +507,8 @@ class GcodeEditor {
       }
       new_word_[a] = std::strtod(text.c_str(), nullptr);
     }
-    std::sort(edits.begin(), edits.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+    std::sort(edits.begin(), edits.end(),
+              [](const auto& x, const auto& y) { return x.first > y.first; });
     if (!added.empty()) b.line.insert(insert_at, added);
     for (const auto& [start, e] : edits) b.line.replace(start, e.first, e.second);
     out_.written[b.point] = !b.restore;
@@ -514,16 +533,20 @@ class GcodeEditor {
   void notes() {
     auto note = [&](const std::vector<int>& lines, const char* what) {
       if (!lines.empty())
-        out_.notes.push_back(std::to_string(lines.size()) + " " + what + " left as programmed, uncompensated (lines " +
-                             lineList(lines) + ")");
+        out_.notes.push_back(std::to_string(lines.size()) + " " + what +
+                             " left as programmed, uncompensated (lines " + lineList(lines) + ")");
     };
     note(arcs_, "arc blocks (G2/G3)");
-    note(arc_starts_, "blocks that start an arc (written back to their programmed position: the arc's start must stay on its circle)");
+    note(arc_starts_,
+         "blocks that start an arc (written back to their programmed position: the arc's start "
+         "must stay on its circle)");
     note(cycles_, "drilling-cycle blocks");
     note(incremental_, "incremental (G91) blocks");
     note(machine_moves_, "moves in machine coordinates (G53, G28, ...)");
-    note(expressions_, "blocks with words given by expressions or parameters, or without the word in force");
-    note(rapid_kept_, "rapid blocks that would need an axis they do not name (a rapid keeps its words)");
+    note(expressions_,
+         "blocks with words given by expressions or parameters, or without the word in force");
+    note(rapid_kept_,
+         "rapid blocks that would need an axis they do not name (a rapid keeps its words)");
   }
 
   const ClProgram& program_;
@@ -543,7 +566,8 @@ class GcodeEditor {
   std::vector<int> decimals_;
   int motion_ = 0;  // 0, 1, 2, 3, 80 (none), 81+ (cycles)
   bool absolute_ = true;
-  std::vector<int> arcs_, arc_starts_, cycles_, incremental_, machine_moves_, expressions_, rapid_kept_;
+  std::vector<int> arcs_, arc_starts_, cycles_, incremental_, machine_moves_, expressions_,
+      rapid_kept_;
   CompensatedProgramText out_;
 };
 

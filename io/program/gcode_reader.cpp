@@ -7,12 +7,12 @@
 #include <optional>
 #include <set>
 
-#include "core/path/arc_interpolation.h"
 #include "core/kinematics/forward_kinematics.h"
 #include "core/kinematics/inverse_kinematics.h"
+#include "core/numerics/units.h"
+#include "core/path/arc_interpolation.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
-#include "core/numerics/units.h"
 
 namespace tolver {
 namespace {
@@ -39,10 +39,12 @@ std::string codeOf(char letter, double value) {
 // G words that change geometry and that this reader does not carry out: refused.
 const std::map<std::string, const char*>& refusedG() {
   static const std::map<std::string, const char*> m = {
-      {"G41", "cutter radius compensation is not supported: post the program with compensation "
-              "in the CAM system (tool centre path)"},
-      {"G42", "cutter radius compensation is not supported: post the program with compensation "
-              "in the CAM system (tool centre path)"},
+      {"G41",
+       "cutter radius compensation is not supported: post the program with compensation "
+       "in the CAM system (tool centre path)"},
+      {"G42",
+       "cutter radius compensation is not supported: post the program with compensation "
+       "in the CAM system (tool centre path)"},
       {"G41.1", "cutter radius compensation is not supported"},
       {"G42.1", "cutter radius compensation is not supported"},
       {"G92", "G92 coordinate offsets are not supported: use work offsets (G54-G59)"},
@@ -56,8 +58,9 @@ const std::map<std::string, const char*>& refusedG() {
       {"G76", "threading cycles (G76, LinuxCNC) are not supported"},
       {"G38.2", "probing moves are not supported"},
       {"G38.3", "probing moves are not supported"},
-      {"G87", "back boring (G87) is not expanded: the tool passes the hole off-centre with the "
-              "spindle oriented; post it as motion"},
+      {"G87",
+       "back boring (G87) is not expanded: the tool passes the hole off-centre with the "
+       "spindle oriented; post it as motion"},
       {"G65", "macro calls (G65) are not supported"},
       {"G66", "modal macro calls (G66) are not supported"},
   };
@@ -66,9 +69,9 @@ const std::map<std::string, const char*>& refusedG() {
 
 // G words that do not change the tool path: accepted silently.
 const std::set<std::string>& harmlessG() {
-  static const std::set<std::string> s = {"G4",  "G9",  "G40", "G61", "G61.1", "G64", "G93",
-                                          "G94", "G95", "G96", "G97", "G15", "G50",
-                                          "G5.1", "G8", "G187", "G50.1", "G98", "G99", "G80"};
+  static const std::set<std::string> s = {"G4",  "G9",   "G40",   "G61", "G61.1", "G64", "G93",
+                                          "G94", "G95",  "G96",   "G97", "G15",   "G50", "G5.1",
+                                          "G8",  "G187", "G50.1", "G98", "G99",   "G80"};
   return s;
 }
 
@@ -99,7 +102,8 @@ class Reader {
     prog_.units = unit_ == 25.4 ? "INCH" : "MM";
     for (size_t a = 0; a < model.axes.size(); ++a) {
       const std::string& n = model.axes[a].name;
-      if (n.size() == 1) letter_axis_[static_cast<unsigned char>(std::toupper(n[0]))] = static_cast<int>(a);
+      if (n.size() == 1)
+        letter_axis_[static_cast<unsigned char>(std::toupper(n[0]))] = static_cast<int>(a);
     }
     for (const auto& [name, value] : model.control.parameters) named_[lowerNoSpace(name)] = value;
     prepareMachineCoordinates();
@@ -125,8 +129,10 @@ class Reader {
         bool leader = false;
         for (const std::string& h : held) leader = leader || !looksLikeBlock(h);
         for (const std::string& h : held) {
-          if (leader) skipLine(h);
-          else processLine(h);
+          if (leader)
+            skipLine(h);
+          else
+            processLine(h);
         }
         if (leader)
           prog_.notes.push_back("lines 1-" + std::to_string(held.size()) +
@@ -148,9 +154,11 @@ class Reader {
     if (prog_.path.empty())
       fail(0, 0, "", "the program has no moves (no G0/G1/G2/G3 with axis words)");
     if (unknown_moves_ > 0)
-      prog_.notes.push_back(std::to_string(unknown_moves_) + " move(s) before every axis had a "
-                            "commanded position (lines " + std::to_string(first_unknown_line_) +
-                            "-" + std::to_string(last_unknown_line_) +
+      prog_.notes.push_back(std::to_string(unknown_moves_) +
+                            " move(s) before every axis had a "
+                            "commanded position (lines " +
+                            std::to_string(first_unknown_line_) + "-" +
+                            std::to_string(last_unknown_line_) +
                             ") are not in the path: the tool's position there is not in the "
                             "program");
     if (!units_seen_) {
@@ -208,8 +216,11 @@ class Reader {
       return c != 'I' || d != ' ';  // "I ..." is prose
     if (model_.control.dialect == "sinumerik") {
       size_t k = 0;
-      while (k < line.size() && (std::isalnum(static_cast<unsigned char>(line[k])) || line[k] == '_')) ++k;
-      return k == line.size() || line[k] == '=' || line[k] == '(' || line[k] == ' ' || line[k] == ';';
+      while (k < line.size() &&
+             (std::isalnum(static_cast<unsigned char>(line[k])) || line[k] == '_'))
+        ++k;
+      return k == line.size() || line[k] == '=' || line[k] == '(' || line[k] == ' ' ||
+             line[k] == ';';
     }
     return (c == 'O' || c == 'o');  // a program name: "OFinal ToolPath"
   }
@@ -281,8 +292,7 @@ class Reader {
   // words (deg, program values), in joint mode.
   JointVector jointsFromMachine(const Eigen::Vector3d& m_controlled) const {
     JointVector q = q_;
-    const Eigen::Vector3d m_gauge =
-        m_controlled + (tlc_ ? toolLength() : 0.0) * spindle_m_;
+    const Eigen::Vector3d m_gauge = m_controlled + (tlc_ ? toolLength() : 0.0) * spindle_m_;
     for (int k = 0; k < 3; ++k) q[prismatic_[k]] = model_.axes[prismatic_[k]].nc_sign * m_gauge[k];
     setRotaries(q);
     return q;
@@ -325,7 +335,8 @@ class Reader {
         if (!str && c == ')') --depth;
         if (c == ' ' && depth <= 0 && !str) {
           if (!cur.empty()) {
-            if (!tok.empty() && (cur[0] == '=' || tok.back().back() == '=')) tok.back() += cur;
+            if (!tok.empty() && (cur[0] == '=' || tok.back().back() == '='))
+              tok.back() += cur;
             else {
               tok.push_back(cur);
               tcol.push_back(start);
@@ -353,7 +364,8 @@ class Reader {
       // DEF type name[=value], name2...: declared variables, 0 unless given.
       if (t + 1 >= tok.size()) refuse(t, "DEF without a type");
       const std::string type = tok[t + 1];
-      static const std::set<std::string> types = {"REAL", "INT", "BOOL", "CHAR", "STRING", "AXIS", "FRAME"};
+      static const std::set<std::string> types = {"REAL",   "INT",  "BOOL", "CHAR",
+                                                  "STRING", "AXIS", "FRAME"};
       if (!types.count(type.substr(0, type.find('[')))) refuse(t + 1, "unknown type in DEF");
       std::string rest;
       for (size_t k = t + 2; k < tok.size(); ++k) rest += tok[k];
@@ -365,24 +377,25 @@ class Reader {
         const size_t eq = item.find('=');
         const std::string name = item.substr(0, eq);
         double v = 0.0;
-        if (eq != std::string::npos && type != "STRING" && type != "CHAR") v = sinExpression(item.substr(eq + 1), tcol[t]);
+        if (eq != std::string::npos && type != "STRING" && type != "CHAR")
+          v = sinExpression(item.substr(eq + 1), tcol[t]);
         if (!name.empty()) sin_vars_[name] = v;
         p = e + 1;
       }
       return "";
     }
-    static const std::set<std::string> flow = {"GOTO", "GOTOF", "GOTOB", "GOTOC", "IF", "ELSE",
-                                               "ENDIF", "WHILE", "ENDWHILE", "LOOP", "ENDLOOP",
-                                               "FOR", "ENDFOR", "REPEAT", "UNTIL", "CASE", "CALL",
-                                               "PCALL", "RET", "M17", "PROC", "SAVE", "EXTERN"};
+    static const std::set<std::string> flow = {
+        "GOTO",     "GOTOF", "GOTOB",   "GOTOC", "IF",     "ELSE",   "ENDIF", "WHILE",
+        "ENDWHILE", "LOOP",  "ENDLOOP", "FOR",   "ENDFOR", "REPEAT", "UNTIL", "CASE",
+        "CALL",     "PCALL", "RET",     "M17",   "PROC",   "SAVE",   "EXTERN"};
     static const std::set<std::string> ignored = {
-        "FNORM",  "COMPOF", "COMPON", "COMPCURV", "COMPCAD", "SOFT",   "BRISK",  "SOFTA",
-        "BRISKA", "FFWON",  "FFWOF",  "CFC",      "CFTCP",   "CFIN",   "G60",    "G601",
-        "G602",   "G603",   "G64",    "G641",     "G642",    "G643",   "G644",   "G645",
-        "UPATH",  "SPATH",  "ORIAXES", "ORIVECT", "STOPRE", "G153",
-        "G40",    "DIAMOF", "CUT2D",  "CUT2DF",   "CUT3DC",  "G450",   "G451",   "WAITM",
-        "ORIAXPOS", "ORIEULER", "ORIRPY", "ORIPATH", "TOFFOF", "G93", "G94", "G95", "M27", "M29",
-        "M50", "M51", "M65", "M7", "M8", "M9", "CYCLE832"};
+        "FNORM",  "COMPOF",  "COMPON",  "COMPCURV", "COMPCAD", "SOFT",  "BRISK",    "SOFTA",
+        "BRISKA", "FFWON",   "FFWOF",   "CFC",      "CFTCP",   "CFIN",  "G60",      "G601",
+        "G602",   "G603",    "G64",     "G641",     "G642",    "G643",  "G644",     "G645",
+        "UPATH",  "SPATH",   "ORIAXES", "ORIVECT",  "STOPRE",  "G153",  "G40",      "DIAMOF",
+        "CUT2D",  "CUT2DF",  "CUT3DC",  "G450",     "G451",    "WAITM", "ORIAXPOS", "ORIEULER",
+        "ORIRPY", "ORIPATH", "TOFFOF",  "G93",      "G94",     "G95",   "M27",      "M29",
+        "M50",    "M51",     "M65",     "M7",       "M8",      "M9",    "CYCLE832"};
     for (; t < tok.size(); ++t) {
       const std::string& k = tok[t];
       const size_t paren = k.find('(');
@@ -392,9 +405,9 @@ class Reader {
         refuse(t, "Sinumerik " + (k.back() == ':' ? std::string("jump label") : head) +
                       ": loops, jumps and subprograms are not supported: post the program "
                       "without them (expanded)");
-      if (head == "MSG" || head == "G710" || head == "G700" ||
-          head == "SETMS" || head == "WORKPIECE" || head == "CYCLE800" || head == "MCALL" ||
-          head == "SUPA" || head == "G500" || head == "TRANS" || head == "ATRANS" || head == "ROT" ||
+      if (head == "MSG" || head == "G710" || head == "G700" || head == "SETMS" ||
+          head == "WORKPIECE" || head == "CYCLE800" || head == "MCALL" || head == "SUPA" ||
+          head == "G500" || head == "TRANS" || head == "ATRANS" || head == "ROT" ||
           head == "AROT" || head == "T" || head == "D") {
         // handled below
       } else if (ignored.count(head)) {
@@ -488,12 +501,14 @@ class Reader {
           continue;
         }
         static const std::set<std::string> motion_names = {
-            "A2", "B2", "C2", "A4", "B4", "C4", "A5", "B5", "C5", "A6", "B6", "C6", "A7", "B7",
-            "C7", "LEAD", "TILT", "THETA", "PO", "PSI", "XH", "YH", "ZH", "RND", "RNDM", "CHR",
-            "CHF", "AP", "RP", "AR", "ANG", "TURN", "CIP", "I1", "J1", "K1", "SF", "OFFN", "DISC", "DISR"};
+            "A2",  "B2",   "C2",  "A4",  "B4",   "C4",   "A5",   "B5",    "C5",   "A6",
+            "B6",  "C6",   "A7",  "B7",  "C7",   "LEAD", "TILT", "THETA", "PO",   "PSI",
+            "XH",  "YH",   "ZH",  "RND", "RNDM", "CHR",  "CHF",  "AP",    "RP",   "AR",
+            "ANG", "TURN", "CIP", "I1",  "J1",   "K1",   "SF",   "OFFN",  "DISC", "DISR"};
         if (motion_names.count(name))
-          refuse(t, "Sinumerik " + name + "= (orientation angles, normals, rounding, chamfers, contour offsets, "
-                    "polar or circle-angle programming) changes the path and is not supported");
+          refuse(t, "Sinumerik " + name +
+                        "= (orientation angles, normals, rounding, chamfers, contour offsets, "
+                        "polar or circle-angle programming) changes the path and is not supported");
         if (address) {
           out += " " + name + "[" + sinBrackets(expr) + "]";
         } else {
@@ -504,15 +519,17 @@ class Reader {
           for (size_t c = 1; c < name.size() && r_parameter; ++c)
             r_parameter = std::isdigit(static_cast<unsigned char>(name[c])) != 0;
           if (!sin_vars_.count(name) && !r_parameter)
-            refuse(t, "Sinumerik " + name + "= is neither a variable the program declares (DEF) nor an "
-                      "R parameter: an address tolver does not carry out");
+            refuse(t, "Sinumerik " + name +
+                          "= is neither a variable the program declares (DEF) nor an "
+                          "R parameter: an address tolver does not carry out");
           // An assignment: constant expressions only (a value computed from motion is refused
           // by the expression's own check).
           sin_vars_[name] = sinExpression(expr, tcol[t]);
         }
       } else if (paren != std::string::npos) {
-        refuse(t, "Sinumerik " + head + "(...) is not supported: a cycle or function tolver does "
-                  "not know (post it as motion)");
+        refuse(t, "Sinumerik " + head +
+                      "(...) is not supported: a cycle or function tolver does "
+                      "not know (post it as motion)");
       } else if (std::isalpha(static_cast<unsigned char>(k[0])) && k.size() > 1 &&
                  std::isalpha(static_cast<unsigned char>(k[1])) && !tcpWordName(k)) {
         if (k == "TRAORI" || k == "TRAFOOF") {
@@ -568,7 +585,8 @@ class Reader {
   // not points of the path; the other digits of _ST (tool follow-up) do not change the points.
   void cycle800(const std::string& k, int column) {
     const size_t paren = k.find('(');
-    if (paren == std::string::npos || k.back() != ')') fail(line_, column, "CYCLE800", "expected CYCLE800(...)");
+    if (paren == std::string::npos || k.back() != ')')
+      fail(line_, column, "CYCLE800", "expected CYCLE800(...)");
     const std::string args = k.substr(paren + 1, k.size() - paren - 2);
     std::vector<std::string> a;
     {
@@ -590,7 +608,8 @@ class Reader {
       try {
         return sinExpression(a[n], column);
       } catch (const InputError&) {
-        fail(line_, column, std::string("CYCLE800 ") + field, "expected a number, found '" + a[n] + "'");
+        fail(line_, column, std::string("CYCLE800 ") + field,
+             "expected a number, found '" + a[n] + "'");
       }
       return 0.0;
     };
@@ -602,19 +621,23 @@ class Reader {
       swivel_on_ = false;
       setFrame(swivel_ * pframe_);
       cur_xyz_ = currentProgramXyz();
-      prog_.notes.push_back("line " + std::to_string(line_) + ": CYCLE800 deselects the swivel frame");
+      prog_.notes.push_back("line " + std::to_string(line_) +
+                            ": CYCLE800 deselects the swivel frame");
       return;
     }
     const double st = num(2, "_ST"), mode_v = num(3, "_MODE"), dir_v = num(13, "_DIR");
-    if (!(st >= 0 && st < 1e9) || std::floor(st) != st) fail(line_, column, "CYCLE800 _ST", "expected a whole number");
+    if (!(st >= 0 && st < 1e9) || std::floor(st) != st)
+      fail(line_, column, "CYCLE800 _ST", "expected a whole number");
     if (!(mode_v >= 0 && mode_v <= 255) || std::floor(mode_v) != mode_v)
       fail(line_, column, "CYCLE800 _MODE", "expected a whole number from 0 to 255");
-    if (!(dir_v == -1 || dir_v == 0 || dir_v == 1)) fail(line_, column, "CYCLE800 _DIR", "expected -1, 0 or +1");
+    if (!(dir_v == -1 || dir_v == 0 || dir_v == 1))
+      fail(line_, column, "CYCLE800 _DIR", "expected -1, 0 or +1");
     const int mode = static_cast<int>(mode_v), dir = static_cast<int>(dir_v);
     const int st_units = static_cast<int>(std::fmod(st, 10.0));
     if (st_units > 1)
-      fail(line_, column, "CYCLE800 _ST", "swivel type " + std::to_string(st_units) +
-                                              " (units digit) is not known: 0 new, 1 additive");
+      fail(line_, column, "CYCLE800 _ST",
+           "swivel type " + std::to_string(st_units) +
+               " (units digit) is not known: 0 new, 1 additive");
     const std::vector<int> rot = swivelAxes();
     if (rot.size() != 2)
       fail(line_, column, "CYCLE800", "swivelling needs a machine with two rotary axes");
@@ -634,7 +657,8 @@ class Reader {
           fail(line_, column, "CYCLE800 _MODE",
                "_MODE " + std::to_string(mode) + " names no axis for angle " + "ABC"[r] + "");
         if (code == 0) continue;
-        R = R * Eigen::AngleAxisd(ang[r] * kDegToRad, Eigen::Vector3d::Unit(code - 1)).toRotationMatrix();
+        R = R * Eigen::AngleAxisd(ang[r] * kDegToRad, Eigen::Vector3d::Unit(code - 1))
+                    .toRotationMatrix();
       }
     } else if (swivel_mode == 3) {
       // Rotary axes direct: the frame is the turn they give the tool frame.
@@ -645,16 +669,19 @@ class Reader {
         q[rot[r]] = ax.nc_sign * words[r] * kDegToRad;
         q0[rot[r]] = 0.0;
         if (!ax.endless && (q[rot[r]] < ax.travel_min - 1e-9 || q[rot[r]] > ax.travel_max + 1e-9))
-          fail(line_, column, "CYCLE800", "rotary axis " + ax.name + " " + formatNumber(words[r]) +
-                                              " deg (direct mode) is outside its travel");
+          fail(line_, column, "CYCLE800",
+               "rotary axis " + ax.name + " " + formatNumber(words[r]) +
+                   " deg (direct mode) is outside its travel");
       }
-      const Eigen::Matrix3d w_R_t = nominal_.w_T_t(q).linear(), w_R_t0 = nominal_.w_T_t(q0).linear();
+      const Eigen::Matrix3d w_R_t = nominal_.w_T_t(q).linear(),
+                            w_R_t0 = nominal_.w_T_t(q0).linear();
       R = Gm_inv_ * w_R_t * w_R_t0.transpose() * Gm_;
       positioned = true;
     } else {
       fail(line_, column, "CYCLE800 _MODE",
-           std::string(swivel_mode == 1 ? "solid angles" : "projection angles") +
-               " (_MODE " + std::to_string(mode) + ") are not supported: post the swivel axis by "
+           std::string(swivel_mode == 1 ? "solid angles" : "projection angles") + " (_MODE " +
+               std::to_string(mode) +
+               ") are not supported: post the swivel axis by "
                "axis (_MODE 57 or 27) or with the rotary axes direct (_MODE 192)");
     }
     Eigen::Isometry3d S = Eigen::Isometry3d::Identity();
@@ -669,7 +696,8 @@ class Reader {
     if (!positioned && dir != 0) {
       // The tool along the new z: the rotary solution the direction picks.
       const Eigen::Vector3d u_w = Gm_ * frame_.linear() * Eigen::Vector3d::UnitZ();
-      const std::vector<JointVector> ok = rotarySolutions(u_w, q, column, "CYCLE800", "the swivelled plane");
+      const std::vector<JointVector> ok =
+          rotarySolutions(u_w, q, column, "CYCLE800", "the swivelled plane");
       size_t pick = 0;
       if (ok.size() == 2) {
         const Axis& ref = model_.axes[rot[0]];
@@ -686,9 +714,10 @@ class Reader {
     cur_xyz_ = currentProgramXyz();
     std::string words;
     for (int r : rot) words += " " + model_.axes[r].name + formatWith("%.3f", rot_word_[r] + 0.0);
-    prog_.notes.push_back("line " + std::to_string(line_) + ": CYCLE800 swivels the working plane" +
-                          (positioned ? " (rotaries to" + words + ")" : " (rotaries as the program puts them)") +
-                          "; the points after it are held in the swivelled frame until CYCLE800()");
+    prog_.notes.push_back(
+        "line " + std::to_string(line_) + ": CYCLE800 swivels the working plane" +
+        (positioned ? " (rotaries to" + words + ")" : " (rotaries as the program puts them)") +
+        "; the points after it are held in the swivelled frame until CYCLE800()");
   }
 
   // G68.2, tilted working plane (Fanuc 30i-B Operator's Manual, "Tilted working plane indexing";
@@ -700,25 +729,34 @@ class Reader {
   // parameters may pick the other; the points are the same, the joints not). While the plane is
   // active the machine holds the tool tip at the program's points in it (as in TCP mode); G69
   // cancels it.
-  std::string tiltedPlane(const std::map<char, const Word*>& aw, const Word* g682, const Word* g531) {
+  std::string tiltedPlane(const std::map<char, const Word*>& aw, const Word* g682,
+                          const Word* g531) {
     auto value = [&](char l) { return aw.count(l) ? aw.at(l)->value : 0.0; };
     if (g682) {
       const double form_v = value('P');
       const int form = form_v == 0.0 ? 0 : form_v == 1.0 ? 1 : -1;
       if (form < 0)
-        fail(line_, g682->column, "G68.2", "G68.2 P" + formatNumber(form_v) + " (three points, two vectors or "
-                                           "projection angles) is not supported: post Euler angles (P0) or "
-                                           "roll-pitch-yaw (P1)");
+        fail(line_, g682->column, "G68.2",
+             "G68.2 P" + formatNumber(form_v) +
+                 " (three points, two vectors or "
+                 "projection angles) is not supported: post Euler angles (P0) or "
+                 "roll-pitch-yaw (P1)");
       if (rotaryCount() != 2)
-        fail(line_, g682->column, "G68.2", "a tilted working plane needs a machine with two rotary axes");
-      const double I = value('I') * kDegToRad, J = value('J') * kDegToRad, K = value('K') * kDegToRad;
+        fail(line_, g682->column, "G68.2",
+             "a tilted working plane needs a machine with two rotary axes");
+      const double I = value('I') * kDegToRad, J = value('J') * kDegToRad,
+                   K = value('K') * kDegToRad;
       Eigen::Matrix3d R;
       if (form == 0)
-        R = (Eigen::AngleAxisd(I, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(J, Eigen::Vector3d::UnitX()) *
-             Eigen::AngleAxisd(K, Eigen::Vector3d::UnitZ())).toRotationMatrix();
+        R = (Eigen::AngleAxisd(I, Eigen::Vector3d::UnitZ()) *
+             Eigen::AngleAxisd(J, Eigen::Vector3d::UnitX()) *
+             Eigen::AngleAxisd(K, Eigen::Vector3d::UnitZ()))
+                .toRotationMatrix();
       else
-        R = (Eigen::AngleAxisd(K, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(J, Eigen::Vector3d::UnitY()) *
-             Eigen::AngleAxisd(I, Eigen::Vector3d::UnitX())).toRotationMatrix();
+        R = (Eigen::AngleAxisd(K, Eigen::Vector3d::UnitZ()) *
+             Eigen::AngleAxisd(J, Eigen::Vector3d::UnitY()) *
+             Eigen::AngleAxisd(I, Eigen::Vector3d::UnitX()))
+                .toRotationMatrix();
       Eigen::Isometry3d S = Eigen::Isometry3d::Identity();
       S.translation() = Eigen::Vector3d(value('X'), value('Y'), value('Z')) * unit_;
       S.linear() = R;
@@ -728,11 +766,13 @@ class Reader {
       cur_xyz_ = currentProgramXyz();
     }
     if (g531) {
-      if (!swivel_on_) fail(line_, g531->column, "G53.1", "G53.1 without a tilted working plane (G68.2)");
+      if (!swivel_on_)
+        fail(line_, g531->column, "G53.1", "G53.1 without a tilted working plane (G68.2)");
       const Eigen::Vector3d u_w = Gm_ * frame_.linear() * Eigen::Vector3d::UnitZ();
       JointVector q = q_;
       setRotaries(q);
-      const std::vector<JointVector> ok = rotarySolutions(u_w, q, g531->column, "G53.1", "the tilted plane");
+      const std::vector<JointVector> ok =
+          rotarySolutions(u_w, q, g531->column, "G53.1", "the tilted plane");
       const size_t pick = nearestSolution(ok, q);
       std::string words;
       for (int a : ik_.rotaryAxes()) {
@@ -741,10 +781,11 @@ class Reader {
       }
       setRotaries(q_);
       cur_xyz_ = currentProgramXyz();
-      prog_.notes.push_back("line " + std::to_string(line_) + ": G53.1 turns the rotaries to" + words +
-                            (ok.size() > 1 ? ", the solution nearer their positions (the control's parameters "
-                                             "may pick the other: the points are the same, the joints not)"
-                                           : ""));
+      prog_.notes.push_back(
+          "line " + std::to_string(line_) + ": G53.1 turns the rotaries to" + words +
+          (ok.size() > 1 ? ", the solution nearer their positions (the control's parameters "
+                           "may pick the other: the points are the same, the joints not)"
+                         : ""));
     }
     return g682 ? "G68.2" : "G53.1";
   }
@@ -770,8 +811,9 @@ class Reader {
   // The rotary solutions (at most two) that turn the tool along u_w, each inside travel, from
   // joint values q (each angle unwrapped to the turn nearest q's); none is an error naming what
   // (e.g. "the swivelled plane") needs which angles.
-  std::vector<JointVector> rotarySolutions(const Eigen::Vector3d& u_w, const JointVector& q, int column,
-                                           const std::string& field, const std::string& what) {
+  std::vector<JointVector> rotarySolutions(const Eigen::Vector3d& u_w, const JointVector& q,
+                                           int column, const std::string& field,
+                                           const std::string& what) {
     InverseKinematics::RotaryCandidate cand[2];
     bool singular = false;
     const int n = ik_.rotaryCandidates(u_w, cand, &singular);
@@ -823,24 +865,29 @@ class Reader {
   // choice of the shorter path), absolute.
   std::string orientationWords(const Eigen::Vector3d& v, int column) {
     if (!tcpMode())
-      fail(line_, column, "A3", "an orientation vector (A3= B3= C3=) outside TRAORI: the control "
-                                "has no tool orientation to program");
+      fail(line_, column, "A3",
+           "an orientation vector (A3= B3= C3=) outside TRAORI: the control "
+           "has no tool orientation to program");
     if (orimks_)
-      fail(line_, column, "A3", "orientation vectors under ORIMKS (machine coordinates) are not "
-                                "supported: post them in ORIWKS");
+      fail(line_, column, "A3",
+           "orientation vectors under ORIMKS (machine coordinates) are not "
+           "supported: post them in ORIWKS");
     if (!absolute_) fail(line_, column, "A3", "orientation vectors in G91 are not supported");
     if (!(v.norm() > 1e-12)) fail(line_, column, "A3", "the orientation vector is zero");
     const Eigen::Vector3d u_w = Gm_ * frame_.linear() * v.normalized();
     JointVector q = q_;
     setRotaries(q);
-    const std::vector<JointVector> ok = rotarySolutions(u_w, q, column, "A3", "the orientation vector");
+    const std::vector<JointVector> ok =
+        rotarySolutions(u_w, q, column, "A3", "the orientation vector");
     const size_t pick = nearestSolution(ok, q);
     std::string out;
     char buf[64];
     for (int a : ik_.rotaryAxes()) {
       const Axis& ax = model_.axes[a];
-      if (ax.name.size() != 1) fail(line_, column, "A3", "rotary axis " + ax.name + " has no one-letter word");
-      std::snprintf(buf, sizeof buf, " %s%.12g", ax.name.c_str(), ax.nc_sign * radToDeg(ok[pick][a]) + 0.0);
+      if (ax.name.size() != 1)
+        fail(line_, column, "A3", "rotary axis " + ax.name + " has no one-letter word");
+      std::snprintf(buf, sizeof buf, " %s%.12g", ax.name.c_str(),
+                    ax.nc_sign * radToDeg(ok[pick][a]) + 0.0);
       out += buf;
     }
     return out;
@@ -872,8 +919,10 @@ class Reader {
   // A Sinumerik expression in the reader's bracket syntax: ( ) become [ ].
   static std::string sinBrackets(std::string e) {
     for (char& c : e) {
-      if (c == '(') c = '[';
-      else if (c == ')') c = ']';
+      if (c == '(')
+        c = '[';
+      else if (c == ')')
+        c = ']';
     }
     return e;
   }
@@ -885,7 +934,8 @@ class Reader {
     while (i < b.size() && b[i] == ' ') ++i;
     if (i != b.size()) fail(line_, column, e.substr(0, 20), "unexpected text in the expression");
     if (!std::isfinite(v) || std::abs(v) > 1e9)
-      fail(line_, column, e.substr(0, 20), "value " + clip(formatNumber(v)) + " is beyond any plausible number");
+      fail(line_, column, e.substr(0, 20),
+           "value " + clip(formatNumber(v)) + " is beyond any plausible number");
     return v;
   }
 
@@ -896,15 +946,19 @@ class Reader {
     const size_t paren = k.find('(');
     const std::string name = k.substr(0, paren);
     if (name != "CYCLE81" && name != "CYCLE82" && name != "CYCLE83")
-      fail(line_, column, name, "the Sinumerik cycle " + name + " is not expanded (drilling "
-                                "cycles CYCLE81, CYCLE82 and CYCLE83 are)");
-    if (paren == std::string::npos || k.back() != ')') fail(line_, column, name, "expected " + name + "(...)");
+      fail(line_, column, name,
+           "the Sinumerik cycle " + name +
+               " is not expanded (drilling "
+               "cycles CYCLE81, CYCLE82 and CYCLE83 are)");
+    if (paren == std::string::npos || k.back() != ')')
+      fail(line_, column, name, "expected " + name + "(...)");
     const std::string args = k.substr(paren + 1, k.size() - paren - 2);
     std::vector<std::string> a;
     size_t p = 0;
     while (true) {
       const size_t e = args.find(',', p);
-      a.push_back(std::string(trim(args.substr(p, e == std::string::npos ? std::string::npos : e - p))));
+      a.push_back(
+          std::string(trim(args.substr(p, e == std::string::npos ? std::string::npos : e - p))));
       if (e == std::string::npos) break;
       p = e + 1;
     }
@@ -914,7 +968,8 @@ class Reader {
     };
     const auto rtp = arg(0), rfp = arg(1), sdis = arg(2), dp = arg(3), dpr = arg(4);
     if (!rtp || !rfp) fail(line_, column, name, name + " needs RTP and RFP (its first two values)");
-    if (!dp && !dpr) fail(line_, column, name, name + " needs DP or DPR (its fourth or fifth value)");
+    if (!dp && !dpr)
+      fail(line_, column, name, name + " needs DP or DPR (its fourth or fifth value)");
     cycle_ = true;
     ++prog_.cycles;
     sin_mcall_ = modal;
@@ -940,14 +995,16 @@ class Reader {
         fail(line_, col_base + i, "#<" + name + ">",
              name.rfind("_hal[", 0) == 0
                  ? "HAL pin with no value: declare it in the machine file's <control> as "
-                   "<parameter name=\"" + name + "\" value=\"...\"/>"
+                   "<parameter name=\"" +
+                       name + "\" value=\"...\"/>"
                  : "parameter has no value");
       return it->second;
     }
     const size_t at = i;
     const int n = parameterNumber(primary(text, i, col_base), col_base + static_cast<int>(at));
     auto it = numbered_.find(n);
-    if (it == numbered_.end()) fail(line_, col_base + i, "#" + std::to_string(n), "parameter has no value");
+    if (it == numbered_.end())
+      fail(line_, col_base + i, "#" + std::to_string(n), "parameter has no value");
     return it->second;
   }
 
@@ -955,9 +1012,11 @@ class Reader {
   int parameterNumber(double n, int col) {
     const double r = std::round(n);
     if (!(r >= 1 && r <= kMaxParameter))
-      fail(line_, col, "#", "parameter number " + formatWith("%g", n) + " out of range (1 to " +
-                                std::to_string(kMaxParameter) + ")");
-    if (std::abs(n - r) > 1e-4) fail(line_, col, "#", "parameter number " + formatWith("%g", n) + " is not an integer");
+      fail(line_, col, "#",
+           "parameter number " + formatWith("%g", n) + " out of range (1 to " +
+               std::to_string(kMaxParameter) + ")");
+    if (std::abs(n - r) > 1e-4)
+      fail(line_, col, "#", "parameter number " + formatWith("%g", n) + " is not an integer");
     return static_cast<int>(r);
   }
 
@@ -970,7 +1029,8 @@ class Reader {
       ~Depth() { --d; }
     } depth(nesting_);
     if (nesting_ > kMaxNesting)
-      fail(line_, col_base + i, "", "expression nested deeper than " + std::to_string(kMaxNesting) + " levels");
+      fail(line_, col_base + i, "",
+           "expression nested deeper than " + std::to_string(kMaxNesting) + " levels");
     while (i < text.size() && text[i] == ' ') ++i;
     if (i >= text.size()) fail(line_, col_base + i, "", "a number is missing");
     const char c = text[i];
@@ -991,13 +1051,17 @@ class Reader {
     if (model_.control.dialect == "sinumerik" &&
         (std::isalpha(static_cast<unsigned char>(c)) || c == '_')) {
       size_t j = i;
-      while (j < text.size() && (std::isalnum(static_cast<unsigned char>(text[j])) || text[j] == '_')) ++j;
+      while (j < text.size() &&
+             (std::isalnum(static_cast<unsigned char>(text[j])) || text[j] == '_'))
+        ++j;
       const std::string name = text.substr(i, j - i);
       if (j < text.size() && text[j] == '[')
-        fail(line_, col_base + i, name, "functions in expressions (" + name + ") are not supported");
+        fail(line_, col_base + i, name,
+             "functions in expressions (" + name + ") are not supported");
       auto it = sin_vars_.find(name);
       if (it == sin_vars_.end())
-        fail(line_, col_base + i, name, "the variable " + name + " has no value (not assigned in the program)");
+        fail(line_, col_base + i, name,
+             "the variable " + name + " has no value (not assigned in the program)");
       i = j;
       return it->second;
     }
@@ -1007,7 +1071,8 @@ class Reader {
     while (j < text.size() && (std::isdigit(static_cast<unsigned char>(text[j])) || text[j] == '.'))
       ++j;
     const auto v = parseNumber(std::string_view(text).substr(i, j - i));
-    if (!v) fail(line_, col_base + i, "", "malformed number '" + clip(text.substr(i, j - i + 1)) + "'");
+    if (!v)
+      fail(line_, col_base + i, "", "malformed number '" + clip(text.substr(i, j - i + 1)) + "'");
     i = j;
     return *v;
   }
@@ -1062,10 +1127,12 @@ class Reader {
   double arcRadiusTolerance(double radius_mm) const {
     const bool inch = unit_ == 25.4;
     double rule;
-    if (model_.control.arc_radius_tolerance_mm > 0) rule = model_.control.arc_radius_tolerance_mm;
+    if (model_.control.arc_radius_tolerance_mm > 0)
+      rule = model_.control.arc_radius_tolerance_mm;
     else if (model_.control.dialect == "linuxcnc")
       rule = std::min(inch ? 1.27 : 0.5, std::max(inch ? 0.0127 : 0.005, 1e-3 * radius_mm));
-    else rule = inch ? 0.00508 : 0.002;
+    else
+      rule = inch ? 0.00508 : 0.002;
     const double step = unit_ * std::pow(10.0, -max_decimals_);
     return std::max(rule, 4.0 * step);
   }
@@ -1099,13 +1166,16 @@ class Reader {
         size_t b = at + key.size();
         while (b < c.size() && c[b] == ' ') ++b;
         size_t e = b;
-        while (e < c.size() && (std::isdigit(static_cast<unsigned char>(c[e])) || c[e] == '.' || c[e] == '-')) ++e;
+        while (e < c.size() &&
+               (std::isdigit(static_cast<unsigned char>(c[e])) || c[e] == '.' || c[e] == '-'))
+          ++e;
         return parseNumber(std::string_view(c).substr(b, e - b));
       };
       std::optional<double> d = numberAfter(" D=");
       if (!d) d = numberAfter("=");  // "T1 = 10.0 dia."
       if (!d || !(*d > 0)) continue;
-      const double r = numberAfter(" CR=").value_or(c.find("BALL") != std::string::npos ? *d / 2 : 0.0);
+      const double r =
+          numberAfter(" CR=").value_or(c.find("BALL") != std::string::npos ? *d / 2 : 0.0);
       tool_table_["T" + std::to_string(number)] = {*d, std::clamp(r, 0.0, *d / 2)};
     }
   }
@@ -1117,7 +1187,9 @@ class Reader {
     auto numberAt = [&](size_t b, bool integer) -> std::optional<double> {
       while (b < c.size() && c[b] == ' ') ++b;
       size_t e = b;
-      while (e < c.size() && (std::isdigit(static_cast<unsigned char>(c[e])) || (!integer && c[e] == '.'))) ++e;
+      while (e < c.size() &&
+             (std::isdigit(static_cast<unsigned char>(c[e])) || (!integer && c[e] == '.')))
+        ++e;
       if (e == b || e - b > 12) return std::nullopt;
       return parseNumber(std::string_view(c).substr(b, e - b));
     };
@@ -1147,7 +1219,8 @@ class Reader {
     spec.kind = key;
     spec.line = line_;
     auto it = tool_table_.find(key);
-    if (it != tool_table_.end()) spec.values = {it->second.first * unit_, it->second.second * unit_};
+    if (it != tool_table_.end())
+      spec.values = {it->second.first * unit_, it->second.second * unit_};
     prog_.cutters.push_back(spec);
   }
 
@@ -1162,7 +1235,8 @@ class Reader {
       if (c == ';') break;
       if (sinumerik && c == '"') {  // a string: MSG("..."), T="name"
         const size_t close = raw.find('"', i + 1);
-        if (close == std::string::npos) fail(line_, static_cast<int>(i) + 1, "\"", "unclosed string");
+        if (close == std::string::npos)
+          fail(line_, static_cast<int>(i) + 1, "\"", "unclosed string");
         for (size_t k = i; k <= close; ++k) {
           text += raw[k];
           col.push_back(static_cast<int>(k) + 1);
@@ -1172,7 +1246,8 @@ class Reader {
       }
       if (c == '(' && !sinumerik) {
         const size_t close = raw.find(')', i);
-        if (close == std::string::npos) fail(line_, static_cast<int>(i) + 1, "(", "unclosed comment");
+        if (close == std::string::npos)
+          fail(line_, static_cast<int>(i) + 1, "(", "unclosed comment");
         i = close;
         continue;
       }
@@ -1198,8 +1273,9 @@ class Reader {
         const size_t at = upper.find(*w);
         if (at == std::string::npos) continue;
         const size_t end = at + w->size();
-        const bool alone = (at == 0 || !std::isalnum(static_cast<unsigned char>(upper[at - 1]))) &&
-                           (end == upper.size() || !std::isalnum(static_cast<unsigned char>(upper[end])));
+        const bool alone =
+            (at == 0 || !std::isalnum(static_cast<unsigned char>(upper[at - 1]))) &&
+            (end == upper.size() || !std::isalnum(static_cast<unsigned char>(upper[end])));
         if (!alone) continue;
         tcpWord(*w);
         for (size_t k = at; k < end; ++k) upper[k] = ' ';
@@ -1222,7 +1298,8 @@ class Reader {
       const std::string lhs = lowerNoSpace(text.substr(0, eq));
       size_t i = eq + 1;
       const double v = expression(text, i, col[0] - 1);
-      if (lhs.size() > 2 && lhs[1] == '<') named_[lhs.substr(2, lhs.size() - 3)] = v;
+      if (lhs.size() > 2 && lhs[1] == '<')
+        named_[lhs.substr(2, lhs.size() - 3)] = v;
       else {
         const auto n = parseNumber(lhs.substr(1));
         if (!n) fail(line_, col[0], "#", "malformed parameter number");
@@ -1244,21 +1321,24 @@ class Reader {
         if (prog_.part_name.empty()) prog_.part_name = std::string(trim(text.substr(1)));
         return "";
       }
-      static const std::set<std::string> flow = {"SUB", "ENDSUB", "CALL", "IF", "ELSE", "ELSEIF",
-                                                 "ENDIF", "WHILE", "ENDWHILE", "DO", "REPEAT",
-                                                 "ENDREPEAT", "RETURN", "BREAK", "CONTINUE"};
+      static const std::set<std::string> flow = {
+          "SUB",      "ENDSUB", "CALL",   "IF",        "ELSE",   "ELSEIF", "ENDIF",   "WHILE",
+          "ENDWHILE", "DO",     "REPEAT", "ENDREPEAT", "RETURN", "BREAK",  "CONTINUE"};
       const std::string keyword = rest.substr(0, rest.find_first_of(" [#"));
       if (numbered && flow.count(keyword))
-        fail(line_, col[0], "O", "O-word " + toLower(keyword) + " ('" + clip(rest) +
-                                     "'): subprograms and control flow are not supported: "
-                                     "expand them in the post-processor");
+        fail(line_, col[0], "O",
+             "O-word " + toLower(keyword) + " ('" + clip(rest) +
+                 "'): subprograms and control flow are not supported: "
+                 "expand them in the post-processor");
       if (!numbered && upper[0] == 'O' && !executed_block_) {
         prog_.part_name = std::string(trim(text.substr(1)));  // a name at the program start
         return "";
       }
-      fail(line_, col[0], "O", "'" + clip(text) + "' is neither a program number nor a name at "
-                               "the program start: O-word subprograms and control flow are not "
-                               "supported");
+      fail(line_, col[0], "O",
+           "'" + clip(text) +
+               "' is neither a program number nor a name at "
+               "the program start: O-word subprograms and control flow are not "
+               "supported");
     }
     // Words.
     std::vector<Word> words;
@@ -1293,20 +1373,22 @@ class Reader {
     std::map<char, const Word*> axis_words;  // X Y Z and rotary letters, I J K R, P Q L H
     std::vector<const Word*> g, m;
     for (const Word& w : words) {
-      if (w.letter == 'G') g.push_back(&w);
-      else if (w.letter == 'M') m.push_back(&w);
+      if (w.letter == 'G')
+        g.push_back(&w);
+      else if (w.letter == 'M')
+        m.push_back(&w);
       else if (w.letter == 'D' && model_.control.dialect == "sinumerik") {
         // Sinumerik: D0 switches the tool length offset off, Dn on (cutting edge n).
         tlc_ = w.value != 0.0;
         if (tlc_) h_ = static_cast<int>(w.value);
-      } else if (w.letter == 'N' || w.letter == 'F' || w.letter == 'S' || w.letter == 'D') continue;
+      } else if (w.letter == 'N' || w.letter == 'F' || w.letter == 'S' || w.letter == 'D')
+        continue;
       else if (w.letter == 'T') {
         tool_ = static_cast<int>(w.value);
         selected_tool_ = "T" + std::to_string(tool_);
         // Posts that write no M6 (Fusion for personal use, grbl): the T word changes the tool.
         if (!seen_m6_ && !blockHasM6(words)) toolChange(selected_tool_);
-      }
-      else {
+      } else {
         if (axis_words.count(w.letter))
           fail(line_, w.column, std::string(1, w.letter), "the word appears twice in the block");
         axis_words[w.letter] = &w;
@@ -1318,16 +1400,18 @@ class Reader {
     // M words: subprograms refused, program end, TCP switches, tool number.
     for (const Word* w : m) {
       if (w->code == "M98" || w->code == "M99" || w->code == "M97")
-        fail(line_, w->column, w->code, "subprogram calls are not supported: expand them in the post");
+        fail(line_, w->column, w->code,
+             "subprogram calls are not supported: expand them in the post");
       if (w->code == "M2" || w->code == "M30") {
         ended_ = true;
         endModes(w->code);
       } else if (w->code == "M6") {
         seen_m6_ = true;
         toolChange(selected_tool_);
-      }
-      else if (w->code == "M61" && has('Q')) tool_ = static_cast<int>(val('Q'));
-      else if (!tcpWord(w->code) && !harmlessM().count(w->code)) ignored_.insert(w->code);
+      } else if (w->code == "M61" && has('Q'))
+        tool_ = static_cast<int>(val('Q'));
+      else if (!tcpWord(w->code) && !harmlessM().count(w->code))
+        ignored_.insert(w->code);
     }
     // G words in modal-group order.
     std::string motion_this_block;
@@ -1340,34 +1424,53 @@ class Reader {
         if (c == "G49") tlc_ = false;
         if (c.rfind("G43", 0) == 0 || c == "G234") {
           tlc_ = true;
-          if (has('H')) h_ = static_cast<int>(val('H'));
-          else if (h_ == 0) h_ = tool_;
+          if (has('H'))
+            h_ = static_cast<int>(val('H'));
+          else if (h_ == 0)
+            h_ = tool_;
         }
         continue;
       }
       auto refused = refusedG().find(c);
-      if (refused != refusedG().end() && !isDrillingCycle(c)) fail(line_, w->column, c, refused->second);
-      if (c == "G0" || c == "G1" || c == "G2" || c == "G3") motion_this_block = c;
-      else if (isDrillingCycle(c)) motion_this_block = c;
-      else if (c == "G17") plane_ = 2;
-      else if (c == "G18") plane_ = 1;
-      else if (c == "G19") plane_ = 0;
-      else if (c == "G20" || c == "G70") setUnits(25.4);
-      else if (c == "G21" || c == "G71") setUnits(1.0);
-      else if (c == "G90") absolute_ = true;
-      else if (c == "G91") absolute_ = false;
-      else if (c == "G90.1") arc_absolute_ = true;
-      else if (c == "G91.1") arc_absolute_ = false;
+      if (refused != refusedG().end() && !isDrillingCycle(c))
+        fail(line_, w->column, c, refused->second);
+      if (c == "G0" || c == "G1" || c == "G2" || c == "G3")
+        motion_this_block = c;
+      else if (isDrillingCycle(c))
+        motion_this_block = c;
+      else if (c == "G17")
+        plane_ = 2;
+      else if (c == "G18")
+        plane_ = 1;
+      else if (c == "G19")
+        plane_ = 0;
+      else if (c == "G20" || c == "G70")
+        setUnits(25.4);
+      else if (c == "G21" || c == "G71")
+        setUnits(1.0);
+      else if (c == "G90")
+        absolute_ = true;
+      else if (c == "G91")
+        absolute_ = false;
+      else if (c == "G90.1")
+        arc_absolute_ = true;
+      else if (c == "G91.1")
+        arc_absolute_ = false;
       else if (c == "G43") {
         tlc_ = true;
         h_ = has('H') ? static_cast<int>(val('H')) : tool_;
       } else if (c == "G49") {  // (a TCP mode that G49 ends was switched off by tcpWord)
         tlc_ = false;
-      } else if (c == "G53") g53 = true;
-      else if (c == "G28" || c == "G30") g28 = true;
-      else if (c == "G10") g10 = true;
-      else if (c == "G68.2") g682 = w;
-      else if (c == "G53.1") g531 = w;
+      } else if (c == "G53")
+        g53 = true;
+      else if (c == "G28" || c == "G30")
+        g28 = true;
+      else if (c == "G10")
+        g10 = true;
+      else if (c == "G68.2")
+        g682 = w;
+      else if (c == "G53.1")
+        g531 = w;
       else if (c == "G69") {
         if (swivel_on_) {
           swivel_ = Eigen::Isometry3d::Identity();
@@ -1378,9 +1481,10 @@ class Reader {
       } else if (c == "G80") {
         motion_ = "G0";
         cycle_ = false;
-      }
-      else if (c == "G98") cycle_return_initial_ = true;
-      else if (c == "G99") cycle_return_initial_ = false;
+      } else if (c == "G98")
+        cycle_return_initial_ = true;
+      else if (c == "G99")
+        cycle_return_initial_ = false;
       else if (c == "G54" || c == "G55" || c == "G56" || c == "G57" || c == "G58" || c == "G59" ||
                c == "G59.1" || c == "G59.2" || c == "G59.3")
         work_ = c;
@@ -1402,8 +1506,9 @@ class Reader {
       // here reads (Fanuc's E is a thread lead). Refused, so that Y1e5 is never read as Y1.
       if (l == 'E')
         fail(line_, w->column, "E",
-             "an E word (E" + formatNumber(w->value) + "): G-code numbers have no exponent, so '1e5' reads "
-             "as 1 followed by E5; write the number out (100000)");
+             "an E word (E" + formatNumber(w->value) +
+                 "): G-code numbers have no exponent, so '1e5' reads "
+                 "as 1 followed by E5; write the number out (100000)");
       if (l == 'X' || l == 'Y' || l == 'Z' || l == 'I' || l == 'J' || l == 'K' || l == 'R' ||
           l == 'P' || l == 'Q' || l == 'L' || l == 'H')
         continue;
@@ -1447,8 +1552,8 @@ class Reader {
   // line): G73, G81-G86, G88, G89 (Fanuc, HAAS, LinuxCNC); G74 and G76 (counter tapping and
   // fine boring) on ISO controls, where LinuxCNC's G76 is threading (refused).
   bool isDrillingCycle(const std::string& c) const {
-    static const std::set<std::string> cycles = {"G73", "G81", "G82", "G83", "G84", "G85",
-                                                 "G86", "G88", "G89"};
+    static const std::set<std::string> cycles = {"G73", "G81", "G82", "G83", "G84",
+                                                 "G85", "G86", "G88", "G89"};
     if (cycles.count(c)) return true;
     return (c == "G74" || c == "G76") && model_.control.dialect != "linuxcnc";
   }
@@ -1480,8 +1585,8 @@ class Reader {
   // one group, each replacing the other); the machine file's ended_by words (HAAS: G28 cancels
   // tool length compensation, and with it G234); M2 and M30 end every mode.
   void endModes(const std::string& c) {
-    static const std::set<std::string> group08 = {"G43", "G44", "G49", "G43.1", "G43.4", "G43.5",
-                                                  "G234"};
+    static const std::set<std::string> group08 = {"G43",   "G44",   "G49", "G43.1",
+                                                  "G43.4", "G43.5", "G234"};
     std::vector<std::string> ended;
     for (const std::string& on : tcp_active_) {
       bool ends = c == "M2" || c == "M30";
@@ -1517,11 +1622,13 @@ class Reader {
     static const std::set<std::string> known = {"G43.4", "G43.5", "G234", "M428", "M128", "G254"};
     if (known.count(c)) {
       std::string declared;
-      for (const auto& [on, off] : model_.control.tcp_words) declared += (declared.empty() ? "" : ", ") + on;
+      for (const auto& [on, off] : model_.control.tcp_words)
+        declared += (declared.empty() ? "" : ", ") + on;
       fail(line_, 0, c,
            declared.empty()
                ? "a tool-centre-point word, but the machine file declares no TCP words: add "
-                 "<control><tcp on=\"" + c + "\" off=\"...\"/></control> to it"
+                 "<control><tcp on=\"" +
+                     c + "\" off=\"...\"/></control> to it"
                : "a tool-centre-point word this machine's control does not use (it declares " +
                      declared + "): is the program posted for this machine?");
     }
@@ -1565,7 +1672,8 @@ class Reader {
         fail(line_, w->column, std::string(1, l),
              "rotary word " + formatNumber(rot_word_[a]) + " deg is outside the travel of " +
                  ax.name + " [" + formatNumber(ax.travel_min / kDegToRad) + ", " +
-                 formatNumber(ax.travel_max / kDegToRad) + "] deg (mark the axis endless=\"true\" "
+                 formatNumber(ax.travel_max / kDegToRad) +
+                 "] deg (mark the axis endless=\"true\" "
                  "in the machine file if it turns without stops)");
     }
   }
@@ -1630,7 +1738,8 @@ class Reader {
         words += (words.empty() ? "" : " ") + model_.axes[a].name + formatNumber(rot_word_[a]);
     fail(line_, 0, "frame",
          "the tool axis the rotary words give (" + words + ") is " +
-             formatWith("%.1f", radToDeg(angle)) + " deg from the z axis of the rotated frame "
+             formatWith("%.1f", radToDeg(angle)) +
+             " deg from the z axis of the rotated frame "
              "the program works in: the machine file's rotary senses or zeros (nc_sign, "
              "direction) differ from those the program was posted for");
   }
@@ -1717,8 +1826,8 @@ class Reader {
       if (d < 1e-9) fail(line_, aw.at('R')->column, "R", "an R arc needs distinct end points");
       const double h2 = r * r - d * d / 4.0;
       if (h2 < 0 && d / 2.0 - std::abs(r) > arcRadiusTolerance(std::abs(r)))
-        fail(line_, aw.at('R')->column, "R", "radius " + formatNumber(std::abs(r / unit_)) +
-                                                 " is shorter than half the chord");
+        fail(line_, aw.at('R')->column, "R",
+             "radius " + formatNumber(std::abs(r / unit_)) + " is shorter than half the chord");
       const double h = std::sqrt(std::max(0.0, h2));
       const Eigen::Vector3d left = axis.cross(chord / d);
       const Eigen::Vector3d mid = start + 0.5 * chord;
@@ -1741,8 +1850,9 @@ class Reader {
     if (aw.count('P')) {
       const Word& p = *aw.at('P');
       if (model_.control.dialect != "linuxcnc")
-        fail(line_, p.column, "P", "a P word on an arc (LinuxCNC's turns) on a control that is "
-                                   "not declared dialect=\"linuxcnc\"");
+        fail(line_, p.column, "P",
+             "a P word on an arc (LinuxCNC's turns) on a control that is "
+             "not declared dialect=\"linuxcnc\"");
       if (!(p.value >= 1 && p.value <= 1000 && p.value == std::round(p.value)))
         fail(line_, p.column, "P", "the number of turns must be a whole number from 1 to 1000");
       turns = static_cast<int>(p.value) - 1;
@@ -1753,8 +1863,10 @@ class Reader {
     // Bounded work: a full turn at this radius and tolerance, before anything is expanded.
     if (!(arcPointsPerTurn(r0, tol) * (turns + 1) <= kMaxArcPoints))
       fail(line_, 0, motion,
-           "an arc of radius " + formatNumber(r0) + " mm would expand into more than a million "
-           "points at chordal tolerance " + formatNumber(tol) + " mm (raise --chordal-tol)");
+           "an arc of radius " + formatNumber(r0) +
+               " mm would expand into more than a million "
+               "points at chordal tolerance " +
+               formatNumber(tol) + " mm (raise --chordal-tol)");
     const double radius_tol = arcRadiusTolerance(r0);
     if (!interpolateArc(start, end, centre, axis, tol, radius_tol, pts, turns)) {
       const Eigen::Vector3d re = end - centre - n * n.dot(end - centre);
@@ -1763,8 +1875,9 @@ class Reader {
                formatWith("%.2f", std::abs(re.norm() - r0) * 1000.0) + " um, more than the " +
                formatWith("%.2f", radius_tol * 1000.0) + " um the control accepts (" +
                (model_.control.dialect == "linuxcnc" ? "LinuxCNC's rule"
-                : model_.control.arc_radius_tolerance_mm > 0 ? "the machine file's arc_radius_tolerance_mm"
-                                                            : "RS274NGC's rule") +
+                : model_.control.arc_radius_tolerance_mm > 0
+                    ? "the machine file's arc_radius_tolerance_mm"
+                    : "RS274NGC's rule") +
                ", or four steps of the program's " + std::to_string(max_decimals_) + " decimals)");
     }
     ++prog_.arcs_expanded;
@@ -1839,12 +1952,14 @@ class Reader {
     return cycle_code_;
   }
 
-  std::string setOffsetByG10(const std::map<char, const Word*>& aw, const std::vector<const Word*>& g) {
+  std::string setOffsetByG10(const std::map<char, const Word*>& aw,
+                             const std::vector<const Word*>& g) {
     const int L = aw.count('L') ? static_cast<int>(aw.at('L')->value) : -1;
     if (L != 2 && L != 20)
       fail(line_, g.front()->column, "G10", "only G10 L2 and L20 (work offsets) are supported");
     const int P = aw.count('P') ? static_cast<int>(aw.at('P')->value) : 0;
-    static const char* names[] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
+    static const char* names[] = {"G54", "G55",   "G56",   "G57",  "G58",
+                                  "G59", "G59.1", "G59.2", "G59.3"};
     if (P < 0 || P > 9) fail(line_, aw.at('P')->column, "P", "expected P0 to P9");
     const std::string name = P == 0 ? work_ : names[P - 1];
     Eigen::Vector3d off = set_offsets_.count(name) ? set_offsets_[name] : workOffset(name);
@@ -1866,7 +1981,7 @@ class Reader {
   ForwardKinematics nominal_;
   InverseKinematics ik_;
   ClProgram prog_;
-  static constexpr int kMaxNesting = 64;  // signs, brackets and '#' within one expression
+  static constexpr int kMaxNesting = 64;      // signs, brackets and '#' within one expression
   static constexpr int kMaxParameter = 5601;  // LinuxCNC's numbered parameters: #1 to #5601
   int nesting_ = 0;
   LineSource* source_ = nullptr;
@@ -1884,11 +1999,11 @@ class Reader {
   Eigen::Isometry3d pframe_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d frame_ = Eigen::Isometry3d::Identity();
   bool swivel_on_ = false;
-  bool orimks_ = false;  // ORIMKS: orientation vectors in machine coordinates (refused)
-  int frame_index_ = 0;  // into prog_.frames
+  bool orimks_ = false;        // ORIMKS: orientation vectors in machine coordinates (refused)
+  int frame_index_ = 0;        // into prog_.frames
   bool frame_checked_ = true;  // the tool axis checked against a rotated frame's z
   std::string tool_name_;
-  int max_decimals_ = 3;  // assumed until the program prints more
+  int max_decimals_ = 3;         // assumed until the program prints more
   bool executed_block_ = false;  // a block of words was executed (O names come before)
   static constexpr size_t kMaxLeaderLines = 2000;  // lines held while looking for a first '%'
   double unit_ = 1.0;
@@ -1901,7 +2016,8 @@ class Reader {
   int h_ = 0, tool_ = 0;
   std::string active_tool_, selected_tool_;  // "T1" or a Sinumerik tool name
   bool seen_m6_ = false;
-  std::map<std::string, std::pair<double, double>> tool_table_;  // "T1" -> diameter, corner radius (program unit: comments come before G20/G21)
+  std::map<std::string, std::pair<double, double>>
+      tool_table_;  // "T1" -> diameter, corner radius (program unit: comments come before G20/G21)
   std::set<std::string> tcp_active_;
   std::set<std::string> ignored_;
   std::map<std::string, int> missing_offsets_;  // work offset -> first line that used it

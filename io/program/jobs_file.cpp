@@ -17,7 +17,8 @@ std::vector<VerifyJob> parseJobsCsv(const std::string& text, const std::string& 
   };
   std::vector<VerifyJob> jobs;
   forEachCsvRow(text, file, {"name", "machine", "cl", "tolerance"},
-                "missing column (name,machine,cl,part,tolerance[,setup,zones,probed])", [&](const CsvRow& row) {
+                "missing column (name,machine,cl,part,tolerance[,setup,zones,probed])",
+                [&](const CsvRow& row) {
                   VerifyJob j;
                   j.line = row.line;
                   j.machine = resolve(row.cell("machine"));
@@ -32,18 +33,24 @@ std::vector<VerifyJob> parseJobsCsv(const std::string& text, const std::string& 
                                      "'" + row.cell("tolerance") + "' is not a number");
                   j.tolerance_mm = tol ? *tol : NAN;
                   j.name = row.cell("name");
-                  if (j.name.empty() || j.name.find('/') != std::string::npos || j.name == "." || j.name == "..")
-                    throw InputError(file, row.line, row.column("name"), "name", "a job name is a plain file name");
-                  // Two jobs of one name would write one directory, one report lost.
-                  if (std::any_of(jobs.begin(), jobs.end(), [&](const VerifyJob& o) { return o.name == j.name; }))
+                  if (j.name.empty() || j.name.find('/') != std::string::npos || j.name == "." ||
+                      j.name == "..")
                     throw InputError(file, row.line, row.column("name"), "name",
-                                     "job '" + j.name + "' is named twice: each job needs its own name");
+                                     "a job name is a plain file name");
+                  // Two jobs of one name would write one directory, one report lost.
+                  if (std::any_of(jobs.begin(), jobs.end(),
+                                  [&](const VerifyJob& o) { return o.name == j.name; }))
+                    throw InputError(
+                        file, row.line, row.column("name"), "name",
+                        "job '" + j.name + "' is named twice: each job needs its own name");
                   jobs.push_back(j);
                 });
   if (jobs.empty()) throw InputError(file, 0, 0, "jobs", "the file lists no job");
   return jobs;
 }
 
-std::vector<VerifyJob> readJobsFile(const std::string& path) { return parseJobsCsv(readFile(path), path); }
+std::vector<VerifyJob> readJobsFile(const std::string& path) {
+  return parseJobsCsv(readFile(path), path);
+}
 
 }  // namespace tolver

@@ -1,9 +1,10 @@
 #include "io/program/point_table.h"
-#include "core/numerics/units.h"
 
 #include <cctype>
 #include <cmath>
 #include <cstdio>
+
+#include "core/numerics/units.h"
 
 namespace tolver {
 
@@ -18,8 +19,7 @@ std::string formatPointTable(const MachineModel& model, const std::vector<ClPoin
 void writePointTable(TextOut& out, const MachineModel& model, const std::vector<ClPoint>& nominal,
                      const PredictedPoints& predicted,
                      const std::vector<PoseUncertainty>* uncertainty) {
-  out +=
-      "index,line,rapid,nominal_x_mm,nominal_y_mm,nominal_z_mm,nominal_i,nominal_j,nominal_k";
+  out += "index,line,rapid,nominal_x_mm,nominal_y_mm,nominal_z_mm,nominal_i,nominal_j,nominal_k";
   for (const Axis& ax : model.axes) {
     std::string n = ax.name;
     for (char& c : n) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
@@ -54,13 +54,14 @@ void writePointTable(TextOut& out, const MachineModel& model, const std::vector<
     if (uncertainty) {
       const PoseUncertainty& u = (*uncertainty)[i];
       std::snprintf(buf, sizeof buf, ",%.4f,%.4f,%.4f,%d", mmToUm(u.tip),
-                    mmToUm(PredictionUncertainty::along(u, c.u_w)), radToUrad(u.axis), u.outside ? 1 : 0);
+                    mmToUm(PredictionUncertainty::along(u, c.u_w)), radToUrad(u.axis),
+                    u.outside ? 1 : 0);
       out += buf;
       // The tip's covariance in the part frame (um^2): the band along any unit direction n is
       // 1.96 sqrt(n^T C n).
       const Eigen::Matrix3d C = u.tip_covariance_w * (mmToUm(1.0) * mmToUm(1.0));
-      std::snprintf(buf, sizeof buf, ",%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", C(0, 0), C(0, 1), C(0, 2), C(1, 1), C(1, 2),
-                    C(2, 2));
+      std::snprintf(buf, sizeof buf, ",%.6g,%.6g,%.6g,%.6g,%.6g,%.6g", C(0, 0), C(0, 1), C(0, 2),
+                    C(1, 1), C(1, 2), C(2, 2));
       out += buf;
     }
     out += "\n";

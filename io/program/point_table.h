@@ -8,17 +8,17 @@
 //   along_axis_um (component along the nominal tool axis), across_axis_um (normal to it),
 //   axis_angle_urad (angle between nominal and predicted tool axes), singular (0/1);
 // with the identification's uncertainty (a calibrated machine):
-//   u_tip_um (1 sigma of the predicted tip, worst direction), u_along_axis_um (along the tool axis),
-//   u_axis_urad (1 sigma of the tool axis), outside_calibrated (0/1: a joint beyond the ranges
-//   the calibration readings covered), cov_xx_um2, cov_xy_um2, cov_xz_um2, cov_yy_um2,
+//   u_tip_um (1 sigma of the predicted tip, worst direction), u_along_axis_um (along the tool
+//   axis), u_axis_urad (1 sigma of the tool axis), outside_calibrated (0/1: a joint beyond the
+//   ranges the calibration readings covered), cov_xx_um2, cov_xy_um2, cov_xz_um2, cov_yy_um2,
 //   cov_yz_um2, cov_zz_um2 (the tip's covariance in the part frame: the 95 % band along a unit
 //   direction n is 1.96 sqrt(n^T C n))
 #include <string>
 #include <vector>
 
 #include "core/path/prediction_uncertainty.h"
-#include "io/common/io_error.h"
 #include "core/path/tool_path_prediction.h"
+#include "io/common/io_error.h"
 
 namespace tolver {
 

@@ -4,9 +4,9 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/numerics/units.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
-#include "core/numerics/units.h"
 
 namespace tolver {
 
@@ -37,9 +37,9 @@ PartSetup parseSetup(const std::string& text, const std::string& file_name, Part
     }
     auto need = [&](size_t n) {
       if (v.size() != n)
-        throw InputError(file_name, line, 0, key,
-                         "expected " + std::to_string(n) + " value(s), found " +
-                             std::to_string(v.size()));
+        throw InputError(
+            file_name, line, 0, key,
+            "expected " + std::to_string(n) + " value(s), found " + std::to_string(v.size()));
     };
     for (double x : v)
       if (std::abs(x) > 1e6)
@@ -58,18 +58,21 @@ PartSetup parseSetup(const std::string& text, const std::string& file_name, Part
       if (v[0] < 0) throw InputError(file_name, line, 0, key, "must not be negative");
       s.gauge_length = v[0];
       s.gauge_length_given = true;
-    } else if (lower.size() > 4 && lower[0] == 'g' && lower.compare(lower.size() - 3, 3, "_mm") == 0 &&
+    } else if (lower.size() > 4 && lower[0] == 'g' &&
+               lower.compare(lower.size() - 3, 3, "_mm") == 0 &&
                std::isdigit(static_cast<unsigned char>(lower[1]))) {
       // Work offset: g54_mm, g55_mm, g54.1p1_mm, g59.3_mm = x, y, z (machine coordinates).
       need(3);
-      s.work_offsets[toUpper(lower.substr(0, lower.size() - 3))] = Eigen::Vector3d(v[0], v[1], v[2]);
+      s.work_offsets[toUpper(lower.substr(0, lower.size() - 3))] =
+          Eigen::Vector3d(v[0], v[1], v[2]);
     } else if (lower.rfind("tool_h", 0) == 0 && lower.size() > 9 &&
                lower.compare(lower.size() - 3, 3, "_mm") == 0) {
       // Tool length of an H number: tool_h2_mm = 100.5.
       need(1);
       const auto h = parseNumber(lower.substr(6, lower.size() - 9));
       if (!h || *h < 0 || *h != std::floor(*h) || *h > 9999)
-        throw InputError(file_name, line, 0, key, "expected tool_hN_mm with a whole number N from 0 to 9999");
+        throw InputError(file_name, line, 0, key,
+                         "expected tool_hN_mm with a whole number N from 0 to 9999");
       if (v[0] < 0) throw InputError(file_name, line, 0, key, "must not be negative");
       s.tool_lengths[static_cast<int>(*h)] = v[0];
     } else {

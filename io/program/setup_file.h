@@ -6,7 +6,8 @@
 //   gauge_length_mm   = L           # tool tip to spindle gauge point, mm
 //   g54_mm            = x, y, z     # G-code work offsets (g54 ... g59, g54.1p1, g59.3), machine
 //                                   # coordinates, mm; one not given puts its origin at part zero
-//   tool_h1_mm        = L           # G-code tool length of H1 (G43 H1); one not given: gauge length
+//   tool_h1_mm        = L           # G-code tool length of H1 (G43 H1); one not given: gauge
+//   length
 #include <string>
 
 #include "core/model/machine_model.h"

@@ -5,12 +5,11 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
-#include "io/common/json_text.h"
-
 #include "io/common/io_error.h"
+#include "io/common/json_text.h"
 #include "io/common/text_util.h"
-#include "io/report/png_plot.h"
 #include "io/machine/tolerance_file.h"
+#include "io/report/png_plot.h"
 
 namespace tolver {
 
@@ -41,11 +40,14 @@ void writeAllocationCsv(const AllocationView& v, const std::string& dir) {
   std::string table = "term,parameter,category,unit,standard,optimised,lower,upper,reference\n";
   for (size_t i = 0; i < terms.size(); ++i) {
     const ToleranceTerm& t = terms[i];
-    table += csvField(t.name) + "," + csvField(m.parameters[t.parameter].iso_code) + "," + categoryName(t.category) + "," +
-             displayUnit(m, t) + "," + formatWith("%.6g", displayValue(m, t, t.standard)) + "," +
+    table += csvField(t.name) + "," + csvField(m.parameters[t.parameter].iso_code) + "," +
+             categoryName(t.category) + "," + displayUnit(m, t) + "," +
+             formatWith("%.6g", displayValue(m, t, t.standard)) + "," +
              (chosen ? formatWith("%.6g", displayValue(m, t, chosen->T[i])) : "") + "," +
-             formatWith("%.6g", displayValue(m, t, t.lower)) + "," + formatWith("%.6g", displayValue(m, t, t.upper)) +
-             "," + (std::isnan(t.reference) ? "" : formatWith("%.6g", displayValue(m, t, t.reference))) + "\n";
+             formatWith("%.6g", displayValue(m, t, t.lower)) + "," +
+             formatWith("%.6g", displayValue(m, t, t.upper)) + "," +
+             (std::isnan(t.reference) ? "" : formatWith("%.6g", displayValue(m, t, t.reference))) +
+             "\n";
   }
   writeFileAtomically(dir + "/allocation.csv", table);
 }
@@ -60,11 +62,13 @@ void writeParetoCsv(const AllocationView& v, const std::string& dir) {
   front += "\n";
   for (size_t k = 0; k < r.front.size(); ++k) {
     const auto& s = r.front[k];
-    front += formatWith("%.8g", s.m1) + "," + formatWith("%.8g", s.m2) + "," + formatWith("%.8g", s.cost) + "," +
-             formatWith("%.8g", s.loss) + "," + formatWith("%.6f", s.worst_exact[0]) + "," +
-             formatWith("%.6f", s.worst_exact[1]) + "," + formatWith("%.6f", s.worst_exact[2]) + "," +
+    front += formatWith("%.8g", s.m1) + "," + formatWith("%.8g", s.m2) + "," +
+             formatWith("%.8g", s.cost) + "," + formatWith("%.8g", s.loss) + "," +
+             formatWith("%.6f", s.worst_exact[0]) + "," + formatWith("%.6f", s.worst_exact[1]) +
+             "," + formatWith("%.6f", s.worst_exact[2]) + "," +
              (static_cast<int>(k) == r.chosen ? "1" : "0");
-    for (size_t i = 0; i < terms.size(); ++i) front += "," + formatWith("%.6g", displayValue(m, terms[i], s.T[i]));
+    for (size_t i = 0; i < terms.size(); ++i)
+      front += "," + formatWith("%.6g", displayValue(m, terms[i], s.T[i]));
     front += "\n";
   }
   writeFileAtomically(dir + "/pareto.csv", front);
@@ -121,7 +125,6 @@ void writeParetoPng(const AllocationView& v, const std::string& dir) {
   chart.y_label = "M2: spread within correlation groups (maximised)";
   chart.series = {all, std_pt, ch, pub};
   writeScatterPng(dir + "/pareto.png", chart);
-
 }
 
 // report.json.
@@ -140,19 +143,30 @@ std::string allocationJson(const AllocationView& v) {
   j["workspace_poses"] = in.poses;
   j["limits_mm"] = {a.limits[0], a.limits[1], a.limits[2]};
   j["combination"] = a.rss ? "root-sum-square" : "worst case over the error signs";
-  j["cost_model"] = {{"h_p", a.h_p}, {"h_a", a.h_a}, {"h_d", a.h_d}, {"r", a.r},
+  j["cost_model"] = {{"h_p", a.h_p},
+                     {"h_a", a.h_a},
+                     {"h_d", a.h_d},
+                     {"r", a.r},
                      {"units", "t = T/2 in mm for lengths and mm/m for angles"}};
-  j["quality_loss"] = {{"weight", a.loss_weight},
-                       {"distribution", a.loss_normal ? "normal, t = 3 sigma" : "uniform in [-t, t]"}};
-  j["optimiser"] = {{"algorithm", "NSGA-II (pagmo)"}, {"population", in.options.population},
-                    {"generations", in.options.generations}, {"seed", in.options.seed},
+  j["quality_loss"] = {
+      {"weight", a.loss_weight},
+      {"distribution", a.loss_normal ? "normal, t = 3 sigma" : "uniform in [-t, t]"}};
+  j["optimiser"] = {{"algorithm", "NSGA-II (pagmo)"},
+                    {"population", in.options.population},
+                    {"generations", in.options.generations},
+                    {"seed", in.options.seed},
                     {"constraint_handling", r.constraint_handling},
-                    {"compromise_rule", "the front point closest to the ideal point (least M1, "
-                                        "largest M2), both objectives normalised over the front"}};
-  j["standard"] = {{"cost", r.standard.cost}, {"loss", r.standard.loss}, {"m1", r.standard.m1},
-                   {"m2", r.standard.m2},
-                   {"worst_mm", {r.standard.worst_exact[0], r.standard.worst_exact[1], r.standard.worst_exact[2]}},
-                   {"feasible", r.standard_feasible}};
+                    {"compromise_rule",
+                     "the front point closest to the ideal point (least M1, "
+                     "largest M2), both objectives normalised over the front"}};
+  j["standard"] = {
+      {"cost", r.standard.cost},
+      {"loss", r.standard.loss},
+      {"m1", r.standard.m1},
+      {"m2", r.standard.m2},
+      {"worst_mm",
+       {r.standard.worst_exact[0], r.standard.worst_exact[1], r.standard.worst_exact[2]}},
+      {"feasible", r.standard_feasible}};
   json groups = json::array();
   for (const auto& g : r.correlation.members) {
     json names = json::array();
@@ -166,12 +180,17 @@ std::string allocationJson(const AllocationView& v) {
   if (!ref_groups.empty()) j["reference_groups"] = ref_groups;
   j["pareto_front_size"] = r.front.size();
   if (chosen) {
-    j["chosen"] = {{"cost", chosen->cost}, {"loss", chosen->loss}, {"m1", chosen->m1}, {"m2", chosen->m2},
-                   {"worst_mm", {chosen->worst_exact[0], chosen->worst_exact[1], chosen->worst_exact[2]}},
-                   {"cost_saving_percent", 100.0 * (1.0 - chosen->cost / r.standard.cost)}};
+    j["chosen"] = {
+        {"cost", chosen->cost},
+        {"loss", chosen->loss},
+        {"m1", chosen->m1},
+        {"m2", chosen->m2},
+        {"worst_mm", {chosen->worst_exact[0], chosen->worst_exact[1], chosen->worst_exact[2]}},
+        {"cost_saving_percent", 100.0 * (1.0 - chosen->cost / r.standard.cost)}};
     json t = json::array();
     for (size_t i = 0; i < terms.size(); ++i)
-      t.push_back({{"term", terms[i].name}, {"unit", displayUnit(m, terms[i])},
+      t.push_back({{"term", terms[i].name},
+                   {"unit", displayUnit(m, terms[i])},
                    {"standard", displayValue(m, terms[i], terms[i].standard)},
                    {"optimised", displayValue(m, terms[i], chosen->T[i])}});
     j["terms"] = t;
@@ -190,16 +209,18 @@ std::string htmlSummary(const AllocationView& v) {
   const AllocationResult& r = v.r;
   const AllocationReportInputs& in = v.in;
   const AllocationSolution* chosen = v.chosen;
-  std::string h = "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>tolver allocation</title>"
-                  "<style>body{font-family:sans-serif;max-width:60em;margin:2em auto}"
-                  "table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:2px 8px;text-align:right}"
-                  "th{background:#eee}.bad{color:#b00}.ok{color:#070}</style></head><body>";
+  std::string h =
+      "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>tolver allocation</title>"
+      "<style>body{font-family:sans-serif;max-width:60em;margin:2em auto}"
+      "table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:2px 8px;text-align:right}"
+      "th{background:#eee}.bad{color:#b00}.ok{color:#070}</style></head><body>";
   h += "<h1>Tolerance allocation: " + m.name + "</h1>";
-  h += "<p>Machine file <code>" + in.machine_file + "</code>, tolerances <code>" + in.tolerance_file +
-       "</code>, tool gauge length " + formatWith("%.1f", in.gauge_length) + " mm, " + std::to_string(in.poses) +
-       " workspace poses, errors combined by " + (a.rss ? "root-sum-square" : "worst case over their signs") +
-       ". Limits |dx|, |dy|, |dz| &le; " + formatWith("%.4f", a.limits[0]) + ", " + formatWith("%.4f", a.limits[1]) +
-       ", " + formatWith("%.4f", a.limits[2]) + " mm.</p>";
+  h += "<p>Machine file <code>" + in.machine_file + "</code>, tolerances <code>" +
+       in.tolerance_file + "</code>, tool gauge length " + formatWith("%.1f", in.gauge_length) +
+       " mm, " + std::to_string(in.poses) + " workspace poses, errors combined by " +
+       (a.rss ? "root-sum-square" : "worst case over their signs") +
+       ". Limits |dx|, |dy|, |dz| &le; " + formatWith("%.4f", a.limits[0]) + ", " +
+       formatWith("%.4f", a.limits[1]) + ", " + formatWith("%.4f", a.limits[2]) + " mm.</p>";
   auto worst = [&](const Eigen::Vector3d& w) {
     std::string s;
     for (int d = 0; d < 3; ++d)
@@ -208,21 +229,27 @@ std::string htmlSummary(const AllocationView& v) {
     return s;
   };
   h += "<p>Standard tolerances: cost " + formatWith("%.5g", r.standard.cost) + ", worst errors " +
-       worst(r.standard.worst_exact) + "mm" + (r.standard_feasible ? "" : " &mdash; <b class=\"bad\">they break the limits</b>") + ".</p>";
+       worst(r.standard.worst_exact) + "mm" +
+       (r.standard_feasible ? "" : " &mdash; <b class=\"bad\">they break the limits</b>") + ".</p>";
   if (chosen)
     h += "<p>Chosen allocation: cost " + formatWith("%.5g", chosen->cost) + " (" +
-         formatWith("%+.1f", -100.0 * (1.0 - chosen->cost / r.standard.cost)) + " % against the standard), worst errors " +
-         worst(chosen->worst_exact) + "mm, checked with the nonlinear model.</p>";
+         formatWith("%+.1f", -100.0 * (1.0 - chosen->cost / r.standard.cost)) +
+         " % against the standard), worst errors " + worst(chosen->worst_exact) +
+         "mm, checked with the nonlinear model.</p>";
   else
-    h += "<p class=\"bad\">No allocation within the bounds meets the limits: loosen the limits or allow tighter tolerances (lower bounds).</p>";
+    h += "<p class=\"bad\">No allocation within the bounds meets the limits: loosen the limits or "
+         "allow tighter tolerances (lower bounds).</p>";
   return h;
 }
 
 // The Pareto front (the PNG embedded).
 std::string htmlFront(const std::string& dir) {
   std::string h;
-  h += "<h2>Pareto front</h2><p>M1 = cost + quality loss (x, minimised) against M2 (y, maximised); grey: the standard tolerances, red: the chosen compromise, orange: the published allocation (when the tolerance file gives it).</p>";
-  h += "<img alt=\"Pareto front\" src=\"data:image/png;base64," + base64Encode(readFile(dir + "/pareto.png")) + "\">";
+  h += "<h2>Pareto front</h2><p>M1 = cost + quality loss (x, minimised) against M2 (y, maximised); "
+       "grey: the standard tolerances, red: the chosen compromise, orange: the published "
+       "allocation (when the tolerance file gives it).</p>";
+  h += "<img alt=\"Pareto front\" src=\"data:image/png;base64," +
+       base64Encode(readFile(dir + "/pareto.png")) + "\">";
   return h;
 }
 
@@ -232,13 +259,17 @@ std::string htmlTolerances(const AllocationView& v) {
   const std::vector<ToleranceTerm>& terms = v.terms;
   const AllocationSolution* chosen = v.chosen;
   std::string h;
-  h += "<h2>Tolerances (like the paper's Table 4)</h2><table><tr><th>term</th><th>category</th><th>unit</th><th>standard</th><th>optimised</th><th>paper</th></tr>";
+  h += "<h2>Tolerances (like the paper's Table "
+       "4)</h2><table><tr><th>term</th><th>category</th><th>unit</th><th>standard</"
+       "th><th>optimised</th><th>paper</th></tr>";
   for (size_t i = 0; i < terms.size(); ++i) {
     const auto& t = terms[i];
-    h += "<tr><td>" + t.name + "</td><td>" + categoryName(t.category) + "</td><td>" + displayUnit(m, t) +
-         "</td><td>" + formatWith("%.5g", displayValue(m, t, t.standard)) + "</td><td>" +
-         (chosen ? formatWith("%.5g", displayValue(m, t, chosen->T[i])) : "") + "</td><td>" +
-         (std::isnan(t.reference) ? "" : formatWith("%.5g", displayValue(m, t, t.reference))) + "</td></tr>";
+    h += "<tr><td>" + t.name + "</td><td>" + categoryName(t.category) + "</td><td>" +
+         displayUnit(m, t) + "</td><td>" + formatWith("%.5g", displayValue(m, t, t.standard)) +
+         "</td><td>" + (chosen ? formatWith("%.5g", displayValue(m, t, chosen->T[i])) : "") +
+         "</td><td>" +
+         (std::isnan(t.reference) ? "" : formatWith("%.5g", displayValue(m, t, t.reference))) +
+         "</td></tr>";
   }
   h += "</table>";
   return h;
@@ -310,14 +341,20 @@ std::string htmlMethod(const AllocationView& v) {
   const AllocationResult& r = v.r;
   std::string h;
   h += "<h2>Method</h2><p>Cost C = &Sigma; (h<sub>i</sub> t<sub>i</sub>)<sup>-r</sup> with t = T/2 "
-       "in mm for lengths and mm/m for angles; h<sub>p</sub> = " + formatWith("%g", a.h_p) + ", h<sub>a</sub> = " +
-       formatWith("%g", a.h_a) + ", h<sub>d</sub> = " + formatWith("%g", a.h_d) + ", r = " + formatWith("%g", a.r) +
-       ". Quality loss: the signal-to-noise ratio &eta;<sub>i</sub> = &minus;10 log<sub>10</sub> E[y<sub>i</sub><sup>2</sup>] "
+       "in mm for lengths and mm/m for angles; h<sub>p</sub> = " +
+       formatWith("%g", a.h_p) + ", h<sub>a</sub> = " + formatWith("%g", a.h_a) +
+       ", h<sub>d</sub> = " + formatWith("%g", a.h_d) + ", r = " + formatWith("%g", a.r) +
+       ". Quality loss: the signal-to-noise ratio &eta;<sub>i</sub> = &minus;10 log<sub>10</sub> "
+       "E[y<sub>i</sub><sup>2</sup>] "
        "with the error value y<sub>i</sub> " +
-       std::string(a.loss_normal ? "normal with t = 3&sigma; (E = t&sup2;/9)" : "uniform in &plusmn;t (E = t&sup2;/3)") +
-       ", weights &lambda;<sub>i</sub> = (1/&eta;<sub>i</sub>)/&Sigma;(1/&eta;<sub>j</sub>), L = " + formatWith("%g", a.loss_weight) +
-       " &Sigma; &lambda;<sub>i</sub> t<sub>i</sub><sup>2</sup>. M1 = C + L is minimised and M2 (the tolerance "
-       "spread over the correlation groups) maximised by NSGA-II; the chosen compromise is the front "
+       std::string(a.loss_normal ? "normal with t = 3&sigma; (E = t&sup2;/9)"
+                                 : "uniform in &plusmn;t (E = t&sup2;/3)") +
+       ", weights &lambda;<sub>i</sub> = (1/&eta;<sub>i</sub>)/&Sigma;(1/&eta;<sub>j</sub>), L = " +
+       formatWith("%g", a.loss_weight) +
+       " &Sigma; &lambda;<sub>i</sub> t<sub>i</sub><sup>2</sup>. M1 = C + L is minimised and M2 "
+       "(the tolerance "
+       "spread over the correlation groups) maximised by NSGA-II; the chosen compromise is the "
+       "front "
        "point closest to the ideal point, both objectives normalised over the front. " +
        r.constraint_handling + ".</p></body></html>\n";
   return h;
@@ -335,8 +372,8 @@ void writeAllocationReport(const std::string& dir, const MachineModel& m,
   writeParetoCsv(v, dir);
   writeParetoPng(v, dir);
   writeFileAtomically(dir + "/report.json", allocationJson(v));
-  writeFileAtomically(dir + "/report.html", htmlSummary(v) + htmlFront(dir) + htmlTolerances(v) + htmlComparison(v) +
-                                                htmlGroups(v) + htmlMethod(v));
+  writeFileAtomically(dir + "/report.html", htmlSummary(v) + htmlFront(dir) + htmlTolerances(v) +
+                                                htmlComparison(v) + htmlGroups(v) + htmlMethod(v));
 }
 
 }  // namespace tolver

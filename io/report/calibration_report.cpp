@@ -1,39 +1,51 @@
 #include "io/report/calibration_report.h"
 
-#include "io/machine/ballbar_file.h"
-#include "io/machine/machine_file.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
+#include "core/numerics/units.h"
 #include "io/common/json_text.h"
 #include "io/common/text_util.h"
-#include "core/numerics/units.h"
+#include "io/machine/ballbar_file.h"
+#include "io/machine/machine_file.h"
 
 namespace tolver {
 
 // Long by design: the JSON document's members in order, each a line or two.
 nlohmann::json lackOfFitJson(const LackOfFit& l) {
   if (!l.tested)
-    return {{"tested", false}, {"reason", "no pose is measured twice (or too few degrees of freedom): the model's "
-                                          "adequacy cannot be tested"}};
-  return {{"tested", true},          {"repeated_poses", l.poses},     {"readings_at_them", l.repeats},
-          {"df_pure_error", l.df_pure}, {"df_lack_of_fit", l.df_lack}, {"repeatability_um", mmToUm(l.s_pure)},
-          {"fit_sigma_um", mmToUm(l.s_fit)}, {"f", l.f},              {"p_value", l.p_value},
+    return {{"tested", false},
+            {"reason",
+             "no pose is measured twice (or too few degrees of freedom): the model's "
+             "adequacy cannot be tested"}};
+  return {{"tested", true},
+          {"repeated_poses", l.poses},
+          {"readings_at_them", l.repeats},
+          {"df_pure_error", l.df_pure},
+          {"df_lack_of_fit", l.df_lack},
+          {"repeatability_um", mmToUm(l.s_pure)},
+          {"fit_sigma_um", mmToUm(l.s_fit)},
+          {"f", l.f},
+          {"p_value", l.p_value},
           {"missing_rms_um", mmToUm(l.missing_rms)}};
 }
 
 std::string describeLackOfFit(const LackOfFit& l, double alpha) {
-  if (!l.tested) return "not tested: no pose is measured twice, so the model's adequacy cannot be judged";
+  if (!l.tested)
+    return "not tested: no pose is measured twice, so the model's adequacy cannot be judged";
   char buf[320];
-  std::snprintf(buf, sizeof buf, "repeatability %.3f um (%d poses, %.0f df) against the fit's %.3f um: F %.2f, p %.2g: %s",
-                mmToUm(l.s_pure), l.poses, l.df_pure, mmToUm(l.s_fit), l.f, l.p_value,
-                l.p_value < alpha ? "the model misses " : "no significant lack of fit (level ");
+  std::snprintf(
+      buf, sizeof buf,
+      "repeatability %.3f um (%d poses, %.0f df) against the fit's %.3f um: F %.2f, p %.2g: %s",
+      mmToUm(l.s_pure), l.poses, l.df_pure, mmToUm(l.s_fit), l.f, l.p_value,
+      l.p_value < alpha ? "the model misses " : "no significant lack of fit (level ");
   std::string out = buf;
-  if (l.p_value < alpha) out += formatWith("%.3f um RMS beyond the repeatability", mmToUm(l.missing_rms));
-  else out += formatWith("%.2g)", alpha);
+  if (l.p_value < alpha)
+    out += formatWith("%.3f um RMS beyond the repeatability", mmToUm(l.missing_rms));
+  else
+    out += formatWith("%.2g)", alpha);
   return out;
 }
 
@@ -95,17 +107,22 @@ std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test
                     {"unit", unitName(p)}});
   j["held_parameters"] = held;
   if (!r.held.empty())
-    j["warning"] = "the readings cannot see the held parameters: predictions that depend on them "
-                   "are unverified";
+    j["warning"] =
+        "the readings cannot see the held parameters: predictions that depend on them "
+        "are unverified";
   json balls = json::array();
   for (size_t s = 0; s < test.setups.size() && s < r.ball_errors.size(); ++s) {
     const auto& e = r.ball_errors[s];
     const auto& u = r.ball_uncertainty[s];
-    balls.push_back({{"setup", test.setups[s].id},
-                     {"table_ball_error_um", {mmToUm(e.table_w.x()), mmToUm(e.table_w.y()), mmToUm(e.table_w.z())}},
-                     {"table_ball_uncertainty_um", {mmToUm(u.table_w.x()), mmToUm(u.table_w.y()), mmToUm(u.table_w.z())}},
-                     {"tool_ball_error_um", {mmToUm(e.tool_t.x()), mmToUm(e.tool_t.y()), mmToUm(e.tool_t.z())}},
-                     {"tool_ball_uncertainty_um", {mmToUm(u.tool_t.x()), mmToUm(u.tool_t.y()), mmToUm(u.tool_t.z())}}});
+    balls.push_back(
+        {{"setup", test.setups[s].id},
+         {"table_ball_error_um",
+          {mmToUm(e.table_w.x()), mmToUm(e.table_w.y()), mmToUm(e.table_w.z())}},
+         {"table_ball_uncertainty_um",
+          {mmToUm(u.table_w.x()), mmToUm(u.table_w.y()), mmToUm(u.table_w.z())}},
+         {"tool_ball_error_um", {mmToUm(e.tool_t.x()), mmToUm(e.tool_t.y()), mmToUm(e.tool_t.z())}},
+         {"tool_ball_uncertainty_um",
+          {mmToUm(u.tool_t.x()), mmToUm(u.tool_t.y()), mmToUm(u.tool_t.z())}}});
   }
   j["ball_errors"] = balls;
   auto stats = [](const ResidualStats& x) {
@@ -120,10 +137,12 @@ std::string formatCalibrationJson(const MachineModel& m, const BallbarTest& test
   j["written_files_check"] = {
       {"description", "the written machine file and ball positions, read back, on the readings"},
       {"fit", stats(in.written.fit)}};
-  if (in.written.heldout.readings > 0) j["written_files_check"]["heldout"] = stats(in.written.heldout);
+  if (in.written.heldout.readings > 0)
+    j["written_files_check"]["heldout"] = stats(in.written.heldout);
   json removed = json::array();
   for (const RemovedReading& g : in.removed)
-    removed.push_back({{"line", g.line}, {"residual_um", mmToUm(g.residual)}, {"studentized", g.studentized}});
+    removed.push_back(
+        {{"line", g.line}, {"residual_um", mmToUm(g.residual)}, {"studentized", g.studentized}});
   j["gross_readings_removed"] = removed;
   return jsonText(j);
 }
@@ -141,8 +160,10 @@ std::string standsFor(const MachineModel& m, int p, const std::vector<AbsorbedTe
     }
     const double c = t.coefficient;
     const std::string& name = m.parameters[t.parameter].iso_code;
-    if (std::abs(c - 1.0) < 1e-3) s += " + " + name;
-    else if (std::abs(c + 1.0) < 1e-3) s += " - " + name;
+    if (std::abs(c - 1.0) < 1e-3)
+      s += " + " + name;
+    else if (std::abs(c + 1.0) < 1e-3)
+      s += " - " + name;
     else {
       std::snprintf(buf, sizeof buf, " %s %.3g ", c < 0 ? "-" : "+", std::abs(c));
       s += buf + name;
@@ -166,7 +187,8 @@ WrittenCheck checkWrittenFiles(const std::string& machine_file, const std::strin
 std::string formatBallbarGcode(const MachineModel& m, const BallbarTest& plan, double feed,
                                double dwell_s) {
   std::string o = "%\n(tolver ball-bar plan: " + m.name + ")\n";
-  o += "(NC values = nc_sign * joint value, relative to the machine file's zero: apply your work offset)\n";
+  o += "(NC values = nc_sign * joint value, relative to the machine file's zero: apply your work "
+       "offset)\n";
   o += "G90 G94 G21\n";
   char buf[256];
   int current = -1, n = 0;
@@ -174,10 +196,11 @@ std::string formatBallbarGcode(const MachineModel& m, const BallbarTest& plan, d
     if (r.setup != current) {
       current = r.setup;
       const BallbarSetup& s = plan.setups[r.setup];
-      std::snprintf(buf, sizeof buf,
-                    "(SET-UP %d: TABLE BALL %.3f %.3f %.3f IN W, TOOL BALL %.3f %.3f %.3f IN T)\nM0\n",
-                    s.id, s.table_ball_w.x(), s.table_ball_w.y(), s.table_ball_w.z(),
-                    s.tool_ball_t.x(), s.tool_ball_t.y(), s.tool_ball_t.z());
+      std::snprintf(
+          buf, sizeof buf,
+          "(SET-UP %d: TABLE BALL %.3f %.3f %.3f IN W, TOOL BALL %.3f %.3f %.3f IN T)\nM0\n", s.id,
+          s.table_ball_w.x(), s.table_ball_w.y(), s.table_ball_w.z(), s.tool_ball_t.x(),
+          s.tool_ball_t.y(), s.tool_ball_t.z());
       o += buf;
     }
     std::string rot, lin;

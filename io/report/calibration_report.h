@@ -46,8 +46,8 @@ struct CalibrationReportInputs {
 };
 
 // "EAX.c0 + EAY.c0 - 0.5 EBX.c1 (+2 more)": an identified parameter with the ones it absorbs.
-std::string standsFor(const MachineModel& model, int parameter, const std::vector<AbsorbedTerm>& terms,
-                      int max_terms = 4);
+std::string standsFor(const MachineModel& model, int parameter,
+                      const std::vector<AbsorbedTerm>& terms, int max_terms = 4);
 
 // Reads the machine file and ball positions written by calibrate or diagnose and returns what
 // they predict for the fitted and held-out readings (residual RMS and max).

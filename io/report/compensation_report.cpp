@@ -2,34 +2,33 @@
 
 #include <cmath>
 #include <cstdio>
-
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "io/common/io_error.h"
 #include "io/common/json_text.h"
-#include "io/report/png_plot.h"
 #include "io/common/text_util.h"
+#include "io/report/png_plot.h"
 
 namespace tolver {
 namespace {
 
 nlohmann::json figures(const PathFigures& f) {
-  return {{"tip_max_um", f.tip_max_um},     {"tip_rms_um", f.tip_rms_um},
-          {"tip_max_line", f.tip_max_line}, {"axis_max_urad", f.axis_max_urad},
+  return {{"tip_max_um", f.tip_max_um},
+          {"tip_rms_um", f.tip_rms_um},
+          {"tip_max_line", f.tip_max_line},
+          {"axis_max_urad", f.axis_max_urad},
           {"axis_rms_urad", f.axis_rms_urad}};
 }
 
 }  // namespace
 
-std::string formatCompensatedJointsCsv(const std::vector<std::string>& axis_names,
-                                       const std::vector<bool>& rotary, const std::vector<int>& line,
-                                       const std::vector<std::string>& status,
-                                       const std::vector<std::vector<double>>& before,
-                                       const std::vector<std::vector<double>>& after,
-                                       const std::vector<double>& tip_after_um,
-                                       const std::vector<double>& axis_after_urad) {
+std::string formatCompensatedJointsCsv(
+    const std::vector<std::string>& axis_names, const std::vector<bool>& rotary,
+    const std::vector<int>& line, const std::vector<std::string>& status,
+    const std::vector<std::vector<double>>& before, const std::vector<std::vector<double>>& after,
+    const std::vector<double>& tip_after_um, const std::vector<double>& axis_after_urad) {
   std::string out = "index,line,status";
   for (const char* when : {"_before", "_after"})
     for (size_t a = 0; a < axis_names.size(); ++a) {
@@ -70,9 +69,10 @@ std::string formatCompensationJson(const CompensationReport& r) {
                               {"band95_median_um", r.after_band95_median_um},
                               {"axis_band95_max_urad", r.after_axis_band95_max_urad},
                               {"axis_band95_median_urad", r.after_axis_band95_median_urad},
-                              {"meaning", "the after is zero only to within the calibration's "
-                                          "uncertainty: compensation removes what the model "
-                                          "knows, not what it does not"}};
+                              {"meaning",
+                               "the after is zero only to within the calibration's "
+                               "uncertainty: compensation removes what the model "
+                               "knows, not what it does not"}};
   if (!r.setup_note.empty()) j["setup"] = r.setup_note;
   nlohmann::json jc = nlohmann::json::object();
   for (size_t k = 0; k < r.joint_correction_max.size(); ++k)
@@ -124,14 +124,16 @@ std::string embedded(const std::string& path, const std::string& alt) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream ss;
   ss << in.rdbuf();
-  return "<img alt=\"" + xmlEscape(alt) + "\" src=\"data:image/png;base64," + base64Encode(ss.str()) + "\">";
+  return "<img alt=\"" + xmlEscape(alt) + "\" src=\"data:image/png;base64," +
+         base64Encode(ss.str()) + "\">";
 }
 
 std::string row(const char* what, const PathFigures& f) {
   char buf[400];
-  std::snprintf(buf, sizeof buf,
-                "<tr><td>%s</td><td>%.4f</td><td>%d</td><td>%.4f</td><td>%.3f</td><td>%.3f</td></tr>\n", what,
-                f.tip_max_um, f.tip_max_line, f.tip_rms_um, f.axis_max_urad, f.axis_rms_urad);
+  std::snprintf(
+      buf, sizeof buf,
+      "<tr><td>%s</td><td>%.4f</td><td>%d</td><td>%.4f</td><td>%.3f</td><td>%.3f</td></tr>\n", what,
+      f.tip_max_um, f.tip_max_line, f.tip_rms_um, f.axis_max_urad, f.axis_rms_urad);
   return buf;
 }
 
@@ -144,8 +146,8 @@ void writeCompensationReport(const std::string& dir, const CompensationReport& r
                              const std::vector<double>& axis_after_urad) {
   namespace fs = std::filesystem;
   std::vector<std::string> images;
-  auto chart = [&](const char* name, const char* title, const char* y_label, const std::vector<double>& before,
-                   const std::vector<double>& after) {
+  auto chart = [&](const char* name, const char* title, const char* y_label,
+                   const std::vector<double>& before, const std::vector<double>& after) {
     ScatterChart c;
     c.title = title;
     c.x_label = "program line";
@@ -166,35 +168,41 @@ void writeCompensationReport(const std::string& dir, const CompensationReport& r
     writeScatterPng(path, c);
     images.push_back(embedded(path, title));
   };
-  chart("tip_deviation.png", "Tool-tip deviation along the program", "tip deviation (µm)", tip_before_um,
-        tip_after_um);
-  chart("tool_axis.png", "Tool-axis error along the program", "tool-axis error (µrad)", axis_before_urad,
-        axis_after_urad);
-  std::string h = "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>tolver compensate</title>"
-                  "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"
-                  "td,th{border:1px solid #999;padding:3px 8px;text-align:right}</style></head><body>\n";
-  h += "<h1>tolver compensate</h1>\n<p>machine " + xmlEscape(r.machine) + "<br>program " + xmlEscape(r.program) +
-       " (" + xmlEscape(r.dialect) + "), " + std::to_string(r.points) + " tool positions<br>written " +
-       xmlEscape(r.output) + "</p>\n";
+  chart("tip_deviation.png", "Tool-tip deviation along the program", "tip deviation (µm)",
+        tip_before_um, tip_after_um);
+  chart("tool_axis.png", "Tool-axis error along the program", "tool-axis error (µrad)",
+        axis_before_urad, axis_after_urad);
+  std::string h =
+      "<!DOCTYPE html><html><head><meta charset=\"utf-8\"><title>tolver compensate</title>"
+      "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse}"
+      "td,th{border:1px solid #999;padding:3px 8px;text-align:right}</style></head><body>\n";
+  h += "<h1>tolver compensate</h1>\n<p>machine " + xmlEscape(r.machine) + "<br>program " +
+       xmlEscape(r.program) + " (" + xmlEscape(r.dialect) + "), " + std::to_string(r.points) +
+       " tool positions<br>written " + xmlEscape(r.output) + "</p>\n";
   if (!r.setup_note.empty()) h += "<p>set-up: " + xmlEscape(r.setup_note) + "</p>\n";
-  h += "<table><tr><th></th><th>tip max (µm)</th><th>at line</th><th>tip RMS (µm)</th><th>axis max (µrad)</th>"
+  h += "<table><tr><th></th><th>tip max (µm)</th><th>at line</th><th>tip RMS (µm)</th><th>axis max "
+       "(µrad)</th>"
        "<th>axis RMS (µrad)</th></tr>\n";
-  h += row("before", r.before) + row("after (the written program, read back and predicted)", r.after);
-  h += row(("after, the " + std::to_string(r.compensated_points) + " points compensated").c_str(), r.after_compensated);
+  h += row("before", r.before) +
+       row("after (the written program, read back and predicted)", r.after);
+  h += row(("after, the " + std::to_string(r.compensated_points) + " points compensated").c_str(),
+           r.after_compensated);
   h += "</table>\n";
   if (r.after_band95_max_um >= 0) {
     char buf[300];
-    std::snprintf(buf, sizeof buf,
-                  "<p>The after is zero only to within the calibration's uncertainty: 95 %% band median %.3f "
-                  "µm, max %.3f µm. Compensation removes what the model knows, not what it does not.</p>\n",
-                  r.after_band95_median_um, r.after_band95_max_um);
+    std::snprintf(
+        buf, sizeof buf,
+        "<p>The after is zero only to within the calibration's uncertainty: 95 %% band median %.3f "
+        "µm, max %.3f µm. Compensation removes what the model knows, not what it does not.</p>\n",
+        r.after_band95_median_um, r.after_band95_max_um);
     h += buf;
   }
   for (const std::string& img : images) h += "<figure>" + img + "</figure>\n";
   h += "<h2>Joint corrections (largest)</h2><table>";
   for (size_t k = 0; k < r.joint_correction_max.size(); ++k) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "<tr><td>%s</td><td>%.3f %s</td></tr>", xmlEscape(r.joint_correction_max[k].first).c_str(),
+    std::snprintf(buf, sizeof buf, "<tr><td>%s</td><td>%.3f %s</td></tr>",
+                  xmlEscape(r.joint_correction_max[k].first).c_str(),
                   r.joint_correction_max[k].second, r.joint_rotary[k] ? "µrad" : "µm");
     h += buf;
   }
@@ -202,13 +210,16 @@ void writeCompensationReport(const std::string& dir, const CompensationReport& r
        "<th>after max (µm)</th></tr>\n";
   for (const SegmentFigures& sg : r.segments) {
     char buf[200];
-    std::snprintf(buf, sizeof buf, "<tr><td>%d-%d</td><td>%d</td><td>%.3f</td><td>%.4f</td></tr>\n", sg.first_line,
-                  sg.last_line, sg.points, sg.before.tip_max_um, sg.after.tip_max_um);
+    std::snprintf(buf, sizeof buf, "<tr><td>%d-%d</td><td>%d</td><td>%.3f</td><td>%.4f</td></tr>\n",
+                  sg.first_line, sg.last_line, sg.points, sg.before.tip_max_um,
+                  sg.after.tip_max_um);
     h += buf;
   }
   h += "</table>\n<h2>Left as programmed</h2><ul>";
-  h += "<li>" + std::to_string(r.out_of_travel) + " points whose compensating joints leave travel</li>";
-  h += "<li>" + std::to_string(r.ill_conditioned) + " points near a singular pose (tool axis left as programmed)</li>";
+  h += "<li>" + std::to_string(r.out_of_travel) +
+       " points whose compensating joints leave travel</li>";
+  h += "<li>" + std::to_string(r.ill_conditioned) +
+       " points near a singular pose (tool axis left as programmed)</li>";
   for (const std::string& n : r.notes) h += "<li>" + xmlEscape(n) + "</li>";
   h += "</ul></body></html>\n";
   OutputSet out;

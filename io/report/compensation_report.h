@@ -21,15 +21,15 @@ struct SegmentFigures {
 struct CompensationReport {
   std::string machine, program, dialect, output;
   int points = 0;
-  PathFigures before, after;          // after: predicted on the written file, read back
-  PathFigures after_compensated;      // the same over the points the file compensates
+  PathFigures before, after;      // after: predicted on the written file, read back
+  PathFigures after_compensated;  // the same over the points the file compensates
   int compensated_points = 0;
-  double after_band95_max_um = -1;    // the model's 95 % band of the after (calibrated machine)
+  double after_band95_max_um = -1;  // the model's 95 % band of the after (calibrated machine)
   double after_band95_median_um = -1;
   double after_axis_band95_max_urad = -1;  // the same for the tool axis (worst direction)
   double after_axis_band95_median_urad = -1;
-  std::string joints_file;            // the per-point joints (CSV), before and after
-  std::string setup_note;             // the set-up the machine's share is taken after
+  std::string joints_file;  // the per-point joints (CSV), before and after
+  std::string setup_note;   // the set-up the machine's share is taken after
   std::vector<std::pair<std::string, double>> joint_correction_max;  // axis, um or urad
   std::vector<bool> joint_rotary;
   int ill_conditioned = 0, out_of_travel = 0, not_converged = 0, left_by_writer = 0;
@@ -43,13 +43,11 @@ std::string formatCompensationJson(const CompensationReport& r);
 // The joints of every point (CSV): index, line, status (compensated, ill_conditioned,
 // out_of_travel, not_converged, kept: left as written), then <axis>_before and <axis>_after per
 // machine axis (mm or deg, machine-file convention) and the after's tip and axis error (um, urad).
-std::string formatCompensatedJointsCsv(const std::vector<std::string>& axis_names,
-                                       const std::vector<bool>& rotary, const std::vector<int>& line,
-                                       const std::vector<std::string>& status,
-                                       const std::vector<std::vector<double>>& before,
-                                       const std::vector<std::vector<double>>& after,
-                                       const std::vector<double>& tip_after_um,
-                                       const std::vector<double>& axis_after_urad);
+std::string formatCompensatedJointsCsv(
+    const std::vector<std::string>& axis_names, const std::vector<bool>& rotary,
+    const std::vector<int>& line, const std::vector<std::string>& status,
+    const std::vector<std::vector<double>>& before, const std::vector<std::vector<double>>& after,
+    const std::vector<double>& tip_after_um, const std::vector<double>& axis_after_urad);
 
 // The report directory: report.json, report.html (the figures, the segments, the notes) and the
 // charts tip_deviation.png and tool_axis.png (before and after along the program, one scale),

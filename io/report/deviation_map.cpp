@@ -1,7 +1,5 @@
 #include "io/report/deviation_map.h"
 
-#include "io/common/text_util.h"
-
 #include <vtkActor.h>
 #include <vtkActor2D.h>
 #include <vtkCamera.h>
@@ -31,9 +29,10 @@
 #include <cmath>
 #include <cstdio>
 
-#include "io/common/io_error.h"
-#include "io/report/png_plot.h"
 #include "core/numerics/units.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
+#include "io/report/png_plot.h"
 
 namespace tolver {
 namespace {
@@ -90,7 +89,8 @@ std::vector<Eigen::Vector2d> placeCallouts(const std::vector<Eigen::Vector2d>& a
   std::vector<Eigen::Vector2d> out(at.size());
   double next_free = 0;
   for (size_t k : order) {
-    const double x = at[k].x() + 30 + label_w < view_w ? at[k].x() + 30 : std::max(5.0, at[k].x() - 30 - label_w);
+    const double x = at[k].x() + 30 + label_w < view_w ? at[k].x() + 30
+                                                       : std::max(5.0, at[k].x() - 30 - label_w);
     const double y = std::max(at[k].y() + 30, next_free);
     out[k] = Eigen::Vector2d(x, y);
     next_free = y + label_h + 6;
@@ -163,7 +163,8 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
   renderer->ResetCameraClippingRange();
 
   // Colour bar: the same colour function sampled over the zone and beyond, in um.
-  const double lo = map.bar_lower, up = map.bar_upper, half = 0.5 * (up - lo), mid = 0.5 * (lo + up);
+  const double lo = map.bar_lower, up = map.bar_upper, half = 0.5 * (up - lo),
+               mid = 0.5 * (lo + up);
   const double range_lo = mid - 3.0 * half, range_hi = mid + 3.0 * half;
   vtkNew<vtkLookupTable> lut;
   const int n = 240;
@@ -258,7 +259,8 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
     at.emplace_back(dp[0], dp[1]);
   }
   const double label_w = 0.26 * width, label_h = 0.055 * height;
-  const std::vector<Eigen::Vector2d> where = placeCallouts(at, label_w, label_h, 0.84 * width, 0.93 * height);
+  const std::vector<Eigen::Vector2d> where =
+      placeCallouts(at, label_w, label_h, 0.84 * width, 0.93 * height);
   for (size_t k = 0; k < placed.size(); ++k) {
     placed[k].lx = where[k].x();
     placed[k].ly = where[k].y();
@@ -303,7 +305,8 @@ void renderHistogram(const std::string& png_path, const std::vector<double>& dev
   const int bins = 60;
   std::vector<double> h(bins, 0.0);
   for (size_t i = 0; i < deviation.size(); ++i) {
-    const int b = std::clamp(static_cast<int>((deviation[i] - dmin) / (dmax - dmin) * bins), 0, bins - 1);
+    const int b =
+        std::clamp(static_cast<int>((deviation[i] - dmin) / (dmax - dmin) * bins), 0, bins - 1);
     h[b] += weight[i];
   }
   double hmax = 1e-12;

@@ -31,18 +31,18 @@ struct MapCallout {
 };
 
 struct MapView {
-  std::string name;            // "isometric", "top", "worst"
-  Eigen::Vector3d direction;   // from the camera towards the part, in w
+  std::string name;           // "isometric", "top", "worst"
+  Eigen::Vector3d direction;  // from the camera towards the part, in w
   Eigen::Vector3d up;
-  bool focus = false;          // a region's view (the whole part, seen along its normal)
+  bool focus = false;  // a region's view (the whole part, seen along its normal)
   Eigen::Vector3d focus_w = Eigen::Vector3d::Zero();
 };
 
 struct DeviationMap {
   const std::vector<Eigen::Vector3d>* points = nullptr;  // #S, mm
   const std::vector<Eigen::Vector3i>* faces = nullptr;
-  std::vector<Rgb> colours;                               // #S
-  double bar_lower = -0.01, bar_upper = 0.01;             // mm: the zone on the colour bar
+  std::vector<Rgb> colours;                    // #S
+  double bar_lower = -0.01, bar_upper = 0.01;  // mm: the zone on the colour bar
   std::string title;
   std::vector<MapCallout> callouts;
 };

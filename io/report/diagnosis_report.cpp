@@ -6,15 +6,14 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-
-#include "io/common/json_text.h"
 #include <sstream>
 
 #include "core/model/effects.h"
-#include "io/common/io_error.h"
-#include "io/report/png_plot.h"
-#include "io/common/text_util.h"
 #include "core/numerics/units.h"
+#include "io/common/io_error.h"
+#include "io/common/json_text.h"
+#include "io/common/text_util.h"
+#include "io/report/png_plot.h"
 
 namespace tolver {
 namespace {
@@ -27,7 +26,9 @@ json num(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
 json findingsJson(const ResidualAnalysis& a) {
   json out = json::array();
   for (const ResidualFinding& f : a.findings) {
-    json j = {{"variable", f.variable}, {"test", f.test}, {"strength", num(f.strength)},
+    json j = {{"variable", f.variable},
+              {"test", f.test},
+              {"strength", num(f.strength)},
               {"p_value", num(f.p_value)}};
     if (f.test == "periodogram") j["period"] = num(f.period);
     out.push_back(j);
@@ -39,25 +40,35 @@ json findingsJson(const ResidualAnalysis& a) {
           {"runs_p", num(a.runs_p)},
           {"repeated_poses", a.repeats.size()},
           {"repeated_pose_max_span_um",
-           mmToUm(a.repeats.empty() ? 0.0
-                                : std::max_element(a.repeats.begin(), a.repeats.end(),
-                                                   [](const RepeatedPose& x, const RepeatedPose& y) {
-                                                     return x.span_mm < y.span_mm;
-                                                   })->span_mm)},
+           mmToUm(a.repeats.empty()
+                      ? 0.0
+                      : std::max_element(a.repeats.begin(), a.repeats.end(),
+                                         [](const RepeatedPose& x, const RepeatedPose& y) {
+                                           return x.span_mm < y.span_mm;
+                                         })
+                            ->span_mm)},
           {"findings", out}};
 }
 
 const char* hyperName(const EffectSpec& e) { return traitsOf(e.type).hyper.name; }
 
 json fitJson(const CalibrationResult& f) {
-  return {{"status", f.message}, {"iterations", f.iterations}, {"unknowns", f.unknowns},
-          {"rank", f.rank}, {"condition", num(f.condition)}, {"rms_um", mmToUm(f.rms_residual)},
-          {"max_um", mmToUm(f.max_residual)}, {"sigma_um", mmToUm(f.residual_sigma)}};
+  return {{"status", f.message},
+          {"iterations", f.iterations},
+          {"unknowns", f.unknowns},
+          {"rank", f.rank},
+          {"condition", num(f.condition)},
+          {"rms_um", mmToUm(f.rms_residual)},
+          {"max_um", mmToUm(f.max_residual)},
+          {"sigma_um", mmToUm(f.residual_sigma)}};
 }
 
 json summaryJson(const PredictionSummary& s) {
-  return {{"points", s.points}, {"max_um", mmToUm(s.max_deviation)}, {"rms_um", mmToUm(s.rms_deviation)},
-          {"max_point", s.max_index}, {"max_axis_error_urad", radToUrad(s.max_axis_angle)}};
+  return {{"points", s.points},
+          {"max_um", mmToUm(s.max_deviation)},
+          {"rms_um", mmToUm(s.rms_deviation)},
+          {"max_point", s.max_index},
+          {"max_axis_error_urad", radToUrad(s.max_axis_angle)}};
 }
 
 // The variable an effect follows, per reading, and its axis label.
@@ -85,11 +96,18 @@ std::vector<double> variableOf(const MachineModel& m, const BallbarTest& test, c
     }
   }
   switch (e.type) {
-    case EffectType::Periodic: *label = axis + " position modulo the period (mm)"; break;
+    case EffectType::Periodic:
+      *label = axis + " position modulo the period (mm)";
+      break;
     case EffectType::Drift:
-    case EffectType::Warmup: *label = "time since the test began (min)"; break;
-    case EffectType::BarLength: *label = "reading, in measurement order (set-ups in colour)"; break;
-    default: *label = axis + (rotary ? " angle (deg)" : " position (mm)");
+    case EffectType::Warmup:
+      *label = "time since the test began (min)";
+      break;
+    case EffectType::BarLength:
+      *label = "reading, in measurement order (set-ups in colour)";
+      break;
+    default:
+      *label = axis + (rotary ? " angle (deg)" : " position (mm)");
   }
   return v;
 }
@@ -97,10 +115,12 @@ std::vector<double> variableOf(const MachineModel& m, const BallbarTest& test, c
 // Residual series coloured by approach direction (reversal) or set-up (bar length), else one.
 std::vector<ScatterSeries> seriesOf(const BallbarTest& test, const EffectSpec& e,
                                     const std::vector<double>& x, const Eigen::VectorXd& r) {
-  static const unsigned char colours[4][3] = {{40, 90, 200}, {210, 60, 40}, {40, 150, 60}, {150, 80, 170}};
+  static const unsigned char colours[4][3] = {
+      {40, 90, 200}, {210, 60, 40}, {40, 150, 60}, {150, 80, 170}};
   std::vector<ScatterSeries> s;
   auto groupOf = [&](size_t i) {
-    if (e.type == EffectType::Reversal) return test.readings[i].context.direction[e.axis] < 0 ? 1 : 0;
+    if (e.type == EffectType::Reversal)
+      return test.readings[i].context.direction[e.axis] < 0 ? 1 : 0;
     if (e.type == EffectType::BarLength) return test.readings[i].setup % 4;
     return 0;
   };
@@ -124,7 +144,8 @@ std::string imageTag(const std::string& path, const std::string& alt) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream ss;
   ss << in.rdbuf();
-  return "<img alt=\"" + xmlEscape(alt) + "\" src=\"data:image/png;base64," + base64Encode(ss.str()) + "\">";
+  return "<img alt=\"" + xmlEscape(alt) + "\" src=\"data:image/png;base64," +
+         base64Encode(ss.str()) + "\">";
 }
 
 std::string effectKey(const MachineModel& m, const EffectSpec& e) {
@@ -158,13 +179,15 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
     }
     json e = {{"type", traitsOf(a.spec.type).name},
               {"axis", a.spec.axis >= 0 ? json(m.axes[a.spec.axis].name) : json(nullptr)},
-              {"component", a.spec.component >= 0 ? json(kComponentNames[a.spec.component]) : json(nullptr)},
+              {"component",
+               a.spec.component >= 0 ? json(kComponentNames[a.spec.component]) : json(nullptr)},
               {"label", a.label},
               {"unit", unit},
               {"parameters", params},
               {"uncertainty", unc}};
     if (hyperName(a.spec))
-      e["hyperparameter"] = {{"name", hyperName(a.spec)}, {"value", num(a.hyperparameter)},
+      e["hyperparameter"] = {{"name", hyperName(a.spec)},
+                             {"value", num(a.hyperparameter)},
                              {"uncertainty", num(a.hyperparameter_uncertainty)}};
     if (a.spec.type == EffectType::Chebyshev || a.spec.type == EffectType::Harmonics)
       e["orders"] = {a.spec.first_order, a.spec.last_order};
@@ -187,7 +210,8 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
     json j = {{"round", c.round},
               {"type", traitsOf(c.spec.type).name},
               {"axis", c.spec.axis >= 0 ? json(base.axes[c.spec.axis].name) : json(nullptr)},
-              {"component", c.spec.component >= 0 ? json(kComponentNames[c.spec.component]) : json(nullptr)},
+              {"component",
+               c.spec.component >= 0 ? json(kComponentNames[c.spec.component]) : json(nullptr)},
               {"label", c.label},
               {"coefficients", c.coefficients},
               {"search_trials", c.trials},
@@ -217,13 +241,16 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
       {"verdict", verdictName(r.verdict)},
       {"verdict_text", r.verdict_text},
       {"message", r.message},
-      {"lack_of_fit", {{"before", lackOfFitJson(r.lack_of_fit_before)}, {"after", lackOfFitJson(r.lack_of_fit_after)}}},
+      {"lack_of_fit",
+       {{"before", lackOfFitJson(r.lack_of_fit_before)},
+        {"after", lackOfFitJson(r.lack_of_fit_after)}}},
       {"effects_added", added},
       {"rms_before_um", mmToUm(r.rms_before)},
       {"rms_after_um", mmToUm(r.rms_after)},
       {"cv_rms_before_um", mmToUm(r.cv_rms_before)},
       {"cv_rms_after_um", mmToUm(r.cv_rms_after)},
-      {"cross_validation", {{"folds", r.folds}, {"blocks", "contiguous runs of readings within each set-up"}}},
+      {"cross_validation",
+       {{"folds", r.folds}, {"blocks", "contiguous runs of readings within each set-up"}}},
       {"ball_positions_file", in.balls_file},
       {"selection",
        {{"method", "forward stepwise"},
@@ -231,32 +258,41 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
         {"information_criterion", "BIC with m_eff"}}},
       {"base_fit", fitJson(r.base_fit)},
       {"final_fit", fitJson(r.final_fit)},
-      {"residual_analysis", {{"before", findingsJson(r.analysis_before)}, {"after", findingsJson(r.analysis_after)}}},
+      {"residual_analysis",
+       {{"before", findingsJson(r.analysis_before)}, {"after", findingsJson(r.analysis_after)}}},
       {"candidates", cands},
       {"seconds", in.seconds}};
   auto stats = [](const ResidualStats& x) {
     return json{{"readings", x.readings}, {"rms_um", mmToUm(x.rms)}, {"max_um", mmToUm(x.max)}};
   };
   if (r.heldout_before.readings > 0)
-    out["heldout"] = {{"file", in.heldout_file},
-                      {"before", stats(r.heldout_before)},
-                      {"after", stats(r.heldout_after)},
-                      {"mean_squared_gain_um2", r.heldout_gain_mm2 * 1e6},
-                      {"mean_squared_gain_standard_error_um2", r.heldout_gain_se_mm2 * 1e6},
-                      {"gain_rule", "confirmed when above twice its standard error; else the effects are withdrawn"}};
+    out["heldout"] = {
+        {"file", in.heldout_file},
+        {"before", stats(r.heldout_before)},
+        {"after", stats(r.heldout_after)},
+        {"mean_squared_gain_um2", r.heldout_gain_mm2 * 1e6},
+        {"mean_squared_gain_standard_error_um2", r.heldout_gain_se_mm2 * 1e6},
+        {"gain_rule",
+         "confirmed when above twice its standard error; else the effects are withdrawn"}};
   if (in.written.fit.readings > 0) {
     out["written_files_check"] = {
         {"description", "the written machine file and ball positions, read back, on the readings"},
         {"fit", stats(in.written.fit)}};
-    if (in.written.heldout.readings > 0) out["written_files_check"]["heldout"] = stats(in.written.heldout);
+    if (in.written.heldout.readings > 0)
+      out["written_files_check"]["heldout"] = stats(in.written.heldout);
   }
   if (r.unexplained) {
     const ResidualFinding& u = r.unexplained_finding;
     out["unexplained_structure"] = {
-        {"variable", u.variable}, {"test", u.test}, {"strength", u.strength}, {"p_value", u.p_value},
-        {"description", "the residual after the selection still follows this variable, and no "
-                        "effect of the library removes it"}};
-    if (u.test == "periodogram" && u.order) out["unexplained_structure"]["harmonic_order"] = u.period;
+        {"variable", u.variable},
+        {"test", u.test},
+        {"strength", u.strength},
+        {"p_value", u.p_value},
+        {"description",
+         "the residual after the selection still follows this variable, and no "
+         "effect of the library removes it"}};
+    if (u.test == "periodogram" && u.order)
+      out["unexplained_structure"]["harmonic_order"] = u.period;
     if (u.test == "periodogram" && !u.order) {
       out["unexplained_structure"]["period_mm"] = u.period;
       out["unexplained_structure"]["period_uncertainty_mm"] = u.period_uncertainty;
@@ -271,8 +307,10 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
   }
   json removed = json::array(), restored = json::array();
   for (const RemovedReading& g : in.removed) {
-    json e = {{"line", g.line}, {"residual_um", mmToUm(g.residual)}, {"studentized", g.studentized}};
-    if (std::isfinite(g.studentized_after)) e["studentized_against_final_model"] = g.studentized_after;
+    json e = {
+        {"line", g.line}, {"residual_um", mmToUm(g.residual)}, {"studentized", g.studentized}};
+    if (std::isfinite(g.studentized_after))
+      e["studentized_against_final_model"] = g.studentized_after;
     (g.restored ? restored : removed).push_back(e);
   }
   out["gross_readings_removed"] = removed;
@@ -316,8 +354,8 @@ std::string htmlVerdict(const DiagnosisView& v) {
   h += "<h1>Diagnosis of " + xmlEscape(m.name) + "</h1>\n";
   h += "<p class=\"note\">Readings: " + xmlEscape(in.readings_file) + " (" +
        std::to_string(test.readings.size()) + " in " + std::to_string(test.setups.size()) +
-       " set-ups). Machine: " + xmlEscape(in.machine_file) + ". Augmented machine file: " +
-       xmlEscape(in.output_file) + ".</p>\n";
+       " set-ups). Machine: " + xmlEscape(in.machine_file) +
+       ". Augmented machine file: " + xmlEscape(in.output_file) + ".</p>\n";
   {
     std::string title = verdictName(r.verdict);
     title[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(title[0])));
@@ -334,28 +372,32 @@ std::string htmlBeforeAfter(const DiagnosisView& v) {
   const DiagnosisReportInputs& in = v.in;
   std::string h;
   h += "<table><tr><th class=\"l\"></th><th>before</th><th>after</th></tr>";
-  h += "<tr><td class=\"l\">residual RMS (µm)</td><td>" + formatWith("%.3f", mmToUm(r.rms_before)) + "</td><td>" +
-       formatWith("%.3f", mmToUm(r.rms_after)) + "</td></tr>";
+  h += "<tr><td class=\"l\">residual RMS (µm)</td><td>" + formatWith("%.3f", mmToUm(r.rms_before)) +
+       "</td><td>" + formatWith("%.3f", mmToUm(r.rms_after)) + "</td></tr>";
   auto lof = [](const LackOfFit& l) {
     return l.tested ? formatWith("F %.2f", l.f) + formatWith(", p %.2g", l.p_value) +
                           formatWith(" (repeatability %.3f µm)", mmToUm(l.s_pure))
                     : std::string("not tested");
   };
-  h += "<tr><td class=\"l\">lack of fit (residual against the repeatability of repeated poses)</td><td>" +
+  h += "<tr><td class=\"l\">lack of fit (residual against the repeatability of repeated "
+       "poses)</td><td>" +
        lof(r.lack_of_fit_before) + "</td><td>" + lof(r.lack_of_fit_after) + "</td></tr>";
   h += "<tr><td class=\"l\">cross-validated RMS (µm, " + std::to_string(r.folds) +
-       " contiguous blocks left out in turn)</td><td>" + formatWith("%.3f", mmToUm(r.cv_rms_before)) +
-       "</td><td>" + formatWith("%.3f", mmToUm(r.cv_rms_after)) + "</td></tr>";
+       " contiguous blocks left out in turn)</td><td>" +
+       formatWith("%.3f", mmToUm(r.cv_rms_before)) + "</td><td>" +
+       formatWith("%.3f", mmToUm(r.cv_rms_after)) + "</td></tr>";
   if (r.heldout_before.readings > 0)
-    h += "<tr><td class=\"l\">held-out readings RMS (µm, " + std::to_string(r.heldout_before.readings) +
-         " readings of " + xmlEscape(in.heldout_file) + ")</td><td>" + formatWith("%.3f", mmToUm(r.heldout_before.rms)) +
-         "</td><td>" + formatWith("%.3f", mmToUm(r.heldout_after.rms)) + "</td></tr>";
+    h += "<tr><td class=\"l\">held-out readings RMS (µm, " +
+         std::to_string(r.heldout_before.readings) + " readings of " + xmlEscape(in.heldout_file) +
+         ")</td><td>" + formatWith("%.3f", mmToUm(r.heldout_before.rms)) + "</td><td>" +
+         formatWith("%.3f", mmToUm(r.heldout_after.rms)) + "</td></tr>";
   if (in.written.fit.readings > 0) {
     h += "<tr><td class=\"l\">from the written files (" + xmlEscape(in.output_file) + " + " +
          xmlEscape(in.balls_file) + "), fitted readings RMS (µm)</td><td></td><td>" +
          formatWith("%.3f", mmToUm(in.written.fit.rms)) + "</td></tr>";
     if (in.written.heldout.readings > 0)
-      h += "<tr><td class=\"l\">from the written files, held-out readings RMS (µm)</td><td></td><td>" +
+      h += "<tr><td class=\"l\">from the written files, held-out readings RMS "
+           "(µm)</td><td></td><td>" +
            formatWith("%.3f", mmToUm(in.written.heldout.rms)) + "</td></tr>";
   }
   h += "</table>\n";
@@ -370,12 +412,14 @@ std::string htmlRemoved(const DiagnosisView& v) {
   if (!r.withdrawn.empty())
     h += "<p><b>Withdrawn:</b> " + xmlEscape(r.withdrawn_reason) + ".</p>\n";
   if (!in.removed.empty()) {
-    h += "<p><b>Readings the base model found gross</b> (studentised residual against the base fit, then "
+    h += "<p><b>Readings the base model found gross</b> (studentised residual against the base "
+         "fit, then "
          "against the final model; restored when the final model explains them):";
     for (const RemovedReading& g : in.removed)
-      h += " line " + std::to_string(g.line) + " (" + formatWith("%+.2f", mmToUm(g.residual)) + " µm, t " +
-           formatWith("%.1f", g.studentized) +
-           (std::isfinite(g.studentized_after) ? formatWith(" → %.1f", g.studentized_after) : std::string()) +
+      h += " line " + std::to_string(g.line) + " (" + formatWith("%+.2f", mmToUm(g.residual)) +
+           " µm, t " + formatWith("%.1f", g.studentized) +
+           (std::isfinite(g.studentized_after) ? formatWith(" → %.1f", g.studentized_after)
+                                               : std::string()) +
            (g.restored ? ", restored)" : ", removed)");
     h += ".</p>\n";
   }
@@ -395,11 +439,13 @@ std::string htmlAdded(const DiagnosisView& v) {
       const char* unit = effectUnit(a.spec, &k);
       for (size_t j = 0; j < a.parameters.size(); ++j)
         h += "<tr><td class=\"l\">" + xmlEscape(a.label) + "</td><td class=\"l\">" +
-             m.parameters[a.parameters[j]].iso_code + "</td><td>" + formatWith("%.3f", a.values[j] * k) +
-             "</td><td>" + formatWith("%.3f", a.uncertainty[j] * k) + "</td><td class=\"l\">" + unit + "</td></tr>";
+             m.parameters[a.parameters[j]].iso_code + "</td><td>" +
+             formatWith("%.3f", a.values[j] * k) + "</td><td>" +
+             formatWith("%.3f", a.uncertainty[j] * k) + "</td><td class=\"l\">" + unit +
+             "</td></tr>";
       if (hyperName(a.spec))
-        h += "<tr><td class=\"l\">" + xmlEscape(a.label) + "</td><td class=\"l\">" + hyperName(a.spec) +
-             "</td><td>" + formatWith("%.4g", a.hyperparameter) + "</td><td>" +
+        h += "<tr><td class=\"l\">" + xmlEscape(a.label) + "</td><td class=\"l\">" +
+             hyperName(a.spec) + "</td><td>" + formatWith("%.4g", a.hyperparameter) + "</td><td>" +
              formatWith("%.2g", a.hyperparameter_uncertainty) + "</td><td class=\"l\">" +
              (a.spec.type == EffectType::Periodic ? "mm" : "s") + "</td></tr>";
     }
@@ -437,9 +483,9 @@ std::string htmlResidualPlots(const DiagnosisView& v) {
       const std::string name = "residual_" + key + (k ? "_after.png" : "_before.png");
       const std::string path = (std::filesystem::path(dir) / name).string();
       ScatterChart chart;
-      chart.title = std::string(k ? "After: " : "Before: ") +
-                    (e.type == EffectType::BarLength && r.added.empty() ? "residuals"
-                                                                        : describeEffect(m, e));
+      chart.title =
+          std::string(k ? "After: " : "Before: ") +
+          (e.type == EffectType::BarLength && r.added.empty() ? "residuals" : describeEffect(m, e));
       chart.x_label = label;
       chart.y_label = "residual (µm)";
       chart.series = k ? after : before;
@@ -466,13 +512,14 @@ std::string htmlUnexplained(const DiagnosisView& v) {
   if (r.unexplained) {
     const ResidualFinding& u = r.unexplained_finding;
     h += "<h2>Structure the library does not explain</h2>\n<p>After the selection the residual "
-         "still follows <b>" + xmlEscape(u.variable) + "</b> (" + xmlEscape(u.test) +
+         "still follows <b>" +
+         xmlEscape(u.variable) + "</b> (" + xmlEscape(u.test) +
          (u.test == "periodogram" ? (u.order ? formatWith(", harmonic order %.0f", u.period)
                                              : formatWith(", period %.2f", u.period) +
                                                    formatWith(" ± %.2f mm", u.period_uncertainty))
                                   : "") +
-         ", " + formatWith("%.0f", u.strength * 100) + " % of its variance, p " + formatWith("%.1e", u.p_value) +
-         "), and no effect of the library removes it.</p>\n";
+         ", " + formatWith("%.0f", u.strength * 100) + " % of its variance, p " +
+         formatWith("%.1e", u.p_value) + "), and no effect of the library removes it.</p>\n";
     std::vector<double> x(test.readings.size());
     std::string label = "reading, in measurement order";
     int axis = -1;
@@ -480,15 +527,21 @@ std::string htmlUnexplained(const DiagnosisView& v) {
       if (u.variable.rfind(m.axes[a].name, 0) == 0) axis = static_cast<int>(a);
     for (size_t i = 0; i < x.size(); ++i) {
       const BallbarReading& rd = test.readings[i];
-      if (u.variable == "time") x[i] = rd.context.time_s / 60.0;
-      else if (axis >= 0) x[i] = rd.q[axis] * (m.axes[axis].isRotary() ? radToDeg(1.0) : 1.0);
-      else x[i] = static_cast<double>(i);
+      if (u.variable == "time")
+        x[i] = rd.context.time_s / 60.0;
+      else if (axis >= 0)
+        x[i] = rd.q[axis] * (m.axes[axis].isRotary() ? radToDeg(1.0) : 1.0);
+      else
+        x[i] = static_cast<double>(i);
     }
-    if (u.variable == "time") label = "time since the test began (min)";
-    else if (axis >= 0) label = m.axes[axis].name + (m.axes[axis].isRotary() ? " angle (deg)" : " position (mm)");
+    if (u.variable == "time")
+      label = "time since the test began (min)";
+    else if (axis >= 0)
+      label = m.axes[axis].name + (m.axes[axis].isRotary() ? " angle (deg)" : " position (mm)");
     ScatterSeries one;
     one.x = x;
-    for (Eigen::Index i = 0; i < r.final_fit.residuals.size(); ++i) one.y.push_back(mmToUm(r.final_fit.residuals[i]));
+    for (Eigen::Index i = 0; i < r.final_fit.residuals.size(); ++i)
+      one.y.push_back(mmToUm(r.final_fit.residuals[i]));
     const std::string path = (std::filesystem::path(dir) / "residual_unexplained.png").string();
     ScatterChart chart;
     chart.title = "Unexplained: residual after, against " + u.variable;
@@ -496,8 +549,9 @@ std::string htmlUnexplained(const DiagnosisView& v) {
     chart.y_label = "residual (µm)";
     chart.series = {one};
     writeScatterPng(path, chart);
-    h += "<figure>" + imageTag(path, "residual_unexplained.png") + "<figcaption>residual (µm) after, against " +
-         xmlEscape(label) + "</figcaption></figure>\n";
+    h += "<figure>" + imageTag(path, "residual_unexplained.png") +
+         "<figcaption>residual (µm) after, against " + xmlEscape(label) +
+         "</figcaption></figure>\n";
   }
   return h;
 }
@@ -507,22 +561,28 @@ std::string htmlResidualAnalysis(const DiagnosisView& v) {
   const DiagnosisResult& r = v.r;
   std::string h;
   // Residual analysis.
-  h += "<h2>Residual analysis</h2>\n<table><tr><th class=\"l\">variable</th><th class=\"l\">test</th>"
+  h += "<h2>Residual analysis</h2>\n<table><tr><th class=\"l\">variable</th><th "
+       "class=\"l\">test</th>"
        "<th>strength before</th><th>p before</th><th>strength after</th><th>p after</th></tr>";
   for (const ResidualFinding& f : r.analysis_before.findings) {
     const ResidualFinding* g = nullptr;
     for (const ResidualFinding& x : r.analysis_after.findings)
       if (x.variable == f.variable && x.test == f.test) g = &x;
     h += "<tr><td class=\"l\">" + xmlEscape(f.variable) + "</td><td class=\"l\">" + f.test +
-         (f.test == "periodogram" ? formatWith(f.period < 9 ? " (order %.0f)" : " (%.2f mm)", f.period) : "") +
-         "</td><td>" + formatWith("%.3f", f.strength) + "</td><td>" + formatWith("%.2g", f.p_value) + "</td><td>" +
-         (g ? formatWith("%.3f", g->strength) : "") + "</td><td>" + (g ? formatWith("%.2g", g->p_value) : "") + "</td></tr>";
+         (f.test == "periodogram"
+              ? formatWith(f.period < 9 ? " (order %.0f)" : " (%.2f mm)", f.period)
+              : "") +
+         "</td><td>" + formatWith("%.3f", f.strength) + "</td><td>" +
+         formatWith("%.2g", f.p_value) + "</td><td>" + (g ? formatWith("%.3f", g->strength) : "") +
+         "</td><td>" + (g ? formatWith("%.2g", g->p_value) : "") + "</td></tr>";
   }
   h += "</table>\n<p class=\"note\">Strength: fraction of the residual variance explained. The "
        "residual follows <b>" +
-       xmlEscape(r.analysis_before.follows.empty() ? "nothing in particular" : r.analysis_before.follows) +
+       xmlEscape(r.analysis_before.follows.empty() ? "nothing in particular"
+                                                   : r.analysis_before.follows) +
        "</b> before, <b>" +
-       xmlEscape(r.analysis_after.follows.empty() ? "nothing in particular" : r.analysis_after.follows) +
+       xmlEscape(r.analysis_after.follows.empty() ? "nothing in particular"
+                                                  : r.analysis_after.follows) +
        "</b> after.</p>\n";
   return h;
 }
@@ -533,11 +593,16 @@ std::string htmlProgram(const DiagnosisView& v) {
   std::string h;
   if (in.program) {
     const ProgramComparison& p = *in.program;
-    h += "<h2>Predicted error of " + xmlEscape(p.cl_file) + "</h2>\n<table><tr><th></th><th>max (µm)</th>"
-         "<th>RMS (µm)</th></tr><tr><td class=\"l\">before</td><td>" + formatWith("%.3f", mmToUm(p.before.max_deviation)) +
-         "</td><td>" + formatWith("%.3f", mmToUm(p.before.rms_deviation)) + "</td></tr><tr><td class=\"l\">after</td><td>" +
-         formatWith("%.3f", mmToUm(p.after.max_deviation)) + "</td><td>" + formatWith("%.3f", mmToUm(p.after.rms_deviation)) +
-         "</td></tr><tr><td class=\"l\">change</td><td>" + formatWith("%.3f", mmToUm(p.change_max)) + "</td><td>" +
+    h += "<h2>Predicted error of " + xmlEscape(p.cl_file) +
+         "</h2>\n<table><tr><th></th><th>max (µm)</th>"
+         "<th>RMS (µm)</th></tr><tr><td class=\"l\">before</td><td>" +
+         formatWith("%.3f", mmToUm(p.before.max_deviation)) + "</td><td>" +
+         formatWith("%.3f", mmToUm(p.before.rms_deviation)) +
+         "</td></tr><tr><td class=\"l\">after</td><td>" +
+         formatWith("%.3f", mmToUm(p.after.max_deviation)) + "</td><td>" +
+         formatWith("%.3f", mmToUm(p.after.rms_deviation)) +
+         "</td></tr><tr><td class=\"l\">change</td><td>" +
+         formatWith("%.3f", mmToUm(p.change_max)) + "</td><td>" +
          formatWith("%.3f", mmToUm(p.change_rms)) + "</td></tr></table>\n";
   }
   return h;
@@ -558,13 +623,15 @@ std::string htmlCandidates(const DiagnosisView& v) {
     return a.round != b.round ? a.round < b.round : a.delta_ic > b.delta_ic;
   });
   for (const CandidateScore& s : c)
-    h += "<tr><td>" + std::to_string(s.round) + "</td><td class=\"l\">" + xmlEscape(s.label) + "</td><td>" +
-         formatWith("%.1f", s.delta_ic) + "</td><td>" + formatWith("%.2g", s.p_value) + "</td><td>" +
-         formatWith("%.0f", s.effective_readings) + "</td><td>" + formatWith("%.3f", mmToUm(s.cv_rms_before)) +
-         "</td><td>" + formatWith("%.3f", mmToUm(s.cv_rms_after)) + "</td><td>" + formatWith("%.3f", s.new_information) +
-         "</td><td class=\"l\">" + verdictName(s.verdict) + "</td></tr>";
-  h += "</table>\n<p class=\"note\">" + xmlEscape(base.name) + "; " + formatWith("%.2f", in.seconds) +
-       " s.</p></body></html>\n";
+    h += "<tr><td>" + std::to_string(s.round) + "</td><td class=\"l\">" + xmlEscape(s.label) +
+         "</td><td>" + formatWith("%.1f", s.delta_ic) + "</td><td>" +
+         formatWith("%.2g", s.p_value) + "</td><td>" + formatWith("%.0f", s.effective_readings) +
+         "</td><td>" + formatWith("%.3f", mmToUm(s.cv_rms_before)) + "</td><td>" +
+         formatWith("%.3f", mmToUm(s.cv_rms_after)) + "</td><td>" +
+         formatWith("%.3f", s.new_information) + "</td><td class=\"l\">" + verdictName(s.verdict) +
+         "</td></tr>";
+  h += "</table>\n<p class=\"note\">" + xmlEscape(base.name) + "; " +
+       formatWith("%.2f", in.seconds) + " s.</p></body></html>\n";
   return h;
 }
 
@@ -575,8 +642,9 @@ std::string writeDiagnosisHtml(const std::string& dir, const MachineModel& base,
                                const BallbarTest& test, const DiagnosisResult& r,
                                const DiagnosisReportInputs& in) {
   const DiagnosisView v{dir, base, test, r, in};
-  return htmlVerdict(v) + htmlBeforeAfter(v) + htmlRemoved(v) + htmlAdded(v) + htmlResidualPlots(v) +
-         htmlUnexplained(v) + htmlResidualAnalysis(v) + htmlProgram(v) + htmlCandidates(v);
+  return htmlVerdict(v) + htmlBeforeAfter(v) + htmlRemoved(v) + htmlAdded(v) +
+         htmlResidualPlots(v) + htmlUnexplained(v) + htmlResidualAnalysis(v) + htmlProgram(v) +
+         htmlCandidates(v);
 }
 
 }  // namespace tolver

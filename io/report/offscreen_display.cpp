@@ -40,7 +40,8 @@ std::string findXvfb() {
   size_t start = 0;
   while (start <= dirs.size()) {
     const size_t end = dirs.find(':', start);
-    const std::string dir = dirs.substr(start, end == std::string::npos ? std::string::npos : end - start);
+    const std::string dir =
+        dirs.substr(start, end == std::string::npos ? std::string::npos : end - start);
     const std::string candidate = (dir.empty() ? "." : dir) + "/Xvfb";
     if (access(candidate.c_str(), X_OK) == 0) return candidate;
     if (end == std::string::npos) break;
@@ -52,8 +53,9 @@ std::string findXvfb() {
 bool startXvfb(std::string* message) {
   const std::string xvfb = findXvfb();
   if (xvfb.empty()) {
-    *message = "cannot render images: no X display ($DISPLAY) and no Xvfb to start one; install "
-               "it (sudo apt-get install xvfb, or scripts/install_deps.sh), or pass --no-images";
+    *message =
+        "cannot render images: no X display ($DISPLAY) and no Xvfb to start one; install "
+        "it (sudo apt-get install xvfb, or scripts/install_deps.sh), or pass --no-images";
     return false;
   }
   int fds[2];
@@ -116,8 +118,10 @@ bool ensureDisplay(std::string* message) {
   static std::string failure;
   std::lock_guard<std::mutex> lock(mutex);
   if (state == 0) {
-    if (canOpen(std::getenv("DISPLAY"))) state = 1;
-    else state = startXvfb(&failure) ? 1 : -1;
+    if (canOpen(std::getenv("DISPLAY")))
+      state = 1;
+    else
+      state = startXvfb(&failure) ? 1 : -1;
   }
   if (state < 0 && message) *message = failure;
   return state > 0;

@@ -18,11 +18,11 @@ struct ScatterSeries {
 struct ScatterChart {
   std::string title, x_label, y_label;  // labels carry their units: "residual (µm)"
   std::vector<ScatterSeries> series;
-  bool fixed_y = false;                 // y from y_min to y_max (a scale shared between charts)
+  bool fixed_y = false;  // y from y_min to y_max (a scale shared between charts)
   double y_min = 0.0, y_max = 0.0;
-  bool fixed_x = false;                 // x from x_min to x_max
+  bool fixed_x = false;  // x from x_min to x_max
   double x_min = 0.0, x_max = 0.0;
-  double bar_width = 0.0;               // bars: their width in x units (0: VTK's default)
+  double bar_width = 0.0;  // bars: their width in x units (0: VTK's default)
   int width = 640, height = 420;
 };
 

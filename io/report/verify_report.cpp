@@ -1,16 +1,14 @@
 #include "io/report/verify_report.h"
 
-#include <filesystem>
-
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include "io/common/json_text.h"
-
-#include "io/common/io_error.h"
-#include "io/common/text_util.h"
 #include "core/numerics/units.h"
+#include "io/common/io_error.h"
+#include "io/common/json_text.h"
+#include "io/common/text_util.h"
 
 namespace tolver {
 namespace {
@@ -21,8 +19,11 @@ using nlohmann::json;
 double umToTheNanometre(double mm) { return std::round(mm * 1e6) / 1e3; }
 
 json stats(const DeviationStats& s) {
-  return {{"samples", s.samples}, {"min_um", umToTheNanometre(s.min)}, {"max_um", umToTheNanometre(s.max)},
-          {"mean_um", umToTheNanometre(s.mean)}, {"rms_um", umToTheNanometre(s.rms)}};
+  return {{"samples", s.samples},
+          {"min_um", umToTheNanometre(s.min)},
+          {"max_um", umToTheNanometre(s.max)},
+          {"mean_um", umToTheNanometre(s.mean)},
+          {"rms_um", umToTheNanometre(s.rms)}};
 }
 
 std::string html(const std::string& s) { return xmlEscape(s); }
@@ -40,7 +41,6 @@ std::string verdictName(const VerifyReport& r) {
   return r.result->pass ? "PASS" : "FAIL";
 }
 
-
 static bool attributable(const VerifyResult& v, int i) {
   return v.split.empty() || v.split[i] == Split::Attributable;
 }
@@ -48,7 +48,8 @@ static bool attributable(const VerifyResult& v, int i) {
 std::string worstDeviationText(const VerifyResult& v, const OutOfToleranceRegion& g, bool unit) {
   const std::string um = unit ? " um" : "";
   if (!v.total_beyond.empty() && v.total_beyond[g.worst_sample])
-    return formatWith("%+.4g", mmToUm(g.worst_deviation)) + um + " or deeper (beyond the search range)";
+    return formatWith("%+.4g", mmToUm(g.worst_deviation)) + um +
+           " or deeper (beyond the search range)";
   return formatWith("%+.2f", mmToUm(g.worst_deviation)) + um;
 }
 
@@ -72,65 +73,101 @@ std::string formatVerifyJson(const VerifyReport& r) {
   if (!r.band95_um.empty()) {
     j["uncertainty"] = {{"band95_max_um", r.band95_max_um},
                         {"undecided_samples", r.undecided_samples},
-                        {"method", "the calibration's covariance carried to each CL point's tip, "
-                                   "along each sample's normal (nearest CL point), k = 1.96"}};
+                        {"method",
+                         "the calibration's covariance carried to each CL point's tip, "
+                         "along each sample's normal (nearest CL point), k = 1.96"}};
     if (r.undecided) j["uncertainty"]["undecided"] = r.undecided_text;
   }
   j["exit_code"] = r.exit_code;
   j["mode"] = r.mode;
   j["machine"] = {{"name", r.machine_name}, {"file", r.machine_file}};
-  j["program"] = {{"file", r.program_file}, {"cl_points", r.cl_points}, {"placements", r.placements},
-                  {"placement_step_mm", r.step_mm}, {"cutter", r.cutter}};
-  j["part"] = {{"file", r.part_file}, {"samples", r.samples->size()}, {"sample_spacing_mm", r.spacing_mm},
+  j["program"] = {{"file", r.program_file},
+                  {"cl_points", r.cl_points},
+                  {"placements", r.placements},
+                  {"placement_step_mm", r.step_mm},
+                  {"cutter", r.cutter}};
+  j["part"] = {{"file", r.part_file},
+               {"samples", r.samples->size()},
+               {"sample_spacing_mm", r.spacing_mm},
                {"regions", r.samples->group_names}};
   if (r.has_repair) {
     const auto& m = r.repair;
-    j["part"]["repair"] = {{"merged_vertices", m.merged_vertices}, {"degenerate_faces", m.degenerate_faces},
-                           {"duplicate_faces", m.duplicate_faces}, {"reoriented_faces", m.reoriented_faces},
-                           {"split_vertices", m.split_vertices}, {"holes_filled", m.holes_filled},
-                           {"open_borders", m.open_borders}, {"closed", m.closed}, {"notes", m.notes}};
+    j["part"]["repair"] = {{"merged_vertices", m.merged_vertices},
+                           {"degenerate_faces", m.degenerate_faces},
+                           {"duplicate_faces", m.duplicate_faces},
+                           {"reoriented_faces", m.reoriented_faces},
+                           {"split_vertices", m.split_vertices},
+                           {"holes_filled", m.holes_filled},
+                           {"open_borders", m.open_borders},
+                           {"closed", m.closed},
+                           {"notes", m.notes}};
   }
   json zones = json::array();
   for (const auto& z : r.zones)
-    zones.push_back({{"region", z.region}, {"spec", z.spec}, {"tolerance_um", umToTheNanometre(z.tolerance)},
-                     {"lower_um", umToTheNanometre(z.lower)}, {"upper_um", umToTheNanometre(z.upper)}});
+    zones.push_back({{"region", z.region},
+                     {"spec", z.spec},
+                     {"tolerance_um", umToTheNanometre(z.tolerance)},
+                     {"lower_um", umToTheNanometre(z.lower)},
+                     {"upper_um", umToTheNanometre(z.upper)}});
   j["zones"] = zones;
-  j["sign_convention"] = "deviation along the outward normal of the nominal surface: + material left, - gouge";
-  j["deviation"] = {{"total", stats(v.total_stats)}, {"program", stats(v.program_stats)},
-                    {"machine", stats(v.machine_stats)},
-                    {"definitions", {{"total", "predicted swept surface - CAD (what the part will be)"},
-                                     {"program", "nominal swept surface - CAD (the program on a perfect machine)"},
-                                     {"machine", "predicted swept - nominal swept (the machine's contribution)"}}}};
+  j["sign_convention"] =
+      "deviation along the outward normal of the nominal surface: + material left, - gouge";
+  j["deviation"] = {
+      {"total", stats(v.total_stats)},
+      {"program", stats(v.program_stats)},
+      {"machine", stats(v.machine_stats)},
+      {"definitions",
+       {{"total", "predicted swept surface - CAD (what the part will be)"},
+        {"program", "nominal swept surface - CAD (the program on a perfect machine)"},
+        {"machine", "predicted swept - nominal swept (the machine's contribution)"}}}};
   j["split"] = {{"beyond_search_range", v.split_beyond},
                 {"cut_boundary", v.split_boundary},
-                {"meaning", "total = program + machine at every other machined sample; these samples "
-                            "have no program and machine shares (null in the regions, empty in "
-                            "deviations.csv)"}};
-  j["area"] = {{"total_mm2", v.area}, {"machined_mm2", v.area_machined}, {"in_tolerance_mm2", v.area_in},
-               {"unmachined_mm2", v.area_unmachined}, {"edges_not_verified_mm2", v.area_edge}, {"percent_in_tolerance", v.percent_in}};
+                {"meaning",
+                 "total = program + machine at every other machined sample; these samples "
+                 "have no program and machine shares (null in the regions, empty in "
+                 "deviations.csv)"}};
+  j["area"] = {{"total_mm2", v.area},
+               {"machined_mm2", v.area_machined},
+               {"in_tolerance_mm2", v.area_in},
+               {"unmachined_mm2", v.area_unmachined},
+               {"edges_not_verified_mm2", v.area_edge},
+               {"percent_in_tolerance", v.percent_in}};
   json regions = json::array();
   for (const auto& g : v.regions) {
-    regions.push_back({{"kind", conformanceName(g.kind)}, {"zone", g.zone},
-                       {"region", r.zones[g.zone].region}, {"samples", g.samples},
-                       {"area_mm2", g.area_mm2}, {"worst_deviation_um", umToTheNanometre(g.worst_deviation)},
-                       {"worst_excursion_um", umToTheNanometre(g.worst_excursion)},
-                       {"where_mm", {g.where_w.x(), g.where_w.y(), g.where_w.z()}},
-                       {"machine_um", attributable(v, g.worst_sample) ? json(umToTheNanometre(v.machine[g.worst_sample])) : json()},
-                       {"program_um", attributable(v, g.worst_sample) ? json(umToTheNanometre(v.program[g.worst_sample])) : json()},
-                       {"beyond_search_range", !v.total_beyond.empty() && v.total_beyond[g.worst_sample] != 0},
-                       {"cause", regionCause(r, g)}, {"cl_line", clLine(r, g.worst_sample)}});
+    regions.push_back(
+        {{"kind", conformanceName(g.kind)},
+         {"zone", g.zone},
+         {"region", r.zones[g.zone].region},
+         {"samples", g.samples},
+         {"area_mm2", g.area_mm2},
+         {"worst_deviation_um", umToTheNanometre(g.worst_deviation)},
+         {"worst_excursion_um", umToTheNanometre(g.worst_excursion)},
+         {"where_mm", {g.where_w.x(), g.where_w.y(), g.where_w.z()}},
+         {"machine_um", attributable(v, g.worst_sample)
+                            ? json(umToTheNanometre(v.machine[g.worst_sample]))
+                            : json()},
+         {"program_um", attributable(v, g.worst_sample)
+                            ? json(umToTheNanometre(v.program[g.worst_sample]))
+                            : json()},
+         {"beyond_search_range", !v.total_beyond.empty() && v.total_beyond[g.worst_sample] != 0},
+         {"cause", regionCause(r, g)},
+         {"cl_line", clLine(r, g.worst_sample)}});
   }
   j["out_of_tolerance_regions"] = regions;
   if (r.line_pass > 0) {
     json lp = json::array();
     for (const auto& p : r.line_profile)
-      lp.push_back({{"cl_line", p.cl_index < static_cast<int>(r.cl_lines.size()) ? r.cl_lines[p.cl_index] : 0},
-                    {"arc_length_mm", p.arc_length}, {"total_um", umToTheNanometre(p.total)}, {"machine_um", umToTheNanometre(p.machine)}});
+      lp.push_back({{"cl_line",
+                     p.cl_index < static_cast<int>(r.cl_lines.size()) ? r.cl_lines[p.cl_index] : 0},
+                    {"arc_length_mm", p.arc_length},
+                    {"total_um", umToTheNanometre(p.total)},
+                    {"machine_um", umToTheNanometre(p.machine)}});
     j["line_profile"] = {{"pass", r.line_pass}, {"points", lp}};
   }
   json images = json::array();
   for (const auto& [caption, path] : r.images)
-    images.push_back({{"caption", caption}, {"file", std::filesystem::path(path).filename().string()}});
+    images.push_back(
+        {{"caption", caption}, {"file", std::filesystem::path(path).filename().string()}});
   j["images"] = images;
   j["notes"] = r.notes;
   j["seconds"] = std::round(r.seconds * 1000) / 1000;
@@ -146,7 +183,8 @@ std::string formatDeviationsCsv(const VerifyReport& r) {
   std::string out =
       "# tolver verify: signed normal deviation per surface sample, um (+ material left, - gouge); "
       "positions mm in the part frame\n"
-      "# program_um and machine_um are empty where the deviation does not split (split: beyond range, "
+      "# program_um and machine_um are empty where the deviation does not split (split: beyond "
+      "range, "
       "cut boundary); total_um is empty where the cut reaches the gouge search limit\n"
       "sample,x,y,z,nx,ny,nz,region,zone,state,total_um,program_um,machine_um,cl_line,split\n";
   char buf[512];
@@ -161,9 +199,12 @@ std::string formatDeviationsCsv(const VerifyReport& r) {
       std::snprintf(ma, sizeof ma, "%.4f", mmToUm(v.machine[i]));
     }
     std::snprintf(buf, sizeof buf, "%zu,%.5f,%.5f,%.5f,%.6f,%.6f,%.6f,%s,%d,%s,%s,%s,%s,%d,%s\n", i,
-                  s.p_w[i].x(), s.p_w[i].y(), s.p_w[i].z(), s.n_w[i].x(), s.n_w[i].y(), s.n_w[i].z(),
-                  csvField(s.group_names[s.group[i]]).c_str(), v.zone[i], conformanceName(v.conformance[i]), t, pr, ma, line,
-                  !v.machined[i] ? "" : v.split.empty() ? "split" : splitName(v.split[i]));
+                  s.p_w[i].x(), s.p_w[i].y(), s.p_w[i].z(), s.n_w[i].x(), s.n_w[i].y(),
+                  s.n_w[i].z(), csvField(s.group_names[s.group[i]]).c_str(), v.zone[i],
+                  conformanceName(v.conformance[i]), t, pr, ma, line,
+                  !v.machined[i]    ? ""
+                  : v.split.empty() ? "split"
+                                    : splitName(v.split[i]));
     out += buf;
   }
   return out;
@@ -173,29 +214,34 @@ std::string formatDeviationsCsv(const VerifyReport& r) {
 std::string formatVerifyHtml(const VerifyReport& r) {
   const VerifyResult& v = *r.result;
   std::string h;
-  h += "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>tolver verify: " + html(r.name) +
-       "</title>\n<style>body{font-family:sans-serif;margin:2em;max-width:1300px;color:#222}"
-       "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:4px 10px;"
-       "text-align:right}th{background:#eee}td.l,th.l{text-align:left}.pass{background:#2e9f43;"
-       "color:#fff;padding:6px 18px;font-size:1.6em}.fail{background:#be0000;color:#fff;"
-       "padding:6px 18px;font-size:1.6em}img{max-width:100%;border:1px solid #ddd;margin:6px 0}"
-       ".worst{display:flex;flex-wrap:wrap;gap:12px}.card{width:400px}.thumb{width:400px}"
-       "</style></head><body>\n";
+  h +=
+      "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>tolver verify: " + html(r.name) +
+      "</title>\n<style>body{font-family:sans-serif;margin:2em;max-width:1300px;color:#222}"
+      "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #bbb;padding:4px 10px;"
+      "text-align:right}th{background:#eee}td.l,th.l{text-align:left}.pass{background:#2e9f43;"
+      "color:#fff;padding:6px 18px;font-size:1.6em}.fail{background:#be0000;color:#fff;"
+      "padding:6px 18px;font-size:1.6em}img{max-width:100%;border:1px solid #ddd;margin:6px 0}"
+      ".worst{display:flex;flex-wrap:wrap;gap:12px}.card{width:400px}.thumb{width:400px}"
+      "</style></head><body>\n";
   h += "<h1>tolver verify: " + html(r.name) + "</h1>\n";
   const std::string verdict = verdictName(r);
-  h += std::string("<p><span class=\"") + (verdict == "PASS" ? "pass" : "fail") + "\">" + verdict + "</span> ";
-  h += verdict == "PASS"        ? std::string("the part is predicted in tolerance everywhere it is machined.")
+  h += std::string("<p><span class=\"") + (verdict == "PASS" ? "pass" : "fail") + "\">" + verdict +
+       "</span> ";
+  h += verdict == "PASS"
+           ? std::string("the part is predicted in tolerance everywhere it is machined.")
        : verdict == "INCOMPLETE" ? html(r.incomplete_text)
        : verdict == "UNDECIDED"  ? html(r.undecided_text)
-                                 : "the part is predicted out of tolerance in " + std::to_string(v.regions.size()) +
-                                      " region(s).";
+                                 : "the part is predicted out of tolerance in " +
+                                      std::to_string(v.regions.size()) + " region(s).";
   h += "</p>\n";
   // The worst regions first, each with a thumbnail of the map that looks along its normal.
   if (!v.regions.empty()) {
     auto thumbnail = [&](size_t k) -> std::string {
-      const std::string want = k == 0 ? "map_worst.png" : "map_region" + std::to_string(k + 1) + ".png";
+      const std::string want =
+          k == 0 ? "map_worst.png" : "map_region" + std::to_string(k + 1) + ".png";
       for (const auto& [caption, path] : r.images)
-        if (path.size() >= want.size() && path.compare(path.size() - want.size(), want.size(), want) == 0)
+        if (path.size() >= want.size() &&
+            path.compare(path.size() - want.size(), want.size(), want) == 0)
           return "<img class=\"thumb\" alt=\"" + html(caption) + "\" src=\"data:image/png;base64," +
                  base64Encode(readFile(path)) + "\">";
       return "";
@@ -204,11 +250,13 @@ std::string formatVerifyHtml(const VerifyReport& r) {
     for (size_t k = 0; k < v.regions.size() && k < 3; ++k) {
       const auto& g = v.regions[k];
       char where[96];
-      std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", g.where_w.x(), g.where_w.y(), g.where_w.z());
+      std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", g.where_w.x(), g.where_w.y(),
+                    g.where_w.z());
       h += "<div class=\"card\">" + thumbnail(k) + "<p><b>R" + std::to_string(k + 1) + "</b> " +
-           conformanceName(g.kind) + " " + worstDeviationText(v, g) + ", " + formatWith("%.3f", g.area_mm2) +
-           " mm&sup2;, at " + where + " mm, CL line " + std::to_string(clLine(r, g.worst_sample)) +
-           "; cause: " + regionCause(r, g) + "</p></div>\n";
+           conformanceName(g.kind) + " " + worstDeviationText(v, g) + ", " +
+           formatWith("%.3f", g.area_mm2) + " mm&sup2;, at " + where + " mm, CL line " +
+           std::to_string(clLine(r, g.worst_sample)) + "; cause: " + regionCause(r, g) +
+           "</p></div>\n";
     }
     h += "</div>\n";
   }
@@ -218,7 +266,8 @@ std::string formatVerifyHtml(const VerifyReport& r) {
   };
   row("machine", r.machine_name + " (" + r.machine_file + ")");
   row("program", r.program_file + ": " + std::to_string(r.cl_points) + " CL points, " +
-                     std::to_string(r.placements) + " tool placements (step " + formatWith("%.3g", r.step_mm) + " mm)");
+                     std::to_string(r.placements) + " tool placements (step " +
+                     formatWith("%.3g", r.step_mm) + " mm)");
   row("cutter", r.cutter);
   row("part", r.mode == "cl-only" ? "none: CL-only mode (surfaces through the CL points)"
                                   : r.part_file + ": " + std::to_string(r.samples->size()) +
@@ -227,15 +276,18 @@ std::string formatVerifyHtml(const VerifyReport& r) {
     row("zone " + z.region, z.spec + " mm: [" + formatWith("%+.1f", mmToUm(z.lower)) + ", " +
                                 formatWith("%+.1f", mmToUm(z.upper)) + "] um");
   row("sign convention", "along the outward normal: + material left, - gouge");
-  h += "</table>\n<h2>Deviations (um)</h2>\n<table><tr><th class=\"l\"></th><th>min</th><th>max</th>"
-       "<th>mean</th><th>RMS</th><th class=\"l\">what it is</th></tr>\n";
+  h +=
+      "</table>\n<h2>Deviations (um)</h2>\n<table><tr><th class=\"l\"></th><th>min</th><th>max</th>"
+      "<th>mean</th><th>RMS</th><th class=\"l\">what it is</th></tr>\n";
   auto srow = [&](const char* name, const DeviationStats& s, const char* what) {
-    h += std::string("<tr><th class=\"l\">") + name + "</th><td>" + formatWith("%+.2f", mmToUm(s.min)) + "</td><td>" +
-         formatWith("%+.2f", mmToUm(s.max)) + "</td><td>" + formatWith("%+.2f", mmToUm(s.mean)) + "</td><td>" +
+    h += std::string("<tr><th class=\"l\">") + name + "</th><td>" +
+         formatWith("%+.2f", mmToUm(s.min)) + "</td><td>" + formatWith("%+.2f", mmToUm(s.max)) +
+         "</td><td>" + formatWith("%+.2f", mmToUm(s.mean)) + "</td><td>" +
          formatWith("%.2f", mmToUm(s.rms)) + "</td><td class=\"l\">" + what + "</td></tr>\n";
   };
   srow("total", v.total_stats, "predicted swept surface - CAD: what the part will be");
-  if (r.mode != "cl-only") srow("program", v.program_stats, "nominal swept - CAD: the program on a perfect machine");
+  if (r.mode != "cl-only")
+    srow("program", v.program_stats, "nominal swept - CAD: the program on a perfect machine");
   srow("machine", v.machine_stats, "predicted swept - nominal swept: the machine's contribution");
   h += "</table>\n<p>Machined area " + formatWith("%.1f", v.area_machined) + " mm&sup2;, " +
        formatWith("%.2f", v.percent_in) + " % of it in tolerance; not machined by this program " +
@@ -243,22 +295,25 @@ std::string formatVerifyHtml(const VerifyReport& r) {
   if (!v.regions.empty()) {
     h += "<h2>Out-of-tolerance regions</h2>\n<table><tr><th>#</th><th class=\"l\">kind</th>"
          "<th class=\"l\">zone</th><th>area mm&sup2;</th><th>worst um</th><th>beyond limit um</th>"
-         "<th>machine um</th><th>program um</th><th class=\"l\">cause</th><th class=\"l\">where (mm)</th>"
+         "<th>machine um</th><th>program um</th><th class=\"l\">cause</th><th class=\"l\">where "
+         "(mm)</th>"
          "<th>CL line</th></tr>\n";
     for (size_t k = 0; k < v.regions.size() && k < 50; ++k) {
       const auto& g = v.regions[k];
       char where[96];
-      std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", g.where_w.x(), g.where_w.y(), g.where_w.z());
+      std::snprintf(where, sizeof where, "(%.2f, %.2f, %.2f)", g.where_w.x(), g.where_w.y(),
+                    g.where_w.z());
       h += "<tr><td>" + std::to_string(k + 1) + "</td><td class=\"l\">" + conformanceName(g.kind) +
-           "</td><td class=\"l\">" + html(r.zones[g.zone].region) + "</td><td>" + formatWith("%.3f", g.area_mm2) +
-           "</td><td>" + worstDeviationText(v, g, false) + "</td><td>" +
-           formatWith("%.2f", mmToUm(g.worst_excursion)) + "</td><td>" +
-           (attributable(v, g.worst_sample) ? formatWith("%+.2f", mmToUm(v.machine[g.worst_sample])) : std::string("&mdash;")) +
+           "</td><td class=\"l\">" + html(r.zones[g.zone].region) + "</td><td>" +
+           formatWith("%.3f", g.area_mm2) + "</td><td>" + worstDeviationText(v, g, false) +
+           "</td><td>" + formatWith("%.2f", mmToUm(g.worst_excursion)) + "</td><td>" +
+           (attributable(v, g.worst_sample) ? formatWith("%+.2f", mmToUm(v.machine[g.worst_sample]))
+                                            : std::string("&mdash;")) +
            "</td><td>" +
-           (attributable(v, g.worst_sample) ? formatWith("%+.2f", mmToUm(v.program[g.worst_sample])) : std::string("&mdash;")) +
-           "</td><td class=\"l\">" +
-           regionCause(r, g) + "</td><td class=\"l\">" + where + "</td><td>" +
-           std::to_string(clLine(r, g.worst_sample)) + "</td></tr>\n";
+           (attributable(v, g.worst_sample) ? formatWith("%+.2f", mmToUm(v.program[g.worst_sample]))
+                                            : std::string("&mdash;")) +
+           "</td><td class=\"l\">" + regionCause(r, g) + "</td><td class=\"l\">" + where +
+           "</td><td>" + std::to_string(clLine(r, g.worst_sample)) + "</td></tr>\n";
     }
     if (v.regions.size() > 50)
       h += "<tr><td colspan=\"11\" class=\"l\">... " + std::to_string(v.regions.size() - 50) +
@@ -278,10 +333,11 @@ std::string formatVerifyHtml(const VerifyReport& r) {
     h += "</ul>\n";
   }
   for (const auto& [caption, path] : r.images) {
-    h += "<h3>" + html(caption) + "</h3>\n<img alt=\"" + html(caption) + "\" src=\"data:image/png;base64," +
-         base64Encode(readFile(path)) + "\">\n";
+    h += "<h3>" + html(caption) + "</h3>\n<img alt=\"" + html(caption) +
+         "\" src=\"data:image/png;base64," + base64Encode(readFile(path)) + "\">\n";
   }
-  h += "<p style=\"color:#777\">tolver verify, " + formatWith("%.2f", r.seconds) + " s</p>\n</body></html>\n";
+  h += "<p style=\"color:#777\">tolver verify, " + formatWith("%.2f", r.seconds) +
+       " s</p>\n</body></html>\n";
   return h;
 }
 

@@ -12,18 +12,18 @@
 namespace tolver {
 
 struct VerifyReport {
-  std::string name;                     // job name (batch) or the program's stem
+  std::string name;  // job name (batch) or the program's stem
   std::string machine_name, machine_file, program_file, part_file, cutter;
-  std::string mode = "part";            // "part" (CAD model) or "cl-only"
+  std::string mode = "part";  // "part" (CAD model) or "cl-only"
   int cl_points = 0, placements = 0;
-  std::vector<int> cl_lines;            // per CL point, its file line
+  std::vector<int> cl_lines;  // per CL point, its file line
   double step_mm = 0, spacing_mm = 0;
   const SurfaceSamples* samples = nullptr;
   const VerifyResult* result = nullptr;
   std::vector<ToleranceZone> zones;
   bool has_repair = false;
   MeshRepairReport repair;
-  int line_pass = -1;                   // 1-based pass of the line profile, -1 none
+  int line_pass = -1;  // 1-based pass of the line profile, -1 none
   std::vector<LineProfilePoint> line_profile;
   std::vector<std::pair<std::string, std::string>> images;  // caption, path
   std::vector<std::string> notes;
@@ -54,7 +54,8 @@ std::string regionCause(const VerifyReport& r, const OutOfToleranceRegion& regio
 // A region's worst deviation as printed, in um: "+12.34 um", or "-500 um or deeper (beyond the
 // search range)" where the cut reaches the gouge limit (never a clipped number); without the
 // unit ("+12.34", "-500 or deeper (beyond the search range)") for a column headed in um.
-std::string worstDeviationText(const VerifyResult& v, const OutOfToleranceRegion& region, bool unit = true);
+std::string worstDeviationText(const VerifyResult& v, const OutOfToleranceRegion& region,
+                               bool unit = true);
 
 std::string formatVerifyJson(const VerifyReport& r);
 std::string formatVerifyHtml(const VerifyReport& r);
