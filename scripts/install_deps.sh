@@ -5,7 +5,7 @@
 set -euo pipefail
 packages=(
   build-essential cmake pkg-config ninja-build
-  clang libclang-rt-14-dev
+  clang libclang-rt-14-dev clang-format
   libeigen3-dev libboost-dev libcgal-dev libassimp-dev libminizip-dev libvtk9-dev
   libtinyxml2-dev libcli11-dev nlohmann-json3-dev libtbb-dev
   libgtest-dev libgmock-dev libbenchmark-dev libpagmo-dev libx11-dev

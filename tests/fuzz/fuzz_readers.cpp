@@ -1,7 +1,7 @@
 // libFuzzer harnesses for tolver's readers (one binary per reader, chosen by TOLVER_FUZZ_TARGET at
-// compile time; built by the sanitizer build with TOLVER_FUZZ=ON, run by tests/fuzz/run.sh). Each feeds the bytes to a reader as a
-// file's text: an InputError is the expected answer to bad input; anything else (a crash, a
-// sanitizer report, another exception, a hang) is a defect.
+// compile time; built by the sanitizer build with TOLVER_FUZZ=ON, run by tests/fuzz/run.sh). Each
+// feeds the bytes to a reader as a file's text: an InputError is the expected answer to bad input;
+// anything else (a crash, a sanitizer report, another exception, a hang) is a defect.
 #include <unistd.h>
 
 #include <cstddef>
@@ -9,27 +9,40 @@
 #include <cstdio>
 #include <string>
 
-#include "io/program/apt_reader.h"
-#include "io/machine/ballbar_file.h"
-#include "io/program/gcode_reader.h"
 #include "io/common/io_error.h"
+#include "io/machine/ballbar_file.h"
 #include "io/machine/machine_file.h"
-#include "io/program/probe_file.h"
-#include "io/program/setup_file.h"
 #include "io/machine/tolerance_file.h"
 #include "io/machine/zone_file.h"
-#include "io/program/jobs_file.h"
 #include "io/mesh/mesh_file.h"
+#include "io/program/apt_reader.h"
+#include "io/program/gcode_reader.h"
+#include "io/program/jobs_file.h"
+#include "io/program/probe_file.h"
+#include "io/program/setup_file.h"
 
 namespace {
 
 const tolver::Machine& machine() {
   static const tolver::Machine m = [] {
-    tolver::Machine x = tolver::readMachineFile(std::string(TOLVER_SOURCE_DIR) + "/resources/machines/linuxcnc_xyzac_trt.xml");
+    tolver::Machine x = tolver::readMachineFile(std::string(TOLVER_SOURCE_DIR) +
+                                                "/resources/machines/linuxcnc_xyzac_trt.xml");
     x.model.setup.gauge_length = 50;
     return x;
   }();
   return m;
+}
+
+// The test a ball-positions file is matched to: the sample plan's set-ups.
+const tolver::BallbarTest& samplePlan() {
+  static const tolver::BallbarTest t =
+      tolver::readBallbarFile(std::string(TOLVER_SOURCE_DIR) + "/samples/ballbar/plan.csv",
+                              tolver::readMachineFile(std::string(TOLVER_SOURCE_DIR) +
+                                                      "/resources/machines/matsuura_mc760vx.xml")
+                                  .model,
+                              false)
+          .test;
+  return t;
 }
 
 const tolver::Machine& sinumerik() {
@@ -69,7 +82,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     tolver::parseJobsCsv(text, "fuzz/jobs.csv");
 #elif TOLVER_FUZZ_TARGET == 10
     // The mesh loader reads a path (assimp picks the format by extension and content): the first
-    // byte chooses STL, OBJ, PLY or OFF, the rest is the file; then units and repair as verify runs.
+    // byte chooses STL, OBJ, PLY or OFF, the rest is the file; then units and repair as verify
+    // runs.
     if (size < 1) return 0;
     static const char* ext[4] = {".stl", ".obj", ".ply", ".off"};
     const std::string path = "/tmp/tolver-fuzz-" + std::to_string(::getpid()) + ext[data[0] % 4];
@@ -91,6 +105,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       std::fclose(f);
     }
     tolver::readPartMesh(path, tolver::PartImportOptions{});
+#elif TOLVER_FUZZ_TARGET == 12
+    // The ball positions calibrate writes and simulate-ballbar --balls reads.
+    tolver::parseBallPositionsCsv(text, "fuzz_balls.csv", samplePlan());
 #endif
   } catch (const tolver::InputError&) {
   }

@@ -12,7 +12,7 @@ shift || true
 names=("$@")
 # The default list (CI's) leaves out the scene harness (glTF, 3MF) until its open finding is fixed
 # (tests/fuzz/open_findings; docs/validation.md, Fuzzing): name it to run it.
-[ ${#names[@]} -eq 0 ] && names=(apt gcode machine setup ballbar zones tolerances probe jobs mesh)
+[ ${#names[@]} -eq 0 ] && names=(apt gcode machine setup ballbar zones tolerances probe jobs mesh balls)
 out="$here/build/fuzz"
 # As for the sanitized suite (scripts/run_sanitized.sh): leaks are not checked, since the
 # third-party readers (assimp) keep allocations of malformed files they give up on.
@@ -28,7 +28,7 @@ declare -A corpus=([apt]="tests/fixtures/cl samples/*.apt" [gcode]="tests/fixtur
                    [ballbar]="samples/ballbar/*.csv" [zones]="samples/sculptured_zones.csv"
                    [tolerances]="resources/allocation" [probe]="samples/matsuura_probed.csv"
                    [jobs]="samples/verify_jobs.csv" [mesh]="tests/fuzz/mesh_corpus"
-                   [scene]="tests/fuzz/scene_corpus")
+                   [scene]="tests/fuzz/scene_corpus" [balls]="tests/fuzz/balls_corpus")
 # One harness: its corpus seeded, its run, one line in history.tsv; a failure leaves a file.
 run_one() {
   local n="$1"
