@@ -480,72 +480,99 @@ std::vector<std::pair<int, int>> programOperations(const ClProgram& p, const Mac
 // of the rotary axes (each axis's sense reversed, its zero half a turn away, or both) and its
 // nominal sweep measured: a convention under which the cut fits names it, instead of a verdict
 // that blames the program or the machine.
-void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, const ToolSet& tools,
-                           const MotionSampling& sampling, const SweepOptions& sweep,
-                           const Verification& v) {
-  const ClProgram& program = m.program;
-  const MachineModel& model = m.machine.model;
-  if (program.dialect != "G-code" || !gcodeGivesRotaryWords(program, model)) return;
-  if (program.joints.size() != program.path.size()) return;
-  const VerifyResult& r = v.result;
-  const std::vector<std::pair<int, int>> ops = programOperations(program, model, tools);
-  std::vector<int> op_of(program.path.size(), 0);
-  for (size_t k = 0; k < ops.size(); ++k)
-    for (int i = ops[k].first; i <= ops[k].second; ++i) op_of[i] = static_cast<int>(k);
-  std::vector<int> rotary;
-  for (size_t a = 0; a < model.axes.size(); ++a)
-    if (model.axes[a].isRotary()) rotary.push_back(static_cast<int>(a));
-  // Samples cut (deepest) by each operation, and those beyond the gouge limit; index ops.size()
-  // is the whole program.
+class ConventionCheck {
+ public:
+  ConventionCheck(const VerifyInputs& o, const ProgramOnMachine& m, const ToolSet& tools,
+                  const MotionSampling& sampling, const SweepOptions& sweep, const Verification& v)
+      : o_(o),
+        program_(m.program),
+        model_(m.machine.model),
+        tools_(tools),
+        sampling_(sampling),
+        sweep_(sweep),
+        v_(v) {}
+
+  void run() {
+    if (program_.dialect != "G-code" || !gcodeGivesRotaryWords(program_, model_)) return;
+    if (program_.joints.size() != program_.path.size()) return;
+    ops_ = programOperations(program_, model_, tools_);
+    op_of_.assign(program_.path.size(), 0);
+    for (size_t k = 0; k < ops_.size(); ++k)
+      for (int i = ops_[k].first; i <= ops_[k].second; ++i) op_of_[i] = static_cast<int>(k);
+    for (size_t a = 0; a < model_.axes.size(); ++a)
+      if (model_.axes[a].isRotary()) rotary_.push_back(static_cast<int>(a));
+    countAsRead();
+    const std::vector<int> suspects = suspectOperations();
+    if (suspects.empty()) return;
+    makeVariants();
+    after_.resize(variants_.size());
+    for (size_t vi = 0; vi < variants_.size(); ++vi) countUnder(vi);
+    for (int s : suspects) nameConvention(s);
+  }
+
+ private:
+  // Samples cut (deepest) by an operation, and those beyond the gouge limit.
   struct Count {
     size_t machined = 0, beyond = 0;
     double share() const {
       return machined ? static_cast<double>(beyond) / static_cast<double>(machined) : 0.0;
     }
   };
-  std::vector<Count> before(ops.size() + 1);
-  for (size_t i = 0; i < r.machined.size(); ++i) {
-    if (!r.machined[i]) continue;
-    const int k = r.cl_index[i] >= 0 ? op_of[r.cl_index[i]] : -1;
-    for (int idx : {k, static_cast<int>(ops.size())}) {
-      if (idx < 0) continue;
-      ++before[idx].machined;
-      before[idx].beyond += r.total_beyond[i] ? 1 : 0;
-    }
-  }
-  // Suspect: the whole program gouged on 30 % of what it cuts, or an operation that turns a
-  // rotary axis gouged on half of what it cuts.
-  std::vector<int> suspects;
-  const Count& all = before.back();
-  if (all.machined >= 20 && all.share() >= 0.3) suspects.push_back(static_cast<int>(ops.size()));
-  for (size_t k = 0; k < ops.size() && ops.size() > 1; ++k) {
-    bool turned = false;
-    for (int i = ops[k].first; i <= ops[k].second && !turned; ++i)
-      for (int a : rotary) turned = turned || std::abs(program.joints[i][a]) > 1e-6;
-    if (turned && before[k].machined >= 20 && before[k].share() >= 0.5)
-      suspects.push_back(static_cast<int>(k));
-  }
-  if (suspects.empty()) return;
-  // The conventions tried: each rotary axis as in the machine file, its sense reversed, its zero
-  // half a turn away, or both (every combination but the file's own).
+  // One rotary axis's change of convention.
   struct Change {
     int axis;
     bool sense, zero;
   };
-  std::vector<std::vector<Change>> variants;
-  const int combos = static_cast<int>(std::pow(4.0, static_cast<double>(rotary.size())));
-  for (int c = 1; c < combos; ++c) {
-    std::vector<Change> ch;
-    for (size_t k = 0, code = static_cast<size_t>(c); k < rotary.size(); ++k, code /= 4)
-      if (code % 4) ch.push_back({rotary[k], (code % 4 & 1) != 0, (code % 4 & 2) != 0});
-    variants.push_back(ch);
+
+  // The counts under the machine file's convention, per operation; index ops_.size() is the
+  // whole program.
+  void countAsRead() {
+    const VerifyResult& r = v_.result;
+    before_.assign(ops_.size() + 1, Count{});
+    for (size_t i = 0; i < r.machined.size(); ++i) {
+      if (!r.machined[i]) continue;
+      const int k = r.cl_index[i] >= 0 ? op_of_[r.cl_index[i]] : -1;
+      for (int idx : {k, static_cast<int>(ops_.size())}) {
+        if (idx < 0) continue;
+        ++before_[idx].machined;
+        before_[idx].beyond += r.total_beyond[i] ? 1 : 0;
+      }
+    }
   }
-  const double floor_mm = -sweep.gouge_range + 1e-9;
-  // Per variant, the counts of every operation and the whole (empty: it does not read).
-  std::vector<std::vector<Count>> after(variants.size());
-  for (size_t vi = 0; vi < variants.size(); ++vi) {
-    MachineModel mm = model;
-    for (const Change& c : variants[vi]) {
+
+  // Suspect: the whole program gouged on 30 % of what it cuts, or an operation that turns a
+  // rotary axis gouged on half of what it cuts.
+  std::vector<int> suspectOperations() const {
+    std::vector<int> suspects;
+    const Count& all = before_.back();
+    if (all.machined >= 20 && all.share() >= 0.3) suspects.push_back(static_cast<int>(ops_.size()));
+    for (size_t k = 0; k < ops_.size() && ops_.size() > 1; ++k) {
+      bool turned = false;
+      for (int i = ops_[k].first; i <= ops_[k].second && !turned; ++i)
+        for (int a : rotary_) turned = turned || std::abs(program_.joints[i][a]) > 1e-6;
+      if (turned && before_[k].machined >= 20 && before_[k].share() >= 0.5)
+        suspects.push_back(static_cast<int>(k));
+    }
+    return suspects;
+  }
+
+  // The conventions tried: each rotary axis as in the machine file, its sense reversed, its zero
+  // half a turn away, or both (every combination but the file's own).
+  void makeVariants() {
+    const int combos = static_cast<int>(std::pow(4.0, static_cast<double>(rotary_.size())));
+    for (int c = 1; c < combos; ++c) {
+      std::vector<Change> ch;
+      for (size_t k = 0, code = static_cast<size_t>(c); k < rotary_.size(); ++k, code /= 4)
+        if (code % 4) ch.push_back({rotary_[k], (code % 4 & 1) != 0, (code % 4 & 2) != 0});
+      variants_.push_back(ch);
+    }
+  }
+
+  // The program read again and swept under variant vi: the counts of every operation and the
+  // whole (left empty when it does not read).
+  void countUnder(size_t vi) {
+    MachineModel mm = model_;
+    for (const Change& c : variants_[vi]) {
       Axis& ax = mm.axes[c.axis];
       if (c.sense) {
         ax.nc_sign = -ax.nc_sign;
@@ -558,32 +585,35 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
     }
     ClProgram p;
     try {
-      p = loadProgram(o.program, mm);
+      p = loadProgram(o_.program, mm);
     } catch (const InputError&) {
-      continue;  // the program does not read with this convention (a rotary word out of travel)
+      return;  // the program does not read with this convention (a rotary word out of travel)
     }
-    if (p.path.size() != program.path.size()) continue;
+    if (p.path.size() != program_.path.size()) return;
     const ForwardKinematics fk(mm, Eigen::VectorXd::Zero(mm.parameterCount()));
     std::vector<ToolPlacement> nominal, unused;
-    samplePlacements(fk, fk, p.path, p.joints, sampling, &nominal, &unused);
+    samplePlacements(fk, fk, p.path, p.joints, sampling_, &nominal, &unused);
     SweepResult res;
-    sweepSurface(v.samples, tools, nominal, sweep, &res);
-    std::vector<Count>& cnt = after[vi];
-    cnt.assign(ops.size() + 1, Count{});
+    sweepSurface(v_.samples, tools_, nominal, sweep_, &res);
+    const double floor_mm = -sweep_.gouge_range + 1e-9;
+    std::vector<Count>& cnt = after_[vi];
+    cnt.assign(ops_.size() + 1, Count{});
     for (size_t i = 0; i < res.machined.size(); ++i) {
       if (!res.machined[i] || res.placement[i] < 0) continue;
-      const int k = op_of[nominal[res.placement[i]].cl_index];
-      for (int idx : {k, static_cast<int>(ops.size())}) {
+      const int k = op_of_[nominal[res.placement[i]].cl_index];
+      for (int idx : {k, static_cast<int>(ops_.size())}) {
         ++cnt[idx].machined;
         cnt[idx].beyond += res.deviation[i] <= floor_mm ? 1 : 0;
       }
     }
   }
-  auto describe = [&](const std::vector<Change>& change, std::string* fix) {
+
+  // A convention in words ("C turns the other way"), and in *fix what to set in the machine file.
+  std::string describe(const std::vector<Change>& change, std::string* fix) const {
     std::string what;
     for (size_t k = 0; k < change.size(); ++k) {
       const Change& c = change[k];
-      const std::string& name = model.axes[c.axis].name;
+      const std::string& name = model_.axes[c.axis].name;
       what += std::string(k == 0                   ? ""
                           : k + 1 == change.size() ? " and "
                                                    : ", ") +
@@ -596,24 +626,27 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
                 (c.zero ? "the zero of " + name + " (its link rotation)" : "");
     }
     return what;
-  };
-  for (int s : suspects) {
-    const double share0 = before[s].share();
+  }
+
+  // The convention under which suspect s fits best, when it fits (a tenth of the gouges and a
+  // third of the file's): an InputError naming it, and the others that fit as well.
+  void nameConvention(int s) const {
+    const double share0 = before_[s].share();
     double best_share = 1.0;
     int best = -1;
-    for (size_t vi = 0; vi < variants.size(); ++vi) {
-      if (after[vi].empty() || after[vi][s].machined < before[s].machined / 2) continue;
+    for (size_t vi = 0; vi < variants_.size(); ++vi) {
+      if (after_[vi].empty() || after_[vi][s].machined < before_[s].machined / 2) continue;
       // A tie goes to the convention tried first (one axis before two).
-      if (after[vi][s].share() < best_share - 1e-12)
-        best_share = after[vi][s].share(), best = static_cast<int>(vi);
+      if (after_[vi][s].share() < best_share - 1e-12)
+        best_share = after_[vi][s].share(), best = static_cast<int>(vi);
     }
-    if (best < 0 || best_share > 0.1 || best_share > share0 / 3.0) continue;
+    if (best < 0 || best_share > 0.1 || best_share > share0 / 3.0) return;
     std::string fix;
-    const std::string what = describe(variants[best], &fix);
+    const std::string what = describe(variants_[best], &fix);
     // Conventions that fit as well cannot be told apart by this part: named, so the user checks.
     // (Not those that add changes to the best one: the program does not see what they add.)
     auto adds = [&](const std::vector<Change>& a) {
-      for (const Change& b : variants[best]) {
+      for (const Change& b : variants_[best]) {
         bool in = false;
         for (const Change& c : a)
           in = in || (c.axis == b.axis && c.sense == b.sense && c.zero == b.zero);
@@ -622,26 +655,47 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
       return true;
     };
     std::string also;
-    for (size_t vi = 0; vi < variants.size(); ++vi)
-      if (static_cast<int>(vi) != best && !after[vi].empty() &&
-          after[vi][s].machined >= before[s].machined / 2 &&
-          after[vi][s].share() <= best_share + 0.005 && !adds(variants[vi]))
-        also += (also.empty() ? "" : "; or ") + describe(variants[vi], nullptr);
-    const bool whole = s == static_cast<int>(ops.size());
+    for (size_t vi = 0; vi < variants_.size(); ++vi)
+      if (static_cast<int>(vi) != best && !after_[vi].empty() &&
+          after_[vi][s].machined >= before_[s].machined / 2 &&
+          after_[vi][s].share() <= best_share + 0.005 && !adds(variants_[vi]))
+        also += (also.empty() ? "" : "; or ") + describe(variants_[vi], nullptr);
+    const bool whole = s == static_cast<int>(ops_.size());
     const std::string where =
-        whole ? "the program's cut fits the part"
-              : "the operation of lines " + std::to_string(program.path[ops[s].first].line) + "-" +
-                    std::to_string(program.path[ops[s].second].line) + " fits the part it cuts";
+        whole
+            ? "the program's cut fits the part"
+            : "the operation of lines " + std::to_string(program_.path[ops_[s].first].line) + "-" +
+                  std::to_string(program_.path[ops_[s].second].line) + " fits the part it cuts";
     throw InputError(
-        o.machine.machine, 0, 0, "convention",
+        o_.machine.machine, 0, 0, "convention",
         what + " in this program compared with the machine file: with that convention " + where +
-            " (gouged beyond " + formatWith("%.3g", sweep.gouge_range) + " mm on " +
+            " (gouged beyond " + formatWith("%.3g", sweep_.gouge_range) + " mm on " +
             formatWith("%.1f", 100.0 * best_share) + " % of the surface it cuts instead of " +
             formatWith("%.1f", 100.0 * share0) + " %)" +
             (also.empty() ? ""
                           : " (it fits as well if " + also + ": the part cannot tell them apart)") +
             ": set " + fix + " in the machine file to the control's convention");
   }
+
+  const VerifyInputs& o_;
+  const ClProgram& program_;
+  const MachineModel& model_;
+  const ToolSet& tools_;
+  const MotionSampling& sampling_;
+  const SweepOptions& sweep_;
+  const Verification& v_;
+  std::vector<std::pair<int, int>> ops_;  // first and last CL point of each operation
+  std::vector<int> op_of_;                // per CL point, its operation
+  std::vector<int> rotary_;               // the rotary axes
+  std::vector<Count> before_;
+  std::vector<std::vector<Change>> variants_;
+  std::vector<std::vector<Count>> after_;  // per variant
+};
+
+void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, const ToolSet& tools,
+                           const MotionSampling& sampling, const SweepOptions& sweep,
+                           const Verification& v) {
+  ConventionCheck(o, m, tools, sampling, sweep, v).run();
 }
 
 // The 95 % band of the machine's share at each verified sample (the prediction's uncertainty
