@@ -163,73 +163,80 @@ const char* effectUnit(const EffectSpec& spec, double* scale) {
   return angular ? "urad" : "um";
 }
 
-// Long by design: the JSON document's members in order, each a line or two.
+// One added effect in report.json: its values and uncertainties in the effect's unit, its
+// hyperparameter, orders, new information and what it is confounded with.
+json addedEffectJson(const MachineModel& m, const AddedEffect& a) {
+  double k = 1;
+  const char* unit = effectUnit(a.spec, &k);
+  json params = json::object(), unc = json::object();
+  for (size_t j = 0; j < a.parameters.size(); ++j) {
+    const std::string& name = m.parameters[a.parameters[j]].iso_code;
+    params[name] = num(a.values[j] * k);
+    unc[name] = num(a.uncertainty[j] * k);
+  }
+  json e = {{"type", traitsOf(a.spec.type).name},
+            {"axis", a.spec.axis >= 0 ? json(m.axes[a.spec.axis].name) : json(nullptr)},
+            {"component",
+             a.spec.component >= 0 ? json(kComponentNames[a.spec.component]) : json(nullptr)},
+            {"label", a.label},
+            {"unit", unit},
+            {"parameters", params},
+            {"uncertainty", unc}};
+  if (hyperName(a.spec))
+    e["hyperparameter"] = {{"name", hyperName(a.spec)},
+                           {"value", num(a.hyperparameter)},
+                           {"uncertainty", num(a.hyperparameter_uncertainty)}};
+  if (a.spec.type == EffectType::Chebyshev || a.spec.type == EffectType::Harmonics)
+    e["orders"] = {a.spec.first_order, a.spec.last_order};
+  e["new_information"] = a.new_information;
+  json conf = json::array();
+  for (const AddedEffect::Confounding& c : a.confounded_with) {
+    const double f = c.angular ? radToUrad(1.0) : mmToUm(1.0);
+    conf.push_back({{"unknown", c.name},
+                    {"abs_cosine", c.cosine},
+                    {"unit", c.angular ? "urad" : "um"},
+                    {"before", c.before * f},
+                    {"after", c.after * f}});
+  }
+  e["partly_confounded_with"] = conf;
+  e["equivalent"] = a.equivalent;
+  return e;
+}
+
+// One candidate in report.json: its scores and verdict.
+json candidateJson(const MachineModel& base, const CandidateScore& c) {
+  json j = {{"round", c.round},
+            {"type", traitsOf(c.spec.type).name},
+            {"axis", c.spec.axis >= 0 ? json(base.axes[c.spec.axis].name) : json(nullptr)},
+            {"component",
+             c.spec.component >= 0 ? json(kComponentNames[c.spec.component]) : json(nullptr)},
+            {"label", c.label},
+            {"coefficients", c.coefficients},
+            {"search_trials", c.trials},
+            {"rss_before_um2", num(c.rss_before * mmToUm(1.0) * mmToUm(1.0))},
+            {"rss_after_um2", num(c.rss_after * mmToUm(1.0) * mmToUm(1.0))},
+            {"f_statistic", num(c.f_statistic)},
+            {"p_value", num(c.p_value)},
+            {"effective_readings", num(c.effective_readings)},
+            {"delta_ic", num(c.delta_ic)},
+            {"cv_rms_before_um", num(mmToUm(c.cv_rms_before))},
+            {"cv_rms_after_um", num(mmToUm(c.cv_rms_after))},
+            {"new_information", num(c.new_information)},
+            {"condition", c.condition > 0 ? num(c.condition) : json(nullptr)},
+            {"verdict", verdictName(c.verdict)}};
+  if (!c.reason.empty()) j["reason"] = c.reason;
+  if (hyperName(c.spec)) j[hyperName(c.spec)] = num(hyperparameterValue(c.spec));
+  return j;
+}
+
+// The JSON document's members in order.
 std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& test,
                                 const DiagnosisResult& r, const DiagnosisReportInputs& in) {
   const MachineModel& m = r.machine.model;
   json added = json::array();
-  for (const AddedEffect& a : r.added) {
-    double k = 1;
-    const char* unit = effectUnit(a.spec, &k);
-    json params = json::object(), unc = json::object();
-    for (size_t j = 0; j < a.parameters.size(); ++j) {
-      const std::string& name = m.parameters[a.parameters[j]].iso_code;
-      params[name] = num(a.values[j] * k);
-      unc[name] = num(a.uncertainty[j] * k);
-    }
-    json e = {{"type", traitsOf(a.spec.type).name},
-              {"axis", a.spec.axis >= 0 ? json(m.axes[a.spec.axis].name) : json(nullptr)},
-              {"component",
-               a.spec.component >= 0 ? json(kComponentNames[a.spec.component]) : json(nullptr)},
-              {"label", a.label},
-              {"unit", unit},
-              {"parameters", params},
-              {"uncertainty", unc}};
-    if (hyperName(a.spec))
-      e["hyperparameter"] = {{"name", hyperName(a.spec)},
-                             {"value", num(a.hyperparameter)},
-                             {"uncertainty", num(a.hyperparameter_uncertainty)}};
-    if (a.spec.type == EffectType::Chebyshev || a.spec.type == EffectType::Harmonics)
-      e["orders"] = {a.spec.first_order, a.spec.last_order};
-    e["new_information"] = a.new_information;
-    json conf = json::array();
-    for (const AddedEffect::Confounding& c : a.confounded_with) {
-      const double f = c.angular ? radToUrad(1.0) : mmToUm(1.0);
-      conf.push_back({{"unknown", c.name},
-                      {"abs_cosine", c.cosine},
-                      {"unit", c.angular ? "urad" : "um"},
-                      {"before", c.before * f},
-                      {"after", c.after * f}});
-    }
-    e["partly_confounded_with"] = conf;
-    e["equivalent"] = a.equivalent;
-    added.push_back(e);
-  }
+  for (const AddedEffect& a : r.added) added.push_back(addedEffectJson(m, a));
   json cands = json::array();
-  for (const CandidateScore& c : r.candidates) {
-    json j = {{"round", c.round},
-              {"type", traitsOf(c.spec.type).name},
-              {"axis", c.spec.axis >= 0 ? json(base.axes[c.spec.axis].name) : json(nullptr)},
-              {"component",
-               c.spec.component >= 0 ? json(kComponentNames[c.spec.component]) : json(nullptr)},
-              {"label", c.label},
-              {"coefficients", c.coefficients},
-              {"search_trials", c.trials},
-              {"rss_before_um2", num(c.rss_before * mmToUm(1.0) * mmToUm(1.0))},
-              {"rss_after_um2", num(c.rss_after * mmToUm(1.0) * mmToUm(1.0))},
-              {"f_statistic", num(c.f_statistic)},
-              {"p_value", num(c.p_value)},
-              {"effective_readings", num(c.effective_readings)},
-              {"delta_ic", num(c.delta_ic)},
-              {"cv_rms_before_um", num(mmToUm(c.cv_rms_before))},
-              {"cv_rms_after_um", num(mmToUm(c.cv_rms_after))},
-              {"new_information", num(c.new_information)},
-              {"condition", c.condition > 0 ? num(c.condition) : json(nullptr)},
-              {"verdict", verdictName(c.verdict)}};
-    if (!c.reason.empty()) j["reason"] = c.reason;
-    if (hyperName(c.spec)) j[hyperName(c.spec)] = num(hyperparameterValue(c.spec));
-    cands.push_back(j);
-  }
+  for (const CandidateScore& c : r.candidates) cands.push_back(candidateJson(base, c));
   json out = {
       {"tool", "tolver diagnose"},
       {"machine", m.name},
