@@ -19,10 +19,6 @@ void printTimeLine(const MachineModel& model, const TestDesign& design) {
         c.worst, model.axes[c.worst_axis].name.c_str());
 }
 
-void printWarnings(const std::vector<std::string>& warnings) {
-  for (const std::string& w : warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
-}
-
 void printGross(const std::string& readings_file, const BallbarTest& test,
                 const std::vector<GrossReading>& gross, bool kept,
                 const CalibrationResult& with_all, const CalibrationResult& fit,

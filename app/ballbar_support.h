@@ -9,8 +9,6 @@ namespace tolver::app {
 
 // The line on time against the joints (the test's design; its warnings are the run's).
 void printTimeLine(const MachineModel& model, const TestDesign& design);
-// Warnings to stderr, one line each.
-void printWarnings(const std::vector<std::string>& warnings);
 
 // Prints the gross readings (by file line) and, when they were removed, the fit with and without
 // them.

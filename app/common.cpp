@@ -85,6 +85,14 @@ void addProbedOption(CLI::App* cmd, std::string& path) {
                   "errors, the tool taken as preset");
 }
 
+void printWarnings(const std::vector<std::string>& warnings) {
+  for (const std::string& w : warnings) std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+}
+
+void printNotes(const std::vector<std::string>& notes) {
+  for (const std::string& n : notes) std::fprintf(stderr, "tolver: note: %s\n", n.c_str());
+}
+
 ProgressBar::ProgressBar(bool enabled) : enabled_(enabled && isatty(2)) {}
 
 void ProgressBar::operator()(const std::string& what, double f) {

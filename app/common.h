@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <map>
 #include <string>
+#include <vector>
 
 #include "pipeline/command.h"
 #include "pipeline/inputs.h"
@@ -21,6 +22,10 @@ void addProbedOption(CLI::App* cmd, std::string& path);
 std::string optionForField(const std::string& field);
 // Registers the command's spellings with the library (setInputNamer), before it runs.
 void useOptionNames(const std::map<std::string, std::string>& command_spellings = {});
+
+// A run's warnings and notes to stderr, one line each ("tolver: warning: ...", "tolver: note:").
+void printWarnings(const std::vector<std::string>& warnings);
+void printNotes(const std::vector<std::string>& notes);
 
 // A progress bar on stderr when it is a terminal (and enabled).
 class ProgressBar {

@@ -119,8 +119,7 @@ void printCompensation(const CompensationRun& run, const CompensateInputs& o,
         "(lines %s)\n",
         rep.ill_conditioned, o.max_condition, lines(rep.ill_conditioned_lines).c_str());
   for (const std::string& note : run.text.notes) std::printf("  note       %s\n", note.c_str());
-  for (const std::string& w : run.warnings)
-    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
+  printWarnings(run.warnings);
   std::printf(
       "  wrote      %s (compensated program), %s (report), %s (the joints of every point)\n",
       o.output.c_str(), report.c_str(), compensatedJointsPath(report).c_str());

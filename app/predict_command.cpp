@@ -168,9 +168,8 @@ void printPrediction(const PredictionRun& run, const PredictInputs& in) {
               radToUrad(s.rms_axis_angle));
   if (!cal.uncertainty.empty()) printUncertainty(machine, program, cal);
   printRisks(run, in.max_rotary_step_deg);
-  for (const std::string& w : run.warnings)
-    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
-  for (const std::string& n : run.notes) std::fprintf(stderr, "tolver: note: %s\n", n.c_str());
+  printWarnings(run.warnings);
+  printNotes(run.notes);
   std::printf("  wrote      %s (predicted CL), %s (per-point table)\n", run.output.c_str(),
               run.point_table.c_str());
 }

@@ -104,9 +104,8 @@ void printSetupHeader(const SetupInputs& o, const SetupRun& run) {
       s.part_zero_table.x(), s.part_zero_table.y(), s.part_zero_table.z(),
       radToDeg(s.part_rotation), s.gauge_length,
       o.machine.setup.empty() ? " (defaults: no --setup)" : "");
-  for (const std::string& w : run.warnings)
-    std::fprintf(stderr, "tolver: warning: %s\n", w.c_str());
-  for (const std::string& n : run.notes) std::fprintf(stderr, "tolver: note: %s\n", n.c_str());
+  printWarnings(run.warnings);
+  printNotes(run.notes);
 }
 
 // A program posted outside TCP mode: the work offset that centres its joints.

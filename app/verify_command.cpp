@@ -75,7 +75,7 @@ void printVerification(const Verification& v, const VerifyOptions& o, const std:
   }
   if (result.regions.size() > 5)
     std::printf("  ...        %zu regions in all\n", result.regions.size());
-  for (const auto& n : r.notes) std::fprintf(stderr, "tolver: note: %s\n", n.c_str());
+  printNotes(r.notes);
   std::printf("  report     %s (and report.json, deviations.csv, swept_*.ply/.vtp, *.png)\n",
               report.c_str());
 }
