@@ -158,6 +158,34 @@ TEST_F(CompensateCli, ARealNxClsfPieceKeepsItsLinesAndItsFrame) {
   for (size_t i = 578; i < a.size(); ++i) EXPECT_EQ(a[i], b[i + 1]) << i + 1;
 }
 
+// SolidWorks CAM's program with CL drilling cycles (CYCLE/DRILL ... CYCLE/OFF): a hole's
+// motions come from its GOTO and the cycle, so the hole is left as programmed and named; the
+// written program reads back with the same points (before: 6103 instead of 5911, exit 3), and
+// everything else is compensated.
+TEST_F(CompensateCli, ARealSolidWorksClWithDrillingCycles) {
+  const std::string cl = src("tests/fixtures/cl/swcam_basemach.apt");
+  const nlohmann::json j =
+      compensate(src("samples/machines/matsuura_mc760vx_measured.xml"), "--cl", cl,
+                 "--setup " + src("samples/matsuura_setup.txt"), path("swc.apt"));
+  ASSERT_FALSE(j.is_null());
+  EXPECT_EQ(j["points"], 5911);
+  EXPECT_EQ(j["compensated_points"], 5911 - 16 * 4);  // 16 holes, 4 motions each
+  bool named = false;
+  for (const auto& n : j["notes"])
+    named =
+        named || n.get<std::string>().rfind("16 drilling-cycle holes left as programmed", 0) == 0;
+  EXPECT_TRUE(named) << j["notes"];
+  EXPECT_LT(j["after_compensated_points"]["tip_max_um"].get<double>(), 0.01);
+  // The cycles are written as they were: as many CYCLE/ statements, in the same order.
+  auto cycles = [](const std::string& file) {
+    std::vector<std::string> c;
+    for (const std::string& l : linesOf(file))
+      if (l.rfind("CYCLE/", 0) == 0) c.push_back(l);
+    return c;
+  };
+  EXPECT_EQ(cycles(path("swc.apt")), cycles(cl));
+}
+
 TEST_F(CompensateCli, ARealCreoClWithArcs) {
   const std::string m = withErrors("resources/machines/matsuura_mc760vx.xml", 3);
   const nlohmann::json j = compensate(m, "--cl", src("tests/fixtures/cl/creo_profile_milling.ncl"),

@@ -592,6 +592,7 @@ class Parser {
     addMotion(top + cycle_.retract * u, line, st);
     st.first_point = first;
     st.point_count = static_cast<int>(prog_.path.size()) - first;
+    st.cycle = true;
     ++prog_.cycle_holes;
   }
 

@@ -42,6 +42,9 @@ struct AptStatement {
   std::string major;  // upper case ("GOTO", "CIRCLE"); empty for comments and blank lines
   int first_point = -1;
   int point_count = 0;
+  // Its points are the motions of a drilling cycle at a hole (a GOTO while CYCLE/ is in force):
+  // read again, the same text makes them again.
+  bool cycle = false;
 };
 
 // The coordinate system in force for a point: p_w = scale * (T * p_file).

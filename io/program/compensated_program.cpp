@@ -109,8 +109,21 @@ CompensatedProgramText formatCompensatedApt(const ClProgram& program,
     *u = f.T.linear().transpose() * corrected[k].u_w.normalized();
   };
   int expanded = 0;
-  std::vector<int> expanded_lines;
+  std::vector<int> expanded_lines, cycle_lines;
   for (const AptStatement& st : program.statements) {
+    if (st.cycle) {
+      // A hole of a drilling cycle: the control makes its motions from the GOTO and the cycle's
+      // distances, so its compensated points cannot be written as GOTOs (read again, each would
+      // be a hole of its own). Left as programmed, as the G-code writer leaves canned cycles.
+      cycle_lines.push_back(st.first_line);
+      for (int k = st.first_point; k < st.first_point + st.point_count; ++k) out.written[k] = 0;
+      for (int l = st.first_line; l <= st.last_line; ++l) {
+        out.text += program.lines[l - 1];
+        out.text += '\n';
+        out.source_line.push_back(l);
+      }
+      continue;
+    }
     const bool single = st.point_count == 1 && (st.major == "GOTO" || st.major == "FROM");
     if (single) {
       // The numbers of the statement, across its continuation lines, after the '/'.
@@ -183,6 +196,10 @@ CompensatedProgramText formatCompensatedApt(const ClProgram& program,
       out.source_line.push_back(l);
     }
   }
+  if (!cycle_lines.empty())
+    out.notes.push_back(std::to_string(cycle_lines.size()) +
+                        " drilling-cycle holes left as programmed, uncompensated (lines " +
+                        lineList(cycle_lines) + ")");
   if (expanded > 0)
     out.notes.push_back(std::to_string(expanded) + " statements whose points the reader expanded " +
                         "(arcs, curves; lines " + lineList(expanded_lines) +
