@@ -321,69 +321,91 @@ class Reader {
   // listed as ignored. Loops, jumps, swivelling with CYCLE800(...) and frame rotations are
   // refused naming the construct.
   std::string sinumerikBlock(const std::string& upper, const std::vector<int>& col) {
-    // Tokens separated by spaces outside parentheses and strings; "NAME = expr" joined.
-    std::vector<std::string> tok;
-    std::vector<int> tcol;
-    {
-      std::string cur;
-      int depth = 0, start = 0;
-      bool str = false;
-      for (size_t k = 0; k <= upper.size(); ++k) {
-        const char c = k < upper.size() ? upper[k] : ' ';
-        if (c == '"') str = !str;
-        if (!str && c == '(') ++depth;
-        if (!str && c == ')') --depth;
-        if (c == ' ' && depth <= 0 && !str) {
-          if (!cur.empty()) {
-            if (!tok.empty() && (cur[0] == '=' || tok.back().back() == '='))
-              tok.back() += cur;
-            else {
-              tok.push_back(cur);
-              tcol.push_back(start);
-            }
-          }
-          cur.clear();
-          continue;
-        }
-        if (cur.empty()) start = k < col.size() ? col[k] : (col.empty() ? 1 : col.back());
-        cur += c;
-      }
-    }
-    auto refuse = [&](size_t t, const std::string& why) -> void {
-      fail(line_, tcol[t], tok[t].substr(0, tok[t].find_first_of("(=")), why);
-    };
-    std::string out;
-    Eigen::Vector3d orient = Eigen::Vector3d::Zero();  // A3= B3= C3= (0 where not given)
-    bool orient_given = false;
-    int orient_column = 0;
+    SinBlock b = sinTokens(upper, col);
     size_t t = 0;
-    if (t < tok.size() && tok[t][0] == 'N' && tok[t].size() > 1 &&
-        std::isdigit(static_cast<unsigned char>(tok[t][1])))
+    if (t < b.tok.size() && b.tok[t][0] == 'N' && b.tok[t].size() > 1 &&
+        std::isdigit(static_cast<unsigned char>(b.tok[t][1])))
       ++t;  // the block number
-    if (t < tok.size() && tok[t] == "DEF") {
-      // DEF type name[=value], name2...: declared variables, 0 unless given.
-      if (t + 1 >= tok.size()) refuse(t, "DEF without a type");
-      const std::string type = tok[t + 1];
-      static const std::set<std::string> types = {"REAL",   "INT",  "BOOL", "CHAR",
-                                                  "STRING", "AXIS", "FRAME"};
-      if (!types.count(type.substr(0, type.find('[')))) refuse(t + 1, "unknown type in DEF");
-      std::string rest;
-      for (size_t k = t + 2; k < tok.size(); ++k) rest += tok[k];
-      size_t p = 0;
-      while (p < rest.size()) {
-        size_t e = rest.find(',', p);
-        if (e == std::string::npos) e = rest.size();
-        const std::string item = rest.substr(p, e - p);
-        const size_t eq = item.find('=');
-        const std::string name = item.substr(0, eq);
-        double v = 0.0;
-        if (eq != std::string::npos && type != "STRING" && type != "CHAR")
-          v = sinExpression(item.substr(eq + 1), tcol[t]);
-        if (!name.empty()) sin_vars_[name] = v;
-        p = e + 1;
-      }
+    if (t < b.tok.size() && b.tok[t] == "DEF") {
+      sinDeclare(b, t);
       return "";
     }
+    for (; t < b.tok.size(); ++t) t = sinWord(b, t);
+    if (b.orient_given) b.out += orientationWords(b.orient, b.orient_column);
+    return b.out;
+  }
+
+  // One Sinumerik block being rewritten: its tokens with their columns, the ISO words written so
+  // far, and the tool orientation (A3= B3= C3=, 0 where not given) gathered over the block.
+  struct SinBlock {
+    std::vector<std::string> tok;
+    std::vector<int> col;
+    std::string out;
+    Eigen::Vector3d orient = Eigen::Vector3d::Zero();
+    bool orient_given = false;
+    int orient_column = 0;
+  };
+
+  [[noreturn]] void sinRefuse(const SinBlock& b, size_t t, const std::string& why) {
+    fail(line_, b.col[t], b.tok[t].substr(0, b.tok[t].find_first_of("(=")), why);
+  }
+
+  // Tokens separated by spaces outside parentheses and strings; "NAME = expr" joined.
+  static SinBlock sinTokens(const std::string& upper, const std::vector<int>& col) {
+    SinBlock b;
+    std::string cur;
+    int depth = 0, start = 0;
+    bool str = false;
+    for (size_t k = 0; k <= upper.size(); ++k) {
+      const char c = k < upper.size() ? upper[k] : ' ';
+      if (c == '"') str = !str;
+      if (!str && c == '(') ++depth;
+      if (!str && c == ')') --depth;
+      if (c == ' ' && depth <= 0 && !str) {
+        if (!cur.empty()) {
+          if (!b.tok.empty() && (cur[0] == '=' || b.tok.back().back() == '=')) {
+            b.tok.back() += cur;
+          } else {
+            b.tok.push_back(cur);
+            b.col.push_back(start);
+          }
+        }
+        cur.clear();
+        continue;
+      }
+      if (cur.empty()) start = k < col.size() ? col[k] : (col.empty() ? 1 : col.back());
+      cur += c;
+    }
+    return b;
+  }
+
+  // DEF type name[=value], name2...: declared variables, 0 unless given.
+  void sinDeclare(const SinBlock& b, size_t t) {
+    if (t + 1 >= b.tok.size()) sinRefuse(b, t, "DEF without a type");
+    const std::string type = b.tok[t + 1];
+    static const std::set<std::string> types = {"REAL",   "INT",  "BOOL", "CHAR",
+                                                "STRING", "AXIS", "FRAME"};
+    if (!types.count(type.substr(0, type.find('[')))) sinRefuse(b, t + 1, "unknown type in DEF");
+    std::string rest;
+    for (size_t k = t + 2; k < b.tok.size(); ++k) rest += b.tok[k];
+    size_t p = 0;
+    while (p < rest.size()) {
+      size_t e = rest.find(',', p);
+      if (e == std::string::npos) e = rest.size();
+      const std::string item = rest.substr(p, e - p);
+      const size_t eq = item.find('=');
+      const std::string name = item.substr(0, eq);
+      double v = 0.0;
+      if (eq != std::string::npos && type != "STRING" && type != "CHAR")
+        v = sinExpression(item.substr(eq + 1), b.col[t]);
+      if (!name.empty()) sin_vars_[name] = v;
+      p = e + 1;
+    }
+  }
+
+  // Token t of a block: rewritten into ISO words, carried out (frames, tools, cycles), ignored
+  // or refused. Returns the last token it used.
+  size_t sinWord(SinBlock& b, size_t t) {
     static const std::set<std::string> flow = {
         "GOTO",     "GOTOF", "GOTOB",   "GOTOC", "IF",     "ELSE",   "ENDIF", "WHILE",
         "ENDWHILE", "LOOP",  "ENDLOOP", "FOR",   "ENDFOR", "REPEAT", "UNTIL", "CASE",
@@ -396,154 +418,160 @@ class Reader {
         "CUT2D",  "CUT2DF",  "CUT3DC",  "G450",     "G451",    "WAITM", "ORIAXPOS", "ORIEULER",
         "ORIRPY", "ORIPATH", "TOFFOF",  "G93",      "G94",     "G95",   "M27",      "M29",
         "M50",    "M51",     "M65",     "M7",       "M8",      "M9",    "CYCLE832"};
-    for (; t < tok.size(); ++t) {
-      const std::string& k = tok[t];
-      const size_t paren = k.find('(');
-      const size_t eq = k.find('=');
-      const std::string head = k.substr(0, std::min(paren, eq));
-      if (flow.count(head) || k.back() == ':')
-        refuse(t, "Sinumerik " + (k.back() == ':' ? std::string("jump label") : head) +
-                      ": loops, jumps and subprograms are not supported: post the program "
-                      "without them (expanded)");
-      if (head == "MSG" || head == "G710" || head == "G700" || head == "SETMS" ||
-          head == "WORKPIECE" || head == "CYCLE800" || head == "MCALL" || head == "SUPA" ||
-          head == "G500" || head == "TRANS" || head == "ATRANS" || head == "ROT" ||
-          head == "AROT" || head == "T" || head == "D") {
-        // handled below
-      } else if (ignored.count(head)) {
-        ignored_.insert(head);
-        continue;
-      }
-      if (head == "ORIWKS" || head == "ORIMKS") {
-        orimks_ = head == "ORIMKS";
-        continue;
-      }
-      if (head == "MSG" || head == "SETMS" || head == "WORKPIECE") {
-        ignored_.insert(head);
-      } else if (head == "G710" || head == "G700") {
-        out += (head == "G710" ? " G21" : " G20");
-      } else if (head == "SUPA") {
-        out += " G53";
-      } else if (head == "G500") {
-        work_ = "G500";
-      } else if (head == "T") {
-        // T="name" or T=number or T5
-        const std::string v = eq == std::string::npos ? k.substr(1) : k.substr(eq + 1);
-        tool_name_ = v.size() >= 2 && v.front() == '"' ? v.substr(1, v.size() - 2) : v;
-        bool digits = !tool_name_.empty() && tool_name_.size() < 8;
-        for (char ch : tool_name_) digits = digits && std::isdigit(static_cast<unsigned char>(ch));
-        selected_tool_ = digits ? "T" + std::to_string(std::stoi(tool_name_)) : tool_name_;
-      } else if (head == "CYCLE800") {
-        cycle800(k, tcol[t]);
-      } else if (head == "MCALL") {
-        if (t + 1 >= tok.size()) {
-          sin_mcall_ = false;  // MCALL alone ends the modal call
-          cycle_ = false;
-          continue;
-        }
-        sinCycle(tok[t + 1], tcol[t + 1], /*modal=*/true);
-        ++t;
-      } else if (head.rfind("CYCLE", 0) == 0 && paren != std::string::npos) {
-        sinCycle(k, tcol[t], /*modal=*/false);  // once, where the block ends
-        sin_cycle_here_ = true;
-      } else if (head == "TRANS" || head == "ATRANS" || head == "ROT" || head == "AROT") {
-        // The programmable frame (SINUMERIK Fundamentals, "Frames"): TRANS and ROT replace it,
-        // ATRANS and AROT add to it; several angles in one ROT/AROT turn about Z, then Y, then X
-        // (RPY, the control's default); an angle turns the coordinate system counter-clockwise
-        // seen from the positive axis. Program coordinates x map into the settable frame as
-        // frame_ * x.
-        Eigen::Vector3d v = Eigen::Vector3d::Zero();
-        size_t u = t + 1;
-        for (; u < tok.size(); ++u) {
-          const std::string& a = tok[u];
-          const char l = a[0];
-          if (a.rfind("RPL=", 0) == 0 && head.find("ROT") != std::string::npos) {
-            // RPL: a rotation in the working plane, about its normal (G17: Z, G18: Y, G19: X).
-            v[plane_] += sinExpression(a.substr(4), tcol[u]);
-            continue;
-          }
-          if (a.size() < 2 || (l != 'X' && l != 'Y' && l != 'Z')) {
-            if (a.size() >= 2 && std::isalpha(static_cast<unsigned char>(l)) &&
-                (std::isdigit(static_cast<unsigned char>(a[1])) || a[1] == '=' || a[1] == '-'))
-              refuse(u, head + " with " + std::string(1, l) + " (not X, Y or Z) is not supported");
-            break;
-          }
-          const std::string e = a[1] == '=' ? a.substr(2) : a.substr(1);
-          v[l - 'X'] = sinExpression(e, tcol[u]);
-        }
-        Eigen::Isometry3d change = Eigen::Isometry3d::Identity();
-        if (head == "TRANS" || head == "ATRANS") {
-          change.translation() = v * unit_;
-        } else {
-          change.linear() = (Eigen::AngleAxisd(v.z() * kDegToRad, Eigen::Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(v.y() * kDegToRad, Eigen::Vector3d::UnitY()) *
-                             Eigen::AngleAxisd(v.x() * kDegToRad, Eigen::Vector3d::UnitX()))
-                                .toRotationMatrix();
-        }
-        pframe_ = head[0] == 'A' ? Eigen::Isometry3d(pframe_ * change) : change;
-        setFrame(swivel_ * pframe_);
-        t = u - 1;
-      } else if (head == "D") {
-        out += " " + k;
-      } else if (eq != std::string::npos && (paren == std::string::npos || eq < paren)) {
-        const std::string name = k.substr(0, eq);
-        const std::string expr = k.substr(eq + 1);
-        const bool address = name.size() == 1 && std::isalpha(static_cast<unsigned char>(name[0]));
-        if (name == "A3" || name == "B3" || name == "C3") {
-          orient[name[0] - 'A'] = sinExpression(expr, tcol[t]);
-          orient_given = true;
-          if (orient_column == 0) orient_column = tcol[t];
-          continue;
-        }
-        if (name == "CR") {
-          // Circle radius (G2/G3 ... CR=, negative beyond 180 deg): the ISO R form.
-          out += " R[" + sinBrackets(expr) + "]";
-          continue;
-        }
-        static const std::set<std::string> motion_names = {
-            "A2",  "B2",   "C2",  "A4",  "B4",   "C4",   "A5",   "B5",    "C5",   "A6",
-            "B6",  "C6",   "A7",  "B7",  "C7",   "LEAD", "TILT", "THETA", "PO",   "PSI",
-            "XH",  "YH",   "ZH",  "RND", "RNDM", "CHR",  "CHF",  "AP",    "RP",   "AR",
-            "ANG", "TURN", "CIP", "I1",  "J1",   "K1",   "SF",   "OFFN",  "DISC", "DISR"};
-        if (motion_names.count(name))
-          refuse(t, "Sinumerik " + name +
-                        "= (orientation angles, normals, rounding, chamfers, contour offsets, "
-                        "polar or circle-angle programming) changes the path and is not supported");
-        if (address) {
-          out += " " + name + "[" + sinBrackets(expr) + "]";
-        } else {
-          if (name.empty()) refuse(t, "an assignment without a name");
-          // A name the program did not declare (DEF) and not an R parameter is an address with
-          // a meaning on the control (an orientation, path or spindle word): not a variable.
-          bool r_parameter = name.size() > 1 && name[0] == 'R';
-          for (size_t c = 1; c < name.size() && r_parameter; ++c)
-            r_parameter = std::isdigit(static_cast<unsigned char>(name[c])) != 0;
-          if (!sin_vars_.count(name) && !r_parameter)
-            refuse(t, "Sinumerik " + name +
-                          "= is neither a variable the program declares (DEF) nor an "
-                          "R parameter: an address tolver does not carry out");
-          // An assignment: constant expressions only (a value computed from motion is refused
-          // by the expression's own check).
-          sin_vars_[name] = sinExpression(expr, tcol[t]);
-        }
-      } else if (paren != std::string::npos) {
-        refuse(t, "Sinumerik " + head +
-                      "(...) is not supported: a cycle or function tolver does "
-                      "not know (post it as motion)");
-      } else if (std::isalpha(static_cast<unsigned char>(k[0])) && k.size() > 1 &&
-                 std::isalpha(static_cast<unsigned char>(k[1])) && !tcpWordName(k)) {
-        if (k == "TRAORI" || k == "TRAFOOF") {
-          // a TCP name the machine file does not declare: let the ISO path say so
-          out += " " + k;
-        } else {
-          refuse(t, "Sinumerik instruction " + k + " is not supported");
-        }
-      } else {
-        out += " " + k;
-      }
+    static const std::set<std::string> carried = {"MSG",      "G710",  "G700", "SETMS", "WORKPIECE",
+                                                  "CYCLE800", "MCALL", "SUPA", "G500",  "TRANS",
+                                                  "ATRANS",   "ROT",   "AROT", "T",     "D"};
+    const std::string& k = b.tok[t];
+    const size_t paren = k.find('(');
+    const size_t eq = k.find('=');
+    const std::string head = k.substr(0, std::min(paren, eq));
+    if (flow.count(head) || k.back() == ':')
+      sinRefuse(b, t,
+                "Sinumerik " + (k.back() == ':' ? std::string("jump label") : head) +
+                    ": loops, jumps and subprograms are not supported: post the program "
+                    "without them (expanded)");
+    if (!carried.count(head) && ignored.count(head)) {
+      ignored_.insert(head);
+      return t;
     }
-    if (orient_given) out += orientationWords(orient, orient_column);
-    return out;
+    if (head == "ORIWKS" || head == "ORIMKS") {
+      orimks_ = head == "ORIMKS";
+    } else if (head == "MSG" || head == "SETMS" || head == "WORKPIECE") {
+      ignored_.insert(head);
+    } else if (head == "G710" || head == "G700") {
+      b.out += (head == "G710" ? " G21" : " G20");
+    } else if (head == "SUPA") {
+      b.out += " G53";
+    } else if (head == "G500") {
+      work_ = "G500";
+    } else if (head == "T") {
+      sinTool(eq == std::string::npos ? k.substr(1) : k.substr(eq + 1));
+    } else if (head == "CYCLE800") {
+      cycle800(k, b.col[t]);
+    } else if (head == "MCALL") {
+      if (t + 1 >= b.tok.size()) {
+        sin_mcall_ = false;  // MCALL alone ends the modal call
+        cycle_ = false;
+        return t;
+      }
+      sinCycle(b.tok[t + 1], b.col[t + 1], /*modal=*/true);
+      return t + 1;
+    } else if (head.rfind("CYCLE", 0) == 0 && paren != std::string::npos) {
+      sinCycle(k, b.col[t], /*modal=*/false);  // once, where the block ends
+      sin_cycle_here_ = true;
+    } else if (head == "TRANS" || head == "ATRANS" || head == "ROT" || head == "AROT") {
+      return sinFrame(b, t, head);
+    } else if (head == "D") {
+      b.out += " " + k;
+    } else if (eq != std::string::npos && (paren == std::string::npos || eq < paren)) {
+      sinAssign(b, t, k.substr(0, eq), k.substr(eq + 1));
+    } else if (paren != std::string::npos) {
+      sinRefuse(b, t,
+                "Sinumerik " + head +
+                    "(...) is not supported: a cycle or function tolver does "
+                    "not know (post it as motion)");
+    } else if (std::isalpha(static_cast<unsigned char>(k[0])) && k.size() > 1 &&
+               std::isalpha(static_cast<unsigned char>(k[1])) && !tcpWordName(k)) {
+      // A TCP name the machine file does not declare goes on for the ISO path to name it.
+      if (k != "TRAORI" && k != "TRAFOOF")
+        sinRefuse(b, t, "Sinumerik instruction " + k + " is not supported");
+      b.out += " " + k;
+    } else {
+      b.out += " " + k;
+    }
+    return t;
+  }
+
+  // T="name", T=number or T5: the tool selected.
+  void sinTool(const std::string& v) {
+    tool_name_ = v.size() >= 2 && v.front() == '"' ? v.substr(1, v.size() - 2) : v;
+    bool digits = !tool_name_.empty() && tool_name_.size() < 8;
+    for (char ch : tool_name_) digits = digits && std::isdigit(static_cast<unsigned char>(ch));
+    selected_tool_ = digits ? "T" + std::to_string(std::stoi(tool_name_)) : tool_name_;
+  }
+
+  // The programmable frame (SINUMERIK Fundamentals, "Frames"): TRANS and ROT replace it, ATRANS
+  // and AROT add to it; several angles in one ROT/AROT turn about Z, then Y, then X (RPY, the
+  // control's default); an angle turns the coordinate system counter-clockwise seen from the
+  // positive axis. Program coordinates x map into the settable frame as frame_ * x. Returns the
+  // last token of the instruction.
+  size_t sinFrame(const SinBlock& b, size_t t, const std::string& head) {
+    Eigen::Vector3d v = Eigen::Vector3d::Zero();
+    size_t u = t + 1;
+    for (; u < b.tok.size(); ++u) {
+      const std::string& a = b.tok[u];
+      const char l = a[0];
+      if (a.rfind("RPL=", 0) == 0 && head.find("ROT") != std::string::npos) {
+        // RPL: a rotation in the working plane, about its normal (G17: Z, G18: Y, G19: X).
+        v[plane_] += sinExpression(a.substr(4), b.col[u]);
+        continue;
+      }
+      if (a.size() < 2 || (l != 'X' && l != 'Y' && l != 'Z')) {
+        if (a.size() >= 2 && std::isalpha(static_cast<unsigned char>(l)) &&
+            (std::isdigit(static_cast<unsigned char>(a[1])) || a[1] == '=' || a[1] == '-'))
+          sinRefuse(b, u,
+                    head + " with " + std::string(1, l) + " (not X, Y or Z) is not supported");
+        break;
+      }
+      const std::string e = a[1] == '=' ? a.substr(2) : a.substr(1);
+      v[l - 'X'] = sinExpression(e, b.col[u]);
+    }
+    Eigen::Isometry3d change = Eigen::Isometry3d::Identity();
+    if (head == "TRANS" || head == "ATRANS") {
+      change.translation() = v * unit_;
+    } else {
+      change.linear() = (Eigen::AngleAxisd(v.z() * kDegToRad, Eigen::Vector3d::UnitZ()) *
+                         Eigen::AngleAxisd(v.y() * kDegToRad, Eigen::Vector3d::UnitY()) *
+                         Eigen::AngleAxisd(v.x() * kDegToRad, Eigen::Vector3d::UnitX()))
+                            .toRotationMatrix();
+    }
+    pframe_ = head[0] == 'A' ? Eigen::Isometry3d(pframe_ * change) : change;
+    setFrame(swivel_ * pframe_);
+    return u - 1;
+  }
+
+  // NAME=expression: the tool orientation (A3= B3= C3=), a circle radius (CR=), an address with
+  // an expression (X=...), or a variable's value; words that change the path are refused.
+  void sinAssign(SinBlock& b, size_t t, const std::string& name, const std::string& expr) {
+    if (name == "A3" || name == "B3" || name == "C3") {
+      b.orient[name[0] - 'A'] = sinExpression(expr, b.col[t]);
+      b.orient_given = true;
+      if (b.orient_column == 0) b.orient_column = b.col[t];
+      return;
+    }
+    if (name == "CR") {
+      // Circle radius (G2/G3 ... CR=, negative beyond 180 deg): the ISO R form.
+      b.out += " R[" + sinBrackets(expr) + "]";
+      return;
+    }
+    static const std::set<std::string> motion_names = {
+        "A2",  "B2",   "C2",  "A4",  "B4",   "C4",   "A5",   "B5",    "C5",   "A6",
+        "B6",  "C6",   "A7",  "B7",  "C7",   "LEAD", "TILT", "THETA", "PO",   "PSI",
+        "XH",  "YH",   "ZH",  "RND", "RNDM", "CHR",  "CHF",  "AP",    "RP",   "AR",
+        "ANG", "TURN", "CIP", "I1",  "J1",   "K1",   "SF",   "OFFN",  "DISC", "DISR"};
+    if (motion_names.count(name))
+      sinRefuse(b, t,
+                "Sinumerik " + name +
+                    "= (orientation angles, normals, rounding, chamfers, contour offsets, "
+                    "polar or circle-angle programming) changes the path and is not supported");
+    if (name.size() == 1 && std::isalpha(static_cast<unsigned char>(name[0]))) {
+      b.out += " " + name + "[" + sinBrackets(expr) + "]";
+      return;
+    }
+    if (name.empty()) sinRefuse(b, t, "an assignment without a name");
+    // A name the program did not declare (DEF) and not an R parameter is an address with a
+    // meaning on the control (an orientation, path or spindle word): not a variable.
+    bool r_parameter = name.size() > 1 && name[0] == 'R';
+    for (size_t c = 1; c < name.size() && r_parameter; ++c)
+      r_parameter = std::isdigit(static_cast<unsigned char>(name[c])) != 0;
+    if (!sin_vars_.count(name) && !r_parameter)
+      sinRefuse(b, t,
+                "Sinumerik " + name +
+                    "= is neither a variable the program declares (DEF) nor an "
+                    "R parameter: an address tolver does not carry out");
+    // An assignment: constant expressions only (a value computed from motion is refused by the
+    // expression's own check).
+    sin_vars_[name] = sinExpression(expr, b.col[t]);
   }
 
   bool tcpWordName(const std::string& k) const {
