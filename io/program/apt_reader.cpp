@@ -304,186 +304,42 @@ class Parser {
     return major;
   }
 
+  // One statement: its major word decides what it does to the path, the frames, the tools or
+  // the notes; an unknown word is counted and named.
   void apply(const std::string& major, const std::vector<Arg>& args, int line, AptStatement& st) {
     if (major == "GOTO" || major == "FROM") {
-      const auto v = numbers(args, major, false);
-      if (v.size() != 3 && v.size() != 6)
-        fail(line, 0, major,
-             "takes 3 values (x,y,z) or 6 (x,y,z,i,j,k), found " + std::to_string(v.size()));
-      Eigen::Vector3d p(v[0], v[1], v[2]);
-      if (v.size() == 6) {
-        setAxis(Eigen::Vector3d(v[3], v[4], v[5]), line, args[3].column, major);
-        prog_.multiax = true;
-      }
-      if (major == "FROM") {
-        // APT: FROM names where the tool already is (the start, NX's tool change position in
-        // the MCS); it is not a move, and the machine's home need not lie in the part's MCS.
-        const ClFrame& f = prog_.frames[frame_];
-        from_w_ = f.scale * (f.T * p);
-        last_local_ = p;
-        have_point_ = true;
-        if (!from_noted_) {
-          from_noted_ = true;
-          prog_.notes.push_back("FROM at line " + std::to_string(line) +
-                                " is the start position, not a move: not a point of the path");
-        }
-      } else if (cycle_.active) {
-        cycleMotion(p, line, st);
-      } else {
-        addMotion(p, line, st);
-      }
+      goTo(major, args, line, st);
     } else if (major == "GOHOME") {
-      // A return to the start position: posts make it the machine's home move (G28, G53).
-      if (!gohome_noted_) {
-        gohome_noted_ = true;
-        prog_.notes.push_back("GOHOME at line " + std::to_string(line) +
-                              " returns to the start position, which the post makes a home "
-                              "move: not a point of the path");
-      }
+      goHome(line);
     } else if (major == "CYCLE") {
       cycleStatement(args, line);
     } else if (major == "CUTCOM") {
-      // The points stay the tool centre; a post that writes the part contour for the control's
-      // own radius compensation (G41/G42 with the full radius) would be off by the radius.
-      const std::string side = args.empty() ? "" : toUpper(args[0].text);
-      if ((side == "LEFT" || side == "RIGHT") && !cutcom_noted_) {
-        cutcom_noted_ = true;
-        prog_.notes.push_back("CUTCOM/" + side + " at line " + std::to_string(line) +
-                              ": the points are read as the tool centre (the control adds only "
-                              "wear); if the CAM wrote the part contour for the control's radius "
-                              "compensation, the path there is off by the tool radius");
-      }
+      cutcom(args, line);
     } else if (major == "GODLTA") {
-      const auto v = numbers(args, major, false);
-      if (!have_point_) fail(line, 0, major, "incremental move before any position");
-      Eigen::Vector3d p = last_local_;
-      if (v.size() == 3)
-        p += Eigen::Vector3d(v[0], v[1], v[2]);
-      else if (v.size() == 1)
-        p += v[0] * axis_local_;
-      else
-        fail(line, 0, major, "takes 1 or 3 values, found " + std::to_string(v.size()));
-      addMotion(p, line, st);
+      goDelta(args, line, st);
     } else if (major == "TLAXIS") {
-      std::vector<std::string> words;
-      const auto v = numbers(args, major, true, &words);
-      if (v.size() < 3) fail(line, 0, major, "only TLAXIS/i,j,k is supported");
-      setAxis(Eigen::Vector3d(v[0], v[1], v[2]), line, args.empty() ? 0 : args[0].column, major);
+      toolAxis(args, line);
     } else if (major == "MULTAX") {
       prog_.multiax = args.empty() || toUpper(args[0].text) != "OFF";
     } else if (major == "CIRCLE" || major == "MOVARC") {
-      std::vector<std::string> words;
-      const auto v = numbers(args, major, true, &words);
-      if (v.size() < 6)
-        fail(line, 0, major,
-             "needs the centre and axis (6 values), found " + std::to_string(v.size()));
-      if (!have_point_) fail(line, 0, major, "arc before any position");
-      const ClFrame& f = prog_.frames[frame_];
-      Eigen::Vector3d axis(v[3], v[4], v[5]);
-      if (axis.norm() < 1e-12) fail(line, 0, major, "zero-length circle axis");
-      // NX: CIRCLE/...,TIMES,n: n full turns before the end point (a helical ramp).
-      arc_turns_ = 0;
-      for (size_t k = 0; k + 1 < args.size(); ++k)
-        if (toUpper(args[k].text) == "TIMES") {
-          const auto n = parseNumber(args[k + 1].text);
-          if (!n || *n < 0 || *n > 1000 || *n != std::round(*n))
-            fail(args[k + 1].line, args[k + 1].column, major,
-                 "TIMES takes a whole number of turns");
-          arc_turns_ = static_cast<int>(*n);
-          if (!times_noted_) {
-            times_noted_ = true;
-            prog_.notes.push_back("CIRCLE ... TIMES,n (line " + std::to_string(line) +
-                                  ") read as n full turns before the end point");
-          }
-        }
-      arc_centre_w_ = f.scale * (f.T * Eigen::Vector3d(v[0], v[1], v[2]));
-      arc_axis_w_ = f.T.linear() * axis.normalized();
-      arc_line_ = line;
-      arc_pending_ = true;
+      circle(major, args, line);
     } else if (major == "UNITS" || major == "UNIT") {
-      const std::string u = args.empty() ? "" : toUpper(args[0].text);
-      double scale;
-      if (u == "MM" || u == "MILLIMETERS" || u == "MILLIMETRES") {
-        scale = 1.0;
-        prog_.units = "MM";
-      } else if (u == "INCH" || u == "INCHES" || u == "IN") {
-        scale = 25.4;
-        prog_.units = "INCH";
-      } else {
-        fail(line, args.empty() ? 0 : args[0].column, major,
-             "unknown unit '" + (args.empty() ? std::string() : args[0].text) +
-                 "' (expected MM or INCHES)");
-      }
-      prog_.units_declared = true;
-      ClFrame f = prog_.frames[frame_];
-      f.scale = scale;
-      pushFrame(f);
+      units(major, args, line);
     } else if (major == "FEDRAT") {
       std::vector<std::string> words;
-      const auto v = numbers(args, major, true, &words);
-      if (v.empty()) fail(line, 0, major, "no feed rate value");
+      if (numbers(args, major, true, &words).empty()) fail(line, 0, major, "no feed rate value");
     } else if (major == "RAPID") {
       rapid_next_ = true;
     } else if (major == "CUTTER") {
-      const auto v = numbers(args, major, false);
-      if (v.empty() || v.size() > 7)
-        fail(line, 0, major, "takes 1 to 7 values, found " + std::to_string(v.size()));
-      CutterSpec c{"CUTTER", "", v, line};
-      const double s = prog_.frames[frame_].scale;
-      for (size_t k = 0; k < c.values.size(); ++k)
-        if (k != 4 && k != 5) c.values[k] *= s;  // alpha, beta are angles
-      prog_.cutters.push_back(c);
+      cutter(args, line);
     } else if (major == "TLDATA") {
-      std::vector<std::string> words;
-      const auto v = numbers(args, major, true, &words);
-      CutterSpec c{"TLDATA", words.empty() ? "" : words[0], v, line};
-      const double s = prog_.frames[frame_].scale;
-      for (size_t k = 0; k < c.values.size() && k < 3; ++k) c.values[k] *= s;
-      prog_.cutters.push_back(c);
+      toolData(args, line);
     } else if (major == "TRNTYP") {
       trntyp_world_ = !args.empty() && toUpper(args[0].text) == "WORLD";
     } else if (major == "CSYS") {
-      const auto v = numbers(args, major, false);
-      if (v.size() != 12)
-        fail(line, 0, major, "takes 12 values, found " + std::to_string(v.size()));
-      if (trntyp_world_) {
-        // SolidWorks CAM: after TRNTYP/WORLD the points stay in world coordinates and CSYS only
-        // names the tool plane (a 3+2 orientation); recorded, not applied.
-        ++prog_.tool_planes;
-        return;
-      }
-      setFrameFromRows(v, line, major);
+      csys(args, line);
     } else if (major == "MSYS") {
-      const auto v = numbers(args, major, false);
-      if (v.size() != 9) fail(line, 0, major, "takes 9 values, found " + std::to_string(v.size()));
-      Eigen::Vector3d x(v[3], v[4], v[5]), y(v[6], v[7], v[8]);
-      if (x.norm() < 1e-9 || y.norm() < 1e-9 || std::abs(x.normalized().dot(y.normalized())) > 1e-4)
-        fail(line, 0, major, "the x and y axes must be non-zero and perpendicular");
-      x.normalize();
-      y = (y - x * x.dot(y)).normalized();
-      Eigen::Isometry3d abs_T_mcs = Eigen::Isometry3d::Identity();
-      abs_T_mcs.linear() << x, y, x.cross(y);
-      abs_T_mcs.translation() << v[0], v[1], v[2];
-      // NX writes the GOTOs in the MCS the MSYS names. The part frame is the program's first
-      // (main) MCS: a later MSYS is a 3+2 set-up relative to it (opt_.absolute_msys: the CAD's
-      // absolute frame instead, for a part fixtured in it).
-      if (!main_mcs_) main_mcs_ = abs_T_mcs;
-      const Eigen::Isometry3d w_T_mcs =
-          opt_.absolute_msys ? abs_T_mcs : main_mcs_->inverse() * abs_T_mcs;
-      std::vector<double> rows;
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) rows.push_back(w_T_mcs.linear()(r, c));
-        rows.push_back(w_T_mcs.translation()[r]);
-      }
-      setFrameFromRows(rows, line, major);
-      if (!opt_.absolute_msys && !first_msys_noted_) {
-        first_msys_noted_ = true;
-        if ((abs_T_mcs.linear() - Eigen::Matrix3d::Identity()).norm() > 1e-9 ||
-            abs_T_mcs.translation().norm() > 1e-9)
-          prog_.notes.push_back("MSYS at line " + std::to_string(line) +
-                                " is the main MCS: the part frame (--absolute-msys reads the "
-                                "points in the CAD's absolute frame instead)");
-      }
+      msys(args, line);
     } else if (major == "PARTNO") {
       prog_.part_name = args.empty() ? "" : args[0].text;
     } else if (major == "NURBS" || major == "KNOT" || major == "CNTRL") {
@@ -493,12 +349,214 @@ class Parser {
     } else if (major == "FINI" || noOpStatements().count(major) || major.rfind("CSI_", 0) == 0) {
       // recognised; nothing to do for the tool positions
     } else {
-      ++prog_.unknown_count;
-      const std::string name = major.empty() ? "(blank)" : major;
-      if (std::find(prog_.unknown_names.begin(), prog_.unknown_names.end(), name) ==
-          prog_.unknown_names.end())
-        prog_.unknown_names.push_back(name);
+      unknownStatement(major);
     }
+  }
+
+  // GOTO/x,y,z[,i,j,k] (a move, or a cycle's hole) and FROM (the start position).
+  void goTo(const std::string& major, const std::vector<Arg>& args, int line, AptStatement& st) {
+    const auto v = numbers(args, major, false);
+    if (v.size() != 3 && v.size() != 6)
+      fail(line, 0, major,
+           "takes 3 values (x,y,z) or 6 (x,y,z,i,j,k), found " + std::to_string(v.size()));
+    Eigen::Vector3d p(v[0], v[1], v[2]);
+    if (v.size() == 6) {
+      setAxis(Eigen::Vector3d(v[3], v[4], v[5]), line, args[3].column, major);
+      prog_.multiax = true;
+    }
+    if (major == "FROM") {
+      // APT: FROM names where the tool already is (the start, NX's tool change position in
+      // the MCS); it is not a move, and the machine's home need not lie in the part's MCS.
+      const ClFrame& f = prog_.frames[frame_];
+      from_w_ = f.scale * (f.T * p);
+      last_local_ = p;
+      have_point_ = true;
+      if (!from_noted_) {
+        from_noted_ = true;
+        prog_.notes.push_back("FROM at line " + std::to_string(line) +
+                              " is the start position, not a move: not a point of the path");
+      }
+    } else if (cycle_.active) {
+      cycleMotion(p, line, st);
+    } else {
+      addMotion(p, line, st);
+    }
+  }
+
+  // GOHOME: a return to the start position; posts make it the machine's home move (G28, G53).
+  void goHome(int line) {
+    if (!gohome_noted_) {
+      gohome_noted_ = true;
+      prog_.notes.push_back("GOHOME at line " + std::to_string(line) +
+                            " returns to the start position, which the post makes a home "
+                            "move: not a point of the path");
+    }
+  }
+
+  // CUTCOM/LEFT|RIGHT: noted, the points stay the tool centre.
+  void cutcom(const std::vector<Arg>& args, int line) {
+    // The points stay the tool centre; a post that writes the part contour for the control's
+    // own radius compensation (G41/G42 with the full radius) would be off by the radius.
+    const std::string side = args.empty() ? "" : toUpper(args[0].text);
+    if ((side == "LEFT" || side == "RIGHT") && !cutcom_noted_) {
+      cutcom_noted_ = true;
+      prog_.notes.push_back("CUTCOM/" + side + " at line " + std::to_string(line) +
+                            ": the points are read as the tool centre (the control adds only "
+                            "wear); if the CAM wrote the part contour for the control's radius "
+                            "compensation, the path there is off by the tool radius");
+    }
+  }
+
+  // GODLTA/dx,dy,dz or GODLTA/d (along the tool axis): an incremental move.
+  void goDelta(const std::vector<Arg>& args, int line, AptStatement& st) {
+    const auto v = numbers(args, "GODLTA", false);
+    if (!have_point_) fail(line, 0, "GODLTA", "incremental move before any position");
+    Eigen::Vector3d p = last_local_;
+    if (v.size() == 3)
+      p += Eigen::Vector3d(v[0], v[1], v[2]);
+    else if (v.size() == 1)
+      p += v[0] * axis_local_;
+    else
+      fail(line, 0, "GODLTA", "takes 1 or 3 values, found " + std::to_string(v.size()));
+    addMotion(p, line, st);
+  }
+
+  // TLAXIS/i,j,k.
+  void toolAxis(const std::vector<Arg>& args, int line) {
+    std::vector<std::string> words;
+    const auto v = numbers(args, "TLAXIS", true, &words);
+    if (v.size() < 3) fail(line, 0, "TLAXIS", "only TLAXIS/i,j,k is supported");
+    setAxis(Eigen::Vector3d(v[0], v[1], v[2]), line, args.empty() ? 0 : args[0].column, "TLAXIS");
+  }
+
+  // CIRCLE/MOVARC: the centre and axis of the arc the next GOTO ends (TIMES,n: full turns first).
+  void circle(const std::string& major, const std::vector<Arg>& args, int line) {
+    std::vector<std::string> words;
+    const auto v = numbers(args, major, true, &words);
+    if (v.size() < 6)
+      fail(line, 0, major,
+           "needs the centre and axis (6 values), found " + std::to_string(v.size()));
+    if (!have_point_) fail(line, 0, major, "arc before any position");
+    const ClFrame& f = prog_.frames[frame_];
+    Eigen::Vector3d axis(v[3], v[4], v[5]);
+    if (axis.norm() < 1e-12) fail(line, 0, major, "zero-length circle axis");
+    // NX: CIRCLE/...,TIMES,n: n full turns before the end point (a helical ramp).
+    arc_turns_ = 0;
+    for (size_t k = 0; k + 1 < args.size(); ++k)
+      if (toUpper(args[k].text) == "TIMES") {
+        const auto n = parseNumber(args[k + 1].text);
+        if (!n || *n < 0 || *n > 1000 || *n != std::round(*n))
+          fail(args[k + 1].line, args[k + 1].column, major, "TIMES takes a whole number of turns");
+        arc_turns_ = static_cast<int>(*n);
+        if (!times_noted_) {
+          times_noted_ = true;
+          prog_.notes.push_back("CIRCLE ... TIMES,n (line " + std::to_string(line) +
+                                ") read as n full turns before the end point");
+        }
+      }
+    arc_centre_w_ = f.scale * (f.T * Eigen::Vector3d(v[0], v[1], v[2]));
+    arc_axis_w_ = f.T.linear() * axis.normalized();
+    arc_line_ = line;
+    arc_pending_ = true;
+  }
+
+  // UNITS/MM|INCHES: the scale of the points that follow.
+  void units(const std::string& major, const std::vector<Arg>& args, int line) {
+    const std::string u = args.empty() ? "" : toUpper(args[0].text);
+    double scale;
+    if (u == "MM" || u == "MILLIMETERS" || u == "MILLIMETRES") {
+      scale = 1.0;
+      prog_.units = "MM";
+    } else if (u == "INCH" || u == "INCHES" || u == "IN") {
+      scale = 25.4;
+      prog_.units = "INCH";
+    } else {
+      fail(line, args.empty() ? 0 : args[0].column, major,
+           "unknown unit '" + (args.empty() ? std::string() : args[0].text) +
+               "' (expected MM or INCHES)");
+    }
+    prog_.units_declared = true;
+    ClFrame f = prog_.frames[frame_];
+    f.scale = scale;
+    pushFrame(f);
+  }
+
+  // CUTTER/d,r,e,f,alpha,beta,h: the APT cutter, lengths in the current unit.
+  void cutter(const std::vector<Arg>& args, int line) {
+    const auto v = numbers(args, "CUTTER", false);
+    if (v.empty() || v.size() > 7)
+      fail(line, 0, "CUTTER", "takes 1 to 7 values, found " + std::to_string(v.size()));
+    CutterSpec c{"CUTTER", "", v, line};
+    const double s = prog_.frames[frame_].scale;
+    for (size_t k = 0; k < c.values.size(); ++k)
+      if (k != 4 && k != 5) c.values[k] *= s;  // alpha, beta are angles
+    prog_.cutters.push_back(c);
+  }
+
+  // TLDATA/type,values: the tool as CATIA and Creo describe it.
+  void toolData(const std::vector<Arg>& args, int line) {
+    std::vector<std::string> words;
+    const auto v = numbers(args, "TLDATA", true, &words);
+    CutterSpec c{"TLDATA", words.empty() ? "" : words[0], v, line};
+    const double s = prog_.frames[frame_].scale;
+    for (size_t k = 0; k < c.values.size() && k < 3; ++k) c.values[k] *= s;
+    prog_.cutters.push_back(c);
+  }
+
+  // CSYS/12 values: the frame of the points that follow (rows of [R | t]).
+  void csys(const std::vector<Arg>& args, int line) {
+    const auto v = numbers(args, "CSYS", false);
+    if (v.size() != 12) fail(line, 0, "CSYS", "takes 12 values, found " + std::to_string(v.size()));
+    if (trntyp_world_) {
+      // SolidWorks CAM: after TRNTYP/WORLD the points stay in world coordinates and CSYS only
+      // names the tool plane (a 3+2 orientation); recorded, not applied.
+      ++prog_.tool_planes;
+      return;
+    }
+    setFrameFromRows(v, line, "CSYS");
+  }
+
+  // MSYS/origin, x axis, y axis: NX's machine coordinate system of the points that follow.
+  void msys(const std::vector<Arg>& args, int line) {
+    const auto v = numbers(args, "MSYS", false);
+    if (v.size() != 9) fail(line, 0, "MSYS", "takes 9 values, found " + std::to_string(v.size()));
+    Eigen::Vector3d x(v[3], v[4], v[5]), y(v[6], v[7], v[8]);
+    if (x.norm() < 1e-9 || y.norm() < 1e-9 || std::abs(x.normalized().dot(y.normalized())) > 1e-4)
+      fail(line, 0, "MSYS", "the x and y axes must be non-zero and perpendicular");
+    x.normalize();
+    y = (y - x * x.dot(y)).normalized();
+    Eigen::Isometry3d abs_T_mcs = Eigen::Isometry3d::Identity();
+    abs_T_mcs.linear() << x, y, x.cross(y);
+    abs_T_mcs.translation() << v[0], v[1], v[2];
+    // NX writes the GOTOs in the MCS the MSYS names. The part frame is the program's first
+    // (main) MCS: a later MSYS is a 3+2 set-up relative to it (opt_.absolute_msys: the CAD's
+    // absolute frame instead, for a part fixtured in it).
+    if (!main_mcs_) main_mcs_ = abs_T_mcs;
+    const Eigen::Isometry3d w_T_mcs =
+        opt_.absolute_msys ? abs_T_mcs : main_mcs_->inverse() * abs_T_mcs;
+    std::vector<double> rows;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) rows.push_back(w_T_mcs.linear()(r, c));
+      rows.push_back(w_T_mcs.translation()[r]);
+    }
+    setFrameFromRows(rows, line, "MSYS");
+    if (!opt_.absolute_msys && !first_msys_noted_) {
+      first_msys_noted_ = true;
+      if ((abs_T_mcs.linear() - Eigen::Matrix3d::Identity()).norm() > 1e-9 ||
+          abs_T_mcs.translation().norm() > 1e-9)
+        prog_.notes.push_back("MSYS at line " + std::to_string(line) +
+                              " is the main MCS: the part frame (--absolute-msys reads the "
+                              "points in the CAD's absolute frame instead)");
+    }
+  }
+
+  // A statement tolver does not know: counted and named in the notes.
+  void unknownStatement(const std::string& major) {
+    ++prog_.unknown_count;
+    const std::string name = major.empty() ? "(blank)" : major;
+    if (std::find(prog_.unknown_names.begin(), prog_.unknown_names.end(), name) ==
+        prog_.unknown_names.end())
+      prog_.unknown_names.push_back(name);
   }
 
   // CYCLE/<type>, then pairs of a word and its value: FEDTO or DEPTH (depth below the GOTO
