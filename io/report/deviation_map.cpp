@@ -20,6 +20,7 @@
 #include <vtkRenderWindow.h>
 #include <vtkRenderer.h>
 #include <vtkScalarBarActor.h>
+#include <vtkSmartPointer.h>
 #include <vtkTextActor.h>
 #include <vtkTextProperty.h>
 #include <vtkUnsignedCharArray.h>
@@ -104,10 +105,10 @@ std::vector<Eigen::Vector2d> placeCallouts(const std::vector<Eigen::Vector2d>& a
   return out;
 }
 
-// Long by design: one VTK scene built step by step (surface, lookup table, bar, axes, callouts,
-// camera, render); VTK's objects live in this frame until the PNG is written.
-void renderDeviationMap(const std::string& png_path, const DeviationMap& map, const MapView& view,
-                        int width, int height) {
+namespace {
+
+// The part's surface coloured per vertex by the map's colours.
+vtkSmartPointer<vtkPolyData> colouredSurface(const DeviationMap& map) {
   const auto& P = *map.points;
   vtkNew<vtkPoints> pts;
   pts->SetDataTypeToDouble();
@@ -123,31 +124,31 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
   rgb->SetNumberOfTuples(static_cast<vtkIdType>(P.size()));
   for (size_t i = 0; i < P.size(); ++i)
     rgb->SetTypedTuple(static_cast<vtkIdType>(i), map.colours[i].data());
-  vtkNew<vtkPolyData> poly;
+  auto poly = vtkSmartPointer<vtkPolyData>::New();
   poly->SetPoints(pts);
   poly->SetPolys(cells);
   poly->GetPointData()->SetScalars(rgb);
+  return poly;
+}
 
+vtkSmartPointer<vtkActor> surfaceActor(vtkPolyData* poly) {
   vtkNew<vtkPolyDataMapper> mapper;
   mapper->SetInputData(poly);
   mapper->SetColorModeToDirectScalars();
   mapper->ScalarVisibilityOn();
-  vtkNew<vtkActor> actor;
+  auto actor = vtkSmartPointer<vtkActor>::New();
   actor->SetMapper(mapper);
   actor->GetProperty()->SetAmbient(0.35);
   actor->GetProperty()->SetDiffuse(0.65);
   actor->GetProperty()->SetSpecular(0.0);
   actor->GetProperty()->BackfaceCullingOff();
+  return actor;
+}
 
-  vtkNew<vtkRenderer> renderer;
-  renderer->SetBackground(1, 1, 1);
-  renderer->AddActor(actor);
-  renderer->SetViewport(0.0, 0.0, 0.84, 0.93);
-
-  // Camera: looking along view.direction at the whole part, or zoomed onto the focus point.
+// Camera: looking along view.direction at the whole part (a region's view looks along its
+// normal; nothing is cropped), with room for the box's coordinates.
+void aimCamera(vtkRenderer* renderer, const double bounds[6], const MapView& view) {
   vtkCamera* cam = renderer->GetActiveCamera();
-  double bounds[6];
-  poly->GetBounds(bounds);
   const Eigen::Vector3d centre(0.5 * (bounds[0] + bounds[1]), 0.5 * (bounds[2] + bounds[3]),
                                0.5 * (bounds[4] + bounds[5]));
   const Eigen::Vector3d dir = view.direction.normalized();
@@ -157,12 +158,13 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
   cam->SetViewUp(view.up.data());
   cam->ParallelProjectionOn();
   renderer->ResetCamera();
-  // The whole part in every view (a region's view looks along its normal; nothing is cropped),
-  // with room for the box's coordinates.
   cam->Zoom(0.85);
   renderer->ResetCameraClippingRange();
+}
 
-  // Colour bar: the same colour function sampled over the zone and beyond, in um.
+// Colour bar: the same colour function sampled over the zone and beyond, in um, with the limits
+// and the band boundaries beyond them annotated.
+vtkSmartPointer<vtkScalarBarActor> colourBar(const DeviationMap& map) {
   const double lo = map.bar_lower, up = map.bar_upper, half = 0.5 * (up - lo),
                mid = 0.5 * (lo + up);
   const double range_lo = mid - 3.0 * half, range_hi = mid + 3.0 * half;
@@ -177,13 +179,12 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
   }
   lut->SetAnnotation(vtkVariant(mmToUm(lo)), ("lower " + um(lo)).c_str());
   lut->SetAnnotation(vtkVariant(mmToUm(up)), ("upper " + um(up)).c_str());
-  // The band boundaries beyond the limits.
   const double band = 2.0 * half / 4.0;
   for (int k = 1; k <= 3; ++k) {
     lut->SetAnnotation(vtkVariant(mmToUm(up + k * band)), um(up + k * band).c_str());
     lut->SetAnnotation(vtkVariant(mmToUm(lo - k * band)), um(lo - k * band).c_str());
   }
-  vtkNew<vtkScalarBarActor> bar;
+  auto bar = vtkSmartPointer<vtkScalarBarActor>::New();
   bar->SetLookupTable(lut);
   bar->SetTitle("deviation um\n+ material left\n- gouge");
   bar->SetNumberOfLabels(0);
@@ -201,28 +202,13 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
     t->BoldOff();
     t->SetFontSize(14);
   }
-  vtkNew<vtkRenderer> overlay;
-  overlay->SetBackground(1, 1, 1);
-  overlay->SetViewport(0.0, 0.0, 1.0, 1.0);
-  overlay->SetLayer(0);
-  renderer->SetLayer(1);
-  overlay->AddActor2D(bar);
-  vtkNew<vtkTextActor> title;
-  title->SetInput((map.title + "   [" + view.name + " view; grey: not machined]").c_str());
-  title->SetPosition(12, height - 34);
-  title->GetTextProperty()->SetFontSize(18);
-  title->GetTextProperty()->SetColor(0.1, 0.1, 0.1);
-  overlay->AddActor2D(title);
+  return bar;
+}
 
-  auto window = offscreenWindow(width, height);
-  window->SetNumberOfLayers(2);
-  window->AddRenderer(overlay);
-  window->AddRenderer(renderer);
-  renderer->SetBackground(1, 1, 1);
-
-  // The part's bounding box with its coordinates in mm (the axes' directions and a scale).
-  vtkNew<vtkCubeAxesActor> axes;
-  axes->SetBounds(bounds);
+// The part's bounding box with its coordinates in mm (the axes' directions and a scale).
+vtkSmartPointer<vtkCubeAxesActor> boundingAxes(const double bounds[6], vtkCamera* cam) {
+  auto axes = vtkSmartPointer<vtkCubeAxesActor>::New();
+  axes->SetBounds(const_cast<double*>(bounds));
   axes->SetCamera(cam);
   axes->SetXTitle("x mm");
   axes->SetYTitle("y mm");
@@ -239,52 +225,82 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
   axes->GetXAxesLinesProperty()->SetColor(0.3, 0.3, 0.3);
   axes->GetYAxesLinesProperty()->SetColor(0.3, 0.3, 0.3);
   axes->GetZAxesLinesProperty()->SetColor(0.3, 0.3, 0.3);
-  renderer->AddActor(axes);
-  renderer->ResetCameraClippingRange();
+  return axes;
+}
 
-  // Callouts, placed without overlap beside their points.
-  struct Placed {
-    const MapCallout* c;
-    double x, y;  // the attachment in display pixels
-    double lx = 0, ly = 0;
-  };
-  std::vector<Placed> placed;
+// Callouts, placed without overlap beside their points (the camera must be final).
+void addCallouts(vtkRenderer* renderer, const std::vector<MapCallout>& callouts, int width,
+                 int height) {
   std::vector<Eigen::Vector2d> at;
-  for (const auto& c : map.callouts) {
+  for (const auto& c : callouts) {
     renderer->SetWorldPoint(c.p_w.x(), c.p_w.y(), c.p_w.z(), 1.0);
     renderer->WorldToDisplay();
     double dp[3];
     renderer->GetDisplayPoint(dp);
-    placed.push_back({&c, dp[0], dp[1]});
     at.emplace_back(dp[0], dp[1]);
   }
   const double label_w = 0.26 * width, label_h = 0.055 * height;
   const std::vector<Eigen::Vector2d> where =
       placeCallouts(at, label_w, label_h, 0.84 * width, 0.93 * height);
-  for (size_t k = 0; k < placed.size(); ++k) {
-    placed[k].lx = where[k].x();
-    placed[k].ly = where[k].y();
-  }
-  for (const Placed& p : placed) {
+  for (size_t k = 0; k < callouts.size(); ++k) {
     vtkNew<vtkCaptionActor2D> cap;
-    cap->SetCaption(p.c->text.c_str());
-    cap->SetAttachmentPoint(const_cast<double*>(p.c->p_w.data()));
+    cap->SetCaption(callouts[k].text.c_str());
+    cap->SetAttachmentPoint(const_cast<double*>(callouts[k].p_w.data()));
     cap->BorderOn();
     cap->LeaderOn();
     cap->ThreeDimensionalLeaderOff();
-    cap->GetCaptionTextProperty()->SetColor(0.1, 0.1, 0.1);
-    cap->GetCaptionTextProperty()->SetFontSize(13);
-    cap->GetCaptionTextProperty()->BoldOff();
-    cap->GetCaptionTextProperty()->ShadowOff();
-    cap->GetCaptionTextProperty()->ItalicOff();
-    cap->GetCaptionTextProperty()->SetJustificationToLeft();
+    vtkTextProperty* text = cap->GetCaptionTextProperty();
+    text->SetColor(0.1, 0.1, 0.1);
+    text->SetFontSize(13);
+    text->BoldOff();
+    text->ShadowOff();
+    text->ItalicOff();
+    text->SetJustificationToLeft();
     cap->GetProperty()->SetColor(0.1, 0.1, 0.1);
-    cap->SetPosition(p.lx - p.x, p.ly - p.y);
+    cap->SetPosition(where[k].x() - at[k].x(), where[k].y() - at[k].y());
     cap->SetWidth(label_w / width);
     cap->SetHeight(label_h / height);
     cap->GetTextActor()->SetTextScaleModeToNone();
     renderer->AddActor2D(cap);
   }
+}
+
+}  // namespace
+
+// One VTK scene: the coloured surface and its bounding box in a renderer on top of an overlay
+// that holds the colour bar and the title; callouts last, once the camera is set.
+void renderDeviationMap(const std::string& png_path, const DeviationMap& map, const MapView& view,
+                        int width, int height) {
+  const vtkSmartPointer<vtkPolyData> poly = colouredSurface(map);
+  vtkNew<vtkRenderer> renderer;
+  renderer->SetBackground(1, 1, 1);
+  renderer->AddActor(surfaceActor(poly));
+  renderer->SetViewport(0.0, 0.0, 0.84, 0.93);
+  double bounds[6];
+  poly->GetBounds(bounds);
+  aimCamera(renderer, bounds, view);
+
+  vtkNew<vtkRenderer> overlay;
+  overlay->SetBackground(1, 1, 1);
+  overlay->SetViewport(0.0, 0.0, 1.0, 1.0);
+  overlay->SetLayer(0);
+  renderer->SetLayer(1);
+  overlay->AddActor2D(colourBar(map));
+  vtkNew<vtkTextActor> title;
+  title->SetInput((map.title + "   [" + view.name + " view; grey: not machined]").c_str());
+  title->SetPosition(12, height - 34);
+  title->GetTextProperty()->SetFontSize(18);
+  title->GetTextProperty()->SetColor(0.1, 0.1, 0.1);
+  overlay->AddActor2D(title);
+
+  auto window = offscreenWindow(width, height);
+  window->SetNumberOfLayers(2);
+  window->AddRenderer(overlay);
+  window->AddRenderer(renderer);
+
+  renderer->AddActor(boundingAxes(bounds, renderer->GetActiveCamera()));
+  renderer->ResetCameraClippingRange();
+  addCallouts(renderer, map.callouts, width, height);
   window->Render();
   writePng(window, png_path);
 }
