@@ -1396,139 +1396,178 @@ class Reader {
   }
 
   // ---------------------------------------------------------------- execution
+  // The words of a block by letter: X Y Z and rotary letters, I J K R, P Q L H (once each).
+  using AxisWords = std::map<char, const Word*>;
+
+  // What a block's G words ask for beyond the modes they set.
+  struct BlockModes {
+    std::string motion;  // G0-G3 or a drilling cycle, when the block has one
+    bool g53 = false, g28 = false, g10 = false;
+    const Word* g682 = nullptr;
+    const Word* g531 = nullptr;
+  };
+
   std::string execute(const std::vector<Word>& words) {
     executed_block_ = true;
-    std::map<char, const Word*> axis_words;  // X Y Z and rotary letters, I J K R, P Q L H
+    AxisWords axis_words;
     std::vector<const Word*> g, m;
+    sortWords(words, &axis_words, &g, &m);
+    // M words first (subprograms refused, program end, TCP switches, tool number), then the G
+    // words in modal-group order.
+    for (const Word* w : m) mWord(*w, axis_words);
+    BlockModes modes;
+    for (const Word* w : g) gWord(*w, axis_words, &modes);
+    if (modes.g10) return setOffsetByG10(axis_words, g);
+    if (modes.g682 || modes.g531) return tiltedPlane(axis_words, modes.g682, modes.g531);
+    const bool any_axis = checkAxisWords(axis_words);
+    if (!modes.motion.empty()) {
+      if (isDrillingCycle(modes.motion)) {
+        if (!cycle_ || cycle_code_ != modes.motion) ++prog_.cycles;
+        cycle_ = true;
+        cycle_code_ = modes.motion;
+        cycle_initial_z_ = cur_xyz_.z();
+      } else {
+        cycle_ = false;
+      }
+      motion_ = modes.motion;
+    }
+    if (sin_mcall_) cycle_ = true;  // Sinumerik MCALL: modal until MCALL alone, whatever G0/G1
+    if (modes.g28) return homeMove(axis_words);
+    if (modes.g53) return machineMove(axis_words);
+    if (sin_cycle_here_) {  // Sinumerik CYCLE8x(...) without MCALL: once, where the block ends
+      sin_cycle_here_ = false;
+      if (any_axis) move(axis_words, motion_);
+      const std::string c = drillCycle({});
+      cycle_ = sin_mcall_;
+      return c;
+    }
+    if (!any_axis) return "";
+    if (cycle_) return drillCycle(axis_words);
+    return move(axis_words, motion_);
+  }
+
+  // The block's words sorted into G, M and the others by letter; T and (Sinumerik) D words
+  // carried out here, N F S skipped.
+  void sortWords(const std::vector<Word>& words, AxisWords* axis_words, std::vector<const Word*>* g,
+                 std::vector<const Word*>* m) {
     for (const Word& w : words) {
-      if (w.letter == 'G')
-        g.push_back(&w);
-      else if (w.letter == 'M')
-        m.push_back(&w);
-      else if (w.letter == 'D' && model_.control.dialect == "sinumerik") {
+      if (w.letter == 'G') {
+        g->push_back(&w);
+      } else if (w.letter == 'M') {
+        m->push_back(&w);
+      } else if (w.letter == 'D' && model_.control.dialect == "sinumerik") {
         // Sinumerik: D0 switches the tool length offset off, Dn on (cutting edge n).
         tlc_ = w.value != 0.0;
         if (tlc_) h_ = static_cast<int>(w.value);
-      } else if (w.letter == 'N' || w.letter == 'F' || w.letter == 'S' || w.letter == 'D')
+      } else if (w.letter == 'N' || w.letter == 'F' || w.letter == 'S' || w.letter == 'D') {
         continue;
-      else if (w.letter == 'T') {
+      } else if (w.letter == 'T') {
         tool_ = static_cast<int>(w.value);
         selected_tool_ = "T" + std::to_string(tool_);
         // Posts that write no M6 (Fusion for personal use, grbl): the T word changes the tool.
         if (!seen_m6_ && !blockHasM6(words)) toolChange(selected_tool_);
       } else {
-        if (axis_words.count(w.letter))
+        if (axis_words->count(w.letter))
           fail(line_, w.column, std::string(1, w.letter), "the word appears twice in the block");
-        axis_words[w.letter] = &w;
+        (*axis_words)[w.letter] = &w;
       }
     }
-    auto has = [&](char l) { return axis_words.count(l) > 0; };
-    auto val = [&](char l) { return axis_words.at(l)->value; };
+  }
 
-    // M words: subprograms refused, program end, TCP switches, tool number.
-    for (const Word* w : m) {
-      if (w->code == "M98" || w->code == "M99" || w->code == "M97")
-        fail(line_, w->column, w->code,
-             "subprogram calls are not supported: expand them in the post");
-      if (w->code == "M2" || w->code == "M30") {
-        ended_ = true;
-        endModes(w->code);
-      } else if (w->code == "M6") {
-        seen_m6_ = true;
-        toolChange(selected_tool_);
-      } else if (w->code == "M61" && has('Q'))
-        tool_ = static_cast<int>(val('Q'));
-      else if (!tcpWord(w->code) && !harmlessM().count(w->code))
-        ignored_.insert(w->code);
+  void mWord(const Word& w, const AxisWords& axis_words) {
+    if (w.code == "M98" || w.code == "M99" || w.code == "M97")
+      fail(line_, w.column, w.code, "subprogram calls are not supported: expand them in the post");
+    if (w.code == "M2" || w.code == "M30") {
+      ended_ = true;
+      endModes(w.code);
+    } else if (w.code == "M6") {
+      seen_m6_ = true;
+      toolChange(selected_tool_);
+    } else if (w.code == "M61" && axis_words.count('Q')) {
+      tool_ = static_cast<int>(axis_words.at('Q')->value);
+    } else if (!tcpWord(w.code) && !harmlessM().count(w.code)) {
+      ignored_.insert(w.code);
     }
-    // G words in modal-group order.
-    std::string motion_this_block;
-    bool g53 = false, g28 = false, g10 = false;
-    const Word *g682 = nullptr, *g531 = nullptr;
-    for (const Word* w : g) {
-      const std::string& c = w->code;
-      endModes(c);
-      if (tcpWord(c)) {
-        if (c == "G49") tlc_ = false;
-        if (c.rfind("G43", 0) == 0 || c == "G234") {
-          tlc_ = true;
-          if (has('H'))
-            h_ = static_cast<int>(val('H'));
-          else if (h_ == 0)
-            h_ = tool_;
-        }
-        continue;
-      }
-      auto refused = refusedG().find(c);
-      if (refused != refusedG().end() && !isDrillingCycle(c))
-        fail(line_, w->column, c, refused->second);
-      if (c == "G0" || c == "G1" || c == "G2" || c == "G3")
-        motion_this_block = c;
-      else if (isDrillingCycle(c))
-        motion_this_block = c;
-      else if (c == "G17")
-        plane_ = 2;
-      else if (c == "G18")
-        plane_ = 1;
-      else if (c == "G19")
-        plane_ = 0;
-      else if (c == "G20" || c == "G70")
-        setUnits(25.4);
-      else if (c == "G21" || c == "G71")
-        setUnits(1.0);
-      else if (c == "G90")
-        absolute_ = true;
-      else if (c == "G91")
-        absolute_ = false;
-      else if (c == "G90.1")
-        arc_absolute_ = true;
-      else if (c == "G91.1")
-        arc_absolute_ = false;
-      else if (c == "G43") {
+  }
+
+  // One G word: a mode set (plane, units, distance modes, tool length, work offset, cycle
+  // return), a motion or an instruction for the block recorded in modes, or a refusal.
+  void gWord(const Word& w, const AxisWords& axis_words, BlockModes* modes) {
+    const std::string& c = w.code;
+    auto h_word = [&]() -> std::optional<int> {
+      if (!axis_words.count('H')) return std::nullopt;
+      return static_cast<int>(axis_words.at('H')->value);
+    };
+    endModes(c);
+    if (tcpWord(c)) {
+      if (c == "G49") tlc_ = false;
+      if (c.rfind("G43", 0) == 0 || c == "G234") {
         tlc_ = true;
-        h_ = has('H') ? static_cast<int>(val('H')) : tool_;
-      } else if (c == "G49") {  // (a TCP mode that G49 ends was switched off by tcpWord)
-        tlc_ = false;
-      } else if (c == "G53")
-        g53 = true;
-      else if (c == "G28" || c == "G30")
-        g28 = true;
-      else if (c == "G10")
-        g10 = true;
-      else if (c == "G68.2")
-        g682 = w;
-      else if (c == "G53.1")
-        g531 = w;
-      else if (c == "G69") {
-        if (swivel_on_) {
-          swivel_ = Eigen::Isometry3d::Identity();
-          swivel_on_ = false;
-          setFrame(swivel_ * pframe_);
-          cur_xyz_ = currentProgramXyz();
-        }
-      } else if (c == "G80") {
-        motion_ = "G0";
-        cycle_ = false;
-      } else if (c == "G98")
-        cycle_return_initial_ = true;
-      else if (c == "G99")
-        cycle_return_initial_ = false;
-      else if (c == "G54" || c == "G55" || c == "G56" || c == "G57" || c == "G58" || c == "G59" ||
-               c == "G59.1" || c == "G59.2" || c == "G59.3")
-        work_ = c;
-      else if (c == "G54.1") {
-        if (!has('P')) fail(line_, w->column, c, "G54.1 needs a P number");
-        work_ = "G54.1P" + std::to_string(static_cast<int>(val('P')));
-      } else if (!harmlessG().count(c)) {
-        ignored_.insert(c);
+        if (h_word())
+          h_ = *h_word();
+        else if (h_ == 0)
+          h_ = tool_;
       }
+      return;
     }
-    if (g10) return setOffsetByG10(axis_words, g);
-    if (g682 || g531) return tiltedPlane(axis_words, g682, g531);
+    auto refused = refusedG().find(c);
+    if (refused != refusedG().end() && !isDrillingCycle(c))
+      fail(line_, w.column, c, refused->second);
+    if (c == "G0" || c == "G1" || c == "G2" || c == "G3" || isDrillingCycle(c)) {
+      modes->motion = c;
+    } else if (c == "G17" || c == "G18" || c == "G19") {
+      plane_ = c == "G17" ? 2 : (c == "G18" ? 1 : 0);
+    } else if (c == "G20" || c == "G70") {
+      setUnits(25.4);
+    } else if (c == "G21" || c == "G71") {
+      setUnits(1.0);
+    } else if (c == "G90" || c == "G91") {
+      absolute_ = c == "G90";
+    } else if (c == "G90.1" || c == "G91.1") {
+      arc_absolute_ = c == "G90.1";
+    } else if (c == "G43") {
+      tlc_ = true;
+      h_ = h_word() ? *h_word() : tool_;
+    } else if (c == "G49") {  // (a TCP mode that G49 ends was switched off by tcpWord)
+      tlc_ = false;
+    } else if (c == "G53") {
+      modes->g53 = true;
+    } else if (c == "G28" || c == "G30") {
+      modes->g28 = true;
+    } else if (c == "G10") {
+      modes->g10 = true;
+    } else if (c == "G68.2") {
+      modes->g682 = &w;
+    } else if (c == "G53.1") {
+      modes->g531 = &w;
+    } else if (c == "G69") {
+      if (swivel_on_) {
+        swivel_ = Eigen::Isometry3d::Identity();
+        swivel_on_ = false;
+        setFrame(swivel_ * pframe_);
+        cur_xyz_ = currentProgramXyz();
+      }
+    } else if (c == "G80") {
+      motion_ = "G0";
+      cycle_ = false;
+    } else if (c == "G98" || c == "G99") {
+      cycle_return_initial_ = c == "G98";
+    } else if (c == "G54" || c == "G55" || c == "G56" || c == "G57" || c == "G58" || c == "G59" ||
+               c == "G59.1" || c == "G59.2" || c == "G59.3") {
+      work_ = c;
+    } else if (c == "G54.1") {
+      if (!axis_words.count('P')) fail(line_, w.column, c, "G54.1 needs a P number");
+      work_ = "G54.1P" + std::to_string(static_cast<int>(axis_words.at('P')->value));
+    } else if (!harmlessG().count(c)) {
+      ignored_.insert(c);
+    }
+  }
 
-    // Axis words of this block (program units, absolute or incremental).
+  // The block's axis words (program units, absolute or incremental): true when it moves an axis;
+  // an E word, or a rotary letter the machine lacks, is refused; other letters are noted.
+  bool checkAxisWords(const AxisWords& axis_words) {
     bool any_axis = false;
-    for (char l : {'X', 'Y', 'Z'}) any_axis |= has(l);
+    for (char l : {'X', 'Y', 'Z'}) any_axis |= axis_words.count(l) > 0;
     for (const auto& [l, w] : axis_words) {
       // G-code numbers have no exponent: "Y1e5" is Y1 and an E word, which no milling control
       // here reads (Fanuc's E is a thread lead). Refused, so that Y1e5 is never read as Y1.
@@ -1549,30 +1588,7 @@ class Reader {
              std::string("the program commands axis ") + l + " but the machine has " + axisList());
       ignored_.insert(std::string(1, l) + " word");
     }
-    if (!motion_this_block.empty()) {
-      if (isDrillingCycle(motion_this_block)) {
-        if (!cycle_ || cycle_code_ != motion_this_block) ++prog_.cycles;
-        cycle_ = true;
-        cycle_code_ = motion_this_block;
-        cycle_initial_z_ = cur_xyz_.z();
-      } else {
-        cycle_ = false;
-      }
-      motion_ = motion_this_block;
-    }
-    if (sin_mcall_) cycle_ = true;  // Sinumerik MCALL: modal until MCALL alone, whatever G0/G1
-    if (g28) return homeMove(axis_words);
-    if (g53) return machineMove(axis_words);
-    if (sin_cycle_here_) {  // Sinumerik CYCLE8x(...) without MCALL: once, where the block ends
-      sin_cycle_here_ = false;
-      if (any_axis) move(axis_words, motion_);
-      const std::string c = drillCycle({});
-      cycle_ = sin_mcall_;
-      return c;
-    }
-    if (!any_axis) return "";
-    if (cycle_) return drillCycle(axis_words);
-    return move(axis_words, motion_);
+    return any_axis;
   }
 
   // Canned cycles expanded into the motions the control makes along the tool axis (over the
