@@ -423,8 +423,63 @@ bool InverseKinematics::placeToolPoint(const Eigen::Vector3d& b_t, const Eigen::
   return true;
 }
 
-// Long by design: the prediction's hot loop (a few hundred ns per point): its steps are lambdas
-// over one stack frame so that nothing is allocated or copied between them.
+namespace {
+
+// The continuity reference: the previous rotary values (zero at the start), with their cos and
+// sin (given by the caller, or computed here).
+struct RotaryReference {
+  double angle[2] = {0.0, 0.0}, cos[2] = {1.0, 1.0}, sin[2] = {0.0, 0.0};
+};
+
+RotaryReference rotaryReference(const std::vector<int>& rotary, const JointVector* previous,
+                                const double* previous_cos, const double* previous_sin) {
+  RotaryReference ref;
+  for (size_t r = 0; r < rotary.size() && previous; ++r) {
+    const int a = rotary[r];
+    ref.angle[r] = (*previous)[a];
+    if (previous_cos) {
+      ref.cos[r] = previous_cos[a];
+      ref.sin[r] = previous_sin[a];
+    } else {
+      ref.cos[r] = std::cos(ref.angle[r]);
+      ref.sin[r] = std::sin(ref.angle[r]);
+    }
+  }
+  return ref;
+}
+
+// A free angle (a singular orientation) keeps the reference's value.
+void pinFreeAngles(InverseKinematics::RotaryCandidate* cand, int ncand, int nr,
+                   const RotaryReference& ref) {
+  for (int ci = 0; ci < ncand; ++ci)
+    for (int r = 0; r < nr; ++r)
+      if (cand[ci].free[r]) {
+        cand[ci].angle[r] = ref.angle[r];
+        cand[ci].cos[r] = ref.cos[r];
+        cand[ci].sin[r] = ref.sin[r];
+        cand[ci].known[r] = true;
+        cand[ci].free[r] = false;
+      }
+}
+
+// Of two candidates, the one nearer to the reference by chords: the squared chord between the
+// unit vectors (cos, sin) of candidate and reference, summed over the angles, in chord2.
+int nearerByChords(const InverseKinematics::RotaryCandidate* cand, int nr,
+                   const RotaryReference& ref, double chord2[2]) {
+  for (int ci = 0; ci < 2; ++ci) {
+    chord2[ci] = 0.0;
+    for (int r = 0; r < nr; ++r) {
+      const double dc = cand[ci].cos[r] - ref.cos[r], ds = cand[ci].sin[r] - ref.sin[r];
+      chord2[ci] += dc * dc + ds * ds;
+    }
+  }
+  return chord2[1] < chord2[0] ? 1 : 0;
+}
+
+}  // namespace
+
+// The prediction's hot loop (a few hundred ns per point): the candidates' evaluation and
+// attempt are lambdas over one stack frame so that nothing is allocated or copied between them.
 IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vector3d& u_w,
                                     const JointVector* previous, const double* previous_cos,
                                     const double* previous_sin, bool exact_angles) const {
@@ -444,28 +499,11 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
     return sol;
   }
   const int nr = static_cast<int>(rotary_.size());
-  // The reference: the previous rotary values (zero at the start), with their cos and sin.
-  double ref[2] = {0.0, 0.0}, ref_cos[2] = {1.0, 1.0}, ref_sin[2] = {0.0, 0.0};
-  for (int r = 0; r < nr && previous; ++r) {
-    const int a = rotary_[r];
-    ref[r] = (*previous)[a];
-    if (previous_cos) {
-      ref_cos[r] = previous_cos[a];
-      ref_sin[r] = previous_sin[a];
-    } else {
-      ref_cos[r] = std::cos(ref[r]);
-      ref_sin[r] = std::sin(ref[r]);
-    }
-  }
-  for (int ci = 0; ci < ncand; ++ci)  // a free angle keeps the previous value
-    for (int r = 0; r < nr; ++r)
-      if (cand[ci].free[r]) {
-        cand[ci].angle[r] = ref[r];
-        cand[ci].cos[r] = ref_cos[r];
-        cand[ci].sin[r] = ref_sin[r];
-        cand[ci].known[r] = true;
-        cand[ci].free[r] = false;
-      }
+  const RotaryReference reference = rotaryReference(rotary_, previous, previous_cos, previous_sin);
+  const double* ref = reference.angle;
+  const double* ref_cos = reference.cos;
+  const double* ref_sin = reference.sin;
+  pinFreeAngles(cand, ncand, nr, reference);
   auto violation = [&](int axis, double value) {
     if (sol.violated_axis < 0) {
       sol.violated_axis = axis;
@@ -547,13 +585,8 @@ IkSolution InverseKinematics::solve(const Eigen::Vector3d& p_w, const Eigen::Vec
   // bound, the other's angles (two atan2) are needed only if the first fails.
   int order[2] = {0, 1};
   if (ncand == 2) {
-    double chord2[2] = {0.0, 0.0};
-    for (int ci = 0; ci < 2; ++ci)
-      for (int r = 0; r < nr; ++r) {
-        const double dc = cand[ci].cos[r] - ref_cos[r], ds = cand[ci].sin[r] - ref_sin[r];
-        chord2[ci] += dc * dc + ds * ds;
-      }
-    const int first = chord2[1] < chord2[0] ? 1 : 0;
+    double chord2[2];
+    const int first = nearerByChords(cand, nr, reference, chord2);
     evaluate(first);
     if (std::isfinite(cost[first]) &&
         cost[first] * cost[first] < chord2[1 - first] * (1.0 - 1e-9)) {
