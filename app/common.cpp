@@ -4,6 +4,8 @@
 
 #include <cstdio>
 
+#include "io/common/text_util.h"
+
 namespace tolver::app {
 
 namespace {
@@ -38,6 +40,19 @@ std::string optionForField(const std::string& field) {
   for (char& c : option)
     if (c == '_') c = '-';
   return option;
+}
+
+void useFileNumberRule(CLI::App* app) {
+  static const CLI::Validator number(
+      [](std::string& s) -> std::string {
+        if (parseNumber(s)) return "";
+        return "expected a number (digits with one point, an optional sign and exponent), found '" +
+               s + "'";
+      },
+      "NUMBER");
+  for (CLI::Option* o : app->get_options())
+    if (o->get_type_name().find("FLOAT") != std::string::npos) o->check(number);
+  for (CLI::App* sub : app->get_subcommands([](CLI::App*) { return true; })) useFileNumberRule(sub);
 }
 
 void useOptionNames(const std::map<std::string, std::string>& command_spellings) {

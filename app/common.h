@@ -23,6 +23,11 @@ std::string optionForField(const std::string& field);
 // Registers the command's spellings with the library (setInputNamer), before it runs.
 void useOptionNames(const std::map<std::string, std::string>& command_spellings = {});
 
+// Every number option of app and its subcommands read by the files' rule (parseNumber: digits,
+// one point, an optional sign and exponent; no hex, inf or nan), so that a number the files
+// refuse is refused on the command line. Call once the commands are registered.
+void useFileNumberRule(CLI::App* app);
+
 // A run's warnings and notes to stderr, one line each ("tolver: warning: ...", "tolver: note:").
 void printWarnings(const std::vector<std::string>& warnings);
 void printNotes(const std::vector<std::string>& notes);

@@ -7,6 +7,7 @@
 
 #include "core/calibration/calibration.h"
 #include "core/kinematics/inverse_kinematics.h"
+#include "core/numerics/quantities.h"
 #include "core/numerics/units.h"
 #include "core/path/setup_search.h"
 #include "io/common/io_error.h"
@@ -90,8 +91,8 @@ PlanRun planBallbar(const PlanBallbarInputs& in) {
   if (in.lengths_mm.size() == 1) opt.bar_length = in.lengths_mm[0];
   if (in.lengths_mm.size() > 1) opt.bar_lengths = in.lengths_mm;
   for (double l : in.lengths_mm)
-    if (!(l > 0 && l < 1e5))
-      throw FieldError("lengths_mm", "expected bar lengths above 0 and below 1e5 mm");
+    if (const std::string problem = outOfRange(Quantity::BarLength, l); !problem.empty())
+      throw FieldError("lengths_mm", problem);
   if (!in.program.cl.empty() && in.volume)
     throw FieldError("volume", "give a program (" + inputName("cl") + ") or " +
                                    inputName("volume") + ", not both");

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "core/kinematics/forward_kinematics.h"
+#include "core/numerics/quantities.h"
 #include "core/numerics/units.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
@@ -137,8 +138,9 @@ CalibrationRun calibrateMachine(const CalibrateInputs& in) {
 }
 
 CalibrationRun runCalibration(const CalibrateInputs& in) {
-  if (!(in.spindle_tilt_urad >= 0 && in.spindle_tilt_urad <= 1e5))
-    throw FieldError("spindle_tilt_urad", "expected 0 to 1e5 urad");
+  if (const std::string problem = outOfRange(Quantity::SpindleTilt, in.spindle_tilt_urad);
+      !problem.empty())
+    throw FieldError("spindle_tilt_urad", problem);
   CalibrationRun run;
   run.machine = loadMachine(in.machine);
   const MachineModel& m = run.machine.model;

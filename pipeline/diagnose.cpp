@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "core/model/effects.h"
+#include "core/numerics/quantities.h"
 #include "core/numerics/statistics.h"
 #include "core/numerics/units.h"
 #include "core/path/tool_path_prediction.h"
@@ -110,8 +111,9 @@ DiagnosisOutputs diagnosisOutputs(const std::string& machine, const std::string&
 }
 
 DiagnosisRun runDiagnosis(const DiagnoseInputs& in, const std::function<void(int, int)>& progress) {
-  if (!(in.spindle_tilt_urad >= 0 && in.spindle_tilt_urad <= 1e5))
-    throw FieldError("spindle_tilt_urad", "expected 0 to 1e5 urad");
+  if (const std::string problem = outOfRange(Quantity::SpindleTilt, in.spindle_tilt_urad);
+      !problem.empty())
+    throw FieldError("spindle_tilt_urad", problem);
   DiagnosisRun run;
   run.started = std::chrono::steady_clock::now();
   run.machine = loadMachine(in.machine);

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "core/numerics/quantities.h"
 #include "core/numerics/units.h"
 #include "core/path/tool_path_prediction.h"
 #include "io/common/io_error.h"
@@ -24,17 +25,22 @@ Machine loadMachine(const MachineOptions& o) {
   if (!o.setup.empty()) setup = readSetupFile(o.setup);
   if (!o.part_zero.empty()) {
     if (o.part_zero.size() != 3) throw FieldError("part_zero", "expected x,y,z in mm");
+    for (double v : o.part_zero)
+      if (const std::string problem = outOfRange(Quantity::Position, v); !problem.empty())
+        throw FieldError("part_zero", problem);
     setup.part_zero_table = Eigen::Vector3d(o.part_zero[0], o.part_zero[1], o.part_zero[2]);
   }
   if (!o.part_zero.empty()) setup.part_zero_given = true;
   if (!std::isnan(o.part_rotation_deg)) {
+    if (const std::string problem = outOfRange(Quantity::PartRotation, o.part_rotation_deg);
+        !problem.empty())
+      throw FieldError("part_rotation_deg", problem);
     setup.part_rotation = degToRad(o.part_rotation_deg);
     setup.part_rotation_given = true;
   }
   if (!std::isnan(o.gauge_length)) {
-    if (!(o.gauge_length >= 0) || o.gauge_length > 1e5)
-      throw FieldError("gauge_length",
-                       "expected a length from 0 to 1e5 mm, found " + formatNumber(o.gauge_length));
+    if (const std::string problem = outOfRange(Quantity::Length, o.gauge_length); !problem.empty())
+      throw FieldError("gauge_length", problem);
     setup.gauge_length = o.gauge_length;
     setup.gauge_length_given = true;
   }

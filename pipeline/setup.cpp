@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "core/numerics/quantities.h"
 #include "core/numerics/units.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
@@ -152,8 +153,8 @@ SetupRun proposeSetup(const SetupInputs& in, const Progress& progress) {
   if (!(in.rotation_step_deg >= 0 && in.rotation_step_deg <= 180))
     throw FieldError("rotation_step_deg", "expected 0 to 180 deg");
   for (double L : in.gauge_lengths)
-    if (!(L >= 0 && L < 1e5))
-      throw FieldError("gauge_lengths", "expected lengths from 0 to 1e5 mm");
+    if (const std::string problem = outOfRange(Quantity::Length, L); !problem.empty())
+      throw FieldError("gauge_lengths", problem);
   SetupRun run;
   Machine machine = loadMachine(in.machine);
   // The search moves the part frame with the program in it: a posted program's work offsets

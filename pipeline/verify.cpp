@@ -11,6 +11,7 @@
 #include <mutex>
 #include <string>
 
+#include "core/numerics/quantities.h"
 #include "core/numerics/units.h"
 #include "core/path/prediction_uncertainty.h"
 #include "core/path/tool_motion.h"
@@ -82,11 +83,14 @@ std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o) {
   std::vector<ToleranceZone> zones;
   if (!std::isnan(o.tolerance_mm)) {
     // The tolerance is in mm: 30 meant as micrometres would accept gouges of tens of millimetres.
-    try {
-      checkToleranceSize(o.tolerance_mm, o.tolerance_confirmed, "", 0, 0);
-    } catch (const InputError& e) {
-      throw FieldError("tolerance_mm", e.message());
-    }
+    const std::string problem =
+        outOfRange(Quantity::ProfileTolerance, o.tolerance_mm, o.tolerance_confirmed);
+    if (!problem.empty())
+      throw FieldError(
+          "tolerance_mm",
+          problem + (o.tolerance_mm > rangeOf(Quantity::ProfileTolerance).hi
+                         ? ": give " + inputName("tolerance_units") + " mm to confirm it"
+                         : ""));
     if (!std::isnan(o.uz_mm) && !std::isnan(o.asme_u_mm))
       throw FieldError("uz_mm", "give either " + inputName("uz_mm") + " (ISO) or " +
                                     inputName("asme_u_mm") + " (ASME), not both");

@@ -61,7 +61,7 @@ BatchRun verifyBatch(const VerifyInputs& base, const std::string& jobs_file,
   if (base.report_dir.empty()) throw FieldError("report_dir", "give the report directory");
   std::vector<VerifyInputs> jobs;
   std::vector<std::string> names;
-  for (const VerifyJob& j : readJobsFile(jobs_file)) {
+  for (const VerifyJob& j : readJobsFile(jobs_file, base.tolerance_confirmed)) {
     VerifyInputs o = base;
     o.machine.machine = j.machine;
     o.machine.setup = j.setup;

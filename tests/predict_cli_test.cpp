@@ -129,9 +129,17 @@ TEST_F(PredictCli, BadInputsExitWithCode2AndOneLine) {
        "s.txt:1: gauge: unknown key"},
       // The library names the input's field (gauge_length, point_table); the CLI, the option.
       {"--cl " + path("f.apt") + " --gauge-length -3",
-       "error: --gauge-length: expected a length from 0"},
+       "error: --gauge-length: expected a gauge or tool length from 0"},
       {"--cl " + path("f.apt") + " --errors " + path("nodir/t.csv"),
        "error: --errors: " + path("nodir/t.csv")},
+      // One number rule: what the files refuse, the command line refuses (nan, inf, hex).
+      {"--cl " + path("f.apt") + " --gauge-length nan", "error: --gauge-length: expected a number"},
+      {"--cl " + path("f.apt") + " --part-zero 0x10,0,0", "error: --part-zero: expected a number"},
+      {"--cl " + path("f.apt") + " --part-rotation-deg inf",
+       "error: --part-rotation-deg: expected a number"},
+      // One range per quantity: a position the set-up file refuses, the option refuses.
+      {"--cl " + path("f.apt") + " --part-zero 0,2e5,0",
+       "error: --part-zero: expected a position from -100000 to 100000 mm, found 200000"},
   };
   for (const Case& c : cases) {
     const auto r =

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <map>
 
+#include "core/numerics/quantities.h"
 #include "core/numerics/units.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
@@ -67,17 +68,22 @@ BallbarFile parseBallbarCsv(const std::string& text, const std::string& file, co
         throw InputError(file, line, 0, name, "missing value");
       const auto v = parseNumber(cells[k]);
       if (!v) throw InputError(file, line, 0, name, "malformed number '" + cells[k] + "'");
-      // Plausible ranges: lengths within 1e6 mm, angles within 1e4 deg, times from 0
-      // to 1e9 s; nothing absurd reaches the model.
+      // Plausible ranges: lengths and positions as everywhere (core/numerics/quantities.h),
+      // rotary axis values within 1e4 deg (an endless axis), times from 0 to 1e9 s; nothing
+      // absurd reaches the model.
       const bool deg = name.size() > 4 && name.compare(name.size() - 4, 4, "_deg") == 0;
-      const double limit = name == "time_s" ? 1e9 : deg ? 1e4 : 1e6;
-      if (!(std::abs(*v) <= limit) || (name == "time_s" && *v < 0))
-        throw InputError(file, line, k + 1, name,
-                         "'" + cells[k] + "' is out of range (" +
-                             (name == "time_s" ? std::string("0 to 1e9 s")
-                              : deg            ? "within 1e4 deg"
-                                               : "within 1e6 mm") +
-                             ")");
+      const bool mm = name.size() > 3 && name.compare(name.size() - 3, 3, "_mm") == 0;
+      std::string problem;
+      if (name == "length_mm")
+        problem = outOfRange(Quantity::BarLength, *v);
+      else if (mm)
+        problem = outOfRange(Quantity::Position, *v);
+      else if (name == "time_s" && !(*v >= 0 && *v <= 1e9))
+        problem = "expected 0 to 1e9 s";
+      else if (deg && !(std::abs(*v) <= 1e4))
+        problem = "expected within 1e4 deg";
+      if (!problem.empty())
+        throw InputError(file, line, k + 1, name, "'" + cells[k] + "': " + problem);
       return *v;
     };
     BallbarReading r;

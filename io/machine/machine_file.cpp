@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/model/effects.h"
+#include "core/numerics/quantities.h"
 #include "core/numerics/units.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
@@ -522,8 +523,8 @@ class Reader {
     }
     if (u->Attribute("spindle_tilt_urad")) {
       const double v = number(u, "spindle_tilt_urad");
-      if (!(v >= 0 && v <= 1e5))
-        fail(u, "identification_uncertainty.spindle_tilt_urad", "expected 0 to 100000 urad");
+      if (const std::string problem = outOfRange(Quantity::SpindleTilt, v); !problem.empty())
+        fail(u, "identification_uncertainty.spindle_tilt_urad", problem);
       id.spindle_tilt_rad = v * 1e-6;
     }
     for (const XMLElement* c = u->FirstChildElement("covered"); c;

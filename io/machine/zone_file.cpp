@@ -3,6 +3,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/numerics/quantities.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
 
@@ -10,13 +11,12 @@ namespace tolver {
 
 void checkToleranceSize(double tolerance_mm, bool confirmed, const std::string& file, int line,
                         int column) {
-  if (tolerance_mm <= 1.0 || confirmed) return;
+  const std::string problem = outOfRange(Quantity::ProfileTolerance, tolerance_mm, confirmed);
+  if (problem.empty()) return;
   throw InputError(file, line, column, "tolerance",
-                   formatNumber(tolerance_mm) +
-                       " mm is not a plausible profile tolerance: tolerances are in "
-                       "mm (" +
-                       formatNumber(tolerance_mm / 1000.0) + " for " + formatNumber(tolerance_mm) +
-                       " um); give --tolerance-units mm to confirm a tolerance above 1 mm");
+                   problem + (tolerance_mm > rangeOf(Quantity::ProfileTolerance).hi
+                                  ? ": give --tolerance-units mm to confirm it"
+                                  : ""));
 }
 
 std::vector<ToleranceZone> parseZoneCsv(const std::string& text, const std::string& file,

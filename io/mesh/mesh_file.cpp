@@ -26,6 +26,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/numerics/quantities.h"
 #include "io/common/io_error.h"
 
 namespace tolver {
@@ -705,9 +706,10 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
   if (raw.faces.empty()) throw InputError(path, 0, 0, "mesh", "the file holds no triangles");
   for (auto& v : raw.vertices) v = options.w_T_file * (scale * v);
   // A vertex far beyond any part (a corrupt or mis-scaled file) would make the sampling and
-  // the sweeps run for hours: parts lie within 1e5 mm of the part frame.
+  // the sweeps run for hours: parts lie within a position's range of the part frame.
+  const double reach = rangeOf(Quantity::Position).hi;
   for (size_t i = 0; i < raw.vertices.size(); ++i)
-    if (!raw.vertices[i].allFinite() || raw.vertices[i].cwiseAbs().maxCoeff() > 1e5) {
+    if (!raw.vertices[i].allFinite() || raw.vertices[i].cwiseAbs().maxCoeff() > reach) {
       char buf[160];
       std::snprintf(buf, sizeof buf,
                     "vertex %zu at (%.4g, %.4g, %.4g) mm lies beyond 1e5 mm of the part frame "

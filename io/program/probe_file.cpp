@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "core/numerics/quantities.h"
 #include "core/numerics/units.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
@@ -37,12 +38,20 @@ std::vector<ProbedPoint> parseProbeCsv(const std::string& text, const std::strin
                              "'" + c + "' is out of range (within " + formatNumber(limit) + ")");
           return *v;
         };
+        // A value of a quantity with its range (core/numerics/quantities.h), as the options'.
+        auto quantity = [&](const std::string& name, Quantity q) {
+          const double v = number(name, INFINITY);
+          if (const std::string problem = outOfRange(q, v); !problem.empty())
+            throw InputError(file, row.line, row.column(name.c_str()), name, problem);
+          return v;
+        };
         ProbedPoint p;
         p.line = row.line;
         p.q.resize(model.axes.size());
         for (size_t a = 0; a < model.axes.size(); ++a) {
           const Axis& ax = model.axes[a];
-          const double v = number(axisColumn(ax), ax.isRotary() ? 1e4 : 1e6);
+          const double v = ax.isRotary() ? number(axisColumn(ax), 1e4)
+                                         : quantity(axisColumn(ax), Quantity::Position);
           p.q[a] = ax.isRotary() ? degToRad(v) : v;
         }
         if (!row.cell("tram_x_urad").empty() || !row.cell("tram_y_urad").empty()) {
@@ -59,8 +68,9 @@ std::vector<ProbedPoint> parseProbeCsv(const std::string& text, const std::strin
           points.push_back(p);
           return;
         }
-        p.p_w = Eigen::Vector3d(number("part_x_mm", 1e6), number("part_y_mm", 1e6),
-                                number("part_z_mm", 1e6));
+        p.p_w = Eigen::Vector3d(quantity("part_x_mm", Quantity::Position),
+                                quantity("part_y_mm", Quantity::Position),
+                                quantity("part_z_mm", Quantity::Position));
         const int given = !row.cell("part_nx").empty() + !row.cell("part_ny").empty() +
                           !row.cell("part_nz").empty();
         if (given == 3) {
@@ -76,10 +86,7 @@ std::vector<ProbedPoint> parseProbeCsv(const std::string& text, const std::strin
         }
         p.probe_length = model.setup.gauge_length;
         if (!row.cell("probe_length_mm").empty()) {
-          p.probe_length = number("probe_length_mm", 1e4);
-          if (p.probe_length < 0)
-            throw InputError(file, row.line, row.column("probe_length_mm"), "probe_length_mm",
-                             "negative length");
+          p.probe_length = quantity("probe_length_mm", Quantity::Length);
         }
         points.push_back(p);
       });

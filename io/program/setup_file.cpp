@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/numerics/quantities.h"
 #include "core/numerics/units.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
@@ -41,21 +42,26 @@ PartSetup parseSetup(const std::string& text, const std::string& file_name, Part
             file_name, line, 0, key,
             "expected " + std::to_string(n) + " value(s), found " + std::to_string(v.size()));
     };
-    for (double x : v)
-      if (std::abs(x) > 1e6)
-        throw InputError(file_name, line, 0, key, "value beyond 1e6: not a plausible set-up");
+    // Each value in its quantity's range, as the command line's (core/numerics/quantities.h).
+    auto within = [&](Quantity q) {
+      for (double x : v)
+        if (const std::string problem = outOfRange(q, x); !problem.empty())
+          throw InputError(file_name, line, 0, key, problem);
+    };
     const std::string lower = toLower(key);
     if (key == "part_zero_mm") {
       need(3);
+      within(Quantity::Position);
       s.part_zero_table = Eigen::Vector3d(v[0], v[1], v[2]);
       s.part_zero_given = true;
     } else if (key == "part_rotation_deg") {
       need(1);
+      within(Quantity::PartRotation);
       s.part_rotation = degToRad(v[0]);
       s.part_rotation_given = true;
     } else if (key == "gauge_length_mm") {
       need(1);
-      if (v[0] < 0) throw InputError(file_name, line, 0, key, "must not be negative");
+      within(Quantity::Length);
       s.gauge_length = v[0];
       s.gauge_length_given = true;
     } else if (lower.size() > 4 && lower[0] == 'g' &&
@@ -63,6 +69,7 @@ PartSetup parseSetup(const std::string& text, const std::string& file_name, Part
                std::isdigit(static_cast<unsigned char>(lower[1]))) {
       // Work offset: g54_mm, g55_mm, g54.1p1_mm, g59.3_mm = x, y, z (machine coordinates).
       need(3);
+      within(Quantity::Position);
       s.work_offsets[toUpper(lower.substr(0, lower.size() - 3))] =
           Eigen::Vector3d(v[0], v[1], v[2]);
     } else if (lower.rfind("tool_h", 0) == 0 && lower.size() > 9 &&
@@ -73,7 +80,7 @@ PartSetup parseSetup(const std::string& text, const std::string& file_name, Part
       if (!h || *h < 0 || *h != std::floor(*h) || *h > 9999)
         throw InputError(file_name, line, 0, key,
                          "expected tool_hN_mm with a whole number N from 0 to 9999");
-      if (v[0] < 0) throw InputError(file_name, line, 0, key, "must not be negative");
+      within(Quantity::Length);
       s.tool_lengths[static_cast<int>(*h)] = v[0];
     } else {
       throw InputError(file_name, line, 0, key,
