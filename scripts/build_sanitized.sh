@@ -25,7 +25,7 @@ fi
 targets=()
 for t in "$@"; do targets+=(--target "$t"); done
 if [ "$fuzz" = ON ] && [ ${#targets[@]} -eq 0 ]; then
-  for n in apt gcode machine setup ballbar zones tolerances probe jobs mesh balls; do targets+=(--target "fuzz_$n"); done
+  for n in apt gcode machine setup ballbar zones tolerances probe jobs mesh balls scene commands; do targets+=(--target "fuzz_$n"); done
 fi
 mkdir -p "$dir"
 echo "tolver: building with the sanitizers in $dir/ ..." >&2

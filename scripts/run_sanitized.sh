@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The test suite again under AddressSanitizer and UndefinedBehaviorSanitizer (build-asan/, see
-# scripts/build_sanitized.sh), then each libFuzzer harness for 30 s on its corpus (build-fuzz/,
+# scripts/build_sanitized.sh), then each libFuzzer harness for 25 s on its corpus (build-fuzz/,
 # two at a time on 2 cores). CI runs it after scripts/run_tests.sh. Any sanitizer report fails
 # the test that made it; a crash found by a harness fails the run (build/fuzz/<name>/crash-*).
 set -euo pipefail
@@ -8,18 +8,28 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 "$here/scripts/install_deps.sh"
 "$here/scripts/build_sanitized.sh"
 cd "$here/build-asan"
-# Leaks are not checked: the third-party libraries the reports use (VTK, Mesa, fontconfig) keep
-# allocations to the end by design.
-export ASAN_OPTIONS="detect_leaks=0:abort_on_error=1:strict_string_checks=1"
+# Leaks are checked (LeakSanitizer): tests/lsan.supp names the third-party libraries that keep
+# allocations to the end by design (VTK, Mesa, fontconfig, ...); a leak in tolver's code fails the
+# test that made it.
+export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:strict_string_checks=1"
+export LSAN_OPTIONS="suppressions=$here/tests/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 # Left out here (they run in the normal suite): the doc-test and the two statistical campaigns, which repeat code
 # the rest of the suite covers on twenty seeds each and would take a quarter of an hour under
 # the sanitizers.
 campaigns="IndependentDiagnosis.TwentyCleanSeedsInBothSetupStylesAddNothing"
 campaigns+="|Diagnosis.OverTwentyNoiseSeedsCleanDataAddsAtMostOnce"
-# and the doc-test, whose commands the suite's own command tests cover
+# and the doc-test, whose commands the suite's own command tests cover; and three long runs of
+# paths the rest covers under the sanitizers (a statistical check of the diagnosis on independent
+# data twice, and every command run twice for its bytes): 4 minutes of the 2-core budget, which
+# the commands' fuzz harness and LeakSanitizer now use
 campaigns+="|Docs.CommandsRun"
+campaigns+="|IndependentDiagnosis.AnUndeclaredEffectIsNamedAndTheWrittenFilesPredictBetter"
+campaigns+="|IndependentDiagnosis.StructureOutsideTheLibraryIsSaid"
+campaigns+="|Determinism.EveryCommandGivesTheSameBytesTwice"
 ctest --output-on-failure -j"$(nproc)" --timeout 1800 -E "^($campaigns)\$"
 # A fixed libFuzzer seed: the same clone fuzzes the same inputs first (a CI run is repeatable);
 # longer runs (tests/fuzz/run.sh 3600) use random seeds.
-TOLVER_FUZZ_SEED="${TOLVER_FUZZ_SEED:-1}" "$here/tests/fuzz/run.sh" "${TOLVER_FUZZ_SECONDS:-30}"
+# Every harness, the commands' one as built in build-asan above (tests/CMakeLists.txt), 25 s each.
+TOLVER_FUZZ_COMMANDS_FROM_ASAN=1 TOLVER_FUZZ_SEED="${TOLVER_FUZZ_SEED:-1}" \
+  "$here/tests/fuzz/run.sh" "${TOLVER_FUZZ_SECONDS:-25}"

@@ -33,6 +33,7 @@
 #include "core/numerics/units.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "io/report/offscreen_display.h"
 #include "io/report/png_plot.h"
 
 namespace tolver {
@@ -302,6 +303,7 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
   renderer->ResetCameraClippingRange();
   addCallouts(renderer, map.callouts, width, height);
   window->Render();
+  keepGlDriverLoaded();
   writePng(window, png_path);
 }
 

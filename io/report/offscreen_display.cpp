@@ -1,6 +1,8 @@
 #include "io/report/offscreen_display.h"
 
 #include <X11/Xlib.h>
+#include <dlfcn.h>
+#include <link.h>
 #include <poll.h>
 #include <signal.h>
 #include <sys/prctl.h>
@@ -24,6 +26,13 @@ void stopServer() {
     waitpid(g_server, nullptr, 0);
     g_server = -1;
   }
+}
+
+int pinDriver(struct dl_phdr_info* info, size_t, void*) {
+  const std::string name = info->dlpi_name ? info->dlpi_name : "";
+  if (name.size() > 7 && name.compare(name.size() - 7, 7, "_dri.so") == 0)
+    dlopen(name.c_str(), RTLD_NOW | RTLD_NOLOAD | RTLD_NODELETE);  // the handle is kept for good
+  return 0;
 }
 
 bool canOpen(const char* display) {
@@ -125,6 +134,15 @@ bool ensureDisplay(std::string* message) {
   }
   if (state < 0 && message) *message = failure;
   return state > 0;
+}
+
+void keepGlDriverLoaded() {
+  static std::mutex m;
+  static bool pinned = false;
+  std::lock_guard<std::mutex> lock(m);
+  if (pinned) return;
+  dl_iterate_phdr(pinDriver, nullptr);
+  pinned = true;
 }
 
 }  // namespace tolver

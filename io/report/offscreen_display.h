@@ -11,4 +11,10 @@ namespace tolver {
 // Thread-safe; starts at most one server per process.
 bool ensureDisplay(std::string* message);
 
+// Keeps the GL driver Mesa loaded for the first render (its *_dri.so) in the process: Mesa's libGL
+// unloads it when a context ends and loads it again for the next image (each map, chart and view
+// of a report), and LeakSanitizer cannot name the allocations of a library that is gone. Call
+// after a render; pins each driver once (RTLD_NODELETE).
+void keepGlDriverLoaded();
+
 }  // namespace tolver

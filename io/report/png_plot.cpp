@@ -112,6 +112,7 @@ void writeScatterPng(const std::string& path, const ScatterChart& c) {
     x->SetRange(c.x_min, c.x_max);
   }
   view->GetRenderWindow()->Render();
+  keepGlDriverLoaded();
   vtkNew<vtkWindowToImageFilter> grab;
   grab->SetInput(view->GetRenderWindow());
   grab->Update();

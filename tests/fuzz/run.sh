@@ -10,29 +10,38 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
 seconds="${1:-30}"
 shift || true
 names=("$@")
-# The default list (CI's) leaves out the scene harness (glTF, 3MF) until its open finding is fixed
-# (tests/fuzz/open_findings; docs/validation.md, Fuzzing): name it to run it.
-[ ${#names[@]} -eq 0 ] && names=(apt gcode machine setup ballbar zones tolerances probe jobs mesh balls)
+# The default list (CI's): every harness, the part scenes (glTF, 3MF) and the commands included.
+[ ${#names[@]} -eq 0 ] && names=(apt gcode machine setup ballbar zones tolerances probe jobs mesh balls scene commands)
 out="$here/build/fuzz"
-# As for the sanitized suite (scripts/run_sanitized.sh): leaks are not checked, since the
-# third-party readers (assimp) keep allocations of malformed files they give up on.
-export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=0:abort_on_error=1:strict_string_checks=1}"
+# As for the sanitized suite (scripts/run_sanitized.sh): leaks are checked (LeakSanitizer), with
+# tests/lsan.supp naming the third-party libraries that keep allocations to the end by design.
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}"
+export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$here/tests/lsan.supp:print_suppressions=0}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 mkdir -p "$out"
+# TOLVER_FUZZ_COMMANDS_FROM_ASAN=1 (CI): the commands harness as built in build-asan (its own file
+# instrumented for coverage, the libraries not; tests/CMakeLists.txt), not built again here.
+from_asan="${TOLVER_FUZZ_COMMANDS_FROM_ASAN:-}"
 targets=()
-for n in "${names[@]}"; do targets+=("fuzz_$n"); done
+for n in "${names[@]}"; do
+  [ "$n" = commands ] && [ -n "$from_asan" ] && continue
+  targets+=("fuzz_$n")
+done
 # TOLVER_FUZZ_NO_BUILD=1: use the harnesses as built (several runs at once share build-fuzz/).
-[ -n "${TOLVER_FUZZ_NO_BUILD:-}" ] || "$here/scripts/build_sanitized.sh" --fuzz "${targets[@]}"
+[ -n "${TOLVER_FUZZ_NO_BUILD:-}" ] || [ ${#targets[@]} -eq 0 ] ||
+  "$here/scripts/build_sanitized.sh" --fuzz "${targets[@]}"
 declare -A corpus=([apt]="tests/fixtures/cl samples/*.apt" [gcode]="tests/fixtures/gcode tests/fuzz/gcode_corpus samples/gcode/*.nc samples/gcode/*.ngc"
                    [machine]="resources/machines tests/fixtures/machines samples/machines" [setup]="samples/*setup*.txt samples/gcode/*.txt"
                    [ballbar]="samples/ballbar/*.csv" [zones]="samples/sculptured_zones.csv"
                    [tolerances]="resources/allocation" [probe]="samples/matsuura_probed.csv"
                    [jobs]="samples/verify_jobs.csv" [mesh]="tests/fuzz/mesh_corpus"
-                   [scene]="tests/fuzz/scene_corpus" [balls]="tests/fuzz/balls_corpus")
+                   [scene]="tests/fuzz/scene_corpus" [balls]="tests/fuzz/balls_corpus"
+                   [commands]="tests/fuzz/commands_corpus")
 # One harness: its corpus seeded, its run, one line in history.tsv; a failure leaves a file.
 run_one() {
   local n="$1"
   local bin="$here/build-fuzz/tests/fuzz/fuzz_$n"
+  [ "$n" = commands ] && [ -n "$from_asan" ] && bin="$here/build-asan/tests/fuzz_commands"
   mkdir -p "$out/$n/corpus"
   for c in ${corpus[$n]}; do
     if [ -d "$here/$c" ]; then cp -n "$here/$c"/* "$out/$n/corpus/" 2>/dev/null || true;
