@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <random>
 #include <string>
 
 #include "io/common/io_error.h"
@@ -235,6 +237,25 @@ TEST(Numbers, OneRuleForEveryReaderExponentsReadNoHexInfOrNan) {
        {"nan", "inf", "-inf", "0x10", "0x1p3", "1_0", "1,5", "1e", "e5", "--1", "1e400", ""})
     EXPECT_FALSE(parseNumber(bad).has_value()) << bad;
   EXPECT_EQ(*parseNumber("1e5"), 100000.0);
+  EXPECT_EQ(*parseNumber("+1.5"), 1.5);
+  EXPECT_EQ(*parseNumber("1e-400"), 0.0);  // below a double: 0, as strtod reads it
+  EXPECT_FALSE(parseNumber("+-1").has_value());
+  EXPECT_FALSE(parseNumber("-+1").has_value());
+  // The same double as strtod (correctly rounded both) on random decimal texts.
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> digit(0, 9), length(1, 19), exponent(-30, 30), coin(0, 1);
+  for (int k = 0; k < 100000; ++k) {
+    std::string t = coin(rng) ? "-" : "";
+    const int n = length(rng), point = std::uniform_int_distribution<int>(0, n)(rng);
+    for (int d = 0; d < n; ++d) {
+      if (d == point) t += '.';
+      t += static_cast<char>('0' + digit(rng));
+    }
+    if (coin(rng)) t += "e" + std::to_string(exponent(rng));
+    const auto v = parseNumber(t);
+    ASSERT_TRUE(v.has_value()) << t;
+    EXPECT_EQ(*v, std::strtod(t.c_str(), nullptr)) << t;
+  }
 }
 
 }  // namespace

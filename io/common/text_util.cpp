@@ -1,10 +1,12 @@
 #include "io/common/text_util.h"
 
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 
 #include "io/common/io_error.h"
 
@@ -109,11 +111,46 @@ std::optional<double> parseNumber(std::string_view token) {
     }
   }
   if (!digit) return std::nullopt;
-  std::string s(token);
-  char* end = nullptr;
-  const double v = std::strtod(s.c_str(), &end);
-  if (end != s.c_str() + s.size() || !std::isfinite(v)) return std::nullopt;
+  // std::from_chars: correctly rounded as strtod, without a copy or the locale; it takes no '+'.
+  const std::string_view body = token[0] == '+' ? token.substr(1) : token;
+  if (body.size() < token.size() && (body.empty() || body[0] == '+' || body[0] == '-'))
+    return std::nullopt;
+  double v = 0.0;
+  const auto r = std::from_chars(body.data(), body.data() + body.size(), v);
+  if (r.ptr != body.data() + body.size()) return std::nullopt;
+  if (r.ec == std::errc::result_out_of_range) {
+    // Beyond a double (refused) or below its smallest (strtod's rounding to 0 or a subnormal).
+    const std::string s(body);
+    v = std::strtod(s.c_str(), nullptr);
+  } else if (r.ec != std::errc()) {
+    return std::nullopt;
+  }
+  if (!std::isfinite(v)) return std::nullopt;
   return v;
+}
+
+LineBuilder& LineBuilder::text(std::string_view s) {
+  const size_t n = std::min(s.size(), static_cast<size_t>(buf_ + sizeof buf_ - at_));
+  std::memcpy(at_, s.data(), n);
+  at_ += n;
+  return *this;
+}
+
+LineBuilder& LineBuilder::fixed(double v, int decimals) {
+  const auto r = std::to_chars(at_, buf_ + sizeof buf_, v, std::chars_format::fixed, decimals);
+  if (r.ec == std::errc()) at_ = r.ptr;
+  return *this;
+}
+
+LineBuilder& LineBuilder::integer(long long v) {
+  const auto r = std::to_chars(at_, buf_ + sizeof buf_, v);
+  if (r.ec == std::errc()) at_ = r.ptr;
+  return *this;
+}
+
+LineBuilder& LineBuilder::character(char c) {
+  if (at_ < buf_ + sizeof buf_) *at_++ = c;
+  return *this;
 }
 
 std::string formatNumber(double v) {

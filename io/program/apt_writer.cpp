@@ -3,6 +3,8 @@
 #include <cassert>
 #include <cstdio>
 
+#include "io/common/text_util.h"
+
 namespace tolver {
 
 std::string formatPredictedApt(const ClProgram& program, const std::vector<ClPoint>& predicted,
@@ -17,7 +19,17 @@ void writePredictedApt(TextOut& out, const ClProgram& program,
                        const std::vector<std::string>& header) {
   assert(predicted.size() == program.path.size());
   for (const std::string& h : header) out += "$$ " + h + "\n";
-  char buf[256];
+  LineBuilder line;
+  // GOTO/x,y,z,i,j,k: the point with `decimals`, the unit axis with 9.
+  auto gotoLine = [&](const char* word, const Eigen::Vector3d& p, const Eigen::Vector3d& u,
+                      int decimals) {
+    line.clear();
+    line.text(word).character('/').fixed(p.x(), decimals).character(',');
+    line.fixed(p.y(), decimals).character(',').fixed(p.z(), decimals).character(',');
+    line.fixed(u.x(), 9).character(',').fixed(u.y(), 9).character(',').fixed(u.z(), 9);
+    line.character('\n');
+    out += line.view();
+  };
   if (program.dialect == "G-code") {
     // A G-code program becomes plain CL data in mm, in the part frame: one GOTO per point,
     // RAPID before positioning moves, the source line in a comment.
@@ -29,9 +41,7 @@ void writePredictedApt(TextOut& out, const ClProgram& program,
         if (program.path[k].rapid) out += "RAPID\n";
         const Eigen::Vector3d& p = predicted[k].p_w;
         const Eigen::Vector3d u = predicted[k].u_w.normalized();
-        std::snprintf(buf, sizeof buf, "GOTO/%.6f,%.6f,%.6f,%.9f,%.9f,%.9f\n", p.x(), p.y(), p.z(),
-                      u.x(), u.y(), u.z());
-        out += buf;
+        gotoLine("GOTO", p, u, 6);
       }
     }
     out += "FINI\n";
@@ -51,11 +61,7 @@ void writePredictedApt(TextOut& out, const ClProgram& program,
         const ClFrame& f = program.frames[program.point_frame[k]];
         const Eigen::Vector3d p = f.T.inverse(Eigen::Isometry) * (predicted[k].p_w / f.scale);
         const Eigen::Vector3d u = f.T.linear().transpose() * predicted[k].u_w.normalized();
-        std::snprintf(
-            buf, sizeof buf,
-            inch ? "%s/%.8f,%.8f,%.8f,%.9f,%.9f,%.9f\n" : "%s/%.6f,%.6f,%.6f,%.9f,%.9f,%.9f\n",
-            word, p.x(), p.y(), p.z(), u.x(), u.y(), u.z());
-        out += buf;
+        gotoLine(word, p, u, inch ? 8 : 6);
       }
       continue;
     }

@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include "core/numerics/units.h"
+#include "io/common/text_util.h"
 
 namespace tolver {
 
@@ -32,25 +33,28 @@ void writePointTable(TextOut& out, const MachineModel& model, const std::vector<
                        "cov_xx_um2,cov_xy_um2,cov_xz_um2,cov_yy_um2,cov_yz_um2,cov_zz_um2\n"
                      : "\n";
   char buf[512];
+  LineBuilder line;  // the line's numbers as printf's %.Nf writes them (io/common/text_util.h)
+  auto put = [&](double v, int decimals) { line.character(',').fixed(v, decimals); };
   for (size_t i = 0; i < nominal.size(); ++i) {
     const ClPoint& c = nominal[i];
     const PredictedPoint& p = predicted[i];
-    std::snprintf(buf, sizeof buf, "%zu,%d,%d,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f", i, c.line,
-                  c.rapid ? 1 : 0, c.p_w.x(), c.p_w.y(), c.p_w.z(), c.u_w.x(), c.u_w.y(),
-                  c.u_w.z());
-    out += buf;
-    for (size_t a = 0; a < model.axes.size(); ++a) {
-      const double v = model.axes[a].isRotary() ? radToDeg(p.q[a]) : p.q[a];
-      std::snprintf(buf, sizeof buf, ",%.6f", v);
-      out += buf;
-    }
+    line.clear();
+    line.integer(static_cast<long long>(i)).character(',').integer(c.line).character(',');
+    line.integer(c.rapid ? 1 : 0);
+    for (int k = 0; k < 3; ++k) put(c.p_w[k], 6);
+    for (int k = 0; k < 3; ++k) put(c.u_w[k], 9);
+    for (size_t a = 0; a < model.axes.size(); ++a)
+      put(model.axes[a].isRotary() ? radToDeg(p.q[a]) : p.q[a], 6);
     const Eigen::Vector3d d = p.deviation_w * mmToUm(1.0);
-    std::snprintf(buf, sizeof buf,
-                  ",%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%d",
-                  p.p_pred_w.x(), p.p_pred_w.y(), p.p_pred_w.z(), p.u_pred_w.x(), p.u_pred_w.y(),
-                  p.u_pred_w.z(), d.x(), d.y(), d.z(), d.norm(), mmToUm(p.along_axis),
-                  mmToUm(p.across_axis), radToUrad(p.axis_angle), p.singular ? 1 : 0);
-    out += buf;
+    for (int k = 0; k < 3; ++k) put(p.p_pred_w[k], 6);
+    for (int k = 0; k < 3; ++k) put(p.u_pred_w[k], 9);
+    for (int k = 0; k < 3; ++k) put(d[k], 4);
+    put(d.norm(), 4);
+    put(mmToUm(p.along_axis), 4);
+    put(mmToUm(p.across_axis), 4);
+    put(radToUrad(p.axis_angle), 4);
+    line.character(',').integer(p.singular ? 1 : 0);
+    out += line.view();
     if (uncertainty) {
       const PoseUncertainty& u = (*uncertainty)[i];
       std::snprintf(buf, sizeof buf, ",%.4f,%.4f,%.4f,%d", mmToUm(u.tip),
