@@ -267,6 +267,11 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
                          : "after the set-up a shop measures (part probed, tool preset), which the "
                            "calibration cannot see";
   for (const std::string& w : setupWarnings(run.machine.model)) run.warnings.push_back(w);
+  // A nominal machine file: nothing to compensate; said, so that an unchanged program is not
+  // taken for a compensated one.
+  bool no_errors = false;
+  const std::string errors = machineErrorsStatement(run.machine, &no_errors);
+  if (no_errors) run.warnings.push_back(errors + "; the program is written as it came");
   const ClProgram& program = run.program;
   run.orientation = program.dialect == "G-code" ? gcodeGivesRotaryWords(program, run.machine.model)
                                                 : program.multiax;

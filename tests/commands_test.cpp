@@ -214,6 +214,21 @@ TEST_F(Commands, CompensateWritesACloserProgram) {
             0.05 * run.compensation->report.before.tip_max_um);
   EXPECT_EQ(run.report, path("c.json"));
   EXPECT_TRUE(fs::exists(run.joints));
+  // The machine's own errors are said: none named on the measured machine; on the nominal one,
+  // that there is nothing to compensate and the program is written as it came.
+  auto saysNoErrors = [](const CompensateRun& r) {
+    for (const std::string& w : r.compensation->warnings)
+      if (w.find("carries no errors") != std::string::npos &&
+          w.find("written as it came") != std::string::npos)
+        return true;
+    return false;
+  };
+  EXPECT_FALSE(saysNoErrors(run));
+  in.machine = machine(kNominal);
+  in.output = path("n.apt");
+  const CompensateRun nominal = compensateProgram(in);
+  ASSERT_TRUE(nominal.compensation);
+  EXPECT_TRUE(saysNoErrors(nominal));
   in.output.clear();
   EXPECT_EQ(refusedField([&] { compensateProgram(in); }), "output");
 }
