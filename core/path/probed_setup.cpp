@@ -214,7 +214,7 @@ ProbedSetupFit fitProbedSetup(Machine& machine, const std::vector<ProbedPoint>& 
   summarise(points, r, &fit.rms_before, nullptr, &fit.tram_before);
   // Which set-up directions the touches constrain: the rank of the column-scaled rows.
   Eigen::MatrixXd Js = J * scale.cwiseInverse().asDiagonal();
-  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js, Eigen::ComputeThinU | Eigen::ComputeThinV);
   svd.setThreshold(1e-6);
   fit.observed = static_cast<int>(svd.rank());
   if (fit.observed < n) {
@@ -246,7 +246,7 @@ ProbedSetupFit fitProbedSetup(Machine& machine, const std::vector<ProbedPoint>& 
     evaluate(machine, points, cols, &r, &J);
     if (step.cwiseProduct(scale).norm() < 1e-10) break;
     Js = J * scale.cwiseInverse().asDiagonal();
-    svd.compute(Js, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    svd.compute(Js, Eigen::ComputeThinU | Eigen::ComputeThinV);
   }
   fit.residual = perPoint(points, r);
   summarise(points, r, &fit.rms, &fit.max, &fit.tram_max);
