@@ -6,8 +6,9 @@
 // and a command (predict, compensate, verify in CL-only mode, analyze, plan-ballbar then
 // simulate-ballbar then calibrate, setup), and run it in-process under the sanitizers. An
 // InputError (a FieldError included) is the expected answer to what tolver cannot do; any other
-// exception, a crash, a sanitizer report, a hang past libFuzzer's -timeout or memory past
-// -rss_limit_mb is a defect. Run it with tests/fuzz/run.sh (name "commands").
+// exception, a crash, a sanitizer report, a hang past libFuzzer's -timeout (tests/fuzz/run.sh
+// gives this harness 30 s: about 1 s of a released build) or memory past -rss_limit_mb (2 GB) is
+// a defect. Run it with tests/fuzz/run.sh (name "commands").
 #include <fuzzer/FuzzedDataProvider.h>
 #include <unistd.h>
 
