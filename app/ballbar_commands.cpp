@@ -203,6 +203,8 @@ void printCalibrationRun(const CalibrationRun& run, const CalibrateInputs& in) {
               out.machine.c_str(), out.balls.c_str(), mmToUm(run.written.fit.rms));
   if (run.written.heldout.readings > 0)
     std::printf(", the held-out ones at %.3f um", mmToUm(run.written.heldout.rms));
+  // The set-up is not in the machine file: the next command needs it again.
+  if (!in.machine.setup.empty()) std::printf(" (with --setup %s)", in.machine.setup.c_str());
   std::printf("\n");
   std::printf("  wrote      %s (identified machine), %s (ball positions), %s (report)\n",
               out.machine.c_str(), out.balls.c_str(), out.report.c_str());

@@ -99,6 +99,8 @@ void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o) {
               out.machine.c_str(), out.balls.c_str(), mmToUm(run.written.fit.rms));
   if (run.written.heldout.readings > 0)
     std::printf(", the held-out ones at %.3f um", mmToUm(run.written.heldout.rms));
+  // The set-up is not in the machine file: the next command needs it again.
+  if (!o.in.machine.setup.empty()) std::printf(" (with --setup %s)", o.in.machine.setup.c_str());
   std::printf("\n");
   if (program)
     std::printf(

@@ -216,7 +216,8 @@ WrittenCheck writeCalibration(const CalibrationRun& run, const CalibrateInputs& 
                                         {"identified ball positions of " + in.readings +
                                          " by tolver calibrate (machine " + out.machine + ")"}));
   // What the written files predict, read back as the next command will.
-  const WrittenCheck check = checkWrittenFiles(xml_tmp, balls_tmp, run.used, run.heldout);
+  const WrittenCheck check =
+      checkWrittenFiles(xml_tmp, balls_tmp, run.used, run.heldout, &run.machine.model.setup);
   CalibrationReportInputs rin;
   rin.machine_file = in.machine.machine;
   rin.readings_file = in.readings;

@@ -230,7 +230,7 @@ DiagnosisWritten writeDiagnosis(const DiagnosisRun& run, const DiagnoseInputs& i
                                        {"identified ball positions of " + in.readings +
                                         " by tolver diagnose (machine " + out.machine + ")"}));
   // What the written files predict, read back as the next command will: the report states it.
-  rin.written = checkWrittenFiles(xml_tmp, balls_tmp, used, run.heldout);
+  rin.written = checkWrittenFiles(xml_tmp, balls_tmp, used, run.heldout, &run.machine.model.setup);
   const std::string html =
       writeDiagnosisHtml(report_dir.staging(), run.machine.model, used, r, rin);
   writeFileAtomically((staging / "report.json").string(),

@@ -142,6 +142,22 @@ TEST_F(Commands, PlanSimulateCalibrateRoundTrip) {
   EXPECT_EQ(c.outputs.balls, path("identified_balls.csv"));
   EXPECT_TRUE(fs::exists(c.outputs.report));
 
+  // With a set-up file (its 100 mm gauge length moves the tool frame the ball positions are in),
+  // simulated and fitted alike: the written files, read back with the same set-up, reproduce the
+  // fit (they reported 98.6 mm RMS, read back without it).
+  sim.machine = machine(kMeasured, true);
+  sim.output = path("readings_setup.csv");
+  sim.heldout_output = path("readings_setup_heldout.csv");
+  simulateBallbar(sim);
+  cal.machine = machine(kNominal, true);
+  cal.readings = sim.output;
+  cal.heldout = sim.heldout_output;
+  cal.output = path("identified_setup.xml");
+  const CalibrationRun cs = calibrateMachine(cal);
+  EXPECT_LT(cs.fit.rms_residual, 1e-6);
+  EXPECT_LT(cs.written.fit.rms, 1e-6);
+  EXPECT_LT(cs.written.heldout.rms, 1e-4);
+
   cal.spindle_tilt_urad = -1;
   EXPECT_EQ(refusedField([&] { calibrateMachine(cal); }), "spindle_tilt_urad");
   plan.program = cone();

@@ -174,8 +174,10 @@ std::string standsFor(const MachineModel& m, int p, const std::vector<AbsorbedTe
 }
 
 WrittenCheck checkWrittenFiles(const std::string& machine_file, const std::string& balls_file,
-                               const BallbarTest& fit, const BallbarTest& heldout) {
-  const Machine m = readMachineFile(machine_file);
+                               const BallbarTest& fit, const BallbarTest& heldout,
+                               const PartSetup* setup) {
+  Machine m = readMachineFile(machine_file);
+  if (setup) m.model.setup = *setup;
   const std::vector<BallErrors> balls = readBallPositionsFile(balls_file, fit);
   const ForwardKinematics fk(m.model, m.params);
   WrittenCheck c;

@@ -51,8 +51,12 @@ std::string standsFor(const MachineModel& model, int parameter,
 
 // Reads the machine file and ball positions written by calibrate or diagnose and returns what
 // they predict for the fitted and held-out readings (residual RMS and max).
+// setup: the part set-up the fit ran with (a set-up file's gauge length moves the tool frame the
+// ball positions are in), applied to the machine read back as the next command given the same
+// set-up applies it; null: the machine file's own.
 WrittenCheck checkWrittenFiles(const std::string& machine_file, const std::string& balls_file,
-                               const BallbarTest& fit, const BallbarTest& heldout);
+                               const BallbarTest& fit, const BallbarTest& heldout,
+                               const PartSetup* setup = nullptr);
 
 // The lack-of-fit test as JSON (um), or {"tested": false, "reason": ...}; and as one line for a
 // console ("repeatability 0.58 um (33 df) against the fit's 1.32 um: F 5.20, p 1.1e-06: the
