@@ -102,7 +102,7 @@ std::string machineXml(FuzzedDataProvider& in) {
   xml += "  <control name=\"fuzz\" default_units=\"mm\" dialect=\"linuxcnc\">\n";
   xml += "    <tcp on=\"M428\" off=\"M429\"/>\n  </control>\n";
   xml += "  <errors source=\"simulated\" length_unit=\"um\" angle_unit=\"urad\" default_degree=\"" +
-         std::to_string(in.ConsumeIntegralInRange(0, 4)) + "\">\n";
+         std::to_string(in.ConsumeIntegralInRange(0, 2)) + "\">\n";
   static const char* comps[] = {"ex", "ey", "ez", "gx", "gy", "gz"};
   for (int e = in.ConsumeIntegralInRange(0, 4); e > 0; --e) {
     const char* axis = names[in.ConsumeIntegralInRange(0, n - 1)];
@@ -243,10 +243,10 @@ void runCommand(FuzzedDataProvider& in, const std::string& dir) {
       tolver::AnalyzeInputs a;
       a.machine = machine;
       a.model = in.ConsumeBool() ? "link" : "motion";
-      // Sizes within what the instrumented build analyses inside libFuzzer's 10 s (a 600-pose
-      // degree-6 analysis takes 0.3 s released, 17 s under ASan and coverage): the harness
-      // explores shapes, not sizes.
-      a.degree = in.ConsumeIntegralInRange(0, 4);
+      // Sizes within what the instrumented build analyses inside the 30 s budget (a 7-axis
+      // degree-4 analysis takes 5 s released, 65 s under ASan and coverage: the minimal-set
+      // search is cubic in the parameters, issue 36): the harness explores shapes, not sizes.
+      a.degree = in.ConsumeIntegralInRange(0, 2);
       a.poses = in.ConsumeIntegralInRange(1, 40);
       tolver::analyze(a);
       break;
