@@ -21,7 +21,7 @@ campaigns="IndependentDiagnosis.TwentyCleanSeedsInBothSetupStylesAddNothing"
 campaigns+="|Diagnosis.OverTwentyNoiseSeedsCleanDataAddsAtMostOnce"
 # and the doc-test, whose commands the suite's own command tests cover; and three long runs of
 # paths the rest covers under the sanitizers (a statistical check of the diagnosis on independent
-# data twice, and every command run twice for its bytes): 4 minutes of the 2-core budget, which
+# data twice, and every command run twice for its bytes): 4 minutes of test time (2 of wall time), which
 # the commands' fuzz harness and LeakSanitizer now use
 campaigns+="|Docs.CommandsRun"
 campaigns+="|IndependentDiagnosis.AnUndeclaredEffectIsNamedAndTheWrittenFilesPredictBetter"
