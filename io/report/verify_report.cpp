@@ -187,25 +187,30 @@ std::string formatDeviationsCsv(const VerifyReport& r) {
       "range, "
       "cut boundary); total_um is empty where the cut reaches the gouge search limit\n"
       "sample,x,y,z,nx,ny,nz,region,zone,state,total_um,program_um,machine_um,cl_line,split\n";
-  char buf[512];
+  // One row per sample, built in place (LineBuilder: the bytes of printf's %.Nf), the regions'
+  // CSV fields once.
+  std::vector<std::string> region_field(s.group_names.size());
+  for (size_t g = 0; g < region_field.size(); ++g) region_field[g] = csvField(s.group_names[g]);
+  LineBuilder row;
   for (size_t i = 0; i < s.size(); ++i) {
     const int line = clLine(r, static_cast<int>(i));
     const bool split = attributable(v, static_cast<int>(i));
     const bool beyond = !v.total_beyond.empty() && v.total_beyond[i];
-    char t[32] = "", pr[32] = "", ma[32] = "";
-    if (!beyond) std::snprintf(t, sizeof t, "%.4f", v.machined[i] ? mmToUm(v.total[i]) : 0.0);
-    if (split) {
-      std::snprintf(pr, sizeof pr, "%.4f", mmToUm(v.program[i]));
-      std::snprintf(ma, sizeof ma, "%.4f", mmToUm(v.machine[i]));
-    }
-    std::snprintf(buf, sizeof buf, "%zu,%.5f,%.5f,%.5f,%.6f,%.6f,%.6f,%s,%d,%s,%s,%s,%s,%d,%s\n", i,
-                  s.p_w[i].x(), s.p_w[i].y(), s.p_w[i].z(), s.n_w[i].x(), s.n_w[i].y(),
-                  s.n_w[i].z(), csvField(s.group_names[s.group[i]]).c_str(), v.zone[i],
-                  conformanceName(v.conformance[i]), t, pr, ma, line,
-                  !v.machined[i]    ? ""
-                  : v.split.empty() ? "split"
-                                    : splitName(v.split[i]));
-    out += buf;
+    row.clear();
+    row.integer(static_cast<long long>(i));
+    for (int k = 0; k < 3; ++k) row.character(',').fixed(s.p_w[i][k], 5);
+    for (int k = 0; k < 3; ++k) row.character(',').fixed(s.n_w[i][k], 6);
+    row.character(',').text(region_field[s.group[i]]).character(',').integer(v.zone[i]);
+    row.character(',').text(conformanceName(v.conformance[i])).character(',');
+    if (!beyond) row.fixed(v.machined[i] ? mmToUm(v.total[i]) : 0.0, 4);
+    row.character(',');
+    if (split) row.fixed(mmToUm(v.program[i]), 4);
+    row.character(',');
+    if (split) row.fixed(mmToUm(v.machine[i]), 4);
+    row.character(',').integer(line).character(',');
+    row.text(!v.machined[i] ? "" : v.split.empty() ? "split" : splitName(v.split[i]));
+    row.character('\n');
+    out += row.view();
   }
   return out;
 }
