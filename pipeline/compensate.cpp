@@ -163,7 +163,8 @@ std::vector<SegmentFigures> segmentFigures(const CompensationRun& run) {
   return out;
 }
 
-// The model's own uncertainty of the after on a calibrated machine: the 95 % band, median and max.
+// The model's own uncertainty of the after on a calibrated machine: the 95 % radii of the tip's
+// distance and the tool axis's angle, median and max.
 void afterBand(const CompensateInputs& in, const std::vector<ProbedPoint>& probed, bool probed_fit,
                CompensationRun& run) {
   const size_t n = run.program.path.size();
@@ -179,8 +180,8 @@ void afterBand(const CompensateInputs& in, const std::vector<ProbedPoint>& probe
   std::vector<double> band(n), axis(n);
   for (size_t i = 0; i < n; ++i) {
     const PoseUncertainty u = pu.at(run.after.points[i].q);
-    band[i] = 1.96 * mmToUm(u.tip);
-    axis[i] = 1.96 * radToUrad(u.axis);
+    band[i] = mmToUm(PredictionUncertainty::tipRadius95(u));
+    axis[i] = radToUrad(PredictionUncertainty::axisRadius95(u));
   }
   auto medianMax = [n](std::vector<double>& v, double* median, double* max) {
     *max = *std::max_element(v.begin(), v.end());

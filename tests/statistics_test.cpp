@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <random>
+#include <vector>
 
 #include "core/diagnosis/residual_analysis.h"
 #include "io/machine/ballbar_file.h"
@@ -30,6 +31,32 @@ TEST(Statistics, FSurvivalClosedForms) {
   EXPECT_NEAR(fSurvival(4.0, 1, 1e7), 2 * normalSurvival(2.0), 1e-6);
   EXPECT_EQ(fSurvival(0.0, 3, 10), 1.0);
   EXPECT_NEAR(normalSurvival(1.959963984540054), 0.025, 1e-12);
+}
+
+// Chi-square quantiles against tables (closed form for 2 degrees of freedom: -2 ln(1 - p)), and
+// the Gaussian radius against its cases of exact form and a Monte Carlo draw of an anisotropic one.
+TEST(Statistics, ChiSquareQuantileAndGaussianRadius) {
+  EXPECT_NEAR(chiSquareQuantile(0.95, 1), 1.959964 * 1.959964, 1e-5);
+  EXPECT_NEAR(chiSquareQuantile(0.95, 2), -2 * std::log(0.05), 1e-10);
+  EXPECT_NEAR(chiSquareQuantile(0.95, 3), 7.814728, 1e-5);
+  const double one[3] = {4.0, 0.0, 0.0}, equal[2] = {1.0, 1.0}, zero[2] = {0.0, 0.0};
+  EXPECT_NEAR(gaussianRadiusQuantile(one, 3, 0.95), 2 * 1.959964, 1e-5);
+  EXPECT_NEAR(gaussianRadiusQuantile(equal, 2, 0.95), std::sqrt(-2 * std::log(0.05)), 1e-10);
+  EXPECT_EQ(gaussianRadiusQuantile(zero, 2, 0.95), 0.0);
+  std::mt19937 rng(7);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (const auto& l : {std::vector<double>{4.0, 1.0, 0.25}, std::vector<double>{1.0, 0.3, 0.0},
+                        std::vector<double>{2.0, 2.0, 0.1}}) {
+    const double r = gaussianRadiusQuantile(l.data(), 3, 0.95);
+    int inside = 0;
+    const int draws = 200000;
+    for (int k = 0; k < draws; ++k) {
+      double s = 0;
+      for (double v : l) s += v * std::pow(n(rng), 2);
+      inside += std::sqrt(s) <= r;
+    }
+    EXPECT_NEAR(inside / double(draws), 0.95, 0.006) << l[0] << " " << l[1] << " " << l[2];
+  }
 }
 
 TEST(Statistics, LombScargleFindsThePeriodOfUnevenSamples) {

@@ -1,6 +1,7 @@
 #include "core/numerics/statistics.h"
 
 #include <algorithm>
+#include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <boost/math/special_functions/beta.hpp>
 #include <cmath>
@@ -30,6 +31,22 @@ double fSurvival(double f, double d1, double d2) {
 }
 
 double normalSurvival(double z) { return 0.5 * std::erfc(z / std::sqrt(2.0)); }
+
+double chiSquareQuantile(double p, double dof) {
+  const boost::math::chi_squared_distribution<double, QuietPolicy> dist(dof);
+  return boost::math::quantile(dist, p);
+}
+
+double gaussianRadiusQuantile(const double* eigenvalues, int n, double p) {
+  double s1 = 0.0, s2 = 0.0;
+  for (int k = 0; k < n; ++k) {
+    const double l = std::max(0.0, eigenvalues[k]);
+    s1 += l;
+    s2 += l * l;
+  }
+  if (!(s1 > 0.0)) return 0.0;
+  return std::sqrt(s2 / s1 * chiSquareQuantile(p, s1 * s1 / s2));
+}
 
 std::vector<double> lombScargle(const std::vector<double>& t, const std::vector<double>& y,
                                 const std::vector<double>& omega) {

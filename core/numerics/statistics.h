@@ -12,6 +12,13 @@ double incompleteBeta(double a, double b, double x);
 double fSurvival(double f, double d1, double d2);
 // P(Z > z) for a standard normal Z.
 double normalSurvival(double z);
+// The p-quantile of a chi-square distribution with dof > 0 degrees of freedom (Boost.Math).
+double chiSquareQuantile(double p, double dof);
+// The radius r with P(|e| <= r) = p for a Gaussian e ~ N(0, C) in n dimensions, given C's
+// eigenvalues: |e|^2 = sum_k lambda_k z_k^2, matched in mean and variance to g chi2_h
+// (Welch-Satterthwaite: g = sum lambda^2 / sum lambda, h = (sum lambda)^2 / sum lambda^2), exact
+// when one eigenvalue holds all the variance or all are equal. 0 when C is zero.
+double gaussianRadiusQuantile(const double* eigenvalues, int n, double p);
 
 // Lomb-Scargle periodogram (Lomb 1976, Scargle 1982) of y(t), unevenly sampled, at angular
 // frequencies omega (rad per unit of t), normalised by the variance of y: a pure sinusoid fit

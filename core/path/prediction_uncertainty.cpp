@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "core/kinematics/sensitivity_jacobian.h"
+#include "core/numerics/statistics.h"
 
 namespace tolver {
 
@@ -113,6 +114,8 @@ PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionCont
   u.calibration_axis = std::sqrt(std::max(0.0, ax.eigenvalues()[1]));
   u.axis = std::sqrt(u.calibration_axis * u.calibration_axis +
                      id.spindle_tilt_rad * id.spindle_tilt_rad);
+  u.axis_covariance_t << S(4, 4), -S(4, 3), -S(3, 4), S(3, 3);
+  u.axis_covariance_t.diagonal().array() += id.spindle_tilt_rad * id.spindle_tilt_rad;
   if (!id.covered_min.empty()) {
     u.beyond = JointVector::Zero(q.size());
     for (Eigen::Index a = 0; a < q.size() && a < static_cast<Eigen::Index>(id.covered_min.size());
@@ -125,6 +128,18 @@ PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionCont
     }
   }
   return u;
+}
+
+double PredictionUncertainty::tipRadius95(const PoseUncertainty& u) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(u.tip_covariance_w,
+                                                          Eigen::EigenvaluesOnly);
+  return gaussianRadiusQuantile(es.eigenvalues().data(), 3, 0.95);
+}
+
+double PredictionUncertainty::axisRadius95(const PoseUncertainty& u) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(u.axis_covariance_t,
+                                                          Eigen::EigenvaluesOnly);
+  return gaussianRadiusQuantile(es.eigenvalues().data(), 2, 0.95);
 }
 
 Eigen::VectorXd applyMeasuredSetup(Machine& machine, const std::vector<JointVector>& q,

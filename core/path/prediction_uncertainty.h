@@ -19,6 +19,9 @@ struct PoseUncertainty {
   Eigen::Matrix3d tip_covariance_w = Eigen::Matrix3d::Zero();  // mm^2
   double tip = 0.0;   // mm, 1 sigma along the worst direction (sqrt of the largest eigenvalue)
   double axis = 0.0;  // rad, 1 sigma of the tool axis's direction (worst direction)
+  // The covariance of the tool axis's direction across it (rad^2): its components along t's x and
+  // y, e = (w_y, -w_x) for a small rotation w of t; the spindle-tilt prior included.
+  Eigen::Matrix2d axis_covariance_t = Eigen::Matrix2d::Zero();
   // The shares of the calibration's covariance alone (mm, rad): tip and axis above add the
   // identification's lack of fit (tip) and spindle-tilt prior (axis) in quadrature.
   double calibration_tip = 0.0, calibration_axis = 0.0;
@@ -64,6 +67,12 @@ class PredictionUncertainty {
   static double along(const PoseUncertainty& u, const Eigen::Vector3d& n_w) {
     return std::sqrt(std::max(0.0, n_w.dot(u.tip_covariance_w * n_w)));
   }
+  // The 95 % radii: the tip's distance from its prediction (mm, 3-D) and the tool axis's angle
+  // from its prediction (rad, 2-D) that hold 95 % of their Gaussian (gaussianRadiusQuantile).
+  // 1.96 times the worst direction's sigma holds 95 % only when one direction dominates: for an
+  // isotropic covariance it holds 85 % of the axis's angle and 72 % of the tip's distance.
+  static double tipRadius95(const PoseUncertainty& u);
+  static double axisRadius95(const PoseUncertainty& u);
 
  private:
   // R_wt J_d for the given columns at q (3 x columns.size()).
