@@ -86,6 +86,12 @@ void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o) {
       lof.tested
           ? ("F " + formatWith("%.2f", lof.f) + ", p " + formatWith("%.2g", lof.p_value)).c_str()
           : "not tested");
+  if (r.heldout_before.readings == 0 && (!r.added.empty() || !r.withdrawn.empty()) &&
+      std::isfinite(r.cv_gain_se_mm2))
+    std::printf("  cv gain    mean squared gain %.3g +- %.2g um^2 over the %d folds (%s)\n",
+                r.cv_gain_mm2 * 1e6, r.cv_gain_se_mm2 * 1e6, r.folds,
+                r.cv_gain_mm2 > 2.0 * r.cv_gain_se_mm2 ? "confirmed: above twice its uncertainty"
+                                                       : "not confirmed");
   if (r.heldout_before.readings > 0) {
     std::printf(
         "  held-out   %d readings (%s): RMS %.3f -> %.3f um, max %.3f -> %.3f um; mean squared "

@@ -26,8 +26,8 @@ if clang-format --dry-run --Werror "${files[@]}" 2>/tmp/format.$$; then
   echo "format: ${#files[@]} files as clang-format writes them"
   rm -f /tmp/format.$$
 else
-  grep -E '^[^ ].*warning:' /tmp/format.$$ | sed -E 's/: warning: code should be clang-formatted.*//' | head -n 40
-  echo "format: $(grep -c 'warning:' /tmp/format.$$) places differ from clang-format (scripts/check_format.sh --fix)"
+  grep -E '^[^ ].*(warning|error): code should' /tmp/format.$$ | sed -E 's/: (warning|error): code should be clang-formatted.*//' | head -n 40
+  echo "format: $(grep -cE '(warning|error): code should' /tmp/format.$$) places differ from clang-format (scripts/check_format.sh --fix)"
   rm -f /tmp/format.$$
   exit 1
 fi

@@ -47,10 +47,11 @@ struct DiagnosisOutcome {
   DiagnosisVerdict verdict = DiagnosisVerdict::NothingMissing;
   std::vector<std::string> implausible;  // candidates refused for their fitted value
   double heldout_gain_um2 = 0,
-         heldout_gain_se_um2 = 0;  // mean squared held-out gain, its standard error
-  double lack_of_fit_p = 1;        // of the final fit (1 when not tested)
-  bool held_stayed_held = true;    // parameters the base fit held are at their prior values
-  int held = 0;                    // how many the base fit held
+         heldout_gain_se_um2 = 0;              // mean squared held-out gain, its standard error
+  double cv_gain_um2 = 0, cv_gain_se_um2 = 0;  // the same over the cross-validation's folds
+  double lack_of_fit_p = 1;                    // of the final fit (1 when not tested)
+  bool held_stayed_held = true;  // parameters the base fit held are at their prior values
+  int held = 0;                  // how many the base fit held
 };
 
 // The independent simulator's set-ups for a plan's (ball position errors of 10 um, 1 sigma, drawn
@@ -150,7 +151,8 @@ inline std::vector<DiagnosisCase> diagnosisCases() {
 // effects (a test of the final check: the augmented model must then be withdrawn).
 inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, unsigned seed,
                                          const std::string& dir,
-                                         bool heldout_without_effects = false) {
+                                         bool heldout_without_effects = false,
+                                         bool diagnose_with_heldout = true) {
   DiagnosisOutcome out;
   const Machine nominal = readMachineFile(sourcePath("resources/machines/matsuura_mc760vx.xml"));
   const std::vector<int> unknowns = defaultCalibrationUnknowns(nominal.model);
@@ -197,8 +199,11 @@ inline DiagnosisOutcome runDiagnosisCase(const DiagnosisCase& c, bool on_axis, u
   out.gross_removed = static_cast<int>(rc.removed.size());
   DiagnosisOptions opt;
   opt.base_unknowns = unknowns;
-  opt.heldout = &held;
+  // Without: the held-out readings only judge, through the written files.
+  opt.heldout = diagnose_with_heldout ? &held : nullptr;
   const DiagnosisResult r = diagnose(nominal, rc.test, opt);
+  out.cv_gain_um2 = r.cv_gain_mm2 * 1e6;
+  out.cv_gain_se_um2 = r.cv_gain_se_mm2 * 1e6;
   out.message = r.message;
   out.withdrawn = !r.withdrawn.empty();
   out.held = static_cast<int>(r.base_fit.held.size());

@@ -286,9 +286,8 @@ int main(int argc, char** argv) {
           probed_mode ? measureProbed(truth, id, qs, tram_mode) : measure(truth, id, qs);
       if (band_mode) {
         std::printf("| %u | %s | %.2f | %.3f | %.2f | %.1f | %.3f | %.3f | %.3f |\n", seed,
-                    inside ? "inside" : "whole travel", g.tip_rms, g.along_coverage,
-                    g.along_z_rms, g.axis_rms, g.axis_coverage, g.axis_coverage_worst,
-                    g.coverage);
+                    inside ? "inside" : "whole travel", g.tip_rms, g.along_coverage, g.along_z_rms,
+                    g.axis_rms, g.axis_coverage, g.axis_coverage_worst, g.coverage);
         std::fflush(stdout);
         continue;
       }

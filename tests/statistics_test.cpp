@@ -59,6 +59,44 @@ TEST(Statistics, ChiSquareQuantileAndGaussianRadius) {
   }
 }
 
+// The blocks' standard error: the ordinary one with one element per block (closed form), and on
+// correlated blocks the spread of the mean over repeated draws (Monte Carlo), which the
+// ordinary standard error understates.
+TEST(Statistics, BlockMeanStandardErrorFollowsTheSpreadOfCorrelatedBlocks) {
+  const std::vector<double> x = {1.0, 2.0, 4.0, 7.0};
+  double se = 0;
+  EXPECT_DOUBLE_EQ(blockMean(x, {0, 1, 2, 3}, 4, &se), 3.5);
+  // Deviations -2.5 -1.5 0.5 3.5: sum of squares 21, ordinary se = sqrt(21 / 3 / 4).
+  EXPECT_NEAR(se, std::sqrt(21.0 / 12.0), 1e-12);
+  blockMean(x, {0, 0, 0, 0}, 1, &se);
+  EXPECT_TRUE(std::isinf(se));
+  EXPECT_DOUBLE_EQ(blockMean(x, {0, -1, 1, -1}, 2, &se), 2.5);  // -1: left out
+  // 12 blocks of 20 elements sharing a block effect (sd 1) over independent noise (sd 1).
+  std::mt19937 rng(17);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const int blocks = 12, per = 20, draws = 4000;
+  std::vector<int> block(blocks * per);
+  for (int i = 0; i < blocks * per; ++i) block[i] = i / per;
+  double sum_mean2 = 0, sum_se2 = 0, sum_naive2 = 0;
+  std::vector<double> y(blocks * per);
+  for (int d = 0; d < draws; ++d) {
+    for (int b = 0; b < blocks; ++b) {
+      const double shared = n(rng);
+      for (int i = 0; i < per; ++i) y[b * per + i] = shared + n(rng);
+    }
+    const double m = blockMean(y, block, blocks, &se);
+    sum_mean2 += m * m;
+    sum_se2 += se * se;
+    double ss = 0;
+    for (double v : y) ss += (v - m) * (v - m);
+    sum_naive2 += ss / (y.size() - 1) / y.size();
+  }
+  // The true variance of the mean: (1 + 1/20) / 12.
+  EXPECT_NEAR(sum_mean2 / draws, 1.05 / 12, 0.006);
+  EXPECT_NEAR(sum_se2 / draws, 1.05 / 12, 0.006);
+  EXPECT_LT(sum_naive2 / draws, 0.2 * 1.05 / 12);
+}
+
 TEST(Statistics, LombScargleFindsThePeriodOfUnevenSamples) {
   std::mt19937 rng(4);
   std::uniform_real_distribution<double> u(0, 300);

@@ -171,10 +171,13 @@ class Scorer {
     return e.squaredNorm();
   }
 
-  // Cross-validated RMS of the base model (G empty) or the model with the columns G, mm.
-  double crossValidatedRms(const Eigen::MatrixXd* G) const {
+  // Cross-validated RMS of the base model (G empty) or the model with the columns G, mm; with
+  // held, each reading's residual predicted by the fit without its fold (0 when its fold is
+  // empty or all).
+  double crossValidatedRms(const Eigen::MatrixXd* G, Eigen::VectorXd* held = nullptr) const {
     double sum = 0.0;
     int count = 0;
+    if (held) held->setZero(m_);
     for (const Fold& F : folds_) {
       if (F.held.empty() || F.train.empty()) continue;
       Eigen::VectorXd eH;
@@ -190,6 +193,8 @@ class Scorer {
       }
       sum += eH.squaredNorm();
       count += static_cast<int>(eH.size());
+      if (held)
+        for (size_t k = 0; k < F.held.size(); ++k) (*held)[F.held[k]] = eH[k];
     }
     return count ? std::sqrt(sum / count) : 0.0;
   }
@@ -653,16 +658,22 @@ void finalCheck(const Machine& machine, const DiagnosisOptions& opt, DiagnosisRe
     const bool with_heldout = res.heldout_before.readings > 0;
     const double before = with_heldout ? res.heldout_before.rms : res.cv_rms_before;
     const double after = with_heldout ? res.heldout_after.rms : res.cv_rms_after;
-    // On held-out readings the gain must exceed twice its standard error to count.
-    const bool unconfirmed = with_heldout && after <= before && !(gain > 2.0 * gain_se);
+    // The gain must exceed twice its standard error to count: on held-out readings, else over
+    // the cross-validation's folds (each fold's fit refits the effects' own parameters).
+    if (!with_heldout) {
+      gain = res.cv_gain_mm2;
+      gain_se = res.cv_gain_se_mm2;
+    }
+    const bool unconfirmed =
+        after <= before && (with_heldout || std::isfinite(gain_se)) && !(gain > 2.0 * gain_se);
     if (after > before || unconfirmed) {
       char why[300];
       if (unconfirmed)
         std::snprintf(why, sizeof why,
-                      "the held-out gain (RMS %.3f -> %.3f um; mean squared gain %.3g +- %.2g "
-                      "um^2) is within "
-                      "twice its uncertainty: not confirmed",
-                      mmToUm(before), mmToUm(after), gain * 1e6, gain_se * 1e6);
+                      "the %s gain (RMS %.3f -> %.3f um; mean squared gain %.3g +- %.2g "
+                      "um^2) is within twice its uncertainty: not confirmed",
+                      with_heldout ? "held-out" : "cross-validated", mmToUm(before), mmToUm(after),
+                      gain * 1e6, gain_se * 1e6);
       else
         std::snprintf(why, sizeof why,
                       "the augmented model predicted the %s readings worse than the base model "
@@ -860,11 +871,16 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
   unknowns = res.base_fit.identified;
   const std::vector<int> fold_of = contiguousFolds(test, opt.blocks_per_setup, &res.folds);
   std::vector<EffectSpec> rejected;  // found not identifiable by the nonlinear refit
+  // Each reading's cross-validated residual: the base model's, and the current model's.
+  Eigen::VectorXd cv_before, cv_after;
 
   for (int round = 1; round <= opt.max_effects + 1; ++round) {
     const Scorer sc(res.machine, test, res.final_fit, fold_of, res.folds);
-    const double cv_base = sc.crossValidatedRms(nullptr);
-    if (round == 1) res.cv_rms_before = cv_base;
+    const double cv_base = sc.crossValidatedRms(nullptr, &cv_after);
+    if (round == 1) {
+      res.cv_rms_before = cv_base;
+      cv_before = cv_after;
+    }
     res.cv_rms_after = cv_base;
     if (round > opt.max_effects) break;
     std::vector<CandidateScore> scores = candidatesOf(res.machine.model, opt, round);
@@ -877,6 +893,14 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
     if (res.added.size() >= 2) refineHyperparameters(res, test, unknowns, fold_of);
   }
   finalValues(res);
+  {
+    // The cross-validated gain per reading and its standard error over the folds (the blocks
+    // are contiguous runs, so their readings share slow errors: the blocks' standard error).
+    std::vector<double> d(cv_before.size());
+    for (Eigen::Index i = 0; i < cv_before.size(); ++i)
+      d[i] = cv_before[i] * cv_before[i] - cv_after[i] * cv_after[i];
+    res.cv_gain_mm2 = blockMean(d, fold_of, res.folds, &res.cv_gain_se_mm2);
+  }
   finalCheck(machine, opt, res);
   res.rms_before = res.base_fit.rms_residual;
   res.rms_after = res.final_fit.rms_residual;

@@ -142,6 +142,10 @@ struct DiagnosisResult {
   // standard error (mm^2; 0 without held-out readings). A gain under twice its standard error
   // is not confirmed, and the effects are withdrawn.
   double heldout_gain_mm2 = 0, heldout_gain_se_mm2 = 0;
+  // The same over the cross-validation: each reading's r_before^2 - r_after^2 predicted without
+  // its fold, the mean and its standard error over the folds (mm^2). Without held-out readings
+  // it decides: under twice its standard error the effects are not confirmed and withdrawn.
+  double cv_gain_mm2 = 0, cv_gain_se_mm2 = 0;
   // The effects the selection added but the final check rejected (the augmented model
   // predicted worse than the base one); then `added` is empty and `machine` the base model.
   std::vector<AddedEffect> withdrawn;

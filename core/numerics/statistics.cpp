@@ -48,6 +48,32 @@ double gaussianRadiusQuantile(const double* eigenvalues, int n, double p) {
   return std::sqrt(s2 / s1 * chiSquareQuantile(p, s1 * s1 / s2));
 }
 
+double blockMean(const std::vector<double>& x, const std::vector<int>& block, int blocks,
+                 double* standard_error) {
+  std::vector<double> sum(std::max(0, blocks), 0.0);
+  std::vector<int> count(sum.size(), 0);
+  double total = 0.0;
+  int n = 0;
+  for (size_t i = 0; i < x.size() && i < block.size(); ++i) {
+    if (block[i] < 0 || block[i] >= blocks) continue;
+    sum[block[i]] += x[i];
+    ++count[block[i]];
+    total += x[i];
+    ++n;
+  }
+  const double mean = n ? total / n : 0.0;
+  int used = 0;
+  double ss = 0.0;
+  for (size_t b = 0; b < sum.size(); ++b)
+    if (count[b] > 0) {
+      ++used;
+      ss += (sum[b] - mean * count[b]) * (sum[b] - mean * count[b]);
+    }
+  if (standard_error)
+    *standard_error = used > 1 ? std::sqrt(used / (used - 1.0) * ss) / n : INFINITY;
+  return mean;
+}
+
 std::vector<double> lombScargle(const std::vector<double>& t, const std::vector<double>& y,
                                 const std::vector<double>& omega) {
   const size_t n = std::min(t.size(), y.size());

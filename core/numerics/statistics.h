@@ -19,6 +19,12 @@ double chiSquareQuantile(double p, double dof);
 // (Welch-Satterthwaite: g = sum lambda^2 / sum lambda, h = (sum lambda)^2 / sum lambda^2), exact
 // when one eigenvalue holds all the variance or all are equal. 0 when C is zero.
 double gaussianRadiusQuantile(const double* eigenvalues, int n, double p);
+// The mean of x and its standard error when x falls in correlated blocks (block[i] in 0..blocks-1,
+// -1: left out): the clustered (ratio) estimator over the blocks' sums, se^2 = B / (B - 1)
+// sum_b (S_b - mean n_b)^2 / N^2. One element per block gives the ordinary standard error of
+// the mean. se is infinite with fewer than two non-empty blocks.
+double blockMean(const std::vector<double>& x, const std::vector<int>& block, int blocks,
+                 double* standard_error);
 
 // Lomb-Scargle periodogram (Lomb 1976, Scargle 1982) of y(t), unevenly sampled, at angular
 // frequencies omega (rad per unit of t), normalised by the variance of y: a pure sinusoid fit

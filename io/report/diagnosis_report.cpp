@@ -257,7 +257,14 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
       {"cv_rms_before_um", mmToUm(r.cv_rms_before)},
       {"cv_rms_after_um", mmToUm(r.cv_rms_after)},
       {"cross_validation",
-       {{"folds", r.folds}, {"blocks", "contiguous runs of readings within each set-up"}}},
+       {{"folds", r.folds},
+        {"blocks", "contiguous runs of readings within each set-up"},
+        {"mean_squared_gain_um2", r.cv_gain_mm2 * 1e6},
+        {"mean_squared_gain_standard_error_um2",
+         std::isfinite(r.cv_gain_se_mm2) ? json(r.cv_gain_se_mm2 * 1e6) : json(nullptr)},
+        {"gain_rule",
+         "without held-out readings, confirmed when above twice its standard error over the "
+         "folds; else the effects are withdrawn"}}},
       {"ball_positions_file", in.balls_file},
       {"selection",
        {{"method", "forward stepwise"},
@@ -393,6 +400,11 @@ std::string htmlBeforeAfter(const DiagnosisView& v) {
        " contiguous blocks left out in turn)</td><td>" +
        formatWith("%.3f", mmToUm(r.cv_rms_before)) + "</td><td>" +
        formatWith("%.3f", mmToUm(r.cv_rms_after)) + "</td></tr>";
+  if (std::isfinite(r.cv_gain_se_mm2))
+    h += "<tr><td class=\"l\">cross-validated mean squared gain (µm², ± its standard error over "
+         "the blocks; confirmed above twice it)</td><td></td><td>" +
+         formatWith("%.3g", r.cv_gain_mm2 * 1e6) + formatWith(" ± %.2g", r.cv_gain_se_mm2 * 1e6) +
+         "</td></tr>";
   if (r.heldout_before.readings > 0)
     h += "<tr><td class=\"l\">held-out readings RMS (µm, " +
          std::to_string(r.heldout_before.readings) + " readings of " + xmlEscape(in.heldout_file) +
