@@ -30,6 +30,8 @@ campaigns+="|Determinism.EveryCommandGivesTheSameBytesTwice"
 # and the cross-validated gain's ten diagnoses on independent data (18 s released), whose code the
 # suite's other diagnoses run
 campaigns+="|IndependentDiagnosis.WithoutHeldOutReadingsTheCrossValidatedGainDecides"
+# and the band's ten calibrations machine by machine (6 s released), whose code the band's other tests run
+campaigns+="|PredictionUncertaintyTest.TheBandHoldsMachineByMachine"
 ctest --output-on-failure -j"$(nproc)" --timeout 1800 -E "^($campaigns)\$"
 # A fixed libFuzzer seed: the same clone fuzzes the same inputs first (a CI run is repeatable);
 # longer runs (tests/fuzz/run.sh 3600) use random seeds.

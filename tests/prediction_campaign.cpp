@@ -16,6 +16,7 @@
 #include <cstdlib>
 #include <memory>
 
+#include "band_figures.h"
 #include "core/numerics/statistics.h"
 #include "core/path/prediction_uncertainty.h"
 #include "core/path/probed_setup.h"
@@ -24,88 +25,9 @@
 #include "io/program/setup_file.h"
 
 using namespace tolver;
+using tolver::test::Figures;
 
 namespace {
-
-struct Figures {
-  double tip_rms = 0, axis_rms = 0, own_tip_rms = 0, own_axis_rms = 0, coverage = 0;
-  // Along the predicted tool axis: the share of poses whose deviation lies in the 95 % band, and
-  // RMS(deviation / sigma). The tool axis: the share inside the 95 % radius of its covariance,
-  // and inside 1.96 sigma of the worst direction (compensate's band before).
-  double along_coverage = 0, along_z_rms = 0, axis_coverage = 0, axis_coverage_worst = 0;
-};
-
-// Truth and prediction at the poses, each after its own best set-up (applyMeasuredSetup, as
-// predict does): the identified machine's prediction, and the nominal machine's (what assuming
-// no errors predicts: the machine's own error).
-Figures measure(const indep::Machine& truth, Machine identified,
-                const std::vector<JointVector>& qs) {
-  identified.model.setup.gauge_length = 100;
-  Machine nominal = identified;
-  nominal.params.setZero();
-  std::vector<Eigen::Vector3d> tip(qs.size()), axis(qs.size());
-  for (size_t i = 0; i < qs.size(); ++i) {
-    indep::Pose p;
-    for (int a = 0; a < 5; ++a) p.q[a] = qs[i][a];
-    tip[i] = truth.point(p, Eigen::Vector3d(0, 0, -100));
-    axis[i] = (truth.point(p, Eigen::Vector3d(0, 0, 0)) - tip[i]).normalized();
-  }
-  // Errors of a machine's prediction after the set-up that best fits the truth.
-  auto errors = [&](Machine m, std::vector<double>* tip_err, std::vector<double>* axis_err) {
-    std::vector<Eigen::Vector3d> d(qs.size());
-    {
-      const ForwardKinematics fk(m.model, m.params);
-      for (size_t i = 0; i < qs.size(); ++i) d[i] = fk.w_T_t(qs[i]).translation() - tip[i];
-    }
-    applyMeasuredSetup(m, qs, d);
-    const ForwardKinematics fk(m.model, m.params);
-    for (size_t i = 0; i < qs.size(); ++i) {
-      const Eigen::Isometry3d T = fk.w_T_t(qs[i]);
-      tip_err->push_back((T.translation() - tip[i]).norm());
-      axis_err->push_back(std::acos(std::clamp(axis[i].dot(T.linear().col(2)), -1.0, 1.0)));
-    }
-    return m;
-  };
-  std::vector<double> tp, ap, to, ao;
-  const Machine after = errors(identified, &tp, &ap);
-  errors(nominal, &to, &ao);
-  // Coverage of the band: the truth against the prediction after its set-up.
-  Figures f;
-  PredictionUncertainty pu(after);
-  pu.setupModulo(qs);
-  const ForwardKinematics fk(after.model, after.params);
-  int inside = 0, along_in = 0, axis_in = 0, axis_in_worst = 0;
-  double z2 = 0;
-  for (size_t i = 0; i < qs.size(); ++i) {
-    const Eigen::Isometry3d T = fk.w_T_t(qs[i]);
-    const Eigen::Vector3d d = tip[i] - T.translation();
-    const PoseUncertainty u = pu.at(qs[i]);
-    for (int k = 0; k < 3; ++k)
-      inside += std::abs(d[k]) <= 1.96 * std::sqrt(u.tip_covariance_w(k, k));
-    const Eigen::Vector3d n = T.linear().col(2);
-    const double s = PredictionUncertainty::along(u, n), r = d.dot(n);
-    along_in += std::abs(r) <= 1.96 * s;
-    z2 += (r / s) * (r / s);
-    const Eigen::Vector2d e = (T.linear().transpose() * axis[i]).head<2>();
-    axis_in += e.norm() <= PredictionUncertainty::axisRadius95(u);
-    axis_in_worst += e.norm() <= 1.96 * u.axis;
-  }
-  f.along_coverage = along_in / double(qs.size());
-  f.along_z_rms = std::sqrt(z2 / qs.size());
-  f.axis_coverage = axis_in / double(qs.size());
-  f.axis_coverage_worst = axis_in_worst / double(qs.size());
-  auto rms = [](const std::vector<double>& v, double k) {
-    double s = 0;
-    for (double x : v) s += x * x;
-    return std::sqrt(s / v.size()) * k;
-  };
-  f.tip_rms = rms(tp, 1e3);
-  f.own_tip_rms = rms(to, 1e3);
-  f.axis_rms = rms(ap, 1e6);
-  f.own_axis_rms = rms(ao, 1e6);
-  f.coverage = inside / (3.0 * qs.size());
-  return f;
-}
 
 // The same, with the set-up from probed points (fitProbedSetup) instead of the best fit to the
 // truth: 12 touches around the middle of the calibrated volume at three table orientations,
@@ -219,8 +141,9 @@ int main(int argc, char** argv) {
   if (band_mode)
     std::printf(
         "| machine (seed) | where | tip RMS (um) | along-axis coverage | RMS(r/sigma) along | "
+        "effective dof | the band's 90 %% range of RMS(r/sigma) | "
         "tool axis RMS (urad) | axis coverage (95 %% radius) | axis coverage (1.96 worst) | tip "
-        "coordinate coverage |\n|---|---|---|---|---|---|---|---|---|\n");
+        "coordinate coverage |\n|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (int k = 0; k < machines; ++k) {
     const unsigned seed = 900 + k;
     indep::Machine truth(seed);
@@ -257,7 +180,7 @@ int main(int argc, char** argv) {
         if (aimed)
           for (size_t i = 0; i < cone.size(); i += std::max<size_t>(1, cone.size() / 60))
             pa.target_poses.push_back(cone[i]);
-        const Figures g = measure(truth, calibrateWith(pa), cone);
+        const Figures g = test::measure(truth, calibrateWith(pa), cone);
         std::printf("| %u | %s | the cone's poses | %.2f | %.2f | %.2f | %.1f | %.1f | %.3f |\n",
                     seed, aimed ? "--for the cone" : "D-optimal", g.tip_rms, g.own_tip_rms,
                     g.tip_rms / g.own_tip_rms, g.axis_rms, g.own_axis_rms, g.coverage);
@@ -283,11 +206,13 @@ int main(int argc, char** argv) {
         qs.push_back(q);
       }
       const Figures g =
-          probed_mode ? measureProbed(truth, id, qs, tram_mode) : measure(truth, id, qs);
+          probed_mode ? measureProbed(truth, id, qs, tram_mode) : test::measure(truth, id, qs);
       if (band_mode) {
-        std::printf("| %u | %s | %.2f | %.3f | %.2f | %.1f | %.3f | %.3f | %.3f |\n", seed,
-                    inside ? "inside" : "whole travel", g.tip_rms, g.along_coverage, g.along_z_rms,
-                    g.axis_rms, g.axis_coverage, g.axis_coverage_worst, g.coverage);
+        std::printf(
+            "| %u | %s | %.2f | %.3f | %.2f | %.1f | %.2f-%.2f | %.1f | %.3f | %.3f | %.3f |\n",
+            seed, inside ? "inside" : "whole travel", g.tip_rms, g.along_coverage, g.along_z_rms,
+            g.effective_dof, g.z_rms_lo, g.z_rms_hi, g.axis_rms, g.axis_coverage,
+            g.axis_coverage_worst, g.coverage);
         std::fflush(stdout);
         continue;
       }

@@ -11,6 +11,7 @@
 
 #include <random>
 
+#include "band_figures.h"
 #include "independent_diagnosis.h"
 
 namespace tolver {
@@ -86,6 +87,77 @@ TEST_F(PredictionUncertaintyTest, TheTrueDeviationLiesInTheBandAtNinetyFivePerce
       coverage, total, sum_ratio / total);
   EXPECT_GE(coverage, 0.90);
   EXPECT_LE(coverage, 0.98);
+}
+
+// The band machine by machine (issue 33, point 5), on ten machines of the independent simulator
+// with seeds the campaign (tests/prediction_campaign.cpp, seeds 900-909) does not use: each
+// calibrated from a three-set-up ball-bar test with the prior chosen by the readings' evidence,
+// the spindle tilt a ball-bar cannot see given as a stated prior of 20 urad (the simulator's
+// Z pitch and yaw at the ends of its travel: four cubic coefficients of 10 urad), predicted at
+// 500 random poses over the whole travel and inside the calibrated volume. What holds (measured
+// 2026-12-04, docs/validation.md "The band machine by machine"):
+// - Along the tool axis, RMS(r/sigma) pooled over the machines is 1.27 over the whole travel and
+//   1.11 inside (the band a little narrow where it extrapolates), and each machine's lies in the
+//   band's own 90 % range of it (its poses' errors are correlated: h effective degrees of
+//   freedom, mean(z^2) ~ chi2_h / h) on 16 of the 20 (machine, region) rows (18 expected).
+// - The 95 % radius of the tool axis, the tilt prior included, covers the axis error (modulo the
+//   part's rotation, fitted as a shop's set-up does) on 96.6 % of all poses, and on at least 90 %
+//   of them on 18 of 20 rows: machine 1005's unseen tilt is beyond the prior (0.64, 0.68).
+TEST_F(PredictionUncertaintyTest, TheBandHoldsMachineByMachine) {
+  const Machine nominal =
+      readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
+  const std::vector<int> unknowns = defaultCalibrationUnknowns(nominal.model);
+  double z2_whole = 0, z2_inside = 0;
+  int rows = 0, z_in_range = 0, axis_90 = 0;
+  double axis_sum = 0;
+  for (unsigned seed = 1000; seed < 1010; ++seed) {
+    indep::Machine truth(seed);
+    BallbarPlanOptions po;
+    po.poses = 360;
+    po.seed = 5000 + seed;
+    po.reference_every = 8;
+    const BallbarPlan plan = planBallbarTest(nominal.model, unknowns, po);
+    Machine id = test::calibrateOnIndependent(nominal, unknowns, truth, plan.test, seed, 700 + seed,
+                                              true, path("b"));
+    id.identification.spindle_tilt_rad = 20e-6;
+    std::mt19937 prng(seed + 1);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (bool inside : {false, true}) {
+      std::vector<JointVector> qs;
+      for (int i = 0; i < 500; ++i) {
+        JointVector q(5);
+        for (int a = 0; a < 5; ++a) {
+          const double lo =
+              inside ? id.identification.covered_min[a] : nominal.model.axes[a].travel_min;
+          const double hi =
+              inside ? id.identification.covered_max[a] : nominal.model.axes[a].travel_max;
+          q[a] = lo + (hi - lo) * u(prng);
+        }
+        qs.push_back(q);
+      }
+      const test::Figures f = test::measure(truth, id, qs);
+      std::printf(
+          "[ band ] machine %u %-12s along-axis coverage %.3f, RMS(r/sigma) %.2f (band's 90 %% "
+          "range %.2f-%.2f, %.1f dof); tool axis coverage %.3f\n",
+          seed, inside ? "inside" : "whole travel", f.along_coverage, f.along_z_rms, f.z_rms_lo,
+          f.z_rms_hi, f.effective_dof, f.axis_coverage);
+      (inside ? z2_inside : z2_whole) += f.along_z_rms * f.along_z_rms;
+      ++rows;
+      z_in_range += f.along_z_rms >= f.z_rms_lo && f.along_z_rms <= f.z_rms_hi;
+      axis_90 += f.axis_coverage >= 0.90;
+      axis_sum += f.axis_coverage;
+    }
+  }
+  const double pooled_whole = std::sqrt(z2_whole / 10), pooled_inside = std::sqrt(z2_inside / 10);
+  std::printf("[ band ] pooled RMS(r/sigma): whole travel %.2f, inside %.2f\n", pooled_whole,
+              pooled_inside);
+  EXPECT_GT(pooled_whole, 0.8);
+  EXPECT_LT(pooled_whole, 1.35);
+  EXPECT_GT(pooled_inside, 0.8);
+  EXPECT_LT(pooled_inside, 1.2);
+  EXPECT_GE(z_in_range, 15) << rows;
+  EXPECT_GE(axis_sum / rows, 0.93);
+  EXPECT_GE(axis_90, 17) << rows;
 }
 
 // Outside the calibrated volume the prediction is flagged and its uncertainty grows.

@@ -130,6 +130,24 @@ PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionCont
   return u;
 }
 
+Eigen::RowVectorXd PredictionUncertainty::alongRoot(const JointVector& q,
+                                                    const Eigen::Vector3d& n_w) const {
+  const IdentificationUncertainty& id = machine_.identification;
+  J_.setZero();
+  sensitivityJacobian(fk_, q, J_, nullptr);
+  Eigen::MatrixXd Jid(3, id.parameters.size());
+  for (size_t k = 0; k < id.parameters.size(); ++k)
+    Jid.col(k) = J_.block<3, 1>(0, id.parameters[k]);
+  if (modulo_) {
+    Eigen::MatrixXd Jm(3, modulo_columns_.size());
+    for (size_t k = 0; k < modulo_columns_.size(); ++k)
+      Jm.col(k) = J_.block<3, 1>(0, modulo_columns_[k]);
+    Jid -= Jm * B_;
+  }
+  const Eigen::Vector3d n_t = fk_.w_T_t(q).linear().transpose() * n_w;
+  return n_t.transpose() * Jid * root_;
+}
+
 double PredictionUncertainty::tipRadius95(const PoseUncertainty& u) {
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(u.tip_covariance_w,
                                                           Eigen::EigenvaluesOnly);

@@ -73,6 +73,10 @@ class PredictionUncertainty {
   // isotropic covariance it holds 85 % of the axis's angle and 72 % of the tip's distance.
   static double tipRadius95(const PoseUncertainty& u);
   static double axisRadius95(const PoseUncertainty& u);
+  // The tip's error along n_w at q as a row a with error = a z, z ~ N(0, I) shared by every pose
+  // (mm; the calibration's share, without the lack of fit): a_i a_j^T is the covariance of two
+  // poses' errors, so a band's errors over a program are correlated, not independent.
+  Eigen::RowVectorXd alongRoot(const JointVector& q, const Eigen::Vector3d& n_w) const;
 
  private:
   // R_wt J_d for the given columns at q (3 x columns.size()).
