@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <vector>
 
 #include "core/numerics/statistics.h"
@@ -27,6 +28,37 @@ struct Figures {
   double effective_dof = 0, z_rms_lo = 0, z_rms_hi = 0;
 };
 
+// The truth's tool tip (100 mm below the gauge point) and tool axis at the poses.
+inline void truthTipAndAxis(const indep::Machine& truth, const std::vector<JointVector>& qs,
+                            std::vector<Eigen::Vector3d>* tip, std::vector<Eigen::Vector3d>* axis) {
+  tip->resize(qs.size());
+  axis->resize(qs.size());
+  for (size_t i = 0; i < qs.size(); ++i) {
+    indep::Pose p;
+    for (int a = 0; a < 5; ++a) p.q[a] = qs[i][a];
+    (*tip)[i] = truth.point(p, Eigen::Vector3d(0, 0, -100));
+    (*axis)[i] = (truth.point(p, Eigen::Vector3d(0, 0, 0)) - (*tip)[i]).normalized();
+  }
+}
+
+// n random poses, uniform over the whole travel or inside the volume the calibration covered.
+inline std::vector<JointVector> randomPoses(const Machine& identified, bool inside, int n,
+                                            std::mt19937& prng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const IdentificationUncertainty& id = identified.identification;
+  std::vector<JointVector> qs;
+  for (int i = 0; i < n; ++i) {
+    JointVector q(5);
+    for (int a = 0; a < 5; ++a) {
+      const double lo = inside ? id.covered_min[a] : identified.model.axes[a].travel_min;
+      const double hi = inside ? id.covered_max[a] : identified.model.axes[a].travel_max;
+      q[a] = lo + (hi - lo) * u(prng);
+    }
+    qs.push_back(q);
+  }
+  return qs;
+}
+
 // Truth and prediction at the poses, each after its own best set-up (applyMeasuredSetup, as
 // predict does): the identified machine's prediction, and the nominal machine's (what assuming
 // no errors predicts: the machine's own error).
@@ -35,13 +67,8 @@ inline Figures measure(const indep::Machine& truth, Machine identified,
   identified.model.setup.gauge_length = 100;
   Machine nominal = identified;
   nominal.params.setZero();
-  std::vector<Eigen::Vector3d> tip(qs.size()), axis(qs.size());
-  for (size_t i = 0; i < qs.size(); ++i) {
-    indep::Pose p;
-    for (int a = 0; a < 5; ++a) p.q[a] = qs[i][a];
-    tip[i] = truth.point(p, Eigen::Vector3d(0, 0, -100));
-    axis[i] = (truth.point(p, Eigen::Vector3d(0, 0, 0)) - tip[i]).normalized();
-  }
+  std::vector<Eigen::Vector3d> tip, axis;
+  truthTipAndAxis(truth, qs, &tip, &axis);
   // Errors of a machine's prediction after the set-up that best fits the truth.
   auto errors = [&](Machine m, std::vector<double>* tip_err, std::vector<double>* axis_err) {
     std::vector<Eigen::Vector3d> d(qs.size());

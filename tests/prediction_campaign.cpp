@@ -69,13 +69,8 @@ Figures measureProbed(const indep::Machine& truth, Machine identified,
   }
   Machine nominal = identified;
   nominal.params.setZero();
-  std::vector<Eigen::Vector3d> tip(qs.size()), axis(qs.size());
-  for (size_t i = 0; i < qs.size(); ++i) {
-    indep::Pose p;
-    for (int a = 0; a < 5; ++a) p.q[a] = qs[i][a];
-    tip[i] = truth.point(p, Eigen::Vector3d(0, 0, -100));
-    axis[i] = (truth.point(p, Eigen::Vector3d(0, 0, 0)) - tip[i]).normalized();
-  }
+  std::vector<Eigen::Vector3d> tip, axis;
+  test::truthTipAndAxis(truth, qs, &tip, &axis);
   Figures f;
   int inside = 0;
   for (Machine* m : {&identified, &nominal}) {
@@ -191,20 +186,8 @@ int main(int argc, char** argv) {
     Machine id = calibrateWith(po);
     if (band_mode) id.identification.spindle_tilt_rad = tilt_urad * 1e-6;
     std::mt19937 prng(seed + 1);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
     for (bool inside : {false, true}) {
-      std::vector<JointVector> qs;
-      for (int i = 0; i < 500; ++i) {
-        JointVector q(5);
-        for (int a = 0; a < 5; ++a) {
-          const double lo =
-              inside ? id.identification.covered_min[a] : nominal.model.axes[a].travel_min;
-          const double hi =
-              inside ? id.identification.covered_max[a] : nominal.model.axes[a].travel_max;
-          q[a] = lo + (hi - lo) * u(prng);
-        }
-        qs.push_back(q);
-      }
+      const std::vector<JointVector> qs = test::randomPoses(id, inside, 500, prng);
       const Figures g =
           probed_mode ? measureProbed(truth, id, qs, tram_mode) : test::measure(truth, id, qs);
       if (band_mode) {

@@ -121,20 +121,8 @@ TEST_F(PredictionUncertaintyTest, TheBandHoldsMachineByMachine) {
                                               true, path("b"));
     id.identification.spindle_tilt_rad = 20e-6;
     std::mt19937 prng(seed + 1);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
     for (bool inside : {false, true}) {
-      std::vector<JointVector> qs;
-      for (int i = 0; i < 500; ++i) {
-        JointVector q(5);
-        for (int a = 0; a < 5; ++a) {
-          const double lo =
-              inside ? id.identification.covered_min[a] : nominal.model.axes[a].travel_min;
-          const double hi =
-              inside ? id.identification.covered_max[a] : nominal.model.axes[a].travel_max;
-          q[a] = lo + (hi - lo) * u(prng);
-        }
-        qs.push_back(q);
-      }
+      const std::vector<JointVector> qs = test::randomPoses(id, inside, 500, prng);
       const test::Figures f = test::measure(truth, id, qs);
       std::printf(
           "[ band ] machine %u %-12s along-axis coverage %.3f, RMS(r/sigma) %.2f (band's 90 %% "
