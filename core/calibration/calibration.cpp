@@ -455,6 +455,37 @@ IdentificationUncertainty identificationUncertainty(const CalibrationResult& fit
   return u;
 }
 
+double evidenceScale(const Eigen::MatrixXd& A, const Eigen::VectorXd& d, const Eigen::VectorXd& y,
+                     double s2) {
+  // C = s^2 I + k^2 B B^T, B = A D^(1/2) = U S V^T (thin): C's eigenvalues are s^2 + k^2 S_j^2 on
+  // U's columns and s^2 on their complement, so the log evidence costs O(np) per k after one
+  // thin SVD (O(m np^2)) instead of a Cholesky of the m x m C (O(m^3)) per k.
+  const Eigen::Index m = A.rows();
+  const Eigen::MatrixXd B = A * d.cwiseMax(0.0).cwiseSqrt().asDiagonal();
+  const Eigen::BDCSVD<Eigen::MatrixXd> svd(B, Eigen::ComputeThinU);
+  const Eigen::VectorXd S2 = svd.singularValues().cwiseAbs2();
+  const Eigen::VectorXd c = svd.matrixU().transpose() * y;
+  const double rest = std::max(0.0, y.squaredNorm() - c.squaredNorm());
+  const Eigen::Index r = S2.size();
+  double best_k = 1.0, best = -std::numeric_limits<double>::infinity();
+  if (!(s2 > 0.0)) return best_k;
+  for (int i = 0; i <= 40; ++i) {
+    const double k = 0.03 * std::pow(100.0 / 0.03, i / 40.0);
+    double quad = rest / s2, logdet = static_cast<double>(m - r) * std::log(s2);
+    for (Eigen::Index j = 0; j < r; ++j) {
+      const double l = s2 + k * k * S2[j];
+      quad += c[j] * c[j] / l;
+      logdet += std::log(l);
+    }
+    const double e = -0.5 * (quad + logdet);
+    if (e > best) {
+      best = e;
+      best_k = k;
+    }
+  }
+  return best_k;
+}
+
 double choosePriorScale(const MachineModel& model, const BallbarTest& test,
                         const CalibrationResult& fit, double unit_linear, double unit_angular) {
   const ForwardKinematics fk(model, fit.params);
@@ -470,32 +501,15 @@ double choosePriorScale(const MachineModel& model, const BallbarTest& test,
     const double u = model.parameters[fit.identified[k]].angular ? unit_angular : unit_linear;
     d[k] = u * u;
   }
-  const Eigen::VectorXd y0 = r + J.leftCols(np) * theta;
-  // Project off the ball columns (flat prior): the complement of their span.
+  // Project off the ball columns (flat prior): Q^T applied as Householder reflections, its last
+  // m - nb rows the complement of their span.
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(J.rightCols(nb));
-  const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(m, m);
-  const Eigen::MatrixXd P = Q.rightCols(m - nb);
-  const Eigen::VectorXd y = P.transpose() * y0;
-  const Eigen::MatrixXd A = P.transpose() * J.leftCols(np);
-  const Eigen::MatrixXd ADA = A * d.asDiagonal() * A.transpose();
-  const double s2 = fit.residual_sigma * fit.residual_sigma;
-  double best_k = 1.0, best = -std::numeric_limits<double>::infinity();
-  for (int i = 0; i <= 40; ++i) {
-    const double k = 0.03 * std::pow(100.0 / 0.03, i / 40.0);
-    Eigen::MatrixXd C = k * k * ADA;
-    C.diagonal().array() += s2;
-    const Eigen::LLT<Eigen::MatrixXd> llt(C);
-    if (llt.info() != Eigen::Success) continue;
-    const Eigen::VectorXd z = llt.matrixL().solve(y);
-    double logdet = 0;
-    for (Eigen::Index j = 0; j < C.rows(); ++j) logdet += 2.0 * std::log(llt.matrixL()(j, j));
-    const double e = -0.5 * (z.squaredNorm() + logdet);
-    if (e > best) {
-      best = e;
-      best_k = k;
-    }
-  }
-  return best_k;
+  Eigen::MatrixXd Ay(m, np + 1);
+  Ay.leftCols(np) = J.leftCols(np);
+  Ay.col(np) = r + J.leftCols(np) * theta;
+  Ay.applyOnTheLeft(qr.householderQ().transpose());
+  return evidenceScale(Ay.bottomLeftCorner(m - nb, np), d, Ay.col(np).tail(m - nb),
+                       fit.residual_sigma * fit.residual_sigma);
 }
 
 CalibrationOptions evidencePrior(const MachineModel& model, const BallbarTest& test,

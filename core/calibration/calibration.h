@@ -107,6 +107,10 @@ RobustCalibration calibrateWithoutGross(const MachineModel& model, const Eigen::
 // from 0.03 to 100 is returned. Linearised at the unregularised fit `fit`.
 double choosePriorScale(const MachineModel& model, const BallbarTest& test,
                         const CalibrationResult& fit, double unit_linear, double unit_angular);
+// The grid search behind it: the k of largest log N(y; 0, s2 I + k^2 A diag(d) A^T) over the
+// same grid, from one thin SVD of A diag(d)^(1/2) (linear in the readings).
+double evidenceScale(const Eigen::MatrixXd& A, const Eigen::VectorXd& d, const Eigen::VectorXd& y,
+                     double s2);
 
 // The prior's units of `calibrate --prior auto`: 1 um per linear and 3.3 urad per angular
 // coefficient (a 1 um straightness over 300 mm), scaled together by choosePriorScale.
