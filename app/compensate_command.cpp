@@ -9,6 +9,7 @@
 #include "app/commands.h"
 #include "app/common.h"
 #include "core/numerics/units.h"
+#include "io/common/text_util.h"
 #include "pipeline/compensate.h"
 
 namespace tolver::app {
@@ -60,14 +61,25 @@ void printCompensation(const CompensationRun& run, const CompensateInputs& o,
       rep.before.axis_max_urad, rep.before.axis_rms_urad);
   // On a calibrated machine the after is the calibration's band (what the model cannot know);
   // the model's own residual, read back, is given apart.
-  if (rep.after_band95_max_um >= 0)
+  if (rep.after_band95_max_um >= 0) {
     std::printf(
-        "  after      within the calibration's 95 %% band: tip median %.3f um, max %.3f um; tool "
-        "axis "
-        "median %.2f urad, max %.2f urad (the spindle's tilt, which a ball-bar cannot see, not "
-        "included)\n",
+        "  after      within the calibration's 95 %% radius: tip median %.3f um, max %.3f um; "
+        "tool axis median %.2f urad, max %.2f urad\n",
         rep.after_band95_median_um, rep.after_band95_max_um, rep.after_axis_band95_median_urad,
         rep.after_axis_band95_max_urad);
+    std::printf(
+        "  band from  the covariance; %s; %s\n",
+        rep.after_lack_of_fit_um > 0
+            ? formatWith("the lack of fit, %.3f um per tip coordinate", rep.after_lack_of_fit_um)
+                  .c_str()
+            : "no lack of fit",
+        rep.after_tilt_prior_urad > 0
+            ? formatWith("the spindle tilt's prior, %.1f urad on the axis",
+                         rep.after_tilt_prior_urad)
+                  .c_str()
+            : "the spindle's tilt, which a ball-bar cannot see, is not in the axis band "
+              "(calibrate --spindle-tilt-urad states its prior)");
+  }
   std::printf(
       "  %s tip max %.4f um (line %d), RMS %.4f um; tool axis max %.3f urad, RMS %.3f urad "
       "(the written program, read back and predicted on the model)\n",

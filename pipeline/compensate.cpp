@@ -191,6 +191,8 @@ void afterBand(const CompensateInputs& in, const std::vector<ProbedPoint>& probe
   medianMax(band, &run.report.after_band95_median_um, &run.report.after_band95_max_um);
   medianMax(axis, &run.report.after_axis_band95_median_urad,
             &run.report.after_axis_band95_max_urad);
+  run.report.after_lack_of_fit_um = mmToUm(run.machine.identification.lack_of_fit_mm);
+  run.report.after_tilt_prior_urad = radToUrad(run.machine.identification.spindle_tilt_rad);
 }
 
 void fillReport(const CompensateInputs& in, const std::string& output, CompensationRun& run) {

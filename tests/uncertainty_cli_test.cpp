@@ -171,13 +171,19 @@ TEST_F(UncertaintyCli, CompensationSaysHowMuchOfTheAfterIsModelUncertainty) {
                            test::sourcePath("samples/matsuura_setup.txt") + " -o " + path("c.apt"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   // The after is the band (tip and axis), the model's own residual apart.
-  EXPECT_NE(r.output.find("after      within the calibration's 95 % band: tip median"),
+  EXPECT_NE(r.output.find("after      within the calibration's 95 % radius: tip median"),
             std::string::npos)
       << r.output;
   EXPECT_NE(r.output.find("model      tip max"), std::string::npos) << r.output;
+  // Where the band comes from: no tilt prior was stated, and it says the axis band leaves it out.
+  EXPECT_NE(r.output.find("band from  the covariance;"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("the spindle's tilt, which a ball-bar cannot see, is not in the axis"),
+            std::string::npos)
+      << r.output;
   std::ifstream in(path("c.json"));
   const nlohmann::json j = nlohmann::json::parse(in);
   ASSERT_TRUE(j.contains("after_uncertainty")) << j.dump(1);
+  EXPECT_EQ(j["after_uncertainty"]["axis_spindle_tilt_prior_urad"].get<double>(), 0.0);
   const double band = j["after_uncertainty"]["band95_max_um"].get<double>();
   EXPECT_GT(band, 0.01);
   EXPECT_LT(band, 5.0);
@@ -186,6 +192,29 @@ TEST_F(UncertaintyCli, CompensationSaysHowMuchOfTheAfterIsModelUncertainty) {
   EXPECT_EQ(j["uncompensated"]["out_of_travel_lines"], nlohmann::json::array({553}));
   EXPECT_LT(j["after_compensated_points"]["tip_max_um"].get<double>(), 0.01);
   EXPECT_GT(j["after_uncertainty"]["axis_band95_max_urad"].get<double>(), 0.1);
+  {
+    // With a stated tilt prior of 20 urad (the machine file's attribute), the axis's 95 % radius
+    // holds it: at least sqrt(chi2_2(0.95)) 20 = 48.95 urad on every point, and it says so.
+    std::ifstream mf(id);
+    std::string xml((std::istreambuf_iterator<char>(mf)), std::istreambuf_iterator<char>());
+    const std::string tag = "<identification_uncertainty ";
+    ASSERT_NE(xml.find(tag), std::string::npos);
+    xml.replace(xml.find(tag), tag.size(), tag + "spindle_tilt_urad=\"20\" ");
+    std::ofstream(path("tilt.xml")) << xml;
+    auto t =
+        test::runTolver("compensate --machine " + path("tilt.xml") + " --cl " +
+                        test::sourcePath("samples/nas979_cone.apt") + " --setup " +
+                        test::sourcePath("samples/matsuura_setup.txt") + " -o " + path("t.apt"));
+    ASSERT_EQ(t.exit_code, 0) << t.output;
+    EXPECT_NE(t.output.find("the spindle tilt's prior, 20.0 urad on the axis"), std::string::npos)
+        << t.output;
+    std::ifstream tj(path("t.json"));
+    const nlohmann::json k = nlohmann::json::parse(tj);
+    EXPECT_EQ(k["after_uncertainty"]["axis_spindle_tilt_prior_urad"].get<double>(), 20.0);
+    EXPECT_GE(k["after_uncertainty"]["axis_band95_median_urad"].get<double>(), 48.95);
+    EXPECT_LT(k["after_uncertainty"]["axis_band95_median_urad"].get<double>(),
+              48.95 + j["after_uncertainty"]["axis_band95_max_urad"].get<double>());
+  }
   // The joints of every point: a compensated point's after joints put the calibrated machine's
   // tip on the program's point; the out-of-travel one keeps its joints.
   ASSERT_EQ(j["joints_file"], path("c_joints.csv"));

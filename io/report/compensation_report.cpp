@@ -69,6 +69,11 @@ std::string formatCompensationJson(const CompensationReport& r) {
                               {"band95_median_um", r.after_band95_median_um},
                               {"axis_band95_max_urad", r.after_axis_band95_max_urad},
                               {"axis_band95_median_urad", r.after_axis_band95_median_urad},
+                              {"radii",
+                               "95 % of the tip's distance (3-D) and of the tool "
+                               "axis's angle (2-D)"},
+                              {"tip_lack_of_fit_um", r.after_lack_of_fit_um},
+                              {"axis_spindle_tilt_prior_urad", r.after_tilt_prior_urad},
                               {"meaning",
                                "the after is zero only to within the calibration's "
                                "uncertainty: compensation removes what the model "

@@ -24,10 +24,15 @@ struct CompensationReport {
   PathFigures before, after;      // after: predicted on the written file, read back
   PathFigures after_compensated;  // the same over the points the file compensates
   int compensated_points = 0;
-  double after_band95_max_um = -1;  // the model's 95 % band of the after (calibrated machine)
+  // The model's 95 % radii of the after (calibrated machine): the tip's distance and the tool
+  // axis's angle, and what they hold beyond the calibration's covariance: its lack of fit (per
+  // tip coordinate) and the spindle tilt's stated prior (0: none stated, the axis band leaves
+  // the tilt out).
+  double after_band95_max_um = -1;
   double after_band95_median_um = -1;
-  double after_axis_band95_max_urad = -1;  // the same for the tool axis (worst direction)
+  double after_axis_band95_max_urad = -1;
   double after_axis_band95_median_urad = -1;
+  double after_lack_of_fit_um = 0, after_tilt_prior_urad = 0;
   std::string joints_file;  // the per-point joints (CSV), before and after
   std::string setup_note;   // the set-up the machine's share is taken after
   std::vector<std::pair<std::string, double>> joint_correction_max;  // axis, um or urad
