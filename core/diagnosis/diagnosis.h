@@ -77,7 +77,9 @@ struct CandidateScore {
   double p_value = 1.0;  // Bonferroni-adjusted over the round
   double effective_readings = 0.0;
   double delta_ic = 0.0;
-  double cv_rms_before = 0.0, cv_rms_after = 0.0;  // mm
+  // mm; cv_rms_after NaN when the candidate failed an earlier test (significance, confounding),
+  // so that its cross-validation could not change its verdict and was not computed.
+  double cv_rms_before = 0.0, cv_rms_after = 0.0;
   double new_information = 0.0;
   double condition = 0.0;  // computed for candidates that pass the other tests
   CandidateVerdict verdict = CandidateVerdict::NotSignificant;

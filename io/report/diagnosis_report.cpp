@@ -635,8 +635,9 @@ std::string htmlCandidates(const DiagnosisView& v) {
   std::string h;
   // Candidates.
   h += "<h2>Every candidate tried</h2>\n<table><tr><th>round</th><th class=\"l\">candidate</th>"
-       "<th>ΔIC</th><th>p (adjusted)</th><th>m_eff</th><th>held-out before (µm)</th>"
-       "<th>held-out after (µm)</th><th>new information</th><th class=\"l\">verdict</th></tr>";
+       "<th>ΔIC</th><th>p (adjusted)</th><th>m_eff</th><th>cross-validated before (µm)</th>"
+       "<th>cross-validated after (µm; — where an earlier test decided)</th><th>new "
+       "information</th><th class=\"l\">verdict</th></tr>";
   std::vector<CandidateScore> c = r.candidates;
   std::stable_sort(c.begin(), c.end(), [](const CandidateScore& a, const CandidateScore& b) {
     return a.round != b.round ? a.round < b.round : a.delta_ic > b.delta_ic;
@@ -646,9 +647,10 @@ std::string htmlCandidates(const DiagnosisView& v) {
          "</td><td>" + formatWith("%.1f", s.delta_ic) + "</td><td>" +
          formatWith("%.2g", s.p_value) + "</td><td>" + formatWith("%.0f", s.effective_readings) +
          "</td><td>" + formatWith("%.3f", mmToUm(s.cv_rms_before)) + "</td><td>" +
-         formatWith("%.3f", mmToUm(s.cv_rms_after)) + "</td><td>" +
-         formatWith("%.3f", s.new_information) + "</td><td class=\"l\">" + verdictName(s.verdict) +
-         "</td></tr>";
+         (std::isfinite(s.cv_rms_after) ? formatWith("%.3f", mmToUm(s.cv_rms_after))
+                                        : std::string("—")) +
+         "</td><td>" + formatWith("%.3f", s.new_information) + "</td><td class=\"l\">" +
+         verdictName(s.verdict) + "</td></tr>";
   h += "</table>\n<p class=\"note\">" + xmlEscape(base.name) + "; " +
        formatWith("%.2f", in.seconds) + " s.</p></body></html>\n";
   return h;
