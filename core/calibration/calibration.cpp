@@ -462,7 +462,9 @@ double evidenceScale(const Eigen::MatrixXd& A, const Eigen::VectorXd& d, const E
   // thin SVD (O(m np^2)) instead of a Cholesky of the m x m C (O(m^3)) per k.
   const Eigen::Index m = A.rows();
   const Eigen::MatrixXd B = A * d.cwiseMax(0.0).cwiseSqrt().asDiagonal();
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(B, Eigen::ComputeThinU);
+  // JacobiSVD (QR-preconditioned), not BDCSVD: Eigen 3.4.0's BDCSVD reads out of bounds
+  // (docs/validation.md).
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(B, Eigen::ComputeThinU);
   const Eigen::VectorXd S2 = svd.singularValues().cwiseAbs2();
   const Eigen::VectorXd c = svd.matrixU().transpose() * y;
   const double rest = std::max(0.0, y.squaredNorm() - c.squaredNorm());
