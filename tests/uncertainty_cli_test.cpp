@@ -343,6 +343,27 @@ TEST_F(UncertaintyCli, PredictWithProbedPointsFollowsTheTruth) {
   err = std::sqrt(err / dt.size());
   std::printf("[ probed ] truth's deviation RMS %.3f um, predicted against it %.3f um\n", own, err);
   EXPECT_LT(err, 0.3 * own);
+  {
+    // The set-up fit and its uncertainty are linear in the touches (issue 36): the same 12
+    // touches 1 000 times over (12 000 rows) give the same prediction, where the uncertainty's
+    // full U of the touches' SVD (36 000 x 36 000) ran out of memory.
+    std::vector<ProbedPoint> many;
+    for (int k = 0; k < 1000; ++k) many.insert(many.end(), probes.begin(), probes.end());
+    writeFileAtomically(path("touches.csv"), formatProbeCsv(truth.model, many));
+    auto m = test::runTolver(base + " --machine " + id + " --probed " + path("touches.csv") +
+                             " -o " + path("many.apt"));
+    ASSERT_EQ(m.exit_code, 0) << m.output;
+    const auto dm = deviations(path("many.csv"));
+    ASSERT_EQ(dm.size(), dp.size());
+    double diff = 0;
+    for (size_t i = 0; i < dm.size(); ++i)
+      for (int k = 0; k < 3; ++k) diff = std::max(diff, std::abs(dm[i][k] - dp[i][k]));
+    EXPECT_LT(diff, 1e-3);  // um
+    const auto um = columns(path("many.csv"), "u_tip_um", "u_axis_urad", "u_tip_um");
+    const auto up = columns(path("p.csv"), "u_tip_um", "u_axis_urad", "u_tip_um");
+    ASSERT_EQ(um.size(), up.size());
+    for (size_t i = 0; i < um.size(); i += 50) EXPECT_NEAR(um[i][0], up[i][0], 1e-3) << i;
+  }
   // The tool axis: the touches cannot see the spindle's tilt; a tram (the truth's tool axis
   // against its table at the first touch's place, rotaries at zero) fits it.
   JointVector q = probes.front().q;

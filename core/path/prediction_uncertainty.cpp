@@ -62,7 +62,7 @@ void PredictionUncertainty::setupModuloProbed(const std::vector<ProbedPoint>& po
   probedRows(machine_, points, machine_.identification.parameters, &J);
   // The same scaling and rank rule as fitProbedSetup: unobserved set-up directions stay fixed.
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(P * scale.cwiseInverse().asDiagonal(),
-                                        Eigen::ComputeFullU | Eigen::ComputeFullV);
+                                        Eigen::ComputeThinU | Eigen::ComputeThinV);
   svd.setThreshold(1e-6);
   B_ = scale.cwiseInverse().asDiagonal() * svd.solve(J);
   modulo_columns_ = part;
