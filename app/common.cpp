@@ -2,7 +2,11 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 
 #include "io/common/text_util.h"
 
@@ -108,15 +112,53 @@ void printNotes(const std::vector<std::string>& notes) {
   for (const std::string& n : notes) std::fprintf(stderr, "tolver: note: %s\n", n.c_str());
 }
 
-ProgressBar::ProgressBar(bool enabled) : enabled_(enabled && isatty(2)) {}
+ProgressBar::ProgressBar(bool enabled) : enabled_(enabled), tty_(isatty(2) != 0) {
+  if (const char* e = std::getenv("TOLVER_PROGRESS_SECONDS")) {
+    char* end = nullptr;
+    const double v = std::strtod(e, &end);
+    if (end != e && *end == '\0' && std::isfinite(v) && v >= 0.0) line_seconds_ = v;
+  }
+}
+
+ProgressBar::~ProgressBar() { endPhase(); }
+
+void ProgressBar::endPhase() {
+  if (!open_) return;
+  open_ = false;
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  if (tty_) {
+    if (drawn_) std::fprintf(stderr, "\n");
+  } else if (seconds >= line_seconds_) {
+    std::fprintf(stderr, "tolver: %s: %.1f s\n", phase_.c_str(), seconds);
+  }
+  drawn_ = false;
+  std::fflush(stderr);
+}
 
 void ProgressBar::operator()(const std::string& what, double f) {
   if (!enabled_) return;
-  const int width = 40, filled = static_cast<int>(f * width + 0.5);
-  std::fprintf(stderr, "\r  %-24s [%s%s] %3d%%", what.c_str(), std::string(filled, '#').c_str(),
-               std::string(width - filled, '.').c_str(), static_cast<int>(f * 100 + 0.5));
-  if (f >= 1.0) std::fprintf(stderr, "\n");
-  std::fflush(stderr);
+  if (!open_ || what != phase_) {
+    endPhase();
+    phase_ = what;
+    start_ = std::chrono::steady_clock::now();
+    open_ = true;
+  }
+  f = std::clamp(std::isfinite(f) ? f : 0.0, 0.0, 1.0);
+  if (tty_) {
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    char left[32] = "";
+    if (f > 0.02 && f < 1.0 && seconds > 1.0)
+      std::snprintf(left, sizeof left, ", ~%.0f s left", seconds * (1.0 - f) / f);
+    const int width = 40, filled = static_cast<int>(f * width + 0.5);
+    std::fprintf(stderr, "\r  %-24s [%s%s] %3d%%%-18s", what.c_str(),
+                 std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(),
+                 static_cast<int>(f * 100 + 0.5), left);
+    drawn_ = true;
+    std::fflush(stderr);
+  }
+  if (f >= 1.0) endPhase();
 }
 
 }  // namespace tolver::app

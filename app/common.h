@@ -2,6 +2,7 @@
 // Command-line options shared by the commands (CLI11), and the progress bar. The work behind
 // them is in pipeline/.
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <map>
 #include <string>
 #include <vector>
@@ -32,14 +33,25 @@ void useFileNumberRule(CLI::App* app);
 void printWarnings(const std::vector<std::string>& warnings);
 void printNotes(const std::vector<std::string>& notes);
 
-// A progress bar on stderr when it is a terminal (and enabled).
+// Progress on stderr (when enabled): on a terminal, a bar per phase with its fraction and the
+// time left (from the phase's rate so far, once 2 % is done and a second has passed); elsewhere
+// (a log, a script), one line per phase that took 2 s or more (TOLVER_PROGRESS_SECONDS in the
+// environment sets another bound; 0: every phase), when it ends: "tolver: <phase>: 12.3 s".
 class ProgressBar {
  public:
   explicit ProgressBar(bool enabled);
+  ~ProgressBar();
+  ProgressBar(const ProgressBar&) = delete;
+  ProgressBar& operator=(const ProgressBar&) = delete;
   void operator()(const std::string& what, double fraction);
 
  private:
-  bool enabled_;
+  void endPhase();
+  bool enabled_, tty_;
+  double line_seconds_ = 2.0;
+  std::string phase_;
+  std::chrono::steady_clock::time_point start_;
+  bool open_ = false, drawn_ = false;
 };
 
 }  // namespace tolver::app

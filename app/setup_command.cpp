@@ -224,7 +224,7 @@ void registerSetup(CLI::App& app, Verdict* verdict) {
                   "gauge lengths to try, mm (default: the set-up's)")
       ->delimiter(',');
   cmd->callback([o, verdict] {
-    ProgressBar bar(true);  // on a terminal only (stderr)
+    ProgressBar bar(true);  // a bar on a terminal, a line per long phase elsewhere (stderr)
     const SetupRun run =
         proposeSetup(*o, [&bar](const std::string& phase, double f) { bar(phase, f); });
     printSetupRun(*o, run);

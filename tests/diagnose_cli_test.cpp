@@ -2,6 +2,7 @@
 // file used as it is by predict and simulate-ballbar, --cl, and bad input.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -83,6 +84,25 @@ TEST_F(DiagnoseCli, CleanDatasetAddsNothing) {
   EXPECT_TRUE(j["effects_added"].empty());
   EXPECT_EQ(j["verdict"], "nothing missing");
   EXPECT_EQ(test::readText(path("augmented.xml")).find("<effect"), std::string::npos);
+}
+
+// Progress when stderr is not a terminal (a log, a script): no bar, one line per phase that took
+// TOLVER_PROGRESS_SECONDS or more (0 here: every phase), and none with --quiet.
+TEST_F(DiagnoseCli, ProgressInALogIsOneLinePerPhase) {
+  const std::string cmd = "diagnose --machine " + nominal + " --readings " + readings("clean") +
+                          " -o " + path("augmented.xml") + " --report-dir " + path("out");
+  setenv("TOLVER_PROGRESS_SECONDS", "0", 1);
+  const auto r = test::runTolver(cmd);
+  const auto q = test::runTolver(cmd + " --quiet");
+  unsetenv("TOLVER_PROGRESS_SECONDS");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const size_t at = r.output.find("tolver: scoring candidates: ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("tolver: scoring candidates: ", at + 1), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("[#"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find('\r'), std::string::npos);
+  ASSERT_EQ(q.exit_code, 0) << q.output;
+  EXPECT_EQ(q.output.find("tolver: scoring candidates"), std::string::npos) << q.output;
 }
 
 // The lack-of-fit test on the plan's repeated poses: the reversal data fail it with the base
