@@ -8,6 +8,7 @@
 #include "app/commands.h"
 #include "app/common.h"
 #include "core/numerics/units.h"
+#include "io/common/text_util.h"
 #include "io/report/verify_report.h"
 #include "pipeline/verify.h"
 
@@ -61,8 +62,13 @@ void printVerification(const Verification& v, const VerifyOptions& o, const std:
   if (v.banded)
     std::printf(
         "  band       the machine's share is known to +- %.2f um at most (95 %%, from the "
-        "calibration's covariance)%s\n",
-        r.band95_max_um, o.in.absolute ? "" : ", after the set-up a shop measures");
+        "calibration's covariance%s)%s\n",
+        r.band95_max_um,
+        r.band_lack_of_fit_um > 0
+            ? formatWith(" and its lack of fit, %.3f um per tip coordinate", r.band_lack_of_fit_um)
+                  .c_str()
+            : "; no lack of fit",
+        o.in.absolute ? "" : ", after the set-up a shop measures");
   std::printf(
       "  area       %.2f %% of %.1f mm2 machined in tolerance; %.1f mm2 not machined; "
       "%.1f mm2 on edges not verified\n",

@@ -857,6 +857,7 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   if (v->banded && v->samples.size() > 0) {
     if (!m.setup_note.empty()) rep.notes.push_back(m.setup_note);
     decideWithinBand(m.cal.uncertainty, program, zones, *v);
+    rep.band_lack_of_fit_um = mmToUm(m.machine.identification.lack_of_fit_mm);
   }
   if (o.line_pass > 0) {
     const auto passes = clPasses(program.path);

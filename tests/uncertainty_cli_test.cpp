@@ -117,6 +117,16 @@ TEST_F(UncertaintyCli, VerifySaysUndecidedWhenTheLimitIsInsideTheBand) {
   ASSERT_TRUE(std::regex_search(r.output, m, std::regex("known to \\+- ([0-9.]+) um"))) << r.output;
   const double band = std::stod(m[1]);
   ASSERT_GT(band, 0.0);
+  // Where the band comes from, in the console and the JSON: this calibration's test showed no
+  // lack of fit (its repeats agree with the fit).
+  EXPECT_NE(r.output.find("calibration's covariance; no lack of fit)"), std::string::npos)
+      << r.output;
+  {
+    std::ifstream j0(path("v0") + "/report.json");
+    const nlohmann::json k = nlohmann::json::parse(j0);
+    EXPECT_EQ(k["uncertainty"]["lack_of_fit_um"].get<double>(),
+              readMachineFile(id).identification.lack_of_fit_mm * 1e3);
+  }
   auto run = [&](double t_um, const std::string& dir) {
     char t[32];
     std::snprintf(t, sizeof t, "%.6f", t_um * 1e-3);

@@ -71,11 +71,18 @@ std::string formatVerifyJson(const VerifyReport& r) {
   j["verdict"] = toLower(verdictName(r));
   if (r.incomplete) j["incomplete"] = r.incomplete_text;
   if (!r.band95_um.empty()) {
-    j["uncertainty"] = {{"band95_max_um", r.band95_max_um},
-                        {"undecided_samples", r.undecided_samples},
-                        {"method",
-                         "the calibration's covariance carried to each CL point's tip, "
-                         "along each sample's normal (nearest CL point), k = 1.96"}};
+    j["uncertainty"] = {
+        {"band95_max_um", r.band95_max_um},
+        {"undecided_samples", r.undecided_samples},
+        {"method",
+         "the calibration's covariance carried to each CL point's tip, "
+         "along each sample's normal (nearest CL point), k = 1.96"},
+        {"lack_of_fit_um", r.band_lack_of_fit_um},
+        {"sources", r.band_lack_of_fit_um > 0
+                        ? "the calibration's covariance and its lack of fit (added to each "
+                          "tip coordinate)"
+                        : "the calibration's covariance (its test showed no lack of fit, "
+                          "or it had no repeats)"}};
     if (r.undecided) j["uncertainty"]["undecided"] = r.undecided_text;
   }
   j["exit_code"] = r.exit_code;

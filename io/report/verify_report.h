@@ -31,6 +31,9 @@ struct VerifyReport {
   // value, and the decision when a zone limit lies within it.
   std::vector<double> band95_um;
   double band95_max_um = 0;
+  // What the band holds beyond the calibration's covariance: its lack of fit per tip coordinate
+  // (um, 0: none). The spindle tilt's prior moves the axis, not the tip the band is taken at.
+  double band_lack_of_fit_um = 0;
   int undecided_samples = 0;
   bool undecided = false;
   std::string undecided_text;
