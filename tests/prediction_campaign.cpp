@@ -8,7 +8,8 @@
 // prior_urad] [cone]` (prior -1 -1: chosen by the readings' evidence; cone: a D-optimal plan
 // against a --for plan, judged at the cone sample's poses; probed: the set-up fitted to 12 probed
 // points instead of the best fit to the truth, the prediction compared with the truth as it is;
-// tram: probed, and a spindle tram at the middle of the volume).
+// tram: probed, and a spindle tram at the middle of the volume; band [tilt_urad]: the band machine
+// by machine along the tool axis and of the tool axis, with a stated spindle-tilt prior).
 #include <unistd.h>
 
 #include <Eigen/Eigenvalues>
