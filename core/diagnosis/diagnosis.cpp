@@ -445,7 +445,7 @@ std::vector<size_t> qualify(const Scorer& sc, const DiagnosisOptions& opt,
                !((c.cv_rms_after = sc.crossValidatedRms(&G)) < c.cv_rms_before)) {
       c.verdict = CandidateVerdict::NoPredictiveGain;
     } else {
-      c.condition = sc.condition(sc.columns(c.spec));
+      c.condition = sc.condition(G);
       if (c.condition > opt.max_condition ||
           std::any_of(rejected.begin(), rejected.end(),
                       [&](const EffectSpec& r) { return sameEffect(r, c.spec); })) {

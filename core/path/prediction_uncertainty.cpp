@@ -84,7 +84,8 @@ Eigen::VectorXd PredictionUncertainty::removeSetup(const std::vector<JointVector
   return beta;
 }
 
-PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionContext* ctx) const {
+Eigen::MatrixXd PredictionUncertainty::identifiedRows(const JointVector& q,
+                                                      const MotionContext* ctx) const {
   const IdentificationUncertainty& id = machine_.identification;
   J_.setZero();
   sensitivityJacobian(fk_, q, J_, ctx);
@@ -95,7 +96,12 @@ PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionCont
     for (size_t k = 0; k < modulo_columns_.size(); ++k) Jm.col(k) = J_.col(modulo_columns_[k]);
     Jid -= Jm * B_;
   }
-  const Eigen::MatrixXd A = Jid * root_;
+  return Jid;
+}
+
+PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionContext* ctx) const {
+  const IdentificationUncertainty& id = machine_.identification;
+  const Eigen::MatrixXd A = identifiedRows(q, ctx) * root_;
   const Eigen::Matrix<double, 6, 6> S = A * A.transpose();
   const Eigen::Matrix3d R = fk_.w_T_t(q, ctx).linear();
   PoseUncertainty u;
@@ -132,20 +138,8 @@ PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionCont
 
 Eigen::RowVectorXd PredictionUncertainty::alongRoot(const JointVector& q,
                                                     const Eigen::Vector3d& n_w) const {
-  const IdentificationUncertainty& id = machine_.identification;
-  J_.setZero();
-  sensitivityJacobian(fk_, q, J_, nullptr);
-  Eigen::MatrixXd Jid(3, id.parameters.size());
-  for (size_t k = 0; k < id.parameters.size(); ++k)
-    Jid.col(k) = J_.block<3, 1>(0, id.parameters[k]);
-  if (modulo_) {
-    Eigen::MatrixXd Jm(3, modulo_columns_.size());
-    for (size_t k = 0; k < modulo_columns_.size(); ++k)
-      Jm.col(k) = J_.block<3, 1>(0, modulo_columns_[k]);
-    Jid -= Jm * B_;
-  }
   const Eigen::Vector3d n_t = fk_.w_T_t(q).linear().transpose() * n_w;
-  return n_t.transpose() * Jid * root_;
+  return n_t.transpose() * identifiedRows(q, nullptr).topRows<3>() * root_;
 }
 
 double PredictionUncertainty::tipRadius95(const PoseUncertainty& u) {

@@ -79,6 +79,9 @@ class PredictionUncertainty {
   Eigen::RowVectorXd alongRoot(const JointVector& q, const Eigen::Vector3d& n_w) const;
 
  private:
+  // The identified parameters' twist rows at q (6 x identified, in t), modulo the measured
+  // set-up when one is fixed: what at() and alongRoot() carry the covariance's root through.
+  Eigen::MatrixXd identifiedRows(const JointVector& q, const MotionContext* ctx) const;
   // R_wt J_d for the given columns at q (3 x columns.size()).
   Eigen::MatrixXd tipColumns(const JointVector& q, const std::vector<int>& columns) const;
 
