@@ -19,7 +19,7 @@ PredictionResult predictToolPathParallel(const MachineModel& model, const Eigen:
 void predictToolPathParallel(const MachineModel& model, const Eigen::VectorXd& params,
                              const std::vector<ClPoint>& path, PredictionResult& result,
                              int max_failures, const std::vector<JointVector>* commanded,
-                             int threads, ParallelPredictionStats* stats) {
+                             int threads, ParallelPredictionStats* stats, PredictionCarry* carry) {
   ParallelPredictionStats own;
   ParallelPredictionStats& st = stats ? *stats : own;
   st = ParallelPredictionStats{};
@@ -30,12 +30,12 @@ void predictToolPathParallel(const MachineModel& model, const Eigen::VectorXd& p
   const size_t stretches =
       std::min<size_t>(static_cast<size_t>(arena.max_concurrency()), blocks / kUnit);
   if (commanded || stretches < 2) {
-    predictToolPath(model, params, path, result, max_failures, commanded, true);
+    predictToolPath(model, params, path, result, max_failures, commanded, true, carry);
     return;
   }
-  BlockPrediction bp(model, params, path, result, max_failures);
+  BlockPrediction bp(model, params, path, result, max_failures, carry);
   if (!bp.batchable()) {
-    predictToolPath(model, params, path, result, max_failures, nullptr, true);
+    predictToolPath(model, params, path, result, max_failures, nullptr, true, carry);
     return;
   }
   using Cursor = BlockPrediction::Cursor;

@@ -24,11 +24,13 @@ struct ParallelPredictionStats {
   size_t blocks_again = 0;
 };
 // The same into an existing result, reusing its storage (no allocation, no page faults, when
-// it already holds as many points): for batch work over many programs.
+// it already holds as many points): for batch work over many programs. With a carry, path is
+// the next stretch of a longer one (core/path/tool_path_prediction.h, PredictionCarry).
 void predictToolPathParallel(const MachineModel& model, const Eigen::VectorXd& params,
                              const std::vector<ClPoint>& path, PredictionResult& result,
                              int max_failures = 20,
                              const std::vector<JointVector>* commanded = nullptr, int threads = 0,
-                             ParallelPredictionStats* stats = nullptr);
+                             ParallelPredictionStats* stats = nullptr,
+                             PredictionCarry* carry = nullptr);
 
 }  // namespace tolver

@@ -104,6 +104,112 @@ TEST(ParallelPrediction, EqualsTheSingleThreadedPredictionBitForBit) {
   }
 }
 
+// The path's stretches one after another: its points into one result, for comparing with the
+// whole path predicted at once. predict(stretch, result, carry) predicts one stretch.
+template <typename Predict>
+PredictionResult inStretches(const std::vector<ClPoint>& path, const std::vector<size_t>& sizes,
+                             int axes, Predict&& predict) {
+  PredictionCarry carry;
+  PredictionResult whole, part;
+  whole.points.resize(path.size(), axes);
+  size_t at = 0;
+  for (size_t k = 0; at < path.size(); ++k) {
+    const size_t n = std::min(k < sizes.size() ? sizes[k] : path.size(), path.size() - at);
+    const std::vector<ClPoint> stretch(path.begin() + at, path.begin() + at + n);
+    predict(stretch, part, carry);
+    EXPECT_EQ(part.points.size(), n);
+    EXPECT_EQ(carry.points(), at + n);
+    for (size_t i = 0; i < n; ++i) whole.points.set(at + i, part.points[i]);
+    at += n;
+  }
+  whole.failures = part.failures;  // the whole path's so far, after the last stretch
+  whole.failed_points = part.failed_points;
+  whole.failures_per_axis = part.failures_per_axis;
+  whole.summary = part.summary;
+  return whole;
+}
+
+// A program read and predicted block by block (PredictionCarry) gives the whole path's
+// prediction bit for bit when its stretches hold multiples of kExactEvery points: the batch path
+// on one and two threads, the one-point path, commanded joints, and a direction-dependent effect
+// (reversal), whose approach directions cross the stretches. A stretch of another length still
+// gives the same joints and deviations (its first point is solved with exact angles).
+TEST(ParallelPrediction, AProgramPredictedInStretchesIsThePathPredictedAtOnce) {
+  std::mt19937 rng(11);
+  const size_t e = BlockPrediction::kExactEvery;
+  const std::vector<size_t> sizes = {2 * e, e, 3 * e, 4 * e};
+  for (const char* file : {test::shippedMachines()[0], test::shippedMachines()[5]}) {
+    const Machine m = machineWithErrors(file, rng);
+    const int axes = static_cast<int>(m.model.axes.size());
+    const std::vector<ClPoint> path = longPath(12 * static_cast<int>(e) + 333, rng);
+    const PredictionResult one = predictToolPath(m.model, m.params, path, 7);
+    ASSERT_GT(one.failed_points, 10) << file;
+    for (int threads : {1, 2}) {
+      const PredictionResult r = inStretches(path, sizes, axes, [&](auto& s, auto& res, auto& c) {
+        predictToolPathParallel(m.model, m.params, s, res, 7, nullptr, threads, nullptr, &c);
+      });
+      expectSameBits(r, one, std::string(file) + " stretches, " + std::to_string(threads));
+      EXPECT_EQ(r.summary.max_line, path[one.summary.max_index].line);
+    }
+    PredictionResult reference;
+    predictToolPath(m.model, m.params, path, reference, 7, nullptr, false);
+    const PredictionResult r = inStretches(path, sizes, axes, [&](auto& s, auto& res, auto& c) {
+      predictToolPath(m.model, m.params, s, res, 7, nullptr, false, &c);
+    });
+    expectSameBits(r, reference, std::string(file) + " one by one in stretches");
+    // Commanded joints: the whole path's own solution as the commands.
+    std::vector<JointVector> commanded(path.size());
+    for (size_t i = 0; i < path.size(); ++i) {
+      commanded[i] = one.points[i].q;
+      if (!commanded[i].allFinite()) commanded[i] = JointVector::Zero(axes);
+    }
+    const PredictionResult cmd = predictToolPath(m.model, m.params, path, 7, &commanded);
+    size_t at = 0;
+    const PredictionResult rc = inStretches(path, sizes, axes, [&](auto& s, auto& res, auto& c) {
+      const std::vector<JointVector> part(commanded.begin() + at, commanded.begin() + at + s.size());
+      at += s.size();
+      predictToolPath(m.model, m.params, s, res, 7, &part, true, &c);
+    });
+    expectSameBits(rc, cmd, std::string(file) + " commanded, in stretches");
+    // Stretches of any length: the same numbers to the rounding of the exact angles.
+    const PredictionResult odd = inStretches(path, {5000, 7777, 64}, axes,
+                                             [&](auto& s, auto& res, auto& c) {
+      predictToolPath(m.model, m.params, s, res, 7, nullptr, true, &c);
+    });
+    EXPECT_EQ(odd.failed_points, one.failed_points);
+    double most = 0.0;
+    for (size_t i = 0; i < path.size(); ++i)
+      if (std::isfinite(one.points[i].deviation_w.x()))
+        most = std::max(most, (odd.points[i].deviation_w - one.points[i].deviation_w).norm());
+    EXPECT_LT(most, 1e-12) << file;
+  }
+  // A reversal (backlash) on X: the approach directions are carried across the stretches.
+  Machine m = machineWithErrors(test::shippedMachines()[0], rng);
+  EffectSpec rev;
+  rev.type = EffectType::Reversal;
+  rev.axis = 0;
+  rev.component = 0;
+  const int first = m.model.parameterCount();
+  m.model.addEffect(rev);
+  m.params.conservativeResize(m.model.parameterCount());
+  for (int k = first; k < m.model.parameterCount(); ++k) m.params[k] = 4e-3;
+  std::vector<ClPoint> path = longPath(3 * static_cast<int>(e) + 17, rng);
+  const PredictionResult one = predictToolPath(m.model, m.params, path, 7);
+  const PredictionResult r = inStretches(path, {e, e}, static_cast<int>(m.model.axes.size()),
+                                         [&](auto& s, auto& res, auto& c) {
+    predictToolPathParallel(m.model, m.params, s, res, 7, nullptr, 2, nullptr, &c);
+  });
+  expectSameBits(r, one, "reversal in stretches");
+  // (the effect shows: without the carried directions the stretches' first points differ)
+  PredictionResult cold;
+  const std::vector<ClPoint> second(path.begin() + e, path.begin() + 2 * e);
+  predictToolPath(m.model, m.params, second, cold, 7);
+  bool differs = false;
+  for (size_t i = 0; i < 64 && i < second.size(); ++i)
+    differs = differs || !same(cold.points[i].deviation_w.x(), one.points[e + i].deviation_w.x());
+  EXPECT_TRUE(differs);
+}
+
 // A smooth path: each speculative stretch agrees with the true one after its first block.
 TEST(ParallelPrediction, ASmoothPathIsPredictedAgainOneBlockPerStretch) {
   std::mt19937 rng(8);

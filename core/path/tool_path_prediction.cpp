@@ -185,10 +185,10 @@ void deviationLanes(int n, const double* const in[4][3], double* const out[7]) {
 struct BlockSums {  // (a value apart from the failures: the loop keeps it in registers)
   double sum2 = 0.0, sum2_angle = 0.0;
   double max_deviation = 0.0, max_axis_angle = 0.0;
-  int max_index = -1;
+  int max_index = -1, max_line = 0;
   int singular_points = 0, first_singular_line = 0;
   // Rapids (positioning, home moves) are counted apart: the headline figures are the cut's.
-  int rapid_points = 0, rapid_max_index = -1;
+  int rapid_points = 0, rapid_max_index = -1, rapid_max_line = 0;
   double rapid_max_deviation = 0.0;
   TOLVER_LANE_INLINE void add(size_t i, const ClPoint& cl, bool singular, double d, double angle) {
     if (singular) {
@@ -200,6 +200,7 @@ struct BlockSums {  // (a value apart from the failures: the loop keeps it in re
       if (d > rapid_max_deviation || rapid_max_index < 0) {
         rapid_max_deviation = d;
         rapid_max_index = static_cast<int>(i);
+        rapid_max_line = cl.line;
       }
       return;
     }
@@ -208,6 +209,7 @@ struct BlockSums {  // (a value apart from the failures: the loop keeps it in re
     if (d > max_deviation || max_index < 0) {
       max_deviation = d;
       max_index = static_cast<int>(i);
+      max_line = cl.line;
     }
     if (angle > max_axis_angle) max_axis_angle = angle;
   }
@@ -235,50 +237,76 @@ struct BlockTally {
 
 namespace {
 
-// The tallies of consecutive blocks, in path order, into the result's failures and summary.
-void mergeTallies(const MachineModel& model, const std::vector<BlockTally>& tallies, size_t points,
-                  int max_failures, PredictionResult& result) {
+// A block's tally folded into the tally of the blocks before it on the path (in path order):
+// sums added, maxima kept, the first max_failures failures.
+void foldTally(BlockTally& into, const BlockTally& t, int max_failures, int axes) {
+  BlockSums& s = into.sums;
+  const BlockSums& b = t.sums;
+  s.sum2 += b.sum2;
+  s.sum2_angle += b.sum2_angle;
+  if (b.max_index >= 0 && (b.max_deviation > s.max_deviation || s.max_index < 0)) {
+    s.max_deviation = b.max_deviation;
+    s.max_index = b.max_index;
+    s.max_line = b.max_line;
+  }
+  if (b.max_axis_angle > s.max_axis_angle) s.max_axis_angle = b.max_axis_angle;
+  s.rapid_points += b.rapid_points;
+  if (b.rapid_max_index >= 0 &&
+      (b.rapid_max_deviation > s.rapid_max_deviation || s.rapid_max_index < 0)) {
+    s.rapid_max_deviation = b.rapid_max_deviation;
+    s.rapid_max_index = b.rapid_max_index;
+    s.rapid_max_line = b.rapid_max_line;
+  }
+  if (b.singular_points > 0 && s.singular_points == 0)
+    s.first_singular_line = b.first_singular_line;
+  s.singular_points += b.singular_points;
+  into.failed += t.failed;
+  for (int a = 0; a <= axes; ++a) into.failed_per_axis[a] += t.failed_per_axis[a];
+  for (const BlockTally::Failure& f : t.failures) {
+    if (static_cast<int>(into.failures.size()) >= max_failures) break;
+    into.failures.push_back(f);
+  }
+}
+
+// The tally of a path's `points` points into the result's failures and summary.
+void summarise(const MachineModel& model, const BlockTally& total, size_t points,
+               PredictionResult& result) {
   const int axes = static_cast<int>(model.axes.size());
   PredictionSummary& s = result.summary;
-  double sum2 = 0.0, sum2_angle = 0.0;
-  for (const BlockTally& t : tallies) {
-    const BlockSums& b = t.sums;
-    sum2 += b.sum2;
-    sum2_angle += b.sum2_angle;
-    if (b.max_index >= 0 && (b.max_deviation > s.max_deviation || s.max_index < 0)) {
-      s.max_deviation = b.max_deviation;
-      s.max_index = b.max_index;
-    }
-    if (b.max_axis_angle > s.max_axis_angle) s.max_axis_angle = b.max_axis_angle;
-    s.rapid_points += b.rapid_points;
-    if (b.rapid_max_index >= 0 &&
-        (b.rapid_max_deviation > s.rapid_max_deviation || s.rapid_max_index < 0)) {
-      s.rapid_max_deviation = b.rapid_max_deviation;
-      s.rapid_max_index = b.rapid_max_index;
-    }
-    if (b.singular_points > 0 && s.singular_points == 0)
-      s.first_singular_line = b.first_singular_line;
-    s.singular_points += b.singular_points;
-    result.failed_points += t.failed;
-    for (int a = 0; a <= axes; ++a) result.failures_per_axis[a] += t.failed_per_axis[a];
-    for (const BlockTally::Failure& f : t.failures) {
-      if (static_cast<int>(result.failures.size()) >= max_failures) break;
-      IkSolution sol;
-      sol.status = f.status;
-      sol.violated_axis = f.axis;
-      sol.violated_value = f.value;
-      result.failures.push_back({f.index, f.line, f.status, f.axis, describeIkFailure(model, sol)});
-    }
+  const BlockSums& b = total.sums;
+  s = PredictionSummary{};
+  s.points = static_cast<int>(points);
+  s.max_deviation = b.max_deviation;
+  s.max_index = b.max_index;
+  s.max_line = b.max_line;
+  s.max_axis_angle = b.max_axis_angle;
+  s.rapid_points = b.rapid_points;
+  s.rapid_max_deviation = b.rapid_max_deviation;
+  s.rapid_max_index = b.rapid_max_index;
+  s.rapid_max_line = b.rapid_max_line;
+  s.singular_points = b.singular_points;
+  s.first_singular_line = b.first_singular_line;
+  result.failed_points = total.failed;
+  result.failures_per_axis.assign(model.axes.size() + 1, 0);
+  for (int a = 0; a <= axes; ++a) result.failures_per_axis[a] = total.failed_per_axis[a];
+  result.failures.clear();
+  for (const BlockTally::Failure& f : total.failures) {
+    IkSolution sol;
+    sol.status = f.status;
+    sol.violated_axis = f.axis;
+    sol.violated_value = f.value;
+    result.failures.push_back({f.index, f.line, f.status, f.axis, describeIkFailure(model, sol)});
   }
   // Over the cutting points that were predicted (failed points and rapids apart).
   const long cutting = static_cast<long>(points) - result.failed_points - s.rapid_points;
   if (cutting <= 0) {  // nothing but rapids: their figures are the only ones
     s.max_deviation = s.rapid_max_deviation;
     s.max_index = s.rapid_max_index;
+    s.max_line = s.rapid_max_line;
     return;
   }
-  s.rms_deviation = std::sqrt(sum2 / static_cast<double>(cutting));
-  s.rms_axis_angle = std::sqrt(sum2_angle / static_cast<double>(cutting));
+  s.rms_deviation = std::sqrt(b.sum2 / static_cast<double>(cutting));
+  s.rms_axis_angle = std::sqrt(b.sum2_angle / static_cast<double>(cutting));
 }
 
 }  // namespace
@@ -295,21 +323,64 @@ struct BlockPrediction::Work {
 };
 static_assert(InverseKinematics::kBlock % 64 == 0);
 
+struct PredictionCarry::State {
+  size_t points = 0;        // in the stretches before
+  bool has_before = false;  // a point precedes the next stretch,
+  double u_before[3] = {0.0, 0.0, 1.0};  // with this tool axis
+  InverseKinematics::Cursor cursor;      // the choice's (the one-point path's previous point)
+  MotionContext ctx;                     // direction-dependent effects' approach directions
+  BlockTally total;                      // the whole path's so far
+};
+
+PredictionCarry::PredictionCarry() : s_(std::make_unique<State>()) {}
+PredictionCarry::~PredictionCarry() = default;
+PredictionCarry::PredictionCarry(PredictionCarry&&) noexcept = default;
+PredictionCarry& PredictionCarry::operator=(PredictionCarry&&) noexcept = default;
+size_t PredictionCarry::points() const { return s_->points; }
+
 struct BlockPrediction::State {
   State(const MachineModel& m, const Eigen::VectorXd& params, const std::vector<ClPoint>& p,
-        PredictionResult& r, int most_failures)
-      : model(m), path(p), ik(m), actual(m, params), result(r), max_failures(most_failures) {}
+        PredictionResult& r, int most_failures, PredictionCarry* c)
+      : model(m),
+        path(p),
+        ik(m),
+        actual(m, params),
+        result(r),
+        max_failures(most_failures),
+        carry(c),
+        base(c ? c->points() : 0) {}
   const MachineModel& model;
   const std::vector<ClPoint>& path;
   const InverseKinematics ik;
   const ForwardKinematics actual;
   PredictionResult& result;
   int max_failures;
+  PredictionCarry* carry;
+  size_t base;                      // index of path[0] in the whole path
   std::vector<BlockTally> tallies;  // one per block
   InverseKinematics::Cursor cursor;
 };
 
 namespace {
+
+// The stretch's tallies, in path order, into the result's failures and summary; with a carry,
+// folded into the whole path's so far, which the carry keeps with the stretch's last tool axis.
+void finishTallies(const MachineModel& model, const std::vector<BlockTally>& tallies,
+                   const std::vector<ClPoint>& path, int max_failures, PredictionResult& result,
+                   PredictionCarry* carry) {
+  BlockTally local;
+  BlockTally& total = carry ? carry->state().total : local;
+  for (const BlockTally& t : tallies)
+    foldTally(total, t, max_failures, static_cast<int>(model.axes.size()));
+  const size_t points = (carry ? carry->points() : 0) + path.size();
+  summarise(model, total, points, result);
+  if (!carry) return;
+  PredictionCarry::State& c = carry->state();
+  c.points = points;
+  if (path.empty()) return;
+  c.has_before = true;
+  for (int k = 0; k < 3; ++k) c.u_before[k] = path.back().u_w[k];
+}
 
 size_t blockCount(size_t points) {
   return (points + InverseKinematics::kBlock - 1) / InverseKinematics::kBlock;
@@ -330,9 +401,10 @@ void prepare(const MachineModel& model, const std::vector<ClPoint>& path, Predic
 
 BlockPrediction::BlockPrediction(const MachineModel& model, const Eigen::VectorXd& params,
                                  const std::vector<ClPoint>& path, PredictionResult& result,
-                                 int max_failures)
-    : s_(std::make_unique<State>(model, params, path, result, max_failures)) {
+                                 int max_failures, PredictionCarry* carry)
+    : s_(std::make_unique<State>(model, params, path, result, max_failures, carry)) {
   prepare(model, path, result, s_->tallies);
+  if (carry) s_->cursor = carry->state().cursor;
 }
 
 BlockPrediction::~BlockPrediction() = default;
@@ -366,11 +438,17 @@ void BlockPrediction::lanes(size_t block, Work& w, int hint) const {
       b.u[k][i] = cl.u_w[k];
     }
   }
-  b.has_before = w.start > 0;
-  b.exact_first = w.start % kExactEvery == 0;
+  b.exact_first = (s_->base + w.start) % kExactEvery == 0;
   b.prism_only = hint;
-  if (b.has_before)
+  if (w.start > 0) {
+    b.has_before = true;
     for (int k = 0; k < 3; ++k) b.u_before[k] = path[w.start - 1].u_w[k];
+  } else {  // the stretch before's last point, if any
+    const PredictionCarry::State* c = s_->carry ? &s_->carry->state() : nullptr;
+    b.has_before = c && c->has_before;
+    if (b.has_before)
+      for (int k = 0; k < 3; ++k) b.u_before[k] = c->u_before[k];
+  }
   s_->ik.blockLanes(b);
 }
 
@@ -444,17 +522,18 @@ void BlockPrediction::account(Work& w) const {
     const size_t at = w.start + i;
     if (b.status[i] != IkStatus::Ok) {
       s_->result.points.setFailed(at);
-      t.fail(at, s_->path[at], b.status[i], b.violated_axis[i], b.violated_value[i],
+      t.fail(s_->base + at, s_->path[at], b.status[i], b.violated_axis[i], b.violated_value[i],
              s_->max_failures, axes);
     } else {
-      sums.add(at, s_->path[at], b.singular[i], w.dev[6][i], w.dev[5][i]);
+      sums.add(s_->base + at, s_->path[at], b.singular[i], w.dev[6][i], w.dev[5][i]);
     }
   }
   t.sums = sums;
 }
 
 void BlockPrediction::finish() {
-  mergeTallies(s_->model, s_->tallies, s_->path.size(), s_->max_failures, s_->result);
+  if (s_->carry) s_->carry->state().cursor = s_->cursor;
+  finishTallies(s_->model, s_->tallies, s_->path, s_->max_failures, s_->result, s_->carry);
 }
 
 namespace {
@@ -502,10 +581,11 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
 
 void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                      const std::vector<ClPoint>& path, PredictionResult& result, int max_failures,
-                     const std::vector<JointVector>* commanded, bool batch) {
+                     const std::vector<JointVector>* commanded, bool batch,
+                     PredictionCarry* carry) {
   if (commanded && commanded->size() != path.size()) commanded = nullptr;
   if (batch && !commanded) {
-    BlockPrediction bp(model, params, path, result, max_failures);
+    BlockPrediction bp(model, params, path, result, max_failures, carry);
     if (bp.batchable()) {
       const std::shared_ptr<BlockPrediction::Work> w = bp.newWork();
       for (size_t k = 0; k < bp.blocks(); ++k) bp.predict(k, *w, bp.cursor());
@@ -515,29 +595,32 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
   }
   std::vector<BlockTally> tallies;
   prepare(model, path, result, tallies);
+  const size_t base = carry ? carry->points() : 0;
   const InverseKinematics ik(model);
   const ForwardKinematics actual(model, params);
   const int axes = static_cast<int>(model.axes.size());
-  JointVector previous_q;
-  const JointVector* previous = nullptr;
-  std::array<double, kMaxAxes> previous_cos, previous_sin;  // of previous's rotary values
+  // The previous point (the cursor's previous values; the stretch before's last with a carry).
+  InverseKinematics::Cursor own;
+  InverseKinematics::Cursor& prev = carry ? carry->state().cursor : own;
   // Effects that depend on the approach direction (reversal) see it from the joint sequence;
   // time-dependent ones (thermal) see an unknown time and add nothing.
-  MotionContext ctx;
-  const MotionContext* ctx_ptr = model.effects.empty() ? nullptr : &ctx;
+  MotionContext own_ctx;
+  MotionContext& ctx = carry ? carry->state().ctx : own_ctx;
+  MotionContext* ctx_ptr = model.effects.empty() ? nullptr : &ctx;
   PredictedPoint out;
   for (size_t i = 0; i < path.size(); ++i) {
     const ClPoint& cl = path[i];
-    IkSolution sol = commanded
-                         ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
-                         : ik.solve(cl.p_w, cl.u_w, previous, previous_cos.data(),
-                                    previous_sin.data(), i % BlockPrediction::kExactEvery == 0);
+    const JointVector* previous = prev.has_previous ? &prev.previous : nullptr;
+    IkSolution sol =
+        commanded ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
+                  : ik.solve(cl.p_w, cl.u_w, previous, prev.previous_cos.data(),
+                             prev.previous_sin.data(), (base + i) % BlockPrediction::kExactEvery == 0);
     if (commanded && sol.status == IkStatus::Ok) keepCommanded(ik, cl, (*commanded)[i], sol);
     if (sol.status != IkStatus::Ok) {
       result.points.setFailed(i);
-      tallies[i / InverseKinematics::kBlock].fail(i, cl, sol.status, sol.violated_axis,
+      tallies[i / InverseKinematics::kBlock].fail(base + i, cl, sol.status, sol.violated_axis,
                                                   sol.violated_value, max_failures, axes);
-      previous = nullptr;
+      prev.has_previous = false;
       continue;
     }
     out.q = sol.q;
@@ -551,13 +634,13 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
     out.across_axis = d.across;
     out.axis_angle = d.angle;
     result.points.set(i, out);
-    tallies[i / InverseKinematics::kBlock].sums.add(i, cl, sol.singular, d.norm, d.angle);
-    previous_q = sol.q;
-    previous = &previous_q;
-    previous_cos = sol.cos_q;
-    previous_sin = sol.sin_q;
+    tallies[i / InverseKinematics::kBlock].sums.add(base + i, cl, sol.singular, d.norm, d.angle);
+    prev.has_previous = true;
+    prev.previous = sol.q;
+    prev.previous_cos = sol.cos_q;
+    prev.previous_sin = sol.sin_q;
   }
-  mergeTallies(model, tallies, path.size(), max_failures, result);
+  finishTallies(model, tallies, path, max_failures, result, carry);
 }
 
 std::vector<RotaryJump> findRotaryJumps(const MachineModel& model, const std::vector<ClPoint>& path,

@@ -124,11 +124,13 @@ struct PredictionSummary {
   double max_deviation = 0.0;        // mm, |deviation_w|, over cutting points
   double rms_deviation = 0.0;        // mm, over cutting points
   int max_index = -1;                // cutting point with the largest deviation
+  int max_line = 0;                  // its source line
   double max_axis_angle = 0.0;       // rad, over cutting points
   double rms_axis_angle = 0.0;       // rad
   int rapid_points = 0;              // rapids predicted, not in the figures above
   double rapid_max_deviation = 0.0;  // mm
   int rapid_max_index = -1;
+  int rapid_max_line = 0;
 };
 
 struct PredictionResult {
@@ -140,6 +142,28 @@ struct PredictionResult {
   std::vector<int> failures_per_axis;
   PredictionSummary summary;
   bool ok() const { return failures.empty(); }
+};
+
+// A path predicted in consecutive stretches (a program read and written block by block, its
+// memory independent of its length): what each stretch hands the next (the inverse kinematics'
+// choice, the last point's tool axis, the approach directions of direction-dependent effects),
+// and the failures and summary of the whole path so far. The stretches' points are those of the
+// whole path predicted at once, bit for bit, when every stretch but the last holds a multiple of
+// BlockPrediction::kExactEvery points (tested). Given to a prediction (`carry`), the result's
+// points are the stretch's and its failures, failures_per_axis and summary the whole path's so
+// far, with indices in the whole path.
+class PredictionCarry {
+ public:
+  PredictionCarry();
+  ~PredictionCarry();
+  PredictionCarry(PredictionCarry&&) noexcept;
+  PredictionCarry& operator=(PredictionCarry&&) noexcept;
+  size_t points() const;  // predicted so far
+  struct State;           // (complete in core)
+  State& state() { return *s_; }
+
+ private:
+  std::unique_ptr<State> s_;
 };
 
 // Predicts the path; params are the machine's error parameters (model.parameterCount()).
@@ -161,7 +185,8 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
 // batchable()) reproduces bit for bit (tests); without commanded joints only.
 void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
                      const std::vector<ClPoint>& path, PredictionResult& result, int max_failures,
-                     const std::vector<JointVector>* commanded, bool batch);
+                     const std::vector<JointVector>* commanded, bool batch,
+                     PredictionCarry* carry = nullptr);
 
 // The batch path block by block, for a driver that runs blocks on several threads
 // (pipeline/parallel_prediction.h): blocks of InverseKinematics::kBlock points. predict()
@@ -186,8 +211,11 @@ class BlockPrediction {
   // that starts there agrees with the true one as soon as both take the same candidate.
   static constexpr size_t kExactEvery = 64 * InverseKinematics::kBlock;
   // Prepares result for path (its points resized, its failures and summary cleared).
+  // With a carry, path is the next stretch of a longer one (PredictionCarry): the cursor starts
+  // as the stretch before left it, and finish() hands it on.
   BlockPrediction(const MachineModel& model, const Eigen::VectorXd& params,
-                  const std::vector<ClPoint>& path, PredictionResult& result, int max_failures);
+                  const std::vector<ClPoint>& path, PredictionResult& result, int max_failures,
+                  PredictionCarry* carry = nullptr);
   ~BlockPrediction();
   // The stages apply (InverseKinematics and ForwardKinematics batchable()).
   bool batchable() const;
