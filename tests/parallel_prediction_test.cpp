@@ -166,16 +166,17 @@ TEST(ParallelPrediction, AProgramPredictedInStretchesIsThePathPredictedAtOnce) {
     const PredictionResult cmd = predictToolPath(m.model, m.params, path, 7, &commanded);
     size_t at = 0;
     const PredictionResult rc = inStretches(path, sizes, axes, [&](auto& s, auto& res, auto& c) {
-      const std::vector<JointVector> part(commanded.begin() + at, commanded.begin() + at + s.size());
+      const std::vector<JointVector> part(commanded.begin() + at,
+                                          commanded.begin() + at + s.size());
       at += s.size();
       predictToolPath(m.model, m.params, s, res, 7, &part, true, &c);
     });
     expectSameBits(rc, cmd, std::string(file) + " commanded, in stretches");
     // Stretches of any length: the same numbers to the rounding of the exact angles.
-    const PredictionResult odd = inStretches(path, {5000, 7777, 64}, axes,
-                                             [&](auto& s, auto& res, auto& c) {
-      predictToolPath(m.model, m.params, s, res, 7, nullptr, true, &c);
-    });
+    const PredictionResult odd =
+        inStretches(path, {5000, 7777, 64}, axes, [&](auto& s, auto& res, auto& c) {
+          predictToolPath(m.model, m.params, s, res, 7, nullptr, true, &c);
+        });
     EXPECT_EQ(odd.failed_points, one.failed_points);
     double most = 0.0;
     for (size_t i = 0; i < path.size(); ++i)
@@ -195,10 +196,10 @@ TEST(ParallelPrediction, AProgramPredictedInStretchesIsThePathPredictedAtOnce) {
   for (int k = first; k < m.model.parameterCount(); ++k) m.params[k] = 4e-3;
   std::vector<ClPoint> path = longPath(3 * static_cast<int>(e) + 17, rng);
   const PredictionResult one = predictToolPath(m.model, m.params, path, 7);
-  const PredictionResult r = inStretches(path, {e, e}, static_cast<int>(m.model.axes.size()),
-                                         [&](auto& s, auto& res, auto& c) {
-    predictToolPathParallel(m.model, m.params, s, res, 7, nullptr, 2, nullptr, &c);
-  });
+  const PredictionResult r = inStretches(
+      path, {e, e}, static_cast<int>(m.model.axes.size()), [&](auto& s, auto& res, auto& c) {
+        predictToolPathParallel(m.model, m.params, s, res, 7, nullptr, 2, nullptr, &c);
+      });
   expectSameBits(r, one, "reversal in stretches");
   // (the effect shows: without the carried directions the stretches' first points differ)
   PredictionResult cold;

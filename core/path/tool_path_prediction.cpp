@@ -324,8 +324,8 @@ struct BlockPrediction::Work {
 static_assert(InverseKinematics::kBlock % 64 == 0);
 
 struct PredictionCarry::State {
-  size_t points = 0;        // in the stretches before
-  bool has_before = false;  // a point precedes the next stretch,
+  size_t points = 0;                     // in the stretches before
+  bool has_before = false;               // a point precedes the next stretch,
   double u_before[3] = {0.0, 0.0, 1.0};  // with this tool axis
   InverseKinematics::Cursor cursor;      // the choice's (the one-point path's previous point)
   MotionContext ctx;                     // direction-dependent effects' approach directions
@@ -611,10 +611,10 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
   for (size_t i = 0; i < path.size(); ++i) {
     const ClPoint& cl = path[i];
     const JointVector* previous = prev.has_previous ? &prev.previous : nullptr;
-    IkSolution sol =
-        commanded ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
-                  : ik.solve(cl.p_w, cl.u_w, previous, prev.previous_cos.data(),
-                             prev.previous_sin.data(), (base + i) % BlockPrediction::kExactEvery == 0);
+    IkSolution sol = commanded ? ik.solve(cl.p_w, cl.u_w, &(*commanded)[i])
+                               : ik.solve(cl.p_w, cl.u_w, previous, prev.previous_cos.data(),
+                                          prev.previous_sin.data(),
+                                          (base + i) % BlockPrediction::kExactEvery == 0);
     if (commanded && sol.status == IkStatus::Ok) keepCommanded(ik, cl, (*commanded)[i], sol);
     if (sol.status != IkStatus::Ok) {
       result.points.setFailed(i);
