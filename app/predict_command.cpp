@@ -20,26 +20,9 @@ double clean(double v) { return std::abs(v) < 5e-7 ? 0.0 : v; }
 
 // The prediction's uncertainty on a calibrated machine: the set-up it is taken after, the 1-sigma
 // band, and the points beyond the calibrated ranges.
-void printUncertainty(const Machine& machine, const ClProgram& program,
-                      const CalibratedPrediction& cal) {
-  const std::vector<PoseUncertainty>& unc = cal.uncertainty;
+void printUncertainty(const Machine& machine, const CalibratedPrediction& cal,
+                      const BandSummary& band) {
   const Eigen::VectorXd& measured_setup = cal.measured_setup;
-  std::vector<double> tip(unc.size()), axis(unc.size());
-  int outside = 0, first_outside = -1;
-  std::vector<double> beyond(machine.model.axes.size(), 0.0);
-  for (size_t i = 0; i < unc.size(); ++i) {
-    tip[i] = unc[i].tip;
-    axis[i] = unc[i].axis;
-    if (unc[i].outside) {
-      if (outside++ == 0) first_outside = static_cast<int>(i);
-      for (size_t a = 0; a < beyond.size() && a < static_cast<size_t>(unc[i].beyond.size()); ++a)
-        beyond[a] = std::max(beyond[a], unc[i].beyond[a]);
-    }
-  }
-  auto median = [](std::vector<double> v) {
-    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
-    return v[v.size() / 2];
-  };
   if (cal.probed)
     std::printf(
         "  set-up     probed: the calibration cannot see the part's pose on the table; "
@@ -62,19 +45,13 @@ void printUncertainty(const Machine& machine, const ClProgram& program,
       "covariance does not hold, below): tip median %.3f um, max %.3f um; tool axis median %.3f "
       "urad, "
       "max %.3f urad\n",
-      machine.identification.parameters.size(), mmToUm(median(tip)),
-      mmToUm(*std::max_element(tip.begin(), tip.end())), radToUrad(median(axis)),
-      radToUrad(*std::max_element(axis.begin(), axis.end())));
+      machine.identification.parameters.size(), mmToUm(band.tip_median), mmToUm(band.tip_max),
+      radToUrad(band.axis_median), radToUrad(band.axis_max));
   // Which parts of the band come from where.
   const IdentificationUncertainty& id = machine.identification;
-  std::vector<double> cal_tip(unc.size()), cal_axis(unc.size());
-  for (size_t i = 0; i < unc.size(); ++i) {
-    cal_tip[i] = unc[i].calibration_tip;
-    cal_axis[i] = unc[i].calibration_axis;
-  }
   std::printf(
       "  band from  the covariance (tip median %.3f um, axis median %.3f urad); %s; %s\n",
-      mmToUm(median(cal_tip)), radToUrad(median(cal_axis)),
+      mmToUm(band.calibration_tip_median), radToUrad(band.calibration_axis_median),
       id.lack_of_fit_mm > 0
           ? ("the calibration's lack of fit, " + formatWith("%.3f um", mmToUm(id.lack_of_fit_mm)) +
              " per tip coordinate")
@@ -86,21 +63,21 @@ void printUncertainty(const Machine& machine, const ClProgram& program,
                 .c_str()
           : "the spindle's tilt, which a ball-bar cannot see, is not in the axis band (calibrate "
             "--spindle-tilt-urad states its prior; a tram measures it)");
-  if (outside > 0) {
+  if (band.outside > 0) {
     std::string where;
     char buf[96];
-    for (size_t a = 0; a < beyond.size(); ++a)
-      if (beyond[a] > 0) {
+    for (size_t a = 0; a < band.beyond.size(); ++a)
+      if (band.beyond[a] > 0) {
         const bool rot = machine.model.axes[a].isRotary();
         std::snprintf(buf, sizeof buf, "%s%s by up to %.3f %s", where.empty() ? "" : ", ",
-                      machine.model.axes[a].name.c_str(), beyond[a] * (rot ? radToDeg(1.0) : 1.0),
-                      rot ? "deg" : "mm");
+                      machine.model.axes[a].name.c_str(),
+                      band.beyond[a] * (rot ? radToDeg(1.0) : 1.0), rot ? "deg" : "mm");
         where += buf;
       }
     std::printf(
         "  calibrated %d points lie outside the joint ranges the calibration readings "
         "covered (first at line %d; %s): there the errors are extrapolated\n",
-        outside, program.path[first_outside].line, where.c_str());
+        band.outside, band.first_outside_line, where.c_str());
   }
 }
 
@@ -129,7 +106,6 @@ void printPrediction(const PredictionRun& run, const PredictInputs& in) {
   const ClProgram& program = run.program;
   const PartSetup& setup = machine.model.setup;
   const PredictionSummary& s = run.prediction.summary;
-  const PredictedPoints& pts = run.prediction.points;
   const CalibratedPrediction& cal = run.calibration;
   std::printf("tolver predict\n");
   std::printf("  machine    %s (%s): %zu axes, %d error parameters, %d non-zero\n",
@@ -150,10 +126,10 @@ void printPrediction(const PredictionRun& run, const PredictInputs& in) {
       setup.part_zero_table.x(), setup.part_zero_table.y(), setup.part_zero_table.z(),
       radToDeg(setup.part_rotation), setup.gauge_length);
   if (cal.probed) std::printf("  probed     %s\n", run.probe_line.c_str());
-  const PredictedPoint& worst = pts[s.max_index];
+  const PredictedPoint& worst = run.worst;
   std::printf("  deviation  max %.3f um at point %d (line %d), RMS %.3f um%s\n",
-              mmToUm(s.max_deviation), s.max_index, program.path[s.max_index].line,
-              mmToUm(s.rms_deviation), s.rapid_points > 0 ? " (cutting moves)" : "");
+              mmToUm(s.max_deviation), s.max_index, s.max_line, mmToUm(s.rms_deviation),
+              s.rapid_points > 0 ? " (cutting moves)" : "");
   std::printf(
       "             at the max: (%.3f, %.3f, %.3f) um in the part frame, %.3f um along the "
       "tool axis, %.3f um across\n",
@@ -162,16 +138,18 @@ void printPrediction(const PredictionRun& run, const PredictInputs& in) {
       clean(mmToUm(worst.across_axis)));
   if (s.rapid_points > 0 && s.rapid_max_index >= 0)
     std::printf("  rapids     %d positioning and home moves, apart: max %.3f um at line %d\n",
-                s.rapid_points, mmToUm(s.rapid_max_deviation),
-                program.path[s.rapid_max_index].line);
+                s.rapid_points, mmToUm(s.rapid_max_deviation), s.rapid_max_line);
   std::printf("  tool axis  max %.3f urad, RMS %.3f urad\n", radToUrad(s.max_axis_angle),
               radToUrad(s.rms_axis_angle));
-  if (!cal.uncertainty.empty()) printUncertainty(machine, program, cal);
+  if (run.has_band) printUncertainty(machine, cal, run.band);
   printRisks(run, in.max_rotary_step_deg);
   printWarnings(run.warnings);
   printNotes(run.notes);
-  std::printf("  wrote      %s (predicted CL), %s (per-point table)\n", run.output.c_str(),
-              run.point_table.c_str());
+  if (run.point_table.empty())
+    std::printf("  wrote      %s (predicted CL)\n", run.output.c_str());
+  else
+    std::printf("  wrote      %s (predicted CL), %s (per-point table)\n", run.output.c_str(),
+                run.point_table.c_str());
 }
 
 }  // namespace
@@ -188,14 +166,22 @@ void registerPredict(CLI::App& app, Verdict* verdict) {
   cmd->add_option("--max-rotary-step-deg", o->max_rotary_step_deg,
                   "report rotary steps above this between cutting moves, deg (default 10)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--errors", o->point_table,
-                  "per-point table to write (CSV; default: the output path with .csv)");
+  auto* errors =
+      cmd->add_option("--errors", o->point_table,
+                      "per-point table to write (CSV; default: the output path with .csv)");
+  cmd->add_flag("--no-errors", o->no_point_table,
+                "write the predicted CL alone, without the per-point table")
+      ->excludes(errors);
   cmd->add_flag("--absolute", o->absolute,
                 "a calibrated machine: predict without the set-up a shop measures (part probed, "
                 "tool preset), i.e. with what the calibration cannot see left in");
   addProbedOption(cmd, o->probed);
-  cmd->callback([o, verdict] {
-    const PredictionRun run = predict(*o);
+  auto quiet = std::make_shared<bool>(false);
+  cmd->add_flag("--quiet", *quiet, "no progress bar");
+  cmd->callback([o, verdict, quiet] {
+    ProgressBar bar(!*quiet);
+    const PredictionRun run =
+        predict(*o, [&bar](const std::string& phase, double f) { bar(phase, f); });
     printPrediction(run, *o);
     *verdict = run.verdict;
   });

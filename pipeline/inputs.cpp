@@ -82,17 +82,26 @@ std::string machineErrorsStatement(const Machine& machine, bool* none) {
 
 namespace {
 
-// Keeps the points of source lines first..last (and their parallel per-point data).
-void keepLines(ClProgram& p, const std::string& spec) {
+// The line range of --lines ("first-last").
+struct LineRange {
+  int first = 0, last = 0;
+};
+LineRange lineRange(const std::string& spec) {
   const size_t dash = spec.find('-', 1);
   const auto a = dash == std::string::npos ? std::nullopt : parseNumber(spec.substr(0, dash));
   const auto b = dash == std::string::npos ? std::nullopt : parseNumber(spec.substr(dash + 1));
-  if (!a || !b || *a < 1 || *b < *a || *a != std::floor(*a) || *b != std::floor(*b))
+  if (!a || !b || *a < 1 || *b < *a || *a != std::floor(*a) || *b != std::floor(*b) || *b > 2e9)
     throw FieldError("lines", "expected 'first-last', e.g. 11-578");
+  return {static_cast<int>(*a), static_cast<int>(*b)};
+}
+
+// Keeps the points of source lines r.first..r.last (and their parallel per-point data); returns
+// how many.
+size_t keepLines(ClProgram& p, const LineRange& r) {
   size_t k = 0;
   std::vector<int> kept_index(p.path.size(), -1);  // old point -> new point
   for (size_t i = 0; i < p.path.size(); ++i) {
-    if (p.path[i].line < *a || p.path[i].line > *b) continue;
+    if (p.path[i].line < r.first || p.path[i].line > r.last) continue;
     kept_index[i] = static_cast<int>(k);
     p.path[k] = p.path[i];
     if (i < p.point_frame.size()) p.point_frame[k] = p.point_frame[i];
@@ -102,7 +111,6 @@ void keepLines(ClProgram& p, const std::string& spec) {
     if (i < p.cycle_orientation.size()) p.cycle_orientation[k] = p.cycle_orientation[i];
     ++k;
   }
-  if (k == 0) throw FieldError("lines", p.file + " has no tool position on lines " + spec);
   // The statements own the kept points only (writers index the path through them).
   for (AptStatement& st : p.statements) {
     int first = -1, count = 0;
@@ -120,6 +128,7 @@ void keepLines(ClProgram& p, const std::string& spec) {
   if (p.tcp.size() > k) p.tcp.resize(k);
   if (p.fixed_axes.size() > k) p.fixed_axes.resize(k);
   if (p.cycle_orientation.size() > k) p.cycle_orientation.resize(k);
+  return k;
 }
 
 bool hasGcodeExtension(const std::string& path) {
@@ -129,63 +138,90 @@ bool hasGcodeExtension(const std::string& path) {
          ext == ".cnc" || ext == ".iso" || ext == ".eia";
 }
 
-// A CL without UNITS read as mm: scales it to inches (points, frames, cutter lengths).
-void scaleToInches(ClProgram& p) {
-  for (ClPoint& c : p.path) c.p_w *= 25.4;
-  for (ClFrame& f : p.frames) f.scale *= 25.4;
-  for (CutterSpec& c : p.cutters)
-    for (size_t k = 0; k < c.values.size(); ++k) {
-      const bool angle = c.source == "CUTTER" ? (k == 4 || k == 5) : (k == 3 || k == 4);
-      if (!angle) c.values[k] *= 25.4;
-    }
-  p.units = "INCH";
-}
-
 }  // namespace
 
 namespace {
 
+// Reads the program whole, or in blocks (blocks given): the line range kept block by block.
 ClProgram readProgram(LineSource& source, const std::string& path, bool gcode,
-                      const ProgramOptions& o, const MachineModel& model) {
+                      const ProgramOptions& o, const MachineModel& model,
+                      const ProgramBlocks* blocks = nullptr) {
+  const std::optional<LineRange> range =
+      o.lines.empty() ? std::nullopt : std::optional<LineRange>(lineRange(o.lines));
+  size_t kept = 0;
+  ProgramBlocks ranged;
+  if (blocks) {
+    ranged.points = blocks->points;
+    ranged.sink = [&](ClProgram& p, bool last) {
+      if (range) {
+        // The block's points renumbered from the kept ones before it.
+        const size_t before = kept;
+        kept += keepLines(p, *range);
+        p.first_point = before;
+      }
+      blocks->sink(p, last);
+    };
+  }
   ClProgram program;
   if (gcode) {
     GcodeReadOptions go;
     go.chordal_tolerance_mm = o.chordal_tolerance;
     if (o.units == "inch") go.unit_mm = 25.4;
     if (o.units == "mm") go.unit_mm = 1.0;
-    program = readGcode(source, path, model, go);
+    program =
+        blocks ? readGcode(source, path, model, go, ranged) : readGcode(source, path, model, go);
   } else {
     AptReadOptions ro;
     ro.chordal_tolerance_mm = o.chordal_tolerance;
     ro.keep_motion_text = o.keep_motion_text;
     ro.absolute_msys = o.absolute_msys;
-    program = readApt(source, path, ro);
-    if (program.path.empty())
+    if (o.units == "inch") ro.unit_mm = 25.4;
+    program = blocks ? readApt(source, path, ro, ranged) : readApt(source, path, ro);
+    if (program.pointsRead() == 0)
       throw InputError(path, 0, 0, "GOTO", "the program has no tool positions");
-    if (o.units == "inch") {
-      if (program.units_declared && program.units != "INCH")
-        throw InputError(path, 0, 0, "UNITS",
-                         inputName("units") + " inch, but the file declares UNITS/MM");
-      if (!program.units_declared) scaleToInches(program);
-    }
+    if (o.units == "inch" && program.units_declared && program.units != "INCH")
+      throw InputError(path, 0, 0, "UNITS",
+                       inputName("units") + " inch, but the file declares UNITS/MM");
   }
-  if (!o.lines.empty()) keepLines(program, o.lines);
+  if (range && !blocks) kept = keepLines(program, *range);
+  if (range && kept == 0)
+    throw FieldError("lines", program.file + " has no tool position on lines " + o.lines);
   return program;
+}
+
+// The dialect from the option, the extension, or the first statements (looksLikeGcode reads
+// twenty non-blank lines; 64 kB hold them in any real program).
+bool readsAsGcode(const ProgramOptions& o) {
+  if (o.cl.empty() == o.nc.empty())
+    throw FieldError("cl", "give the program with " + inputName("cl") + " (CL data) or " +
+                               inputName("nc") + " (G-code), one of them");
+  const std::string& path = o.nc.empty() ? o.cl : o.nc;
+  return !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(readFilePrefix(path, 65536));
 }
 
 }  // namespace
 
 ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model) {
-  if (o.cl.empty() == o.nc.empty())
-    throw FieldError("cl", "give the program with " + inputName("cl") + " (CL data) or " +
-                               inputName("nc") + " (G-code), one of them");
-  const std::string path = o.nc.empty() ? o.cl : o.nc;
-  // The dialect from the option, the extension, or the first statements (looksLikeGcode reads
-  // twenty non-blank lines; 64 kB hold them in any real program).
-  const bool gcode =
-      !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(readFilePrefix(path, 65536));
+  const bool gcode = readsAsGcode(o);
+  const std::string& path = o.nc.empty() ? o.cl : o.nc;
   LineSource source = LineSource::file(path);
   return readProgram(source, path, gcode, o, model);
+}
+
+ClProgram streamProgram(const ProgramOptions& o, const MachineModel& model,
+                        const ProgramBlocks& blocks,
+                        const std::function<void(double)>& fraction_read) {
+  const bool gcode = readsAsGcode(o);
+  const std::string& path = o.nc.empty() ? o.cl : o.nc;
+  LineSource source = LineSource::file(path);
+  ProgramBlocks told = blocks;
+  if (fraction_read && source.sizeHint() > 0)
+    told.sink = [&](ClProgram& p, bool last) {
+      blocks.sink(p, last);
+      fraction_read(std::min(
+          1.0, static_cast<double>(source.bytesRead()) / static_cast<double>(source.sizeHint())));
+    };
+  return readProgram(source, path, gcode, o, model, &told);
 }
 
 ClProgram parseProgram(const std::string& text, const std::string& path, const ProgramOptions& o,
@@ -197,15 +233,22 @@ ClProgram parseProgram(const std::string& text, const std::string& path, const P
 
 std::vector<std::string> unitWarnings(const ClProgram& program, const MachineModel& model,
                                       const std::string& units_option) {
-  std::vector<std::string> w;
-  if (program.units_declared || !units_option.empty() || program.path.empty() ||
-      program.dialect == "G-code")  // the G-code reader says which default it used
-    return w;
+  if (program.path.empty()) return {};
   Eigen::Vector3d lo = program.path[0].p_w, hi = lo;
   for (const ClPoint& c : program.path) {
     lo = lo.cwiseMin(c.p_w);
     hi = hi.cwiseMax(c.p_w);
   }
+  return unitWarnings(program, model, units_option, lo, hi);
+}
+
+std::vector<std::string> unitWarnings(const ClProgram& program, const MachineModel& model,
+                                      const std::string& units_option, const Eigen::Vector3d& lo,
+                                      const Eigen::Vector3d& hi) {
+  std::vector<std::string> w;
+  if (program.units_declared || !units_option.empty() || program.pointsRead() == 0 ||
+      program.dialect == "G-code")  // the G-code reader says which default it used
+    return w;
   const double extent = (hi - lo).norm();
   double travel = 0.0;
   for (const Axis& a : model.axes)
@@ -262,28 +305,41 @@ PredictionResult predictProgram(const Machine& machine, const ClProgram& program
 }
 
 std::vector<std::string> programNotes(const ClProgram& program) {
-  std::vector<std::string> w = program.notes;
-  // A coordinate system statement moves the points out of the file's own frame: say where.
-  for (const AptStatement& st : program.statements) {
-    if (st.major != "MSYS" && st.major != "CSYS" && st.major != "$$*CATIA0") continue;
-    // The frame in force at the first point after the statement (a CSYS that names only a tool
-    // plane leaves it at the identity).
-    size_t k = 0;
-    while (k < program.path.size() && program.path[k].line <= st.first_line) ++k;
-    if (k == program.path.size() || k >= program.point_frame.size()) continue;
-    {
-      const ClFrame& f = program.frames[program.point_frame[k]];
-      if (f.T.isApprox(Eigen::Isometry3d::Identity())) continue;
-      const Eigen::Vector3d o = f.scale * f.T.translation();
-      char buf[300];
-      std::snprintf(buf, sizeof buf,
-                    "%s at line %d applied: the points after it are moved into the part frame "
-                    "(that system's origin is at (%.3f, %.3f, %.3f) mm in it)",
-                    st.major.c_str(), st.first_line, o.x(), o.y(), o.z());
-      w.push_back(buf);
-      break;
-    }
+  ProgramNotes notes;
+  notes.add(program);
+  return notes.notes(program);
+}
+
+void ProgramNotes::add(const ClProgram& block) {
+  if (!frame_note_.empty()) return;
+  for (const AptStatement& st : block.statements)
+    if (st.major == "MSYS" || st.major == "CSYS" || st.major == "$$*CATIA0") pending_.push_back(st);
+  // A coordinate system statement moves the points out of the file's own frame: say where. The
+  // frame in force at the first point after the statement (a CSYS that names only a tool plane
+  // leaves it at the identity).
+  size_t k = 0, resolved = 0;
+  for (const AptStatement& st : pending_) {
+    while (k < block.path.size() && block.path[k].line <= st.first_line) ++k;
+    if (k == block.path.size() || k >= block.point_frame.size()) break;  // in a later block
+    ++resolved;
+    const ClFrame& f = block.frames[block.point_frame[k]];
+    if (f.T.isApprox(Eigen::Isometry3d::Identity())) continue;
+    const Eigen::Vector3d o = f.scale * f.T.translation();
+    char buf[300];
+    std::snprintf(buf, sizeof buf,
+                  "%s at line %d applied: the points after it are moved into the part frame "
+                  "(that system's origin is at (%.3f, %.3f, %.3f) mm in it)",
+                  st.major.c_str(), st.first_line, o.x(), o.y(), o.z());
+    frame_note_ = buf;
+    pending_.clear();
+    return;
   }
+  pending_.erase(pending_.begin(), pending_.begin() + static_cast<std::ptrdiff_t>(resolved));
+}
+
+std::vector<std::string> ProgramNotes::notes(const ClProgram& program) const {
+  std::vector<std::string> w = program.notes;
+  if (!frame_note_.empty()) w.push_back(frame_note_);
   if (program.cycle_holes > 0)
     w.push_back(std::to_string(program.cycles) + " drilling cycle(s) expanded at " +
                 std::to_string(program.cycle_holes) + " holes (in, out along the tool axis)");
@@ -294,6 +350,26 @@ std::vector<std::string> programNotes(const ClProgram& program) {
                 names + ")");
   }
   return w;
+}
+
+void EvenPoses::add(size_t index, const JointVector& q_i, const Eigen::Vector3d& d) {
+  if (!wants(index)) return;
+  q.push_back(q_i);
+  deviation_w.push_back(d);
+  index_.push_back(index);
+  if (q.size() <= 2 * kFew) return;
+  step_ *= 2;
+  size_t k = 0;
+  for (size_t i = 0; i < q.size(); ++i) {
+    if (index_[i] % step_ != 0) continue;
+    q[k] = q[i];
+    deviation_w[k] = deviation_w[i];
+    index_[k] = index_[i];
+    ++k;
+  }
+  q.resize(k);
+  deviation_w.resize(k);
+  index_.resize(k);
 }
 
 void checkOutputDir(const std::string& path, const char* field) {
@@ -320,16 +396,13 @@ CalibratedPrediction applyCalibration(Machine& machine, const ClProgram& program
     return out;
   }
   if (machine.identification.empty()) return out;
-  // The set-up is fitted, and taken modulo, over at most 2000 evenly spaced poses.
-  const size_t n = pred.points.size(), step = std::max<size_t>(1, n / 2000);
-  std::vector<JointVector> sub;
-  std::vector<Eigen::Vector3d> d;
-  for (size_t i = 0; i < n; i += step) {
-    sub.push_back(pred.points[i].q);
-    d.push_back(pred.points[i].deviation_w);
-  }
+  // The set-up is fitted, and taken modulo, over evenly spaced poses (EvenPoses).
+  EvenPoses even;
+  for (size_t i = 0; i < pred.points.size(); ++i)
+    if (even.wants(i)) even.add(i, pred.points[i].q, pred.points[i].deviation_w);
+  const std::vector<JointVector>& sub = even.q;
   if (!absolute) {
-    out.measured_setup = applyMeasuredSetup(machine, sub, d, sub.size());
+    out.measured_setup = applyMeasuredSetup(machine, sub, even.deviation_w, sub.size());
     pred = PredictionResult{};  // one path's points in memory at a time
     pred = predictToolPathParallel(machine.model, machine.params, program.path, 20, commanded);
   }

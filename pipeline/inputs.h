@@ -49,12 +49,22 @@ struct ProgramOptions {
 // Reads the CL or G-code program (G-code: --nc, a G-code extension, or content that reads as
 // G-code), as a stream of lines. Throws InputError.
 ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model);
+// The same in blocks (io/program/apt_reader.h, ProgramBlocks), --lines applied to each: a long
+// program's memory independent of its length. Returns the program's state after the last block
+// (no points; pointsRead() counts them). An InputError may come after blocks were passed on.
+ClProgram streamProgram(const ProgramOptions& o, const MachineModel& model,
+                        const ProgramBlocks& blocks,
+                        const std::function<void(double)>& fraction_read = {});
 // The same on text already read (path names it and chooses the dialect as above).
 ClProgram parseProgram(const std::string& text, const std::string& path, const ProgramOptions& o,
                        const MachineModel& model);
 // When the program declares no units: what was assumed, and whether inches fit better.
 std::vector<std::string> unitWarnings(const ClProgram& program, const MachineModel& model,
                                       const std::string& units_option);
+// The same for a program read in blocks: its points' bounding box (min, max corners, mm).
+std::vector<std::string> unitWarnings(const ClProgram& program, const MachineModel& model,
+                                      const std::string& units_option, const Eigen::Vector3d& lo,
+                                      const Eigen::Vector3d& hi);
 
 // The message for a prediction that failed: the first failing point, how many fail, and per
 // axis how many break it first.
@@ -64,6 +74,33 @@ std::string describeUnreachable(const MachineModel& model, const PredictionResul
 PredictionResult predictProgram(const Machine& machine, const ClProgram& program);
 // What the reader assumed or skipped, one line each.
 std::vector<std::string> programNotes(const ClProgram& program);
+// The same over a program read in blocks: add() each block in order, then notes() with the
+// program's state after the last.
+class ProgramNotes {
+ public:
+  void add(const ClProgram& block);
+  std::vector<std::string> notes(const ClProgram& program) const;
+
+ private:
+  std::vector<AptStatement> pending_;  // coordinate system statements before any point after them
+  std::string frame_note_;             // the first that moved the points
+};
+
+// Evenly spaced poses of a program, taken point by point in bounded memory: every step-th point,
+// the step a power of two doubled whenever more than 2 * kFew are held, so that kFew to 2 kFew
+// remain (all of a shorter program). The set-up a shop measures is fitted over them.
+class EvenPoses {
+ public:
+  static constexpr size_t kFew = 2000;
+  bool wants(size_t index) const { return index % step_ == 0; }
+  void add(size_t index, const JointVector& q, const Eigen::Vector3d& deviation_w);
+  std::vector<JointVector> q;
+  std::vector<Eigen::Vector3d> deviation_w;
+
+ private:
+  size_t step_ = 1;
+  std::vector<size_t> index_;
+};
 
 // Throws FieldError(field) when the directory of `path` does not exist.
 void checkOutputDir(const std::string& path, const char* field);

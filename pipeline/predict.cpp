@@ -1,63 +1,264 @@
 #include "pipeline/predict.h"
 
+#include <algorithm>
+#include <limits>
+
+#include "core/numerics/statistics.h"
 #include "core/numerics/units.h"
 #include "io/common/io_error.h"
 #include "io/program/apt_writer.h"
 #include "io/program/point_table.h"
+#include "pipeline/parallel_prediction.h"
 
 namespace tolver {
 
-PredictionRun predict(const PredictInputs& in) {
+namespace {
+
+// The points of a program read in blocks, each block's with the bits of the whole program
+// predicted at once (PredictionCarry): a block's points are predicted up to the last multiple of
+// BlockPrediction::kExactEvery with the program's carry, and the rest (the tail) with a copy of
+// it, to be written with the block; the tail is predicted again, the same bits, at the start of
+// the next block's stretch. So at most kExactEvery - 1 points a block are predicted twice.
+class BlockPredictor {
+ public:
+  explicit BlockPredictor(const Machine& machine) : machine_(machine) {}
+
+  // The block's points (with its commanded joints, G-code) into `out`, one per block point.
+  void predict(const ClProgram& block, bool last, PredictedPoints& out) {
+    const MachineModel& model = machine_.model;
+    const bool joints = !block.joints.empty();
+    const size_t tail = stretch_.size();
+    stretch_.insert(stretch_.end(), block.path.begin(), block.path.end());
+    if (joints) {
+      joints_.resize(tail);  // (a tail without joints: none in a program with them)
+      joints_.insert(joints_.end(), block.joints.begin(), block.joints.end());
+    } else {
+      joints_.clear();
+    }
+    const size_t n = stretch_.size();
+    const size_t e = BlockPrediction::kExactEvery;
+    const size_t full = last ? n : n / e * e;
+    next_.assign(stretch_.begin() + static_cast<std::ptrdiff_t>(full), stretch_.end());
+    stretch_.resize(full);
+    next_joints_.clear();
+    if (joints) {
+      next_joints_.assign(joints_.begin() + static_cast<std::ptrdiff_t>(full), joints_.end());
+      joints_.resize(full);
+    }
+    const size_t base = carry_.points();
+    predictToolPathParallel(model, machine_.params, stretch_, committed_, 20,
+                            joints ? &joints_ : nullptr, 0, nullptr, &carry_);
+    const PredictionSummary& s = committed_.summary;
+    if (s.max_index >= 0 && static_cast<size_t>(s.max_index) >= base &&
+        static_cast<size_t>(s.max_index) < base + full) {
+      worst_ = committed_.points[static_cast<size_t>(s.max_index) - base];
+      worst_index_ = s.max_index;
+    }
+    if (!next_.empty()) {
+      PredictionCarry ahead = carry_;
+      predictToolPathParallel(model, machine_.params, next_, ahead_, 20,
+                              joints ? &next_joints_ : nullptr, 0, nullptr, &ahead);
+    }
+    // Block point j is stretch point tail + j: the committed stretch's up to full, then the
+    // tail's.
+    out.resize(block.path.size(), static_cast<int>(model.axes.size()));
+    const size_t split = std::max(tail, full);
+    if (full > tail) out.copyFrom(committed_.points, tail, full - tail, 0);
+    out.copyFrom(ahead_.points, split - full, n - split, split - tail);
+    stretch_.swap(next_);
+    joints_.swap(next_joints_);
+  }
+
+  // After the last block: the program's failures and summary, and its worst point.
+  const PredictionResult& result() const { return committed_; }
+  const PredictedPoint& worst() const { return worst_; }
+  int worstIndex() const { return worst_index_; }
+
+ private:
+  const Machine& machine_;
+  PredictionCarry carry_;
+  std::vector<ClPoint> stretch_, next_;  // between blocks: the tail
+  std::vector<JointVector> joints_, next_joints_;
+  PredictionResult committed_, ahead_;
+  PredictedPoint worst_;
+  int worst_index_ = -1;
+};
+
+// The band over the program's points, block by block.
+class BandTally {
+ public:
+  explicit BandTally(size_t axes) { band_.beyond.assign(axes, 0.0); }
+  void add(const ClProgram& block, const std::vector<PoseUncertainty>& unc) {
+    for (size_t i = 0; i < unc.size(); ++i) {
+      const PoseUncertainty& u = unc[i];
+      tip_.add(u.tip);
+      axis_.add(u.axis);
+      cal_tip_.add(u.calibration_tip);
+      cal_axis_.add(u.calibration_axis);
+      band_.tip_max = std::max(band_.tip_max, u.tip);
+      band_.axis_max = std::max(band_.axis_max, u.axis);
+      if (!u.outside) continue;
+      if (band_.outside++ == 0) band_.first_outside_line = block.path[i].line;
+      for (size_t a = 0; a < band_.beyond.size() && a < static_cast<size_t>(u.beyond.size()); ++a)
+        band_.beyond[a] = std::max(band_.beyond[a], u.beyond[a]);
+    }
+  }
+  BandSummary finish() {
+    const size_t mid = tip_.count() / 2;
+    if (tip_.count() > 0) {
+      band_.tip_median = tip_.ranked(mid);
+      band_.axis_median = axis_.ranked(mid);
+      band_.calibration_tip_median = cal_tip_.ranked(mid);
+      band_.calibration_axis_median = cal_axis_.ranked(mid);
+    }
+    return band_;
+  }
+
+ private:
+  BandSummary band_;
+  StreamQuantiles tip_, axis_, cal_tip_, cal_axis_;
+};
+
+}  // namespace
+
+PredictionRun predict(const PredictInputs& in, const Progress& progress) {
   PredictionRun run;
   run.machine = loadMachine(in.machine);
-  run.program = loadProgram(in.program, run.machine.model);
   run.output = in.output;
-  run.point_table = in.point_table.empty() ? replaceExtension(in.output, ".csv") : in.point_table;
+  if (!in.no_point_table)
+    run.point_table = in.point_table.empty() ? replaceExtension(in.output, ".csv") : in.point_table;
   checkOutputDir(run.output, "output");
-  checkOutputDir(run.point_table, "point_table");
-  const Machine& machine = run.machine;
-  const ClProgram& program = run.program;
+  if (!run.point_table.empty()) checkOutputDir(run.point_table, "point_table");
+  Machine& machine = run.machine;
+  const MachineModel& model = machine.model;
+  ProgramBlocks blocks;
+  blocks.points = std::max<size_t>(1, in.block_points);
+  auto told = [&](const char* phase) {
+    return [&progress, phase](double f) {
+      if (progress) progress(phase, f);
+    };
+  };
+  auto unreachable = [&](const ClProgram& program, const PredictionResult& r) {
+    if (!r.ok())
+      throw InputError(program.file, r.failures.front().line, 0, "unreachable",
+                       describeUnreachable(model, r));
+  };
 
-  run.prediction = predictProgram(machine, program);
   // A calibrated machine: after the set-up a shop measures (unless absolute), with each point's
-  // uncertainty.
-  const std::vector<ProbedPoint> probed = loadProbed(in.probed, machine.model);
-  run.calibration = applyCalibration(run.machine, program, run.prediction, in.absolute, probed);
+  // uncertainty; the set-up is fitted to the program's evenly spaced poses, read in a first pass.
+  const std::vector<ProbedPoint> probed = loadProbed(in.probed, model);
+  std::unique_ptr<PredictionUncertainty> pu;
+  if (!probed.empty()) {
+    run.calibration.probed = true;
+    run.calibration.probe = fitProbedSetup(machine, probed);
+    if (!machine.identification.empty()) {
+      pu = std::make_unique<PredictionUncertainty>(machine);
+      pu->setupModuloProbed(probed);
+    }
+  } else if (!machine.identification.empty()) {
+    EvenPoses even;
+    if (!in.absolute) {
+      run.passes = 2;
+      BlockPredictor first(machine);
+      PredictedPoints pts;
+      const ClProgram program =
+          streamProgram(in.program, model,
+                        ProgramBlocks{blocks.points,
+                                      [&](ClProgram& block, bool last) {
+                                        first.predict(block, last, pts);
+                                        for (size_t i = 0; i < pts.size(); ++i) {
+                                          const size_t at = block.first_point + i;
+                                          if (even.wants(at))
+                                            even.add(at, pts[i].q, pts[i].deviation_w);
+                                        }
+                                      }},
+                        told("fitting the measured set-up"));
+      unreachable(program, first.result());
+      run.calibration.measured_setup =
+          applyMeasuredSetup(machine, even.q, even.deviation_w, even.q.size());
+    }
+    pu = std::make_unique<PredictionUncertainty>(machine);
+    if (!in.absolute) pu->setupModulo(even.q);
+  }
   if (run.calibration.probed)
     run.probe_line = describeProbedSetup(in.probed, run.calibration.probe, probed, &run.warnings);
-  const std::vector<PoseUncertainty>& unc = run.calibration.uncertainty;
 
-  std::vector<ClPoint> predicted(program.path.size());
-  const PredictedPoints& pts = run.prediction.points;
-  for (size_t i = 0; i < predicted.size(); ++i) {
-    predicted[i] = program.path[i];
-    predicted[i].p_w = pts[i].p_pred_w;
-    predicted[i].u_w = pts[i].u_pred_w;
-  }
-  const std::vector<std::string> header = {
-      "tolver predicted CL: " + program.file + " on " + machine.model.name + " (" +
-          in.machine.machine + ")",
-      "each GOTO is the tool position the machine will really reach, in the program's frame"};
   OutputSet outputs;  // both files, or neither
-  // Written as they are made: a long program's outputs never sit whole in memory.
-  outputs.addStreamed(run.output,
-                      [&](TextOut& out) { writePredictedApt(out, program, predicted, header); });
-  // The prediction's uncertainty, when the machine file carries its calibration's covariance.
-  outputs.addStreamed(run.point_table, [&](TextOut& out) {
-    writePointTable(out, machine.model, program.path, pts, unc.empty() ? nullptr : &unc);
-  });
+  TextOut& cl_out = outputs.open(run.output);
+  TextOut* table_out = run.point_table.empty() ? nullptr : &outputs.open(run.point_table);
+  BlockPredictor predictor(machine);
+  PredictedPoints pts;
+  std::vector<ClPoint> predicted;
+  std::vector<PoseUncertainty> unc;
+  BandTally band(model.axes.size());
+  RotaryJumpFinder jumps(model, degToRad(in.max_rotary_step_deg));
+  ProgramNotes notes;
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = -lo;
+  bool started = false;
+  blocks.sink = [&](ClProgram& block, bool last) {
+    if (!started) {
+      writePredictedAptStart(
+          cl_out, block,
+          {"tolver predicted CL: " + block.file + " on " + model.name + " (" + in.machine.machine +
+               ")",
+           "each GOTO is the tool position the machine will really reach, in the program's "
+           "frame"});
+      if (table_out) writePointTableHeader(*table_out, model, pu != nullptr);
+      started = true;
+    }
+    predictor.predict(block, last, pts);
+    const size_t n = block.path.size();
+    predicted.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      predicted[i] = block.path[i];
+      predicted[i].p_w = Eigen::Vector3d(pts.field(PredictedPoints::kTipX)[i],
+                                         pts.field(PredictedPoints::kTipY)[i],
+                                         pts.field(PredictedPoints::kTipZ)[i]);
+      predicted[i].u_w = Eigen::Vector3d(pts.field(PredictedPoints::kAxisX)[i],
+                                         pts.field(PredictedPoints::kAxisY)[i],
+                                         pts.field(PredictedPoints::kAxisZ)[i]);
+      lo = lo.cwiseMin(block.path[i].p_w);
+      hi = hi.cwiseMax(block.path[i].p_w);
+    }
+    writePredictedAptStatements(cl_out, block, predicted);
+    if (pu) {
+      unc.resize(n);
+      JointVector q(pts.axes());
+      for (size_t i = 0; i < n; ++i) {
+        for (int a = 0; a < pts.axes(); ++a) q[a] = pts.q(a)[i];
+        unc[i] = pu->at(q);
+      }
+      band.add(block, unc);
+    }
+    if (table_out)
+      writePointTableRows(*table_out, model, block.path, pts, pu ? &unc : nullptr,
+                          block.first_point);
+    jumps.add(block.path, pts, block.first_point);
+    notes.add(block);
+    if (last) writePredictedAptEnd(cl_out, block);
+  };
+  run.program = streamProgram(in.program, model, blocks, told("predicting"));
+  run.prediction = predictor.result();
+  unreachable(run.program, run.prediction);
   outputs.commit();
 
+  run.worst = predictor.worst();
+  if (pu) {
+    run.band = band.finish();
+    run.has_band = true;
+  }
   for (int i = 0; i < machine.params.size(); ++i)
     run.nonzero_parameters += machine.params[i] != 0.0;
   bool no_errors = false;
   run.errors_statement = machineErrorsStatement(machine, &no_errors);
-  run.jumps = findRotaryJumps(machine.model, program.path, run.prediction,
-                              degToRad(in.max_rotary_step_deg));
-  for (const std::string& w : setupWarnings(machine.model)) run.warnings.push_back(w);
-  for (const std::string& w : unitWarnings(program, machine.model, in.program.units))
-    run.warnings.push_back(w);
-  for (const std::string& w : programNotes(program)) run.notes.push_back(program.file + ": " + w);
+  run.jumps = std::move(jumps.jumps);
+  for (const std::string& w : setupWarnings(model)) run.warnings.push_back(w);
+  if (run.program.pointsRead() > 0)
+    for (const std::string& w : unitWarnings(run.program, model, in.program.units, lo, hi))
+      run.warnings.push_back(w);
+  for (const std::string& w : notes.notes(run.program))
+    run.notes.push_back(run.program.file + ": " + w);
   return run;
 }
 

@@ -74,7 +74,8 @@ TEST_F(Commands, PredictOnAPerfectMachineIsTheProgram) {
   size_t rows = 0;
   while (std::getline(table, line))
     if (!line.empty() && line[0] != '#') ++rows;
-  EXPECT_EQ(rows, run.program.path.size() + 1);  // and the header
+  EXPECT_EQ(rows, run.program.pointsRead() + 1);  // and the header
+  EXPECT_EQ(run.program.pointsRead(), static_cast<size_t>(run.prediction.summary.points));
 
   in.machine = machine(kMeasured);
   const PredictionRun real = predict(in);

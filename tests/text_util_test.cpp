@@ -178,6 +178,27 @@ TEST(LineBuilder, FixedWritesThePrintfBytes) {
       line.fixed(v, decimals);
       ASSERT_EQ(line.view(), std::string_view(expected)) << v << " with " << decimals;
     }
+  // Exact halves (j / 2^(d+1), j odd: v 10^d = j 5^d / 2, a tie at d decimals), rounded to even
+  // as printf does, and their neighbours one ulp away, at every precision the writers use.
+  std::uniform_int_distribution<long long> odd(0, 1LL << 40);
+  for (int k = 0; k < 20000; ++k)
+    for (int decimals = 0; decimals <= 9; ++decimals) {
+      const double tie = std::ldexp(
+          static_cast<double>(2 * odd(rng) % (1LL << (52 - decimals)) + 1), -(decimals + 1));
+      for (double v : {tie, -tie, std::nextafter(tie, 0.0), std::nextafter(tie, 1e300)}) {
+        std::snprintf(expected, sizeof expected, "%.*f", decimals, v);
+        line.clear();
+        line.fixed(v, decimals);
+        ASSERT_EQ(line.view(), std::string_view(expected)) << v << " with " << decimals;
+      }
+    }
+  for (double v : values)
+    for (int decimals : {0, 1, 2, 3, 12, 15, 17}) {
+      std::snprintf(expected, sizeof expected, "%.*f", decimals, v);
+      line.clear();
+      line.fixed(v, decimals);
+      ASSERT_EQ(line.view(), std::string_view(expected)) << v << " with " << decimals;
+    }
   line.clear();
   line.text("GOTO").character('/').integer(-42).character(',').fixed(1.5, 2);
   EXPECT_EQ(line.view(), "GOTO/-42,1.50");

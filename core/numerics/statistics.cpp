@@ -5,8 +5,51 @@
 #include <boost/math/distributions/fisher_f.hpp>
 #include <boost/math/special_functions/beta.hpp>
 #include <cmath>
+#include <cstring>
+#include <limits>
 
 namespace tolver {
+
+StreamQuantiles::StreamQuantiles() : exponent_(2048) {}
+StreamQuantiles::~StreamQuantiles() = default;
+StreamQuantiles::StreamQuantiles(StreamQuantiles&&) noexcept = default;
+StreamQuantiles& StreamQuantiles::operator=(StreamQuantiles&&) noexcept = default;
+
+void StreamQuantiles::add(double v) {
+  ++count_;
+  if (!(v > 0.0)) {  // zero, negative, NaN
+    ++zeros_;
+    return;
+  }
+  if (std::isinf(v)) v = std::numeric_limits<double>::max();
+  std::uint64_t bits;
+  std::memcpy(&bits, &v, sizeof bits);
+  const size_t e = static_cast<size_t>(bits >> 52) & 2047;
+  const size_t bin = static_cast<size_t>(bits >> 36) & 0xFFFF;
+  std::unique_ptr<std::uint32_t[]>& bins = exponent_[e];
+  if (!bins) bins = std::make_unique<std::uint32_t[]>(65536);  // zeroed
+  ++bins[bin];
+}
+
+double StreamQuantiles::ranked(size_t k) const {
+  if (k < zeros_) return 0.0;
+  size_t seen = zeros_;
+  for (size_t e = 0; e < exponent_.size(); ++e) {
+    if (!exponent_[e]) continue;
+    for (size_t b = 0; b < 65536; ++b) {
+      seen += exponent_[e][b];
+      if (seen <= k) continue;
+      // The bin's midpoint: its lower edge with the next mantissa bit set.
+      const std::uint64_t bits = (static_cast<std::uint64_t>(e) << 52) |
+                                 (static_cast<std::uint64_t>(b) << 36) | (std::uint64_t{1} << 35);
+      double v;
+      std::memcpy(&v, &bits, sizeof v);
+      return v;
+    }
+  }
+  return 0.0;
+}
+
 namespace {
 
 // Domain and overflow errors give NaN or infinity instead of exceptions; the callers decide.

@@ -1,9 +1,35 @@
 #pragma once
 // Statistics for residual analysis and model selection: distribution tails, the Lomb-Scargle
 // periodogram of unevenly sampled data, the runs test, autocorrelation.
+#include <cstddef>
+#include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace tolver {
+
+// Quantiles of a long stream of values >= 0 in bounded memory (a program's per-point bands read
+// block by block): each value counted in a bin of relative width 2^-16, its double's exponent and
+// first 16 mantissa bits, the bins of an exponent allocated when a value of it first comes (256 kB
+// each; values within a factor of 2^k of each other need k + 1). A quantile is its bin's
+// midpoint, within 1.6e-5 of the value (relative); zeros are exact. Negative and NaN values count
+// as zero, infinite ones as the largest finite.
+class StreamQuantiles {
+ public:
+  StreamQuantiles();
+  ~StreamQuantiles();
+  StreamQuantiles(StreamQuantiles&&) noexcept;
+  StreamQuantiles& operator=(StreamQuantiles&&) noexcept;
+  void add(double v);
+  size_t count() const { return count_; }
+  // The value of rank k (0-based, in sorted order; k < count()), e.g. k = count() / 2 for the
+  // median as nth_element takes it.
+  double ranked(size_t k) const;
+
+ private:
+  size_t count_ = 0, zeros_ = 0;
+  std::vector<std::unique_ptr<std::uint32_t[]>> exponent_;  // per exponent, 65536 bins or none
+};
 
 // Regularised incomplete beta function I_x(a, b), a, b > 0, 0 <= x <= 1 (Boost.Math ibeta).
 double incompleteBeta(double a, double b, double x);

@@ -75,6 +75,13 @@ void PredictedPoints::setFailed(size_t i) {
   singular_[i] = 0;
 }
 
+void PredictedPoints::copyFrom(const PredictedPoints& other, size_t from, size_t count, size_t to) {
+  if (count == 0) return;
+  for (int a = 0; a < axes_ + kFields; ++a)
+    std::memcpy(q(a) + to, other.q(a) + from, count * sizeof(double));
+  std::memcpy(singular_.data() + to, other.singular_.data() + from, count);
+}
+
 void PredictedPoints::resize(size_t n, int axes) {
   n_ = n;
   axes_ = axes;
@@ -336,6 +343,8 @@ PredictionCarry::PredictionCarry() : s_(std::make_unique<State>()) {}
 PredictionCarry::~PredictionCarry() = default;
 PredictionCarry::PredictionCarry(PredictionCarry&&) noexcept = default;
 PredictionCarry& PredictionCarry::operator=(PredictionCarry&&) noexcept = default;
+PredictionCarry::PredictionCarry(const PredictionCarry& other)
+    : s_(std::make_unique<State>(*other.s_)) {}
 size_t PredictionCarry::points() const { return s_->points; }
 
 struct BlockPrediction::State {
@@ -645,18 +654,29 @@ void predictToolPath(const MachineModel& model, const Eigen::VectorXd& params,
 
 std::vector<RotaryJump> findRotaryJumps(const MachineModel& model, const std::vector<ClPoint>& path,
                                         const PredictionResult& result, double threshold) {
-  std::vector<RotaryJump> jumps;
-  const PredictedPoints& points = result.points;
-  for (size_t i = 1; i < path.size() && i < points.size(); ++i) {
-    if (path[i].rapid || path[i - 1].rapid) continue;
-    for (int k = 0; k < static_cast<int>(model.axes.size()) && k < points.axes(); ++k) {
-      if (!model.axes[k].isRotary()) continue;
-      const double step = points.q(k)[i] - points.q(k)[i - 1];
-      if (std::isfinite(step) && std::abs(step) > threshold)
-        jumps.push_back({static_cast<int>(i), path[i].line, k, step});
-    }
+  RotaryJumpFinder finder(model, threshold);
+  finder.add(path, result.points, 0);
+  return std::move(finder.jumps);
+}
+
+RotaryJumpFinder::RotaryJumpFinder(const MachineModel& model, double threshold)
+    : model_(model), threshold_(threshold) {}
+
+void RotaryJumpFinder::add(const std::vector<ClPoint>& path, const PredictedPoints& points,
+                           size_t first_index) {
+  const int axes = std::min(static_cast<int>(model_.axes.size()), points.axes());
+  for (size_t i = 0; i < path.size() && i < points.size(); ++i) {
+    if (has_previous_ && !path[i].rapid && !previous_rapid_)
+      for (int k = 0; k < axes; ++k) {
+        if (!model_.axes[k].isRotary()) continue;
+        const double step = points.q(k)[i] - previous_q_[k];
+        if (std::isfinite(step) && std::abs(step) > threshold_)
+          jumps.push_back({static_cast<int>(first_index + i), path[i].line, k, step});
+      }
+    has_previous_ = true;
+    previous_rapid_ = path[i].rapid;
+    for (int k = 0; k < axes; ++k) previous_q_[k] = points.q(k)[i];
   }
-  return jumps;
 }
 
 }  // namespace tolver

@@ -3,6 +3,7 @@
 // the nominal machine, then the actual tool pose from the forward model with the machine's
 // errors. Deviations are expressed in the workpiece frame w.
 #include <Eigen/Core>
+#include <array>
 #include <iterator>
 #include <memory>
 #include <string>
@@ -63,6 +64,8 @@ class PredictedPoints {
   PredictedPoint back() const { return (*this)[n_ - 1]; }
   void set(size_t i, const PredictedPoint& p);  // p.q holds axes() values
   void setFailed(size_t i);                     // NaN in every number, not singular
+  // Points from..from+count of `other` (as many axes) into to..to+count.
+  void copyFrom(const PredictedPoints& other, size_t from, size_t count, size_t to);
   // n points of axes joint values, their numbers unspecified (storage is kept when it holds
   // them: no allocation when a result is reused for a path as long).
   void resize(size_t n, int axes);
@@ -158,8 +161,9 @@ class PredictionCarry {
   ~PredictionCarry();
   PredictionCarry(PredictionCarry&&) noexcept;
   PredictionCarry& operator=(PredictionCarry&&) noexcept;
-  size_t points() const;  // predicted so far
-  struct State;           // (complete in core)
+  PredictionCarry(const PredictionCarry& other);  // a copy, to predict ahead with
+  size_t points() const;                          // predicted so far
+  struct State;                                   // (complete in core)
   State& state() { return *s_; }
 
  private:
@@ -253,6 +257,20 @@ struct RotaryJump {
 // (not rapid) and both predicted.
 std::vector<RotaryJump> findRotaryJumps(const MachineModel& model, const std::vector<ClPoint>& path,
                                         const PredictionResult& result, double threshold);
+// The same over a path given in consecutive stretches (a program read in blocks).
+class RotaryJumpFinder {
+ public:
+  RotaryJumpFinder(const MachineModel& model, double threshold);
+  // The stretch's points, the first at index first_index of the whole path.
+  void add(const std::vector<ClPoint>& path, const PredictedPoints& points, size_t first_index);
+  std::vector<RotaryJump> jumps;
+
+ private:
+  const MachineModel& model_;
+  double threshold_;
+  bool has_previous_ = false, previous_rapid_ = false;
+  std::array<double, kMaxAxes> previous_q_{};
+};
 
 // One-line description of an IK failure (axis names and values in mm or deg).
 std::string describeIkFailure(const MachineModel& model, const IkSolution& sol);

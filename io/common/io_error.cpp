@@ -88,8 +88,40 @@ void writeTemporary(const std::string& path, const std::string& tmp, const std::
 }
 }  // namespace
 
+struct OutputSet::Open {
+  std::string path;
+  std::FILE* file = nullptr;
+  TextOut out;
+};
+
+OutputSet::OutputSet() = default;
+
+void OutputSet::closeAll() {
+  std::string failed;
+  for (const std::unique_ptr<Open>& o : open_) {
+    const bool ok = o->out.flush();
+    if (std::fclose(o->file) != 0 || !ok) failed = o->path;
+  }
+  open_.clear();
+  if (!failed.empty()) throw InputError(failed, 0, 0, "output", "cannot write the file");
+}
+
 OutputSet::~OutputSet() {
+  for (const std::unique_ptr<Open>& o : open_) std::fclose(o->file);
   for (const auto& [tmp, path] : pending_) std::remove(tmp.c_str());
+}
+
+TextOut& OutputSet::open(const std::string& path) {
+  const std::string tmp = path + ".tmp-tolver";
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f)
+    throw InputError(path, 0, 0, "output", std::string("cannot write: ") + std::strerror(errno));
+  pending_.emplace_back(tmp, path);
+  open_.push_back(std::make_unique<Open>());
+  open_.back()->path = path;
+  open_.back()->file = f;
+  open_.back()->out = TextOut(f);
+  return open_.back()->out;
 }
 
 std::string OutputSet::add(const std::string& path, const std::string& content) {
@@ -100,6 +132,7 @@ std::string OutputSet::add(const std::string& path, const std::string& content) 
 }
 
 void OutputSet::commit() {
+  closeAll();
   for (const auto& [tmp, path] : pending_)
     if (std::rename(tmp.c_str(), path.c_str()) != 0) {
       const std::string why = std::strerror(errno);

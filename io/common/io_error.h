@@ -3,6 +3,7 @@
 // what() as one line and exits with code 2.
 #include <cstdio>
 #include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -77,7 +78,7 @@ class TextOut {
 // the new files and every previous one in place; the destructor removes the temporaries.
 class OutputSet {
  public:
-  OutputSet() = default;
+  OutputSet();
   OutputSet(const OutputSet&) = delete;
   OutputSet& operator=(const OutputSet&) = delete;
   ~OutputSet();
@@ -88,10 +89,17 @@ class OutputSet {
                          const std::function<bool(const std::string&)>& write);
   // The same for text made in pieces (TextOut), written as it is made.
   std::string addStreamed(const std::string& path, const std::function<void(TextOut&)>& fill);
+  // A file written in pieces over the command's work (a program streamed block by block): the
+  // TextOut stays valid until commit(), which flushes and closes it before the renames (throwing
+  // InputError when a write failed).
+  TextOut& open(const std::string& path);
   void commit();
 
  private:
+  struct Open;
+  void closeAll();
   std::vector<std::pair<std::string, std::string>> pending_;  // temporary, final path
+  std::vector<std::unique_ptr<Open>> open_;
 };
 
 // A report directory written as a whole: the files go to a staging directory beside it

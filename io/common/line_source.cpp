@@ -20,7 +20,8 @@ std::unique_ptr<std::FILE, void (*)(std::FILE*)> openOrThrow(const std::string& 
 }
 }  // namespace
 
-LineSource::LineSource(std::string_view text) : rest_(text), size_hint_(text.size()) {}
+LineSource::LineSource(std::string_view text)
+    : rest_(text), size_hint_(text.size()), bytes_read_(text.size()) {}
 
 LineSource LineSource::file(const std::string& path) {
   LineSource s;
@@ -49,6 +50,7 @@ bool LineSource::fill() {
   if (got == 0 && std::ferror(file_.get()))
     throw InputError(name_, 0, 0, "", std::string("cannot read: ") + std::strerror(errno));
   next.resize(old + got);
+  bytes_read_ += got;
   buf_ = std::move(next);
   rest_ = buf_;
   if (got == 0) file_.reset();

@@ -26,6 +26,8 @@ class LineSource {
   // reader that keeps the text, to reserve it at once.
   size_t sizeHint() const { return size_hint_; }
   const std::string& name() const { return name_; }
+  // Bytes read so far (of a file: up to a block ahead of the lines returned), for progress.
+  size_t bytesRead() const { return bytes_read_; }
 
  private:
   LineSource() = default;
@@ -40,6 +42,7 @@ class LineSource {
   std::string_view rest_;  // what is left to read: of buf_, or of the caller's text
   bool first_ = true;
   size_t size_hint_ = 0;
+  size_t bytes_read_ = 0;
 };
 
 // The first `max_bytes` of a file (for guessing its dialect before it is streamed); throws

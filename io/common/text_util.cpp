@@ -136,8 +136,85 @@ LineBuilder& LineBuilder::text(std::string_view s) {
   return *this;
 }
 
+namespace {
+
+// |v| 10^d rounded to an integer as printf rounds the exact binary value (to nearest, ties to
+// even), when |v| 10^d < 2^51 and d <= 15; false otherwise. The product's rounding error is exact
+// (Dekker's two-product, no fused multiply-add needed): a * p = y + r, |r| <= ulp(y) / 2. With
+// f = floor(y), y - f is exact and a multiple of ulp(y), as is 0.5 (ulp(y) <= 2^-2 below 2^51),
+// so (y - f) - 0.5 is zero or at least ulp(y) > |r| in size: r decides only an exact half.
+bool scaledRound(double a, int d, std::uint64_t* n) {
+  static constexpr double kPow10[16] = {1e0, 1e1, 1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                        1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15};
+  if (d < 0 || d > 15) return false;
+  const double p = kPow10[d];
+  const double y = a * p;
+  if (!(y < 2251799813685248.0)) return false;  // 2^51; also NaN and infinities
+  if (y < 0.25) {  // rounds to 0 whatever the error (and tiny a, whose split would underflow)
+    *n = 0;
+    return true;
+  }
+  auto split = [](double x, double* hi, double* lo) {
+    const double c = 134217729.0 * x;  // 2^27 + 1
+    *hi = c - (c - x);
+    *lo = x - *hi;
+  };
+  double ah, al, ph, pl;
+  split(a, &ah, &al);
+  split(p, &ph, &pl);
+  const double r = ((ah * ph - y) + ah * pl + al * ph) + al * pl;
+  std::uint64_t k = static_cast<std::uint64_t>(y);  // floor (y >= 0)
+  const double h = (y - static_cast<double>(k)) - 0.5;
+  if (h > 0.0 || (h == 0.0 && (r > 0.0 || (r == 0.0 && (k & 1) != 0)))) ++k;
+  *n = k;
+  return true;
+}
+
+}  // namespace
+
 LineBuilder& LineBuilder::fixed(double v, int decimals) {
+  std::uint64_t k;
+  // The common case (a coordinate, a deviation) by integer digits, written from the right two at
+  // a time; any other by std::to_chars.
+  if (buf_ + sizeof buf_ - at_ >= 40 && scaledRound(std::abs(v), decimals, &k)) {
+    static constexpr char kPairs[] =
+        "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+        "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+        "8081828384858687888990919293949596979899";
+    char tmp[40];
+    char* const end = tmp + sizeof tmp;
+    char* p = end;
+    int left = decimals;
+    for (; left >= 2; left -= 2) {
+      const std::uint64_t pair = k % 100;
+      k /= 100;
+      p -= 2;
+      std::memcpy(p, kPairs + 2 * pair, 2);
+    }
+    if (left == 1) {
+      *--p = static_cast<char>('0' + k % 10);
+      k /= 10;
+    }
+    if (decimals > 0) *--p = '.';
+    while (k >= 10) {
+      const std::uint64_t pair = k % 100;
+      k /= 100;
+      p -= 2;
+      std::memcpy(p, kPairs + 2 * pair, 2);
+    }
+    if (k > 0 || p == end || *p == '.') *--p = static_cast<char>('0' + k);
+    if (std::signbit(v)) *--p = '-';
+    std::memcpy(at_, p, static_cast<size_t>(end - p));
+    at_ += end - p;
+    return *this;
+  }
   const auto r = std::to_chars(at_, buf_ + sizeof buf_, v, std::chars_format::fixed, decimals);
+  if (r.ec == std::errc()) at_ = r.ptr;
+  return *this;
+}
+
+LineBuilder& LineBuilder::general(double v, int precision) {
+  const auto r = std::to_chars(at_, buf_ + sizeof buf_, v, std::chars_format::general, precision);
   if (r.ec == std::errc()) at_ = r.ptr;
   return *this;
 }

@@ -58,20 +58,21 @@ std::string formatNumber(double v);
 // Formats one double by a printf format ("%+.2f", "%.4g"): the reports' fixed precisions.
 std::string formatWith(const char* printf_format, double v);
 // One line of numbers built in place, for the writers of one line per point (the predicted CL,
-// the point table): fixed(v, n) writes the same bytes as printf's "%.<n>f" (both round exactly),
-// by std::to_chars, three to four times faster; no allocation. Holds any line of up to 24 numbers
-// of any magnitude.
+// the point table): fixed(v, n) writes the same bytes as printf's "%.<n>f" (both round exactly:
+// to nearest, ties to even on the binary value), by integer digits when |v| 10^n < 2^51 and by
+// std::to_chars otherwise; no allocation. Holds 48 numbers of any magnitude (330 bytes each).
 class LineBuilder {
  public:
   LineBuilder& text(std::string_view s);
   LineBuilder& fixed(double v, int decimals);
+  LineBuilder& general(double v, int precision);  // printf's "%.<precision>g"
   LineBuilder& integer(long long v);
   LineBuilder& character(char c);
   std::string_view view() const { return {buf_, static_cast<size_t>(at_ - buf_)}; }
   void clear() { at_ = buf_; }
 
  private:
-  char buf_[8192];
+  char buf_[16384];
   char* at_ = buf_;
 };
 

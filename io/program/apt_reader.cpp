@@ -38,14 +38,17 @@ const std::set<std::string>& noOpStatements() {
 
 class Parser {
  public:
-  Parser(LineSource& source, const std::string& file, const AptReadOptions& opt)
-      : opt_(opt), source_(source) {
+  Parser(LineSource& source, const std::string& file, const AptReadOptions& opt,
+         const ProgramBlocks* blocks)
+      : opt_(opt), source_(source), blocks_(blocks) {
     prog_.file = file;
     prog_.frames.push_back(ClFrame{});
+    prog_.frames[0].scale = opt.unit_mm;
+    if (opt.unit_mm == 25.4) prog_.units = "INCH";
     // Line ends for a line of about 40 bytes; the text when it is kept (growing it by doubling
     // would copy it and fault in fresh pages over and over).
     const size_t bytes = source.sizeHint();
-    prog_.lines.reserve(opt.keep_motion_text ? bytes : 0, bytes / 40);
+    if (!blocks_) prog_.lines.reserve(opt.keep_motion_text ? bytes : 0, bytes / 40);
   }
 
   ClProgram run() {
@@ -65,13 +68,13 @@ class Parser {
         i = catiaFrame(i);
         st.major = "$$*CATIA0";
       } else if (t.rfind("$$->", 0) == 0) {
-        Logical lg = gather(i, 4 + (t.data() - raw.data()), /*pseudo=*/true);
+        const Logical& lg = gather(i, 4 + (t.data() - raw.data()), /*pseudo=*/true);
         st.major = statement(lg, /*pseudo=*/true, st);
         st.major.clear();  // Creo pseudo-comments are copied verbatim, never rewritten
       } else if (t.rfind("$$", 0) == 0 || t[0] == '$') {
         ++i;
       } else {
-        Logical lg = gather(i, 0, /*pseudo=*/false);
+        const Logical& lg = gather(i, 0, /*pseudo=*/false);
         st.major = statement(lg, /*pseudo=*/false, st);
         if (st.major == "FINI") finished = true;
       }
@@ -80,23 +83,22 @@ class Parser {
       keepUpTo(static_cast<size_t>(st.last_line),
                opt_.keep_motion_text || (st.major != "GOTO" && st.major != "FROM"));
       prog_.statements.push_back(st);
+      if (blocks_ && prog_.path.size() >= blocks_->points) passOn(false);
     }
     if (!any) fail(0, 0, "", "empty file: no statements");
     // The main MCS read as the part frame while its z points down in the CAD's absolute frame
     // and the tool axes point down in it: they point up in the absolute frame, so the part may
     // be fixtured in that frame instead. Said, not guessed.
-    if (main_mcs_ && !opt_.absolute_msys && main_mcs_->linear()(2, 2) < -0.5 &&
-        !prog_.path.empty()) {
-      size_t down = 0;
-      for (const ClPoint& c : prog_.path) down += c.u_w.z() < -0.5;
-      if (2 * down > prog_.path.size())
-        prog_.notes.push_back(
-            "the tool axis points down (-z) in the main MCS on " + std::to_string(down) + " of " +
-            std::to_string(prog_.path.size()) +
-            " points; that MCS's z points down in the CAD's "
-            "absolute frame, where the tool points up: if the part is fixtured in the absolute "
-            "frame, read the program with --absolute-msys");
-    }
+    countDown();
+    if (main_mcs_ && !opt_.absolute_msys && main_mcs_->linear()(2, 2) < -0.5 && read_ > 0 &&
+        2 * down_ > read_)
+      prog_.notes.push_back(
+          "the tool axis points down (-z) in the main MCS on " + std::to_string(down_) + " of " +
+          std::to_string(read_) +
+          " points; that MCS's z points down in the CAD's "
+          "absolute frame, where the tool points up: if the part is fixtured in the absolute "
+          "frame, read the program with --absolute-msys");
+    if (blocks_) passOn(true);
     return std::move(prog_);
   }
 
@@ -119,6 +121,33 @@ class Parser {
     return i < window_first_ + window_.size() ? &window_[i - window_first_] : nullptr;
   }
 
+  // The points held whose tool axis points down (-z), counted once.
+  void countDown() {
+    for (size_t i = down_counted_; i < prog_.path.size(); ++i)
+      down_ += prog_.path[i].u_w.z() < -0.5;
+    read_ += prog_.path.size() - down_counted_;
+    down_counted_ = prog_.path.size();
+  }
+
+  // The block read so far to the sink, then dropped (the last point kept apart: an arc starts
+  // there).
+  void passOn(bool last) {
+    countDown();
+    if (!prog_.path.empty()) {
+      last_passed_ = prog_.path.back();
+      passed_any_ = true;
+    }
+    blocks_->sink(prog_, last);
+    prog_.dropBlock();
+    down_counted_ = 0;
+  }
+
+  // The path's last point, held or passed on; nullptr before the first.
+  const ClPoint* lastPoint() const {
+    if (!prog_.path.empty()) return &prog_.path.back();
+    return passed_any_ ? &last_passed_ : nullptr;
+  }
+
   // Moves the lines before `end` (0-based, exclusive) from the window into prog_.lines.
   void keepUpTo(size_t end, bool keep_text) {
     while (window_first_ < end && !window_.empty()) {
@@ -134,8 +163,11 @@ class Parser {
   }
 
   // Collects a statement from line i on, following `$` continuations; strips `$$` comments.
-  Logical gather(size_t& i, size_t skip, bool pseudo) {
-    Logical lg;
+  // Into lg_, whose storage the statements share (no allocation per statement).
+  const Logical& gather(size_t& i, size_t skip, bool pseudo) {
+    Logical& lg = lg_;
+    lg.text.clear();
+    lg.pos.clear();
     const size_t first = i;
     while (true) {
       if (line(i) == nullptr)
@@ -152,11 +184,10 @@ class Parser {
       while (end > 0 && std::isspace(static_cast<unsigned char>(body[end - 1]))) --end;
       const bool cont = end > 0 && body[end - 1] == '$';
       if (cont) --end;
-      for (size_t k = 0; k < end; ++k) {
-        lg.text += body[k];
+      lg.text.append(body.substr(0, end));
+      for (size_t k = 0; k < end; ++k)
         lg.pos.emplace_back(static_cast<int>(i) + 1,
                             static_cast<int>(k + (body.data() - raw.data())) + 1);
-      }
       ++i;
       if (!cont) break;
       lg.text += ' ';
@@ -228,8 +259,10 @@ class Parser {
     frame_ = static_cast<int>(prog_.frames.size()) - 1;
   }
 
-  static std::vector<Arg> splitArgs(const Logical& lg, size_t from) {
-    std::vector<Arg> args;
+  // Into args_, whose strings the statements share.
+  const std::vector<Arg>& splitArgs(const Logical& lg, size_t from) {
+    std::vector<Arg>& args = args_;
+    size_t n = 0;
     size_t p = from;
     while (true) {
       size_t q = lg.text.find(',', p);
@@ -237,18 +270,20 @@ class Parser {
       size_t b = p, e = q;
       while (b < e && std::isspace(static_cast<unsigned char>(lg.text[b]))) ++b;
       while (e > b && std::isspace(static_cast<unsigned char>(lg.text[e - 1]))) --e;
-      Arg a;
-      a.text = lg.text.substr(b, e - b);
+      if (n == args.size()) args.emplace_back();
+      Arg& a = args[n++];
+      a.text.assign(lg.text, b, e - b);
+      a.line = a.column = 0;
       const size_t at = b < lg.pos.size() ? b : (lg.pos.empty() ? 0 : lg.pos.size() - 1);
       if (!lg.pos.empty()) {
         a.line = lg.pos[at].first;
         a.column = lg.pos[at].second + (b >= lg.pos.size() ? 1 : 0);
       }
-      args.push_back(a);
       if (q == lg.text.size()) break;
       p = q + 1;
     }
-    if (args.size() == 1 && args[0].text.empty()) args.clear();
+    if (n == 1 && args[0].text.empty()) n = 0;
+    args.resize(n);
     return args;
   }
 
@@ -261,6 +296,14 @@ class Parser {
   std::vector<double> numbers(const std::vector<Arg>& args, const std::string& field, bool words_ok,
                               std::vector<std::string>* words = nullptr) {
     std::vector<double> v;
+    numbers(args, field, words_ok, words, &v);
+    return v;
+  }
+  // The same into *out (its storage reused).
+  void numbers(const std::vector<Arg>& args, const std::string& field, bool words_ok,
+               std::vector<std::string>* words, std::vector<double>* out) {
+    std::vector<double>& v = *out;
+    v.clear();
     for (const Arg& a : args) {
       if (a.text.empty()) fail(a.line, a.column, field, "missing value");
       if (looksNumeric(a.text)) {
@@ -275,7 +318,6 @@ class Parser {
         fail(a.line, a.column, field, "expected a number, found '" + a.text + "'");
       }
     }
-    return v;
   }
 
   // Parses and applies one logical statement; returns its major word.
@@ -294,8 +336,8 @@ class Parser {
       }
     }
     const int line = lg.pos.empty() ? 0 : lg.pos.front().first;
-    const std::vector<Arg> args =
-        slash == std::string::npos ? std::vector<Arg>{} : splitArgs(lg, slash + 1);
+    static const std::vector<Arg> none;
+    const std::vector<Arg>& args = slash == std::string::npos ? none : splitArgs(lg, slash + 1);
     if (pseudo) {
       if (major == "CUTTER" || major == "CSYS") apply(major, args, line, st);
       return major;  // other Creo pseudo-comments are comments
@@ -355,7 +397,8 @@ class Parser {
 
   // GOTO/x,y,z[,i,j,k] (a move, or a cycle's hole) and FROM (the start position).
   void goTo(const std::string& major, const std::vector<Arg>& args, int line, AptStatement& st) {
-    const auto v = numbers(args, major, false);
+    std::vector<double>& v = values_;
+    numbers(args, major, false, nullptr, &v);
     if (v.size() != 3 && v.size() != 6)
       fail(line, 0, major,
            "takes 3 values (x,y,z) or 6 (x,y,z,i,j,k), found " + std::to_string(v.size()));
@@ -670,7 +713,7 @@ class Parser {
     st.first_point = static_cast<int>(prog_.path.size());
     if (arc_pending_) {
       std::vector<Eigen::Vector3d> pts;
-      const Eigen::Vector3d start = prog_.path.empty() ? from_w_ : prog_.path.back().p_w;
+      const Eigen::Vector3d start = lastPoint() ? lastPoint()->p_w : from_w_;
       const double r =
           ((start - arc_centre_w_) - arc_axis_w_ * arc_axis_w_.dot(start - arc_centre_w_)).norm();
       // Bounded work: a full turn's points, before anything is expanded.
@@ -684,7 +727,7 @@ class Parser {
       if (!interpolateArc(start, cl.p_w, arc_centre_w_, arc_axis_w_, opt_.chordal_tolerance_mm,
                           std::max(0.005, 1e-4 * r), pts, arc_turns_))
         fail(arc_line_, 0, "CIRCLE",
-             "the arc's start and end points (lines " + std::to_string(prog_.path.back().line) +
+             "the arc's start and end points (lines " + std::to_string(lastPoint()->line) +
                  " and " + std::to_string(line) + ") are not on one circle about its centre");
       for (size_t k = 0; k + 1 < pts.size(); ++k) {
         ClPoint a = cl;
@@ -704,9 +747,16 @@ class Parser {
 
   const AptReadOptions& opt_;
   LineSource& source_;
-  std::deque<std::string> window_;  // lines read but not yet in prog_.lines
-  std::vector<std::string> spare_;  // strings of lines passed on, for reuse
-  size_t window_first_ = 0;         // the 0-based number of window_.front()
+  const ProgramBlocks* blocks_;  // or nullptr: the whole program at once
+  Logical lg_;                   // the statement being read (gather)
+  std::vector<Arg> args_;        // its arguments (splitArgs)
+  std::vector<double> values_;   // a GOTO's numbers
+  ClPoint last_passed_;          // the last point passed on
+  bool passed_any_ = false;
+  size_t down_ = 0, down_counted_ = 0, read_ = 0;  // points down, counted, read
+  std::deque<std::string> window_;                 // lines read but not yet in prog_.lines
+  std::vector<std::string> spare_;                 // strings of lines passed on, for reuse
+  size_t window_first_ = 0;                        // the 0-based number of window_.front()
   bool at_end_ = false;
   ClProgram prog_;
   int frame_ = 0;
@@ -736,7 +786,12 @@ class Parser {
 }  // namespace
 
 ClProgram readApt(LineSource& source, const std::string& file_name, const AptReadOptions& options) {
-  return Parser(source, file_name, options).run();
+  return Parser(source, file_name, options, nullptr).run();
+}
+
+ClProgram readApt(LineSource& source, const std::string& file_name, const AptReadOptions& options,
+                  const ProgramBlocks& blocks) {
+  return Parser(source, file_name, options, &blocks).run();
 }
 
 ClProgram parseApt(const std::string& text, const std::string& file_name,

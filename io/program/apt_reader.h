@@ -17,6 +17,7 @@
 // Points are returned in the workpiece frame w in mm: p_w = s * (R p_file + t), u_w = R u_file,
 // with s the unit scale (25.4 for inches) and (R, t) the coordinate system in force.
 #include <Eigen/Geometry>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -90,6 +91,34 @@ struct ClProgram {
   // program's words: a corrected program can move its tip, not its tool axis.
   std::vector<char> cycle_orientation;
   std::vector<std::string> notes;  // what the reader assumed or ignored, one line each
+  // A program read in blocks (ProgramBlocks): the index of path[0] in the whole program.
+  size_t first_point = 0;
+  size_t pointsRead() const { return first_point + path.size(); }
+  // After a block was passed on: its points (and their per-point arrays), statements and lines
+  // dropped, the program's state kept.
+  void dropBlock() {
+    first_point += path.size();
+    path.clear();
+    point_frame.clear();
+    joints.clear();
+    tcp.clear();
+    fixed_axes.clear();
+    cycle_orientation.clear();
+    statements.clear();
+    lines.dropAll();
+  }
+};
+
+// A program read in blocks, so that a long program's memory does not grow with its length: the
+// reader calls `sink` with the program whenever it holds at least `points` points at the end of
+// a statement, and once at the end (last: true) with the rest and the reader's closing notes;
+// after each call it drops what it passed on (ClProgram::dropBlock). Each call's path starts at
+// point ClProgram::first_point of the whole program, its statements index its own path, its
+// lines keep their numbers in the file (SourceLines::first()). A checked error (InputError) may
+// come after blocks were passed on: a caller writes what it makes of them to temporary files.
+struct ProgramBlocks {
+  size_t points = 65536;
+  std::function<void(ClProgram& block, bool last)> sink;
 };
 
 struct AptReadOptions {
@@ -100,12 +129,18 @@ struct AptReadOptions {
   // NX MSYS in the CAD's absolute frame (the reading before issue 32); by default the first
   // MSYS is the part frame and later ones are relative to it.
   bool absolute_msys = false;
+  // The unit of a file that declares none, mm (25.4: --cl-units inch): its points, cutters and
+  // arcs read in it from the start.
+  double unit_mm = 1.0;
 };
 
 // Throws InputError naming file:line:column and the field on malformed input. The file is
 // read as a stream of lines (io/common/line_source.h), not whole.
 ClProgram readApt(LineSource& source, const std::string& file_name,
                   const AptReadOptions& options = {});
+// In blocks: the program returned holds the state after the last block (no points).
+ClProgram readApt(LineSource& source, const std::string& file_name, const AptReadOptions& options,
+                  const ProgramBlocks& blocks);
 ClProgram readAptFile(const std::string& path, const AptReadOptions& options = {});
 ClProgram parseApt(const std::string& text, const std::string& file_name,
                    const AptReadOptions& options = {});

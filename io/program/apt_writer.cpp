@@ -18,7 +18,32 @@ void writePredictedApt(TextOut& out, const ClProgram& program,
                        const std::vector<ClPoint>& predicted,
                        const std::vector<std::string>& header) {
   assert(predicted.size() == program.path.size());
+  writePredictedAptStart(out, program, header);
+  writePredictedAptStatements(out, program, predicted);
+  writePredictedAptEnd(out, program);
+}
+
+void writePredictedAptStart(TextOut& out, const ClProgram& program,
+                            const std::vector<std::string>& header) {
   for (const std::string& h : header) out += "$$ " + h + "\n";
+  if (program.dialect == "G-code") {
+    // A G-code program becomes plain CL data in mm, in the part frame: one GOTO per point,
+    // RAPID before positioning moves, the source line in a comment.
+    out += "UNITS/MM\nMULTAX/ON\n";
+    return;
+  }
+  // A program read in inches without a UNITS statement (--cl-units inch) says so, or the
+  // written inches would read back as millimetres.
+  if (program.units == "INCH" && !program.units_declared) out += "UNITS/INCHES\n";
+  if (!program.multiax) out += "MULTAX/ON\n";
+}
+
+void writePredictedAptEnd(TextOut& out, const ClProgram& program) {
+  if (program.dialect == "G-code") out += "FINI\n";
+}
+
+void writePredictedAptStatements(TextOut& out, const ClProgram& program,
+                                 const std::vector<ClPoint>& predicted) {
   LineBuilder line;
   // GOTO/x,y,z,i,j,k: the point with `decimals`, the unit axis with 9.
   auto gotoLine = [&](const char* word, const Eigen::Vector3d& p, const Eigen::Vector3d& u,
@@ -31,12 +56,11 @@ void writePredictedApt(TextOut& out, const ClProgram& program,
     out += line.view();
   };
   if (program.dialect == "G-code") {
-    // A G-code program becomes plain CL data in mm, in the part frame: one GOTO per point,
-    // RAPID before positioning moves, the source line in a comment.
-    out += "UNITS/MM\nMULTAX/ON\n";
     for (const AptStatement& st : program.statements) {
       if (st.point_count <= 0) continue;
-      out += "$$ line " + std::to_string(st.first_line) + "\n";
+      line.clear();
+      line.text("$$ line ").integer(st.first_line).character('\n');
+      out += line.view();
       for (int k = st.first_point; k < st.first_point + st.point_count; ++k) {
         if (program.path[k].rapid) out += "RAPID\n";
         const Eigen::Vector3d& p = predicted[k].p_w;
@@ -44,13 +68,8 @@ void writePredictedApt(TextOut& out, const ClProgram& program,
         gotoLine("GOTO", p, u, 6);
       }
     }
-    out += "FINI\n";
     return;
   }
-  // A program read in inches without a UNITS statement (--cl-units inch) says so, or the
-  // written inches would read back as millimetres.
-  if (program.units == "INCH" && !program.units_declared) out += "UNITS/INCHES\n";
-  if (!program.multiax) out += "MULTAX/ON\n";
   const bool inch = program.units == "INCH";
   for (const AptStatement& st : program.statements) {
     if (st.point_count > 0) {

@@ -18,5 +18,13 @@ std::string formatPredictedApt(const ClProgram& program, const std::vector<ClPoi
 void writePredictedApt(TextOut& out, const ClProgram& program,
                        const std::vector<ClPoint>& predicted,
                        const std::vector<std::string>& header);
+// The same in three parts, for a program read in blocks (io/program/apt_reader.h, ProgramBlocks):
+// the start with the first block, the statements of each block (predicted: one per block point),
+// the end with the last.
+void writePredictedAptStart(TextOut& out, const ClProgram& program,
+                            const std::vector<std::string>& header);
+void writePredictedAptStatements(TextOut& out, const ClProgram& program,
+                                 const std::vector<ClPoint>& predicted);
+void writePredictedAptEnd(TextOut& out, const ClProgram& program);
 
 }  // namespace tolver

@@ -87,16 +87,18 @@ const std::set<std::string>& harmlessM() {
 class Reader {
  public:
   Reader(LineSource& source, const std::string& file, const MachineModel& model,
-         const GcodeReadOptions& opt)
+         const GcodeReadOptions& opt, const ProgramBlocks* blocks)
       : model_(model),
         opt_(opt),
         nominal_(model, Eigen::VectorXd::Zero(model.parameterCount())),
-        ik_(model) {
+        ik_(model),
+        blocks_(blocks) {
     prog_.file = file;
     prog_.dialect = "G-code";
     prog_.multiax = true;
     source_ = &source;
-    prog_.lines.reserve(source.sizeHint(), source.sizeHint() / 30);  // all the text is kept
+    if (!blocks_)  // all the text is kept
+      prog_.lines.reserve(source.sizeHint(), source.sizeHint() / 30);
     prog_.frames.push_back(ClFrame{});
     unit_ = opt.unit_mm > 0 ? opt.unit_mm : model.control.default_unit_mm;
     prog_.units = unit_ == 25.4 ? "INCH" : "MM";
@@ -151,7 +153,7 @@ class Reader {
     }
     for (const std::string& h : held) processLine(h);
     if (!any_) fail(0, 0, "", "empty file: no blocks");
-    if (prog_.path.empty())
+    if (points_read_ == 0)
       fail(0, 0, "", "the program has no moves (no G0/G1/G2/G3 with axis words)");
     if (unknown_moves_ > 0)
       prog_.notes.push_back(std::to_string(unknown_moves_) +
@@ -177,12 +179,16 @@ class Reader {
     for (const auto& [word, first] : missing_offsets_)
       prog_.notes.push_back(word + " (first used at line " + std::to_string(first) +
                             ") is not in the set-up: its origin was put at the part zero");
+    if (blocks_) {
+      blocks_->sink(prog_, true);
+      prog_.dropBlock();
+    }
     return std::move(prog_);
   }
 
   // One physical line: a block, a '%' or nothing; its statement and text kept.
   void processLine(const std::string& text) {
-    line_ = static_cast<int>(prog_.statements.size()) + 1;
+    line_ = static_cast<int>(prog_.lines.size()) + 1;
     AptStatement st;
     st.first_line = st.last_line = line_;
     st.first_point = static_cast<int>(prog_.path.size());
@@ -197,6 +203,10 @@ class Reader {
     if (st.point_count == 0) st.first_point = -1;
     prog_.statements.push_back(st);
     prog_.lines.push(text, true);
+    if (blocks_ && prog_.path.size() >= blocks_->points) {
+      blocks_->sink(prog_, false);
+      prog_.dropBlock();
+    }
   }
 
   // True when a line can start a block: empty, a comment, '/', '#', ':' or 'O' or a word (a
@@ -228,7 +238,7 @@ class Reader {
   // A line of the tape leader: kept as text, not read.
   void skipLine(const std::string& text) {
     AptStatement st;
-    st.first_line = st.last_line = static_cast<int>(prog_.statements.size()) + 1;
+    st.first_line = st.last_line = static_cast<int>(prog_.lines.size()) + 1;
     prog_.statements.push_back(st);
     prog_.lines.push(text, true);
   }
@@ -1685,7 +1695,7 @@ class Reader {
   // The program coordinates (mm) of the current position in the current mode.
   Eigen::Vector3d currentProgramXyz() const {
     if (tcpMode()) {
-      if (prog_.path.empty()) return Eigen::Vector3d::Zero();
+      if (points_read_ == 0) return Eigen::Vector3d::Zero();
       return frame_.inverse() * Eigen::Vector3d(Gm_inv_ * (last_tip_w_ - g0_) - last_offset_);
     }
     return frame_.inverse() * Eigen::Vector3d(machineOfJoints(q_) - last_offset_);
@@ -1793,6 +1803,7 @@ class Reader {
     if (!positionKnown()) return;
     last_tip_w_ = p.p_w;
     prog_.path.push_back(p);
+    ++points_read_;
     prog_.point_frame.push_back(frame_index_);
     prog_.cycle_orientation.push_back(swivel_on_ ? 1 : 0);
     prog_.joints.push_back(q);
@@ -2024,6 +2035,8 @@ class Reader {
   GcodeReadOptions opt_;
   ForwardKinematics nominal_;
   InverseKinematics ik_;
+  const ProgramBlocks* blocks_;  // or nullptr: the whole program at once
+  size_t points_read_ = 0;       // points made, those passed on included
   ClProgram prog_;
   static constexpr int kMaxNesting = 64;      // signs, brackets and '#' within one expression
   static constexpr int kMaxParameter = 5601;  // LinuxCNC's numbered parameters: #1 to #5601
@@ -2093,7 +2106,12 @@ class Reader {
 
 ClProgram readGcode(LineSource& source, const std::string& file_name, const MachineModel& model,
                     const GcodeReadOptions& options) {
-  return Reader(source, file_name, model, options).run();
+  return Reader(source, file_name, model, options, nullptr).run();
+}
+
+ClProgram readGcode(LineSource& source, const std::string& file_name, const MachineModel& model,
+                    const GcodeReadOptions& options, const ProgramBlocks& blocks) {
+  return Reader(source, file_name, model, options, &blocks).run();
 }
 
 ClProgram parseGcode(const std::string& text, const std::string& file_name,

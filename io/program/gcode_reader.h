@@ -52,6 +52,10 @@ struct GcodeReadOptions {
 // The file is read as a stream of lines (io/common/line_source.h); every line's text is kept.
 ClProgram readGcode(LineSource& source, const std::string& file_name, const MachineModel& model,
                     const GcodeReadOptions& options = {});
+// In blocks (io/program/apt_reader.h, ProgramBlocks): the program returned holds the state after
+// the last block (no points).
+ClProgram readGcode(LineSource& source, const std::string& file_name, const MachineModel& model,
+                    const GcodeReadOptions& options, const ProgramBlocks& blocks);
 ClProgram readGcodeFile(const std::string& path, const MachineModel& model,
                         const GcodeReadOptions& options = {});
 ClProgram parseGcode(const std::string& text, const std::string& file_name,

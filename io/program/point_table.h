@@ -29,5 +29,11 @@ std::string formatPointTable(const MachineModel& model, const std::vector<ClPoin
 void writePointTable(TextOut& out, const MachineModel& model, const std::vector<ClPoint>& nominal,
                      const PredictedPoints& predicted,
                      const std::vector<PoseUncertainty>* uncertainty = nullptr);
+// The same in parts, for a program predicted in blocks: the header line, then each block's rows
+// (first_index: the index of the block's first point in the program).
+void writePointTableHeader(TextOut& out, const MachineModel& model, bool uncertainty);
+void writePointTableRows(TextOut& out, const MachineModel& model,
+                         const std::vector<ClPoint>& nominal, const PredictedPoints& predicted,
+                         const std::vector<PoseUncertainty>* uncertainty, size_t first_index);
 
 }  // namespace tolver

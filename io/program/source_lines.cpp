@@ -10,8 +10,9 @@ void SourceLines::push(std::string_view line, bool keep) {
 }
 
 std::string_view SourceLines::operator[](size_t i) const {
-  assert(i < end_.size());
+  assert(i >= first_ && i < size());
   if (!kept(i)) return {};
+  i -= first_;
   const size_t begin = i == 0 ? 0 : static_cast<size_t>(end_[i - 1] & ~kDropped);
   return std::string_view(text_).substr(begin, static_cast<size_t>(end_[i]) - begin);
 }
