@@ -174,6 +174,11 @@ void printSearch(const SetupInputs& o, const SetupRun& run) {
   std::printf("  searched   %d part rotations (%d rejected: rotary travel)%s\n", r.rotations_tried,
               r.rotations_rejected,
               o.gauge_lengths.size() > 1 ? ", gauge lengths given with --gauge-lengths" : "");
+  if (r.budget_spent)
+    std::printf(
+        "  budget     --max-seconds %g ran out after %d part rotations: the set-up below is the "
+        "best of those tried, not of all (a longer budget may find a larger margin)\n",
+        o.max_seconds, r.rotations_tried);
   if (run.rotations_exhausted) {
     std::printf(
         "  result     no rotation keeps the rotary axes inside travel: the program cannot "
@@ -223,6 +228,10 @@ void registerSetup(CLI::App& app, Verdict* verdict) {
   cmd->add_option("--gauge-lengths", o->gauge_lengths,
                   "gauge lengths to try, mm (default: the set-up's)")
       ->delimiter(',');
+  cmd->add_option("--max-seconds", o->max_seconds,
+                  "time budget of the search, s (default 0: none); when it runs out, the best "
+                  "set-up of the part rotations tried, said so")
+      ->check(CLI::Range(0.0, 1e6));
   cmd->callback([o, verdict] {
     ProgressBar bar(true);  // a bar on a terminal, a line per long phase elsewhere (stderr)
     const SetupRun run =

@@ -71,6 +71,14 @@ class BlockPredictor {
 
   // After the last block: the program's failures and summary, and its worst point.
   const PredictionResult& result() const { return committed_; }
+  PredictionResult takeResult() {  // the failures and summary, without the last stretch's points
+    PredictionResult r;
+    r.failures = std::move(committed_.failures);
+    r.failed_points = committed_.failed_points;
+    r.failures_per_axis = std::move(committed_.failures_per_axis);
+    r.summary = committed_.summary;
+    return r;
+  }
   const PredictedPoint& worst() const { return worst_; }
   int worstIndex() const { return worst_index_; }
 
@@ -239,7 +247,7 @@ PredictionRun predict(const PredictInputs& in, const Progress& progress) {
     if (last) writePredictedAptEnd(cl_out, block);
   };
   run.program = streamProgram(in.program, model, blocks, told("predicting"));
-  run.prediction = predictor.result();
+  run.prediction = predictor.takeResult();
   unreachable(run.program, run.prediction);
   outputs.commit();
 

@@ -23,7 +23,7 @@ struct PredictInputs {
   std::string probed;                 // probed points (CSV), or empty
   // The program is read, predicted and written in blocks of at least this many points (ending
   // on a statement): the memory a run takes does not grow with the program's length.
-  size_t block_points = 65536;
+  size_t block_points = 16384;
 };
 
 // The prediction's band over a calibrated machine's program (PoseUncertainty per point, not

@@ -196,6 +196,7 @@ SetupRun proposeSetup(const SetupInputs& in, const Progress& progress) {
   // A posted program's rotary words assume the part as the post placed it: keep its rotation.
   if (program.dialect == "G-code") so.rotation_step = 0.0;
   so.gauge_lengths = in.gauge_lengths;
+  so.max_seconds = in.max_seconds;
   if (progress) so.progress = [&progress](double f) { progress("searching set-ups", f); };
   run.search = findSetup(model, run.path, cmd, so);
   if (progress) progress("searching set-ups", 1.0);

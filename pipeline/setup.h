@@ -18,6 +18,10 @@ struct SetupInputs {
   std::string output;                 // set-up file to write with the proposal, or empty
   double rotation_step_deg = 15.0;    // part rotations tried (0 keeps the given one)
   std::vector<double> gauge_lengths;  // gauge lengths to try, mm; empty: the set-up's
+  // A time budget for the search, s (0: none): once spent, the best set-up of the rotations
+  // tried (SetupSearchResult::budget_spent). The pieces of a program no set-up reaches are
+  // searched with the same budget each.
+  double max_seconds = 0.0;
 };
 
 enum class SetupMode {

@@ -8,6 +8,7 @@
 
 #include "geometry/cutter.h"
 #include "io/common/io_error.h"
+#include "io/common/text_util.h"
 #include "test_support.h"
 
 namespace tolver {
@@ -404,6 +405,80 @@ TEST(AptReader, MessagesQuoteAtMostSixtyCharactersOfABadToken) {
   EXPECT_NE(m.find(sentence), std::string::npos) << m;
   EXPECT_NE(m.find(std::string(60, '9') + "..."), std::string::npos) << m;
   EXPECT_LT(m.size(), 400u);
+}
+
+}  // namespace
+}  // namespace tolver
+
+namespace tolver {
+namespace {
+
+// Every GOTO written "GOTO /" instead of "GOTO/": the reader's plain-GOTO path is not taken.
+std::string generalGotos(const std::string& text) {
+  std::string out;
+  for (const std::string& l : splitLines(text))
+    out += (l.rfind("GOTO/", 0) == 0 ? "GOTO /" + l.substr(5) : l) + "\n";
+  return out;
+}
+
+// A one-line GOTO of plain numbers is read by a shorter path than other statements; it makes
+// the same program, bit for bit, as the general path does (real programs from NX, Creo,
+// SolidWorks CAM, with cycles, frames, arcs and modal tool axes), and leaves every refusal to the
+// general path, with its message.
+TEST(AptReader, PlainGotoLinesReadAsTheGeneralPathReadsThem) {
+  for (const char* f :
+       {"samples/sculptured_finish.apt", "tests/fixtures/cl/creo_drilling.ncl",
+        "tests/fixtures/cl/nx_cutcom.clsf", "tests/fixtures/cl/swcam_RotateThick.apt",
+        "tests/fixtures/cl/nx_ust_a.cls"}) {
+    const std::string text = readFile(test::sourcePath(f));
+    const ClProgram plain = parseApt(text, f), general = parseApt(generalGotos(text), f);
+    ASSERT_EQ(plain.path.size(), general.path.size()) << f;
+    ASSERT_GT(plain.path.size(), 5u) << f;
+    for (size_t i = 0; i < plain.path.size(); ++i) {
+      ASSERT_EQ(std::memcmp(plain.path[i].p_w.data(), general.path[i].p_w.data(), 24), 0) << f;
+      ASSERT_EQ(std::memcmp(plain.path[i].u_w.data(), general.path[i].u_w.data(), 24), 0) << f;
+      ASSERT_EQ(plain.path[i].line, general.path[i].line) << f;
+      ASSERT_EQ(plain.path[i].rapid, general.path[i].rapid) << f;
+      ASSERT_EQ(plain.point_frame[i], general.point_frame[i]) << f;
+    }
+    ASSERT_EQ(plain.statements.size(), general.statements.size()) << f;
+    for (size_t k = 0; k < plain.statements.size(); ++k) {
+      EXPECT_EQ(plain.statements[k].major, general.statements[k].major) << f;
+      EXPECT_EQ(plain.statements[k].first_point, general.statements[k].first_point) << f;
+      EXPECT_EQ(plain.statements[k].point_count, general.statements[k].point_count) << f;
+    }
+    EXPECT_EQ(plain.multiax, general.multiax) << f;
+    EXPECT_EQ(plain.notes, general.notes) << f;
+  }
+  // Refusals come from the general path, the same message either way.
+  for (const char* bad : {"GOTO/1,2,3,0,0,0\n", "GOTO/1,2\n", "GOTO/1,2,3e12\n", "GOTO/1,,3\n",
+                          "GOTO/1,2,x\n", "GOTO/1,2,3,0,0,1,5\n"}) {
+    std::string a, b;
+    try {
+      parseApt(std::string("MULTAX/ON\n") + bad, "bad.apt");
+    } catch (const InputError& e) {
+      a = e.what();
+    }
+    try {
+      parseApt(generalGotos(std::string("MULTAX/ON\n") + bad), "bad.apt");
+    } catch (const InputError& e) {
+      b = e.what();
+    }
+    // (the general spelling has one more character before the values: columns one further)
+    // (a message without a column is the same either way)
+    auto split = [](const std::string& m, int* column) {
+      const size_t c1 = m.find(':', m.find(':') + 1), c2 = m.find(':', c1 + 1);
+      const std::string field = m.substr(c1 + 1, c2 - c1 - 1);
+      if (field.empty() || field.find_first_not_of("0123456789") != std::string::npos) return m;
+      *column = std::stoi(field);
+      return m.substr(0, c1) + m.substr(c2);
+    };
+    ASSERT_FALSE(a.empty()) << bad;
+    ASSERT_FALSE(b.empty()) << bad;
+    int ca = -1, cb = -1;
+    EXPECT_EQ(split(a, &ca), split(b, &cb)) << bad;
+    EXPECT_EQ(cb, ca < 0 ? -1 : ca + 1) << a << " / " << b;
+  }
 }
 
 }  // namespace

@@ -58,6 +58,25 @@ namespace {
 // Analytic truth: a vertical-tool program on the Matsuura at a fixed rotation keeps A and C at
 // zero, so each prismatic joint is the point's coordinate plus a constant, and the best margin
 // is half the smallest difference between an axis's travel and the program's span along it.
+// A time budget stops the search with the best set-up of the rotations tried, and says so; one
+// rotation is always tried, and without a budget all of them are.
+TEST(SetupSearch, ATimeBudgetStopsWithTheBestSetupTriedAndSaysSo) {
+  Machine m = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
+  m.model.setup.gauge_length = 100;
+  const ClProgram p = readAptFile(test::sourcePath("samples/sculptured_finish.apt"));
+  SetupSearchOptions o;
+  const SetupSearchResult all = findSetup(m.model, p.path, nullptr, o);
+  EXPECT_FALSE(all.budget_spent);
+  EXPECT_EQ(all.rotations_tried, 24);
+  o.max_seconds = 1e-9;
+  const SetupSearchResult cut = findSetup(m.model, p.path, nullptr, o);
+  EXPECT_TRUE(cut.budget_spent);
+  EXPECT_EQ(cut.rotations_tried, 1);
+  EXPECT_TRUE(std::isfinite(cut.margin));
+  EXPECT_LE(cut.margin, all.margin);
+  EXPECT_EQ(cut.setup.part_rotation, 0.0);  // the first rotation's best
+}
+
 TEST(SetupSearch, VerticalToolMarginIsHalfTheSmallestSlack) {
   Machine m = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
   m.model.setup.gauge_length = 100;

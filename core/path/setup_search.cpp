@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -421,11 +422,20 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
     }
     return v;
   };
+  // The time budget: once spent (after one rotation at least), the best of those tried.
+  const auto start = std::chrono::steady_clock::now();
+  auto spent = [&] {
+    if (!(options.max_seconds > 0.0) || out.rotations_tried == 0) return false;
+    const std::chrono::duration<double> t = std::chrono::steady_clock::now() - start;
+    if (t.count() > options.max_seconds) out.budget_spent = true;
+    return out.budget_spent;
+  };
   std::vector<std::pair<double, double>> coarse;  // margin, rotation
   const double total =
       static_cast<double>(rotations.size()) * (options.rotation_step > 0 ? 2.0 : 1.0);
   for (double rot : rotations) {
     if (options.stop_when_found && out.margin >= 0.0) break;
+    if (spent()) break;
     if (options.progress) options.progress(out.rotations_tried / total);
     ++out.rotations_tried;
     double v = -std::numeric_limits<double>::infinity();
@@ -448,7 +458,8 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
                          0.5 * refined++ / static_cast<double>(std::max<size_t>(1, coarse.size())));
       double rot = rot0, v = v0;
       for (double h = options.rotation_step / 2.0;
-           h > degToRad(0.1) && !(options.stop_when_found && out.margin >= 0.0); h /= 2.0)
+           h > degToRad(0.1) && !(options.stop_when_found && out.margin >= 0.0) && !spent();
+           h /= 2.0)
         for (double r : {rot - h, rot + h}) {
           double vr = -std::numeric_limits<double>::infinity();
           const double rr = std::fmod(r + 2.0 * kPi, 2.0 * kPi);

@@ -43,6 +43,9 @@ struct SetupSearchOptions {
   std::vector<double> gauge_lengths;      // candidates, mm; empty: the model's
   int max_points = 20000;                 // points used in the search (evenly spaced subset)
   bool stop_when_found = false;           // return the first set-up that reaches every point
+  // A time budget, s (0: none): once spent, the search stops with the best set-up of the
+  // rotations tried (SetupSearchResult::budget_spent); one rotation is always tried.
+  double max_seconds = 0.0;
   // Called with the fraction of the candidate rotations searched (0..1), from the calling thread.
   std::function<void(double)> progress;
 };
@@ -54,6 +57,7 @@ struct SetupSearchResult {
   std::vector<AxisRange> ranges;  // with the best set-up
   std::vector<int> outside;       // with the best set-up: points outside travel
   int rotations_tried = 0, rotations_rejected = 0;
+  bool budget_spent = false;  // max_seconds ran out before every rotation was tried
 };
 
 SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint>& path,

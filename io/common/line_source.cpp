@@ -40,9 +40,11 @@ LineSource::~LineSource() = default;
 
 bool LineSource::fill() {
   if (!file_) return false;
-  // Keep what is left (a line cut by the block's end) and append the next block.
+  // Keep what is left (a line cut by the block's end) and append the next block, in the spare
+  // buffer (the two swap: no allocation, no fresh pages, once they hold a block).
   // The block grows with a long line, so that reading one is linear in its length.
-  std::string next(rest_);
+  std::string& next = spare_;
+  next.assign(rest_);
   const size_t old = next.size();
   const size_t want = std::max(kBlockBytes, old);
   next.resize(old + want);
@@ -51,7 +53,7 @@ bool LineSource::fill() {
     throw InputError(name_, 0, 0, "", std::string("cannot read: ") + std::strerror(errno));
   next.resize(old + got);
   bytes_read_ += got;
-  buf_ = std::move(next);
+  buf_.swap(next);
   rest_ = buf_;
   if (got == 0) file_.reset();
   return got > 0;

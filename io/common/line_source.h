@@ -39,6 +39,7 @@ class LineSource {
   std::unique_ptr<std::FILE, FileCloser> file_;
   std::string name_;
   std::string buf_;        // the file's block being read
+  std::string spare_;      // the next block's buffer
   std::string_view rest_;  // what is left to read: of buf_, or of the caller's text
   bool first_ = true;
   size_t size_hint_ = 0;

@@ -154,6 +154,14 @@ bool scaledRound(double a, int d, std::uint64_t* n) {
     *n = 0;
     return true;
   }
+  std::uint64_t k = static_cast<std::uint64_t>(y);  // floor (y >= 0)
+  const double h = (y - static_cast<double>(k)) - 0.5;
+  if (h != 0.0) {  // the rounded product decides (above)
+    *n = k + (h > 0.0 ? 1 : 0);
+    return true;
+  }
+  // A half in the rounded product: the product's rounding error decides, and an exact half goes
+  // to the even neighbour.
   auto split = [](double x, double* hi, double* lo) {
     const double c = 134217729.0 * x;  // 2^27 + 1
     *hi = c - (c - x);
@@ -163,9 +171,7 @@ bool scaledRound(double a, int d, std::uint64_t* n) {
   split(a, &ah, &al);
   split(p, &ph, &pl);
   const double r = ((ah * ph - y) + ah * pl + al * ph) + al * pl;
-  std::uint64_t k = static_cast<std::uint64_t>(y);  // floor (y >= 0)
-  const double h = (y - static_cast<double>(k)) - 0.5;
-  if (h > 0.0 || (h == 0.0 && (r > 0.0 || (r == 0.0 && (k & 1) != 0)))) ++k;
+  if (r > 0.0 || (r == 0.0 && (k & 1) != 0)) ++k;
   *n = k;
   return true;
 }
@@ -174,38 +180,57 @@ bool scaledRound(double a, int d, std::uint64_t* n) {
 
 LineBuilder& LineBuilder::fixed(double v, int decimals) {
   std::uint64_t k;
-  // The common case (a coordinate, a deviation) by integer digits, written from the right two at
-  // a time; any other by std::to_chars.
+  // The common case (a coordinate, a deviation) by integer digits, written in place from the
+  // right two at a time; any other by std::to_chars.
   if (buf_ + sizeof buf_ - at_ >= 40 && scaledRound(std::abs(v), decimals, &k)) {
     static constexpr char kPairs[] =
         "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
         "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
         "8081828384858687888990919293949596979899";
-    char tmp[40];
-    char* const end = tmp + sizeof tmp;
+    static constexpr std::uint64_t kPow10[17] = {1,
+                                                 10,
+                                                 100,
+                                                 1000,
+                                                 10000,
+                                                 100000,
+                                                 1000000,
+                                                 10000000,
+                                                 100000000,
+                                                 1000000000,
+                                                 10000000000,
+                                                 100000000000,
+                                                 1000000000000,
+                                                 10000000000000,
+                                                 100000000000000,
+                                                 1000000000000000,
+                                                 10000000000000000};
+    int digits = decimals + 1;  // of k, at least one before the point
+    while (digits < 16 && k >= kPow10[digits]) ++digits;
+    if (std::signbit(v)) *at_++ = '-';
+    char* const end = at_ + digits + (decimals > 0 ? 1 : 0);
     char* p = end;
     int left = decimals;
     for (; left >= 2; left -= 2) {
       const std::uint64_t pair = k % 100;
       k /= 100;
       p -= 2;
-      std::memcpy(p, kPairs + 2 * pair, 2);
+      p[0] = kPairs[2 * pair];
+      p[1] = kPairs[2 * pair + 1];
     }
     if (left == 1) {
       *--p = static_cast<char>('0' + k % 10);
       k /= 10;
     }
     if (decimals > 0) *--p = '.';
-    while (k >= 10) {
+    while (p - at_ >= 2) {
       const std::uint64_t pair = k % 100;
       k /= 100;
       p -= 2;
-      std::memcpy(p, kPairs + 2 * pair, 2);
+      p[0] = kPairs[2 * pair];
+      p[1] = kPairs[2 * pair + 1];
     }
-    if (k > 0 || p == end || *p == '.') *--p = static_cast<char>('0' + k);
-    if (std::signbit(v)) *--p = '-';
-    std::memcpy(at_, p, static_cast<size_t>(end - p));
-    at_ += end - p;
+    if (p > at_) *--p = static_cast<char>('0' + k);
+    at_ = end;
     return *this;
   }
   const auto r = std::to_chars(at_, buf_ + sizeof buf_, v, std::chars_format::fixed, decimals);

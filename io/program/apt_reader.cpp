@@ -73,6 +73,9 @@ class Parser {
         st.major.clear();  // Creo pseudo-comments are copied verbatim, never rewritten
       } else if (t.rfind("$$", 0) == 0 || t[0] == '$') {
         ++i;
+      } else if (plainGoto(t, static_cast<int>(i) + 1, st)) {
+        ++i;
+        st.major = "GOTO";
       } else {
         const Logical& lg = gather(i, 0, /*pseudo=*/false);
         st.major = statement(lg, /*pseudo=*/false, st);
@@ -287,7 +290,42 @@ class Parser {
     return args;
   }
 
-  static bool looksNumeric(const std::string& s) {
+  // The common statement, GOTO/x,y,z[,i,j,k] on one line of plain numbers, read without the
+  // general path's buffers. Anything else, and anything the general path would refuse, is left
+  // to it (false): it reads the same values the same way (tests/apt_reader_test.cpp).
+  bool plainGoto(std::string_view t, int line, AptStatement& st) {
+    if (t.size() < 6 || t.compare(0, 5, "GOTO/") != 0 || t.find('$') != std::string_view::npos)
+      return false;
+    double v[6];
+    int n = 0;
+    for (size_t p = 5;;) {
+      if (n == 6) return false;
+      size_t q = t.find(',', p);
+      if (q == std::string_view::npos) q = t.size();
+      const std::string_view token = trim(t.substr(p, q - p));
+      if (!looksNumeric(token)) return false;
+      const std::optional<double> x = parseNumber(token);
+      if (!x || std::abs(*x) > 1e9) return false;
+      v[n++] = *x;
+      if (q == t.size()) break;
+      p = q + 1;
+    }
+    if (n != 3 && n != 6) return false;
+    if (n == 6) {
+      const Eigen::Vector3d u(v[3], v[4], v[5]);
+      if (u.norm() < 1e-9) return false;
+      axis_local_ = u.normalized();
+      prog_.multiax = true;
+    }
+    const Eigen::Vector3d p(v[0], v[1], v[2]);
+    if (cycle_.active)
+      cycleMotion(p, line, st);
+    else
+      addMotion(p, line, st);
+    return true;
+  }
+
+  static bool looksNumeric(std::string_view s) {
     return !s.empty() && (std::isdigit(static_cast<unsigned char>(s[0])) || s[0] == '.' ||
                           s[0] == '-' || s[0] == '+');
   }
