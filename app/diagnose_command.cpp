@@ -76,6 +76,11 @@ void printDiagnosis(const DiagnosisRun& run, const DiagnoseOptions& o) {
       std::printf("  rejected   %s: %s\n", c.label.c_str(), c.reason.c_str());
   // One verdict; what follows supports it.
   std::printf("  verdict    %s\n", r.verdict_text.c_str());
+  if (r.budget_spent)
+    std::printf(
+        "  budget     --max-seconds %g ran out after %d selection round%s: the effects above are "
+        "those the rounds done found; a longer budget may add more\n",
+        o.in.max_seconds, r.rounds_done, r.rounds_done == 1 ? "" : "s");
   for (const AddedEffect& a : r.added) printAdded(m, a);
   if (!r.where.empty()) std::printf("  where      %s\n", r.where.c_str());
   if (!r.suggestion.empty()) std::printf("  to separate it: %s\n", r.suggestion.c_str());
@@ -178,6 +183,10 @@ void registerDiagnose(CLI::App& app, Verdict* verdict) {
   cmd->add_option("--alpha", o->in.alpha,
                   "family-wise significance level per round (default 0.001)")
       ->check(CLI::Range(1e-12, 0.5));
+  cmd->add_option("--max-seconds", o->in.max_seconds,
+                  "time budget, s (default 0: none); when it runs out no further selection round "
+                  "starts, said so")
+      ->check(CLI::Range(0.0, 1e6));
   cmd->add_option("--max-effects", o->in.max_effects, "most effects to add (default 4)")
       ->check(CLI::Range(0, 20));
   cmd->add_option("--blocks-per-setup", o->in.blocks_per_setup,

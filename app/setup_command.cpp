@@ -176,7 +176,7 @@ void printSearch(const SetupInputs& o, const SetupRun& run) {
               o.gauge_lengths.size() > 1 ? ", gauge lengths given with --gauge-lengths" : "");
   if (r.budget_spent)
     std::printf(
-        "  budget     --max-seconds %g ran out after %d part rotations: the set-up below is the "
+        "  budget     --max-seconds %g ran out after %d part rotation(s): the set-up below is the "
         "best of those tried, not of all (a longer budget may find a larger margin)\n",
         o.max_seconds, r.rotations_tried);
   if (run.rotations_exhausted) {

@@ -56,6 +56,7 @@ DiagnosisOptions diagnosisOptions(const DiagnoseInputs& in) {
   DiagnosisOptions opt;
   opt.alpha = in.alpha;
   opt.max_effects = in.max_effects;
+  opt.max_seconds = in.max_seconds;
   opt.blocks_per_setup = in.blocks_per_setup;
   for (const std::string& t : in.types) {
     const EffectTraits* tr = findEffectType(t);

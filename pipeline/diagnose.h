@@ -30,6 +30,7 @@ struct DiagnoseInputs {
   int blocks_per_setup = 6;  // cross-validation blocks
   bool keep_outliers = false;
   double spindle_tilt_urad = 0.0;  // as CalibrateInputs::spindle_tilt_urad
+  double max_seconds = 0.0;        // time budget (DiagnosisOptions::max_seconds; 0: none)
   // The outputs (diagnoseMachine): the augmented machine (XML), its ball positions (beside it
   // unless given) and the report directory.
   std::string output, balls, report_dir;

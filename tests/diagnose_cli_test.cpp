@@ -105,6 +105,32 @@ TEST_F(DiagnoseCli, ProgressInALogIsOneLinePerPhase) {
   EXPECT_EQ(q.output.find("tolver: scoring candidates"), std::string::npos) << q.output;
 }
 
+// A time budget stops the selection after the rounds done and says so (console and JSON); the
+// two-effect readings then get the first effect only, where without a budget they get both.
+TEST_F(DiagnoseCli, ATimeBudgetStopsTheSelectionAndSaysSo) {
+  const std::string cmd = "diagnose --machine " + nominal + " --readings " +
+                          readings("two_effects") + " -o " + path("augmented.xml") +
+                          " --quiet --report-dir ";
+  const auto all = test::runTolver(cmd + path("all"));
+  ASSERT_EQ(all.exit_code, 0) << all.output;
+  EXPECT_EQ(all.output.find("  budget "), std::string::npos) << all.output;
+  const auto cut = test::runTolver(cmd + path("cut") + " --max-seconds 0.000001");
+  ASSERT_EQ(cut.exit_code, 0) << cut.output;
+  EXPECT_NE(cut.output.find("--max-seconds 1e-06 ran out after 1 selection round"),
+            std::string::npos)
+      << cut.output;
+  auto report = [&](const char* dir) {
+    std::ifstream in(path(dir) + "/report.json");
+    return nlohmann::json::parse(in);
+  };
+  const nlohmann::json a = report("all"), c = report("cut");
+  EXPECT_FALSE(a["budget_spent"].get<bool>());
+  EXPECT_TRUE(c["budget_spent"].get<bool>());
+  EXPECT_EQ(c["rounds_done"].get<int>(), 1);
+  EXPECT_EQ(a["effects_added"].size(), 2u);
+  EXPECT_EQ(c["effects_added"].size(), 1u);
+}
+
 // The lack-of-fit test on the plan's repeated poses: the reversal data fail it with the base
 // model and pass it with the reversal added; the clean data pass it. One verdict line.
 TEST_F(DiagnoseCli, LackOfFitBeforeAndAfterAndOneVerdict) {

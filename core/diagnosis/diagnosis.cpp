@@ -4,6 +4,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <boost/math/tools/minima.hpp>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -858,6 +859,7 @@ const char* verdictName(DiagnosisVerdict v) {
 DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
                          const DiagnosisOptions& opt,
                          const std::function<void(int, int)>& progress) {
+  const auto start = std::chrono::steady_clock::now();
   DiagnosisResult res;
   res.machine = machine;
   std::vector<int> unknowns =
@@ -887,6 +889,13 @@ DiagnosisResult diagnose(const Machine& machine, const BallbarTest& test,
     }
     res.cv_rms_after = cv_base;
     if (round > opt.max_effects) break;
+    if (round > 1 && opt.max_seconds > 0.0 &&
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count() >
+            opt.max_seconds) {
+      res.budget_spent = true;
+      break;
+    }
+    res.rounds_done = round;
     std::vector<CandidateScore> scores = candidatesOf(res.machine.model, opt, round);
     const int tests = scoreCandidates(sc, test, res.machine.model, cv_base, scores, progress);
     bool added = false;

@@ -51,6 +51,9 @@ struct DiagnosisOptions {
   // Readings of the same set-ups that no fit uses (aligned to the test's set-ups); when given,
   // they judge the final model against the base one, otherwise cross-validation does.
   const BallbarTest* heldout = nullptr;
+  // A time budget, s (0: none): once spent, no further round starts; the model is the one the
+  // rounds done made (DiagnosisResult::budget_spent). The first round always runs.
+  double max_seconds = 0.0;
 };
 
 enum class CandidateVerdict {
@@ -123,6 +126,8 @@ const char* verdictName(DiagnosisVerdict v);
 
 struct DiagnosisResult {
   bool ok = false;
+  bool budget_spent = false;  // max_seconds ran out: rounds after rounds_done were not run
+  int rounds_done = 0;
   std::string message;
   DiagnosisVerdict verdict = DiagnosisVerdict::NothingMissing;
   std::string verdict_text;  // one line: what the verdict means here, with its figures

@@ -247,6 +247,8 @@ std::string formatDiagnosisJson(const MachineModel& base, const BallbarTest& tes
       {"setups", test.setups.size()},
       {"verdict", verdictName(r.verdict)},
       {"verdict_text", r.verdict_text},
+      {"budget_spent", r.budget_spent},
+      {"rounds_done", r.rounds_done},
       {"message", r.message},
       {"lack_of_fit",
        {{"before", lackOfFitJson(r.lack_of_fit_before)},
