@@ -1,5 +1,9 @@
 #include "pipeline/predict.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <limits>
 
@@ -191,6 +195,9 @@ PredictionRun predict(const PredictInputs& in, const Progress& progress) {
   if (run.calibration.probed)
     run.probe_line = describeProbedSetup(in.probed, run.calibration.probe, probed, &run.warnings);
 
+  std::unique_ptr<tbb::enumerable_thread_specific<PredictionUncertainty>> per_thread;
+  if (pu)
+    per_thread = std::make_unique<tbb::enumerable_thread_specific<PredictionUncertainty>>(*pu);
   OutputSet outputs;  // both files, or neither
   TextOut& cl_out = outputs.open(run.output);
   TextOut* table_out = run.point_table.empty() ? nullptr : &outputs.open(run.point_table);
@@ -231,12 +238,18 @@ PredictionRun predict(const PredictInputs& in, const Progress& progress) {
     }
     writePredictedAptStatements(cl_out, block, predicted);
     if (pu) {
+      // Each point's band on the cores (a copy of the uncertainty's work matrix per thread; the
+      // points are independent, the result the same on any number of threads).
       unc.resize(n);
-      JointVector q(pts.axes());
-      for (size_t i = 0; i < n; ++i) {
-        for (int a = 0; a < pts.axes(); ++a) q[a] = pts.q(a)[i];
-        unc[i] = pu->at(q);
-      }
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256),
+                        [&](const tbb::blocked_range<size_t>& r) {
+                          const PredictionUncertainty& u = per_thread->local();
+                          JointVector q(pts.axes());
+                          for (size_t i = r.begin(); i < r.end(); ++i) {
+                            for (int a = 0; a < pts.axes(); ++a) q[a] = pts.q(a)[i];
+                            unc[i] = u.at(q);
+                          }
+                        });
       band.add(block, unc);
     }
     if (table_out)
