@@ -63,7 +63,7 @@ namespace {
 TEST(SetupSearch, ATimeBudgetStopsWithTheBestSetupTriedAndSaysSo) {
   Machine m = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
   m.model.setup.gauge_length = 100;
-  const ClProgram p = readAptFile(test::sourcePath("samples/sculptured_finish.apt"));
+  const ClProgram p = readAptFile(test::sourcePath("samples/nas979_cone.apt"));
   SetupSearchOptions o;
   const SetupSearchResult all = findSetup(m.model, p.path, nullptr, o);
   EXPECT_FALSE(all.budget_spent);
