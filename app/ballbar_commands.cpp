@@ -251,9 +251,13 @@ void registerBallbar(CLI::App& app, Verdict* verdict) {
         ->check(CLI::Range(0, 100000));
     cmd->add_option("-o,--output", o->output, "plan to write (CSV)")->required();
     cmd->add_option("--gcode", o->gcode, "NC program to write (default: the plan path with .nc)");
-    cmd->callback([o, verdict] {
+    auto quiet = std::make_shared<bool>(false);
+    cmd->add_flag("--quiet", *quiet, "no progress bar");
+    cmd->callback([o, verdict, quiet] {
       useOptionNames({{"cl", "--for"}, {"lengths_mm", "--length"}});
-      const PlanRun run = planBallbar(*o);
+      ProgressBar bar(!*quiet);
+      const PlanRun run =
+          planBallbar(*o, [&bar](const std::string& phase, double f) { bar(phase, f); });
       printPlanRun(*o, run);
       *verdict = run.verdict;
     });
@@ -317,8 +321,12 @@ void registerBallbar(CLI::App& app, Verdict* verdict) {
         ->check(CLI::Range(0.0, 1e5));
     cmd->add_flag("--keep-outliers", o->keep_outliers,
                   "fit every reading (gross readings are still named)");
-    cmd->callback([o, verdict] {
-      const CalibrationRun run = calibrateMachine(*o);
+    auto quiet = std::make_shared<bool>(false);
+    cmd->add_flag("--quiet", *quiet, "no progress bar");
+    cmd->callback([o, verdict, quiet] {
+      ProgressBar bar(!*quiet);
+      const CalibrationRun run =
+          calibrateMachine(*o, [&bar](const std::string& phase, double f) { bar(phase, f); });
       printCalibrationRun(run, *o);
       *verdict = run.verdict;
     });

@@ -187,8 +187,12 @@ void registerCompensate(CLI::App& app, Verdict* verdict) {
       "a calibrated machine: compensate its raw prediction, with what probing and presetting "
       "would take up");
   addProbedOption(cmd, o->probed);
-  cmd->callback([o, verdict] {
-    const CompensateRun run = compensateProgram(*o);
+  auto quiet = std::make_shared<bool>(false);
+  cmd->add_flag("--quiet", *quiet, "no progress bar");
+  cmd->callback([o, verdict, quiet] {
+    ProgressBar bar(!*quiet);
+    const CompensateRun run =
+        compensateProgram(*o, [&bar](const std::string& phase, double f) { bar(phase, f); });
     printRun(run, *o);
     *verdict = run.verdict;
   });

@@ -85,9 +85,10 @@ ExpectedUncertainty expectedAt(const Machine& machine, const std::vector<int>& u
 
 }  // namespace
 
-PlanRun planBallbar(const PlanBallbarInputs& in) {
+PlanRun planBallbar(const PlanBallbarInputs& in, const Progress& progress) {
   PlanRun run;
   BallbarPlanOptions opt = in.plan;
+  if (progress) opt.progress = [&progress](double f) { progress("choosing poses", f); };
   if (in.lengths_mm.size() == 1) opt.bar_length = in.lengths_mm[0];
   if (in.lengths_mm.size() > 1) opt.bar_lengths = in.lengths_mm;
   for (double l : in.lengths_mm)
@@ -140,6 +141,7 @@ PlanRun planBallbar(const PlanBallbarInputs& in) {
     ho.seed = opt.seed + 7919u;
     ho.reference_every = 0;
     ho.candidates_per_pose = 1;
+    if (progress) ho.progress = [&progress](double f) { progress("choosing held-out poses", f); };
     run.held = planBallbarTest(machine.model, run.unknowns, ho);
     run.heldout_output = replaceExtension(in.output, "") + "_heldout.csv";
     run.heldout_gcode = replaceExtension(run.heldout_output, ".nc");
@@ -159,6 +161,8 @@ PlanRun planBallbar(const PlanBallbarInputs& in) {
     // What the plan would give at the target before anyone measures, and what the default plan
     // (the whole travel, D-optimal, the same size) would give there.
     BallbarPlanOptions whole = opt;
+    if (progress)
+      whole.progress = [&progress](double f) { progress("the default plan, to compare", f); };
     whole.target_poses.clear();
     whole.geometry.clear();
     const BallbarPlan general = planBallbarTest(machine.model, run.unknowns, whole);

@@ -49,7 +49,8 @@ struct PlanRun {
 
 // Plans, writes the plan, its NC program and the held-out ones as a set. Throws InputError
 // (FieldError: "output", "gcode", "volume", "heldout"; a machine without three prismatic axes).
-PlanRun planBallbar(const PlanBallbarInputs& in);
+// Progress: "choosing poses" (the fraction of the plan's poses chosen).
+PlanRun planBallbar(const PlanBallbarInputs& in, const Progress& progress = {});
 
 struct SimulateBallbarInputs {
   MachineOptions machine;      // the true machine

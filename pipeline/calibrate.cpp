@@ -127,12 +127,15 @@ std::string heldoutWarning(const std::string& file, const ResidualStats& after, 
   return buf;
 }
 
-CalibrationRun calibrateMachine(const CalibrateInputs& in) {
+CalibrationRun calibrateMachine(const CalibrateInputs& in, const Progress& progress) {
   const CalibrationOutputs out = calibrationOutputs(in.output, in.balls, in.report);
+  if (progress) progress("fitting", 0.0);
   CalibrationRun run = runCalibration(in);
   run.outputs = out;
   // The machine, its ball positions and the report as a set: all three or none.
+  if (progress) progress("writing and checking the files", 0.0);
   run.written = writeCalibration(run, in, out);
+  if (progress) progress("writing and checking the files", 1.0);
   run.verdict = run.fit.status == CalibrationStatus::Converged ? Verdict::Ok : Verdict::NotMet;
   return run;
 }

@@ -77,7 +77,8 @@ struct CalibrationRun {
 
 // tolver calibrate: checks the outputs' places, identifies, writes the machine, its ball
 // positions and the report as a set, and reads them back. Throws InputError.
-CalibrationRun calibrateMachine(const CalibrateInputs& in);
+// Progress: "fitting", then "writing and checking the files" (each 0 then 1).
+CalibrationRun calibrateMachine(const CalibrateInputs& in, const Progress& progress = {});
 
 // Reads the inputs and identifies. An unobservable test or no data is an InputError.
 CalibrationRun runCalibration(const CalibrateInputs& in);

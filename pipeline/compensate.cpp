@@ -249,7 +249,12 @@ void fillReport(const CompensateInputs& in, const std::string& output, Compensat
 
 }  // namespace
 
-CompensationRun runCompensation(const CompensateInputs& in, const std::string& output) {
+CompensationRun runCompensation(const CompensateInputs& in, const std::string& output,
+                                const Progress& progress) {
+  auto phase = [&progress](const char* p) {
+    if (progress) progress(p, 0.0);
+  };
+  phase("reading and predicting");
   CompensationRun run;
   run.machine = loadMachine(in.machine);
   ProgramOptions program_options = in.program;
@@ -280,12 +285,14 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
                                                 : program.multiax;
   std::vector<JointVector> q0(run.before.points.size());
   for (size_t i = 0; i < q0.size(); ++i) q0[i] = run.before.points[i].q;
+  phase("compensating");
   CompensationOptions co;
   co.max_condition = in.max_condition;
   if (std::count(program.cycle_orientation.begin(), program.cycle_orientation.end(), 1) > 0)
     co.tip_only = &program.cycle_orientation;
   run.compensation = compensateToolPath(run.machine.model, run.machine.params, program.path, q0,
                                         run.orientation, co, &run.before.points);
+  phase("writing and reading back");
   run.text = correctedText(in, run);
   // The after, measured on the file as written: read back, predicted on the machine.
   const ClProgram back = readBack(in, run, output);
@@ -414,7 +421,7 @@ TableRun runTables(const MachineOptions& machine_options, double step_mm,
   return run;
 }
 
-CompensateRun compensateProgram(const CompensateInputs& in) {
+CompensateRun compensateProgram(const CompensateInputs& in, const Progress& progress) {
   if (!(in.table_step >= 0.1 && in.table_step <= 1000.0))
     throw FieldError("table_step", "expected 0.1 to 1000 mm");
   if (!(in.max_condition >= 10.0 && in.max_condition <= 1e15))
@@ -433,7 +440,8 @@ CompensateRun compensateProgram(const CompensateInputs& in) {
   run.joints = compensatedJointsPath(run.report);
   checkOutputDir(run.output, "output");
   checkOutputDir(run.report, "report");
-  run.compensation = runCompensation(in, in.output);
+  run.compensation = runCompensation(in, in.output, progress);
+  if (progress) progress("writing and reading back", 1.0);
   const CompensationRun& c = *run.compensation;
   writeCompensation(c, in.output, run.report, in.report_dir);
   // The read-back check: a point further off after than before means the written program moves

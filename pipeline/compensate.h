@@ -47,7 +47,8 @@ struct CompensationRun {
 
 // Reads, predicts, compensates, writes the text (named `output` in its notes) and measures it
 // read back. Throws InputError.
-CompensationRun runCompensation(const CompensateInputs& in, const std::string& output);
+CompensationRun runCompensation(const CompensateInputs& in, const std::string& output,
+                                const Progress& progress = {});
 // Where the joints of every point go: beside the JSON report, <report stem>_joints.csv.
 std::string compensatedJointsPath(const std::string& report_json);
 // Writes the program, the JSON report and the joints (CSV) as a set, then the report directory
@@ -81,6 +82,8 @@ struct CompensateRun {
   Verdict verdict = Verdict::Ok;
 };
 // Throws InputError (FieldError "output": neither a program's output nor tables asked for).
-CompensateRun compensateProgram(const CompensateInputs& in);
+// Progress: "reading and predicting", "compensating", "writing and reading back" (each 0, then
+// the next).
+CompensateRun compensateProgram(const CompensateInputs& in, const Progress& progress = {});
 
 }  // namespace tolver

@@ -208,3 +208,46 @@ TEST_F(PredictOutputs, ASecondOutputThatFailsLeavesNoFirst) {
 
 }  // namespace
 }  // namespace tolver
+
+namespace tolver {
+namespace {
+
+// Every command that can run long says where it is: in a log, one line per phase when it ends
+// (TOLVER_PROGRESS_SECONDS=0: every phase), none with --quiet, never a terminal's bar.
+class ProgressCli : public test::TempDirTest {};
+
+TEST_F(ProgressCli, PredictCompensatePlanAndCalibrateSayTheirPhasesInALog) {
+  const std::string m = test::sourcePath("samples/machines/matsuura_mc760vx_measured.xml");
+  const std::string nominal = test::sourcePath("resources/machines/matsuura_mc760vx.xml");
+  const std::string prog = " --cl " + test::sourcePath("samples/nas979_cone.apt") + " --setup " +
+                           test::sourcePath("samples/matsuura_setup.txt");
+  const std::vector<std::pair<std::string, std::vector<std::string>>> runs = {
+      {"predict --machine " + m + prog + " -o " + path("p.apt"), {"predicting"}},
+      {"compensate --machine " + m + prog + " -o " + path("c.apt"),
+       {"reading and predicting", "compensating", "writing and reading back"}},
+      {"plan-ballbar --machine " + nominal + " --poses 60 -o " + path("plan.csv"),
+       {"choosing poses"}},
+      {"calibrate --machine " + nominal + " --readings " +
+           test::sourcePath("samples/ballbar/clean.csv") + " -o " + path("id.xml"),
+       {"fitting", "writing and checking the files"}},
+  };
+  setenv("TOLVER_PROGRESS_SECONDS", "0", 1);
+  for (const auto& [cmd, phases] : runs) {
+    const auto r = test::runTolver(cmd);
+    const auto q = test::runTolver(cmd + " --quiet");
+    ASSERT_EQ(r.exit_code, 0) << cmd << "\n" << r.output;
+    ASSERT_EQ(q.exit_code, 0) << cmd << "\n" << q.output;
+    for (const std::string& p : phases) {
+      const std::string line = "tolver: " + p + ": ";
+      const size_t at = r.output.find(line);
+      EXPECT_NE(at, std::string::npos) << cmd << "\n" << r.output;
+      EXPECT_EQ(r.output.find(line, at + 1), std::string::npos) << cmd << "\n" << r.output;
+      EXPECT_EQ(q.output.find(line), std::string::npos) << cmd << "\n" << q.output;
+    }
+    EXPECT_EQ(r.output.find('\r'), std::string::npos) << cmd;
+  }
+  unsetenv("TOLVER_PROGRESS_SECONDS");
+}
+
+}  // namespace
+}  // namespace tolver

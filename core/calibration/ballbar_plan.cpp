@@ -155,6 +155,7 @@ std::vector<int> chooseIOptimal(const MachineModel& model, const std::vector<int
   Eigen::VectorXd d = rows.rowwise().squaredNorm() / eps;
   Eigen::MatrixXd Y = (rows * G.transpose()) / eps;  // X M^-1 G^T
   for (int k = 0; k < opt.poses; ++k) {
+    if (opt.progress && k % 16 == 0) opt.progress(k / static_cast<double>(opt.poses));
     const int best =
         g.pick(k % nsetups, [&](size_t i) { return Y.row(i).squaredNorm() / (1.0 + d[i]); });
     if (best < 0) continue;
@@ -184,6 +185,7 @@ std::vector<int> chooseDOptimal(const BallbarPlanOptions& opt, int nsetups, Gree
   Eigen::VectorXd Mx(rows.cols()), v(rows.rows());
   std::vector<int> picks;
   for (int k = 0; k < opt.poses; ++k) {
+    if (opt.progress && k % 16 == 0) opt.progress(k / static_cast<double>(opt.poses));
     const int best = g.pick(k % nsetups, [&](size_t i) { return d[i]; });
     if (best < 0) continue;
     Mx.noalias() = Minv * rows.row(best).transpose();

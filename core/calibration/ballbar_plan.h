@@ -4,6 +4,7 @@
 // to maximise identifiability (greedy D-optimal design on the column-scaled identification
 // Jacobian: each new pose is the candidate that most increases det(J^T J)).
 #include <Eigen/Core>
+#include <functional>
 #include <vector>
 
 #include "core/calibration/ballbar.h"
@@ -12,6 +13,8 @@
 namespace tolver {
 
 struct BallbarPlanOptions {
+  // Called with the fraction of the poses chosen (0..1), from the calling thread; may be empty.
+  std::function<void(double)> progress;
   double bar_length = 150.0;  // mm
   // Per set-up bar lengths (mm), cycled over the set-ups; empty: bar_length for every set-up.
   // Two or more lengths let a calibration tell the bar's own length error from machine scale.
