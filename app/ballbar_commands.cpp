@@ -251,13 +251,11 @@ void registerBallbar(CLI::App& app, Verdict* verdict) {
         ->check(CLI::Range(0, 100000));
     cmd->add_option("-o,--output", o->output, "plan to write (CSV)")->required();
     cmd->add_option("--gcode", o->gcode, "NC program to write (default: the plan path with .nc)");
-    auto quiet = std::make_shared<bool>(false);
-    cmd->add_flag("--quiet", *quiet, "no progress bar");
+    auto quiet = addQuietFlag(cmd);
     cmd->callback([o, verdict, quiet] {
       useOptionNames({{"cl", "--for"}, {"lengths_mm", "--length"}});
       ProgressBar bar(!*quiet);
-      const PlanRun run =
-          planBallbar(*o, [&bar](const std::string& phase, double f) { bar(phase, f); });
+      const PlanRun run = planBallbar(*o, progressOf(bar));
       printPlanRun(*o, run);
       *verdict = run.verdict;
     });
@@ -321,12 +319,10 @@ void registerBallbar(CLI::App& app, Verdict* verdict) {
         ->check(CLI::Range(0.0, 1e5));
     cmd->add_flag("--keep-outliers", o->keep_outliers,
                   "fit every reading (gross readings are still named)");
-    auto quiet = std::make_shared<bool>(false);
-    cmd->add_flag("--quiet", *quiet, "no progress bar");
+    auto quiet = addQuietFlag(cmd);
     cmd->callback([o, verdict, quiet] {
       ProgressBar bar(!*quiet);
-      const CalibrationRun run =
-          calibrateMachine(*o, [&bar](const std::string& phase, double f) { bar(phase, f); });
+      const CalibrationRun run = calibrateMachine(*o, progressOf(bar));
       printCalibrationRun(run, *o);
       *verdict = run.verdict;
     });

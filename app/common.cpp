@@ -161,4 +161,14 @@ void ProgressBar::operator()(const std::string& what, double f) {
   if (f >= 1.0) endPhase();
 }
 
+std::shared_ptr<bool> addQuietFlag(CLI::App* cmd) {
+  auto quiet = std::make_shared<bool>(false);
+  cmd->add_flag("--quiet", *quiet, "no progress bar");
+  return quiet;
+}
+
+Progress progressOf(ProgressBar& bar) {
+  return [&bar](const std::string& phase, double f) { bar(phase, f); };
+}
+
 }  // namespace tolver::app

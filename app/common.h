@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <chrono>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -53,5 +54,10 @@ class ProgressBar {
   std::chrono::steady_clock::time_point start_;
   bool open_ = false, drawn_ = false;
 };
+
+// --quiet (no progress bar) on a command: its value, read in the command's callback.
+std::shared_ptr<bool> addQuietFlag(CLI::App* cmd);
+// The bar as a library function's progress callback (pipeline/command.h).
+Progress progressOf(ProgressBar& bar);
 
 }  // namespace tolver::app

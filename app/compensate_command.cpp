@@ -187,12 +187,10 @@ void registerCompensate(CLI::App& app, Verdict* verdict) {
       "a calibrated machine: compensate its raw prediction, with what probing and presetting "
       "would take up");
   addProbedOption(cmd, o->probed);
-  auto quiet = std::make_shared<bool>(false);
-  cmd->add_flag("--quiet", *quiet, "no progress bar");
+  auto quiet = addQuietFlag(cmd);
   cmd->callback([o, verdict, quiet] {
     ProgressBar bar(!*quiet);
-    const CompensateRun run =
-        compensateProgram(*o, [&bar](const std::string& phase, double f) { bar(phase, f); });
+    const CompensateRun run = compensateProgram(*o, progressOf(bar));
     printRun(run, *o);
     *verdict = run.verdict;
   });

@@ -209,8 +209,7 @@ void registerDiagnose(CLI::App& app, Verdict* verdict) {
   cmd->add_flag("--quiet", o->quiet, "no progress bar");
   cmd->callback([o, verdict] {
     ProgressBar bar(!o->quiet);
-    const DiagnosisRun run =
-        diagnoseMachine(o->in, [&bar](const std::string& phase, double f) { bar(phase, f); });
+    const DiagnosisRun run = diagnoseMachine(o->in, progressOf(bar));
     printRun(run, *o);
     *verdict = run.verdict;
   });

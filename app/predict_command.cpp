@@ -176,12 +176,10 @@ void registerPredict(CLI::App& app, Verdict* verdict) {
                 "a calibrated machine: predict without the set-up a shop measures (part probed, "
                 "tool preset), i.e. with what the calibration cannot see left in");
   addProbedOption(cmd, o->probed);
-  auto quiet = std::make_shared<bool>(false);
-  cmd->add_flag("--quiet", *quiet, "no progress bar");
+  auto quiet = addQuietFlag(cmd);
   cmd->callback([o, verdict, quiet] {
     ProgressBar bar(!*quiet);
-    const PredictionRun run =
-        predict(*o, [&bar](const std::string& phase, double f) { bar(phase, f); });
+    const PredictionRun run = predict(*o, progressOf(bar));
     printPrediction(run, *o);
     *verdict = run.verdict;
   });

@@ -234,8 +234,7 @@ void registerSetup(CLI::App& app, Verdict* verdict) {
       ->check(CLI::Range(0.0, 1e6));
   cmd->callback([o, verdict] {
     ProgressBar bar(true);  // a bar on a terminal, a line per long phase elsewhere (stderr)
-    const SetupRun run =
-        proposeSetup(*o, [&bar](const std::string& phase, double f) { bar(phase, f); });
+    const SetupRun run = proposeSetup(*o, progressOf(bar));
     printSetupRun(*o, run);
     *verdict = run.verdict;
   });

@@ -117,8 +117,7 @@ Verdict runVerify(VerifyOptions& o) {
   if (o.tolerance_units == "um" && !std::isnan(o.in.tolerance_mm))
     o.in.tolerance_mm = umToMm(o.in.tolerance_mm);
   ProgressBar bar(!o.quiet);
-  const VerifyRun run =
-      verifyPart(o.in, "", [&bar](const std::string& phase, double f) { bar(phase, f); });
+  const VerifyRun run = verifyPart(o.in, "", progressOf(bar));
   if (!o.quiet) printVerification(*run.verification, o, run.report);
   return run.verdict;
 }
