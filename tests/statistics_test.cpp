@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -192,6 +193,41 @@ TEST_F(Analysis, ADriftFollowsTime) {
   double span = 0;
   for (const RepeatedPose& p : a.repeats) span = std::max(span, p.span_mm);
   EXPECT_GT(span, 0.5e-3);  // the reference pose drifts
+}
+
+}  // namespace
+}  // namespace tolver
+
+namespace tolver {
+namespace {
+
+// The streamed quantiles against the sorted values: within half a bin (2^-17 of the value) over
+// twelve decades, zeros exact, negative and NaN values counted as zeros, the count kept.
+TEST(Statistics, StreamQuantilesMatchTheSortedValuesToTheirBinWidth) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> decade(-9.0, 3.0);
+  std::vector<double> v;
+  StreamQuantiles q;
+  for (int i = 0; i < 200000; ++i) {
+    const double x = i % 50 == 0 ? 0.0 : std::pow(10.0, decade(rng));
+    v.push_back(x);
+    q.add(x);
+  }
+  for (const double bad : {-1.0, std::nan("")}) {
+    v.push_back(0.0);
+    q.add(bad);
+  }
+  ASSERT_EQ(q.count(), v.size());
+  std::sort(v.begin(), v.end());
+  std::vector<size_t> ranks = {v.size() / 50, v.size() / 50 + 1, v.size() / 2, v.size() - 1};
+  for (size_t k = 0; k < v.size(); k += 997) ranks.push_back(k);
+  for (size_t k : ranks) {
+    const double got = q.ranked(k), want = v[k];
+    if (want == 0.0)
+      EXPECT_EQ(got, 0.0) << k;
+    else
+      EXPECT_LE(std::abs(got - want), std::ldexp(want, -17)) << k << ": " << got << " " << want;
+  }
 }
 
 }  // namespace
