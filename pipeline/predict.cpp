@@ -56,7 +56,6 @@ class BlockPredictor {
     if (s.max_index >= 0 && static_cast<size_t>(s.max_index) >= base &&
         static_cast<size_t>(s.max_index) < base + full) {
       worst_ = committed_.points[static_cast<size_t>(s.max_index) - base];
-      worst_index_ = s.max_index;
     }
     if (!next_.empty()) {
       PredictionCarry ahead = carry_;
@@ -84,7 +83,6 @@ class BlockPredictor {
     return r;
   }
   const PredictedPoint& worst() const { return worst_; }
-  int worstIndex() const { return worst_index_; }
 
  private:
   const Machine& machine_;
@@ -92,8 +90,7 @@ class BlockPredictor {
   std::vector<ClPoint> stretch_, next_;  // between blocks: the tail
   std::vector<JointVector> joints_, next_joints_;
   PredictionResult committed_, ahead_;
-  PredictedPoint worst_;
-  int worst_index_ = -1;
+  PredictedPoint worst_;  // the point of the summary's max_index
 };
 
 // The band over the program's points, block by block.
