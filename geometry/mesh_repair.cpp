@@ -109,12 +109,67 @@ void mergeVertices(Repair& r) {
 }
 
 // 2. Degenerate (zero-area) and duplicate faces removed, with notes.
+// A zero-area face whose three points lie on a line (a tessellator's sliver along a straight
+// edge: OCCT's BRepMesh leaves them on cones) hides a T-junction: its middle point lies on the
+// long edge of the face beyond it. Removing the sliver alone leaves a slit (an open border of no
+// area); splitting that face at the middle point closes it, as the sliver meant.
+void splitAtNeedles(Repair& r, const std::vector<Eigen::Vector3i>& needles) {
+  if (needles.empty()) return;
+  std::map<std::pair<size_t, size_t>, std::vector<size_t>> faces_of;  // undirected edge
+  auto key = [](size_t a, size_t b) { return std::make_pair(std::min(a, b), std::max(a, b)); };
+  auto index = [&](size_t f) {
+    for (int k = 0; k < 3; ++k)
+      faces_of[key(r.polygons[f][k], r.polygons[f][(k + 1) % 3])].push_back(f);
+  };
+  auto unindex = [&](size_t f) {
+    for (int k = 0; k < 3; ++k) {
+      auto& v = faces_of[key(r.polygons[f][k], r.polygons[f][(k + 1) % 3])];
+      v.erase(std::remove(v.begin(), v.end(), f), v.end());
+    }
+  };
+  for (size_t f = 0; f < r.polygons.size(); ++f) index(f);
+  std::vector<char> done(needles.size(), 0);
+  for (bool progress = true; progress;) {
+    progress = false;
+    for (size_t n = 0; n < needles.size(); ++n) {
+      if (done[n]) continue;
+      const Eigen::Vector3i& t = needles[n];
+      // The middle point: the one between the other two along their line.
+      int m = 0;
+      for (int k = 0; k < 3; ++k) {
+        const Eigen::Vector3d& p = r.points[t[k]];
+        const Eigen::Vector3d& a = r.points[t[(k + 1) % 3]];
+        const Eigen::Vector3d& c = r.points[t[(k + 2) % 3]];
+        if ((p - a).dot(p - c) < 0) m = k;
+      }
+      const size_t b = t[m], a = t[(m + 1) % 3], c = t[(m + 2) % 3];
+      const auto it = faces_of.find(key(a, c));
+      if (it == faces_of.end() || it->second.size() != 1) continue;
+      const size_t f = it->second.front();
+      std::vector<size_t> poly = r.polygons[f];
+      int k = 0;  // poly[k] -> poly[k+1] is the edge {a, c}
+      while (key(poly[k], poly[(k + 1) % 3]) != key(a, c)) ++k;
+      const size_t u = poly[k], v = poly[(k + 1) % 3], w = poly[(k + 2) % 3];
+      if (w == b) continue;
+      unindex(f);
+      r.polygons[f] = {u, b, w};
+      index(f);
+      r.polygons.push_back({b, v, w});
+      r.groups.push_back(r.groups[f]);
+      index(r.polygons.size() - 1);
+      done[n] = 1;
+      progress = true;
+    }
+  }
+}
+
 void removeDegenerateFaces(Repair& r) {
   const TriangleMesh& input = r.input;
   MeshRepairReport& rep = r.rep;
   const std::vector<Eigen::Vector3d>& points = r.points;
   const double diag = r.diag;
   std::map<std::array<int, 3>, int> seen;
+  std::vector<Eigen::Vector3i> needles;  // zero-area faces of three distinct points on a line
   for (size_t f = 0; f < input.faces.size(); ++f) {
     Eigen::Vector3i t;
     for (int k = 0; k < 3; ++k) {
@@ -129,6 +184,7 @@ void removeDegenerateFaces(Repair& r) {
     const double twice_area =
         (points[t[1]] - points[t[0]]).cross(points[t[2]] - points[t[0]]).norm();
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] || !(twice_area > 1e-14 * diag * diag)) {
+      if (t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) needles.push_back(t);
       if (rep.degenerate_faces++ < 3)
         rep.notes.push_back("removed a degenerate (zero-area) face at " + at(c));
       continue;
@@ -145,6 +201,7 @@ void removeDegenerateFaces(Repair& r) {
   }
   if (rep.degenerate_faces > 3)
     rep.notes.push_back("... " + std::to_string(rep.degenerate_faces) + " degenerate faces in all");
+  splitAtNeedles(r, needles);
   if (rep.duplicate_faces > 3)
     rep.notes.push_back("... " + std::to_string(rep.duplicate_faces) + " duplicate faces in all");
   if (r.polygons.empty()) throw MeshDefect("every face of the mesh is degenerate", r.box.center());
@@ -302,6 +359,63 @@ void fillHoles(Repair& r) {
                         " edges); outward is the side the file's winding gives");
 }
 
+// How many closed components enclose each closed component (ray parity from one of its
+// vertices); 0 for open ones, and for all when the rays would cost more than a bounded budget
+// (then every closed component is taken as an outer one, as before voids were told apart).
+std::vector<int> nestingDepth(const std::vector<Eigen::Vector3i>& faces,
+                              const std::vector<Eigen::Vector3d>& points,
+                              const std::vector<int>& comp, const std::vector<char>& open) {
+  const int n = static_cast<int>(open.size());
+  std::vector<int> depth(n, 0);
+  std::vector<Eigen::AlignedBox3d> box(n);
+  std::vector<std::vector<int>> of(n);  // each component's faces
+  for (int f = 0; f < static_cast<int>(faces.size()); ++f) {
+    of[comp[f]].push_back(f);
+    for (int k = 0; k < 3; ++k) box[comp[f]].extend(points[faces[f][k]]);
+  }
+  std::vector<std::pair<int, int>> tests;  // (component, enclosing candidate)
+  double work = 0;
+  for (int c = 0; c < n; ++c)
+    for (int d = 0; d < n && !open[c]; ++d)
+      if (d != c && !open[d] && box[d].contains(box[c])) {
+        tests.push_back({c, d});
+        work += 3.0 * static_cast<double>(of[d].size());
+      }
+  if (tests.empty() || work > 5e7) return depth;
+  // A direction no face of a CAD model is likely to hold edge-on.
+  const Eigen::Vector3d dir = Eigen::Vector3d(1.0, 0.3137, 0.1731).normalized();
+  // Three rays, from the centroids of three of its faces, vote: one that starts on a point where
+  // the shells touch, or grazes an edge, is outvoted.
+  auto inside = [&](const Eigen::Vector3d& o, int d) {
+    int crossings = 0;
+    for (int f : of[d]) {
+      const Eigen::Vector3d& a = points[faces[f][0]];
+      const Eigen::Vector3d e1 = points[faces[f][1]] - a, e2 = points[faces[f][2]] - a;
+      const Eigen::Vector3d q = dir.cross(e2);
+      const double det = e1.dot(q);
+      if (std::abs(det) < 1e-300) continue;
+      const Eigen::Vector3d t = o - a;
+      const double u = t.dot(q) / det;
+      if (u < 0 || u > 1) continue;
+      const Eigen::Vector3d r = t.cross(e1);
+      const double v = dir.dot(r) / det;
+      if (v < 0 || u + v > 1) continue;
+      if (e2.dot(r) / det > 0) ++crossings;
+    }
+    return crossings % 2 == 1;
+  };
+  for (const auto& [c, d] : tests) {
+    int votes = 0;
+    for (size_t k : {size_t(0), of[c].size() / 2, of[c].size() - 1}) {
+      const Eigen::Vector3i& t = faces[of[c][k]];
+      votes += inside((points[t[0]] + points[t[1]] + points[t[2]]) / 3.0, d);
+    }
+    const int crossings = votes >= 2;
+    depth[c] += crossings % 2;
+  }
+  return depth;
+}
+
 // 6. Closed components bound their volume: their faces turned outward (positive signed
 // volume); which open borders are holes in the surface (MeshRepairReport::holes).
 void orientOutwards(Repair& r) {
@@ -348,17 +462,27 @@ void orientOutwards(Repair& r) {
                           " mm2 not covered by the mesh; the first at " +
                           at(rep.holes.front().centre_w) + ")");
   }
-  int turned = 0;
-  for (int f = 0; f < static_cast<int>(faces.size()); ++f)
-    if (!open[comp[f]] && volume[comp[f]] < 0) {
+  // A closed component inside another bounds a void (a solid's inner shell, as STEP files
+  // carry them): its faces look into the void, so its signed volume is negative.
+  const std::vector<int> depth = nestingDepth(faces, points, comp, open);
+  int turned = 0, voids = 0;
+  for (int c = 0; c < rep.components; ++c) voids += !open[c] && depth[c] % 2 == 1;
+  for (int f = 0; f < static_cast<int>(faces.size()); ++f) {
+    const int c = comp[f];
+    if (!open[c] && (volume[c] < 0) != (depth[c] % 2 == 1)) {
       std::swap(faces[f][1], faces[f][2]);
       ++turned;
     }
+  }
   if (turned > 0) {
     rep.reoriented_faces += turned;
     rep.notes.push_back("turned " + std::to_string(turned) +
-                        " faces of closed components inside out to face outwards");
+                        " faces of closed components inside out to face outwards" +
+                        (voids > 0 ? std::string(" (of voids: into the void)") : std::string()));
   }
+  if (voids > 0)
+    rep.notes.push_back(std::to_string(voids) +
+                        " closed components lie inside another: kept as voids of the part");
 }
 
 }  // namespace
@@ -384,6 +508,7 @@ TriangleMesh repairMesh(const TriangleMesh& input, const MeshRepairOptions& opti
   out.face_group = std::move(r.groups);
   out.group_names =
       input.group_names.empty() ? std::vector<std::string>{"part"} : input.group_names;
+  out.group_aliases = input.group_aliases;
   r.rep.merged_vertices = r.rep.input_vertices - r.merged;
   if (report) *report = r.rep;
   return out;

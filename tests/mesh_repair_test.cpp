@@ -17,16 +17,19 @@ void addCube(TriangleMesh* m, const Eigen::Vector3d& lo, double side, bool inwar
   const int base = static_cast<int>(m->vertices.size());
   for (int k = 0; k < 8; ++k)
     m->vertices.push_back(lo + side * Eigen::Vector3d(k == 1 || k == 2 || k == 5 || k == 6,
-                                                      k == 2 || k == 3 || k == 6 || k == 7, k >= 4));
+                                                      k == 2 || k == 3 || k == 6 || k == 7,
+                                                      k >= 4));
   for (const auto& f : kCube) {
-    m->faces.emplace_back(base + f[0], base + (inward ? f[2] : f[1]), base + (inward ? f[1] : f[2]));
+    m->faces.emplace_back(base + f[0], base + (inward ? f[2] : f[1]),
+                          base + (inward ? f[1] : f[2]));
     m->face_group.push_back(0);
   }
 }
 
 double signedVolume(const TriangleMesh& m) {
   double v = 0;
-  for (const auto& t : m.faces) v += m.vertices[t[0]].dot(m.vertices[t[1]].cross(m.vertices[t[2]])) / 6.0;
+  for (const auto& t : m.faces)
+    v += m.vertices[t[0]].dot(m.vertices[t[1]].cross(m.vertices[t[2]])) / 6.0;
   return v;
 }
 
@@ -39,7 +42,7 @@ TEST(MeshRepair, AVoidInsideASolidKeepsItsFacesLookingIntoIt) {
     TriangleMesh m;
     addCube(&m, Eigen::Vector3d(0, 0, 0), 10, false);
     addCube(&m, Eigen::Vector3d(3, 4, 2), 2, /*inward=*/!void_wrong);  // the void
-    addCube(&m, Eigen::Vector3d(20, 0, 0), 4, /*inward=*/true);          // a separate body
+    addCube(&m, Eigen::Vector3d(20, 0, 0), 4, /*inward=*/true);        // a separate body
     MeshRepairReport rep;
     const TriangleMesh out = repairMesh(m, {}, &rep);
     EXPECT_TRUE(rep.closed);
