@@ -11,6 +11,7 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev libpagmo-dev libx11-dev
   xvfb libgl1-mesa-dri
   chromium
+  libocct-data-exchange-dev libocct-ocaf-dev occt-draw libocct-draw-dev libopenmesh-dev libjs-three
 )
 # Other packages instead, when given (bench/install_peers.sh): the same check and install.
 [ $# -gt 0 ] && packages=("$@")

@@ -32,6 +32,10 @@ campaigns+="|Determinism.EveryCommandGivesTheSameBytesTwice"
 campaigns+="|IndependentDiagnosis.WithoutHeldOutReadingsTheCrossValidatedGainDecides"
 # and the band's ten calibrations machine by machine (6 s released), whose code the band's other tests run
 campaigns+="|PredictionUncertaintyTest.TheBandHoldsMachineByMachine"
+# and the STEP readings of seven real files (9 s released, OCCT's mesher) and the STEP cone's three
+# verifies (14 s released), whose code the other STEP tests run on the smaller files
+campaigns+="|StepFile.RealFilesFromFiveCadSystemsReadAsDrawReadsThem"
+campaigns+="|VerifyCli.AStepPartIsCheckedFaceByFaceAndAgreesWithItsStl"
 ctest --output-on-failure -j"$(nproc)" --timeout 1800 -E "^($campaigns)\$"
 # A fixed libFuzzer seed: the same clone fuzzes the same inputs first (a CI run is repeatable);
 # longer runs (tests/fuzz/run.sh 3600) use random seeds.

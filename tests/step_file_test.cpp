@@ -25,27 +25,55 @@ const std::string kDir = std::string(TOLVER_SOURCE_DIR) + "/tests/data/step/";
 
 struct Reference {
   const char* file;
-  const char* part_name;   // "" for a single part
-  const char* system;      // a word of FILE_NAME's originating system
-  const char* unit;        // the file's length unit, as it names it (upper case)
-  int faces;               // nbshapes: FACE
-  double area_mm2;         // sprops (6 digits as Draw prints them)
+  const char* part_name;      // "" for a single part
+  const char* system;         // a word of FILE_NAME's originating system
+  const char* unit;           // the file's length unit, as it names it (upper case)
+  int faces;                  // nbshapes: FACE
+  double area_mm2;            // sprops (6 digits as Draw prints them)
   std::array<double, 6> box;  // bounding -optimal (Draw adds 1e-7); NaN when not compared
-  double chordal_mm = 0.01;    // coarser for the large files: the test's time is the mesher's
+  double chordal_mm = 0.01;   // coarser for the large files: the test's time is the mesher's
 };
 
 constexpr double kNoBox = std::numeric_limits<double>::quiet_NaN();
 
 const Reference kReferences[] = {
-    {"face_recognition_sample_part.stp", "", "NX", "MILLIMETRE", 23, 248642,
+    {"face_recognition_sample_part.stp",
+     "",
+     "NX",
+     "MILLIMETRE",
+     23,
+     248642,
      {0, -105, 0, 315, 0, 225}},
-    {"transmission_pulley_at3_t10_center.STEP", "", "SolidWorks", "MILLIMETRE", 76, 687.249,
+    {"transmission_pulley_at3_t10_center.STEP",
+     "",
+     "SolidWorks",
+     "MILLIMETRE",
+     76,
+     687.249,
      {-4.57, 0, -4.4096371732830812, 4.57, 19, 4.4096371732830821}},
-    {"nist_ctc_01_asme1_ap242-e1.stp", "", "", "MILLIMETRE", 117, 807081,
+    {"nist_ctc_01_asme1_ap242-e1.stp",
+     "",
+     "",
+     "MILLIMETRE",
+     117,
+     807081,
      {-400, -225, -100, 400, 225, 50}},
-    {"Ventilator.stp", "", "CATIA", "MILLIMETRE", 305, 16925, {-40, -40, -1.25, 40, 40, 16.834227784}, 0.05},
-    {"11752.stp", "", "Inventor", "INCH", 1018, 2.4495e6,
-     {-640.08, -72.136, -66.675, 640.08, 72.136, 66.675}, 0.2},
+    {"Ventilator.stp",
+     "",
+     "CATIA",
+     "MILLIMETRE",
+     305,
+     16925,
+     {-40, -40, -1.25, 40, 40, 16.834227784},
+     0.05},
+    {"11752.stp",
+     "",
+     "Inventor",
+     "INCH",
+     1018,
+     2.4495e6,
+     {-640.08, -72.136, -66.675, 640.08, 72.136, 66.675},
+     0.2},
     // Assemblies: one part by its product name (Draw: XGetShape of the part's label, unlocated,
     // so the box is not compared).
     {"as1_pe_203.stp", "L-BRACKET", "PRO/ENGINEER", "", 16, 1.58892e7, {kNoBox}},
@@ -88,7 +116,8 @@ std::set<int> faceEntities(const std::string& text) {
 double meshArea(const TriangleMesh& m) {
   double a = 0;
   for (const auto& t : m.faces)
-    a += 0.5 * (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]).norm();
+    a += 0.5 *
+         (m.vertices[t[1]] - m.vertices[t[0]]).cross(m.vertices[t[2]] - m.vertices[t[0]]).norm();
   return a;
 }
 
@@ -110,14 +139,18 @@ TEST(StepFile, RealFilesFromFiveCadSystemsReadAsDrawReadsThem) {
     EXPECT_NE(p.system.find(r.system), std::string::npos) << p.system;
     std::string unit = p.file_unit;
     for (char& c : unit) c = static_cast<char>(std::toupper(c));
-    if (*r.unit) EXPECT_EQ(unit, r.unit);
+    if (*r.unit) {
+      EXPECT_EQ(unit, r.unit);
+    }
     EXPECT_EQ(p.chordal_mm, r.chordal_mm);
     // Groups: one per face, each with triangles, each naming an entity of the file.
     ASSERT_EQ(p.mesh.group_names.size(), p.faces.size());
     std::vector<int> triangles(p.faces.size(), 0);
     for (int g : p.mesh.face_group) ++triangles.at(g);
     const std::set<int> entities = faceEntities(slurp(kDir + r.file));
-    if (!*r.part_name) EXPECT_EQ(static_cast<int>(entities.size()), r.faces);
+    if (!*r.part_name) {
+      EXPECT_EQ(static_cast<int>(entities.size()), r.faces);
+    }
     for (size_t g = 0; g < p.faces.size(); ++g) {
       EXPECT_GT(triangles[g], 0) << p.mesh.group_names[g];
       ASSERT_GT(p.faces[g].entity, 0);
@@ -144,8 +177,7 @@ TEST(StepFile, DrawHarnessAgreesLive) {
       << "puts \"BOX [bounding -optimal a_1]\"\nexit\n";
   }
   const std::string out = dir + "/out.txt";
-  ASSERT_EQ(std::system(("cd " + dir + " && occt-draw -b -f s.tcl > " + out + " 2>&1").c_str()),
-            0);
+  ASSERT_EQ(std::system(("cd " + dir + " && occt-draw -b -f s.tcl > " + out + " 2>&1").c_str()), 0);
   const std::string text = slurp(out);
   std::smatch m;
   ASSERT_TRUE(std::regex_search(text, m, std::regex("FACE\\s*:\\s*(\\d+)"))) << text;
@@ -164,8 +196,9 @@ TEST(StepFile, DrawHarnessAgreesLive) {
 // The repaired mesh a verify reads is closed where the B-rep is: NX's block, SolidWorks'
 // pulley, NIST's AP242 part (whose cones BRepMesh fills with needles: split, not left as slits).
 TEST(StepFile, TheRepairedPartIsClosedAndItsVoidsStayVoids) {
-  for (const char* f : {"face_recognition_sample_part.stp", "transmission_pulley_at3_t10_center.STEP",
-                        "nist_ctc_01_asme1_ap242-e1.stp"}) {
+  for (const char* f :
+       {"face_recognition_sample_part.stp", "transmission_pulley_at3_t10_center.STEP",
+        "nist_ctc_01_asme1_ap242-e1.stp"}) {
     SCOPED_TRACE(f);
     PartImportOptions o;
     o.chordal_mm = 0.01;
@@ -176,7 +209,9 @@ TEST(StepFile, TheRepairedPartIsClosedAndItsVoidsStayVoids) {
     // Outward faces: the signed volume is the B-rep's volume, positive.
     double volume = 0;
     for (const auto& t : part.mesh.faces)
-      volume += part.mesh.vertices[t[0]].dot(part.mesh.vertices[t[1]].cross(part.mesh.vertices[t[2]])) / 6.0;
+      volume +=
+          part.mesh.vertices[t[0]].dot(part.mesh.vertices[t[1]].cross(part.mesh.vertices[t[2]])) /
+          6.0;
     EXPECT_GT(volume, 0);
   }
 }
@@ -204,9 +239,12 @@ TEST(StepFile, NistCtc1CarriesNamesColoursAndTolerances) {
   for (const StepTolerance& t : p.tolerances)
     got.insert({t.type, {std::round(t.value_mm * 1000) / 1000, t.faces.size()}});
   const std::multiset<std::pair<std::string, std::pair<double, size_t>>> want = {
-      {"profile of a surface", {1.25, 2}}, {"profile of a surface", {0.5, 6}},
-      {"position", {0.75, 0}},             {"position", {0.75, 0}},
-      {"perpendicularity", {1.5, 0}},      {"flatness", {0.2, 0}}};
+      {"profile of a surface", {1.25, 2}},
+      {"profile of a surface", {0.5, 6}},
+      {"position", {0.75, 0}},
+      {"position", {0.75, 0}},
+      {"perpendicularity", {1.5, 0}},
+      {"flatness", {0.2, 0}}};
   // Faces of the non-profile tolerances are whatever the file links; compare types and values.
   std::multiset<std::pair<std::string, double>> got_values, want_values;
   for (const auto& g : got) got_values.insert({g.first, g.second.first});
@@ -261,7 +299,9 @@ TEST(StepFile, DamagedAndForeignFilesAreRefusedNamingTheFile) {
       {"header_only.stp", whole.substr(0, whole.find("DATA;"))},
       {"empty.step", ""},
       {"text.stp", "G0 X0 Y0 Z10\nG1 X10 F100\nM30\n"},
-      {"binary.stp", std::string("\x7f" "ELF\x02\x01\x01\0\0\0", 10)},
+      {"binary.stp", std::string("\x7f"
+                                 "ELF\x02\x01\x01\0\0\0",
+                                 10)},
   };
   for (const auto& [name, content] : cases) {
     SCOPED_TRACE(name);

@@ -12,6 +12,8 @@
 #include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
 #include <GProp_GProps.hxx>
+#include <Interface_EntityIterator.hxx>
+#include <Interface_Graph.hxx>
 #include <Interface_Static.hxx>
 #include <Message.hxx>
 #include <Message_Messenger.hxx>
@@ -23,10 +25,8 @@
 #include <Standard_Failure.hxx>
 #include <StepBasic_LengthMeasureWithUnit.hxx>
 #include <StepBasic_MeasureValueMember.hxx>
-#include <StepData_StepModel.hxx>
-#include <Interface_EntityIterator.hxx>
-#include <Interface_Graph.hxx>
 #include <StepBasic_MeasureWithUnit.hxx>
+#include <StepData_StepModel.hxx>
 #include <StepDimTol_GeoTolAndGeoTolWthDatRefAndUneqDisGeoTol.hxx>
 #include <StepDimTol_GeometricTolerance.hxx>
 #include <StepDimTol_UnequallyDisposedGeometricTolerance.hxx>
@@ -53,7 +53,6 @@
 #include <XCAFDoc_ShapeTool.hxx>
 #include <XSControl_TransferReader.hxx>
 #include <XSControl_WorkSession.hxx>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -89,22 +88,38 @@ std::string labelName(const TDF_Label& label) {
 
 const char* toleranceType(XCAFDimTolObjects_GeomToleranceType t) {
   switch (t) {
-    case XCAFDimTolObjects_GeomToleranceType_Angularity: return "angularity";
-    case XCAFDimTolObjects_GeomToleranceType_CircularRunout: return "circular runout";
-    case XCAFDimTolObjects_GeomToleranceType_CircularityOrRoundness: return "circularity";
-    case XCAFDimTolObjects_GeomToleranceType_Coaxiality: return "coaxiality";
-    case XCAFDimTolObjects_GeomToleranceType_Concentricity: return "concentricity";
-    case XCAFDimTolObjects_GeomToleranceType_Cylindricity: return "cylindricity";
-    case XCAFDimTolObjects_GeomToleranceType_Flatness: return "flatness";
-    case XCAFDimTolObjects_GeomToleranceType_Parallelism: return "parallelism";
-    case XCAFDimTolObjects_GeomToleranceType_Perpendicularity: return "perpendicularity";
-    case XCAFDimTolObjects_GeomToleranceType_Position: return "position";
-    case XCAFDimTolObjects_GeomToleranceType_ProfileOfLine: return "profile of a line";
-    case XCAFDimTolObjects_GeomToleranceType_ProfileOfSurface: return "profile of a surface";
-    case XCAFDimTolObjects_GeomToleranceType_Straightness: return "straightness";
-    case XCAFDimTolObjects_GeomToleranceType_Symmetry: return "symmetry";
-    case XCAFDimTolObjects_GeomToleranceType_TotalRunout: return "total runout";
-    default: return "unknown";
+    case XCAFDimTolObjects_GeomToleranceType_Angularity:
+      return "angularity";
+    case XCAFDimTolObjects_GeomToleranceType_CircularRunout:
+      return "circular runout";
+    case XCAFDimTolObjects_GeomToleranceType_CircularityOrRoundness:
+      return "circularity";
+    case XCAFDimTolObjects_GeomToleranceType_Coaxiality:
+      return "coaxiality";
+    case XCAFDimTolObjects_GeomToleranceType_Concentricity:
+      return "concentricity";
+    case XCAFDimTolObjects_GeomToleranceType_Cylindricity:
+      return "cylindricity";
+    case XCAFDimTolObjects_GeomToleranceType_Flatness:
+      return "flatness";
+    case XCAFDimTolObjects_GeomToleranceType_Parallelism:
+      return "parallelism";
+    case XCAFDimTolObjects_GeomToleranceType_Perpendicularity:
+      return "perpendicularity";
+    case XCAFDimTolObjects_GeomToleranceType_Position:
+      return "position";
+    case XCAFDimTolObjects_GeomToleranceType_ProfileOfLine:
+      return "profile of a line";
+    case XCAFDimTolObjects_GeomToleranceType_ProfileOfSurface:
+      return "profile of a surface";
+    case XCAFDimTolObjects_GeomToleranceType_Straightness:
+      return "straightness";
+    case XCAFDimTolObjects_GeomToleranceType_Symmetry:
+      return "symmetry";
+    case XCAFDimTolObjects_GeomToleranceType_TotalRunout:
+      return "total runout";
+    default:
+      return "unknown";
   }
 }
 
@@ -244,8 +259,8 @@ StepPart readInProcess(const std::string& path, const StepReadOptions& o) {
   if (candidates.empty())
     throw InputError(path, 0, 0, "STEP", "the file holds no solid, shell or face");
   // A solid is the part; shells beside it (construction or PMI surfaces) are not.
-  const size_t n_solids = static_cast<size_t>(
-      std::count_if(candidates.begin(), candidates.end(), [](const Candidate& c) { return c.solid; }));
+  const size_t n_solids = static_cast<size_t>(std::count_if(
+      candidates.begin(), candidates.end(), [](const Candidate& c) { return c.solid; }));
   if (n_solids > 0 && n_solids < candidates.size()) {
     part.notes.push_back(std::to_string(candidates.size() - n_solids) +
                          " shell(s) or free faces beside the solid(s) left out");
@@ -265,9 +280,9 @@ StepPart readInProcess(const std::string& path, const StepReadOptions& o) {
         chosen = &c;
       }
     if (!chosen)
-      throw InputError(path, 0, 0, "part_name",
-                       "no solid named '" + o.part_name + "' (its solids: " +
-                           distinctNames(candidates) + ")");
+      throw InputError(
+          path, 0, 0, "part_name",
+          "no solid named '" + o.part_name + "' (its solids: " + distinctNames(candidates) + ")");
   } else if (candidates.size() == 1) {
     chosen = &candidates[0];
   } else {
@@ -304,8 +319,9 @@ StepPart readInProcess(const std::string& path, const StepReadOptions& o) {
                          "OCCT's BRepCheck finds the solid '" + part.solid + "' invalid: " + what +
                              ", and ShapeFix does not repair it");
       }
-      part.notes.push_back("OCCT's BRepCheck found the B-rep invalid; ShapeFix repaired it "
-                           "(face entity numbers may be lost where faces were rebuilt)");
+      part.notes.push_back(
+          "OCCT's BRepCheck found the B-rep invalid; ShapeFix repaired it "
+          "(face entity numbers may be lost where faces were rebuilt)");
       shape = fix.Shape();
     }
   }
@@ -524,8 +540,8 @@ bool takePart(ByteReader& r, StepPart* p) {
   p->tolerances.resize(n);
   for (StepTolerance& t : p->tolerances) {
     uint64_t k = 0;
-    if (!r.takeString(&t.type) || !r.takeString(&t.name) || !r.take(&t.value_mm) || !r.take(&t.unequal) ||
-        !r.take(&t.offset_mm) || !r.takeCount(&k, sizeof(int)))
+    if (!r.takeString(&t.type) || !r.takeString(&t.name) || !r.take(&t.value_mm) ||
+        !r.take(&t.unequal) || !r.take(&t.offset_mm) || !r.takeCount(&k, sizeof(int)))
       return false;
     t.faces.resize(k);
     if (!r.takeBytes(t.faces.data(), k * sizeof(int))) return false;

@@ -17,41 +17,41 @@
 namespace tolver {
 
 struct StepReadOptions {
-  double chordal_mm = 0.001;      // the tessellation's largest distance to the true surface
-  double angular_rad = 0.2;       // and its largest angle between adjacent facets' normals
-  std::string part_name;          // the solid to read in an assembly (product or instance name)
-  bool in_process = false;        // read in this process (fuzz harnesses)
+  double chordal_mm = 0.001;  // the tessellation's largest distance to the true surface
+  double angular_rad = 0.2;   // and its largest angle between adjacent facets' normals
+  std::string part_name;      // the solid to read in an assembly (product or instance name)
+  bool in_process = false;    // read in this process (fuzz harnesses)
 };
 
 struct StepFace {
-  int entity = 0;                 // #N of its face entity in the file (0: none found)
-  std::string name, colour;       // "" when the file gives none; colour "#rrggbb"
-  double area_mm2 = 0;            // of the B-rep face (BRepGProp), not of its triangles
+  int entity = 0;            // #N of its face entity in the file (0: none found)
+  std::string name, colour;  // "" when the file gives none; colour "#rrggbb"
+  double area_mm2 = 0;       // of the B-rep face (BRepGProp), not of its triangles
 };
 
 // A geometric tolerance of the file's semantic PMI (AP242, XCAFDoc_DimTolTool).
 struct StepTolerance {
-  std::string type;               // "profile of a surface", "flatness", "position", ...
-  std::string name;               // as the file names it, e.g. "Position surfacic profile.2"
-  double value_mm = 0;            // the zone's width
-  bool unequal = false;           // unequally disposed (ISO UZ, ASME U): offset_mm holds it
-  double offset_mm = 0;           // ASME U: the part of the zone outside the material
-  std::vector<int> faces;         // the face groups it applies to
+  std::string type;        // "profile of a surface", "flatness", "position", ...
+  std::string name;        // as the file names it, e.g. "Position surfacic profile.2"
+  double value_mm = 0;     // the zone's width
+  bool unequal = false;    // unequally disposed (ISO UZ, ASME U): offset_mm holds it
+  double offset_mm = 0;    // ASME U: the part of the zone outside the material
+  std::vector<int> faces;  // the face groups it applies to
 };
 
 struct StepPart {
-  TriangleMesh mesh;               // mm, in the file's frame; groups = faces below
-  std::vector<StepFace> faces;     // #groups
-  std::string schema;              // FILE_SCHEMA's first identifier, e.g. "AP242_MANAGED_..."
-  std::string system;              // FILE_NAME's originating system
-  std::string file_unit;           // the file's length unit as it names it ("MILLIMETRE", ...)
-  std::string solid;               // the name of the solid read ("" when it has none)
-  std::vector<std::string> solids; // every solid's name in the file (assemblies)
-  double area_mm2 = 0;             // B-rep area of the solid
-  Eigen::AlignedBox3d box_mm;      // B-rep bounding box (BRepBndLib, optimal)
+  TriangleMesh mesh;                // mm, in the file's frame; groups = faces below
+  std::vector<StepFace> faces;      // #groups
+  std::string schema;               // FILE_SCHEMA's first identifier, e.g. "AP242_MANAGED_..."
+  std::string system;               // FILE_NAME's originating system
+  std::string file_unit;            // the file's length unit as it names it ("MILLIMETRE", ...)
+  std::string solid;                // the name of the solid read ("" when it has none)
+  std::vector<std::string> solids;  // every solid's name in the file (assemblies)
+  double area_mm2 = 0;              // B-rep area of the solid
+  Eigen::AlignedBox3d box_mm;       // B-rep bounding box (BRepBndLib, optimal)
   double chordal_mm = 0, angular_rad = 0;  // the tessellation's bounds as requested
-  double deflection_mm = 0;        // the largest deflection BRepMesh reports on a face (it may
-                                   // exceed chordal_mm on some B-spline faces)
+  double deflection_mm = 0;  // the largest deflection BRepMesh reports on a face (it may
+                             // exceed chordal_mm on some B-spline faces)
   std::vector<StepTolerance> tolerances;
   std::vector<std::string> notes;  // repairs made, what was left out (a line each)
 };
