@@ -41,6 +41,7 @@ void printVerification(const Verification& v, const VerifyOptions& o, const std:
   else
     std::printf("  part       %s: %zu samples at %.3g mm%s\n", r.part_file.c_str(), samples.size(),
                 r.spacing_mm, r.repair.notes.empty() ? "" : " (mesh repaired: see the report)");
+  if (!r.cad_text.empty()) std::printf("  cad        %s\n", r.cad_text.c_str());
   for (const auto& z : r.zones)
     std::printf("  zone       %s: %s mm [%+.1f, %+.1f] um\n", z.region.c_str(), z.spec.c_str(),
                 mmToUm(z.lower), mmToUm(z.upper));
@@ -140,7 +141,9 @@ void registerVerify(CLI::App& app, Verdict* verdict) {
                   "unit of --tolerance: mm (default; needed to confirm one above 1 mm) or um")
       ->check(CLI::IsMember({"mm", "um"}));
   cmd->add_option("--part", o->in.part,
-                  "part model (STL, OBJ, PLY, OFF, 3MF, glTF); without it: CL-only mode");
+                  "part model (STEP, STL, OBJ, PLY, OFF, 3MF, glTF); without it: CL-only mode");
+  cmd->add_option("--part-name", o->in.part_name,
+                  "the solid to verify in a STEP assembly (product or instance name)");
   cmd->add_option("--tolerance", o->in.tolerance_mm,
                   "profile tolerance all over, mm (zone width t)");
   cmd->add_option("--uz", o->in.uz_mm,

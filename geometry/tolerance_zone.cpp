@@ -84,16 +84,22 @@ std::vector<int> assignZones(const SurfaceSamples& samples,
   std::vector<int> zone_of(samples.size(), -1);
   for (int z = 0; z < static_cast<int>(zones.size()); ++z) {
     const ToleranceZone& zone = zones[z];
-    int group = -2;  // -2: any
-    if (!zone.has_box && zone.region != "*" && !zone.region.empty()) {
-      const auto it =
-          std::find(samples.group_names.begin(), samples.group_names.end(), zone.region);
-      group =
-          it == samples.group_names.end() ? -3 : static_cast<int>(it - samples.group_names.begin());
-    }
+    // The groups the zone's region names: by name, or by an alias (a CAD face's name or
+    // colour, which several faces may share); all of them when "*".
+    const bool any = zone.region == "*" || zone.region.empty();
+    std::vector<char> named(samples.group_names.size(), 0);
+    if (!zone.has_box && !any)
+      for (size_t g = 0; g < named.size(); ++g) {
+        named[g] = samples.group_names[g] == zone.region;
+        if (g < samples.group_aliases.size())
+          for (const std::string& a : samples.group_aliases[g])
+            if (a == zone.region) named[g] = 1;
+      }
     for (size_t i = 0; i < samples.size(); ++i) {
-      const bool in = zone.has_box ? zone.box_w.contains(samples.p_w[i])
-                                   : (group == -2 || samples.group[i] == group);
+      const int g = samples.group[i];
+      const bool in = zone.has_box
+                          ? zone.box_w.contains(samples.p_w[i])
+                          : (any || (g >= 0 && g < static_cast<int>(named.size()) && named[g]));
       if (in) zone_of[i] = z;
     }
   }

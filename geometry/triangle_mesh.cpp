@@ -61,6 +61,7 @@ SurfaceSamples sampleSurface(const TriangleMesh& input, double spacing, double f
   const double cos_feature = std::cos(feature_angle);
   SurfaceSamples s;
   s.group_names = mesh.group_names;
+  s.group_aliases = mesh.group_aliases;
   s.faces = mesh.faces;
   s.face_group = mesh.face_group;
   std::vector<Eigen::Vector3d> cluster_ref;

@@ -15,6 +15,9 @@ struct TriangleMesh {
   std::vector<Eigen::Vector3i> faces;     // #F, vertex indices
   std::vector<int> face_group;            // #F, index into group_names (region of the face)
   std::vector<std::string> group_names;   // at least one
+  // Empty, or #groups: further names a zone may use for the group (a CAD face's name and colour,
+  // io/mesh/step_file.h), shared by as many groups as carry them.
+  std::vector<std::vector<std::string>> group_aliases;
 
   double area() const;
   Eigen::Vector3d faceNormal(int f) const;  // unit; zero for a degenerate face
@@ -51,6 +54,7 @@ struct SurfaceSamples {
   std::vector<Eigen::Vector3i> faces;  // the mesh's faces re-indexed into samples
   std::vector<int> face_group;
   std::vector<std::string> group_names;
+  std::vector<std::vector<std::string>> group_aliases;  // as the mesh's
   size_t size() const { return p_w.size(); }
 };
 

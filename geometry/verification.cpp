@@ -318,4 +318,38 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
   r.program_stats.samples = r.total_stats.samples;
 }
 
+std::vector<RegionSummary> summariseRegions(const SurfaceSamples& samples,
+                                            const VerifyResult& result) {
+  std::vector<RegionSummary> out(std::max<size_t>(samples.group_names.size(), 1));
+  std::vector<char> machined(out.size(), 0);
+  for (size_t g = 0; g < out.size(); ++g) out[g].group = static_cast<int>(g);
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const int g = samples.group[i];
+    if (g < 0 || g >= static_cast<int>(out.size())) continue;
+    RegionSummary& r = out[g];
+    ++r.samples;
+    r.area_mm2 += samples.area[i];
+    if (i < result.machined.size() && result.machined[i]) machined[g] = 1;
+    if (i >= result.conformance.size()) continue;
+    const Conformance c = result.conformance[i];
+    if (c == Conformance::Unchecked || c == Conformance::Unmachined) continue;
+    ++r.checked;
+    r.checked_mm2 += samples.area[i];
+    if (c != Conformance::In) {
+      ++r.out;
+      r.out_mm2 += samples.area[i];
+    }
+    if (r.worst_sample < 0 || std::abs(result.total[i]) > std::abs(r.worst_mm)) {
+      r.worst_mm = result.total[i];
+      r.worst_sample = static_cast<int>(i);
+    }
+  }
+  for (size_t g = 0; g < out.size(); ++g)
+    out[g].status = out[g].out > 0       ? "out"
+                    : out[g].checked > 0 ? "in"
+                    : !machined[g]       ? "unmachined"
+                                         : "unchecked";
+  return out;
+}
+
 }  // namespace tolver

@@ -8,6 +8,7 @@
 //   program = nominal swept - nominal surface     (the program's own error: scallops, gouges)
 //   machine = predicted swept - nominal swept     (the machine's contribution)
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "core/path/tool_motion.h"
@@ -71,6 +72,21 @@ VerifyResult verifyPart(const SurfaceSamples& samples, const ToolSet& tools,
 // verifyPart and by the CL-only mode).
 void evaluateZones(const SurfaceSamples& samples, const std::vector<ToleranceZone>& zones,
                    VerifyResult* result);
+
+// Each region of the part (a mesh group: an OBJ group, a CAD face of a STEP part) summarised over
+// its samples: area, the machined and checked area, the deviation furthest from zero among its
+// checked samples and the one furthest out of its zone.
+struct RegionSummary {
+  int group = 0;
+  double area_mm2 = 0, checked_mm2 = 0, out_mm2 = 0;
+  int samples = 0, checked = 0, out = 0;
+  double worst_mm = 0;  // signed total deviation of largest magnitude among checked samples
+  int worst_sample = -1;
+  // "out" (a checked sample out of its zone), "in", "unmachined" (none cut), "unchecked"
+  std::string status;
+};
+std::vector<RegionSummary> summariseRegions(const SurfaceSamples& samples,
+                                            const VerifyResult& result);
 
 // Passes of a CL program: runs of points [first, last] between rapid moves and sharp turns of
 // the feed direction (more than 60 deg), with at least two points.

@@ -2,13 +2,16 @@
 #include "pipeline/verify.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <future>
+#include <map>
 #include <memory>
 #include <mutex>
+#include <numeric>
 #include <string>
 
 #include "core/numerics/quantities.h"
@@ -79,7 +82,65 @@ void checkPartUnits(const VerifyInputs& o, const ClProgram& program, const Trian
   }
 }
 
-std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o) {
+// The zones of a STEP file's semantic PMI: each profile-of-a-surface tolerance a zone on each of
+// its faces; the other tolerances listed as not checked (notes).
+std::vector<ToleranceZone> pmiZones(const StepPart& cad, const TriangleMesh& mesh,
+                                    std::vector<std::string>* notes) {
+  std::vector<ToleranceZone> zones;
+  std::vector<double> widths;
+  std::map<std::string, int> unchecked;
+  for (const StepTolerance& t : cad.tolerances) {
+    const std::string label = t.type + " " + formatNumber(t.value_mm) + " mm" +
+                              (t.name.empty() ? "" : " ('" + t.name + "')");
+    // A composite frame (ASME Y14.5 10.5.1) reads as two tolerances of one name on the same
+    // faces: the wider, located segment is checked; the refining one floats in location.
+    const bool refining =
+        std::any_of(cad.tolerances.begin(), cad.tolerances.end(), [&](const StepTolerance& u) {
+          return &u != &t && u.type == t.type && u.name == t.name && u.faces == t.faces &&
+                 u.value_mm > t.value_mm;
+        });
+    if (refining) {
+      notes->push_back("PMI " + label +
+                       ": the refining segment of a composite frame, not checked "
+                       "(its zone is not located on the nominal surface)");
+      continue;
+    }
+    if (t.type != "profile of a surface" || t.faces.empty() || !(t.value_mm > 0)) {
+      ++unchecked[t.type];
+      notes->push_back("PMI " + label + " on " + std::to_string(t.faces.size()) +
+                       " faces: not checked (verify checks profile of a surface only)");
+      continue;
+    }
+    ToleranceZone z;
+    try {
+      z = t.unequal ? isoUzZone(t.value_mm, t.offset_mm) : bilateralZone(t.value_mm);
+    } catch (const std::invalid_argument& e) {
+      notes->push_back("PMI " + label + ": not checked (" + e.what() + ")");
+      continue;
+    }
+    z.spec += " (PMI" + (t.name.empty() ? std::string() : " '" + t.name + "'") + ")";
+    for (int g : t.faces) {
+      z.region = mesh.group_names[g];
+      zones.push_back(z);
+      widths.push_back(t.value_mm);
+    }
+    notes->push_back("PMI " + label + (t.unequal ? " UZ " + formatNumber(t.offset_mm) : "") +
+                     " on " + std::to_string(t.faces.size()) +
+                     " faces: checked as a profile zone on the nominal surface in the part frame "
+                     "(datum references are not evaluated)");
+  }
+  // A face under two frames must lie in both: the narrower zone comes last, so it decides.
+  std::vector<size_t> order(zones.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return widths[a] > widths[b]; });
+  std::vector<ToleranceZone> sorted;
+  for (size_t i : order) sorted.push_back(zones[i]);
+  return sorted;
+}
+
+std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o, const ImportedPart* part,
+                                     std::vector<std::string>* notes) {
   std::vector<ToleranceZone> zones;
   if (!std::isnan(o.tolerance_mm)) {
     // The tolerance is in mm: 30 meant as micrometres would accept gouges of tens of millimetres.
@@ -102,13 +163,48 @@ std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o) {
       throw FieldError("tolerance_mm", e.what());
     }
   }
+  // A drawing's own tolerances on its faces override the general one; a zone file's rows, last,
+  // override both.
+  if (part && part->cad) {
+    const auto pmi = pmiZones(*part->cad, part->mesh, notes);
+    zones.insert(zones.end(), pmi.begin(), pmi.end());
+  }
   if (!o.zones_file.empty()) {
     auto more = readZoneFile(o.zones_file, o.tolerance_confirmed);
     zones.insert(zones.end(), more.begin(), more.end());
   }
   if (zones.empty())
     throw FieldError("tolerance_mm", "give " + inputName("tolerance_mm") + " (mm) or " +
-                                         inputName("zones_file") + " (file)");
+                                         inputName("zones_file") + " (file)" +
+                                         (part && part->cad ? ": the STEP file has no profile "
+                                                              "tolerance in its PMI"
+                                                            : ""));
+  // A zone naming a region that the part does not have would check nothing, silently.
+  if (part)
+    for (const ToleranceZone& z : zones) {
+      if (z.has_box || z.region == "*" || z.region.empty()) continue;
+      bool found = false;
+      for (size_t g = 0; g < part->mesh.group_names.size() && !found; ++g) {
+        found = part->mesh.group_names[g] == z.region;
+        if (g < part->mesh.group_aliases.size())
+          for (const std::string& a : part->mesh.group_aliases[g]) found = found || a == z.region;
+      }
+      if (!found) {
+        // Its regions, then the CAD names and colours they may be called by, each once.
+        std::vector<std::string> names = part->mesh.group_names, aliases;
+        if (names.size() > 6) names.resize(6), names.push_back("...");
+        for (const auto& as : part->mesh.group_aliases)
+          for (const std::string& a : as)
+            if (std::find(aliases.begin(), aliases.end(), a) == aliases.end()) aliases.push_back(a);
+        if (aliases.size() > 6) aliases.resize(6), aliases.push_back("...");
+        names.insert(names.end(), aliases.begin(), aliases.end());
+        std::string list;
+        for (const std::string& n : names) list += (list.empty() ? "'" : ", '") + n + "'";
+        throw InputError(o.zones_file, 0, 0, "region",
+                         "no region or CAD face of " + o.part + " is named '" + z.region +
+                             "' (its regions: " + list + ")");
+      }
+    }
   return zones;
 }
 
@@ -407,8 +503,8 @@ ProgramOnMachine predictOnMachine(const VerifyInputs& o) {
   return m;
 }
 
-// The part file read, placed in w, repaired, checked against the program's size, sampled.
-ImportedPart readPart(const VerifyInputs& o, const ClProgram& program) {
+// The part file read, placed in w and repaired.
+ImportedPart readPart(const VerifyInputs& o) {
   PartImportOptions io;
   io.units = o.mesh_units;
   if (!o.mesh_offset.empty())
@@ -423,9 +519,12 @@ ImportedPart readPart(const VerifyInputs& o, const ClProgram& program) {
             .toRotationMatrix();
   }
   io.repair.max_hole_perimeter = o.max_hole_mm;
-  ImportedPart part = readPartMesh(o.part, io);
-  checkPartUnits(o, program, part.mesh);
-  return part;
+  // A STEP part's chordal tolerance follows the sample spacing (spacing / 500), and is never
+  // above 1 um: the facets' distance to the B-rep reads as deviation of the program, and 1 um is
+  // 5 % of a 20 um zone (a 4 um tessellation of the NAS 979 cone put 11 % of its flank out).
+  io.chordal_mm = std::min(o.spacing_mm / 500.0, 0.001);
+  io.part_name = o.part_name;
+  return readPartMesh(o.part, io);
 }
 
 // The nominal and the predicted tool placements along the program, swept over the samples.
@@ -779,7 +878,14 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   v->started = std::chrono::steady_clock::now();
   VerifyReport& rep = v->report;
   PhaseClock phase(&rep.timings);
-  const std::vector<ToleranceZone> zones = zonesFrom(o);
+  std::unique_ptr<ImportedPart> part;
+  if (!o.part.empty()) {
+    part = std::make_unique<ImportedPart>(readPart(o));
+    phase("read_part");
+  } else if (!o.part_name.empty())
+    throw FieldError("part_name", "names a solid of a STEP part: give the part too");
+  std::vector<std::string> zone_notes;
+  const std::vector<ToleranceZone> zones = zonesFrom(o, part.get(), &zone_notes);
   const ProgramOnMachine m = predictOnMachine(o);
   const ClProgram& program = m.program;
   const ToolSet tools = toolsFrom(o, program);
@@ -803,6 +909,7 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   rep.machine_file = o.machine.machine;
   rep.program_file = program.file;
   rep.notes = m.warnings;
+  rep.notes.insert(rep.notes.end(), zone_notes.begin(), zone_notes.end());
   // A drill's point (APT CUTTER alpha with no corner radius) is swept as a flat end.
   for (const CutterSpec& c : program.cutters)
     if (o.cutter.empty() && c.source == "CUTTER" && c.values.size() > 4 && c.values[4] > 0 &&
@@ -839,14 +946,29 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
         "CL-only mode: no part model; the surfaces are built through the CL points "
         "(thesis 5.5.4-5.5.5) and the deviation is the machine's alone");
   } else {
-    const ImportedPart part = readPart(o, program);
-    checkSampleBudget(o, part.mesh);
+    checkPartUnits(o, program, part->mesh);
+    checkSampleBudget(o, part->mesh);
     checkPlacementBudget(program, sampling);
     rep.has_repair = true;
-    rep.repair = part.repair;
+    rep.repair = part->repair;
     rep.part_file = o.part;
-    phase("read_part");
-    v->samples = sampleSurface(part.mesh, o.spacing_mm);
+    if (part->cad) {
+      const StepPart& c = *part->cad;
+      rep.cad = true;
+      rep.cad_text = "STEP: " + (c.system.empty() ? std::string("system not named") : c.system) +
+                     ", " + c.schema + ", unit " + c.file_unit + "; solid '" + c.solid + "' of " +
+                     std::to_string(c.solids.size()) + "; " + std::to_string(c.faces.size()) +
+                     formatWith(" CAD faces, %.1f mm2; ", c.area_mm2) +
+                     formatWith("tessellated within %.2g um (chordal", mmToUm(c.chordal_mm)) +
+                     (c.deflection_mm > c.chordal_mm
+                          ? formatWith(" asked; BRepMesh reports %.2g um on its worst face)",
+                                       mmToUm(c.deflection_mm))
+                          : std::string(")")) +
+                     formatWith(" and %.2g deg", radToDeg(c.angular_rad));
+      for (const std::string& n : c.notes) rep.notes.push_back(o.part + ": " + n);
+    }
+    v->samples = sampleSurface(part->mesh, o.spacing_mm);
+    part.reset();  // the samples are what the rest needs
     rep.spacing_mm = o.spacing_mm;
     phase("sample_surface");
     sweepPart(m, tools, zones, sampling, sweep, *v, phase, progress);
@@ -854,6 +976,7 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   }
   rep.samples = &v->samples;
   rep.result = &v->result;
+  if (rep.mode == "part") rep.region_table = summariseRegions(v->samples, v->result);
   if (v->banded && v->samples.size() > 0) {
     if (!m.setup_note.empty()) rep.notes.push_back(m.setup_note);
     decideWithinBand(m.cal.uncertainty, program, zones, *v);

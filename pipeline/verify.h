@@ -21,6 +21,7 @@ struct VerifyInputs {
   MachineOptions machine;
   ProgramOptions program;
   std::string part;                       // part model; empty: CL-only mode
+  std::string part_name;                  // the solid of a STEP assembly
   std::string zones_file;                 // zones per region (CSV)
   std::string mesh_units;                 // "", "mm", "inch", "m"
   std::vector<double> mesh_offset;        // placement of the part file in w, mm (x, y, z)

@@ -301,3 +301,66 @@ TEST_F(VerifyCli, BatchVerifiesJobsInParallelAndSummarises) {
 
 }  // namespace
 }  // namespace tolver
+
+namespace tolver {
+namespace {
+
+// A STEP part (samples/nas979_cone.step, the B-rep twin of nas979_cone.stl written by OCCT):
+// zones name its CAD faces by colour, the report has a row per CAD face, and the verdict is the
+// STL's (the same share of the machined area in tolerance, within the two tessellations' gap).
+TEST_F(VerifyCli, AStepPartIsCheckedFaceByFaceAndAgreesWithItsStl) {
+  const std::string cone = "verify --machine " +
+                           sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
+                           " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
+                           sourcePath("samples/nas979_cone.apt") + " --spacing 2 --no-images ";
+  const std::string zones = write("flank.csv", "region,tolerance\ncolour #e77c7c,0.02\n");
+  auto r = runTolver(cone + "--part " + sourcePath("samples/nas979_cone.step") + " --zones " +
+                     zones + " --report-dir " + path("step"));
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 1) << r.output;
+  EXPECT_NE(r.output.find("8 CAD faces"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("tessellated within 1 um"), std::string::npos) << r.output;
+  const auto j = nlohmann::json::parse(slurp(path("step") + "/report.json"));
+  const auto& faces = j["part"]["cad_faces"];
+  ASSERT_EQ(faces.size(), 8u) << j["part"].dump();
+  int flanks = 0;
+  for (const auto& f : faces) {
+    const bool flank = !f["aliases"].empty() && f["aliases"][0] == "colour #e77c7c";
+    flanks += flank;
+    if (flank) {
+      EXPECT_GT(f["checked_mm2"].get<double>(), 0.9 * f["area_mm2"].get<double>());
+      EXPECT_NEAR(f["area_mm2"].get<double>(), 9013.06, 0.5);  // pi (R0 + R1) s of the frustum
+    } else {
+      EXPECT_EQ(f["checked_mm2"].get<double>(), 0.0) << f.dump();
+    }
+  }
+  EXPECT_EQ(flanks, 1);
+  const std::string html = slurp(path("step") + "/report.html");
+  EXPECT_NE(html.find("CAD faces"), std::string::npos);
+  // The same zone on the STL (its flank is the region "part" there: the whole part with --tolerance
+  // limited to the flank is not expressible, so compare the flank rows' in-tolerance share).
+  const std::string flank_only = write("flank_stl.csv", "region,tolerance\n*,0.02\n");
+  auto s = runTolver(cone + "--part " + sourcePath("samples/nas979_cone.stl") + " --zones " +
+                     flank_only + " --report-dir " + path("stl"));
+  auto t = runTolver(cone + "--part " + sourcePath("samples/nas979_cone.step") + " --zones " +
+                     flank_only + " --report-dir " + path("step_all"));
+  const std::regex area("area +([0-9.]+) % of ([0-9.]+) mm2 machined in tolerance");
+  std::smatch ms, mt;
+  ASSERT_TRUE(std::regex_search(s.output, ms, area)) << s.output;
+  ASSERT_TRUE(std::regex_search(t.output, mt, area)) << t.output;
+  EXPECT_NEAR(std::stod(mt[1]), std::stod(ms[1]), 1.5);
+  EXPECT_NEAR(std::stod(mt[2]), std::stod(ms[2]), 0.05 * std::stod(ms[2]));  // sampling at 2 mm
+  // A zone naming no face: exit 2, and the message lists the names it could have used.
+  const std::string bad = write("bad.csv", "region,tolerance\ncolour #000000,0.02\n");
+  r = runTolver(cone + "--part " + sourcePath("samples/nas979_cone.step") + " --zones " + bad +
+                " --report-dir " + path("bad"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("bad.csv"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("'colour #e77c7c'"), std::string::npos) << r.output;
+  // STEP files carry their units: --mesh-units is refused.
+  r = runTolver(cone + "--part " + sourcePath("samples/nas979_cone.step") +
+                " --tolerance 0.02 --mesh-units inch --report-dir " + path("units"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+}
+
+}  // namespace
+}  // namespace tolver

@@ -2,7 +2,6 @@
 
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
-#include <sys/wait.h>
 #include <tinyxml2.h>
 #include <unistd.h>
 #include <unzip.h>
@@ -29,7 +28,9 @@
 #include <vector>
 
 #include "core/numerics/quantities.h"
+#include "io/common/child_process.h"
 #include "io/common/io_error.h"
+#include "io/mesh/mesh_bytes.h"
 
 namespace tolver {
 namespace {
@@ -706,122 +707,34 @@ TriangleMesh importWithAssimp(const std::string& path, const std::string& format
   return raw;
 }
 
-// The scene formats (glTF, 3MF) are read by assimp in a child process: Debian's assimp 5.2
-// crashed on damaged glTF files (the scene fuzz harness: a line loop whose indices pass its
-// vertices, a segmentation fault; a strip without positions, 2^32 faces allocated), which
-// checkGltfMeshes now refuses first; the child stays for what no check foresees. The child sends
-// the mesh, or the error, through a pipe; a child that ends any other way (a signal, a sanitizer's
-// exit) is said as a damaged file, and tolver goes on. Under the fuzz harness (TOLVER_FUZZING) the
-// read stays in the process, so that what assimp does is seen.
+// The scene formats (glTF, 3MF) are read by assimp in a child process (io/common/
+// child_process.h): Debian's assimp 5.2 crashed on damaged glTF files (the scene fuzz harness: a
+// line loop whose indices pass its vertices, a segmentation fault; a strip without positions,
+// 2^32 faces allocated), which checkGltfMeshes now refuses first; the child stays for what no
+// check foresees. Under the fuzz harness (TOLVER_FUZZING) the read stays in the process, so that
+// what assimp does is seen.
 TriangleMesh importInChildProcess(const std::string& path, const std::string& format) {
 #ifdef TOLVER_FUZZING
-  return importWithAssimp(path, format);
+  constexpr bool in_process = true;
 #else
-  int fds[2];
-  if (::pipe(fds) != 0) return importWithAssimp(path, format);
-  const pid_t pid = ::fork();
-  if (pid < 0) {
-    ::close(fds[0]);
-    ::close(fds[1]);
-    return importWithAssimp(path, format);
-  }
-  auto putAll = [](int fd, const std::string& bytes) {
-    for (size_t at = 0; at < bytes.size();) {
-      const ssize_t n = ::write(fd, bytes.data() + at, bytes.size() - at);
-      if (n <= 0) return;
-      at += static_cast<size_t>(n);
-    }
-  };
-  if (pid == 0) {  // the child: read, send, and leave without running anything else
-    ::close(fds[0]);
-    // Fault injection for the test of this path (no known file crashes assimp past the checks
-    // above any more): the child stops as assimp did on the scene harness's findings.
-    if (std::getenv("TOLVER_TEST_CRASH_SCENE_READER")) std::raise(SIGSEGV);
-    std::string out;
-    auto add = [&](const void* p, size_t n) { out.append(static_cast<const char*>(p), n); };
-    try {
-      const TriangleMesh m = importWithAssimp(path, format);
-      const uint64_t counts[3] = {m.vertices.size(), m.faces.size(), m.group_names.size()};
-      out = "M";
-      add(counts, sizeof counts);
-      add(m.vertices.data(), m.vertices.size() * sizeof(Eigen::Vector3d));
-      add(m.faces.data(), m.faces.size() * sizeof(Eigen::Vector3i));
-      add(m.face_group.data(), m.face_group.size() * sizeof(int));
-      for (const std::string& g : m.group_names) {
-        const uint64_t n = g.size();
-        add(&n, sizeof n);
-        out += g;
-      }
-    } catch (const InputError& e) {
-      out = "E" + e.field() + '\n' + e.what();
-    } catch (const std::exception& e) {
-      out = std::string("E") + "mesh\n" + e.what();
-    }
-    putAll(fds[1], out);
-    ::close(fds[1]);
-    ::_exit(0);
-  }
-  ::close(fds[1]);
-  std::string in;
-  char buffer[1 << 16];
-  for (;;) {
-    const ssize_t n = ::read(fds[0], buffer, sizeof buffer);
-    if (n > 0)
-      in.append(buffer, static_cast<size_t>(n));
-    else if (n == 0 || errno != EINTR)
-      break;
-  }
-  ::close(fds[0]);
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
-  }
-  const bool clean = WIFEXITED(status) && WEXITSTATUS(status) == 0;
-  if (clean && !in.empty() && in[0] == 'E') {
-    const size_t eol = in.find('\n');
-    const std::string field = in.substr(1, eol - 1);
-    std::string what = in.substr(eol + 1);
-    const std::string prefix = path + ": " + field + ": ";
-    if (what.rfind(prefix, 0) == 0) what.erase(0, prefix.size());
-    throw InputError(path, 0, 0, field, what);
-  }
-  TriangleMesh m;
-  uint64_t counts[3] = {0, 0, 0};
-  size_t at = 1;
-  auto take = [&](void* p, size_t n) {
-    if (in.size() - at < n) return false;
-    std::memcpy(p, in.data() + at, n);
-    at += n;
-    return true;
-  };
-  bool whole = clean && in.size() >= 1 + sizeof counts && in[0] == 'M' &&
-               take(counts, sizeof counts) && counts[0] <= in.size() && counts[1] <= in.size() &&
-               counts[2] <= in.size();
-  if (whole) {
-    m.vertices.resize(counts[0]);
-    m.faces.resize(counts[1]);
-    m.face_group.resize(counts[1]);
-    m.group_names.resize(counts[2]);
-    whole = take(m.vertices.data(), counts[0] * sizeof(Eigen::Vector3d)) &&
-            take(m.faces.data(), counts[1] * sizeof(Eigen::Vector3i)) &&
-            take(m.face_group.data(), counts[1] * sizeof(int));
-    for (std::string& g : m.group_names) {
-      uint64_t n = 0;
-      whole = whole && take(&n, sizeof n) && n <= in.size() - at;
-      if (!whole) break;
-      g = in.substr(at, n);
-      at += n;
-    }
-  }
-  if (!whole) {
-    std::string how =
-        WIFSIGNALED(status) ? "stopped on signal " + std::to_string(WTERMSIG(status)) + " (" +
-                                  strsignal(WTERMSIG(status)) + ")"
-        : WIFEXITED(status) ? "stopped with exit code " + std::to_string(WEXITSTATUS(status))
-                            : "stopped";
-    throw InputError(path, 0, 0, "mesh", "assimp " + how + " reading it: a damaged file?");
-  }
-  return m;
+  constexpr bool in_process = false;
 #endif
+  const std::string bytes = runInChildProcess(
+      path, "assimp",
+      [&] {
+        // Fault injection for the test of this path (no known file crashes assimp past the
+        // checks above any more): the child stops as assimp did on the scene harness's findings.
+        if (!in_process && std::getenv("TOLVER_TEST_CRASH_SCENE_READER")) std::raise(SIGSEGV);
+        ByteWriter w;
+        putMesh(w, importWithAssimp(path, format));
+        return std::move(w.bytes());
+      },
+      in_process);
+  TriangleMesh m;
+  ByteReader r(bytes);
+  if (!takeMesh(r, &m))
+    throw InputError(path, 0, 0, "mesh", "assimp sent a damaged mesh reading it");
+  return m;
 }
 
 }  // namespace
@@ -829,16 +742,21 @@ TriangleMesh importInChildProcess(const std::string& path, const std::string& fo
 ImportedPart readPartMesh(const std::string& path, const PartImportOptions& options) {
   ImportedPart part;
   part.format = lowerExtension(path);
-  static const char* kFormats[] = {"stl", "obj", "ply", "off", "3mf", "gltf", "glb"};
+  static const char* kFormats[] = {"stl", "obj", "ply", "off", "3mf", "gltf", "glb", "step", "stp"};
   if (std::find_if(std::begin(kFormats), std::end(kFormats),
                    [&](const char* f) { return part.format == f; }) == std::end(kFormats))
     throw InputError(path, 0, 0, "mesh",
                      "unsupported part format '." + part.format +
-                         "' (use .stl, .obj, .ply, .off, .3mf, .gltf or .glb)");
+                         "' (use .step, .stp, .stl, .obj, .ply, .off, .3mf, .gltf or .glb)");
   if (!std::filesystem::is_regular_file(path))
     throw InputError(path, 0, 0, "mesh", "cannot open the file");
 
-  part.units = options.units.empty()
+  const bool step = part.format == "step" || part.format == "stp";
+  if (step && !options.units.empty())
+    throw InputError(path, 0, 0, "units",
+                     "a STEP file carries its own length unit: leave out the mesh units");
+  part.units = step ? "mm"
+               : options.units.empty()
                    ? ((part.format == "gltf" || part.format == "glb") ? "m" : "mm")
                    : options.units;
   double scale;
@@ -861,10 +779,22 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
   check3mf(path, part.format == "3mf");
   if (part.format == "glb") checkGlb(path);
   if (part.format == "gltf") checkGltfMeshes(path, readFile(path), "");
-  TriangleMesh raw =
-      (part.format == "gltf" || part.format == "glb" || part.format == "3mf")
-          ? importInChildProcess(path, part.format)
-          : importWithAssimp(path, part.format, part.format == "ply" ? &ply_bytes : nullptr);
+  TriangleMesh raw;
+  if (step) {
+    StepReadOptions so;
+    so.chordal_mm = options.chordal_mm;
+    so.part_name = options.part_name;
+#ifdef TOLVER_FUZZING
+    so.in_process = true;
+#endif
+    part.cad = std::make_shared<StepPart>(readStepPart(path, so));
+    raw = std::move(part.cad->mesh);
+    part.cad->mesh = TriangleMesh();
+  } else {
+    raw = (part.format == "gltf" || part.format == "glb" || part.format == "3mf")
+              ? importInChildProcess(path, part.format)
+              : importWithAssimp(path, part.format, part.format == "ply" ? &ply_bytes : nullptr);
+  }
   if (raw.faces.empty()) throw InputError(path, 0, 0, "mesh", "the file holds no triangles");
   for (auto& v : raw.vertices) v = options.w_T_file * (scale * v);
   // A vertex far beyond any part (a corrupt or mis-scaled file) would make the sampling and

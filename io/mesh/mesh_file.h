@@ -3,11 +3,15 @@
 // .glb). Faces are triangulated; points and lines dropped. Each mesh of the file (an OBJ group,
 // a glTF mesh, a 3MF object) becomes a region, named as the file names it. Node transforms are
 // applied; then p_w = R (scale p_file) + t with the placement below.
+// STEP parts (.step, .stp) through OpenCASCADE (io/mesh/step_file.h): tessellated within a
+// chordal tolerance, one region per CAD face; their unit is the file's.
 #include <Eigen/Geometry>
+#include <memory>
 #include <string>
 
 #include "geometry/mesh_repair.h"
 #include "geometry/triangle_mesh.h"
+#include "io/mesh/step_file.h"
 
 namespace tolver {
 
@@ -16,6 +20,9 @@ struct PartImportOptions {
   std::string units;
   Eigen::Isometry3d w_T_file = Eigen::Isometry3d::Identity();  // placement of the file in w, mm
   MeshRepairOptions repair;
+  // STEP: the tessellation's chordal tolerance (mm) and the solid of an assembly.
+  double chordal_mm = 0.001;
+  std::string part_name;
 };
 
 struct ImportedPart {
@@ -23,6 +30,8 @@ struct ImportedPart {
   MeshRepairReport repair;
   std::string units;   // the unit applied
   std::string format;  // file extension, lower case
+  // STEP: what the file says of the part (faces, PMI, units); its mesh moved into `mesh`.
+  std::shared_ptr<StepPart> cad;
 };
 
 // Throws InputError naming the file (field "mesh") when the file cannot be read or the mesh has a

@@ -97,6 +97,25 @@ std::string formatVerifyJson(const VerifyReport& r) {
                {"samples", r.samples->size()},
                {"sample_spacing_mm", r.spacing_mm},
                {"regions", r.samples->group_names}};
+  if (!r.cad_text.empty()) j["part"]["cad"] = r.cad_text;
+  if (!r.region_table.empty()) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (const RegionSummary& g : r.region_table) {
+      nlohmann::json row = {{"region", r.samples->group_names[g.group]},
+                            {"area_mm2", g.area_mm2},
+                            {"checked_mm2", g.checked_mm2},
+                            {"out_mm2", g.out_mm2},
+                            {"status", g.status}};
+      if (g.group < static_cast<int>(r.samples->group_aliases.size()))
+        row["aliases"] = r.samples->group_aliases[g.group];
+      if (g.worst_sample >= 0) {
+        row["worst_um"] = mmToUm(g.worst_mm);
+        row["worst_sample"] = g.worst_sample;
+      }
+      rows.push_back(row);
+    }
+    j["part"][r.cad ? "cad_faces" : "region_table"] = rows;
+  }
   if (r.has_repair) {
     const auto& m = r.repair;
     j["part"]["repair"] = {{"merged_vertices", m.merged_vertices},
@@ -334,6 +353,40 @@ std::string formatVerifyHtml(const VerifyReport& r) {
          "of the zone there (scallop, gouge, step), <i>machine</i> when the machine's errors take "
          "it out.</p>\n";
   }
+  if (r.region_table.size() > 1) {
+    // Out first, then by the worst deviation's size; each row anchored by its region's name.
+    std::vector<const RegionSummary*> rows;
+    for (const RegionSummary& g : r.region_table) rows.push_back(&g);
+    std::stable_sort(rows.begin(), rows.end(), [](const RegionSummary* a, const RegionSummary* b) {
+      if ((a->out > 0) != (b->out > 0)) return a->out > 0;
+      return std::abs(a->worst_mm) > std::abs(b->worst_mm);
+    });
+    h += std::string("<h2>") + (r.cad ? "CAD faces" : "Regions") +
+         "</h2>\n<table><tr><th class=\"l\">region</th><th class=\"l\">name, colour</th>"
+         "<th>area (mm2)</th><th>checked (mm2)</th><th>worst (um)</th><th>out (mm2)</th>"
+         "<th class=\"l\">status</th></tr>\n";
+    for (size_t k = 0; k < rows.size() && k < 200; ++k) {
+      const RegionSummary& g = *rows[k];
+      const std::string& name = r.samples->group_names[g.group];
+      std::string aliases;
+      if (g.group < static_cast<int>(r.samples->group_aliases.size()))
+        for (const std::string& a : r.samples->group_aliases[g.group])
+          aliases += (aliases.empty() ? "" : ", ") + a;
+      char cells[200];
+      std::snprintf(cells, sizeof cells, "<td>%.1f</td><td>%.1f</td><td>%s</td><td>%.2f</td>",
+                    g.area_mm2, g.checked_mm2,
+                    g.worst_sample >= 0 ? formatWith("%+.2f", mmToUm(g.worst_mm)).c_str() : "",
+                    g.out_mm2);
+      h += "<tr id=\"region-" + html(name) + "\"><td class=\"l\">" + html(name) +
+           "</td><td class=\"l\">" + html(aliases) + "</td>" + cells + "<td class=\"l\">" +
+           g.status + "</td></tr>\n";
+    }
+    if (rows.size() > 200)
+      h += "<tr><td colspan=\"7\" class=\"l\">... " + std::to_string(rows.size() - 200) +
+           " more in report.json</td></tr>\n";
+    h += "</table>\n";
+  }
+  if (!r.cad_text.empty()) h += "<p>" + html(r.cad_text) + "</p>\n";
   if (r.has_repair && !r.repair.notes.empty()) {
     h += "<h2>Part mesh</h2>\n<ul>\n";
     for (const auto& n : r.repair.notes) h += "<li>" + html(n) + "</li>\n";

@@ -23,6 +23,11 @@ struct VerifyReport {
   std::vector<ToleranceZone> zones;
   bool has_repair = false;
   MeshRepairReport repair;
+  // Per region of the part (a CAD face of a STEP part), and what the STEP file said (one line:
+  // system, schema, unit, solid, faces, tessellation), empty for other formats.
+  std::vector<RegionSummary> region_table;
+  std::string cad_text;
+  bool cad = false;
   int line_pass = -1;  // 1-based pass of the line profile, -1 none
   std::vector<LineProfilePoint> line_profile;
   std::vector<std::pair<std::string, std::string>> images;  // caption, path
