@@ -82,63 +82,6 @@ void checkPartUnits(const VerifyInputs& o, const ClProgram& program, const Trian
   }
 }
 
-// The zones of a STEP file's semantic PMI: each profile-of-a-surface tolerance a zone on each of
-// its faces; the other tolerances listed as not checked (notes).
-std::vector<ToleranceZone> pmiZones(const StepPart& cad, const TriangleMesh& mesh,
-                                    std::vector<std::string>* notes) {
-  std::vector<ToleranceZone> zones;
-  std::vector<double> widths;
-  std::map<std::string, int> unchecked;
-  for (const StepTolerance& t : cad.tolerances) {
-    const std::string label = t.type + " " + formatNumber(t.value_mm) + " mm" +
-                              (t.name.empty() ? "" : " ('" + t.name + "')");
-    // A composite frame (ASME Y14.5 10.5.1) reads as two tolerances of one name on the same
-    // faces: the wider, located segment is checked; the refining one floats in location.
-    const bool refining =
-        std::any_of(cad.tolerances.begin(), cad.tolerances.end(), [&](const StepTolerance& u) {
-          return &u != &t && u.type == t.type && u.name == t.name && u.faces == t.faces &&
-                 u.value_mm > t.value_mm;
-        });
-    if (refining) {
-      notes->push_back("PMI " + label +
-                       ": the refining segment of a composite frame, not checked "
-                       "(its zone is not located on the nominal surface)");
-      continue;
-    }
-    if (t.type != "profile of a surface" || t.faces.empty() || !(t.value_mm > 0)) {
-      ++unchecked[t.type];
-      notes->push_back("PMI " + label + " on " + std::to_string(t.faces.size()) +
-                       " faces: not checked (verify checks profile of a surface only)");
-      continue;
-    }
-    ToleranceZone z;
-    try {
-      z = t.unequal ? isoUzZone(t.value_mm, t.offset_mm) : bilateralZone(t.value_mm);
-    } catch (const std::invalid_argument& e) {
-      notes->push_back("PMI " + label + ": not checked (" + e.what() + ")");
-      continue;
-    }
-    z.spec += " (PMI" + (t.name.empty() ? std::string() : " '" + t.name + "'") + ")";
-    for (int g : t.faces) {
-      z.region = mesh.group_names[g];
-      zones.push_back(z);
-      widths.push_back(t.value_mm);
-    }
-    notes->push_back("PMI " + label + (t.unequal ? " UZ " + formatNumber(t.offset_mm) : "") +
-                     " on " + std::to_string(t.faces.size()) +
-                     " faces: checked as a profile zone on the nominal surface in the part frame "
-                     "(datum references are not evaluated)");
-  }
-  // A face under two frames must lie in both: the narrower zone comes last, so it decides.
-  std::vector<size_t> order(zones.size());
-  std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](size_t a, size_t b) { return widths[a] > widths[b]; });
-  std::vector<ToleranceZone> sorted;
-  for (size_t i : order) sorted.push_back(zones[i]);
-  return sorted;
-}
-
 std::vector<ToleranceZone> zonesFrom(const VerifyInputs& o, const ImportedPart* part,
                                      std::vector<std::string>* notes) {
   std::vector<ToleranceZone> zones;
@@ -871,6 +814,61 @@ void reportHoles(bool allow_open, Verification& v) {
 }
 
 }  // namespace
+
+std::vector<ToleranceZone> pmiZones(const StepPart& cad, const TriangleMesh& mesh,
+                                    std::vector<std::string>* notes) {
+  std::vector<ToleranceZone> zones;
+  std::vector<double> widths;
+  std::map<std::string, int> unchecked;
+  for (const StepTolerance& t : cad.tolerances) {
+    const std::string label = t.type + " " + formatNumber(t.value_mm) + " mm" +
+                              (t.name.empty() ? "" : " ('" + t.name + "')");
+    // A composite frame (ASME Y14.5 10.5.1) reads as two tolerances of one name on the same
+    // faces: the wider, located segment is checked; the refining one floats in location.
+    const bool refining =
+        std::any_of(cad.tolerances.begin(), cad.tolerances.end(), [&](const StepTolerance& u) {
+          return &u != &t && u.type == t.type && u.name == t.name && u.faces == t.faces &&
+                 u.value_mm > t.value_mm;
+        });
+    if (refining) {
+      notes->push_back("PMI " + label +
+                       ": the refining segment of a composite frame, not checked "
+                       "(its zone is not located on the nominal surface)");
+      continue;
+    }
+    if (t.type != "profile of a surface" || t.faces.empty() || !(t.value_mm > 0)) {
+      ++unchecked[t.type];
+      notes->push_back("PMI " + label + " on " + std::to_string(t.faces.size()) +
+                       " faces: not checked (verify checks profile of a surface only)");
+      continue;
+    }
+    ToleranceZone z;
+    try {
+      z = t.unequal ? isoUzZone(t.value_mm, t.offset_mm) : bilateralZone(t.value_mm);
+    } catch (const std::invalid_argument& e) {
+      notes->push_back("PMI " + label + ": not checked (" + e.what() + ")");
+      continue;
+    }
+    z.spec += " (PMI" + (t.name.empty() ? std::string() : " '" + t.name + "'") + ")";
+    for (int g : t.faces) {
+      z.region = mesh.group_names[g];
+      zones.push_back(z);
+      widths.push_back(t.value_mm);
+    }
+    notes->push_back("PMI " + label + (t.unequal ? " UZ " + formatNumber(t.offset_mm) : "") +
+                     " on " + std::to_string(t.faces.size()) +
+                     " faces: checked as a profile zone on the nominal surface in the part frame "
+                     "(datum references are not evaluated)");
+  }
+  // A face under two frames must lie in both: the narrower zone comes last, so it decides.
+  std::vector<size_t> order(zones.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](size_t a, size_t b) { return widths[a] > widths[b]; });
+  std::vector<ToleranceZone> sorted;
+  for (size_t i : order) sorted.push_back(zones[i]);
+  return sorted;
+}
 
 std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::string& name,
                                               const std::function<void(double)>& progress) {

@@ -17,6 +17,14 @@
 
 namespace tolver {
 
+struct StepPart;
+
+// The zones of a STEP file's semantic PMI (docs/formats.md, STEP parts): each profile-of-a-surface
+// tolerance a zone on each of its faces (of a composite frame, the located segment; the narrower
+// zone last, so it decides where frames overlap); the other tolerances listed as not checked.
+std::vector<ToleranceZone> pmiZones(const StepPart& cad, const TriangleMesh& mesh,
+                                    std::vector<std::string>* notes);
+
 struct VerifyInputs {
   MachineOptions machine;
   ProgramOptions program;

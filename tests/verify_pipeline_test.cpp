@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/common/io_error.h"
+#include "io/mesh/step_file.h"
 #include "pipeline/verify.h"
 #include "test_support.h"
 
@@ -136,6 +137,69 @@ TEST_F(VerifyPipeline, TheSampleBudgetCountsTheEdgePoints) {
   EXPECT_LE(area / (std::sqrt(3.0) / 2.0 * s * s) + 0.5 * perimeter / (4.0 / 3.0 * s),
             5e6 * 1.0001);
   EXPECT_FALSE(std::filesystem::exists(path("report")));
+}
+
+}  // namespace
+}  // namespace tolver
+
+namespace tolver {
+namespace {
+
+// PMI into zones: NIST CTC 1's two profile tolerances become a zone on each of their faces
+// (0.5 mm on six, 1.25 on two), the four others are listed as not checked; a composite frame
+// (two segments of one name on the same faces, as NIST FTC 6 carries) checks its located
+// segment only; a face under two frames takes the narrower zone (the last one, which decides).
+TEST(VerifyPmi, ProfileTolerancesBecomeZonesOnTheirFacesAndTheRestIsListed) {
+  StepReadOptions o;
+  o.chordal_mm = 0.05;
+  const StepPart nist =
+      readStepPart(test::sourcePath("tests/data/step/nist_ctc_01_asme1_ap242-e1.stp"), o);
+  std::vector<std::string> notes;
+  const std::vector<ToleranceZone> zones = pmiZones(nist, nist.mesh, &notes);
+  ASSERT_EQ(zones.size(), 8u);
+  int narrow = 0, wide = 0;
+  for (const ToleranceZone& z : zones) {
+    const double width = z.upper - z.lower;
+    narrow += std::abs(width - 0.5) < 1e-12;
+    wide += std::abs(width - 1.25) < 1e-12;
+    EXPECT_NE(std::find(nist.mesh.group_names.begin(), nist.mesh.group_names.end(), z.region),
+              nist.mesh.group_names.end());
+  }
+  EXPECT_EQ(narrow, 6);
+  EXPECT_EQ(wide, 2);
+  EXPECT_NEAR(zones.back().upper - zones.back().lower, 0.5, 1e-12);  // narrower last
+  int unchecked = 0;
+  for (const std::string& n : notes) unchecked += n.find("not checked") != std::string::npos;
+  EXPECT_EQ(unchecked, 4);
+
+  // A composite frame and two frames on one face, on a part of three faces.
+  StepPart part;
+  part.mesh.group_names = {"face #1", "face #2", "face #3"};
+  auto profile = [](const char* name, double v, std::vector<int> faces) {
+    StepTolerance t;
+    t.type = "profile of a surface";
+    t.name = name;
+    t.value_mm = v;
+    t.faces = std::move(faces);
+    return t;
+  };
+  part.tolerances = {profile("Position surfacic profile.9", 1.27, {0, 1}),
+                     profile("Position surfacic profile.9", 0.254, {0, 1}),
+                     profile("Surface profile.2", 0.1, {1, 2})};
+  notes.clear();
+  const std::vector<ToleranceZone> z = pmiZones(part, part.mesh, &notes);
+  ASSERT_EQ(z.size(), 4u);  // 1.27 on faces 1 and 2, 0.1 on faces 2 and 3
+  EXPECT_NEAR(z[0].upper - z[0].lower, 1.27, 1e-12);
+  EXPECT_NEAR(z[3].upper - z[3].lower, 0.1, 1e-12);
+  // Face #2 is under both: its last zone is the 0.1 mm one.
+  int last_for_face2 = -1;
+  for (int k = 0; k < static_cast<int>(z.size()); ++k)
+    if (z[k].region == "face #2") last_for_face2 = k;
+  EXPECT_NEAR(z[last_for_face2].upper - z[last_for_face2].lower, 0.1, 1e-12);
+  bool composite = false;
+  for (const std::string& n : notes)
+    composite |= n.find("0.254") != std::string::npos && n.find("composite") != std::string::npos;
+  EXPECT_TRUE(composite);
 }
 
 }  // namespace
