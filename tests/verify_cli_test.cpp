@@ -336,6 +336,13 @@ TEST_F(VerifyCli, AStepPartIsCheckedFaceByFaceAndAgreesWithItsStl) {
   EXPECT_EQ(flanks, 1);
   const std::string html = slurp(path("step") + "/report.html");
   EXPECT_NE(html.find("CAD faces"), std::string::npos);
+  // Each row is addressable: the id of "face #376" is "region-face-376" (an HTML id holds no
+  // space).
+  for (const auto& f : faces) {
+    std::string id = f["region"].get<std::string>();
+    id.replace(id.find(" #"), 2, "-");
+    EXPECT_NE(html.find("<tr id=\"region-" + id + "\">"), std::string::npos) << id;
+  }
   // The same zone on the STL (its flank is the region "part" there: the whole part with --tolerance
   // limited to the flank is not expressible, so compare the flank rows' in-tolerance share).
   const std::string flank_only = write("flank_stl.csv", "region,tolerance\n*,0.02\n");

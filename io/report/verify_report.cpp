@@ -1,5 +1,6 @@
 #include "io/report/verify_report.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -377,7 +378,14 @@ std::string formatVerifyHtml(const VerifyReport& r) {
                     g.area_mm2, g.checked_mm2,
                     g.worst_sample >= 0 ? formatWith("%+.2f", mmToUm(g.worst_mm)).c_str() : "",
                     g.out_mm2);
-      h += "<tr id=\"region-" + html(name) + "\"><td class=\"l\">" + html(name) +
+      // An HTML id holds no space: "face #213" is "region-face-213".
+      std::string id;
+      for (char c : name)
+        if (std::isalnum(static_cast<unsigned char>(c)))
+          id += c;
+        else if (id.empty() || id.back() != '-')
+          id += '-';
+      h += "<tr id=\"region-" + html(id) + "\"><td class=\"l\">" + html(name) +
            "</td><td class=\"l\">" + html(aliases) + "</td>" + cells + "<td class=\"l\">" +
            g.status + "</td></tr>\n";
     }
