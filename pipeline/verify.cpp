@@ -819,7 +819,6 @@ std::vector<ToleranceZone> pmiZones(const StepPart& cad, const TriangleMesh& mes
                                     std::vector<std::string>* notes) {
   std::vector<ToleranceZone> zones;
   std::vector<double> widths;
-  std::map<std::string, int> unchecked;
   for (const StepTolerance& t : cad.tolerances) {
     const std::string label = t.type + " " + formatNumber(t.value_mm) + " mm" +
                               (t.name.empty() ? "" : " ('" + t.name + "')");
@@ -837,7 +836,6 @@ std::vector<ToleranceZone> pmiZones(const StepPart& cad, const TriangleMesh& mes
       continue;
     }
     if (t.type != "profile of a surface" || t.faces.empty() || !(t.value_mm > 0)) {
-      ++unchecked[t.type];
       notes->push_back("PMI " + label + " on " + std::to_string(t.faces.size()) +
                        " faces: not checked (verify checks profile of a surface only)");
       continue;
