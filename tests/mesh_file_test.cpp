@@ -21,6 +21,8 @@
 #include <iterator>
 #include <random>
 
+#include <unistd.h>
+
 #include "io/common/io_error.h"
 #include "test_support.h"
 
@@ -696,7 +698,9 @@ TEST(SurfaceFiles, VtpSurfaceReadsBackExactly) {
     b[i] = static_cast<double>(i % 4);
   }
   const std::string path =
-      (std::filesystem::temp_directory_path() / "tolver_vtp_test.vtp").string();
+      (std::filesystem::temp_directory_path() /
+       ("tolver_vtp_test_" + std::to_string(::getpid()) + ".vtp"))
+          .string();
   writeVtpWithScalars(path, points, faces, {{"total_um", &a}, {"state", &b}});
   vtkNew<vtkXMLPolyDataReader> reader;
   reader->SetFileName(path.c_str());

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <random>
 
+#include <unistd.h>
+
 #include "io/common/io_error.h"
 #include "io/common/line_source.h"
 
@@ -23,7 +25,9 @@ std::vector<std::string> streamedLines(LineSource source) {
 
 std::vector<std::string> fileLines(const std::string& text) {
   const std::string path =
-      (std::filesystem::temp_directory_path() / "tolver_line_source.txt").string();
+      (std::filesystem::temp_directory_path() /
+       ("tolver_line_source_" + std::to_string(::getpid()) + ".txt"))
+          .string();  // one per process: the tests of this file run concurrently under ctest
   std::ofstream(path, std::ios::binary) << text;
   std::vector<std::string> lines = streamedLines(LineSource::file(path));
   std::filesystem::remove(path);
