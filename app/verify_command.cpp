@@ -20,6 +20,7 @@ struct VerifyOptions {
   std::string batch;
   std::string tolerance_units;  // "", "mm" or "um" (of --tolerance)
   bool no_images = false;
+  bool no_3d = false;
   bool quiet = false;
 };
 
@@ -103,6 +104,7 @@ void printBatch(const VerifyOptions& o, const BatchRun& run) {
 
 Verdict runVerify(VerifyOptions& o) {
   o.in.images = !o.no_images;
+  o.in.view3d = !o.no_3d;
   o.in.tolerance_confirmed = !o.tolerance_units.empty();
   if (!o.batch.empty()) {
     const BatchRun run = verifyBatch(o.in, o.batch, [&o](int n, size_t total, const JobOutcome& r) {
@@ -192,6 +194,8 @@ void registerVerify(CLI::App& app, Verdict* verdict) {
   cmd->add_option("--line-pass", o->in.line_pass, "also a line profile along this pass (1-based)")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--no-images", o->no_images, "write no PNG images (no X server needed)");
+  cmd->add_flag("--no-3d", o->no_3d,
+                "no interactive 3D view in report.html (a smaller file; the maps stay)");
   cmd->add_flag("--quiet", o->quiet, "print nothing but errors");
   cmd->add_flag("--absolute", o->in.absolute,
                 "a calibrated machine: verify without the set-up a shop measures (part probed, "

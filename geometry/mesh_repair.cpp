@@ -5,6 +5,7 @@
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <iostream>
 #include <map>
 #include <numeric>
 #include <unordered_map>
@@ -43,27 +45,65 @@ struct BitsHash {
   }
 };
 
-// Connected components of faces through shared edges; returns the component of each face.
-int faceComponents(const std::vector<Eigen::Vector3i>& faces, std::vector<int>* comp) {
-  std::vector<int> parent(faces.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  };
-  std::unordered_map<uint64_t, int> first;
-  for (int f = 0; f < static_cast<int>(faces.size()); ++f)
-    for (int e = 0; e < 3; ++e) {
-      auto [it, fresh] = first.try_emplace(edgeKey(faces[f][e], faces[f][(e + 1) % 3]), f);
-      if (!fresh) parent[find(f)] = find(it->second);
+// The topology (half-edges, borders, components) is OpenMesh's. What stays hand-written here:
+// merging vertices bit for bit with the map from each input vertex (the faces' groups and the
+// needle split below use it); the non-manifold edge check, which runs on the polygon soup because
+// neither OpenMesh nor CGAL's Surface_mesh can hold such an edge (OpenMesh's add_face refuses it
+// without saying where; CGAL's orient_polygon_soup would duplicate vertices and go on); the needle
+// split (a T-junction's repair no library here does); the outward orientation of voids by ray
+// parity (CGAL's orient_to_bound_a_volume needs a closed mesh, and the open ones are oriented by
+// the file's winding).
+struct OmTraits : OpenMesh::DefaultTraits {
+  using Point = OpenMesh::Vec3d;
+};
+using OmMesh = OpenMesh::TriMesh_ArrayKernelT<OmTraits>;
+
+// The faces as OpenMesh's half-edge mesh, face f as its face f. After orient_polygon_soup the
+// faces form an oriented manifold OpenMesh takes face by face; a face it cannot take is refused
+// with its place (OpenMesh's own message, on std::cerr, is silenced).
+OmMesh halfedgeMesh(const std::vector<Eigen::Vector3d>& points,
+                    const std::vector<Eigen::Vector3i>& faces) {
+  OmMesh m;
+  m.reserve(points.size(), 3 * faces.size() / 2 + 16, faces.size());
+  for (const Eigen::Vector3d& p : points) m.add_vertex(OmMesh::Point(p.x(), p.y(), p.z()));
+  auto* previous = std::cerr.rdbuf(nullptr);
+  for (const Eigen::Vector3i& f : faces) {
+    const auto h = m.add_face(OmMesh::VertexHandle(f[0]), OmMesh::VertexHandle(f[1]),
+                              OmMesh::VertexHandle(f[2]));
+    if (!h.is_valid()) {
+      std::cerr.rdbuf(previous);
+      const Eigen::Vector3d c = (points[f[0]] + points[f[1]] + points[f[2]]) / 3.0;
+      throw MeshDefect("a face cannot join its neighbours (a non-manifold vertex or edge) at " +
+                           at(c) + "; repair the model in CAD",
+                       c);
     }
-  comp->assign(faces.size(), -1);
-  std::unordered_map<int, int> ids;
-  for (int f = 0; f < static_cast<int>(faces.size()); ++f) {
-    auto [it, fresh] = ids.try_emplace(find(f), static_cast<int>(ids.size()));
-    (*comp)[f] = it->second;
   }
-  return static_cast<int>(ids.size());
+  std::cerr.rdbuf(previous);
+  return m;
+}
+
+// Connected components of faces through shared edges (OpenMesh's face-face circulator); returns
+// the component of each face.
+int faceComponents(const OmMesh& m, std::vector<int>* comp) {
+  comp->assign(m.n_faces(), -1);
+  int n = 0;
+  std::vector<OmMesh::FaceHandle> stack;
+  for (auto f : m.faces()) {
+    if ((*comp)[f.idx()] >= 0) continue;
+    (*comp)[f.idx()] = n;
+    stack.push_back(f);
+    while (!stack.empty()) {
+      const auto g = stack.back();
+      stack.pop_back();
+      for (auto h : m.ff_range(g))
+        if ((*comp)[h.idx()] < 0) {
+          (*comp)[h.idx()] = n;
+          stack.push_back(h);
+        }
+    }
+    ++n;
+  }
+  return n;
 }
 
 // A hole's border loop kept open (longer than the largest filled), for the coverage report.
@@ -257,24 +297,6 @@ void orientConsistently(Repair& r) {
                         " non-manifold vertices (surfaces touching at a point)");
 }
 
-// The border loops of the faces: vertex -> next vertex along the border (opposite to the face's
-// edge), and the face of each border vertex's edge.
-void borderLoops(const std::vector<Eigen::Vector3i>& faces, std::unordered_map<int, int>* next,
-                 std::unordered_map<int, int>* border_face) {
-  std::unordered_map<uint64_t, int> directed;  // directed edge -> face
-  for (int f = 0; f < static_cast<int>(faces.size()); ++f)
-    for (int e = 0; e < 3; ++e)
-      directed[(static_cast<uint64_t>(faces[f][e]) << 32) |
-               static_cast<uint32_t>(faces[f][(e + 1) % 3])] = f;
-  for (const auto& [k, f] : directed) {
-    const int a = static_cast<int>(k >> 32), b = static_cast<int>(k & 0xffffffffu);
-    if (!directed.count((static_cast<uint64_t>(b) << 32) | static_cast<uint32_t>(a))) {
-      (*next)[b] = a;
-      (*border_face)[b] = f;
-    }
-  }
-}
-
 // 5. Holes: borders shorter than max_hole are filled (CGAL), the others kept and measured.
 void fillHoles(Repair& r) {
   MeshRepairReport& rep = r.rep;
@@ -288,34 +310,32 @@ void fillHoles(Repair& r) {
     faces.emplace_back(static_cast<int>(p[0]), static_cast<int>(p[1]), static_cast<int>(p[2]));
   points.clear();
   for (const auto& p : cgal_points) points.emplace_back(p.x(), p.y(), p.z());
-  std::unordered_map<int, int> next, border_face;
-  borderLoops(faces, &next, &border_face);
-  if (next.empty()) return;
+  // The border loops: OpenMesh's boundary half-edges, each loop followed once.
+  const OmMesh om = halfedgeMesh(points, faces);
+  std::vector<char> visited(om.n_halfedges(), 0);
   SurfaceMesh sm;
   bool built = false;
-  std::unordered_map<int, bool> visited;
-  for (const auto& [v0, v1] : next) {
-    if (visited[v0]) continue;
+  for (auto h0 : om.halfedges()) {
+    if (!om.is_boundary(h0) || visited[h0.idx()]) continue;
     std::vector<int> loop;
     double perimeter = 0;
-    int v = v0;
-    while (!visited[v] && next.count(v)) {
-      visited[v] = true;
-      loop.push_back(v);
-      perimeter += (points[next[v]] - points[v]).norm();
-      v = next[v];
+    for (auto h = h0; !visited[h.idx()]; h = om.next_halfedge_handle(h)) {
+      visited[h.idx()] = 1;
+      loop.push_back(om.from_vertex_handle(h).idx());
+      perimeter += (points[om.to_vertex_handle(h).idx()] - points[loop.back()]).norm();
     }
+    const int border_face = om.face_handle(om.opposite_halfedge_handle(h0)).idx();
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     for (int u : loop) centre += points[u];
     centre /= static_cast<double>(loop.size());
     // A hole of more than kMaxHoleEdges edges is kept open: filling is cubic in its edges.
-    if (v != v0 || perimeter > max_hole || loop.size() < 3 || loop.size() > kMaxHoleEdges) {
+    if (perimeter > max_hole || loop.size() < 3 || loop.size() > kMaxHoleEdges) {
       ++rep.open_borders;
-      if (v == v0 && loop.size() >= 3) {
+      if (loop.size() >= 3) {
         Eigen::Vector3d spanned = Eigen::Vector3d::Zero();
         for (size_t k = 0; k < loop.size(); ++k)
           spanned += points[loop[k]].cross(points[loop[(k + 1) % loop.size()]]);
-        r.open_loops.push_back({centre, perimeter, 0.5 * spanned.norm(), border_face[loop[0]]});
+        r.open_loops.push_back({centre, perimeter, 0.5 * spanned.norm(), border_face});
       }
       continue;
     }
@@ -338,7 +358,7 @@ void fillHoles(Repair& r) {
     // programme over all triangulations is bounded, O(edges^3).
     PMP::triangulate_hole(sm, h.first, std::back_inserter(added),
                           CGAL::parameters::use_delaunay_triangulation(false));
-    const int g = groups[border_face[loop[0]]];
+    const int g = groups[border_face];
     for (auto f : added) {
       Eigen::Vector3i t;
       int k = 0;
@@ -424,19 +444,14 @@ void orientOutwards(Repair& r) {
   const std::vector<Eigen::Vector3d>& points = r.points;
   const std::vector<OpenLoop>& open_loops = r.open_loops;
   std::vector<int> comp;
-  rep.components = faceComponents(faces, &comp);
+  const OmMesh om = halfedgeMesh(points, faces);
+  rep.components = faceComponents(om, &comp);
   std::vector<double> volume(rep.components, 0.0);
   std::vector<char> open(rep.components, 0);
-  {
-    std::unordered_map<uint64_t, int> count;
-    for (const auto& t : faces)
-      for (int e = 0; e < 3; ++e) ++count[edgeKey(t[e], t[(e + 1) % 3])];
-    for (int f = 0; f < static_cast<int>(faces.size()); ++f) {
-      const auto& t = faces[f];
-      volume[comp[f]] += points[t[0]].dot(points[t[1]].cross(points[t[2]])) / 6.0;
-      for (int e = 0; e < 3; ++e)
-        if (count[edgeKey(t[e], t[(e + 1) % 3])] == 1) open[comp[f]] = 1;
-    }
+  for (auto f : om.faces()) {
+    const auto& t = faces[f.idx()];
+    volume[comp[f.idx()]] += points[t[0]].dot(points[t[1]].cross(points[t[2]])) / 6.0;
+    if (om.is_boundary(f)) open[comp[f.idx()]] = 1;  // an edge of it has no face beyond
   }
   rep.closed = std::none_of(open.begin(), open.end(), [](char c) { return c != 0; });
   // Which open borders are holes in the surface (see MeshRepairReport::holes).

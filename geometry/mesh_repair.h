@@ -1,12 +1,14 @@
 #pragma once
-// Checks and repairs of an imported part mesh (CGAL Polygon Mesh Processing where it applies):
+// Checks and repairs of an imported part mesh (CGAL Polygon Mesh Processing and OpenMesh where
+// they apply; geometry/mesh_repair.cpp says what stays hand-written and why):
 //   - vertices at the same position are merged (an STL file repeats them per face);
 //   - degenerate faces (repeated vertex or zero area) and duplicate faces are removed;
 //   - inconsistent orientation is made consistent (CGAL orient_polygon_soup) and each closed
 //     component is turned to bound its volume (faces outward);
 //   - holes whose border is shorter than max_hole_perimeter are filled (CGAL triangulate_hole);
 //     longer borders are the edge of an open surface and are kept (reported);
-//   - a non-manifold edge (three or more faces) cannot be repaired safely: refused.
+//   - a non-manifold edge (three or more faces) cannot be repaired safely: refused;
+//   - borders, holes and components are read from OpenMesh's half-edge mesh of the result.
 #include <Eigen/Core>
 #include <stdexcept>
 #include <string>

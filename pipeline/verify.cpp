@@ -230,14 +230,7 @@ std::vector<std::pair<std::string, std::string>> renderImages(
   map.points = &points;
   map.faces = &s.faces;
   map.colours.resize(s.size());
-  for (size_t i = 0; i < s.size(); ++i) {
-    if (r.conformance[i] == Conformance::Unmachined)
-      map.colours[i] = kUnmachinedColour;
-    else if (r.conformance[i] == Conformance::Unchecked)
-      map.colours[i] = kUncheckedColour;
-    else
-      map.colours[i] = deviationColour(r.total[i], zones[r.zone[i]].lower, zones[r.zone[i]].upper);
-  }
+  for (size_t i = 0; i < s.size(); ++i) map.colours[i] = sampleColour(r, zones, i);
   map.bar_lower = zones.front().lower;
   map.bar_upper = zones.front().upper;
   map.title = title;
@@ -249,12 +242,8 @@ std::vector<std::pair<std::string, std::string>> renderImages(
   auto where = [](const Eigen::Vector3d& p) {
     return formatWith("(%.1f, ", p.x()) + formatWith("%.1f, ", p.y()) + formatWith("%.1f)", p.z());
   };
-  std::vector<MapView> views = {
-      {"isometric", Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d::UnitZ(), false, {}},
-      {"top", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitY(), false, {}}};
-  auto upFor = [](const Eigen::Vector3d& n) {
-    return std::abs(n.z()) > 0.9 ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitZ();
-  };
+  // The views that show the worst regions look along each one's normal at the whole part.
+  const std::vector<MapView> views = deviationMapViews(s, r);
   if (!r.regions.empty()) {
     for (size_t k = 0; k < r.regions.size() && k < 3; ++k) {
       const auto& g = r.regions[k];
@@ -266,15 +255,11 @@ std::vector<std::pair<std::string, std::string>> renderImages(
                           formatWith("%+.1f um", mmToUm(g.worst_deviation)) + "\n" +
                           where(g.where_w) +
                           (line > 0 ? " line " + std::to_string(line) : std::string())});
-      // The views that show the worst regions: along each one's normal, the whole part.
-      views.push_back({k == 0 ? "worst" : "region" + std::to_string(k + 1), -g.normal_w,
-                       upFor(g.normal_w), true, g.where_w});
     }
   } else if (worst >= 0) {
     map.callouts.push_back(
         {s.p_w[worst],
          "largest " + formatWith("%+.1f um", mmToUm(r.total[worst])) + "\n" + where(s.p_w[worst])});
-    views.push_back({"worst", -s.n_w[worst], upFor(s.n_w[worst]), true, s.p_w[worst]});
   }
   for (const auto& v : views) {
     const std::string path = (fs::path(dir) / ("map_" + v.name + ".png")).string();
@@ -1004,7 +989,32 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   return v;
 }
 
-std::string writeVerification(Verification& v, const std::string& report_dir_path, bool images) {
+DecimatedMesh viewMesh(const SurfaceSamples& s, const VerifyResult& r,
+                       const std::vector<ToleranceZone>& zones, double spacing_mm) {
+  std::vector<double> value(s.size());
+  std::vector<int> category(s.size());
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
+  const int zone_count = static_cast<int>(zones.size());
+  for (size_t i = 0; i < s.size(); ++i) {
+    const bool beyond = !r.total_beyond.empty() && r.total_beyond[i];
+    value[i] = r.machined[i] && !beyond ? r.total[i] : 0.0;
+    const int state = static_cast<int>(r.conformance[i]) + (beyond ? 5 : 0);
+    category[i] = (s.group[i] * (zone_count + 1) + r.zone[i] + 1) * 10 + state;
+    lo = lo.cwiseMin(s.p_w[i]);
+    hi = hi.cwiseMax(s.p_w[i]);
+  }
+  double narrowest = INFINITY;
+  for (const ToleranceZone& z : zones) narrowest = std::min(narrowest, z.upper - z.lower);
+  DecimateOptions o;
+  o.max_distance_mm = std::min(0.5 * spacing_mm, 1e-3 * (hi - lo).norm());
+  // Half a band of the colour scale (a band is a quarter of the zone's width)
+  o.max_value_difference = std::isfinite(narrowest) ? narrowest / 8 : 1e-3;
+  o.max_vertices = 120000;
+  return decimateForDisplay(s.p_w, s.faces, value, category, s.on_edge, o);
+}
+
+std::string writeVerification(Verification& v, const std::string& report_dir_path, bool images,
+                              bool view3d) {
   // Written as a whole into a staging directory, swapped in at the end (a killed run leaves the
   // previous report; a concurrent run on the same directory is refused).
   ReportDirectory report_dir(report_dir_path);
@@ -1043,6 +1053,12 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
                        program_um, "deviation_um");
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   });
+  // The 3D view's decimation, on a third thread (it reads only).
+  auto view = std::async(std::launch::async, [&] {
+    return view3d && !samples.faces.empty() && !r.zones.empty()
+               ? viewMesh(samples, result, r.zones, r.spacing_mm)
+               : DecimatedMesh{};
+  });
   try {
     {
       std::lock_guard<std::mutex> lock(g_vtk_mutex);
@@ -1063,8 +1079,12 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
     phase("images");
   } catch (...) {
     tables.wait();  // it writes into the staging directory: let it finish before that goes
+    view.wait();
     throw;
   }
+  v.view_mesh = view.get();
+  if (!v.view_mesh.vertex.empty()) r.view_mesh = &v.view_mesh;
+  phase("wait_view3d");
   // The table and PLY thread's own time (concurrent with the two phases above), then what was
   // left of it to wait for.
   const double tables_s = tables.get();

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "geometry/mesh_decimate.h"
 #include "geometry/verification.h"
 #include "io/report/verify_report.h"
 #include "pipeline/command.h"
@@ -50,6 +51,7 @@ struct VerifyInputs {
   // The outputs (verifyPart, verifyBatch): the report directory, with images or without.
   std::string report_dir;
   bool images = true;
+  bool view3d = true;  // report.html's interactive 3D view (io/report/view3d.h)
 };
 
 // What a verification computed. Not copyable: `report` points at `samples` and `result`.
@@ -57,6 +59,7 @@ struct Verification {
   VerifyReport report;
   SurfaceSamples samples;
   VerifyResult result;
+  DecimatedMesh view_mesh;  // the 3D view's (writeVerification)
   std::string machine_file, program_dialect;
   bool banded = false;  // a calibrated machine: report.band95_* hold the prediction's band
   std::chrono::steady_clock::time_point started;
@@ -75,8 +78,17 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& in, const std:
 
 // Writes deviations.csv, swept_{predicted,nominal}.{ply,vtp}, the images (unless !images, or
 // no display: then a note), report.json and report.html into `report_dir`, staged and swapped in
-// as a whole (ReportDirectory). Returns the path of report.html. Throws InputError.
-std::string writeVerification(Verification& v, const std::string& report_dir, bool images);
+// as a whole (ReportDirectory); report.html with its 3D view unless !view3d. Returns the path of
+// report.html. Throws InputError.
+std::string writeVerification(Verification& v, const std::string& report_dir, bool images,
+                              bool view3d = true);
+
+// The 3D view's surface: the samples decimated (geometry/mesh_decimate.h) down to 120 000
+// vertices within min(0.5 x the spacing, 1e-3 x the part's diagonal) of the surface, and 1/8 of
+// the narrowest zone (half a band of the colour scale) of the total deviation; CAD faces, zones and states (in, out, unmachined, unchecked, beyond the search
+// range) keep their boundaries, sharp edges and borders stay.
+DecimatedMesh viewMesh(const SurfaceSamples& samples, const VerifyResult& result,
+                       const std::vector<ToleranceZone>& zones, double spacing_mm);
 
 // tolver verify on one program: runVerification, then writeVerification into in.report_dir.
 // name: the report's (empty: the program's stem). progress: "sweeping <name>".

@@ -83,6 +83,48 @@ Rgb deviationColour(double d, double lower, double upper, double saturation) {
   return in_zone;
 }
 
+Rgb sampleColour(const VerifyResult& r, const std::vector<ToleranceZone>& zones, size_t i) {
+  if (r.conformance[i] == Conformance::Unmachined) return kUnmachinedColour;
+  if (r.conformance[i] == Conformance::Unchecked) return kUncheckedColour;
+  return deviationColour(r.total[i], zones[r.zone[i]].lower, zones[r.zone[i]].upper);
+}
+
+std::vector<LegendBand> deviationLegend(double lower, double upper, double saturation) {
+  // The bands of deviationColour, at its own boundaries.
+  const double half = std::max(0.5 * (upper - lower), 1e-12);
+  const double band = std::max((saturation - 1.0) * half / 4.0, 1e-12);
+  std::vector<LegendBand> out;
+  for (int k = 3; k >= 0; --k)
+    out.push_back({deviationColour(lower - (k + 0.5) * band, lower, upper, saturation),
+                   k == 3 ? -INFINITY : lower - (k + 1) * band, lower - k * band});
+  out.push_back({deviationColour(0.5 * (lower + upper), lower, upper, saturation), lower, upper});
+  for (int k = 0; k < 4; ++k)
+    out.push_back({deviationColour(upper + (k + 0.5) * band, lower, upper, saturation),
+                   upper + k * band, k == 3 ? INFINITY : upper + (k + 1) * band});
+  return out;
+}
+
+std::vector<MapView> deviationMapViews(const SurfaceSamples& s, const VerifyResult& r) {
+  std::vector<MapView> views = {
+      {"isometric", Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d::UnitZ(), false, {}},
+      {"top", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitY(), false, {}}};
+  auto upFor = [](const Eigen::Vector3d& n) {
+    return std::abs(n.z()) > 0.9 ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitZ();
+  };
+  for (size_t k = 0; k < r.regions.size() && k < 3; ++k) {
+    const auto& g = r.regions[k];
+    views.push_back({k == 0 ? "worst" : "region" + std::to_string(k + 1), -g.normal_w,
+                     upFor(g.normal_w), true, g.where_w});
+  }
+  if (r.regions.empty()) {
+    int worst = r.total_stats.max_sample;
+    if (r.total_stats.min_sample >= 0 && std::abs(r.total_stats.min) > std::abs(r.total_stats.max))
+      worst = r.total_stats.min_sample;
+    if (worst >= 0) views.push_back({"worst", -s.n_w[worst], upFor(s.n_w[worst]), true, s.p_w[worst]});
+  }
+  return views;
+}
+
 std::vector<Eigen::Vector2d> placeCallouts(const std::vector<Eigen::Vector2d>& at, double label_w,
                                            double label_h, double view_w, double view_h) {
   std::vector<size_t> order(at.size());

@@ -14,6 +14,8 @@
 #include <vector>
 
 #include "geometry/tolerance_zone.h"
+#include "geometry/triangle_mesh.h"
+#include "geometry/verification.h"
 
 namespace tolver {
 
@@ -24,6 +26,9 @@ using Rgb = std::array<unsigned char, 3>;
 Rgb deviationColour(double d, double lower, double upper, double saturation = 3.0);
 constexpr Rgb kUnmachinedColour = {165, 165, 165};
 constexpr Rgb kUncheckedColour = {215, 215, 215};
+// Sample i's colour on the maps: unmachined and unchecked greys, else its total deviation in its
+// zone.
+Rgb sampleColour(const VerifyResult& r, const std::vector<ToleranceZone>& zones, size_t i);
 
 struct MapCallout {
   Eigen::Vector3d p_w;
@@ -47,11 +52,23 @@ struct DeviationMap {
   std::vector<MapCallout> callouts;
 };
 
+// The scale as a legend: its bands in order from the deepest gouge to the most material left,
+// each with its colour and its deviations [from_mm, to_mm) (infinite at the saturated ends).
+struct LegendBand {
+  Rgb colour;
+  double from_mm, to_mm;
+};
+std::vector<LegendBand> deviationLegend(double lower, double upper, double saturation = 3.0);
+
 // Where the callout labels go (bottom-left corners, display pixels) for attachment points at
 // `at` (display pixels): beside each point (to the right, or to the left near the right edge),
 // pushed up so that no two labels of label_w x label_h overlap, kept inside the view.
 std::vector<Eigen::Vector2d> placeCallouts(const std::vector<Eigen::Vector2d>& at, double label_w,
                                            double label_h, double view_w, double view_h);
+
+// The maps' views: isometric, top, then along the normal of each of the three worst regions
+// ("worst", "region2", "region3"), or of the largest deviation when nothing is out.
+std::vector<MapView> deviationMapViews(const SurfaceSamples& s, const VerifyResult& r);
 
 // Renders one view into a PNG (atomic write). Throws InputError (field "image") when it
 // cannot render or write; call ensureDisplay() first.

@@ -1,6 +1,5 @@
 #include "io/report/verify_report.h"
 
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -10,6 +9,7 @@
 #include "io/common/io_error.h"
 #include "io/common/json_text.h"
 #include "io/common/text_util.h"
+#include "io/report/view3d.h"
 
 namespace tolver {
 namespace {
@@ -292,6 +292,7 @@ std::string formatVerifyHtml(const VerifyReport& r) {
     }
     h += "</div>\n";
   }
+  h += view3dSection(r);
   h += "<h2>Figures</h2>\n<table>\n";
   auto row = [&](const std::string& k, const std::string& val) {
     h += "<tr><th class=\"l\">" + html(k) + "</th><td class=\"l\">" + html(val) + "</td></tr>\n";
@@ -365,7 +366,8 @@ std::string formatVerifyHtml(const VerifyReport& r) {
     h += std::string("<h2>") + (r.cad ? "CAD faces" : "Regions") +
          "</h2>\n<table><tr><th class=\"l\">region</th><th class=\"l\">name, colour</th>"
          "<th>area (mm2)</th><th>checked (mm2)</th><th>worst (um)</th><th>out (mm2)</th>"
-         "<th class=\"l\">status</th></tr>\n";
+         "<th class=\"l\">status</th>" +
+         (r.view_mesh ? "<th>view</th>" : "") + "</tr>\n";
     for (size_t k = 0; k < rows.size() && k < 200; ++k) {
       const RegionSummary& g = *rows[k];
       const std::string& name = r.samples->group_names[g.group];
@@ -378,16 +380,14 @@ std::string formatVerifyHtml(const VerifyReport& r) {
                     g.area_mm2, g.checked_mm2,
                     g.worst_sample >= 0 ? formatWith("%+.2f", mmToUm(g.worst_mm)).c_str() : "",
                     g.out_mm2);
-      // An HTML id holds no space: "face #213" is "region-face-213".
-      std::string id;
-      for (char c : name)
-        if (std::isalnum(static_cast<unsigned char>(c)))
-          id += c;
-        else if (id.empty() || id.back() != '-')
-          id += '-';
-      h += "<tr id=\"region-" + html(id) + "\"><td class=\"l\">" + html(name) +
+      // An HTML id holds no space: "face #213" is "region-face-213". The last cell shows the
+      // face in the 3D view.
+      const std::string show = r.view_mesh ? "<td><a href=\"#view3d\" data-face=\"" +
+                                                 std::to_string(g.group) + "\">3D</a></td>"
+                                           : std::string();
+      h += "<tr id=\"region-" + html(regionHtmlId(name)) + "\"><td class=\"l\">" + html(name) +
            "</td><td class=\"l\">" + html(aliases) + "</td>" + cells + "<td class=\"l\">" +
-           g.status + "</td></tr>\n";
+           g.status + "</td>" + show + "</tr>\n";
     }
     if (rows.size() > 200)
       h += "<tr><td colspan=\"7\" class=\"l\">... " + std::to_string(rows.size() - 200) +

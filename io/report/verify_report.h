@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "geometry/mesh_decimate.h"
 #include "geometry/mesh_repair.h"
 #include "geometry/verification.h"
 
@@ -46,6 +47,8 @@ struct VerifyReport {
   // --allow-open: the verdict cannot be PASS.
   bool incomplete = false;
   std::string incomplete_text;
+  // The 3D view's surface (io/report/view3d.h): the samples kept by the decimation; null: none.
+  const DecimatedMesh* view_mesh = nullptr;
   double seconds = 0;
   std::vector<std::pair<std::string, double>> timings;  // phase, seconds
   int exit_code = 0;  // the command's, as the pipeline decided it (pipeline/command.h, exitCode)

@@ -1,0 +1,263 @@
+#include "geometry/mesh_decimate.h"
+
+// OpenMesh is kept inside this file (and mesh_repair.cpp): no header of this layer includes it.
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Tools/Decimater/DecimaterT.hh>
+#include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
+#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <iostream>
+#include <stdexcept>
+
+namespace tolver {
+namespace {
+
+struct Traits : OpenMesh::DefaultTraits {
+  using Point = OpenMesh::Vec3d;
+  using Normal = OpenMesh::Vec3d;
+};
+using Mesh = OpenMesh::TriMesh_ArrayKernelT<Traits>;
+
+// The point of triangle (a, b, c) closest to p, as barycentric weights (Ericson, Real-Time
+// Collision Detection, 5.1.5); false for a triangle of no area.
+bool closestBarycentric(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                        const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                        std::array<double, 3>* w) {
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
+  if (ab.cross(ac).squaredNorm() <= 1e-30 * std::max(ab.squaredNorm(), ac.squaredNorm()))
+    return false;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return *w = {1, 0, 0}, true;
+  const Eigen::Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return *w = {0, 1, 0}, true;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+    const double v = d1 / (d1 - d3);
+    return *w = {1 - v, v, 0}, true;
+  }
+  const Eigen::Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return *w = {0, 0, 1}, true;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+    const double t = d2 / (d2 - d6);
+    return *w = {1 - t, 0, t}, true;
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+    const double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    return *w = {0, 1 - t, t}, true;
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const double v = vb * denom, t = vc * denom;
+  return *w = {1 - v - t, v, t}, true;
+}
+
+// The bounds, kept per vertex at the cost of its one-ring (no list of removed points): each vertex
+// carries the interval of the values of the original vertices it stands for, and a bound on
+// their distance from the surface. A collapse of v0 into v1 re-triangulates v0's star with the
+// vertices of its one-ring, so what v0 stood for (itself included) passes to each of them: the
+// collapse is legal when every one of them shares v0's category, every interval merged with v0's
+// stays within the value bound (then any value interpolated on a face of them lies within the
+// bound of every value they stand for), and v0's own distance to the faces left, added to the
+// distance bound it carried, stays within the distance bound.
+template <class MeshT>
+class ModDisplayBoundT : public OpenMesh::Decimater::ModBaseT<MeshT> {
+ public:
+  DECIMATING_MODULE(ModDisplayBoundT, MeshT, DisplayBound);
+
+  explicit ModDisplayBoundT(MeshT& mesh) : Base(mesh, true), mesh_(Base::mesh()) {}
+
+  void set(const std::vector<Eigen::Vector3d>* p, const std::vector<double>* value,
+           const std::vector<int>* category, double max_distance, double max_difference) {
+    p_ = p;
+    category_ = category;
+    max_distance_ = max_distance;
+    max_difference_ = max_difference;
+    if (lo_.empty()) {
+      lo_ = *value;
+      hi_ = *value;
+      distance_.assign(value->size(), 0.0);
+    }
+  }
+
+  float collapse_priority(const CollapseInfo& ci) override {
+    return carried(ci) >= 0 ? static_cast<float>(Base::LEGAL_COLLAPSE)
+                            : static_cast<float>(Base::ILLEGAL_COLLAPSE);
+  }
+
+  void preprocess_collapse(const CollapseInfo& ci) override {
+    const double d = carried(ci);
+    const int v0 = ci.v0.idx();
+    for (auto w : mesh_.vv_range(ci.v0)) {
+      const int i = w.idx();
+      lo_[i] = std::min(lo_[i], lo_[v0]);
+      hi_[i] = std::max(hi_[i], hi_[v0]);
+      distance_[i] = std::max(distance_[i], d);
+    }
+  }
+
+ private:
+  // The distance bound v0's vertices would carry after the collapse; -1: the collapse breaks a
+  // bound or a category.
+  double carried(const CollapseInfo& ci) const {
+    const auto& C = *category_;
+    const int v0 = ci.v0.idx();
+    for (auto w : mesh_.vv_range(ci.v0)) {
+      const int i = w.idx();
+      if (C[i] != C[v0]) return -1;
+      if (std::max(hi_[i], hi_[v0]) - std::min(lo_[i], lo_[v0]) > max_difference_) return -1;
+    }
+    const auto& P = *p_;
+    double nearest = INFINITY;
+    for (auto f : mesh_.vf_range(ci.v0)) {
+      if (f == ci.fl || f == ci.fr) continue;
+      std::array<int, 3> v;
+      int k = 0;
+      for (auto fv : mesh_.fv_range(f)) v[k++] = (fv == ci.v0 ? ci.v1 : fv).idx();
+      std::array<double, 3> w;
+      if (!closestBarycentric(P[v0], P[v[0]], P[v[1]], P[v[2]], &w)) continue;
+      const Eigen::Vector3d q = w[0] * P[v[0]] + w[1] * P[v[1]] + w[2] * P[v[2]];
+      nearest = std::min(nearest, (q - P[v0]).norm());
+    }
+    const double d = distance_[v0] + nearest;
+    return d <= max_distance_ ? d : -1;
+  }
+
+  Mesh& mesh_;
+  const std::vector<Eigen::Vector3d>* p_ = nullptr;
+  const std::vector<int>* category_ = nullptr;
+  double max_distance_ = 0, max_difference_ = 0;
+  std::vector<double> lo_, hi_, distance_;  // per vertex
+};
+
+}  // namespace
+
+DecimatedMesh decimateForDisplay(const std::vector<Eigen::Vector3d>& p,
+                                 const std::vector<Eigen::Vector3i>& faces,
+                                 const std::vector<double>& value, const std::vector<int>& category,
+                                 const std::vector<char>& locked, const DecimateOptions& options) {
+  if (value.size() != p.size() || category.size() != p.size() || locked.size() != p.size())
+    throw std::invalid_argument("decimateForDisplay: one value, category and lock per vertex");
+  DecimatedMesh out;
+  out.max_vertices = options.max_vertices;
+  if (p.size() <= static_cast<size_t>(std::max(options.max_vertices, 3))) {
+    // It fits as sampled.
+    out.vertex.resize(p.size());
+    for (size_t i = 0; i < p.size(); ++i) out.vertex[i] = static_cast<int>(i);
+    for (const Eigen::Vector3i& f : faces)
+      if (f[0] != f[1] && f[1] != f[2] && f[0] != f[2]) out.faces.push_back(f);
+    return out;  // bounds 0: nothing moved
+  }
+  Mesh mesh;
+  mesh.reserve(p.size(), 3 * faces.size() / 2 + 16, faces.size());
+  std::vector<Mesh::VertexHandle> vh(p.size());
+  for (size_t i = 0; i < p.size(); ++i)
+    vh[i] = mesh.add_vertex(Mesh::Point(p[i].x(), p[i].y(), p[i].z()));
+  std::vector<Eigen::Vector3i> as_given;
+  {
+    // OpenMesh reports a face it cannot add (a non-manifold edge) on std::cerr: silenced here,
+    // the face is kept as given and its vertices locked.
+    for (const Eigen::Vector3i& f : faces) {
+      const bool repeated = f[0] == f[1] || f[1] == f[2] || f[0] == f[2];
+      Mesh::FaceHandle h;
+      if (!repeated) {
+        auto* previous = std::cerr.rdbuf(nullptr);
+        h = mesh.add_face(vh[f[0]], vh[f[1]], vh[f[2]]);
+        std::cerr.rdbuf(previous);
+      }
+      if (!h.is_valid()) as_given.push_back(f);
+    }
+  }
+  mesh.request_vertex_status();
+  mesh.request_edge_status();
+  mesh.request_face_status();
+  mesh.request_face_normals();
+  mesh.update_face_normals();
+  for (size_t i = 0; i < p.size(); ++i)
+    if (locked[i] || mesh.is_boundary(vh[i])) mesh.status(vh[i]).set_locked(true);
+  for (const Eigen::Vector3i& f : as_given)
+    for (int k = 0; k < 3; ++k) mesh.status(vh[f[k]]).set_locked(true);
+
+  using Decimater = OpenMesh::Decimater::DecimaterT<Mesh>;
+  Decimater decimater(mesh);
+  OpenMesh::Decimater::ModQuadricT<Mesh>::Handle quadric;
+  OpenMesh::Decimater::ModNormalFlippingT<Mesh>::Handle flipping;
+  ModDisplayBoundT<Mesh>::Handle bound;
+  decimater.add(bound);
+  decimater.add(flipping);
+  decimater.add(quadric);
+  decimater.module(quadric).unset_max_err();  // the order only; the bound decides
+  decimater.module(flipping).set_max_normal_deviation(30.0);
+  // The modules that can refuse go first: OpenMesh asks them in order and stops at a refusal.
+  double distance = options.max_distance_mm, difference = options.max_value_difference;
+  // A field that varies more from sample to sample than the bound (a scallop's texture) cannot
+  // go down to the budget within it: start where a fraction 1 - budget/size of the edges would
+  // pass (the quantile of the value's change along an edge), so that few rounds are spent
+  // below it. The bounds met are the ones returned either way.
+  {
+    std::vector<double> change;
+    change.reserve(3 * faces.size());
+    for (const Eigen::Vector3i& f : faces)
+      for (int k = 0; k < 3; ++k) change.push_back(std::abs(value[f[k]] - value[f[(k + 1) % 3]]));
+    if (!change.empty()) {
+      const double keep = static_cast<double>(options.max_vertices) / p.size();
+      const size_t at = std::min(change.size() - 1, static_cast<size_t>((1 - keep) * change.size()));
+      std::nth_element(change.begin(), change.begin() + at, change.end());
+      while (difference < change[at]) {
+        difference *= 2;
+        out.relaxed = true;
+      }
+    }
+  }
+  decimater.module(bound).set(&p, &value, &category, distance, difference);
+  if (!decimater.initialize()) throw std::logic_error("decimateForDisplay: decimater setup");
+  // Only as far as the budget: the surface stays as sampled where it fits.
+  const size_t budget = static_cast<size_t>(std::max(options.max_vertices, 3));
+  auto kept = [&] {
+    size_t n = 0;
+    for (const auto& v : vh) n += !mesh.status(v).deleted();
+    return n;
+  };
+  // decimate_to counts the deleted vertices OpenMesh keeps until garbage collection: the
+  // collapses still wanted are counted here.
+  decimater.decimate(kept() - budget);
+  for (size_t left = kept(), round = 0; round < 12 && left > budget; ++round, left = kept()) {
+    distance *= 2;
+    difference *= 2;
+    out.relaxed = true;
+    decimater.module(bound).set(&p, &value, &category, distance, difference);
+    decimater.decimate(left - budget);
+  }
+  out.max_distance_mm = distance;
+  out.max_value_difference = difference;
+
+  // Surviving vertices in their original order, then the faces.
+  std::vector<int> index(p.size(), -1);
+  for (size_t i = 0; i < p.size(); ++i)
+    if (!mesh.status(vh[i]).deleted()) {
+      index[i] = static_cast<int>(out.vertex.size());
+      out.vertex.push_back(static_cast<int>(i));
+    }
+  out.faces.reserve(mesh.n_faces() + as_given.size());
+  for (auto f : mesh.faces()) {
+    if (mesh.status(f).deleted()) continue;
+    Eigen::Vector3i t;
+    int k = 0;
+    for (auto v : mesh.fv_range(f)) t[k++] = index[v.idx()];
+    out.faces.push_back(t);
+  }
+  for (const Eigen::Vector3i& f : as_given) {
+    if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) continue;  // no area: nothing to show
+    out.faces.emplace_back(index[f[0]], index[f[1]], index[f[2]]);
+    ++out.faces_kept_as_given;
+  }
+  return out;
+}
+
+}  // namespace tolver

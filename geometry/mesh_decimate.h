@@ -1,0 +1,46 @@
+#pragma once
+// Decimation of a coloured surface for display (the report's 3D view), by OpenMesh's decimater,
+// only when it has more vertices than the budget, and only down to it: halfedge collapses in the
+// order of OpenMesh's quadric error, no normal turned by more than 30 degrees, and each collapse
+// allowed only within bounds of our own (ModDisplayBoundT), kept per vertex at the cost of its
+// one-ring:
+//   - the value: each vertex carries the interval of the values of the original vertices it
+//     stands for; a collapse passes the removed vertex's interval to its one-ring, and is refused
+//     when an interval would grow wider than `max_value_difference`. A value interpolated on a
+//     face therefore lies within that bound of every original value the face stands for;
+//   - the surface: the removed vertex's distance to the faces that replace it, added to the
+//     distance its vertices already stood at, stays within `max_distance_mm` (an accumulated
+//     bound; the tests measure the true distance against it);
+//   - the category: a vertex goes only when its whole one-ring shares its category, so the
+//     boundaries between categories (zones, CAD faces, machined or not) stay where they are.
+// Vertices in `locked` stay (sharp edges), and so do the mesh's borders. The decimated mesh's
+// vertices are original vertices, each with its index.
+#include <Eigen/Core>
+#include <vector>
+
+namespace tolver {
+
+struct DecimateOptions {
+  double max_distance_mm = 0.01;
+  double max_value_difference = 1e-3;
+  // The budget: a mesh with more vertices is decimated down to it; when the bounds above stop
+  // it sooner, both are doubled until it fits (at most 12 times); the bounds met are returned.
+  int max_vertices = 150000;
+};
+
+struct DecimatedMesh {
+  std::vector<int> vertex;               // #V': the original vertex each one is
+  std::vector<Eigen::Vector3i> faces;    // into `vertex`
+  double max_distance_mm = 0;            // the bounds the result meets
+  double max_value_difference = 0;
+  bool relaxed = false;                  // the bounds were doubled to fit max_vertices
+  int max_vertices = 0;                  // the budget it was given
+  int faces_kept_as_given = 0;           // faces OpenMesh could not take (a non-manifold edge)
+};
+
+DecimatedMesh decimateForDisplay(const std::vector<Eigen::Vector3d>& p,
+                                 const std::vector<Eigen::Vector3i>& faces,
+                                 const std::vector<double>& value, const std::vector<int>& category,
+                                 const std::vector<char>& locked, const DecimateOptions& options);
+
+}  // namespace tolver

@@ -1,0 +1,190 @@
+#include "geometry/mesh_decimate.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace tolver {
+namespace {
+
+struct Grid {
+  std::vector<Eigen::Vector3d> p;
+  std::vector<Eigen::Vector3i> faces;
+};
+
+// An n x n grid of unit spacing over [0, n-1]^2 mapped by `shape`, two triangles per cell.
+template <class Shape>
+Grid grid(int n, Shape shape) {
+  Grid g;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) g.p.push_back(shape(i, j));
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const int a = j * n + i, b = a + 1, c = a + n, d = c + 1;
+      g.faces.emplace_back(a, b, d);
+      g.faces.emplace_back(a, d, c);
+    }
+  return g;
+}
+
+// The independent check: the point of the triangle nearest q, by the plane's projection when it
+// falls inside, else the nearest of the three edges (clamped projections); barycentric weights.
+Eigen::Vector3d nearestWeights(const Eigen::Vector3d& q, const Eigen::Vector3d& a,
+                               const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  Eigen::Matrix<double, 3, 2> m;
+  m << b - a, c - a;
+  const Eigen::Vector2d uv = m.colPivHouseholderQr().solve(q - a);
+  if (uv.minCoeff() >= 0 && uv.sum() <= 1) return {1 - uv.sum(), uv[0], uv[1]};
+  Eigen::Vector3d best;
+  double best_d = INFINITY;
+  const Eigen::Vector3d corner[3] = {a, b, c};
+  for (int e = 0; e < 3; ++e) {
+    const Eigen::Vector3d& s = corner[e];
+    const Eigen::Vector3d& t = corner[(e + 1) % 3];
+    const double u = std::clamp((q - s).dot(t - s) / (t - s).squaredNorm(), 0.0, 1.0);
+    const double d = (s + u * (t - s) - q).norm();
+    if (d < best_d) {
+      best_d = d;
+      best.setZero();
+      best[e] = 1 - u;
+      best[(e + 1) % 3] = u;
+    }
+  }
+  return best;
+}
+
+// Every original vertex has a decimated face of its category within the distance bound on which
+// the interpolated value is within the value bound; returns the largest value difference found on
+// such faces (the best face per vertex).
+double checkBounds(const Grid& g, const std::vector<double>& value,
+                   const std::vector<int>& category, const DecimatedMesh& m) {
+  double worst = 0;
+  for (size_t i = 0; i < g.p.size(); ++i) {
+    double best = INFINITY;
+    for (const Eigen::Vector3i& f : m.faces) {
+      const int v[3] = {m.vertex[f[0]], m.vertex[f[1]], m.vertex[f[2]]};
+      if (category[v[0]] != category[i] || category[v[1]] != category[i] ||
+          category[v[2]] != category[i])
+        continue;
+      const Eigen::Vector3d w = nearestWeights(g.p[i], g.p[v[0]], g.p[v[1]], g.p[v[2]]);
+      const Eigen::Vector3d q = w[0] * g.p[v[0]] + w[1] * g.p[v[1]] + w[2] * g.p[v[2]];
+      if ((q - g.p[i]).norm() > m.max_distance_mm * (1 + 1e-9) + 1e-12) continue;
+      const double interpolated = w[0] * value[v[0]] + w[1] * value[v[1]] + w[2] * value[v[2]];
+      best = std::min(best, std::abs(interpolated - value[i]));
+    }
+    EXPECT_LE(best, m.max_value_difference * (1 + 1e-9) + 1e-15) << "vertex " << i;
+    worst = std::max(worst, best);
+  }
+  return worst;
+}
+
+TEST(MeshDecimate, AMeshWithinTheBudgetIsKeptAsSampled) {
+  const Grid g = grid(11, [](int i, int j) { return Eigen::Vector3d(i, j, 0); });
+  const DecimatedMesh m = decimateForDisplay(g.p, g.faces, std::vector<double>(g.p.size(), 0),
+                                             std::vector<int>(g.p.size(), 0),
+                                             std::vector<char>(g.p.size(), 0), {});
+  EXPECT_EQ(m.vertex.size(), g.p.size());
+  EXPECT_EQ(m.faces, g.faces);
+  EXPECT_EQ(m.max_distance_mm, 0.0);  // exact: nothing moved
+  EXPECT_EQ(m.max_value_difference, 0.0);
+}
+
+TEST(MeshDecimate, AFlatGridWithTwoValuesGoesDownToTheBudgetWithinTheBounds) {
+  const int n = 41;
+  const Grid g = grid(n, [](int i, int j) { return Eigen::Vector3d(i, j, 0); });
+  std::vector<double> value(g.p.size());
+  std::vector<int> category(g.p.size());
+  for (size_t i = 0; i < g.p.size(); ++i) {
+    category[i] = g.p[i].x() < 20 ? 0 : 1;
+    value[i] = category[i] == 0 ? 1e-3 : 2e-3 + 1e-7 * g.p[i].y();
+  }
+  const std::vector<char> locked(g.p.size(), 0);
+  DecimateOptions o;
+  o.max_distance_mm = 1e-3;
+  o.max_value_difference = 1e-5;
+  o.max_vertices = 300;
+  const DecimatedMesh m = decimateForDisplay(g.p, g.faces, value, category, locked, o);
+  EXPECT_FALSE(m.relaxed);
+  EXPECT_LE(m.vertex.size(), 300u);
+  // The border (160 vertices) and the boundary between the categories stay.
+  for (int j = 0; j < n; ++j)
+    for (int i : {19, 20})
+      EXPECT_NE(std::find(m.vertex.begin(), m.vertex.end(), j * n + i), m.vertex.end()) << i << j;
+  checkBounds(g, value, category, m);
+  // The area is kept: the decimated faces cover the square.
+  double area = 0;
+  for (const Eigen::Vector3i& f : m.faces)
+    area += 0.5 * (g.p[m.vertex[f[1]]] - g.p[m.vertex[f[0]]])
+                      .cross(g.p[m.vertex[f[2]]] - g.p[m.vertex[f[0]]])
+                      .norm();
+  EXPECT_NEAR(area, (n - 1) * (n - 1), 1e-9);
+}
+
+TEST(MeshDecimate, ABumpAndTwoCategoriesStayWithinBothBounds) {
+  const int n = 41;
+  // A cylinder's quarter (radius 30): the distance bound matters.
+  const Grid g = grid(n, [](int i, int j) {
+    const double t = i / 40.0 * 1.5708;
+    return Eigen::Vector3d(30 * std::cos(t), 30 * std::sin(t), j);
+  });
+  std::vector<double> value(g.p.size());
+  std::vector<int> category(g.p.size());
+  std::vector<char> locked(g.p.size(), 0);
+  for (size_t i = 0; i < g.p.size(); ++i) {
+    const double dx = static_cast<double>(i % n) - 25, dy = static_cast<double>(i / n) - 20;
+    value[i] = 0.01 * std::exp(-(dx * dx + dy * dy) / 60.0);
+    category[i] = (i % n) < 15 ? 0 : 1;
+  }
+  locked[5 * n + 5] = 1;
+  DecimateOptions o;
+  o.max_distance_mm = 0.05;
+  o.max_value_difference = 2e-3;
+  o.max_vertices = 600;
+  const DecimatedMesh m = decimateForDisplay(g.p, g.faces, value, category, locked, o);
+  EXPECT_LE(m.vertex.size(), 600u);
+  EXPECT_NE(std::find(m.vertex.begin(), m.vertex.end(), 5 * n + 5), m.vertex.end());
+  const double worst = checkBounds(g, value, category, m);
+  EXPECT_GT(worst, 0.05 * m.max_value_difference);  // the bound is used, not just met
+}
+
+TEST(MeshDecimate, ANoisyFieldIsDecimatedWithinRelaxedBoundsToFitTheBudget) {
+  const int n = 41;
+  const Grid g = grid(n, [](int i, int j) { return Eigen::Vector3d(i, j, 0); });
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1e-3, 1e-3);
+  std::vector<double> value(g.p.size());
+  for (double& v : value) v = u(rng);
+  const std::vector<int> category(g.p.size(), 7);
+  const std::vector<char> locked(g.p.size(), 0);
+  DecimateOptions o;
+  o.max_distance_mm = 1e-3;
+  o.max_value_difference = 1e-5;  // far below the noise: nothing goes at first
+  o.max_vertices = 600;
+  const DecimatedMesh m = decimateForDisplay(g.p, g.faces, value, category, locked, o);
+  EXPECT_TRUE(m.relaxed);
+  EXPECT_LE(m.vertex.size(), 600u);
+  EXPECT_GT(m.max_value_difference, o.max_value_difference);
+  checkBounds(g, value, category, m);
+}
+
+TEST(MeshDecimate, ANonManifoldFaceIsKeptAsGivenAndWrongSizesAreRefused) {
+  Grid g = grid(5, [](int i, int j) { return Eigen::Vector3d(i, j, 0); });
+  // A third face on the edge (0, 1): OpenMesh cannot add it.
+  g.p.emplace_back(0.5, 0, 1);
+  g.faces.emplace_back(0, 1, static_cast<int>(g.p.size()) - 1);
+  const std::vector<double> value(g.p.size(), 0);
+  const std::vector<int> category(g.p.size(), 0);
+  const std::vector<char> locked(g.p.size(), 0);
+  DecimateOptions o;
+  o.max_vertices = 5;
+  const DecimatedMesh m = decimateForDisplay(g.p, g.faces, value, category, locked, o);
+  EXPECT_EQ(m.faces_kept_as_given, 1);
+  EXPECT_THROW(decimateForDisplay(g.p, g.faces, std::vector<double>(3), category, locked, {}),
+               std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace tolver
