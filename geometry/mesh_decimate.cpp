@@ -1,12 +1,11 @@
 #include "geometry/mesh_decimate.h"
 
 // OpenMesh is kept inside this file (and mesh_repair.cpp): no header of this layer includes it.
+#include <Eigen/Geometry>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Tools/Decimater/DecimaterT.hh>
 #include <OpenMesh/Tools/Decimater/ModNormalFlippingT.hh>
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
-
-#include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -207,7 +206,8 @@ DecimatedMesh decimateForDisplay(const std::vector<Eigen::Vector3d>& p,
       for (int k = 0; k < 3; ++k) change.push_back(std::abs(value[f[k]] - value[f[(k + 1) % 3]]));
     if (!change.empty()) {
       const double keep = static_cast<double>(options.max_vertices) / p.size();
-      const size_t at = std::min(change.size() - 1, static_cast<size_t>((1 - keep) * change.size()));
+      const size_t at =
+          std::min(change.size() - 1, static_cast<size_t>((1 - keep) * change.size()));
       std::nth_element(change.begin(), change.begin() + at, change.end());
       while (difference < change[at]) {
         difference *= 2;

@@ -29,13 +29,13 @@ struct DecimateOptions {
 };
 
 struct DecimatedMesh {
-  std::vector<int> vertex;               // #V': the original vertex each one is
-  std::vector<Eigen::Vector3i> faces;    // into `vertex`
-  double max_distance_mm = 0;            // the bounds the result meets
+  std::vector<int> vertex;             // #V': the original vertex each one is
+  std::vector<Eigen::Vector3i> faces;  // into `vertex`
+  double max_distance_mm = 0;          // the bounds the result meets
   double max_value_difference = 0;
-  bool relaxed = false;                  // the bounds were doubled to fit max_vertices
-  int max_vertices = 0;                  // the budget it was given
-  int faces_kept_as_given = 0;           // faces OpenMesh could not take (a non-manifold edge)
+  bool relaxed = false;         // the bounds were doubled to fit max_vertices
+  int max_vertices = 0;         // the budget it was given
+  int faces_kept_as_given = 0;  // faces OpenMesh could not take (a non-manifold edge)
 };
 
 DecimatedMesh decimateForDisplay(const std::vector<Eigen::Vector3d>& p,

@@ -5,9 +5,9 @@
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>
-#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
 #include <Eigen/Geometry>
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -85,8 +85,9 @@ std::string writeVerification(Verification& v, const std::string& report_dir, bo
 
 // The 3D view's surface: the samples decimated (geometry/mesh_decimate.h) down to 120 000
 // vertices within min(0.5 x the spacing, 1e-3 x the part's diagonal) of the surface, and 1/8 of
-// the narrowest zone (half a band of the colour scale) of the total deviation; CAD faces, zones and states (in, out, unmachined, unchecked, beyond the search
-// range) keep their boundaries, sharp edges and borders stay.
+// the narrowest zone (half a band of the colour scale) of the total deviation; CAD faces, zones and
+// states (in, out, unmachined, unchecked, beyond the search range) keep their boundaries, sharp
+// edges and borders stay.
 DecimatedMesh viewMesh(const SurfaceSamples& samples, const VerifyResult& result,
                        const std::vector<ToleranceZone>& zones, double spacing_mm);
 

@@ -83,9 +83,9 @@ double checkBounds(const Grid& g, const std::vector<double>& value,
 
 TEST(MeshDecimate, AMeshWithinTheBudgetIsKeptAsSampled) {
   const Grid g = grid(11, [](int i, int j) { return Eigen::Vector3d(i, j, 0); });
-  const DecimatedMesh m = decimateForDisplay(g.p, g.faces, std::vector<double>(g.p.size(), 0),
-                                             std::vector<int>(g.p.size(), 0),
-                                             std::vector<char>(g.p.size(), 0), {});
+  const DecimatedMesh m =
+      decimateForDisplay(g.p, g.faces, std::vector<double>(g.p.size(), 0),
+                         std::vector<int>(g.p.size(), 0), std::vector<char>(g.p.size(), 0), {});
   EXPECT_EQ(m.vertex.size(), g.p.size());
   EXPECT_EQ(m.faces, g.faces);
   EXPECT_EQ(m.max_distance_mm, 0.0);  // exact: nothing moved

@@ -3,6 +3,7 @@
 
 #include <assimp/scene.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <vtkCellArray.h>
 #include <vtkDataArray.h>
 #include <vtkPointData.h>
@@ -20,8 +21,6 @@
 #include <fstream>
 #include <iterator>
 #include <random>
-
-#include <unistd.h>
 
 #include "io/common/io_error.h"
 #include "test_support.h"
@@ -697,10 +696,9 @@ TEST(SurfaceFiles, VtpSurfaceReadsBackExactly) {
     a[i] = U(rng) * 1e-3;
     b[i] = static_cast<double>(i % 4);
   }
-  const std::string path =
-      (std::filesystem::temp_directory_path() /
-       ("tolver_vtp_test_" + std::to_string(::getpid()) + ".vtp"))
-          .string();
+  const std::string path = (std::filesystem::temp_directory_path() /
+                            ("tolver_vtp_test_" + std::to_string(::getpid()) + ".vtp"))
+                               .string();
   writeVtpWithScalars(path, points, faces, {{"total_um", &a}, {"state", &b}});
   vtkNew<vtkXMLPolyDataReader> reader;
   reader->SetFileName(path.c_str());

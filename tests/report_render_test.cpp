@@ -91,7 +91,6 @@ TEST_F(ReportRender, TheReportOpensOnTheVerdictWithItsImagesAndTables) {
   EXPECT_GT(green, 5000);
 }
 
-
 // The script the test adds to the report (the report's own code stays as written): after the
 // page has loaded, it turns shading off (the legend's colours exactly) and the out-of-tolerance
 // wire off, looks from the top, reads the canvas's pixels, then clicks (pointer events on the
@@ -157,9 +156,10 @@ window.addEventListener('load', function () {
 )js";
 
 std::string unescapeHtml(std::string s) {
-  for (const auto& [from, to] :
-       {std::pair<std::string, std::string>{"&quot;", "\""}, {"&lt;", "<"}, {"&gt;", ">"},
-        {"&amp;", "&"}}) {
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"&quot;", "\""},
+                                 {"&lt;", "<"},
+                                 {"&gt;", ">"},
+                                 {"&amp;", "&"}}) {
     for (size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
       s.replace(at, from.size(), to);
   }
@@ -221,7 +221,8 @@ TEST_F(ReportRender, TheThreeDViewShowsThePartInTheLegendsColoursAndAClickReadsT
   const size_t at = dom.find("<pre id=\"tv-test\">");
   ASSERT_NE(at, std::string::npos) << dom.substr(0, 400);
   const size_t stop = dom.find("</pre>", at);
-  const nlohmann::json out = nlohmann::json::parse(unescapeHtml(dom.substr(at + 18, stop - at - 18)));
+  const nlohmann::json out =
+      nlohmann::json::parse(unescapeHtml(dom.substr(at + 18, stop - at - 18)));
   ASSERT_FALSE(out.contains("error")) << out["error"];
   // The part fills a good share of the canvas, drawn in the legend's colours (antialiased
   // silhouettes aside), more than one of them.
@@ -272,9 +273,10 @@ TEST_F(ReportRender, TheThreeDViewShowsThePartInTheLegendsColoursAndAClickReadsT
     EXPECT_NE(text.find("<tr id=\"region-face-"), std::string::npos);
     EXPECT_NE(text.find("data-face=\""), std::string::npos);
   }
-  chromium("--use-angle=swiftshader --enable-unsafe-swiftshader --window-size=1280,800 "
-           "--virtual-time-budget=60000 --screenshot=" +
-           path("view3d.png") + " file://" + cone + "#view3d");
+  chromium(
+      "--use-angle=swiftshader --enable-unsafe-swiftshader --window-size=1280,800 "
+      "--virtual-time-budget=60000 --screenshot=" +
+      path("view3d.png") + " file://" + cone + "#view3d");
   ASSERT_TRUE(fs::exists(path("view3d.png")));
   // The view fills the window: the legend's in-tolerance green and the part's colours are in it.
   vtkNew<vtkPNGReader> png;

@@ -1,14 +1,13 @@
 #include "io/common/text_util.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <random>
-
-#include <unistd.h>
 
 #include "io/common/io_error.h"
 #include "io/common/line_source.h"

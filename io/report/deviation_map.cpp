@@ -120,7 +120,8 @@ std::vector<MapView> deviationMapViews(const SurfaceSamples& s, const VerifyResu
     int worst = r.total_stats.max_sample;
     if (r.total_stats.min_sample >= 0 && std::abs(r.total_stats.min) > std::abs(r.total_stats.max))
       worst = r.total_stats.min_sample;
-    if (worst >= 0) views.push_back({"worst", -s.n_w[worst], upFor(s.n_w[worst]), true, s.p_w[worst]});
+    if (worst >= 0)
+      views.push_back({"worst", -s.n_w[worst], upFor(s.n_w[worst]), true, s.p_w[worst]});
   }
   return views;
 }

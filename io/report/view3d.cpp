@@ -13,14 +13,17 @@
 // three.js, its OrbitControls (Debian's libjs-three, paths from io/CMakeLists.txt) and the view's
 // own script (io/report/view3d.js), built into the program: a report opens offline, and tolver
 // reads nothing outside its inputs at run time.
-#define TOLVER_EMBED(symbol, path)                      \
-  asm(".pushsection .rodata\n"                          \
-      ".balign 16\n"                                    \
-      ".global " #symbol "_begin\n" #symbol "_begin:\n" \
-      ".incbin \"" path "\"\n"                          \
-      ".global " #symbol "_end\n" #symbol "_end:\n"     \
-      ".byte 0\n"                                       \
-      ".popsection\n");                                 \
+#define TOLVER_EMBED(symbol, path)          \
+  asm(".pushsection .rodata\n"              \
+      ".balign 16\n"                        \
+      ".global " #symbol "_begin\n" #symbol \
+      "_begin:\n"                           \
+      ".incbin \"" path                     \
+      "\"\n"                                \
+      ".global " #symbol "_end\n" #symbol   \
+      "_end:\n"                             \
+      ".byte 0\n"                           \
+      ".popsection\n");                     \
   extern "C" const char symbol##_begin[], symbol##_end[];
 TOLVER_EMBED(tolver_three_js, TOLVER_THREE_JS)
 TOLVER_EMBED(tolver_orbit_controls_js, TOLVER_ORBIT_CONTROLS_JS)
@@ -33,8 +36,7 @@ using nlohmann::json;
 
 template <class T>
 std::string base64Of(const std::vector<T>& v) {
-  return base64Encode(
-      std::string(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T)));
+  return base64Encode(std::string(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T)));
 }
 
 std::string colourHex(const Rgb& c) {
@@ -167,8 +169,7 @@ std::string view3dSection(const VerifyReport& r) {
     views.push_back({{"name", view.name},
                      {"direction", {view.direction.x(), view.direction.y(), view.direction.z()}},
                      {"up", {view.up.x(), view.up.y(), view.up.z()}}});
-    buttons += "<button type=\"button\" data-view=\"" + view.name + "\">" + view.name +
-               "</button>";
+    buttons += "<button type=\"button\" data-view=\"" + view.name + "\">" + view.name + "</button>";
   }
   d["views"] = views;
   json regions = json::array();
@@ -190,10 +191,10 @@ std::string view3dSection(const VerifyReport& r) {
   std::string legend = "<table class=\"tv-legend\">";
   const std::vector<LegendBand> bands = deviationLegend(z0.lower, z0.upper);
   for (auto it = bands.rbegin(); it != bands.rend(); ++it) {
-    const std::string range = std::isinf(it->to_mm)     ? "above " + umText(it->from_mm)
-                              : std::isinf(it->from_mm) ? "below " + umText(it->to_mm)
-                                                        : umText(it->from_mm) + " to " +
-                                                              umText(it->to_mm);
+    const std::string range = std::isinf(it->to_mm) ? "above " + umText(it->from_mm)
+                              : std::isinf(it->from_mm)
+                                  ? "below " + umText(it->to_mm)
+                                  : umText(it->from_mm) + " to " + umText(it->to_mm);
     legend += "<tr><td class=\"sw\" style=\"background:" + colourHex(it->colour) + "\"></td><td>" +
               range + (it->from_mm == z0.lower ? " (in tolerance)" : "") + "</td></tr>";
   }
@@ -210,8 +211,9 @@ std::string view3dSection(const VerifyReport& r) {
   const std::string budget = std::to_string(m.max_vertices);
   const std::string bounds =
       (n == s.size()
-           ? "Shown: all " + std::to_string(n) + " samples, as sampled (within the view's budget of " +
-                 budget + " vertices, nothing is decimated)."
+           ? "Shown: all " + std::to_string(n) +
+                 " samples, as sampled (within the view's budget of " + budget +
+                 " vertices, nothing is decimated)."
            : "Shown: " + std::to_string(n) + " of " + std::to_string(s.size()) +
                  " samples, decimated by OpenMesh down to the view's budget of " + budget +
                  " vertices: every sample lies within " + formatWith("%.3g", m.max_distance_mm) +
