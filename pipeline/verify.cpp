@@ -999,7 +999,8 @@ DecimatedMesh viewMesh(const SurfaceSamples& s, const VerifyResult& r,
     const bool beyond = !r.total_beyond.empty() && r.total_beyond[i];
     value[i] = r.machined[i] && !beyond ? r.total[i] : 0.0;
     const int state = static_cast<int>(r.conformance[i]) + (beyond ? 5 : 0);
-    category[i] = (s.group[i] * (zone_count + 1) + r.zone[i] + 1) * 10 + state;
+    const int group = i < s.group.size() ? s.group[i] : 0;
+    category[i] = (group * (zone_count + 1) + r.zone[i] + 1) * 10 + state;
     lo = lo.cwiseMin(s.p_w[i]);
     hi = hi.cwiseMax(s.p_w[i]);
   }
@@ -1010,7 +1011,10 @@ DecimatedMesh viewMesh(const SurfaceSamples& s, const VerifyResult& r,
   // Half a band of the colour scale (a band is a quarter of the zone's width)
   o.max_value_difference = std::isfinite(narrowest) ? narrowest / 8 : 1e-3;
   o.max_vertices = 120000;
-  return decimateForDisplay(s.p_w, s.faces, value, category, s.on_edge, o);
+  // Sharp edges stay (a CL-only surface has none marked).
+  const std::vector<char> locked =
+      s.on_edge.size() == s.size() ? s.on_edge : std::vector<char>(s.size(), 0);
+  return decimateForDisplay(s.p_w, s.faces, value, category, locked, o);
 }
 
 std::string writeVerification(Verification& v, const std::string& report_dir_path, bool images,

@@ -36,6 +36,8 @@ campaigns+="|PredictionUncertaintyTest.TheBandHoldsMachineByMachine"
 # verifies (14 s released), whose code the other STEP tests run on the smaller files
 campaigns+="|StepFile.RealFilesFromFiveCadSystemsReadAsDrawReadsThem"
 campaigns+="|VerifyCli.AStepPartIsCheckedFaceByFaceAndAgreesWithItsStl"
+# Two verify runs and three headless Chromium runs; the view's code runs in every verify test.
+campaigns+="|ReportRender.TheThreeDViewShowsThePartInTheLegendsColoursAndAClickReadsTheSample"
 ctest --output-on-failure -j"$(nproc)" --timeout 1800 -E "^($campaigns)\$"
 # A fixed libFuzzer seed: the same clone fuzzes the same inputs first (a CI run is repeatable);
 # longer runs (tests/fuzz/run.sh 3600) use random seeds.

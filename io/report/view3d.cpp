@@ -112,7 +112,7 @@ std::string view3dSection(const VerifyReport& r) {
     if (machined && !beyond) largest_um = std::max(largest_um, std::abs(mmToUm(v.total[i])));
     sample[j] = static_cast<std::uint32_t>(i);
     zone[j] = v.zone[i];
-    group[j] = s.group[i];
+    group[j] = i < static_cast<int>(s.group.size()) ? s.group[i] : 0;
     state[j] = static_cast<std::uint8_t>(v.conformance[i]);
     const int c_index = v.cl_index[i];
     line[j] = c_index >= 0 && c_index < static_cast<int>(r.cl_lines.size())
@@ -181,7 +181,8 @@ std::string view3dSection(const VerifyReport& r) {
                                     worstDeviationText(v, g)}});
   }
   d["regions"] = regions;
-  std::string data = d.dump();
+  // Names from the files may hold invalid UTF-8: replaced, as in report.json.
+  std::string data = d.dump(-1, ' ', false, json::error_handler_t::replace);
   // "</" would end the script element: JSON lets it be written "<\/".
   for (size_t at = data.find("</"); at != std::string::npos; at = data.find("</", at + 3))
     data.insert(at + 1, "\\");
