@@ -27,7 +27,7 @@ class ReportRender : public test::TempDirTest {
   // Runs Chromium headless on a file with the given extra arguments; returns its stdout.
   std::string chromium(const std::string& args) {
     const std::string cmd =
-        "timeout 120 /usr/bin/chromium --headless --no-sandbox --disable-gpu --disable-quic "
+        "timeout 300 /usr/bin/chromium --headless --no-sandbox --disable-gpu --disable-quic "
         "--no-first-run --disable-background-networking --disable-component-update "
         "--disable-sync --user-data-dir=" +
         path("profile") + " " + args + " 2>/dev/null";
@@ -40,6 +40,9 @@ class ReportRender : public test::TempDirTest {
     }
     return out;
   }
+  // The report with the test's script (kViewProbe) added before </body>, opened in Chromium:
+  // what the script wrote.
+  nlohmann::json probe(const std::string& report, const std::string& flags);
 };
 
 TEST_F(ReportRender, TheReportOpensOnTheVerdictWithItsImagesAndTables) {
@@ -144,6 +147,14 @@ window.addEventListener('load', function () {
       out.picks.push({vertex: v, x: x, y: y, sample: Number(d.sample), total: d.total, program: d.program,
                       machine: d.machine, line: Number(d.line), face: d.face, miss_px: miss});
     }
+    // A CAD faces table's link: the face outlined in the view.
+    const link = document.querySelector('a[data-face]');
+    if (link) {
+      link.click();
+      const index = tv.highlight.geometry.getIndex();
+      out.face_link = {face: Number(link.dataset.face), visible: tv.highlight.visible,
+                       triangles: index ? index.count / 3 : 0};
+    }
   } catch (e) {
     out.error = String(e) + ' ' + (e.stack || '');
   }
@@ -164,6 +175,23 @@ std::string unescapeHtml(std::string s) {
       s.replace(at, from.size(), to);
   }
   return s;
+}
+
+nlohmann::json ReportRender::probe(const std::string& report, const std::string& flags) {
+  std::string html;
+  {
+    std::ifstream in(report, std::ios::binary);
+    html.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const size_t end = html.rfind("</body>");
+  if (end == std::string::npos) return {{"error", "no </body> in " + report}};
+  std::ofstream(path("probe.html"), std::ios::binary)
+      << html.substr(0, end) << kViewProbe << html.substr(end);
+  const std::string dom = chromium(flags + "--dump-dom file://" + path("probe.html"));
+  const size_t at = dom.find("<pre id=\"tv-test\">");
+  if (at == std::string::npos) return {{"error", "no result: " + dom.substr(0, 400)}};
+  const size_t stop = dom.find("</pre>", at);
+  return nlohmann::json::parse(unescapeHtml(dom.substr(at + 18, stop - at - 18)));
 }
 
 // deviations.csv: per sample, its total, program and machine (um; empty: no value) and CL line.
@@ -210,19 +238,10 @@ TEST_F(ReportRender, TheThreeDViewShowsThePartInTheLegendsColoursAndAClickReadsT
   }
   ASSERT_NE(html.find("id=\"tolver-view-data\""), std::string::npos);
   EXPECT_EQ(html.find("http://"), html.find("http://www.w3.org"));  // nothing fetched
-  const size_t end = html.rfind("</body>");
-  ASSERT_NE(end, std::string::npos);
-  std::ofstream(path("probe.html"), std::ios::binary)
-      << html.substr(0, end) << kViewProbe << html.substr(end);
   const std::string flags =
       "--use-angle=swiftshader --enable-unsafe-swiftshader --window-size=1280,1000 "
       "--virtual-time-budget=60000 ";
-  const std::string dom = chromium(flags + "--dump-dom file://" + path("probe.html"));
-  const size_t at = dom.find("<pre id=\"tv-test\">");
-  ASSERT_NE(at, std::string::npos) << dom.substr(0, 400);
-  const size_t stop = dom.find("</pre>", at);
-  const nlohmann::json out =
-      nlohmann::json::parse(unescapeHtml(dom.substr(at + 18, stop - at - 18)));
+  const nlohmann::json out = probe(report, flags);
   ASSERT_FALSE(out.contains("error")) << out["error"];
   // The part fills a good share of the canvas, drawn in the legend's colours (antialiased
   // silhouettes aside), more than one of them.
@@ -278,6 +297,12 @@ TEST_F(ReportRender, TheThreeDViewShowsThePartInTheLegendsColoursAndAClickReadsT
       "--virtual-time-budget=60000 --screenshot=" +
       path("view3d.png") + " file://" + cone + "#view3d");
   ASSERT_TRUE(fs::exists(path("view3d.png")));
+  // Its first CAD face link outlines that face in the view.
+  const nlohmann::json cone_out = probe(cone, flags);
+  ASSERT_FALSE(cone_out.contains("error")) << cone_out["error"];
+  ASSERT_TRUE(cone_out.contains("face_link"));
+  EXPECT_TRUE(bool(cone_out["face_link"]["visible"]));
+  EXPECT_GT(int(cone_out["face_link"]["triangles"]), 100);
   // The view fills the window: the legend's in-tolerance green and the part's colours are in it.
   vtkNew<vtkPNGReader> png;
   png->SetFileName(path("view3d.png").c_str());

@@ -307,7 +307,8 @@
     resize();
     setView(D.views[0].name);
     window.tolverView = {scene: scene, camera: camera, renderer: renderer, canvas: canvas,
-                         predicted: predicted, nominal: nominal, out: outMesh, vertices: V,
+                         predicted: predicted, nominal: nominal, out: outMesh, highlight: highlight,
+                         vertices: V,
                          sample: SAMPLE, centre: centre, pickAt: pickAt, setView: setView,
                          showFace: showFace, show: show, render: render};
   }
