@@ -1,5 +1,5 @@
-// geometry/mesh_repair.h on meshes built here: a solid's voids, and the slivers CAD
-// tessellators leave along straight edges.
+// geometry/mesh_repair.h on meshes built here: a solid's voids, the slivers CAD
+// tessellators leave along straight edges, and borders, holes and components.
 #include "geometry/mesh_repair.h"
 
 #include <gtest/gtest.h>
@@ -78,6 +78,51 @@ TEST(MeshRepair, ASliverAlongAnEdgeSplitsTheFaceAcrossInsteadOfLeavingASlit) {
   EXPECT_TRUE(rep.holes.empty());
   EXPECT_EQ(rep.open_borders, 0);
   EXPECT_NEAR(signedVolume(out), 1000.0, 1e-9);
+}
+
+// The topology read from OpenMesh's half-edge mesh, against what the mesh is by construction: a
+// closed cube and, beside it, a 10 x 10 mm sheet with a 4 x 4 mm square missing from its middle
+// (kept open: longer than the largest hole filled). Two components, one of them open; two
+// borders kept (the sheet's edge and the hole); one hole, of the missing square's area; a
+// small hole (one cell, 4 mm of border) is filled when the limit allows it.
+TEST(MeshRepair, BordersHolesAndComponentsComeFromTheHalfEdgeMesh) {
+  for (const double max_hole : {1.0, 5.0}) {
+    TriangleMesh m;
+    addCube(&m, Eigen::Vector3d(20, 0, 0), 5, false);
+    const int base = static_cast<int>(m.vertices.size());
+    for (int j = 0; j <= 10; ++j)
+      for (int i = 0; i <= 10; ++i) m.vertices.emplace_back(i, j, 0);
+    for (int j = 0; j < 10; ++j)
+      for (int i = 0; i < 10; ++i) {
+        const bool missing =
+            max_hole < 2 ? (i >= 3 && i < 7 && j >= 3 && j < 7) : (i == 5 && j == 5);
+        if (missing) continue;
+        const int a = base + j * 11 + i;
+        m.faces.emplace_back(a, a + 1, a + 12);
+        m.faces.emplace_back(a, a + 12, a + 11);
+        m.face_group.push_back(0);
+        m.face_group.push_back(0);
+      }
+    MeshRepairOptions o;
+    o.max_hole_perimeter = max_hole;
+    MeshRepairReport rep;
+    const TriangleMesh out = repairMesh(m, o, &rep);
+    EXPECT_EQ(rep.components, 2);
+    EXPECT_FALSE(rep.closed);
+    if (max_hole < 2) {
+      EXPECT_EQ(rep.open_borders, 2);
+      EXPECT_EQ(rep.holes_filled, 0);
+      ASSERT_EQ(rep.holes.size(), 1u);
+      EXPECT_NEAR(rep.holes[0].area, 16.0, 1e-9);
+      EXPECT_NEAR(rep.holes[0].perimeter, 16.0, 1e-9);
+      EXPECT_NEAR((rep.holes[0].centre_w - Eigen::Vector3d(5, 5, 0)).norm(), 0.0, 1e-9);
+    } else {
+      EXPECT_EQ(rep.holes_filled, 1);  // the one cell, 4 mm around
+      EXPECT_EQ(rep.open_borders, 1);  // the sheet's edge
+      EXPECT_TRUE(rep.holes.empty());
+      EXPECT_EQ(out.faces.size(), m.faces.size() + 2);
+    }
+  }
 }
 
 }  // namespace
