@@ -16,6 +16,7 @@
 // Vertices in `locked` stay (sharp edges), and so do the mesh's borders. The decimated mesh's
 // vertices are original vertices, each with its index.
 #include <Eigen/Core>
+#include <functional>
 #include <vector>
 
 namespace tolver {
@@ -26,6 +27,8 @@ struct DecimateOptions {
   // The budget: a mesh with more vertices is decimated down to it; when the bounds above stop
   // it sooner, both are doubled until it fits (at most 12 times); the bounds met are returned.
   int max_vertices = 150000;
+  // Called with the fraction of the collapses wanted that are done, from the decimating thread.
+  std::function<void(double)> progress;
 };
 
 struct DecimatedMesh {

@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -990,7 +991,8 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
 }
 
 DecimatedMesh viewMesh(const SurfaceSamples& s, const VerifyResult& r,
-                       const std::vector<ToleranceZone>& zones, double spacing_mm) {
+                       const std::vector<ToleranceZone>& zones, double spacing_mm,
+                       const std::function<void(double)>& progress) {
   std::vector<double> value(s.size());
   std::vector<int> category(s.size());
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(INFINITY), hi = -lo;
@@ -1011,6 +1013,7 @@ DecimatedMesh viewMesh(const SurfaceSamples& s, const VerifyResult& r,
   // Half a band of the colour scale (a band is a quarter of the zone's width)
   o.max_value_difference = std::isfinite(narrowest) ? narrowest / 8 : 1e-3;
   o.max_vertices = 120000;
+  o.progress = progress;
   // Sharp edges stay (a CL-only surface has none marked).
   const std::vector<char> locked =
       s.on_edge.size() == s.size() ? s.on_edge : std::vector<char>(s.size(), 0);
@@ -1018,7 +1021,7 @@ DecimatedMesh viewMesh(const SurfaceSamples& s, const VerifyResult& r,
 }
 
 std::string writeVerification(Verification& v, const std::string& report_dir_path, bool images,
-                              bool view3d) {
+                              bool view3d, const Progress& progress) {
   // Written as a whole into a staging directory, swapped in at the end (a killed run leaves the
   // previous report; a concurrent run on the same directory is refused).
   ReportDirectory report_dir(report_dir_path);
@@ -1058,10 +1061,16 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   });
   // The 3D view's decimation, on a third thread (it reads only).
+  double view_s = 0;
+  std::atomic<double> view_done{-1};  // the decimation's fraction, -1 before it starts
   auto view = std::async(std::launch::async, [&] {
-    return view3d && !samples.faces.empty() && !r.zones.empty()
-               ? viewMesh(samples, result, r.zones, r.spacing_mm)
-               : DecimatedMesh{};
+    const auto start = std::chrono::steady_clock::now();
+    DecimatedMesh m =
+        view3d && !samples.faces.empty() && !r.zones.empty()
+            ? viewMesh(samples, result, r.zones, r.spacing_mm, [&](double f) { view_done = f; })
+            : DecimatedMesh{};
+    view_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return m;
   });
   try {
     {
@@ -1086,6 +1095,10 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
     view.wait();
     throw;
   }
+  // The view's decimation may still run (a part of more than 120 000 samples): its progress.
+  while (view.wait_for(std::chrono::milliseconds(200)) != std::future_status::ready)
+    if (progress && view_done >= 0)
+      progress("3D view: decimating " + std::to_string(samples.size()) + " samples", view_done);
   v.view_mesh = view.get();
   if (!v.view_mesh.vertex.empty()) r.view_mesh = &v.view_mesh;
   phase("wait_view3d");
@@ -1094,6 +1107,7 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
   const double tables_s = tables.get();
   phase("wait_tables");
   r.timings.push_back({"tables_and_ply_concurrent", tables_s});
+  r.timings.push_back({"view3d_concurrent", view_s});
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - v.started).count();
   writeFileAtomically((dir / "report.json").string(), formatVerifyJson(r));
   writeFileAtomically((dir / "report.html").string(), formatVerifyHtml(r));

@@ -81,7 +81,7 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& in, const std:
 // as a whole (ReportDirectory); report.html with its 3D view unless !view3d. Returns the path of
 // report.html. Throws InputError.
 std::string writeVerification(Verification& v, const std::string& report_dir, bool images,
-                              bool view3d = true);
+                              bool view3d = true, const Progress& progress = {});
 
 // The 3D view's surface: the samples decimated (geometry/mesh_decimate.h) down to 120 000
 // vertices within min(0.5 x the spacing, 1e-3 x the part's diagonal) of the surface, and 1/8 of
@@ -89,7 +89,8 @@ std::string writeVerification(Verification& v, const std::string& report_dir, bo
 // states (in, out, unmachined, unchecked, beyond the search range) keep their boundaries, sharp
 // edges and borders stay.
 DecimatedMesh viewMesh(const SurfaceSamples& samples, const VerifyResult& result,
-                       const std::vector<ToleranceZone>& zones, double spacing_mm);
+                       const std::vector<ToleranceZone>& zones, double spacing_mm,
+                       const std::function<void(double)>& progress = {});
 
 // tolver verify on one program: runVerification, then writeVerification into in.report_dir.
 // name: the report's (empty: the program's stem). progress: "sweeping <name>".

@@ -31,7 +31,7 @@ VerifyRun verifyPart(const VerifyInputs& in, const std::string& name_given,
   run.verification = runVerification(in, name, [&](double f) {
     if (progress) progress("sweeping " + name, f);
   });
-  run.report = writeVerification(*run.verification, in.report_dir, in.images, in.view3d);
+  run.report = writeVerification(*run.verification, in.report_dir, in.images, in.view3d, progress);
   run.verdict = run.verification->verdict;
   return run;
 }
