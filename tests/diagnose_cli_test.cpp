@@ -2,6 +2,7 @@
 // file used as it is by predict and simulate-ballbar, --cl, and bad input.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -50,6 +51,25 @@ TEST_F(DiagnoseCli, ReversalDatasetEndToEnd) {
   // Report with the residual plots embedded, and the PNGs beside it.
   const std::string html = test::readText(path("out/report.html"));
   EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
+  // A periodogram's period is a harmonic order on a rotary axis and a length on a linear one,
+  // printed as such whatever its size (a 4 mm period is not "order 4").
+  int periodograms = 0;
+  for (const auto& f : j["residual_analysis"]["before"]["findings"]) {
+    if (f["test"] != "periodogram") continue;
+    ++periodograms;
+    const double period = f["period"].get<double>();
+    const bool order = f["period_unit"] == "harmonic order";
+    EXPECT_EQ(order, f["variable"] == "A" || f["variable"] == "B" || f["variable"] == "C")
+        << f.dump();
+    char text[64];
+    if (order)
+      std::snprintf(text, sizeof text, "(harmonic order %.0f)", period);
+    else
+      std::snprintf(text, sizeof text, "(period %.2f +- %.2f mm)", period,
+                    f["period_uncertainty_mm"].get<double>());
+    EXPECT_NE(html.find(text), std::string::npos) << text;
+  }
+  EXPECT_GT(periodograms, 0);
   EXPECT_TRUE(std::filesystem::exists(path("out/residual_reversal_Y_ey_before.png")));
   EXPECT_TRUE(std::filesystem::exists(path("out/residual_reversal_Y_ey_after.png")));
   // The augmented machine file works as it is.

@@ -30,7 +30,12 @@ json findingsJson(const ResidualAnalysis& a) {
               {"test", f.test},
               {"strength", num(f.strength)},
               {"p_value", num(f.p_value)}};
-    if (f.test == "periodogram") j["period"] = num(f.period);
+    if (f.test == "periodogram") {
+      // A rotary axis's period is a harmonic order, a linear axis's a length with its width.
+      j["period"] = num(f.period);
+      j["period_unit"] = f.order ? "harmonic order" : "mm";
+      if (!f.order) j["period_uncertainty_mm"] = num(f.period_uncertainty);
+    }
     out.push_back(j);
   }
   return {{"rms_um", mmToUm(a.rms)},
@@ -590,9 +595,10 @@ std::string htmlResidualAnalysis(const DiagnosisView& v) {
     for (const ResidualFinding& x : r.analysis_after.findings)
       if (x.variable == f.variable && x.test == f.test) g = &x;
     h += "<tr><td class=\"l\">" + xmlEscape(f.variable) + "</td><td class=\"l\">" + f.test +
-         (f.test == "periodogram"
-              ? formatWith(f.period < 9 ? " (order %.0f)" : " (%.2f mm)", f.period)
-              : "") +
+         (f.test == "periodogram" ? (f.order ? formatWith(" (harmonic order %.0f)", f.period)
+                                             : formatWith(" (period %.2f", f.period) +
+                                                   formatWith(" +- %.2f mm)", f.period_uncertainty))
+                                  : "") +
          "</td><td>" + formatWith("%.3f", f.strength) + "</td><td>" +
          formatWith("%.2g", f.p_value) + "</td><td>" + (g ? formatWith("%.3f", g->strength) : "") +
          "</td><td>" + (g ? formatWith("%.2g", g->p_value) : "") + "</td></tr>";
