@@ -1,6 +1,8 @@
 #include "geometry/mesh_decimate.h"
 
 // OpenMesh is kept inside this file (and mesh_repair.cpp): no header of this layer includes it.
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Geometry>
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Tools/Decimater/DecimaterT.hh>
@@ -9,9 +11,11 @@
 #include <OpenMesh/Tools/Decimater/Observer.hh>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <iostream>
 #include <stdexcept>
+#include <thread>
 
 namespace tolver {
 namespace {
@@ -155,12 +159,13 @@ class DecimationProgress : public OpenMesh::Decimater::Observer {
 
 }  // namespace
 
-DecimatedMesh decimateForDisplay(const std::vector<Eigen::Vector3d>& p,
-                                 const std::vector<Eigen::Vector3i>& faces,
-                                 const std::vector<double>& value, const std::vector<int>& category,
-                                 const std::vector<char>& locked, const DecimateOptions& options) {
-  if (value.size() != p.size() || category.size() != p.size() || locked.size() != p.size())
-    throw std::invalid_argument("decimateForDisplay: one value, category and lock per vertex");
+namespace {
+
+// One piece, decimated by one OpenMesh decimater (the arrays are the piece's own).
+DecimatedMesh decimatePiece(const std::vector<Eigen::Vector3d>& p,
+                            const std::vector<Eigen::Vector3i>& faces,
+                            const std::vector<double>& value, const std::vector<int>& category,
+                            const std::vector<char>& locked, const DecimateOptions& options) {
   DecimatedMesh out;
   out.max_vertices = options.max_vertices;
   if (p.size() <= static_cast<size_t>(std::max(options.max_vertices, 3))) {
@@ -288,6 +293,108 @@ DecimatedMesh decimateForDisplay(const std::vector<Eigen::Vector3d>& p,
     out.faces.emplace_back(index[f[0]], index[f[1]], index[f[2]]);
     ++out.faces_kept_as_given;
   }
+  return out;
+}
+
+}  // namespace
+
+DecimatedMesh decimateForDisplay(const std::vector<Eigen::Vector3d>& p,
+                                 const std::vector<Eigen::Vector3i>& faces,
+                                 const std::vector<double>& value, const std::vector<int>& category,
+                                 const std::vector<char>& locked, const DecimateOptions& options) {
+  if (value.size() != p.size() || category.size() != p.size() || locked.size() != p.size())
+    throw std::invalid_argument("decimateForDisplay: one value, category and lock per vertex");
+  // Slabs along the longest axis, one per core (at most 8, each of 100 000 vertices or more),
+  // each decimated by its own decimater to its share of the budget; the faces across a seam are
+  // kept as they are, their vertices locked. One piece: the whole mesh.
+  const size_t n = p.size();
+  const size_t budget = static_cast<size_t>(std::max(options.max_vertices, 3));
+  const size_t automatic = std::clamp<size_t>(
+      std::min<size_t>(std::thread::hardware_concurrency(), 8), 1, std::max<size_t>(n / 100000, 1));
+  const size_t pieces = n <= budget          ? 1
+                        : options.pieces > 0 ? static_cast<size_t>(options.pieces)
+                                             : automatic;
+  if (pieces == 1) return decimatePiece(p, faces, value, category, locked, options);
+  Eigen::AlignedBox3d box;
+  for (const Eigen::Vector3d& q : p) box.extend(q);
+  int axis = 0;
+  box.diagonal().maxCoeff(&axis);
+  std::vector<int> order(n);
+  for (size_t i = 0; i < n; ++i) order[i] = static_cast<int>(i);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](int a, int b) { return p[a][axis] < p[b][axis]; });
+  std::vector<int> piece_of(n);
+  for (size_t k = 0; k < n; ++k) piece_of[order[k]] = static_cast<int>(k * pieces / n);
+  std::vector<char> lock(locked);
+  std::vector<Eigen::Vector3i> seam;
+  std::vector<std::vector<Eigen::Vector3i>> piece_faces(pieces);
+  for (const Eigen::Vector3i& f : faces) {
+    const int a = piece_of[f[0]];
+    if (piece_of[f[1]] == a && piece_of[f[2]] == a) {
+      piece_faces[a].push_back(f);
+    } else {
+      seam.push_back(f);
+      for (int k = 0; k < 3; ++k) lock[f[k]] = 1;
+    }
+  }
+  std::vector<std::vector<int>> global(pieces);  // each piece's vertices, ascending
+  for (size_t i = 0; i < n; ++i) global[piece_of[i]].push_back(static_cast<int>(i));
+  std::vector<int> local(n);
+  for (const auto& g : global)
+    for (size_t k = 0; k < g.size(); ++k) local[g[k]] = static_cast<int>(k);
+  std::vector<DecimatedMesh> result(pieces);
+  std::vector<std::atomic<double>> done(pieces);
+  for (auto& d : done) d = 0;
+  tbb::parallel_for(size_t(0), pieces, [&](size_t k) {
+    const std::vector<int>& g = global[k];
+    std::vector<Eigen::Vector3d> pk(g.size());
+    std::vector<double> vk(g.size());
+    std::vector<int> ck(g.size());
+    std::vector<char> lk(g.size());
+    for (size_t j = 0; j < g.size(); ++j) {
+      pk[j] = p[g[j]];
+      vk[j] = value[g[j]];
+      ck[j] = category[g[j]];
+      lk[j] = lock[g[j]];
+    }
+    std::vector<Eigen::Vector3i> fk;
+    fk.reserve(piece_faces[k].size());
+    for (const Eigen::Vector3i& f : piece_faces[k])
+      fk.emplace_back(local[f[0]], local[f[1]], local[f[2]]);
+    DecimateOptions o = options;
+    o.max_vertices = static_cast<int>(budget * g.size() / n);
+    o.progress = [&, k](double f) {
+      done[k] = f;
+      double mean = 0;
+      for (const auto& d : done) mean += d;
+      if (options.progress) options.progress(mean / static_cast<double>(pieces));
+    };
+    result[k] = decimatePiece(pk, fk, vk, ck, lk, o);
+  });
+  // The pieces' vertices in their original order, their faces, then the seam's.
+  DecimatedMesh out;
+  out.max_vertices = options.max_vertices;
+  std::vector<int> index(n, -1);
+  for (size_t k = 0; k < pieces; ++k)
+    for (int v : result[k].vertex) index[global[k][v]] = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (index[i] == 0) {
+      index[i] = static_cast<int>(out.vertex.size());
+      out.vertex.push_back(static_cast<int>(i));
+    }
+  for (size_t k = 0; k < pieces; ++k) {
+    const DecimatedMesh& r = result[k];
+    for (const Eigen::Vector3i& f : r.faces)
+      out.faces.emplace_back(index[global[k][r.vertex[f[0]]]], index[global[k][r.vertex[f[1]]]],
+                             index[global[k][r.vertex[f[2]]]]);
+    out.max_distance_mm = std::max(out.max_distance_mm, r.max_distance_mm);
+    out.max_value_difference = std::max(out.max_value_difference, r.max_value_difference);
+    out.relaxed = out.relaxed || r.relaxed;
+    out.faces_kept_as_given += r.faces_kept_as_given;
+  }
+  for (const Eigen::Vector3i& f : seam)
+    if (f[0] != f[1] && f[1] != f[2] && f[0] != f[2])
+      out.faces.emplace_back(index[f[0]], index[f[1]], index[f[2]]);
   return out;
 }
 

@@ -13,8 +13,10 @@
 //     bound; the tests measure the true distance against it);
 //   - the category: a vertex goes only when its whole one-ring shares its category, so the
 //     boundaries between categories (zones, CAD faces, machined or not) stay where they are.
-// Vertices in `locked` stay (sharp edges), and so do the mesh's borders. The decimated mesh's
-// vertices are original vertices, each with its index.
+// Vertices in `locked` stay (sharp edges), and so do the mesh's borders. A large mesh is cut in
+// slabs decimated in parallel, each by its own decimater to its share of the budget, the faces
+// across a seam kept as they are. The decimated mesh's vertices are original vertices, each with
+// its index.
 #include <Eigen/Core>
 #include <functional>
 #include <vector>
@@ -27,6 +29,9 @@ struct DecimateOptions {
   // The budget: a mesh with more vertices is decimated down to it; when the bounds above stop
   // it sooner, both are doubled until it fits (at most 12 times); the bounds met are returned.
   int max_vertices = 150000;
+  // Pieces decimated in parallel (slabs along the longest axis, their seams kept whole): 0, one
+  // per core, at most 8, each of 100 000 vertices or more.
+  int pieces = 0;
   // Called with the fraction of the collapses wanted that are done, from the decimating thread.
   std::function<void(double)> progress;
 };

@@ -186,5 +186,52 @@ TEST(MeshDecimate, ANonManifoldFaceIsKeptAsGivenAndWrongSizesAreRefused) {
                std::invalid_argument);
 }
 
+// In pieces (slabs decimated in parallel, seams kept whole): the surface is still covered once
+// (the faces' area is the square's, none turned over), the budget holds, and the bounds hold on
+// every 97th vertex.
+TEST(MeshDecimate, InPiecesTheSurfaceStaysWholeAndWithinTheBounds) {
+  const int n = 201;
+  const Grid g = grid(n, [](int i, int j) { return Eigen::Vector3d(0.15 * i, 0.15 * j, 0); });
+  std::vector<double> value(g.p.size());
+  std::vector<int> category(g.p.size());
+  for (size_t i = 0; i < g.p.size(); ++i) {
+    const Eigen::Vector3d& q = g.p[i];
+    value[i] = 1e-3 * std::sin(q.x() / 3) * std::cos(q.y() / 4);
+    category[i] = (q - Eigen::Vector3d(15, 15, 0)).norm() < 6 ? 1 : 0;
+  }
+  const std::vector<char> locked(g.p.size(), 0);
+  DecimateOptions o;
+  o.max_distance_mm = 1e-3;
+  o.max_value_difference = 1e-4;
+  o.max_vertices = 2500;
+  o.pieces = 3;
+  const DecimatedMesh m = decimateForDisplay(g.p, g.faces, value, category, locked, o);
+  EXPECT_LE(m.vertex.size(), 2500u);
+  EXPECT_GT(m.vertex.size(), 1200u);
+  double area = 0;
+  for (const Eigen::Vector3i& f : m.faces) {
+    const Eigen::Vector3d n_w = (g.p[m.vertex[f[1]]] - g.p[m.vertex[f[0]]])
+                                    .cross(g.p[m.vertex[f[2]]] - g.p[m.vertex[f[0]]]);
+    EXPECT_GT(n_w.z(), 0);
+    area += 0.5 * n_w.norm();
+  }
+  EXPECT_NEAR(area, 30.0 * 30.0, 1e-6);
+  for (size_t i = 0; i < g.p.size(); i += 97) {
+    double best = INFINITY;
+    for (const Eigen::Vector3i& f : m.faces) {
+      const int v[3] = {m.vertex[f[0]], m.vertex[f[1]], m.vertex[f[2]]};
+      if (category[v[0]] != category[i] || category[v[1]] != category[i] ||
+          category[v[2]] != category[i])
+        continue;
+      const Eigen::Vector3d w = nearestWeights(g.p[i], g.p[v[0]], g.p[v[1]], g.p[v[2]]);
+      const Eigen::Vector3d q = w[0] * g.p[v[0]] + w[1] * g.p[v[1]] + w[2] * g.p[v[2]];
+      if ((q - g.p[i]).norm() > m.max_distance_mm + 1e-12) continue;
+      best = std::min(
+          best, std::abs(w[0] * value[v[0]] + w[1] * value[v[1]] + w[2] * value[v[2]] - value[i]));
+    }
+    EXPECT_LE(best, m.max_value_difference * (1 + 1e-9)) << i;
+  }
+}
+
 }  // namespace
 }  // namespace tolver
