@@ -28,6 +28,8 @@ struct DecimateOptions {
   double max_value_difference = 1e-3;
   // The budget: a mesh with more vertices is decimated down to it; when the bounds above stop
   // it sooner, both are doubled until it fits (at most 12 times); the bounds met are returned.
+  // What must stay (sharp edges, borders, seams, boundaries between categories) stays, over the
+  // budget if it must.
   int max_vertices = 150000;
   // Pieces decimated in parallel (slabs along the longest axis, their seams kept whole): 0, one
   // per core, at most 8, each of 100 000 vertices or more.

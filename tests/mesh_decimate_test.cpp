@@ -203,11 +203,11 @@ TEST(MeshDecimate, InPiecesTheSurfaceStaysWholeAndWithinTheBounds) {
   DecimateOptions o;
   o.max_distance_mm = 1e-3;
   o.max_value_difference = 1e-4;
-  o.max_vertices = 2500;
+  o.max_vertices = 4000;  // the borders, seams and the category's boundary hold about 2 000
   o.pieces = 3;
   const DecimatedMesh m = decimateForDisplay(g.p, g.faces, value, category, locked, o);
-  EXPECT_LE(m.vertex.size(), 2500u);
-  EXPECT_GT(m.vertex.size(), 1200u);
+  EXPECT_LE(m.vertex.size(), 4000u);
+  EXPECT_GT(m.vertex.size(), 2000u);
   double area = 0;
   for (const Eigen::Vector3i& f : m.faces) {
     const Eigen::Vector3d n_w = (g.p[m.vertex[f[1]]] - g.p[m.vertex[f[0]]])
