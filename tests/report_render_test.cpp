@@ -43,17 +43,20 @@ class ReportRender : public test::TempDirTest {
   // The report with the test's script (kViewProbe) added before </body>, opened in Chromium:
   // what the script wrote.
   nlohmann::json probe(const std::string& report, const std::string& flags);
+  // tolver verify of the sculptured sample job on the measured Matsuura, with `options`.
+  test::RunResult verifySample(const std::string& options) {
+    return test::runTolver("verify --machine " +
+                           test::sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
+                           " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " --cl " +
+                           test::sourcePath("samples/sculptured_finish.apt") + " --part " +
+                           test::sourcePath("samples/sculptured_part.obj") + " " + options);
+  }
 };
 
 TEST_F(ReportRender, TheReportOpensOnTheVerdictWithItsImagesAndTables) {
   ASSERT_TRUE(fs::exists("/usr/bin/chromium"))
       << "chromium is missing: run scripts/install_deps.sh";
-  const auto r = test::runTolver(
-      "verify --machine " + test::sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
-      " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " --cl " +
-      test::sourcePath("samples/sculptured_finish.apt") + " --part " +
-      test::sourcePath("samples/sculptured_part.obj") +
-      " --spacing 1.2 --tolerance 0.012 --report-dir " + path("rep"));
+  const auto r = verifySample("--spacing 1.2 --tolerance 0.012 --report-dir " + path("rep"));
   ASSERT_EQ(r.exit_code, 1) << r.output;
   const std::string url = "file://" + path("rep/report.html");
   const std::string dom = chromium("--dump-dom " + url);
@@ -222,12 +225,7 @@ std::map<int, CsvRow> readDeviations(const std::string& path) {
 TEST_F(ReportRender, TheThreeDViewShowsThePartInTheLegendsColoursAndAClickReadsTheSample) {
   ASSERT_TRUE(fs::exists("/usr/bin/chromium"))
       << "chromium is missing: run scripts/install_deps.sh";
-  const auto r = test::runTolver(
-      "verify --machine " + test::sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
-      " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " --cl " +
-      test::sourcePath("samples/sculptured_finish.apt") + " --part " +
-      test::sourcePath("samples/sculptured_part.obj") + " --tolerance 0.02 --report-dir " +
-      path("rep"));
+  const auto r = verifySample("--tolerance 0.02 --report-dir " + path("rep"));
   ASSERT_EQ(r.exit_code, 1) << r.output;  // FAIL: material left beyond +10 um in a corner
   const std::string report = path("rep/report.html");
   EXPECT_LT(fs::file_size(report), 20u << 20);
