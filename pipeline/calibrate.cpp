@@ -43,9 +43,10 @@ void refitWithPrior(const CalibrateInputs& in, const CalibrationOptions& opt, Ca
       !(r.status == CalibrationStatus::Converged || r.status == CalibrationStatus::NotConverged))
     return;
   CalibrationOptions ro = opt;
+  PriorScaleEvidence evidence;
   if (prior_auto) {
     double k = 0;
-    ro = evidencePrior(run.machine.model, run.used, r, opt, &k);
+    ro = evidencePrior(run.machine.model, run.used, r, opt, &k, &evidence);
     prior_um = k * mmToUm(kPriorUnitLinear);
     prior_urad = k * radToUrad(kPriorUnitAngular);
   } else {
@@ -53,9 +54,11 @@ void refitWithPrior(const CalibrateInputs& in, const CalibrationOptions& opt, Ca
     ro.prior_angular = uradToRad(prior_urad);
     ro.prior_noise = std::max(r.residual_sigma, 1e-12);
   }
-  const CalibrationResult rr =
+  CalibrationResult rr =
       calibrate(run.machine.model, run.machine.params, run.used, run.unknowns, ro);
   if (rr.status != CalibrationStatus::Converged) return;
+  // The evidence's k is itself uncertain: the covariance over its posterior, not at its best.
+  if (prior_auto) marginalisePriorScale(evidence, r.identified, &rr);
   run.fit = rr;
   char buf[160];
   std::snprintf(buf, sizeof buf, "%.3g um per linear, %.3g urad per angular coefficient%s",

@@ -423,5 +423,58 @@ TEST(Calibration, EvidenceScaleMatchesTheDirectLogDensity) {
   }
 }
 
+// Not knowing k: the chosen k's covariance widened by PriorScaleEvidence::inflation equals the
+// posterior mixture over the grid computed directly (each k's Gaussian posterior from the normal
+// equations, weights from the m x m log density), about the chosen k's mean; with more
+// parameters than readings too (the complement of V carries the prior alone).
+TEST(Calibration, PriorScaleInflationIsTheMixtureOverTheEvidence) {
+  std::mt19937 rng(9);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int m : {12, 6}) {
+    const int np = 8;
+    const double s2 = 0.5;
+    Eigen::MatrixXd A(m, np);
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j < np; ++j) A(i, j) = n(rng) * (j < 3 ? 1.0 : 0.05);  // weak columns
+    Eigen::VectorXd d(np), y(m);
+    for (int j = 0; j < np; ++j) d[j] = j % 2 ? 1.0 : 0.3;
+    for (int i = 0; i < m; ++i) y[i] = 2.0 * n(rng);
+    const PriorScaleEvidence e = priorScaleEvidence(A, d, y, s2);
+    std::vector<double> le;
+    std::vector<Eigen::MatrixXd> cov;
+    std::vector<Eigen::VectorXd> mean;
+    double top = -INFINITY;
+    size_t best = 0;
+    for (int i = 0; i <= 40; ++i) {
+      const double k = 0.03 * std::pow(100.0 / 0.03, i / 40.0);
+      Eigen::MatrixXd C = k * k * A * d.asDiagonal() * A.transpose();
+      C.diagonal().array() += s2;
+      const Eigen::LLT<Eigen::MatrixXd> llt(C);
+      const Eigen::VectorXd z = llt.matrixL().solve(y);
+      double logdet = 0;
+      for (int j = 0; j < m; ++j) logdet += 2.0 * std::log(llt.matrixL()(j, j));
+      le.push_back(-0.5 * (z.squaredNorm() + logdet));
+      if (le.back() > top) top = le.back(), best = le.size() - 1;
+      Eigen::MatrixXd P = A.transpose() * A / s2;
+      P.diagonal() += d.cwiseInverse() / (k * k);
+      cov.push_back(P.inverse());
+      mean.push_back(cov.back() * A.transpose() * y / s2);
+    }
+    ASSERT_DOUBLE_EQ(e.k, 0.03 * std::pow(100.0 / 0.03, best / 40.0));
+    double sum = 0;
+    for (double v : le) sum += std::exp(v - top);
+    Eigen::MatrixXd mixture = Eigen::MatrixXd::Zero(np, np);
+    for (size_t i = 0; i < le.size(); ++i) {
+      const Eigen::VectorXd dm = mean[i] - mean[best];
+      mixture += std::exp(le[i] - top) / sum * (cov[i] + dm * dm.transpose());
+    }
+    const Eigen::MatrixXd T = e.inflation();
+    const Eigen::MatrixXd widened = T * cov[best] * T.transpose();
+    EXPECT_LT((widened - mixture).norm(), 1e-8 * mixture.norm()) << m;
+    // The widening matters here: k is decided by a few readings.
+    EXPECT_GT((mixture - cov[best]).norm(), 0.1 * cov[best].norm()) << m;
+  }
+}
+
 }  // namespace
 }  // namespace tolver

@@ -97,9 +97,14 @@ inline Machine calibrateOnIndependent(const Machine& nominal, const std::vector<
   indep::writeCsv(dir + "/fit.csv", poses, setups, false);
   const BallbarFile f = readBallbarFile(dir + "/fit.csv", nominal.model, true);
   CalibrationResult r = calibrate(nominal.model, nominal.params, f.test, unknowns);
-  if (regularised)
-    r = calibrate(nominal.model, nominal.params, f.test, unknowns,
-                  evidencePrior(nominal.model, f.test, r, CalibrationOptions{}));
+  if (regularised) {
+    PriorScaleEvidence evidence;
+    const CalibrationOptions ro =
+        evidencePrior(nominal.model, f.test, r, CalibrationOptions{}, nullptr, &evidence);
+    const std::vector<int> free_identified = r.identified;
+    r = calibrate(nominal.model, nominal.params, f.test, unknowns, ro);
+    marginalisePriorScale(evidence, free_identified, &r);
+  }
   Machine id = nominal;
   id.params = r.params;
   id.identification =

@@ -455,41 +455,95 @@ IdentificationUncertainty identificationUncertainty(const CalibrationResult& fit
   return u;
 }
 
-double evidenceScale(const Eigen::MatrixXd& A, const Eigen::VectorXd& d, const Eigen::VectorXd& y,
-                     double s2) {
+PriorScaleEvidence priorScaleEvidence(const Eigen::MatrixXd& A, const Eigen::VectorXd& d,
+                                      const Eigen::VectorXd& y, double s2) {
   // C = s^2 I + k^2 B B^T, B = A D^(1/2) = U S V^T (thin): C's eigenvalues are s^2 + k^2 S_j^2 on
   // U's columns and s^2 on their complement, so the log evidence costs O(np) per k after one
   // thin SVD (O(m np^2)) instead of a Cholesky of the m x m C (O(m^3)) per k.
+  PriorScaleEvidence e;
   const Eigen::Index m = A.rows();
-  const Eigen::MatrixXd B = A * d.cwiseMax(0.0).cwiseSqrt().asDiagonal();
+  e.d_root = d.cwiseMax(0.0).cwiseSqrt();
+  e.s2 = s2;
+  const Eigen::MatrixXd B = A * e.d_root.asDiagonal();
   // JacobiSVD (QR-preconditioned), not BDCSVD: Eigen 3.4.0's BDCSVD reads out of bounds
   // (docs/validation.md).
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(B, Eigen::ComputeThinU);
-  const Eigen::VectorXd S2 = svd.singularValues().cwiseAbs2();
-  const Eigen::VectorXd c = svd.matrixU().transpose() * y;
-  const double rest = std::max(0.0, y.squaredNorm() - c.squaredNorm());
-  const Eigen::Index r = S2.size();
-  double best_k = 1.0, best = -std::numeric_limits<double>::infinity();
-  if (!(s2 > 0.0)) return best_k;
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(B, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  e.S2 = svd.singularValues().cwiseAbs2();
+  e.V = svd.matrixV();
+  e.c = svd.matrixU().transpose() * y;
+  const double rest = std::max(0.0, y.squaredNorm() - e.c.squaredNorm());
+  const Eigen::Index r = e.S2.size();
+  if (!(s2 > 0.0)) return e;
+  double best = -std::numeric_limits<double>::infinity();
   for (int i = 0; i <= 40; ++i) {
     const double k = 0.03 * std::pow(100.0 / 0.03, i / 40.0);
     double quad = rest / s2, logdet = static_cast<double>(m - r) * std::log(s2);
     for (Eigen::Index j = 0; j < r; ++j) {
-      const double l = s2 + k * k * S2[j];
-      quad += c[j] * c[j] / l;
+      const double l = s2 + k * k * e.S2[j];
+      quad += e.c[j] * e.c[j] / l;
       logdet += std::log(l);
     }
-    const double e = -0.5 * (quad + logdet);
-    if (e > best) {
-      best = e;
-      best_k = k;
+    const double le = -0.5 * (quad + logdet);
+    e.grid_k.push_back(k);
+    e.log_evidence.push_back(le);
+    if (le > best) {
+      best = le;
+      e.k = k;
     }
   }
-  return best_k;
+  return e;
 }
 
-double choosePriorScale(const MachineModel& model, const BallbarTest& test,
-                        const CalibrationResult& fit, double unit_linear, double unit_angular) {
+double evidenceScale(const Eigen::MatrixXd& A, const Eigen::VectorXd& d, const Eigen::VectorXd& y,
+                     double s2) {
+  return priorScaleEvidence(A, d, y, s2).k;
+}
+
+Eigen::MatrixXd PriorScaleEvidence::inflation() const {
+  const Eigen::Index np = d_root.size();
+  if (grid_k.empty() || np == 0 || !(s2 > 0.0)) return Eigen::MatrixXd::Identity(np, np);
+  const double top = *std::max_element(log_evidence.begin(), log_evidence.end());
+  std::vector<double> w(grid_k.size());
+  double sum = 0;
+  for (size_t i = 0; i < w.size(); ++i) sum += (w[i] = std::exp(log_evidence[i] - top));
+  // Whitened coordinates phi = D^(-1/2) theta in V's basis, completed when V is not square (the
+  // complement has no reading: precision 1 / k^2, mean 0).
+  const Eigen::Index r = S2.size();
+  Eigen::MatrixXd Vfull = V;
+  if (r < np) {
+    const Eigen::HouseholderQR<Eigen::MatrixXd> qr(V);
+    Vfull = qr.householderQ() * Eigen::MatrixXd::Identity(np, np);
+    Vfull.leftCols(r) = V;
+  }
+  Eigen::VectorXd S2full = Eigen::VectorXd::Zero(np), cfull = Eigen::VectorXd::Zero(np);
+  S2full.head(r) = S2;
+  cfull.head(r) = c;
+  const auto precision = [&](double kk) { return (S2full / s2).array() + 1.0 / (kk * kk); };
+  const Eigen::ArrayXd prec_best = precision(k);
+  const Eigen::ArrayXd mean_best = S2full.cwiseSqrt().array() * cfull.array() / s2 / prec_best;
+  // M: the mixture's second moment about the chosen k's mean (V's basis).
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(np, np);
+  for (size_t i = 0; i < w.size(); ++i) {
+    const Eigen::ArrayXd prec = precision(grid_k[i]);
+    const Eigen::VectorXd dm =
+        (S2full.cwiseSqrt().array() * cfull.array() / s2 / prec - mean_best).matrix();
+    M.diagonal() += (w[i] / sum) * prec.inverse().matrix();
+    M += (w[i] / sum) * dm * dm.transpose();
+  }
+  // T = D^(1/2) V L P*^(1/2) V^T D^(-1/2), L L^T = M: T Sigma* T^T = D^(1/2) V M V^T D^(1/2).
+  const Eigen::LLT<Eigen::MatrixXd> llt(M);
+  if (llt.info() != Eigen::Success) return Eigen::MatrixXd::Identity(np, np);
+  const Eigen::MatrixXd L = llt.matrixL();
+  const Eigen::VectorXd p_root = prec_best.sqrt().matrix();
+  const Eigen::MatrixXd G = L * p_root.asDiagonal();
+  const Eigen::VectorXd inv_root =
+      d_root.unaryExpr([](double x) { return x > 0.0 ? 1.0 / x : 0.0; });
+  return d_root.asDiagonal() * Vfull * G * Vfull.transpose() * inv_root.asDiagonal();
+}
+
+PriorScaleEvidence priorScaleEvidence(const MachineModel& model, const BallbarTest& test,
+                                      const CalibrationResult& fit, double unit_linear,
+                                      double unit_angular) {
   const ForwardKinematics fk(model, fit.params);
   Eigen::VectorXd r;
   const Eigen::MatrixXd J = identificationJacobian(fk, test, fit.ball_errors, fit.identified, &r);
@@ -510,19 +564,38 @@ double choosePriorScale(const MachineModel& model, const BallbarTest& test,
   Ay.leftCols(np) = J.leftCols(np);
   Ay.col(np) = r + J.leftCols(np) * theta;
   Ay.applyOnTheLeft(qr.householderQ().transpose());
-  return evidenceScale(Ay.bottomLeftCorner(m - nb, np), d, Ay.col(np).tail(m - nb),
-                       fit.residual_sigma * fit.residual_sigma);
+  return priorScaleEvidence(Ay.bottomLeftCorner(m - nb, np), d, Ay.col(np).tail(m - nb),
+                            fit.residual_sigma * fit.residual_sigma);
+}
+
+double choosePriorScale(const MachineModel& model, const BallbarTest& test,
+                        const CalibrationResult& fit, double unit_linear, double unit_angular) {
+  return priorScaleEvidence(model, test, fit, unit_linear, unit_angular).k;
 }
 
 CalibrationOptions evidencePrior(const MachineModel& model, const BallbarTest& test,
                                  const CalibrationResult& free_fit, CalibrationOptions options,
-                                 double* scale) {
-  const double k = choosePriorScale(model, test, free_fit, kPriorUnitLinear, kPriorUnitAngular);
+                                 double* scale, PriorScaleEvidence* evidence) {
+  PriorScaleEvidence e =
+      priorScaleEvidence(model, test, free_fit, kPriorUnitLinear, kPriorUnitAngular);
+  const double k = e.k;
+  if (evidence) *evidence = std::move(e);
   options.prior_linear = k * kPriorUnitLinear;
   options.prior_angular = k * kPriorUnitAngular;
   options.prior_noise = std::max(free_fit.residual_sigma, 1e-12);
   if (scale) *scale = k;
   return options;
+}
+
+bool marginalisePriorScale(const PriorScaleEvidence& evidence,
+                           const std::vector<int>& free_identified, CalibrationResult* fit) {
+  if (fit->identified != free_identified || evidence.d_root.size() != fit->covariance.rows())
+    return false;
+  const Eigen::MatrixXd T = evidence.inflation();
+  fit->covariance = T * fit->covariance * T.transpose();
+  fit->covariance = 0.5 * (fit->covariance + fit->covariance.transpose()).eval();
+  fit->uncertainty = fit->covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+  return true;
 }
 
 }  // namespace tolver

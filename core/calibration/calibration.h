@@ -111,15 +111,46 @@ double choosePriorScale(const MachineModel& model, const BallbarTest& test,
 // same grid, from one thin SVD of A diag(d)^(1/2) (linear in the readings).
 double evidenceScale(const Eigen::MatrixXd& A, const Eigen::VectorXd& d, const Eigen::VectorXd& y,
                      double s2);
+// The evidence over the whole grid, and what not knowing k costs. The regularised fit takes the
+// k of largest evidence, and its covariance is that of the parameters given k; but k is itself
+// uncertain (a few readings decide it), and where the readings are weak (the cubic terms that
+// carry a prediction beyond the calibrated ranges) the covariance scales with k. With a flat
+// prior on log k over the grid, the posterior of the whitened parameters phi = D^(-1/2) theta is
+// a mixture over k of Gaussians that share V's basis (B = A D^(1/2) = U S V^T):
+//   given k:  precision S_j^2 / s^2 + 1 / k^2,  mean S_j c_j / s^2 / precision  (c = U^T y),
+// so the mixture's second moment about the chosen k's mean is, in V's basis,
+//   M = sum_k w_k [diag(1 / prec(k)) + (mean(k) - mean(k*)) (mean(k) - mean(k*))^T],
+// w_k proportional to the evidence. inflation() returns T = D^(1/2) V L P*^(1/2) V^T D^(-1/2)
+// (L L^T = M, P* = diag(prec(k*))): T Sigma T^T is the chosen k's covariance widened to the
+// mixture's (much where k decides a value, not at all where the readings do).
+struct PriorScaleEvidence {
+  double k = 1.0;  // the grid's k of largest evidence
+  std::vector<double> grid_k, log_evidence;
+  Eigen::VectorXd d_root, S2, c;  // D^(1/2), S^2, U^T y
+  Eigen::MatrixXd V;
+  double s2 = 0.0;
+  Eigen::MatrixXd inflation() const;
+};
+PriorScaleEvidence priorScaleEvidence(const Eigen::MatrixXd& A, const Eigen::VectorXd& d,
+                                      const Eigen::VectorXd& y, double s2);
+PriorScaleEvidence priorScaleEvidence(const MachineModel& model, const BallbarTest& test,
+                                      const CalibrationResult& fit, double unit_linear,
+                                      double unit_angular);
 
 // The prior's units of `calibrate --prior auto`: 1 um per linear and 3.3 urad per angular
 // coefficient (a 1 um straightness over 300 mm), scaled together by choosePriorScale.
 constexpr double kPriorUnitLinear = 1e-3, kPriorUnitAngular = 3.3e-6;
 // `options` with the prior chosen by the readings' evidence after the unregularised fit
 // `free_fit` (the refit with them is the regularised calibration); *scale: the k chosen.
+// *evidence (when given): the grid behind the choice, for marginalisePriorScale.
 CalibrationOptions evidencePrior(const MachineModel& model, const BallbarTest& test,
                                  const CalibrationResult& free_fit, CalibrationOptions options,
-                                 double* scale = nullptr);
+                                 double* scale = nullptr, PriorScaleEvidence* evidence = nullptr);
+// The regularised fit's covariance widened by the prior scale's uncertainty
+// (PriorScaleEvidence::inflation), when it identifies the free fit's parameters (the evidence's
+// order); its per-parameter uncertainties follow. Returns false (the fit unchanged) otherwise.
+bool marginalisePriorScale(const PriorScaleEvidence& evidence,
+                           const std::vector<int>& free_identified, CalibrationResult* fit);
 
 // The identification uncertainty of a fit for a machine file: the covariance of the identified
 // parameters and the joint ranges the readings covered.
