@@ -64,12 +64,15 @@ void printVerification(const Verification& v, const VerifyOptions& o, const std:
   if (v.banded)
     std::printf(
         "  band       the machine's share is known to +- %.2f um at most (95 %%, from the "
-        "calibration's covariance%s)%s\n",
+        "calibration's covariance at each contact, tip and tool axis%s%s)%s\n",
         r.band95_max_um,
         r.band_lack_of_fit_um > 0
             ? formatWith(" and its lack of fit, %.3f um per tip coordinate", r.band_lack_of_fit_um)
                   .c_str()
             : "; no lack of fit",
+        r.band_spindle_tilt_urad > 0
+            ? formatWith("; spindle tilt prior %.3g urad", r.band_spindle_tilt_urad).c_str()
+            : "; spindle tilt not included",
         o.in.absolute ? "" : ", after the set-up a shop measures");
   std::printf(
       "  area       %.2f %% of %.1f mm2 machined in tolerance; %.1f mm2 not machined; "

@@ -104,6 +104,7 @@ VerifyResult verifyPart(const SurfaceSamples& samples, const ToolSet& tools,
   r.total_beyond.assign(n, 0);
   r.machined.assign(n, 0);
   r.cl_index.assign(n, -1);
+  r.contact_offset_w.assign(n, Eigen::Vector3f::Zero());
   const double floor_mm = -options.gouge_range + 1e-9;
   const double L = tools.maxLength(), R = tools.maxRadius();
   // How far placement k moves between the perfect and the real machine, seen at height h on the
@@ -117,6 +118,7 @@ VerifyResult verifyPart(const SurfaceSamples& samples, const ToolSet& tools,
     if (pred.machined[i]) {
       r.total[i] = pred.deviation[i];
       r.cl_index[i] = predicted[pred.placement[i]].cl_index;
+      r.contact_offset_w[i] = (samples.p_w[i] - predicted[pred.placement[i]].tip_w).cast<float>();
       r.total_beyond[i] = pred.deviation[i] <= floor_mm;
     }
     const bool nom_ok = nom.machined[i] && nom.deviation[i] > floor_mm;
@@ -307,6 +309,7 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
   r.total_beyond.assign(n, 0);
   r.machined.assign(n, 1);
   r.cl_index.assign(n, -1);
+  r.contact_offset_w.assign(n, Eigen::Vector3f::Zero());  // the surface through the tips
   for (size_t i = 0; i < n; ++i) {
     const int c = cl_of[i];
     r.cl_index[i] = c;

@@ -45,6 +45,9 @@ struct VerifyResult {
   std::vector<int> zone;                        // #S, -1: no zone holds it
   std::vector<Conformance> conformance;  // #S, of `total` (Unchecked: no zone, or on an edge)
   std::vector<int> cl_index;             // #S, CL point whose move cut it (predicted), -1
+  // #S, the sample seen from the tip of the predicted placement that cut it (mm, in w; zero when
+  // none): where on the cutter the contact lies, the lever arm of the tool axis's errors.
+  std::vector<Eigen::Vector3f> contact_offset_w;
   DeviationStats total_stats, program_stats, machine_stats;
   double area = 0, area_machined = 0, area_in = 0, area_unmachined = 0;  // mm^2
   double area_edge = 0;   // mm^2 of samples on sharp edges and borders (not verified)

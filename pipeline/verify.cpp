@@ -731,7 +731,9 @@ void checkRotaryConvention(const VerifyInputs& o, const ProgramOnMachine& m, con
 }
 
 // The 95 % band of the machine's share at each verified sample (the prediction's uncertainty
-// at the nearest CL point, along the sample's normal), and the decision it allows: FAIL when
+// at the CL point whose move cut it, along the sample's normal at its contact on the cutter:
+// the tip's and the tool axis's errors with the contact's lever arm; at the nearest CL point
+// where no move cut it), and the decision it allows: FAIL when
 // a sample is out of its zone by more than the band, UNDECIDED when a limit lies inside the
 // band of some sample, else PASS.
 void decideWithinBand(const std::vector<PoseUncertainty>& cl_unc, const ClProgram& program,
@@ -739,15 +741,25 @@ void decideWithinBand(const std::vector<PoseUncertainty>& cl_unc, const ClProgra
   VerifyReport& rep = v.report;
   const SurfaceSamples& samples = v.samples;
   const VerifyResult& result = v.result;
-  std::vector<Eigen::Vector3d> cl(program.path.size());
-  for (size_t i = 0; i < cl.size(); ++i) cl[i] = program.path[i].p_w;
-  const std::vector<int> nearest = nearestPointIndices(cl, samples.p_w);
+  // The nearest CL point stands in only where no move cut the sample (its band is shown, not
+  // decided on).
+  std::vector<int> nearest;
+  if (std::find(result.cl_index.begin(), result.cl_index.end(), -1) != result.cl_index.end()) {
+    std::vector<Eigen::Vector3d> cl(program.path.size());
+    for (size_t i = 0; i < cl.size(); ++i) cl[i] = program.path[i].p_w;
+    nearest = nearestPointIndices(cl, samples.p_w);
+  }
   const std::vector<int> zone_of = assignZones(samples, zones);
   double worst_u = 0;
   int definite_fail = 0, undecided = 0, undecided_at = -1;
   rep.band95_um.assign(samples.size(), 0.0);
   for (size_t i = 0; i < samples.size(); ++i) {
-    const double u95 = 1.96 * PredictionUncertainty::along(cl_unc[nearest[i]], samples.n_w[i]);
+    const int cut_by = result.cl_index[i];
+    const double u95 =
+        cut_by >= 0
+            ? 1.96 * PredictionUncertainty::alongContact(cl_unc[cut_by], samples.n_w[i],
+                                                         result.contact_offset_w[i].cast<double>())
+            : 1.96 * PredictionUncertainty::along(cl_unc[nearest[i]], samples.n_w[i]);
     rep.band95_um[i] = mmToUm(u95);
     worst_u = std::max(worst_u, u95);
     const Conformance c = result.conformance[i];
@@ -963,6 +975,7 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
     if (!m.setup_note.empty()) rep.notes.push_back(m.setup_note);
     decideWithinBand(m.cal.uncertainty, program, zones, *v);
     rep.band_lack_of_fit_um = mmToUm(m.machine.identification.lack_of_fit_mm);
+    rep.band_spindle_tilt_urad = radToUrad(m.machine.identification.spindle_tilt_rad);
   }
   if (o.line_pass > 0) {
     const auto passes = clPasses(program.path);

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <random>
 
 #include "band_figures.h"
@@ -146,6 +147,72 @@ TEST_F(PredictionUncertaintyTest, TheBandHoldsMachineByMachine) {
   EXPECT_GE(z_in_range, 15) << rows;
   EXPECT_GE(axis_sum / rows, 0.93);
   EXPECT_GE(axis_90, 17) << rows;
+}
+
+// A point of the cutter away from the tip (a ball's flank contact, a flank cutter's contact up
+// the axis): its 1-sigma along a normal from alongContact equals the spread of that point moved
+// by the forward kinematics with parameters drawn from the calibration's covariance (Monte
+// Carlo, 4 000 draws; the rotation about the tool axis cannot move the normal deviation of a
+// point on the axis's meridian plane). The tip alone (along) misses the lever arm; a stated
+// tilt prior adds tilt x |r x n| across the axis.
+TEST_F(PredictionUncertaintyTest, AContactUpTheCutterCarriesTheToolAxisLeverArm) {
+  Calibrated c = calibrateIndependent(4, path(""));
+  Machine& m = c.identified;
+  const IdentificationUncertainty& id = m.identification;
+  const PredictionUncertainty pu(m);
+  JointVector q(5);
+  for (int a = 0; a < 5; ++a) q[a] = 0.3 * id.covered_min[a] + 0.7 * id.covered_max[a];
+  const ForwardKinematics fk0(m.model, m.params);
+  const Eigen::Isometry3d T0 = fk0.w_T_t(q);
+  const Eigen::Vector3d a = T0.linear().col(2), x = T0.linear().col(0);
+  const PoseUncertainty u = pu.at(q);
+  // Contacts: 40 mm up a flank cutter (normal across the axis), a 6 mm ball's 45 deg flank.
+  const Eigen::Vector3d r_flank = 40.0 * a + 5.0 * x, n_flank = x;
+  const Eigen::Vector3d n_ball = (x - a).normalized(), r_ball = 6.0 * a + 6.0 * n_ball;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(id.covariance);
+  const Eigen::MatrixXd root =
+      es.eigenvectors() * es.eigenvalues().cwiseMax(0.0).cwiseSqrt().asDiagonal();
+  std::mt19937 rng(17);
+  std::normal_distribution<double> g(0.0, 1.0);
+  double s_flank = 0, s_ball = 0;
+  const int draws = 4000;
+  for (int k = 0; k < draws; ++k) {
+    Eigen::VectorXd z(root.cols());
+    for (Eigen::Index j = 0; j < z.size(); ++j) z[j] = g(rng);
+    const Eigen::VectorXd dp = root * z;
+    Eigen::VectorXd p = m.params;
+    for (size_t j = 0; j < id.parameters.size(); ++j) p[id.parameters[j]] += dp[j];
+    const Eigen::Isometry3d T = ForwardKinematics(m.model, p).w_T_t(q);
+    const auto moved = [&](const Eigen::Vector3d& r_w) {  // the cutter's point, fixed in t
+      const Eigen::Vector3d c_w = T0.translation() + r_w;
+      const Eigen::Vector3d c_t = T0.inverse() * c_w;
+      const Eigen::Vector3d moved_w = T * c_t;
+      return Eigen::Vector3d(moved_w - c_w);
+    };
+    s_flank += std::pow(moved(r_flank).dot(n_flank), 2);
+    s_ball += std::pow(moved(r_ball).dot(n_ball), 2);
+  }
+  s_flank = std::sqrt(s_flank / draws);
+  s_ball = std::sqrt(s_ball / draws);
+  const double flank = PredictionUncertainty::alongContact(u, n_flank, r_flank);
+  const double ball = PredictionUncertainty::alongContact(u, n_ball, r_ball);
+  std::printf(
+      "[ contact ] flank 40 mm up: %.3f um (Monte Carlo %.3f, tip alone %.3f); ball flank "
+      "%.3f um (%.3f, %.3f)\n",
+      1e3 * flank, 1e3 * s_flank, 1e3 * PredictionUncertainty::along(u, n_flank), 1e3 * ball,
+      1e3 * s_ball, 1e3 * PredictionUncertainty::along(u, n_ball));
+  EXPECT_NEAR(flank, s_flank, 0.05 * s_flank);  // 4 000 draws: about 1.1 % standard error
+  EXPECT_NEAR(ball, s_ball, 0.05 * s_ball);
+  // The lever arm: 10 % here, 4 times the Monte Carlo's own spread.
+  EXPECT_GT(flank - PredictionUncertainty::along(u, n_flank), 0.05 * s_flank);
+  EXPECT_DOUBLE_EQ(PredictionUncertainty::alongContact(u, n_flank, Eigen::Vector3d::Zero()),
+                   PredictionUncertainty::along(u, n_flank));
+  // A 20 urad tilt prior adds (20 urad x 40 mm)^2 across the axis at the flank contact.
+  m.identification.spindle_tilt_rad = 20e-6;
+  const PoseUncertainty ut = PredictionUncertainty(m).at(q);
+  const double lever = r_flank.cross(n_flank).norm();  // r x n is across the axis here
+  EXPECT_NEAR(std::pow(PredictionUncertainty::alongContact(ut, n_flank, r_flank), 2),
+              flank * flank + std::pow(20e-6 * lever, 2), 1e-9 * flank * flank);
 }
 
 // Outside the calibrated volume the prediction is flagged and its uncertainty grows.

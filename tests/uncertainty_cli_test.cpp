@@ -119,13 +119,18 @@ TEST_F(UncertaintyCli, VerifySaysUndecidedWhenTheLimitIsInsideTheBand) {
   ASSERT_GT(band, 0.0);
   // Where the band comes from, in the console and the JSON: this calibration's test showed no
   // lack of fit (its repeats agree with the fit).
-  EXPECT_NE(r.output.find("calibration's covariance; no lack of fit)"), std::string::npos)
+  EXPECT_NE(r.output.find("calibration's covariance at each contact, tip and tool axis; no lack "
+                          "of fit; spindle tilt not included)"),
+            std::string::npos)
       << r.output;
   {
     std::ifstream j0(path("v0") + "/report.json");
     const nlohmann::json k = nlohmann::json::parse(j0);
     EXPECT_EQ(k["uncertainty"]["lack_of_fit_um"].get<double>(),
               readMachineFile(id).identification.lack_of_fit_mm * 1e3);
+    EXPECT_EQ(k["uncertainty"]["spindle_tilt_prior_urad"].get<double>(), 0.0);
+    EXPECT_NE(k["uncertainty"]["sources"].get<std::string>().find("tip and tool axis"),
+              std::string::npos);
   }
   auto run = [&](double t_um, const std::string& dir) {
     char t[32];

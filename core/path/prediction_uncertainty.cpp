@@ -122,6 +122,11 @@ PoseUncertainty PredictionUncertainty::at(const JointVector& q, const MotionCont
                      id.spindle_tilt_rad * id.spindle_tilt_rad);
   u.axis_covariance_t << S(4, 4), -S(4, 3), -S(3, 4), S(3, 3);
   u.axis_covariance_t.diagonal().array() += id.spindle_tilt_rad * id.spindle_tilt_rad;
+  u.axis_w = R.col(2);
+  u.rotation_covariance_w = R * S.bottomRightCorner<3, 3>() * R.transpose() +
+                            id.spindle_tilt_rad * id.spindle_tilt_rad *
+                                (Eigen::Matrix3d::Identity() - u.axis_w * u.axis_w.transpose());
+  u.tip_rotation_covariance_w = R * S.topRightCorner<3, 3>() * R.transpose();
   if (!id.covered_min.empty()) {
     u.beyond = JointVector::Zero(q.size());
     for (Eigen::Index a = 0; a < q.size() && a < static_cast<Eigen::Index>(id.covered_min.size());
@@ -140,6 +145,16 @@ Eigen::RowVectorXd PredictionUncertainty::alongRoot(const JointVector& q,
                                                     const Eigen::Vector3d& n_w) const {
   const Eigen::Vector3d n_t = fk_.w_T_t(q).linear().transpose() * n_w;
   return n_t.transpose() * identifiedRows(q, nullptr).topRows<3>() * root_;
+}
+
+double PredictionUncertainty::alongContact(const PoseUncertainty& u, const Eigen::Vector3d& n_w,
+                                           const Eigen::Vector3d& r_w) {
+  Eigen::Vector3d m = r_w.cross(n_w);
+  m -= m.dot(u.axis_w) * u.axis_w;
+  const double v = n_w.dot(u.tip_covariance_w * n_w) +
+                   2.0 * n_w.dot(u.tip_rotation_covariance_w * m) +
+                   m.dot(u.rotation_covariance_w * m);
+  return std::sqrt(std::max(0.0, v));
 }
 
 double PredictionUncertainty::tipRadius95(const PoseUncertainty& u) {

@@ -22,6 +22,12 @@ struct PoseUncertainty {
   // The covariance of the tool axis's direction across it (rad^2): its components along t's x and
   // y, e = (w_y, -w_x) for a small rotation w of t; the spindle-tilt prior included.
   Eigen::Matrix2d axis_covariance_t = Eigen::Matrix2d::Zero();
+  // The tool frame's rotation (a small rotation w of t, seen in w; rad^2) and its covariance with
+  // the tip (mm rad), the spindle-tilt prior included across the axis: a point of the cutter at
+  // r_w from the tip moves by d_tip + w x r_w (alongContact). axis_w: the tool axis.
+  Eigen::Matrix3d rotation_covariance_w = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d tip_rotation_covariance_w = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d axis_w = Eigen::Vector3d::UnitZ();
   // The shares of the calibration's covariance alone (mm, rad): tip and axis above add the
   // identification's lack of fit (tip) and spindle-tilt prior (axis) in quadrature.
   double calibration_tip = 0.0, calibration_axis = 0.0;
@@ -67,6 +73,12 @@ class PredictionUncertainty {
   static double along(const PoseUncertainty& u, const Eigen::Vector3d& n_w) {
     return std::sqrt(std::max(0.0, n_w.dot(u.tip_covariance_w * n_w)));
   }
+  // 1 sigma along n_w of the cutter's point at r_w from the tip (mm): the tip and the tool's
+  // rotation together, n.d_tip + (r x n).w, the rotation about the tool axis left out (it turns
+  // the cutter in itself). A ball end's contact on a flank, or a flank cutter's at height h,
+  // moves with the axis's tilt times the lever arm; along() is this with r = 0.
+  static double alongContact(const PoseUncertainty& u, const Eigen::Vector3d& n_w,
+                             const Eigen::Vector3d& r_w);
   // The 95 % radii: the tip's distance from its prediction (mm, 3-D) and the tool axis's angle
   // from its prediction (rad, 2-D) that hold 95 % of their Gaussian (gaussianRadiusQuantile).
   // 1.96 times the worst direction's sigma holds 95 % only when one direction dominates: for an

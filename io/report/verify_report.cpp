@@ -63,6 +63,16 @@ std::string regionCause(const VerifyReport& r, const OutOfToleranceRegion& regio
   const double program = r.result->program[i];
   return classify(program, true, z) == Conformance::In ? "machine" : "program";
 }
+// What the band holds, in words (report.json's uncertainty.sources).
+static std::string bandSources(const VerifyReport& r) {
+  std::string s = "the calibration's covariance (tip and tool axis)";
+  s += r.band_lack_of_fit_um > 0 ? "; its lack of fit, added to each tip coordinate"
+                                 : "; no lack of fit (its test passed, or it had no repeats)";
+  s += r.band_spindle_tilt_urad > 0
+           ? "; the spindle tilt's stated prior across the tool axis"
+           : "; the spindle's tilt left out (no prior stated: a ball-bar cannot see it)";
+  return s;
+}
 
 std::string formatVerifyJson(const VerifyReport& r) {
   const VerifyResult& v = *r.result;
@@ -76,14 +86,12 @@ std::string formatVerifyJson(const VerifyReport& r) {
         {"band95_max_um", r.band95_max_um},
         {"undecided_samples", r.undecided_samples},
         {"method",
-         "the calibration's covariance carried to each CL point's tip, "
-         "along each sample's normal (nearest CL point), k = 1.96"},
+         "the calibration's covariance carried to the tool's pose at the CL point whose move "
+         "cut each sample, along the sample's normal at its contact on the cutter (the tip's "
+         "and the tool axis's errors with the contact's lever arm), k = 1.96"},
         {"lack_of_fit_um", r.band_lack_of_fit_um},
-        {"sources", r.band_lack_of_fit_um > 0
-                        ? "the calibration's covariance and its lack of fit (added to each "
-                          "tip coordinate)"
-                        : "the calibration's covariance (its test showed no lack of fit, "
-                          "or it had no repeats)"}};
+        {"spindle_tilt_prior_urad", r.band_spindle_tilt_urad},
+        {"sources", bandSources(r)}};
     if (r.undecided) j["uncertainty"]["undecided"] = r.undecided_text;
   }
   j["exit_code"] = r.exit_code;

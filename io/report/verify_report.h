@@ -40,6 +40,7 @@ struct VerifyReport {
   // What the band holds beyond the calibration's covariance: its lack of fit per tip coordinate
   // (um, 0: none). The spindle tilt's prior moves the axis, not the tip the band is taken at.
   double band_lack_of_fit_um = 0;
+  double band_spindle_tilt_urad = 0;  // the stated prior of the spindle's tilt (0: none)
   int undecided_samples = 0;
   bool undecided = false;
   std::string undecided_text;
