@@ -16,5 +16,6 @@ void registerVerify(CLI::App& app, Verdict* verdict);
 void registerDiagnose(CLI::App& app, Verdict* verdict);
 void registerSetup(CLI::App& app, Verdict* verdict);
 void registerCompensate(CLI::App& app, Verdict* verdict);
+void registerMeasure(CLI::App& app, Verdict* verdict);
 
 }  // namespace tolver::app

@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   tolver::app::registerDiagnose(app, &verdict);
   tolver::app::registerSetup(app, &verdict);
   tolver::app::registerCompensate(app, &verdict);
+  tolver::app::registerMeasure(app, &verdict);
   tolver::app::useFileNumberRule(&app);
   try {
     app.parse(argc, argv);

@@ -432,21 +432,29 @@ ProgramOnMachine predictOnMachine(const VerifyInputs& o) {
   return m;
 }
 
+}  // namespace
+
+Eigen::Isometry3d partPlacement(const VerifyInputs& o) {
+  Eigen::Isometry3d w_T_file = Eigen::Isometry3d::Identity();
+  if (!o.mesh_offset.empty())
+    w_T_file.translation() = Eigen::Vector3d(o.mesh_offset[0], o.mesh_offset[1], o.mesh_offset[2]);
+  if (!o.mesh_rotation_deg.empty()) {
+    const double k = degToRad(1.0);
+    w_T_file.linear() = (Eigen::AngleAxisd(o.mesh_rotation_deg[2] * k, Eigen::Vector3d::UnitZ()) *
+                         Eigen::AngleAxisd(o.mesh_rotation_deg[1] * k, Eigen::Vector3d::UnitY()) *
+                         Eigen::AngleAxisd(o.mesh_rotation_deg[0] * k, Eigen::Vector3d::UnitX()))
+                            .toRotationMatrix();
+  }
+  return w_T_file;
+}
+
+namespace {
+
 // The part file read, placed in w and repaired.
 ImportedPart readPart(const VerifyInputs& o) {
   PartImportOptions io;
   io.units = o.mesh_units;
-  if (!o.mesh_offset.empty())
-    io.w_T_file.translation() =
-        Eigen::Vector3d(o.mesh_offset[0], o.mesh_offset[1], o.mesh_offset[2]);
-  if (!o.mesh_rotation_deg.empty()) {
-    const double k = degToRad(1.0);
-    io.w_T_file.linear() =
-        (Eigen::AngleAxisd(o.mesh_rotation_deg[2] * k, Eigen::Vector3d::UnitZ()) *
-         Eigen::AngleAxisd(o.mesh_rotation_deg[1] * k, Eigen::Vector3d::UnitY()) *
-         Eigen::AngleAxisd(o.mesh_rotation_deg[0] * k, Eigen::Vector3d::UnitX()))
-            .toRotationMatrix();
-  }
+  io.w_T_file = partPlacement(o);
   io.repair.max_hole_perimeter = o.max_hole_mm;
   // A STEP part's chordal tolerance follows the sample spacing (spacing / 500), and is never
   // above 1 um: the facets' distance to the B-rep reads as deviation of the program, and 1 um is
@@ -961,7 +969,7 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
                      formatWith(" and %.2g deg", radToDeg(c.angular_rad));
       for (const std::string& n : c.notes) rep.notes.push_back(o.part + ": " + n);
     }
-    v->samples = sampleSurface(part->mesh, o.spacing_mm);
+    v->samples = o.samples_at ? o.samples_at(part->mesh) : sampleSurface(part->mesh, o.spacing_mm);
     part.reset();  // the samples are what the rest needs
     rep.spacing_mm = o.spacing_mm;
     phase("sample_surface");
@@ -970,6 +978,19 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   }
   rep.samples = &v->samples;
   rep.result = &v->result;
+  if (o.keep_poses) {
+    Verification::Poses& k = v->poses;
+    k.q.resize(m.pred.points.size());
+    k.axis_w.resize(program.path.size());
+    k.tool.assign(program.path.size(), 0);
+    for (size_t i = 0; i < k.q.size(); ++i) k.q[i] = m.pred.points[i].q;
+    for (size_t i = 0; i < k.axis_w.size(); ++i) {
+      k.axis_w[i] = program.path[i].u_w;
+      if (i < tools.tool_of_cl.size()) k.tool[i] = tools.tool_of_cl[i];
+    }
+    k.cutters = tools.cutters;
+    k.machine = m.machine;
+  }
   if (rep.mode == "part") rep.region_table = summariseRegions(v->samples, v->result);
   if (v->banded && v->samples.size() > 0) {
     if (!m.setup_note.empty()) rep.notes.push_back(m.setup_note);

@@ -3,6 +3,7 @@
 // library functions: will this program on this machine make this part within its profile
 // tolerance? runVerification reads the inputs and computes; writeVerification writes the report
 // directory as a whole. `tolver verify` parses options into VerifyInputs and prints.
+#include <Eigen/Geometry>
 #include <chrono>
 #include <cmath>
 #include <functional>
@@ -48,6 +49,11 @@ struct VerifyInputs {
   std::string probed;            // probed points (CSV)
   std::string compensated_from;  // the original of a compensated program
   bool allow_open = false;       // holes in the checked surface do not make INCOMPLETE
+  // The samples to verify instead of the part's surface sampled at spacing_mm (tolver measure:
+  // the measured points' feet on the part), given the part's mesh in w; and whether to keep
+  // each CL point's joints, tool axis and tool (Verification::poses).
+  std::function<SurfaceSamples(const TriangleMesh&)> samples_at;
+  bool keep_poses = false;
   // The outputs (verifyPart, verifyBatch): the report directory, with images or without.
   std::string report_dir;
   bool images = true;
@@ -62,6 +68,15 @@ struct Verification {
   DecimatedMesh view_mesh;  // the 3D view's (writeVerification)
   std::string machine_file, program_dialect;
   bool banded = false;  // a calibrated machine: report.band95_* hold the prediction's band
+  // With VerifyInputs::keep_poses: per CL point its joints (nominal IK), nominal tool axis and
+  // tool (index into cutters); the machine as predicted (its identification included).
+  struct Poses {
+    std::vector<JointVector> q;
+    std::vector<Eigen::Vector3d> axis_w;
+    std::vector<int> tool;
+    std::vector<Cutter> cutters;
+    Machine machine;
+  } poses;
   std::chrono::steady_clock::time_point started;
   // PASS: Ok; FAIL and INCOMPLETE: NotMet; UNDECIDED: Undecided (report.exit_code says the same).
   Verdict verdict = Verdict::Ok;
@@ -70,6 +85,9 @@ struct Verification {
   Verification(const Verification&) = delete;
   Verification& operator=(const Verification&) = delete;
 };
+
+// The part file's placement in w (mesh_offset, mesh_rotation_deg).
+Eigen::Isometry3d partPlacement(const VerifyInputs& in);
 
 // Reads the inputs, predicts the program, samples the part, sweeps the nominal and predicted
 // tool and classifies every sample. `progress` gets the sweep's fraction done. Throws InputError.

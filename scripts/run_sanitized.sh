@@ -38,6 +38,9 @@ campaigns+="|StepFile.RealFilesFromFiveCadSystemsReadAsDrawReadsThem"
 campaigns+="|VerifyCli.AStepPartIsCheckedFaceByFaceAndAgreesWithItsStl"
 # Two verify runs and three headless Chromium runs; the view's code runs in every verify test.
 campaigns+="|ReportRender.TheThreeDViewShowsThePartInTheLegendsColoursAndAClickReadsTheSample"
+# The measure loop's four ten-seed campaigns (50 s released); its command test runs.
+campaigns+="|MeasureTest.ACleanPartAddsNothing|MeasureTest.ACutterRadiusErrorIsNamedWithItsValue"
+campaigns+="|MeasureTest.AToolLengthErrorIsNamedOrConfounded|MeasureTest.APartSetUpErrorIsNamed"
 ctest --output-on-failure -j"$(nproc)" --timeout 1800 -E "^($campaigns)\$"
 # A fixed libFuzzer seed: the same clone fuzzes the same inputs first (a CI run is repeatable);
 # longer runs (tests/fuzz/run.sh 3600) use random seeds.

@@ -1,0 +1,81 @@
+#pragma once
+// Tracing a machined part's residual: measured normal deviations (a CMM's, or the machine's probe)
+// minus the predicted ones, explained by candidate effects the prediction lacks, each a few
+// parameters whose effect on the normal deviation at a measured point is linear to first order:
+//
+//   set-up        the part's pose on the table off by t, w (the part sat at p + t + w x p):
+//                 the path seen from the part moves the other way, -n . (t + w x p); values
+//                 reported at the part's origin
+//   cutter radius tool k's effective radius off by dR:           dR * s_R (its length preset to
+//                 the tip: s_R = -(1 - n.a) on a ball, -|n across the axis| on a flat or
+//                 bull-nose cutter, whose floor never moves)
+//   tool length   tool k's length off by dL (its tip further out): -dL * (n . a)
+//   tool offset   tool k's tip off by d (several tools only):      n . d
+//   stock         a uniform normal offset c (stock left, deflection that the same everywhere): c
+//   machine       calibrated parameters theta off by dtheta:        m . dtheta, m the point's row
+//                 (n . (J_tip + J_rot x r)) with the calibration's covariance as their prior.
+//
+// Selection as diagnose's (core/diagnosis/diagnosis.h): forward, one group at a time, the group
+// whose F test against the current model is strongest; it is added only when that test holds
+// (p < alpha) and the held-out points' squared residuals fall by more than twice their standard
+// error. Nothing is added when nothing is missing. Groups whose fit on these points is as good as
+// the added one's (within 2 % of its gain) are named as confounded with it: the points cannot tell
+// them apart (a set-up's z and a tool's length on a flat face, always). Groups are ranked by BIC
+// (m log(RSS_with / RSS_without) + q log m), so that six values must buy more than one.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace tolver {
+
+// One measured point as the prediction sees it (mm; w the part frame).
+struct TracePoint {
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();     // on the nominal surface
+  Eigen::Vector3d n_w = Eigen::Vector3d::UnitZ();    // outward unit normal
+  Eigen::Vector3d axis_w = Eigen::Vector3d::UnitZ();  // the cutting tool's axis (tip -> spindle)
+  double radius_sensitivity = -1.0;                   // s_R above
+  int tool = 0;                                        // index of the tool that cut it
+  double residual = 0.0;                               // measured - predicted, mm
+  bool held_out = false;
+};
+
+struct TraceOptions {
+  double alpha = 1e-3;
+  // The calibrated machine's parameters: one row per point (points x parameters, d deviation /
+  // d parameter) and their prior covariance (mm, rad); empty: no machine group.
+  Eigen::MatrixXd machine_rows;
+  Eigen::MatrixXd machine_covariance;
+  std::vector<std::string> machine_names;
+  int tools = 1;
+};
+
+struct TraceGroup {
+  std::string name;                       // "set-up", "cutter radius T2", ...
+  std::vector<std::string> value_names;   // each value's name with its unit
+  Eigen::VectorXd values, sd;             // fitted alone on the fit points (mm, rad)
+  double f = 0, p_value = 1;              // against the model before it (the last round it was tried)
+  double rss_fit = 0;                     // mm^2, on the fit points, the current model with it
+  double heldout_gain_um2 = 0, heldout_gain_se_um2 = 0;  // mean drop of r^2 on held-out points
+  bool added = false;
+  std::string reason;                     // why added or not
+  std::vector<std::string> confounded;    // groups these points cannot tell from it
+};
+
+struct PartTrace {
+  std::vector<TraceGroup> groups;  // ranked: the added ones first in order, then by F
+  std::vector<int> added;          // indices into groups, in the order added
+  Eigen::VectorXd residual_after;  // per point, mm: the residual with the added effects
+  int fit_points = 0, heldout_points = 0;
+  double fit_rms_before = 0, fit_rms_after = 0;            // mm
+  double heldout_rms_before = 0, heldout_rms_after = 0;    // mm
+  double heldout_max_before = 0, heldout_max_after = 0;    // mm
+  double sigma_after = 0;  // residual sigma of the final model on the fit points, mm
+  // "effects added", "nothing missing" (no candidate passes and the residual is at the noise the
+  // data show), or "unexplained" (no candidate passes, the residual is structured or larger than
+  // the repeatability when repeats exist).
+  std::string verdict, verdict_text;
+};
+
+PartTrace tracePart(const std::vector<TracePoint>& points, const TraceOptions& options = {});
+
+}  // namespace tolver

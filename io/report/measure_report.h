@@ -1,0 +1,43 @@
+#pragma once
+// tolver measure's outputs: the per-point table (residuals.csv), report.json and the process
+// corrections file (process.txt), from what the measure pipeline computed.
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/diagnosis/part_trace.h"
+
+namespace tolver {
+
+// One measured point as reported (mm; NAN where it has no value).
+struct MeasureRow {
+  int line = 0;  // in the points file
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero(), foot_w = Eigen::Vector3d::Zero();
+  Eigen::Vector3d n_w = Eigen::Vector3d::Zero();
+  double measured = NAN, predicted = NAN, program = NAN, machine = NAN;
+  double residual = NAN, residual_after = NAN;
+  double instrument = NAN;  // the file's own deviation, when given
+  int cl_line = 0, tool = 0;
+  bool held_out = false;
+  std::string status;  // "used", or why not: "beyond search range", "not machined", ...
+};
+
+struct MeasureReport {
+  std::string name, machine_file, program_file, part_file, points_file;
+  std::vector<MeasureRow> rows;
+  int used = 0;
+  int beyond_range = 0, unmachined = 0, off_face = 0;
+  double search_mm = 0;
+  int heldout_every = 0;
+  // Summaries of the used points (mm).
+  double measured_rms = 0, predicted_rms = 0, residual_rms = 0, residual_max = 0;
+  PartTrace trace;
+  std::vector<std::string> notes;
+};
+
+std::string formatMeasureCsv(const MeasureReport& r);
+std::string formatMeasureJson(const MeasureReport& r);
+// The corrections learned, as `key value` lines with units (docs/formats.md: process file).
+std::string formatProcessFile(const MeasureReport& r);
+
+}  // namespace tolver

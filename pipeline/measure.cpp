@@ -1,0 +1,212 @@
+#include "pipeline/measure.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include "core/kinematics/sensitivity_jacobian.h"
+#include "geometry/surface_projection.h"
+#include "io/common/io_error.h"
+#include "io/common/text_util.h"
+#include "io/program/measured_points.h"
+
+namespace tolver {
+namespace {
+
+// Where each measured point lands: its foot on the part and the sample verify sweeps there.
+struct Matching {
+  std::vector<Eigen::Vector3d> p_w, given_n_w;
+  std::vector<SurfaceFoot> feet;
+  std::vector<int> sample_of;  // -1: not swept (beyond the search range, beyond an edge)
+};
+
+SurfaceSamples samplesAtFeet(const TriangleMesh& mesh, double search_mm, Matching& m) {
+  m.feet = projectOntoMesh(mesh, m.p_w);
+  m.sample_of.assign(m.p_w.size(), -1);
+  SurfaceSamples s;
+  s.group_names = mesh.group_names;
+  s.group_aliases = mesh.group_aliases;
+  for (size_t i = 0; i < m.p_w.size(); ++i) {
+    const SurfaceFoot& f = m.feet[i];
+    if (f.distance > search_mm || f.off_face) continue;
+    m.sample_of[i] = static_cast<int>(s.p_w.size());
+    s.p_w.push_back(f.foot_w);
+    // The file's nominal normal where it gives one (the CAD's, exact), else the facet's.
+    s.n_w.push_back(m.given_n_w[i].squaredNorm() > 0 ? m.given_n_w[i] : f.n_w);
+    s.area.push_back(1.0);  // a point stands for itself: areas count points
+    s.group.push_back(mesh.face_group.empty() ? 0 : mesh.face_group[f.face]);
+    s.on_edge.push_back(0);
+  }
+  return s;
+}
+
+// d(normal deviation) / d(cutter radius), the tool's length preset to its tip (as shops set
+// tools): a ball of radius R + dR has its centre dR further up the axis, so its contact with
+// normal n moves by dR (a - n): -(1 - n.a), nothing on the ball's bottom, -1 on its equator. A
+// flat or bull-nose cutter: the radial share of the normal (its floor does not move).
+double radiusSensitivity(const Cutter& c, const Eigen::Vector3d& n, const Eigen::Vector3d& a) {
+  if (c.corner_radius >= 0.5 * c.diameter - 1e-9) return -(1.0 - n.dot(a));
+  return -(n - n.dot(a) * a).norm();
+}
+
+}  // namespace
+
+MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
+  if (in.verify.part.empty())
+    throw FieldError("part", "measure needs the part's model: the points are matched to it");
+  if (!(in.search_mm > 0 && in.search_mm <= 10))
+    throw FieldError("search_mm", "the search range must lie in (0, 10] mm");
+  if (in.heldout_every < 2)
+    throw FieldError("heldout_every", "hold out every N-th point with N at least 2");
+  const std::vector<MeasuredPoint> points = readMeasuredPoints(in.points);
+  if (progress) progress("reading", 1.0);
+  const Eigen::Isometry3d w_T_file = partPlacement(in.verify);
+  Matching m;
+  for (const MeasuredPoint& p : points) {
+    m.p_w.push_back(w_T_file * p.p);
+    m.given_n_w.push_back(w_T_file.linear() * p.n);
+  }
+  VerifyInputs vi = in.verify;
+  vi.keep_poses = true;
+  // Placements 0.05 mm apart: the cusp between them (step^2 / 8R) is 0.06 um on a 5 mm ball,
+  // 0.3 um on a 1 mm one, below a CMM's noise; verify's default keeps it at a tenth of the
+  // tolerance, which would read as residual here.
+  if (std::isnan(vi.step_mm)) vi.step_mm = 0.05;
+  vi.images = false;
+  vi.view3d = false;
+  vi.samples_at = [&](const TriangleMesh& mesh) { return samplesAtFeet(mesh, in.search_mm, m); };
+  std::unique_ptr<Verification> v =
+      runVerification(vi, "", [&](double f) { if (progress) progress("sweeping", f); });
+  const VerifyResult& res = v->result;
+  const Verification::Poses& poses = v->poses;
+
+  MeasureRun run;
+  MeasureReport& rep = run.report;
+  rep.name = std::filesystem::path(in.points).stem().string();
+  rep.machine_file = v->machine_file;
+  rep.program_file = v->report.program_file;
+  rep.part_file = in.verify.part;
+  rep.points_file = in.points;
+  rep.search_mm = in.search_mm;
+  rep.heldout_every = in.heldout_every;
+  std::vector<TracePoint> trace;
+  std::vector<int> row_of_trace;
+  std::vector<int> cl_of_trace, sample_of_trace;
+  for (size_t i = 0; i < points.size(); ++i) {
+    MeasureRow w;
+    w.line = points[i].line;
+    w.p_w = m.p_w[i];
+    w.foot_w = m.feet[i].foot_w;
+    if (points[i].has_deviation) w.instrument = points[i].deviation;
+    const int s = m.sample_of[i];
+    if (s < 0) {
+      w.n_w = m.feet[i].n_w;
+      if (m.feet[i].distance > in.search_mm) {
+        w.status = "beyond search range";
+        ++rep.beyond_range;
+      } else {
+        w.status = "beyond an edge";
+        ++rep.off_face;
+      }
+      rep.rows.push_back(w);
+      continue;
+    }
+    w.n_w = v->samples.n_w[s];
+    w.measured = (m.p_w[i] - w.foot_w).dot(w.n_w);
+    const int cl = res.cl_index[s];
+    if (!res.machined[s] || cl < 0) {
+      w.status = "not machined";
+      ++rep.unmachined;
+      rep.rows.push_back(w);
+      continue;
+    }
+    w.predicted = res.total[s];
+    const bool split = res.split.empty() || res.split[s] == Split::Attributable;
+    if (split) {
+      w.program = res.program[s];
+      w.machine = res.machine[s];
+    }
+    w.residual = w.measured - w.predicted;
+    w.cl_line = cl < static_cast<int>(v->report.cl_lines.size()) ? v->report.cl_lines[cl] : 0;
+    w.tool = poses.tool[cl];
+    w.held_out = rep.used % in.heldout_every == in.heldout_every - 1;
+    w.status = "used";
+    TracePoint t;
+    t.p_w = w.foot_w;
+    t.n_w = w.n_w;
+    t.axis_w = poses.axis_w[cl];
+    t.tool = w.tool;
+    t.radius_sensitivity = radiusSensitivity(poses.cutters[w.tool], t.n_w, t.axis_w);
+    t.residual = w.residual;
+    t.held_out = w.held_out;
+    trace.push_back(t);
+    row_of_trace.push_back(static_cast<int>(rep.rows.size()));
+    cl_of_trace.push_back(cl);
+    sample_of_trace.push_back(s);
+    ++rep.used;
+    rep.rows.push_back(w);
+  }
+  if (rep.used == 0)
+    throw InputError(in.points, 0, 0, "x_mm",
+                     "none of the " + std::to_string(points.size()) +
+                         " points lies on a machined face of the part within " +
+                         formatNumber(in.search_mm) +
+                         " mm: are they in the part's frame (the set-up, mesh_offset)?");
+  // The machine's parameters, when calibrated: each point's row through the sensitivity
+  // Jacobian at the joints of the move that cut it, at its contact on the cutter.
+  TraceOptions opt;
+  opt.tools = static_cast<int>(poses.cutters.size());
+  const Machine& machine = poses.machine;
+  if (!machine.identification.empty()) {
+    const IdentificationUncertainty& id = machine.identification;
+    const ForwardKinematics fk(machine.model, machine.params);
+    Eigen::MatrixXd J(6, machine.model.parameterCount());
+    opt.machine_rows.resize(static_cast<Eigen::Index>(trace.size()), id.parameters.size());
+    for (size_t k = 0; k < trace.size(); ++k) {
+      const JointVector& q = poses.q[cl_of_trace[k]];
+      J.setZero();
+      sensitivityJacobian(fk, q, J);
+      const Eigen::Matrix3d R = fk.w_T_t(q).linear();
+      const Eigen::Vector3d r = res.contact_offset_w[sample_of_trace[k]].cast<double>();
+      const Eigen::Vector3d n = trace[k].n_w, m_w = r.cross(n);
+      for (size_t c = 0; c < id.parameters.size(); ++c) {
+        const int p = id.parameters[c];
+        opt.machine_rows(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(c)) =
+            n.dot(R * J.block<3, 1>(0, p)) + m_w.dot(R * J.block<3, 1>(3, p));
+      }
+    }
+    opt.machine_covariance = id.covariance;
+    for (int p : id.parameters) opt.machine_names.push_back(machine.model.parameters[p].iso_code);
+  }
+  if (progress) progress("tracing", 0.0);
+  rep.trace = tracePart(trace, opt);
+  double m2 = 0, p2 = 0, r2 = 0;
+  for (size_t k = 0; k < trace.size(); ++k) {
+    MeasureRow& w = rep.rows[row_of_trace[k]];
+    w.residual_after = rep.trace.residual_after[static_cast<Eigen::Index>(k)];
+    m2 += w.measured * w.measured;
+    p2 += w.predicted * w.predicted;
+    r2 += w.residual * w.residual;
+    rep.residual_max = std::max(rep.residual_max, std::abs(w.residual));
+  }
+  rep.measured_rms = std::sqrt(m2 / trace.size());
+  rep.predicted_rms = std::sqrt(p2 / trace.size());
+  rep.residual_rms = std::sqrt(r2 / trace.size());
+  if (rep.beyond_range + rep.off_face + rep.unmachined > 0)
+    rep.notes.push_back(std::to_string(rep.beyond_range) + " points beyond the search range, " +
+                        std::to_string(rep.off_face) + " beyond an edge of the part, " +
+                        std::to_string(rep.unmachined) +
+                        " on faces the program does not cut: not used");
+  if (!in.report_dir.empty()) {
+    ReportDirectory dir(in.report_dir);
+    writeFileAtomically(dir.staging() + "/residuals.csv", formatMeasureCsv(rep));
+    writeFileAtomically(dir.staging() + "/report.json", formatMeasureJson(rep));
+    writeFileAtomically(dir.staging() + "/process.txt", formatProcessFile(rep));
+    dir.commit();
+    run.report_dir = dir.final();
+  }
+  run.verdict = Verdict::Ok;
+  return run;
+}
+
+}  // namespace tolver

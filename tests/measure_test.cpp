@@ -1,0 +1,378 @@
+// tolver measure against an independent machining simulation: the sculptured sample's ball-end
+// finish cut by a brute-force simulator (its own reading of the CL file, its own placements and
+// its own envelope: the material left along each measured point's normal is where that line
+// first enters a ball, over every placement; no code of tolver's sweep), on a perfect machine
+// with one process effect, measured with 0.5 um probe noise. tolver measure must name the effect
+// (or nothing when there is none) and bring the held-out residual to the probe's noise.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <filesystem>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "io/mesh/mesh_file.h"
+#include "io/program/measured_points.h"
+#include "pipeline/measure.h"
+#include "test_support.h"
+
+namespace tolver {
+namespace {
+
+namespace fs = std::filesystem;
+
+// --- the independent simulator -------------------------------------------------------------
+struct Ball {
+  Eigen::Vector3d centre;
+};
+
+struct Effect {
+  double radius_error_mm = 0;   // the ball's true radius is R + this (its tip preset)
+  double length_error_mm = 0;   // the tool's true length is longer by this: tip further out
+  Eigen::Isometry3d part_error = Eigen::Isometry3d::Identity();  // the part's true pose on the
+                                                                  // table, in the part frame
+};
+
+// GOTO/x,y,z,i,j,k lines of an APT file; a GOTO after RAPID is a rapid move (not cut).
+struct Cl {
+  Eigen::Vector3d tip, axis;
+  bool rapid;
+};
+std::vector<Cl> readGotos(const std::string& path) {
+  std::ifstream in(path);
+  std::vector<Cl> out;
+  std::string line;
+  bool rapid = false;
+  while (std::getline(in, line)) {
+    if (line.rfind("RAPID", 0) == 0) rapid = true;
+    if (line.rfind("GOTO/", 0) != 0) continue;
+    std::stringstream ss(line.substr(5));
+    double v[6];
+    char comma;
+    for (int k = 0; k < 6; ++k) {
+      ss >> v[k];
+      if (k < 5) ss >> comma;
+    }
+    out.push_back({Eigen::Vector3d(v[0], v[1], v[2]),
+                   Eigen::Vector3d(v[3], v[4], v[5]).normalized(), rapid});
+    rapid = false;
+  }
+  return out;
+}
+
+class Simulator {
+ public:
+  Simulator(const std::vector<Cl>& cl, double radius, const Effect& e) : r_(radius + e.radius_error_mm) {
+    // The part sits at part_error on the table: the path the machine runs, seen from the part,
+    // is the inverse of that pose applied to the programmed one.
+    const Eigen::Isometry3d inv = e.part_error.inverse();
+    for (size_t i = 1; i < cl.size(); ++i) {
+      if (cl[i].rapid) continue;
+      const int steps = std::max(1, static_cast<int>(std::ceil((cl[i].tip - cl[i - 1].tip).norm() / 0.02)));
+      for (int k = 0; k <= steps; ++k) {
+        const double t = static_cast<double>(k) / steps;
+        const Eigen::Vector3d a = ((1 - t) * cl[i - 1].axis + t * cl[i].axis).normalized();
+        const Eigen::Vector3d tip = (1 - t) * cl[i - 1].tip + t * cl[i].tip - e.length_error_mm * a;
+        const Eigen::Vector3d c = inv * (tip + r_ * a);
+        balls_[key(c)].push_back({c});
+      }
+    }
+  }
+  // The machined surface along p + s n (n outward): the smallest s where the line enters a ball,
+  // within [-range, range]; NAN when none reaches it.
+  double surface(const Eigen::Vector3d& p, const Eigen::Vector3d& n, double range) const {
+    double best = INFINITY;
+    const int reach = static_cast<int>(std::ceil((r_ + range) / kCell));
+    const std::array<int, 3> k0 = cell(p);
+    for (int dx = -reach; dx <= reach; ++dx)
+      for (int dy = -reach; dy <= reach; ++dy)
+        for (int dz = -reach; dz <= reach; ++dz) {
+          const auto it = balls_.find(pack({k0[0] + dx, k0[1] + dy, k0[2] + dz}));
+          if (it == balls_.end()) continue;
+          for (const Ball& b : it->second) {
+            const Eigen::Vector3d d = p - b.centre;
+            const double bb = d.dot(n), cc = d.squaredNorm() - r_ * r_;
+            const double disc = bb * bb - cc;
+            if (disc < 0) continue;
+            const double s = -bb - std::sqrt(disc);
+            if (s >= -range && s <= range) best = std::min(best, s);
+          }
+        }
+    return std::isfinite(best) ? best : NAN;
+  }
+
+ private:
+  static constexpr double kCell = 2.0;
+  static std::array<int, 3> cell(const Eigen::Vector3d& p) {
+    return {static_cast<int>(std::floor(p.x() / kCell)), static_cast<int>(std::floor(p.y() / kCell)),
+            static_cast<int>(std::floor(p.z() / kCell))};
+  }
+  static long long pack(const std::array<int, 3>& k) {
+    return ((static_cast<long long>(k[0]) + 100000) * 200000 + (k[1] + 100000)) * 200000 + (k[2] + 100000);
+  }
+  static long long key(const Eigen::Vector3d& p) { return pack(cell(p)); }
+  double r_;
+  std::map<long long, std::vector<Ball>> balls_;
+};
+
+// Points on the part's faces (area-weighted), measured on the simulated part: the foot moved
+// along the face's normal to the machined surface, plus probe noise. Points the simulator does
+// not machine, or within 1.5 mm of the part's border, are not measured.
+std::string measuredCsv(const TriangleMesh& mesh, const Simulator& sim, int count, unsigned seed,
+                        double noise_mm) {
+  std::mt19937 rng(seed);
+  std::vector<double> cum;
+  double total = 0;
+  for (size_t f = 0; f < mesh.faces.size(); ++f) cum.push_back(total += mesh.faceArea(f));
+  std::uniform_real_distribution<double> u(0, 1);
+  std::normal_distribution<double> g(0, noise_mm);
+  std::string out = "# simulated CMM points\nx_mm,y_mm,z_mm,nx,ny,nz\n";
+  int made = 0;
+  for (int tries = 0; made < count && tries < 50 * count; ++tries) {
+    const size_t f = std::lower_bound(cum.begin(), cum.end(), u(rng) * total) - cum.begin();
+    const Eigen::Vector3i& t = mesh.faces[f];
+    double a = u(rng), b = u(rng);
+    if (a + b > 1) a = 1 - a, b = 1 - b;
+    const Eigen::Vector3d p = mesh.vertices[t[0]] + a * (mesh.vertices[t[1]] - mesh.vertices[t[0]]) +
+                              b * (mesh.vertices[t[2]] - mesh.vertices[t[0]]);
+    const Eigen::Vector3d n = mesh.faceNormal(static_cast<int>(f));
+    if (n.z() < 0.3) continue;  // the sculptured top only (the finish cuts nothing else)
+    if (std::abs(p.x()) > 38 || std::abs(p.y()) > 28) continue;  // clear of the border
+    const double s = sim.surface(p, n, 0.2);
+    if (std::isnan(s)) continue;
+    const Eigen::Vector3d q = p + (s + g(rng)) * n;
+    char line[200];
+    std::snprintf(line, sizeof line, "%.6f,%.6f,%.6f,%.9f,%.9f,%.9f\n", q.x(), q.y(), q.z(), n.x(),
+                  n.y(), n.z());
+    out += line;
+    ++made;
+  }
+  return out;
+}
+
+// The sculptured finish as a three-axis program: the same ball centres with the tool upright (a
+// ball's envelope depends on its centre's path alone), so joint-linear moves are CL-linear and
+// the part's slopes let the ball's radius show (-(1 - n.z) per unit of radius).
+std::string threeAxisProgram(const std::vector<Cl>& cl, double radius) {
+  std::string out =
+      "PARTNO/SCULPTURED_3AXIS\nUNITS/MM\nCUTTER/10,5,0,0,0,0,40\nLOADTL/1\n"
+      "SPINDL/RPM,8000,CLW\n";
+  for (const Cl& c : cl) {
+    const Eigen::Vector3d tip = c.tip + radius * c.axis - radius * Eigen::Vector3d::UnitZ();
+    if (c.rapid) out += "RAPID\n";
+    char line[120];
+    std::snprintf(line, sizeof line, "GOTO/%.6f,%.6f,%.6f\n", tip.x(), tip.y(), tip.z());
+    out += line;
+    if (c.rapid) out += "FEDRAT/MMPM,2000\n";
+  }
+  return out;
+}
+
+std::vector<Cl> upright(std::vector<Cl> cl, double radius) {
+  for (Cl& c : cl) {
+    c.tip += radius * c.axis - radius * Eigen::Vector3d::UnitZ();
+    c.axis = Eigen::Vector3d::UnitZ();
+  }
+  return cl;
+}
+
+class MeasureTest : public test::TempDirTest {
+ protected:
+  MeasureInputs inputs(const std::string& points) {
+    MeasureInputs in;
+    in.verify.machine.machine = test::sourcePath("resources/machines/matsuura_mc760vx.xml");
+    in.verify.machine.setup = test::sourcePath("samples/matsuura_setup.txt");
+    in.verify.program.cl = program_;
+    in.verify.part = test::sourcePath("samples/sculptured_part.obj");
+    in.verify.tolerance_mm = 0.03;
+    in.points = points;
+    return in;
+  }
+  static const TriangleMesh& mesh() {
+    static const TriangleMesh m = readPartMesh(test::sourcePath("samples/sculptured_part.obj")).mesh;
+    return m;
+  }
+  std::string program_;
+  static const std::vector<Cl>& cl() {
+    static const std::vector<Cl> c = readGotos(test::sourcePath("samples/sculptured_finish.apt"));
+    return c;
+  }
+  void SetUp() override {
+    TempDirTest::SetUp();
+    program_ = write("sculptured_3axis.apt", threeAxisProgram(cl(), 5.0));
+  }
+  MeasureRun run(const Effect& e, unsigned seed, const std::string& name) {
+    const Simulator sim(upright(cl(), 5.0), 5.0, e);
+    const std::string file = write(name + ".csv", measuredCsv(mesh(), sim, 600, seed, 0.5e-3));
+    return measurePart(inputs(file));
+  }
+};
+
+bool added(const PartTrace& t, const std::string& name) {
+  for (const TraceGroup& g : t.groups)
+    if (g.added && g.name == name) return true;
+  return false;
+}
+
+void print(const char* what, const MeasureRun& r) {
+  const PartTrace& t = r.report.trace;
+  std::printf("[ measure ] %-12s %s; held-out RMS %.2f -> %.2f um (%d used)\n", what,
+              t.verdict_text.c_str(), 1e3 * t.heldout_rms_before, 1e3 * t.heldout_rms_after,
+              r.report.used);
+}
+
+// Ten seeds per case, as the issue asks: the right answer in at least 9 of 10, the held-out
+// residual after within 1.5 x the probe's noise.
+constexpr int kSeeds = 10;
+constexpr double kNoise = 0.5e-3;
+
+TEST_F(MeasureTest, ACleanPartAddsNothing) {
+  int nothing = 0, at_noise = 0;
+  for (unsigned seed = 1; seed <= kSeeds; ++seed) {
+    const MeasureRun r = run(Effect{}, seed, "clean" + std::to_string(seed));
+    print("clean", r);
+    EXPECT_GT(r.report.used, 400);
+    nothing += r.report.trace.added.empty();
+    at_noise += r.report.trace.heldout_rms_after < 1.5 * kNoise;
+  }
+  EXPECT_GE(nothing, 9);
+  EXPECT_GE(at_noise, 9);
+}
+
+TEST_F(MeasureTest, ACutterRadiusErrorIsNamedWithItsValue) {
+  Effect e;
+  e.radius_error_mm = 0.015;
+  int named = 0, at_noise = 0;
+  for (unsigned seed = 101; seed < 101 + kSeeds; ++seed) {
+    const MeasureRun r = run(e, seed, "radius" + std::to_string(seed));
+    print("radius +15 um", r);
+    const PartTrace& t = r.report.trace;
+    // The value within three of its standard deviations (on this gentle part 15 um of radius
+    // moves the surface by 0.3 um RMS: the value is known to about 1-2 um).
+    const bool ok = !t.added.empty() && t.groups[0].name == "cutter radius" &&
+                    std::abs(t.groups[0].values[0] - 0.015) < 3 * t.groups[0].sd[0];
+    if (!t.added.empty())
+      std::printf("[ measure ]   radius %.2f +- %.2f um\n", 1e3 * t.groups[0].values[0],
+                  1e3 * t.groups[0].sd[0]);
+    named += ok;
+    at_noise += t.heldout_rms_after < 1.5 * kNoise && t.heldout_rms_after < t.heldout_rms_before;
+  }
+  EXPECT_GE(named, 9);
+  EXPECT_GE(at_noise, 9);
+}
+
+// A tool 12 um longer than preset: on this gentle part (normals within 35 deg of the axis) it
+// reads almost as a uniform stock; tolver names the length, or names the two as confounded.
+TEST_F(MeasureTest, AToolLengthErrorIsNamedOrConfounded) {
+  Effect e;
+  e.length_error_mm = 0.012;
+  int named = 0, at_noise = 0;
+  for (unsigned seed = 201; seed < 201 + kSeeds; ++seed) {
+    const MeasureRun r = run(e, seed, "length" + std::to_string(seed));
+    print("length +12 um", r);
+    const PartTrace& t = r.report.trace;
+    bool ok = false;
+    if (!t.added.empty()) {
+      const TraceGroup& g = t.groups[0];
+      ok = (g.name == "tool length" && std::abs(g.values[0] - 0.012) < 0.002) ||
+           std::find(g.confounded.begin(), g.confounded.end(), "tool length") != g.confounded.end();
+    }
+    named += ok;
+    at_noise += t.heldout_rms_after < 1.5 * kNoise;
+  }
+  EXPECT_GE(named, 9);
+  EXPECT_GE(at_noise, 9);
+}
+
+TEST_F(MeasureTest, APartSetUpErrorIsNamed) {
+  Effect e;
+  e.part_error.translation() = Eigen::Vector3d(0.010, -0.004, -0.006);
+  e.part_error.linear() = Eigen::AngleAxisd(60e-6, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  int named = 0, at_noise = 0;
+  for (unsigned seed = 301; seed < 301 + kSeeds; ++seed) {
+    const MeasureRun r = run(e, seed, "setup" + std::to_string(seed));
+    print("set-up", r);
+    const PartTrace& t = r.report.trace;
+    named += !t.added.empty() && t.groups[0].name == "set-up";
+    at_noise += t.heldout_rms_after < 1.5 * kNoise;
+  }
+  EXPECT_GE(named, 9);
+  EXPECT_GE(at_noise, 9);
+}
+
+// The command as a user runs it: the console's figures are report.json's, the residual RMS is
+// residuals.csv's, process.txt holds the set-up found; a bad points file is refused with its
+// line and field, and writes nothing.
+TEST_F(MeasureTest, TheCommandWritesWhatItSaysAndRefusesBadPoints) {
+  Effect e;
+  e.part_error.translation() = Eigen::Vector3d(0.010, -0.004, -0.006);
+  const Simulator sim(upright(cl(), 5.0), 5.0, e);
+  const std::string points = write("cmm.csv", measuredCsv(mesh(), sim, 400, 77, kNoise));
+  const std::string base = "measure --machine " +
+                           test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
+                           " --setup " + test::sourcePath("samples/matsuura_setup.txt") +
+                           " --cl " + program_ + " --part " +
+                           test::sourcePath("samples/sculptured_part.obj") + " --tolerance 0.03";
+  const test::RunResult r =
+      test::runTolver(base + " --points " + points + " --report-dir " + path("out"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::printf("%s", r.output.c_str());
+  EXPECT_NE(r.output.find("tolver measure: effects added: set-up"), std::string::npos) << r.output;
+  std::ifstream jf(path("out") + "/report.json");
+  const nlohmann::json j = nlohmann::json::parse(jf);
+  EXPECT_EQ(j["points"]["used"].get<int>(), 400);
+  EXPECT_EQ(j["trace"]["verdict"], "effects added");
+  char after[80];
+  std::snprintf(after, sizeof after, "held-out RMS %.2f um",
+                j["trace"]["after_um"]["heldout_rms"].get<double>());
+  EXPECT_NE(r.output.find(after), std::string::npos) << r.output;
+  // residuals.csv: the residual RMS of the used rows is the JSON's.
+  std::ifstream cf(path("out") + "/residuals.csv");
+  std::string line;
+  std::getline(cf, line);
+  double s2 = 0;
+  int used = 0;
+  while (std::getline(cf, line)) {
+    std::vector<std::string> c;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
+    ASSERT_EQ(c.size(), 21u) << line;
+    if (c[20] != "used") continue;
+    const double res = std::stod(c[14]), meas = std::stod(c[10]), pred = std::stod(c[11]);
+    EXPECT_NEAR(res, meas - pred, 2e-4) << line;
+    s2 += res * res;
+    ++used;
+  }
+  EXPECT_EQ(used, 400);
+  EXPECT_NEAR(std::sqrt(s2 / used), j["deviation_um"]["residual_rms"].get<double>(), 1e-3);
+  std::ifstream pf(path("out") + "/process.txt");
+  const std::string process((std::istreambuf_iterator<char>(pf)), {});
+  EXPECT_NE(process.find("set-up_x_mm "), std::string::npos) << process;
+
+  // Bad input: a word where a number goes; points nowhere near the part.
+  const std::string bad = write("bad.csv", "x_mm,y_mm,z_mm\n1,2,3\n4,five,6\n");
+  const test::RunResult b =
+      test::runTolver(base + " --points " + bad + " --report-dir " + path("bad_out"));
+  EXPECT_EQ(b.exit_code, 2) << b.output;
+  EXPECT_NE(b.output.find("bad.csv:3"), std::string::npos) << b.output;
+  EXPECT_NE(b.output.find("y_mm"), std::string::npos) << b.output;
+  EXPECT_FALSE(fs::exists(path("bad_out")));
+  const std::string far = write("far.csv", "x_mm,y_mm,z_mm\n1000,2000,3000\n");
+  const test::RunResult f =
+      test::runTolver(base + " --points " + far + " --report-dir " + path("far_out"));
+  EXPECT_EQ(f.exit_code, 2) << f.output;
+  EXPECT_NE(f.output.find("none of the 1 points"), std::string::npos) << f.output;
+  EXPECT_FALSE(fs::exists(path("far_out")));
+}
+
+}  // namespace
+}  // namespace tolver
