@@ -21,14 +21,16 @@ void printMeasurement(const MeasureRun& run) {
   const MeasureReport& r = run.report;
   const PartTrace& t = r.trace;
   std::printf("tolver measure: %s\n", t.verdict_text.c_str());
-  std::printf("  points     %zu in %s: %d used (%d fit, %d held out), %d beyond the %.3g mm "
-              "search range, %d beyond an edge, %d on faces not machined\n",
-              r.rows.size(), r.points_file.c_str(), r.used, t.fit_points, t.heldout_points,
-              r.beyond_range, r.search_mm, r.off_face, r.unmachined);
-  std::printf("  deviation  measured RMS %.2f um, predicted RMS %.2f um; residual (measured - "
-              "predicted) RMS %.2f um, max %.2f um\n",
-              mmToUm(r.measured_rms), mmToUm(r.predicted_rms), mmToUm(r.residual_rms),
-              mmToUm(r.residual_max));
+  std::printf(
+      "  points     %zu in %s: %d used (%d fit, %d held out), %d beyond the %.3g mm "
+      "search range, %d beyond an edge, %d on faces not machined\n",
+      r.rows.size(), r.points_file.c_str(), r.used, t.fit_points, t.heldout_points, r.beyond_range,
+      r.search_mm, r.off_face, r.unmachined);
+  std::printf(
+      "  deviation  measured RMS %.2f um, predicted RMS %.2f um; residual (measured - "
+      "predicted) RMS %.2f um, max %.2f um\n",
+      mmToUm(r.measured_rms), mmToUm(r.predicted_rms), mmToUm(r.residual_rms),
+      mmToUm(r.residual_max));
   for (const TraceGroup& g : t.groups) {
     if (!g.added) continue;
     std::printf("  added      %s:", g.name.c_str());
@@ -54,8 +56,7 @@ void printMeasurement(const MeasureRun& run) {
     if (!g.added && !g.reason.empty())
       std::printf("  not added  %s: %s\n", g.name.c_str(), g.reason.c_str());
   std::printf("  before     held-out RMS %.2f um, max %.2f um (fit points %.2f um)\n",
-              mmToUm(t.heldout_rms_before), mmToUm(t.heldout_max_before),
-              mmToUm(t.fit_rms_before));
+              mmToUm(t.heldout_rms_before), mmToUm(t.heldout_max_before), mmToUm(t.fit_rms_before));
   std::printf("  after      held-out RMS %.2f um, max %.2f um (fit points %.2f um)\n",
               mmToUm(t.heldout_rms_after), mmToUm(t.heldout_max_after), mmToUm(t.fit_rms_after));
   for (const std::string& n : r.notes) std::printf("  note       %s\n", n.c_str());
@@ -76,8 +77,7 @@ void registerMeasure(CLI::App& app, Verdict* verdict) {
       "points. Exit 0 done, 2 bad input.");
   addMachineOptions(cmd, o->in.verify.machine, "machine file (XML), calibrated or not");
   addProgramOptions(cmd, o->in.verify.program);
-  cmd->add_option("--part", o->in.verify.part, "part model (STEP, STL, OBJ, PLY, ...)")
-      ->required();
+  cmd->add_option("--part", o->in.verify.part, "part model (STEP, STL, OBJ, PLY, ...)")->required();
   cmd->add_option("--points", o->in.points,
                   "measured points (CSV x_mm,y_mm,z_mm[,nx,ny,nz][,deviation_mm], or an ASC "
                   "point cloud), in the part file's frame")
@@ -103,6 +103,9 @@ void registerMeasure(CLI::App& app, Verdict* verdict) {
       ->delimiter(',');
   cmd->add_flag("--absolute", o->in.verify.absolute,
                 "a calibrated machine: without the set-up a shop measures");
+  cmd->add_option("--process", o->in.verify.process,
+                  "process corrections the prediction already holds (a previous process.txt); "
+                  "the new process.txt adds what this part shows to them");
   cmd->add_flag("--quiet", o->quiet, "print nothing but errors");
   cmd->callback([o, verdict] {
     ProgressBar bar(!o->quiet);

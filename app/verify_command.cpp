@@ -204,6 +204,9 @@ void registerVerify(CLI::App& app, Verdict* verdict) {
                 "a calibrated machine: verify without the set-up a shop measures (part probed, "
                 "tool preset), i.e. with what the calibration cannot see left in");
   addProbedOption(cmd, o->in.probed);
+  cmd->add_option("--process", o->in.process,
+                  "process corrections learned from a measured part (tolver measure's "
+                  "process.txt): the part's pose on the table, the tools' radii and lengths");
   cmd->add_flag(
       "--allow-open", o->in.allow_open,
       "holes in the part's surface (not covered by its mesh) do not make the verdict INCOMPLETE");

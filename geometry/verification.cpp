@@ -87,6 +87,14 @@ VerifyResult verifyPart(const SurfaceSamples& samples, const ToolSet& tools,
                         const std::vector<ToolPlacement>& predicted,
                         const std::vector<ToleranceZone>& zones, const SweepOptions& options,
                         const std::function<void(double)>& progress) {
+  return verifyPart(samples, tools, tools, nominal, predicted, zones, options, progress);
+}
+
+VerifyResult verifyPart(const SurfaceSamples& samples, const ToolSet& tools,
+                        const ToolSet& predicted_tools, const std::vector<ToolPlacement>& nominal,
+                        const std::vector<ToolPlacement>& predicted,
+                        const std::vector<ToleranceZone>& zones, const SweepOptions& options,
+                        const std::function<void(double)>& progress) {
   SweepResult nom, pred;
   std::function<void(double)> first, second;
   if (progress) {
@@ -94,7 +102,7 @@ VerifyResult verifyPart(const SurfaceSamples& samples, const ToolSet& tools,
     second = [&](double f) { progress(0.5 + 0.5 * f); };
   }
   sweepSurface(samples, tools, nominal, options, &nom, first);
-  sweepSurface(samples, tools, predicted, options, &pred, second);
+  sweepSurface(samples, predicted_tools, predicted, options, &pred, second);
   const size_t n = samples.size();
   VerifyResult r;
   r.total.assign(n, 0.0);

@@ -71,6 +71,14 @@ VerifyResult verifyPart(const SurfaceSamples& samples, const ToolSet& tools,
                         const std::vector<ToleranceZone>& zones, const SweepOptions& options,
                         const std::function<void(double)>& progress = {});
 
+// The predicted placements cut with tools of their own (the tools as they are, when a measured
+// part showed their radii off: pipeline/verify.cpp's process corrections).
+VerifyResult verifyPart(const SurfaceSamples& samples, const ToolSet& tools,
+                        const ToolSet& predicted_tools, const std::vector<ToolPlacement>& nominal,
+                        const std::vector<ToolPlacement>& predicted,
+                        const std::vector<ToleranceZone>& zones, const SweepOptions& options,
+                        const std::function<void(double)>& progress = {});
+
 // Conformance, statistics, regions and verdict from the three deviation fields (used by
 // verifyPart and by the CL-only mode).
 void evaluateZones(const SurfaceSamples& samples, const std::vector<ToleranceZone>& zones,

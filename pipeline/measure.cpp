@@ -3,12 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <map>
 
 #include "core/kinematics/sensitivity_jacobian.h"
 #include "geometry/surface_projection.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
 #include "io/program/measured_points.h"
+#include "io/program/process_file.h"
 
 namespace tolver {
 namespace {
@@ -49,6 +51,48 @@ double radiusSensitivity(const Cutter& c, const Eigen::Vector3d& n, const Eigen:
   return -(n - n.dot(a) * a).norm();
 }
 
+// process.txt: the corrections found, added to those the prediction already held (the set-up's
+// small translations and angles add to first order; radii and lengths add).
+void collectCorrections(const std::string& process_from, MeasureReport& rep) {
+  std::map<std::string, MeasureReport::Correction> all;
+  std::vector<std::string> order;
+  auto add = [&](const std::string& key, double v, double sd) {
+    if (!all.count(key)) {
+      order.push_back(key);
+      all[key] = {key, 0.0, NAN};
+    }
+    all[key].value += v;
+    if (std::isfinite(sd)) all[key].sd = sd;
+  };
+  if (!process_from.empty()) {
+    rep.process_from = process_from;
+    const ProcessCorrections p = readProcessFile(process_from);
+    const Eigen::Vector3d t = p.part_error.translation();
+    const Eigen::AngleAxisd aa(p.part_error.linear());
+    const Eigen::Vector3d w = aa.angle() * aa.axis();
+    const char* names[6] = {"x mm", "y mm", "z mm", "about x rad", "about y rad", "about z rad"};
+    for (int k = 0; k < 6; ++k)
+      if ((k < 3 ? t[k] : w[k - 3]) != 0.0)
+        add(processKey("set-up", names[k]), k < 3 ? t[k] : w[k - 3], NAN);
+    for (const auto& [tool, v] : p.radius_mm)
+      add(processKey(tool ? "cutter radius T" + std::to_string(tool + 1) : "cutter radius",
+                     "dR mm"),
+          v, NAN);
+    for (const auto& [tool, v] : p.length_mm)
+      add(processKey(tool ? "tool length T" + std::to_string(tool + 1) : "tool length", "dL mm"), v,
+          NAN);
+  }
+  for (const TraceGroup& g : rep.trace.groups) {
+    if (!g.added) continue;
+    for (Eigen::Index k = 0; k < g.values.size(); ++k)
+      add(processKey(g.name, k < static_cast<Eigen::Index>(g.value_names.size())
+                                 ? g.value_names[k]
+                                 : std::string("value")),
+          g.values[k], g.sd[k]);
+  }
+  for (const std::string& k : order) rep.corrections.push_back(all[k]);
+}
+
 }  // namespace
 
 MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
@@ -75,8 +119,9 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
   vi.images = false;
   vi.view3d = false;
   vi.samples_at = [&](const TriangleMesh& mesh) { return samplesAtFeet(mesh, in.search_mm, m); };
-  std::unique_ptr<Verification> v =
-      runVerification(vi, "", [&](double f) { if (progress) progress("sweeping", f); });
+  std::unique_ptr<Verification> v = runVerification(vi, "", [&](double f) {
+    if (progress) progress("sweeping", f);
+  });
   const VerifyResult& res = v->result;
   const Verification::Poses& poses = v->poses;
 
@@ -197,6 +242,7 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
                         std::to_string(rep.off_face) + " beyond an edge of the part, " +
                         std::to_string(rep.unmachined) +
                         " on faces the program does not cut: not used");
+  collectCorrections(in.verify.process, rep);
   if (!in.report_dir.empty()) {
     ReportDirectory dir(in.report_dir);
     writeFileAtomically(dir.staging() + "/residuals.csv", formatMeasureCsv(rep));

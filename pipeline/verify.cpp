@@ -28,6 +28,7 @@
 #include "io/mesh/mesh_file.h"
 #include "io/program/apt_reader.h"
 #include "io/program/compensated_program.h"
+#include "io/program/process_file.h"
 #include "io/program/tool_file.h"
 #include "io/report/deviation_map.h"
 #include "io/report/offscreen_display.h"
@@ -445,6 +446,8 @@ Eigen::Isometry3d partPlacement(const VerifyInputs& o) {
                          Eigen::AngleAxisd(o.mesh_rotation_deg[0] * k, Eigen::Vector3d::UnitX()))
                             .toRotationMatrix();
   }
+  // A measured part showed it sitting elsewhere on the table: the part's true pose.
+  if (!o.process.empty()) return readProcessFile(o.process).part_error * w_T_file;
   return w_T_file;
 }
 
@@ -465,7 +468,7 @@ ImportedPart readPart(const VerifyInputs& o) {
 }
 
 // The nominal and the predicted tool placements along the program, swept over the samples.
-void sweepPart(const ProgramOnMachine& m, const ToolSet& tools,
+void sweepPart(const ProgramOnMachine& m, const ToolSet& tools, const ProcessCorrections& process,
                const std::vector<ToleranceZone>& zones, const MotionSampling& sampling,
                const SweepOptions& sweep, Verification& v, PhaseClock& phase,
                const std::function<void(double)>& progress) {
@@ -481,10 +484,27 @@ void sweepPart(const ProgramOnMachine& m, const ToolSet& tools,
     samplePlacements(fk_nominal, fk_actual, m.program.path, m.q_nominal, q, sampling, &nominal,
                      &actual);
   v.report.placements = static_cast<int>(nominal.size());
+  // The tools as a measured part showed them: longer than preset (the tip further out along
+  // the axis), radii off (the length preset to the tip: a ball's centre moves with its radius).
+  ToolSet actual_tools = tools;
+  for (const auto& [k, dr] : process.radius_mm) {
+    if (k >= static_cast<int>(tools.cutters.size())) continue;
+    Cutter& c = actual_tools.cutters[k];
+    const bool ball = c.corner_radius >= 0.5 * c.diameter - 1e-9;
+    c.diameter += 2.0 * dr;
+    if (ball) c.corner_radius += dr;
+  }
+  if (!process.length_mm.empty())
+    for (ToolPlacement& a : actual) {
+      const int k = tools.tool_of_cl.empty() ? 0 : tools.tool_of_cl[a.cl_index];
+      const auto it = process.length_mm.find(k);
+      if (it != process.length_mm.end()) a.tip_w -= it->second * a.axis_w;
+    }
   phase("placements");
-  v.result = verifyPart(v.samples, tools, nominal, actual, zones, sweep, [&](double f) {
-    if (progress) progress(f);
-  });
+  v.result =
+      verifyPart(v.samples, tools, actual_tools, nominal, actual, zones, sweep, [&](double f) {
+        if (progress) progress(f);
+      });
   phase("swept_surfaces");
 }
 
@@ -884,8 +904,11 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   if (!o.part.empty()) {
     part = std::make_unique<ImportedPart>(readPart(o));
     phase("read_part");
-  } else if (!o.part_name.empty())
+  } else if (!o.part_name.empty()) {
     throw FieldError("part_name", "names a solid of a STEP part: give the part too");
+  } else if (!o.process.empty()) {
+    throw FieldError("process", "corrects the part's set-up and the tools' sweep: give the part");
+  }
   std::vector<std::string> zone_notes;
   const std::vector<ToleranceZone> zones = zonesFrom(o, part.get(), &zone_notes);
   const ProgramOnMachine m = predictOnMachine(o);
@@ -973,7 +996,11 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
     part.reset();  // the samples are what the rest needs
     rep.spacing_mm = o.spacing_mm;
     phase("sample_surface");
-    sweepPart(m, tools, zones, sampling, sweep, *v, phase, progress);
+    const ProcessCorrections process =
+        o.process.empty() ? ProcessCorrections{} : readProcessFile(o.process);
+    for (const std::string& k : process.not_applied)
+      rep.notes.push_back(o.process + ": " + k + " is reported, not applied");
+    sweepPart(m, tools, process, zones, sampling, sweep, *v, phase, progress);
     checkRotaryConvention(o, m, tools, sampling, sweep, *v);
   }
   rep.samples = &v->samples;

@@ -54,6 +54,9 @@ struct VerifyInputs {
   // each CL point's joints, tool axis and tool (Verification::poses).
   std::function<SurfaceSamples(const TriangleMesh&)> samples_at;
   bool keep_poses = false;
+  // Process corrections learned from a measured part (io/program/process_file.h): the part's
+  // pose on the table, the tools' radii and lengths as they are.
+  std::string process;
   // The outputs (verifyPart, verifyBatch): the report directory, with images or without.
   std::string report_dir;
   bool images = true;

@@ -4,25 +4,25 @@
 // first enters a ball, over every placement; no code of tolver's sweep), on a perfect machine
 // with one process effect, measured with 0.5 um probe noise. tolver measure must name the effect
 // (or nothing when there is none) and bring the held-out residual to the probe's noise.
+#include "pipeline/measure.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
-#include <filesystem>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <random>
 #include <sstream>
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "io/mesh/mesh_file.h"
 #include "io/program/measured_points.h"
-#include "pipeline/measure.h"
 #include "test_support.h"
 
 namespace tolver {
@@ -36,10 +36,10 @@ struct Ball {
 };
 
 struct Effect {
-  double radius_error_mm = 0;   // the ball's true radius is R + this (its tip preset)
-  double length_error_mm = 0;   // the tool's true length is longer by this: tip further out
+  double radius_error_mm = 0;  // the ball's true radius is R + this (its tip preset)
+  double length_error_mm = 0;  // the tool's true length is longer by this: tip further out
   Eigen::Isometry3d part_error = Eigen::Isometry3d::Identity();  // the part's true pose on the
-                                                                  // table, in the part frame
+                                                                 // table, in the part frame
 };
 
 // GOTO/x,y,z,i,j,k lines of an APT file; a GOTO after RAPID is a rapid move (not cut).
@@ -62,8 +62,8 @@ std::vector<Cl> readGotos(const std::string& path) {
       ss >> v[k];
       if (k < 5) ss >> comma;
     }
-    out.push_back({Eigen::Vector3d(v[0], v[1], v[2]),
-                   Eigen::Vector3d(v[3], v[4], v[5]).normalized(), rapid});
+    out.push_back(
+        {Eigen::Vector3d(v[0], v[1], v[2]), Eigen::Vector3d(v[3], v[4], v[5]).normalized(), rapid});
     rapid = false;
   }
   return out;
@@ -71,13 +71,15 @@ std::vector<Cl> readGotos(const std::string& path) {
 
 class Simulator {
  public:
-  Simulator(const std::vector<Cl>& cl, double radius, const Effect& e) : r_(radius + e.radius_error_mm) {
+  Simulator(const std::vector<Cl>& cl, double radius, const Effect& e)
+      : r_(radius + e.radius_error_mm) {
     // The part sits at part_error on the table: the path the machine runs, seen from the part,
     // is the inverse of that pose applied to the programmed one.
     const Eigen::Isometry3d inv = e.part_error.inverse();
     for (size_t i = 1; i < cl.size(); ++i) {
       if (cl[i].rapid) continue;
-      const int steps = std::max(1, static_cast<int>(std::ceil((cl[i].tip - cl[i - 1].tip).norm() / 0.02)));
+      const int steps =
+          std::max(1, static_cast<int>(std::ceil((cl[i].tip - cl[i - 1].tip).norm() / 0.02)));
       for (int k = 0; k <= steps; ++k) {
         const double t = static_cast<double>(k) / steps;
         const Eigen::Vector3d a = ((1 - t) * cl[i - 1].axis + t * cl[i].axis).normalized();
@@ -113,11 +115,13 @@ class Simulator {
  private:
   static constexpr double kCell = 2.0;
   static std::array<int, 3> cell(const Eigen::Vector3d& p) {
-    return {static_cast<int>(std::floor(p.x() / kCell)), static_cast<int>(std::floor(p.y() / kCell)),
+    return {static_cast<int>(std::floor(p.x() / kCell)),
+            static_cast<int>(std::floor(p.y() / kCell)),
             static_cast<int>(std::floor(p.z() / kCell))};
   }
   static long long pack(const std::array<int, 3>& k) {
-    return ((static_cast<long long>(k[0]) + 100000) * 200000 + (k[1] + 100000)) * 200000 + (k[2] + 100000);
+    return ((static_cast<long long>(k[0]) + 100000) * 200000 + (k[1] + 100000)) * 200000 +
+           (k[2] + 100000);
   }
   static long long key(const Eigen::Vector3d& p) { return pack(cell(p)); }
   double r_;
@@ -142,7 +146,8 @@ std::string measuredCsv(const TriangleMesh& mesh, const Simulator& sim, int coun
     const Eigen::Vector3i& t = mesh.faces[f];
     double a = u(rng), b = u(rng);
     if (a + b > 1) a = 1 - a, b = 1 - b;
-    const Eigen::Vector3d p = mesh.vertices[t[0]] + a * (mesh.vertices[t[1]] - mesh.vertices[t[0]]) +
+    const Eigen::Vector3d p = mesh.vertices[t[0]] +
+                              a * (mesh.vertices[t[1]] - mesh.vertices[t[0]]) +
                               b * (mesh.vertices[t[2]] - mesh.vertices[t[0]]);
     const Eigen::Vector3d n = mesh.faceNormal(static_cast<int>(f));
     if (n.z() < 0.3) continue;  // the sculptured top only (the finish cuts nothing else)
@@ -198,7 +203,8 @@ class MeasureTest : public test::TempDirTest {
     return in;
   }
   static const TriangleMesh& mesh() {
-    static const TriangleMesh m = readPartMesh(test::sourcePath("samples/sculptured_part.obj")).mesh;
+    static const TriangleMesh m =
+        readPartMesh(test::sourcePath("samples/sculptured_part.obj")).mesh;
     return m;
   }
   std::string program_;
@@ -317,11 +323,10 @@ TEST_F(MeasureTest, TheCommandWritesWhatItSaysAndRefusesBadPoints) {
   e.part_error.translation() = Eigen::Vector3d(0.010, -0.004, -0.006);
   const Simulator sim(upright(cl(), 5.0), 5.0, e);
   const std::string points = write("cmm.csv", measuredCsv(mesh(), sim, 400, 77, kNoise));
-  const std::string base = "measure --machine " +
-                           test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
-                           " --setup " + test::sourcePath("samples/matsuura_setup.txt") +
-                           " --cl " + program_ + " --part " +
-                           test::sourcePath("samples/sculptured_part.obj") + " --tolerance 0.03";
+  const std::string base =
+      "measure --machine " + test::sourcePath("resources/machines/matsuura_mc760vx.xml") +
+      " --setup " + test::sourcePath("samples/matsuura_setup.txt") + " --cl " + program_ +
+      " --part " + test::sourcePath("samples/sculptured_part.obj") + " --tolerance 0.03";
   const test::RunResult r =
       test::runTolver(base + " --points " + points + " --report-dir " + path("out"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -372,6 +377,37 @@ TEST_F(MeasureTest, TheCommandWritesWhatItSaysAndRefusesBadPoints) {
   EXPECT_EQ(f.exit_code, 2) << f.output;
   EXPECT_NE(f.output.find("none of the 1 points"), std::string::npos) << f.output;
   EXPECT_FALSE(fs::exists(path("far_out")));
+}
+
+// The loop closed: the corrections measure writes, read back by measure (and verify) with
+// --process, predict the same part to the probe's noise with nothing left to add; the second
+// run's "before" is the first run's "after" on the same held-out points.
+TEST_F(MeasureTest, TheProcessFileCarriesWhatWasLearnedIntoTheNextPrediction) {
+  Effect e;
+  e.radius_error_mm = 0.015;
+  e.length_error_mm = 0.008;
+  e.part_error.translation() = Eigen::Vector3d(0.006, 0.0, 0.0);
+  const Simulator sim(upright(cl(), 5.0), 5.0, e);
+  const std::string points = write("cmm.csv", measuredCsv(mesh(), sim, 600, 401, kNoise));
+  MeasureInputs in = inputs(points);
+  in.report_dir = path("first");
+  const MeasureRun first = measurePart(in);
+  print("first", first);
+  ASSERT_FALSE(first.report.trace.added.empty());
+  in.verify.process = path("first") + "/process.txt";
+  in.report_dir = path("second");
+  const MeasureRun second = measurePart(in);
+  print("second", second);
+  const PartTrace& t = second.report.trace;
+  EXPECT_TRUE(t.added.empty()) << t.verdict_text;
+  EXPECT_LT(t.heldout_rms_before, 1.5 * kNoise);
+  EXPECT_NEAR(t.heldout_rms_before, first.report.trace.heldout_rms_after, 0.1e-3);
+  // The second process file carries the first's corrections.
+  std::ifstream a(path("first") + "/process.txt"), b(path("second") + "/process.txt");
+  const std::string pa((std::istreambuf_iterator<char>(a)), {}),
+      pb((std::istreambuf_iterator<char>(b)), {});
+  for (const std::string key : {"tool_length_dL_mm", "set-up_x_mm"})
+    if (pa.find(key) != std::string::npos) EXPECT_NE(pb.find(key), std::string::npos) << pb;
 }
 
 }  // namespace

@@ -22,7 +22,7 @@ std::string formatReason(const char* f, A... a) {
 struct Group {
   std::string name;
   std::vector<std::string> value_names;
-  Eigen::MatrixXd X;     // points x values
+  Eigen::MatrixXd X;               // points x values
   Eigen::MatrixXd prior_root_inv;  // values x values, L^-1 of the prior (empty: none)
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // set-up: the rotations' centre while fitting
 };
@@ -74,8 +74,8 @@ Fit fitGroups(const std::vector<Group>& groups, const std::vector<int>& set,
   f.beta = scale.asDiagonal() * qr.solve(b);
   f.rss = (b.head(m) - A.topRows(m) * f.beta).squaredNorm();
   const Eigen::MatrixXd N = As.transpose() * As;
-  f.covariance = scale.asDiagonal() *
-                 N.completeOrthogonalDecomposition().pseudoInverse() * scale.asDiagonal();
+  f.covariance =
+      scale.asDiagonal() * N.completeOrthogonalDecomposition().pseudoInverse() * scale.asDiagonal();
   return f;
 }
 
@@ -163,8 +163,8 @@ std::vector<Group> candidateGroups(const std::vector<TracePoint>& pts, const Tra
     const Eigen::LLT<Eigen::MatrixXd> llt(C);
     if (llt.info() == Eigen::Success) {
       const Eigen::MatrixXd L = llt.matrixL();
-      g.prior_root_inv = L.triangularView<Eigen::Lower>().solve(
-          Eigen::MatrixXd::Identity(C.rows(), C.cols()));
+      g.prior_root_inv =
+          L.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(C.rows(), C.cols()));
       groups.push_back(std::move(g));
     }
   }
@@ -215,8 +215,7 @@ PartTrace tracePart(const std::vector<TracePoint>& pts, const TraceOptions& o) {
     double best_f = 0, best_p = 1, best_bic = 0;
     std::vector<Fit> trial(groups.size());
     for (size_t g = 0; g < groups.size(); ++g) {
-      if (std::find(current.begin(), current.end(), static_cast<int>(g)) != current.end())
-        continue;
+      if (std::find(current.begin(), current.end(), static_cast<int>(g)) != current.end()) continue;
       std::vector<int> set = current;
       set.push_back(static_cast<int>(g));
       trial[g] = fitGroups(groups, set, fit_rows, y, sigma);
@@ -257,8 +256,8 @@ PartTrace tracePart(const std::vector<TracePoint>& pts, const TraceOptions& o) {
       tb.heldout_gain_um2 = blockMean(gain, block, blocks, &se);
       tb.heldout_gain_se_um2 = se;
       if (!(tb.heldout_gain_um2 > 2.0 * se)) {
-        tb.reason = formatReason("held-out gain %.3g +- %.2g um2: not confirmed",
-                                 tb.heldout_gain_um2, se);
+        tb.reason =
+            formatReason("held-out gain %.3g +- %.2g um2: not confirmed", tb.heldout_gain_um2, se);
         break;
       }
     }
@@ -266,13 +265,12 @@ PartTrace tracePart(const std::vector<TracePoint>& pts, const TraceOptions& o) {
     const double gain_best = base.rss - trial[best].rss;
     for (size_t g = 0; g < groups.size(); ++g) {
       if (static_cast<int>(g) == best || trial[g].columns == 0) continue;
-      if (std::find(current.begin(), current.end(), static_cast<int>(g)) != current.end())
-        continue;
+      if (std::find(current.begin(), current.end(), static_cast<int>(g)) != current.end()) continue;
       if (base.rss - trial[g].rss >= 0.98 * gain_best) {
         tb.confounded.push_back(groups[g].name);
         out.groups[g].confounded.push_back(groups[best].name);
-        out.groups[g].reason = "confounded with " + groups[best].name +
-                               ": these points cannot tell them apart";
+        out.groups[g].reason =
+            "confounded with " + groups[best].name + ": these points cannot tell them apart";
       }
     }
     tb.added = true;

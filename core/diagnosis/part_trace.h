@@ -30,12 +30,12 @@ namespace tolver {
 
 // One measured point as the prediction sees it (mm; w the part frame).
 struct TracePoint {
-  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();     // on the nominal surface
-  Eigen::Vector3d n_w = Eigen::Vector3d::UnitZ();    // outward unit normal
+  Eigen::Vector3d p_w = Eigen::Vector3d::Zero();      // on the nominal surface
+  Eigen::Vector3d n_w = Eigen::Vector3d::UnitZ();     // outward unit normal
   Eigen::Vector3d axis_w = Eigen::Vector3d::UnitZ();  // the cutting tool's axis (tip -> spindle)
   double radius_sensitivity = -1.0;                   // s_R above
-  int tool = 0;                                        // index of the tool that cut it
-  double residual = 0.0;                               // measured - predicted, mm
+  int tool = 0;                                       // index of the tool that cut it
+  double residual = 0.0;                              // measured - predicted, mm
   bool held_out = false;
 };
 
@@ -50,15 +50,15 @@ struct TraceOptions {
 };
 
 struct TraceGroup {
-  std::string name;                       // "set-up", "cutter radius T2", ...
-  std::vector<std::string> value_names;   // each value's name with its unit
-  Eigen::VectorXd values, sd;             // fitted alone on the fit points (mm, rad)
-  double f = 0, p_value = 1;              // against the model before it (the last round it was tried)
-  double rss_fit = 0;                     // mm^2, on the fit points, the current model with it
+  std::string name;                      // "set-up", "cutter radius T2", ...
+  std::vector<std::string> value_names;  // each value's name with its unit
+  Eigen::VectorXd values, sd;            // fitted alone on the fit points (mm, rad)
+  double f = 0, p_value = 1;  // against the model before it (the last round it was tried)
+  double rss_fit = 0;         // mm^2, on the fit points, the current model with it
   double heldout_gain_um2 = 0, heldout_gain_se_um2 = 0;  // mean drop of r^2 on held-out points
   bool added = false;
-  std::string reason;                     // why added or not
-  std::vector<std::string> confounded;    // groups these points cannot tell from it
+  std::string reason;                   // why added or not
+  std::vector<std::string> confounded;  // groups these points cannot tell from it
 };
 
 struct PartTrace {
@@ -66,9 +66,9 @@ struct PartTrace {
   std::vector<int> added;          // indices into groups, in the order added
   Eigen::VectorXd residual_after;  // per point, mm: the residual with the added effects
   int fit_points = 0, heldout_points = 0;
-  double fit_rms_before = 0, fit_rms_after = 0;            // mm
-  double heldout_rms_before = 0, heldout_rms_after = 0;    // mm
-  double heldout_max_before = 0, heldout_max_after = 0;    // mm
+  double fit_rms_before = 0, fit_rms_after = 0;          // mm
+  double heldout_rms_before = 0, heldout_rms_after = 0;  // mm
+  double heldout_max_before = 0, heldout_max_after = 0;  // mm
   double sigma_after = 0;  // residual sigma of the final model on the fit points, mm
   // "effects added", "nothing missing" (no candidate passes and the residual is at the noise the
   // data show), or "unexplained" (no candidate passes, the residual is structured or larger than

@@ -52,8 +52,8 @@ std::vector<MeasuredPoint> parseAsc(const std::vector<std::string>& lines,
     if (columns == 0) columns = cells.size();
     if (cells.size() != columns)
       throw InputError(file, line, 0, "x",
-                       "expected " + std::to_string(columns) + " numbers as on the first line, got " +
-                           std::to_string(cells.size()));
+                       "expected " + std::to_string(columns) +
+                           " numbers as on the first line, got " + std::to_string(cells.size()));
     MeasuredPoint p;
     p.line = line;
     double v[6] = {0, 0, 0, 0, 0, 0};
@@ -91,17 +91,14 @@ std::vector<MeasuredPoint> parseMeasuredPoints(const std::string& text, const st
   std::vector<MeasuredPoint> out;
   std::string xs = "x_mm", ys = "y_mm", zs = "z_mm", ds = "deviation_mm";
   forEachCsvRow(
-      text, file, {},
-      "",
+      text, file, {}, "",
       [&](const CsvRow& row) {
         auto number = [&](const std::string& name) {
           const std::string c = row.cell(name);
-          if (c.empty())
-            throw InputError(file, row.line, row.column(name), name, "missing value");
+          if (c.empty()) throw InputError(file, row.line, row.column(name), name, "missing value");
           const auto v = parseNumber(c);
           if (!v)
-            throw InputError(file, row.line, row.column(name), name,
-                             "'" + c + "' is not a number");
+            throw InputError(file, row.line, row.column(name), name, "'" + c + "' is not a number");
           if (!(std::abs(*v) <= kLimit))
             throw InputError(file, row.line, row.column(name), name,
                              "'" + c + "' is out of range (within 1e6 mm)");

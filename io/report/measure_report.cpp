@@ -95,11 +95,11 @@ std::string formatMeasureJson(const MeasureReport& r) {
     if (g.added) {
       nlohmann::json v = nlohmann::json::array();
       for (Eigen::Index k = 0; k < g.values.size(); ++k)
-        v.push_back({{"name", k < static_cast<Eigen::Index>(g.value_names.size())
-                                  ? g.value_names[k]
-                                  : std::string("value")},
-                     {"value", numberOrNull(g.values[k])},
-                     {"sd", numberOrNull(g.sd[k])}});
+        v.push_back(
+            {{"name", k < static_cast<Eigen::Index>(g.value_names.size()) ? g.value_names[k]
+                                                                          : std::string("value")},
+             {"value", numberOrNull(g.values[k])},
+             {"sd", numberOrNull(g.sd[k])}});
       e["values"] = v;
     }
     groups.push_back(e);
@@ -109,23 +109,21 @@ std::string formatMeasureJson(const MeasureReport& r) {
   return j.dump(2) + "\n";
 }
 
+std::string processKey(const std::string& group, const std::string& value_name) {
+  std::string key = group + " " + value_name;
+  for (char& ch : key)
+    if (ch == ' ') ch = '_';
+  return key;
+}
+
 std::string formatProcessFile(const MeasureReport& r) {
-  std::string out =
-      "# tolver process corrections, learned by tolver measure from " + r.points_file + "\n" +
-      "# " + r.trace.verdict_text + "\n";
-  for (const TraceGroup& g : r.trace.groups) {
-    if (!g.added) continue;
-    out += "# " + g.name + " (sd in brackets)\n";
-    for (Eigen::Index k = 0; k < g.values.size(); ++k) {
-      std::string key = g.name + " " +
-                        (k < static_cast<Eigen::Index>(g.value_names.size()) ? g.value_names[k]
-                                                                             : "value");
-      for (char& ch : key)
-        if (ch == ' ') ch = '_';
-      out += key + " " + formatWith("%.9g", g.values[k]) + "  # +- " +
-             formatWith("%.3g", g.sd[k]) + "\n";
-    }
-  }
+  std::string out = "# tolver process corrections, learned by tolver measure from " +
+                    r.points_file + "\n# " + r.trace.verdict_text + "\n";
+  if (!r.process_from.empty())
+    out += "# the prediction already held " + r.process_from + ": its values are included\n";
+  for (const MeasureReport::Correction& c : r.corrections)
+    out += c.key + " " + formatWith("%.9g", c.value) +
+           (std::isfinite(c.sd) ? "  # +- " + formatWith("%.3g", c.sd) : "  # carried over") + "\n";
   return out;
 }
 

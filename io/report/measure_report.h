@@ -32,8 +32,18 @@ struct MeasureReport {
   // Summaries of the used points (mm).
   double measured_rms = 0, predicted_rms = 0, residual_rms = 0, residual_max = 0;
   PartTrace trace;
+  // process.txt's lines: key, value (mm or rad), its standard deviation (NAN: carried over
+  // from the process file the run started from).
+  struct Correction {
+    std::string key;
+    double value = 0, sd = NAN;
+  };
+  std::vector<Correction> corrections;
+  std::string process_from;  // the process file the prediction already held, or ""
   std::vector<std::string> notes;
 };
+// process.txt's key of a traced value: the group's name and the value's, spaces as '_'.
+std::string processKey(const std::string& group, const std::string& value_name);
 
 std::string formatMeasureCsv(const MeasureReport& r);
 std::string formatMeasureJson(const MeasureReport& r);
