@@ -39,7 +39,9 @@ ProcessCorrections parseProcessFile(const std::string& text, const std::string& 
     const std::string key(tl.substr(0, sp));
     const std::string value(trim(tl.substr(sp + 1)));
     const auto v = parseNumber(value);
-    if (!v) throw InputError(file, line, static_cast<int>(sp) + 2, key, "'" + value + "' is not a number");
+    if (!v)
+      throw InputError(file, line, static_cast<int>(sp) + 2, key,
+                       "'" + value + "' is not a number");
     if (!(std::abs(*v) <= 1.0))
       throw InputError(file, line, static_cast<int>(sp) + 2, key,
                        "'" + value + "' is beyond 1 mm or 1 rad: not a correction");

@@ -19,8 +19,8 @@ namespace tolver {
 
 struct ProcessCorrections {
   Eigen::Isometry3d part_error = Eigen::Isometry3d::Identity();  // the part's true pose in w
-  std::map<int, double> radius_mm, length_mm;                     // by tool index (0-based)
-  std::vector<std::string> not_applied;                           // keys read, not applied
+  std::map<int, double> radius_mm, length_mm;                    // by tool index (0-based)
+  std::vector<std::string> not_applied;                          // keys read, not applied
   bool empty() const {
     return part_error.isApprox(Eigen::Isometry3d::Identity(), 0.0) && radius_mm.empty() &&
            length_mm.empty();
