@@ -59,6 +59,14 @@ void printMeasurement(const MeasureRun& run) {
               mmToUm(t.heldout_rms_before), mmToUm(t.heldout_max_before), mmToUm(t.fit_rms_before));
   std::printf("  after      held-out RMS %.2f um, max %.2f um (fit points %.2f um)\n",
               mmToUm(t.heldout_rms_after), mmToUm(t.heldout_max_after), mmToUm(t.fit_rms_after));
+  if (r.worst_row >= 0) {
+    const MeasureRow& w = r.rows[r.worst_row];
+    std::printf(
+        "  largest    %+.2f um after, at (%.3f, %.3f, %.3f) (points line %d), %s, CL line "
+        "%d, tool %d\n",
+        mmToUm(w.residual_after), w.p_w.x(), w.p_w.y(), w.p_w.z(), w.line,
+        w.region.empty() ? "no region" : ("region " + w.region).c_str(), w.cl_line, w.tool + 1);
+  }
   for (const std::string& n : r.notes) std::printf("  note       %s\n", n.c_str());
   if (!run.report_dir.empty())
     std::printf("  wrote      %s/{residuals.csv,report.json,process.txt}\n",

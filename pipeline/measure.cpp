@@ -1,6 +1,7 @@
 #include "pipeline/measure.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -135,6 +136,7 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
   rep.search_mm = in.search_mm;
   rep.heldout_every = in.heldout_every;
   std::vector<TracePoint> trace;
+  std::map<std::array<long long, 3>, int> places;
   std::vector<int> row_of_trace;
   std::vector<int> cl_of_trace, sample_of_trace;
   for (size_t i = 0; i < points.size(); ++i) {
@@ -157,6 +159,9 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
       continue;
     }
     w.n_w = v->samples.n_w[s];
+    const int group = v->samples.group[s];
+    if (group >= 0 && group < static_cast<int>(v->samples.group_names.size()))
+      w.region = v->samples.group_names[group];
     w.measured = (m.p_w[i] - w.foot_w).dot(w.n_w);
     const int cl = res.cl_index[s];
     if (!res.machined[s] || cl < 0) {
@@ -184,6 +189,12 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
     t.radius_sensitivity = radiusSensitivity(poses.cutters[w.tool], t.n_w, t.axis_w);
     t.residual = w.residual;
     t.held_out = w.held_out;
+    // Places measured more than once: the same foot within the 10 um grid cell.
+    const std::array<long long, 3> cell = {std::llround(w.foot_w.x() / 0.01),
+                                           std::llround(w.foot_w.y() / 0.01),
+                                           std::llround(w.foot_w.z() / 0.01)};
+    const auto [it, fresh] = places.emplace(cell, static_cast<int>(places.size()));
+    t.repeat = it->second;
     trace.push_back(t);
     row_of_trace.push_back(static_cast<int>(rep.rows.size()));
     cl_of_trace.push_back(cl);
@@ -233,6 +244,9 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
     p2 += w.predicted * w.predicted;
     r2 += w.residual * w.residual;
     rep.residual_max = std::max(rep.residual_max, std::abs(w.residual));
+    if (rep.worst_row < 0 ||
+        std::abs(w.residual_after) > std::abs(rep.rows[rep.worst_row].residual_after))
+      rep.worst_row = row_of_trace[k];
   }
   rep.measured_rms = std::sqrt(m2 / trace.size());
   rep.predicted_rms = std::sqrt(p2 / trace.size());

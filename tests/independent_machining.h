@@ -31,6 +31,9 @@ struct Effect {
   double length_error_mm = 0;  // the tool's true length is longer by this: tip further out
   Eigen::Isometry3d part_error = Eigen::Isometry3d::Identity();  // the part's true pose on the
                                                                  // table, in the part frame
+  // Outside any candidate of measure's: the ball's centre waves along z with x (a screw's
+  // periodic error of the machine's X), amplitude mm and period mm.
+  double wave_mm = 0, wave_period_mm = 10;
 };
 
 // GOTO/x,y,z,i,j,k lines of an APT file; a GOTO after RAPID is a rapid move (not cut).
@@ -75,7 +78,8 @@ class Simulator {
         const double t = static_cast<double>(k) / steps;
         const Eigen::Vector3d a = ((1 - t) * cl[i - 1].axis + t * cl[i].axis).normalized();
         const Eigen::Vector3d tip = (1 - t) * cl[i - 1].tip + t * cl[i].tip - e.length_error_mm * a;
-        const Eigen::Vector3d c = inv * (tip + r_ * a);
+        Eigen::Vector3d c = inv * (tip + r_ * a);
+        c.z() += e.wave_mm * std::sin(2 * M_PI * c.x() / e.wave_period_mm);
         balls_[key(c)].push_back({c});
       }
     }
@@ -122,8 +126,9 @@ class Simulator {
 // Points on the part's faces (area-weighted), measured on the simulated part: the foot moved
 // along the face's normal to the machined surface, plus probe noise. Points the simulator does
 // not machine, or within 1.5 mm of the part's border, are not measured.
+// times > 1: each place measured that many times (the noise drawn again each time).
 inline std::string measuredCsv(const tolver::TriangleMesh& mesh, const Simulator& sim, int count,
-                               unsigned seed, double noise_mm) {
+                               unsigned seed, double noise_mm, int times = 1) {
   std::mt19937 rng(seed);
   std::vector<double> cum;
   double total = 0;
@@ -145,12 +150,14 @@ inline std::string measuredCsv(const tolver::TriangleMesh& mesh, const Simulator
     if (std::abs(p.x()) > 38 || std::abs(p.y()) > 28) continue;  // clear of the border
     const double s = sim.surface(p, n, 0.2);
     if (std::isnan(s)) continue;
-    const Eigen::Vector3d q = p + (s + g(rng)) * n;
-    char line[200];
-    std::snprintf(line, sizeof line, "%.6f,%.6f,%.6f,%.9f,%.9f,%.9f\n", q.x(), q.y(), q.z(), n.x(),
-                  n.y(), n.z());
-    out += line;
-    ++made;
+    for (int k = 0; k < times; ++k) {
+      const Eigen::Vector3d q = p + (s + g(rng)) * n;
+      char line[200];
+      std::snprintf(line, sizeof line, "%.6f,%.6f,%.6f,%.9f,%.9f,%.9f\n", q.x(), q.y(), q.z(),
+                    n.x(), n.y(), n.z());
+      out += line;
+    }
+    made += times;
   }
   return out;
 }

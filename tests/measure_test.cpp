@@ -192,7 +192,7 @@ TEST_F(MeasureTest, TheCommandWritesWhatItSaysAndRefusesBadPoints) {
     std::vector<std::string> c;
     std::stringstream ss(line);
     for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
-    ASSERT_EQ(c.size(), 21u) << line;
+    ASSERT_EQ(c.size(), 22u) << line;
     if (c[20] != "used") continue;
     const double res = std::stod(c[14]), meas = std::stod(c[10]), pred = std::stod(c[11]);
     EXPECT_NEAR(res, meas - pred, 2e-4) << line;
@@ -250,6 +250,37 @@ TEST_F(MeasureTest, TheProcessFileCarriesWhatWasLearnedIntoTheNextPrediction) {
       pb((std::istreambuf_iterator<char>(b)), {});
   for (const std::string key : {"tool_length_dL_mm", "set-up_x_mm"})
     if (pa.find(key) != std::string::npos) EXPECT_NE(pb.find(key), std::string::npos) << pb;
+}
+
+// Places measured twice give the repeatability: a clean part's residual is it (the test passes,
+// nothing added); a 2 um waviness along x that no candidate holds fails it, and the verdict is
+// "unexplained" with what the model misses, never "nothing added".
+TEST_F(MeasureTest, RepeatedPlacesTestTheModelsAdequacy) {
+  const auto trace = [&](const Effect& e, unsigned seed, const std::string& name) {
+    const Simulator sim(upright(cl(), 5.0), 5.0, e);
+    const std::string file = write(name, measuredCsv(mesh(), sim, 600, seed, kNoise, 2));
+    return measurePart(inputs(file)).report.trace;
+  };
+  const PartTrace clean = trace(Effect{}, 501, "clean.csv");
+  std::printf("[ measure ] clean, twice   %s\n", clean.verdict_text.c_str());
+  EXPECT_TRUE(clean.lack_of_fit.tested);
+  EXPECT_GE(clean.lack_of_fit.places,
+            150);  // 300 places; pairs split by the held-out points do not count
+  EXPECT_EQ(clean.verdict, "nothing added");
+  EXPECT_NEAR(clean.lack_of_fit.s_pure, kNoise, 0.1e-3);
+  Effect wave;
+  wave.wave_mm = 0.002;
+  const PartTrace waved = trace(wave, 502, "wave.csv");
+  std::printf("[ measure ] wave, twice    %s\n", waved.verdict_text.c_str());
+  EXPECT_EQ(waved.verdict, "unexplained");
+  EXPECT_GT(waved.lack_of_fit.missing_rms, 0.8e-3);
+  // Once per place: adequacy cannot be tested, and the verdict says so.
+  const Simulator sim(upright(cl(), 5.0), 5.0, Effect{});
+  const PartTrace once =
+      measurePart(inputs(write("once.csv", measuredCsv(mesh(), sim, 300, 503, kNoise))))
+          .report.trace;
+  EXPECT_FALSE(once.lack_of_fit.tested);
+  EXPECT_NE(once.verdict_text.find("adequacy not tested"), std::string::npos);
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 // The measured-part sample (samples/measured/): the sculptured part's finish as a three-axis
 // ball-end program, cut by the independent machining simulation (tests/independent_machining.h)
-// with a tool 10 um longer than preset, and measured at 2 000 points with 0.5 um of probe noise.
+// with a tool 10 um longer than preset, and measured at 1 000 places twice each (2 000 points)
+// with 0.5 um of probe noise: the repeats test the model's adequacy.
 //   make_measured_sample <source dir> <output dir> [points] [seed]
 #include <cstdio>
 #include <filesystem>
@@ -29,7 +30,7 @@ int main(int argc, char** argv) {
   tolver::writeFileAtomically(out + "/cmm_points.csv",
                               "# made by tools/make_measured_sample.cpp: the independent machining "
                               "simulation, one hidden process effect, 0.5 um probe noise\n" +
-                                  indep_cut::measuredCsv(mesh, sim, points, seed, 0.5e-3));
+                                  indep_cut::measuredCsv(mesh, sim, points, seed, 0.5e-3, 2));
   std::printf("wrote %s/sculptured_3axis.apt and %s/cmm_points.csv (%d points)\n", out.c_str(),
               out.c_str(), points);
   return 0;

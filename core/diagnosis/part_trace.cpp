@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <map>
 
 #include "core/numerics/statistics.h"
 
@@ -317,7 +318,47 @@ PartTrace tracePart(const std::vector<TracePoint>& pts, const TraceOptions& o) {
   for (int i : order) ranked.push_back(out.groups[i]);
   out.groups = std::move(ranked);
   for (size_t i = 0; i < out.added.size(); ++i) out.added[i] = static_cast<int>(i);
-  if (!current.empty()) {
+  // Lack of fit against the points measured more than once.
+  {
+    std::map<int, std::vector<int>> places;
+    for (int i : fit_rows)
+      if (pts[i].repeat >= 0) places[pts[i].repeat].push_back(i);
+    double ss_pe = 0;
+    PartTrace::LackOfFit& l = out.lack_of_fit;
+    for (const auto& [id, rows] : places) {
+      if (rows.size() < 2) continue;
+      ++l.places;
+      double mean = 0;
+      for (int i : rows) mean += r_base[i];
+      mean /= static_cast<double>(rows.size());
+      for (int i : rows) ss_pe += (r_base[i] - mean) * (r_base[i] - mean);
+      l.df_pure += static_cast<double>(rows.size()) - 1.0;
+    }
+    const double df_resid = static_cast<double>(fit_rows.size()) - base.columns;
+    l.df_lack = df_resid - l.df_pure;
+    if (l.df_pure >= 2 && l.df_lack >= 1 && ss_pe > 0) {
+      l.tested = true;
+      l.s_pure = std::sqrt(ss_pe / l.df_pure);
+      const double ss_lof = std::max(0.0, base.rss - ss_pe);
+      l.f = (ss_lof / l.df_lack) / (ss_pe / l.df_pure);
+      l.p_value = fSurvival(l.f, l.df_lack, l.df_pure);
+      l.missing_rms =
+          std::sqrt(std::max(0.0, out.sigma_after * out.sigma_after - l.s_pure * l.s_pure));
+    }
+  }
+  const PartTrace::LackOfFit& lof = out.lack_of_fit;
+  if (lof.tested && lof.p_value < o.alpha) {
+    out.verdict = "unexplained";
+    out.verdict_text = formatReason(
+        "unexplained: the model misses %.2f um RMS beyond the points' repeatability (%.2f um, "
+        "%d places measured twice or more; F %.3g, p %.2g)",
+        1e3 * lof.missing_rms, 1e3 * lof.s_pure, lof.places, lof.f, lof.p_value);
+    if (!current.empty()) {
+      out.verdict_text += "; added:";
+      for (size_t i = 0; i < current.size(); ++i)
+        out.verdict_text += (i ? ", " : " ") + out.groups[i].name;
+    }
+  } else if (!current.empty()) {
     out.verdict = "effects added";
     out.verdict_text = "effects added:";
     for (size_t i = 0; i < current.size(); ++i)
@@ -327,6 +368,13 @@ PartTrace tracePart(const std::vector<TracePoint>& pts, const TraceOptions& o) {
     out.verdict_text =
         "nothing added: no candidate explains the residual beyond the points' own scatter";
   }
+  if (out.verdict != "unexplained")
+    out.verdict_text += lof.tested
+                            ? formatReason(
+                                  " (the residual is the repeatability: %.2f um over %d places "
+                                  "measured twice or more, F %.3g, p %.2g)",
+                                  1e3 * lof.s_pure, lof.places, lof.f, lof.p_value)
+                            : std::string(" (adequacy not tested: no place measured twice)");
   return out;
 }
 

@@ -37,6 +37,7 @@ struct TracePoint {
   int tool = 0;                                       // index of the tool that cut it
   double residual = 0.0;                              // measured - predicted, mm
   bool held_out = false;
+  int repeat = -1;  // points measured at the same place share an index (>= 0); -1: once
 };
 
 struct TraceOptions {
@@ -70,9 +71,16 @@ struct PartTrace {
   double heldout_rms_before = 0, heldout_rms_after = 0;  // mm
   double heldout_max_before = 0, heldout_max_after = 0;  // mm
   double sigma_after = 0;  // residual sigma of the final model on the fit points, mm
-  // "effects added", "nothing missing" (no candidate passes and the residual is at the noise the
-  // data show), or "unexplained" (no candidate passes, the residual is structured or larger than
-  // the repeatability when repeats exist).
+  // The final model against the repeatability of points measured more than once (fit points):
+  // SS_pe within the repeats, F = (SS_lof / df_lof) / (SS_pe / df_pe), as the ball-bar's.
+  struct LackOfFit {
+    bool tested = false;
+    int places = 0;  // places measured more than once
+    double df_pure = 0, df_lack = 0, s_pure = 0, f = 0, p_value = 1;
+    double missing_rms = 0;  // mm: sqrt(max(0, sigma_after^2 - s_pure^2))
+  } lack_of_fit;
+  // "effects added", "nothing added" (no candidate passes), or "unexplained" (the final model
+  // fails the lack-of-fit test: it misses more than the repeatability, whatever was added).
   std::string verdict, verdict_text;
 };
 

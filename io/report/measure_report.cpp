@@ -22,7 +22,7 @@ std::string formatMeasureCsv(const MeasureReport& r) {
   std::string out =
       "line,x_mm,y_mm,z_mm,foot_x_mm,foot_y_mm,foot_z_mm,nx,ny,nz,measured_um,predicted_um,"
       "program_um,machine_um,residual_um,residual_after_um,instrument_um,cl_line,tool,set,"
-      "status\n";
+      "status,region\n";
   for (const MeasureRow& w : r.rows) {
     std::vector<std::string> c = {std::to_string(w.line),
                                   mm(w.p_w.x()),
@@ -44,7 +44,8 @@ std::string formatMeasureCsv(const MeasureReport& r) {
                                   w.cl_line > 0 ? std::to_string(w.cl_line) : "",
                                   std::to_string(w.tool + 1),
                                   w.held_out ? "held-out" : "fit",
-                                  w.status};
+                                  w.status,
+                                  w.region};
     out += csvLine(c) + "\n";
   }
   return out;
@@ -82,6 +83,22 @@ std::string formatMeasureJson(const MeasureReport& r) {
                  {{"fit_rms", mmToUm(t.fit_rms_after)},
                   {"heldout_rms", mmToUm(t.heldout_rms_after)},
                   {"heldout_max", mmToUm(t.heldout_max_after)}}}};
+  const PartTrace::LackOfFit& l = t.lack_of_fit;
+  j["trace"]["lack_of_fit"] = {{"tested", l.tested},
+                               {"places_repeated", l.places},
+                               {"repeatability_um", mmToUm(l.s_pure)},
+                               {"f", l.f},
+                               {"df_lack", l.df_lack},
+                               {"df_pure", l.df_pure},
+                               {"p_value", l.p_value},
+                               {"missing_rms_um", mmToUm(l.missing_rms)}};
+  if (r.worst_row >= 0) {
+    const MeasureRow& w = r.rows[r.worst_row];
+    j["largest_residual_after"] = {{"line", w.line},     {"residual_um", mmToUm(w.residual_after)},
+                                   {"x_mm", w.p_w.x()},  {"y_mm", w.p_w.y()},
+                                   {"z_mm", w.p_w.z()},  {"cl_line", w.cl_line},
+                                   {"tool", w.tool + 1}, {"region", w.region}};
+  }
   nlohmann::json groups = nlohmann::json::array();
   for (const TraceGroup& g : t.groups) {
     nlohmann::json e = {{"effect", g.name},

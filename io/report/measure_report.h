@@ -18,6 +18,7 @@ struct MeasureRow {
   double residual = NAN, residual_after = NAN;
   double instrument = NAN;  // the file's own deviation, when given
   int cl_line = 0, tool = 0;
+  std::string region;  // the part's region (mesh group, CAD face) of the foot
   bool held_out = false;
   std::string status;  // "used", or why not: "beyond search range", "not machined", ...
 };
@@ -31,6 +32,7 @@ struct MeasureReport {
   int heldout_every = 0;
   // Summaries of the used points (mm).
   double measured_rms = 0, predicted_rms = 0, residual_rms = 0, residual_max = 0;
+  int worst_row = -1;  // the used row of the largest residual after the trace
   PartTrace trace;
   // process.txt's lines: key, value (mm or rad), its standard deviation (NAN: carried over
   // from the process file the run started from).
