@@ -14,6 +14,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <random>
@@ -22,8 +23,10 @@
 #include <vector>
 
 #include "independent_machining.h"
+#include "io/common/io_error.h"
 #include "io/mesh/mesh_file.h"
 #include "io/program/measured_points.h"
+#include "io/program/process_file.h"
 #include "test_support.h"
 
 namespace tolver {
@@ -281,6 +284,46 @@ TEST_F(MeasureTest, RepeatedPlacesTestTheModelsAdequacy) {
           .report.trace;
   EXPECT_FALSE(once.lack_of_fit.tested);
   EXPECT_NE(once.verdict_text.find("adequacy not tested"), std::string::npos);
+}
+
+// The two readers' refusals name the line and the field; what they accept they read exactly.
+TEST(MeasureFiles, PointsAndProcessCorrectionsAreReadOrRefusedByLine) {
+  const auto refused = [](const std::function<void()>& f, const std::string& where) {
+    try {
+      f();
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(where), std::string::npos) << e.what();
+      return true;
+    }
+    return false;
+  };
+  const ProcessCorrections c = parseProcessFile(
+      "# c\nset-up_x_mm 0.002\nset-up_about_z_rad 1e-5\ncutter_radius_T2_dR_mm -0.003\n"
+      "tool_length_dL_mm 0.01  # +- 1e-5\nstock_offset_mm 0.001\nmachine_EXX.c1 1e-4\n",
+      "p.txt");
+  EXPECT_DOUBLE_EQ(c.part_error.translation().x(), 0.002);
+  EXPECT_NEAR(c.part_error.linear()(1, 0), 1e-5, 1e-12);
+  EXPECT_DOUBLE_EQ(c.radius_mm.at(1), -0.003);
+  EXPECT_DOUBLE_EQ(c.length_mm.at(0), 0.01);
+  EXPECT_EQ(c.not_applied.size(), 2u);
+  EXPECT_TRUE(refused([] { parseProcessFile("\nbogus_key 1\n", "p.txt"); }, "p.txt:2"));
+  EXPECT_TRUE(refused([] { parseProcessFile("tool_length_dL_mm 5\n", "p.txt"); }, "beyond 1 mm"));
+  EXPECT_TRUE(refused([] { parseProcessFile("cutter_radius_T99999999999_dR_mm 0.001\n", "p.txt"); },
+                      "unknown key"));
+  EXPECT_TRUE(refused([] { parseProcessFile("set-up_x_mm abc\n", "p.txt"); }, "not a number"));
+  const std::vector<MeasuredPoint> asc = parseMeasuredPoints("1 2 3\n4;5;6\n", "c.asc");
+  ASSERT_EQ(asc.size(), 2u);
+  EXPECT_EQ(asc[1].p, Eigen::Vector3d(4, 5, 6));
+  const std::vector<MeasuredPoint> csv =
+      parseMeasuredPoints("X,Y,Z,nx,ny,nz,Deviation\n1,2,3,0,0,2,0.004\n", "c.csv");
+  ASSERT_EQ(csv.size(), 1u);
+  EXPECT_EQ(csv[0].n, Eigen::Vector3d(0, 0, 1));
+  EXPECT_TRUE(csv[0].has_deviation);
+  EXPECT_TRUE(
+      refused([] { parseMeasuredPoints("x_mm,y_mm,z_mm,nx\n1,2,3,1\n", "c.csv"); }, "c.csv:2"));
+  EXPECT_TRUE(refused([] { parseMeasuredPoints("1 2 3\n1 2\n", "c.asc"); }, "c.asc:2"));
+  EXPECT_TRUE(refused([] { parseMeasuredPoints("x_mm,y_mm\n1,2\n", "c.csv"); }, "z_mm"));
+  EXPECT_TRUE(refused([] { parseMeasuredPoints("1 2 3 0 0 0\n", "c.asc"); }, "normal is zero"));
 }
 
 }  // namespace

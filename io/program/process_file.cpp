@@ -1,5 +1,6 @@
 #include "io/program/process_file.h"
 
+#include <cctype>
 #include <cmath>
 #include <sstream>
 
@@ -12,9 +13,12 @@ namespace {
 // "cutter_radius_T3_dR_mm" -> tool 2 and the rest "dR_mm"; no T<k>: tool 0.
 int toolOf(const std::string& rest, std::string* tail) {
   if (rest.size() > 1 && rest[0] == 'T' && std::isdigit(static_cast<unsigned char>(rest[1]))) {
-    const size_t u = rest.find('_');
-    const int k = std::stoi(rest.substr(1, u == std::string::npos ? std::string::npos : u - 1));
-    *tail = u == std::string::npos ? "" : rest.substr(u + 1);
+    size_t i = 1;
+    int k = 0;
+    while (i < rest.size() && std::isdigit(static_cast<unsigned char>(rest[i])) && k < 100000)
+      k = 10 * k + (rest[i++] - '0');
+    if (k >= 100000 || (i < rest.size() && rest[i] != '_')) return -1;  // not a tool number
+    *tail = i < rest.size() ? rest.substr(i + 1) : "";
     return k - 1;
   }
   *tail = rest;

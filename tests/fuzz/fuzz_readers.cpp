@@ -18,7 +18,9 @@
 #include "io/program/apt_reader.h"
 #include "io/program/gcode_reader.h"
 #include "io/program/jobs_file.h"
+#include "io/program/measured_points.h"
 #include "io/program/probe_file.h"
+#include "io/program/process_file.h"
 #include "io/program/setup_file.h"
 
 namespace {
@@ -108,6 +110,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 #elif TOLVER_FUZZ_TARGET == 12
     // The ball positions calibrate writes and simulate-ballbar --balls reads.
     tolver::parseBallPositionsCsv(text, "fuzz_balls.csv", samplePlan());
+#elif TOLVER_FUZZ_TARGET == 13
+    // A measured part's points (CSV or ASC) and the process corrections measure writes.
+    try {
+      tolver::parseMeasuredPoints(text, "fuzz_points.csv");
+    } catch (const tolver::InputError&) {
+    }
+    tolver::parseProcessFile(text, "fuzz_process.txt");
 #endif
   } catch (const tolver::InputError&) {
   }

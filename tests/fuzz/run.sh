@@ -11,7 +11,7 @@ seconds="${1:-30}"
 shift || true
 names=("$@")
 # The default list (CI's): every harness, the part scenes (glTF, 3MF) and the commands included.
-[ ${#names[@]} -eq 0 ] && names=(apt gcode machine setup ballbar zones tolerances probe jobs mesh balls scene commands)
+[ ${#names[@]} -eq 0 ] && names=(apt gcode machine setup ballbar zones tolerances probe jobs mesh balls scene measured commands)
 out="$here/build/fuzz"
 # As for the sanitized suite (scripts/run_sanitized.sh): leaks are checked (LeakSanitizer), with
 # tests/lsan.supp naming the third-party libraries that keep allocations to the end by design.
@@ -36,6 +36,7 @@ declare -A corpus=([apt]="tests/fixtures/cl samples/*.apt" [gcode]="tests/fixtur
                    [tolerances]="resources/allocation" [probe]="samples/matsuura_probed.csv"
                    [jobs]="samples/verify_jobs.csv" [mesh]="tests/fuzz/mesh_corpus"
                    [scene]="tests/fuzz/scene_corpus" [balls]="tests/fuzz/balls_corpus"
+                   [measured]="samples/measured/cmm_points.csv tests/fuzz/measured_corpus"
                    [commands]="tests/fuzz/commands_corpus")
 # One harness: its corpus seeded, its run, one line in history.tsv; a failure leaves a file.
 run_one() {
