@@ -319,6 +319,13 @@ TEST(MeasureFiles, PointsAndProcessCorrectionsAreReadOrRefusedByLine) {
   ASSERT_EQ(csv.size(), 1u);
   EXPECT_EQ(csv[0].n, Eigen::Vector3d(0, 0, 1));
   EXPECT_TRUE(csv[0].has_deviation);
+  const std::vector<MeasuredPoint> table = parseMeasuredPoints(
+      "nominal_x_mm,nominal_y_mm,nominal_z_mm,nx,ny,nz,deviation_mm\n1,2,3,0,0,1,0.004\n", "t.csv");
+  ASSERT_EQ(table.size(), 1u);
+  EXPECT_NEAR(table[0].p.z(), 3.004, 1e-12);
+  EXPECT_TRUE(refused(
+      [] { parseMeasuredPoints("nominal_x_mm,nominal_y_mm,nominal_z_mm\n1,2,3\n", "t.csv"); },
+      "t.csv:2"));
   EXPECT_TRUE(
       refused([] { parseMeasuredPoints("x_mm,y_mm,z_mm,nx\n1,2,3,1\n", "c.csv"); }, "c.csv:2"));
   EXPECT_TRUE(refused([] { parseMeasuredPoints("1 2 3\n1 2\n", "c.asc"); }, "c.asc:2"));

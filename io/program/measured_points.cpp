@@ -90,6 +90,7 @@ std::vector<MeasuredPoint> parseMeasuredPoints(const std::string& text, const st
   }
   std::vector<MeasuredPoint> out;
   std::string xs = "x_mm", ys = "y_mm", zs = "z_mm", ds = "deviation_mm";
+  bool nominal_table = false;
   forEachCsvRow(
       text, file, {}, "",
       [&](const CsvRow& row) {
@@ -120,10 +121,24 @@ std::vector<MeasuredPoint> parseMeasuredPoints(const std::string& text, const st
           p.deviation = number(ds);
           p.has_deviation = true;
         }
+        if (nominal_table) {  // the measured point: the nominal moved by the deviation along n
+          if (given != 3 || !p.has_deviation)
+            throw InputError(file, row.line, given != 3 ? row.column("nx") : row.column(ds),
+                             given != 3 ? "nx" : ds,
+                             "a deviation table (nominal_x_mm, ...) needs the normal and the "
+                             "deviation on every row");
+          p.p += p.deviation * p.n;
+        }
         out.push_back(p);
       },
       [&](const CsvHeader& h) {
         if (!h.has("x_mm") && h.has("x")) xs = "x", ys = "y", zs = "z";
+        if (!h.has("x_mm") && h.has("actual_x_mm"))
+          xs = "actual_x_mm", ys = "actual_y_mm", zs = "actual_z_mm";
+        if (!h.has("x_mm") && !h.has("x") && !h.has("actual_x_mm") && h.has("nominal_x_mm")) {
+          xs = "nominal_x_mm", ys = "nominal_y_mm", zs = "nominal_z_mm";
+          nominal_table = true;
+        }
         if (!h.has("deviation_mm") && h.has("deviation")) ds = "deviation";
         for (const std::string& c : {xs, ys, zs})
           if (!h.has(c))

@@ -8,7 +8,10 @@
 //                           part mesh's normal at the point's foot
 //   deviation_mm            (optional) the instrument's own normal deviation; reported beside
 //                           tolver's (the point's distance from the mesh along the normal)
-// x, y, z (and deviation) are accepted without the _mm suffix, as CMM exports write them.
+// x, y, z (and deviation) are accepted without the _mm suffix, as CMM exports write them;
+// actual_x_mm, actual_y_mm, actual_z_mm stand for x_mm, ...; a deviation table without the
+// measured point (nominal_x_mm, nominal_y_mm, nominal_z_mm, nx, ny, nz, deviation_mm on every
+// row) gives it as the nominal moved by the deviation along the normal.
 // An ASC point cloud (CloudCompare, PolyWorks: whitespace- or comma-separated numbers per line,
 // no header; 3 columns x y z, or 6 with the normal) is read when the first data line is numbers.
 #include <Eigen/Core>
