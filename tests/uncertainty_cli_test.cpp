@@ -129,6 +129,22 @@ TEST_F(UncertaintyCli, VerifySaysUndecidedWhenTheLimitIsInsideTheBand) {
     EXPECT_EQ(k["uncertainty"]["lack_of_fit_um"].get<double>(),
               readMachineFile(id).identification.lack_of_fit_mm * 1e3);
     EXPECT_EQ(k["uncertainty"]["spindle_tilt_prior_urad"].get<double>(), 0.0);
+    // The printed band is the largest of deviations.csv's per-sample bands.
+    std::ifstream csv(path("v0") + "/deviations.csv");
+    std::string line;
+    double largest = 0;
+    int rows = 0;
+    while (std::getline(csv, line)) {
+      if (line.empty() || line[0] == '#' || line.rfind("sample,", 0) == 0) {
+        if (line.rfind("sample,", 0) == 0) EXPECT_NE(line.find(",band95_um"), std::string::npos);
+        continue;
+      }
+      largest = std::max(largest, std::stod(line.substr(line.rfind(',') + 1)));
+      ++rows;
+    }
+    EXPECT_GT(rows, 0);
+    EXPECT_NEAR(largest, k["uncertainty"]["band95_max_um"].get<double>(), 1e-4);
+    EXPECT_NEAR(largest, band, 0.006);
     EXPECT_NE(k["uncertainty"]["sources"].get<std::string>().find("tip and tool axis"),
               std::string::npos);
   }

@@ -221,7 +221,11 @@ std::string formatDeviationsCsv(const VerifyReport& r) {
       "# program_um and machine_um are empty where the deviation does not split (split: beyond "
       "range, "
       "cut boundary); total_um is empty where the cut reaches the gouge search limit\n"
-      "sample,x,y,z,nx,ny,nz,region,zone,state,total_um,program_um,machine_um,cl_line,split\n";
+      "sample,x,y,z,nx,ny,nz,region,zone,state,total_um,program_um,machine_um,cl_line,split";
+  // On a calibrated machine, each sample's 95 % band of the machine's share (report.json's
+  // uncertainty.band95_max_um is its largest).
+  const bool banded = r.band95_um.size() == s.size() && !r.band95_um.empty();
+  out += banded ? ",band95_um\n" : "\n";
   // One row per sample, built in place (LineBuilder: the bytes of printf's %.Nf), the regions'
   // CSV fields once.
   std::vector<std::string> region_field(s.group_names.size());
@@ -244,6 +248,7 @@ std::string formatDeviationsCsv(const VerifyReport& r) {
     if (split) row.fixed(mmToUm(v.machine[i]), 4);
     row.character(',').integer(line).character(',');
     row.text(!v.machined[i] ? "" : v.split.empty() ? "split" : splitName(v.split[i]));
+    if (banded) row.character(',').fixed(r.band95_um[i], 4);
     row.character('\n');
     out += row.view();
   }
