@@ -7,6 +7,7 @@
 #include "pipeline/measure.h"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -329,6 +330,16 @@ TEST(MeasureFiles, PointsAndProcessCorrectionsAreReadOrRefusedByLine) {
   EXPECT_TRUE(
       refused([] { parseMeasuredPoints("x_mm,y_mm,z_mm,nx\n1,2,3,1\n", "c.csv"); }, "c.csv:2"));
   EXPECT_TRUE(refused([] { parseMeasuredPoints("1 2 3\n1 2\n", "c.asc"); }, "c.asc:2"));
+  // Empty, comments only, a header alone: no points is an error, not an empty trace.
+  const std::string dir = std::filesystem::temp_directory_path().string();
+  for (const std::string text : {"", "# nothing\n", "x_mm,y_mm,z_mm\n"}) {
+    const std::string f = dir + "/tolver_empty_points_" + std::to_string(::getpid()) + ".csv";
+    std::ofstream(f) << text;
+    EXPECT_TRUE(refused([&] { readMeasuredPoints(f); }, f + ": "))
+        << text;  // "empty file" or "no measured points"
+    std::filesystem::remove(f);
+  }
+  EXPECT_TRUE(refused([] { parseProcessFile("set-up_x_mm\n", "p.txt"); }, "key value"));
   EXPECT_TRUE(refused([] { parseMeasuredPoints("x_mm,y_mm\n1,2\n", "c.csv"); }, "z_mm"));
   EXPECT_TRUE(refused([] { parseMeasuredPoints("1 2 3 0 0 0\n", "c.asc"); }, "normal is zero"));
 }
