@@ -39,9 +39,11 @@ void printMeasurement(const MeasureRun& run) {
                                  ? g.value_names[k]
                                  : std::string("value");
       const bool angle = n.find("rad") != std::string::npos;
+      const bool rate = n.size() > 2 && n.compare(n.size() - 2, 2, "/h") == 0;
       std::printf(" %s %+.3g +- %.2g %s;", n.substr(0, n.rfind(' ')).c_str(),
                   angle ? radToUrad(g.values[k]) : mmToUm(g.values[k]),
-                  angle ? radToUrad(g.sd[k]) : mmToUm(g.sd[k]), angle ? "urad" : "um");
+                  angle ? radToUrad(g.sd[k]) : mmToUm(g.sd[k]),
+                  angle ? "urad" : (rate ? "um/h" : "um"));
     }
     std::printf(" (%s; held-out gain %.3g +- %.2g um2)\n", g.reason.c_str(), g.heldout_gain_um2,
                 g.heldout_gain_se_um2);

@@ -7,6 +7,7 @@
 #include <map>
 
 #include "core/kinematics/sensitivity_jacobian.h"
+#include "core/path/tool_motion.h"
 #include "geometry/surface_projection.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
@@ -82,6 +83,12 @@ void collectCorrections(const std::string& process_from, MeasureReport& rep) {
     for (const auto& [tool, v] : p.length_mm)
       add(processKey(tool ? "tool length T" + std::to_string(tool + 1) : "tool length", "dL mm"), v,
           NAN);
+    if (p.drift_mm_per_h != 0.0)
+      add(processKey("thermal drift", "spindle growth mm/h"), p.drift_mm_per_h, NAN);
+    for (const auto& [tool, v] : p.across_feed_mm)
+      add(processKey(tool ? "tool deflection T" + std::to_string(tool + 1) : "tool deflection",
+                     "across the feed mm"),
+          v, NAN);
   }
   for (const TraceGroup& g : rep.trace.groups) {
     if (!g.added) continue;
@@ -136,6 +143,11 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
   rep.search_mm = in.search_mm;
   rep.heldout_every = in.heldout_every;
   std::vector<TracePoint> trace;
+  const std::vector<double> times_min = programTimes(poses.path);
+  if (times_min.empty())
+    rep.notes.push_back(
+        "thermal drift not tried: the program's cutting moves have no feed rate in mm/min (its "
+        "clock)");
   std::map<std::array<long long, 3>, int> places;
   std::vector<int> row_of_trace;
   std::vector<int> cl_of_trace, sample_of_trace;
@@ -184,7 +196,13 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
     TracePoint t;
     t.p_w = w.foot_w;
     t.n_w = w.n_w;
-    t.axis_w = poses.axis_w[cl];
+    t.axis_w = poses.path[cl].u_w;
+    if (cl > 0) {
+      const Eigen::Vector3d move = poses.path[cl].p_w - poses.path[cl - 1].p_w;
+      if (move.norm() > 1e-9) t.feed_w = move.normalized();
+      // The program's clock halfway along the move that cut it.
+      if (!times_min.empty()) t.time_h = 0.5 * (times_min[cl - 1] + times_min[cl]) / 60.0;
+    }
     t.tool = w.tool;
     t.radius_sensitivity = radiusSensitivity(poses.cutters[w.tool], t.n_w, t.axis_w);
     t.residual = w.residual;
@@ -211,6 +229,7 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
   // The machine's parameters, when calibrated: each point's row through the sensitivity
   // Jacobian at the joints of the move that cut it, at its contact on the cutter.
   TraceOptions opt;
+  opt.plausible = in.plausible;
   opt.tools = static_cast<int>(poses.cutters.size());
   const Machine& machine = poses.machine;
   if (!machine.identification.empty()) {

@@ -17,11 +17,12 @@
 namespace tolver {
 
 struct MeasureInputs {
-  VerifyInputs verify;     // machine, program, set-up, part (required), tolerance, placement
-  std::string points;      // the measured points file
-  double search_mm = 0.5;  // farthest a point may lie from the nominal surface
-  int heldout_every = 5;   // every N-th used point is held out of the fit (N >= 2)
-  std::string report_dir;  // residuals.csv, report.json, process.txt
+  VerifyInputs verify;       // machine, program, set-up, part (required), tolerance, placement
+  std::string points;        // the measured points file
+  double search_mm = 0.5;    // farthest a point may lie from the nominal surface
+  int heldout_every = 5;     // every N-th used point is held out of the fit (N >= 2)
+  PlausibleRange plausible;  // beyond these a traced value is implausible, not added
+  std::string report_dir;    // residuals.csv, report.json, process.txt
 };
 
 struct MeasureRun {

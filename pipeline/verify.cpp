@@ -467,6 +467,37 @@ ImportedPart readPart(const VerifyInputs& o) {
   return readPartMesh(o.part, io);
 }
 
+// A measured part's thermal drift (the tip further out along the axis by the rate times the
+// program's clock at the placement) and sideways deflection (along a x f, f the move's
+// direction), on the predicted placements.
+void applyTimedCorrections(const std::vector<ClPoint>& path, const ToolSet& tools,
+                           const ProcessCorrections& process, std::vector<ToolPlacement>& actual,
+                           std::vector<std::string>& notes) {
+  if (process.drift_mm_per_h == 0.0 && process.across_feed_mm.empty()) return;
+  const std::vector<double> t_min = programTimes(path);
+  if (process.drift_mm_per_h != 0.0 && t_min.empty())
+    notes.push_back(
+        "the process file's thermal drift is not applied: the program's cutting moves have no "
+        "feed rate in mm/min");
+  for (ToolPlacement& a : actual) {
+    const int i = a.cl_index;
+    if (i < 1 || i >= static_cast<int>(path.size())) continue;
+    const Eigen::Vector3d move = path[i].p_w - path[i - 1].p_w;
+    const double len = move.norm();
+    if (!t_min.empty() && process.drift_mm_per_h != 0.0) {
+      // The placement's share of its move: its tip's distance from the move's start.
+      const double frac =
+          len > 0 ? std::clamp((a.tip_w - path[i - 1].p_w).norm() / len, 0.0, 1.0) : 1.0;
+      const double t_h = (t_min[i - 1] + frac * (t_min[i] - t_min[i - 1])) / 60.0;
+      a.tip_w -= process.drift_mm_per_h * t_h * a.axis_w;
+    }
+    const int k = tools.tool_of_cl.empty() ? 0 : tools.tool_of_cl[i];
+    const auto it = process.across_feed_mm.find(k);
+    if (it != process.across_feed_mm.end() && len > 0)
+      a.tip_w += it->second * a.axis_w.cross(move / len);
+  }
+}
+
 // The nominal and the predicted tool placements along the program, swept over the samples.
 void sweepPart(const ProgramOnMachine& m, const ToolSet& tools, const ProcessCorrections& process,
                const std::vector<ToleranceZone>& zones, const MotionSampling& sampling,
@@ -500,6 +531,7 @@ void sweepPart(const ProgramOnMachine& m, const ToolSet& tools, const ProcessCor
       const auto it = process.length_mm.find(k);
       if (it != process.length_mm.end()) a.tip_w -= it->second * a.axis_w;
     }
+  applyTimedCorrections(m.program.path, tools, process, actual, v.report.notes);
   phase("placements");
   v.result =
       verifyPart(v.samples, tools, actual_tools, nominal, actual, zones, sweep, [&](double f) {
@@ -1008,13 +1040,11 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
   if (o.keep_poses) {
     Verification::Poses& k = v->poses;
     k.q.resize(m.pred.points.size());
-    k.axis_w.resize(program.path.size());
+    k.path = program.path;
     k.tool.assign(program.path.size(), 0);
     for (size_t i = 0; i < k.q.size(); ++i) k.q[i] = m.pred.points[i].q;
-    for (size_t i = 0; i < k.axis_w.size(); ++i) {
-      k.axis_w[i] = program.path[i].u_w;
-      if (i < tools.tool_of_cl.size()) k.tool[i] = tools.tool_of_cl[i];
-    }
+    for (size_t i = 0; i < k.path.size() && i < tools.tool_of_cl.size(); ++i)
+      k.tool[i] = tools.tool_of_cl[i];
     k.cutters = tools.cutters;
     k.machine = m.machine;
   }

@@ -71,11 +71,12 @@ struct Verification {
   DecimatedMesh view_mesh;  // the 3D view's (writeVerification)
   std::string machine_file, program_dialect;
   bool banded = false;  // a calibrated machine: report.band95_* hold the prediction's band
-  // With VerifyInputs::keep_poses: per CL point its joints (nominal IK), nominal tool axis and
-  // tool (index into cutters); the machine as predicted (its identification included).
+  // With VerifyInputs::keep_poses: per CL point its joints (nominal IK), the CL point itself
+  // (tip, axis, feed) and tool (index into cutters); the machine as predicted (its
+  // identification included).
   struct Poses {
     std::vector<JointVector> q;
-    std::vector<Eigen::Vector3d> axis_w;
+    std::vector<ClPoint> path;
     std::vector<int> tool;
     std::vector<Cutter> cutters;
     Machine machine;

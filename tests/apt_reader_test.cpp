@@ -6,6 +6,7 @@
 #include <cstring>
 #include <random>
 
+#include "core/path/tool_motion.h"
 #include "geometry/cutter.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
@@ -479,6 +480,39 @@ TEST(AptReader, PlainGotoLinesReadAsTheGeneralPathReadsThem) {
     EXPECT_EQ(split(a, &ca), split(b, &cb)) << bad;
     EXPECT_EQ(cb, ca < 0 ? -1 : ca + 1) << a << " / " << b;
   }
+}
+
+// Feed rates as CAM posts write them (the program's clock for measure's thermal drift): the unit
+// before or after the value, per minute in the file's unit without one, inches per minute, per
+// revolution through SPINDL's speed; inverse time and per revolution without a speed unknown.
+TEST(AptReader, FeedRatesAreKeptInMillimetresPerMinute) {
+  const ClProgram p = parseApt(
+      "GOTO/0,0,0\n"
+      "FEDRAT/MMPM,500\nGOTO/1,0,0\n"
+      "FEDRAT/250,MMPM\nGOTO/2,0,0\n"
+      "FEDRAT/10,IPM\nGOTO/3,0,0\n"
+      "FEDRAT/0.1,MMPR\nGOTO/4,0,0\n"  // no speed yet: unknown
+      "SPINDL/RPM,3000,CLW\nFEDRAT/0.1,MMPR\nGOTO/5,0,0\n"
+      "FEDRAT/INVERS,2\nGOTO/6,0,0\n"
+      "UNITS/INCHES\nFEDRAT/20\nGOTO/7,0,0\n",
+      "feeds.cls");
+  ASSERT_EQ(p.path.size(), 8u);
+  EXPECT_TRUE(std::isnan(p.path[0].feed_mm_min));
+  EXPECT_FLOAT_EQ(p.path[1].feed_mm_min, 500.0f);
+  EXPECT_FLOAT_EQ(p.path[2].feed_mm_min, 250.0f);
+  EXPECT_FLOAT_EQ(p.path[3].feed_mm_min, 254.0f);
+  EXPECT_TRUE(std::isnan(p.path[4].feed_mm_min));
+  EXPECT_FLOAT_EQ(p.path[5].feed_mm_min, 300.0f);
+  EXPECT_TRUE(std::isnan(p.path[6].feed_mm_min));
+  EXPECT_FLOAT_EQ(p.path[7].feed_mm_min, 508.0f);
+  // The clock: 1 mm at 500, 250, 254 mm/min, then a move without a feed: no clock at all.
+  EXPECT_TRUE(programTimes(p.path).empty());
+  std::vector<ClPoint> head(p.path.begin(), p.path.begin() + 4);
+  const std::vector<double> t = programTimes(head);
+  ASSERT_EQ(t.size(), 4u);
+  EXPECT_NEAR(t[3], 1.0 / 500 + 1.0 / 250 + 1.0 / 254, 1e-9);
+  head[2].rapid = true;  // a rapid at the stated rate
+  EXPECT_NEAR(programTimes(head, 1000.0)[3], 1.0 / 500 + 1.0 / 1000 + 1.0 / 254, 1e-9);
 }
 
 }  // namespace

@@ -899,5 +899,23 @@ TEST(GcodeReader, AnExponentIsRefusedNotReadAsItsMantissa) {
   EXPECT_NE(e.find("no exponent"), std::string::npos) << e;
 }
 
+// F words: per minute in the program's unit under G94 (every control's default), unknown under
+// inverse time (G93) and per revolution (G95); modal.
+TEST(GcodeReader, FeedRatesFollowTheFeedMode) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const ClProgram p = parseGcode(
+      "G21\nG0 X0 Y0 Z0 A0 C0\nG1 X1 F600\nX2\nG20 G1 X0.1 F10\nG93 G1 X0.2 F2\nG94 G21 G1 X3 "
+      "F100\nG95 G1 X4 F0.1\n",
+      "feeds.ngc", m.model);
+  ASSERT_EQ(p.path.size(), 7u);
+  EXPECT_TRUE(std::isnan(p.path[0].feed_mm_min));
+  EXPECT_FLOAT_EQ(p.path[1].feed_mm_min, 600.0f);
+  EXPECT_FLOAT_EQ(p.path[2].feed_mm_min, 600.0f);
+  EXPECT_FLOAT_EQ(p.path[3].feed_mm_min, 254.0f);
+  EXPECT_TRUE(std::isnan(p.path[4].feed_mm_min));
+  EXPECT_FLOAT_EQ(p.path[5].feed_mm_min, 100.0f);
+  EXPECT_TRUE(std::isnan(p.path[6].feed_mm_min));
+}
+
 }  // namespace
 }  // namespace tolver

@@ -5,7 +5,9 @@
 // envelope of a ball-end cutter: the material left along a line p + s n is where that line first
 // enters a ball, over every placement (a hash grid of the balls' centres; no code of tolver's
 // sweep). Process effects: the ball's radius (its length preset to the tip), the tool's length,
-// the part's pose on the table. Used by tests/measure_test.cpp and tools/make_measured_sample.cpp.
+// the part's pose on the table, the spindle's thermal growth along the program's own clock (its
+// FEDRAT words, rapids at 10 m/min), the cutter pushed sideways of its feed. Used by
+// tests/measure_test.cpp and tools/make_measured_sample.cpp.
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
@@ -34,20 +36,25 @@ struct Effect {
   // Outside any candidate of measure's: the ball's centre waves along z with x (a screw's
   // periodic error of the machine's X), amplitude mm and period mm.
   double wave_mm = 0, wave_period_mm = 10;
+  double drift_mm_per_h = 0;        // the tool grows along its axis at this rate from the start
+  double deflection_across_mm = 0;  // the ball pushed along a x f (f the move's direction)
 };
 
 // GOTO/x,y,z,i,j,k lines of an APT file; a GOTO after RAPID is a rapid move (not cut).
 struct Cl {
   Eigen::Vector3d tip, axis;
   bool rapid;
+  double feed_mm_min = 0;  // the last FEDRAT/MMPM before it (0: none)
 };
 inline std::vector<Cl> readGotos(const std::string& path) {
   std::ifstream in(path);
   std::vector<Cl> out;
   std::string line;
   bool rapid = false;
+  double feed = 0;
   while (std::getline(in, line)) {
     if (line.rfind("RAPID", 0) == 0) rapid = true;
+    if (line.rfind("FEDRAT/MMPM,", 0) == 0) feed = std::stod(line.substr(12));
     if (line.rfind("GOTO/", 0) != 0) continue;
     std::stringstream ss(line.substr(5));
     double v[6];
@@ -56,8 +63,8 @@ inline std::vector<Cl> readGotos(const std::string& path) {
       ss >> v[k];
       if (k < 5) ss >> comma;
     }
-    out.push_back(
-        {Eigen::Vector3d(v[0], v[1], v[2]), Eigen::Vector3d(v[3], v[4], v[5]).normalized(), rapid});
+    out.push_back({Eigen::Vector3d(v[0], v[1], v[2]),
+                   Eigen::Vector3d(v[3], v[4], v[5]).normalized(), rapid, feed});
     rapid = false;
   }
   return out;
@@ -70,18 +77,29 @@ class Simulator {
     // The part sits at part_error on the table: the path the machine runs, seen from the part,
     // is the inverse of that pose applied to the programmed one.
     const Eigen::Isometry3d inv = e.part_error.inverse();
+    double clock_h = 0;  // when the tool reaches cl[i - 1]
     for (size_t i = 1; i < cl.size(); ++i) {
-      if (cl[i].rapid) continue;
-      const int steps =
-          std::max(1, static_cast<int>(std::ceil((cl[i].tip - cl[i - 1].tip).norm() / 0.02)));
+      const double len = (cl[i].tip - cl[i - 1].tip).norm();
+      const double move_h = len / (cl[i].rapid ? 10000.0 : cl[i].feed_mm_min) / 60.0;
+      if (cl[i].rapid) {
+        clock_h += move_h;
+        continue;
+      }
+      const Eigen::Vector3d f =
+          len > 0 ? Eigen::Vector3d((cl[i].tip - cl[i - 1].tip) / len) : Eigen::Vector3d::Zero();
+      const int steps = std::max(1, static_cast<int>(std::ceil(len / 0.02)));
       for (int k = 0; k <= steps; ++k) {
         const double t = static_cast<double>(k) / steps;
         const Eigen::Vector3d a = ((1 - t) * cl[i - 1].axis + t * cl[i].axis).normalized();
-        const Eigen::Vector3d tip = (1 - t) * cl[i - 1].tip + t * cl[i].tip - e.length_error_mm * a;
+        const double grown = e.drift_mm_per_h * (clock_h + t * move_h);
+        const Eigen::Vector3d tip = (1 - t) * cl[i - 1].tip + t * cl[i].tip -
+                                    (e.length_error_mm + grown) * a +
+                                    e.deflection_across_mm * a.cross(f);
         Eigen::Vector3d c = inv * (tip + r_ * a);
         c.z() += e.wave_mm * std::sin(2 * M_PI * c.x() / e.wave_period_mm);
         balls_[key(c)].push_back({c});
       }
+      clock_h += move_h;
     }
   }
   // The machined surface along p + s n (n outward): the smallest s where the line enters a ball,

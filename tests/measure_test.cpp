@@ -161,6 +161,79 @@ TEST_F(MeasureTest, APartSetUpErrorIsNamed) {
   EXPECT_GE(at_noise, 9);
 }
 
+// The spindle growing 60 um/h from the program's start: over the finish's 5 min (its FEDRAT,
+// 2 m/min) the tip moves 5 um along the axis, growing with the program's clock. tolver reads the
+// clock from the program's feed rates and names the drift with its rate (not a tool length).
+TEST_F(MeasureTest, AThermalDriftIsNamedWithItsRate) {
+  Effect e;
+  e.drift_mm_per_h = 0.060;
+  int named = 0, at_noise = 0;
+  for (unsigned seed = 601; seed < 601 + kSeeds; ++seed) {
+    const MeasureRun r = run(e, seed, "drift" + std::to_string(seed));
+    print("drift 60um/h", r);
+    const PartTrace& t = r.report.trace;
+    bool ok = false;
+    if (!t.added.empty()) {
+      const TraceGroup& g = t.groups[0];
+      std::printf("[ measure ]   %s %.2f +- %.2f\n", g.name.c_str(), 1e3 * g.values[0],
+                  1e3 * g.sd[0]);
+      ok = g.name == "thermal drift" && std::abs(g.values[0] - 0.060) < 3 * g.sd[0] + 1e-3;
+    }
+    named += ok;
+    at_noise += t.heldout_rms_after < 1.5 * kNoise;
+  }
+  EXPECT_GE(named, 9);
+  EXPECT_GE(at_noise, 9);
+}
+
+// The cutter pushed 8 um sideways of its feed (a climb cut's deflection): the raster's passes
+// run both ways, so the part shows it with opposite signs on neighbouring passes.
+TEST_F(MeasureTest, ASidewaysDeflectionIsNamed) {
+  Effect e;
+  e.deflection_across_mm = 0.008;
+  int named = 0, at_noise = 0;
+  for (unsigned seed = 701; seed < 701 + kSeeds; ++seed) {
+    const MeasureRun r = run(e, seed, "deflection" + std::to_string(seed));
+    print("deflect 8 um", r);
+    const PartTrace& t = r.report.trace;
+    bool ok = false;
+    if (!t.added.empty()) {
+      const TraceGroup& g = t.groups[0];
+      std::printf("[ measure ]   %s %.2f +- %.2f, %.2f +- %.2f um\n", g.name.c_str(),
+                  1e3 * g.values[0], 1e3 * g.sd[0], 1e3 * g.values[g.values.size() - 1],
+                  1e3 * g.sd[g.sd.size() - 1]);
+      ok = g.name == "tool deflection" && std::abs(g.values[1] - 0.008) < 3 * g.sd[1] + 0.5e-3 &&
+           std::abs(g.values[0]) < 3 * g.sd[0] + 0.5e-3;
+    }
+    named += ok;
+    at_noise += t.heldout_rms_after < 1.5 * kNoise;
+  }
+  EXPECT_GE(named, 9);
+  EXPECT_GE(at_noise, 9);
+}
+
+// An implausible value is not added: the same drift, judged against a physical range of
+// 10 um/h, is reported as implausible and the trace goes on without it.
+TEST_F(MeasureTest, AnImplausibleValueIsNotAdded) {
+  Effect e;
+  e.drift_mm_per_h = 0.060;
+  const Simulator sim(upright(cl(), 5.0), 5.0, e);
+  const std::string file = write("drift.csv", measuredCsv(mesh(), sim, 600, 651, kNoise));
+  MeasureInputs in = inputs(file);
+  const MeasureRun plausible = measurePart(in);
+  ASSERT_FALSE(plausible.report.trace.added.empty());
+  EXPECT_EQ(plausible.report.trace.groups[0].name, "thermal drift");
+  // The same points judged against a tighter range.
+  in.plausible.drift_mm_per_h = 0.010;
+  const MeasureRun tight = measurePart(in);
+  bool reported = false;
+  for (const TraceGroup& g : tight.report.trace.groups) {
+    EXPECT_FALSE(g.added && g.name == "thermal drift");
+    if (g.name == "thermal drift") reported = g.reason.find("implausible") != std::string::npos;
+  }
+  EXPECT_TRUE(reported);
+}
+
 // The command as a user runs it: the console's figures are report.json's, the residual RMS is
 // residuals.csv's, process.txt holds the set-up found; a bad points file is refused with its
 // line and field, and writes nothing.
@@ -254,6 +327,36 @@ TEST_F(MeasureTest, TheProcessFileCarriesWhatWasLearnedIntoTheNextPrediction) {
       pb((std::istreambuf_iterator<char>(b)), {});
   for (const std::string key : {"tool_length_dL_mm", "set-up_x_mm"})
     if (pa.find(key) != std::string::npos) EXPECT_NE(pb.find(key), std::string::npos) << pb;
+}
+
+// The drift and the sideways deflection a part showed carry into the next prediction too:
+// verify moves each predicted placement by the rate times the program's clock along the axis and
+// by the deflection along a x f; the second measure finds nothing left.
+TEST_F(MeasureTest, TheProcessFileCarriesDriftAndDeflection) {
+  Effect e;
+  e.drift_mm_per_h = 0.040;
+  e.deflection_across_mm = 0.010;
+  const Simulator sim(upright(cl(), 5.0), 5.0, e);
+  const std::string points = write("cmm.csv", measuredCsv(mesh(), sim, 600, 451, kNoise));
+  MeasureInputs in = inputs(points);
+  in.report_dir = path("first");
+  const MeasureRun first = measurePart(in);
+  print("first", first);
+  ASSERT_GE(first.report.trace.added.size(), 2u);
+  std::ifstream a(path("first") + "/process.txt");
+  const std::string pa((std::istreambuf_iterator<char>(a)), {});
+  EXPECT_NE(pa.find("thermal_drift_spindle_growth_mm/h "), std::string::npos) << pa;
+  EXPECT_NE(pa.find("tool_deflection_across_the_feed_mm "), std::string::npos) << pa;
+  const ProcessCorrections pc = readProcessFile(path("first") + "/process.txt");
+  EXPECT_NEAR(pc.drift_mm_per_h, 0.040, 0.003);
+  ASSERT_EQ(pc.across_feed_mm.count(0), 1u);
+  EXPECT_NEAR(pc.across_feed_mm.at(0), 0.010, 0.0015);
+  in.verify.process = path("first") + "/process.txt";
+  in.report_dir = path("second");
+  const MeasureRun second = measurePart(in);
+  print("second", second);
+  EXPECT_TRUE(second.report.trace.added.empty()) << second.report.trace.verdict_text;
+  EXPECT_LT(second.report.trace.heldout_rms_before, 1.5 * kNoise);
 }
 
 // Places measured twice give the repeatability: a clean part's residual is it (the test passes,

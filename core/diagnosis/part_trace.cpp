@@ -26,6 +26,7 @@ struct Group {
   Eigen::MatrixXd X;               // points x values
   Eigen::MatrixXd prior_root_inv;  // values x values, L^-1 of the prior (empty: none)
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();  // set-up: the rotations' centre while fitting
+  double plausible_abs = INFINITY;                   // the largest |value| that is physical
 };
 
 // The least squares fit of y by the columns of the groups in `set` on the rows in `rows`, with
@@ -145,6 +146,33 @@ std::vector<Group> candidateGroups(const std::vector<TracePoint>& pts, const Tra
       if (g->X.cwiseAbs().maxCoeff() > 1e-6) groups.push_back(std::move(*g));
     if (o.tools > 1 && d.X.cwiseAbs().maxCoeff() > 1e-6) groups.push_back(std::move(d));
   }
+  bool timed = n > 0;
+  for (const TracePoint& p : pts) timed = timed && std::isfinite(p.time_h);
+  if (timed) {
+    Group g;
+    g.name = "thermal drift";
+    g.value_names = {"spindle growth mm/h"};
+    g.X.resize(n, 1);
+    for (Eigen::Index i = 0; i < n; ++i) g.X(i, 0) = -pts[i].n_w.dot(pts[i].axis_w) * pts[i].time_h;
+    g.plausible_abs = o.plausible.drift_mm_per_h;
+    if (g.X.cwiseAbs().maxCoeff() > 1e-9) groups.push_back(std::move(g));
+  }
+  for (int k = 0; k < std::max(1, o.tools); ++k) {
+    Group g;
+    g.name = "tool deflection" + (o.tools > 1 ? " T" + std::to_string(k + 1) : std::string());
+    g.value_names = {"off the surface mm", "across the feed mm"};
+    g.X = Eigen::MatrixXd::Zero(n, 2);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const TracePoint& p = pts[i];
+      if (p.tool != k) continue;
+      g.X(i, 0) = (p.n_w - p.n_w.dot(p.axis_w) * p.axis_w).norm();
+      g.X(i, 1) = p.n_w.dot(p.axis_w.cross(p.feed_w));
+    }
+    g.plausible_abs = o.plausible.deflection_mm;
+    // Both directions must vary, or the group is another's (a flat floor: nothing to see).
+    if (g.X.col(0).cwiseAbs().maxCoeff() > 1e-6 && g.X.col(1).cwiseAbs().maxCoeff() > 1e-6)
+      groups.push_back(std::move(g));
+  }
   {
     Group g;
     g.name = "stock";
@@ -208,7 +236,7 @@ PartTrace tracePart(const std::vector<TracePoint>& pts, const TraceOptions& o) {
   for (size_t i = 0; i < held_rows.size(); ++i)
     block[i] = static_cast<int>(i * blocks / std::max<size_t>(1, held_rows.size()));
 
-  std::vector<int> current;
+  std::vector<int> current, implausible;
   Fit base = fitGroups(groups, current, fit_rows, y, sigma);
   Eigen::VectorXd r_base = y;
   for (;;) {
@@ -217,6 +245,9 @@ PartTrace tracePart(const std::vector<TracePoint>& pts, const TraceOptions& o) {
     std::vector<Fit> trial(groups.size());
     for (size_t g = 0; g < groups.size(); ++g) {
       if (std::find(current.begin(), current.end(), static_cast<int>(g)) != current.end()) continue;
+      if (std::find(implausible.begin(), implausible.end(), static_cast<int>(g)) !=
+          implausible.end())
+        continue;
       std::vector<int> set = current;
       set.push_back(static_cast<int>(g));
       trial[g] = fitGroups(groups, set, fit_rows, y, sigma);
@@ -246,6 +277,20 @@ PartTrace tracePart(const std::vector<TracePoint>& pts, const TraceOptions& o) {
     }
     std::vector<int> set = current;
     set.push_back(best);
+    {
+      const Eigen::Index k = groups[best].X.cols();
+      const Eigen::VectorXd v = trial[best].beta.tail(k);
+      if (v.cwiseAbs().maxCoeff() > groups[best].plausible_abs) {
+        tb.reason =
+            formatReason("implausible: %.3g beyond the physical range +-%.3g (%s); not added",
+                         v.cwiseAbs().maxCoeff(), groups[best].plausible_abs,
+                         groups[best].value_names[0].c_str());
+        tb.values = v;
+        tb.sd = Eigen::VectorXd::Constant(k, NAN);
+        implausible.push_back(best);
+        continue;
+      }
+    }
     const Eigen::VectorXd r_new = y - predictGroups(groups, set, trial[best]);
     if (!held_rows.empty()) {
       std::vector<double> gain(held_rows.size());

@@ -12,6 +12,12 @@
 //   tool length   tool k's length off by dL (its tip further out): -dL * (n . a)
 //   tool offset   tool k's tip off by d (several tools only):      n . d
 //   stock         a uniform normal offset c (stock left, deflection that the same everywhere): c
+//   thermal drift the spindle growing along its axis at a constant rate g (mm/h) from the
+//                 program's start, the time t_h the program's clock at the cut: -g t_h (n . a)
+//   tool deflection tool k pushed off the surface by e (across its axis, away from the material)
+//                 and sideways of its feed by s (along a x f, f the move's direction: climb and
+//                 conventional passes take opposite signs), the engagement taken as uniform:
+//                 e |n - (n.a) a| + s n . (a x f)
 //   machine       calibrated parameters theta off by dtheta:        m . dtheta, m the point's row
 //                 (n . (J_tip + J_rot x r)) with the calibration's covariance as their prior.
 //
@@ -20,7 +26,9 @@
 // (p < alpha) and the held-out points' squared residuals fall by more than twice their standard
 // error. Nothing is added when nothing is missing. Groups whose fit on these points is as good as
 // the added one's (within 2 % of its gain) are named as confounded with it: the points cannot tell
-// them apart (a set-up's z and a tool's length on a flat face, always). Groups are ranked by BIC
+// them apart (a set-up's z and a tool's length on a flat face, always). A group whose values fall
+// outside their physical range (kPlausible below) is reported as implausible and not added, and
+// the next is tried. Groups are ranked by BIC
 // (m log(RSS_with / RSS_without) + q log m), so that six values must buy more than one.
 #include <Eigen/Core>
 #include <string>
@@ -37,7 +45,17 @@ struct TracePoint {
   int tool = 0;                                       // index of the tool that cut it
   double residual = 0.0;                              // measured - predicted, mm
   bool held_out = false;
-  int repeat = -1;  // points measured at the same place share an index (>= 0); -1: once
+  int repeat = -1;      // points measured at the same place share an index (>= 0); -1: once
+  double time_h = NAN;  // the program's clock when the point was cut (h); NAN: no feed rates
+  Eigen::Vector3d feed_w = Eigen::Vector3d::Zero();  // unit direction of the cutting move; 0: none
+};
+
+// The physical ranges beyond which a traced value is implausible (mm, mm/h): a spindle's thermal
+// growth reaches 20-60 um in its first hour (ISO 230-3 tests), a finishing cutter deflects by
+// tens of um.
+struct PlausibleRange {
+  double drift_mm_per_h = 0.1;
+  double deflection_mm = 0.2;
 };
 
 struct TraceOptions {
@@ -48,6 +66,7 @@ struct TraceOptions {
   Eigen::MatrixXd machine_covariance;
   std::vector<std::string> machine_names;
   int tools = 1;
+  PlausibleRange plausible;
 };
 
 struct TraceGroup {

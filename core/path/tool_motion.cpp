@@ -72,4 +72,19 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
   }
 }
 
+std::vector<double> programTimes(const std::vector<ClPoint>& path, double rapid_mm_min) {
+  std::vector<double> t(path.size(), 0.0);
+  for (size_t i = 1; i < path.size(); ++i) {
+    const double len = (path[i].p_w - path[i - 1].p_w).norm();
+    const double feed = path[i].rapid ? rapid_mm_min : static_cast<double>(path[i].feed_mm_min);
+    if (!(feed > 0)) {
+      if (len > 0) return {};
+      t[i] = t[i - 1];
+      continue;
+    }
+    t[i] = t[i - 1] + len / feed;
+  }
+  return t;
+}
+
 }  // namespace tolver

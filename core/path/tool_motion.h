@@ -46,4 +46,10 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
                       std::vector<ToolPlacement>* nominal_out,
                       std::vector<ToolPlacement>* actual_out);
 
+// The program's clock: the time (min, from the first point) at which the tool reaches each CL
+// point, each cutting move's tip path at its feed rate (ClPoint::feed_mm_min; TCP controls feed
+// the tip), rapids at `rapid_mm_min` (the machine's rapid rate: an assumption, rapids are short).
+// Acceleration and dwell are not modelled. Empty when a cutting move has no feed rate.
+std::vector<double> programTimes(const std::vector<ClPoint>& path, double rapid_mm_min = 10000.0);
+
 }  // namespace tolver

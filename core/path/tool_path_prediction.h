@@ -21,6 +21,9 @@ struct ClPoint {
   Eigen::Vector3d u_w = Eigen::Vector3d::UnitZ();
   int line = 0;        // source line in the CL file (1-based), for messages
   bool rapid = false;  // a positioning move (APT RAPID), not a cutting move
+  // The feed rate of the move to this point (mm/min), NAN where the program gives none the
+  // reader can turn into mm/min (per revolution without a spindle speed, inverse time).
+  float feed_mm_min = NAN;
 };
 
 // One predicted point, as a value: PredictedPoints assembles it from its arrays.

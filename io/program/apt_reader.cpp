@@ -407,7 +407,16 @@ class Parser {
       units(major, args, line);
     } else if (major == "FEDRAT") {
       std::vector<std::string> words;
-      if (numbers(args, major, true, &words).empty()) fail(line, 0, major, "no feed rate value");
+      const std::vector<double> v = numbers(args, major, true, &words);
+      if (v.empty()) fail(line, 0, major, "no feed rate value");
+      feedRate(v[0], words);
+    } else if (major == "SPINDL") {
+      // SPINDL/rpm[,RPM|SFM|SMM][,CLW|CCLW]: the speed turns per-revolution feeds into mm/min.
+      std::vector<std::string> words;
+      const std::vector<double> v = numbers(args, major, true, &words);
+      const bool surface = std::find(words.begin(), words.end(), "SFM") != words.end() ||
+                           std::find(words.begin(), words.end(), "SMM") != words.end();
+      if (!v.empty()) spindle_rpm_ = surface ? NAN : std::abs(v[0]);
     } else if (major == "RAPID") {
       rapid_next_ = true;
     } else if (major == "CUTTER") {
@@ -747,6 +756,7 @@ class Parser {
     cl.u_w = f.T.linear() * axis_local_;
     cl.line = line;
     cl.rapid = rapid_next_;
+    cl.feed_mm_min = static_cast<float>(feed_mm_min_);
     rapid_next_ = false;
     st.first_point = static_cast<int>(prog_.path.size());
     if (arc_pending_) {
@@ -802,6 +812,23 @@ class Parser {
   Eigen::Vector3d last_local_ = Eigen::Vector3d::Zero();
   bool have_point_ = false;
   bool rapid_next_ = false;
+  double feed_mm_min_ = NAN, spindle_rpm_ = NAN;
+
+  // FEDRAT/f[,MMPM|IPM|MMPR|IPR] (the unit before or after the value): per minute in the file's
+  // unit when none is given; per revolution through the last SPINDL speed; INVERS (inverse time)
+  // and per revolution without a speed leave the feed unknown.
+  void feedRate(double f, const std::vector<std::string>& words) {
+    const double unit = prog_.frames[frame_].scale;
+    feed_mm_min_ = std::abs(f) * unit;
+    for (const std::string& w : words) {
+      if (w == "MMPM") feed_mm_min_ = std::abs(f);
+      if (w == "IPM") feed_mm_min_ = std::abs(f) * 25.4;
+      if (w == "MMPR") feed_mm_min_ = std::abs(f) * spindle_rpm_;
+      if (w == "IPR") feed_mm_min_ = std::abs(f) * 25.4 * spindle_rpm_;
+      if (w == "INVERS") feed_mm_min_ = NAN;
+    }
+    if (!(feed_mm_min_ > 0)) feed_mm_min_ = NAN;
+  }
   bool trntyp_world_ = false;
   bool arc_pending_ = false;
   int arc_turns_ = 0;

@@ -1469,7 +1469,9 @@ class Reader {
         // Sinumerik: D0 switches the tool length offset off, Dn on (cutting edge n).
         tlc_ = w.value != 0.0;
         if (tlc_) h_ = static_cast<int>(w.value);
-      } else if (w.letter == 'N' || w.letter == 'F' || w.letter == 'S' || w.letter == 'D') {
+      } else if (w.letter == 'F') {
+        feed_word_ = w.value;  // modal; its unit is the feed mode in force (G93/G94/G95)
+      } else if (w.letter == 'N' || w.letter == 'S' || w.letter == 'D') {
         continue;
       } else if (w.letter == 'T') {
         tool_ = static_cast<int>(w.value);
@@ -1527,6 +1529,8 @@ class Reader {
       modes->motion = c;
     } else if (c == "G17" || c == "G18" || c == "G19") {
       plane_ = c == "G17" ? 2 : (c == "G18" ? 1 : 0);
+    } else if (c == "G93" || c == "G94" || c == "G95") {
+      feed_mode_ = c;
     } else if (c == "G20" || c == "G70") {
       setUnits(25.4);
     } else if (c == "G21" || c == "G71") {
@@ -1740,6 +1744,10 @@ class Reader {
     ClPoint p;
     p.line = line_;
     p.rapid = rapid;
+    // Feed per minute (G94, every control's default) in the program's unit; inverse time (G93)
+    // and per revolution (G95) leave it unknown.
+    if (feed_mode_ == "G94" && feed_word_ > 0)
+      p.feed_mm_min = static_cast<float>(feed_word_ * unit_);
     JointVector q;
     if (tcpMode()) {
       q = q_;
@@ -2068,6 +2076,8 @@ class Reader {
   int plane_ = 2;  // normal index: 2 = G17 (XY), 1 = G18 (ZX), 0 = G19 (YZ)
   bool absolute_ = true, arc_absolute_ = false;
   std::string motion_ = "G0";
+  std::string feed_mode_ = "G94";
+  double feed_word_ = 0.0;  // the last F word, in the unit of the feed mode
   std::string work_ = "G54";
   bool tlc_ = false, tcp_without_tlc_ = false;
   int h_ = 0, tool_ = 0;

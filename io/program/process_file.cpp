@@ -72,14 +72,27 @@ ProcessCorrections parseProcessFile(const std::string& text, const std::string& 
         c.length_mm[tool] = *v;
         continue;
       }
+    } else if (key == "thermal_drift_spindle_growth_mm/h") {
+      c.drift_mm_per_h = *v;
+      continue;
+    } else if (key.rfind("tool_deflection_", 0) == 0) {
+      const int tool = toolOf(key.substr(16), &tail);
+      if (tail == "across_the_feed_mm" && tool >= 0) {
+        c.across_feed_mm[tool] = *v;
+        continue;
+      }
+      if (tail == "off_the_surface_mm" && tool >= 0) {
+        c.not_applied.push_back(key);
+        continue;
+      }
     } else if (key.rfind("stock_", 0) == 0 || key.rfind("tool_offset_", 0) == 0 ||
                key.rfind("machine_", 0) == 0) {
       c.not_applied.push_back(key);
       continue;
     }
     throw InputError(file, line, 1, key,
-                     "unknown key (set-up_*, cutter_radius_*, tool_length_*, stock_*, "
-                     "tool_offset_*, machine_*)");
+                     "unknown key (set-up_*, cutter_radius_*, tool_length_*, "
+                     "thermal_drift_*, tool_deflection_*, stock_*, tool_offset_*, machine_*)");
   }
   c.part_error.linear() = (Eigen::AngleAxisd(w.z(), Eigen::Vector3d::UnitZ()) *
                            Eigen::AngleAxisd(w.y(), Eigen::Vector3d::UnitY()) *
