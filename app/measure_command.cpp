@@ -14,7 +14,7 @@ namespace {
 
 struct MeasureOptions {
   MeasureInputs in;
-  bool quiet = false;
+  bool quiet = false, no_images = false;
 };
 
 void printMeasurement(const MeasureRun& run) {
@@ -71,8 +71,14 @@ void printMeasurement(const MeasureRun& run) {
   }
   for (const std::string& n : r.notes) std::printf("  note       %s\n", n.c_str());
   if (!run.report_dir.empty())
-    std::printf("  wrote      %s/{residuals.csv,report.json,process.txt}\n",
-                run.report_dir.c_str());
+    std::printf("  wrote      %s/{residuals.csv,report.json,process.txt%s%s}\n",
+                run.report_dir.c_str(), r.images.empty() ? "" : ",",
+                [&] {
+                  std::string s;
+                  for (size_t k = 0; k < r.images.size(); ++k) s += (k ? "," : "") + r.images[k];
+                  return s;
+                }()
+                    .c_str());
 }
 
 }  // namespace
@@ -117,7 +123,10 @@ void registerMeasure(CLI::App& app, Verdict* verdict) {
                   "process corrections the prediction already holds (a previous process.txt); "
                   "the new process.txt adds what this part shows to them");
   cmd->add_flag("--quiet", o->quiet, "print nothing but errors");
+  cmd->add_flag("--no-images", o->no_images,
+                "write no PNG maps or histograms (no X server needed)");
   cmd->callback([o, verdict] {
+    o->in.images = !o->no_images;
     ProgressBar bar(!o->quiet);
     const MeasureRun run = measurePart(o->in, progressOf(bar));
     if (!o->quiet) printMeasurement(run);

@@ -7,24 +7,30 @@
 #include <map>
 
 #include "core/kinematics/sensitivity_jacobian.h"
+#include "core/numerics/units.h"
 #include "core/path/tool_motion.h"
 #include "geometry/surface_projection.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
 #include "io/program/measured_points.h"
 #include "io/program/process_file.h"
+#include "io/report/deviation_map.h"
+#include "io/report/offscreen_display.h"
 
 namespace tolver {
 namespace {
 
 // Where each measured point lands: its foot on the part and the sample verify sweeps there.
 struct Matching {
+  TriangleMesh part;  // the nominal part in w, for the maps
   std::vector<Eigen::Vector3d> p_w, given_n_w;
   std::vector<SurfaceFoot> feet;
   std::vector<int> sample_of;  // -1: not swept (beyond the search range, beyond an edge)
 };
 
 SurfaceSamples samplesAtFeet(const TriangleMesh& mesh, double search_mm, Matching& m) {
+  m.part.vertices = mesh.vertices;
+  m.part.faces = mesh.faces;
   m.feet = projectOntoMesh(mesh, m.p_w);
   m.sample_of.assign(m.p_w.size(), -1);
   SurfaceSamples s;
@@ -99,6 +105,63 @@ void collectCorrections(const std::string& process_from, MeasureReport& rep) {
           g.values[k], g.sd[k]);
   }
   for (const std::string& k : order) rep.corrections.push_back(all[k]);
+}
+
+// The residual's maps (before and after the trace, one scale: +-3 sigma of the final model's
+// residual, so that what is left beyond the model stands out) and histograms, into dir. Returns
+// the files' names; without a display, a note instead.
+std::vector<std::string> renderResiduals(const std::string& dir, const TriangleMesh& part,
+                                         MeasureReport& rep) {
+  std::string why;
+  if (!ensureDisplay(&why)) {
+    rep.notes.push_back(why);
+    return {};
+  }
+  const double band = std::max(3.0 * rep.trace.sigma_after, 0.5e-3);
+  std::vector<double> before, after;
+  std::vector<Eigen::Vector3d> at;
+  for (const MeasureRow& w : rep.rows)
+    if (w.status == "used") {
+      before.push_back(w.residual);
+      after.push_back(w.residual_after);
+      at.push_back(w.foot_w);
+    }
+  std::vector<std::string> files;
+  const std::vector<Rgb> grey(part.vertices.size(), kUncheckedColour);
+  for (const bool is_after : {false, true}) {
+    const std::vector<double>& r = is_after ? after : before;
+    DeviationMap map;
+    map.points = &part.vertices;
+    map.faces = &part.faces;
+    map.colours = grey;
+    map.bar_lower = -band;
+    map.bar_upper = band;
+    map.grey_means = "the part; dots: measured points";
+    map.bar_title = "residual um\n+ more material\nthan predicted";
+    map.limit_names = {"-3 sigma", "+3 sigma"};
+    map.title = is_after ? "residual after the trace (measured - predicted - effects added)"
+                         : "residual (measured - predicted)";
+    map.markers = at;
+    for (double d : r) map.marker_colours.push_back(deviationColour(d, -band, band));
+    if (!is_after && rep.worst_row >= 0) {
+      const MeasureRow& w = rep.rows[rep.worst_row];
+      map.callouts.push_back(
+          {w.foot_w, formatWith("largest after %+.1f um", mmToUm(w.residual_after)) + "\n" +
+                         formatWith("(%.1f, ", w.foot_w.x()) + formatWith("%.1f, ", w.foot_w.y()) +
+                         formatWith("%.1f)", w.foot_w.z()) +
+                         (w.cl_line > 0 ? " line " + std::to_string(w.cl_line) : std::string())});
+    }
+    const MapView iso{"isometric", Eigen::Vector3d(-1, 1, -1), Eigen::Vector3d::UnitZ(), false, {}};
+    const std::string name = is_after ? "map_residual_after.png" : "map_residual.png";
+    renderDeviationMap(dir + "/" + name, map, iso);
+    files.push_back(name);
+    const std::string hist = is_after ? "histogram_residual_after.png" : "histogram_residual.png";
+    renderHistogram(dir + "/" + hist, r, std::vector<double>(r.size(), 1.0), -band, band,
+                    is_after ? "residual after the trace" : "residual (measured - predicted)", 900,
+                    500, "residual (µm)", "% of the points used", "3 sigma of the final model");
+    files.push_back(hist);
+  }
+  return files;
 }
 
 }  // namespace
@@ -279,8 +342,9 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
   if (!in.report_dir.empty()) {
     ReportDirectory dir(in.report_dir);
     writeFileAtomically(dir.staging() + "/residuals.csv", formatMeasureCsv(rep));
-    writeFileAtomically(dir.staging() + "/report.json", formatMeasureJson(rep));
     writeFileAtomically(dir.staging() + "/process.txt", formatProcessFile(rep));
+    if (in.images) rep.images = renderResiduals(dir.staging(), m.part, rep);
+    writeFileAtomically(dir.staging() + "/report.json", formatMeasureJson(rep));
     dir.commit();
     run.report_dir = dir.final();
   }

@@ -22,7 +22,8 @@ struct MeasureInputs {
   double search_mm = 0.5;    // farthest a point may lie from the nominal surface
   int heldout_every = 5;     // every N-th used point is held out of the fit (N >= 2)
   PlausibleRange plausible;  // beyond these a traced value is implausible, not added
-  std::string report_dir;    // residuals.csv, report.json, process.txt
+  std::string report_dir;    // residuals.csv, report.json, process.txt, the residual's images
+  bool images = true;        // the maps and histograms (PNG, off screen: a display is needed)
 };
 
 struct MeasureRun {

@@ -281,6 +281,15 @@ TEST_F(MeasureTest, TheCommandWritesWhatItSaysAndRefusesBadPoints) {
   std::ifstream pf(path("out") + "/process.txt");
   const std::string process((std::istreambuf_iterator<char>(pf)), {});
   EXPECT_NE(process.find("set-up_x_mm "), std::string::npos) << process;
+  // The residual's maps and histograms, before and after, listed in report.json and written.
+  const std::vector<std::string> images = j["images"].get<std::vector<std::string>>();
+  EXPECT_EQ(images.size(), 4u);
+  for (const std::string name : {"map_residual.png", "map_residual_after.png",
+                                 "histogram_residual.png", "histogram_residual_after.png"}) {
+    EXPECT_NE(std::find(images.begin(), images.end(), name), images.end()) << name;
+    EXPECT_GT(fs::file_size(path("out") + "/" + name), 10000u) << name;
+    EXPECT_NE(r.output.find(name), std::string::npos) << name;
+  }
 
   // Bad input: a word where a number goes; points nowhere near the part.
   const std::string bad = write("bad.csv", "x_mm,y_mm,z_mm\n1,2,3\n4,five,6\n");

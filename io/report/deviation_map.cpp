@@ -175,6 +175,36 @@ vtkSmartPointer<vtkPolyData> colouredSurface(const DeviationMap& map) {
   return poly;
 }
 
+// The map's markers as round dots, drawn over the surface (the surface's depth offset back).
+vtkSmartPointer<vtkActor> markerActor(const DeviationMap& map) {
+  vtkNew<vtkPoints> pts;
+  pts->SetDataTypeToDouble();
+  vtkNew<vtkCellArray> verts;
+  vtkNew<vtkUnsignedCharArray> rgb;
+  rgb->SetNumberOfComponents(3);
+  for (size_t i = 0; i < map.markers.size(); ++i) {
+    const vtkIdType id = pts->InsertNextPoint(map.markers[i].data());
+    verts->InsertNextCell(1, &id);
+    rgb->InsertNextTypedTuple(map.marker_colours[i].data());
+  }
+  vtkNew<vtkPolyData> poly;
+  poly->SetPoints(pts);
+  poly->SetVerts(verts);
+  poly->GetPointData()->SetScalars(rgb);
+  vtkNew<vtkPolyDataMapper> mapper;
+  mapper->SetInputData(poly);
+  mapper->SetColorModeToDirectScalars();
+  mapper->ScalarVisibilityOn();
+  mapper->SetResolveCoincidentTopologyToPolygonOffset();
+  auto actor = vtkSmartPointer<vtkActor>::New();
+  actor->SetMapper(mapper);
+  actor->GetProperty()->SetPointSize(map.markers.size() > 3000 ? 4.0f : 7.0f);
+  actor->GetProperty()->RenderPointsAsSpheresOn();
+  actor->GetProperty()->SetAmbient(1.0);
+  actor->GetProperty()->SetDiffuse(0.0);
+  return actor;
+}
+
 vtkSmartPointer<vtkActor> surfaceActor(vtkPolyData* poly) {
   vtkNew<vtkPolyDataMapper> mapper;
   mapper->SetInputData(poly);
@@ -221,8 +251,8 @@ vtkSmartPointer<vtkScalarBarActor> colourBar(const DeviationMap& map) {
     const Rgb c = deviationColour(d, lo, up);
     lut->SetTableValue(i, c[0] / 255.0, c[1] / 255.0, c[2] / 255.0, 1.0);
   }
-  lut->SetAnnotation(vtkVariant(mmToUm(lo)), ("lower " + um(lo)).c_str());
-  lut->SetAnnotation(vtkVariant(mmToUm(up)), ("upper " + um(up)).c_str());
+  lut->SetAnnotation(vtkVariant(mmToUm(lo)), (map.limit_names[0] + " " + um(lo)).c_str());
+  lut->SetAnnotation(vtkVariant(mmToUm(up)), (map.limit_names[1] + " " + um(up)).c_str());
   const double band = 2.0 * half / 4.0;
   for (int k = 1; k <= 3; ++k) {
     lut->SetAnnotation(vtkVariant(mmToUm(up + k * band)), um(up + k * band).c_str());
@@ -230,7 +260,7 @@ vtkSmartPointer<vtkScalarBarActor> colourBar(const DeviationMap& map) {
   }
   auto bar = vtkSmartPointer<vtkScalarBarActor>::New();
   bar->SetLookupTable(lut);
-  bar->SetTitle("deviation um\n+ material left\n- gouge");
+  bar->SetTitle(map.bar_title.c_str());
   bar->SetNumberOfLabels(0);
   bar->SetLabelFormat("%+.1f");
   bar->DrawAnnotationsOn();
@@ -331,7 +361,8 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
   renderer->SetLayer(1);
   overlay->AddActor2D(colourBar(map));
   vtkNew<vtkTextActor> title;
-  title->SetInput((map.title + "   [" + view.name + " view; grey: not machined]").c_str());
+  title->SetInput(
+      (map.title + "   [" + view.name + " view; grey: " + map.grey_means + "]").c_str());
   title->SetPosition(12, height - 34);
   title->GetTextProperty()->SetFontSize(18);
   title->GetTextProperty()->SetColor(0.1, 0.1, 0.1);
@@ -343,6 +374,7 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
   window->AddRenderer(renderer);
 
   renderer->AddActor(boundingAxes(bounds, renderer->GetActiveCamera()));
+  if (!map.markers.empty()) renderer->AddActor(markerActor(map));
   renderer->ResetCameraClippingRange();
   addCallouts(renderer, map.callouts, width, height);
   window->Render();
@@ -352,7 +384,8 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
 
 void renderHistogram(const std::string& png_path, const std::vector<double>& deviation,
                      const std::vector<double>& weight, double lower, double upper,
-                     const std::string& title, int width, int height) {
+                     const std::string& title, int width, int height, const std::string& x_label,
+                     const std::string& y_label, const std::string& band_label) {
   double dmin = lower, dmax = upper;
   double total = 0;
   for (size_t i = 0; i < deviation.size(); ++i) {
@@ -378,16 +411,17 @@ void renderHistogram(const std::string& png_path, const std::vector<double>& dev
   // Bars in the zone green, beyond it blue (material left) or red (gouge); the limits as lines.
   ScatterChart c;
   c.title = title;
-  c.x_label = "normal deviation (µm): + material left, - gouge";
-  c.y_label = "% of the machined area";
+  c.x_label = x_label.empty() ? "normal deviation (µm): + material left, - gouge" : x_label;
+  c.y_label = y_label.empty() ? "% of the machined area" : y_label;
   c.width = width;
   c.height = height;
   c.bar_width = mmToUm(dmax - dmin) / bins;
   ScatterSeries in, over, under;
   in.style = over.style = under.style = ScatterSeries::Style::Bars;
-  in.legend = "in the zone";
-  over.legend = "material left beyond the zone";
-  under.legend = "gouge beyond the zone";
+  const bool band = !band_label.empty();
+  in.legend = band ? "within " + band_label : "in the zone";
+  over.legend = band ? "above" : "material left beyond the zone";
+  under.legend = band ? "below" : "gouge beyond the zone";
   in.rgb[0] = 46, in.rgb[1] = 160, in.rgb[2] = 67;
   over.rgb[0] = 60, over.rgb[1] = 110, over.rgb[2] = 230;
   under.rgb[0] = 215, under.rgb[1] = 50, under.rgb[2] = 25;
@@ -403,7 +437,9 @@ void renderHistogram(const std::string& png_path, const std::vector<double>& dev
     lim.style = ScatterSeries::Style::Line;
     lim.radius = 2;
     lim.rgb[0] = lim.rgb[1] = lim.rgb[2] = 20;
-    lim.legend = l == lower ? "zone limits " + um(lower) + " / " + um(upper) + " µm" : "";
+    lim.legend = l == lower ? (band ? band_label : std::string("zone limits")) + " " + um(lower) +
+                                  " / " + um(upper) + " µm"
+                            : "";
     lim.x = {mmToUm(l), mmToUm(l)};
     lim.y = {0.0, hmax * 1.1};
     c.series.push_back(lim);

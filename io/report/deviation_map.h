@@ -50,6 +50,12 @@ struct DeviationMap {
   double bar_lower = -0.01, bar_upper = 0.01;  // mm: the zone on the colour bar
   std::string title;
   std::vector<MapCallout> callouts;
+  std::string grey_means = "not machined";  // what the grey surface means, in the title
+  std::string bar_title = "deviation um\n+ material left\n- gouge";
+  std::array<std::string, 2> limit_names = {"lower", "upper"};  // the bar's limits' labels
+  // Points drawn over the surface as round dots in their colours (measured points, mm, in w).
+  std::vector<Eigen::Vector3d> markers;
+  std::vector<Rgb> marker_colours;
 };
 
 // The scale as a legend: its bands in order from the deepest gouge to the most material left,
@@ -76,9 +82,13 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
                         int width = 1200, int height = 900);
 
 // Histogram of deviations (mm, area-weighted) with the zone limits marked, as a PNG.
+// The axes' labels default to verify's (normal deviation, % of the machined area), the limits'
+// to the zone's ("in the zone", "material left"...); a band_label names another band.
 void renderHistogram(const std::string& png_path, const std::vector<double>& deviation,
                      const std::vector<double>& weight, double lower, double upper,
-                     const std::string& title, int width = 900, int height = 500);
+                     const std::string& title, int width = 900, int height = 500,
+                     const std::string& x_label = "", const std::string& y_label = "",
+                     const std::string& band_label = "");
 
 // A line profile ([AM01] Fig. 5.7): deviation (mm) against arc length (mm) with the zone band.
 void renderLineProfile(const std::string& png_path, const std::vector<double>& arc_length,

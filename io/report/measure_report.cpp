@@ -123,6 +123,7 @@ std::string formatMeasureJson(const MeasureReport& r) {
   }
   j["trace"]["effects"] = groups;
   j["notes"] = r.notes;
+  j["images"] = r.images;
   return j.dump(2) + "\n";
 }
 

@@ -41,7 +41,8 @@ struct MeasureReport {
     double value = 0, sd = NAN;
   };
   std::vector<Correction> corrections;
-  std::string process_from;  // the process file the prediction already held, or ""
+  std::string process_from;         // the process file the prediction already held, or ""
+  std::vector<std::string> images;  // the PNG files written beside report.json
   std::vector<std::string> notes;
 };
 // process.txt's key of a traced value: the group's name and the value's, spaces as '_'.
