@@ -456,5 +456,80 @@ TEST(MeasureFiles, PointsAndProcessCorrectionsAreReadOrRefusedByLine) {
   EXPECT_TRUE(refused([] { parseMeasuredPoints("1 2 3 0 0 0\n", "c.asc"); }, "normal is zero"));
 }
 
+// PLY point clouds as CloudCompare and scanners write them: ascii and binary of both byte orders
+// read the same points (and normals) as the CSV; short or malformed files are refused by field.
+TEST(MeasureFiles, PlyPointCloudsReadAsTheCsvDoes) {
+  const std::vector<Eigen::Vector3d> p = {{1.5, -2.25, 3.125}, {-10, 20.5, 0.001}, {7, 8, 9}};
+  const std::vector<Eigen::Vector3d> n = {{0, 0, 1}, {0, 0.6, 0.8}, {1, 0, 0}};
+  std::string ascii =
+      "ply\nformat ascii 1.0\ncomment CloudCompare\nelement vertex 3\nproperty double x\n"
+      "property double y\nproperty double z\nproperty float nx\nproperty float ny\n"
+      "property float nz\nproperty uchar red\nelement face 0\n"
+      "property list uchar int vertex_indices\nend_header\n";
+  for (size_t i = 0; i < p.size(); ++i) {
+    char l[200];
+    std::snprintf(l, sizeof l, "%.17g %.17g %.17g %g %g %g 255\n", p[i].x(), p[i].y(), p[i].z(),
+                  n[i].x(), n[i].y(), n[i].z());
+    ascii += l;
+  }
+  const auto binary = [&](bool big) {
+    std::string b = std::string("ply\nformat ") +
+                    (big ? "binary_big_endian" : "binary_little_endian") +
+                    " 1.0\nelement vertex 3\nproperty float64 x\nproperty float64 y\n"
+                    "property float64 z\nproperty short flag\nproperty float nx\n"
+                    "property float ny\nproperty float nz\nend_header\n";
+    auto put = [&](const void* v, size_t size) {
+      std::string bytes(static_cast<const char*>(v), size);
+      if (big) std::reverse(bytes.begin(), bytes.end());  // the test machine is little-endian
+      b += bytes;
+    };
+    for (size_t i = 0; i < p.size(); ++i) {
+      for (int c = 0; c < 3; ++c) put(&p[i][c], 8);
+      const int16_t flag = -3;
+      put(&flag, 2);
+      for (int c = 0; c < 3; ++c) {
+        const float f = static_cast<float>(n[i][c]);
+        put(&f, 4);
+      }
+    }
+    return b;
+  };
+  for (const std::string& text : {ascii, binary(false), binary(true)}) {
+    const std::vector<MeasuredPoint> m = parseMeasuredPoints(text, "cloud.ply");
+    ASSERT_EQ(m.size(), 3u);
+    for (size_t i = 0; i < p.size(); ++i) {
+      EXPECT_EQ(m[i].p, p[i]);
+      EXPECT_NEAR((m[i].n - n[i]).norm(), 0.0, 1e-6);
+    }
+  }
+  const auto refusal = [](const std::string& text) {
+    try {
+      parseMeasuredPoints(text, "bad.ply");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  std::string cut = binary(false);
+  cut.resize(cut.size() - 5);
+  EXPECT_NE(refusal(cut).find("shorter than its 3 vertices"), std::string::npos) << refusal(cut);
+  EXPECT_NE(refusal("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float "
+                    "y\nend_header\n1 2\n")
+                .find("no property z"),
+            std::string::npos);
+  EXPECT_NE(refusal("ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float "
+                    "y\nproperty float z\nend_header\n1 2 3\n4 five 6\n")
+                .find("bad.ply:9"),
+            std::string::npos);
+  EXPECT_NE(refusal("ply\nformat ascii 1.0\nelement vertex 99999999999\nproperty float x\n"
+                    "property float y\nproperty float z\nend_header\n1 2 3\n")
+                .find("shorter"),
+            std::string::npos);
+  EXPECT_NE(refusal("ply\nformat binary 1.0\nend_header\n").find("format"), std::string::npos);
+  EXPECT_NE(
+      refusal("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n").find("end_header"),
+      std::string::npos);
+}
+
 }  // namespace
 }  // namespace tolver

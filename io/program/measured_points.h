@@ -14,6 +14,11 @@
 // row) gives it as the nominal moved by the deviation along the normal.
 // An ASC point cloud (CloudCompare, PolyWorks: whitespace- or comma-separated numbers per line,
 // no header; 3 columns x y z, or 6 with the normal) is read when the first data line is numbers.
+// A PLY point cloud (CloudCompare, GOM, scanners' exports; ascii or binary of either byte order)
+// is read when the file starts with "ply": the vertex element's x, y, z and, when all three are
+// there, nx, ny, nz; faces and other properties are ignored. A binary PLY's "line" is the vertex
+// number. (A reader of its own: Debian's assimp 5.2 trusts a PLY's counts and turns a point
+// cloud into a mesh of points; io/mesh/mesh_file.cpp.)
 #include <Eigen/Core>
 #include <string>
 #include <vector>
