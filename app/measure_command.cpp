@@ -71,8 +71,9 @@ void printMeasurement(const MeasureRun& run) {
   }
   for (const std::string& n : r.notes) std::printf("  note       %s\n", n.c_str());
   if (!run.report_dir.empty())
-    std::printf("  wrote      %s/{residuals.csv,report.json,process.txt%s%s}\n",
-                run.report_dir.c_str(), r.images.empty() ? "" : ",",
+    std::printf("  wrote      %s/{residuals.csv,report.json,process.txt%s%s%s}\n",
+                run.report_dir.c_str(), r.machine_written.empty() ? "" : ",machine.xml",
+                r.images.empty() ? "" : ",",
                 [&] {
                   std::string s;
                   for (size_t k = 0; k < r.images.size(); ++k) s += (k ? "," : "") + r.images[k];

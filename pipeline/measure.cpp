@@ -6,16 +6,18 @@
 #include <filesystem>
 #include <map>
 
-#include "core/kinematics/sensitivity_jacobian.h"
 #include "core/numerics/units.h"
+#include "core/path/prediction_uncertainty.h"
 #include "core/path/tool_motion.h"
 #include "geometry/surface_projection.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "io/machine/machine_file.h"
 #include "io/program/measured_points.h"
 #include "io/program/process_file.h"
 #include "io/report/deviation_map.h"
 #include "io/report/offscreen_display.h"
+#include "pipeline/inputs.h"
 
 namespace tolver {
 namespace {
@@ -164,6 +166,24 @@ std::vector<std::string> renderResiduals(const std::string& dir, const TriangleM
   return files;
 }
 
+// The machine file as the part refined it: the file as read, the machine group's values added
+// to its identified parameters and their covariance the final model's (the calibration's prior
+// and the part's points together). Empty when the machine group was not added.
+std::string refinedMachineXml(const std::string& machine_file, const MeasureReport& rep) {
+  for (const TraceGroup& g : rep.trace.groups) {
+    if (!g.added || g.name != "machine") continue;
+    Machine m = readMachineFile(machine_file);
+    IdentificationUncertainty& id = m.identification;
+    if (static_cast<Eigen::Index>(id.parameters.size()) != g.values.size()) return "";
+    for (size_t c = 0; c < id.parameters.size(); ++c)
+      m.params[id.parameters[c]] += g.values[static_cast<Eigen::Index>(c)];
+    if (g.covariance.rows() == g.values.size()) id.covariance = g.covariance;
+    return formatMachineXml(m, "refined by tolver measure from the machined part's points " +
+                                   rep.points_file + " (" + rep.trace.verdict_text + ")");
+  }
+  return "";
+}
+
 }  // namespace
 
 MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
@@ -298,20 +318,26 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
   if (!machine.identification.empty()) {
     const IdentificationUncertainty& id = machine.identification;
     const ForwardKinematics fk(machine.model, machine.params);
-    Eigen::MatrixXd J(6, machine.model.parameterCount());
+    // Without --absolute the prediction takes the machine's share modulo the set-up a shop
+    // measures (fitted over the program's evenly spaced poses, pipeline/inputs.h): the rows
+    // are taken modulo the same set-up, so that a machine refined by them predicts what they fit.
+    PredictionUncertainty pu(machine);
+    if (!in.verify.absolute) {
+      EvenPoses even;
+      for (size_t i = 0; i < poses.q.size(); ++i)
+        if (even.wants(i)) even.add(i, poses.q[i], Eigen::Vector3d::Zero());
+      pu.setupModulo(even.q);
+    }
     opt.machine_rows.resize(static_cast<Eigen::Index>(trace.size()), id.parameters.size());
     for (size_t k = 0; k < trace.size(); ++k) {
       const JointVector& q = poses.q[cl_of_trace[k]];
-      J.setZero();
-      sensitivityJacobian(fk, q, J);
+      const Eigen::MatrixXd J = pu.identifiedRows(q, nullptr);  // twist rows in t
       const Eigen::Matrix3d R = fk.w_T_t(q).linear();
       const Eigen::Vector3d r = res.contact_offset_w[sample_of_trace[k]].cast<double>();
       const Eigen::Vector3d n = trace[k].n_w, m_w = r.cross(n);
-      for (size_t c = 0; c < id.parameters.size(); ++c) {
-        const int p = id.parameters[c];
+      for (size_t c = 0; c < id.parameters.size(); ++c)
         opt.machine_rows(static_cast<Eigen::Index>(k), static_cast<Eigen::Index>(c)) =
-            n.dot(R * J.block<3, 1>(0, p)) + m_w.dot(R * J.block<3, 1>(3, p));
-      }
+            n.dot(R * J.block<3, 1>(0, c)) + m_w.dot(R * J.block<3, 1>(3, c));
     }
     opt.machine_covariance = id.covariance;
     for (int p : id.parameters) opt.machine_names.push_back(machine.model.parameters[p].iso_code);
@@ -343,6 +369,11 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
     ReportDirectory dir(in.report_dir);
     writeFileAtomically(dir.staging() + "/residuals.csv", formatMeasureCsv(rep));
     writeFileAtomically(dir.staging() + "/process.txt", formatProcessFile(rep));
+    const std::string machine_xml = refinedMachineXml(v->machine_file, rep);
+    if (!machine_xml.empty()) {
+      writeFileAtomically(dir.staging() + "/machine.xml", machine_xml);
+      rep.machine_written = "machine.xml";
+    }
     if (in.images) rep.images = renderResiduals(dir.staging(), m.part, rep);
     writeFileAtomically(dir.staging() + "/report.json", formatMeasureJson(rep));
     dir.commit();

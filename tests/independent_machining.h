@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <random>
 #include <sstream>
@@ -38,6 +39,9 @@ struct Effect {
   double wave_mm = 0, wave_period_mm = 10;
   double drift_mm_per_h = 0;        // the tool grows along its axis at this rate from the start
   double deflection_across_mm = 0;  // the ball pushed along a x f (f the move's direction)
+  // A machine's error the calibration missed: the tool's displacement from the programmed tip
+  // (part frame, mm), written as a formula in the test (e.g. an axis's scale error).
+  std::function<Eigen::Vector3d(const Eigen::Vector3d&)> machine_error;
 };
 
 // GOTO/x,y,z,i,j,k lines of an APT file; a GOTO after RAPID is a rapid move (not cut).
@@ -95,7 +99,8 @@ class Simulator {
         const Eigen::Vector3d tip = (1 - t) * cl[i - 1].tip + t * cl[i].tip -
                                     (e.length_error_mm + grown) * a +
                                     e.deflection_across_mm * a.cross(f);
-        Eigen::Vector3d c = inv * (tip + r_ * a);
+        const Eigen::Vector3d moved = e.machine_error ? tip + e.machine_error(tip) : tip;
+        Eigen::Vector3d c = inv * (moved + r_ * a);
         c.z() += e.wave_mm * std::sin(2 * M_PI * c.x() / e.wave_period_mm);
         balls_[key(c)].push_back({c});
       }

@@ -25,6 +25,7 @@
 
 #include "independent_machining.h"
 #include "io/common/io_error.h"
+#include "io/machine/machine_file.h"
 #include "io/mesh/mesh_file.h"
 #include "io/program/measured_points.h"
 #include "io/program/process_file.h"
@@ -232,6 +233,84 @@ TEST_F(MeasureTest, AnImplausibleValueIsNotAdded) {
     if (g.name == "thermal drift") reported = g.reason.find("implausible") != std::string::npos;
   }
   EXPECT_TRUE(reported);
+}
+
+// A machine error the calibration missed: the X axis's scale off by 60 um over its 760 mm travel
+// (the simulator moves the tool by k x along x, its own formula), on a machine file whose
+// calibration left the axes' linear positioning terms loose (200 um SD). The part refines the
+// machine: the machine group named with EXX.c1's value, machine.xml written, and the next
+// measure with it adds nothing and starts where this one ended. --absolute: the simulated part
+// was not probed on the machine (without it the prediction, and the machine rows, are taken
+// modulo the set-up a shop measures; the loop for that case below).
+TEST_F(MeasureTest, AMachineErrorTheCalibrationMissedRefinesTheMachine) {
+  Machine m = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
+  std::vector<int> ids;
+  for (const char* code : {"EXX.c1", "EYY.c1", "EZZ.c1"}) {
+    const int k = m.model.findParameter(code);
+    ASSERT_GE(k, 0) << code;
+    ids.push_back(k);
+  }
+  m.identification.parameters = ids;
+  m.identification.covariance = Eigen::MatrixXd::Identity(3, 3) * 0.2 * 0.2;
+  m.identification.readings = 600;
+  const std::string machine = write("calibrated.xml", formatMachineXml(m, "loose linear terms"));
+  Effect e;
+  const double k = 0.060 / 380.0;
+  e.machine_error = [k](const Eigen::Vector3d& p) { return Eigen::Vector3d(k * p.x(), 0, 0); };
+  int named = 0, at_noise = 0;
+  for (unsigned seed = 801; seed < 801 + kSeeds; ++seed) {
+    const Simulator sim(upright(cl(), 5.0), 5.0, e);
+    const std::string file = write("machine" + std::to_string(seed) + ".csv",
+                                   measuredCsv(mesh(), sim, 600, seed, kNoise));
+    MeasureInputs in = inputs(file);
+    in.verify.machine.machine = machine;
+    in.verify.absolute = true;  // the simulator's part was not probed on the machine
+    const MeasureRun r = measurePart(in);
+    print("machine EXX", r);
+    const PartTrace& t = r.report.trace;
+    bool ok = false;
+    if (!t.added.empty() && t.groups[0].name == "machine") {
+      const TraceGroup& g = t.groups[0];
+      std::printf(
+          "[ measure ]   EXX.c1 %.2f +- %.2f um, EYY.c1 %.2f +- %.2f, EZZ.c1 %.2f +- %.2f\n",
+          1e3 * g.values[0], 1e3 * g.sd[0], 1e3 * g.values[1], 1e3 * g.sd[1], 1e3 * g.values[2],
+          1e3 * g.sd[2]);
+      ok = std::abs(std::abs(g.values[0]) - 0.060) < 3 * g.sd[0] + 2e-3;
+    }
+    named += ok;
+    at_noise += t.heldout_rms_after < 1.5 * kNoise;
+  }
+  EXPECT_GE(named, 9);
+  EXPECT_GE(at_noise, 9);
+  // The loop: machine.xml written, read back, nothing left to add.
+  const Simulator sim(upright(cl(), 5.0), 5.0, e);
+  MeasureInputs in = inputs(write("loop.csv", measuredCsv(mesh(), sim, 600, 899, kNoise)));
+  in.verify.machine.machine = machine;
+  in.verify.absolute = true;
+  in.report_dir = path("first");
+  in.images = false;
+  const MeasureRun first = measurePart(in);
+  ASSERT_EQ(first.report.machine_written, "machine.xml") << first.report.trace.verdict_text;
+  in.verify.machine.machine = path("first") + "/machine.xml";
+  in.report_dir = path("second");
+  const MeasureRun second = measurePart(in);
+  print("refined", second);
+  EXPECT_TRUE(second.report.trace.added.empty()) << second.report.trace.verdict_text;
+  EXPECT_NEAR(second.report.trace.heldout_rms_before, first.report.trace.heldout_rms_after, 0.1e-3);
+  // Modulo the measured set-up (no --absolute): the refined machine predicts what its rows fit.
+  in.verify.absolute = false;
+  in.verify.machine.machine = machine;
+  in.report_dir = path("first_modulo");
+  const MeasureRun first_modulo = measurePart(in);
+  ASSERT_EQ(first_modulo.report.machine_written, "machine.xml")
+      << first_modulo.report.trace.verdict_text;
+  in.verify.machine.machine = path("first_modulo") + "/machine.xml";
+  in.report_dir = path("second_modulo");
+  const MeasureRun second_modulo = measurePart(in);
+  print("modulo", second_modulo);
+  EXPECT_TRUE(second_modulo.report.trace.added.empty()) << second_modulo.report.trace.verdict_text;
+  EXPECT_NEAR(second_modulo.report.trace.heldout_rms_before,
+              first_modulo.report.trace.heldout_rms_after, 0.1e-3);
 }
 
 // The command as a user runs it: the console's figures are report.json's, the residual RMS is

@@ -343,6 +343,7 @@ PartTrace tracePart(const std::vector<TracePoint>& pts, const TraceOptions& o) {
     }
     out.groups[g].values = v;
     out.groups[g].sd = C.diagonal().cwiseMax(0.0).cwiseSqrt();
+    out.groups[g].covariance = C;
     c += k;
   }
   out.residual_after = r_base;

@@ -73,6 +73,7 @@ struct TraceGroup {
   std::string name;                      // "set-up", "cutter radius T2", ...
   std::vector<std::string> value_names;  // each value's name with its unit
   Eigen::VectorXd values, sd;            // fitted alone on the fit points (mm, rad)
+  Eigen::MatrixXd covariance;            // of the values in the final model (added groups)
   double f = 0, p_value = 1;  // against the model before it (the last round it was tried)
   double rss_fit = 0;         // mm^2, on the fit points, the current model with it
   double heldout_gain_um2 = 0, heldout_gain_se_um2 = 0;  // mean drop of r^2 on held-out points

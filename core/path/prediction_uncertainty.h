@@ -89,11 +89,12 @@ class PredictionUncertainty {
   // (mm; the calibration's share, without the lack of fit): a_i a_j^T is the covariance of two
   // poses' errors, so a band's errors over a program are correlated, not independent.
   Eigen::RowVectorXd alongRoot(const JointVector& q, const Eigen::Vector3d& n_w) const;
+  // The identified parameters' twist rows at q (6 x identified, in t: tip, then rotation),
+  // modulo the measured set-up when one is fixed: what at() and alongRoot() carry the
+  // covariance's root through, and what a measured part's deviations are fitted by (measure).
+  Eigen::MatrixXd identifiedRows(const JointVector& q, const MotionContext* ctx) const;
 
  private:
-  // The identified parameters' twist rows at q (6 x identified, in t), modulo the measured
-  // set-up when one is fixed: what at() and alongRoot() carry the covariance's root through.
-  Eigen::MatrixXd identifiedRows(const JointVector& q, const MotionContext* ctx) const;
   // R_wt J_d for the given columns at q (3 x columns.size()).
   Eigen::MatrixXd tipColumns(const JointVector& q, const std::vector<int>& columns) const;
 

@@ -124,6 +124,8 @@ std::string formatMeasureJson(const MeasureReport& r) {
   j["trace"]["effects"] = groups;
   j["notes"] = r.notes;
   j["images"] = r.images;
+  j["machine_file_written"] =
+      r.machine_written.empty() ? nlohmann::json() : nlohmann::json(r.machine_written);
   return j.dump(2) + "\n";
 }
 

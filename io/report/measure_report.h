@@ -43,6 +43,7 @@ struct MeasureReport {
   std::vector<Correction> corrections;
   std::string process_from;         // the process file the prediction already held, or ""
   std::vector<std::string> images;  // the PNG files written beside report.json
+  std::string machine_written;      // "machine.xml" when the part refined the machine, else
   std::vector<std::string> notes;
 };
 // process.txt's key of a traced value: the group's name and the value's, spaces as '_'.
