@@ -38,9 +38,11 @@ campaigns+="|StepFile.RealFilesFromFiveCadSystemsReadAsDrawReadsThem"
 campaigns+="|VerifyCli.AStepPartIsCheckedFaceByFaceAndAgreesWithItsStl"
 # Two verify runs and three headless Chromium runs; the view's code runs in every verify test.
 campaigns+="|ReportRender.TheThreeDViewShowsThePartInTheLegendsColoursAndAClickReadsTheSample"
-# The measure loop's four ten-seed campaigns (50 s released); its command test runs.
+# The measure loop's seven ten-seed campaigns (90 s released); its command and loop tests run.
 campaigns+="|MeasureTest.ACleanPartAddsNothing|MeasureTest.ACutterRadiusErrorIsNamedWithItsValue"
 campaigns+="|MeasureTest.AToolLengthErrorIsNamedOrConfounded|MeasureTest.APartSetUpErrorIsNamed"
+campaigns+="|MeasureTest.AThermalDriftIsNamedWithItsRate|MeasureTest.ASidewaysDeflectionIsNamed"
+campaigns+="|MeasureTest.AMachineErrorTheCalibrationMissedRefinesTheMachine"
 ctest --output-on-failure -j"$(nproc)" --timeout 1800 -E "^($campaigns)\$"
 # A fixed libFuzzer seed: the same clone fuzzes the same inputs first (a CI run is repeatable);
 # longer runs (tests/fuzz/run.sh 3600) use random seeds.

@@ -203,6 +203,11 @@ std::vector<MeasuredPoint> parsePly(const std::string& text, const std::string& 
     for (size_t k = 0; k < vertex; ++k) {
       size_t r = 0;
       for (const Property& p : elements[k].props) r += static_cast<size_t>(p.size);
+      const size_t left = text.size() - std::min(pos, text.size());
+      if (r > 0 && static_cast<unsigned long long>(elements[k].count) > left / r)
+        throw InputError(file, line, 0, elements[k].name,
+                         "the file is shorter than its " + std::to_string(elements[k].count) + " " +
+                             elements[k].name + " elements");
       pos += r * static_cast<size_t>(elements[k].count);
     }
     if (pos > text.size() || static_cast<unsigned long long>(v.count) >
