@@ -86,6 +86,14 @@ std::vector<MeasuredPoint> parseAsc(const std::vector<std::string>& lines,
 
 namespace {
 
+// A binary PLY value of type T from its bytes in host order.
+template <typename T>
+double loadAs(const unsigned char* b) {
+  T v;
+  std::memcpy(&v, b, sizeof v);
+  return static_cast<double>(v);
+}
+
 // A PLY point cloud: the vertex element's x, y, z (and nx, ny, nz when all three are there),
 // ascii or binary of either byte order; other elements after the vertices are ignored, before
 // them only when they have no list properties. Every count is checked against the file's size
@@ -219,58 +227,24 @@ std::vector<MeasuredPoint> parsePly(const std::string& text, const std::string& 
                      "the file is shorter than its " + std::to_string(v.count) + " vertices");
   }
   out.reserve(static_cast<size_t>(v.count));
+  const bool host_little = [] {
+    const uint16_t one = 1;
+    unsigned char c;
+    std::memcpy(&c, &one, 1);
+    return c == 1;
+  }();
   auto binaryValue = [&](const char* at, const Property& p) {
     unsigned char b[8];
     std::memcpy(b, at, static_cast<size_t>(p.size));
-    const bool host_little = [] {
-      const uint16_t one = 1;
-      unsigned char c;
-      std::memcpy(&c, &one, 1);
-      return c == 1;
-    }();
     if (swap == host_little) std::reverse(b, b + p.size);
-    switch (p.kind) {
-      case 'f':
-        if (p.size == 4) {
-          float f;
-          std::memcpy(&f, b, 4);
-          return static_cast<double>(f);
-        } else {
-          double d;
-          std::memcpy(&d, b, 8);
-          return d;
-        }
-      case 'i': {
-        int64_t x = 0;
-        if (p.size == 1) x = static_cast<int8_t>(b[0]);
-        if (p.size == 2) {
-          int16_t y;
-          std::memcpy(&y, b, 2);
-          x = y;
-        }
-        if (p.size == 4) {
-          int32_t y;
-          std::memcpy(&y, b, 4);
-          x = y;
-        }
-        return static_cast<double>(x);
-      }
-      default: {
-        uint64_t x = 0;
-        if (p.size == 1) x = b[0];
-        if (p.size == 2) {
-          uint16_t y;
-          std::memcpy(&y, b, 2);
-          x = y;
-        }
-        if (p.size == 4) {
-          uint32_t y;
-          std::memcpy(&y, b, 4);
-          x = y;
-        }
-        return static_cast<double>(x);
-      }
-    }
+    if (p.kind == 'f') return p.size == 4 ? loadAs<float>(b) : loadAs<double>(b);
+    if (p.kind == 'i')
+      return p.size == 1   ? loadAs<int8_t>(b)
+             : p.size == 2 ? loadAs<int16_t>(b)
+                           : loadAs<int32_t>(b);
+    return p.size == 1   ? loadAs<uint8_t>(b)
+           : p.size == 2 ? loadAs<uint16_t>(b)
+                         : loadAs<uint32_t>(b);
   };
   for (long long i = 0; i < v.count; ++i) {
     double val[6] = {0, 0, 0, 0, 0, 0};
