@@ -54,6 +54,11 @@ void printCompensation(const CompensationRun& run, const CompensateInputs& o,
       run.orientation ? "tool tip and tool axis compensated"
                       : "3-axis: the tool tip compensated by the linear axes");
   if (!run.setup_note.empty()) std::printf("  set-up     %s\n", run.setup_note.c_str());
+  if (!rep.process.empty())
+    std::printf(
+        "  process    %s: also compensated, %s (before and after are measured against where "
+        "these effects need the tool)\n",
+        rep.process.c_str(), rep.process_applied.c_str());
   std::printf(
       "  before     tip max %.3f um (line %d), RMS %.3f um; tool axis max %.2f urad, RMS %.2f "
       "urad\n",
@@ -187,6 +192,10 @@ void registerCompensate(CLI::App& app, Verdict* verdict) {
       "a calibrated machine: compensate its raw prediction, with what probing and presetting "
       "would take up");
   addProbedOption(cmd, o->probed);
+  cmd->add_option("--process", o->process,
+                  "process corrections learned from a measured part (tolver measure's "
+                  "process.txt): the part's set-up, the tools' lengths, the spindle's drift and "
+                  "the tools' deflection compensated too (a radius error goes to the tool table)");
   auto quiet = addQuietFlag(cmd);
   cmd->callback([o, verdict, quiet] {
     ProgressBar bar(!*quiet);

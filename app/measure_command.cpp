@@ -65,9 +65,10 @@ void printMeasurement(const MeasureRun& run) {
     const MeasureRow& w = r.rows[r.worst_row];
     std::printf(
         "  largest    %+.2f um after, at (%.3f, %.3f, %.3f) (points line %d), %s, CL line "
-        "%d, tool %d\n",
+        "%d, tool %d%s\n",
         mmToUm(w.residual_after), w.p_w.x(), w.p_w.y(), w.p_w.z(), w.line,
-        w.region.empty() ? "no region" : ("region " + w.region).c_str(), w.cl_line, w.tool + 1);
+        w.region.empty() ? "no region" : ("region " + w.region).c_str(), w.cl_line, w.tool + 1,
+        w.operation.empty() ? "" : (", operation " + w.operation).c_str());
   }
   for (const std::string& n : r.notes) std::printf("  note       %s\n", n.c_str());
   if (!run.report_dir.empty())

@@ -11,6 +11,7 @@
 
 #include "core/numerics/units.h"
 #include "core/path/prediction_uncertainty.h"
+#include "core/path/tool_motion.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
 #include "pipeline/parallel_prediction.h"
@@ -119,7 +120,7 @@ ClProgram readBack(const CompensateInputs& in, const CompensationRun& run,
 
 // Before and after per point, in um and urad.
 void pointFigures(CompensationRun& run) {
-  const std::vector<ClPoint>& path = run.program.path;
+  const std::vector<ClPoint>& path = run.target.empty() ? run.program.path : run.target;
   const size_t n = path.size();
   run.line.resize(n);
   run.tip_before_um.resize(n);
@@ -249,6 +250,67 @@ void fillReport(const CompensateInputs& in, const std::string& output, Compensat
 
 }  // namespace
 
+std::vector<ClPoint> processTargets(const ClProgram& program, const ProcessCorrections& process,
+                                    std::vector<std::string>* notes) {
+  const std::vector<ClPoint>& path = program.path;
+  std::vector<ClPoint> target = path;
+  const std::vector<int> tool = program.toolOfPoints();
+  const std::vector<double> t_min =
+      process.drift_mm_per_h != 0.0 ? programTimes(path) : std::vector<double>{};
+  if (process.drift_mm_per_h != 0.0 && t_min.empty() && notes)
+    notes->push_back(
+        "the process file's thermal drift is not compensated: the program's cutting moves have "
+        "no feed rate in mm/min (its clock)");
+  const Eigen::Isometry3d& E = process.part_error;
+  for (size_t i = 0; i < path.size(); ++i) {
+    ClPoint& c = target[i];
+    c.u_w = (E.linear() * path[i].u_w).normalized();
+    c.p_w = E * path[i].p_w;
+    const int k = tool.empty() ? 0 : tool[i];
+    if (const auto it = process.length_mm.find(k); it != process.length_mm.end())
+      c.p_w += it->second * c.u_w;
+    if (!t_min.empty()) c.p_w += process.drift_mm_per_h * (t_min[i] / 60.0) * c.u_w;
+    const auto d = process.across_feed_mm.find(k);
+    if (d != process.across_feed_mm.end() && i > 0 && !path[i].rapid) {
+      const Eigen::Vector3d move = E.linear() * (path[i].p_w - path[i - 1].p_w);
+      if (move.norm() > 0) c.p_w -= d->second * c.u_w.cross(move.normalized());
+    }
+  }
+  if (notes) {
+    for (const auto& [k, dr] : process.radius_mm)
+      notes->push_back(formatWith("the process file's cutter radius error (tool %.0f, ",
+                                  static_cast<double>(k + 1)) +
+                       formatWith("%+.1f um) is not in the program: enter it as the tool's radius "
+                                  "wear in the control's tool table",
+                                  mmToUm(dr)));
+    for (const std::string& key : process.not_applied)
+      notes->push_back("the process file's " + key + " is reported, not compensated");
+  }
+  return target;
+}
+
+std::string describeProcessTargets(const ProcessCorrections& process) {
+  std::string s;
+  auto add = [&s](const std::string& part) { s += (s.empty() ? "" : ", ") + part; };
+  const Eigen::Isometry3d& E = process.part_error;
+  if (!E.isApprox(Eigen::Isometry3d::Identity(), 0.0)) {
+    const Eigen::Vector3d t = E.translation();
+    const Eigen::AngleAxisd r(E.linear());
+    char buf[160];
+    std::snprintf(buf, sizeof buf, "the part's set-up (%+.1f, %+.1f, %+.1f um; %.1f urad)",
+                  mmToUm(t.x()), mmToUm(t.y()), mmToUm(t.z()), radToUrad(r.angle()));
+    add(buf);
+  }
+  auto tool = [](int k) { return "T" + std::to_string(k + 1); };
+  for (const auto& [k, v] : process.length_mm)
+    add("tool " + tool(k) + formatWith(" length %+.1f um", mmToUm(v)));
+  if (process.drift_mm_per_h != 0.0)
+    add(formatWith("thermal drift %+.1f um/h along the tool axis", mmToUm(process.drift_mm_per_h)));
+  for (const auto& [k, v] : process.across_feed_mm)
+    add("tool " + tool(k) + formatWith(" deflection %+.1f um across the feed", mmToUm(v)));
+  return s.empty() ? "nothing the program can take up" : s;
+}
+
 CompensationRun runCompensation(const CompensateInputs& in, const std::string& output,
                                 const Progress& progress) {
   auto phase = [&progress](const char* p) {
@@ -260,6 +322,12 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
   ProgramOptions program_options = in.program;
   program_options.keep_motion_text = true;  // the in-place writer edits the GOTO statements
   run.program = loadProgram(program_options, run.machine.model);
+  if (!in.process.empty()) {
+    const ProcessCorrections process = readProcessFile(in.process);
+    run.target = processTargets(run.program, process, &run.warnings);
+    run.report.process = in.process;
+    run.report.process_applied = describeProcessTargets(process);
+  }
   run.before = predictProgram(run.machine, run.program);
   // A calibrated machine: its share after the set-up the shop measures (the calibration cannot
   // see the rest), as predict takes it.
@@ -279,7 +347,8 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
   // taken for a compensated one.
   bool no_errors = false;
   const std::string errors = machineErrorsStatement(run.machine, &no_errors);
-  if (no_errors) run.warnings.push_back(errors + "; the program is written as it came");
+  if (no_errors && run.target.empty())
+    run.warnings.push_back(errors + "; the program is written as it came");
   const ClProgram& program = run.program;
   run.orientation = program.dialect == "G-code" ? gcodeGivesRotaryWords(program, run.machine.model)
                                                 : program.multiax;
@@ -290,7 +359,8 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
   co.max_condition = in.max_condition;
   if (std::count(program.cycle_orientation.begin(), program.cycle_orientation.end(), 1) > 0)
     co.tip_only = &program.cycle_orientation;
-  run.compensation = compensateToolPath(run.machine.model, run.machine.params, program.path, q0,
+  run.compensation = compensateToolPath(run.machine.model, run.machine.params,
+                                        run.target.empty() ? program.path : run.target, q0,
                                         run.orientation, co, &run.before.points);
   phase("writing and reading back");
   run.text = correctedText(in, run);

@@ -10,6 +10,7 @@
 
 #include "core/path/compensation.h"
 #include "io/program/compensated_program.h"
+#include "io/program/process_file.h"
 #include "io/report/compensation_report.h"
 #include "pipeline/command.h"
 #include "pipeline/inputs.h"
@@ -19,7 +20,10 @@ namespace tolver {
 struct CompensateInputs {
   MachineOptions machine;
   ProgramOptions program;
-  std::string probed;          // probed points (CSV)
+  std::string probed;  // probed points (CSV)
+  // Process corrections learned from a measured part (tolver measure's process.txt): the
+  // program is compensated for them too (processTargets).
+  std::string process;
   bool absolute = false;       // calibrated machine: no measured set-up
   double max_condition = 1e6;  // beyond it, a point is near a singular pose
   // The outputs (compensateProgram): the compensated program (same dialect), its JSON report
@@ -35,6 +39,10 @@ struct CompensationRun {
   ClProgram program;
   PredictionResult before, after;  // after: the written text read back and predicted
   CompensationResult compensation;
+  // With --process: where the machine must put the tool tip and axis so that, with the process
+  // effects, the cut lands on the program's path; the before and after are measured against it.
+  // Empty without.
+  std::vector<ClPoint> target;
   CompensatedProgramText text;  // the corrected program, in the source's encoding
   bool orientation = false;     // the tool axis is compensated too (five-axis program)
   std::string setup_note;
@@ -44,6 +52,21 @@ struct CompensationRun {
   std::vector<int> line;
   std::vector<double> tip_before_um, tip_after_um, axis_before_urad, axis_after_urad;
 };
+
+// Where the machine must put the tool for the process effects a measured part showed to leave
+// the cut on the program's path (mm; io/program/process_file.h), per program point:
+//   p' = E p + dL_k u' + g t u' - d_k (u' x f),   u' = R_E u,
+// E the part's true pose on the table (R_E its rotation), dL_k tool k's extra length, g the
+// spindle's growth rate and t the program's clock at the point (programTimes), d_k tool k's
+// sideways deflection and f the direction of the move to the point. The measured effects read
+// tip = commanded - (dL + g t) u + d (u x f) on a part at E (verify's applyTimedCorrections and
+// sweepPart): p' inverts them to first order (their size is micrometres). A radius error is
+// not a tip offset: it is listed in `notes` for the control's tool table (radius wear), as are
+// the keys verify does not apply either, and drift without feed rates.
+std::vector<ClPoint> processTargets(const ClProgram& program, const ProcessCorrections& process,
+                                    std::vector<std::string>* notes);
+// What processTargets compensates, in words (um, urad, um/h).
+std::string describeProcessTargets(const ProcessCorrections& process);
 
 // Reads, predicts, compensates, writes the text (named `output` in its notes) and measures it
 // read back. Throws InputError.

@@ -274,6 +274,7 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
     w.residual = w.measured - w.predicted;
     w.cl_line = cl < static_cast<int>(v->report.cl_lines.size()) ? v->report.cl_lines[cl] : 0;
     w.tool = poses.tool[cl];
+    w.operation = operationAt(poses.operations, w.cl_line);
     w.held_out = rep.used % in.heldout_every == in.heldout_every - 1;
     w.status = "used";
     TracePoint t;

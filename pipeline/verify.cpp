@@ -193,20 +193,13 @@ ToolSet toolsFrom(const VerifyInputs& o, const ClProgram& program) {
                          ", whose geometry it does not give (no "
                          "tool comment): describe them in a tool file (" +
                          inputName("tools") + "), or give " + inputName("cutter") + " d,r for all");
-  std::vector<int> lines;
   for (const CutterSpec& s : specs) {
     if (!cutterFromApt(s.source, s.values, &c))
       throw InputError(program.file, s.line, 0, s.source, "the values do not describe a cutter");
     tools.cutters.push_back(c);
-    lines.push_back(s.line);
   }
   if (tools.cutters.size() == 1) return tools;
-  tools.tool_of_cl.resize(program.path.size());
-  size_t t = 0;
-  for (size_t i = 0; i < program.path.size(); ++i) {
-    while (t + 1 < lines.size() && lines[t + 1] < program.path[i].line) ++t;
-    tools.tool_of_cl[i] = static_cast<int>(t);
-  }
+  tools.tool_of_cl = program.toolOfPoints();
   return tools;
 }
 
@@ -1046,6 +1039,7 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
     for (size_t i = 0; i < k.path.size() && i < tools.tool_of_cl.size(); ++i)
       k.tool[i] = tools.tool_of_cl[i];
     k.cutters = tools.cutters;
+    k.operations = program.operations;
     k.machine = m.machine;
   }
   if (rep.mode == "part") rep.region_table = summariseRegions(v->samples, v->result);

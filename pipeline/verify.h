@@ -79,6 +79,7 @@ struct Verification {
     std::vector<ClPoint> path;
     std::vector<int> tool;
     std::vector<Cutter> cutters;
+    std::vector<ProgramOperation> operations;  // the program's named operations
     Machine machine;
   } poses;
   std::chrono::steady_clock::time_point started;

@@ -515,5 +515,27 @@ TEST(AptReader, FeedRatesAreKeptInMillimetresPerMinute) {
   EXPECT_NEAR(programTimes(head, 1000.0)[3], 1.0 / 500 + 1.0 / 1000 + 1.0 / 254, 1e-9);
 }
 
+// The operations the CAM systems name: NX's TOOL PATH/name, Creo's FEATNO, CATIA's PPRINT and
+// `$$` comments; "end of operation" lines name none.
+TEST(AptReader, NamesTheProgramsOperations) {
+  const ClProgram nx = readAptFile(test::sourcePath("tests/fixtures/cl/nx_TORETC_250_BOK.cls"));
+  ASSERT_FALSE(nx.operations.empty());
+  EXPECT_EQ(nx.operations[0].name, "2_TORETC_250_BOK");
+  EXPECT_EQ(operationAt(nx.operations, nx.path.back().line), nx.operations.back().name);
+  const ClProgram creo = readAptFile(test::sourcePath("tests/fixtures/cl/creo_schruppen_1.ncl"));
+  ASSERT_EQ(creo.operations.size(), 1u);
+  EXPECT_EQ(creo.operations[0].name, "feature 605");
+  const ClProgram text = parseApt(
+      "UNITS/MM\nGOTO/0,0,0\nPPRINT/OPERATION NAME : Sweeping.1\nGOTO/1,0,0\n"
+      "$$ end of operation: Sweeping.1\n$$ Operation: Pocket 2\nGOTO/2,0,0\nFINI\n",
+      "ops.apt");
+  ASSERT_EQ(text.operations.size(), 2u);
+  EXPECT_EQ(text.operations[0].name, "Sweeping.1");
+  EXPECT_EQ(text.operations[1].name, "Pocket 2");
+  EXPECT_EQ(operationAt(text.operations, 2), "");
+  EXPECT_EQ(operationAt(text.operations, 4), "Sweeping.1");
+  EXPECT_EQ(operationAt(text.operations, 7), "Pocket 2");
+}
+
 }  // namespace
 }  // namespace tolver

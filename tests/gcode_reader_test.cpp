@@ -917,5 +917,30 @@ TEST(GcodeReader, FeedRatesFollowTheFeedMode) {
   EXPECT_TRUE(std::isnan(p.path[6].feed_mm_min));
 }
 
+// The operations the posts name in comments: FreeCAD's "(begin operation: Profile)", NX's
+// Sinumerik ";Operation : CURVE_DRIVE", the Creo-style "( OPERATION=  ROUGH7  Z LEVEL ...)".
+TEST(GcodeReader, NamesTheProgramsOperations) {
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml");
+  const ClProgram freecad = readGcodeFile(
+      test::sourcePath("tests/fixtures/gcode/freecad_grbl_platteyz-helix.nc"), vmc.model);
+  ASSERT_GE(freecad.operations.size(), 2u);
+  EXPECT_EQ(freecad.operations[0].name, "Fixture");
+  EXPECT_EQ(freecad.operations[1].name, "Profile");
+  EXPECT_EQ(operationAt(freecad.operations, freecad.path.back().line),
+            freecad.operations.back().name);
+  const ClProgram nx =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/nx_sin840d_Keychain.mpf"),
+                    machine("resources/machines/sinumerik_bc_table.xml").model);
+  ASSERT_EQ(nx.operations.size(), 3u);
+  EXPECT_EQ(nx.operations[0].name, "CURVE_DRIVE");
+  EXPECT_EQ(nx.operations[2].name, "DRILLING");
+  EXPECT_EQ(nx.operations[2].line, 617);
+  const ClProgram boat =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_boat-xyzbc.ngc"),
+                    machine("resources/machines/linuxcnc_xyzbc_trt.xml").model);
+  ASSERT_EQ(boat.operations.size(), 1u);
+  EXPECT_EQ(boat.operations[0].name, "FINISH1 FLOWLINE SRF_MILL1");
+}
+
 }  // namespace
 }  // namespace tolver

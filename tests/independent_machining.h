@@ -44,7 +44,8 @@ struct Effect {
   std::function<Eigen::Vector3d(const Eigen::Vector3d&)> machine_error;
 };
 
-// GOTO/x,y,z,i,j,k lines of an APT file; a GOTO after RAPID is a rapid move (not cut).
+// GOTO/x,y,z[,i,j,k] lines of an APT file (the axis modal, +z at first); a GOTO after RAPID is a
+// rapid move (not cut).
 struct Cl {
   Eigen::Vector3d tip, axis;
   bool rapid;
@@ -61,12 +62,11 @@ inline std::vector<Cl> readGotos(const std::string& path) {
     if (line.rfind("FEDRAT/MMPM,", 0) == 0) feed = std::stod(line.substr(12));
     if (line.rfind("GOTO/", 0) != 0) continue;
     std::stringstream ss(line.substr(5));
-    double v[6];
-    char comma;
-    for (int k = 0; k < 6; ++k) {
-      ss >> v[k];
-      if (k < 5) ss >> comma;
-    }
+    double v[6] = {0, 0, 0, 0, 0, 1};  // GOTO/x,y,z: the tool axis as before
+    if (!out.empty())
+      v[3] = out.back().axis.x(), v[4] = out.back().axis.y(), v[5] = out.back().axis.z();
+    std::string cell;
+    for (int k = 0; k < 6 && std::getline(ss, cell, ','); ++k) v[k] = std::stod(cell);
     out.push_back({Eigen::Vector3d(v[0], v[1], v[2]),
                    Eigen::Vector3d(v[3], v[4], v[5]).normalized(), rapid, feed});
     rapid = false;
@@ -190,7 +190,8 @@ inline std::string measuredCsv(const tolver::TriangleMesh& mesh, const Simulator
 // the part's slopes let the ball's radius show (-(1 - n.z) per unit of radius).
 inline std::string threeAxisProgram(const std::vector<Cl>& cl, double radius) {
   std::string out =
-      "PARTNO/SCULPTURED_3AXIS\nUNITS/MM\nCUTTER/10,5,0,0,0,0,40\nLOADTL/1\n"
+      "PARTNO/SCULPTURED_3AXIS\nUNITS/MM\nTOOL PATH/FINISH_3AXIS,TOOL,BALL_MILL_D10\n"
+      "CUTTER/10,5,0,0,0,0,40\nLOADTL/1\n"
       "SPINDL/RPM,8000,CLW\n";
   for (const Cl& c : cl) {
     const Eigen::Vector3d tip = c.tip + radius * c.axis - radius * Eigen::Vector3d::UnitZ();

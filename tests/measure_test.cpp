@@ -29,6 +29,7 @@
 #include "io/mesh/mesh_file.h"
 #include "io/program/measured_points.h"
 #include "io/program/process_file.h"
+#include "pipeline/compensate.h"
 #include "test_support.h"
 
 namespace tolver {
@@ -334,6 +335,9 @@ TEST_F(MeasureTest, TheCommandWritesWhatItSaysAndRefusesBadPoints) {
   const nlohmann::json j = nlohmann::json::parse(jf);
   EXPECT_EQ(j["points"]["used"].get<int>(), 400);
   EXPECT_EQ(j["trace"]["verdict"], "effects added");
+  // The largest residual's place names the CAM operation that cut it (NX's TOOL PATH/name).
+  EXPECT_EQ(j["largest_residual_after"]["operation"], "FINISH_3AXIS");
+  EXPECT_NE(r.output.find(", operation FINISH_3AXIS"), std::string::npos) << r.output;
   char after[80];
   std::snprintf(after, sizeof after, "held-out RMS %.2f um",
                 j["trace"]["after_um"]["heldout_rms"].get<double>());
@@ -348,7 +352,8 @@ TEST_F(MeasureTest, TheCommandWritesWhatItSaysAndRefusesBadPoints) {
     std::vector<std::string> c;
     std::stringstream ss(line);
     for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
-    ASSERT_EQ(c.size(), 22u) << line;
+    ASSERT_EQ(c.size(), 23u) << line;
+    if (c[20] == "used") EXPECT_EQ(c[22], "FINISH_3AXIS") << line;
     if (c[20] != "used") continue;
     const double res = std::stod(c[14]), meas = std::stod(c[10]), pred = std::stod(c[11]);
     EXPECT_NEAR(res, meas - pred, 2e-4) << line;
@@ -442,6 +447,90 @@ TEST_F(MeasureTest, TheProcessFileCarriesDriftAndDeflection) {
   in.verify.process = path("first") + "/process.txt";
   in.report_dir = path("second");
   const MeasureRun second = measurePart(in);
+  print("second", second);
+  EXPECT_TRUE(second.report.trace.added.empty()) << second.report.trace.verdict_text;
+  EXPECT_LT(second.report.trace.heldout_rms_before, 1.5 * kNoise);
+}
+
+// The loop closed through compensate: the process file a measured part gave compensates the
+// program (compensate --process), and the independent simulator cuts the compensated program
+// with the same process effects: the part comes out where a clean process puts it, and measure
+// on it (with the compensated program and the process file) finds nothing left.
+TEST_F(MeasureTest, CompensatingForTheProcessMakesTheNextPartRight) {
+  Effect e;
+  e.part_error.translation() = Eigen::Vector3d(0.008, -0.005, 0.004);
+  e.drift_mm_per_h = 0.040;
+  e.deflection_across_mm = 0.006;
+  const std::vector<Cl> nominal = upright(cl(), 5.0);
+  const Simulator first_sim(nominal, 5.0, e);
+  MeasureInputs in = inputs(write("cmm.csv", measuredCsv(mesh(), first_sim, 600, 501, kNoise)));
+  in.report_dir = path("first");
+  const MeasureRun first = measurePart(in);
+  print("first", first);
+  ASSERT_GE(first.report.trace.added.size(), 2u) << first.report.trace.verdict_text;
+  CompensateInputs c;
+  c.machine = in.verify.machine;
+  c.program.cl = program_;
+  c.process = path("first") + "/process.txt";
+  c.output = path("compensated.apt");
+  const CompensateRun comp = compensateProgram(c);
+  EXPECT_EQ(comp.verdict, Verdict::Ok);
+  ASSERT_TRUE(comp.compensation.has_value());
+  const CompensationReport& rep = comp.compensation->report;
+  EXPECT_NE(rep.process_applied.find("set-up"), std::string::npos) << rep.process_applied;
+  std::printf("[ measure ] compensate --process: %s; before %.2f um RMS, after %.4f um\n",
+              rep.process_applied.c_str(), rep.before.tip_rms_um, rep.after.tip_rms_um);
+  EXPECT_GT(rep.before.tip_rms_um, 5.0);
+  EXPECT_LT(rep.after.tip_rms_um, 0.01);
+  {
+    std::ifstream jf(path("compensated.json"));
+    const nlohmann::json j = nlohmann::json::parse(jf);
+    EXPECT_EQ(j["process"]["file"], c.process);
+  }
+  // The next part, cut by the independent simulator from the compensated program's own text.
+  const std::vector<Cl> corrected = readGotos(c.output);
+  ASSERT_EQ(corrected.size(), nominal.size());
+  const Simulator second_sim(corrected, 5.0, e), clean_sim(nominal, 5.0, Effect{});
+  auto offsets = [&](const Simulator& sim) {  // the surface along the same 300 normals
+    std::vector<double> out;
+    std::stringstream ss(measuredCsv(mesh(), sim, 300, 502, 0.0));
+    std::string line;
+    while (std::getline(ss, line)) {
+      if (line.empty() || line[0] == '#' || line[0] == 'x') continue;
+      double v[6];
+      std::stringstream ls(line);
+      std::string cell;
+      for (int k = 0; k < 6 && std::getline(ls, cell, ','); ++k) v[k] = std::stod(cell);
+      out.push_back(Eigen::Vector3d(v[0], v[1], v[2]).dot(Eigen::Vector3d(v[3], v[4], v[5])));
+    }
+    return out;
+  };
+  const std::vector<double> clean = offsets(clean_sim), before = offsets(first_sim),
+                            after = offsets(second_sim);
+  ASSERT_EQ(clean.size(), 300u);
+  ASSERT_EQ(before.size(), clean.size());
+  ASSERT_EQ(after.size(), clean.size());
+  double s_before = 0, s_after = 0;
+  for (size_t i = 0; i < clean.size(); ++i) {
+    s_before += std::pow(before[i] - clean[i], 2);
+    s_after += std::pow(after[i] - clean[i], 2);
+  }
+  const double rms_before = std::sqrt(s_before / clean.size()),
+               rms_after = std::sqrt(s_after / clean.size());
+  std::printf(
+      "[ measure ] the part against a clean process's: %.2f um RMS uncompensated, %.2f um "
+      "compensated\n",
+      1e3 * rms_before, 1e3 * rms_after);
+  EXPECT_GT(rms_before, 0.003);
+  EXPECT_LT(rms_after, 0.1 * rms_before);
+  EXPECT_LT(rms_after, kNoise);
+  // measure on the compensated part, with the compensated program and the process file: the
+  // prediction holds (nothing to add, held-out at the probe's noise).
+  MeasureInputs again =
+      inputs(write("cmm2.csv", measuredCsv(mesh(), second_sim, 600, 503, kNoise)));
+  again.verify.program.cl = c.output;
+  again.verify.process = c.process;
+  const MeasureRun second = measurePart(again);
   print("second", second);
   EXPECT_TRUE(second.report.trace.added.empty()) << second.report.trace.verdict_text;
   EXPECT_LT(second.report.trace.heldout_rms_before, 1.5 * kNoise);

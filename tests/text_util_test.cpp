@@ -207,5 +207,18 @@ TEST(LineBuilder, FixedWritesThePrintfBytes) {
   EXPECT_EQ(line.view(), "GOTO/-42,1.50");
 }
 
+TEST(TextUtil, OperationNamesFromCamComments) {
+  EXPECT_EQ(operationName("begin operation: Profile)"), "Profile");
+  EXPECT_EQ(operationName("finish operation: Profile"), "");
+  EXPECT_EQ(operationName("End Operation: Profile"), "");
+  EXPECT_EQ(operationName("Operation : CURVE_DRIVE"), "CURVE_DRIVE");
+  EXPECT_EQ(operationName(" OPERATION=  ROUGH7  Z LEVEL  SRF_MILL1  )"),
+            "ROUGH7 Z LEVEL SRF_MILL1");
+  EXPECT_EQ(operationName("OPERATION NAME : Sweeping.1"), "Sweeping.1");
+  EXPECT_EQ(operationName("operations follow"), "");
+  EXPECT_EQ(operationName("T1 D=6 CR=0"), "");
+  EXPECT_EQ(operationName("Operation:" + std::string(100, 'x')).size(), 60u);
+}
+
 }  // namespace
 }  // namespace tolver

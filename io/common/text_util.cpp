@@ -365,4 +365,33 @@ std::string formatWith(const char* printf_format, double v) {
   return buf;
 }
 
+std::string operationName(std::string_view comment) {
+  const std::string u = toUpper(comment);
+  const size_t at = u.find("OPERATION");
+  if (at == std::string::npos) return "";
+  const std::string_view before = trim(std::string_view(u).substr(0, at));
+  if (before.size() >= 3 && (before.substr(before.size() - 3) == "END" ||
+                             (before.size() >= 6 && before.substr(before.size() - 6) == "FINISH")))
+    return "";
+  size_t k = at + 9;
+  while (k < u.size() && u[k] == ' ') ++k;
+  if (u.compare(k, 4, "NAME") == 0) k += 4;
+  while (k < u.size() && u[k] == ' ') ++k;
+  if (k >= u.size() || (u[k] != ':' && u[k] != '=')) return "";
+  ++k;
+  std::string name;
+  for (; k < comment.size(); ++k) {
+    const char c = comment[k];
+    if (c == ')' || c == '\r' || c == '\n') break;
+    if (std::isspace(static_cast<unsigned char>(c))) {
+      if (!name.empty() && name.back() != ' ') name += ' ';
+    } else {
+      name += c;
+    }
+  }
+  while (!name.empty() && name.back() == ' ') name.pop_back();
+  if (name.size() > 60) name = name.substr(0, 57) + "...";
+  return name;
+}
+
 }  // namespace tolver

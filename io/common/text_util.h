@@ -78,6 +78,12 @@ class LineBuilder {
 
 // s with & < > " replaced by their XML/HTML entities.
 std::string xmlEscape(std::string_view s);
+
+// The operation a CAM comment names, or empty: "begin operation: Profile" (FreeCAD),
+// "Operation : CURVE_DRIVE" (NX posts), "OPERATION=  ROUGH7  Z LEVEL ..." (Creo), "OPERATION NAME :
+// Sweeping.1" (CATIA); "finish/end operation" lines name none. Inner spaces collapsed, at most 60
+// characters.
+std::string operationName(std::string_view comment);
 // Base64 (RFC 4648, with padding) of bytes, for images embedded in HTML reports.
 std::string base64Encode(const std::string& bytes);
 

@@ -72,6 +72,7 @@ class Parser {
         st.major = statement(lg, /*pseudo=*/true, st);
         st.major.clear();  // Creo pseudo-comments are copied verbatim, never rewritten
       } else if (t.rfind("$$", 0) == 0 || t[0] == '$') {
+        operation(static_cast<int>(i) + 1, operationName(t));
         ++i;
       } else if (plainGoto(t, static_cast<int>(i) + 1, st)) {
         ++i;
@@ -377,7 +378,7 @@ class Parser {
     static const std::vector<Arg> none;
     const std::vector<Arg>& args = slash == std::string::npos ? none : splitArgs(lg, slash + 1);
     if (pseudo) {
-      if (major == "CUTTER" || major == "CSYS") apply(major, args, line, st);
+      if (major == "CUTTER" || major == "CSYS" || major == "FEATNO") apply(major, args, line, st);
       return major;  // other Creo pseudo-comments are comments
     }
     apply(major, args, line, st);
@@ -429,6 +430,18 @@ class Parser {
       csys(args, line);
     } else if (major == "MSYS") {
       msys(args, line);
+    } else if (major == "TOOL PATH" || major == "OPERATION") {  // NX: TOOL PATH/name,TOOL,...
+      if (!args.empty()) {
+        std::string name(trim(args[0].text));
+        name.erase(std::remove(name.begin(), name.end(), '\''), name.end());
+        operation(line, name);
+      }
+    } else if (major == "FEATNO") {  // Creo: the NC sequence's feature number
+      if (!args.empty()) operation(line, "feature " + std::string(trim(args[0].text)));
+    } else if (major == "PPRINT") {
+      std::string text;
+      for (const Arg& a : args) text += a.text + " ";
+      operation(line, operationName(text));
     } else if (major == "PARTNO") {
       prog_.part_name = args.empty() ? "" : args[0].text;
     } else if (major == "NURBS" || major == "KNOT" || major == "CNTRL") {
@@ -440,6 +453,13 @@ class Parser {
     } else {
       unknownStatement(major);
     }
+  }
+
+  // A CAM operation named from this line on.
+  void operation(int line, std::string name) {
+    if (name.empty()) return;
+    if (!prog_.operations.empty() && prog_.operations.back().name == name) return;
+    prog_.operations.push_back({line, std::move(name)});
   }
 
   // GOTO/x,y,z[,i,j,k] (a move, or a cycle's hole) and FROM (the start position).
@@ -849,6 +869,25 @@ class Parser {
 };
 
 }  // namespace
+
+const std::string& operationAt(const std::vector<ProgramOperation>& operations, int line) {
+  static const std::string none;
+  auto it = std::upper_bound(operations.begin(), operations.end(), line,
+                             [](int l, const ProgramOperation& o) { return l < o.line; });
+  return it == operations.begin() ? none : std::prev(it)->name;
+}
+
+std::vector<int> ClProgram::toolOfPoints() const {
+  std::vector<int> tool;
+  if (cutters.size() <= 1) return tool;
+  tool.resize(path.size());
+  size_t t = 0;
+  for (size_t i = 0; i < path.size(); ++i) {
+    while (t + 1 < cutters.size() && cutters[t + 1].line < path[i].line) ++t;
+    tool[i] = static_cast<int>(t);
+  }
+  return tool;
+}
 
 ClProgram readApt(LineSource& source, const std::string& file_name, const AptReadOptions& options) {
   return Parser(source, file_name, options, nullptr).run();

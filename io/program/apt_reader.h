@@ -48,6 +48,16 @@ struct AptStatement {
   bool cycle = false;
 };
 
+// A CAM operation the program names (NX's TOOL PATH/name, an "Operation : name" comment), from
+// its line on.
+struct ProgramOperation {
+  int line = 0;
+  std::string name;
+};
+
+// The operation a line belongs to (the last named at or before it), or empty.
+const std::string& operationAt(const std::vector<ProgramOperation>& operations, int line);
+
 // The coordinate system in force for a point: p_w = scale * (T * p_file).
 struct ClFrame {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -66,6 +76,7 @@ struct ClProgram {
   // coordinates into the settable frame (G54...), in mm.
   std::vector<ClFrame> frames;
   std::vector<CutterSpec> cutters;
+  std::vector<ProgramOperation> operations;  // in line order
   std::string part_name;
   std::string units = "MM";  // as the file declares: MM or INCH
   bool multiax = false;      // MULTAX/ON seen, or GOTO with six values
@@ -91,6 +102,9 @@ struct ClProgram {
   // program's words: a corrected program can move its tip, not its tool axis.
   std::vector<char> cycle_orientation;
   std::vector<std::string> notes;  // what the reader assumed or ignored, one line each
+  // Per point, the index of its tool in `cutters` (the last declared before its line); empty
+  // when the program declares at most one.
+  std::vector<int> toolOfPoints() const;
   // A program read in blocks (ProgramBlocks): the index of path[0] in the whole program.
   size_t first_point = 0;
   size_t pointsRead() const { return first_point + path.size(); }

@@ -1262,8 +1262,23 @@ class Reader {
     prog_.cutters.push_back(spec);
   }
 
+  // A CAM operation named in a comment ("(begin operation: Profile)", ";Operation : DRILLING").
+  void operationComment(const std::string& raw) {
+    if (raw.find_first_of("(;") == std::string::npos) return;
+    std::string name;
+    const size_t semi = raw.find(';');
+    if (semi != std::string::npos) name = operationName(std::string_view(raw).substr(semi + 1));
+    for (size_t open = raw.find('('); name.empty() && open != std::string::npos && open < semi;
+         open = raw.find('(', open + 1))
+      name = operationName(std::string_view(raw).substr(open + 1));
+    if (name.empty()) return;
+    if (!prog_.operations.empty() && prog_.operations.back().name == name) return;
+    prog_.operations.push_back({line_, std::move(name)});
+  }
+
   std::string block(const std::string& raw) {
     toolComment(raw);
+    operationComment(raw);
     // Strip comments, keep positions (1-based columns of the raw line).
     std::string text;
     std::vector<int> col;

@@ -79,6 +79,7 @@ std::string formatCompensationJson(const CompensationReport& r) {
                                "uncertainty: compensation removes what the model "
                                "knows, not what it does not"}};
   if (!r.setup_note.empty()) j["setup"] = r.setup_note;
+  if (!r.process.empty()) j["process"] = {{"file", r.process}, {"compensated", r.process_applied}};
   nlohmann::json jc = nlohmann::json::object();
   for (size_t k = 0; k < r.joint_correction_max.size(); ++k)
     jc[r.joint_correction_max[k].first] = {
@@ -185,6 +186,8 @@ void writeCompensationReport(const std::string& dir, const CompensationReport& r
        xmlEscape(r.program) + " (" + xmlEscape(r.dialect) + "), " + std::to_string(r.points) +
        " tool positions<br>written " + xmlEscape(r.output) + "</p>\n";
   if (!r.setup_note.empty()) h += "<p>set-up: " + xmlEscape(r.setup_note) + "</p>\n";
+  if (!r.process.empty())
+    h += "<p>process (" + xmlEscape(r.process) + "): " + xmlEscape(r.process_applied) + "</p>\n";
   h += "<table><tr><th></th><th>tip max (µm)</th><th>at line</th><th>tip RMS (µm)</th><th>axis max "
        "(µrad)</th>"
        "<th>axis RMS (µrad)</th></tr>\n";

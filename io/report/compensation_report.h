@@ -35,6 +35,9 @@ struct CompensationReport {
   double after_lack_of_fit_um = 0, after_tilt_prior_urad = 0;
   std::string joints_file;  // the per-point joints (CSV), before and after
   std::string setup_note;   // the set-up the machine's share is taken after
+  // --process: the process file and what of it the program compensates (in words); the before
+  // and after are then measured against where the process needs the tool.
+  std::string process, process_applied;
   std::vector<std::pair<std::string, double>> joint_correction_max;  // axis, um or urad
   std::vector<bool> joint_rotary;
   int ill_conditioned = 0, out_of_travel = 0, not_converged = 0, left_by_writer = 0;

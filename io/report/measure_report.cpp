@@ -22,7 +22,7 @@ std::string formatMeasureCsv(const MeasureReport& r) {
   std::string out =
       "line,x_mm,y_mm,z_mm,foot_x_mm,foot_y_mm,foot_z_mm,nx,ny,nz,measured_um,predicted_um,"
       "program_um,machine_um,residual_um,residual_after_um,instrument_um,cl_line,tool,set,"
-      "status,region\n";
+      "status,region,operation\n";
   for (const MeasureRow& w : r.rows) {
     std::vector<std::string> c = {std::to_string(w.line),
                                   mm(w.p_w.x()),
@@ -45,7 +45,8 @@ std::string formatMeasureCsv(const MeasureReport& r) {
                                   std::to_string(w.tool + 1),
                                   w.held_out ? "held-out" : "fit",
                                   w.status,
-                                  w.region};
+                                  w.region,
+                                  w.operation};
     out += csvLine(c) + "\n";
   }
   return out;
@@ -94,10 +95,12 @@ std::string formatMeasureJson(const MeasureReport& r) {
                                {"missing_rms_um", mmToUm(l.missing_rms)}};
   if (r.worst_row >= 0) {
     const MeasureRow& w = r.rows[r.worst_row];
-    j["largest_residual_after"] = {{"line", w.line},     {"residual_um", mmToUm(w.residual_after)},
-                                   {"x_mm", w.p_w.x()},  {"y_mm", w.p_w.y()},
-                                   {"z_mm", w.p_w.z()},  {"cl_line", w.cl_line},
-                                   {"tool", w.tool + 1}, {"region", w.region}};
+    j["largest_residual_after"] = {
+        {"line", w.line},          {"residual_um", mmToUm(w.residual_after)},
+        {"x_mm", w.p_w.x()},       {"y_mm", w.p_w.y()},
+        {"z_mm", w.p_w.z()},       {"cl_line", w.cl_line},
+        {"tool", w.tool + 1},      {"region", w.region},
+        {"operation", w.operation}};
   }
   nlohmann::json groups = nlohmann::json::array();
   for (const TraceGroup& g : t.groups) {

@@ -18,7 +18,8 @@ struct MeasureRow {
   double residual = NAN, residual_after = NAN;
   double instrument = NAN;  // the file's own deviation, when given
   int cl_line = 0, tool = 0;
-  std::string region;  // the part's region (mesh group, CAD face) of the foot
+  std::string region;     // the part's region (mesh group, CAD face) of the foot
+  std::string operation;  // the CAM operation that cut it (as the program names it), or empty
   bool held_out = false;
   std::string status;  // "used", or why not: "beyond search range", "not machined", ...
 };
