@@ -38,6 +38,18 @@ namespace {
 namespace fs = std::filesystem;
 using namespace indep_cut;
 
+// Ten seeds per case, as the issue asks: the right answer in at least 9 of 10, the held-out
+// residual after within 1.5 x the probe's noise.
+constexpr int kSeeds = 10;
+constexpr double kNoise = 0.5e-3;
+
+void print(const char* what, const MeasureRun& r) {
+  const PartTrace& t = r.report.trace;
+  std::printf("[ measure ] %-12s %s; held-out RMS %.2f -> %.2f um (%d used)\n", what,
+              t.verdict_text.c_str(), 1e3 * t.heldout_rms_before, 1e3 * t.heldout_rms_after,
+              r.report.used);
+}
+
 class MeasureTest : public test::TempDirTest {
  protected:
   MeasureInputs inputs(const std::string& points) {
@@ -67,6 +79,50 @@ class MeasureTest : public test::TempDirTest {
     TempDirTest::SetUp();
     program_ = write("sculptured_3axis.apt", threeAxisProgram(cl(), 5.0));
   }
+  // machine_ as a calibration that missed its X, Y and Z scales: their linear terms identified
+  // loose (200 um SD), written beside the test.
+  std::string looseScales() {
+    Machine m = readMachineFile(test::sourcePath(machine_));
+    std::vector<int> ids;
+    for (const char* code : {"EXX.c1", "EYY.c1", "EZZ.c1"}) {
+      const int k = m.model.findParameter(code);
+      EXPECT_GE(k, 0) << code;
+      if (k >= 0) ids.push_back(k);
+    }
+    m.identification.parameters = ids;
+    const Eigen::Index n = static_cast<Eigen::Index>(ids.size());
+    m.identification.covariance = Eigen::MatrixXd::Identity(n, n) * 0.2 * 0.2;
+    m.identification.readings = 600;
+    return write("calibrated.xml", formatMachineXml(m, "loose linear terms"));
+  }
+  // Ten seeds of the X scale off by k (the simulator's own k x), measured with --absolute on
+  // `machine`: {named as the machine with |EXX.c1| within 3 SD (+2 um) of 60 um, at the noise}.
+  std::pair<int, int> scaleCampaign(const std::string& machine, double k, unsigned first_seed,
+                                    const char* what) {
+    Effect e;
+    e.machine_error = [k](const Eigen::Vector3d& p) { return Eigen::Vector3d(k * p.x(), 0, 0); };
+    int named = 0, at_noise = 0;
+    for (unsigned seed = first_seed; seed < first_seed + kSeeds; ++seed) {
+      const Simulator sim(upright(cl(), 5.0), 5.0, e);
+      MeasureInputs in = inputs(write("machine" + std::to_string(seed) + ".csv",
+                                      measuredCsv(mesh(), sim, 600, seed, kNoise)));
+      in.verify.machine.machine = machine;
+      in.verify.absolute = true;  // the simulator's part was not probed on the machine
+      const MeasureRun r = measurePart(in);
+      print(what, r);
+      const PartTrace& t = r.report.trace;
+      if (!t.added.empty() && t.groups[0].name == "machine") {
+        const TraceGroup& g = t.groups[0];
+        std::printf(
+            "[ measure ]   EXX.c1 %.2f +- %.2f um, EYY.c1 %.2f +- %.2f, EZZ.c1 %.2f +- %.2f\n",
+            1e3 * g.values[0], 1e3 * g.sd[0], 1e3 * g.values[1], 1e3 * g.sd[1], 1e3 * g.values[2],
+            1e3 * g.sd[2]);
+        named += std::abs(std::abs(g.values[0]) - 0.060) < 3 * g.sd[0] + 2e-3;
+      }
+      at_noise += t.heldout_rms_after < 1.5 * kNoise;
+    }
+    return {named, at_noise};
+  }
   MeasureRun run(const Effect& e, unsigned seed, const std::string& name) {
     const Simulator sim(upright(cl(), 5.0), 5.0, e);
     const std::string file = write(name + ".csv", measuredCsv(mesh(), sim, 600, seed, 0.5e-3));
@@ -79,18 +135,6 @@ bool added(const PartTrace& t, const std::string& name) {
     if (g.added && g.name == name) return true;
   return false;
 }
-
-void print(const char* what, const MeasureRun& r) {
-  const PartTrace& t = r.report.trace;
-  std::printf("[ measure ] %-12s %s; held-out RMS %.2f -> %.2f um (%d used)\n", what,
-              t.verdict_text.c_str(), 1e3 * t.heldout_rms_before, 1e3 * t.heldout_rms_after,
-              r.report.used);
-}
-
-// Ten seeds per case, as the issue asks: the right answer in at least 9 of 10, the held-out
-// residual after within 1.5 x the probe's noise.
-constexpr int kSeeds = 10;
-constexpr double kNoise = 0.5e-3;
 
 TEST_F(MeasureTest, ACleanPartAddsNothing) {
   int nothing = 0, at_noise = 0;
@@ -247,45 +291,13 @@ TEST_F(MeasureTest, AnImplausibleValueIsNotAdded) {
 // was not probed on the machine (without it the prediction, and the machine rows, are taken
 // modulo the set-up a shop measures; the loop for that case below).
 TEST_F(MeasureTest, AMachineErrorTheCalibrationMissedRefinesTheMachine) {
-  Machine m = readMachineFile(test::sourcePath("resources/machines/matsuura_mc760vx.xml"));
-  std::vector<int> ids;
-  for (const char* code : {"EXX.c1", "EYY.c1", "EZZ.c1"}) {
-    const int k = m.model.findParameter(code);
-    ASSERT_GE(k, 0) << code;
-    ids.push_back(k);
-  }
-  m.identification.parameters = ids;
-  m.identification.covariance = Eigen::MatrixXd::Identity(3, 3) * 0.2 * 0.2;
-  m.identification.readings = 600;
-  const std::string machine = write("calibrated.xml", formatMachineXml(m, "loose linear terms"));
-  Effect e;
+  const std::string machine = looseScales();
   const double k = 0.060 / 380.0;
-  e.machine_error = [k](const Eigen::Vector3d& p) { return Eigen::Vector3d(k * p.x(), 0, 0); };
-  int named = 0, at_noise = 0;
-  for (unsigned seed = 801; seed < 801 + kSeeds; ++seed) {
-    const Simulator sim(upright(cl(), 5.0), 5.0, e);
-    const std::string file = write("machine" + std::to_string(seed) + ".csv",
-                                   measuredCsv(mesh(), sim, 600, seed, kNoise));
-    MeasureInputs in = inputs(file);
-    in.verify.machine.machine = machine;
-    in.verify.absolute = true;  // the simulator's part was not probed on the machine
-    const MeasureRun r = measurePart(in);
-    print("machine EXX", r);
-    const PartTrace& t = r.report.trace;
-    bool ok = false;
-    if (!t.added.empty() && t.groups[0].name == "machine") {
-      const TraceGroup& g = t.groups[0];
-      std::printf(
-          "[ measure ]   EXX.c1 %.2f +- %.2f um, EYY.c1 %.2f +- %.2f, EZZ.c1 %.2f +- %.2f\n",
-          1e3 * g.values[0], 1e3 * g.sd[0], 1e3 * g.values[1], 1e3 * g.sd[1], 1e3 * g.values[2],
-          1e3 * g.sd[2]);
-      ok = std::abs(std::abs(g.values[0]) - 0.060) < 3 * g.sd[0] + 2e-3;
-    }
-    named += ok;
-    at_noise += t.heldout_rms_after < 1.5 * kNoise;
-  }
+  const auto [named, at_noise] = scaleCampaign(machine, k, 801, "machine EXX");
   EXPECT_GE(named, 9);
   EXPECT_GE(at_noise, 9);
+  Effect e;
+  e.machine_error = [k](const Eigen::Vector3d& p) { return Eigen::Vector3d(k * p.x(), 0, 0); };
   // The loop: machine.xml written, read back, nothing left to add.
   const Simulator sim(upright(cl(), 5.0), 5.0, e);
   MeasureInputs in = inputs(write("loop.csv", measuredCsv(mesh(), sim, 600, 899, kNoise)));
@@ -375,39 +387,7 @@ TEST_F(OtherMachineTest, Xkh800) {
 TEST_F(OtherMachineTest, TrunnionMachineErrorTheCalibrationMissed) {
   machine_ = "resources/machines/trunnion_ac_trt.xml";
   setup_ = "samples/trunnion_setup.txt";
-  Machine m = readMachineFile(test::sourcePath(machine_));
-  std::vector<int> ids;
-  for (const char* code : {"EXX.c1", "EYY.c1", "EZZ.c1"}) {
-    const int k = m.model.findParameter(code);
-    ASSERT_GE(k, 0) << code;
-    ids.push_back(k);
-  }
-  m.identification.parameters = ids;
-  m.identification.covariance = Eigen::MatrixXd::Identity(3, 3) * 0.2 * 0.2;
-  m.identification.readings = 600;
-  const std::string machine = write("calibrated.xml", formatMachineXml(m, "loose linear terms"));
-  Effect e;
-  const double k = 0.060 / 400.0;
-  e.machine_error = [k](const Eigen::Vector3d& p) { return Eigen::Vector3d(k * p.x(), 0, 0); };
-  int named = 0, at_noise = 0;
-  for (unsigned seed = 1401; seed < 1401 + kSeeds; ++seed) {
-    const Simulator sim(upright(cl(), 5.0), 5.0, e);
-    MeasureInputs in = inputs(write("machine" + std::to_string(seed) + ".csv",
-                                    measuredCsv(mesh(), sim, 600, seed, kNoise)));
-    in.verify.machine.machine = machine;
-    in.verify.absolute = true;
-    const MeasureRun r = measurePart(in);
-    print("trunnion EXX", r);
-    const PartTrace& t = r.report.trace;
-    bool ok = false;
-    if (!t.added.empty() && t.groups[0].name == "machine") {
-      const TraceGroup& g = t.groups[0];
-      std::printf("[ measure ]   EXX.c1 %.2f +- %.2f um\n", 1e3 * g.values[0], 1e3 * g.sd[0]);
-      ok = std::abs(std::abs(g.values[0]) - 0.060) < 3 * g.sd[0] + 2e-3;
-    }
-    named += ok;
-    at_noise += t.heldout_rms_after < 1.5 * kNoise;
-  }
+  const auto [named, at_noise] = scaleCampaign(looseScales(), 0.060 / 400.0, 1401, "trunnion EXX");
   EXPECT_GE(named, 9);
   EXPECT_GE(at_noise, 9);
 }
