@@ -33,18 +33,7 @@ void printMeasurement(const MeasureRun& run) {
       mmToUm(r.residual_max));
   for (const TraceGroup& g : t.groups) {
     if (!g.added) continue;
-    std::printf("  added      %s:", g.name.c_str());
-    for (Eigen::Index k = 0; k < g.values.size(); ++k) {
-      const std::string& n = k < static_cast<Eigen::Index>(g.value_names.size())
-                                 ? g.value_names[k]
-                                 : std::string("value");
-      const bool angle = n.find("rad") != std::string::npos;
-      const bool rate = n.size() > 2 && n.compare(n.size() - 2, 2, "/h") == 0;
-      std::printf(" %s %+.3g +- %.2g %s;", n.substr(0, n.rfind(' ')).c_str(),
-                  angle ? radToUrad(g.values[k]) : mmToUm(g.values[k]),
-                  angle ? radToUrad(g.sd[k]) : mmToUm(g.sd[k]),
-                  angle ? "urad" : (rate ? "um/h" : "um"));
-    }
+    std::printf("  added      %s: %s", g.name.c_str(), describeTracedValues(g).c_str());
     std::printf(" (%s; held-out gain %.3g +- %.2g um2)\n", g.reason.c_str(), g.heldout_gain_um2,
                 g.heldout_gain_se_um2);
     if (!g.confounded.empty()) {
@@ -72,7 +61,7 @@ void printMeasurement(const MeasureRun& run) {
   }
   for (const std::string& n : r.notes) std::printf("  note       %s\n", n.c_str());
   if (!run.report_dir.empty())
-    std::printf("  wrote      %s/{residuals.csv,report.json,process.txt%s%s%s}\n",
+    std::printf("  wrote      %s/{residuals.csv,report.json,report.html,process.txt%s%s%s}\n",
                 run.report_dir.c_str(), r.machine_written.empty() ? "" : ",machine.xml",
                 r.images.empty() ? "" : ",",
                 [&] {

@@ -377,6 +377,7 @@ MeasureRun measurePart(const MeasureInputs& in, const Progress& progress) {
     }
     if (in.images) rep.images = renderResiduals(dir.staging(), m.part, rep);
     writeFileAtomically(dir.staging() + "/report.json", formatMeasureJson(rep));
+    writeFileAtomically(dir.staging() + "/report.html", formatMeasureHtml(rep, dir.staging()));
     dir.commit();
     run.report_dir = dir.final();
   }

@@ -443,6 +443,19 @@ TEST_F(MeasureTest, TheCommandWritesWhatItSaysAndRefusesBadPoints) {
   std::ifstream pf(path("out") + "/process.txt");
   const std::string process((std::istreambuf_iterator<char>(pf)), {});
   EXPECT_NE(process.find("set-up_x_mm "), std::string::npos) << process;
+  // report.html: self-contained, the verdict, the effect added with its values as the console
+  // prints them, the largest residual's operation, the images embedded.
+  std::ifstream hf(path("out") + "/report.html");
+  const std::string html((std::istreambuf_iterator<char>(hf)), {});
+  EXPECT_NE(html.find(j["trace"]["verdict_text"].get<std::string>()), std::string::npos);
+  EXPECT_NE(html.find("<tr class=\"added\"><td>set-up</td>"), std::string::npos);
+  EXPECT_NE(html.find("operation FINISH_3AXIS"), std::string::npos);
+  size_t embedded = 0;
+  for (size_t at = html.find("data:image/png;base64,"); at != std::string::npos;
+       at = html.find("data:image/png;base64,", at + 1))
+    ++embedded;
+  EXPECT_EQ(embedded, 4u);
+  EXPECT_NE(r.output.find("report.html"), std::string::npos);
   // The residual's maps and histograms, before and after, listed in report.json and written.
   const std::vector<std::string> images = j["images"].get<std::vector<std::string>>();
   EXPECT_EQ(images.size(), 4u);

@@ -365,6 +365,11 @@ std::string formatWith(const char* printf_format, double v) {
   return buf;
 }
 
+std::string htmlPng(const std::string& png_bytes, const std::string& alt) {
+  return "<img alt=\"" + xmlEscape(alt) + "\" src=\"data:image/png;base64," +
+         base64Encode(png_bytes) + "\">";
+}
+
 std::string operationName(std::string_view comment) {
   const std::string u = toUpper(comment);
   const size_t at = u.find("OPERATION");

@@ -86,5 +86,7 @@ std::string xmlEscape(std::string_view s);
 std::string operationName(std::string_view comment);
 // Base64 (RFC 4648, with padding) of bytes, for images embedded in HTML reports.
 std::string base64Encode(const std::string& bytes);
+// An HTML <img> holding a PNG file's bytes (self-contained: data URI).
+std::string htmlPng(const std::string& png_bytes, const std::string& alt);
 
 }  // namespace tolver

@@ -126,12 +126,12 @@ std::string formatAxisTableCsv(const std::vector<std::string>& axis_names, int a
 
 namespace {
 
+// A missing file embeds as an empty image.
 std::string embedded(const std::string& path, const std::string& alt) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream ss;
   ss << in.rdbuf();
-  return "<img alt=\"" + xmlEscape(alt) + "\" src=\"data:image/png;base64," +
-         base64Encode(ss.str()) + "\">";
+  return htmlPng(ss.str(), alt);
 }
 
 std::string row(const char* what, const PathFigures& f) {

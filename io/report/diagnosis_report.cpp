@@ -145,12 +145,12 @@ std::vector<ScatterSeries> seriesOf(const BallbarTest& test, const EffectSpec& e
   return s;
 }
 
+// A missing file embeds as an empty image.
 std::string imageTag(const std::string& path, const std::string& alt) {
   std::ifstream in(path, std::ios::binary);
   std::stringstream ss;
   ss << in.rdbuf();
-  return "<img alt=\"" + xmlEscape(alt) + "\" src=\"data:image/png;base64," +
-         base64Encode(ss.str()) + "\">";
+  return htmlPng(ss.str(), alt);
 }
 
 std::string effectKey(const MachineModel& m, const EffectSpec& e) {

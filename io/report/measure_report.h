@@ -50,7 +50,15 @@ struct MeasureReport {
 // process.txt's key of a traced value: the group's name and the value's, spaces as '_'.
 std::string processKey(const std::string& group, const std::string& value_name);
 
+// A traced group's values in words: "x +9.87 +- 0.41 um; about z +28.6 +- 91 urad;" (um,
+// urad, um/h).
+std::string describeTracedValues(const TraceGroup& g);
+
 std::string formatMeasureCsv(const MeasureReport& r);
+// report.html: self-contained (the images in `dir`, listed in r.images, embedded): the verdict,
+// the inputs, the deviations, before and after, every candidate effect, the largest residual,
+// the corrections written and the notes.
+std::string formatMeasureHtml(const MeasureReport& r, const std::string& dir);
 std::string formatMeasureJson(const MeasureReport& r);
 // The corrections learned, as `key value` lines with units (docs/formats.md: process file).
 std::string formatProcessFile(const MeasureReport& r);
