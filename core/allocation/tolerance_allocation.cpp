@@ -3,13 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <pagmo/algorithms/nsga2.hpp>
-#include <pagmo/batch_evaluators/thread_bfe.hpp>
-#include <pagmo/bfe.hpp>
-#include <pagmo/population.hpp>
-#include <pagmo/problem.hpp>
 #include <stdexcept>
 
+#include "core/allocation/nsga2.h"
 #include "core/kinematics/forward_kinematics.h"
 #include "core/kinematics/sensitivity_jacobian.h"
 
@@ -277,22 +273,6 @@ struct Evaluator {
   }
 };
 
-struct PagmoProblem {
-  const Evaluator* ev = nullptr;
-  std::vector<double> lb, ub;
-  pagmo::vector_double fitness(const pagmo::vector_double& x) const {
-    Eigen::VectorXd Tx(x.size());
-    for (size_t i = 0; i < x.size(); ++i) Tx[i] = x[i] * (*ev->terms)[i].standard;
-    double violation = 0.0;
-    const AllocationSolution s = ev->evaluate(ev->repair(Tx, &violation));
-    const double pen = violation * ev->penalty_scale;
-    return {s.m1 + pen, -s.m2 + pen};
-  }
-  std::pair<pagmo::vector_double, pagmo::vector_double> get_bounds() const { return {lb, ub}; }
-  pagmo::vector_double::size_type get_nobj() const { return 2; }
-  std::string get_name() const { return "tolver tolerance allocation"; }
-};
-
 }  // namespace
 
 // Long by design: the NSGA-II run as the paper sets it up ([Cai] 4.2): the problem, the
@@ -330,24 +310,29 @@ AllocationResult allocateTolerances(const MachineModel& m, const std::vector<Tol
   if ((lower_worst.array() > a.limits.array()).any()) return res;  // nothing can be feasible
   ev.penalty_scale = 10.0 * std::max(res.standard.m1, 1.0);
 
-  PagmoProblem udp;
-  udp.ev = &ev;
+  std::vector<double> lb, ub;
   for (int i = 0; i < n; ++i) {
-    udp.lb.push_back(terms[i].lower / terms[i].standard);
-    udp.ub.push_back(terms[i].upper / terms[i].standard);
+    lb.push_back(terms[i].lower / terms[i].standard);
+    ub.push_back(terms[i].upper / terms[i].standard);
   }
-  pagmo::problem prob{udp};
-  const int pop_size = std::max(8, (o.population + 3) / 4 * 4);
-  pagmo::population pop{prob, static_cast<pagmo::population::size_type>(pop_size), o.seed};
-  pagmo::nsga2 algo{static_cast<unsigned>(o.generations), 0.95, 10.0, 1.0 / n, 50.0, o.seed};
-  // The population's fitness in parallel (pagmo's thread batch evaluator; the evaluator is
-  // const and shares nothing mutable). The same seed gives the same front.
-  algo.set_bfe(pagmo::bfe{pagmo::thread_bfe{}});
-  pop = algo.evolve(pop);
+  const Nsga2Fitness fitness = [&ev](const std::vector<double>& x) {
+    Eigen::VectorXd Tx(static_cast<Eigen::Index>(x.size()));
+    for (size_t i = 0; i < x.size(); ++i) Tx[i] = x[i] * (*ev.terms)[i].standard;
+    double violation = 0.0;
+    const AllocationSolution s = ev.evaluate(ev.repair(Tx, &violation));
+    const double pen = violation * ev.penalty_scale;
+    return std::array<double, 2>{s.m1 + pen, -s.m2 + pen};
+  };
+  Nsga2Run run;
+  run.population = std::max(8, (o.population + 3) / 4 * 4);
+  run.generations = o.generations;
+  run.mutation_probability = 1.0 / n;
+  run.seed = o.seed;
+  const std::vector<std::vector<double>> final_x = nsga2(fitness, lb, ub, run);
 
   // The repaired final population, its non-dominated front, by increasing M1.
   std::vector<AllocationSolution> all;
-  for (const auto& x : pop.get_x()) {
+  for (const auto& x : final_x) {
     Eigen::VectorXd Tx(n);
     for (int i = 0; i < n; ++i) Tx[i] = x[i] * terms[i].standard;
     double violation = 0.0;

@@ -5,13 +5,6 @@
 #include <tinyxml2.h>
 #include <unistd.h>
 #include <unzip.h>
-#include <vtkCellArray.h>
-#include <vtkDoubleArray.h>
-#include <vtkNew.h>
-#include <vtkPointData.h>
-#include <vtkPoints.h>
-#include <vtkPolyData.h>
-#include <vtkXMLPolyDataWriter.h>
 
 #include <algorithm>
 #include <assimp/Importer.hpp>
@@ -27,6 +20,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/numerics/lazy_module.h"
 #include "core/numerics/quantities.h"
 #include "io/common/child_process.h"
 #include "io/common/io_error.h"
@@ -842,44 +836,13 @@ void writePlyWithScalar(const std::string& path, const std::vector<Eigen::Vector
   writeFileAtomically(path, out);
 }
 
+// Written by VTK's XML writer in the tolver_vtk module (io/report/vtk_render.cpp).
 void writeVtpWithScalars(
     const std::string& path, const std::vector<Eigen::Vector3d>& points,
     const std::vector<Eigen::Vector3i>& faces,
     const std::vector<std::pair<std::string, const std::vector<double>*>>& scalars) {
-  vtkNew<vtkPoints> pts;
-  pts->SetDataTypeToDouble();
-  pts->SetNumberOfPoints(static_cast<vtkIdType>(points.size()));
-  for (size_t i = 0; i < points.size(); ++i)
-    pts->SetPoint(static_cast<vtkIdType>(i), points[i].data());
-  vtkNew<vtkCellArray> cells;
-  for (const auto& f : faces) {
-    const vtkIdType ids[3] = {f[0], f[1], f[2]};
-    cells->InsertNextCell(3, ids);
-  }
-  vtkNew<vtkPolyData> poly;
-  poly->SetPoints(pts);
-  poly->SetPolys(cells);
-  for (const auto& [name, values] : scalars) {
-    vtkNew<vtkDoubleArray> a;
-    a->SetName(name.c_str());
-    a->SetNumberOfValues(static_cast<vtkIdType>(values->size()));
-    for (size_t i = 0; i < values->size(); ++i)
-      a->SetValue(static_cast<vtkIdType>(i), (*values)[i]);
-    poly->GetPointData()->AddArray(a);
-  }
-  OutputSet out;
-  out.addWritten(path, [&](const std::string& tmp) {
-    vtkNew<vtkXMLPolyDataWriter> writer;
-    writer->SetFileName(tmp.c_str());
-    writer->SetInputData(poly);
-    // Raw appended binary without compression: zlib took most of the writing time and saved
-    // little (doubles compress poorly); ParaView and VTK read it as they read the compressed form.
-    writer->SetDataModeToAppended();
-    writer->EncodeAppendedDataOff();
-    writer->SetCompressorTypeToNone();
-    return writer->Write() == 1;
-  });
-  out.commit();
+  moduleFunction<decltype(writeVtpWithScalars)>("tolver_vtk", "writeVtpWithScalars")(
+      path, points, faces, scalars);
 }
 
 }  // namespace tolver

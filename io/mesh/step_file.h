@@ -61,4 +61,8 @@ struct StepPart {
 // invalid after ShapeFix (the face and the check named), a failed tessellation.
 StepPart readStepPart(const std::string& path, const StepReadOptions& options = {});
 
+// The tolver_occt module's reader (io/mesh/step_reader_occt.cpp): the part as bytes (mesh_bytes.h),
+// which readStepPart decodes.
+using StepPartBytes = std::string(const std::string& path, const StepReadOptions& options);
+
 }  // namespace tolver
