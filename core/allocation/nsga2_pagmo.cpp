@@ -35,11 +35,13 @@ std::vector<std::vector<double>> nsga2(const Nsga2Fitness& fitness, const std::v
   udp.lb = lb;
   udp.ub = ub;
   pagmo::problem prob{udp};
-  pagmo::population pop{prob, static_cast<pagmo::population::size_type>(run.population),
-                        run.seed};
-  pagmo::nsga2 algo{static_cast<unsigned>(run.generations), run.crossover_probability,
-                    run.crossover_distribution, run.mutation_probability,
-                    run.mutation_distribution, run.seed};
+  pagmo::population pop{prob, static_cast<pagmo::population::size_type>(run.population), run.seed};
+  pagmo::nsga2 algo{static_cast<unsigned>(run.generations),
+                    run.crossover_probability,
+                    run.crossover_distribution,
+                    run.mutation_probability,
+                    run.mutation_distribution,
+                    run.seed};
   // The population's fitness in parallel (the fitness shares nothing mutable). The same seed
   // gives the same front.
   algo.set_bfe(pagmo::bfe{pagmo::thread_bfe{}});

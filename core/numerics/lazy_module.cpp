@@ -62,8 +62,8 @@ void* moduleSymbol(const char* module, const char* name) {
   auto* lookup = reinterpret_cast<Lookup*>(dlsym(handle, "tolver_module_symbol"));
   void* f = lookup ? lookup(name) : nullptr;
   if (!f)
-    throw std::runtime_error(std::string("tolver's module ") + module + " has no function " +
-                             name + ": it belongs to another build of tolver");
+    throw std::runtime_error(std::string("tolver's module ") + module + " has no function " + name +
+                             ": it belongs to another build of tolver");
   return f;
 }
 

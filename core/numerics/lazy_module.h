@@ -25,15 +25,14 @@ F* moduleFunction(const char* module, const char* name) {
 }  // namespace tolver
 
 // In a module's one exporting file: `TOLVER_MODULE_EXPORTS({"name", &impl::name}, ...)`.
-#define TOLVER_MODULE_EXPORTS(...)                                                        \
-  extern "C" __attribute__((visibility("default"))) void* tolver_module_symbol(          \
-      const char* name) {                                                                 \
-    struct Entry {                                                                        \
-      const char* name;                                                                   \
-      void* function;                                                                     \
-    };                                                                                    \
-    static const Entry entries[] = {__VA_ARGS__};                                         \
-    for (const Entry& e : entries)                                                        \
-      if (std::string(e.name) == name) return e.function;                                 \
-    return nullptr;                                                                       \
+#define TOLVER_MODULE_EXPORTS(...)                                                                 \
+  extern "C" __attribute__((visibility("default"))) void* tolver_module_symbol(const char* name) { \
+    struct Entry {                                                                                 \
+      const char* name;                                                                            \
+      void* function;                                                                              \
+    };                                                                                             \
+    static const Entry entries[] = {__VA_ARGS__};                                                  \
+    for (const Entry& e : entries)                                                                 \
+      if (std::string(e.name) == name) return e.function;                                          \
+    return nullptr;                                                                                \
   }

@@ -57,9 +57,7 @@ StepPart readStepPart(const std::string& path, const StepReadOptions& options) {
     throw InputError(path, 0, 0, "STEP", "the tessellation's bounds must be positive");
   const std::string bytes = runInChildProcess(
       path, "OpenCASCADE",
-      [&] {
-        return moduleFunction<StepPartBytes>("tolver_occt", "stepPartBytes")(path, options);
-      },
+      [&] { return moduleFunction<StepPartBytes>("tolver_occt", "stepPartBytes")(path, options); },
       options.in_process);
   StepPart part;
   ByteReader r(bytes);

@@ -40,20 +40,17 @@
 #include <vtkWindowToImageFilter.h>
 #include <vtkXMLPolyDataWriter.h>
 
-#include <type_traits>
-
-#include "core/numerics/lazy_module.h"
-#include "io/mesh/mesh_file.h"
-#include "io/report/deviation_map.h"
-
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <type_traits>
 
+#include "core/numerics/lazy_module.h"
 #include "core/numerics/units.h"
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
+#include "io/mesh/mesh_file.h"
+#include "io/report/deviation_map.h"
 #include "io/report/offscreen_display.h"
 #include "io/report/png_plot.h"
 
@@ -573,9 +570,9 @@ static_assert(std::is_same_v<decltype(vtk::writeScatterPng), decltype(writeScatt
 static_assert(std::is_same_v<decltype(vtk::writeVtpWithScalars), decltype(writeVtpWithScalars)>);
 }  // namespace tolver
 
-TOLVER_MODULE_EXPORTS({"renderDeviationMap", reinterpret_cast<void*>(&tolver::vtk::renderDeviationMap)},
-                      {"renderHistogram", reinterpret_cast<void*>(&tolver::vtk::renderHistogram)},
-                      {"renderLineProfile", reinterpret_cast<void*>(&tolver::vtk::renderLineProfile)},
-                      {"writeScatterPng", reinterpret_cast<void*>(&tolver::vtk::writeScatterPng)},
-                      {"writeVtpWithScalars",
-                       reinterpret_cast<void*>(&tolver::vtk::writeVtpWithScalars)})
+TOLVER_MODULE_EXPORTS(
+    {"renderDeviationMap", reinterpret_cast<void*>(&tolver::vtk::renderDeviationMap)},
+    {"renderHistogram", reinterpret_cast<void*>(&tolver::vtk::renderHistogram)},
+    {"renderLineProfile", reinterpret_cast<void*>(&tolver::vtk::renderLineProfile)},
+    {"writeScatterPng", reinterpret_cast<void*>(&tolver::vtk::writeScatterPng)},
+    {"writeVtpWithScalars", reinterpret_cast<void*>(&tolver::vtk::writeVtpWithScalars)})
