@@ -254,7 +254,19 @@ TEST(Numbers, OneRuleForEveryReaderExponentsReadNoHexInfOrNan) {
     if (coin(rng)) t += "e" + std::to_string(exponent(rng));
     const auto v = parseNumber(t);
     ASSERT_TRUE(v.has_value()) << t;
-    EXPECT_EQ(*v, std::strtod(t.c_str(), nullptr)) << t;
+    const double want = std::strtod(t.c_str(), nullptr);
+    EXPECT_EQ(*v, want) << t;
+    EXPECT_EQ(std::signbit(*v), std::signbit(want)) << t;  // -0.000 reads as -0
+  }
+  // Where the plain-decimal fast path ends (io/common/text_util.cpp): 2^53 and one above, 22 and
+  // 23 decimals, 19 and 20 digits.
+  for (const char* t : {"9007199254740992", "9007199254740993", "-9007199254740993.0",
+                        "0.0000000000000000000001", "0.00000000000000000000001",
+                        "1234567890123456789", "12345678901234567890", "-0.000", "+0.5e0"}) {
+    const auto v = parseNumber(t);
+    ASSERT_TRUE(v.has_value()) << t;
+    EXPECT_EQ(*v, std::strtod(t, nullptr)) << t;
+    EXPECT_EQ(std::signbit(*v), std::signbit(std::strtod(t, nullptr))) << t;
   }
 }
 

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -12,10 +13,15 @@
 
 namespace tolver {
 
+namespace {
+// isspace in the "C" locale, without the locale's table lookup.
+inline bool space(char c) { return c == ' ' || (c >= '\t' && c <= '\r'); }
+}  // namespace
+
 std::string_view trim(std::string_view s) {
   size_t b = 0, e = s.size();
-  while (b < e && std::isspace(static_cast<unsigned char>(s[b]))) ++b;
-  while (e > b && std::isspace(static_cast<unsigned char>(s[e - 1]))) --e;
+  while (b < e && space(s[b])) ++b;
+  while (e > b && space(s[e - 1])) --e;
   return s.substr(b, e - b);
 }
 
@@ -98,9 +104,42 @@ std::string csvLine(const std::vector<std::string>& cells) {
   return out;
 }
 
+namespace {
+// The common token, [+-]digits[.digits] with at most 19 digits whose integer m is below 2^53,
+// at most 22 after the point: m / 10^d is one correctly rounded division of two exact doubles
+// (Clinger's fast path), the value strtod and std::from_chars give. False for anything else.
+bool plainDecimal(std::string_view t, double* v) {
+  static constexpr double kPow10[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,
+                                        1e8,  1e9,  1e10, 1e11, 1e12, 1e13, 1e14, 1e15,
+                                        1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+  size_t i = 0;
+  const bool negative = t[0] == '-';
+  if (t[0] == '-' || t[0] == '+') ++i;
+  std::uint64_t m = 0;
+  int digits = 0, decimals = -1;
+  for (; i < t.size(); ++i) {
+    const char c = t[i];
+    if (c >= '0' && c <= '9') {
+      if (++digits > 19) return false;
+      m = m * 10 + static_cast<std::uint64_t>(c - '0');
+      if (decimals >= 0) ++decimals;
+    } else if (c == '.' && decimals < 0) {
+      decimals = 0;
+    } else {
+      return false;
+    }
+  }
+  if (digits == 0 || decimals > 22 || m > (std::uint64_t{1} << 53)) return false;
+  const double x = static_cast<double>(m) / kPow10[decimals < 0 ? 0 : decimals];
+  *v = negative ? -x : x;
+  return true;
+}
+}  // namespace
+
 std::optional<double> parseNumber(std::string_view token) {
   token = trim(token);
   if (token.empty()) return std::nullopt;
+  if (double v; plainDecimal(token, &v)) return v;
   // Only digits, one dot, sign, exponent: reject hex, inf, nan and the like.
   bool digit = false;
   for (char c : token) {
@@ -178,15 +217,47 @@ bool scaledRound(double a, int d, std::uint64_t* n) {
 
 }  // namespace
 
+namespace {
+// The digits of k with `decimals` after the point, at least one before, ending at `end`, written
+// from the right two at a time; returns where they start. UInt: 32-bit arithmetic where k fits.
+template <class UInt>
+char* digitsBefore(char* end, UInt k, int decimals, int digits) {
+  static constexpr char kPairs[] =
+      "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+      "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+      "8081828384858687888990919293949596979899";
+  char* p = end;
+  int left = decimals;
+  for (; left >= 2; left -= 2) {
+    const UInt pair = k % 100;
+    k /= 100;
+    p -= 2;
+    p[0] = kPairs[2 * pair];
+    p[1] = kPairs[2 * pair + 1];
+  }
+  if (left == 1) {
+    *--p = static_cast<char>('0' + k % 10);
+    k /= 10;
+  }
+  if (decimals > 0) *--p = '.';
+  char* const start = end - digits - (decimals > 0 ? 1 : 0);
+  while (p - start >= 2) {
+    const UInt pair = k % 100;
+    k /= 100;
+    p -= 2;
+    p[0] = kPairs[2 * pair];
+    p[1] = kPairs[2 * pair + 1];
+  }
+  if (p > start) *--p = static_cast<char>('0' + k);
+  return p;
+}
+}  // namespace
+
 LineBuilder& LineBuilder::fixed(double v, int decimals) {
   std::uint64_t k;
   // The common case (a coordinate, a deviation) by integer digits, written in place from the
-  // right two at a time; any other by std::to_chars.
+  // right two at a time (in 32-bit arithmetic when k fits); any other by std::to_chars.
   if (buf_ + sizeof buf_ - at_ >= 40 && scaledRound(std::abs(v), decimals, &k)) {
-    static constexpr char kPairs[] =
-        "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
-        "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
-        "8081828384858687888990919293949596979899";
     static constexpr std::uint64_t kPow10[17] = {1,
                                                  10,
                                                  100,
@@ -208,28 +279,10 @@ LineBuilder& LineBuilder::fixed(double v, int decimals) {
     while (digits < 16 && k >= kPow10[digits]) ++digits;
     if (std::signbit(v)) *at_++ = '-';
     char* const end = at_ + digits + (decimals > 0 ? 1 : 0);
-    char* p = end;
-    int left = decimals;
-    for (; left >= 2; left -= 2) {
-      const std::uint64_t pair = k % 100;
-      k /= 100;
-      p -= 2;
-      p[0] = kPairs[2 * pair];
-      p[1] = kPairs[2 * pair + 1];
-    }
-    if (left == 1) {
-      *--p = static_cast<char>('0' + k % 10);
-      k /= 10;
-    }
-    if (decimals > 0) *--p = '.';
-    while (p - at_ >= 2) {
-      const std::uint64_t pair = k % 100;
-      k /= 100;
-      p -= 2;
-      p[0] = kPairs[2 * pair];
-      p[1] = kPairs[2 * pair + 1];
-    }
-    if (p > at_) *--p = static_cast<char>('0' + k);
+    if (k <= 0xFFFFFFFFu)
+      digitsBefore(end, static_cast<std::uint32_t>(k), decimals, digits);
+    else
+      digitsBefore(end, k, decimals, digits);
     at_ = end;
     return *this;
   }
