@@ -13,7 +13,9 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <iostream>
+#include <limits>
 #include <stdexcept>
 #include <thread>
 
@@ -90,6 +92,18 @@ class ModDisplayBoundT : public OpenMesh::Decimater::ModBaseT<MeshT> {
     }
   }
 
+  // The category and value part of the bound alone (no distances): a cheap first refusal.
+  bool sharesRing(const CollapseInfo& ci) const {
+    const auto& C = *category_;
+    const int v0 = ci.v0.idx();
+    for (auto w : mesh_.vv_range(ci.v0)) {
+      const int i = w.idx();
+      if (C[i] != C[v0]) return false;
+      if (std::max(hi_[i], hi_[v0]) - std::min(lo_[i], lo_[v0]) > max_difference_) return false;
+    }
+    return true;
+  }
+
   float collapse_priority(const CollapseInfo& ci) override {
     return carried(ci) >= 0 ? static_cast<float>(Base::LEGAL_COLLAPSE)
                             : static_cast<float>(Base::ILLEGAL_COLLAPSE);
@@ -157,6 +171,74 @@ class DecimationProgress : public OpenMesh::Decimater::Observer {
   double wanted_;
 };
 
+// OpenMesh's decimater with a first phase of multiple choices (Wu and Kobbelt, "Fast mesh
+// decimation by multiple-choice techniques", 2002; OpenMesh's McDecimaterT, which draws from the
+// process-wide rand()): each step draws 8 halfedges by its own generator, seeded per piece (the
+// same mesh on any thread), and collapses the one of least quadric error among those every
+// module allows. It keeps no heap: a collapse costs 8 evaluations instead of the heap's update of
+// its whole neighbourhood (about 36). The heap decimater does the rest, where the choices grow
+// rare. Both ask every module, so the bounds hold the same.
+template <class MeshT, class Bound>
+class SampledDecimaterT : public OpenMesh::Decimater::DecimaterT<MeshT> {
+ public:
+  using Base = OpenMesh::Decimater::DecimaterT<MeshT>;
+  using CollapseInfo = typename Base::CollapseInfo;
+  explicit SampledDecimaterT(MeshT& mesh)
+      : OpenMesh::Decimater::BaseDecimaterT<MeshT>(mesh), Base(mesh), mesh_(mesh) {}
+
+  // Up to `wanted` collapses, or fewer when a whole pass over the halfedges made none. Returns
+  // the collapses made.
+  size_t sampled(size_t wanted, const Bound& bound, std::uint64_t seed) {
+    if (!this->is_initialized()) return 0;
+    std::uint64_t state = seed;
+    auto next = [&state] {  // splitmix64
+      std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+      z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+      z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+      return z ^ (z >> 31);
+    };
+    const std::uint64_t halfedges = mesh_.n_halfedges();
+    if (halfedges == 0) return 0;
+    size_t done = 0, done_at_pass = 0;
+    for (std::uint64_t cursor = 0; done < wanted; cursor += kAdvance) {
+      if (cursor >= halfedges) {  // a pass ends
+        if (done == done_at_pass) break;
+        done_at_pass = done;
+        cursor = 0;
+      }
+      typename MeshT::HalfedgeHandle best;
+      float best_energy = std::numeric_limits<float>::max();
+      for (int k = 0; k < kDraws; ++k) {
+        const typename MeshT::HalfedgeHandle h(
+            static_cast<int>((cursor + next() % kWindow) % halfedges));
+        if (mesh_.status(mesh_.edge_handle(h)).deleted()) continue;
+        const CollapseInfo ci(mesh_, h);
+        if (!bound.sharesRing(ci) || !this->is_collapse_legal(ci)) continue;
+        const float e = this->collapse_priority(ci);
+        if (e != OpenMesh::Decimater::ModBaseT<MeshT>::ILLEGAL_COLLAPSE && e < best_energy)
+          best_energy = e, best = h;
+      }
+      if (!best.is_valid()) continue;
+      CollapseInfo ci(mesh_, best);
+      this->preprocess_collapse(ci);
+      mesh_.collapse(best);
+      for (auto f : mesh_.vf_range(ci.v1))
+        if (!mesh_.status(f).deleted()) mesh_.set_normal(f, mesh_.calc_face_normal(f));
+      this->postprocess_collapse(ci);
+      ++done;
+      this->notify_observer(done);
+    }
+    return done;
+  }
+
+ private:
+  // Each step draws kDraws halfedges from the kWindow that start at a cursor advancing kAdvance
+  // a step through the halfedges (the sampler's order is spatial: the draws stay in cache).
+  static constexpr int kDraws = 8;
+  static constexpr std::uint64_t kWindow = 64, kAdvance = 8;
+  MeshT& mesh_;
+};
+
 }  // namespace
 
 namespace {
@@ -206,7 +288,7 @@ DecimatedMesh decimatePiece(const std::vector<Eigen::Vector3d>& p,
   for (const Eigen::Vector3i& f : as_given)
     for (int k = 0; k < 3; ++k) mesh.status(vh[f[k]]).set_locked(true);
 
-  using Decimater = OpenMesh::Decimater::DecimaterT<Mesh>;
+  using Decimater = SampledDecimaterT<Mesh, ModDisplayBoundT<Mesh>>;
   Decimater decimater(mesh);
   OpenMesh::Decimater::ModQuadricT<Mesh>::Handle quadric;
   OpenMesh::Decimater::ModNormalFlippingT<Mesh>::Handle flipping;
@@ -260,14 +342,22 @@ DecimatedMesh decimatePiece(const std::vector<Eigen::Vector3d>& p,
   // collapses still wanted are counted here.
   DecimationProgress progress(options.progress, p.size() - budget);
   decimater.set_observer(&progress);
-  decimater.decimate(kept() - budget);
+  // Multiple choices first, then the heap for what they leave (decimate(0) would go as far as
+  // the bounds allow: not called for nothing).
+  auto collapse = [&](size_t n, std::uint64_t seed) {
+    decimater.sampled(n, decimater.module(bound), seed);
+    progress.done_before = static_cast<double>(p.size() - kept());
+    if (kept() > budget) decimater.decimate(kept() - budget);
+  };
+  const std::uint64_t seed = 0x746f6c766572ull ^ static_cast<std::uint64_t>(p.size());
+  collapse(kept() - budget, seed);
   for (size_t left = kept(), round = 0; round < 12 && left > budget; ++round, left = kept()) {
     distance *= 2;
     difference *= 2;
     out.relaxed = true;
     decimater.module(bound).set(&p, &value, &category, distance, difference);
     progress.done_before = static_cast<double>(p.size() - left);
-    decimater.decimate(left - budget);
+    collapse(left - budget, seed + round + 1);
   }
   decimater.set_observer(nullptr);
   out.max_distance_mm = distance;

@@ -1,7 +1,9 @@
 #pragma once
 // Decimation of a coloured surface for display (the report's 3D view), by OpenMesh's decimater,
-// only when it has more vertices than the budget, and only down to it: halfedge collapses in the
-// order of OpenMesh's quadric error, no normal turned by more than 30 degrees, and each collapse
+// only when it has more vertices than the budget, and only down to it: halfedge collapses chosen
+// by their quadric error among a few drawn near a cursor that sweeps the mesh (multiple choices:
+// local in memory, so that a million samples take seconds), then by OpenMesh's heap for what
+// those leave; no normal turned by more than 30 degrees, and each collapse
 // allowed only within bounds of our own (ModDisplayBoundT), kept per vertex at the cost of its
 // one-ring:
 //   - the value: each vertex carries the interval of the values of the original vertices it
