@@ -1,5 +1,7 @@
 #include "core/diagnosis/diagnosis.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <Eigen/SVD>
 #include <algorithm>
@@ -62,6 +64,18 @@ Eigen::MatrixXd orthonormalBasis(const Eigen::ColPivHouseholderQR<Eigen::MatrixX
   return Q;
 }
 
+// A - Q Q^T A, Q the orthonormal basis of the QR's first rank() columns, by its reflectors
+// (H^T A with its first rank() rows zeroed, turned back by H): 4 m n k operations for k columns,
+// where forming Q would take 2 m n^2.
+Eigen::MatrixXd outsideColumns(const Eigen::ColPivHouseholderQR<Eigen::MatrixXd>& qr,
+                               const Eigen::MatrixXd& A) {
+  Eigen::MatrixXd W = A;
+  W.applyOnTheLeft(qr.householderQ().adjoint());
+  W.topRows(qr.rank()).setZero();
+  W.applyOnTheLeft(qr.householderQ());
+  return W;
+}
+
 Eigen::MatrixXd rowsOf(const Eigen::MatrixXd& A, const std::vector<int>& rows) {
   Eigen::MatrixXd out(rows.size(), A.cols());
   for (size_t i = 0; i < rows.size(); ++i) out.row(i) = A.row(rows[i]);
@@ -105,16 +119,36 @@ class Scorer {
       same_run_[i] = test.readings[i].setup == test.readings[i - 1].setup;
     // Folds: the base fit without each block.
     folds_.resize(folds);
+    // Each fold's fit by downdating the normal equations, N - J_H^T J_H (n^3 / 3 and |H| n^2
+    // operations, where a fold's QR takes 2 m n^2), when J has full rank and is well conditioned
+    // (the scaled columns' condition below 1e5: the normal equations keep ten digits); else by
+    // the QR of the fold's rows.
+    const Eigen::MatrixXd::Index cols = J_.cols();
+    const auto& R = qr.matrixR();
+    const double r_max = cols > 0 ? std::abs(R(0, 0)) : 0.0;
+    const double r_min = cols > 0 ? std::abs(R(cols - 1, cols - 1)) : 0.0;
+    normal_ = n_ == cols && cols > 0 && r_min > 1e-5 * r_max;
+    if (normal_) {
+      N_ = J_.transpose() * J_;
+      Jtr_ = J_.transpose() * r_;
+    }
     for (int f = 0; f < folds; ++f) {
       Fold& F = folds_[f];
       for (int i = 0; i < m_; ++i) (fold_of[i] == f ? F.held : F.train).push_back(i);
       if (F.held.empty() || F.train.empty()) continue;
-      F.JT = rowsOf(J_, F.train);
       F.JH = rowsOf(J_, F.held);
       F.rT = rowsOf(r_, F.train);
       F.rH = rowsOf(r_, F.held);
-      F.qr.compute(F.JT);
-      F.Q = orthonormalBasis(F.qr);
+      if (normal_) {
+        F.llt.compute(N_ - F.JH.transpose() * F.JH);
+        F.normal = F.llt.info() == Eigen::Success;
+        F.c = Jtr_ - F.JH.transpose() * F.rH;
+      }
+      if (!F.normal) {
+        F.JT = rowsOf(J_, F.train);
+        F.qr.compute(F.JT);
+        F.JT.resize(0, 0);
+      }
     }
   }
 
@@ -173,6 +207,29 @@ class Scorer {
     return e.squaredNorm();
   }
 
+  // rssWith(G) by the k x k normal equations of G's part outside the fit's columns:
+  // Gp^T Gp = Gs^T Gs - (Q^T Gs)^T (Q^T Gs) and Gp^T r_perp = Gs^T r_perp (r_perp is outside them
+  // already), so one m n k product where rssWith makes two and factors Gp. For the searches of a
+  // period or a time constant, which evaluate it hundreds of times; directions of Gp whose
+  // squared singular value is below 1e-9 of the largest (nearly inside the fit's columns, where
+  // the normal equations lose their digits) explain nothing here.
+  double rssSearch(const Eigen::MatrixXd& G) const {
+    if (G.cols() == 0) return rss0_;
+    const Eigen::MatrixXd Gs = scaleColumns(G);
+    const Eigen::MatrixXd QtG = Q_.transpose() * Gs;
+    Eigen::MatrixXd gram = Gs.transpose() * Gs;
+    gram.noalias() -= QtG.transpose() * QtG;
+    const Eigen::VectorXd b = Gs.transpose() * r_perp_;
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(gram);
+    const Eigen::VectorXd& lambda = eig.eigenvalues();
+    const double floor = 1e-9 * std::max(lambda.maxCoeff(), 1e-300);
+    const Eigen::VectorXd vb = eig.eigenvectors().transpose() * b;
+    double explained = 0.0;
+    for (Eigen::Index j = 0; j < lambda.size(); ++j)
+      if (lambda[j] > floor) explained += vb[j] * vb[j] / lambda[j];
+    return std::max(0.0, rss0_ - explained);
+  }
+
   // Cross-validated RMS of the base model (G empty) or the model with the columns G, mm; with
   // held, each reading's residual predicted by the fit without its fold (0 when its fold is
   // empty or all).
@@ -180,15 +237,39 @@ class Scorer {
     double sum = 0.0;
     int count = 0;
     if (held) held->setZero(m_);
+    // The whole data's products with G, downdated per fold (normal equations).
+    Eigen::MatrixXd JtG, GtG;
+    Eigen::VectorXd Gtr;
+    if (G && normal_) {
+      JtG = J_.transpose() * *G;
+      GtG = G->transpose() * *G;
+      Gtr = G->transpose() * r_;
+    }
     for (const Fold& F : folds_) {
       if (F.held.empty() || F.train.empty()) continue;
       Eigen::VectorXd eH;
-      if (!G) {
+      if (F.normal) {
+        // [J G] fitted on the fold's training rows by the normal equations' Schur complement:
+        // A = J_T^T G_T, c = J_T^T r_T, (G_T^T G_T - A^T N_T^-1 A) beta = G_T^T r_T - A^T N_T^-1 c,
+        // N_T alpha = c - A beta.
+        if (!G) {
+          eH = F.rH - F.JH * F.llt.solve(F.c);
+        } else {
+          const Eigen::MatrixXd GH = rowsOf(*G, F.held);
+          const Eigen::MatrixXd A = JtG - F.JH.transpose() * GH;
+          const Eigen::MatrixXd NiA = F.llt.solve(A);
+          const Eigen::VectorXd Nic = F.llt.solve(F.c);
+          const Eigen::MatrixXd S = GtG - GH.transpose() * GH - A.transpose() * NiA;
+          const Eigen::VectorXd t = Gtr - GH.transpose() * F.rH - A.transpose() * Nic;
+          const Eigen::VectorXd beta = S.colPivHouseholderQr().solve(t);
+          eH = F.rH - F.JH * (Nic - NiA * beta) - GH * beta;
+        }
+      } else if (!G) {
         eH = F.rH - F.JH * F.qr.solve(F.rT);
       } else {
         const Eigen::MatrixXd GT = rowsOf(*G, F.train), GH = rowsOf(*G, F.held);
-        const Eigen::MatrixXd GTp = GT - F.Q * (F.Q.transpose() * GT);
-        const Eigen::VectorXd rTp = F.rT - F.Q * (F.Q.transpose() * F.rT);
+        const Eigen::MatrixXd GTp = outsideColumns(F.qr, GT);
+        const Eigen::VectorXd rTp = outsideColumns(F.qr, F.rT);
         const Eigen::VectorXd beta = GTp.colPivHouseholderQr().solve(rTp);
         const Eigen::VectorXd alpha = F.qr.solve(F.rT - GT * beta);
         eH = F.rH - F.JH * alpha - GH * beta;
@@ -226,10 +307,16 @@ class Scorer {
  private:
   struct Fold {
     std::vector<int> train, held;
-    Eigen::MatrixXd JT, JH, Q;
+    Eigen::MatrixXd JT, JH;
     Eigen::VectorXd rT, rH;
-    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;
+    bool normal = false;                             // fitted by the downdated normal equations
+    Eigen::LLT<Eigen::MatrixXd> llt;                 // of N - J_H^T J_H
+    Eigen::VectorXd c;                               // J_T^T r_T
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr;  // else
   };
+  bool normal_ = false;
+  Eigen::MatrixXd N_;  // J^T J
+  Eigen::VectorXd Jtr_;
   const MachineModel& model_;
   const BallbarTest& test_;
   Eigen::MatrixXd J_, Q_, Gc_;
@@ -258,7 +345,7 @@ int searchHyperparameter(const Scorer& sc, const BallbarTest& test, EffectSpec& 
   const HyperparameterRange range = traitsOf(spec.type).hyper;
   auto rssAt = [&](double value) {
     *h = value;
-    return sc.rssWith(sc.columns(spec));
+    return sc.rssSearch(sc.columns(spec));
   };
   if (range.frequency_grid) {
     // Uniform in frequency, five samples per cycle of phase change across the data's span.
