@@ -8,7 +8,8 @@
 #     times, 73 MB) and a 3.03 M-point one (309 times, 218 MB); predict on both, with the
 #     per-point table and without (--no-errors), on both cores and on one (taskset -c 0);
 #   * ball-bar readings simulated on the measured Matsuura: 600 poses, and a 2 000-pose plan
-#     measured five times (10 000 and more readings); calibrate on both;
+#     measured five times (10 000 and more readings); calibrate on both, diagnose on the second;
+#   * compensate on the 1.01 M-point program;
 #   * verify at scale: bench/verify_large.sh's part and 120 802-point finish at 0.115 mm;
 #   * setup on the largest program of ../shared/data/corpus, when that directory is there.
 set -euo pipefail
@@ -72,6 +73,10 @@ for s in "${sizes[@]}"; do
   fi
 done
 
+# Compensate (not streamed: its memory grows with the program).
+run "compensate, 1M points" "$tolver" compensate --machine "$m_measured" \
+  --setup samples/matsuura_setup.txt --cl "$work/finish_1M.apt" -o "$work/c.apt"
+
 # Ball-bar readings.
 "$tolver" plan-ballbar --machine "$m_nominal" --poses 600 --seed 3 -o "$work/plan600.csv" > /dev/null
 "$tolver" simulate-ballbar --machine "$m_measured" --plan "$work/plan600.csv" --noise-um 0.5 \
@@ -93,6 +98,13 @@ if [ "$quick" = 0 ]; then
   n10k=$(grep -vc '^#\|^setup' "$work/r10k.csv")
   run "calibrate, $n10k readings (a 2 000-pose plan measured 5 times)" "$tolver" calibrate \
     --machine "$m_nominal" --readings "$work/r10k.csv" -o "$work/id10k.xml"
+  run "diagnose, $n10k readings" "$tolver" diagnose --machine "$m_nominal" \
+    --readings "$work/r10k.csv" -o "$work/d10k.xml" --report-dir "$work/d10k"
+  if command -v taskset > /dev/null; then
+    run "diagnose, $n10k readings, one core" taskset -c 0 "$tolver" diagnose \
+      --machine "$m_nominal" --readings "$work/r10k.csv" -o "$work/d10k.xml" \
+      --report-dir "$work/d10k"
+  fi
 
   # Verify at scale (bench/verify_large.sh's inputs).
   "$make_samples" --large "$work" > /dev/null
