@@ -124,13 +124,8 @@ class ModDisplayBoundT : public OpenMesh::Decimater::ModBaseT<MeshT> {
   // The distance bound v0's vertices would carry after the collapse; -1: the collapse breaks a
   // bound or a category.
   double carried(const CollapseInfo& ci) const {
-    const auto& C = *category_;
+    if (!sharesRing(ci)) return -1;
     const int v0 = ci.v0.idx();
-    for (auto w : mesh_.vv_range(ci.v0)) {
-      const int i = w.idx();
-      if (C[i] != C[v0]) return -1;
-      if (std::max(hi_[i], hi_[v0]) - std::min(lo_[i], lo_[v0]) > max_difference_) return -1;
-    }
     const auto& P = *p_;
     double nearest = INFINITY;
     for (auto f : mesh_.vf_range(ci.v0)) {
