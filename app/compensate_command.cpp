@@ -42,11 +42,11 @@ void printTables(const TableRun& run, const CompensateInputs& o) {
 void printCompensation(const CompensationRun& run, const CompensateInputs& o,
                        const std::string& report) {
   const CompensationReport& rep = run.report;
-  const size_t n = run.program.path.size();
+  const int n = rep.points;
   std::printf("tolver compensate\n");
   std::printf("  machine    %s (%s)\n", run.machine.model.name.c_str(), o.machine.machine.c_str());
   std::printf(
-      "  program    %s (%s): %zu tool positions%s, %s\n", run.program.file.c_str(),
+      "  program    %s (%s): %d tool positions%s, %s\n", run.program.file.c_str(),
       run.program.dialect.c_str(), n,
       o.program.lines.empty()
           ? ""
@@ -91,7 +91,7 @@ void printCompensation(const CompensationRun& run, const CompensateInputs& o,
       rep.after_band95_max_um >= 0 ? "model     " : "after     ", rep.after.tip_max_um,
       rep.after.tip_max_line, rep.after.tip_rms_um, rep.after.axis_max_urad,
       rep.after.axis_rms_urad);
-  if (rep.compensated_points < static_cast<int>(n))
+  if (rep.compensated_points < n)
     std::printf(
         "             on the %d points the file compensates (the others are listed below): tip max "
         "%.4f um, RMS %.4f um; tool axis max %.3f urad\n",

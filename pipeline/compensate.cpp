@@ -1,19 +1,28 @@
 // The compensate pipeline: see pipeline/compensate.h.
 #include "pipeline/compensate.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 #include <set>
 #include <stdexcept>
 
+#include "core/numerics/statistics.h"
 #include "core/numerics/units.h"
 #include "core/path/prediction_uncertainty.h"
 #include "core/path/tool_motion.h"
 #include "io/common/io_error.h"
+#include "io/common/line_source.h"
 #include "io/common/text_util.h"
+#include "pipeline/block_predictor.h"
 #include "pipeline/parallel_prediction.h"
 
 namespace tolver {
@@ -23,33 +32,198 @@ double angle(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
-// Figures over points [from, to): tip deviations (um) and axis angles (urad).
-PathFigures figuresOf(const std::vector<double>& tip_um, const std::vector<double>& axis_urad,
-                      const std::vector<int>& line, size_t from, size_t to) {
-  PathFigures f;
-  double st = 0, sa = 0;
-  for (size_t i = from; i < to; ++i) {
-    const double t = tip_um[i], a = axis_urad[i];
-    st += t * t;
-    sa += a * a;
-    if (t > f.tip_max_um) f.tip_max_um = t, f.tip_max_line = line[i];
-    f.axis_max_urad = std::max(f.axis_max_urad, a);
+// Running figures over points added one at a time: tip deviations (um), axis angles (urad).
+class FigureSum {
+ public:
+  void add(double tip_um, double axis_urad, int line) {
+    st_ += tip_um * tip_um;
+    sa_ += axis_urad * axis_urad;
+    ++n_;
+    if (tip_um > f_.tip_max_um) f_.tip_max_um = tip_um, f_.tip_max_line = line;
+    f_.axis_max_urad = std::max(f_.axis_max_urad, axis_urad);
   }
-  const double n = static_cast<double>(std::max<size_t>(1, to - from));
-  f.tip_rms_um = std::sqrt(st / n);
-  f.axis_rms_urad = std::sqrt(sa / n);
-  return f;
+  PathFigures figures() const {
+    PathFigures f = f_;
+    const double n = static_cast<double>(std::max<size_t>(1, n_));
+    f.tip_rms_um = std::sqrt(st_ / n);
+    f.axis_rms_urad = std::sqrt(sa_ / n);
+    return f;
+  }
+  size_t count() const { return n_; }
+
+ private:
+  PathFigures f_;
+  double st_ = 0, sa_ = 0;
+  size_t n_ = 0;
+};
+
+// One program point as the report counts it: before and after (um, urad), its status, whether
+// the written text commands its compensation, its joints (program's q0 and compensating q).
+struct TalliedPoint {
+  int line = 0;
+  bool rapid = false, written = false;
+  CompensationStatus status = CompensationStatus::Compensated;
+  double tip_before_um = 0, axis_before_urad = 0, tip_after_um = 0, axis_after_urad = 0;
+  const double* q0 = nullptr;
+  const double* q = nullptr;
+};
+
+// The report's figures over a program's points in order, one at a time: a whole program's
+// arrays or a program streamed block by block alike, in memory independent of its length (the
+// band's medians within 1.6e-5, StreamQuantiles).
+class CompensationTally {
+ public:
+  explicit CompensationTally(const MachineModel& model)
+      : model_(model), correction_(model.axes.size(), 0.0) {}
+
+  void add(const TalliedPoint& p) {
+    before_.add(p.tip_before_um, p.axis_before_urad, p.line);
+    after_.add(p.tip_after_um, p.axis_after_urad, p.line);
+    const bool compensated = p.status == CompensationStatus::Compensated ||
+                             p.status == CompensationStatus::IllConditioned;
+    if (p.written && compensated) compensated_.add(p.tip_after_um, p.axis_after_urad, p.line);
+    for (size_t a = 0; a < correction_.size(); ++a)
+      correction_[a] = std::max(correction_[a], std::abs(p.q[a] - p.q0[a]));
+    switch (p.status) {
+      case CompensationStatus::IllConditioned:
+        ++rep_.ill_conditioned;
+        rep_.ill_conditioned_lines.push_back(p.line);
+        break;
+      case CompensationStatus::OutOfTravel:
+        ++rep_.out_of_travel;
+        rep_.out_of_travel_lines.push_back(p.line);
+        break;
+      case CompensationStatus::NotConverged:
+        ++rep_.not_converged;
+        break;
+      case CompensationStatus::Compensated:
+        break;
+    }
+    rep_.left_by_writer += !p.written && p.status != CompensationStatus::OutOfTravel &&
+                           p.status != CompensationStatus::NotConverged;
+    // Segments: runs of cutting moves between rapids.
+    if (p.rapid) {
+      closeSegment();
+    } else {
+      if (!in_segment_) {
+        in_segment_ = true;
+        segment_ = SegmentFigures{};
+        segment_.first_line = p.line;
+        seg_before_ = seg_after_ = FigureSum{};
+      }
+      segment_.last_line = p.line;
+      ++segment_.points;
+      seg_before_.add(p.tip_before_um, p.axis_before_urad, p.line);
+      seg_after_.add(p.tip_after_um, p.axis_after_urad, p.line);
+    }
+    // The read-back check: further off after than before (by more than 1 um and 10 %).
+    if (!(p.tip_after_um <= p.tip_before_um + std::max(1.0, 0.1 * p.tip_before_um))) {
+      if (worse_lines.empty() || worse_lines.back() != p.line) worse_lines.push_back(p.line);
+      worse_max_um = std::max(worse_max_um, p.tip_after_um);
+    }
+  }
+
+  // The model's 95 % radii of the after at a point (calibrated machine; um, urad).
+  void addBand(double tip_um, double axis_urad) {
+    band_tip_.add(tip_um);
+    band_axis_.add(axis_urad);
+    band_tip_max_ = std::max(band_tip_max_, tip_um);
+    band_axis_max_ = std::max(band_axis_max_, axis_urad);
+  }
+
+  // The figures into rep (its other fields as they were).
+  void finish(CompensationReport& rep) {
+    closeSegment();
+    rep.points = static_cast<int>(before_.count());
+    rep.before = before_.figures();
+    rep.after = after_.figures();
+    rep.compensated_points = static_cast<int>(compensated_.count());
+    rep.after_compensated = compensated_.figures();
+    // The counts and lists gathered point by point.
+    for (int CompensationReport::*count :
+         {&CompensationReport::ill_conditioned, &CompensationReport::out_of_travel,
+          &CompensationReport::not_converged, &CompensationReport::left_by_writer})
+      rep.*count = rep_.*count;
+    for (std::vector<int> CompensationReport::*lines :
+         {&CompensationReport::ill_conditioned_lines, &CompensationReport::out_of_travel_lines})
+      rep.*lines = rep_.*lines;
+    rep.segments = std::move(rep_.segments);
+    rep.joint_correction_max.clear();
+    rep.joint_rotary.clear();
+    for (size_t k = 0; k < model_.axes.size(); ++k) {
+      const bool rot = model_.axes[k].isRotary();
+      rep.joint_correction_max.push_back(
+          {model_.axes[k].name, rot ? radToUrad(correction_[k]) : mmToUm(correction_[k])});
+      rep.joint_rotary.push_back(rot);
+    }
+    if (band_tip_.count() > 0) {
+      const size_t mid = band_tip_.count() / 2;
+      rep.after_band95_median_um = band_tip_.ranked(mid);
+      rep.after_band95_max_um = band_tip_max_;
+      rep.after_axis_band95_median_urad = band_axis_.ranked(mid);
+      rep.after_axis_band95_max_urad = band_axis_max_;
+    }
+  }
+
+  std::vector<int> worse_lines;
+  double worse_max_um = 0.0;
+
+ private:
+  void closeSegment() {
+    if (!in_segment_) return;
+    in_segment_ = false;
+    segment_.before = seg_before_.figures();
+    segment_.after = seg_after_.figures();
+    rep_.segments.push_back(segment_);
+  }
+
+  const MachineModel& model_;
+  FigureSum before_, after_, compensated_, seg_before_, seg_after_;
+  std::vector<double> correction_;  // per axis, max |q - q0| (mm, rad)
+  CompensationReport rep_;          // the counts, lines and segments gathered
+  bool in_segment_ = false;
+  SegmentFigures segment_;
+  StreamQuantiles band_tip_, band_axis_;
+  double band_tip_max_ = 0, band_axis_max_ = 0;
+};
+
+// The comment at the top of a compensated program.
+std::vector<std::string> compensatedHeader(const CompensateInputs& in, const std::string& file,
+                                           const std::string& machine_name) {
+  return {"tolver compensate: " + file + " for " + machine_name + " (" + in.machine.machine +
+          "): the machine with its errors runs this program onto the original's nominal path"};
 }
+
+// The source's byte-order mark and line endings (from its first line), which the compensated
+// program keeps.
+struct SourceEncoding {
+  bool bom = false, crlf = false;
+  explicit SourceEncoding(const std::string& path) {
+    const std::string head = readFilePrefix(path, 65536);
+    const size_t eol = head.find('\n');
+    crlf = eol != std::string::npos && eol > 0 && head[eol - 1] == '\r';
+    bom = head.rfind("\xEF\xBB\xBF", 0) == 0;
+  }
+  // text with the source's line endings.
+  void apply(std::string& text) const {
+    if (!crlf) return;
+    std::string out;
+    out.reserve(text.size() + text.size() / 30);
+    for (char ch : text) {
+      if (ch == '\n') out += '\r';
+      out += ch;
+    }
+    text = std::move(out);
+  }
+};
 
 // The corrected program in the source's dialect, with the source's byte-order mark and line
 // endings.
 CompensatedProgramText correctedText(const CompensateInputs& in, const CompensationRun& run) {
   const ClProgram& program = run.program;
   const std::vector<CompensatedPoint>& cp = run.compensation.points;
-  const std::vector<std::string> header = {
-      "tolver compensate: " + program.file + " for " + run.machine.model.name + " (" +
-      in.machine.machine +
-      "): the machine with its errors runs this program onto the original's nominal path"};
+  const std::vector<std::string> header =
+      compensatedHeader(in, program.file, run.machine.model.name);
   CompensatedProgramText text;
   if (program.dialect == "G-code") {
     std::vector<JointVector> q(cp.size());
@@ -67,19 +241,19 @@ CompensatedProgramText correctedText(const CompensateInputs& in, const Compensat
     }
     text = formatCompensatedApt(program, corrected, header);
   }
-  const std::string raw = readFile(in.program.nc.empty() ? in.program.cl : in.program.nc);
-  const size_t eol = raw.find('\n');
-  if (eol != std::string::npos && eol > 0 && raw[eol - 1] == '\r') {
-    std::string crlf;
-    crlf.reserve(text.text.size() + text.text.size() / 30);
-    for (char ch : text.text) {
-      if (ch == '\n') crlf += '\r';
-      crlf += ch;
-    }
-    text.text = std::move(crlf);
-  }
-  if (raw.rfind("\xEF\xBB\xBF", 0) == 0) text.text.insert(0, "\xEF\xBB\xBF");
+  const SourceEncoding encoding(in.program.nc.empty() ? in.program.cl : in.program.nc);
+  encoding.apply(text.text);
+  if (encoding.bom) text.text.insert(0, "\xEF\xBB\xBF");
   return text;
+}
+
+// A point's status in the joints file.
+const char* statusWord(bool written, CompensationStatus status) {
+  return !written                                       ? "kept"
+         : status == CompensationStatus::Compensated    ? "compensated"
+         : status == CompensationStatus::IllConditioned ? "ill_conditioned"
+         : status == CompensationStatus::OutOfTravel    ? "out_of_travel"
+                                                        : "not_converged";
 }
 
 // The written text read back as the next command will, whole, then the points of the source
@@ -140,85 +314,59 @@ void pointFigures(CompensationRun& run) {
   }
 }
 
-// Segments: runs of cutting moves between rapids.
-std::vector<SegmentFigures> segmentFigures(const CompensationRun& run) {
-  const std::vector<ClPoint>& path = run.program.path;
-  const size_t n = path.size();
-  std::vector<SegmentFigures> out;
-  for (size_t i = 0; i < n;) {
-    if (path[i].rapid) {
-      ++i;
-      continue;
-    }
-    size_t j = i;
-    while (j < n && !path[j].rapid) ++j;
-    SegmentFigures s;
-    s.first_line = path[i].line;
-    s.last_line = path[j - 1].line;
-    s.points = static_cast<int>(j - i);
-    s.before = figuresOf(run.tip_before_um, run.axis_before_urad, run.line, i, j);
-    s.after = figuresOf(run.tip_after_um, run.axis_after_urad, run.line, i, j);
-    out.push_back(s);
-    i = j;
-  }
-  return out;
-}
-
-// The model's own uncertainty of the after on a calibrated machine: the 95 % radii of the tip's
-// distance and the tool axis's angle, median and max.
+// The model's own uncertainty of the after on a calibrated machine, per point: the 95 % radii
+// of the tip's distance and the tool axis's angle.
 void afterBand(const CompensateInputs& in, const std::vector<ProbedPoint>& probed, bool probed_fit,
-               CompensationRun& run) {
+               const CompensationRun& run, CompensationTally& tally) {
   const size_t n = run.program.path.size();
   PredictionUncertainty pu(run.machine);
   if (probed_fit) {
     pu.setupModuloProbed(probed);
   } else if (!in.absolute) {
-    std::vector<JointVector> sub;
-    const size_t step = std::max<size_t>(1, n / 2000);
-    for (size_t i = 0; i < n; i += step) sub.push_back(run.after.points[i].q);
-    pu.setupModulo(sub);
+    EvenPoses even;  // the poses a streamed program's band takes too
+    for (size_t i = 0; i < n; ++i)
+      if (even.wants(i)) even.add(i, run.after.points[i].q, Eigen::Vector3d::Zero());
+    pu.setupModulo(even.q);
   }
-  std::vector<double> band(n), axis(n);
   for (size_t i = 0; i < n; ++i) {
     const PoseUncertainty u = pu.at(run.after.points[i].q);
-    band[i] = mmToUm(PredictionUncertainty::tipRadius95(u));
-    axis[i] = radToUrad(PredictionUncertainty::axisRadius95(u));
+    tally.addBand(mmToUm(PredictionUncertainty::tipRadius95(u)),
+                  radToUrad(PredictionUncertainty::axisRadius95(u)));
   }
-  auto medianMax = [n](std::vector<double>& v, double* median, double* max) {
-    *max = *std::max_element(v.begin(), v.end());
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n / 2), v.end());
-    *median = v[n / 2];
-  };
-  medianMax(band, &run.report.after_band95_median_um, &run.report.after_band95_max_um);
-  medianMax(axis, &run.report.after_axis_band95_median_urad,
-            &run.report.after_axis_band95_max_urad);
-  run.report.after_lack_of_fit_um = mmToUm(run.machine.identification.lack_of_fit_mm);
-  run.report.after_tilt_prior_urad = radToUrad(run.machine.identification.spindle_tilt_rad);
 }
 
-void fillReport(const CompensateInputs& in, const std::string& output, CompensationRun& run) {
+// What the model's band leaves out, on a calibrated machine.
+void bandSources(const Machine& machine, CompensationReport& rep) {
+  rep.after_lack_of_fit_um = mmToUm(machine.identification.lack_of_fit_mm);
+  rep.after_tilt_prior_urad = radToUrad(machine.identification.spindle_tilt_rad);
+}
+
+void fillReport(const CompensateInputs& in, const std::string& output, CompensationRun& run,
+                CompensationTally& tally) {
   CompensationReport& rep = run.report;
   const ClProgram& program = run.program;
   const std::vector<CompensatedPoint>& cp = run.compensation.points;
-  const size_t n = program.path.size();
   rep.machine = in.machine.machine;
   rep.program = program.file;
   rep.dialect = program.dialect;
   rep.output = output;
-  rep.points = static_cast<int>(n);
-  rep.before = figuresOf(run.tip_before_um, run.axis_before_urad, run.line, 0, n);
-  rep.after = figuresOf(run.tip_after_um, run.axis_after_urad, run.line, 0, n);
-  std::vector<double> t, a;
-  std::vector<int> at;
-  for (size_t i = 0; i < n; ++i)
-    if (run.text.written[i] && (cp[i].status == CompensationStatus::Compensated ||
-                                cp[i].status == CompensationStatus::IllConditioned)) {
-      t.push_back(run.tip_after_um[i]);
-      a.push_back(run.axis_after_urad[i]);
-      at.push_back(run.line[i]);
-    }
-  rep.compensated_points = static_cast<int>(t.size());
-  rep.after_compensated = figuresOf(t, a, at, 0, t.size());
+  for (size_t i = 0; i < program.path.size(); ++i) {
+    TalliedPoint p;
+    p.line = run.line[i];
+    p.rapid = program.path[i].rapid;
+    p.written = run.text.written[i] != 0;
+    p.status = cp[i].status;
+    p.tip_before_um = run.tip_before_um[i];
+    p.axis_before_urad = run.axis_before_urad[i];
+    p.tip_after_um = run.tip_after_um[i];
+    p.axis_after_urad = run.axis_after_urad[i];
+    p.q0 = cp[i].q0.data();
+    p.q = cp[i].q.data();
+    tally.add(p);
+  }
+  tally.finish(rep);
+  run.worse_lines = tally.worse_lines;
+  run.worse_max_um = tally.worse_max_um;
   rep.setup_note = run.setup_note;
   rep.notes = run.text.notes;
   if (const auto n =
@@ -226,26 +374,6 @@ void fillReport(const CompensateInputs& in, const std::string& output, Compensat
     rep.notes.push_back(std::to_string(n) +
                         " points in a swivelled plane (CYCLE800): the tip compensated by the "
                         "linear axes, the tool axis left where the cycle puts it");
-  const MachineModel& model = run.machine.model;
-  for (size_t k = 0; k < model.axes.size(); ++k) {
-    double m = 0;
-    for (const CompensatedPoint& c : cp) m = std::max(m, std::abs(c.q[k] - c.q0[k]));
-    const bool rot = model.axes[k].isRotary();
-    rep.joint_correction_max.push_back({model.axes[k].name, rot ? radToUrad(m) : mmToUm(m)});
-    rep.joint_rotary.push_back(rot);
-  }
-  rep.ill_conditioned = run.compensation.ill_conditioned;
-  rep.out_of_travel = run.compensation.out_of_travel;
-  rep.not_converged = run.compensation.not_converged;
-  for (size_t i = 0; i < n; ++i) {
-    if (cp[i].status == CompensationStatus::IllConditioned)
-      rep.ill_conditioned_lines.push_back(run.line[i]);
-    if (cp[i].status == CompensationStatus::OutOfTravel)
-      rep.out_of_travel_lines.push_back(run.line[i]);
-    rep.left_by_writer += !run.text.written[i] && cp[i].status != CompensationStatus::OutOfTravel &&
-                          cp[i].status != CompensationStatus::NotConverged;
-  }
-  rep.segments = segmentFigures(run);
 }
 
 }  // namespace
@@ -372,8 +500,12 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
     throw std::runtime_error("the compensated program does not predict: " +
                              run.after.failures.front().message);
   pointFigures(run);
-  fillReport(in, output, run);
-  if (!cal.uncertainty.empty()) afterBand(in, probed, cal.probed, run);
+  CompensationTally tally(run.machine.model);
+  if (!cal.uncertainty.empty()) {
+    afterBand(in, probed, cal.probed, run, tally);
+    bandSources(run.machine, run.report);
+  }
+  fillReport(in, output, run, tally);
   return run;
 }
 
@@ -402,11 +534,7 @@ void writeCompensation(const CompensationRun& run, const std::string& output,
     std::vector<std::vector<double>> before(cp.size()), after(cp.size());
     for (size_t i = 0; i < cp.size(); ++i) {
       const bool written = i < run.text.written.size() && run.text.written[i];
-      status.push_back(!written                                             ? "kept"
-                       : cp[i].status == CompensationStatus::Compensated    ? "compensated"
-                       : cp[i].status == CompensationStatus::IllConditioned ? "ill_conditioned"
-                       : cp[i].status == CompensationStatus::OutOfTravel    ? "out_of_travel"
-                                                                            : "not_converged");
+      status.push_back(statusWord(written, cp[i].status));
       for (size_t a = 0; a < m.axes.size(); ++a) {
         const double k = m.axes[a].isRotary() ? radToDeg(1.0) : 1.0;
         before[i].push_back(cp[i].q0[a] * k);
@@ -491,6 +619,386 @@ TableRun runTables(const MachineOptions& machine_options, double step_mm,
   return run;
 }
 
+namespace {
+
+// Whether compensateProgram streams the program (pipeline/compensate.h).
+bool streamsCompensation(const CompensateInputs& in) {
+  return in.block_points > 0 && in.program.lines.empty() && in.process.empty() &&
+         in.program.nc.empty() && !readsAsGcode(in.program);
+}
+
+// Fixed-width records of doubles in a temporary file (removed when done): a streamed program's
+// per-point data between its compensating pass and its read-back.
+class PointSpool {
+ public:
+  PointSpool(std::string path, size_t width) : path_(std::move(path)), width_(width) {
+    file_ = std::fopen(path_.c_str(), "w+b");
+    if (!file_)
+      throw InputError(path_, 0, 0, "output",
+                       std::string("cannot write a temporary file: ") + std::strerror(errno));
+  }
+  PointSpool(const PointSpool&) = delete;
+  PointSpool& operator=(const PointSpool&) = delete;
+  ~PointSpool() {
+    std::fclose(file_);
+    std::remove(path_.c_str());
+  }
+  size_t width() const { return width_; }
+  size_t count() const { return count_; }
+  void write(const std::vector<double>& records) {
+    if (std::fwrite(records.data(), sizeof(double), records.size(), file_) != records.size())
+      throw InputError(path_, 0, 0, "output", "cannot write a temporary file");
+    count_ += records.size() / width_;
+  }
+  void rewind() {
+    if (std::fflush(file_) != 0 || std::fseek(file_, 0, SEEK_SET) != 0)
+      throw InputError(path_, 0, 0, "output", "cannot read back a temporary file");
+  }
+  // The next n records into `records`.
+  void read(size_t n, std::vector<double>& records) {
+    records.resize(n * width_);
+    if (std::fread(records.data(), sizeof(double), records.size(), file_) != records.size())
+      throw std::runtime_error("a temporary file of compensate reads back short: " + path_);
+  }
+
+ private:
+  std::string path_;
+  size_t width_;
+  size_t count_ = 0;
+  std::FILE* file_ = nullptr;
+};
+
+// A point's record: line, rapid, status, written, tip before (um), axis before (urad), the
+// target p (3, mm) and u (3), q0 and q (axes each; mm, rad).
+enum Field {
+  kLine,
+  kRapid,
+  kStatus,
+  kWritten,
+  kTipBefore,
+  kAxisBefore,
+  kP,
+  kU = kP + 3,
+  kQ0 = kU + 3
+};
+
+// The charts' points of a long program: of every bin of consecutive points (bins of a size
+// making at most 10 000 of them), the points of largest tip and axis error before and after.
+class ChartPoints {
+ public:
+  explicit ChartPoints(size_t points) : bin_(std::max<size_t>(1, (points + 9999) / 10000)) {}
+  void add(size_t index, int line, double tb, double ta, double ab, double aa) {
+    if (index / bin_ != current_) flush(), current_ = index / bin_;
+    const double v[4] = {tb, ta, ab, aa};
+    for (int k = 0; k < 4; ++k)
+      if (!have_[k] || v[k] > best_[k].v[k]) best_[k] = {line, {tb, ta, ab, aa}}, have_[k] = true;
+  }
+  void finish() { flush(); }
+  std::vector<int> line;
+  std::vector<double> tip_before, tip_after, axis_before, axis_after;
+
+ private:
+  struct Kept {
+    int line;
+    double v[4];
+  };
+  void flush() {
+    for (int k = 0; k < 4; ++k) {
+      if (!have_[k]) continue;
+      bool seen = false;  // the same point kept for another figure
+      for (int j = 0; j < k; ++j)
+        seen = seen || (have_[j] && best_[j].line == best_[k].line &&
+                        std::equal(best_[j].v, best_[j].v + 4, best_[k].v));
+      if (!seen) {
+        line.push_back(best_[k].line);
+        tip_before.push_back(best_[k].v[0]);
+        tip_after.push_back(best_[k].v[1]);
+        axis_before.push_back(best_[k].v[2]);
+        axis_after.push_back(best_[k].v[3]);
+      }
+    }
+    for (bool& h : have_) h = false;
+  }
+  size_t bin_, current_ = 0;
+  Kept best_[4] = {};
+  bool have_[4] = {false, false, false, false};
+};
+
+// Point i's predicted tip and tool axis (w, mm), and its joints.
+Eigen::Vector3d tipOf(const PredictedPoints& p, size_t i) {
+  return {p.field(PredictedPoints::kTipX)[i], p.field(PredictedPoints::kTipY)[i],
+          p.field(PredictedPoints::kTipZ)[i]};
+}
+Eigen::Vector3d axisOf(const PredictedPoints& p, size_t i) {
+  return {p.field(PredictedPoints::kAxisX)[i], p.field(PredictedPoints::kAxisY)[i],
+          p.field(PredictedPoints::kAxisZ)[i]};
+}
+void jointsOf(const PredictedPoints& p, size_t i, JointVector& q) {
+  q.resize(p.axes());
+  for (int a = 0; a < p.axes(); ++a) q[a] = p.q(a)[i];
+}
+
+// compensateProgram for CL data, block by block (pipeline/compensate.h): a first pass reads the
+// program (and, on a calibrated machine, fits the set-up to its evenly spaced poses, as predict
+// does); the second predicts, compensates and writes each block, its points' records to a
+// temporary file; the third reads the written file back, predicts it and writes the joints.
+CompensationRun compensateStreamed(const CompensateInputs& in, const std::string& report_json,
+                                   const Progress& progress) {
+  auto told = [&progress](const char* phase) {
+    return [&progress, phase](double f) {
+      if (progress) progress(phase, f);
+    };
+  };
+  CompensationRun run;
+  run.machine = loadMachine(in.machine);
+  Machine& machine = run.machine;
+  const MachineModel& model = machine.model;
+  const size_t axes = model.axes.size();
+  const std::vector<ProbedPoint> probed = loadProbed(in.probed, model);
+  const bool calibrated = !machine.identification.empty();
+  const bool fit_setup = probed.empty() && calibrated && !in.absolute;
+  ProgramBlocks blocks;
+  blocks.points = in.block_points;
+  auto unreachable = [&](const ClProgram& program, const PredictionResult& r) {
+    if (!r.ok())
+      throw InputError(program.file, r.failures.front().line, 0, "unreachable",
+                       describeUnreachable(model, r));
+  };
+
+  // First pass: the whole program's flags (a multi-axis program's 3-value GOTOs get the axis)
+  // and the set-up's poses.
+  ProgramOptions read_only = in.program;
+  read_only.keep_motion_text = false;
+  EvenPoses even;
+  PredictedPoints pts;
+  ClProgram whole;
+  {
+    BlockPredictor first(machine);
+    whole = streamProgram(read_only, model,
+                          ProgramBlocks{blocks.points,
+                                        [&](ClProgram& block, bool last) {
+                                          if (!fit_setup) return;
+                                          first.predict(block, last, pts);
+                                          for (size_t i = 0; i < pts.size(); ++i) {
+                                            const size_t at = block.first_point + i;
+                                            if (even.wants(at))
+                                              even.add(at, pts[i].q, pts[i].deviation_w);
+                                          }
+                                        }},
+                          told(fit_setup ? "fitting the measured set-up" : "reading"));
+    if (fit_setup) {
+      unreachable(whole, first.result());
+      applyMeasuredSetup(machine, even.q, even.deviation_w, even.q.size());
+    }
+  }
+  std::unique_ptr<PredictionUncertainty> pu;
+  if (!probed.empty()) {
+    const ProbedSetupFit fit = fitProbedSetup(machine, probed);
+    run.setup_note = describeProbedSetup(in.probed, fit, probed, &run.warnings);
+  } else if (calibrated) {
+    run.setup_note = in.absolute
+                         ? "absolute (" + inputName("absolute") +
+                               "): what probing and presetting would take up is compensated too"
+                         : "after the set-up a shop measures (part probed, tool preset), which the "
+                           "calibration cannot see";
+  }
+  if (calibrated) {
+    pu = std::make_unique<PredictionUncertainty>(machine);
+    if (!probed.empty())
+      pu->setupModuloProbed(probed);
+    else if (!in.absolute)
+      pu->setupModulo(even.q);
+  }
+  for (const std::string& w : setupWarnings(model)) run.warnings.push_back(w);
+  bool no_errors = false;
+  const std::string errors = machineErrorsStatement(machine, &no_errors);
+  if (no_errors) run.warnings.push_back(errors + "; the program is written as it came");
+  run.orientation = whole.multiax;
+
+  // The report directory is taken before anything is written: one that cannot be written leaves
+  // nothing written.
+  std::unique_ptr<ReportDirectory> report_dir;
+  if (!in.report_dir.empty()) report_dir = std::make_unique<ReportDirectory>(in.report_dir);
+
+  // Second pass: predicted, compensated, written; the records spooled.
+  OutputSet outputs;
+  TextOut& cl_out = outputs.open(in.output);
+  PointSpool spool(in.output + ".points.tmp-tolver", kQ0 + 2 * axes);
+  const SourceEncoding encoding(in.program.cl);
+  CompensatedAptWriter writer(whole.multiax);
+  BlockPredictor predictor(machine);
+  CompensationOptions co;
+  co.max_condition = in.max_condition;
+  StreamCompensator compensator(model, machine.params, co);
+  std::vector<JointVector> q0;
+  std::vector<ClPoint> corrected;
+  std::vector<char> written;
+  std::vector<double> records;
+  std::string text;
+  bool started = false, failed = false;
+  blocks.sink = [&](ClProgram& block, bool last) {
+    text.clear();
+    if (!started) {
+      if (encoding.bom) cl_out += "\xEF\xBB\xBF";
+      writer.start(compensatedHeader(in, block.file, model.name), text);
+      started = true;
+    }
+    predictor.predict(block, last, pts);
+    failed = failed || !predictor.result().ok();
+    if (failed) return;  // the error at the end names the points
+    const size_t n = block.path.size();
+    q0.resize(n);
+    for (size_t i = 0; i < n; ++i) jointsOf(pts, i, q0[i]);
+    const CompensationResult c = compensator.compensate(block.path, q0, run.orientation, &pts);
+    corrected = block.path;
+    for (size_t i = 0; i < n; ++i) {
+      corrected[i].p_w = c.points[i].nominal_p_w;
+      corrected[i].u_w = c.points[i].nominal_u_w;
+    }
+    writer.statements(block, corrected, text, written);
+    encoding.apply(text);
+    cl_out += text;
+    const size_t w = spool.width();
+    records.assign(n * w, 0.0);
+    for (size_t i = 0; i < n; ++i) {
+      double* r = &records[i * w];
+      const ClPoint& c_i = block.path[i];
+      const CompensatedPoint& cp = c.points[i];
+      r[kLine] = c_i.line;
+      r[kRapid] = c_i.rapid;
+      r[kStatus] = static_cast<double>(static_cast<int>(cp.status));
+      r[kWritten] = written[i];
+      r[kTipBefore] = mmToUm((tipOf(pts, i) - c_i.p_w).norm());
+      r[kAxisBefore] = radToUrad(angle(axisOf(pts, i), c_i.u_w.normalized()));
+      for (int k = 0; k < 3; ++k) r[kP + k] = c_i.p_w[k], r[kU + k] = c_i.u_w[k];
+      for (size_t a = 0; a < axes; ++a)
+        r[kQ0 + a] = cp.q0[static_cast<Eigen::Index>(a)],
+                r[kQ0 + axes + a] = cp.q[static_cast<Eigen::Index>(a)];
+    }
+    spool.write(records);
+  };
+  ProgramOptions with_text = in.program;
+  with_text.keep_motion_text = true;  // the in-place writer edits the GOTO statements
+  run.program = streamProgram(with_text, model, blocks, told("compensating"));
+  unreachable(run.program, predictor.takeResult());
+  run.text.notes = writer.notes();
+  const std::string written_file = outputs.close(in.output);
+
+  // Third pass: the written file read back and predicted, against the records.
+  spool.rewind();
+  const std::string joints_path = compensatedJointsPath(report_json);
+  TextOut& joints = outputs.open(joints_path);
+  {
+    std::vector<std::string> names;
+    std::vector<bool> rotary;
+    for (const Axis& ax : model.axes) {
+      names.push_back(ax.name);
+      rotary.push_back(ax.isRotary());
+    }
+    joints += compensatedJointsCsvHeader(names, rotary);
+  }
+  const size_t total = spool.count();
+  CompensationTally tally(model);
+  ChartPoints chart(total);
+  BlockPredictor after(machine);
+  std::unique_ptr<tbb::enumerable_thread_specific<PredictionUncertainty>> per_thread;
+  if (pu)
+    per_thread = std::make_unique<tbb::enumerable_thread_specific<PredictionUncertainty>>(*pu);
+  std::vector<double> band_tip, band_axis;
+  std::vector<double> before_q(axes), after_q(axes);
+  size_t index = 0;
+  ProgramOptions back = read_only;
+  back.cl = in.output;
+  back.nc.clear();
+  blocks.sink = [&](ClProgram& block, bool last) {
+    after.predict(block, last, pts);
+    if (!after.result().ok())
+      throw std::runtime_error("the compensated program does not predict: " +
+                               after.result().failures.front().message);
+    const size_t n = block.path.size();
+    if (index + n > total)
+      throw std::runtime_error("the compensated program reads back with more than its " +
+                               std::to_string(total) + " points");
+    spool.read(n, records);
+    if (pu) {
+      band_tip.resize(n);
+      band_axis.resize(n);
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 256),
+                        [&](const tbb::blocked_range<size_t>& range) {
+                          const PredictionUncertainty& u = per_thread->local();
+                          JointVector q;
+                          for (size_t i = range.begin(); i < range.end(); ++i) {
+                            jointsOf(pts, i, q);
+                            const PoseUncertainty b = u.at(q);
+                            band_tip[i] = mmToUm(PredictionUncertainty::tipRadius95(b));
+                            band_axis[i] = radToUrad(PredictionUncertainty::axisRadius95(b));
+                          }
+                        });
+    }
+    const size_t w = spool.width();
+    for (size_t i = 0; i < n; ++i) {
+      const double* r = &records[i * w];
+      const Eigen::Vector3d p_t(r[kP], r[kP + 1], r[kP + 2]);
+      const Eigen::Vector3d u_t = Eigen::Vector3d(r[kU], r[kU + 1], r[kU + 2]).normalized();
+      TalliedPoint p;
+      p.line = static_cast<int>(r[kLine]);
+      p.rapid = r[kRapid] != 0;
+      p.written = r[kWritten] != 0;
+      p.status = static_cast<CompensationStatus>(static_cast<int>(r[kStatus]));
+      p.tip_before_um = r[kTipBefore];
+      p.axis_before_urad = r[kAxisBefore];
+      p.tip_after_um = mmToUm((tipOf(pts, i) - p_t).norm());
+      p.axis_after_urad =
+          run.orientation ? radToUrad(angle(axisOf(pts, i), u_t)) : p.axis_before_urad;
+      p.q0 = r + kQ0;
+      p.q = r + kQ0 + axes;
+      tally.add(p);
+      if (pu) tally.addBand(band_tip[i], band_axis[i]);
+      chart.add(index + i, p.line, p.tip_before_um, p.tip_after_um, p.axis_before_urad,
+                p.axis_after_urad);
+      for (size_t a = 0; a < axes; ++a) {
+        const double k = model.axes[a].isRotary() ? radToDeg(1.0) : 1.0;
+        before_q[a] = p.q0[a] * k;
+        after_q[a] = (p.written ? p.q[a] : p.q0[a]) * k;
+      }
+      writeCompensatedJointsRow(joints, index + i, p.line, statusWord(p.written, p.status),
+                                before_q.data(), after_q.data(), axes, p.tip_after_um,
+                                p.axis_after_urad);
+    }
+    index += n;
+  };
+  streamProgram(back, model, blocks, told("reading back"), written_file);
+  if (index != total)
+    throw std::runtime_error("the compensated program reads back with " + std::to_string(index) +
+                             " points instead of " + std::to_string(total));
+  chart.finish();
+
+  CompensationReport& rep = run.report;
+  rep.machine = in.machine.machine;
+  rep.program = run.program.file;
+  rep.dialect = run.program.dialect;
+  rep.output = in.output;
+  tally.finish(rep);
+  run.worse_lines = tally.worse_lines;
+  run.worse_max_um = tally.worse_max_um;
+  if (pu) bandSources(machine, rep);
+  rep.setup_note = run.setup_note;
+  rep.notes = run.text.notes;
+  rep.joints_file = joints_path;
+  outputs.add(report_json, formatCompensationJson(rep));
+  if (report_dir) {
+    CompensationReport html = rep;
+    html.joints_file.clear();
+    writeCompensationReport(report_dir->staging(), html, chart.line, chart.tip_before,
+                            chart.tip_after, chart.axis_before, chart.axis_after);
+  }
+  outputs.commit();
+  if (report_dir) report_dir->commit();
+  return run;
+}
+
+}  // namespace
+
 CompensateRun compensateProgram(const CompensateInputs& in, const Progress& progress) {
   if (!(in.table_step >= 0.1 && in.table_step <= 1000.0))
     throw FieldError("table_step", "expected 0.1 to 1000 mm");
@@ -510,20 +1018,17 @@ CompensateRun compensateProgram(const CompensateInputs& in, const Progress& prog
   run.joints = compensatedJointsPath(run.report);
   checkOutputDir(run.output, "output");
   checkOutputDir(run.report, "report");
-  run.compensation = runCompensation(in, in.output, progress);
-  if (progress) progress("writing and reading back", 1.0);
-  const CompensationRun& c = *run.compensation;
-  writeCompensation(c, in.output, run.report, in.report_dir);
+  if (streamsCompensation(in)) {
+    run.compensation = compensateStreamed(in, run.report, progress);
+  } else {
+    run.compensation = runCompensation(in, in.output, progress);
+    if (progress) progress("writing and reading back", 1.0);
+    writeCompensation(*run.compensation, in.output, run.report, in.report_dir);
+  }
   // The read-back check: a point further off after than before means the written program moves
   // where the original did not.
-  for (size_t i = 0; i < c.tip_after_um.size() && i < c.tip_before_um.size(); ++i) {
-    const double before = c.tip_before_um[i], after = c.tip_after_um[i];
-    if (!(after <= before + std::max(1.0, 0.1 * before))) {
-      if (run.worse_lines.empty() || run.worse_lines.back() != c.line[i])
-        run.worse_lines.push_back(c.line[i]);
-      run.worse_max_um = std::max(run.worse_max_um, after);
-    }
-  }
+  run.worse_lines = run.compensation->worse_lines;
+  run.worse_max_um = run.compensation->worse_max_um;
   if (!run.worse_lines.empty()) run.verdict = Verdict::NotMet;
   return run;
 }

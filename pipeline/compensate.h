@@ -32,6 +32,9 @@ struct CompensateInputs {
   std::string output, report, report_dir;
   std::string table;
   double table_step = 10.0;  // mm
+  // CL data is read, compensated and written in blocks of at least this many points (ending on a
+  // statement); 0: the whole program at once, as G-code is (compensateProgram).
+  size_t block_points = 16384;
 };
 
 struct CompensationRun {
@@ -49,8 +52,13 @@ struct CompensationRun {
   std::vector<std::string> warnings;
   CompensationReport report;
   // Per program point: source line, tip deviation (um) and axis error (urad), before and after.
+  // Empty for a program compensated block by block (compensateProgram streams CL data): its
+  // figures are in the report.
   std::vector<int> line;
   std::vector<double> tip_before_um, tip_after_um, axis_before_urad, axis_after_urad;
+  // The read-back check (CompensateRun::worse_lines).
+  std::vector<int> worse_lines;
+  double worse_max_um = 0.0;
 };
 
 // Where the machine must put the tool for the process effects a measured part showed to leave
@@ -69,7 +77,7 @@ std::vector<ClPoint> processTargets(const ClProgram& program, const ProcessCorre
 std::string describeProcessTargets(const ProcessCorrections& process);
 
 // Reads, predicts, compensates, writes the text (named `output` in its notes) and measures it
-// read back. Throws InputError.
+// read back, the whole program in memory. Throws InputError.
 CompensationRun runCompensation(const CompensateInputs& in, const std::string& output,
                                 const Progress& progress = {});
 // Where the joints of every point go: beside the JSON report, <report stem>_joints.csv.
@@ -104,9 +112,18 @@ struct CompensateRun {
   double worse_max_um = 0.0;
   Verdict verdict = Verdict::Ok;
 };
+// CL data (APT, CLSF) compensated whole (no --lines, no --process) is read, predicted,
+// compensated and written block by block, then read back and predicted block by block: memory
+// independent of the program's length (its points' records wait in a temporary file beside the
+// output between the passes; the charts of --report-dir keep at most 4 points of every
+// 1/10 000 of the program, the largest before and after). G-code programs, --lines and --process
+// are compensated whole (runCompensation): the G-code editor looks ahead across blocks to the
+// next arc, a subset is matched to its read-back by line, and the process's program clock and
+// tools are the whole program's.
 // Throws InputError (FieldError "output": neither a program's output nor tables asked for).
-// Progress: "reading and predicting", "compensating", "writing and reading back" (each 0, then
-// the next).
+// Progress: streamed, "reading" (or "fitting the measured set-up" on a calibrated machine),
+// "compensating", "reading back", each with the fraction of the file read; whole, "reading and
+// predicting", "compensating", "writing and reading back" (each 0, then the next).
 CompensateRun compensateProgram(const CompensateInputs& in, const Progress& progress = {});
 
 }  // namespace tolver

@@ -189,6 +189,8 @@ ClProgram readProgram(LineSource& source, const std::string& path, bool gcode,
   return program;
 }
 
+}  // namespace
+
 // The dialect from the option, the extension, or the first statements (looksLikeGcode reads
 // twenty non-blank lines; 64 kB hold them in any real program).
 bool readsAsGcode(const ProgramOptions& o) {
@@ -199,8 +201,6 @@ bool readsAsGcode(const ProgramOptions& o) {
   return !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(readFilePrefix(path, 65536));
 }
 
-}  // namespace
-
 ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model) {
   const bool gcode = readsAsGcode(o);
   const std::string& path = o.nc.empty() ? o.cl : o.nc;
@@ -210,10 +210,14 @@ ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model) {
 
 ClProgram streamProgram(const ProgramOptions& o, const MachineModel& model,
                         const ProgramBlocks& blocks,
-                        const std::function<void(double)>& fraction_read) {
-  const bool gcode = readsAsGcode(o);
+                        const std::function<void(double)>& fraction_read,
+                        const std::string& read_from) {
   const std::string& path = o.nc.empty() ? o.cl : o.nc;
-  LineSource source = LineSource::file(path);
+  // As parseProgram chooses, for a text read back.
+  const bool gcode = read_from.empty() ? readsAsGcode(o)
+                                       : !o.nc.empty() || hasGcodeExtension(path) ||
+                                             looksLikeGcode(readFilePrefix(read_from, 65536));
+  LineSource source = LineSource::file(read_from.empty() ? path : read_from);
   ProgramBlocks told = blocks;
   if (fraction_read && source.sizeHint() > 0)
     told.sink = [&](ClProgram& p, bool last) {

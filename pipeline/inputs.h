@@ -46,15 +46,21 @@ struct ProgramOptions {
   // NX MSYS in the CAD's absolute frame instead of relative to the first (AptReadOptions).
   bool absolute_msys = false;
 };
+// Whether the program reads as G-code (--nc, a G-code extension, or content that reads as
+// G-code); FieldError "cl" when neither or both of --cl and --nc are given.
+bool readsAsGcode(const ProgramOptions& o);
 // Reads the CL or G-code program (G-code: --nc, a G-code extension, or content that reads as
 // G-code), as a stream of lines. Throws InputError.
 ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model);
 // The same in blocks (io/program/apt_reader.h, ProgramBlocks), --lines applied to each: a long
 // program's memory independent of its length. Returns the program's state after the last block
 // (no points; pointsRead() counts them). An InputError may come after blocks were passed on.
+// read_from: another file to read, named as the program in messages (a written program's
+// temporary, read back).
 ClProgram streamProgram(const ProgramOptions& o, const MachineModel& model,
                         const ProgramBlocks& blocks,
-                        const std::function<void(double)>& fraction_read = {});
+                        const std::function<void(double)>& fraction_read = {},
+                        const std::string& read_from = {});
 // The same on text already read (path names it and chooses the dialect as above).
 ClProgram parseProgram(const std::string& text, const std::string& path, const ProgramOptions& o,
                        const MachineModel& model);

@@ -12,86 +12,12 @@
 #include "io/common/io_error.h"
 #include "io/program/apt_writer.h"
 #include "io/program/point_table.h"
+#include "pipeline/block_predictor.h"
 #include "pipeline/parallel_prediction.h"
 
 namespace tolver {
 
 namespace {
-
-// The points of a program read in blocks, each block's with the bits of the whole program
-// predicted at once (PredictionCarry): a block's points are predicted up to the last multiple of
-// BlockPrediction::kExactEvery with the program's carry, and the rest (the tail) with a copy of
-// it, to be written with the block; the tail is predicted again, the same bits, at the start of
-// the next block's stretch. So at most kExactEvery - 1 points a block are predicted twice.
-class BlockPredictor {
- public:
-  explicit BlockPredictor(const Machine& machine) : machine_(machine) {}
-
-  // The block's points (with its commanded joints, G-code) into `out`, one per block point.
-  void predict(const ClProgram& block, bool last, PredictedPoints& out) {
-    const MachineModel& model = machine_.model;
-    const bool joints = !block.joints.empty();
-    const size_t tail = stretch_.size();
-    stretch_.insert(stretch_.end(), block.path.begin(), block.path.end());
-    if (joints) {
-      joints_.resize(tail);  // (a tail without joints: none in a program with them)
-      joints_.insert(joints_.end(), block.joints.begin(), block.joints.end());
-    } else {
-      joints_.clear();
-    }
-    const size_t n = stretch_.size();
-    const size_t e = BlockPrediction::kExactEvery;
-    const size_t full = last ? n : n / e * e;
-    next_.assign(stretch_.begin() + static_cast<std::ptrdiff_t>(full), stretch_.end());
-    stretch_.resize(full);
-    next_joints_.clear();
-    if (joints) {
-      next_joints_.assign(joints_.begin() + static_cast<std::ptrdiff_t>(full), joints_.end());
-      joints_.resize(full);
-    }
-    const size_t base = carry_.points();
-    predictToolPathParallel(model, machine_.params, stretch_, committed_, 20,
-                            joints ? &joints_ : nullptr, 0, nullptr, &carry_);
-    const PredictionSummary& s = committed_.summary;
-    if (s.max_index >= 0 && static_cast<size_t>(s.max_index) >= base &&
-        static_cast<size_t>(s.max_index) < base + full) {
-      worst_ = committed_.points[static_cast<size_t>(s.max_index) - base];
-    }
-    if (!next_.empty()) {
-      PredictionCarry ahead = carry_;
-      predictToolPathParallel(model, machine_.params, next_, ahead_, 20,
-                              joints ? &next_joints_ : nullptr, 0, nullptr, &ahead);
-    }
-    // Block point j is stretch point tail + j: the committed stretch's up to full, then the
-    // tail's.
-    out.resize(block.path.size(), static_cast<int>(model.axes.size()));
-    const size_t split = std::max(tail, full);
-    if (full > tail) out.copyFrom(committed_.points, tail, full - tail, 0);
-    out.copyFrom(ahead_.points, split - full, n - split, split - tail);
-    stretch_.swap(next_);
-    joints_.swap(next_joints_);
-  }
-
-  // After the last block: the program's failures and summary, and its worst point.
-  const PredictionResult& result() const { return committed_; }
-  PredictionResult takeResult() {  // the failures and summary, without the last stretch's points
-    PredictionResult r;
-    r.failures = std::move(committed_.failures);
-    r.failed_points = committed_.failed_points;
-    r.failures_per_axis = std::move(committed_.failures_per_axis);
-    r.summary = committed_.summary;
-    return r;
-  }
-  const PredictedPoint& worst() const { return worst_; }
-
- private:
-  const Machine& machine_;
-  PredictionCarry carry_;
-  std::vector<ClPoint> stretch_, next_;  // between blocks: the tail
-  std::vector<JointVector> joints_, next_joints_;
-  PredictionResult committed_, ahead_;
-  PredictedPoint worst_;  // the point of the summary's max_index
-};
 
 // The band over the program's points, block by block.
 class BandTally {

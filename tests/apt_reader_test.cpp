@@ -304,6 +304,9 @@ TEST(AptReader, BadInputNamesFileLineAndColumn) {
       {"GOTO/1,2,3,0,0,0\n", 1, 12, "zero-length"},
       {"GOTO/1,2, $\n", 1, 0, "past the end"},
       {"GOTO/1,2,3\nCIRCLE/0,0,0,0,0,1,1\nGOTO/5,0,0\n", 2, 0, "not on one circle"},
+      // An arc whose start is FROM (no point before it): the message names FROM's line (a
+      // fuzzer found the message read the missing point).
+      {"FROM/1,0,0\nCIRCLE/0,0,0,0,0,1,1\nGOTO/5,0,0\n", 2, 0, "(lines 1 and 3)"},
       // A circle of 9e8 mm: refused before any point is expanded.
       {"GOTO/900000000,0,0\nCIRCLE/0,0,0,0,0,1,900000000\nGOTO/0,900000000,0\n", 2, 0,
        "more than a million"},

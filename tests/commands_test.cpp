@@ -250,6 +250,102 @@ TEST_F(Commands, CompensateWritesACloserProgram) {
   EXPECT_EQ(refusedField([&] { compensateProgram(in); }), "output");
 }
 
+// CL data is compensated block by block (issue 36): the same files as the whole program at once,
+// byte for byte (the program, the joints), the same report (the band's medians within
+// StreamQuantiles' 1.6e-5), on real programs with arcs, drilling cycles, '$' continuations, a
+// multi-axis program whose first GOTOs give no axis, CRLF line ends and a byte-order mark; on a
+// calibrated machine with the set-up fitted, absolute and probed. Blocks of 97 points: most
+// statements, arcs and cycles meet a block's end somewhere.
+TEST_F(Commands, CompensateInBlocksWritesWhatTheWholeProgramWrites) {
+  // The cone with its first three GOTOs without a tool axis, CRLF line ends and a BOM.
+  std::string cone_text = test::readText(sourcePath("samples/nas979_cone.apt"));
+  {
+    std::string edited = "\xEF\xBB\xBF";
+    size_t at = 0;
+    int shortened = 0;
+    while (at < cone_text.size()) {
+      size_t eol = cone_text.find('\n', at);
+      if (eol == std::string::npos) eol = cone_text.size();
+      std::string line = cone_text.substr(at, eol - at);
+      if (line.rfind("GOTO/", 0) == 0 && shortened < 3) {
+        size_t comma = 0;
+        for (int k = 0; k < 3; ++k) comma = line.find(',', comma + 1);
+        line.resize(comma);
+        ++shortened;
+      }
+      edited += line + "\r\n";
+      at = eol + 1;
+    }
+    std::ofstream(path("cone_crlf.apt"), std::ios::binary) << edited;
+  }
+  struct Case {
+    const char* name;
+    std::string cl;
+    MachineOptions machine;
+    bool absolute = false;
+    std::string probed;
+  };
+  MachineOptions creo = machine(kMeasured, false);
+  creo.part_zero = {0, 0, 100};
+  creo.gauge_length = 100;
+  const std::vector<Case> cases = {
+      {"cone", sourcePath("samples/nas979_cone.apt"), machine(kMeasured)},
+      {"cone absolute", sourcePath("samples/nas979_cone.apt"), machine(kMeasured), true},
+      {"cone probed", sourcePath("samples/nas979_cone.apt"), machine(kMeasured), false,
+       sourcePath("samples/matsuura_probed.csv")},
+      {"cone, CRLF, BOM, first GOTOs 3-axis", path("cone_crlf.apt"), machine(kMeasured)},
+      {"SolidWorks CAM, drilling cycles", sourcePath("tests/fixtures/cl/swcam_basemach.apt"),
+       machine(kMeasured)},
+      {"Creo, arcs", sourcePath("tests/fixtures/cl/creo_profile_milling.ncl"), creo},
+      {"nominal machine", sourcePath("samples/nas979_cone.apt"), machine(kNominal)},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    CompensateInputs in;
+    in.machine = c.machine;
+    in.program.cl = c.cl;
+    in.absolute = c.absolute;
+    in.probed = c.probed;
+    in.output = path("whole.apt");
+    in.block_points = 0;
+    const CompensateRun whole = compensateProgram(in);
+    ASSERT_TRUE(whole.compensation);
+    EXPECT_FALSE(whole.compensation->line.empty());  // the whole program in memory
+    in.output = path("blocks.apt");
+    in.block_points = 97;
+    in.report_dir = path("blocks_report");
+    const CompensateRun blocks = compensateProgram(in);
+    ASSERT_TRUE(blocks.compensation);
+    EXPECT_TRUE(blocks.compensation->line.empty());  // streamed: no per-point arrays
+    EXPECT_TRUE(fs::exists(path("blocks_report/report.html")));
+    EXPECT_EQ(blocks.verdict, whole.verdict);
+    EXPECT_EQ(blocks.worse_lines, whole.worse_lines);
+    EXPECT_FALSE(fs::exists(path("blocks.apt.points.tmp-tolver")));
+    // The program and the joints, byte for byte.
+    EXPECT_EQ(test::readText(path("blocks.apt")), test::readText(path("whole.apt")));
+    EXPECT_EQ(test::readText(path("blocks_joints.csv")), test::readText(path("whole_joints.csv")));
+    nlohmann::json a = nlohmann::json::parse(test::readText(path("whole.json")));
+    nlohmann::json b = nlohmann::json::parse(test::readText(path("blocks.json")));
+    EXPECT_EQ(a.contains("after_uncertainty"), b.contains("after_uncertainty"));
+    if (a.contains("after_uncertainty")) {
+      for (const char* k : {"band95_max_um", "band95_median_um", "axis_band95_max_urad",
+                            "axis_band95_median_urad"}) {
+        const double x = a["after_uncertainty"][k].get<double>();
+        const double y = b["after_uncertainty"][k].get<double>();
+        EXPECT_NEAR(x, y, 1e-4 * x) << k;
+      }
+      a.erase("after_uncertainty");
+      b.erase("after_uncertainty");
+    }
+    for (const char* k : {"output", "joints_file"}) {
+      a.erase(k);
+      b.erase(k);
+    }
+    EXPECT_EQ(a, b) << a.dump(1) << "\n" << b.dump(1);
+    EXPECT_GT(b["points"].get<int>(), 97 * 3);
+  }
+}
+
 // verifyPart's verdict is the report's, and report.json's exit code is the verdict's.
 TEST_F(Commands, VerifyVerdictIsTheReportsAndItsExitCode) {
   VerifyInputs in;

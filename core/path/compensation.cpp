@@ -5,6 +5,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <random>
 
 #include "core/kinematics/forward_kinematics.h"
@@ -252,12 +253,24 @@ class PathCompensator {
 
 }  // namespace
 
-CompensationResult compensateToolPath(const MachineModel& model, const Eigen::VectorXd& params,
-                                      const std::vector<ClPoint>& path,
-                                      const std::vector<JointVector>& q0, bool orientation,
-                                      const CompensationOptions& opt,
-                                      const PredictedPoints* predicted) {
-  PathCompensator pc(model, params, opt);
+struct StreamCompensator::State {
+  State(const MachineModel& model, const Eigen::VectorXd& params, const CompensationOptions& o)
+      : opt(o), pc(model, params, opt) {}
+  CompensationOptions opt;
+  PathCompensator pc;
+};
+
+StreamCompensator::StreamCompensator(const MachineModel& model, const Eigen::VectorXd& params,
+                                     const CompensationOptions& options)
+    : state_(std::make_unique<State>(model, params, options)) {}
+
+StreamCompensator::~StreamCompensator() = default;
+
+CompensationResult StreamCompensator::compensate(const std::vector<ClPoint>& path,
+                                                 const std::vector<JointVector>& q0,
+                                                 bool orientation, const PredictedPoints* predicted,
+                                                 const std::vector<char>* tip_only) {
+  PathCompensator& pc = state_->pc;
   CompensationResult out;
   out.points.resize(path.size());
   for (size_t i = 0; i < path.size(); ++i) {
@@ -269,13 +282,22 @@ CompensationResult compensateToolPath(const MachineModel& model, const Eigen::Ve
       pc.fk().tipAndAxis(q0[i], &p0, &u0);
     }
     CompensatedPoint& c = out.points[i];
-    const bool tip_only = opt.tip_only && i < opt.tip_only->size() && (*opt.tip_only)[i];
-    pc.compensate(path[i], q0[i], p0, u0, orientation && !tip_only, c);
+    const bool tip = tip_only && i < tip_only->size() && (*tip_only)[i];
+    pc.compensate(path[i], q0[i], p0, u0, orientation && !tip, c);
     out.ill_conditioned += c.status == CompensationStatus::IllConditioned;
     out.out_of_travel += c.status == CompensationStatus::OutOfTravel;
     out.not_converged += c.status == CompensationStatus::NotConverged;
   }
   return out;
+}
+
+CompensationResult compensateToolPath(const MachineModel& model, const Eigen::VectorXd& params,
+                                      const std::vector<ClPoint>& path,
+                                      const std::vector<JointVector>& q0, bool orientation,
+                                      const CompensationOptions& opt,
+                                      const PredictedPoints* predicted) {
+  StreamCompensator stream(model, params, opt);
+  return stream.compensate(path, q0, orientation, predicted, opt.tip_only);
 }
 
 std::vector<AxisTable> linearAxisTables(const MachineModel& model, const Eigen::VectorXd& params,

@@ -17,6 +17,7 @@
 // post-processor for a perfect machine turns into exactly those joints): for CL data,
 // nominal_p_w and nominal_u_w; for G-code, the joint changes q - q0.
 #include <Eigen/Core>
+#include <memory>
 #include <vector>
 
 #include "core/model/machine_model.h"
@@ -74,6 +75,28 @@ CompensationResult compensateToolPath(const MachineModel& model, const Eigen::Ve
                                       const std::vector<JointVector>& q0, bool orientation = true,
                                       const CompensationOptions& options = {},
                                       const PredictedPoints* predicted = nullptr);
+
+// The same over a path given in consecutive stretches (a program read in blocks): what is carried
+// from point to point (the kept Jacobian, the warm start, the basis across the tool axis) is
+// carried across stretches too, so that the points are compensateToolPath's on the whole path,
+// bit for bit. tip_only (optional): per point of the stretch, as CompensationOptions::tip_only
+// (which this ignores).
+class StreamCompensator {
+ public:
+  StreamCompensator(const MachineModel& model, const Eigen::VectorXd& params,
+                    const CompensationOptions& options = {});
+  ~StreamCompensator();
+  StreamCompensator(const StreamCompensator&) = delete;
+  StreamCompensator& operator=(const StreamCompensator&) = delete;
+  CompensationResult compensate(const std::vector<ClPoint>& path,
+                                const std::vector<JointVector>& q0, bool orientation,
+                                const PredictedPoints* predicted = nullptr,
+                                const std::vector<char>* tip_only = nullptr);
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
 
 // Compensation tables for a control's linear axes (pitch and straightness): for each prismatic
 // axis, on a grid over its travel with the other joints at q_ref, the changes of the prismatic

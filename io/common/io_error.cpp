@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 namespace tolver {
 namespace {
@@ -122,6 +123,18 @@ TextOut& OutputSet::open(const std::string& path) {
   open_.back()->file = f;
   open_.back()->out = TextOut(f);
   return open_.back()->out;
+}
+
+std::string OutputSet::close(const std::string& path) {
+  for (auto it = open_.begin(); it != open_.end(); ++it) {
+    if ((*it)->path != path) continue;
+    const bool ok = (*it)->out.flush();
+    const bool closed = std::fclose((*it)->file) == 0;
+    open_.erase(it);
+    if (!ok || !closed) throw InputError(path, 0, 0, "output", "cannot write the file");
+    return path + ".tmp-tolver";
+  }
+  throw std::logic_error("OutputSet::close: " + path + " is not open");
 }
 
 std::string OutputSet::add(const std::string& path, const std::string& content) {

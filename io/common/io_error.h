@@ -93,6 +93,10 @@ class OutputSet {
   // TextOut stays valid until commit(), which flushes and closes it before the renames (throwing
   // InputError when a write failed).
   TextOut& open(const std::string& path);
+  // Flushes and closes the file open() opened for `path` (still renamed by commit()), so that
+  // the command can read back what it wrote; returns the temporary's name. Throws InputError
+  // when a write failed.
+  std::string close(const std::string& path);
   void commit();
 
  private:

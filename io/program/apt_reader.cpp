@@ -479,6 +479,7 @@ class Parser {
       // the MCS); it is not a move, and the machine's home need not lie in the part's MCS.
       const ClFrame& f = prog_.frames[frame_];
       from_w_ = f.scale * (f.T * p);
+      from_line_ = line;
       last_local_ = p;
       have_point_ = true;
       if (!from_noted_) {
@@ -781,7 +782,9 @@ class Parser {
     st.first_point = static_cast<int>(prog_.path.size());
     if (arc_pending_) {
       std::vector<Eigen::Vector3d> pts;
-      const Eigen::Vector3d start = lastPoint() ? lastPoint()->p_w : from_w_;
+      const ClPoint* before = lastPoint();
+      const Eigen::Vector3d start = before ? before->p_w : from_w_;
+      const int start_line = before ? before->line : from_line_;
       const double r =
           ((start - arc_centre_w_) - arc_axis_w_ * arc_axis_w_.dot(start - arc_centre_w_)).norm();
       // Bounded work: a full turn's points, before anything is expanded.
@@ -795,8 +798,8 @@ class Parser {
       if (!interpolateArc(start, cl.p_w, arc_centre_w_, arc_axis_w_, opt_.chordal_tolerance_mm,
                           std::max(0.005, 1e-4 * r), pts, arc_turns_))
         fail(arc_line_, 0, "CIRCLE",
-             "the arc's start and end points (lines " + std::to_string(lastPoint()->line) +
-                 " and " + std::to_string(line) + ") are not on one circle about its centre");
+             "the arc's start and end points (lines " + std::to_string(start_line) + " and " +
+                 std::to_string(line) + ") are not on one circle about its centre");
       for (size_t k = 0; k + 1 < pts.size(); ++k) {
         ClPoint a = cl;
         a.p_w = pts[k];
@@ -856,6 +859,7 @@ class Parser {
   bool first_msys_noted_ = false, times_noted_ = false, from_noted_ = false, gohome_noted_ = false;
   bool cutcom_noted_ = false;
   Eigen::Vector3d from_w_ = Eigen::Vector3d::Zero();
+  int from_line_ = 0;  // FROM's line: an arc's start when no point precedes it
   // A CL drilling cycle in force (CYCLE/<type>,... until CYCLE/OFF): its type and distances
   // along the tool axis from each GOTO point (the hole's top), mm in file units.
   struct Cycle {

@@ -91,36 +91,42 @@ std::string lineList(const std::vector<int>& lines) {
 
 // Long by design: one pass over the source's statements, keeping every line it does not change
 // byte for byte.
-CompensatedProgramText formatCompensatedApt(const ClProgram& program,
-                                            const std::vector<ClPoint>& corrected,
-                                            const std::vector<std::string>& header) {
-  CompensatedProgramText out;
-  out.written.assign(program.path.size(), 1);
+CompensatedAptWriter::CompensatedAptWriter(bool multiax) : multiax_(multiax) {}
+
+void CompensatedAptWriter::start(const std::vector<std::string>& header, std::string& out,
+                                 std::vector<int>* source_line) {
+  for (const std::string& h : header) {
+    out += "$$ " + h + "\n";
+    if (source_line) source_line->push_back(0);
+  }
+}
+
+void CompensatedAptWriter::statements(const ClProgram& program,
+                                      const std::vector<ClPoint>& corrected, std::string& out,
+                                      std::vector<char>& written, std::vector<int>* source_line) {
+  written.assign(program.path.size(), 1);
   const bool inch = program.units == "INCH";
   const int pos_min = inch ? 8 : 6, axis_min = 9;
-  for (const std::string& h : header) {
-    out.text += "$$ " + h + "\n";
-    out.source_line.push_back(0);
-  }
+  auto from = [&](int l) {
+    if (source_line) source_line->push_back(l);
+  };
   // The file's coordinates of a corrected point.
   auto inFile = [&](int k, Eigen::Vector3d* p, Eigen::Vector3d* u) {
     const ClFrame& f = program.frames[program.point_frame[k]];
     *p = f.T.inverse(Eigen::Isometry) * (corrected[k].p_w / f.scale);
     *u = f.T.linear().transpose() * corrected[k].u_w.normalized();
   };
-  int expanded = 0;
-  std::vector<int> expanded_lines, cycle_lines;
   for (const AptStatement& st : program.statements) {
     if (st.cycle) {
       // A hole of a drilling cycle: the control makes its motions from the GOTO and the cycle's
       // distances, so its compensated points cannot be written as GOTOs (read again, each would
       // be a hole of its own). Left as programmed, as the G-code writer leaves canned cycles.
-      cycle_lines.push_back(st.first_line);
-      for (int k = st.first_point; k < st.first_point + st.point_count; ++k) out.written[k] = 0;
+      cycle_lines_.push_back(st.first_line);
+      for (int k = st.first_point; k < st.first_point + st.point_count; ++k) written[k] = 0;
       for (int l = st.first_line; l <= st.last_line; ++l) {
-        out.text += program.lines[l - 1];
-        out.text += '\n';
-        out.source_line.push_back(l);
+        out += program.lines[l - 1];
+        out += '\n';
+        from(l);
       }
       continue;
     }
@@ -131,12 +137,12 @@ CompensatedProgramText formatCompensatedApt(const ClProgram& program,
       for (int l = st.first_line; l <= st.last_line; ++l) lines.emplace_back(program.lines[l - 1]);
       std::vector<std::pair<size_t, NumToken>> tokens;
       for (size_t l = 0; l < lines.size(); ++l) {
-        size_t from = 0;
+        size_t from_at = 0;
         if (l == 0) {
           const size_t slash = lines[0].find('/');
-          from = slash == std::string::npos ? lines[0].size() : slash + 1;
+          from_at = slash == std::string::npos ? lines[0].size() : slash + 1;
         }
-        for (const NumToken& t : numbersIn(lines[l], from)) tokens.push_back({l, t});
+        for (const NumToken& t : numbersIn(lines[l], from_at)) tokens.push_back({l, t});
       }
       Eigen::Vector3d p, u;
       inFile(st.first_point, &p, &u);
@@ -145,7 +151,7 @@ CompensatedProgramText formatCompensatedApt(const ClProgram& program,
         const size_t n = std::min<size_t>(tokens.size(), 6);
         // Replace from the last token backwards, so that earlier offsets stay valid.
         std::string append;
-        if (program.multiax && tokens.size() < 6) {
+        if (multiax_ && tokens.size() < 6) {
           const int d = std::max(tokens[2].second.decimals, axis_min);
           append = "," + fixed(u.x(), d) + "," + fixed(u.y(), d) + "," + fixed(u.z(), d);
         }
@@ -157,53 +163,69 @@ CompensatedProgramText formatCompensatedApt(const ClProgram& program,
           lines[l].replace(t.start, t.len, text);
         }
         for (size_t l = 0; l < lines.size(); ++l) {
-          out.text += lines[l] + "\n";
-          out.source_line.push_back(st.first_line + static_cast<int>(l));
+          out += lines[l];
+          out += '\n';
+          from(st.first_line + static_cast<int>(l));
         }
         continue;
       }
     }
     if (st.point_count >= 1) {
       // Points the reader expanded (an arc, a curve): GOTOs of their compensated points.
-      ++expanded;
-      expanded_lines.push_back(st.first_line);
-      out.text += "$$ tolver: " + (st.major.empty() ? std::string("statement") : st.major) +
-                  " of line " + std::to_string(st.first_line) +
-                  " as the GOTOs of its compensated points\n";
-      out.source_line.push_back(st.first_line);
+      expanded_lines_.push_back(st.first_line);
+      out += "$$ tolver: " + (st.major.empty() ? std::string("statement") : st.major) +
+             " of line " + std::to_string(st.first_line) +
+             " as the GOTOs of its compensated points\n";
+      from(st.first_line);
       for (int k = st.first_point; k < st.first_point + st.point_count; ++k) {
         Eigen::Vector3d p, u;
         inFile(k, &p, &u);
-        out.text += "GOTO/" + fixed(p.x(), pos_min) + "," + fixed(p.y(), pos_min) + "," +
-                    fixed(p.z(), pos_min);
-        if (program.multiax)
-          out.text += "," + fixed(u.x(), axis_min) + "," + fixed(u.y(), axis_min) + "," +
-                      fixed(u.z(), axis_min);
-        out.text += "\n";
-        out.source_line.push_back(st.first_line);
+        out += "GOTO/" + fixed(p.x(), pos_min) + "," + fixed(p.y(), pos_min) + "," +
+               fixed(p.z(), pos_min);
+        if (multiax_)
+          out += "," + fixed(u.x(), axis_min) + "," + fixed(u.y(), axis_min) + "," +
+                 fixed(u.z(), axis_min);
+        out += "\n";
+        from(st.first_line);
       }
       continue;
     }
     if (st.major == "CIRCLE" || st.major == "MOVARC") {
-      out.text += "$$ tolver: " + st.major + " of line " + std::to_string(st.first_line) +
-                  " replaced by the compensated points of its arc that follow\n";
-      out.source_line.push_back(st.first_line);
+      out += "$$ tolver: " + st.major + " of line " + std::to_string(st.first_line) +
+             " replaced by the compensated points of its arc that follow\n";
+      from(st.first_line);
       continue;
     }
     for (int l = st.first_line; l <= st.last_line; ++l) {
-      out.text += program.lines[l - 1];
-      out.text += '\n';
-      out.source_line.push_back(l);
+      out += program.lines[l - 1];
+      out += '\n';
+      from(l);
     }
   }
-  if (!cycle_lines.empty())
-    out.notes.push_back(std::to_string(cycle_lines.size()) +
-                        " drilling-cycle holes left as programmed, uncompensated (lines " +
-                        lineList(cycle_lines) + ")");
-  if (expanded > 0)
-    out.notes.push_back(std::to_string(expanded) + " statements whose points the reader expanded " +
-                        "(arcs, curves; lines " + lineList(expanded_lines) +
-                        ") were written as GOTOs of their compensated points");
+}
+
+std::vector<std::string> CompensatedAptWriter::notes() const {
+  std::vector<std::string> notes;
+  if (!cycle_lines_.empty())
+    notes.push_back(std::to_string(cycle_lines_.size()) +
+                    " drilling-cycle holes left as programmed, uncompensated (lines " +
+                    lineList(cycle_lines_) + ")");
+  if (!expanded_lines_.empty())
+    notes.push_back(std::to_string(expanded_lines_.size()) +
+                    " statements whose points the reader expanded " + "(arcs, curves; lines " +
+                    lineList(expanded_lines_) +
+                    ") were written as GOTOs of their compensated points");
+  return notes;
+}
+
+CompensatedProgramText formatCompensatedApt(const ClProgram& program,
+                                            const std::vector<ClPoint>& corrected,
+                                            const std::vector<std::string>& header) {
+  CompensatedProgramText out;
+  CompensatedAptWriter writer(program.multiax);
+  writer.start(header, out.text, &out.source_line);
+  writer.statements(program, corrected, out.text, out.written, &out.source_line);
+  out.notes = writer.notes();
   return out;
 }
 

@@ -39,6 +39,25 @@ CompensatedProgramText formatCompensatedApt(const ClProgram& program,
                                             const std::vector<ClPoint>& corrected,
                                             const std::vector<std::string>& header);
 
+// The same written block by block (a program read in blocks, io/program/apt_reader.h
+// ProgramBlocks), into `out`: start() with the header, statements() for each block in order
+// (corrected: one per block point; `written`: set to one flag per block point), notes() after
+// the last. multiax: the whole program's (a block's own flag tells only what was read before
+// it). source_line (optional): per written line, the source line it comes from.
+class CompensatedAptWriter {
+ public:
+  explicit CompensatedAptWriter(bool multiax);
+  void start(const std::vector<std::string>& header, std::string& out,
+             std::vector<int>* source_line = nullptr);
+  void statements(const ClProgram& block, const std::vector<ClPoint>& corrected, std::string& out,
+                  std::vector<char>& written, std::vector<int>* source_line = nullptr);
+  std::vector<std::string> notes() const;
+
+ private:
+  bool multiax_;
+  std::vector<int> cycle_lines_, expanded_lines_;
+};
+
 // q0: the joints the program commands (program.joints); q: the compensating joints;
 // corrected_p_w: the nominal machine's tip at q (for TCP blocks).
 CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const MachineModel& model,

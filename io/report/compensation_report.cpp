@@ -24,11 +24,8 @@ nlohmann::json figures(const PathFigures& f) {
 
 }  // namespace
 
-std::string formatCompensatedJointsCsv(
-    const std::vector<std::string>& axis_names, const std::vector<bool>& rotary,
-    const std::vector<int>& line, const std::vector<std::string>& status,
-    const std::vector<std::vector<double>>& before, const std::vector<std::vector<double>>& after,
-    const std::vector<double>& tip_after_um, const std::vector<double>& axis_after_urad) {
+std::string compensatedJointsCsvHeader(const std::vector<std::string>& axis_names,
+                                       const std::vector<bool>& rotary) {
   std::string out = "index,line,status";
   for (const char* when : {"_before", "_after"})
     for (size_t a = 0; a < axis_names.size(); ++a) {
@@ -36,19 +33,33 @@ std::string formatCompensatedJointsCsv(
       for (char& c : n) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
       out += "," + n + (rotary[a] ? "_deg" : "_mm") + when;
     }
-  out += ",tip_after_um,axis_after_urad\n";
-  char buf[64];
-  for (size_t i = 0; i < line.size(); ++i) {
-    out += std::to_string(i) + "," + std::to_string(line[i]) + "," + status[i];
-    for (const auto* q : {&before, &after})
-      for (size_t a = 0; a < axis_names.size(); ++a) {
-        std::snprintf(buf, sizeof buf, ",%.9f", (*q)[i][a]);
-        out += buf;
-      }
-    std::snprintf(buf, sizeof buf, ",%.6f,%.6f\n", tip_after_um[i], axis_after_urad[i]);
-    out += buf;
-  }
-  return out;
+  return out + ",tip_after_um,axis_after_urad\n";
+}
+
+void writeCompensatedJointsRow(TextOut& out, size_t index, int line, std::string_view status,
+                               const double* before, const double* after, size_t axes,
+                               double tip_after_um, double axis_after_urad) {
+  LineBuilder row;
+  row.integer(static_cast<long long>(index)).character(',').integer(line).character(',');
+  row.text(status);
+  for (const double* q : {before, after})
+    for (size_t a = 0; a < axes; ++a) row.character(',').fixed(q[a], 9);
+  row.character(',').fixed(tip_after_um, 6).character(',').fixed(axis_after_urad, 6);
+  row.character('\n');
+  out += row.view();
+}
+
+std::string formatCompensatedJointsCsv(
+    const std::vector<std::string>& axis_names, const std::vector<bool>& rotary,
+    const std::vector<int>& line, const std::vector<std::string>& status,
+    const std::vector<std::vector<double>>& before, const std::vector<std::vector<double>>& after,
+    const std::vector<double>& tip_after_um, const std::vector<double>& axis_after_urad) {
+  TextOut out;
+  out += compensatedJointsCsvHeader(axis_names, rotary);
+  for (size_t i = 0; i < line.size(); ++i)
+    writeCompensatedJointsRow(out, i, line[i], status[i], before[i].data(), after[i].data(),
+                              axis_names.size(), tip_after_um[i], axis_after_urad[i]);
+  return out.take();
 }
 
 std::string formatCompensationJson(const CompensationReport& r) {

@@ -4,7 +4,10 @@
 // the points left uncompensated and why. Lengths in um, angles in urad, joint corrections in um
 // (prismatic) and urad (rotary).
 #include <string>
+#include <string_view>
 #include <vector>
+
+#include "io/common/io_error.h"
 
 namespace tolver {
 
@@ -56,6 +59,14 @@ std::string formatCompensatedJointsCsv(
     const std::vector<int>& line, const std::vector<std::string>& status,
     const std::vector<std::vector<double>>& before, const std::vector<std::vector<double>>& after,
     const std::vector<double>& tip_after_um, const std::vector<double>& axis_after_urad);
+
+// The same in pieces (a program compensated block by block): the header line, then one row
+// per point (before, after: one value per axis); the same bytes.
+std::string compensatedJointsCsvHeader(const std::vector<std::string>& axis_names,
+                                       const std::vector<bool>& rotary);
+void writeCompensatedJointsRow(TextOut& out, size_t index, int line, std::string_view status,
+                               const double* before, const double* after, size_t axes,
+                               double tip_after_um, double axis_after_urad);
 
 // The report directory: report.json, report.html (the figures, the segments, the notes) and the
 // charts tip_deviation.png and tool_axis.png (before and after along the program, one scale),
