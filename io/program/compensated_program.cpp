@@ -6,9 +6,12 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
+#include <string_view>
 
 #include "core/kinematics/forward_kinematics.h"
 #include "core/numerics/units.h"
+#include "io/common/text_util.h"
 
 namespace tolver {
 namespace {
@@ -44,7 +47,9 @@ bool numberAt(const std::string& s, size_t i, NumToken* t) {
   t->start = i;
   t->len = j - i;
   t->decimals = decimals;
-  t->value = std::strtod(s.substr(i, j - i).c_str(), nullptr);
+  // strtod's value (parseNumber: the same bits, without a copy).
+  const std::optional<double> v = parseNumber(std::string_view(s).substr(i, j - i));
+  t->value = v ? *v : std::strtod(s.substr(i, j - i).c_str(), nullptr);
   return true;
 }
 
@@ -66,9 +71,9 @@ std::vector<NumToken> numbersIn(const std::string& s, size_t from) {
 }
 
 std::string fixed(double v, int decimals) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
-  std::string s = buf;
+  LineBuilder b;  // printf's "%.<decimals>f"
+  b.fixed(v, decimals);
+  std::string s(b.view());
   // No "-0.000".
   if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
   return s;
