@@ -9,7 +9,7 @@
 #     per-point table and without (--no-errors), on both cores and on one (taskset -c 0);
 #   * ball-bar readings simulated on the measured Matsuura: 600 poses, and a 2 000-pose plan
 #     measured five times (10 000 and more readings); calibrate on both, diagnose on the second;
-#   * compensate on the 1.01 M-point program;
+#   * compensate on both programs;
 #   * verify at scale: bench/verify_large.sh's part and 120 802-point finish at 0.115 mm;
 #   * setup on the largest program of ../shared/data/corpus, when that directory is there.
 set -euo pipefail
@@ -73,9 +73,11 @@ for s in "${sizes[@]}"; do
   fi
 done
 
-# Compensate (not streamed: its memory grows with the program).
-run "compensate, 1M points" "$tolver" compensate --machine "$m_measured" \
-  --setup samples/matsuura_setup.txt --cl "$work/finish_1M.apt" -o "$work/c.apt"
+# Compensate (CL data in blocks: its memory does not grow with the program).
+for s in "${sizes[@]}"; do
+  run "compensate, $s points" "$tolver" compensate --machine "$m_measured" \
+    --setup samples/matsuura_setup.txt --cl "$work/finish_$s.apt" -o "$work/c.apt"
+done
 
 # Ball-bar readings.
 "$tolver" plan-ballbar --machine "$m_nominal" --poses 600 --seed 3 -o "$work/plan600.csv" > /dev/null
