@@ -247,6 +247,23 @@ CompensatedProgramText correctedText(const CompensateInputs& in, const Compensat
   return text;
 }
 
+// Whether the machine can turn the tool axis onto a program's: two rotary axes or more. With
+// fewer, a multi-axis program's tip is compensated by the linear axes and said so (Newton on the
+// axis rows would never converge: 3 or 4 joints for 5 conditions).
+bool turnsToolAxis(const MachineModel& model) {
+  return std::count_if(model.axes.begin(), model.axes.end(),
+                       [](const Axis& a) { return a.isRotary(); }) >= 2;
+}
+
+std::string tipOnlyNote(const MachineModel& model) {
+  const auto rotary = std::count_if(model.axes.begin(), model.axes.end(),
+                                    [](const Axis& a) { return a.isRotary(); });
+  return "the program gives tool axes and the machine has " + std::to_string(rotary) +
+         (rotary == 1 ? " rotary axis" : " rotary axes") +
+         ": the tool tip compensated by the linear axes, the tool axis left where the machine "
+         "holds it";
+}
+
 // A point's status in the joints file.
 const char* statusWord(bool written, CompensationStatus status) {
   return !written                                       ? "kept"
@@ -480,6 +497,8 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
   const ClProgram& program = run.program;
   run.orientation = program.dialect == "G-code" ? gcodeGivesRotaryWords(program, run.machine.model)
                                                 : program.multiax;
+  const bool tip_only = run.orientation && !turnsToolAxis(run.machine.model);
+  if (tip_only) run.orientation = false;
   std::vector<JointVector> q0(run.before.points.size());
   for (size_t i = 0; i < q0.size(); ++i) q0[i] = run.before.points[i].q;
   phase("compensating");
@@ -492,6 +511,7 @@ CompensationRun runCompensation(const CompensateInputs& in, const std::string& o
                                         run.orientation, co, &run.before.points);
   phase("writing and reading back");
   run.text = correctedText(in, run);
+  if (tip_only) run.text.notes.push_back(tipOnlyNote(run.machine.model));
   // The after, measured on the file as written: read back, predicted on the machine.
   const ClProgram back = readBack(in, run, output);
   run.after = predictToolPathParallel(run.machine.model, run.machine.params, back.path, 20,
@@ -813,7 +833,7 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
   bool no_errors = false;
   const std::string errors = machineErrorsStatement(machine, &no_errors);
   if (no_errors) run.warnings.push_back(errors + "; the program is written as it came");
-  run.orientation = whole.multiax;
+  run.orientation = whole.multiax && turnsToolAxis(model);
 
   // The report directory is taken before anything is written: one that cannot be written leaves
   // nothing written.
@@ -882,6 +902,7 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
   run.program = streamProgram(with_text, model, blocks, told("compensating"));
   unreachable(run.program, predictor.takeResult());
   run.text.notes = writer.notes();
+  if (whole.multiax && !run.orientation) run.text.notes.push_back(tipOnlyNote(model));
   const std::string written_file = outputs.close(in.output);
 
   // Third pass: the written file read back and predicted, against the records.
