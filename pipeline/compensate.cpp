@@ -264,6 +264,13 @@ std::string tipOnlyNote(const MachineModel& model) {
          "holds it";
 }
 
+// The report's note on points in a swivelled plane.
+std::string cycleNote(size_t points) {
+  return std::to_string(points) +
+         " points in a swivelled plane (CYCLE800): the tip compensated by the linear axes, the "
+         "tool axis left where the cycle puts it";
+}
+
 // A point's status in the joints file.
 const char* statusWord(bool written, CompensationStatus status) {
   return !written                                       ? "kept"
@@ -388,9 +395,7 @@ void fillReport(const CompensateInputs& in, const std::string& output, Compensat
   rep.notes = run.text.notes;
   if (const auto n =
           std::count(run.program.cycle_orientation.begin(), run.program.cycle_orientation.end(), 1))
-    rep.notes.push_back(std::to_string(n) +
-                        " points in a swivelled plane (CYCLE800): the tip compensated by the "
-                        "linear axes, the tool axis left where the cycle puts it");
+    rep.notes.push_back(cycleNote(static_cast<size_t>(n)));
 }
 
 }  // namespace
@@ -643,8 +648,7 @@ namespace {
 
 // Whether compensateProgram streams the program (pipeline/compensate.h).
 bool streamsCompensation(const CompensateInputs& in) {
-  return in.block_points > 0 && in.program.lines.empty() && in.process.empty() &&
-         in.program.nc.empty() && !readsAsGcode(in.program);
+  return in.block_points > 0 && in.program.lines.empty() && in.process.empty();
 }
 
 // Fixed-width records of doubles in a temporary file (removed when done): a streamed program's
@@ -758,10 +762,11 @@ void jointsOf(const PredictedPoints& p, size_t i, JointVector& q) {
   for (int a = 0; a < p.axes(); ++a) q[a] = p.q(a)[i];
 }
 
-// compensateProgram for CL data, block by block (pipeline/compensate.h): a first pass reads the
-// program (and, on a calibrated machine, fits the set-up to its evenly spaced poses, as predict
-// does); the second predicts, compensates and writes each block, its points' records to a
-// temporary file; the third reads the written file back, predicts it and writes the joints.
+// compensateProgram block by block (pipeline/compensate.h): a first pass reads the program (its
+// flags; G-code: the blocks that start an arc, whether it gives rotary words; on a calibrated
+// machine, the set-up fitted to its evenly spaced poses, as predict does); the second predicts,
+// compensates and writes each block, its points' records to a temporary file; the third reads
+// the written file back, predicts it and writes the joints.
 CompensationRun compensateStreamed(const CompensateInputs& in, const std::string& report_json,
                                    const Progress& progress) {
   auto told = [&progress](const char* phase) {
@@ -787,16 +792,24 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
 
   // First pass: the whole program's flags (a multi-axis program's 3-value GOTOs get the axis)
   // and the set-up's poses.
+  const bool gcode = readsAsGcode(in.program);
   ProgramOptions read_only = in.program;
   read_only.keep_motion_text = false;
   EvenPoses even;
   PredictedPoints pts;
   ClProgram whole;
+  GcodeArcStarts arcs;        // G-code: the blocks that start an arc
+  bool rotary_words = false;  // G-code: any block gives a rotary axis's word
   {
     BlockPredictor first(machine);
     whole = streamProgram(read_only, model,
                           ProgramBlocks{blocks.points,
                                         [&](ClProgram& block, bool last) {
+                                          if (gcode) {
+                                            arcs.add(block);
+                                            rotary_words =
+                                                rotary_words || gcodeGivesRotaryWords(block, model);
+                                          }
                                           if (!fit_setup) return;
                                           first.predict(block, last, pts);
                                           for (size_t i = 0; i < pts.size(); ++i) {
@@ -833,7 +846,8 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
   bool no_errors = false;
   const std::string errors = machineErrorsStatement(machine, &no_errors);
   if (no_errors) run.warnings.push_back(errors + "; the program is written as it came");
-  run.orientation = whole.multiax && turnsToolAxis(model);
+  const bool axes_given = gcode ? rotary_words : whole.multiax;
+  run.orientation = axes_given && turnsToolAxis(model);
 
   // The report directory is taken before anything is written: one that cannot be written leaves
   // nothing written.
@@ -844,8 +858,12 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
   OutputSet outputs;
   TextOut& cl_out = outputs.open(in.output);
   PointSpool spool(in.output + ".points.tmp-tolver", kQ0 + 2 * axes);
-  const SourceEncoding encoding(in.program.cl);
+  const SourceEncoding encoding(in.program.nc.empty() ? in.program.cl : in.program.nc);
   CompensatedAptWriter writer(whole.multiax);
+  CompensatedGcodeWriter gcode_writer(model, whole.units, arcs);
+  std::vector<JointVector> q;
+  std::vector<Eigen::Vector3d> corrected_p;
+  size_t cycle_points = 0;  // in a swivelled plane (CYCLE800)
   BlockPredictor predictor(machine);
   CompensationOptions co;
   co.max_condition = in.max_condition;
@@ -860,7 +878,11 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
     text.clear();
     if (!started) {
       if (encoding.bom) cl_out += "\xEF\xBB\xBF";
-      writer.start(compensatedHeader(in, block.file, model.name), text);
+      const std::vector<std::string> header = compensatedHeader(in, block.file, model.name);
+      if (gcode)
+        gcode_writer.start(block, header, text);
+      else
+        writer.start(header, text);
       started = true;
     }
     predictor.predict(block, last, pts);
@@ -869,13 +891,27 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
     const size_t n = block.path.size();
     q0.resize(n);
     for (size_t i = 0; i < n; ++i) jointsOf(pts, i, q0[i]);
-    const CompensationResult c = compensator.compensate(block.path, q0, run.orientation, &pts);
-    corrected = block.path;
-    for (size_t i = 0; i < n; ++i) {
-      corrected[i].p_w = c.points[i].nominal_p_w;
-      corrected[i].u_w = c.points[i].nominal_u_w;
+    const std::vector<char>* tip_only =
+        block.cycle_orientation.empty() ? nullptr : &block.cycle_orientation;
+    cycle_points += std::count(block.cycle_orientation.begin(), block.cycle_orientation.end(), 1);
+    const CompensationResult c =
+        compensator.compensate(block.path, q0, run.orientation, &pts, tip_only);
+    if (gcode) {
+      q.resize(n);
+      corrected_p.resize(n);
+      for (size_t i = 0; i < n; ++i) {
+        q[i] = c.points[i].q;
+        corrected_p[i] = c.points[i].nominal_p_w;
+      }
+      gcode_writer.lines(block, block.joints, q, corrected_p, text, written, nullptr);
+    } else {
+      corrected = block.path;
+      for (size_t i = 0; i < n; ++i) {
+        corrected[i].p_w = c.points[i].nominal_p_w;
+        corrected[i].u_w = c.points[i].nominal_u_w;
+      }
+      writer.statements(block, corrected, text, written);
     }
-    writer.statements(block, corrected, text, written);
     encoding.apply(text);
     cl_out += text;
     const size_t w = spool.width();
@@ -901,8 +937,8 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
   with_text.keep_motion_text = true;  // the in-place writer edits the GOTO statements
   run.program = streamProgram(with_text, model, blocks, told("compensating"));
   unreachable(run.program, predictor.takeResult());
-  run.text.notes = writer.notes();
-  if (whole.multiax && !run.orientation) run.text.notes.push_back(tipOnlyNote(model));
+  run.text.notes = gcode ? gcode_writer.notes() : writer.notes();
+  if (axes_given && !run.orientation) run.text.notes.push_back(tipOnlyNote(model));
   const std::string written_file = outputs.close(in.output);
 
   // Third pass: the written file read back and predicted, against the records.
@@ -929,8 +965,8 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
   std::vector<double> before_q(axes), after_q(axes);
   size_t index = 0;
   ProgramOptions back = read_only;
-  back.cl = in.output;
-  back.nc.clear();
+  (gcode ? back.nc : back.cl) = in.output;
+  (gcode ? back.cl : back.nc).clear();
   blocks.sink = [&](ClProgram& block, bool last) {
     after.predict(block, last, pts);
     if (!after.result().ok())
@@ -1005,6 +1041,7 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
   if (pu) bandSources(machine, rep);
   rep.setup_note = run.setup_note;
   rep.notes = run.text.notes;
+  if (cycle_points > 0) rep.notes.push_back(cycleNote(cycle_points));
   rep.joints_file = joints_path;
   outputs.add(report_json, formatCompensationJson(rep));
   if (report_dir) {

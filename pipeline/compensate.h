@@ -32,8 +32,8 @@ struct CompensateInputs {
   std::string output, report, report_dir;
   std::string table;
   double table_step = 10.0;  // mm
-  // CL data is read, compensated and written in blocks of at least this many points (ending on a
-  // statement); 0: the whole program at once, as G-code is (compensateProgram).
+  // The program is read, compensated and written in blocks of at least this many points (ending
+  // on a statement); 0: the whole program at once (compensateProgram).
   size_t block_points = 16384;
 };
 
@@ -112,14 +112,15 @@ struct CompensateRun {
   double worse_max_um = 0.0;
   Verdict verdict = Verdict::Ok;
 };
-// CL data (APT, CLSF) compensated whole (no --lines, no --process) is read, predicted,
+// A program compensated whole (no --lines, no --process; CL data or G-code) is read, predicted,
 // compensated and written block by block, then read back and predicted block by block: memory
 // independent of the program's length (its points' records wait in a temporary file beside the
-// output between the passes; the charts of --report-dir keep at most 4 points of every
-// 1/10 000 of the program, the largest before and after). G-code programs, --lines and --process
-// are compensated whole (runCompensation): the G-code editor looks ahead across blocks to the
-// next arc, a subset is matched to its read-back by line, and the process's program clock and
-// tools are the whole program's.
+// output between the passes; a first pass finds the whole program's flags and, for G-code, the
+// blocks that start an arc, one bit per line; the charts of --report-dir keep at most 4 points
+// of every 1/10 000 of the program, the largest before and after). The files are those of
+// runCompensation, byte for byte. --lines and --process are compensated whole (runCompensation):
+// a piece is matched to its read-back by line, and the process's program clock and tools are
+// the whole program's. CompensateInputs::block_points = 0 compensates whole too.
 // Throws InputError (FieldError "output": neither a program's output nor tables asked for).
 // Progress: streamed, "reading" (or "fitting the measured set-up" on a calibrated machine),
 // "compensating", "reading back", each with the fraction of the file read; whole, "reading and

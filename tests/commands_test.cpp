@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "io/common/io_error.h"
+#include "machine_errors.h"
 #include "pipeline/allocate.h"
 #include "pipeline/analyze.h"
 #include "pipeline/ballbar.h"
@@ -250,12 +251,13 @@ TEST_F(Commands, CompensateWritesACloserProgram) {
   EXPECT_EQ(refusedField([&] { compensateProgram(in); }), "output");
 }
 
-// CL data is compensated block by block (issue 36): the same files as the whole program at once,
-// byte for byte (the program, the joints), the same report (the band's medians within
-// StreamQuantiles' 1.6e-5), on real programs with arcs, drilling cycles, '$' continuations, a
-// multi-axis program whose first GOTOs give no axis, CRLF line ends and a byte-order mark; on a
-// calibrated machine with the set-up fitted, absolute and probed. Blocks of 97 points: most
-// statements, arcs and cycles meet a block's end somewhere.
+// Programs are compensated block by block (issue 36): the same files as the whole program at
+// once, byte for byte (the program, the joints), the same report (the band's medians within
+// StreamQuantiles' 1.6e-5), on real CL programs with arcs, drilling cycles, '$' continuations, a
+// multi-axis program whose first GOTOs give no axis, CRLF line ends and a byte-order mark, and on
+// G-code in TCP mode, in inches with arcs (the block before an arc kept), a swivelled plane; on a
+// calibrated machine with the set-up fitted, absolute and probed. Blocks of 97 points (G-code: 3):
+// most statements, arcs and cycles meet a block's end somewhere.
 TEST_F(Commands, CompensateInBlocksWritesWhatTheWholeProgramWrites) {
   // The cone with its first three GOTOs without a tool axis, CRLF line ends and a BOM.
   std::string cone_text = test::readText(sourcePath("samples/nas979_cone.apt"));
@@ -284,10 +286,33 @@ TEST_F(Commands, CompensateInBlocksWritesWhatTheWholeProgramWrites) {
     MachineOptions machine;
     bool absolute = false;
     std::string probed;
+    std::string nc;  // G-code instead of cl
   };
   MachineOptions creo = machine(kMeasured, false);
   creo.part_zero = {0, 0, 100};
   creo.gauge_length = 100;
+  // G-code: LinuxCNC's boat in TCP mode (M428), a posted inch program in joint words with arcs
+  // and machine moves, a Sinumerik swivelled plane (CYCLE800); on machines with random errors.
+  auto withErrors = [&](const char* file, unsigned seed) {
+    MachineOptions m;
+    m.machine = path(fs::path(file).stem().string() + "_errors.xml");
+    test::writeMachineWithErrors(sourcePath(file), seed, m.machine);
+    return m;
+  };
+  MachineOptions boat = withErrors("resources/machines/linuxcnc_xyzac_trt.xml", 5);
+  boat.setup = sourcePath("samples/gcode/linuxcnc_setup.txt");
+  MachineOptions umc = withErrors("resources/machines/umc_bc_trunnion.xml", 7);
+  umc.gauge_length = 76.2;
+  MachineOptions swivel = withErrors("resources/machines/sinumerik_bc_table.xml", 11);
+  swivel.setup = path("swivel_setup.txt");
+  std::ofstream(swivel.setup)
+      << "part_zero_mm = 0, 0, 0\ng54_mm = -310, 0, 200\ngauge_length_mm = 100\n";
+  std::ofstream(path("swivel.mpf"))
+      << "N10 G54 G0 X0 Y0 Z80 B0 C0 D1\n"
+         "N20 CYCLE800(1,\"TC1\",0,57,10,0,0,0,30,0,5,0,-3,1,100,1)\n"
+         "N50 G0 X5 Y-15 Z40\nN60 G1 Z2 F500\nN70 X25.000 Y10.000\nN72 X25.000 Y-10.000\n"
+         "N74 X5.000 Y-10.000\nN80 G0 Z40\nN90 CYCLE800()\nN100 G0 X0 Y0 Z80\n"
+         "N110 G1 X10 Y10 Z60 B10 C20\nN120 X12 Y8\nN130 G2 X14 Y10 I1 J1\nN140 G1 X16\nM30\n";
   const std::vector<Case> cases = {
       {"cone", sourcePath("samples/nas979_cone.apt"), machine(kMeasured)},
       {"cone absolute", sourcePath("samples/nas979_cone.apt"), machine(kMeasured), true},
@@ -298,21 +323,26 @@ TEST_F(Commands, CompensateInBlocksWritesWhatTheWholeProgramWrites) {
        machine(kMeasured)},
       {"Creo, arcs", sourcePath("tests/fixtures/cl/creo_profile_milling.ncl"), creo},
       {"nominal machine", sourcePath("samples/nas979_cone.apt"), machine(kNominal)},
+      {"G-code, LinuxCNC TCP", "", boat, false, "", sourcePath("samples/gcode/boat-xyzac.ngc")},
+      {"G-code, inch, joint words", "", umc, false, "", sourcePath("samples/gcode/umc_bc_inch.nc")},
+      {"G-code, Sinumerik CYCLE800", "", swivel, false, "", path("swivel.mpf")},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
     CompensateInputs in;
     in.machine = c.machine;
     in.program.cl = c.cl;
+    in.program.nc = c.nc;
     in.absolute = c.absolute;
     in.probed = c.probed;
-    in.output = path("whole.apt");
+    const std::string ext = c.nc.empty() ? ".apt" : fs::path(c.nc).extension().string();
+    in.output = path("whole" + ext);
     in.block_points = 0;
     const CompensateRun whole = compensateProgram(in);
     ASSERT_TRUE(whole.compensation);
     EXPECT_FALSE(whole.compensation->line.empty());  // the whole program in memory
-    in.output = path("blocks.apt");
-    in.block_points = 97;
+    in.output = path("blocks" + ext);
+    in.block_points = c.nc.empty() ? 97 : 3;
     in.report_dir = path("blocks_report");
     const CompensateRun blocks = compensateProgram(in);
     ASSERT_TRUE(blocks.compensation);
@@ -320,9 +350,9 @@ TEST_F(Commands, CompensateInBlocksWritesWhatTheWholeProgramWrites) {
     EXPECT_TRUE(fs::exists(path("blocks_report/report.html")));
     EXPECT_EQ(blocks.verdict, whole.verdict);
     EXPECT_EQ(blocks.worse_lines, whole.worse_lines);
-    EXPECT_FALSE(fs::exists(path("blocks.apt.points.tmp-tolver")));
+    EXPECT_FALSE(fs::exists(path("blocks" + ext + ".points.tmp-tolver")));
     // The program and the joints, byte for byte.
-    EXPECT_EQ(test::readText(path("blocks.apt")), test::readText(path("whole.apt")));
+    EXPECT_EQ(test::readText(path("blocks" + ext)), test::readText(path("whole" + ext)));
     EXPECT_EQ(test::readText(path("blocks_joints.csv")), test::readText(path("whole_joints.csv")));
     nlohmann::json a = nlohmann::json::parse(test::readText(path("whole.json")));
     nlohmann::json b = nlohmann::json::parse(test::readText(path("blocks.json")));
@@ -342,7 +372,7 @@ TEST_F(Commands, CompensateInBlocksWritesWhatTheWholeProgramWrites) {
       b.erase(k);
     }
     EXPECT_EQ(a, b) << a.dump(1) << "\n" << b.dump(1);
-    EXPECT_GT(b["points"].get<int>(), 97 * 3);
+    EXPECT_GT(b["points"].get<int>(), 3 * in.block_points);
   }
 }
 

@@ -14,6 +14,7 @@
 
 #include "io/common/io_error.h"
 #include "io/machine/machine_file.h"
+#include "machine_errors.h"
 #include "test_support.h"
 
 namespace tolver {
@@ -33,15 +34,8 @@ class CompensateCli : public test::TempDirTest {
  protected:
   // A copy of a shipped machine with random errors (5 um, 20 urad per coefficient).
   std::string withErrors(const std::string& machine, unsigned seed) {
-    Machine m = readMachineFile(src(machine));
-    std::mt19937 rng(seed);
-    std::normal_distribution<double> n(0.0, 1.0);
-    for (int i = 0; i < m.model.parameterCount(); ++i)
-      if (m.model.blocks[m.model.parameters[i].block].kind != BlockKind::WorkpieceSetup &&
-          m.model.blocks[m.model.parameters[i].block].kind != BlockKind::ToolSetup)
-        m.params[i] = n(rng) * (m.model.parameters[i].angular ? 20e-6 : 0.005) / 4;
     const std::string out = path(fs::path(machine).stem().string() + "_errors.xml");
-    writeFileAtomically(out, formatMachineXml(m, "random errors for a test"));
+    test::writeMachineWithErrors(src(machine), seed, out);
     return out;
   }
   // Runs compensate; checks the kept lines and returns the JSON report.

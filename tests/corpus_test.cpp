@@ -9,12 +9,10 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <random>
 #include <set>
 #include <string>
 
-#include "io/common/io_error.h"
-#include "io/machine/machine_file.h"
+#include "machine_errors.h"
 #include "pipeline/compensate.h"
 #include "test_support.h"
 
@@ -168,16 +166,8 @@ TEST_F(Corpus, EveryClProgramIsCompensatedInBlocksAsItIsWhole) {
     const auto s = test::runTolver("setup --machine " + q(test::sourcePath(e.machine)) + " --cl " +
                                    q(program) + " " + e.options + " -o " + q(setup));
     ASSERT_EQ(s.exit_code, 0) << s.output;
-    Machine m = readMachineFile(test::sourcePath(e.machine));
-    std::mt19937 rng(k);
-    std::normal_distribution<double> n(0.0, 1.0);
-    for (int i = 0; i < m.model.parameterCount(); ++i) {
-      const BlockKind kind = m.model.blocks[m.model.parameters[i].block].kind;
-      if (kind != BlockKind::WorkpieceSetup && kind != BlockKind::ToolSetup)
-        m.params[i] = n(rng) * (m.model.parameters[i].angular ? 20e-6 : 0.005) / 4;
-    }
     const fs::path machine = dir_ / ("m" + std::to_string(k) + ".xml");
-    writeFileAtomically(machine.string(), formatMachineXml(m, "random errors for a test"));
+    test::writeMachineWithErrors(test::sourcePath(e.machine), k, machine.string());
     CompensateInputs in;
     in.machine.machine = machine.string();
     in.machine.setup = setup.string();

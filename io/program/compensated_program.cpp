@@ -310,15 +310,10 @@ namespace {
 // judged (written or left as programmed, and why), given its target words, edited in place.
 class GcodeEditor {
  public:
-  GcodeEditor(const ClProgram& program, const MachineModel& model,
-              const std::vector<JointVector>& q0, const std::vector<JointVector>& q,
-              const std::vector<Eigen::Vector3d>& corrected_p_w)
-      : program_(program),
-        model_(model),
-        q0_(q0),
-        q_(q),
-        corrected_p_w_(corrected_p_w),
-        unit_(program.units == "INCH" ? 25.4 : 1.0),
+  GcodeEditor(const MachineModel& model, const std::string& units, const GcodeArcStarts& arcs)
+      : model_(model),
+        arcs_(arcs),
+        unit_(units == "INCH" ? 25.4 : 1.0),
         lin_min_(unit_ == 25.4 ? 5 : 4),
         n_(static_cast<int>(model.axes.size())),
         old_word_(n_, 0.0),
@@ -330,31 +325,64 @@ class GcodeEditor {
         axis_of_[static_cast<char>(
             std::toupper(static_cast<unsigned char>(model.axes[a].name[0])))] = a;
     gm_inv_ = tcpWordMatrix().inverse();
-    markArcBlocks();
-    out_.written.assign(program.path.size(), 0);
   }
 
-  CompensatedProgramText run(const std::vector<std::string>& header) {
-    size_t first = 0;
-    // The header after a leading '%' line.
-    if (!program_.lines.empty() && !program_.lines[0].empty() && program_.lines[0][0] == '%') {
-      out_.text += program_.lines[0];
-      out_.text += '\n';
-      out_.source_line.push_back(1);
-      first = 1;
+  // The header, after a leading '%' line (the first block's first line).
+  void start(const ClProgram& first, const std::vector<std::string>& header, std::string& out,
+             std::vector<int>* source_line) {
+    if (first.lines.first() == 0 && first.lines.size() > 0 && !first.lines[0].empty() &&
+        first.lines[0][0] == '%') {
+      out += first.lines[0];
+      out += '\n';
+      if (source_line) source_line->push_back(1);
+      skip_first_ = true;
     }
     // A Sinumerik control reads "( )" as a call: its comments start with ';'.
     const bool semicolon = model_.control.dialect == "sinumerik";
     for (const std::string& h : header) {
-      out_.text += semicolon ? "; " + h + "\n" : "(" + withoutParentheses(h) + ")\n";
-      out_.source_line.push_back(0);
+      out += semicolon ? "; " + h + "\n" : "(" + withoutParentheses(h) + ")\n";
+      if (source_line) source_line->push_back(0);
     }
-    for (size_t li = first; li < program_.lines.size(); ++li) {
-      out_.text += block(li) + "\n";
-      out_.source_line.push_back(static_cast<int>(li) + 1);
+  }
+
+  // A block's lines, edited, into out; written: one flag per block point.
+  void lines(const ClProgram& block, const std::vector<JointVector>& q0,
+             const std::vector<JointVector>& q, const std::vector<Eigen::Vector3d>& corrected_p_w,
+             std::string& out, std::vector<char>& written, std::vector<int>* source_line) {
+    program_ = &block;
+    q0_ = &q0;
+    q_ = &q;
+    corrected_p_w_ = &corrected_p_w;
+    written_ = &written;
+    written.assign(block.path.size(), 0);
+    for (size_t li = block.lines.first(); li < block.lines.size(); ++li) {
+      if (li == 0 && skip_first_) continue;
+      out += this->block(li);
+      out += '\n';
+      if (source_line) source_line->push_back(static_cast<int>(li) + 1);
     }
-    notes();
-    return std::move(out_);
+  }
+
+  // What was left as programmed, by reason.
+  std::vector<std::string> notes() const {
+    std::vector<std::string> out;
+    auto note = [&](const std::vector<int>& lines, const char* what) {
+      if (!lines.empty())
+        out.push_back(std::to_string(lines.size()) + " " + what +
+                      " left as programmed, uncompensated (lines " + lineList(lines) + ")");
+    };
+    note(arcs_list_, "arc blocks (G2/G3)");
+    note(arc_starts_,
+         "blocks that start an arc (written back to their programmed position: the arc's start "
+         "must stay on its circle)");
+    note(cycles_, "drilling-cycle blocks");
+    note(incremental_, "incremental (G91) blocks");
+    note(machine_moves_, "moves in machine coordinates (G53, G28, ...)");
+    note(expressions_,
+         "blocks with words given by expressions or parameters, or without the word in force");
+    note(rapid_kept_,
+         "rapid blocks that would need an axis they do not name (a rapid keeps its words)");
+    return out;
   }
 
  private:
@@ -394,30 +422,9 @@ class GcodeEditor {
     return gm;
   }
 
-  // Which blocks are arcs (the motion mode in force, modal): the block before an arc gives the
-  // arc's start, which must stay on the arc's circle, so it is left as programmed too.
-  void markArcBlocks() {
-    arc_block_.assign(program_.lines.size(), 0);
-    int mode = 0;
-    for (size_t li = 0; li < program_.lines.size(); ++li) {
-      for (const GWord& w : gcodeWords(std::string(program_.lines[li])))
-        if (w.letter == 'G' && w.numeric &&
-            (w.value == 0 || w.value == 1 || w.value == 2 || w.value == 3))
-          mode = static_cast<int>(w.value);
-      arc_block_[li] = (mode == 2 || mode == 3) && li < program_.statements.size() &&
-                       program_.statements[li].point_count > 0;
-    }
-  }
-
-  bool startsArc(size_t li) const {
-    for (size_t k = li + 1; k < program_.lines.size() && k < program_.statements.size(); ++k)
-      if (program_.statements[k].point_count > 0) return arc_block_[k] != 0;
-    return false;
-  }
-
   std::string block(size_t li) {
     Block b;
-    b.line = std::string(program_.lines[li]);
+    b.line = std::string(program_->lines[li]);
     b.line_no = static_cast<int>(li) + 1;
     scan(b, li);
     judge(b, li);
@@ -458,7 +465,8 @@ class GcodeEditor {
         if (!w.numeric) b.expression = true;
       }
     }
-    const AptStatement* st = li < program_.statements.size() ? &program_.statements[li] : nullptr;
+    const size_t k = li - program_->lines.first();  // the block's statements: one per line
+    const AptStatement* st = k < program_->statements.size() ? &program_->statements[k] : nullptr;
     const int points = st ? st->point_count : 0;
     if (points == 1) b.point = st->first_point;
     b.write =
@@ -470,11 +478,11 @@ class GcodeEditor {
   // program's own position, all axes (the values in force may carry earlier corrections): the
   // arc starts where it was programmed.
   void judge(Block& b, size_t li) {
-    b.restore = b.write && startsArc(li);
+    b.restore = b.write && arcs_.startsArc(static_cast<int>(li) + 1);
     if (b.restore) {
       arc_starts_.push_back(b.line_no);
     } else if (b.point != -1 && !b.write) {
-      (motion_ == 2 || motion_ == 3)   ? arcs_.push_back(b.line_no)
+      (motion_ == 2 || motion_ == 3)   ? arcs_list_.push_back(b.line_no)
       : motion_ >= 73 && motion_ != 80 ? cycles_.push_back(b.line_no)
       : !absolute_                     ? incremental_.push_back(b.line_no)
       : b.special                      ? machine_moves_.push_back(b.line_no)
@@ -488,14 +496,14 @@ class GcodeEditor {
   // unknown cannot be written.
   void targets(Block& b) {
     const int i = b.point;
-    const JointVector dq = b.restore ? JointVector::Zero(n_) : JointVector(q_[i] - q0_[i]);
+    const JointVector dq = b.restore ? JointVector::Zero(n_) : JointVector((*q_)[i] - (*q0_)[i]);
     const bool tcp =
-        i < static_cast<int>(program_.tcp.size()) && program_.tcp[i] == ClProgram::kTcpWords;
+        i < static_cast<int>(program_->tcp.size()) && program_->tcp[i] == ClProgram::kTcpWords;
     Eigen::Vector3d dxyz = Eigen::Vector3d::Zero();
     if (tcp && !b.restore) {
-      dxyz = gm_inv_ * (corrected_p_w_[i] - program_.path[i].p_w) / unit_;
-      if (i < static_cast<int>(program_.point_frame.size()))
-        dxyz = program_.frames[program_.point_frame[i]].T.linear().transpose() * dxyz;
+      dxyz = gm_inv_ * ((*corrected_p_w_)[i] - program_->path[i].p_w) / unit_;
+      if (i < static_cast<int>(program_->point_frame.size()))
+        dxyz = program_->frames[program_->point_frame[i]].T.linear().transpose() * dxyz;
     }
     const char L[3] = {'X', 'Y', 'Z'};
     b.target.assign(n_, 0.0);
@@ -555,7 +563,7 @@ class GcodeEditor {
               [](const auto& x, const auto& y) { return x.first > y.first; });
     if (!added.empty()) b.line.insert(insert_at, added);
     for (const auto& [start, e] : edits) b.line.replace(start, e.first, e.second);
-    out_.written[b.point] = !b.restore;
+    (*written_)[b.point] = !b.restore;
   }
 
   // The program's words in force after the block.
@@ -573,56 +581,92 @@ class GcodeEditor {
       for (const auto& [a, w] : b.axis_words) known_[a] = 0;
   }
 
-  // What was left as programmed, by reason.
-  void notes() {
-    auto note = [&](const std::vector<int>& lines, const char* what) {
-      if (!lines.empty())
-        out_.notes.push_back(std::to_string(lines.size()) + " " + what +
-                             " left as programmed, uncompensated (lines " + lineList(lines) + ")");
-    };
-    note(arcs_, "arc blocks (G2/G3)");
-    note(arc_starts_,
-         "blocks that start an arc (written back to their programmed position: the arc's start "
-         "must stay on its circle)");
-    note(cycles_, "drilling-cycle blocks");
-    note(incremental_, "incremental (G91) blocks");
-    note(machine_moves_, "moves in machine coordinates (G53, G28, ...)");
-    note(expressions_,
-         "blocks with words given by expressions or parameters, or without the word in force");
-    note(rapid_kept_,
-         "rapid blocks that would need an axis they do not name (a rapid keeps its words)");
-  }
-
-  const ClProgram& program_;
   const MachineModel& model_;
-  const std::vector<JointVector>& q0_;
-  const std::vector<JointVector>& q_;
-  const std::vector<Eigen::Vector3d>& corrected_p_w_;
+  const GcodeArcStarts& arcs_;
   const double unit_;
   const int lin_min_;
   const int n_;
   std::map<char, int> axis_of_;  // word letter -> axis
   Eigen::Matrix3d gm_inv_;
-  std::vector<char> arc_block_;
+  bool skip_first_ = false;  // the leading '%', written with the header
+  // The block being edited, its points' joints (commanded, compensating), corrected tips, flags.
+  const ClProgram* program_ = nullptr;
+  const std::vector<JointVector>* q0_ = nullptr;
+  const std::vector<JointVector>* q_ = nullptr;
+  const std::vector<Eigen::Vector3d>* corrected_p_w_ = nullptr;
+  std::vector<char>* written_ = nullptr;
   // Modal state: the program's word in force per axis, the compensated program's, their decimals.
   std::vector<double> old_word_, new_word_;
   std::vector<char> known_;
   std::vector<int> decimals_;
   int motion_ = 0;  // 0, 1, 2, 3, 80 (none), 81+ (cycles)
   bool absolute_ = true;
-  std::vector<int> arcs_, arc_starts_, cycles_, incremental_, machine_moves_, expressions_,
+  std::vector<int> arcs_list_, arc_starts_, cycles_, incremental_, machine_moves_, expressions_,
       rapid_kept_;
-  CompensatedProgramText out_;
 };
 
 }  // namespace
+
+void GcodeArcStarts::add(const ClProgram& block) {
+  for (size_t li = block.lines.first(); li < block.lines.size(); ++li) {
+    for (const GWord& w : gcodeWords(std::string(block.lines[li])))
+      if (w.letter == 'G' && w.numeric &&
+          (w.value == 0 || w.value == 1 || w.value == 2 || w.value == 3))
+        mode_ = static_cast<int>(w.value);
+    const size_t k = li - block.lines.first();
+    if (k >= block.statements.size() || block.statements[k].point_count <= 0) continue;
+    // A block with points: the previous one starts an arc when this is one.
+    const bool arc = mode_ == 2 || mode_ == 3;
+    if (last_point_line_ > 0 && arc) {
+      if (starts_.size() <= static_cast<size_t>(last_point_line_)) starts_.resize(li + 1, false);
+      starts_[last_point_line_] = true;
+    }
+    last_point_line_ = static_cast<int>(li) + 1;
+  }
+}
+
+bool GcodeArcStarts::startsArc(int line) const {
+  return line > 0 && static_cast<size_t>(line) < starts_.size() && starts_[line];
+}
+
+struct CompensatedGcodeWriter::Editor : GcodeEditor {
+  using GcodeEditor::GcodeEditor;
+};
+
+CompensatedGcodeWriter::CompensatedGcodeWriter(const MachineModel& model, const std::string& units,
+                                               const GcodeArcStarts& arcs)
+    : editor_(std::make_unique<Editor>(model, units, arcs)) {}
+
+CompensatedGcodeWriter::~CompensatedGcodeWriter() = default;
+
+void CompensatedGcodeWriter::start(const ClProgram& first, const std::vector<std::string>& header,
+                                   std::string& out, std::vector<int>* source_line) {
+  editor_->start(first, header, out, source_line);
+}
+
+void CompensatedGcodeWriter::lines(const ClProgram& block, const std::vector<JointVector>& q0,
+                                   const std::vector<JointVector>& q,
+                                   const std::vector<Eigen::Vector3d>& corrected_p_w,
+                                   std::string& out, std::vector<char>& written,
+                                   std::vector<int>* source_line) {
+  editor_->lines(block, q0, q, corrected_p_w, out, written, source_line);
+}
+
+std::vector<std::string> CompensatedGcodeWriter::notes() const { return editor_->notes(); }
 
 CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const MachineModel& model,
                                               const std::vector<JointVector>& q0,
                                               const std::vector<JointVector>& q,
                                               const std::vector<Eigen::Vector3d>& corrected_p_w,
                                               const std::vector<std::string>& header) {
-  return GcodeEditor(program, model, q0, q, corrected_p_w).run(header);
+  GcodeArcStarts arcs;
+  arcs.add(program);
+  CompensatedGcodeWriter writer(model, program.units, arcs);
+  CompensatedProgramText out;
+  writer.start(program, header, out.text, &out.source_line);
+  writer.lines(program, q0, q, corrected_p_w, out.text, out.written, &out.source_line);
+  out.notes = writer.notes();
+  return out;
 }
 
 bool gcodeGivesRotaryWords(const ClProgram& program, const MachineModel& model) {
@@ -630,7 +674,7 @@ bool gcodeGivesRotaryWords(const ClProgram& program, const MachineModel& model) 
   for (const Axis& ax : model.axes)
     if (ax.isRotary() && ax.name.size() == 1)
       rotary[static_cast<unsigned char>(std::toupper(static_cast<unsigned char>(ax.name[0])))] = 1;
-  for (size_t li = 0; li < program.lines.size(); ++li)
+  for (size_t li = program.lines.first(); li < program.lines.size(); ++li)
     for (const GWord& w : gcodeWords(std::string(program.lines[li])))
       if (rotary[static_cast<unsigned char>(w.letter)]) return true;
   return false;

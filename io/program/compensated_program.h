@@ -19,6 +19,7 @@
 // drilling cycles, incremental (G91) blocks, moves in machine coordinates (G53, G28) and words
 // given by expressions or parameters.
 #include <Eigen/Core>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -66,8 +67,47 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
                                               const std::vector<Eigen::Vector3d>& corrected_p_w,
                                               const std::vector<std::string>& header);
 
+// Which G-code blocks start an arc (the next block with a point is a G2/G3 move; its start must
+// stay on the circle, so the block is written back to its programmed position): add() every
+// block of a program in order (a whole program, or its blocks read one by one), then ask by
+// line (1-based). One bit per line up to the last such block.
+class GcodeArcStarts {
+ public:
+  void add(const ClProgram& block);
+  bool startsArc(int line) const;
+
+ private:
+  int mode_ = 0;             // the motion mode in force (G0 G1 G2 G3)
+  int last_point_line_ = 0;  // the last line with a point so far
+  std::vector<bool> starts_;
+};
+
+// formatCompensatedGcode block by block (a program read in blocks): start() with the first block,
+// lines() for each block in order (q0, q, corrected_p_w: one per block point; written: set to
+// one flag per block point), notes() after the last. units: the whole program's ("INCH" or
+// "MM"); arcs: every block added (a first pass over the program).
+class CompensatedGcodeWriter {
+ public:
+  CompensatedGcodeWriter(const MachineModel& model, const std::string& units,
+                         const GcodeArcStarts& arcs);
+  ~CompensatedGcodeWriter();
+  CompensatedGcodeWriter(const CompensatedGcodeWriter&) = delete;
+  CompensatedGcodeWriter& operator=(const CompensatedGcodeWriter&) = delete;
+  void start(const ClProgram& first, const std::vector<std::string>& header, std::string& out,
+             std::vector<int>* source_line = nullptr);
+  void lines(const ClProgram& block, const std::vector<JointVector>& q0,
+             const std::vector<JointVector>& q, const std::vector<Eigen::Vector3d>& corrected_p_w,
+             std::string& out, std::vector<char>& written, std::vector<int>* source_line = nullptr);
+  std::vector<std::string> notes() const;
+
+ private:
+  struct Editor;
+  std::unique_ptr<Editor> editor_;
+};
+
 // Whether any block of a G-code program gives a word of a rotary axis (else it is a 3-axis
-// program, compensated by the prismatic joints alone).
+// program, compensated by the prismatic joints alone). A block of a program read in blocks: its
+// own lines.
 bool gcodeGivesRotaryWords(const ClProgram& program, const MachineModel& model);
 
 }  // namespace tolver
