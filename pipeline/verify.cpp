@@ -212,7 +212,8 @@ std::string describeCutter(const Cutter& c) {
 std::vector<std::pair<std::string, std::string>> renderImages(
     int line_pass, const std::string& dir, const SurfaceSamples& s, const VerifyResult& r,
     const std::vector<ToleranceZone>& zones, const std::vector<LineProfilePoint>& profile,
-    const std::string& title, std::vector<std::string>* notes, const std::vector<int>* cl_lines) {
+    const std::string& title, std::vector<std::string>* notes, const std::vector<int>* cl_lines,
+    const DecimatedMesh* mesh) {
   std::vector<std::pair<std::string, std::string>> images;
   std::string why;
   if (!ensureDisplay(&why)) {
@@ -220,12 +221,27 @@ std::vector<std::pair<std::string, std::string>> renderImages(
     return images;
   }
   std::lock_guard<std::mutex> lock(g_vtk_mutex);
-  std::vector<Eigen::Vector3d> points(s.p_w);
+  // The surface: every sample, or the 3D view's decimated mesh (its vertices are samples, with
+  // their own colours).
+  const bool decimated = mesh && !mesh->vertex.empty() && mesh->vertex.size() < s.size();
+  std::vector<Eigen::Vector3d> points;
   DeviationMap map;
   map.points = &points;
-  map.faces = &s.faces;
-  map.colours.resize(s.size());
-  for (size_t i = 0; i < s.size(); ++i) map.colours[i] = sampleColour(r, zones, i);
+  map.faces = decimated ? &mesh->faces : &s.faces;
+  const size_t n = decimated ? mesh->vertex.size() : s.size();
+  points.resize(n);
+  map.colours.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    const size_t i = decimated ? static_cast<size_t>(mesh->vertex[k]) : k;
+    points[k] = s.p_w[i];
+    map.colours[k] = sampleColour(r, zones, i);
+  }
+  if (decimated)
+    notes->push_back("the deviation maps are drawn on the 3D view's mesh: " + std::to_string(n) +
+                     " of " + std::to_string(s.size()) + " samples, every sample within " +
+                     formatWith("%.3g", mesh->max_distance_mm) + " mm of it and within " +
+                     formatWith("%.3g", mmToUm(mesh->max_value_difference)) +
+                     " um of the value drawn over it, one CAD face, zone and state per triangle");
   map.bar_lower = zones.front().lower;
   map.bar_upper = zones.front().upper;
   map.title = title;
@@ -1171,22 +1187,24 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
     phase("write_surfaces");
     const std::string title =
         verdictName(r) + "  " + r.name + ": total deviation (predicted swept - CAD)";
+    // The view's decimation may still run (a part of more than 120 000 samples): its progress.
+    // The maps are drawn on its mesh (a million samples render in seconds in software, and at
+    // an image's resolution the decimated mesh, within its bounds, draws the same map).
+    while (view.wait_for(std::chrono::milliseconds(200)) != std::future_status::ready)
+      if (progress && view_done >= 0)
+        progress("3D view: decimating " + std::to_string(samples.size()) + " samples", view_done);
+    v.view_mesh = view.get();
+    if (!v.view_mesh.vertex.empty()) r.view_mesh = &v.view_mesh;
+    phase("wait_view3d");
     if (images)
       r.images = renderImages(r.line_pass, dir.string(), samples, result, r.zones, r.line_profile,
-                              title, &r.notes, &r.cl_lines);
+                              title, &r.notes, &r.cl_lines, r.view_mesh);
     phase("images");
   } catch (...) {
     tables.wait();  // it writes into the staging directory: let it finish before that goes
-    view.wait();
+    if (view.valid()) view.wait();
     throw;
   }
-  // The view's decimation may still run (a part of more than 120 000 samples): its progress.
-  while (view.wait_for(std::chrono::milliseconds(200)) != std::future_status::ready)
-    if (progress && view_done >= 0)
-      progress("3D view: decimating " + std::to_string(samples.size()) + " samples", view_done);
-  v.view_mesh = view.get();
-  if (!v.view_mesh.vertex.empty()) r.view_mesh = &v.view_mesh;
-  phase("wait_view3d");
   // The table and PLY thread's own time (concurrent with the two phases above), then what was
   // left of it to wait for.
   const double tables_s = tables.get();
