@@ -376,6 +376,35 @@ TEST_F(Commands, CompensateInBlocksWritesWhatTheWholeProgramWrites) {
   }
 }
 
+// An error found after blocks were written (a malformed number, a point out of travel near the
+// end) leaves nothing: no program, report, joints, temporary or spooled records.
+TEST_F(Commands, CompensateInBlocksLeavesNothingWhenALaterBlockFails) {
+  const std::string cone = test::readText(sourcePath("samples/nas979_cone.apt"));
+  const std::string body = cone.substr(0, cone.rfind("FINI"));
+  const std::pair<std::string, std::string> cases[] = {
+      {"GOTO/1,2,abc,0,0,1\n", "expected a number"},
+      {"GOTO/0,0,-900,0,0,1\n", "unreachable"},
+  };
+  for (const auto& [bad, says] : cases) {
+    SCOPED_TRACE(says);
+    std::ofstream(path("late.apt")) << body << body << bad << "FINI\n";
+    CompensateInputs in;
+    in.machine = machine(kMeasured);
+    in.program.cl = path("late.apt");
+    in.output = path("out/late_c.apt");
+    in.block_points = 100;
+    fs::create_directories(path("out"));
+    try {
+      compensateProgram(in);
+      ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(says), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("late.apt:"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(fs::is_empty(path("out")));
+  }
+}
+
 // verifyPart's verdict is the report's, and report.json's exit code is the verdict's.
 TEST_F(Commands, VerifyVerdictIsTheReportsAndItsExitCode) {
   VerifyInputs in;
