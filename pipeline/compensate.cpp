@@ -886,9 +886,13 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
       started = true;
     }
     predictor.predict(block, last, pts);
-    failed = failed || !predictor.result().ok();
-    if (failed) return;  // the error at the end names the points
     const size_t n = block.path.size();
+    // A point the machine cannot reach (its numbers NaN; in the block's tail it reaches the
+    // result with the next block): nothing more is made, the error at the end names the points.
+    failed = failed || !predictor.result().ok();
+    for (size_t i = 0; i < n && !failed; ++i)
+      failed = !std::isfinite(pts.field(PredictedPoints::kTipX)[i]);
+    if (failed) return;
     q0.resize(n);
     for (size_t i = 0; i < n; ++i) jointsOf(pts, i, q0[i]);
     const std::vector<char>* tip_only =
@@ -937,6 +941,8 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
   with_text.keep_motion_text = true;  // the in-place writer edits the GOTO statements
   run.program = streamProgram(with_text, model, blocks, told("compensating"));
   unreachable(run.program, predictor.takeResult());
+  if (failed)  // a point without numbers that the prediction does not name: never written short
+    throw std::runtime_error("a point of the program has no prediction and no failure");
   run.text.notes = gcode ? gcode_writer.notes() : writer.notes();
   if (axes_given && !run.orientation) run.text.notes.push_back(tipOnlyNote(model));
   const std::string written_file = outputs.close(in.output);
