@@ -9,7 +9,7 @@
 #     per-point table and without (--no-errors), on both cores and on one (taskset -c 0);
 #   * ball-bar readings simulated on the measured Matsuura: 600 poses, and a 2 000-pose plan
 #     measured five times (10 000 and more readings); calibrate on both, diagnose on the second;
-#   * compensate on both programs;
+#   * compensate on both programs and on a 1.03 M-line five-axis G-code program (LinuxCNC's boat);
 #   * verify at scale: bench/verify_large.sh's part and 120 802-point finish at 0.115 mm;
 #   * setup on the largest program of ../shared/data/corpus, when that directory is there.
 set -euo pipefail
@@ -73,11 +73,18 @@ for s in "${sizes[@]}"; do
   fi
 done
 
-# Compensate (CL data in blocks: its memory does not grow with the program).
+# Compensate (in blocks: its memory does not grow with the program).
 for s in "${sizes[@]}"; do
   run "compensate, $s points" "$tolver" compensate --machine "$m_measured" \
     --setup samples/matsuura_setup.txt --cl "$work/finish_$s.apt" -o "$work/c.apt"
 done
+# G-code: LinuxCNC's five-axis boat (TCP, arcs) repeated to 1.03 M lines, on its nominal machine.
+boat=samples/gcode/boat-xyzac.ngc
+{ head -13 "$boat"; for k in $(seq 1 555); do sed -n '14,1874p' "$boat"; done
+  sed -n '1875,1881p' "$boat"; } > "$work/boat_1M.ngc"
+run "compensate, 1.03M-line G-code (boat, TCP), nominal machine" "$tolver" compensate \
+  --machine resources/machines/linuxcnc_xyzac_trt.xml --setup samples/gcode/linuxcnc_setup.txt \
+  --nc "$work/boat_1M.ngc" -o "$work/c.ngc"
 
 # Ball-bar readings.
 "$tolver" plan-ballbar --machine "$m_nominal" --poses 600 --seed 3 -o "$work/plan600.csv" > /dev/null
