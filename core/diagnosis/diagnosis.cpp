@@ -216,7 +216,10 @@ class Scorer {
   double rssSearch(const Eigen::MatrixXd& G) const {
     if (G.cols() == 0) return rss0_;
     const Eigen::MatrixXd Gs = scaleColumns(G);
-    const Eigen::MatrixXd QtG = Q_.transpose() * Gs;
+    // Q^T Gs a column at a time (matrix-vector products down Q's columns): a search's G has a
+    // few columns, and a blocked product would pack all of Q (m x p) again at every call.
+    Eigen::MatrixXd QtG(Q_.cols(), Gs.cols());
+    for (Eigen::Index j = 0; j < Gs.cols(); ++j) QtG.col(j).noalias() = Q_.transpose() * Gs.col(j);
     Eigen::MatrixXd gram = Gs.transpose() * Gs;
     gram.noalias() -= QtG.transpose() * QtG;
     const Eigen::VectorXd b = Gs.transpose() * r_perp_;
