@@ -280,6 +280,38 @@ const char* statusWord(bool written, CompensationStatus status) {
                                                         : "not_converged";
 }
 
+// The joints file (<report>_joints.csv), written a point at a time: the header, then per point
+// the program's joints and those the written file commands (the compensating ones where it
+// compensates), mm or deg.
+class JointsWriter {
+ public:
+  JointsWriter(const MachineModel& model, TextOut& out)
+      : model_(model), out_(out), before_(model.axes.size()), after_(model.axes.size()) {
+    std::vector<std::string> names;
+    std::vector<bool> rotary;
+    for (const Axis& ax : model.axes) {
+      names.push_back(ax.name);
+      rotary.push_back(ax.isRotary());
+    }
+    out_ += compensatedJointsCsvHeader(names, rotary);
+  }
+  void add(size_t index, int line, bool written, CompensationStatus status, const double* q0,
+           const double* q, double tip_after_um, double axis_after_urad) {
+    for (size_t a = 0; a < before_.size(); ++a) {
+      const double k = model_.axes[a].isRotary() ? radToDeg(1.0) : 1.0;
+      before_[a] = q0[a] * k;
+      after_[a] = (written ? q[a] : q0[a]) * k;
+    }
+    writeCompensatedJointsRow(out_, index, line, statusWord(written, status), before_.data(),
+                              after_.data(), before_.size(), tip_after_um, axis_after_urad);
+  }
+
+ private:
+  const MachineModel& model_;
+  TextOut& out_;
+  std::vector<double> before_, after_;
+};
+
 // The written text read back as the next command will, whole, then the points of the source
 // lines compensated (--lines); one point per program point, or an internal error.
 ClProgram readBack(const CompensateInputs& in, const CompensationRun& run,
@@ -547,29 +579,13 @@ void writeCompensation(const CompensationRun& run, const std::string& output,
   OutputSet outputs;
   outputs.add(output, run.text.text);
   // The joints of every point, before and after (the compensating ones where written).
-  {
-    const MachineModel& m = run.machine.model;
+  outputs.addStreamed(compensatedJointsPath(report_json), [&run](TextOut& out) {
+    JointsWriter joints(run.machine.model, out);
     const std::vector<CompensatedPoint>& cp = run.compensation.points;
-    std::vector<std::string> names, status;
-    std::vector<bool> rotary;
-    for (const Axis& ax : m.axes) {
-      names.push_back(ax.name);
-      rotary.push_back(ax.isRotary());
-    }
-    std::vector<std::vector<double>> before(cp.size()), after(cp.size());
-    for (size_t i = 0; i < cp.size(); ++i) {
-      const bool written = i < run.text.written.size() && run.text.written[i];
-      status.push_back(statusWord(written, cp[i].status));
-      for (size_t a = 0; a < m.axes.size(); ++a) {
-        const double k = m.axes[a].isRotary() ? radToDeg(1.0) : 1.0;
-        before[i].push_back(cp[i].q0[a] * k);
-        after[i].push_back((written ? cp[i].q[a] : cp[i].q0[a]) * k);
-      }
-    }
-    outputs.add(compensatedJointsPath(report_json),
-                formatCompensatedJointsCsv(names, rotary, run.line, status, before, after,
-                                           run.tip_after_um, run.axis_after_urad));
-  }
+    for (size_t i = 0; i < cp.size(); ++i)
+      joints.add(i, run.line[i], i < run.text.written.size() && run.text.written[i], cp[i].status,
+                 cp[i].q0.data(), cp[i].q.data(), run.tip_after_um[i], run.axis_after_urad[i]);
+  });
   CompensationReport rep = run.report;
   rep.joints_file = compensatedJointsPath(report_json);
   outputs.add(report_json, formatCompensationJson(rep));
@@ -950,16 +966,7 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
   // Third pass: the written file read back and predicted, against the records.
   spool.rewind();
   const std::string joints_path = compensatedJointsPath(report_json);
-  TextOut& joints = outputs.open(joints_path);
-  {
-    std::vector<std::string> names;
-    std::vector<bool> rotary;
-    for (const Axis& ax : model.axes) {
-      names.push_back(ax.name);
-      rotary.push_back(ax.isRotary());
-    }
-    joints += compensatedJointsCsvHeader(names, rotary);
-  }
+  JointsWriter joints(model, outputs.open(joints_path));
   const size_t total = spool.count();
   CompensationTally tally(model);
   ChartPoints chart(total);
@@ -968,7 +975,6 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
   if (pu)
     per_thread = std::make_unique<tbb::enumerable_thread_specific<PredictionUncertainty>>(*pu);
   std::vector<double> band_tip, band_axis;
-  std::vector<double> before_q(axes), after_q(axes);
   size_t index = 0;
   ProgramOptions back = read_only;
   (gcode ? back.nc : back.cl) = in.output;
@@ -1019,14 +1025,8 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
       if (pu) tally.addBand(band_tip[i], band_axis[i]);
       chart.add(index + i, p.line, p.tip_before_um, p.tip_after_um, p.axis_before_urad,
                 p.axis_after_urad);
-      for (size_t a = 0; a < axes; ++a) {
-        const double k = model.axes[a].isRotary() ? radToDeg(1.0) : 1.0;
-        before_q[a] = p.q0[a] * k;
-        after_q[a] = (p.written ? p.q[a] : p.q0[a]) * k;
-      }
-      writeCompensatedJointsRow(joints, index + i, p.line, statusWord(p.written, p.status),
-                                before_q.data(), after_q.data(), axes, p.tip_after_um,
-                                p.axis_after_urad);
+      joints.add(index + i, p.line, p.written, p.status, p.q0, p.q, p.tip_after_um,
+                 p.axis_after_urad);
     }
     index += n;
   };

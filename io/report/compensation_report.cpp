@@ -49,19 +49,6 @@ void writeCompensatedJointsRow(TextOut& out, size_t index, int line, std::string
   out += row.view();
 }
 
-std::string formatCompensatedJointsCsv(
-    const std::vector<std::string>& axis_names, const std::vector<bool>& rotary,
-    const std::vector<int>& line, const std::vector<std::string>& status,
-    const std::vector<std::vector<double>>& before, const std::vector<std::vector<double>>& after,
-    const std::vector<double>& tip_after_um, const std::vector<double>& axis_after_urad) {
-  TextOut out;
-  out += compensatedJointsCsvHeader(axis_names, rotary);
-  for (size_t i = 0; i < line.size(); ++i)
-    writeCompensatedJointsRow(out, i, line[i], status[i], before[i].data(), after[i].data(),
-                              axis_names.size(), tip_after_um[i], axis_after_urad[i]);
-  return out.take();
-}
-
 std::string formatCompensationJson(const CompensationReport& r) {
   nlohmann::json j;
   j["machine"] = r.machine;

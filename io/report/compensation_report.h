@@ -51,17 +51,11 @@ struct CompensationReport {
 
 std::string formatCompensationJson(const CompensationReport& r);
 
-// The joints of every point (CSV): index, line, status (compensated, ill_conditioned,
-// out_of_travel, not_converged, kept: left as written), then <axis>_before and <axis>_after per
-// machine axis (mm or deg, machine-file convention) and the after's tip and axis error (um, urad).
-std::string formatCompensatedJointsCsv(
-    const std::vector<std::string>& axis_names, const std::vector<bool>& rotary,
-    const std::vector<int>& line, const std::vector<std::string>& status,
-    const std::vector<std::vector<double>>& before, const std::vector<std::vector<double>>& after,
-    const std::vector<double>& tip_after_um, const std::vector<double>& axis_after_urad);
-
-// The same in pieces (a program compensated block by block): the header line, then one row
-// per point (before, after: one value per axis); the same bytes.
+// The joints of every point (CSV), written a row at a time: index, line, status (compensated,
+// ill_conditioned, out_of_travel, not_converged, kept: left as written), then <axis>_before and
+// <axis>_after per machine axis (mm or deg, machine-file convention) and the after's tip and
+// axis error (um, urad): the header line, then one row per point (before, after: one value per
+// axis).
 std::string compensatedJointsCsvHeader(const std::vector<std::string>& axis_names,
                                        const std::vector<bool>& rotary);
 void writeCompensatedJointsRow(TextOut& out, size_t index, int line, std::string_view status,
