@@ -2,10 +2,12 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <unordered_map>
 
 namespace tolver {
 namespace {
@@ -22,10 +24,13 @@ class BoxTree {
     int id;
   };
   explicit BoxTree(std::vector<Box> boxes) : boxes_(std::move(boxes)) {
-    if (!boxes_.empty()) {
-      nodes_.reserve(2 * boxes_.size() / kLeaf + 2);
-      build(0, static_cast<int>(boxes_.size()));
-    }
+    if (boxes_.empty()) return;
+    // Each subtree's nodes follow its root (the left subtree's first): with the node count of a
+    // subtree known from its size, both halves are built at once, into the places they take.
+    const int n = static_cast<int>(boxes_.size());
+    countNodes(n);
+    nodes_.resize(node_count_.at(n));
+    build(0, 0, n);
   }
   // Calls f(id) for each box that overlaps [lo, hi]. lo and hi may shrink while it runs (f
   // changes them): what is left to visit is tested against them as they are.
@@ -76,25 +81,36 @@ class BoxTree {
     int count = 0;  // boxes in a leaf, 0 for an inner node
     int right = 0;
   };
-  // The node over boxes_[first, last); returns its index. Depth stays below 64: each split halves.
-  int build(int first, int last) {
-    const int index = static_cast<int>(nodes_.size());
-    nodes_.emplace_back();
-    Eigen::Array3d lo = boxes_[first].lo, hi = boxes_[first].hi;
-    Eigen::Array3d clo = lo + hi, chi = clo;
+  // The nodes of a subtree over n boxes, for every size the splits below n make (at most two a
+  // level).
+  int countNodes(int n) {
+    if (const auto it = node_count_.find(n); it != node_count_.end()) return it->second;
+    const int c = n <= kLeaf ? 1 : 1 + countNodes(n / 2) + countNodes(n - n / 2);
+    node_count_.emplace(n, c);
+    return c;
+  }
+  // The node `index` over boxes_[first, last), its subtree's nodes after it. Depth stays below 64:
+  // each split halves. Halves of more than kParallel boxes are built in parallel (the nodes and
+  // the boxes they sort are their own).
+  void build(int index, int first, int last) {
+    Node& node = nodes_[index];
+    if (last - first <= kLeaf) {
+      Eigen::Array3d lo = boxes_[first].lo, hi = boxes_[first].hi;
+      for (int k = first + 1; k < last; ++k) {
+        lo = lo.min(boxes_[k].lo);
+        hi = hi.max(boxes_[k].hi);
+      }
+      node.lo = lo;
+      node.hi = hi;
+      node.first = first;
+      node.count = last - first;
+      return;
+    }
+    Eigen::Array3d clo = boxes_[first].lo + boxes_[first].hi, chi = clo;
     for (int k = first + 1; k < last; ++k) {
-      lo = lo.min(boxes_[k].lo);
-      hi = hi.max(boxes_[k].hi);
       const Eigen::Array3d c = boxes_[k].lo + boxes_[k].hi;
       clo = clo.min(c);
       chi = chi.max(c);
-    }
-    nodes_[index].lo = lo;
-    nodes_[index].hi = hi;
-    if (last - first <= kLeaf) {
-      nodes_[index].first = first;
-      nodes_[index].count = last - first;
-      return index;
     }
     int axis = 0;
     (chi - clo).maxCoeff(&axis);
@@ -103,12 +119,19 @@ class BoxTree {
                      [axis](const Box& a, const Box& b) {
                        return a.lo[axis] + a.hi[axis] < b.lo[axis] + b.hi[axis];
                      });
-    const int left = build(first, mid);
-    const int right = build(mid, last);
-    nodes_[index].first = left;
-    nodes_[index].right = right;
-    return index;
+    const int left = index + 1, right = index + 1 + node_count_.at(mid - first);
+    if (last - first > kParallel)
+      tbb::parallel_invoke([&] { build(left, first, mid); }, [&] { build(right, mid, last); });
+    else
+      build(left, first, mid), build(right, mid, last);
+    // The box from the children's (each node's box is its boxes').
+    node.lo = nodes_[left].lo.min(nodes_[right].lo);
+    node.hi = nodes_[left].hi.max(nodes_[right].hi);
+    node.first = left;
+    node.right = right;
   }
+  static constexpr int kParallel = 16384;
+  std::unordered_map<int, int> node_count_;  // the nodes of a subtree, by its boxes
   std::vector<Box> boxes_;
   std::vector<Node> nodes_;
 };
