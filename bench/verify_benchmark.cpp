@@ -6,6 +6,7 @@
 
 #include "core/kinematics/forward_kinematics.h"
 #include "core/path/tool_motion.h"
+#include "geometry/mesh_decimate.h"
 #include "geometry/swept_surface.h"
 #include "io/machine/machine_file.h"
 #include "io/mesh/mesh_file.h"
@@ -71,6 +72,36 @@ void BM_SampleSurfaceSculptured(benchmark::State& state) {
   }
 }
 BENCHMARK(BM_SampleSurfaceSculptured)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// The 3D view's decimation as verify runs it at scale (bench/verify_large.sh's spacing): the part
+// sampled at 0.115 mm (about 1 M samples), the finish's deviations as the values, a category per
+// state of a +-0.03 mm zone, the edges locked, down to 120 000 vertices.
+void BM_DecimateForDisplay(benchmark::State& state) {
+  const Fixture& f = fixture();
+  static const SurfaceSamples s = sampleSurface(f.mesh, 0.115);
+  static std::vector<double> value;
+  static std::vector<int> category;
+  if (value.empty()) {
+    SweepOptions opt;
+    opt.excess_range = opt.gouge_range = 0.15;
+    SweepResult r;
+    sweepSurface(s, f.cutter, f.actual, opt, &r);
+    value = r.deviation;
+    for (size_t i = 0; i < s.size(); ++i)
+      category.push_back(!r.machined[i] ? 0 : value[i] > 0.03 ? 1 : value[i] < -0.03 ? 2 : 3);
+  }
+  DecimateOptions o;
+  o.max_distance_mm = 0.0575;
+  o.max_value_difference = 0.06 / 8;
+  o.max_vertices = 120000;
+  for (auto _ : state) {
+    DecimatedMesh m = decimateForDisplay(s.p_w, s.faces, value, category, s.on_edge, o);
+    benchmark::DoNotOptimize(m.faces.data());
+    state.counters["kept"] = static_cast<double>(m.vertex.size());
+  }
+  state.counters["samples"] = static_cast<double>(s.size());
+}
+BENCHMARK(BM_DecimateForDisplay)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace tolver

@@ -1,5 +1,7 @@
 #include "geometry/mesh_decimate.h"
 
+#include "geometry/openmesh_quiet.h"
+
 // OpenMesh is kept inside this file (and mesh_repair.cpp): no header of this layer includes it.
 #include <tbb/parallel_for.h>
 
@@ -14,7 +16,6 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
-#include <iostream>
 #include <limits>
 #include <stdexcept>
 #include <thread>
@@ -110,7 +111,11 @@ class ModDisplayBoundT : public OpenMesh::Decimater::ModBaseT<MeshT> {
   }
 
   void preprocess_collapse(const CollapseInfo& ci) override {
-    const double d = carried(ci);
+    // The legality test just computed it when it passed this collapse last (the mesh unchanged
+    // since: no collapse in between).
+    const bool known = last_v0_ == ci.v0.idx() && last_v1_ == ci.v1.idx() && last_at_ == collapses_;
+    const double d = known ? last_carried_ : carried(ci);
+    ++collapses_;
     const int v0 = ci.v0.idx();
     for (auto w : mesh_.vv_range(ci.v0)) {
       const int i = w.idx();
@@ -124,6 +129,12 @@ class ModDisplayBoundT : public OpenMesh::Decimater::ModBaseT<MeshT> {
   // The distance bound v0's vertices would carry after the collapse; -1: the collapse breaks a
   // bound or a category.
   double carried(const CollapseInfo& ci) const {
+    last_v0_ = ci.v0.idx();
+    last_v1_ = ci.v1.idx();
+    last_at_ = collapses_;
+    return last_carried_ = carriedBound(ci);
+  }
+  double carriedBound(const CollapseInfo& ci) const {
     if (!sharesRing(ci)) return -1;
     const int v0 = ci.v0.idx();
     const auto& P = *p_;
@@ -147,6 +158,12 @@ class ModDisplayBoundT : public OpenMesh::Decimater::ModBaseT<MeshT> {
   const std::vector<int>* category_ = nullptr;
   double max_distance_ = 0, max_difference_ = 0;
   std::vector<double> lo_, hi_, distance_;  // per vertex
+  // The last bound computed, for the collapse of last_v0_ into last_v1_ after `last_at_`
+  // collapses.
+  mutable int last_v0_ = -1, last_v1_ = -1;
+  mutable size_t last_at_ = 0;
+  mutable double last_carried_ = -1;
+  size_t collapses_ = 0;
 };
 
 // The decimater's progress: every 4096 collapses, the fraction of those wanted.
@@ -173,7 +190,7 @@ class DecimationProgress : public OpenMesh::Decimater::Observer {
 // module allows. It keeps no heap: a collapse costs 8 evaluations instead of the heap's update of
 // its whole neighbourhood (about 36). The heap decimater does the rest, where the choices grow
 // rare. Both ask every module, so the bounds hold the same.
-template <class MeshT, class Bound>
+template <class MeshT, class Bound, class Quadric>
 class SampledDecimaterT : public OpenMesh::Decimater::DecimaterT<MeshT> {
  public:
   using Base = OpenMesh::Decimater::DecimaterT<MeshT>;
@@ -183,7 +200,7 @@ class SampledDecimaterT : public OpenMesh::Decimater::DecimaterT<MeshT> {
 
   // Up to `wanted` collapses, or fewer when a whole pass over the halfedges made none. Returns
   // the collapses made.
-  size_t sampled(size_t wanted, const Bound& bound, std::uint64_t seed) {
+  size_t sampled(size_t wanted, const Bound& bound, Quadric& quadric, std::uint64_t seed) {
     if (!this->is_initialized()) return 0;
     std::uint64_t state = seed;
     auto next = [&state] {  // splitmix64
@@ -201,17 +218,29 @@ class SampledDecimaterT : public OpenMesh::Decimater::DecimaterT<MeshT> {
         done_at_pass = done;
         cursor = 0;
       }
-      typename MeshT::HalfedgeHandle best;
-      float best_energy = std::numeric_limits<float>::max();
+      // The draws' quadric errors first (cheap), then the legality tests (the link condition,
+      // the bounds, the normals: dear) in increasing error until one passes: the collapse of
+      // least error among the legal draws, the first drawn among equal ones, as if every draw
+      // had been tested.
+      std::array<std::pair<float, int>, kDraws> draws;
+      int drawn = 0;
       for (int k = 0; k < kDraws; ++k) {
         const typename MeshT::HalfedgeHandle h(
             static_cast<int>((cursor + next() % kWindow) % halfedges));
         if (mesh_.status(mesh_.edge_handle(h)).deleted()) continue;
         const CollapseInfo ci(mesh_, h);
-        if (!bound.sharesRing(ci) || !this->is_collapse_legal(ci)) continue;
-        const float e = this->collapse_priority(ci);
-        if (e != OpenMesh::Decimater::ModBaseT<MeshT>::ILLEGAL_COLLAPSE && e < best_energy)
-          best_energy = e, best = h;
+        if (mesh_.status(ci.v0).locked() || !bound.sharesRing(ci)) continue;
+        draws[drawn++] = {quadric.collapse_priority(ci), h.idx()};
+      }
+      std::stable_sort(draws.begin(), draws.begin() + drawn,
+                       [](const auto& a, const auto& b) { return a.first < b.first; });
+      typename MeshT::HalfedgeHandle best;
+      for (int k = 0; k < drawn && !best.is_valid(); ++k) {
+        const typename MeshT::HalfedgeHandle h(draws[k].second);
+        const CollapseInfo ci(mesh_, h);
+        if (legal(ci) &&
+            this->collapse_priority(ci) != OpenMesh::Decimater::ModBaseT<MeshT>::ILLEGAL_COLLAPSE)
+          best = h;
       }
       if (!best.is_valid()) continue;
       CollapseInfo ci(mesh_, best);
@@ -227,6 +256,53 @@ class SampledDecimaterT : public OpenMesh::Decimater::DecimaterT<MeshT> {
   }
 
  private:
+  // BaseDecimaterT::is_collapse_legal, its topology test (TriConnectivity::is_collapse_ok)
+  // written without the heap: OpenMesh 9's builds and sorts vectors of the one-rings at every
+  // call (a fifth of a verify's time went there). The classic test of OpenMesh 8 and of Garland
+  // and Heckbert's link condition: the one-rings of v0 and v1 meet only in the vertices opposite
+  // the edge. A ring larger than kRing goes to OpenMesh's.
+  bool legal(const CollapseInfo& ci) {
+    if (mesh_.status(ci.v0).locked() || !collapseOk(ci)) return false;
+    if (ci.vl.is_valid() && ci.vr.is_valid() && mesh_.find_halfedge(ci.vl, ci.vr).is_valid() &&
+        mesh_.valence(ci.vl) == 3 && mesh_.valence(ci.vr) == 3)
+      return false;
+    if (mesh_.status(ci.v0).feature() && !mesh_.status(mesh_.edge_handle(ci.v0v1)).feature())
+      return false;
+    if (mesh_.is_boundary(ci.v0) &&
+        (!mesh_.is_boundary(ci.v1) || (ci.vl.is_valid() && ci.vr.is_valid())))
+      return false;
+    return mesh_.cw_rotated_halfedge_handle(mesh_.cw_rotated_halfedge_handle(ci.v0v1)) != ci.v0v1;
+  }
+  bool collapseOk(const CollapseInfo& ci) {
+    const auto v0v1 = ci.v0v1, v1v0 = ci.v1v0;
+    if (mesh_.status(mesh_.edge_handle(v0v1)).deleted()) return false;
+    const auto v0 = ci.v0, v1 = ci.v1;
+    if (mesh_.status(v0).deleted() || mesh_.status(v1).deleted()) return false;
+    // A face of the mesh is a triangle: a side is one when it is not the boundary.
+    const bool left = !mesh_.is_boundary(v0v1), right = !mesh_.is_boundary(v1v0);
+    const auto l = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(v0v1));
+    const auto r = mesh_.to_vertex_handle(mesh_.next_halfedge_handle(v1v0));
+    auto bothBoundary = [&](typename MeshT::HalfedgeHandle h) {  // the triangle's other edges
+      const auto h1 = mesh_.next_halfedge_handle(h), h2 = mesh_.next_halfedge_handle(h1);
+      return mesh_.is_boundary(mesh_.opposite_halfedge_handle(h1)) &&
+             mesh_.is_boundary(mesh_.opposite_halfedge_handle(h2));
+    };
+    if ((left && bothBoundary(v0v1)) || (right && bothBoundary(v1v0))) return false;
+    if (l == r && left && right) return false;
+    if (mesh_.is_boundary(v0) && mesh_.is_boundary(v1) && left && right) return false;
+    std::array<int, kRing> ring1;
+    int n1 = 0;
+    for (auto w : mesh_.vv_range(v1)) {
+      if (n1 == kRing) return mesh_.is_collapse_ok(v0v1);
+      ring1[n1++] = w.idx();
+    }
+    for (auto w : mesh_.vv_range(v0)) {
+      if ((w == l && left) || (w == r && right)) continue;
+      if (std::find(ring1.begin(), ring1.begin() + n1, w.idx()) != ring1.begin() + n1) return false;
+    }
+    return true;
+  }
+  static constexpr int kRing = 48;
   // Each step draws kDraws halfedges from the kWindow that start at a cursor advancing kAdvance
   // a step through the halfedges (the sampler's order is spatial: the draws stay in cache).
   static constexpr int kDraws = 8;
@@ -260,16 +336,13 @@ DecimatedMesh decimatePiece(const std::vector<Eigen::Vector3d>& p,
     vh[i] = mesh.add_vertex(Mesh::Point(p[i].x(), p[i].y(), p[i].z()));
   std::vector<Eigen::Vector3i> as_given;
   {
-    // OpenMesh reports a face it cannot add (a non-manifold edge) on std::cerr: silenced here,
+    // OpenMesh reports a face it cannot add (a non-manifold edge): silenced (quietOpenMesh),
     // the face is kept as given and its vertices locked.
+    quietOpenMesh();
     for (const Eigen::Vector3i& f : faces) {
       const bool repeated = f[0] == f[1] || f[1] == f[2] || f[0] == f[2];
       Mesh::FaceHandle h;
-      if (!repeated) {
-        auto* previous = std::cerr.rdbuf(nullptr);
-        h = mesh.add_face(vh[f[0]], vh[f[1]], vh[f[2]]);
-        std::cerr.rdbuf(previous);
-      }
+      if (!repeated) h = mesh.add_face(vh[f[0]], vh[f[1]], vh[f[2]]);
       if (!h.is_valid()) as_given.push_back(f);
     }
   }
@@ -283,7 +356,8 @@ DecimatedMesh decimatePiece(const std::vector<Eigen::Vector3d>& p,
   for (const Eigen::Vector3i& f : as_given)
     for (int k = 0; k < 3; ++k) mesh.status(vh[f[k]]).set_locked(true);
 
-  using Decimater = SampledDecimaterT<Mesh, ModDisplayBoundT<Mesh>>;
+  using Decimater =
+      SampledDecimaterT<Mesh, ModDisplayBoundT<Mesh>, OpenMesh::Decimater::ModQuadricT<Mesh>>;
   Decimater decimater(mesh);
   OpenMesh::Decimater::ModQuadricT<Mesh>::Handle quadric;
   OpenMesh::Decimater::ModNormalFlippingT<Mesh>::Handle flipping;
@@ -340,7 +414,7 @@ DecimatedMesh decimatePiece(const std::vector<Eigen::Vector3d>& p,
   // Multiple choices first, then the heap for what they leave (decimate(0) would go as far as
   // the bounds allow: not called for nothing).
   auto collapse = [&](size_t n, std::uint64_t seed) {
-    decimater.sampled(n, decimater.module(bound), seed);
+    decimater.sampled(n, decimater.module(bound), decimater.module(quadric), seed);
     progress.done_before = static_cast<double>(p.size() - kept());
     if (kept() > budget) decimater.decimate(kept() - budget);
   };

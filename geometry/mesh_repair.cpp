@@ -13,10 +13,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <iostream>
 #include <map>
 #include <numeric>
 #include <unordered_map>
+
+#include "geometry/openmesh_quiet.h"
 
 namespace tolver {
 namespace {
@@ -60,25 +61,23 @@ using OmMesh = OpenMesh::TriMesh_ArrayKernelT<OmTraits>;
 
 // The faces as OpenMesh's half-edge mesh, face f as its face f. After orient_polygon_soup the
 // faces form an oriented manifold OpenMesh takes face by face; a face it cannot take is refused
-// with its place (OpenMesh's own message, on std::cerr, is silenced).
+// with its place (OpenMesh's own message is silenced: quietOpenMesh).
 OmMesh halfedgeMesh(const std::vector<Eigen::Vector3d>& points,
                     const std::vector<Eigen::Vector3i>& faces) {
   OmMesh m;
   m.reserve(points.size(), 3 * faces.size() / 2 + 16, faces.size());
   for (const Eigen::Vector3d& p : points) m.add_vertex(OmMesh::Point(p.x(), p.y(), p.z()));
-  auto* previous = std::cerr.rdbuf(nullptr);
+  quietOpenMesh();
   for (const Eigen::Vector3i& f : faces) {
     const auto h = m.add_face(OmMesh::VertexHandle(f[0]), OmMesh::VertexHandle(f[1]),
                               OmMesh::VertexHandle(f[2]));
     if (!h.is_valid()) {
-      std::cerr.rdbuf(previous);
       const Eigen::Vector3d c = (points[f[0]] + points[f[1]] + points[f[2]]) / 3.0;
       throw MeshDefect("a face cannot join its neighbours (a non-manifold vertex or edge) at " +
                            at(c) + "; repair the model in CAD",
                        c);
     }
   }
-  std::cerr.rdbuf(previous);
   return m;
 }
 
