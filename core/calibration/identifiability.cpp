@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <random>
 
 #include "core/kinematics/sensitivity_jacobian.h"
@@ -111,24 +112,27 @@ MinimalSet selectMinimalSet(const Eigen::MatrixXd& J, const std::vector<int>& co
     // III: among what is left, the removal that leaves the smallest condition number (and
     // never one that loses rank).
     int best = candidates.front();
+    std::optional<SvdSummary> best_summary;  // the trials' summary of the removal chosen
     if (candidates.size() > 1) {
       double best_key = std::numeric_limits<double>::infinity();
       for (int g : candidates) {
         std::vector<int> trial = live;
         trial.erase(trial.begin() + g);
-        const SvdSummary s = summariseScaled(selectCols(R, trial), static_cast<int>(J.rows()));
+        SvdSummary s = summariseScaled(selectCols(R, trial), static_cast<int>(J.rows()));
         if (s.rank < cur.rank) continue;
         const double key = s.singular_values[0] / s.singular_values[s.rank - 1];
         if (key < best_key) {
           best_key = key;
           best = g;
+          best_summary = std::move(s);
         }
       }
       step.strategy += step.strategy.empty() ? "III" : "+III";
     }
     std::vector<int> next = live;
     next.erase(next.begin() + best);
-    cur = summariseScaled(selectCols(R, next), static_cast<int>(J.rows()));
+    cur = best_summary ? std::move(*best_summary)
+                       : summariseScaled(selectCols(R, next), static_cast<int>(J.rows()));
     step.removed = columns[live[best]];
     step.size_after = static_cast<int>(next.size());
     step.rank_after = cur.rank;
