@@ -244,6 +244,9 @@ void sweepSurface(const SurfaceSamples& samples, const Cutter& cutter,
         if (deeper) shrink();
       }
     };
+    if (options.first_try && (*options.first_try)[i] >= 0 &&
+        (*options.first_try)[i] < static_cast<int>(placements.size()))
+      cut((*options.first_try)[i]);
     if (hint >= 0) cut(hint);
     if (ball) centre_tree.queryNear(lo, hi, ball_reach2, cut);
     tree.query(lo, hi, cut);
@@ -285,6 +288,9 @@ void sweepSurface(const SurfaceSamples& samples, const ToolSet& tools,
     sweepSurface(samples, tools.cutters.front(), placements, options, result, progress);
     return;
   }
+  // Several tools: each sweeps its own placements, numbered afresh (no first tries).
+  SweepOptions own_options = options;
+  own_options.first_try = nullptr;
   const size_t n = samples.size();
   result->deviation.assign(n, options.excess_range);
   result->machined.assign(n, 0);
@@ -306,7 +312,7 @@ void sweepSurface(const SurfaceSamples& samples, const ToolSet& tools,
     SweepResult r;
     const double share = static_cast<double>(own.size()) / static_cast<double>(placements.size());
     const double before = static_cast<double>(done) / static_cast<double>(placements.size());
-    sweepSurface(samples, tools.cutters[t], own, options, &r, [&](double f) {
+    sweepSurface(samples, tools.cutters[t], own, own_options, &r, [&](double f) {
       if (progress) progress(before + share * f);
     });
     done += own.size();
