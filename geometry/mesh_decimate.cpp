@@ -18,7 +18,6 @@
 #include <cstdint>
 #include <limits>
 #include <stdexcept>
-#include <thread>
 
 namespace tolver {
 namespace {
@@ -463,13 +462,15 @@ DecimatedMesh decimateForDisplay(const std::vector<Eigen::Vector3d>& p,
                                  const std::vector<char>& locked, const DecimateOptions& options) {
   if (value.size() != p.size() || category.size() != p.size() || locked.size() != p.size())
     throw std::invalid_argument("decimateForDisplay: one value, category and lock per vertex");
-  // Slabs along the longest axis, one per core (at most 8, each of 100 000 vertices or more),
-  // each decimated by its own decimater to its share of the budget; the faces across a seam are
-  // kept as they are, their vertices locked. One piece: the whole mesh.
+  // Slabs along the longest axis, one per 100 000 vertices (at most 8), each decimated by its own
+  // decimater to its share of the budget, the slabs in parallel; the faces across a seam are kept
+  // as they are, their vertices locked. One piece: the whole mesh. Not one per core: a slab's
+  // arrays then stay in cache, and eight slabs on two cores balance, so 1.06 M samples went down
+  // to 120 000 in 2.0-2.1 s where two slabs took 2.7-3.0 s; and the mesh shown is the same on any
+  // machine.
   const size_t n = p.size();
   const size_t budget = static_cast<size_t>(std::max(options.max_vertices, 3));
-  const size_t automatic = std::clamp<size_t>(
-      std::min<size_t>(std::thread::hardware_concurrency(), 8), 1, std::max<size_t>(n / 100000, 1));
+  const size_t automatic = std::clamp<size_t>(n / 100000, 1, 8);
   const size_t pieces = n <= budget          ? 1
                         : options.pieces > 0 ? static_cast<size_t>(options.pieces)
                                              : automatic;

@@ -34,7 +34,7 @@ struct DecimateOptions {
   // budget if it must.
   int max_vertices = 150000;
   // Pieces decimated in parallel (slabs along the longest axis, their seams kept whole): 0, one
-  // per core, at most 8, each of 100 000 vertices or more.
+  // per 100 000 vertices, at most 8 (whatever the machine's cores).
   int pieces = 0;
   // Called with the fraction of the collapses wanted that are done, from the decimating thread.
   std::function<void(double)> progress;
