@@ -782,6 +782,72 @@ TEST(GcodeReader, SinumerikOrientationVectorsAndRadiusArcs) {
             std::string::npos);
 }
 
+// TURN= (Sinumerik's helix: full circles added to the arc, 0 to 999; NX's Sinumerik post writes
+// TURN=0 on helical ramps, as in ElMoe's bottle opener): TURN=0 is the arc alone; TURN=2 runs two
+// full circles and then the arc, the infeed linear in the angle over the whole helix (checked
+// against the helix's own formula); a fraction, or TURN= on a line, is refused naming TURN.
+TEST(GcodeReader, SinumerikTurnAddsFullCirclesToAHelix) {
+  Machine m = machine("resources/machines/sinumerik_bc_table.xml", 0.0);
+  m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, 0, 200);
+  const std::string head = "N10 G54 G0 X10 Y0 Z5 B0 C0 D1\nN20 G17 G1 Z0 F100\n";
+  const ClProgram plain = parseGcode(head + "N30 G3 X0 Y10 Z-2 I-10 J0\n", "a.mpf", m.model);
+  const ClProgram zero = parseGcode(head + "N30 G3 X0 Y10 Z-2 I-10 J0 TURN=0\n", "b.mpf", m.model);
+  ASSERT_EQ(plain.path.size(), zero.path.size());
+  for (size_t i = 0; i < plain.path.size(); ++i)
+    EXPECT_EQ(plain.path[i].p_w, zero.path[i].p_w) << i;
+  const ClProgram two = parseGcode(head + "N30 G3 X0 Y10 Z-2 I-10 J0 TURN=2\n", "c.mpf", m.model);
+  // The helix's points: angle from 0 to 2 * 2 pi + pi / 2 about (0, 0), counter-clockwise, z from
+  // 0 to -2 in proportion to the angle; in the part frame, the work offset and machine aside:
+  // compared through the first point (the start of the helix).
+  std::vector<Eigen::Vector3d> helix;
+  size_t first = 0;
+  while (first < two.path.size() && two.path[first].line != 3) ++first;
+  ASSERT_LT(first, two.path.size());
+  const Eigen::Vector3d origin = two.path[first - 1].p_w - Eigen::Vector3d(10, 0, 0);
+  const double total = 2 * 2 * M_PI + M_PI / 2;
+  double last_angle = 0;
+  for (size_t i = first; i < two.path.size(); ++i) {
+    const Eigen::Vector3d q = two.path[i].p_w - origin;
+    EXPECT_NEAR(std::hypot(q.x(), q.y()), 10.0, 1e-9) << i;
+    double angle = std::atan2(q.y(), q.x());
+    while (angle < last_angle - 1e-9) angle += 2 * M_PI;  // unwrapped, never backwards
+    EXPECT_NEAR(q.z(), -2.0 * angle / total, 1e-9) << i;
+    last_angle = angle;
+  }
+  EXPECT_NEAR(last_angle, total, 1e-9);
+  EXPECT_GT(two.path.size() - first, 8 * (plain.path.size() - first));
+  EXPECT_NE(refusal(head + "N30 G3 X0 Y10 Z-2 I-10 J0 TURN=1.5\n", m.model).find("TURN"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "N30 G1 X0 Y10 TURN=2\n", m.model).find("TURN"), std::string::npos);
+}
+
+// Two more programs of the Keychain's data set (ElMoe/Production-Data-Set-for-Five-Axis-CNC-
+// Milling-with-Multiple-Changeovers, NC_code: NX's Sinumerik 840D post, B/C table), byte for
+// byte: the bottle opener ramps down on 234 helices written with TURN=0, refused before TURN=
+// was read; the coordinate-system part swivels the table (B-90, C up to -270). Both read whole;
+// the bottle opener's first helix (N1540 G3 ... Z-12. TURN=0) descends from -11.82 to -12.
+TEST(GcodeReader, SinumerikProgramsOfTheSameDataSetRead) {
+  Machine m = machine("resources/machines/sinumerik_bc_table.xml", 0.0);
+  m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, 0, 200);
+  const ClProgram bottle =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/nx_sin840d_Bottle_opener.txt"), m.model);
+  EXPECT_EQ(bottle.arcs_expanded, 1553);
+  double z_first = NAN, z_last = NAN, z_before = 1e9;
+  for (const ClPoint& c : bottle.path) {
+    if (c.line != 154) continue;
+    if (std::isnan(z_first)) z_first = c.p_w.z();
+    EXPECT_LE(c.p_w.z(), z_before + 1e-12);
+    z_before = z_last = c.p_w.z();
+  }
+  EXPECT_GT(z_first, -12.0);
+  EXPECT_LT(z_first, -11.82);
+  EXPECT_NEAR(z_last, -12.0, 1e-9);
+  const ClProgram cross =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/nx_sin840d_Achskreuz.mpf"), m.model);
+  EXPECT_EQ(cross.arcs_expanded, 696);
+  EXPECT_GT(cross.path.size(), 20000u);
+}
+
 // Tools per operation: M6 switches the cutter to the selected T; its geometry comes from the
 // post's tool comments (Fusion, LinuxCNC posts); posts that write no M6 change tools at T.
 TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {

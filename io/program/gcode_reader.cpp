@@ -336,12 +336,14 @@ class Reader {
     if (t < b.tok.size() && b.tok[t][0] == 'N' && b.tok[t].size() > 1 &&
         std::isdigit(static_cast<unsigned char>(b.tok[t][1])))
       ++t;  // the block number
+    sin_turns_ = -1;
     if (t < b.tok.size() && b.tok[t] == "DEF") {
       sinDeclare(b, t);
       return "";
     }
     for (; t < b.tok.size(); ++t) t = sinWord(b, t);
     if (b.orient_given) b.out += orientationWords(b.orient, b.orient_column);
+    sin_turns_ = b.turns;
     return b.out;
   }
 
@@ -354,6 +356,7 @@ class Reader {
     Eigen::Vector3d orient = Eigen::Vector3d::Zero();
     bool orient_given = false;
     int orient_column = 0;
+    int turns = -1;  // TURN=: full circles added to the block's arc; -1 none
   };
 
   [[noreturn]] void sinRefuse(const SinBlock& b, size_t t, const std::string& why) {
@@ -549,16 +552,27 @@ class Reader {
       if (b.orient_column == 0) b.orient_column = b.col[t];
       return;
     }
+    if (name == "TURN") {
+      // Helical interpolation's additional full circles, 0 to 999 (SINUMERIK 840D sl
+      // Programming Manual, Fundamentals, 6FC5398-1BP40-0BA0, "Helical interpolation (G2/G3,
+      // TURN)": the full circles first, then the arc to the end point; the infeed axis moves
+      // over the whole helix). Carried out by the arc as LinuxCNC's P (turns = TURN + 1).
+      const double n = sinExpression(expr, b.col[t]);
+      if (!(n >= 0 && n <= 999 && n == std::round(n)))
+        sinRefuse(b, t, "TURN= must be a whole number of full circles from 0 to 999");
+      b.turns = static_cast<int>(n);
+      return;
+    }
     if (name == "CR") {
       // Circle radius (G2/G3 ... CR=, negative beyond 180 deg): the ISO R form.
       b.out += " R[" + sinBrackets(expr) + "]";
       return;
     }
     static const std::set<std::string> motion_names = {
-        "A2",  "B2",   "C2",  "A4",  "B4",   "C4",   "A5",   "B5",    "C5",   "A6",
-        "B6",  "C6",   "A7",  "B7",  "C7",   "LEAD", "TILT", "THETA", "PO",   "PSI",
-        "XH",  "YH",   "ZH",  "RND", "RNDM", "CHR",  "CHF",  "AP",    "RP",   "AR",
-        "ANG", "TURN", "CIP", "I1",  "J1",   "K1",   "SF",   "OFFN",  "DISC", "DISR"};
+        "A2",  "B2",  "C2", "A4",  "B4",   "C4",   "A5",   "B5",    "C5",  "A6",
+        "B6",  "C6",  "A7", "B7",  "C7",   "LEAD", "TILT", "THETA", "PO",  "PSI",
+        "XH",  "YH",  "ZH", "RND", "RNDM", "CHR",  "CHF",  "AP",    "RP",  "AR",
+        "ANG", "CIP", "I1", "J1",  "K1",   "SF",   "OFFN", "DISC",  "DISR"};
     if (motion_names.count(name))
       sinRefuse(b, t,
                 "Sinumerik " + name +
@@ -1885,6 +1899,9 @@ class Reader {
       arc(aw, motion, start, end);
       return motion;
     }
+    if (sin_turns_ > 0)
+      fail(line_, 0, "TURN",
+           "TURN= (full circles of a helix) on a block that is not an arc (G2/G3)");
     updateRotaryWords(aw);
     emit(end, motion == "G0");
     return motion;
@@ -1935,6 +1952,7 @@ class Reader {
         fail(line_, p.column, "P", "the number of turns must be a whole number from 1 to 1000");
       turns = static_cast<int>(p.value) - 1;
     }
+    if (sin_turns_ >= 0) turns = sin_turns_;  // Sinumerik's TURN= on this block
     std::vector<Eigen::Vector3d> pts;
     const double tol = opt_.chordal_tolerance_mm;
     const double r0 = (start - centre - n * n.dot(start - centre)).norm();
@@ -2072,6 +2090,7 @@ class Reader {
   int unknown_moves_ = 0, first_unknown_line_ = 0, last_unknown_line_ = 0;
   // Sinumerik state.
   std::map<std::string, double> sin_vars_;
+  int sin_turns_ = -1;  // the Sinumerik block's TURN= (sinumerikBlock), -1 when it gives none
   bool sin_mcall_ = false, sin_cycle_here_ = false;
   // Frames (mm): the swivel frame (CYCLE800), the programmable frame (TRANS, ROT, ...) and
   // frame_ = swivel_ * pframe_, which maps program coordinates into the settable frame (G54...).
