@@ -395,6 +395,36 @@ std::string refusal(const std::string& text, const MachineModel& model) {
   return "accepted";
 }
 
+// The program's end (M30, M2, a second '%') leaves what follows unread: said in a note, and
+// named when nothing was read before it. Fusion's MPCNC post writes remarks as '%' lines
+// ("% vfd enable", "% LED ON" before the first move: richcreations/Ghettotator,
+// models/wiggler-8-back0125drill.gcode, shortened); on an ISO control the second '%' ends the
+// tape there, and tolver said only "the program has no moves".
+TEST(GcodeReader, WhatFollowsTheEndIsNamed) {
+  const Machine m = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  const std::string mpcnc =
+      "%\n(Fusion CAM 2.0.18961)\n( Posts processor: MPCNC21.cps)\n% vfd enable\nM6 T0\n"
+      "% LED ON\nM62 P0\nM3 S5000\nG0 Z3 F300\nX77.688 Y49.688 F7500\nG1 Z-3 F1000\n"
+      "G0 Z3\n% LED Off\nM63 P0\n%%\n";
+  const std::string why = refusal(mpcnc, m.model);
+  EXPECT_NE(why.find("r.nc:6: '%': the program ends here with no moves before it"),
+            std::string::npos)
+      << why;
+  EXPECT_NE(why.find("from line 7"), std::string::npos) << why;
+  EXPECT_NE(why.find("not a comment"), std::string::npos) << why;
+  // Blocks after M30 (a subprogram nothing calls): read up to M30, the rest noted.
+  const ClProgram p = parseGcode("G21 G90\nG0 X1 Y1 Z5\nG1 Z-1 F100\nM30\nO2000\nG1 X50\nM99\n%\n",
+                                 "e.nc", m.model);
+  EXPECT_TRUE(hasNote(p,
+                      "the program ends at line 4 (M30); 3 line(s) after it, from line 5, "
+                      "are not read"))
+      << (p.notes.empty() ? "" : p.notes.back());
+  EXPECT_EQ(p.path.back().line, 3);
+  // Only '%' and comments after the end: nothing to say.
+  const ClProgram q = parseGcode("%\nG21 G90\nG0 X1 Y1 Z5\nM30\n(end)\n%\n", "f.nc", m.model);
+  for (const std::string& n : q.notes) EXPECT_EQ(n.find("program ends at"), std::string::npos) << n;
+}
+
 // Text before the first '%' is the tape leader (NX writes its listing there); O numbers and
 // names, ':' numbers and a name at the program start are the program's name, not subprograms.
 TEST(GcodeReader, TapeLeaderAndProgramNamesAreNotBlocks) {

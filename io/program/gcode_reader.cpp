@@ -153,8 +153,23 @@ class Reader {
     }
     for (const std::string& h : held) processLine(h);
     if (!any_) fail(0, 0, "", "empty file: no blocks");
+    // What the end of the program left unread: said, and named when nothing was read before it
+    // (a post that writes '%' lines as remarks ends an ISO tape there).
+    const std::string after_end =
+        after_end_ == 0
+            ? std::string()
+            : std::to_string(after_end_) + " line(s) after it, from line " +
+                  std::to_string(first_after_end_) + ", are not read" +
+                  (end_cause_ == "'%'" ? " (on ISO controls a second '%' ends the tape: it is not "
+                                         "a comment)"
+                                       : "");
     if (points_read_ == 0)
-      fail(0, 0, "", "the program has no moves (no G0/G1/G2/G3 with axis words)");
+      fail(after_end_ ? end_line_ : 0, 0, after_end_ ? end_cause_ : "",
+           after_end_ ? "the program ends here with no moves before it; " + after_end
+                      : "the program has no moves (no G0/G1/G2/G3 with axis words)");
+    if (after_end_ > 0)
+      prog_.notes.push_back("the program ends at line " + std::to_string(end_line_) + " (" +
+                            end_cause_ + "); " + after_end);
     if (unknown_moves_ > 0)
       prog_.notes.push_back(std::to_string(unknown_moves_) +
                             " move(s) before every axis had a "
@@ -195,9 +210,11 @@ class Reader {
     const std::string_view t = trim(text);
     any_ = any_ || !t.empty();
     if (!ended_ && !t.empty() && t[0] == '%') {
-      if (++percent_ >= 2 && seen_block_) ended_ = true;
+      if (++percent_ >= 2 && seen_block_) endAt("'%'");
     } else if (!ended_ && !t.empty()) {
       st.major = block(text);
+    } else if (ended_ && !t.empty() && t[0] != '%' && t[0] != '(' && t[0] != ';') {
+      if (after_end_++ == 0) first_after_end_ = line_;
     }
     st.point_count = static_cast<int>(prog_.path.size()) - st.first_point;
     if (st.point_count == 0) st.first_point = -1;
@@ -1519,7 +1536,7 @@ class Reader {
     if (w.code == "M98" || w.code == "M99" || w.code == "M97")
       fail(line_, w.column, w.code, "subprogram calls are not supported: expand them in the post");
     if (w.code == "M2" || w.code == "M30") {
-      ended_ = true;
+      endAt(w.code);
       endModes(w.code);
     } else if (w.code == "M6") {
       seen_m6_ = true;
@@ -2084,6 +2101,15 @@ class Reader {
   int nesting_ = 0;
   LineSource* source_ = nullptr;
   int line_ = 0;
+  // The program's end (M2, M30 or a second '%'): where, by what, and the lines after it that
+  // hold more than a comment.
+  void endAt(const std::string& cause) {
+    ended_ = true;
+    end_line_ = line_;
+    end_cause_ = cause;
+  }
+  int end_line_ = 0, after_end_ = 0, first_after_end_ = 0;
+  std::string end_cause_;
   bool ended_ = false, seen_block_ = false, any_ = false;
   int percent_ = 0;
   std::array<char, 3> coord_ = {2, 2, 2};  // Coordinate per X Y Z
