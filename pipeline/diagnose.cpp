@@ -12,7 +12,6 @@
 #include "core/path/tool_path_prediction.h"
 #include "io/common/io_error.h"
 #include "io/machine/machine_file.h"
-#include "io/program/apt_reader.h"
 #include "io/program/setup_file.h"
 #include "pipeline/calibrate.h"
 #include "pipeline/parallel_prediction.h"
@@ -31,7 +30,11 @@ PredictionResult predictOrThrow(const Machine& m, const ClProgram& program,
 // The part program's predicted error on the base machine and on the augmented one.
 ProgramComparison compareProgram(const std::string& cl, const Machine& before,
                                  const Machine& after) {
-  const ClProgram program = readAptFile(cl, AptReadOptions{});
+  // As predict reads it: CL data or G-code (by extension and content), a language tolver does
+  // not read refused by name.
+  ProgramOptions o;
+  o.cl = cl;
+  const ClProgram program = loadProgram(o, before.model);
   if (program.path.empty()) throw InputError(cl, 0, 0, "GOTO", "the program has no tool positions");
   const PredictionResult a = predictOrThrow(before, program, cl);
   const PredictionResult b = predictOrThrow(after, program, cl);

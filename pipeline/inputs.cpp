@@ -198,7 +198,9 @@ bool readsAsGcode(const ProgramOptions& o) {
     throw FieldError("cl", "give the program with " + inputName("cl") + " (CL data) or " +
                                inputName("nc") + " (G-code), one of them");
   const std::string& path = o.nc.empty() ? o.cl : o.nc;
-  return !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(readFilePrefix(path, 65536));
+  const std::string prefix = readFilePrefix(path, 65536);
+  refuseUnreadLanguage(prefix, path);
+  return !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(prefix);
 }
 
 ClProgram loadProgram(const ProgramOptions& o, const MachineModel& model) {
@@ -230,6 +232,7 @@ ClProgram streamProgram(const ProgramOptions& o, const MachineModel& model,
 
 ClProgram parseProgram(const std::string& text, const std::string& path, const ProgramOptions& o,
                        const MachineModel& model) {
+  refuseUnreadLanguage(text, path);
   const bool gcode = !o.nc.empty() || hasGcodeExtension(path) || looksLikeGcode(text);
   LineSource source(text);
   return readProgram(source, path, gcode, o, model);

@@ -332,6 +332,31 @@ TEST_F(GcodeCli, BadGcodeExitsWithCode2NamingTheLine) {
                       " --nc " + src("samples/gcode/boat-xyzac.ngc") + " --gauge-length -5 -o " +
                       path("z.apt"));
   EXPECT_EQ(r.exit_code, 2) << r.output;
+  // A HEIDENHAIN program, conversational or DIN/ISO, whatever its extension and whichever
+  // command reads it: refused by name at its first line (it was read as CL data, "the program
+  // has no tool positions", or as G-code, "expected a word letter").
+  std::ofstream(path("tnc.h")) << "0 BEGIN PGM PART MM\n1 BLK FORM 0.1 Z X+0 Y+0 Z-20\n"
+                                  "2 TOOL CALL 1 Z S5000\n3 L X+10 Y+10 R0 FMAX\n"
+                                  "4 END PGM PART MM\n";
+  std::ofstream(path("tnc.nc")) << "%PART G71 *\nN10 G30 G17 X+0 Y+0 Z-40 *\n"
+                                   "N20 G00 G40 G90 Z+100 *\nN99999999 %PART G71 *\n";
+  const std::string vmc = src("resources/machines/vmc_3axis_iso.xml");
+  for (const std::string& command :
+       {"predict --machine " + vmc + " --cl " + path("tnc.h") + " -o " + path("t.apt"),
+        "setup --machine " + vmc + " --cl " + path("tnc.h") + " -o " + path("t.txt"),
+        "compensate --machine " + vmc + " --cl " + path("tnc.h") + " -o " + path("t2.apt")}) {
+    r = test::runTolver(command);
+    EXPECT_EQ(r.exit_code, 2) << command << r.output;
+    EXPECT_NE(r.output.find("tnc.h:1:3: BEGIN PGM: a HEIDENHAIN conversational (Klartext)"),
+              std::string::npos)
+        << command << r.output;
+  }
+  r = test::runTolver("predict --machine " + vmc + " --nc " + path("tnc.nc") + " -o " +
+                      path("t3.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("tnc.nc:1:1: %: a HEIDENHAIN DIN/ISO program"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(path("t.apt")));
 }
 
 // The cone finish posted as TCP G-code for the LinuxCNC xyzac-trt machine (rotary words from

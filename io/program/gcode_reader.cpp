@@ -2196,6 +2196,37 @@ ClProgram readGcodeFile(const std::string& path, const MachineModel& model,
   return readGcode(source, path, model, options);
 }
 
+void refuseUnreadLanguage(const std::string& text, const std::string& file_name) {
+  int line = 0;
+  for (const std::string& raw : splitLines(text)) {
+    ++line;
+    std::string_view l = trim(raw);
+    if (l.rfind("\xEF\xBB\xBF", 0) == 0) l = trim(l.substr(3));
+    if (l.empty()) continue;
+    const int column = static_cast<int>(l.data() - raw.data()) + 1;
+    const std::string u = toUpper(l);
+    // Klartext: an optional block number, then BEGIN PGM (TNC 640 User's Manual, Klartext
+    // Programming, "Program structure": "0 BEGIN PGM NEW MM" ... "END PGM NEW MM").
+    size_t k = 0;
+    while (k < u.size() && std::isdigit(static_cast<unsigned char>(u[k]))) ++k;
+    while (k < u.size() && u[k] == ' ') ++k;
+    if (u.compare(k, 10, "BEGIN PGM ") == 0)
+      throw InputError(file_name, line, column + static_cast<int>(k), "BEGIN PGM",
+                       "a HEIDENHAIN conversational (Klartext) program: tolver reads CL data "
+                       "(APT/CLSF) and ISO G-code (Fanuc, HAAS, LinuxCNC, Sinumerik 840D); post "
+                       "the program for one of those, or give the CAM's CL file");
+    // HEIDENHAIN DIN/ISO: "%NAME G71 *" (TNC User's Manual, DIN/ISO Programming: the program
+    // begins with %, its name and G70/G71, every block ends with '*').
+    if (u[0] == '%' && u.size() > 2 && u.back() == '*' &&
+        (u.find(" G70") != std::string::npos || u.find(" G71") != std::string::npos))
+      throw InputError(file_name, line, column, "%",
+                       "a HEIDENHAIN DIN/ISO program (blocks ending in '*'): not a dialect "
+                       "tolver reads; post the program for Fanuc, HAAS, LinuxCNC or Sinumerik "
+                       "840D G-code, or give the CAM's CL file");
+    return;  // the first statement is neither
+  }
+}
+
 bool looksLikeGcode(const std::string& text) {
   int gcode = 0, apt = 0, seen = 0;
   for (const std::string& raw : splitLines(text)) {

@@ -65,4 +65,10 @@ ClProgram parseGcode(const std::string& text, const std::string& file_name,
 // %, O or axis words, not APT majors.
 bool looksLikeGcode(const std::string& text);
 
+// A program in a language tolver does not read, known by its first statement: HEIDENHAIN
+// conversational (Klartext: "0 BEGIN PGM NAME MM") and HEIDENHAIN's own DIN/ISO (".h"/".i":
+// "%NAME G71 *", blocks ending in '*'). Throws an InputError naming the file, line, column and
+// the construct; returns when the text is none of them.
+void refuseUnreadLanguage(const std::string& text, const std::string& file_name);
+
 }  // namespace tolver
