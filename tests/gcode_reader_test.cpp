@@ -420,6 +420,13 @@ TEST(GcodeReader, WhatFollowsTheEndIsNamed) {
                       "are not read"))
       << (p.notes.empty() ? "" : p.notes.back());
   EXPECT_EQ(p.path.back().line, 3);
+  // A letter without a number (Marlin's "G28 X", as in blackjetrock/experimental-computer-for-
+  // schools, mechanical/front_panel_62mm_name_recess_only.gcode): named, not "a number is
+  // missing"; a space between letter and number stays a word.
+  EXPECT_NE(refusal("G21\nG0 X1 Y1 Z5\nG28  X         ; home X\n", m.model)
+                .find("r.nc:3:6: X: the word has no value"),
+            std::string::npos);
+  EXPECT_EQ(parseGcode("G21\nG00 X 24.9 Y 26.8 Z 5\n", "s.nc", m.model).path.back().p_w.x(), 24.9);
   // Only '%' and comments after the end: nothing to say.
   const ClProgram q = parseGcode("%\nG21 G90\nG0 X1 Y1 Z5\nM30\n(end)\n%\n", "f.nc", m.model);
   for (const std::string& n : q.notes) EXPECT_EQ(n.find("program ends at"), std::string::npos) << n;

@@ -1439,6 +1439,13 @@ class Reader {
       w.letter = c;
       w.column = col[i];
       ++i;
+      size_t next = i;
+      while (next < upper.size() && upper[next] == ' ') ++next;
+      if (next == upper.size() || std::isalpha(static_cast<unsigned char>(upper[next])))
+        fail(line_, w.column, std::string(1, c),
+             "the word has no value: every word of ISO G-code is a letter and a number (a letter "
+             "alone, as in Marlin's 'G28 X' that homes X, is not G-code a machine tool's control "
+             "reads)");
       const size_t value_at = i;
       w.value = expression(upper, i, 0);
       noteResolution(std::string_view(upper).substr(value_at, i - value_at), c);
