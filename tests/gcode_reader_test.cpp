@@ -427,6 +427,21 @@ TEST(GcodeReader, WhatFollowsTheEndIsNamed) {
                 .find("r.nc:3:6: X: the word has no value"),
             std::string::npos);
   EXPECT_EQ(parseGcode("G21\nG00 X 24.9 Y 26.8 Z 5\n", "s.nc", m.model).path.back().p_w.x(), 24.9);
+  // A comment holding parentheses (norn93/gcode, 3_heatsink_peck_pockets.gcode:
+  // "( Drilling hole at (61.045, 67.745) )", and "cut(s)"): read up to the parenthesis that
+  // balances it, with a note (it read as a stray ')' or, from "cut(s) at", as words A and T);
+  // LinuxCNC refuses it, as LinuxCNC does.
+  const std::string nested =
+      "G21 G90\n( Drilling hole at (61.045, 67.745) )\nG0 X61.045 Y67.745 Z5 (the cut(s) at 2)\n";
+  const ClProgram n = parseGcode(nested, "n.nc", m.model);
+  EXPECT_EQ(n.path.back().p_w.x(), 61.045);
+  EXPECT_TRUE(hasNote(n, "2 comment(s) with parentheses inside (the first at line 2)"));
+  EXPECT_NE(refusal(nested, machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0).model)
+                .find("r.nc:2:20: (: a comment inside a comment"),
+            std::string::npos);
+  EXPECT_EQ(commentEnd("(a (b) c) X1", 0), 8u);
+  EXPECT_EQ(commentEnd("(a) (b)", 0), 2u);
+  EXPECT_EQ(commentEnd("(a (b) X1", 0), 5u);  // never balanced: the first ')'
   // Only '%' and comments after the end: nothing to say.
   const ClProgram q = parseGcode("%\nG21 G90\nG0 X1 Y1 Z5\nM30\n(end)\n%\n", "f.nc", m.model);
   for (const std::string& n : q.notes) EXPECT_EQ(n.find("program ends at"), std::string::npos) << n;

@@ -12,6 +12,7 @@
 #include "core/kinematics/forward_kinematics.h"
 #include "core/numerics/units.h"
 #include "io/common/text_util.h"
+#include "io/program/gcode_reader.h"
 
 namespace tolver {
 namespace {
@@ -251,7 +252,7 @@ std::vector<GWord> gcodeWords(const std::string& s) {
   while (i < s.size()) {
     const char c = s[i];
     if (c == '(') {
-      const size_t close = s.find(')', i);
+      const size_t close = commentEnd(s, i);  // as the reader ends it
       i = close == std::string::npos ? s.size() : close + 1;
       continue;
     }

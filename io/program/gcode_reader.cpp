@@ -182,6 +182,12 @@ class Reader {
       prog_.notes.push_back(std::string("no G20/G21: the control's default unit (") +
                             (unit_ == 25.4 ? "inch" : "mm") + ") was used");
     }
+    if (nested_comments_ > 0)
+      prog_.notes.push_back(std::to_string(nested_comments_) +
+                            " comment(s) with parentheses inside (the first at line " +
+                            std::to_string(first_nested_comment_) +
+                            ") read as one comment each, up to the parenthesis that balances it: "
+                            "the control must do the same (LinuxCNC refuses nested comments)");
     if (!ignored_.empty()) {
       std::string names;
       for (const auto& n : ignored_) names += (names.empty() ? "" : ", ") + n;
@@ -1329,10 +1335,20 @@ class Reader {
         continue;
       }
       if (c == '(' && !sinumerik) {
-        const size_t close = raw.find(')', i);
-        if (close == std::string::npos)
+        const size_t first_close = raw.find(')', i);
+        if (first_close == std::string::npos)
           fail(line_, static_cast<int>(i) + 1, "(", "unclosed comment");
-        i = close;
+        // A '(' inside the comment ("( Drilling hole at (61.045, 67.745) )"): LinuxCNC
+        // refuses it ("Nested comment found"); on other controls the comment is read up to the
+        // parenthesis that balances it, when one does (commentEnd), and a note says so.
+        const size_t inner = raw.find('(', i + 1);
+        if (inner != std::string::npos && inner < first_close) {
+          if (model_.control.dialect == "linuxcnc")
+            fail(line_, static_cast<int>(inner) + 1, "(",
+                 "a comment inside a comment: LinuxCNC refuses nested comments");
+          if (nested_comments_++ == 0) first_nested_comment_ = line_;
+        }
+        i = commentEnd(raw, i);
         continue;
       }
       if (c == '\r' || c == '\t') continue;
@@ -2116,6 +2132,7 @@ class Reader {
     end_cause_ = cause;
   }
   int end_line_ = 0, after_end_ = 0, first_after_end_ = 0;
+  int nested_comments_ = 0, first_nested_comment_ = 0;
   std::string end_cause_;
   bool ended_ = false, seen_block_ = false, any_ = false;
   int percent_ = 0;
@@ -2201,6 +2218,19 @@ ClProgram readGcodeFile(const std::string& path, const MachineModel& model,
                         const GcodeReadOptions& options) {
   LineSource source = LineSource::file(path);
   return readGcode(source, path, model, options);
+}
+
+size_t commentEnd(std::string_view s, size_t open) {
+  const size_t first = s.find(')', open);
+  if (first == std::string_view::npos) return first;
+  const size_t inner = s.find('(', open + 1);
+  if (inner == std::string_view::npos || inner > first) return first;
+  int depth = 0;
+  for (size_t k = open; k < s.size(); ++k) {
+    if (s[k] == '(') ++depth;
+    if (s[k] == ')' && --depth == 0) return k;
+  }
+  return first;  // never balanced: the first ')' ends it
 }
 
 void refuseUnreadLanguage(const std::string& text, const std::string& file_name) {

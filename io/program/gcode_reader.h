@@ -37,6 +37,7 @@
 // jumps and CYCLE800 with arguments. Words that do not change the path are listed once as
 // ignored.
 #include <string>
+#include <string_view>
 
 #include "core/model/machine_model.h"
 #include "io/program/apt_reader.h"
@@ -64,6 +65,11 @@ ClProgram parseGcode(const std::string& text, const std::string& file_name,
 // True when the text reads as G-code rather than APT/CLDATA: its first statements are G, M, N,
 // %, O or axis words, not APT majors.
 bool looksLikeGcode(const std::string& text);
+
+// The ')' that ends the comment opened at s[open] == '(': the one that balances it when the
+// comment holds parentheses and one does ("( hole at (61.045, 67.745) )"), else the first;
+// npos when none. (LinuxCNC refuses a comment inside a comment; the reader says so.)
+size_t commentEnd(std::string_view s, size_t open);
 
 // A program in a language tolver does not read, known by its first statement: HEIDENHAIN
 // conversational (Klartext: "0 BEGIN PGM NAME MM") and HEIDENHAIN's own DIN/ISO (".h"/".i":
