@@ -2260,6 +2260,22 @@ void refuseUnreadLanguage(const std::string& text, const std::string& file_name)
                        "a HEIDENHAIN DIN/ISO program (blocks ending in '*'): not a dialect "
                        "tolver reads; post the program for Fanuc, HAAS, LinuxCNC or Sinumerik "
                        "840D G-code, or give the CAM's CL file");
+    // OpenSBP (ShopBot): comma-separated two-letter commands, "'" comments (OpenSBP Reference
+    // Manual: MS move speed, J2/M2 jog and move in X Y, J3/M3 in X Y Z, JZ/MZ, SA/SR absolute
+    // and relative, C# cuts).
+    if (u[0] == '\'') continue;  // an OpenSBP comment line: the statements after it decide
+    static const char* const kSbp[] = {"SA", "SR", "MS", "JS", "J2", "J3", "J5", "JZ",
+                                       "JX", "JY", "M2", "M3", "M5", "MZ", "MX", "MY",
+                                       "CG", "VD", "VC", "VU", "TR", "SO"};
+    const std::string head = u.substr(0, u.find_first_of(", "));
+    bool sbp = false;
+    for (const char* c : kSbp)
+      sbp = sbp || (head == c && (u.size() == head.size() || u[head.size()] == ','));
+    if (sbp)
+      throw InputError(file_name, line, column, head,
+                       "an OpenSBP (ShopBot) program: not a language tolver reads (CL data "
+                       "APT/CLSF, ISO G-code); post the program for G-code, or give the CAM's "
+                       "CL file");
     return;  // the first statement is neither
   }
 }

@@ -73,8 +73,9 @@ size_t commentEnd(std::string_view s, size_t open);
 
 // A program in a language tolver does not read, known by its first statement: HEIDENHAIN
 // conversational (Klartext: "0 BEGIN PGM NAME MM") and HEIDENHAIN's own DIN/ISO (".h"/".i":
-// "%NAME G71 *", blocks ending in '*'). Throws an InputError naming the file, line, column and
-// the construct; returns when the text is none of them.
+// "%NAME G71 *", blocks ending in '*') and OpenSBP (ShopBot: "MS,1,0.5", "J3,0,0,5", "'"
+// comments). Throws an InputError naming the file, line, column and the construct; returns when
+// the text is none of them.
 void refuseUnreadLanguage(const std::string& text, const std::string& file_name);
 
 }  // namespace tolver
