@@ -1,14 +1,14 @@
 #pragma once
 // Reader of posted ISO 6983 G-code as five-axis controls run it (Fanuc, HAAS, LinuxCNC,
-// Heidenhain ISO, Siemens ISO mode), into the same program representation as the CL reader
+// Sinumerik 840D native and ISO mode), into the same program representation as the CL reader
 // (ClProgram: tool tip p_w and tool axis u_w in the workpiece frame w, mm), so that predict,
 // verify and setup take either.
 //
 // What a word means depends on the control (MachineModel::control, from the machine file):
 //  * in tool-centre-point mode (the control's TCP words: Fanuc G43.4/G43.5, HAAS G234 and G254,
-//    LinuxCNC M428, Heidenhain M128, Siemens TRAORI) X Y Z are the tool tip in the part frame
-//    and the rotary words are joint values: u_w is the nominal forward kinematics of the rotary
-//    joints;
+//    LinuxCNC M428, Siemens TRAORI; a machine file may declare others) X Y Z are the tool tip
+//    in the part frame and the rotary words are joint values: u_w is the nominal forward
+//    kinematics of the rotary joints;
 //  * outside it every axis word is a joint: machine coordinate = word + work offset (+ tool
 //    length along the spindle axis under G43), joint = nc_sign * machine coordinate, and the
 //    tool tip and axis are the nominal forward kinematics with the set-up's gauge length.
