@@ -386,6 +386,14 @@ bool hasNote(const ClProgram& p, const std::string& text) {
   return false;
 }
 
+// The Sinumerik B/C table with G54 at (-300, 0, 200) in machine coordinates, as the NX
+// programs' tests set it.
+Machine sinumerikMachine() {
+  Machine m = machine("resources/machines/sinumerik_bc_table.xml", 0.0);
+  m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, 0, 200);
+  return m;
+}
+
 std::string refusal(const std::string& text, const MachineModel& model) {
   try {
     parseGcode(text, "r.nc", model);
@@ -566,8 +574,7 @@ TEST(GcodeReader, MovesBeforeEveryAxisIsKnownAreNotInventedPoints) {
 // Sinumerik 840D as NX posts it: DEF, assignments, ADDR=expression, SUPA, TRAFOOF, T="name",
 // D0/D1, MSG, CYCLE832, MCALL CYCLE81: the real program reads, every construct carried out.
 TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
-  Machine m = machine("resources/machines/sinumerik_bc_table.xml", 0.0);
-  m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, 0, 200);
+  const Machine m = sinumerikMachine();
   const ClProgram p =
       readGcodeFile(test::sourcePath("tests/fixtures/gcode/nx_sin840d_Keychain.mpf"), m.model);
   EXPECT_EQ(p.cycles, 1);
@@ -652,8 +659,7 @@ TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
 // operation written with the frame instructions (TRANS, AROT, ATRANS) and TRAORI with the rotary
 // words posted by hand (ISO 841 senses: B+30 tilts the tool towards +x).
 TEST(GcodeReader, Cycle800SwivelsThePlaneAsTheFrameInstructionsDo) {
-  Machine m = machine("resources/machines/sinumerik_bc_table.xml", 0.0);
-  m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, 0, 200);
+  const Machine m = sinumerikMachine();
   const std::string head = "N10 G54 G0 X0 Y0 Z80 B0 C0 D1\n";
   const std::string ops = "N50 G0 X5 Y-15 Z40\nN60 G1 Z2 F500\nN70 X25 Y10\nN80 G0 Z40\n";
   // The points from the first in the swivelled plane on (the frame version has one more: the
@@ -796,8 +802,7 @@ TEST(GcodeReader, TiltedWorkingPlaneG682AsItsTcpTwin) {
 // the ISO R arcs; what changes the path unseen (RND=, orientation angles, ORIMKS vectors) is
 // refused.
 TEST(GcodeReader, SinumerikOrientationVectorsAndRadiusArcs) {
-  Machine m = machine("resources/machines/sinumerik_bc_table.xml", 0.0);
-  m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, 0, 200);
+  const Machine m = sinumerikMachine();
   const std::string head = "N10 G54 G0 X0 Y0 Z80 B0 C0 D1\nN20 TRAORI\n";
   const double s30 = std::sin(30 * kDeg), c30 = std::cos(30 * kDeg);
   char v[200];
@@ -839,8 +844,7 @@ TEST(GcodeReader, SinumerikOrientationVectorsAndRadiusArcs) {
 // full circles and then the arc, the infeed linear in the angle over the whole helix (checked
 // against the helix's own formula); a fraction, or TURN= on a line, is refused naming TURN.
 TEST(GcodeReader, SinumerikTurnAddsFullCirclesToAHelix) {
-  Machine m = machine("resources/machines/sinumerik_bc_table.xml", 0.0);
-  m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, 0, 200);
+  const Machine m = sinumerikMachine();
   const std::string head = "N10 G54 G0 X10 Y0 Z5 B0 C0 D1\nN20 G17 G1 Z0 F100\n";
   const ClProgram plain = parseGcode(head + "N30 G3 X0 Y10 Z-2 I-10 J0\n", "a.mpf", m.model);
   const ClProgram zero = parseGcode(head + "N30 G3 X0 Y10 Z-2 I-10 J0 TURN=0\n", "b.mpf", m.model);
@@ -879,8 +883,7 @@ TEST(GcodeReader, SinumerikTurnAddsFullCirclesToAHelix) {
 // was read; the coordinate-system part swivels the table (B-90, C up to -270). Both read whole;
 // the bottle opener's first helix (N1540 G3 ... Z-12. TURN=0) descends from -11.82 to -12.
 TEST(GcodeReader, SinumerikProgramsOfTheSameDataSetRead) {
-  Machine m = machine("resources/machines/sinumerik_bc_table.xml", 0.0);
-  m.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, 0, 200);
+  const Machine m = sinumerikMachine();
   const ClProgram bottle =
       readGcodeFile(test::sourcePath("tests/fixtures/gcode/nx_sin840d_Bottle_opener.txt"), m.model);
   EXPECT_EQ(bottle.arcs_expanded, 1553);
