@@ -1342,13 +1342,13 @@ class Reader {
         // refuses it ("Nested comment found"); on other controls the comment is read up to the
         // parenthesis that balances it, when one does (commentEnd), and a note says so.
         const size_t inner = raw.find('(', i + 1);
-        if (inner != std::string::npos && inner < first_close) {
-          if (model_.control.dialect == "linuxcnc")
-            fail(line_, static_cast<int>(inner) + 1, "(",
-                 "a comment inside a comment: LinuxCNC refuses nested comments");
-          if (nested_comments_++ == 0) first_nested_comment_ = line_;
-        }
-        i = commentEnd(raw, i);
+        if (inner != std::string::npos && inner < first_close &&
+            model_.control.dialect == "linuxcnc")
+          fail(line_, static_cast<int>(inner) + 1, "(",
+               "a comment inside a comment: LinuxCNC refuses nested comments");
+        const size_t close = commentEnd(raw, i);
+        if (close != first_close && nested_comments_++ == 0) first_nested_comment_ = line_;
+        i = close;
         continue;
       }
       if (c == '\r' || c == '\t') continue;
