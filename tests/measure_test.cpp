@@ -130,12 +130,6 @@ class MeasureTest : public test::TempDirTest {
   }
 };
 
-bool added(const PartTrace& t, const std::string& name) {
-  for (const TraceGroup& g : t.groups)
-    if (g.added && g.name == name) return true;
-  return false;
-}
-
 TEST_F(MeasureTest, ACleanPartAddsNothing) {
   int nothing = 0, at_noise = 0;
   for (unsigned seed = 1; seed <= kSeeds; ++seed) {
@@ -431,8 +425,8 @@ TEST_F(MeasureTest, TheCommandWritesWhatItSaysAndRefusesBadPoints) {
     std::stringstream ss(line);
     for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
     ASSERT_EQ(c.size(), 23u) << line;
-    if (c[20] == "used") EXPECT_EQ(c[22], "FINISH_3AXIS") << line;
     if (c[20] != "used") continue;
+    EXPECT_EQ(c[22], "FINISH_3AXIS") << line;
     const double res = std::stod(c[14]), meas = std::stod(c[10]), pred = std::stod(c[11]);
     EXPECT_NEAR(res, meas - pred, 2e-4) << line;
     s2 += res * res;
@@ -510,7 +504,9 @@ TEST_F(MeasureTest, TheProcessFileCarriesWhatWasLearnedIntoTheNextPrediction) {
   const std::string pa((std::istreambuf_iterator<char>(a)), {}),
       pb((std::istreambuf_iterator<char>(b)), {});
   for (const std::string key : {"tool_length_dL_mm", "set-up_x_mm"})
-    if (pa.find(key) != std::string::npos) EXPECT_NE(pb.find(key), std::string::npos) << pb;
+    if (pa.find(key) != std::string::npos) {
+      EXPECT_NE(pb.find(key), std::string::npos) << pb;
+    }
 }
 
 // The drift and the sideways deflection a part showed carry into the next prediction too:
