@@ -68,6 +68,12 @@ Machine machine(const char* rel, double gauge = 0.0) {
 
 // Every point of the real program: tolver's joints (nominal IK, rotaries as commanded) equal
 // LinuxCNC's inverse kinematics of the program's XYZ and rotary words.
+bool hasNote(const ClProgram& p, const std::string& text) {
+  for (const std::string& n : p.notes)
+    if (n.find(text) != std::string::npos) return true;
+  return false;
+}
+
 TEST(GcodeReader, BoatXyzacMatchesLinuxCncKinematics) {
   for (double dt : {0.0, 25.0}) {
     const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", dt);
@@ -285,10 +291,25 @@ TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("declares no TCP words"), std::string::npos) << e.what();
   }
+  // A code tolver does not know is named with its line as unknown, not as harmless (M123; M8 is
+  // known: coolant); G64 is known not to move the tool and is not listed.
   const ClProgram p = parseGcode("G21 G64 P0.01\nM123\nG0 X0 Y0 Z0 A0 C0 M8\n", "ok.ngc", m.model);
-  bool listed = false;
-  for (const std::string& n : p.notes) listed |= n.find("M123") != std::string::npos;
-  EXPECT_TRUE(listed);
+  EXPECT_TRUE(hasNote(p,
+                      "codes tolver does not know, read as not moving the tool (check what "
+                      "they do on the control): M123 (line 2)"));
+  for (const std::string& n : p.notes) {
+    EXPECT_EQ(n.find("M8"), std::string::npos) << n;
+    EXPECT_EQ(n.find("G64"), std::string::npos) << n;
+  }
+  // The default work offset is said to be the default, not "used" by a block that never names it
+  // (a Rotrix DexArm program: G21, then moves); a selected one is named with its first line.
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  const ClProgram d = parseGcode("G21\nG0 X1 Y2 Z5\n", "default.gcode", vmc.model);
+  EXPECT_TRUE(hasNote(d,
+                      "G54 (the control's default work offset: the program never selects one; "
+                      "in force from line 2)"));
+  const ClProgram g = parseGcode("G21\nG0 X1 Y2 Z5\nG55 G0 X2\n", "g55.gcode", vmc.model);
+  EXPECT_TRUE(hasNote(g, "G55 (first used at line 3) is not in the set-up"));
 }
 
 // Mutated lines of the real program: the reader either reads or throws InputError naming the
@@ -379,12 +400,6 @@ TEST(GcodeReader, DetectsGcodeAgainstApt) {
 
 // ---------------------------------------------------------------- issue 32: ISO as controls read
 // it
-
-bool hasNote(const ClProgram& p, const std::string& text) {
-  for (const std::string& n : p.notes)
-    if (n.find(text) != std::string::npos) return true;
-  return false;
-}
 
 // The Sinumerik B/C table with G54 at (-300, 0, 200) in machine coordinates, as the NX
 // programs' tests set it.

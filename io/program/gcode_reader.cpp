@@ -193,13 +193,28 @@ class Reader {
       for (const auto& n : ignored_) names += (names.empty() ? "" : ", ") + n;
       prog_.notes.push_back("ignored (no effect on the tool path): " + names);
     }
+    if (!unknown_.empty()) {
+      std::string names;
+      for (const auto& [code, first] : unknown_)
+        names += (names.empty() ? "" : ", ") + code + " (line " + std::to_string(first) + ")";
+      prog_.notes.push_back(
+          "codes tolver does not know, read as not moving the tool (check "
+          "what they do on the control): " +
+          names);
+    }
     if (tcp_without_tlc_)
       prog_.notes.push_back(
           "TCP mode without G43: LinuxCNC then drives the spindle gauge point; XYZ was taken as "
           "the tool tip with the set-up's gauge length");
     for (const auto& [word, first] : missing_offsets_)
-      prog_.notes.push_back(word + " (first used at line " + std::to_string(first) +
-                            ") is not in the set-up: its origin was put at the part zero");
+      prog_.notes.push_back(
+          word +
+          (commanded_offsets_.count(word)
+               ? " (first used at line " + std::to_string(first) + ")"
+               : " (the control's default work offset: the program never selects one; in force "
+                 "from line " +
+                     std::to_string(first) + ")") +
+          " is not in the set-up: its origin was put at the part zero");
     if (blocks_) {
       blocks_->sink(prog_, true);
       prog_.dropBlock();
@@ -1567,7 +1582,7 @@ class Reader {
     } else if (w.code == "M61" && axis_words.count('Q')) {
       tool_ = static_cast<int>(axis_words.at('Q')->value);
     } else if (!tcpWord(w.code) && !harmlessM().count(w.code)) {
-      ignored_.insert(w.code);
+      unknown_.emplace(w.code, line_);
     }
   }
 
@@ -1638,11 +1653,13 @@ class Reader {
     } else if (c == "G54" || c == "G55" || c == "G56" || c == "G57" || c == "G58" || c == "G59" ||
                c == "G59.1" || c == "G59.2" || c == "G59.3") {
       work_ = c;
+      commanded_offsets_.insert(work_);
     } else if (c == "G54.1") {
       if (!axis_words.count('P')) fail(line_, w.column, c, "G54.1 needs a P number");
       work_ = "G54.1P" + std::to_string(static_cast<int>(axis_words.at('P')->value));
+      commanded_offsets_.insert(work_);
     } else if (!harmlessG().count(c)) {
-      ignored_.insert(c);
+      unknown_.emplace(c, line_);
     }
   }
 
@@ -2172,6 +2189,8 @@ class Reader {
   std::set<std::string> tcp_active_;
   std::set<std::string> ignored_;
   std::map<std::string, int> missing_offsets_;  // work offset -> first line that used it
+  std::set<std::string> commanded_offsets_;     // work offsets a block selects (G54...)
+  std::map<std::string, int> unknown_;          // G and M codes tolver does not know -> first line
   std::map<std::string, Eigen::Vector3d> set_offsets_;
   std::map<std::string, double> named_;
   std::map<int, double> numbered_;
