@@ -418,6 +418,28 @@ std::string refusal(const std::string& text, const MachineModel& model) {
   return "accepted";
 }
 
+// Returns to a reference point: G30's second reference point is a setting of the control that no
+// machine file carries, so it is refused by name at its line (it was read as G28, machine zero);
+// a G28 without axis words homes every axis (HAAS, LinuxCNC), said in a note on an ISO control,
+// whose Fanuc reading moves none (a training template, stcline/CNC_Training, ends with a bare G28).
+TEST(GcodeReader, ReferencePointReturnsAsTheControlsDocumentThem) {
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  const std::string g30 = refusal("G21\nG0 X1 Y2 Z5\nG91 G30 Z0\n", vmc.model);
+  EXPECT_NE(g30.find("r.nc:3"), std::string::npos) << g30;
+  EXPECT_NE(g30.find("second reference point"), std::string::npos) << g30;
+  const ClProgram iso = parseGcode("G21\nG0 X1 Y2 Z5\nG28\nM30\n", "bare.nc", vmc.model);
+  EXPECT_TRUE(hasNote(iso,
+                      "G28 without axis words (first at line 3) read as every axis to "
+                      "machine zero"));
+  ASSERT_FALSE(iso.path.empty());
+  const Machine lcnc = machine("resources/machines/linuxcnc_xyzbc_trt.xml", 0.0);
+  const ClProgram l = parseGcode("G21\nG0 X1 Y2 Z5 B0 C0\nG28\nM30\n", "bare.ngc", lcnc.model);
+  for (const std::string& n : l.notes) EXPECT_EQ(n.find("G28 without"), std::string::npos) << n;
+  // G28 naming an axis homes that axis only, with no note.
+  const ClProgram named = parseGcode("G21\nG0 X1 Y2 Z5\nG91 G28 Z0\n", "z.nc", vmc.model);
+  for (const std::string& n : named.notes) EXPECT_EQ(n.find("G28 without"), std::string::npos) << n;
+}
+
 // The program's end (M30, M2, a second '%') leaves what follows unread: said in a note, and
 // named when nothing was read before it. Fusion's MPCNC post writes remarks as '%' lines
 // ("% vfd enable", "% LED ON" before the first move: richcreations/Ghettotator,

@@ -56,6 +56,13 @@ const std::map<std::string, const char*>& refusedG() {
       {"G7", "lathe diameter mode (G7) is not supported"},
       {"G33", "threading (G33) is not supported"},
       {"G76", "threading cycles (G76, LinuxCNC) are not supported"},
+      // G30 returns to the second reference point, a setting of the control (LinuxCNC
+      // parameters #5181-#5186; Fanuc parameter 1241; HAAS settings 268-270), which a machine
+      // file does not carry: the tool's position after it is unknown.
+      {"G30",
+       "G30 returns to the second reference point, a setting of the control (LinuxCNC #5181-"
+       "#5186, Fanuc parameter 1241, HAAS settings 268-270) that the machine file does not give: "
+       "post the retract as G53 or G28"},
       {"G38.2", "probing moves are not supported"},
       {"G38.3", "probing moves are not supported"},
       {"G87",
@@ -193,6 +200,11 @@ class Reader {
       for (const auto& n : ignored_) names += (names.empty() ? "" : ", ") + n;
       prog_.notes.push_back("ignored (no effect on the tool path): " + names);
     }
+    if (bare_g28_line_ > 0)
+      prog_.notes.push_back(
+          "G28 without axis words (first at line " + std::to_string(bare_g28_line_) +
+          ") read as every axis to machine zero, as HAAS and LinuxCNC do; a Fanuc control moves "
+          "only the axes a G28 names (none)");
     if (!unknown_.empty()) {
       std::string names;
       for (const auto& [code, first] : unknown_)
@@ -1630,7 +1642,7 @@ class Reader {
       tlc_ = false;
     } else if (c == "G53") {
       modes->g53 = true;
-    } else if (c == "G28" || c == "G30") {
+    } else if (c == "G28") {
       modes->g28 = true;
     } else if (c == "G10") {
       modes->g10 = true;
@@ -2059,6 +2071,10 @@ class Reader {
   std::string homeMove(const std::map<char, const Word*>& aw) {
     bool named = false;
     for (const auto& [l, w] : aw) named |= letter_axis_.count(l) > 0;
+    // G28 without axis words: HAAS returns every axis to machine zero (Mill Operator's Manual,
+    // G28), as LinuxCNC does; a Fanuc control moves none (G28 IP_: only the axes named). Read
+    // as HAAS and LinuxCNC; on an ISO control it is said in a note.
+    if (!named && model_.control.dialect == "iso" && bare_g28_line_ == 0) bare_g28_line_ = line_;
     if (named) {  // via the intermediate point, in program coordinates
       const auto saved = motion_;
       move(aw, "G0");
@@ -2189,6 +2205,7 @@ class Reader {
   std::set<std::string> tcp_active_;
   std::set<std::string> ignored_;
   std::map<std::string, int> missing_offsets_;  // work offset -> first line that used it
+  int bare_g28_line_ = 0;                       // the first G28 without axis words (ISO)
   std::set<std::string> commanded_offsets_;     // work offsets a block selects (G54...)
   std::map<std::string, int> unknown_;          // G and M codes tolver does not know -> first line
   std::map<std::string, Eigen::Vector3d> set_offsets_;
