@@ -440,6 +440,22 @@ TEST(GcodeReader, ReferencePointReturnsAsTheControlsDocumentThem) {
   for (const std::string& n : named.notes) EXPECT_EQ(n.find("G28 without"), std::string::npos) << n;
 }
 
+// A Grbl sender's file opening with Grbl's own commands (marcio-pessoa/Escriba,
+// Examples/calibration.gcode: "$I", "$G", "$$", "?"): refused at the first, naming it as Grbl's
+// (some move the machine: $H homes), not as a stray character.
+TEST(GcodeReader, GrblSystemCommandsAreRefusedByName) {
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  for (const char* text : {"$I  ; View build info\nG21\nG0 X1 Y2 Z5\n", "?\nG21\nG0 X1\n",
+                           "G21\nG0 X1 Y2 Z5\n  $H\n"}) {
+    const std::string r = refusal(text, vmc.model);
+    EXPECT_NE(r.find("is a Grbl system command"), std::string::npos) << r;
+    EXPECT_NE(r.find(text[0] == 'G' ? "r.nc:3:3" : "r.nc:1:1"), std::string::npos) << r;
+  }
+  // '$' inside a block is still a stray character, named as such.
+  EXPECT_NE(refusal("G21\nG0 X1 $2\n", vmc.model).find("expected a word letter"),
+            std::string::npos);
+}
+
 // The program's end (M30, M2, a second '%') leaves what follows unread: said in a note, and
 // named when nothing was read before it. Fusion's MPCNC post writes remarks as '%' lines
 // ("% vfd enable", "% LED ON" before the first move: richcreations/Ghettotator,

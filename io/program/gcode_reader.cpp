@@ -1476,6 +1476,14 @@ class Reader {
         ++i;
         continue;
       }
+      // Grbl's own commands ('$H' homes, '$J=' jogs, '$$' lists settings, '?' asks the status:
+      // Grbl v1.1 "Grbl Interface", "Grbl Commands"): lines a sender writes to Grbl, not blocks;
+      // some move the machine, so they are named, not skipped.
+      if (i == 0 && (c == '$' || c == '?'))
+        fail(line_, col[i], std::string(1, c),
+             "'" + clip(text.substr(i, 12)) +
+                 "' is a Grbl system command, not a G-code block (some move the machine: "
+                 "$H homes, $J= jogs): remove it from the program");
       if (!std::isalpha(static_cast<unsigned char>(c)))
         fail(line_, col[i], "", "expected a word letter, found '" + clip(text.substr(i, 12)) + "'");
       Word w;
