@@ -81,8 +81,9 @@ void addProgramOptions(CLI::App* cmd, ProgramOptions& o) {
                   "G-code is detected");
   cmd->add_option("--nc", o.nc, "posted G-code program (ISO 6983: .nc, .ngc, .tap, .gcode)");
   cmd->add_option("--cl-units", o.units,
-                  "unit of a program that declares none: mm or inch (a CL without UNITS, a "
-                  "G-code without G20/G21; default: mm, or the control's default for G-code)")
+                  "unit of the program's numbers: mm or inch (default: the file's UNITS, G20 "
+                  "or G21, else mm or the control's default); on a CL it overrides a UNITS "
+                  "statement, said in a note; G-code's G20/G21 stand, as on the control")
       ->check(CLI::IsMember({"mm", "inch"}));
   cmd->add_option("--chordal-tol", o.chordal_tolerance,
                   "chordal tolerance for expanding arcs, mm (default 0.001)")

@@ -54,11 +54,20 @@ void printRanges(const MachineModel& model, const ClProgram& program,
 }
 
 // The pieces a split program runs in, each with its set-up.
-void printPieces(const std::vector<ClPoint>& path, const std::vector<SetupPiece>& pieces) {
+void printPieces(const std::vector<ClPoint>& path, const std::vector<SetupPiece>& pieces,
+                 bool budget_spent, double max_seconds) {
   const bool all = !pieces.empty() && pieces.back().last == static_cast<int>(path.size()) - 1;
   bool each = true;
   for (const SetupPiece& p : pieces) each = each && p.result.found;
-  if (all && each)
+  if (budget_spent && !all) {
+    const int done = pieces.empty() ? 0 : pieces.back().last + 1;
+    std::printf(
+        "  split      --max-seconds %g ran out while splitting the program: %zu piece(s) found, "
+        "covering %d of %zu points%s; the rest is not split (a longer budget may split it)\n",
+        max_seconds, pieces.size(), done, path.size(),
+        done > 0 ? (" (to line " + std::to_string(path[done - 1].line) + ")").c_str() : "");
+    if (pieces.empty()) return;
+  } else if (all && each)
     std::printf("  split      %zu set-ups reach the program, one piece each:\n", pieces.size());
   else
     std::printf("  split      no split into %zu pieces or fewer reaches every point:\n",
@@ -198,7 +207,7 @@ void printSearch(const SetupInputs& o, const SetupRun& run) {
         "  result     no single set-up reaches the whole program; the best leaves %zu points "
         "outside travel, at lines %s%s: split the program there\n",
         r.outside.size(), run.outside_lines.c_str(), run.outside_runs >= 8 ? ", ..." : "");
-  if (!r.found) printPieces(run.path, run.pieces);
+  if (!r.found) printPieces(run.path, run.pieces, run.split_budget_spent, o.max_seconds);
 }
 
 void printSetupRun(const SetupInputs& o, const SetupRun& run) {

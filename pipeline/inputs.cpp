@@ -176,12 +176,10 @@ ClProgram readProgram(LineSource& source, const std::string& path, bool gcode,
     ro.keep_motion_text = o.keep_motion_text;
     ro.absolute_msys = o.absolute_msys;
     if (o.units == "inch") ro.unit_mm = 25.4;
+    ro.unit_given = !o.units.empty();
     program = blocks ? readApt(source, path, ro, ranged) : readApt(source, path, ro);
     if (program.pointsRead() == 0)
       throw InputError(path, 0, 0, "GOTO", "the program has no tool positions");
-    if (o.units == "inch" && program.units_declared && program.units != "INCH")
-      throw InputError(path, 0, 0, "UNITS",
-                       inputName("units") + " inch, but the file declares UNITS/MM");
   }
   if (range && !blocks) kept = keepLines(program, *range);
   if (range && kept == 0)
@@ -253,21 +251,42 @@ std::vector<std::string> unitWarnings(const ClProgram& program, const MachineMod
                                       const std::string& units_option, const Eigen::Vector3d& lo,
                                       const Eigen::Vector3d& hi) {
   std::vector<std::string> w;
-  if (program.units_declared || !units_option.empty() || program.pointsRead() == 0 ||
-      program.dialect == "G-code")  // the G-code reader says which default it used
-    return w;
+  if (program.pointsRead() == 0 || program.dialect == "G-code")
+    return w;  // the G-code reader says which default it used; the control obeys G20/G21
   const double extent = (hi - lo).norm();
   double travel = 0.0;
   for (const Axis& a : model.axes)
     if (!a.isRotary()) travel += (a.travel_max - a.travel_min) * (a.travel_max - a.travel_min);
   travel = std::sqrt(travel);
+  char buf[400];
+  if (!program.units_in_file.empty()) {
+    std::snprintf(
+        buf, sizeof buf, "%s declares UNITS/%s at line %d: read in %s, as %s says (extent %.1f mm)",
+        program.file.c_str(), program.units_in_file == "INCH" ? "INCHES" : "MM", program.units_line,
+        program.units == "INCH" ? "inches" : "mm", inputName("units").c_str(), extent);
+    w.push_back(buf);
+    return w;
+  }
+  // A CAM that labels millimetres as inches (Creo's UNITS / INCHES over a 6 mm cutter at
+  // 7958 rpm: 4r19415/5-axis-Rotation-tool-center-point-RTCP-, assets/finition.ncl) gives a
+  // program 25.4 times too large: say so when the machine could not hold it and could in mm.
+  if (program.units_declared && units_option.empty() && program.units == "INCH" &&
+      extent > travel && extent / 25.4 < travel) {
+    std::snprintf(buf, sizeof buf,
+                  "%s declares UNITS/INCHES at line %d and spans %.0f mm, more than this "
+                  "machine's travel (%.0f mm across); read as mm it would span %.1f mm: if the "
+                  "CAM wrote millimetres under an inch label, give %s mm",
+                  program.file.c_str(), program.units_line, extent, travel, extent / 25.4,
+                  inputName("units").c_str());
+    w.push_back(buf);
+  }
+  if (program.units_declared || !units_option.empty()) return w;
   double tool_d = 0.0;
   if (!program.cutters.empty() && !program.cutters.back().values.empty())
     tool_d = program.cutters.back().values[0];
   const bool inch_fits = extent * 25.4 < travel;
   const bool small_tool = tool_d > 0.0 && tool_d < 1.0;
   const bool small_part = extent < 30.0;
-  char buf[400];
   if (inch_fits && (small_tool || (small_part && tool_d < 3.0))) {
     std::snprintf(buf, sizeof buf,
                   "%s declares no units and looks like inches (extent %.3f, tool diameter %.3f, "

@@ -1,6 +1,7 @@
 #include "pipeline/setup.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -198,6 +199,7 @@ SetupRun proposeSetup(const SetupInputs& in, const Progress& progress) {
   so.gauge_lengths = in.gauge_lengths;
   so.max_seconds = in.max_seconds;
   if (progress) so.progress = [&progress](double f) { progress("searching set-ups", f); };
+  const auto start = std::chrono::steady_clock::now();
   run.search = findSetup(model, run.path, cmd, so);
   if (progress) progress("searching set-ups", 1.0);
   const SetupSearchResult& r = run.search;
@@ -217,7 +219,14 @@ SetupRun proposeSetup(const SetupInputs& in, const Progress& progress) {
     // with a set-up that reaches it.
     run.verdict = Verdict::NotMet;
     run.outside_lines = outsideLines(run.path, r.outside, &run.outside_runs);
-    run.pieces = splitIntoSetups(model, run.path, cmd, so);
+    // --max-seconds bounds the whole command: the split gets what the search left.
+    if (so.max_seconds > 0.0) {
+      const std::chrono::duration<double> t = std::chrono::steady_clock::now() - start;
+      so.max_seconds = std::max(so.max_seconds - t.count(), 1e-9);
+    }
+    if (progress) so.progress = [&progress](double f) { progress("splitting the program", f); };
+    run.pieces = splitIntoSetups(model, run.path, cmd, so, 8, &run.split_budget_spent);
+    if (progress) progress("splitting the program", 1.0);
   }
   if (!in.output.empty()) writeSetupFiles(in.output, run);
   return run;

@@ -18,9 +18,10 @@ struct SetupInputs {
   std::string output;                 // set-up file to write with the proposal, or empty
   double rotation_step_deg = 15.0;    // part rotations tried (0 keeps the given one)
   std::vector<double> gauge_lengths;  // gauge lengths to try, mm; empty: the set-up's
-  // A time budget for the search, s (0: none): once spent, the best set-up of the rotations
-  // tried (SetupSearchResult::budget_spent). The pieces of a program no set-up reaches are
-  // searched with the same budget each.
+  // A time budget for the whole search, s (0: none): once spent, the best set-up of the
+  // rotations tried (SetupSearchResult::budget_spent); the split of a program no set-up reaches
+  // gets what is left, and stops with the pieces finished when it runs out
+  // (SetupRun::split_budget_spent).
   double max_seconds = 0.0;
 };
 
@@ -46,7 +47,8 @@ struct SetupRun {
   MachineModel best;                 // the model with the proposed set-up
   std::string outside_lines;         // the best set-up's points outside travel, as line runs
   int outside_runs = 0;
-  std::vector<SetupPiece> pieces;  // when no single set-up reaches the program
+  std::vector<SetupPiece> pieces;   // when no single set-up reaches the program
+  bool split_budget_spent = false;  // --max-seconds ran out before the split was finished
 
   // WorkOffset and Fixed: the proposal, and the program read again with it (its joints against
   // travel).

@@ -101,11 +101,11 @@ TEST(AptReader, SolidWorksCamUnitCutterCsysAndFeedAfterValue) {
   EXPECT_EQ(p.tool_planes, 4);
   EXPECT_EQ(p.frames.size(), 2u);  // initial and UNIT: no CSYS applied
   bool seen = false;
-  for (const ClPoint& c : p.path) {
-    if (c.line != 278) continue;
+  for (const ClPoint& pt : p.path) {
+    if (pt.line != 278) continue;
     seen = true;
-    expectNear(c.p_w, Eigen::Vector3d(250, 35.8375, -12.1625));
-    expectNear(c.u_w, Eigen::Vector3d(1, 0, 0));
+    expectNear(pt.p_w, Eigen::Vector3d(250, 35.8375, -12.1625));
+    expectNear(pt.u_w, Eigen::Vector3d(1, 0, 0));
   }
   EXPECT_TRUE(seen);
   EXPECT_TRUE(p.path[1].u_w.isApprox(Eigen::Vector3d(0, 0, 1)));
@@ -228,6 +228,31 @@ TEST(AptReader, DrillingCyclesAreExpandedNeverSkipped) {
   }
 }
 
+// SolidWorks CAM writes a bare CYCLE/CLEAR before a cycle's definition (aamorim1913/
+// AptPostProcessor, parts-2022/SupPetriLED.apt, line 16); it was refused as an unknown cycle.
+// It clears the cycle state: the DEEP cycle after it drills its six holes, and a cycle in force
+// when it comes ends there, with a note (read as nothing, the next GOTO would be a hole).
+TEST(AptReader, CycleClearEndsTheCycleInForce) {
+  const ClProgram p = fixture("swcam_SupPetriLED.apt");
+  EXPECT_EQ(p.cycle_holes, 12);
+  int k = 0;
+  while (p.path[k].line != 18) ++k;
+  // GOTO/59.5,99.5,-24 with DEEP FEDTO 3.301, RAPTO 29, RTRCTO 49: retract, clearance, depth.
+  expectNear(p.path[k].p_w, Eigen::Vector3d(59.5, 99.5, 25.0));
+  expectNear(p.path[k + 1].p_w, Eigen::Vector3d(59.5, 99.5, 5.0));
+  expectNear(p.path[k + 2].p_w, Eigen::Vector3d(59.5, 99.5, -27.301));
+  const ClProgram q =
+      parseApt("GOTO/0,0,10\nCYCLE/DRILL,FEDTO,5,RAPTO,2\nGOTO/0,0,0\nCYCLE/CLEAR\nGOTO/5,0,0\n",
+               "clear.apt");
+  EXPECT_EQ(q.cycle_holes, 1);
+  ASSERT_FALSE(q.path.empty());
+  EXPECT_EQ(q.path.back().line, 5);
+  expectNear(q.path.back().p_w, Eigen::Vector3d(5, 0, 0));
+  bool said = false;
+  for (const auto& n : q.notes) said |= n.find("CYCLE/CLEAR at line 4 ended the DRILL cycle") == 0;
+  EXPECT_TRUE(said);
+}
+
 TEST(AptReader, ShortNxPathWithTldataAndEndOfPath) {
   const ClProgram p = fixture("nx_TORETC_250_BOK.cls");
   EXPECT_EQ(p.path.size(), 10u);
@@ -321,7 +346,9 @@ TEST(AptReader, BadInputNamesFileLineAndColumn) {
     } catch (const InputError& e) {
       EXPECT_EQ(e.file(), "bad.apt");
       EXPECT_EQ(e.line(), c.line) << e.what();
-      if (c.column) EXPECT_EQ(e.column(), c.column) << e.what();
+      if (c.column) {
+        EXPECT_EQ(e.column(), c.column) << e.what();
+      }
       EXPECT_NE(std::string(e.what()).find(c.needle), std::string::npos) << e.what();
     }
   }

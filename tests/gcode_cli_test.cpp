@@ -531,6 +531,52 @@ TEST_F(GcodeCli, ClWithoutUnitsThatLooksLikeInches) {
   EXPECT_NEAR(back.path[1].p_w.x(), 1.5 * 25.4, 1e-6);  // written in inches, read back in mm
 }
 
+// A CL that declares inches over millimetres (Creo: 4r19415/5-axis-Rotation-tool-center-point-
+// RTCP-, assets/finition.ncl, UNITS / INCHES over a 6 mm cutter, 7.6 m across read in inches):
+// setup says the extent would fit in mm and names the option; --cl-units mm then holds over the
+// statement, said with its line, and the written CL says how to read it back.
+TEST_F(GcodeCli, DeclaredInchesThatAreMillimetres) {
+  std::ofstream(path("mislabel.apt")) << "PARTNO/X\nUNITS / INCHES\nMULTAX / ON\n"
+                                         "GOTO/0,0,20,0,0,1\nGOTO/250,0,20,0,0,1\n"
+                                         "GOTO/250,150,20,0,0,1\nGOTO/0,150,5,0,0,1\n";
+  const std::string m = " --machine " + src("resources/machines/vmc_3axis_iso.xml");
+  auto r = test::runTolver("setup" + m + " --cl " + path("mislabel.apt") + " -o " + path("s.txt"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("declares UNITS/INCHES at line 2 and spans 7415 mm"), std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("read as mm it would span 291.9 mm"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("give --cl-units mm"), std::string::npos) << r.output;
+  // --max-seconds bounds the split of a program no set-up reaches, and says where it stopped.
+  r = test::runTolver("setup" + m + " --cl " + path("mislabel.apt") + " --max-seconds 1e-6 -o " +
+                      path("s.txt"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("--max-seconds 1e-06 ran out while splitting the program: 0 piece(s) "
+                          "found, covering 0 of 4 points; the rest is not split"),
+            std::string::npos)
+      << r.output;
+  r = test::runTolver("setup" + m + " --cl-units mm --cl " + path("mislabel.apt") + " -o " +
+                      path("s.txt"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("declares UNITS/INCHES at line 2: read in mm, as --cl-units says"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("units MM"), std::string::npos) << r.output;
+  r = test::runTolver("predict" + m + " --setup " + path("s.txt") + " --cl-units mm --cl " +
+                      path("mislabel.apt") + " -o " + path("p.apt"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(path("p.apt"));
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("not as UNITS at line 2 declares: read this file with --cl-units mm"),
+            std::string::npos)
+      << text;
+  AptReadOptions ro;
+  ro.unit_given = true;  // read back as the header says: the points are the program's
+  const ClProgram back = readAptFile(path("p.apt"), ro);
+  ASSERT_EQ(back.path.size(), 4u);
+  EXPECT_NEAR(back.path[1].p_w.x(), 250.0, 1e-6);
+  EXPECT_EQ(back.units_in_file, "INCH");
+}
+
 TEST_F(GcodeCli, SetupBadInputExitsWithCode2AndWritesNothing) {
   const std::string m = " --machine " + src("resources/machines/linuxcnc_xyzac_trt.xml");
   const std::string nc = " --nc " + src("samples/gcode/boat-xyzac.ngc");

@@ -136,6 +136,19 @@ TEST(SetupSearch, SplitsAProgramTooLongForTheTravel) {
     const std::vector<ClPoint> piece(path.begin() + p.first, path.begin() + p.last + 1);
     EXPECT_TRUE(predictToolPath(model, m.params, piece).ok());
   }
+  // A budget bounds the whole split (each bisection step got the whole budget before: a 35 k
+  // point Creo program took 3 min under --max-seconds 20): spent at once, no piece is given and
+  // the split says so; ample, the same pieces as without.
+  bool spent = false;
+  o.max_seconds = 1e-9;
+  EXPECT_TRUE(splitIntoSetups(m.model, path, nullptr, o, 8, &spent).empty());
+  EXPECT_TRUE(spent);
+  o.max_seconds = 600;
+  const std::vector<SetupPiece> again = splitIntoSetups(m.model, path, nullptr, o, 8, &spent);
+  EXPECT_FALSE(spent);
+  ASSERT_EQ(again.size(), 2u);
+  EXPECT_EQ(again[0].last, 91);
+  EXPECT_EQ(again[1].result.setup.part_rotation, pieces[1].result.setup.part_rotation);
 }
 
 }  // namespace

@@ -495,20 +495,38 @@ SetupSearchResult findSetup(const MachineModel& model, const std::vector<ClPoint
 
 std::vector<SetupPiece> splitIntoSetups(const MachineModel& model, const std::vector<ClPoint>& path,
                                         const std::vector<JointVector>* commanded,
-                                        const SetupSearchOptions& options, int max_pieces) {
+                                        const SetupSearchOptions& options, int max_pieces,
+                                        bool* budget_spent) {
+  const auto start = std::chrono::steady_clock::now();
+  bool spent = false;
+  // What is left of the budget for the next search (0: none given); spent once it is gone.
+  auto left = [&] {
+    if (!(options.max_seconds > 0.0)) return 0.0;
+    const std::chrono::duration<double> t = std::chrono::steady_clock::now() - start;
+    const double l = options.max_seconds - t.count();
+    if (l <= 0.0) spent = true;
+    return l;
+  };
   SetupSearchOptions quick = options;
   quick.stop_when_found = true;
+  quick.progress = nullptr;
+  // Whether one set-up reaches path[first, end); a search cut short by the budget counts as
+  // neither (spent is set and the split stops).
   auto reach = [&](int first, int end, SetupSearchResult* r) {
+    quick.max_seconds = left();
+    if (spent) return false;
     const std::vector<ClPoint> piece(path.begin() + first, path.begin() + end);
     std::vector<JointVector> cmd;
     if (commanded) cmd.assign(commanded->begin() + first, commanded->begin() + end);
     *r = findSetup(model, piece, commanded ? &cmd : nullptr, quick);
+    if (r->budget_spent && !r->found) spent = true;
     return r->found;
   };
   std::vector<SetupPiece> pieces;
   const int n = static_cast<int>(path.size());
   int first = 0;
-  while (first < n && static_cast<int>(pieces.size()) < max_pieces) {
+  while (first < n && static_cast<int>(pieces.size()) < max_pieces && !spent) {
+    if (options.progress) options.progress(static_cast<double>(first) / n);
     SetupPiece p;
     p.first = first;
     if (reach(first, n, &p.result)) {
@@ -534,16 +552,25 @@ std::vector<SetupPiece> splitIntoSetups(const MachineModel& model, const std::ve
         p.last = lo - 1;
       }
     }
-    // The piece's set-up with the margin of the full search (not the first that reached).
+    if (spent) break;  // the piece is not known to be the longest: not given
+    // The piece's set-up with the margin of the full search (not the first that reached); if
+    // the budget runs out in it, the best of the rotations tried, which still reaches the piece.
     if (p.result.found) {
       std::vector<ClPoint> piece(path.begin() + p.first, path.begin() + p.last + 1);
       std::vector<JointVector> cmd;
       if (commanded) cmd.assign(commanded->begin() + p.first, commanded->begin() + p.last + 1);
-      p.result = findSetup(model, piece, commanded ? &cmd : nullptr, options);
+      SetupSearchOptions full = options;
+      full.progress = nullptr;
+      full.max_seconds = left();
+      if (!spent) {
+        SetupSearchResult best = findSetup(model, piece, commanded ? &cmd : nullptr, full);
+        if (best.found && best.margin >= p.result.margin) p.result = std::move(best);
+      }
     }
     first = p.last + 1;
     pieces.push_back(std::move(p));
   }
+  if (budget_spent) *budget_spent = spent;
   return pieces;
 }
 

@@ -70,9 +70,13 @@ struct SetupPiece {
   int first = 0, last = 0;   // indices into the path, inclusive
   SetupSearchResult result;  // its set-up (found is false for a single point no set-up reaches)
 };
+// options.max_seconds (0: none) bounds the whole split: each search gets what is left, and once
+// it is spent the split stops with the pieces finished so far (*budget_spent set); options.
+// progress is called with the fraction of the path split.
 std::vector<SetupPiece> splitIntoSetups(const MachineModel& model, const std::vector<ClPoint>& path,
                                         const std::vector<JointVector>* commanded,
-                                        const SetupSearchOptions& options = {}, int max_pieces = 8);
+                                        const SetupSearchOptions& options = {}, int max_pieces = 8,
+                                        bool* budget_spent = nullptr);
 
 // A posted program outside tool-centre-point mode gives joints, not tool tips: machine
 // coordinate = word + work offset (+ tool length along the spindle under G43). A work offset the

@@ -586,7 +586,14 @@ class Parser {
            "unknown unit '" + (args.empty() ? std::string() : args[0].text) +
                "' (expected MM or INCHES)");
     }
+    if (prog_.units_line == 0) prog_.units_line = line;
     prog_.units_declared = true;
+    if (opt_.unit_given) {
+      const std::string given = opt_.unit_mm == 25.4 ? "INCH" : "MM";
+      if (given != prog_.units && prog_.units_in_file.empty()) prog_.units_in_file = prog_.units;
+      prog_.units = given;
+      scale = opt_.unit_mm;
+    }
     ClFrame f = prog_.frames[frame_];
     f.scale = scale;
     pushFrame(f);
@@ -674,8 +681,11 @@ class Parser {
   // point, the hole's top), RAPTO or CLEAR (clearance above it, reached in rapid), RTRCTO
   // (retract above it; AUTO or absent: the clearance), peck, dwell and feed words (the motion
   // stays on the hole's axis: STEP, INCR, 1STPECK, SUBPECK, DWELL, MMPM, IPM, MMPR, IPR, REV...).
-  // CYCLE/OFF ends it; CYCLE/INIT, /ON and /AUTO set nothing. The types are those NX, Creo,
-  // CATIA and SolidWorks CAM write; another is an error naming it, never skipped.
+  // CYCLE/OFF ends it; CYCLE/INIT, /ON and /AUTO set nothing. A bare CYCLE/CLEAR (SolidWorks
+  // CAM writes it before a cycle's definition; aamorim1913/AptPostProcessor's clsplit, a post for
+  // that CAM's output, moves nothing for it) clears the cycle state: it ends a cycle in force, as
+  // OFF does, and says so, since a post that read it as nothing would drill on. The types are
+  // those NX, Creo, CATIA and SolidWorks CAM write; another is an error naming it, never skipped.
   void cycleStatement(const std::vector<Arg>& args, int line) {
     if (args.empty()) fail(line, 0, "CYCLE", "CYCLE needs a type or OFF");
     const std::string type = toUpper(args[0].text);
@@ -684,6 +694,14 @@ class Parser {
       return;
     }
     if (type == "INIT" || type == "ON" || type == "AUTO") return;
+    if (type == "CLEAR" && args.size() == 1) {
+      if (cycle_.active)
+        prog_.notes.push_back("CYCLE/CLEAR at line " + std::to_string(line) + " ended the " +
+                              cycle_.type + " cycle of line " + std::to_string(cycle_.line) +
+                              " (read as CYCLE/OFF: the GOTOs after it are not holes)");
+      cycle_.active = false;
+      return;
+    }
     static const std::set<std::string> types = {"DRILL",  "DEEP",  "DEEP2", "BRKCHP", "TAP",
                                                 "RGDTAP", "BORE",  "BORE1", "BORE2",  "REAM",
                                                 "FACE",   "CSINK", "SPOT",  "THRU",   "MILL"};

@@ -87,6 +87,8 @@ struct ClProgram {
   int unknown_count = 0;                   // statements skipped as unknown
   std::vector<std::string> unknown_names;  // their major words, each once
   bool units_declared = false;             // UNITS / G20 / G21 seen (else the default was used)
+  int units_line = 0;                      // the first UNITS statement's line (CL)
+  std::string units_in_file;  // CL: the unit that statement declares, when the user's differs
   // G-code only: per point, the commanded joint values (mm, rad, model axis order; in TCP mode
   // the prismatic ones are those of the nominal inverse kinematics' reference, not commands),
   // and how the point was programmed: kJointWords (work offset + tool length, no TCP),
@@ -146,6 +148,10 @@ struct AptReadOptions {
   // The unit of a file that declares none, mm (25.4: --cl-units inch): its points, cutters and
   // arcs read in it from the start.
   double unit_mm = 1.0;
+  // The user gave the unit (--cl-units): it holds also where the file declares another (a CAM
+  // that writes UNITS/INCHES over millimetres); the file's declaration is kept in
+  // ClProgram::units_in_file and units_line for the notes.
+  bool unit_given = false;
 };
 
 // Throws InputError naming file:line:column and the field on malformed input. The file is

@@ -35,6 +35,13 @@ void writePredictedAptStart(TextOut& out, const ClProgram& program,
   // A program read in inches without a UNITS statement (--cl-units inch) says so, or the
   // written inches would read back as millimetres.
   if (program.units == "INCH" && !program.units_declared) out += "UNITS/INCHES\n";
+  // The user's unit over the file's UNITS (--cl-units): the statement is copied as it stands
+  // and the numbers stay as written, so the file reads back only with the same option.
+  if (!program.units_in_file.empty())
+    out += "$$ the numbers are in " + std::string(program.units == "INCH" ? "inches" : "mm") +
+           ", not as UNITS at line " + std::to_string(program.units_line) +
+           " declares: read this file with --cl-units " +
+           (program.units == "INCH" ? "inch" : "mm") + "\n";
   if (!program.multiax) out += "MULTAX/ON\n";
 }
 
