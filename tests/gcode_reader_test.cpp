@@ -440,6 +440,108 @@ TEST(GcodeReader, ReferencePointReturnsAsTheControlsDocumentThem) {
   for (const std::string& n : named.notes) EXPECT_EQ(n.find("G28 without"), std::string::npos) << n;
 }
 
+// Motion codes some control gives a meaning tolver does not carry out are refused by name: their
+// words were read as moves of the modal G0/G1 (LinuxCNC's nc_files/nurbs/G5/butterfly-xy.ngc:
+// the NURBS control points read as a path, no word of warning). An unknown code beside axis
+// words is refused too; without axis words it stays a note, and Fanuc's G5.1 Q1 (AI contour
+// control) is harmless on an ISO control.
+TEST(GcodeReader, MotionCodesItCannotCarryOutAreRefusedByName) {
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  const Machine lcnc = machine("resources/machines/linuxcnc_xyzbc_trt.xml", 0.0);
+  try {
+    readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_nurbs_butterfly-xy.ngc"),
+                  vmc.model);
+    ADD_FAILURE() << "NURBS read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 12) << e.what();
+    EXPECT_NE(std::string(e.what()).find("G5.2: NURBS (G5.2-G5.3, LinuxCNC)"), std::string::npos)
+        << e.what();
+  }
+  const std::string head = "G21 G90\nG0 X1 Y2 Z5 B0 C0\n";
+  struct Case {
+    const MachineModel* model;
+    const char* block;
+    const char* says;
+  };
+  const Case cases[] = {
+      {&lcnc.model, "G5 X2 Y3 I1 J0 P1 Q0\n", "G5: cubic spline (G5, LinuxCNC)"},
+      {&lcnc.model, "G5.1 X2 Y3 I1 J0\n", "G5.1: quadratic spline"},
+      {&lcnc.model, "G33.1 Z-5 K1\n", "G33.1: rigid tapping"},
+      {&lcnc.model, "G71 Q100 D1\n", "G71: lathe finishing and roughing cycles"},
+      {&vmc.model, "G6.2 P3 X2 Y3 R1 K0\n", "G6.2: NURBS (G6.2, Fanuc)"},
+      {&vmc.model, "G12.1\n", "G12.1: polar coordinate interpolation"},
+      {&vmc.model, "G13 I0.5 K2 Q0.1 D1 F10\n", "G13: circular pocket milling (G12/G13, HAAS)"},
+      {&vmc.model, "G81 Z-1 R1 F10 L0\nG70 I2 J0 L6\n", "G70: bolt-hole patterns"},
+      {&vmc.model, "G31 X10 F100\n",
+       "G31: a code tolver does not know, in a block with axis "
+       "words (X)"},
+  };
+  for (const Case& c : cases) {
+    const std::string text =
+        c.model == &vmc.model ? "G21 G90\nG0 X1 Y2 Z5\n" + std::string(c.block) : head + c.block;
+    const std::string r = refusal(text, *c.model);
+    EXPECT_NE(r.find(c.says), std::string::npos) << c.block << " -> " << r;
+    EXPECT_NE(r.find(c.model == &vmc.model && c.block[1] == '8' ? "r.nc:4" : "r.nc:3"),
+              std::string::npos)
+        << r;
+  }
+  const ClProgram ok =
+      parseGcode("G21 G90\nG5.1 Q1\nG0 X1 Y2 Z5\nG1 X3\nG71\nM30\n", "ok.nc", vmc.model);
+  EXPECT_EQ(ok.path.size(), 2u);
+  for (const std::string& n : ok.notes) EXPECT_EQ(n.find("G5.1"), std::string::npos) << n;
+  EXPECT_EQ(ok.units, "MM");
+}
+
+// Parameter settings anywhere in a line (LinuxCNC: after a line number, beside words), set once
+// the line is read: "#1=-2 G0 X-1" lost its move (the line ended at the setting), and "N0050
+// #<tube-cut>=1" (a PlasmaC post) was refused. Polar words are named.
+TEST(GcodeReader, ParameterSettingsAnywhereInTheLine) {
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  const ClProgram p = parseGcode(
+      "G21 G90\nN0050 #<tube-cut>=1\n#1=-2 G0 X-1 Y-1 Z-5\n#1=-7 #2=[#1-10] G1 X#1 Y[#1*6]\n"
+      "G1 X#1 Y#2 Z-#<tube-cut>\nM30\n",
+      "set.ngc", vmc.model);
+  ASSERT_EQ(p.path.size(), 3u);
+  EXPECT_EQ(p.path[0].line, 3);
+  // Line 4: X#1, Y[#1*6] and #2=[#1-10] read #1 = -2, the value before the line.
+  EXPECT_NEAR(p.path[1].p_w.x(), -2.0, 1e-12);
+  EXPECT_NEAR(p.path[1].p_w.y(), -12.0, 1e-12);
+  EXPECT_NEAR(p.path[2].p_w.x(), -7.0, 1e-12);
+  EXPECT_NEAR(p.path[2].p_w.y(), -12.0, 1e-12);
+  EXPECT_NEAR(p.path[2].p_w.z(), -1.0, 1e-12);
+  // LinuxCNC's functions (degrees) and binary operators inside brackets, against <cmath>.
+  const ClProgram f = parseGcode(
+      "G21 G90\n#<r> = [2 * SQRT[2]]\nG0 X[#<r> * COS[45]] Y[#<r>*SIN[45]] Z[ATAN[1]/[-1]]\n"
+      "G1 X[2 ** 3] Y[-7 MOD 3] Z[ROUND[-2.5] + FIX[-0.5] + FUP[0.2] + EXISTS[#<r>]]\n"
+      "G1 X[ABS[-1] + LN[EXP[2]] + ACOS[0] + ASIN[1] + TAN[45]] Y[1 + 2 * 3 ** 2]\nM30\n",
+      "f.ngc", vmc.model);
+  ASSERT_EQ(f.path.size(), 3u);
+  EXPECT_NEAR(f.path[0].p_w.x(), 2.0, 1e-12);
+  EXPECT_NEAR(f.path[0].p_w.y(), 2.0, 1e-12);
+  EXPECT_NEAR(f.path[0].p_w.z(), 135.0, 1e-12);
+  EXPECT_NEAR(f.path[1].p_w.x(), 8.0, 1e-12);
+  EXPECT_NEAR(f.path[1].p_w.y(), 2.0, 1e-12);  // LinuxCNC's MOD is never negative
+  EXPECT_NEAR(f.path[1].p_w.z(), -3.0 - 1.0 + 1.0 + 1.0, 1e-12);
+  EXPECT_NEAR(f.path[2].p_w.x(), 1.0 + 2.0 + 90.0 + 90.0 + 1.0, 1e-9);
+  EXPECT_NEAR(f.path[2].p_w.y(), 19.0, 1e-12);
+  EXPECT_NE(refusal("G21\nG0 X[FOO[1]] Y1 Z1\n", vmc.model).find("not a function"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X[SQRT[-1]] Y1 Z1\n", vmc.model).find("SQRT of -1: no value"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X[1 MOD 0] Y1 Z1\n", vmc.model).find("MOD by zero"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X1 Y1 Z1\nG1 @.5 ^90\n", vmc.model).find("r.nc:3:4: @: polar"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X1 #1 G1\n", vmc.model).find("expected '#parameter = value'"),
+            std::string::npos);
+  // A lathe program (X and Z only) on a mill: its moves are named, not "no moves".
+  const std::string lathe = refusal("G21 G18\nG0 X10 Z1\nG1 Z-5 F50\nM30\n", vmc.model);
+  EXPECT_NE(lathe.find("r.nc:2: 2 move(s), lines 2-3, and none where the tool's position is "
+                       "known: the program never commands Y (a lathe program, X and Z only?)"),
+            std::string::npos)
+      << lathe;
+}
+
 // A Grbl sender's file opening with Grbl's own commands (marcio-pessoa/Escriba,
 // Examples/calibration.gcode: "$I", "$G", "$$", "?"): refused at the first, naming it as Grbl's
 // (some move the machine: $H homes), not as a stray character.

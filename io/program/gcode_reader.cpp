@@ -74,6 +74,39 @@ const std::map<std::string, const char*>& refusedG() {
   return m;
 }
 
+// Codes of the motion group some control gives a meaning tolver does not carry out: refused by
+// name, or their axis words (spline control points, pocket sizes) would be read as moves of the
+// modal G0/G1 (LinuxCNC's NURBS example, nc_files/nurbs/G5/nurbs-xy.ngc, read as five G1 points).
+// Sources: the LinuxCNC G-code reference (G5 cubic spline, G5.1 quadratic spline, G5.2/G5.3
+// NURBS, G33.1 rigid tapping, G70-G72 lathe cycles); Fanuc 0i-MF / 30i (G6.2 NURBS, G12.1/G13.1
+// polar coordinate interpolation, G7.1 cylindrical interpolation, G2.4/G3.4 3-D circular
+// interpolation); HAAS mill operator's manual 96-8000 (G12/G13 circular pocket milling, G150
+// general pocket milling, G70/G71/G72 bolt-hole patterns under a drilling cycle).
+const char* refusedMotion(const std::string& c, const std::string& dialect) {
+  if (c == "G5.2" || c == "G5.3")
+    return "NURBS (G5.2-G5.3, LinuxCNC) is not supported: post the path as G1 moves";
+  if (c == "G6.2") return "NURBS (G6.2, Fanuc) is not supported: post the path as G1 moves";
+  if (c == "G12.1" || c == "G13.1")
+    return "polar coordinate interpolation (G12.1/G13.1) is not supported";
+  if (c == "G7.1") return "cylindrical interpolation (G7.1) is not supported";
+  if (c == "G2.4" || c == "G3.4") return "3-D circular interpolation (G2.4/G3.4) is not supported";
+  if (dialect == "linuxcnc") {
+    if (c == "G5") return "cubic spline (G5, LinuxCNC) is not supported: post the path as G1 moves";
+    if (c == "G5.1")
+      return "quadratic spline (G5.1, LinuxCNC) is not supported: post the path as G1 moves";
+    if (c == "G33.1") return "rigid tapping (G33.1, LinuxCNC) is not expanded: post it as motion";
+    if (c == "G70" || c == "G71" || c == "G72")
+      return "lathe finishing and roughing cycles (G70-G72, LinuxCNC) are not expanded";
+  }
+  if (dialect == "iso") {
+    if (c == "G12" || c == "G13")
+      return "circular pocket milling (G12/G13, HAAS) is not expanded: post it as motion";
+    if (c == "G150")
+      return "general pocket milling (G150, HAAS) is not expanded: post it as motion";
+  }
+  return nullptr;
+}
+
 // G words that do not change the tool path: accepted silently.
 const std::set<std::string>& harmlessG() {
   static const std::set<std::string> s = {"G4",  "G9",   "G40",   "G61", "G61.1", "G64", "G93",
@@ -170,6 +203,21 @@ class Reader {
                   (end_cause_ == "'%'" ? " (on ISO controls a second '%' ends the tape: it is not "
                                          "a comment)"
                                        : "");
+    if (points_read_ == 0 && unknown_moves_ > 0 && !after_end_) {
+      // Moves there were, but some axis never had a position (a lathe program's Y, a program
+      // that relies on where the last one left the tool).
+      std::string never;
+      for (int k = 0; k < 3; ++k)
+        if (coord_[k] == kUnknown) never += std::string(never.empty() ? "" : ", ") + "XYZ"[k];
+      fail(first_unknown_line_, 0, "",
+           std::to_string(unknown_moves_) + " move(s), lines " +
+               std::to_string(first_unknown_line_) + "-" + std::to_string(last_unknown_line_) +
+               ", and none where the tool's position is known: the program never commands " +
+               (never.empty() ? std::string("every axis before it moves") : never) +
+               (coord_[1] == kUnknown && coord_[0] != kUnknown && coord_[2] != kUnknown
+                    ? " (a lathe program, X and Z only?)"
+                    : ""));
+    }
     if (points_read_ == 0)
       fail(after_end_ ? end_line_ : 0, 0, after_end_ ? end_cause_ : "",
            after_end_ ? "the program ends here with no moves before it; " + after_end
@@ -1138,7 +1186,9 @@ class Reader {
     const char c = text[i];
     if (c == '[') {
       ++i;
+      ++brackets_;
       const double v = expression(text, i, col_base);
+      --brackets_;
       while (i < text.size() && text[i] == ' ') ++i;
       if (i >= text.size() || text[i] != ']') fail(line_, col_base + i, "[", "missing ']'");
       ++i;
@@ -1167,8 +1217,7 @@ class Reader {
       i = j;
       return it->second;
     }
-    if (std::isalpha(static_cast<unsigned char>(c)))
-      fail(line_, col_base + i, "", "functions in expressions are not supported");
+    if (std::isalpha(static_cast<unsigned char>(c))) return function(text, i, col_base);
     size_t j = i;
     while (j < text.size() && (std::isdigit(static_cast<unsigned char>(text[j])) || text[j] == '.'))
       ++j;
@@ -1179,13 +1228,91 @@ class Reader {
     return *v;
   }
 
-  double term(const std::string& text, size_t& i, int col_base) {
+  // LinuxCNC's unary functions (G-code reference, "Unary Operation Value"; angles in degrees):
+  // NAME[expr], ATAN[y]/[x], EXISTS[#<name>]. Any other name is refused naming it.
+  double function(const std::string& text, size_t& i, int col_base) {
+    const size_t at = i;
+    size_t j = i;
+    while (j < text.size() && std::isalpha(static_cast<unsigned char>(text[j]))) ++j;
+    const std::string name = toUpper(text.substr(i, j - i));
+    static const std::set<std::string> known = {"ABS", "ACOS", "ASIN", "ATAN",  "COS",
+                                                "EXP", "FIX",  "FUP",  "LN",    "ROUND",
+                                                "SIN", "SQRT", "TAN",  "EXISTS"};
+    if (!known.count(name) || j >= text.size() || text[j] != '[')
+      fail(line_, col_base + at + 1, name,
+           "'" + clip(text.substr(at, 12)) +
+               "': not a function of LinuxCNC expressions (ABS, ACOS, ASIN, ATAN, COS, EXP, "
+               "FIX, FUP, LN, ROUND, SIN, SQRT, TAN, EXISTS)");
+    i = j;
+    if (name == "EXISTS") {
+      const size_t close = text.find(']', j);
+      if (close == std::string::npos) fail(line_, col_base + j, "[", "missing ']'");
+      const std::string inner = lowerNoSpace(text.substr(j + 1, close - j - 1));
+      i = close + 1;
+      if (inner.size() < 3 || inner.rfind("#<", 0) != 0 || inner.back() != '>')
+        fail(line_, col_base + j, name, "EXISTS takes a named parameter, #<name>");
+      return named_.count(inner.substr(2, inner.size() - 3)) ? 1.0 : 0.0;
+    }
+    const double a = primary(text, i, col_base);
+    auto domain = [&](bool ok) {
+      if (!ok) fail(line_, col_base + at + 1, name, name + " of " + formatNumber(a) + ": no value");
+    };
+    constexpr double d = M_PI / 180.0;
+    if (name == "ATAN") {
+      while (i < text.size() && text[i] == ' ') ++i;
+      if (i >= text.size() || text[i] != '/')
+        fail(line_, col_base + i, name, "ATAN is written ATAN[y]/[x]");
+      ++i;
+      const double x = primary(text, i, col_base);
+      return std::atan2(a, x) / d;
+    }
+    if (name == "ABS") return std::abs(a);
+    if (name == "ACOS") return domain(std::abs(a) <= 1.0), std::acos(a) / d;
+    if (name == "ASIN") return domain(std::abs(a) <= 1.0), std::asin(a) / d;
+    if (name == "COS") return std::cos(a * d);
+    if (name == "SIN") return std::sin(a * d);
+    if (name == "TAN") return std::tan(a * d);
+    if (name == "EXP") return std::exp(a);
+    if (name == "FIX") return std::floor(a);
+    if (name == "FUP") return std::ceil(a);
+    if (name == "ROUND") return std::round(a);
+    if (name == "LN") return domain(a > 0.0), std::log(a);
+    return domain(a >= 0.0), std::sqrt(a);  // SQRT
+  }
+
+  // Inside brackets, '**' (power) binds tightest, then * / MOD, then + - (LinuxCNC's binary
+  // operators; comparisons and logic belong to O-word conditions, which are refused).
+  double power(const std::string& text, size_t& i, int col_base) {
     double v = primary(text, i, col_base);
     for (;;) {
+      size_t k = i;
+      while (k < text.size() && text[k] == ' ') ++k;
+      if (brackets_ > 0 && k + 1 < text.size() && text[k] == '*' && text[k + 1] == '*') {
+        i = k + 2;
+        const double e = primary(text, i, col_base);
+        v = std::pow(v, e);
+        if (!std::isfinite(v)) fail(line_, col_base + k, "**", "the power has no finite value");
+      } else {
+        return v;
+      }
+    }
+  }
+
+  double term(const std::string& text, size_t& i, int col_base) {
+    double v = power(text, i, col_base);
+    for (;;) {
       while (i < text.size() && text[i] == ' ') ++i;
-      if (i < text.size() && (text[i] == '*' || text[i] == '/')) {
+      const bool mod = brackets_ > 0 && i + 2 < text.size() && toUpper(text.substr(i, 3)) == "MOD";
+      if (mod) {
+        i += 3;
+        const double r = power(text, i, col_base);
+        if (r == 0.0) fail(line_, col_base + i, "MOD", "MOD by zero");
+        v = std::fmod(v, r);  // LinuxCNC's interp_execute.cc: "always a positive answer"
+        if (v < 0.0) v += std::abs(r);
+      } else if (i < text.size() && (text[i] == '*' || text[i] == '/') &&
+                 !(i + 1 < text.size() && text[i + 1] == '*')) {
         const char op = text[i++];
-        const double r = primary(text, i, col_base);
+        const double r = power(text, i, col_base);
         if (op == '/' && r == 0.0) fail(line_, col_base + i, "/", "division by zero");
         v = op == '*' ? v * r : v / r;
       } else {
@@ -1418,22 +1545,6 @@ class Reader {
       }
       text = upper;
     }
-    // Parameter assignment: #n = expr or #<name> = expr.
-    if (upper[0] == '#') {
-      const size_t eq = upper.find('=');
-      if (eq == std::string::npos) fail(line_, col[0], "#", "expected '#parameter = value'");
-      const std::string lhs = lowerNoSpace(text.substr(0, eq));
-      size_t i = eq + 1;
-      const double v = expression(text, i, col[0] - 1);
-      if (lhs.size() > 2 && lhs[1] == '<')
-        named_[lhs.substr(2, lhs.size() - 3)] = v;
-      else {
-        const auto n = parseNumber(lhs.substr(1));
-        if (!n) fail(line_, col[0], "#", "malformed parameter number");
-        numbered_[parameterNumber(*n, col[0])] = v;
-      }
-      return "";
-    }
     // The program's number or name: O1234, O<name>, :1234 (ISO 6983's alternative), and at the
     // program start OName ... (NX writes "OFinal ToolPath"). O-word subprograms and control flow
     // (LinuxCNC "O100 sub", "O<x> if [...]") are refused naming the construct.
@@ -1467,13 +1578,50 @@ class Reader {
                "the program start: O-word subprograms and control flow are not "
                "supported");
     }
-    // Words.
+    // Words, and parameter settings (#n = expr, #<name> = expr): LinuxCNC takes them anywhere in
+    // a line, after a line number or beside words, and sets them once the whole line is read
+    // (its G-code reference, "Parameters"), so every value on the line, theirs included, is
+    // read with the values before it. A setting that is not the line's first item used to end
+    // the line there, its words unread ("#1=-2 G0 X-1" lost the move).
     std::vector<Word> words;
+    std::vector<std::pair<std::string, double>> named_set;
+    std::vector<std::pair<int, double>> numbered_set;
     size_t i = 0;
     while (i < upper.size()) {
       const char c = upper[i];
       if (c == ' ') {
         ++i;
+        continue;
+      }
+      if (c == '#') {
+        const int at = col[i];
+        size_t k = i + 1;
+        while (k < upper.size() && upper[k] == ' ') ++k;
+        std::string name;
+        std::optional<double> number;
+        if (k < upper.size() && upper[k] == '<') {
+          const size_t close = upper.find('>', k);
+          if (close == std::string::npos) fail(line_, at, "#<", "unclosed parameter name");
+          name = lowerNoSpace(upper.substr(k + 1, close - k - 1));
+          k = close + 1;
+        } else {
+          const size_t from = k;
+          while (k < upper.size() &&
+                 (std::isdigit(static_cast<unsigned char>(upper[k])) || upper[k] == '.'))
+            ++k;
+          number = parseNumber(upper.substr(from, k - from));
+          if (!number) fail(line_, at, "#", "malformed parameter number");
+        }
+        while (k < upper.size() && upper[k] == ' ') ++k;
+        if (k == upper.size() || upper[k] != '=')
+          fail(line_, at, "#", "expected '#parameter = value'");
+        ++k;
+        const double v = expression(upper, k, 0);
+        if (number)
+          numbered_set.emplace_back(parameterNumber(*number, at), v);
+        else
+          named_set.emplace_back(name, v);
+        i = k;
         continue;
       }
       // Grbl's own commands ('$H' homes, '$J=' jogs, '$$' lists settings, '?' asks the status:
@@ -1484,6 +1632,11 @@ class Reader {
              "'" + clip(text.substr(i, 12)) +
                  "' is a Grbl system command, not a G-code block (some move the machine: "
                  "$H homes, $J= jogs): remove it from the program");
+      // LinuxCNC's polar coordinates (@ distance, ^ angle in the XY plane; G-code reference,
+      // "Polar Coordinates"): named, not "a stray character".
+      if (c == '@' || c == '^')
+        fail(line_, col[i], std::string(1, c),
+             "polar coordinates (LinuxCNC @ distance, ^ angle) are not supported: post X and Y");
       if (!std::isalpha(static_cast<unsigned char>(c)))
         fail(line_, col[i], "", "expected a word letter, found '" + clip(text.substr(i, 12)) + "'");
       Word w;
@@ -1506,7 +1659,9 @@ class Reader {
       if (c == 'G' || c == 'M') w.code = codeOf(c, w.value);
       words.push_back(w);
     }
-    return execute(words);
+    for (const auto& [n, v] : numbered_set) numbered_[n] = v;
+    for (const auto& [n, v] : named_set) named_[n] = v;
+    return words.empty() ? std::string() : execute(words);
   }
 
   // ---------------------------------------------------------------- execution
@@ -1629,6 +1784,15 @@ class Reader {
     auto refused = refusedG().find(c);
     if (refused != refusedG().end() && !isDrillingCycle(c))
       fail(line_, w.column, c, refused->second);
+    if (const char* why = refusedMotion(c, model_.control.dialect)) fail(line_, w.column, c, why);
+    // G70/G71 as inch and mm are Sinumerik's (and old ISO posts'); on a HAAS they are bolt-hole
+    // patterns (G70 circle, G71 arc, G72 along an angle: I, J, L words under a drilling cycle),
+    // refused there.
+    if ((c == "G70" || c == "G71" || c == "G72") && model_.control.dialect == "iso" &&
+        (c == "G72" || cycle_ || axis_words.count('I') || axis_words.count('J') ||
+         axis_words.count('L')))
+      fail(line_, w.column, c,
+           "bolt-hole patterns (G70-G72, HAAS) are not expanded: post the holes one by one");
     if (c == "G0" || c == "G1" || c == "G2" || c == "G3" || isDrillingCycle(c)) {
       modes->motion = c;
     } else if (c == "G17" || c == "G18" || c == "G19") {
@@ -1679,6 +1843,14 @@ class Reader {
       work_ = "G54.1P" + std::to_string(static_cast<int>(axis_words.at('P')->value));
       commanded_offsets_.insert(work_);
     } else if (!harmlessG().count(c)) {
+      // Read as not moving the tool, which holds only when no axis word rides with it: with
+      // one, the code may be a motion of its own (a spline, a probe, a pocket) and the words
+      // would be read as a move of the modal G0/G1.
+      for (char l : {'X', 'Y', 'Z', 'A', 'B', 'C', 'U', 'V', 'W'})
+        if (axis_words.count(l))
+          fail(line_, w.column, c,
+               "a code tolver does not know, in a block with axis words (" + std::string(1, l) +
+                   "): what the control does with them is not known");
       unknown_.emplace(c, line_);
     }
   }
@@ -2163,6 +2335,7 @@ class Reader {
   static constexpr int kMaxNesting = 64;      // signs, brackets and '#' within one expression
   static constexpr int kMaxParameter = 5601;  // LinuxCNC's numbered parameters: #1 to #5601
   int nesting_ = 0;
+  int brackets_ = 0;  // '[' open in the expression being read (binary operators live inside)
   LineSource* source_ = nullptr;
   int line_ = 0;
   // The program's end (M2, M30 or a second '%'): where, by what, and the lines after it that
