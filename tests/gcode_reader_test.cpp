@@ -726,6 +726,70 @@ TEST(GcodeReader, MovesBeforeEveryAxisIsKnownAreNotInventedPoints) {
   EXPECT_TRUE(hasNote(p, "1 move(s) before every axis had a commanded position (lines 2-2)"));
 }
 
+// SINUMERIK arithmetic (840D sl Programming Manual, Job Planning, "Arithmetic functions") and
+// dimensions (Fundamentals: AC, IC, DC, ACP, ACN): values against <cmath> and the manual's own
+// ATAN2 example (20.8455 deg); the remainders and whole parts as the manual's DIV and MOD give
+// them (7 DIV 0.4 = 17, 7 MOD 4.1 = 2.9); spaces inside an expression ("X = 100 - 10 * 2").
+TEST(GcodeReader, SinumerikArithmeticAndDimensions) {
+  const Machine m = sinumerikMachine();
+  const std::string head = "N10 G54 G90 G0 X0 Y0 Z50 B0 C0 D1\n";
+  const std::vector<std::pair<std::string, double>> cases = {
+      {"X=SIN(30)", 0.5},
+      {"X=ATAN2(30.5, 80.1)", std::atan2(30.5, 80.1) * 180.0 / M_PI},
+      {"X=SQRT(POT(3)+POT(4))", 5.0},
+      {"X=7 DIV 0.4", 17.0},
+      {"X=7 MOD 4.1", std::fmod(7.0, 4.1)},
+      {"X=1+7 MOD 4", 4.0},
+      {"X = 100 - 10 * 2 + 5", 85.0},
+      {"X=BOUND(0, 10, 12)", 10.0},
+      {"X=MINVAL(3, -2)+MAXVAL(1, 4)", 2.0},
+      {"X=TRUNC(-2.7)+ROUNDUP(2.1)+ROUND(2.5)", -2.0 + 3.0 + 3.0},
+      {"X=ACOS(0.5)+ASIN(0.5)+TAN(45)", 60.0 + 30.0 + 1.0},
+  };
+  for (const auto& [expr, want] : cases) {
+    const ClProgram p = parseGcode(head + "N20 G1 " + expr + " F100\n", "e.mpf", m.model);
+    ASSERT_EQ(p.path.size(), 2u) << expr;
+    EXPECT_NEAR(p.path[1].p_w.x() - p.path[0].p_w.x(), want, 1e-9) << expr;  // from X0
+  }
+  EXPECT_NEAR(std::atan2(30.5, 80.1) * 180.0 / M_PI, 20.8455, 1e-4);  // the manual's example
+  // IC and AC against the modal G90/G91; a STRING variable takes text and moves nothing.
+  const ClProgram d = parseGcode(head +
+                                     "N15 DEF STRING[8] TAG = \"A-7\"\nN20 G1 X10 F100\n"
+                                     "N30 X=IC(5)\nN40 G91 X=AC(2)\nN50 X3\nN60 TAG = \"B-2\"\n",
+                                 "d.mpf", m.model);
+  ASSERT_EQ(d.path.size(), 5u);
+  EXPECT_NEAR(d.path[2].p_w.x() - d.path[0].p_w.x(), 15.0, 1e-12);
+  EXPECT_NEAR(d.path[3].p_w.x() - d.path[0].p_w.x(), 2.0, 1e-12);
+  EXPECT_NEAR(d.path[4].p_w.x() - d.path[0].p_w.x(), 5.0, 1e-12);
+  // An arc centre given absolutely in one coordinate (I=AC) and relatively in the other.
+  const ClProgram a =
+      parseGcode(head + "N20 G17 G1 X10 Y0 F100\nN30 G3 X-10 Y0 I=AC(0) J0\n", "a.mpf", m.model);
+  double top = -1e9;
+  for (const ClPoint& c : a.path) top = std::max(top, c.p_w.y() - a.path[0].p_w.y());
+  EXPECT_NEAR(top, 10.0, 1e-9);  // the half circle about the origin, not about X20
+  // DC, ACP, ACN turn the endless C from 10 deg to 350 the short way (-10), then to 5 in the
+  // positive sense (5), then to 10 in the negative sense (-350). Joint = nc_sign (-1) x word.
+  const ClProgram r = parseGcode(
+      "N10 G54 G90 G0 X0 Y0 Z50 B0 C10 D1\nN20 G0 C=DC(350)\nN30 C=ACP(5)\nN40 C=ACN(10)\n",
+      "r.mpf", m.model);
+  ASSERT_EQ(r.path.size(), 4u);
+  constexpr double deg = M_PI / 180.0;
+  EXPECT_NEAR(r.joints[1][4], 10.0 * deg, 1e-12);
+  EXPECT_NEAR(r.joints[2][4], -5.0 * deg, 1e-12);
+  EXPECT_NEAR(r.joints[3][4], 350.0 * deg, 1e-12);
+  // What it cannot be sure of is refused, naming it.
+  EXPECT_NE(refusal(head + "N20 TRANS X10\nN30 G1 X=IC(5) F100\n", m.model).find("MD 42440"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "N20 G1 X=-7 MOD 3 F100\n", m.model).find("negative"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "N20 G1 X=1+IC(2) F100\n", m.model).find("whole axis word"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "N20 G1 B=DC(5) F100\n", m.model).find("modulo rotary axis"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "N15 DEF STRING[4] S\nN20 G1 X=S F100\n", m.model).find("STRING"),
+            std::string::npos);
+}
+
 // Sinumerik 840D as NX posts it: DEF, assignments, ADDR=expression, SUPA, TRAFOOF, T="name",
 // D0/D1, MSG, CYCLE832, MCALL CYCLE81: the real program reads, every construct carried out.
 TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
@@ -767,7 +831,8 @@ TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {
   const std::string base = "N10 DEF REAL _A\nN20 _A=5\n";
   EXPECT_NE(refusal(base + "N30 GOTOF MARK\n", m.model).find("GOTOF"), std::string::npos);
   EXPECT_NE(refusal(base + "N30 WHILE _A>0\n", m.model).find("WHILE"), std::string::npos);
-  EXPECT_NE(refusal(base + "N30 G0 X=SIN(30)\n", m.model).find("functions"), std::string::npos);
+  EXPECT_NE(refusal(base + "N30 G0 X=SINH(30)\n", m.model).find("not a SINUMERIK arithmetic"),
+            std::string::npos);
   EXPECT_NE(refusal(base + "N30 G0 X=_B\n", m.model).find("_B has no value"), std::string::npos);
   EXPECT_NE(refusal(base + "N30 CYCLE86(10,0,2,-5)\n", m.model).find("CYCLE86"), std::string::npos);
   // 3+2 as NX posts it: the table positioned, TRAORI, the frame turned with AROT: the tool axis

@@ -1,6 +1,7 @@
 #include "io/program/gcode_reader.h"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <map>
@@ -421,13 +422,14 @@ class Reader {
   // ---------------------------------------------------------------- Sinumerik 840D
   // A Sinumerik block (Siemens SINUMERIK 840D sl Programming Manual, Fundamentals and Job
   // Planning) rewritten into ISO words that the rest of the reader carries out: DEF REAL/INT
-  // declarations and NAME=expression assignments of constants (kept as variables),
-  // ADDR=expression words (X=_X_HOME -> X[_X_HOME]), SUPA (non-modal machine coordinates, as
-  // G53), G500 (no settable offset), TRANS/ATRANS (programmable translation), T="name" and D
-  // (tool and its length offset; D0 switches it off), MCALL CYCLE81/82/83 (modal drilling, RTP,
-  // RFP, SDIS, DP, DPR), CYCLE800() (swivel reset); MSG, CYCLE832 and the path-control words
-  // listed as ignored. Loops, jumps, swivelling with CYCLE800(...) and frame rotations are
-  // refused naming the construct.
+  // declarations and NAME=expression assignments of constants (kept as variables; arithmetic
+  // functions, DIV and MOD: sinFunction, term), ADDR=expression words (X=_X_HOME ->
+  // X[_X_HOME]; X=IC(...) and the other dimensions: sinDimension), SUPA (non-modal machine
+  // coordinates, as G53), G500 (no settable offset), TRANS/ATRANS (programmable translation),
+  // T="name" and D (tool and its length offset; D0 switches it off), MCALL CYCLE81/82/83 (modal
+  // drilling, RTP, RFP, SDIS, DP, DPR), CYCLE800() (swivel reset); MSG, CYCLE832 and the
+  // path-control words listed as ignored. Loops, jumps, swivelling with CYCLE800(...) and frame
+  // rotations are refused naming the construct.
   std::string sinumerikBlock(const std::string& upper, const std::vector<int>& col) {
     SinBlock b = sinTokens(upper, col);
     size_t t = 0;
@@ -435,6 +437,7 @@ class Reader {
         std::isdigit(static_cast<unsigned char>(b.tok[t][1])))
       ++t;  // the block number
     sin_turns_ = -1;
+    sin_dim_.clear();
     if (t < b.tok.size() && b.tok[t] == "DEF") {
       sinDeclare(b, t);
       return "";
@@ -461,7 +464,19 @@ class Reader {
     fail(line_, b.col[t], b.tok[t].substr(0, b.tok[t].find_first_of("(=")), why);
   }
 
-  // Tokens separated by spaces outside parentheses and strings; "NAME = expr" joined.
+  // Tokens separated by spaces outside parentheses and strings; an expression written with
+  // spaces ("NAME = expr", "X=7 DIV 2", "R1 = R2 * 4") joined into one token: a token that ends
+  // in '=' or an operator, or one that starts with '=' or an operator or is DIV or MOD, goes on
+  // the one before it.
+  static bool sinJoins(const std::string& prev, const std::string& cur) {
+    static const std::string ops = "=+-*/";
+    if (prev.find('=') == std::string::npos && cur[0] != '=') return false;
+    return ops.find(prev.back()) != std::string::npos || ops.find(cur[0]) != std::string::npos ||
+           cur == "DIV" || cur == "MOD" ||
+           (prev.size() >= 4 && (prev.compare(prev.size() - 4, 4, " DIV") == 0 ||
+                                 prev.compare(prev.size() - 4, 4, " MOD") == 0));
+  }
+
   static SinBlock sinTokens(const std::string& upper, const std::vector<int>& col) {
     SinBlock b;
     std::string cur;
@@ -474,8 +489,10 @@ class Reader {
       if (!str && c == ')') --depth;
       if (c == ' ' && depth <= 0 && !str) {
         if (!cur.empty()) {
-          if (!b.tok.empty() && (cur[0] == '=' || b.tok.back().back() == '=')) {
-            b.tok.back() += cur;
+          if (!b.tok.empty() && sinJoins(b.tok.back(), cur)) {
+            const char last = b.tok.back().back();
+            const bool keep_space = cur == "DIV" || cur == "MOD" || last == 'V' || last == 'D';
+            b.tok.back() += (keep_space ? " " : "") + cur;
           } else {
             b.tok.push_back(cur);
             b.col.push_back(start);
@@ -496,7 +513,8 @@ class Reader {
     const std::string type = b.tok[t + 1];
     static const std::set<std::string> types = {"REAL",   "INT",  "BOOL", "CHAR",
                                                 "STRING", "AXIS", "FRAME"};
-    if (!types.count(type.substr(0, type.find('[')))) sinRefuse(b, t + 1, "unknown type in DEF");
+    const std::string base = type.substr(0, type.find('['));
+    if (!types.count(base)) sinRefuse(b, t + 1, "unknown type in DEF");
     std::string rest;
     for (size_t k = t + 2; k < b.tok.size(); ++k) rest += b.tok[k];
     size_t p = 0;
@@ -507,8 +525,9 @@ class Reader {
       const size_t eq = item.find('=');
       const std::string name = item.substr(0, eq);
       double v = 0.0;
-      if (eq != std::string::npos && type != "STRING" && type != "CHAR")
-        v = sinExpression(item.substr(eq + 1), b.col[t]);
+      const bool text = base == "STRING" || base == "CHAR";
+      if (eq != std::string::npos && !text) v = sinExpression(item.substr(eq + 1), b.col[t]);
+      if (text) sin_texts_.insert(name);
       if (!name.empty()) sin_vars_[name] = v;
       p = e + 1;
     }
@@ -677,7 +696,7 @@ class Reader {
                     "= (orientation angles, normals, rounding, chamfers, contour offsets, "
                     "polar or circle-angle programming) changes the path and is not supported");
     if (name.size() == 1 && std::isalpha(static_cast<unsigned char>(name[0]))) {
-      b.out += " " + name + "[" + sinBrackets(expr) + "]";
+      b.out += " " + name + "[" + sinBrackets(sinDimension(b, t, name[0], expr)) + "]";
       return;
     }
     if (name.empty()) sinRefuse(b, t, "an assignment without a name");
@@ -691,9 +710,81 @@ class Reader {
                 "Sinumerik " + name +
                     "= is neither a variable the program declares (DEF) nor an "
                     "R parameter: an address tolver does not carry out");
+    // A STRING or CHAR variable takes text, which moves nothing.
+    if (sin_texts_.count(name)) {
+      if (expr.size() < 2 || expr.front() != '"' || expr.back() != '"')
+        sinRefuse(b, t, name + " is a STRING variable: only a quoted text is carried (\"...\")");
+      ignored_.insert("STRING assignment");
+      return;
+    }
     // An assignment: constant expressions only (a value computed from motion is refused by the
     // expression's own check).
     sin_vars_[name] = sinExpression(expr, b.col[t]);
+  }
+
+  // An axis word's dimension (SINUMERIK 840D sl Programming Manual, Fundamentals,
+  // "Absolute dimensions (G90, AC)", "Incremental dimensions (G91, IC)", "Absolute dimensions
+  // for rotary axes (DC, ACP, ACN)"): X=IC(v) is incremental and X=AC(v) absolute in this block
+  // whatever G90/G91 says; I=AC(v) puts an arc centre absolute; C=DC(v) turns a modulo rotary
+  // axis to v by the shortest way, ACP in the positive and ACN in the negative sense. Returns
+  // the value's expression; the mode is kept in sin_dim_ for target() and the rotary words.
+  std::string sinDimension(const SinBlock& b, size_t t, char letter, const std::string& expr) {
+    const size_t open = expr.find('(');
+    if (open == std::string::npos || expr.back() != ')') return expr;
+    const std::string mode = expr.substr(0, open);
+    if (mode != "IC" && mode != "AC" && mode != "DC" && mode != "ACP" && mode != "ACN") return expr;
+    // The parenthesis that opens must close at the end: IC(1)+IC(2) is not one dimension.
+    int depth = 0;
+    for (size_t k = open; k < expr.size(); ++k) {
+      depth += expr[k] == '(' ? 1 : expr[k] == ')' ? -1 : 0;
+      if (depth == 0 && k + 1 != expr.size()) return expr;
+    }
+    const bool linear = letter == 'X' || letter == 'Y' || letter == 'Z';
+    const bool centre = letter == 'I' || letter == 'J' || letter == 'K';
+    const auto axis = letter_axis_.find(letter);
+    const bool rotary = axis != letter_axis_.end() && model_.axes[axis->second].isRotary();
+    if (!linear && !centre && !rotary)
+      sinRefuse(b, t,
+                std::string(1, letter) + "=" + mode +
+                    "(...): a dimension on a word that is not "
+                    "an axis of this machine or an arc centre");
+    if (centre && mode != "AC" && mode != "IC")
+      sinRefuse(b, t, std::string(1, letter) + "=" + mode + "(...): an arc centre takes AC or IC");
+    if (mode.size() >= 2 && mode != "AC" && mode != "IC") {
+      if (!rotary)
+        sinRefuse(b, t,
+                  mode + " (absolute with a direction) is for a rotary axis, not " +
+                      std::string(1, letter));
+      if (!model_.axes[axis->second].endless)
+        sinRefuse(b, t,
+                  mode + " on " + std::string(1, letter) +
+                      " is for a modulo rotary axis, and the machine file gives " +
+                      model_.axes[axis->second].name +
+                      " stops (mark it endless=\"true\" if it turns without them)");
+    }
+    sin_dim_[letter] = mode;
+    return expr.substr(open + 1, expr.size() - open - 2);
+  }
+
+  // The rotary word's value (deg) after a block: absolute or incremental as the block says, and
+  // a modulo target (DC, ACP, ACN) taken the way the control turns from the current angle.
+  double rotaryWordValue(char letter, double current, double v) const {
+    const auto it = sin_dim_.find(letter);
+    const std::string mode = it == sin_dim_.end() ? std::string() : it->second;
+    if (mode == "IC" || (mode.empty() && !absolute_)) return current + v;
+    if (mode.empty() || mode == "AC") return v;
+    const double m = std::fmod(v, 360.0);
+    const double target = m < 0.0 ? m + 360.0 : m;  // 0 <= target < 360
+    double d = std::fmod(target - current, 360.0);  // (-360, 360)
+    if (mode == "DC") {
+      if (d > 180.0) d -= 360.0;
+      if (d < -180.0) d += 360.0;
+    } else if (mode == "ACP") {
+      if (d < 0.0) d += 360.0;
+    } else if (d > 0.0) {  // ACN
+      d -= 360.0;
+    }
+    return current + d;
   }
 
   bool tcpWordName(const std::string& k) const {
@@ -705,6 +796,8 @@ class Reader {
   // A new frame (swivel and programmable frames composed): the current position kept, in the
   // new frame's coordinates. The points after it carry it (ClProgram::frames).
   void setFrame(const Eigen::Isometry3d& f) {
+    frame_line_ = line_;
+    frame_moved_.fill(true);
     const Eigen::Vector3d settable = frame_ * cur_xyz_;
     frame_ = f;
     cur_xyz_ = frame_.inverse() * settable;
@@ -1207,9 +1300,13 @@ class Reader {
              (std::isalnum(static_cast<unsigned char>(text[j])) || text[j] == '_'))
         ++j;
       const std::string name = text.substr(i, j - i);
-      if (j < text.size() && text[j] == '[')
-        fail(line_, col_base + i, name,
-             "functions in expressions (" + name + ") are not supported");
+      if (j < text.size() && text[j] == '[') {
+        const double v = sinFunction(name, text, j, col_base, col_base + static_cast<int>(i));
+        i = j;
+        return v;
+      }
+      if (sin_texts_.count(name))
+        fail(line_, col_base + i, name, name + " is a STRING variable: it has no number");
       auto it = sin_vars_.find(name);
       if (it == sin_vars_.end())
         fail(line_, col_base + i, name,
@@ -1226,6 +1323,73 @@ class Reader {
       fail(line_, col_base + i, "", "malformed number '" + clip(text.substr(i, j - i + 1)) + "'");
     i = j;
     return *v;
+  }
+
+  // SINUMERIK's arithmetic functions (840D sl Programming Manual, Job Planning, "Arithmetic
+  // functions"; angles in degrees): SIN COS TAN ASIN ACOS, ATAN2(y, x) (the angle of (x, y)
+  // from x), SQRT, POT (square), ABS, TRUNC, ROUND, ROUNDUP, LN, EXP, MINVAL(a, b),
+  // MAXVAL(a, b), BOUND(min, max, value). text[i] is the '[' (sinBrackets) after the name;
+  // returns with i past the ']'. Any other name is refused naming it.
+  double sinFunction(const std::string& name, const std::string& text, size_t& i, int col_base,
+                     int col) {
+    static const std::map<std::string, int> arity = {
+        {"SIN", 1},  {"COS", 1}, {"TAN", 1},    {"ASIN", 1},   {"ACOS", 1},  {"ATAN2", 2},
+        {"SQRT", 1}, {"POT", 1}, {"ABS", 1},    {"TRUNC", 1},  {"ROUND", 1}, {"ROUNDUP", 1},
+        {"LN", 1},   {"EXP", 1}, {"MINVAL", 2}, {"MAXVAL", 2}, {"BOUND", 3}};
+    const auto known = arity.find(name);
+    if (known == arity.end()) {
+      const bool dimension =
+          name == "IC" || name == "AC" || name == "DC" || name == "ACP" || name == "ACN";
+      fail(line_, col + 1, name,
+           dimension ? name + "(...) is a dimension of a whole axis word (X=" + name +
+                           "(...)), not part of an expression"
+                     : name +
+                           "(...) is not a SINUMERIK arithmetic function tolver evaluates "
+                           "(SIN COS TAN ASIN ACOS ATAN2 SQRT POT ABS TRUNC ROUND ROUNDUP "
+                           "LN EXP MINVAL MAXVAL BOUND)");
+    }
+    ++i;  // '['
+    ++brackets_;
+    std::vector<double> a;
+    for (;;) {
+      a.push_back(expression(text, i, col_base));
+      while (i < text.size() && text[i] == ' ') ++i;
+      if (i < text.size() && text[i] == ',') {
+        ++i;
+        continue;
+      }
+      break;
+    }
+    --brackets_;
+    if (i >= text.size() || text[i] != ']') fail(line_, col + 1, name, "missing ')' after " + name);
+    ++i;
+    if (static_cast<int>(a.size()) != known->second)
+      fail(line_, col + 1, name,
+           name + " takes " + std::to_string(known->second) + " value(s), given " +
+               std::to_string(a.size()));
+    const double x = a[0];
+    auto domain = [&](bool ok) {
+      if (!ok) fail(line_, col + 1, name, name + " of " + formatNumber(x) + ": no value");
+    };
+    constexpr double d = M_PI / 180.0;
+    if (name == "SIN") return std::sin(x * d);
+    if (name == "COS") return std::cos(x * d);
+    if (name == "TAN") return std::tan(x * d);
+    if (name == "ASIN") return domain(std::abs(x) <= 1.0), std::asin(x) / d;
+    if (name == "ACOS") return domain(std::abs(x) <= 1.0), std::acos(x) / d;
+    if (name == "ATAN2") return std::atan2(x, a[1]) / d;
+    if (name == "SQRT") return domain(x >= 0.0), std::sqrt(x);
+    if (name == "POT") return x * x;
+    if (name == "ABS") return std::abs(x);
+    if (name == "TRUNC") return std::trunc(x);
+    if (name == "ROUND") return std::round(x);
+    if (name == "ROUNDUP") return std::ceil(x);
+    if (name == "LN") return domain(x > 0.0), std::log(x);
+    if (name == "EXP") return std::exp(x);
+    if (name == "MINVAL") return std::min(x, a[1]);
+    if (name == "MAXVAL") return std::max(x, a[1]);
+    if (x > a[1]) fail(line_, col + 1, name, "BOUND(min, max, value) with min above max");
+    return std::clamp(a[2], x, a[1]);  // BOUND
   }
 
   // LinuxCNC's unary functions (G-code reference, "Unary Operation Value"; angles in degrees):
@@ -1302,8 +1466,26 @@ class Reader {
     double v = power(text, i, col_base);
     for (;;) {
       while (i < text.size() && text[i] == ' ') ++i;
-      const bool mod = brackets_ > 0 && i + 2 < text.size() && toUpper(text.substr(i, 3)) == "MOD";
-      if (mod) {
+      const bool sin = model_.control.dialect == "sinumerik";
+      const bool mod =
+          (brackets_ > 0 || sin) && i + 2 < text.size() && toUpper(text.substr(i, 3)) == "MOD";
+      const bool div = sin && i + 2 < text.size() && text.compare(i, 3, "DIV") == 0;
+      if (mod && sin) {
+        // SINUMERIK MOD: the remainder of the division, as fmod (7 MOD 4.1 = 2.9). Its sign
+        // with a negative operand is not carried: refused rather than guessed.
+        i += 3;
+        const double r = power(text, i, col_base);
+        if (r == 0.0) fail(line_, col_base + i, "MOD", "MOD by zero");
+        if (v < 0.0 || r < 0.0)
+          fail(line_, col_base + i, "MOD", "MOD of a negative number: its sign is not carried");
+        v = std::fmod(v, r);
+      } else if (div) {
+        // SINUMERIK DIV: division whose result is the whole part (7 DIV 0.4 = 17).
+        i += 3;
+        const double r = power(text, i, col_base);
+        if (r == 0.0) fail(line_, col_base + i, "DIV", "DIV by zero");
+        v = std::trunc(v / r);
+      } else if (mod) {
         i += 3;
         const double r = power(text, i, col_base);
         if (r == 0.0) fail(line_, col_base + i, "MOD", "MOD by zero");
@@ -1863,6 +2045,10 @@ class Reader {
     for (const auto& [l, w] : axis_words) {
       // G-code numbers have no exponent: "Y1e5" is Y1 and an E word, which no milling control
       // here reads (Fanuc's E is a thread lead). Refused, so that Y1e5 is never read as Y1.
+      if (l == 'E' && model_.control.dialect == "sinumerik")
+        fail(line_, w->column, "E",
+             "the program commands axis E (E=" + formatNumber(w->value) + ") but the machine has " +
+                 axisList());
       if (l == 'E')
         fail(line_, w->column, "E",
              "an E word (E" + formatNumber(w->value) +
@@ -1984,14 +2170,28 @@ class Reader {
   }
 
   // The target of the block in program coordinates (mm), from the words present.
-  Eigen::Vector3d target(const std::map<char, const Word*>& aw) const {
+  // An incremental X, Y or Z after a Sinumerik frame changed (TRANS, ATRANS, ROT, CYCLE800) and
+  // before that axis was given absolutely: whether the control also moves by the frame's change
+  // is machine data (MD 42440 FRAME_OFFSET_INCR_PROG), so the target is not known. Refused.
+  Eigen::Vector3d target(const std::map<char, const Word*>& aw) {
     Eigen::Vector3d t = cur_xyz_;
     const char L[3] = {'X', 'Y', 'Z'};
     for (int k = 0; k < 3; ++k) {
       auto it = aw.find(L[k]);
       if (it == aw.end()) continue;
       const double v = it->second->value * unit_;
-      t[k] = absolute_ ? v : t[k] + v;
+      const auto dim = sin_dim_.find(L[k]);
+      const bool abs = dim == sin_dim_.end() ? absolute_ : dim->second == "AC";
+      if (!abs && frame_moved_[k] && model_.control.dialect == "sinumerik")
+        fail(line_, it->second->column, std::string(1, L[k]),
+             std::string("an incremental ") + L[k] +
+                 " (G91 or IC) after the frame changed at line " + std::to_string(frame_line_) +
+                 ", before " + L[k] +
+                 " was given absolutely: whether the control moves by the frame's change too is "
+                 "machine data (MD 42440 FRAME_OFFSET_INCR_PROG); give " +
+                 L[k] + " absolutely after the frame");
+      if (abs) frame_moved_[k] = false;
+      t[k] = abs ? v : t[k] + v;
     }
     return t;
   }
@@ -2001,7 +2201,7 @@ class Reader {
       auto it = letter_axis_.find(l);
       if (it == letter_axis_.end() || !model_.axes[it->second].isRotary()) continue;
       const int a = it->second;
-      rot_word_[a] = absolute_ ? w->value : rot_word_[a] + w->value;
+      rot_word_[a] = rotaryWordValue(l, rot_word_[a], w->value);
       const Axis& ax = model_.axes[a];
       const double q = ax.nc_sign * rot_word_[a] * kDegToRad;
       if (!ax.endless && (q < ax.travel_min - 1e-9 || q > ax.travel_max + 1e-9))
@@ -2186,7 +2386,12 @@ class Reader {
           any = true;
         }
       if (!any) fail(line_, 0, motion, "an arc needs I, J, K or R");
-      centre = arc_absolute_ ? off : start + off;
+      for (int k = 0; k < 3; ++k) {
+        // I=AC(v): that coordinate of the centre is absolute (Sinumerik); the others relative.
+        const auto dim = sin_dim_.find(ijk[k]);
+        const bool abs = dim == sin_dim_.end() ? arc_absolute_ : dim->second == "AC";
+        centre[k] = abs ? off[k] : start[k] + off[k];
+      }
       centre -= n * n.dot(centre - start);
     }
     // Full turns before the end (LinuxCNC: P, the number of turns, 1 by default).
@@ -2354,6 +2559,10 @@ class Reader {
   int unknown_moves_ = 0, first_unknown_line_ = 0, last_unknown_line_ = 0;
   // Sinumerik state.
   std::map<std::string, double> sin_vars_;
+  std::set<std::string> sin_texts_;      // declared STRING and CHAR variables
+  std::map<char, std::string> sin_dim_;  // the block's X=IC(...) etc. (sinDimension)
+  std::array<bool, 3> frame_moved_{};    // X Y Z not given absolutely since the frame changed
+  int frame_line_ = 0;                   // where the frame last changed
   int sin_turns_ = -1;  // the Sinumerik block's TURN= (sinumerikBlock), -1 when it gives none
   bool sin_mcall_ = false, sin_cycle_here_ = false;
   // Frames (mm): the swivel frame (CYCLE800), the programmable frame (TRANS, ROT, ...) and
