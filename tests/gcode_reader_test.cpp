@@ -777,6 +777,14 @@ TEST(GcodeReader, SinumerikArithmeticAndDimensions) {
   EXPECT_NEAR(r.joints[1][4], 10.0 * deg, 1e-12);
   EXPECT_NEAR(r.joints[2][4], -5.0 * deg, 1e-12);
   EXPECT_NEAR(r.joints[3][4], 350.0 * deg, 1e-12);
+  // G75 (fixed point, machine data): not a point; Z unknown until commanded again.
+  const ClProgram fp = parseGcode(
+      head + "N20 G1 X5 F100\nN30 G75 FP=1 Z0\nN40 G0 X7\nN50 Z40\nN60 X8\n", "f.mpf", m.model);
+  ASSERT_EQ(fp.path.size(), 4u);  // X0, X5, then Z40 (X7 waits for Z), X8
+  EXPECT_EQ(fp.path[2].line, 5);
+  EXPECT_NEAR(fp.path[2].p_w.x() - fp.path[0].p_w.x(), 7.0, 1e-12);
+  EXPECT_TRUE(hasNote(fp, "G75 (first at line 3)"));
+  EXPECT_NE(refusal(head + "N20 G75 C0\n", m.model).find("$MA_FIX_POINT_POS"), std::string::npos);
   // What it cannot be sure of is refused, naming it.
   EXPECT_NE(refusal(head + "N20 TRANS X10\nN30 G1 X=IC(5) F100\n", m.model).find("MD 42440"),
             std::string::npos);

@@ -249,6 +249,11 @@ class Reader {
       for (const auto& n : ignored_) names += (names.empty() ? "" : ", ") + n;
       prog_.notes.push_back("ignored (no effect on the tool path): " + names);
     }
+    if (g75_line_ > 0)
+      prog_.notes.push_back("G75 (first at line " + std::to_string(g75_line_) +
+                            ") takes the axes it names to a fixed point of the control's machine "
+                            "data: not a point of the path; those axes are unknown until "
+                            "commanded again");
     if (bare_g28_line_ > 0)
       prog_.notes.push_back(
           "G28 without axis words (first at line " + std::to_string(bare_g28_line_) +
@@ -678,6 +683,11 @@ class Reader {
       if (!(n >= 0 && n <= 999 && n == std::round(n)))
         sinRefuse(b, t, "TURN= must be a whole number of full circles from 0 to 999");
       b.turns = static_cast<int>(n);
+      return;
+    }
+    if (name == "FP") {
+      // G75's fixed point number (1 to 4): which one does not matter, none being known.
+      ignored_.insert("FP=");
       return;
     }
     if (name == "CR") {
@@ -1853,7 +1863,7 @@ class Reader {
   // What a block's G words ask for beyond the modes they set.
   struct BlockModes {
     std::string motion;  // G0-G3 or a drilling cycle, when the block has one
-    bool g53 = false, g28 = false, g10 = false;
+    bool g53 = false, g28 = false, g10 = false, g75 = false;
     const Word* g682 = nullptr;
     const Word* g531 = nullptr;
   };
@@ -1884,6 +1894,7 @@ class Reader {
     }
     if (sin_mcall_) cycle_ = true;  // Sinumerik MCALL: modal until MCALL alone, whatever G0/G1
     if (modes.g28) return homeMove(axis_words);
+    if (modes.g75) return fixedPointMove(axis_words);
     if (modes.g53) return machineMove(axis_words);
     if (sin_cycle_here_) {  // Sinumerik CYCLE8x(...) without MCALL: once, where the block ends
       sin_cycle_here_ = false;
@@ -1998,6 +2009,8 @@ class Reader {
       modes->g53 = true;
     } else if (c == "G28") {
       modes->g28 = true;
+    } else if (c == "G75" && model_.control.dialect == "sinumerik") {
+      modes->g75 = true;
     } else if (c == "G10") {
       modes->g10 = true;
     } else if (c == "G68.2") {
@@ -2479,6 +2492,34 @@ class Reader {
     return "G28";
   }
 
+  // Sinumerik G75, fixed-point approach (SINUMERIK 840D sl Programming Manual, Fundamentals,
+  // "Fixed-point approach (G75)"): G75 FP=n X1=0 Z1=0 takes the axes named to fixed point n
+  // (1 by default), a position in machine data ($MA_FIX_POINT_POS) that a machine file does not
+  // carry; the values written are not positions. Not a point of the path: the axes named are
+  // unknown until the program commands them again (as at the program start). A rotary axis
+  // named is refused: its angle would be needed by the next point.
+  std::string fixedPointMove(const std::map<char, const Word*>& aw) {
+    const char L[3] = {'X', 'Y', 'Z'};
+    bool named = false;
+    for (const auto& [l, w] : aw) {
+      const auto it = letter_axis_.find(l);
+      if (it == letter_axis_.end()) continue;
+      if (model_.axes[it->second].isRotary())
+        fail(line_, w->column, std::string(1, l),
+             "G75 takes " + std::string(1, l) +
+                 " to a fixed point in the control's machine data ($MA_FIX_POINT_POS), which "
+                 "the machine file does not give: position the rotary axis with G0 or SUPA");
+      for (int k = 0; k < 3; ++k)
+        if (l == L[k]) {
+          coord_[k] = kUnknown;
+          named = true;
+        }
+    }
+    if (!named) fail(line_, 0, "G75", "G75 names no axis (write G75 X0 Y0 or G75 Z0)");
+    if (g75_line_ == 0) g75_line_ = line_;
+    return "G75";
+  }
+
   std::string drillCycle(const std::map<char, const Word*>& aw) {
     if (!absolute_) fail(line_, 0, cycle_code_, "drilling cycles in G91 are not expanded");
     if (aw.count('L') && aw.at('L')->value > 1)
@@ -2596,6 +2637,7 @@ class Reader {
   std::set<std::string> ignored_;
   std::map<std::string, int> missing_offsets_;  // work offset -> first line that used it
   int bare_g28_line_ = 0;                       // the first G28 without axis words (ISO)
+  int g75_line_ = 0;                            // the first Sinumerik G75 (fixed point)
   std::set<std::string> commanded_offsets_;     // work offsets a block selects (G54...)
   std::map<std::string, int> unknown_;          // G and M codes tolver does not know -> first line
   std::map<std::string, Eigen::Vector3d> set_offsets_;
