@@ -785,6 +785,13 @@ TEST(GcodeReader, SinumerikArithmeticAndDimensions) {
   EXPECT_NEAR(fp.path[2].p_w.x() - fp.path[0].p_w.x(), 7.0, 1e-12);
   EXPECT_TRUE(hasNote(fp, "G75 (first at line 3)"));
   EXPECT_NE(refusal(head + "N20 G75 C0\n", m.model).find("$MA_FIX_POINT_POS"), std::string::npos);
+  // A jump label marks a block and does nothing (a jump to it is refused where written).
+  const ClProgram lb =
+      parseGcode(head + "N20 WERKZEUG_1_1: G1 X5 F100\nRESTART:\n", "l.mpf", m.model);
+  ASSERT_EQ(lb.path.size(), 2u);
+  EXPECT_NEAR(lb.path[1].p_w.x() - lb.path[0].p_w.x(), 5.0, 1e-12);
+  EXPECT_NE(refusal(head + "N20 GOTOF RESTART\nRESTART:\n", m.model).find("GOTOF"),
+            std::string::npos);
   // What it cannot be sure of is refused, naming it.
   EXPECT_NE(refusal(head + "N20 TRANS X10\nN30 G1 X=IC(5) F100\n", m.model).find("MD 42440"),
             std::string::npos);

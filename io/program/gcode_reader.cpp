@@ -560,9 +560,15 @@ class Reader {
     const size_t paren = k.find('(');
     const size_t eq = k.find('=');
     const std::string head = k.substr(0, std::min(paren, eq));
-    if (flow.count(head) || k.back() == ':')
+    if (k.back() == ':' && k.size() > 1) {
+      // A jump label (NAME:) marks the block and does nothing; a jump to it (GOTOF, GOTOB...)
+      // is refused where it is written. Posts write them as restart marks.
+      ignored_.insert("jump labels");
+      return t;
+    }
+    if (flow.count(head))
       sinRefuse(b, t,
-                "Sinumerik " + (k.back() == ':' ? std::string("jump label") : head) +
+                "Sinumerik " + head +
                     ": loops, jumps and subprograms are not supported: post the program "
                     "without them (expanded)");
     if (!carried.count(head) && ignored.count(head)) {
