@@ -607,7 +607,8 @@ TEST(GcodeReader, WhatFollowsTheEndIsNamed) {
   EXPECT_EQ(commentEnd("(a (b) X1", 0), 5u);  // never balanced: the first ')'
   // Only '%' and comments after the end: nothing to say.
   const ClProgram q = parseGcode("%\nG21 G90\nG0 X1 Y1 Z5\nM30\n(end)\n%\n", "f.nc", m.model);
-  for (const std::string& n : q.notes) EXPECT_EQ(n.find("program ends at"), std::string::npos) << n;
+  for (const std::string& note : q.notes)
+    EXPECT_EQ(note.find("program ends at"), std::string::npos) << note;
 }
 
 // Text before the first '%' is the tape leader (NX writes its listing there); O numbers and

@@ -261,22 +261,41 @@ class Scorer {
   // the normal equations lose their digits) explain nothing here.
   double rssSearch(const Eigen::MatrixXd& G) const {
     if (G.cols() == 0) return rss0_;
-    const Eigen::MatrixXd Gs = scaleColumns(G);
-    // Q^T Gs a column at a time (matrix-vector products down Q's columns): a search's G has a
-    // few columns, and a blocked product would pack all of Q (m x p) again at every call.
+    double out = 0.0;
+    rssSearchBatch(G, static_cast<int>(G.cols()), &out);
+    return out;
+  }
+
+  // rssSearch of several column sets at once: G holds groups of k columns side by side, out[b]
+  // receives group b's. Q^T Gs for all groups is one blocked product, which reads Q (m x p,
+  // beyond the cache for ten thousand readings) once, where a group at a time streamed it from
+  // memory for each: the searches' grids go through it a block of values at a time. Each group
+  // is scaled on its own, as rssSearch scales its G.
+  void rssSearchBatch(const Eigen::MatrixXd& G, int k, double* out) const {
+    const Eigen::Index groups = k > 0 ? G.cols() / k : 0;
+    Eigen::MatrixXd Gs(G.rows(), G.cols());
+    for (Eigen::Index b = 0; b < groups; ++b)
+      Gs.middleCols(b * k, k) = scaleColumns(G.middleCols(b * k, k));
     Eigen::MatrixXd QtG(Q_.cols(), Gs.cols());
-    for (Eigen::Index j = 0; j < Gs.cols(); ++j) QtG.col(j).noalias() = Q_.transpose() * Gs.col(j);
-    Eigen::MatrixXd gram = Gs.transpose() * Gs;
-    gram.noalias() -= QtG.transpose() * QtG;
-    const Eigen::VectorXd b = Gs.transpose() * r_perp_;
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(gram);
-    const Eigen::VectorXd& lambda = eig.eigenvalues();
-    const double floor = 1e-9 * std::max(lambda.maxCoeff(), 1e-300);
-    const Eigen::VectorXd vb = eig.eigenvectors().transpose() * b;
-    double explained = 0.0;
-    for (Eigen::Index j = 0; j < lambda.size(); ++j)
-      if (lambda[j] > floor) explained += vb[j] * vb[j] / lambda[j];
-    return std::max(0.0, rss0_ - explained);
+    QtG.noalias() = Q_.transpose() * Gs;
+    Eigen::VectorXd Gtr(Gs.cols());
+    Gtr.noalias() = Gs.transpose() * r_perp_;
+    Eigen::MatrixXd gram(k, k);
+    Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(k);
+    for (Eigen::Index b = 0; b < groups; ++b) {
+      const auto Gb = Gs.middleCols(b * k, k);
+      const auto Qb = QtG.middleCols(b * k, k);
+      gram.noalias() = Gb.transpose() * Gb;
+      gram.noalias() -= Qb.transpose() * Qb;
+      eig.compute(gram);
+      const Eigen::VectorXd& lambda = eig.eigenvalues();
+      const double floor = 1e-9 * std::max(lambda.maxCoeff(), 1e-300);
+      const Eigen::VectorXd vb = eig.eigenvectors().transpose() * Gtr.segment(b * k, k);
+      double explained = 0.0;
+      for (Eigen::Index j = 0; j < lambda.size(); ++j)
+        if (lambda[j] > floor) explained += vb[j] * vb[j] / lambda[j];
+      out[b] = std::max(0.0, rss0_ - explained);
+    }
   }
 
   // Cross-validated RMS of the base model (G empty) or the model with the columns G, mm; with
@@ -396,6 +415,20 @@ int searchHyperparameter(const Scorer& sc, const BallbarTest& test, EffectSpec& 
     *h = value;
     return sc.rssSearch(sc.columns(spec));
   };
+  // The grid's RSS values, a block of grid values at a time (Scorer::rssSearchBatch); columns(i,
+  // G) writes the columns of grid value i (in order) into G.
+  const int k = traitsOf(spec.type).size(spec);
+  auto gridRss = [&](int count, const auto& columns) {
+    constexpr int kBlock = 32;
+    std::vector<double> v(static_cast<size_t>(count));
+    Eigen::MatrixXd G(sc.readings(), static_cast<Eigen::Index>(kBlock) * k);
+    for (int first = 0; first < count; first += kBlock) {
+      const int n = std::min(kBlock, count - first);
+      for (int b = 0; b < n; ++b) G.middleCols(b * k, k) = columns(first + b);
+      sc.rssSearchBatch(G.leftCols(static_cast<Eigen::Index>(n) * k), k, v.data() + first);
+    }
+    return v;
+  };
   if (range.frequency_grid) {
     // Uniform in frequency, five samples per cycle of phase change across the data's span.
     const double span = std::max(sc.span(spec.axis), range.min);
@@ -404,20 +437,22 @@ int searchHyperparameter(const Scorer& sc, const BallbarTest& test, EffectSpec& 
     const bool periodic = spec.type == EffectType::Periodic;
     std::optional<Scorer::FrequencyGrid> grid;
     if (periodic) grid.emplace(sc, spec, f0, df);
-    for (int k = 0; f0 + k * df <= f1 + 1e-12; ++k) {
-      const double f = f0 + k * df;
-      double v;
-      if (periodic) {
-        v = sc.rssSearch(grid->columns());
-        grid->advance();
-      } else {
-        v = rssAt(1.0 / f);
+    int count = 0;
+    while (f0 + count * df <= f1 + 1e-12) ++count;
+    const std::vector<double> v = gridRss(count, [&](int i) -> Eigen::MatrixXd {
+      if (!periodic) {
+        *h = 1.0 / (f0 + i * df);
+        return sc.columns(spec);
       }
-      if (v < best) {
-        best = v;
-        best_f = f;
+      Eigen::MatrixXd c = grid->columns();  // grid values come in order: i = 0, 1, ...
+      grid->advance();
+      return c;
+    });
+    for (int i = 0; i < count; ++i)
+      if (v[static_cast<size_t>(i)] < best) {
+        best = v[static_cast<size_t>(i)];
+        best_f = f0 + i * df;
       }
-    }
     const double f = minimiseOn([&](double x) { return rssAt(1.0 / x); }, std::max(f0, best_f - df),
                                 std::min(f1, best_f + df));
     *h = 1.0 / f;
@@ -432,14 +467,15 @@ int searchHyperparameter(const Scorer& sc, const BallbarTest& test, EffectSpec& 
                hi = std::log(std::max(range.min * 2, std::min(range.max, 2 * t_end)));
   const int n = 24;
   double best = INFINITY, best_x = lo;
-  for (int i = 0; i <= n; ++i) {
-    const double x = lo + (hi - lo) * i / n;
-    const double v = rssAt(std::exp(x));
-    if (v < best) {
-      best = v;
-      best_x = x;
+  const std::vector<double> v = gridRss(n + 1, [&](int i) {
+    *h = std::exp(lo + (hi - lo) * i / n);
+    return sc.columns(spec);
+  });
+  for (int i = 0; i <= n; ++i)
+    if (v[static_cast<size_t>(i)] < best) {
+      best = v[static_cast<size_t>(i)];
+      best_x = lo + (hi - lo) * i / n;
     }
-  }
   const double step = (hi - lo) / n;
   *h = std::exp(minimiseOn([&](double x) { return rssAt(std::exp(x)); },
                            std::max(lo, best_x - step), std::min(hi, best_x + step)));
