@@ -800,6 +800,15 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
   const bool fit_setup = probed.empty() && calibrated && !in.absolute;
   ProgramBlocks blocks;
   blocks.points = in.block_points;
+  // A LinuxCNC O-word construct runs its lines other than once and its points are not on their
+  // lines (io/program/gcode_reader.h): a compensated program cannot be written line by line.
+  auto refuseControlFlow = [](const ClProgram& program) {
+    if (program.flow_line > 0)
+      throw InputError(program.file, program.flow_line, 0, "O",
+                       "O-word subs and control flow (from this line) run their lines other "
+                       "than once, in another order: a compensated program cannot be written "
+                       "line by line; expand them in the post (predict and verify read it)");
+  };
   auto unreachable = [&](const ClProgram& program, const PredictionResult& r) {
     if (!r.ok())
       throw InputError(program.file, r.failures.front().line, 0, "unreachable",
@@ -821,6 +830,7 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
     whole = streamProgram(read_only, model,
                           ProgramBlocks{blocks.points,
                                         [&](ClProgram& block, bool last) {
+                                          refuseControlFlow(block);
                                           if (gcode) {
                                             arcs.add(block);
                                             rotary_words =

@@ -6,8 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <random>
+#include <sstream>
 
 #include "core/kinematics/forward_kinematics.h"
 #include "core/path/tool_path_prediction.h"
@@ -248,7 +250,7 @@ TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
       {"G21\nG0 X0 Y0 Z0\nG68 X0 Y0 R30\n", 3, "rotation"},
       {"G21\nG41 D1\n", 2, "cutter radius compensation"},
       {"G21\nM98 P1000\n", 2, "subprogram"},
-      {"G21\no100 call\n", 2, "O-word"},
+      {"G21\no100 call\n", 2, "no o100 sub defined above it"},
       {"G21\nG0 X0 Y0 Z0 B10\n", 2, "axis B"},
       {"G21\nG43.4 H1\n", 2, "does not use"},
       {"G21\nG0 X1.2.3\n", 2, "malformed"},
@@ -653,13 +655,21 @@ TEST(GcodeReader, ArcEndPointChecksFollowTheControlAndThePrintedResolution) {
       refusal("G21\nG0 X0 Y0 Z0\nG2 X10.050 Y-10.000 I0 J-10.000\n", haas.model);
   EXPECT_NE(bad.find("r.nc:3"), std::string::npos) << bad;
   EXPECT_NE(bad.find("differs from the start's by 50"), std::string::npos) << bad;
-  // LinuxCNC: 0.005 mm always, 0.1 % of the radius up to 0.5 mm.
+  // LinuxCNC as interp_arc.cc checks it: t = 0.02 sqrt 2 mm (28.28 um) always, 0.1 % of the
+  // radius up to 100 t (2.83 mm); its tests/interp/good and bad arcs on either side.
   const Machine lcnc = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
-  EXPECT_GT(parseGcode("G21\nG0 X0 Y0 Z0 A0 C0\nG2 X100.09 Y-100 I0 J-100\n", "l.ngc", lcnc.model)
+  auto lcncArc = [&](const std::string& arc) { return "G21\nG0 X0 Y0 Z0 A0 C0\n" + arc + "\n"; };
+  EXPECT_GT(parseGcode(lcncArc("G2 X100.09 Y-100 I0 J-100"), "l.ngc", lcnc.model).path.size(), 10u);
+  EXPECT_GT(parseGcode(lcncArc("G2 X10.028 Y-10 I0 J-10"), "l.ngc", lcnc.model).path.size(), 10u);
+  EXPECT_NE(refusal(lcncArc("G2 X10.029 Y-10 I0 J-10"), lcnc.model).find("LinuxCNC's rule"),
+            std::string::npos);
+  // good-arc.big.metric.center-format.ngc: 2.80 mm off a 3 m radius (0.093 %) runs; 3 mm off
+  // 5 m (0.06 %, beyond 100 t) does not.
+  EXPECT_GT(parseGcode("G21\nG0 X0 Y0 Z0 A0 C0\nG2 X6000 I[3000 + [100 * [0.0099 * SQRT[2]]]]\n",
+                       "g.ngc", lcnc.model)
                 .path.size(),
             10u);
-  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0 A0 C0\nG2 X10.02 Y-10 I0 J-10\n", lcnc.model)
-                .find("LinuxCNC's rule"),
+  EXPECT_NE(refusal(lcncArc("G2 X5003 Y-5000 I0 J-5000"), lcnc.model).find("2828.43 um"),
             std::string::npos);
   // LinuxCNC's P: full turns of a helix.
   const ClProgram helix =
@@ -725,6 +735,93 @@ TEST(GcodeReader, MovesBeforeEveryAxisIsKnownAreNotInventedPoints) {
   ASSERT_EQ(p.path.size(), 2u);
   EXPECT_EQ(p.path[0].line, 3);
   EXPECT_TRUE(hasNote(p, "1 move(s) before every axis had a commanded position (lines 2-2)"));
+}
+
+// LinuxCNC's O-words, carried out as its interpreter does. Against LinuxCNC itself: its test
+// tests/interp/flowsnake (recursive subs, if/else, named parameters, calls with five arguments)
+// and the end points its interpreter printed for it (the fixture's expected list).
+TEST(GcodeReader, LinuxCncOWordsAsItsInterpreterRunsThem) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const ClProgram snake =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_flowsnake.ngc"), m.model);
+  std::ifstream f(test::sourcePath("tests/fixtures/gcode/linuxcnc_flowsnake_expected.txt"));
+  std::vector<Eigen::Vector3d> expected;
+  for (std::string l; std::getline(f, l);) {
+    if (l.empty() || l[0] == '#') continue;
+    std::istringstream is(l);
+    Eigen::Vector3d p;
+    is >> p.x() >> p.y() >> p.z();
+    expected.push_back(p);
+  }
+  ASSERT_EQ(expected.size(), 196u);
+  // Its first move (g0 z1) comes before X and Y have a position: not a point here.
+  ASSERT_EQ(snake.path.size(), expected.size() - 1);
+  for (size_t i = 0; i < snake.path.size(); ++i)
+    EXPECT_LT((snake.path[i].p_w - expected[i + 1]).cwiseAbs().maxCoeff(), 0.6e-4) << i;
+  EXPECT_EQ(snake.flow_line, 36);  // the first call
+  // The other constructs: repeat, while, if/elseif/else, do-while with break, return values,
+  // global (#<_...>) and local parameters.
+  const std::string text =
+      "G21 G90 G17\n"
+      "o<square> sub\n"
+      "  G1 X[#1] Y0 F100\n  G1 X[#1] Y[#1]\n  G1 X0 Y[#1]\n  G1 X0 Y0\n"
+      "  #<_sq> = [#<_sq> + 1]\n  #<local> = 99\n"
+      "o<square> endsub [#1 * 4]\n"
+      "#<_sq> = 0\n#<local> = 7\n"
+      "G0 X0 Y0 Z5\nG1 Z-1 F50\n"
+      "o100 repeat [2]\n  o<square> call [10]\no100 endrepeat\n"
+      "#1 = 0\n"
+      "o101 while [#1 LT 3]\n  G1 X[#1] Y-5\n"
+      "  o102 if [#1 EQ 1]\n    G1 Z-2\n  o102 elseif [#1 EQ 2 AND 1]\n    G1 Z-3\n"
+      "  o102 else\n    G1 Z-1.5\n  o102 endif\n  #1 = [#1 + 1]\no101 endwhile\n"
+      "o103 do\n  G1 X[#1] Y-9\n  #1 = [#1 - 1]\n"
+      "  o104 if [#1 LE 1]\n    o103 break\n  o104 endif\no103 while [#1 GT 0]\n"
+      "G0 Z5\nG0 X[#<_value>] Y[#<_sq>] Z[#<local>]\nM2\n";
+  const ClProgram p = parseGcode(text, "o.ngc", m.model);
+  std::vector<Eigen::Vector3d> want = {{0, 0, 5}, {0, 0, -1}};
+  for (int k = 0; k < 2; ++k)
+    for (const Eigen::Vector3d& c : {Eigen::Vector3d(10, 0, -1), Eigen::Vector3d(10, 10, -1),
+                                     Eigen::Vector3d(0, 10, -1), Eigen::Vector3d(0, 0, -1)})
+      want.push_back(c);
+  for (const Eigen::Vector3d& c :
+       {Eigen::Vector3d(0, -5, -1), Eigen::Vector3d(0, -5, -1.5), Eigen::Vector3d(1, -5, -1.5),
+        Eigen::Vector3d(1, -5, -2), Eigen::Vector3d(2, -5, -2), Eigen::Vector3d(2, -5, -3),
+        Eigen::Vector3d(3, -9, -3), Eigen::Vector3d(2, -9, -3), Eigen::Vector3d(2, -9, 5),
+        Eigen::Vector3d(40, 2, 7)})  // #<_value> = 10 * 4, two squares, the caller's #<local>
+    want.push_back(c);
+  ASSERT_EQ(p.path.size(), want.size());
+  for (size_t i = 0; i < want.size(); ++i) EXPECT_LT((p.path[i].p_w - want[i]).norm(), 1e-9) << i;
+  EXPECT_EQ(p.path[2].line, 3);  // a point made in the sub keeps the sub's line
+  // The construct's points belong to its first line's statement (statements one per line).
+  ASSERT_EQ(p.statements.size(), p.lines.size());
+  EXPECT_EQ(p.statements[13].point_count, 8);  // o100 repeat: the two squares
+  // Subs may follow the main program (LinuxCNC's tests/interp/subs-follow-main); spaces are
+  // ignored ("o <name> call", "end sub"); a sub only defined is no move.
+  const ClProgram after = parseGcode(
+      "G21\nG0 X0 Y0 Z0\no <later> call [2]\nM30\no<later> sub\nG1 X[#1] F10\n"
+      "o<later> end sub\n",
+      "a.ngc", m.model);
+  ASSERT_EQ(after.path.size(), 2u);
+  EXPECT_NEAR(after.path[1].p_w.x(), 2.0, 1e-12);
+  EXPECT_EQ(after.path[1].line, 6);
+  // Refused by name.
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\no<elsewhere> call\n", m.model)
+                .find("r.nc:3:1: O: o<elsewhere> call: no o<elsewhere> sub"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\no1 while [1]\nG1 X1\n", m.model)
+                .find("o1 while without its o1 endwhile"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\no1 endif\n", m.model).find("outside the construct"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\no1 while [1]\n(nothing)\no1 endwhile\n", m.model)
+                .find("ran 1000000 times"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\no1 sub\nG0 X1\no1 endsub\n", m.model).find("calls none"),
+            std::string::npos);
+  // Other controls keep refusing O-word flow.
+  const Machine iso = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\nO100 WHILE [1]\n", iso.model).find("O-word while"),
+            std::string::npos);
 }
 
 // SINUMERIK arithmetic (840D sl Programming Manual, Job Planning, "Arithmetic functions") and

@@ -81,9 +81,12 @@ struct ClProgram {
   std::string units = "MM";  // as the file declares: MM or INCH
   bool multiax = false;      // MULTAX/ON seen, or GOTO with six values
   int arcs_expanded = 0;
-  int tool_planes = 0;                     // CSYS statements after TRNTYP/WORLD (not applied)
-  int cycles = 0;                          // drilling cycles (CL CYCLE/, G-code canned cycles)
-  int cycle_holes = 0;                     // holes they were expanded at
+  int tool_planes = 0;  // CSYS statements after TRNTYP/WORLD (not applied)
+  int cycles = 0;       // drilling cycles (CL CYCLE/, G-code canned cycles)
+  int cycle_holes = 0;  // holes they were expanded at
+  // G-code: the first line of an O-word construct carried out (LinuxCNC sub call, loop, if), 0
+  // when none: its lines ran other than once, in place (its points belong to its first line).
+  int flow_line = 0;
   int unknown_count = 0;                   // statements skipped as unknown
   std::vector<std::string> unknown_names;  // their major words, each once
   bool units_declared = false;             // UNITS / G20 / G21 seen (else the default was used)

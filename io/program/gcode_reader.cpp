@@ -4,6 +4,7 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <optional>
 #include <set>
@@ -193,6 +194,13 @@ class Reader {
       }
     }
     for (const std::string& h : held) processLine(h);
+    if (tail_mode_) replayTail();
+    if (!held_flow_.empty()) {
+      const OWord& o = held_open_;
+      fail(held_flow_.front().line, o.column, "O",
+           "o" + o.label + " " + o.keyword + " without its o" + o.label + " " +
+               closerOf(o.keyword) + " (the file ends first)");
+    }
     if (!any_) fail(0, 0, "", "empty file: no blocks");
     // What the end of the program left unread: said, and named when nothing was read before it
     // (a post that writes '%' lines as remarks ends an ISO tape there).
@@ -219,6 +227,10 @@ class Reader {
                     ? " (a lathe program, X and Z only?)"
                     : ""));
     }
+    if (points_read_ == 0 && subs_defined_ && prog_.flow_line == 0 && !after_end_)
+      fail(0, 0, "O",
+           "the file defines subroutines (o... sub) and calls none: no moves (a file of subs for "
+           "another program to call: give that program)");
     if (points_read_ == 0)
       fail(after_end_ ? end_line_ : 0, 0, after_end_ ? end_cause_ : "",
            after_end_ ? "the program ends here with no moves before it; " + after_end
@@ -290,27 +302,428 @@ class Reader {
 
   // One physical line: a block, a '%' or nothing; its statement and text kept.
   void processLine(const std::string& text) {
-    line_ = static_cast<int>(prog_.lines.size()) + 1;
-    AptStatement st;
-    st.first_line = st.last_line = line_;
-    st.first_point = static_cast<int>(prog_.path.size());
+    if (tail_mode_) {
+      tail_.push_back(text);
+      return;
+    }
+    if (model_.control.dialect == "linuxcnc" && (!held_flow_.empty() || opensFlow(text))) {
+      flowLine(text);
+      return;
+    }
+    const int first_point = static_cast<int>(prog_.path.size());
+    const std::string major = runLine(static_cast<int>(prog_.lines.size()) + 1, text);
+    pushStatement(text, first_point, major);
+    sinkBlock();
+  }
+
+  // One line carried out as its own line number: the block, a '%', or a line after the end.
+  // Returns the block's major word.
+  std::string runLine(int line, const std::string& text) {
+    line_ = line;
     const std::string_view t = trim(text);
     any_ = any_ || !t.empty();
     if (!ended_ && !t.empty() && t[0] == '%') {
       if (++percent_ >= 2 && seen_block_) endAt("'%'");
     } else if (!ended_ && !t.empty()) {
-      st.major = block(text);
+      return block(text);
     } else if (ended_ && !t.empty() && t[0] != '%' && t[0] != '(' && t[0] != ';') {
-      if (after_end_++ == 0) first_after_end_ = line_;
+      if (after_end_++ == 0) first_after_end_ = line;
     }
-    st.point_count = static_cast<int>(prog_.path.size()) - st.first_point;
-    if (st.point_count == 0) st.first_point = -1;
+    return "";
+  }
+
+  // The next line's statement (one per line, in order), holding the points from first_point on.
+  void pushStatement(const std::string& text, int first_point, const std::string& major) {
+    AptStatement st;
+    st.first_line = st.last_line = static_cast<int>(prog_.lines.size()) + 1;
+    st.first_point = first_point;
+    st.major = major;
+    st.point_count = static_cast<int>(prog_.path.size()) - first_point;
+    if (st.point_count <= 0) {
+      st.point_count = 0;
+      st.first_point = -1;
+    }
     prog_.statements.push_back(st);
     prog_.lines.push(text, true);
+  }
+
+  void sinkBlock() {
     if (blocks_ && prog_.path.size() >= blocks_->points) {
       blocks_->sink(prog_, false);
       prog_.dropBlock();
     }
+  }
+
+  // ---------------------------------------------------------------- LinuxCNC O-words
+  // LinuxCNC's subprograms and control flow (LinuxCNC G-code reference, "O Codes"): o<name> sub
+  // ... endsub [value], o<name> call [arg] ..., oN while [c] ... endwhile, oN do ... while [c],
+  // oN if [c] ... elseif [c] ... else ... endif, oN repeat [n] ... endrepeat, break, continue,
+  // return [value]. A construct met at the top level is held whole up to its end, then carried
+  // out; its points belong to its first line's statement (statements stay one per line) and each
+  // point keeps the line that made it (ClProgram::flow_line says a construct ran). A sub is kept
+  // where it is defined and run by its calls: #1-#30 take the call's arguments and, with the
+  // named parameters that do not begin with '_', belong to the call (restored after it); a
+  // value returned is #<_value>. Refused by name: a call of a sub not defined above it in the
+  // file (LinuxCNC would also search its subroutine path, which no machine file gives), a
+  // construct without its end or a word out of place, a loop that runs more than
+  // kMaxIterations times, calls nested deeper than kMaxCallDepth.
+  struct OWord {
+    std::string label;    // "100" or "<name>" (lower case, no spaces)
+    std::string keyword;  // lower case: sub, endsub, call, while, ...
+    std::string rest;     // upper case, comments removed: "[#1 LT 3]"
+    int column = 1;
+  };
+  struct SourceLine {
+    int line = 0;
+    std::string text;
+  };
+  struct Sub {
+    std::vector<SourceLine> body;  // between sub and endsub
+    SourceLine end;                // the endsub line (its value)
+  };
+  enum class FlowExit { Next, Break, Continue, Return };
+  struct FlowResult {
+    FlowExit exit = FlowExit::Next;
+    std::string label;
+  };
+  static constexpr long kMaxIterations = 1000000;
+  static constexpr int kMaxCallDepth = 50;
+
+  // An O-word line, read as LinuxCNC reads a line: comments out, and every space ignored ("o
+  // <name> call", "o100 end sub" and "o100 endsub" are the same). nullopt when the line is not
+  // an O-word of subs or control flow (a program number O1234, any other block).
+  static std::optional<OWord> parseOWord(const std::string& raw) {
+    static const std::set<std::string> words = {
+        "sub",      "endsub", "call",   "if",        "elseif", "else",  "endif",   "while",
+        "endwhile", "do",     "repeat", "endrepeat", "return", "break", "continue"};
+    std::string c;  // the line without comments and spaces, upper case
+    std::vector<int> col;
+    for (size_t k = 0; k < raw.size(); ++k) {
+      if (raw[k] == ';') break;
+      if (raw[k] == '(') {
+        const size_t close = commentEnd(raw, k);
+        if (close == std::string::npos) break;
+        k = close;
+        continue;
+      }
+      if (std::isspace(static_cast<unsigned char>(raw[k]))) continue;
+      c += static_cast<char>(std::toupper(static_cast<unsigned char>(raw[k])));
+      col.push_back(static_cast<int>(k) + 1);
+    }
+    size_t i = 0;
+    if (i + 1 < c.size() && c[i] == 'N' && std::isdigit(static_cast<unsigned char>(c[i + 1]))) {
+      ++i;
+      while (i < c.size() && std::isdigit(static_cast<unsigned char>(c[i]))) ++i;
+    }
+    if (i >= c.size() || c[i] != 'O') return std::nullopt;
+    OWord o;
+    o.column = col[i];
+    ++i;
+    if (i < c.size() && c[i] == '<') {
+      const size_t close = c.find('>', i);
+      if (close == std::string::npos) return std::nullopt;
+      o.label = "<" + toLower(c.substr(i + 1, close - i - 1)) + ">";
+      i = close + 1;
+    } else {
+      const size_t from = i;
+      while (i < c.size() && std::isdigit(static_cast<unsigned char>(c[i]))) ++i;
+      if (i == from) return std::nullopt;
+      o.label = std::to_string(std::stol(c.substr(from, std::min<size_t>(i - from, 9))));
+    }
+    size_t e = i;
+    while (e < c.size() && std::isalpha(static_cast<unsigned char>(c[e]))) ++e;
+    o.keyword = toLower(c.substr(i, e - i));
+    if (!words.count(o.keyword)) return std::nullopt;
+    o.rest = c.substr(e);
+    return o;
+  }
+
+  static bool opensFlow(const std::string& text) {
+    const auto o = parseOWord(text);
+    return o.has_value();
+  }
+
+  static const char* closerOf(const std::string& keyword) {
+    if (keyword == "sub") return "endsub";
+    if (keyword == "while") return "endwhile";
+    if (keyword == "do") return "while";
+    if (keyword == "if") return "endif";
+    if (keyword == "repeat") return "endrepeat";
+    return nullptr;
+  }
+
+  // A line at the top level that opens a construct, or one inside a construct being held.
+  void flowLine(const std::string& text) {
+    const int line = static_cast<int>(prog_.lines.size() + held_flow_.size()) + 1;
+    const std::optional<OWord> o = parseOWord(text);
+    any_ = true;
+    if (held_flow_.empty()) {
+      line_ = line;
+      // After the end only sub definitions are read (LinuxCNC: subs may follow the main
+      // program's M2/M30); after a closing '%' nothing is.
+      if (ended_ && (o->keyword != "sub" || end_cause_ == "'%'")) {
+        pushStatement(text, static_cast<int>(prog_.path.size()), runLine(line, text));
+        return;
+      }
+      if (o->keyword == "call") {
+        held_flow_.push_back({line, text});
+        finishFlow();
+        return;
+      }
+      if (o->keyword == "sub") subs_defined_ = true;
+      if (!closerOf(o->keyword))
+        fail(line, o->column, "O",
+             "o" + o->label + " " + o->keyword + " outside the construct it belongs to (no o" +
+                 o->label + " sub, while, do, if or repeat open before it)");
+      held_open_ = *o;
+    }
+    held_flow_.push_back({line, text});
+    if (held_flow_.size() > 1 && o && o->label == held_open_.label &&
+        o->keyword == closerOf(held_open_.keyword))
+      finishFlow();
+  }
+
+  // The construct held is complete: defined (sub) or carried out; its lines become statements.
+  // When it calls a sub not yet defined, it and the rest of the file are held (tail_) and read
+  // again once the file's subs are known (LinuxCNC: subs may follow the main program).
+  void finishFlow() {
+    std::vector<SourceLine> lines;
+    lines.swap(held_flow_);
+    if (!replaying_ && callsUndefined(lines)) {
+      tail_mode_ = true;
+      for (const SourceLine& l : lines) tail_.push_back(l.text);
+      return;
+    }
+    const int first_point = static_cast<int>(prog_.path.size());
+    const std::optional<OWord> o = parseOWord(lines.front().text);
+    if (o->keyword == "sub") {
+      line_ = lines.front().line;
+      defineSub(*o, lines, 0, lines.size() - 1);
+    } else {
+      if (prog_.flow_line == 0) prog_.flow_line = lines.front().line;
+      const FlowResult r = runLines(lines, 0, lines.size());
+      if (r.exit != FlowExit::Next)
+        fail(lines.front().line, o->column, "O",
+             "o" + r.label + " " + (r.exit == FlowExit::Return ? "return" : "break/continue") +
+                 " outside the sub or loop it belongs to");
+    }
+    for (size_t k = 0; k < lines.size(); ++k)
+      pushStatement(lines[k].text, k == 0 ? first_point : static_cast<int>(prog_.path.size()), "");
+    sinkBlock();
+  }
+
+  // The line of lines[from..] that closes the construct opened at lines[at] (same label, the
+  // closing keyword); a construct without one is refused naming it.
+  size_t closing(const std::vector<SourceLine>& lines, size_t at, const OWord& open,
+                 const std::string& keyword) {
+    for (size_t k = at + 1; k < lines.size(); ++k) {
+      const auto o = parseOWord(lines[k].text);
+      if (o && o->label == open.label && o->keyword == keyword) return k;
+    }
+    fail(lines[at].line, open.column, "O",
+         "o" + open.label + " " + open.keyword + " without its o" + open.label + " " + keyword);
+  }
+
+  // True when lines call a sub that is neither defined nor defined among them.
+  bool callsUndefined(const std::vector<SourceLine>& lines) const {
+    std::set<std::string> defined;
+    std::vector<std::string> called;
+    for (const SourceLine& l : lines) {
+      const auto o = parseOWord(l.text);
+      if (o && o->keyword == "sub") defined.insert(o->label);
+      if (o && o->keyword == "call") called.push_back(o->label);
+    }
+    for (const std::string& c : called)
+      if (!subs_.count(c) && !defined.count(c)) return true;
+    return false;
+  }
+
+  // The file's tail held after a call of a sub not yet defined: its subs defined first (up to a
+  // closing '%'), then its lines read in order as any others.
+  void replayTail() {
+    tail_mode_ = false;
+    replaying_ = true;
+    std::vector<SourceLine> lines;
+    int percents = percent_;
+    const int first = static_cast<int>(prog_.lines.size()) + 1;
+    for (size_t k = 0; k < tail_.size(); ++k) {
+      const std::string_view t = trim(tail_[k]);
+      if (!t.empty() && t[0] == '%' && ++percents >= 2) break;
+      lines.push_back({first + static_cast<int>(k), tail_[k]});
+    }
+    for (size_t k = 0; k < lines.size(); ++k) {
+      const auto o = parseOWord(lines[k].text);
+      if (!o || o->keyword != "sub") continue;
+      bool closed = false;
+      for (size_t e = k + 1; e < lines.size() && !closed; ++e) {
+        const auto c = parseOWord(lines[e].text);
+        if (c && c->label == o->label && c->keyword == "endsub") {
+          defineSub(*o, lines, k, e);
+          k = e;
+          closed = true;
+        }
+      }
+    }
+    std::vector<std::string> tail;
+    tail.swap(tail_);
+    for (const std::string& t : tail) processLine(t);
+  }
+
+  void defineSub(const OWord& o, const std::vector<SourceLine>& lines, size_t at, size_t end) {
+    Sub s;
+    s.body.assign(lines.begin() + static_cast<long>(at) + 1,
+                  lines.begin() + static_cast<long>(end));
+    s.end = lines[end];
+    subs_[o.label] = std::move(s);
+  }
+
+  // The value of an O-word's expression (a condition, a count): its bracketed expression.
+  double flowValue(const OWord& o, int line) {
+    line_ = line;
+    if (o.rest.empty() || o.rest[0] != '[')
+      fail(line, o.column, "O", "o" + o.label + " " + o.keyword + " needs [expression]");
+    size_t i = 0;
+    const double v = primary(o.rest, i, o.column);
+    if (!trim(std::string_view(o.rest).substr(i)).empty())
+      fail(line, o.column, "O", "unexpected text after o" + o.label + " " + o.keyword + "'s [...]");
+    return v;
+  }
+
+  void countIteration(long& n, const OWord& o, int line) {
+    if (++n > kMaxIterations)
+      fail(line, o.column, "O",
+           "o" + o.label + " " + o.keyword + " ran " + std::to_string(kMaxIterations) +
+               " times: a loop that does not end (or one too long to predict)");
+  }
+
+  // Carries out lines[from, to); returns how control left them (a break, continue or return
+  // goes to the construct it names).
+  FlowResult runLines(const std::vector<SourceLine>& lines, size_t from, size_t to) {
+    for (size_t k = from; k < to; ++k) {
+      if (ended_) return {};
+      const std::optional<OWord> o = parseOWord(lines[k].text);
+      if (!o) {
+        runLine(lines[k].line, lines[k].text);
+        continue;
+      }
+      const int line = lines[k].line;
+      line_ = line;
+      const std::string& kw = o->keyword;
+      if (kw == "sub") {
+        const size_t e = closing(lines, k, *o, "endsub");
+        defineSub(*o, lines, k, e);
+        k = e;
+      } else if (kw == "call") {
+        callSub(*o, line);
+      } else if (kw == "while" || kw == "do" || kw == "repeat") {
+        const size_t e = closing(lines, k, *o, closerOf(kw));
+        const std::optional<OWord> end = parseOWord(lines[e].text);
+        long n = 0;
+        const double count = kw == "repeat" ? flowValue(*o, line) : 0.0;
+        if (kw == "repeat" && !(count >= 0 && count <= kMaxIterations))
+          fail(line, o->column, "O", "o" + o->label + " repeat count " + formatNumber(count));
+        for (;;) {
+          if (kw == "while" && flowValue(*o, line) == 0.0) break;
+          if (kw == "repeat" && n >= std::lround(count)) break;
+          countIteration(n, *o, line);
+          const FlowResult r = runLines(lines, k + 1, e);
+          if (ended_) return {};
+          if (r.exit == FlowExit::Return || (r.exit != FlowExit::Next && r.label != o->label))
+            return r;
+          if (r.exit == FlowExit::Break) break;
+          if (kw == "do" && flowValue(*end, lines[e].line) == 0.0) break;
+        }
+        k = e;
+      } else if (kw == "if") {
+        const size_t e = closing(lines, k, *o, "endif");
+        // The branches: the if, each elseif, the else; the first whose condition holds runs.
+        std::vector<size_t> at = {k};
+        for (size_t j = k + 1; j < e; ++j) {
+          const auto b = parseOWord(lines[j].text);
+          if (b && b->label == o->label && (b->keyword == "elseif" || b->keyword == "else"))
+            at.push_back(j);
+        }
+        at.push_back(e);
+        for (size_t b = 0; b + 1 < at.size(); ++b) {
+          const OWord head = *parseOWord(lines[at[b]].text);
+          if (head.keyword != "else" && flowValue(head, lines[at[b]].line) == 0.0) continue;
+          const FlowResult r = runLines(lines, at[b] + 1, at[b + 1]);
+          if (r.exit != FlowExit::Next) return r;
+          break;
+        }
+        k = e;
+      } else if (kw == "break" || kw == "continue") {
+        return {kw == "break" ? FlowExit::Break : FlowExit::Continue, o->label};
+      } else if (kw == "return") {
+        if (!o->rest.empty()) setReturnValue(flowValue(*o, line));
+        return {FlowExit::Return, o->label};
+      } else {
+        fail(line, o->column, "O",
+             "o" + o->label + " " + kw + " out of place (no construct of that label open here)");
+      }
+    }
+    return {};
+  }
+
+  void setReturnValue(double v) {
+    named_["_value"] = v;
+    named_["_value_returned"] = 1.0;
+  }
+
+  // o<name> call [a1] [a2] ...: the sub's body with #1.. set to the arguments, in its own scope.
+  void callSub(const OWord& o, int line) {
+    const auto it = subs_.find(o.label);
+    if (it == subs_.end())
+      fail(line, o.column, "O",
+           "o" + o.label + " call: no o" + o.label +
+               " sub defined above it in this file (LinuxCNC would also look for it in the "
+               "subroutine path, which tolver does not read): define it before the call");
+    if (call_depth_ >= kMaxCallDepth)
+      fail(line, o.column, "O", "calls nested deeper than " + std::to_string(kMaxCallDepth));
+    std::vector<double> args;
+    size_t i = 0;
+    while (true) {
+      while (i < o.rest.size() && o.rest[i] == ' ') ++i;
+      if (i >= o.rest.size()) break;
+      if (o.rest[i] != '[')
+        fail(line, o.column, "O", "o" + o.label + " call: arguments are [expressions]");
+      args.push_back(primary(o.rest, i, o.column));
+      if (args.size() > 30) fail(line, o.column, "O", "more than 30 arguments");
+    }
+    // The call's scope: #1-#30 and the named parameters without a leading '_'.
+    std::map<int, double> saved_numbered;
+    for (int n = 1; n <= 30; ++n) {
+      const auto s = numbered_.find(n);
+      if (s != numbered_.end()) saved_numbered[n] = s->second;
+      numbered_.erase(n);
+    }
+    std::map<std::string, double> saved_named;
+    for (auto s = named_.begin(); s != named_.end();) {
+      if (!s->first.empty() && s->first[0] != '_') {
+        saved_named.insert(*s);
+        s = named_.erase(s);
+      } else {
+        ++s;
+      }
+    }
+    for (size_t a = 0; a < args.size(); ++a) numbered_[static_cast<int>(a) + 1] = args[a];
+    named_["_value_returned"] = 0.0;
+    ++call_depth_;
+    const Sub sub = it->second;  // a copy: the body may define subs again
+    const FlowResult r = runLines(sub.body, 0, sub.body.size());
+    if (r.exit == FlowExit::Break || r.exit == FlowExit::Continue)
+      fail(line, o.column, "O", "o" + r.label + " break/continue outside its loop in a sub");
+    if (r.exit == FlowExit::Next && !ended_) {
+      const auto end = parseOWord(sub.end.text);
+      if (end && !end->rest.empty()) setReturnValue(flowValue(*end, sub.end.line));
+    }
+    --call_depth_;
+    line_ = line;
+    for (int n = 1; n <= 30; ++n) numbered_.erase(n);
+    for (const auto& [n, v] : saved_numbered) numbered_[n] = v;
+    for (auto s = named_.begin(); s != named_.end();)
+      s = !s->first.empty() && s->first[0] != '_' ? named_.erase(s) : std::next(s);
+    for (const auto& [n, v] : saved_named) named_[n] = v;
   }
 
   // True when a line can start a block: empty, a comment, '/', '#', ':' or 'O' or a word (a
@@ -1296,7 +1709,8 @@ class Reader {
     if (c == '[') {
       ++i;
       ++brackets_;
-      const double v = expression(text, i, col_base);
+      const double v = model_.control.dialect == "sinumerik" ? expression(text, i, col_base)
+                                                             : logical(text, i, col_base);
       --brackets_;
       while (i < text.size() && text[i] == ' ') ++i;
       if (i >= text.size() || text[i] != ']') fail(line_, col_base + i, "[", "missing ']'");
@@ -1519,6 +1933,53 @@ class Reader {
     }
   }
 
+  // Inside brackets, below + and -: the comparisons EQ NE GT GE LT LE (1 or 0), then AND, OR,
+  // XOR (LinuxCNC's binary operators, "Binary Operators": equal precedence left to right within
+  // each group). The O-words' conditions use them.
+  static bool operatorAt(const std::string& text, size_t i, const char* op) {
+    const size_t n = std::strlen(op);
+    if (i + n > text.size()) return false;
+    for (size_t k = 0; k < n; ++k)
+      if (std::toupper(static_cast<unsigned char>(text[i + k])) != op[k]) return false;
+    return true;
+  }
+
+  double relation(const std::string& text, size_t& i, int col_base) {
+    double v = expression(text, i, col_base);
+    static const char* const ops[] = {"EQ", "NE", "GT", "GE", "LT", "LE"};
+    for (;;) {
+      while (i < text.size() && text[i] == ' ') ++i;
+      int op = -1;
+      for (int k = 0; k < 6 && op < 0; ++k)
+        if (operatorAt(text, i, ops[k])) op = k;
+      if (op < 0) return v;
+      i += 2;
+      const double r = expression(text, i, col_base);
+      const bool t = op == 0   ? v == r
+                     : op == 1 ? v != r
+                     : op == 2 ? v > r
+                     : op == 3 ? v >= r
+                     : op == 4 ? v < r
+                               : v <= r;
+      v = t ? 1.0 : 0.0;
+    }
+  }
+
+  double logical(const std::string& text, size_t& i, int col_base) {
+    double v = relation(text, i, col_base);
+    for (;;) {
+      while (i < text.size() && text[i] == ' ') ++i;
+      const int op = operatorAt(text, i, "AND")   ? 0
+                     : operatorAt(text, i, "XOR") ? 2
+                     : operatorAt(text, i, "OR")  ? 1
+                                                  : -1;
+      if (op < 0) return v;
+      i += op == 1 ? 2 : 3;
+      const bool a = v != 0.0, b = relation(text, i, col_base) != 0.0;
+      v = (op == 0 ? a && b : op == 1 ? a || b : a != b) ? 1.0 : 0.0;
+    }
+  }
+
   double expression(const std::string& text, size_t& i, int col_base) {
     double v = term(text, i, col_base);
     for (;;) {
@@ -1547,19 +2008,25 @@ class Reader {
 
   // The largest difference of an arc's start and end radius (mm) the control accepts, never
   // tighter than four steps of the program's printed resolution (the rounding of start, end and
-  // centre adds up to 2.9 steps): LinuxCNC 2.9 (G2/G3: an error if the radii differ by more
-  // than 0.5 mm, or by more than 0.005 mm and 0.1 % of the radius; 0.05 and 0.0005 inch);
-  // a given arc_radius_tolerance_mm (Fanuc parameter 3410); else RS274NGC v3's 0.002 mm
-  // (0.0002 inch).
+  // centre adds up to 2.9 steps): LinuxCNC as its interpreter checks it (src/emc/rs274ngc/
+  // interp_arc.cc, arc_data_ijk: an error when the radii differ by more than 100 t, or by more
+  // than t and 0.1 % of the radius, t = CENTER_ARC_RADIUS_TOLERANCE_MM = 0.02 sqrt 2 mm, 0.002
+  // sqrt 2 inch in an inch program, interp_internal.hh; its own tests/interp/good and bad arcs
+  // sit on either side; the G-code reference's older figures, 0.5 mm or 0.005 mm and 0.1 %,
+  // reject arcs LinuxCNC runs); a given arc_radius_tolerance_mm (Fanuc parameter 3410); else
+  // RS274NGC v3's 0.002 mm (0.0002 inch).
   double arcRadiusTolerance(double radius_mm) const {
     const bool inch = unit_ == 25.4;
     double rule;
-    if (model_.control.arc_radius_tolerance_mm > 0)
+    if (model_.control.arc_radius_tolerance_mm > 0) {
       rule = model_.control.arc_radius_tolerance_mm;
-    else if (model_.control.dialect == "linuxcnc")
-      rule = std::min(inch ? 1.27 : 0.5, std::max(inch ? 0.0127 : 0.005, 1e-3 * radius_mm));
-    else
+    } else if (model_.control.dialect == "linuxcnc") {
+      const double t = (inch ? 25.4 * 0.002 : 0.02) * std::sqrt(2.0);
+      // 0.1 % of the larger radius, which for an end radius beyond the start is r / 0.999.
+      rule = std::max(t, std::min(100.0 * t, 1e-3 * radius_mm / 0.999));
+    } else {
       rule = inch ? 0.00508 : 0.002;
+    }
     const double step = unit_ * std::pow(10.0, -max_decimals_);
     return std::max(rule, 4.0 * step);
   }
@@ -2649,6 +3116,13 @@ class Reader {
   std::map<std::string, Eigen::Vector3d> set_offsets_;
   std::map<std::string, double> named_;
   std::map<int, double> numbered_;
+  std::vector<SourceLine> held_flow_;  // a LinuxCNC O-word construct being read up to its end
+  OWord held_open_;                    // its first line's O-word
+  std::map<std::string, Sub> subs_;    // o<name> sub definitions, by label
+  int call_depth_ = 0;
+  bool subs_defined_ = false;  // the file defines a sub at its top level
+  bool tail_mode_ = false, replaying_ = false;
+  std::vector<std::string> tail_;  // the file from a call of a sub defined further on
   std::map<char, int> letter_axis_;
   std::array<double, kMaxAxes> rot_word_{};
   // Drilling cycle state.
