@@ -818,6 +818,13 @@ TEST(GcodeReader, LinuxCncOWordsAsItsInterpreterRunsThem) {
             std::string::npos);
   EXPECT_NE(refusal("G21\no1 sub\nG0 X1\no1 endsub\n", m.model).find("calls none"),
             std::string::npos);
+  // Spaces before a function's bracket; M68's E (an analog output's number, as LinuxCNC's
+  // plasma posts write it) is no axis.
+  const ClProgram fn =
+      parseGcode("G21\nG0 X0 Y0 Z0\nM68 E3 Q0\nG1 X[TAN [45]] F10\n", "t.ngc", m.model);
+  ASSERT_EQ(fn.path.size(), 2u);
+  EXPECT_NEAR(fn.path[1].p_w.x(), 1.0, 1e-12);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0 E3\n", m.model).find("E word"), std::string::npos);
   // Other controls keep refusing O-word flow.
   const Machine iso = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
   EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\nO100 WHILE [1]\n", iso.model).find("O-word while"),

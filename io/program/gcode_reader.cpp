@@ -1829,6 +1829,7 @@ class Reader {
     size_t j = i;
     while (j < text.size() && std::isalpha(static_cast<unsigned char>(text[j]))) ++j;
     const std::string name = toUpper(text.substr(i, j - i));
+    while (j < text.size() && text[j] == ' ') ++j;  // LinuxCNC ignores spaces: "TAN [29]"
     static const std::set<std::string> known = {"ABS", "ACOS", "ASIN", "ATAN",  "COS",
                                                 "EXP", "FIX",  "FUP",  "LN",    "ROUND",
                                                 "SIN", "SQRT", "TAN",  "EXISTS"};
@@ -2353,6 +2354,11 @@ class Reader {
     for (const Word* w : g) gWord(*w, axis_words, &modes);
     if (modes.g10) return setOffsetByG10(axis_words, g);
     if (modes.g682 || modes.g531) return tiltedPlane(axis_words, modes.g682, modes.g531);
+    analog_io_block_ = false;
+    if (model_.control.dialect == "linuxcnc")
+      for (const Word* w : m)
+        analog_io_block_ =
+            analog_io_block_ || w->code == "M66" || w->code == "M67" || w->code == "M68";
     const bool any_axis = checkAxisWords(axis_words);
     if (!modes.motion.empty()) {
       if (isDrillingCycle(modes.motion)) {
@@ -2535,6 +2541,12 @@ class Reader {
         fail(line_, w->column, "E",
              "the program commands axis E (E=" + formatNumber(w->value) + ") but the machine has " +
                  axisList());
+      if (l == 'E' && analog_io_block_) {
+        // LinuxCNC's M66/M67/M68 E-: the number of an analog input or output (G-code
+        // reference, "M66", "M67", "M68"; plasma posts set the torch height control this way).
+        ignored_.insert("E (analog I/O number with M66-M68)");
+        continue;
+      }
       if (l == 'E')
         fail(line_, w->column, "E",
              "an E word (E" + formatNumber(w->value) +
@@ -3120,7 +3132,8 @@ class Reader {
   OWord held_open_;                    // its first line's O-word
   std::map<std::string, Sub> subs_;    // o<name> sub definitions, by label
   int call_depth_ = 0;
-  bool subs_defined_ = false;  // the file defines a sub at its top level
+  bool analog_io_block_ = false;  // the block has LinuxCNC's M66/M67/M68 (its E: a port)
+  bool subs_defined_ = false;     // the file defines a sub at its top level
   bool tail_mode_ = false, replaying_ = false;
   std::vector<std::string> tail_;  // the file from a call of a sub defined further on
   std::map<char, int> letter_axis_;
