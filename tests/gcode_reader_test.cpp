@@ -737,6 +737,30 @@ TEST(GcodeReader, MovesBeforeEveryAxisIsKnownAreNotInventedPoints) {
   EXPECT_TRUE(hasNote(p, "1 move(s) before every axis had a commanded position (lines 2-2)"));
 }
 
+// G92 (LinuxCNC and Fanuc "coordinate system setting"): the current point takes the words'
+// values; the offset holds in every work offset; G92.2 suspends it, G92.3 restores it, G92.1
+// clears it. Positions by hand: at (10, 10), G92 X0 Y0 puts X5 Y5 at (15, 15).
+TEST(GcodeReader, G92OffsetsShiftEveryWorkOffset) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const ClProgram p = parseGcode(
+      "G21 G90\nG0 X10 Y10 Z5\nG92 X0 Y0\nG1 X5 Y5 F100\nG55\nG1 X1 Y1\nG54\nG92.2\n"
+      "G1 X1 Y1\nG92.3\nG1 X2 Y2\nG92.1\nG1 X3 Y3\nG92 Z0\nG1 Z-1\nM2\n",
+      "g.ngc", m.model);
+  const std::vector<double> x = {10, 15, 11, 1, 12, 3, 3};
+  ASSERT_EQ(p.path.size(), x.size());
+  for (size_t i = 0; i < x.size(); ++i) EXPECT_NEAR(p.path[i].p_w.x(), x[i], 1e-12) << i;
+  EXPECT_NEAR(p.path.back().p_w.z(), 4.0, 1e-12);  // Z5 became Z0: Z-1 is 1 below it
+  EXPECT_TRUE(hasNote(p, "G92 offsets (first at line 3)"));
+  EXPECT_NE(refusal("G21\nG92 X0\n", m.model).find("before the program gave its position"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0 A0 C0\nG92 A5\n", m.model).find("rotary axis A"),
+            std::string::npos);
+  // G10 L2 R turns the work coordinate system (LinuxCNC's tests/interp/g10/g10-with-g92):
+  // refused, not dropped.
+  EXPECT_NE(refusal("G21\nG10 L2 P1 X1 Y2 Z3 R10\n", m.model).find("turned about Z"),
+            std::string::npos);
+}
+
 // LinuxCNC's O-words, carried out as its interpreter does. Against LinuxCNC itself: its test
 // tests/interp/flowsnake (recursive subs, if/else, named parameters, calls with five arguments)
 // and the end points its interpreter printed for it (the fixture's expected list).

@@ -49,7 +49,7 @@ const std::map<std::string, const char*>& refusedG() {
        "in the CAM system (tool centre path)"},
       {"G41.1", "cutter radius compensation is not supported"},
       {"G42.1", "cutter radius compensation is not supported"},
-      {"G92", "G92 coordinate offsets are not supported: use work offsets (G54-G59)"},
+      {"G92", "G92 is the spindle speed limit on a SINUMERIK (G92 S...), not carried out"},
       {"G52", "local coordinate systems (G52) are not supported"},
       {"G68", "coordinate rotation (G68) is not supported"},
       {"G51", "scaling (G51) is not supported"},
@@ -261,6 +261,10 @@ class Reader {
       for (const auto& n : ignored_) names += (names.empty() ? "" : ", ") + n;
       prog_.notes.push_back("ignored (no effect on the tool path): " + names);
     }
+    if (g92_line_ > 0)
+      prog_.notes.push_back("G92 offsets (first at line " + std::to_string(g92_line_) +
+                            ") carried out: the points after them are where the offset puts "
+                            "them, in the work offset in force");
     if (g75_line_ > 0)
       prog_.notes.push_back("G75 (first at line " + std::to_string(g75_line_) +
                             ") takes the axes it names to a fixed point of the control's machine "
@@ -2339,6 +2343,7 @@ class Reader {
     std::string motion;  // G0-G3 or a drilling cycle, when the block has one
     bool g53 = false, g28 = false, g10 = false, g75 = false;
     const Word* g682 = nullptr;
+    const Word* g92 = nullptr;  // G92, G92.1, G92.2 or G92.3
     const Word* g531 = nullptr;
   };
 
@@ -2353,6 +2358,7 @@ class Reader {
     BlockModes modes;
     for (const Word* w : g) gWord(*w, axis_words, &modes);
     if (modes.g10) return setOffsetByG10(axis_words, g);
+    if (modes.g92) return g92Offset(axis_words, *modes.g92);
     if (modes.g682 || modes.g531) return tiltedPlane(axis_words, modes.g682, modes.g531);
     analog_io_block_ = false;
     if (model_.control.dialect == "linuxcnc")
@@ -2451,6 +2457,11 @@ class Reader {
         else if (h_ == 0)
           h_ = tool_;
       }
+      return;
+    }
+    const bool sinumerik = model_.control.dialect == "sinumerik";
+    if (!sinumerik && (c == "G92" || c == "G92.1" || c == "G92.2" || c == "G92.3")) {
+      modes->g92 = &w;
       return;
     }
     auto refused = refusedG().find(c);
@@ -3005,6 +3016,51 @@ class Reader {
     return "G75";
   }
 
+  // G92 coordinate system offset (LinuxCNC G-code reference, "G92"; Fanuc 0i-MF "Setting a
+  // workpiece coordinate system (G92)"; HAAS "G92 Set Work Coordinate Systems Shift Value"):
+  // the current point's coordinates become the words given, by an offset that shifts every
+  // work coordinate system (held here as a translation of the programmable frame, so that a
+  // later G54..G59 keeps it); the axes not named keep their offset. G92.1 clears the offset,
+  // G92.2 suspends it, G92.3 restores it. Not a point of the path. Refused: a rotary word (an
+  // angle offset is not modelled), an axis whose position is not known yet.
+  std::string g92Offset(const std::map<char, const Word*>& aw, const Word& g) {
+    const char L[3] = {'X', 'Y', 'Z'};
+    for (const auto& [l, w] : aw) {
+      const auto it = letter_axis_.find(l);
+      if (it != letter_axis_.end() && model_.axes[it->second].isRotary())
+        fail(line_, w->column, std::string(1, l),
+             g.code + " on the rotary axis " + std::string(1, l) +
+                 " is not supported (an angle offset)");
+    }
+    if (g.code == "G92") {
+      Eigen::Vector3d o = g92_offset_;
+      const Eigen::Vector3d settable = frame_ * cur_xyz_;
+      bool any = false;
+      for (int k = 0; k < 3; ++k) {
+        const auto it = aw.find(L[k]);
+        if (it == aw.end()) continue;
+        if (coord_[k] == kUnknown)
+          fail(line_, it->second->column, "G92",
+               std::string("G92 names ") + L[k] + " before the program gave its position");
+        o[k] = settable[k] - it->second->value * unit_;
+        any = true;
+      }
+      if (!any) fail(line_, g.column, "G92", "G92 without an X, Y or Z word");
+      g92_offset_ = o;
+      g92_on_ = true;
+    } else if (g.code == "G92.1") {
+      g92_offset_.setZero();
+      g92_on_ = false;
+    } else {
+      g92_on_ = g.code == "G92.3";
+    }
+    if (g92_line_ == 0) g92_line_ = line_;
+    Eigen::Isometry3d f = Eigen::Isometry3d::Identity();
+    if (g92_on_) f.translation() = g92_offset_;
+    setFrame(f);
+    return g.code;
+  }
+
   std::string drillCycle(const std::map<char, const Word*>& aw) {
     if (!absolute_) fail(line_, 0, cycle_code_, "drilling cycles in G91 are not expanded");
     if (aw.count('L') && aw.at('L')->value > 1)
@@ -3042,13 +3098,30 @@ class Reader {
                                   "G59", "G59.1", "G59.2", "G59.3"};
     if (P < 0 || P > 9) fail(line_, aw.at('P')->column, "P", "expected P0 to P9");
     const std::string name = P == 0 ? work_ : names[P - 1];
+    // LinuxCNC's R (the coordinate system turned about Z) and offsets of rotary axes are not
+    // carried out: refused unless zero, never dropped.
+    for (const auto& [l, w] : aw) {
+      const auto ax = letter_axis_.find(l);
+      const bool rotary = ax != letter_axis_.end() && model_.axes[ax->second].isRotary();
+      if ((l == 'R' || rotary) && w->value != 0.0)
+        fail(line_, w->column, std::string(1, l),
+             l == 'R' ? "G10 L" + std::to_string(L) +
+                            " R (the work coordinate system turned about Z) is not supported"
+                      : "G10 L" + std::to_string(L) + " offset of the rotary axis " +
+                            std::string(1, l) + " is not supported");
+    }
     Eigen::Vector3d off = set_offsets_.count(name) ? set_offsets_[name] : workOffset(name);
     const Eigen::Vector3d here = machineOfJoints(q_);
     const char xyz[3] = {'X', 'Y', 'Z'};
+    // L20: the current point takes the words' values (in the program's frame: a G92 offset
+    // stays on top of the work offset).
+    Eigen::Vector3d p = cur_xyz_;
+    for (int k = 0; k < 3; ++k)
+      if (aw.count(xyz[k])) p[k] = aw.at(xyz[k])->value * unit_;
+    const Eigen::Vector3d p_s = frame_ * p;
     for (int k = 0; k < 3; ++k) {
       if (!aw.count(xyz[k])) continue;
-      const double v = aw.at(xyz[k])->value * unit_;
-      off[k] = L == 2 ? v : here[k] - v;
+      off[k] = L == 2 ? aw.at(xyz[k])->value * unit_ : here[k] - p_s[k];
     }
     set_offsets_[name] = off;
     missing_offsets_.erase(name);
@@ -3120,11 +3193,14 @@ class Reader {
       tool_table_;  // "T1" -> diameter, corner radius (program unit: comments come before G20/G21)
   std::set<std::string> tcp_active_;
   std::set<std::string> ignored_;
-  std::map<std::string, int> missing_offsets_;  // work offset -> first line that used it
-  int bare_g28_line_ = 0;                       // the first G28 without axis words (ISO)
-  int g75_line_ = 0;                            // the first Sinumerik G75 (fixed point)
-  std::set<std::string> commanded_offsets_;     // work offsets a block selects (G54...)
-  std::map<std::string, int> unknown_;          // G and M codes tolver does not know -> first line
+  std::map<std::string, int> missing_offsets_;            // work offset -> first line that used it
+  int bare_g28_line_ = 0;                                 // the first G28 without axis words (ISO)
+  int g75_line_ = 0;                                      // the first Sinumerik G75 (fixed point)
+  int g92_line_ = 0;                                      // the first G92..G92.3
+  Eigen::Vector3d g92_offset_ = Eigen::Vector3d::Zero();  // G92's offset (mm, settable frame)
+  bool g92_on_ = false;                                   // in force (not G92.1/G92.2)
+  std::set<std::string> commanded_offsets_;               // work offsets a block selects (G54...)
+  std::map<std::string, int> unknown_;  // G and M codes tolver does not know -> first line
   std::map<std::string, Eigen::Vector3d> set_offsets_;
   std::map<std::string, double> named_;
   std::map<int, double> numbered_;
