@@ -737,6 +737,37 @@ TEST(GcodeReader, MovesBeforeEveryAxisIsKnownAreNotInventedPoints) {
   EXPECT_TRUE(hasNote(p, "1 move(s) before every axis had a commanded position (lines 2-2)"));
 }
 
+// Fanuc M98 P<program> L<times> and HAAS M97 P<block>: subprograms after the main program's
+// M30, each ending in M99 (Fanuc 0i-MF "Subprogram"; HAAS "M97 Local Sub-Program Call").
+// Positions by hand: two calls of G91 X5 from X0 give X5, X10; M97 P100 runs N100..M99.
+TEST(GcodeReader, IsoSubprogramsAfterTheMainProgram) {
+  const Machine m = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  const std::string main_part = "%\nO1000 (MAIN)\nG21 G90 G17\nG0 X0 Y0 Z-5\n";
+  const std::string subs =
+      "M30\nO1001 (SUB)\nG91 G1 X5 F100\nG90\nM99\nN100 G1 Y7\nG1 Y8\nM99\n%\n";
+  const ClProgram p = parseGcode(main_part + "M98 P1001 L2\nG0 X20 Y0\nM97 P100\nG0 Z-10\n" + subs,
+                                 "s.nc", m.model);
+  const std::vector<Eigen::Vector3d> want = {{0, 0, -5},  {5, 0, -5},  {10, 0, -5}, {20, 0, -5},
+                                             {20, 7, -5}, {20, 8, -5}, {20, 8, -10}};
+  ASSERT_EQ(p.path.size(), want.size());
+  for (size_t i = 0; i < want.size(); ++i) EXPECT_LT((p.path[i].p_w - want[i]).norm(), 1e-9) << i;
+  EXPECT_EQ(p.path[1].line, 11);  // made by the subprogram's G91 G1 X5
+  EXPECT_EQ(p.flow_line, 5);
+  EXPECT_EQ(p.statements[4].point_count, 2);  // the call's statement holds its points
+  for (const std::string& n : p.notes) EXPECT_EQ(n.find("not read"), std::string::npos) << n;
+  // Refused by name.
+  EXPECT_NE(refusal(main_part + "M98 P2000\n" + subs, m.model).find("no program O2000"),
+            std::string::npos);
+  EXPECT_NE(refusal(main_part + "G1 X1 M98 P1001\n" + subs, m.model).find("other words"),
+            std::string::npos);
+  EXPECT_NE(refusal(main_part + "M99\n", m.model).find("never ends"), std::string::npos);
+  EXPECT_NE(refusal(main_part + "M98 P1001\nM30\nO1001\nG1 X1 F10\nM99 P20\n", m.model)
+                .find("M99 P returns"),
+            std::string::npos);
+  EXPECT_NE(refusal(main_part + "M98 P31001\n" + subs, m.model).find("write the repeats as L"),
+            std::string::npos);
+}
+
 // G92 (LinuxCNC and Fanuc "coordinate system setting"): the current point takes the words'
 // values; the offset holds in every work offset; G92.2 suspends it, G92.3 restores it, G92.1
 // clears it. Positions by hand: at (10, 10), G92 X0 Y0 puts X5 Y5 at (15, 15).

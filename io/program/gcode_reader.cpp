@@ -314,6 +314,12 @@ class Reader {
       flowLine(text);
       return;
     }
+    if (model_.control.dialect == "iso" && !ended_) {
+      if (const auto call = parseIsoCall(text)) {
+        isoCallLine(text, *call);
+        return;
+      }
+    }
     const int first_point = static_cast<int>(prog_.path.size());
     const std::string major = runLine(static_cast<int>(prog_.lines.size()) + 1, text);
     pushStatement(text, first_point, major);
@@ -330,7 +336,8 @@ class Reader {
       if (++percent_ >= 2 && seen_block_) endAt("'%'");
     } else if (!ended_ && !t.empty()) {
       return block(text);
-    } else if (ended_ && !t.empty() && t[0] != '%' && t[0] != '(' && t[0] != ';') {
+    } else if (ended_ && !t.empty() && t[0] != '%' && t[0] != '(' && t[0] != ';' &&
+               !sub_lines_.count(line)) {
       if (after_end_++ == 0) first_after_end_ = line;
     }
     return "";
@@ -384,6 +391,7 @@ class Reader {
   struct Sub {
     std::vector<SourceLine> body;  // between sub and endsub
     SourceLine end;                // the endsub line (its value)
+    std::string refuse;            // ISO: why it cannot be carried out (its M99 block)
   };
   enum class FlowExit { Next, Break, Continue, Return };
   struct FlowResult {
@@ -393,15 +401,10 @@ class Reader {
   static constexpr long kMaxIterations = 1000000;
   static constexpr int kMaxCallDepth = 50;
 
-  // An O-word line, read as LinuxCNC reads a line: comments out, and every space ignored ("o
-  // <name> call", "o100 end sub" and "o100 endsub" are the same). nullopt when the line is not
-  // an O-word of subs or control flow (a program number O1234, any other block).
-  static std::optional<OWord> parseOWord(const std::string& raw) {
-    static const std::set<std::string> words = {
-        "sub",      "endsub", "call",   "if",        "elseif", "else",  "endif",   "while",
-        "endwhile", "do",     "repeat", "endrepeat", "return", "break", "continue"};
-    std::string c;  // the line without comments and spaces, upper case
-    std::vector<int> col;
+  // A line as LinuxCNC reads it: comments out ('(...)' and after ';'), every space out, upper
+  // case; col (when given) the 1-based column of each character kept.
+  static std::string compactLine(const std::string& raw, std::vector<int>* col = nullptr) {
+    std::string c;
     for (size_t k = 0; k < raw.size(); ++k) {
       if (raw[k] == ';') break;
       if (raw[k] == '(') {
@@ -412,8 +415,20 @@ class Reader {
       }
       if (std::isspace(static_cast<unsigned char>(raw[k]))) continue;
       c += static_cast<char>(std::toupper(static_cast<unsigned char>(raw[k])));
-      col.push_back(static_cast<int>(k) + 1);
+      if (col) col->push_back(static_cast<int>(k) + 1);
     }
+    return c;
+  }
+
+  // An O-word line, read as LinuxCNC reads a line: comments out, and every space ignored ("o
+  // <name> call", "o100 end sub" and "o100 endsub" are the same). nullopt when the line is not
+  // an O-word of subs or control flow (a program number O1234, any other block).
+  static std::optional<OWord> parseOWord(const std::string& raw) {
+    static const std::set<std::string> words = {
+        "sub",      "endsub", "call",   "if",        "elseif", "else",  "endif",   "while",
+        "endwhile", "do",     "repeat", "endrepeat", "return", "break", "continue"};
+    std::vector<int> col;
+    const std::string c = compactLine(raw, &col);
     size_t i = 0;
     if (i + 1 < c.size() && c[i] == 'N' && std::isdigit(static_cast<unsigned char>(c[i + 1]))) {
       ++i;
@@ -528,6 +543,176 @@ class Reader {
          "o" + open.label + " " + open.keyword + " without its o" + open.label + " " + keyword);
   }
 
+  // ---------------------------------------------------------------- ISO subprograms
+  // Fanuc M98 P<program> [L<times>] calls program O<program> of the same file (Fanuc 0i-MF,
+  // "Subprogram": the subprogram ends with M99, the call returns to the block after it); HAAS
+  // M97 P<n> [L<times>] calls the local subroutine that starts at block N<n> and ends with M99
+  // (HAAS Mill Operator's Manual, "M97 Local Sub-Program Call"). The subprograms follow the main
+  // program's M30 in the file: a call holds the rest of the file (tail_), which is read again
+  // once they are known. Each point keeps its line; a call's points belong to its line's
+  // statement (ClProgram::flow_line). Refused by name: a call with axis words or other M codes
+  // in its block, P given as repeats and number together (Fanuc's 8-digit P), a subprogram the
+  // file does not hold, M99 anywhere but at a subprogram's end (in the main program it restarts
+  // it: an endless program), M99 P (a return to a block number).
+  struct IsoCall {
+    std::string code;  // M98 or M97
+    long number = 0;   // the program (M98) or block number (M97)
+    long times = 1;    // L
+    int column = 1;
+  };
+
+  // The M98/M97 call on a line, when it has one (comments out, upper case).
+  std::optional<IsoCall> parseIsoCall(const std::string& raw) const {
+    std::vector<int> col;
+    const std::string c = compactLine(raw, &col);
+    std::optional<IsoCall> call;
+    std::map<char, std::string> words;
+    for (size_t i = 0; i < c.size();) {
+      const char l = c[i];
+      size_t j = i + 1;
+      while (j < c.size() && (std::isdigit(static_cast<unsigned char>(c[j])) || c[j] == '.' ||
+                              c[j] == '-' || c[j] == '+'))
+        ++j;
+      const std::string v = c.substr(i + 1, j - i - 1);
+      if (l == 'M' && (v == "98" || v == "97" || v == "098" || v == "097")) {
+        call = IsoCall{v.back() == '8' ? "M98" : "M97", 0, 1, col[i]};
+      } else if (std::isalpha(static_cast<unsigned char>(l))) {
+        words[l] += (words.count(l) ? "," : "") + v;
+      }
+      if (j == i + 1) ++j;  // not a word: step on
+      i = j;
+    }
+    if (!call) return std::nullopt;
+    for (const auto& [l, v] : words) {
+      if (l == 'P' || l == 'L' || l == 'N' || l == 'O') continue;
+      call->number = -1;  // words beside the call: refused where it is carried out
+      call->code += " with " + std::string(1, l) + v;
+      return call;
+    }
+    if (!words.count('P')) {
+      call->number = -2;
+      return call;
+    }
+    call->number = std::strtol(words['P'].c_str(), nullptr, 10);
+    if (words.count('L')) call->times = std::strtol(words['L'].c_str(), nullptr, 10);
+    return call;
+  }
+
+  // A call at the top level: held with the rest of the file until the subprograms are read.
+  void isoCallLine(const std::string& text, const IsoCall& call) {
+    const int line = static_cast<int>(prog_.lines.size()) + 1;
+    if (!replaying_) {
+      tail_mode_ = true;
+      tail_.push_back(text);
+      return;
+    }
+    const int first_point = static_cast<int>(prog_.path.size());
+    if (prog_.flow_line == 0) prog_.flow_line = line;
+    line_ = line;
+    any_ = true;
+    runIsoCall(call, line);
+    pushStatement(text, first_point, call.code);
+    sinkBlock();
+  }
+
+  void runIsoCall(const IsoCall& call, int line) {
+    if (call.number == -1)
+      fail(line, call.column, call.code.substr(0, 3),
+           call.code +
+               ": a subprogram call with other words in its block is not carried out: "
+               "post the move and the call in separate blocks");
+    if (call.number == -2)
+      fail(line, call.column, call.code, call.code + " without P (the subprogram to call)");
+    if (call.code == "M98" && call.number > 9999)
+      fail(line, call.column, "P",
+           "M98 P" + std::to_string(call.number) +
+               ": a program number above 9999 (Fanuc's repeat count in P's upper digits?) is not "
+               "read: write the repeats as L");
+    if (!(call.times >= 0 && call.times <= 9999))
+      fail(line, call.column, "L", "the repeat count L must be 0 to 9999");
+    const std::string key = (call.code == "M98" ? "O" : "N") + std::to_string(call.number);
+    const auto it = subs_.find(key);
+    if (it == subs_.end())
+      fail(line, call.column, call.code,
+           call.code + " P" + std::to_string(call.number) + ": no " +
+               (call.code == "M98" ? "program O" : "block N") + std::to_string(call.number) +
+               " ending in M99 after the main program in this file (a program in the control's "
+               "memory is not read): put the subprogram in the file or expand it in the post");
+    if (call_depth_ >= kMaxCallDepth)
+      fail(line, call.column, call.code,
+           "calls nested deeper than " + std::to_string(kMaxCallDepth));
+    if (!it->second.refuse.empty()) fail(line, call.column, call.code, it->second.refuse);
+    ++call_depth_;
+    const Sub sub = it->second;
+    for (long n = 0; n < call.times && !ended_; ++n) {
+      const FlowResult r = runLines(sub.body, 0, sub.body.size());
+      if (r.exit != FlowExit::Next)
+        fail(line, call.column, call.code, "an O-word return or loop exit in a subprogram");
+    }
+    --call_depth_;
+    line_ = line;
+  }
+
+  // The subprograms of the file's tail: O<n> ... M99 and (for M97) N<n> ... M99 after the main
+  // program's end (M2/M30).
+  void defineIsoSubs(const std::vector<SourceLine>& lines) {
+    bool after_end = false;
+    for (size_t k = 0; k < lines.size(); ++k) {
+      const std::string u = toUpper(std::string(trim(lines[k].text)));
+      auto hasM = [&](const std::string& text, const char* code) {
+        const std::string w = std::string("M") + code;
+        for (size_t at = text.find(w); at != std::string::npos; at = text.find(w, at + 1)) {
+          const size_t e = at + w.size();
+          if ((at == 0 || !std::isalpha(static_cast<unsigned char>(text[at - 1]))) &&
+              (e == text.size() || !std::isdigit(static_cast<unsigned char>(text[e]))))
+            return true;
+        }
+        return false;
+      };
+      const std::string code = u.substr(0, u.find_first_of("(;"));
+      if (!after_end) {
+        after_end = hasM(code, "30") || hasM(code, "2") || hasM(code, "02");
+        continue;
+      }
+      if (u.empty() || (u[0] != 'O' && u[0] != 'N' && u[0] != ':')) continue;
+      size_t j = 1;
+      while (j < u.size() && std::isdigit(static_cast<unsigned char>(u[j]))) ++j;
+      if (j == 1) continue;
+      const std::string key =
+          std::string(1, u[0] == 'N' ? 'N' : 'O') + std::to_string(std::stol(u.substr(1, j - 1)));
+      Sub sub;
+      // An O line is the program's header; an N line is the subroutine's first block.
+      size_t first = u[0] == 'N' ? k : k + 1;
+      size_t e = first;
+      for (; e < lines.size(); ++e) {
+        const std::string ue = toUpper(std::string(trim(lines[e].text)));
+        if (hasM(ue.substr(0, ue.find_first_of("(;")), "99")) break;
+      }
+      if (e == lines.size()) continue;  // no M99: not a subprogram
+      sub.body.assign(lines.begin() + static_cast<long>(first),
+                      lines.begin() + static_cast<long>(e));
+      sub.end = lines[e];
+      // The M99 block: M99 alone (and a block number). Another word there would be dropped with
+      // it; a P returns elsewhere than to the call.
+      std::string rest = compactLine(lines[e].text);
+      for (const char* w : {"M99", "M099"})
+        for (size_t at = rest.find(w); at != std::string::npos; at = rest.find(w))
+          rest.erase(at, std::strlen(w));
+      if (!rest.empty() && rest[0] == 'N') {
+        size_t d = 1;
+        while (d < rest.size() && std::isdigit(static_cast<unsigned char>(rest[d]))) ++d;
+        rest.erase(0, d);
+      }
+      if (!rest.empty())
+        sub.refuse = "the subprogram's M99 block at line " + std::to_string(lines[e].line) +
+                     " holds other words (" + rest.substr(0, 20) + ")" +
+                     (rest[0] == 'P' ? ": M99 P returns to a block number, not to the call"
+                                     : ": post them in a block of their own");
+      for (size_t b = k; b <= e; ++b) sub_lines_.insert(lines[b].line);
+      if (!subs_.count(key)) subs_[key] = std::move(sub);
+    }
+  }
+
   // True when lines call a sub that is neither defined nor defined among them.
   bool callsUndefined(const std::vector<SourceLine>& lines) const {
     std::set<std::string> defined;
@@ -555,6 +740,7 @@ class Reader {
       if (!t.empty() && t[0] == '%' && ++percents >= 2) break;
       lines.push_back({first + static_cast<int>(k), tail_[k]});
     }
+    if (model_.control.dialect == "iso") defineIsoSubs(lines);
     for (size_t k = 0; k < lines.size(); ++k) {
       const auto o = parseOWord(lines[k].text);
       if (!o || o->keyword != "sub") continue;
@@ -605,6 +791,13 @@ class Reader {
   FlowResult runLines(const std::vector<SourceLine>& lines, size_t from, size_t to) {
     for (size_t k = from; k < to; ++k) {
       if (ended_) return {};
+      if (model_.control.dialect == "iso") {
+        if (const auto call = parseIsoCall(lines[k].text)) {
+          line_ = lines[k].line;
+          runIsoCall(*call, lines[k].line);
+          continue;
+        }
+      }
       const std::optional<OWord> o = parseOWord(lines[k].text);
       if (!o) {
         runLine(lines[k].line, lines[k].text);
@@ -2424,7 +2617,13 @@ class Reader {
   }
 
   void mWord(const Word& w, const AxisWords& axis_words) {
-    if (w.code == "M98" || w.code == "M99" || w.code == "M97")
+    if (w.code == "M99")
+      fail(line_, w.column, w.code,
+           model_.control.dialect == "iso"
+               ? "M99 outside a subprogram that M98/M97 called (in the main program it starts it "
+                 "again: a program that never ends)"
+               : "subprogram calls are not supported: expand them in the post");
+    if (w.code == "M98" || w.code == "M97")
       fail(line_, w.column, w.code, "subprogram calls are not supported: expand them in the post");
     if (w.code == "M2" || w.code == "M30") {
       endAt(w.code);
@@ -3212,6 +3411,7 @@ class Reader {
   bool subs_defined_ = false;     // the file defines a sub at its top level
   bool tail_mode_ = false, replaying_ = false;
   std::vector<std::string> tail_;  // the file from a call of a sub defined further on
+  std::set<int> sub_lines_;        // lines of ISO subprograms after the end (not "unread")
   std::map<char, int> letter_axis_;
   std::array<double, kMaxAxes> rot_word_{};
   // Drilling cycle state.
