@@ -873,6 +873,16 @@ TEST(GcodeReader, LinuxCncOWordsAsItsInterpreterRunsThem) {
             std::string::npos);
   EXPECT_NE(refusal("G21\no1 sub\nG0 X1\no1 endsub\n", m.model).find("calls none"),
             std::string::npos);
+  // Bounded: constructs nested 200 deep, loops within loops that would run 10^12 lines.
+  std::string deep = "G21\nG0 X0 Y0 Z0\n";
+  for (int k = 1; k <= 200; ++k) deep += "o" + std::to_string(k) + " if [1]\n";
+  for (int k = 200; k >= 1; --k) deep += "o" + std::to_string(k) + " endif\n";
+  EXPECT_NE(refusal(deep, m.model).find("nested deeper than 100"), std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\no1 repeat [1000000]\no2 repeat [1000000]\n(x)\n"
+                    "o2 endrepeat\no1 endrepeat\n",
+                    m.model)
+                .find("carried out 10000000 lines"),
+            std::string::npos);
   // Spaces before a function's bracket; M68's E (an analog output's number, as LinuxCNC's
   // plasma posts write it) is no axis.
   const ClProgram fn =

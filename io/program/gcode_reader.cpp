@@ -400,6 +400,8 @@ class Reader {
   };
   static constexpr long kMaxIterations = 1000000;
   static constexpr int kMaxCallDepth = 50;
+  static constexpr int kMaxFlowDepth = 100;        // constructs within constructs
+  static constexpr long kMaxFlowLines = 10000000;  // lines carried out within constructs
 
   // A line as LinuxCNC reads it: comments out ('(...)' and after ';'), every space out, upper
   // case; col (when given) the 1-based column of each character kept.
@@ -789,8 +791,20 @@ class Reader {
   // Carries out lines[from, to); returns how control left them (a break, continue or return
   // goes to the construct it names).
   FlowResult runLines(const std::vector<SourceLine>& lines, size_t from, size_t to) {
+    struct Depth {
+      int& d;
+      explicit Depth(int& depth) : d(++depth) {}
+      ~Depth() { --d; }
+    } depth(flow_depth_);
+    if (flow_depth_ > kMaxFlowDepth)
+      fail(from < lines.size() ? lines[from].line : line_, 0, "O",
+           "subs and control flow nested deeper than " + std::to_string(kMaxFlowDepth));
     for (size_t k = from; k < to; ++k) {
       if (ended_) return {};
+      if (++flow_lines_ > kMaxFlowLines)
+        fail(lines[k].line, 0, "O",
+             "the program's subs and loops carried out " + std::to_string(kMaxFlowLines) +
+                 " lines: too long to predict (or a loop that does not end)");
       if (model_.control.dialect == "iso") {
         if (const auto call = parseIsoCall(lines[k].text)) {
           line_ = lines[k].line;
@@ -3407,6 +3421,8 @@ class Reader {
   OWord held_open_;                    // its first line's O-word
   std::map<std::string, Sub> subs_;    // o<name> sub definitions, by label
   int call_depth_ = 0;
+  int flow_depth_ = 0;            // runLines nesting
+  long flow_lines_ = 0;           // lines carried out within constructs
   bool analog_io_block_ = false;  // the block has LinuxCNC's M66/M67/M68 (its E: a port)
   bool subs_defined_ = false;     // the file defines a sub at its top level
   bool tail_mode_ = false, replaying_ = false;
