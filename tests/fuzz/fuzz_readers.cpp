@@ -47,6 +47,12 @@ const tolver::BallbarTest& samplePlan() {
   return t;
 }
 
+const tolver::Machine& isoVmc() {
+  static const tolver::Machine m = tolver::readMachineFile(
+      std::string(TOLVER_SOURCE_DIR) + "/resources/machines/vmc_3axis_iso.xml");
+  return m;
+}
+
 const tolver::Machine& sinumerik() {
   static const tolver::Machine m = tolver::readMachineFile(
       std::string(TOLVER_SOURCE_DIR) + "/resources/machines/sinumerik_bc_table.xml");
@@ -61,10 +67,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
 #if TOLVER_FUZZ_TARGET == 1
     tolver::parseApt(text, "fuzz.apt");
 #elif TOLVER_FUZZ_TARGET == 2
-    // Each text as an ISO/LinuxCNC program and as a Sinumerik 840D one (DEF, assignments,
-    // frames, cycles: issue 32).
+    // Each text as a LinuxCNC program (O-words), an ISO one and a Sinumerik 840D one (DEF,
+    // assignments, frames, cycles: issue 32).
     try {
       tolver::parseGcode(text, "fuzz.nc", machine().model);
+    } catch (const tolver::InputError&) {
+    }
+    try {
+      tolver::parseGcode(text, "fuzz.nc", isoVmc().model);  // M98/M97 subprograms, G92
     } catch (const tolver::InputError&) {
     }
     tolver::parseGcode(text, "fuzz.mpf", sinumerik().model);
