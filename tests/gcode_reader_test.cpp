@@ -766,6 +766,19 @@ TEST(GcodeReader, IsoSubprogramsAfterTheMainProgram) {
             std::string::npos);
   EXPECT_NE(refusal(main_part + "M98 P31001\n" + subs, m.model).find("write the repeats as L"),
             std::string::npos);
+  // Peter Smid's pattern (CNC Programming Handbook): a cycle stored with L0 where the tool is
+  // (no hole there), the holes' positions in a subprogram: two holes, not three.
+  const ClProgram smid = parseGcode(
+      "%\nO0003\nG21 G17 G40 G80\nG90 G54 G00 X7.0 Y7.0 Z25.0\n"
+      "G99 G82 R2.5 Z-3.4 P200 F200.0 L0\nM98 P1002\nG80 G0 Z25\nM30\nO1002\nX20 Y7\n"
+      "X30 Y7\nM99\n%\n",
+      "smid.nc", m.model);
+  EXPECT_EQ(smid.cycle_holes, 2);
+  for (const ClPoint& c : smid.path)
+    EXPECT_FALSE(std::abs(c.p_w.x() - 7.0) < 1e-9 && c.p_w.z() < 0) << "a hole at X7";
+  EXPECT_TRUE(hasNote(smid, "L0/K0: the cycle stored, no hole made there"));
+  EXPECT_NE(refusal(main_part + "G81 X5 Y5 R1 Z-2 F50 L0\n", m.model).find("new position"),
+            std::string::npos);
 }
 
 // G92 (LinuxCNC and Fanuc "coordinate system setting"): the current point takes the words'

@@ -261,6 +261,10 @@ class Reader {
       for (const auto& n : ignored_) names += (names.empty() ? "" : ", ") + n;
       prog_.notes.push_back("ignored (no effect on the tool path): " + names);
     }
+    if (stored_cycles_ > 0)
+      prog_.notes.push_back(std::to_string(stored_cycles_) +
+                            " drilling-cycle block(s) with L0/K0: the cycle stored, no hole made "
+                            "there");
     if (g92_line_ > 0)
       prog_.notes.push_back("G92 offsets (first at line " + std::to_string(g92_line_) +
                             ") carried out: the points after them are where the offset puts "
@@ -3281,6 +3285,24 @@ class Reader {
     const bool sinumerik_cycle = cycle_code_.rfind("CYCLE", 0) == 0;  // planes from its values
     if (aw.count('R') && !sinumerik_cycle) cycle_r_ = aw.at('R')->value * unit_;
     if (aw.count('Z') && !sinumerik_cycle) cycle_z_ = aw.at('Z')->value * unit_;
+    // L0 (and Fanuc's K0 where K is no peck depth): the cycle's data is stored and no hole is
+    // made at this block (Fanuc 0i-MF, "Canned cycle": "When K0 is specified, drilling data is
+    // stored, but drilling is not performed"; HAAS L0 likewise). A position in that block is
+    // refused: whether the control moves there is not said.
+    const bool k_repeats = cycle_code_ != "G73" && cycle_code_ != "G83" && !sinumerik_cycle;
+    const Word* none = aw.count('L') && aw.at('L')->value == 0.0                ? aw.at('L')
+                       : k_repeats && aw.count('K') && aw.at('K')->value == 0.0 ? aw.at('K')
+                                                                                : nullptr;
+    if (none) {
+      for (char l : {'X', 'Y'})
+        if (aw.count(l) && std::abs(target(aw)[l - 'X'] - cur_xyz_[l - 'X']) > 1e-9)
+          fail(line_, none->column, std::string(1, none->letter),
+               cycle_code_ + " " + none->letter +
+                   "0 with a new position: the cycle makes no hole there, and whether the "
+                   "control moves to it is not said: post the position in its own block");
+      ++stored_cycles_;
+      return cycle_code_;
+    }
     if (std::isnan(cycle_r_) || std::isnan(cycle_z_))
       fail(line_, 0, cycle_code_, "a drilling cycle needs R and Z");
     updateRotaryWords(aw);
@@ -3410,6 +3432,7 @@ class Reader {
   int bare_g28_line_ = 0;                                 // the first G28 without axis words (ISO)
   int g75_line_ = 0;                                      // the first Sinumerik G75 (fixed point)
   int g92_line_ = 0;                                      // the first G92..G92.3
+  int stored_cycles_ = 0;                                 // cycle blocks with L0/K0 (no hole)
   Eigen::Vector3d g92_offset_ = Eigen::Vector3d::Zero();  // G92's offset (mm, settable frame)
   bool g92_on_ = false;                                   // in force (not G92.1/G92.2)
   std::set<std::string> commanded_offsets_;               // work offsets a block selects (G54...)

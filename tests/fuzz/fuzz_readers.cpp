@@ -48,8 +48,8 @@ const tolver::BallbarTest& samplePlan() {
 }
 
 const tolver::Machine& isoVmc() {
-  static const tolver::Machine m = tolver::readMachineFile(
-      std::string(TOLVER_SOURCE_DIR) + "/resources/machines/vmc_3axis_iso.xml");
+  static const tolver::Machine m = tolver::readMachineFile(std::string(TOLVER_SOURCE_DIR) +
+                                                           "/resources/machines/vmc_3axis_iso.xml");
   return m;
 }
 
