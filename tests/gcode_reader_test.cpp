@@ -803,6 +803,18 @@ TEST(GcodeReader, G92OffsetsShiftEveryWorkOffset) {
   // refused, not dropped.
   EXPECT_NE(refusal("G21\nG10 L2 P1 X1 Y2 Z3 R10\n", m.model).find("turned about Z"),
             std::string::npos);
+  // G10 L1 P Z sets the tool length a later G43 applies (as the HEMA programs of a LinuxCNC
+  // shop write it, with R, the radius, beside it): 20 mm of length lifts the gauge point 20 mm
+  // over the tip.
+  const ClProgram tl =
+      parseGcode("G21\nG10 L1 P1 Z20 R3\nT1 M6\nG43 H1\nG0 X0 Y0 Z0\n", "t.ngc", m.model);
+  const ClProgram t0 =
+      parseGcode("G21\nG10 L1 P1 Z0 R3\nT1 M6\nG43 H1\nG0 X0 Y0 Z0\n", "t.ngc", m.model);
+  ASSERT_EQ(tl.joints.size(), 1u);
+  ASSERT_EQ(t0.joints.size(), 1u);
+  EXPECT_NEAR(std::abs(tl.joints[0][2] - t0.joints[0][2]), 20.0, 1e-9);
+  EXPECT_NE(refusal("G21\nG10 L1 P1 X2 Z20\n", m.model).find("other than its length"),
+            std::string::npos);
 }
 
 // LinuxCNC's O-words, carried out as its interpreter does. Against LinuxCNC itself: its test
@@ -872,6 +884,14 @@ TEST(GcodeReader, LinuxCncOWordsAsItsInterpreterRunsThem) {
   ASSERT_EQ(after.path.size(), 2u);
   EXPECT_NEAR(after.path[1].p_w.x(), 2.0, 1e-12);
   EXPECT_EQ(after.path[1].line, 6);
+  // #1-#30 beyond the arguments are 0 in the sub (LinuxCNC zeroes them), whatever the caller's.
+  const ClProgram zero = parseGcode(
+      "G21\n#2 = 9\no<z> sub\nG1 X[#2] F10\no<z> endsub\nG0 X5 Y0 Z0\no<z> call [7]\n"
+      "G1 Y[#2]\n",
+      "z.ngc", m.model);
+  ASSERT_EQ(zero.path.size(), 3u);
+  EXPECT_NEAR(zero.path[1].p_w.x(), 0.0, 1e-12);
+  EXPECT_NEAR(zero.path[2].p_w.y(), 9.0, 1e-12);  // the caller's #2 restored
   // Refused by name.
   EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\no<elsewhere> call\n", m.model)
                 .find("r.nc:3:1: O: o<elsewhere> call: no o<elsewhere> sub"),

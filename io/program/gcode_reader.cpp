@@ -376,8 +376,9 @@ class Reader {
   // return [value]. A construct met at the top level is held whole up to its end, then carried
   // out; its points belong to its first line's statement (statements stay one per line) and each
   // point keeps the line that made it (ClProgram::flow_line says a construct ran). A sub is kept
-  // where it is defined and run by its calls: #1-#30 take the call's arguments and, with the
-  // named parameters that do not begin with '_', belong to the call (restored after it); a
+  // where it is defined and run by its calls: #1-#30 take the call's arguments (0 beyond them)
+  // and, with the named parameters that do not begin with '_', belong to the call (restored
+  // after it); a
   // value returned is #<_value>. Refused by name: a call of a sub not defined above it in the
   // file (LinuxCNC would also search its subroutine path, which no machine file gives), a
   // construct without its end or a word out of place, a loop that runs more than
@@ -921,7 +922,10 @@ class Reader {
         ++s;
       }
     }
-    for (size_t a = 0; a < args.size(); ++a) numbered_[static_cast<int>(a) + 1] = args[a];
+    // #1-#30 take the arguments and 0 beyond them (LinuxCNC's interp_read.cc: "zero the
+    // remaining params").
+    for (int a = 0; a < 30; ++a)
+      numbered_[a + 1] = a < static_cast<int>(args.size()) ? args[static_cast<size_t>(a)] : 0.0;
     named_["_value_returned"] = 0.0;
     ++call_depth_;
     const Sub sub = it->second;  // a copy: the body may define subs again
@@ -1026,6 +1030,8 @@ class Reader {
   }
 
   double toolLength() const {
+    const auto set = set_tool_lengths_.find(h_);  // the program's own G10 L1
+    if (set != set_tool_lengths_.end()) return set->second;
     auto it = model_.setup.tool_lengths.find(h_);
     return it != model_.setup.tool_lengths.end() ? it->second : model_.setup.gauge_length;
   }
@@ -3323,11 +3329,32 @@ class Reader {
     return cycle_code_;
   }
 
+  // G10 L1 P<tool> Z<length> R<radius> (LinuxCNC G-code reference, "G10 L1 Set Tool Table"):
+  // the tool table's length for tool P, which a later G43 (H P, or the tool in the spindle)
+  // applies, as the program sets it; R (the radius, for cutter compensation) changes no point
+  // here (tolver takes the cutter from --tools or the post's comments) and is noted. An X or Y
+  // offset (a lathe tool's) is refused unless zero.
+  std::string setToolByG10(const std::map<char, const Word*>& aw) {
+    if (!aw.count('P')) fail(line_, 0, "G10", "G10 L1 needs P (the tool number)");
+    const int P = static_cast<int>(aw.at('P')->value);
+    for (const auto& [l, w] : aw)
+      if (l != 'L' && l != 'P' && l != 'Z' && l != 'R' && w->value != 0.0)
+        fail(line_, w->column, std::string(1, l),
+             "G10 L1 " + std::string(1, l) +
+                 " (a tool offset other than its length) is not "
+                 "supported");
+    if (aw.count('Z')) set_tool_lengths_[P] = aw.at('Z')->value * unit_;
+    if (aw.count('R')) ignored_.insert("G10 L1 R (tool radius)");
+    return "G10";
+  }
+
   std::string setOffsetByG10(const std::map<char, const Word*>& aw,
                              const std::vector<const Word*>& g) {
     const int L = aw.count('L') ? static_cast<int>(aw.at('L')->value) : -1;
+    if (L == 1) return setToolByG10(aw);
     if (L != 2 && L != 20)
-      fail(line_, g.front()->column, "G10", "only G10 L2 and L20 (work offsets) are supported");
+      fail(line_, g.front()->column, "G10",
+           "only G10 L1 (tool length), L2 and L20 (work offsets) are supported");
     const int P = aw.count('P') ? static_cast<int>(aw.at('P')->value) : 0;
     static const char* names[] = {"G54", "G55",   "G56",   "G57",  "G58",
                                   "G59", "G59.1", "G59.2", "G59.3"};
@@ -3428,11 +3455,12 @@ class Reader {
       tool_table_;  // "T1" -> diameter, corner radius (program unit: comments come before G20/G21)
   std::set<std::string> tcp_active_;
   std::set<std::string> ignored_;
-  std::map<std::string, int> missing_offsets_;            // work offset -> first line that used it
-  int bare_g28_line_ = 0;                                 // the first G28 without axis words (ISO)
-  int g75_line_ = 0;                                      // the first Sinumerik G75 (fixed point)
-  int g92_line_ = 0;                                      // the first G92..G92.3
-  int stored_cycles_ = 0;                                 // cycle blocks with L0/K0 (no hole)
+  std::map<std::string, int> missing_offsets_;  // work offset -> first line that used it
+  int bare_g28_line_ = 0;                       // the first G28 without axis words (ISO)
+  int g75_line_ = 0;                            // the first Sinumerik G75 (fixed point)
+  int g92_line_ = 0;                            // the first G92..G92.3
+  int stored_cycles_ = 0;                       // cycle blocks with L0/K0 (no hole)
+  std::map<int, double> set_tool_lengths_;      // G10 L1 P Z: tool lengths the program sets (mm)
   Eigen::Vector3d g92_offset_ = Eigen::Vector3d::Zero();  // G92's offset (mm, settable frame)
   bool g92_on_ = false;                                   // in force (not G92.1/G92.2)
   std::set<std::string> commanded_offsets_;               // work offsets a block selects (G54...)
