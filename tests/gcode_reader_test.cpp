@@ -555,6 +555,11 @@ TEST(GcodeReader, GrblSystemCommandsAreRefusedByName) {
     EXPECT_NE(r.find("is a Grbl system command"), std::string::npos) << r;
     EXPECT_NE(r.find(text[0] == 'G' ? "r.nc:3:3" : "r.nc:1:1"), std::string::npos) << r;
   }
+  // A HAAS NGC '$' line (donpayne/cnc lathe_jaws_o4001.cnc: "$AddRegPart 1 X2.925 Y2.005") is
+  // a control's own command, not Grbl's.
+  const std::string haas = refusal("%\n$AddRegPart 1 X2.925 Y2.005\nG0 X1\n", vmc.model);
+  EXPECT_NE(haas.find("a control's own command line"), std::string::npos) << haas;
+  EXPECT_EQ(haas.find("Grbl"), std::string::npos) << haas;
   // '$' inside a block is still a stray character, named as such.
   EXPECT_NE(refusal("G21\nG0 X1 $2\n", vmc.model).find("expected a word letter"),
             std::string::npos);

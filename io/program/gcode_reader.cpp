@@ -2514,11 +2514,24 @@ class Reader {
       // Grbl's own commands ('$H' homes, '$J=' jogs, '$$' lists settings, '?' asks the status:
       // Grbl v1.1 "Grbl Interface", "Grbl Commands"): lines a sender writes to Grbl, not blocks;
       // some move the machine, so they are named, not skipped.
-      if (i == 0 && (c == '$' || c == '?'))
+      if (i == 0 && (c == '$' || c == '?')) {
+        // Grbl's: $ alone, $$, $#, $n=, $H, $J=, $I, $X, $C, $G, $N, $RST, $SLP, ?. Another $
+        // line is some control's own command (HAAS NGC writes "$AddRegPart"): named as such.
+        const std::string u = toUpper(text.substr(i, 6));
+        const char d = u.size() > 1 ? u[1] : ' ';
+        const bool grbl =
+            c == '?' || u.size() == 1 || d == '$' || d == '#' || d == ' ' ||
+            std::isdigit(static_cast<unsigned char>(d)) ||
+            ((d == 'H' || d == 'J' || d == 'I' || d == 'X' || d == 'C' || d == 'G' || d == 'N') &&
+             (u.size() == 2 || !std::isalpha(static_cast<unsigned char>(u[2])))) ||
+            u.rfind("$RST", 0) == 0 || u.rfind("$SLP", 0) == 0;
         fail(line_, col[i], std::string(1, c),
              "'" + clip(text.substr(i, 12)) +
-                 "' is a Grbl system command, not a G-code block (some move the machine: "
-                 "$H homes, $J= jogs): remove it from the program");
+                 (grbl ? "' is a Grbl system command, not a G-code block (some move the machine: "
+                         "$H homes, $J= jogs): remove it from the program"
+                       : "' is a control's own command line, not a G-code block: what it does "
+                         "is not known here; remove it from the program"));
+      }
       // LinuxCNC's polar coordinates (@ distance, ^ angle in the XY plane; G-code reference,
       // "Polar Coordinates"): named, not "a stray character".
       if (c == '@' || c == '^')
@@ -2644,8 +2657,9 @@ class Reader {
     if (w.code == "M99")
       fail(line_, w.column, w.code,
            model_.control.dialect == "iso"
-               ? "M99 outside a subprogram that M98/M97 called (in the main program it starts it "
-                 "again: a program that never ends)"
+               ? "M99 outside a subprogram that M98/M97 called: a file of a subprogram (O... "
+                 "M99) is run by the program that calls it (give that one, with it after its "
+                 "M30); in a main program M99 starts it again, a program that never ends"
                : "subprogram calls are not supported: expand them in the post");
     if (w.code == "M98" || w.code == "M97")
       fail(line_, w.column, w.code, "subprogram calls are not supported: expand them in the post");
