@@ -771,6 +771,11 @@ TEST(GcodeReader, IsoSubprogramsAfterTheMainProgram) {
             std::string::npos);
   EXPECT_NE(refusal(main_part + "M98 P31001\n" + subs, m.model).find("write the repeats as L"),
             std::string::npos);
+  // The subprogram as a tape of its own after the main one's ("%" ... "%" "%" O1001 ... "%").
+  const ClProgram two = parseGcode(
+      main_part + "M98 P1001\nG0 Z-1\nM30\n%\n%\nO1001\nG1 X4 F50\nM99\n%\n", "two.nc", m.model);
+  ASSERT_EQ(two.path.size(), 3u);
+  EXPECT_NEAR(two.path[1].p_w.x(), 4.0, 1e-12);
   // Peter Smid's pattern (CNC Programming Handbook): a cycle stored with L0 where the tool is
   // (no hole there), the holes' positions in a subprogram: two holes, not three.
   const ClProgram smid = parseGcode(

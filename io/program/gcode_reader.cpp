@@ -739,15 +739,18 @@ class Reader {
   void replayTail() {
     tail_mode_ = false;
     replaying_ = true;
-    std::vector<SourceLine> lines;
+    std::vector<SourceLine> lines, all;
     int percents = percent_;
     const int first = static_cast<int>(prog_.lines.size()) + 1;
     for (size_t k = 0; k < tail_.size(); ++k) {
+      all.push_back({first + static_cast<int>(k), tail_[k]});
       const std::string_view t = trim(tail_[k]);
-      if (!t.empty() && t[0] == '%' && ++percents >= 2) break;
-      lines.push_back({first + static_cast<int>(k), tail_[k]});
+      if (!t.empty() && t[0] == '%' && ++percents >= 2) continue;
+      if (percents < 2) lines.push_back(all.back());
     }
-    if (model_.control.dialect == "iso") defineIsoSubs(lines);
+    // ISO: a file may hold the subprograms as programs of their own after the main one's tape
+    // ("%" ... "%" "%" O1001 ... M99 "%"): a control loads them all.
+    if (model_.control.dialect == "iso") defineIsoSubs(all);
     for (size_t k = 0; k < lines.size(); ++k) {
       const auto o = parseOWord(lines[k].text);
       if (!o || o->keyword != "sub") continue;
