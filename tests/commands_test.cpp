@@ -89,6 +89,27 @@ TEST_F(Commands, PredictOnAPerfectMachineIsTheProgram) {
   EXPECT_EQ(refusedField([&] { predict(in); }), "part_zero");
 }
 
+// A program whose subs and loops run (LinuxCNC O-words: LinuxCNC's own flowsnake test) is
+// predicted in blocks as whole: the written CL and table byte for byte, although its
+// constructs' points come in runs longer than a block.
+TEST_F(Commands, PredictInBlocksRunsOWordProgramsAsWhole) {
+  PredictInputs in;
+  in.machine.machine = sourcePath("resources/machines/linuxcnc_xyzac_trt.xml");
+  in.program.nc = sourcePath("tests/fixtures/gcode/linuxcnc_flowsnake.ngc");
+  std::string text[2], table[2];
+  for (int blocks = 0; blocks < 2; ++blocks) {
+    in.block_points = blocks ? 7 : 0;
+    in.output = path("f" + std::to_string(blocks) + ".apt");
+    const PredictionRun run = predict(in);
+    EXPECT_EQ(run.verdict, Verdict::Ok);
+    EXPECT_EQ(run.program.pointsRead(), 195u);
+    text[blocks] = test::readText(in.output);
+    table[blocks] = test::readText(path("f" + std::to_string(blocks) + ".csv"));
+  }
+  EXPECT_EQ(text[0], text[1]);
+  EXPECT_EQ(table[0], table[1]);
+}
+
 // The link model of the thesis's machine: the minimal-complete set has as many parameters as the
 // rank of the sensitivity Jacobian (every dependent column removed, none more).
 TEST_F(Commands, AnalyzeKeepsTheRankOfTheModel) {
