@@ -1003,7 +1003,8 @@ TEST(GcodeReader, SinumerikArithmeticAndDimensions) {
       parseGcode(head + "N20 WERKZEUG_1_1: G1 X5 F100\nRESTART:\n", "l.mpf", m.model);
   ASSERT_EQ(lb.path.size(), 2u);
   EXPECT_NEAR(lb.path[1].p_w.x() - lb.path[0].p_w.x(), 5.0, 1e-12);
-  EXPECT_NE(refusal(head + "N20 GOTOF RESTART\nRESTART:\n", m.model).find("GOTOF"),
+  EXPECT_NE(refusal(head + "N20 GOTOF ELSEWHERE\nRESTART:\n", m.model)
+                .find("GOTOF ELSEWHERE: no such label"),
             std::string::npos);
   // What it cannot be sure of is refused, naming it.
   EXPECT_NE(refusal(head + "N20 TRANS X10\nN30 G1 X=IC(5) F100\n", m.model).find("MD 42440"),
@@ -1015,6 +1016,59 @@ TEST(GcodeReader, SinumerikArithmeticAndDimensions) {
   EXPECT_NE(refusal(head + "N20 G1 B=DC(5) F100\n", m.model).find("modulo rotary axis"),
             std::string::npos);
   EXPECT_NE(refusal(head + "N15 DEF STRING[4] S\nN20 G1 X=S F100\n", m.model).find("STRING"),
+            std::string::npos);
+}
+
+// SINUMERIK control flow (Job Planning, "Program jumps and branches", "Control structures"),
+// against the expected outputs of an independent interpreter (CEAD-group/nc-gcode-interpreter's
+// examples goto, for_loop, repeat, logic_operators, whose X, Y and angles are asserted here).
+TEST(GcodeReader, SinumerikJumpsAndControlStructures) {
+  const Machine m = sinumerikMachine();
+  const std::string head = "N1 G54 G90 G0 X0 Y0 Z50 B0 C0 D1\n";
+  auto xs = [](const ClProgram& p) {
+    std::vector<double> v;
+    for (const ClPoint& c : p.path) v.push_back(c.p_w.x() - p.path[0].p_w.x());
+    return v;
+  };
+  // Jumps: GOTOF to a label after, GOTOB back while R4 > 0, GOTOF to a block number (bare or
+  // with N), GOTOC to a label nowhere (goes on), GOTO searching forward then back.
+  const ClProgram g = parseGcode(
+      head +
+          "N10 R1=30 R2=10 R4=3\nN20 GOTOF MIDDLE\nN30 X=999\nN40 REPEAT_HERE: X=R1\n"
+          "N50 R1=R1+R2 R4=R4-1\nN60 IF R4>0 GOTOB REPEAT_HERE\nN70 GOTOF 90\nN80 X=999\n"
+          "N90 GOTOC NOWHERE\nN100 GOTO FINISH\nN110 X=999\nN120 FINISH: M30\n"
+          "MIDDLE: Y=1\nGOTOB REPEAT_HERE\n",
+      "g.mpf", m.model);
+  EXPECT_EQ(xs(g), (std::vector<double>{0, 0, 30, 40, 50}));
+  EXPECT_NEAR(g.path[1].p_w.y() - g.path[0].p_w.y(), 1.0, 1e-12);
+  EXPECT_EQ(g.path[2].line, 5);  // X=R1 at N40, the line that made it
+  EXPECT_EQ(g.flow_line, 3);     // from the first control word on
+  // FOR, REPEAT ... UNTIL, WHILE, LOOP with a jump out, IF/ELSE with AND OR XOR NOT, a
+  // comparison's value in an assignment.
+  const ClProgram f = parseGcode(
+      head +
+          "DEF INT COUNTER, NUMBER=3\nDEF INT TRACK_X=1, TRACK_Y=0\n"
+          "FOR COUNTER=0 TO NUMBER\nG1 X=10*COUNTER F100\nENDFOR\n"
+          "COUNTER=0\nREPEAT\nX=100+COUNTER\nCOUNTER=COUNTER+1\nUNTIL COUNTER>1\n"
+          "WHILE COUNTER < 4\nX=200+COUNTER\nCOUNTER=COUNTER+1\nENDWHILE\n"
+          "LOOP\nX=300\nGOTOF OUT\nENDLOOP\nOUT:\n"
+          "IF (TRACK_X == 1 AND TRACK_Y == 1)\nX=999\nELSE\nX=400\nENDIF\n"
+          "IF NOT TRACK_Y\nX=401\nENDIF\nIF ((TRACK_X == 1) XOR (TRACK_Y == 1))\nX=402\nENDIF\n"
+          "R11 = COUNTER >= 4\nX = 500 + R11\n",
+      "f.mpf", m.model);
+  EXPECT_EQ(xs(f),
+            (std::vector<double>{0, 0, 10, 20, 30, 100, 101, 202, 203, 300, 400, 401, 402, 501}));
+  // Refused by name.
+  EXPECT_NE(refusal(head + "WHILE 1\nX1\n", m.model).find("WHILE without its end"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "ENDIF\n", m.model).find("ENDIF without its IF"), std::string::npos);
+  EXPECT_NE(refusal(head + "CASE R1 OF 1 GOTOF A DEFAULT GOTOF B\n", m.model).find("CASE"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "LOOP\nX1\nENDLOOP\n", m.model).find("ran 1000000 times"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "R1 = 6 B_AND 3\n", m.model).find("bit operator B_AND"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "X=$AA_IW[X]\n", m.model).find("system variable $AA_IW"),
             std::string::npos);
 }
 

@@ -318,6 +318,14 @@ class Reader {
       flowLine(text);
       return;
     }
+    if (model_.control.dialect == "sinumerik" && !ended_ && !replaying_) {
+      const SinFlowLine f = sinFlow(text);
+      if (!f.label.empty() || !f.keyword.empty()) {  // jumps may come: the rest is held
+        tail_mode_ = true;
+        tail_.push_back(text);
+        return;
+      }
+    }
     if (model_.control.dialect == "iso" && !ended_) {
       if (const auto call = parseIsoCall(text)) {
         isoCallLine(text, *call);
@@ -550,6 +558,336 @@ class Reader {
          "o" + open.label + " " + open.keyword + " without its o" + open.label + " " + keyword);
   }
 
+  // ---------------------------------------------------------------- Sinumerik control flow
+  // SINUMERIK 840D sl Programming Manual, Job Planning, "Program jumps and branches" and
+  // "Control structures": jump labels (NAME:), GOTOF/GOTOB/GOTO/GOTOC to a label or a block
+  // number, IF cond GOTO.. (a conditional jump), IF ... ELSE ... ENDIF, WHILE ... ENDWHILE,
+  // LOOP ... ENDLOOP, FOR var = a TO b ... ENDFOR, REPEAT ... UNTIL cond; conditions with == <>
+  // < > <= >=, AND OR XOR NOT. From the first label or control word on, the file is held and
+  // then carried out from there with a program counter (jumps go anywhere in it); its points
+  // belong to the first held line's statement, each keeping its own line (flow_line). Refused by
+  // name: CASE and subprogram calls, a jump to a label or block the held part does not hold
+  // (GOTOC goes on), a structure without its end, loops beyond kMaxIterations and
+  // kMaxFlowLines lines in all.
+  struct SinFlowLine {
+    std::string label;    // NAME when the line defines NAME: (else empty)
+    long number = -1;     // its block number N..., -1 none
+    std::string keyword;  // IF ELSE ENDIF WHILE ENDWHILE LOOP ENDLOOP FOR ENDFOR REPEAT UNTIL
+                          // GOTOF GOTOB GOTO GOTOC CASE CALL ..., or empty
+    std::string rest;     // after the keyword, upper case, comment out
+    int column = 1;
+  };
+
+  static SinFlowLine sinFlow(const std::string& raw) {
+    static const std::set<std::string> words = {
+        "IF",     "ELSE",   "ENDIF", "WHILE", "ENDWHILE", "LOOP", "ENDLOOP", "FOR",
+        "ENDFOR", "REPEAT", "UNTIL", "GOTOF", "GOTOB",    "GOTO", "GOTOC",   "CASE",
+        "CALL",   "PCALL",  "RET",   "M17",   "PROC",     "SAVE", "EXTERN"};
+    SinFlowLine f;
+    std::string u;
+    bool str = false;
+    for (char c : raw) {
+      if (c == '"') str = !str;
+      if (c == ';' && !str) break;
+      u += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    }
+    size_t i = 0;
+    auto skip = [&] {
+      while (i < u.size() && (u[i] == ' ' || u[i] == '\t')) ++i;
+    };
+    auto word = [&] {
+      const size_t from = i;
+      while (i < u.size() && (std::isalnum(static_cast<unsigned char>(u[i])) || u[i] == '_')) ++i;
+      return u.substr(from, i - from);
+    };
+    auto digits = [](const std::string& w) {
+      return w.size() > 1 && std::all_of(w.begin() + 1, w.end(), [](char c) {
+               return std::isdigit(static_cast<unsigned char>(c)) != 0;
+             });
+    };
+    skip();
+    if (i < u.size() && u[i] == '/') {  // block delete: runs unless the switch is on
+      ++i;
+      skip();
+    }
+    size_t at = i;
+    std::string w = word();
+    if (w[0] == 'N' && digits(w)) {
+      f.number = std::strtol(w.c_str() + 1, nullptr, 10);
+      skip();
+      at = i;
+      w = word();
+    }
+    if (!w.empty() && i < u.size() && u[i] == ':' &&
+        std::isalpha(static_cast<unsigned char>(w[0]))) {
+      f.label = w;
+      ++i;
+      skip();
+      at = i;
+      w = word();
+    }
+    if (words.count(w) && (i >= u.size() || !std::isalnum(static_cast<unsigned char>(u[i])))) {
+      f.keyword = w;
+      f.rest = std::string(trim(std::string_view(u).substr(i)));
+      f.column = static_cast<int>(at) + 1;
+    }
+    return f;
+  }
+
+  // A Sinumerik condition (or a value): its operators in the reader's bracket syntax.
+  double sinCondition(const std::string& text, int line, int column) {
+    const std::string e = sinOperators(text, line, column);
+    line_ = line;
+    const std::string b = sinBrackets("[" + e + "]");
+    size_t i = 0;
+    const double v = primary(b, i, column - 1);
+    if (!trim(std::string_view(b).substr(i)).empty())
+      fail(line, column, text.substr(0, 20), "unexpected text in the condition");
+    return v;
+  }
+
+  // Sinumerik's comparisons (== <> < > <= >=) as the reader's EQ NE LT GT LE GE; its bit
+  // operators (B_AND ...) are refused by name.
+  std::string sinOperators(const std::string& text, int line, int column) {
+    for (const char* w : {"B_AND", "B_OR", "B_XOR", "B_NOT"})
+      if (text.find(w) != std::string::npos)
+        fail(line, column, w, std::string("the bit operator ") + w + " is not evaluated");
+    if (text.find_first_of("<>=") == std::string::npos) return text;
+    std::string e;
+    for (size_t k = 0; k < text.size(); ++k) {
+      const char c = text[k], d = k + 1 < text.size() ? text[k + 1] : ' ';
+      if (c == '"') fail(line, column, "\"", "a comparison of texts (STRING) is not evaluated");
+      if (c == '=' && d == '=') {
+        e += " EQ ";
+        ++k;
+      } else if (c == '<' && d == '>') {
+        e += " NE ";
+        ++k;
+      } else if (c == '<' && d == '=') {
+        e += " LE ";
+        ++k;
+      } else if (c == '>' && d == '=') {
+        e += " GE ";
+        ++k;
+      } else if (c == '<') {
+        e += " LT ";
+      } else if (c == '>') {
+        e += " GT ";
+      } else {
+        e += c;
+      }
+    }
+    return e;
+  }
+
+  void runSinumerikTail() {
+    std::vector<SourceLine> lines;
+    const int first = static_cast<int>(prog_.lines.size()) + 1;
+    bool flow = false;
+    for (size_t k = 0; k < tail_.size(); ++k) {
+      lines.push_back({first + static_cast<int>(k), tail_[k]});
+      flow = flow || !sinFlow(tail_[k]).keyword.empty();
+    }
+    std::vector<std::string> tail;
+    tail.swap(tail_);
+    if (!flow) {  // labels alone: the lines as any others
+      for (const std::string& t : tail) processLine(t);
+      return;
+    }
+    const int first_point = static_cast<int>(prog_.path.size());
+    prog_.flow_line = lines.front().line;
+    runSinumerikFlow(lines);
+    for (size_t k = 0; k < lines.size(); ++k)
+      pushStatement(lines[k].text, k == 0 ? first_point : static_cast<int>(prog_.path.size()), "");
+    sinkBlock();
+  }
+
+  // The structures of the held lines: each opening's partner and each IF's ELSE.
+  struct SinStructure {
+    std::vector<size_t> partner, else_of;
+  };
+
+  SinStructure sinStructure(const std::vector<SourceLine>& L, const std::vector<SinFlowLine>& f) {
+    const size_t n = L.size();
+    SinStructure st{std::vector<size_t>(n, n), std::vector<size_t>(n, n)};
+    std::vector<size_t> open;
+    for (size_t k = 0; k < n; ++k) {
+      const std::string& kw = f[k].keyword;
+      const bool jump_if = kw == "IF" && f[k].rest.find("GOTO") != std::string::npos;
+      if (kw == "CASE" || kw == "CALL" || kw == "PCALL" || kw == "RET" || kw == "M17" ||
+          kw == "PROC" || kw == "SAVE" || kw == "EXTERN")
+        fail(L[k].line, f[k].column, kw,
+             "Sinumerik " + kw +
+                 " is not carried out (subprograms and CASE): post the program without it");
+      if ((kw == "IF" && !jump_if) || kw == "WHILE" || kw == "LOOP" || kw == "FOR" ||
+          kw == "REPEAT") {
+        open.push_back(k);
+        if (open.size() > static_cast<size_t>(kMaxFlowDepth))
+          fail(L[k].line, f[k].column, kw, "control structures nested deeper than 100");
+        continue;
+      }
+      const char* want = kw == "ELSE" || kw == "ENDIF" ? "IF"
+                         : kw == "ENDWHILE"            ? "WHILE"
+                         : kw == "ENDLOOP"             ? "LOOP"
+                         : kw == "ENDFOR"              ? "FOR"
+                         : kw == "UNTIL"               ? "REPEAT"
+                                                       : nullptr;
+      if (!want) continue;
+      if (open.empty() || f[open.back()].keyword != want)
+        fail(L[k].line, f[k].column, kw, kw + " without its " + want + " (or structures crossed)");
+      if (kw == "ELSE") {
+        st.else_of[open.back()] = k;
+        continue;
+      }
+      const size_t head = open.back();
+      open.pop_back();
+      st.partner[head] = k;
+      st.partner[k] = head;
+      if (st.else_of[head] < n) st.partner[st.else_of[head]] = k;
+    }
+    if (!open.empty())
+      fail(L[open.back()].line, f[open.back()].column, f[open.back()].keyword,
+           f[open.back()].keyword + " without its end (the file ends first)");
+    return st;
+  }
+
+  void runSinumerikFlow(const std::vector<SourceLine>& L) {
+    const size_t n = L.size();
+    std::vector<SinFlowLine> f(n);
+    std::map<std::string, std::vector<size_t>> labels;
+    std::map<long, std::vector<size_t>> numbers;
+    for (size_t k = 0; k < n; ++k) {
+      f[k] = sinFlow(L[k].text);
+      if (!f[k].label.empty()) labels[f[k].label].push_back(k);
+      if (f[k].number >= 0) numbers[f[k].number].push_back(k);
+    }
+    const SinStructure st = sinStructure(L, f);
+    // A jump's target: a label or a block number, forward (GOTOF), backward (GOTOB) or either
+    // (GOTO, GOTOC: forward first); n when none (GOTOC goes on).
+    auto target = [&](size_t from, const std::string& how, const std::string& to) -> size_t {
+      const std::string name(trim(std::string_view(to)));
+      std::vector<size_t> at;
+      const size_t d = !name.empty() && name[0] == 'N' ? 1 : 0;  // N90 or 90: a block number
+      const bool block = name.size() > d &&
+                         std::all_of(name.begin() + static_cast<long>(d), name.end(), [](char c) {
+                           return std::isdigit(static_cast<unsigned char>(c)) != 0;
+                         });
+      if (block) {
+        const auto it = numbers.find(std::strtol(name.c_str() + d, nullptr, 10));
+        if (it != numbers.end()) at = it->second;
+      } else {
+        const auto it = labels.find(name);
+        if (it != labels.end()) at = it->second;
+      }
+      size_t fwd = n, back = n;
+      for (size_t a : at) {
+        if (a > from && fwd == n) fwd = a;
+        if (a < from) back = a;
+      }
+      const size_t t = how == "GOTOF" ? fwd : how == "GOTOB" ? back : fwd < n ? fwd : back;
+      if (t == n && how != "GOTOC")
+        fail(L[from].line, f[from].column, how,
+             how + " " + name + ": no such label or block " +
+                 (how == "GOTOF"   ? "after"
+                  : how == "GOTOB" ? "before"
+                                   : "in") +
+                 " this line (in the program from its first label or control word on)");
+      return t;
+    };
+    std::map<size_t, std::pair<std::string, double>> for_end;  // FOR line -> variable, end
+    std::map<size_t, long> iterations;
+    auto iterate = [&](size_t at) {
+      if (++iterations[at] > kMaxIterations)
+        fail(L[at].line, f[at].column, f[at].keyword,
+             f[at].keyword + " ran " + std::to_string(kMaxIterations) +
+                 " times: a loop that does not end (or one too long to predict)");
+    };
+    auto jump = [&](size_t pc, const std::string& how, const std::string& to) {
+      const size_t t = target(pc, how, to);
+      if (t < n && t <= pc) iterate(pc);  // a backward jump: a loop
+      return t < n ? t : pc + 1;
+    };
+    size_t pc = 0;
+    while (pc < n && !ended_) {
+      if (++flow_lines_ > kMaxFlowLines)
+        fail(L[pc].line, 0, "O",
+             "the program's loops and jumps carried out " + std::to_string(kMaxFlowLines) +
+                 " lines: too long to predict (or a loop that does not end)");
+      const SinFlowLine& x = f[pc];
+      const std::string& kw = x.keyword;
+      const int line = L[pc].line;
+      line_ = line;
+      if (kw.empty()) {
+        runLine(line, L[pc].text);
+        ++pc;
+      } else if (kw == "GOTOF" || kw == "GOTOB" || kw == "GOTO" || kw == "GOTOC") {
+        pc = jump(pc, kw, x.rest);
+      } else if (kw == "IF" && st.partner[pc] == n) {  // IF condition GOTO.. label
+        const size_t g = x.rest.find("GOTO");
+        size_t e = g + 4;
+        while (e < x.rest.size() && std::isalpha(static_cast<unsigned char>(x.rest[e]))) ++e;
+        const std::string how = x.rest.substr(g, e - g);
+        if (how != "GOTOF" && how != "GOTOB" && how != "GOTO" && how != "GOTOC")
+          fail(line, x.column, how, "IF ... " + how + ": not a jump");
+        pc = sinCondition(x.rest.substr(0, g), line, x.column) != 0.0
+                 ? jump(pc, how, x.rest.substr(e))
+                 : pc + 1;
+      } else if (kw == "IF") {
+        pc = sinCondition(x.rest, line, x.column) != 0.0 ? pc + 1
+             : st.else_of[pc] < n                        ? st.else_of[pc] + 1
+                                                         : st.partner[pc] + 1;
+      } else if (kw == "ELSE") {
+        pc = st.partner[pc] + 1;  // the true branch ran: past its ENDIF
+      } else if (kw == "WHILE") {
+        if (sinCondition(x.rest, line, x.column) != 0.0) {
+          iterate(pc);
+          ++pc;
+        } else {
+          pc = st.partner[pc] + 1;
+        }
+      } else if (kw == "ENDWHILE") {
+        pc = st.partner[pc];
+      } else if (kw == "ENDLOOP") {
+        iterate(st.partner[pc]);
+        pc = st.partner[pc] + 1;
+      } else if (kw == "LOOP" || kw == "REPEAT" || kw == "ENDIF") {
+        ++pc;
+      } else if (kw == "UNTIL") {
+        if (sinCondition(x.rest, line, x.column) != 0.0) {
+          ++pc;
+        } else {
+          iterate(st.partner[pc]);
+          pc = st.partner[pc] + 1;
+        }
+      } else if (kw == "FOR") {
+        // FOR variable = start TO end: the variable runs start, start + 1, ... up to end.
+        const size_t eq = x.rest.find('='), to = x.rest.find(" TO ");
+        if (eq == std::string::npos || to == std::string::npos || to < eq)
+          fail(line, x.column, "FOR", "expected FOR variable = start TO end");
+        const std::string var(trim(std::string_view(x.rest).substr(0, eq)));
+        bool r_parameter = var.size() > 1 && var[0] == 'R';
+        for (size_t c = 1; c < var.size() && r_parameter; ++c)
+          r_parameter = std::isdigit(static_cast<unsigned char>(var[c])) != 0;
+        if (!sin_vars_.count(var) && !r_parameter)
+          fail(line, x.column, var,
+               "FOR: " + var + " is neither a declared variable (DEF) nor an R parameter");
+        const double start = sinCondition(x.rest.substr(eq + 1, to - eq - 1), line, x.column);
+        const double end = sinCondition(x.rest.substr(to + 4), line, x.column);
+        sin_vars_[var] = start;
+        for_end[pc] = {var, end};
+        pc = start <= end ? pc + 1 : st.partner[pc] + 1;
+      } else if (kw == "ENDFOR") {
+        const size_t head = st.partner[pc];
+        const auto& [var, end] = for_end[head];
+        sin_vars_[var] += 1.0;
+        iterate(head);
+        pc = sin_vars_[var] <= end ? head + 1 : pc + 1;
+      } else {
+        fail(line, x.column, kw, "Sinumerik " + kw + " is not carried out");
+      }
+    }
+  }
+
   // ---------------------------------------------------------------- ISO subprograms
   // Fanuc M98 P<program> [L<times>] calls program O<program> of the same file (Fanuc 0i-MF,
   // "Subprogram": the subprogram ends with M99, the call returns to the block after it); HAAS
@@ -739,6 +1077,10 @@ class Reader {
   void replayTail() {
     tail_mode_ = false;
     replaying_ = true;
+    if (model_.control.dialect == "sinumerik") {
+      runSinumerikTail();
+      return;
+    }
     std::vector<SourceLine> lines, all;
     int percents = percent_;
     const int first = static_cast<int>(prog_.lines.size()) + 1;
@@ -1070,8 +1412,9 @@ class Reader {
   // coordinates, as G53), G500 (no settable offset), TRANS/ATRANS (programmable translation),
   // T="name" and D (tool and its length offset; D0 switches it off), MCALL CYCLE81/82/83 (modal
   // drilling, RTP, RFP, SDIS, DP, DPR), CYCLE800() (swivel reset); MSG, CYCLE832 and the
-  // path-control words listed as ignored. Loops, jumps, swivelling with CYCLE800(...) and frame
-  // rotations are refused naming the construct.
+  // path-control words listed as ignored. Jumps and control structures are carried out by
+  // runSinumerikFlow (the lines never reach here); CASE, CALL and other constructs are refused
+  // naming them.
   std::string sinumerikBlock(const std::string& upper, const std::vector<int>& col) {
     SinBlock b = sinTokens(upper, col);
     size_t t = 0;
@@ -1110,13 +1453,18 @@ class Reader {
   // spaces ("NAME = expr", "X=7 DIV 2", "R1 = R2 * 4") joined into one token: a token that ends
   // in '=' or an operator, or one that starts with '=' or an operator or is DIV or MOD, goes on
   // the one before it.
+  static bool sinWordOperator(const std::string& w) {
+    return w == "DIV" || w == "MOD" || w == "AND" || w == "OR" || w == "XOR" || w == "NOT" ||
+           w == "B_AND" || w == "B_OR" || w == "B_XOR" || w == "B_NOT";
+  }
+
   static bool sinJoins(const std::string& prev, const std::string& cur) {
-    static const std::string ops = "=+-*/";
+    static const std::string ops = "=+-*/<>";
     if (prev.find('=') == std::string::npos && cur[0] != '=') return false;
+    const size_t sp = prev.rfind(' ');
     return ops.find(prev.back()) != std::string::npos || ops.find(cur[0]) != std::string::npos ||
-           cur == "DIV" || cur == "MOD" ||
-           (prev.size() >= 4 && (prev.compare(prev.size() - 4, 4, " DIV") == 0 ||
-                                 prev.compare(prev.size() - 4, 4, " MOD") == 0));
+           sinWordOperator(cur) ||
+           (sp != std::string::npos && sinWordOperator(prev.substr(sp + 1)));
   }
 
   static SinBlock sinTokens(const std::string& upper, const std::vector<int>& col) {
@@ -1132,8 +1480,10 @@ class Reader {
       if (c == ' ' && depth <= 0 && !str) {
         if (!cur.empty()) {
           if (!b.tok.empty() && sinJoins(b.tok.back(), cur)) {
-            const char last = b.tok.back().back();
-            const bool keep_space = cur == "DIV" || cur == "MOD" || last == 'V' || last == 'D';
+            const std::string& prev = b.tok.back();
+            const size_t sp = prev.rfind(' ');
+            const bool keep_space = sinWordOperator(cur) || (sp != std::string::npos &&
+                                                             sinWordOperator(prev.substr(sp + 1)));
             b.tok.back() += (keep_space ? " " : "") + cur;
           } else {
             b.tok.push_back(cur);
@@ -1824,9 +2174,9 @@ class Reader {
   }
 
   double sinExpression(const std::string& e, int column) {
-    const std::string b = sinBrackets(e);
+    const std::string b = sinBrackets(sinOperators(e, line_, column));
     size_t i = 0;
-    const double v = expression(b, i, column - 1);
+    const double v = logical(b, i, column - 1);  // comparisons and logic give 1 or 0
     while (i < b.size() && b[i] == ' ') ++i;
     if (i != b.size()) fail(line_, column, e.substr(0, 20), "unexpected text in the expression");
     if (!std::isfinite(v) || std::abs(v) > 1e9)
@@ -1933,8 +2283,7 @@ class Reader {
     if (c == '[') {
       ++i;
       ++brackets_;
-      const double v = model_.control.dialect == "sinumerik" ? expression(text, i, col_base)
-                                                             : logical(text, i, col_base);
+      const double v = logical(text, i, col_base);
       --brackets_;
       while (i < text.size() && text[i] == ' ') ++i;
       if (i >= text.size() || text[i] != ']') fail(line_, col_base + i, "[", "missing ']'");
@@ -1947,6 +2296,15 @@ class Reader {
       return c == '-' ? -v : v;
     }
     if (c == '#') return parameter(text, i, col_base);
+    if (model_.control.dialect == "sinumerik" && c == '$') {
+      size_t j = i + 1;
+      while (j < text.size() &&
+             (std::isalnum(static_cast<unsigned char>(text[j])) || text[j] == '_'))
+        ++j;
+      fail(line_, col_base + i, text.substr(i, j - i),
+           "the system variable " + text.substr(i, j - i) +
+               " (the control's state or machine data) is not known here");
+    }
     if (model_.control.dialect == "sinumerik" &&
         (std::isalpha(static_cast<unsigned char>(c)) || c == '_')) {
       size_t j = i;
@@ -1961,6 +2319,10 @@ class Reader {
       }
       if (sin_texts_.count(name))
         fail(line_, col_base + i, name, name + " is a STRING variable: it has no number");
+      if (name == "TRUE" || name == "FALSE") {  // BOOL constants
+        i = j;
+        return name == "TRUE" ? 1.0 : 0.0;
+      }
       auto it = sin_vars_.find(name);
       if (it == sin_vars_.end())
         fail(line_, col_base + i, name,
@@ -2190,8 +2552,19 @@ class Reader {
     }
   }
 
+  // NOT (Sinumerik) before a relation negates it.
+  double negatable(const std::string& text, size_t& i, int col_base) {
+    while (i < text.size() && text[i] == ' ') ++i;
+    if (operatorAt(text, i, "NOT") && i + 3 < text.size() &&
+        !std::isalnum(static_cast<unsigned char>(text[i + 3])) && text[i + 3] != '_') {
+      i += 3;
+      return negatable(text, i, col_base) == 0.0 ? 1.0 : 0.0;
+    }
+    return relation(text, i, col_base);
+  }
+
   double logical(const std::string& text, size_t& i, int col_base) {
-    double v = relation(text, i, col_base);
+    double v = negatable(text, i, col_base);
     for (;;) {
       while (i < text.size() && text[i] == ' ') ++i;
       const int op = operatorAt(text, i, "AND")   ? 0
@@ -2200,7 +2573,7 @@ class Reader {
                                                   : -1;
       if (op < 0) return v;
       i += op == 1 ? 2 : 3;
-      const bool a = v != 0.0, b = relation(text, i, col_base) != 0.0;
+      const bool a = v != 0.0, b = negatable(text, i, col_base) != 0.0;
       v = (op == 0 ? a && b : op == 1 ? a || b : a != b) ? 1.0 : 0.0;
     }
   }

@@ -33,10 +33,11 @@
 // ROT/AROT frames (whose z must be the rotary words' tool axis in TCP mode). A move made before
 // every axis has a commanded position is not a point of the path. LinuxCNC (dialect
 // "linuxcnc"): O-word subs, calls, loops and conditions, carried out (ClProgram::flow_line);
-// ISO: M98/M97 subprograms after the main program; G92 offsets (not on a Sinumerik). Refused
-// with file:line and the construct: other subprograms, macros and control flow (G65, Fanuc
-// macro B), cutter radius compensation (G41/G42), coordinate rotation and scaling (G68, G51),
-// polar coordinates (G16), G87, Sinumerik loops, jumps and CYCLE800 with solid angles. Words that
+// ISO: M98/M97 subprograms after the main program; G92 offsets (not on a Sinumerik); Sinumerik:
+// jumps, IF/WHILE/LOOP/FOR/REPEAT. Refused with file:line and the construct: other subprograms,
+// macros and control flow (G65, Fanuc macro B, Sinumerik CASE and CALL), cutter radius
+// compensation (G41/G42), coordinate rotation and scaling (G68, G51), polar coordinates (G16),
+// G87, Sinumerik CYCLE800 with solid angles. Words that
 // do not change the path are listed once as ignored.
 #include <string>
 #include <string_view>
