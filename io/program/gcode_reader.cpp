@@ -3429,8 +3429,9 @@ class Reader {
   enum Coordinate : char { kInOffset = 0, kFixed = 1, kUnknown = 2 };
   bool positionKnown() {
     if (coord_[0] != kUnknown && coord_[1] != kUnknown && coord_[2] != kUnknown) return true;
-    if (unknown_moves_++ == 0) first_unknown_line_ = line_;
-    last_unknown_line_ = line_;
+    // (lines in order: a jump or a loop runs them in another)
+    if (unknown_moves_++ == 0 || line_ < first_unknown_line_) first_unknown_line_ = line_;
+    last_unknown_line_ = std::max(last_unknown_line_, line_);
     return false;
   }
   unsigned char fixedMask() const {
