@@ -188,10 +188,20 @@ class CompensationTally {
 };
 
 // The comment at the top of a compensated program.
-std::vector<std::string> compensatedHeader(const CompensateInputs& in, const std::string& file,
+std::vector<std::string> compensatedHeader(const CompensateInputs& in, const ClProgram& program,
                                            const std::string& machine_name) {
-  return {"tolver compensate: " + file + " for " + machine_name + " (" + in.machine.machine +
-          "): the machine with its errors runs this program onto the original's nominal path"};
+  std::vector<std::string> h = {
+      "tolver compensate: " + program.file + " for " + machine_name + " (" + in.machine.machine +
+      "): the machine with its errors runs this program onto the original's nominal path"};
+  // The user's unit over the file's UNITS (--cl-units): the statement is copied as it stands,
+  // the numbers are in the user's unit (as the predicted CL says it, io/program/apt_writer.cpp).
+  if (program.dialect != "G-code" && !program.units_in_file.empty()) {
+    const bool inch = program.units == "INCH";
+    h.push_back(std::string("the numbers are in ") + (inch ? "inches" : "mm") +
+                ", not as UNITS at line " + std::to_string(program.units_line) +
+                " declares: read this file with --cl-units " + (inch ? "inch" : "mm"));
+  }
+  return h;
 }
 
 // The source's byte-order mark and line endings (from its first line), which the compensated
@@ -222,8 +232,7 @@ struct SourceEncoding {
 CompensatedProgramText correctedText(const CompensateInputs& in, const CompensationRun& run) {
   const ClProgram& program = run.program;
   const std::vector<CompensatedPoint>& cp = run.compensation.points;
-  const std::vector<std::string> header =
-      compensatedHeader(in, program.file, run.machine.model.name);
+  const std::vector<std::string> header = compensatedHeader(in, program, run.machine.model.name);
   CompensatedProgramText text;
   if (program.dialect == "G-code") {
     std::vector<JointVector> q(cp.size());
@@ -904,7 +913,7 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
     text.clear();
     if (!started) {
       if (encoding.bom) cl_out += "\xEF\xBB\xBF";
-      const std::vector<std::string> header = compensatedHeader(in, block.file, model.name);
+      const std::vector<std::string> header = compensatedHeader(in, block, model.name);
       if (gcode)
         gcode_writer.start(block, header, text);
       else

@@ -575,6 +575,13 @@ TEST_F(GcodeCli, DeclaredInchesThatAreMillimetres) {
   ASSERT_EQ(back.path.size(), 4u);
   EXPECT_NEAR(back.path[1].p_w.x(), 250.0, 1e-6);
   EXPECT_EQ(back.units_in_file, "INCH");
+  // compensate's CL says the same of its numbers.
+  r = test::runTolver("compensate" + m + " --setup " + path("s.txt") + " --cl-units mm --cl " +
+                      path("mislabel.apt") + " -o " + path("c.apt"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(test::readText(path("c.apt"))
+                .find("not as UNITS at line 2 declares: read this file with --cl-units mm"),
+            std::string::npos);
 }
 
 TEST_F(GcodeCli, SetupBadInputExitsWithCode2AndWritesNothing) {
