@@ -813,10 +813,11 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
   // lines (io/program/gcode_reader.h): a compensated program cannot be written line by line.
   auto refuseControlFlow = [](const ClProgram& program) {
     if (program.flow_line > 0)
-      throw InputError(program.file, program.flow_line, 0, "O",
-                       "O-word subs and control flow (from this line) run their lines other "
-                       "than once, in another order: a compensated program cannot be written "
-                       "line by line; expand them in the post (predict and verify read it)");
+      throw InputError(program.file, program.flow_line, 0, "control flow",
+                       "subprograms, loops and jumps (from this line: O-words, M98/M97, "
+                       "Sinumerik GOTO/IF/WHILE...) run lines other than once, in another "
+                       "order: a compensated program cannot be written line by line; expand "
+                       "them in the post (predict and verify read it)");
   };
   auto unreachable = [&](const ClProgram& program, const PredictionResult& r) {
     if (!r.ok())

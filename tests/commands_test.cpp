@@ -108,6 +108,19 @@ TEST_F(Commands, PredictInBlocksRunsOWordProgramsAsWhole) {
   }
   EXPECT_EQ(text[0], text[1]);
   EXPECT_EQ(table[0], table[1]);
+  // compensate cannot rewrite it line by line: refused at the first call, nothing written.
+  CompensateInputs c;
+  c.machine = in.machine;
+  c.program = in.program;
+  c.output = path("c.ngc");
+  try {
+    compensateProgram(c);
+    ADD_FAILURE() << "compensated";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.field(), "control flow");
+    EXPECT_NE(std::string(e.what()).find("flowsnake.ngc:36"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(path("c.ngc")));
 }
 
 // The link model of the thesis's machine: the minimal-complete set has as many parameters as the
