@@ -318,7 +318,7 @@ class Reader {
       flowLine(text);
       return;
     }
-    if (model_.control.dialect == "sinumerik" && !ended_ && !replaying_) {
+    if (model_.control.dialect == "sinumerik" && !ended_ && !replaying_ && mayFlow(text)) {
       const SinFlowLine f = sinFlow(text);
       if (!f.label.empty() || !f.keyword.empty()) {  // jumps may come: the rest is held
         tail_mode_ = true;
@@ -473,8 +473,15 @@ class Reader {
   }
 
   static bool opensFlow(const std::string& text) {
-    const auto o = parseOWord(text);
-    return o.has_value();
+    // Most lines are no O-word: their first letter (after a block number) is not O.
+    size_t i = 0;
+    while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
+    if (i < text.size() && (text[i] == 'N' || text[i] == 'n'))
+      while (++i < text.size() &&
+             (std::isdigit(static_cast<unsigned char>(text[i])) || text[i] == ' '))
+        ;
+    if (i >= text.size() || (text[i] != 'O' && text[i] != 'o')) return false;
+    return parseOWord(text).has_value();
   }
 
   static const char* closerOf(const std::string& keyword) {
@@ -577,6 +584,20 @@ class Reader {
     std::string rest;     // after the keyword, upper case, comment out
     int column = 1;
   };
+
+  // True when a line may hold a label or a control word (a cheap test before sinFlow).
+  static bool mayFlow(const std::string& raw) {
+    if (raw.find(':') != std::string::npos) return true;
+    std::string u;
+    for (char c : raw) {
+      if (c == ';') break;
+      u += static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    }
+    for (const char* w : {"IF", "GOTO", "WHILE", "LOOP", "FOR", "REPEAT", "UNTIL", "ELSE", "CASE",
+                          "CALL", "RET", "M17", "PROC", "SAVE", "EXTERN"})
+      if (u.find(w) != std::string::npos) return true;
+    return false;
+  }
 
   static SinFlowLine sinFlow(const std::string& raw) {
     static const std::set<std::string> words = {
@@ -908,6 +929,8 @@ class Reader {
 
   // The M98/M97 call on a line, when it has one (comments out, upper case).
   std::optional<IsoCall> parseIsoCall(const std::string& raw) const {
+    if (raw.find("98") == std::string::npos && raw.find("97") == std::string::npos)
+      return std::nullopt;  // most lines: no M98/M97 (M098 holds 98 too)
     std::vector<int> col;
     const std::string c = compactLine(raw, &col);
     std::optional<IsoCall> call;
