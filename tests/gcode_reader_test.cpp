@@ -251,6 +251,8 @@ TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
       {"G21\nG41 D1\n", 2, "cutter radius compensation"},
       {"G21\nM98 P1000\n", 2, "subprogram"},
       {"G21\no100 call\n", 2, "no o100 sub defined above it"},
+      {"G21\nG0 X0 Y0 Z0\nWHILE [#1 LT 3] DO1\n", 3, "WHILE: Fanuc macro B's"},
+      {"G21\nG0 X0 Y0 Z0\nIF [#1 GT 2] GOTO 10\n", 3, "IF: Fanuc macro B's"},
       {"G21\nG0 X0 Y0 Z0 B10\n", 2, "axis B"},
       {"G21\nG43.4 H1\n", 2, "does not use"},
       {"G21\nG0 X1.2.3\n", 2, "malformed"},

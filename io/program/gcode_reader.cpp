@@ -2938,6 +2938,19 @@ class Reader {
              "polar coordinates (LinuxCNC @ distance, ^ angle) are not supported: post X and Y");
       if (!std::isalpha(static_cast<unsigned char>(c)))
         fail(line_, col[i], "", "expected a word letter, found '" + clip(text.substr(i, 12)) + "'");
+      // Fanuc custom macro B's control flow (Fanuc 0i-MF, "Custom macro": WHILE [..] DOn ..
+      // ENDn, IF [..] GOTOn, IF [..] THEN, GOTOn; HAAS likewise): named, not read as words.
+      {
+        size_t e = i;
+        while (e < upper.size() && std::isalpha(static_cast<unsigned char>(upper[e]))) ++e;
+        const std::string kw = upper.substr(i, e - i);
+        if (kw == "WHILE" || kw == "IF" || kw == "GOTO" || kw == "THEN" || kw == "END" ||
+            kw == "DO")
+          fail(line_, col[i], kw,
+               "custom macro control flow (" + kw +
+                   ": Fanuc macro B's WHILE/DO/END, IF, GOTO) is not carried out: post the "
+                   "program without it (expanded)");
+      }
       Word w;
       w.letter = c;
       w.column = col[i];
