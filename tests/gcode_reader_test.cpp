@@ -778,6 +778,14 @@ TEST(GcodeReader, IsoSubprogramsAfterTheMainProgram) {
       main_part + "M98 P1001\nG0 Z-1\nM30\n%\n%\nO1001\nG1 X4 F50\nM99\n%\n", "two.nc", m.model);
   ASSERT_EQ(two.path.size(), 3u);
   EXPECT_NEAR(two.path[1].p_w.x(), 4.0, 1e-12);
+  // A block number longer than any control's after the end is no subprogram (and no crash).
+  const ClProgram longn =
+      parseGcode(main_part +
+                     "M98 P1001\nM30\nN123456789012345678901 G1 X1\nM99\nO1001\n"
+                     "G1 X2 F5\nM99\n",
+                 "n.nc", m.model);
+  ASSERT_EQ(longn.path.size(), 2u);
+  EXPECT_NEAR(longn.path[1].p_w.x(), 2.0, 1e-12);
   // Peter Smid's pattern (CNC Programming Handbook): a cycle stored with L0 where the tool is
   // (no hole there), the holes' positions in a subprogram: two holes, not three.
   const ClProgram smid = parseGcode(

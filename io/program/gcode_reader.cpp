@@ -1023,46 +1023,47 @@ class Reader {
 
   // The subprograms of the file's tail: O<n> ... M99 and (for M97) N<n> ... M99 after the main
   // program's end (M2/M30).
+  // True when a compact line (compactLine) holds the word M<code>: M2 and not M20 or M2 inside
+  // another word.
+  static bool hasMWord(const std::string& c, const char* code) {
+    const std::string w = std::string("M") + code;
+    for (size_t at = c.find(w); at != std::string::npos; at = c.find(w, at + 1)) {
+      const size_t e = at + w.size();
+      if ((at == 0 || !std::isalpha(static_cast<unsigned char>(c[at - 1]))) &&
+          (e == c.size() || !std::isdigit(static_cast<unsigned char>(c[e]))))
+        return true;
+    }
+    return false;
+  }
+
   void defineIsoSubs(const std::vector<SourceLine>& lines) {
+    std::vector<std::string> c(lines.size());
+    for (size_t k = 0; k < lines.size(); ++k) c[k] = compactLine(lines[k].text);
     bool after_end = false;
     for (size_t k = 0; k < lines.size(); ++k) {
-      const std::string u = toUpper(std::string(trim(lines[k].text)));
-      auto hasM = [&](const std::string& text, const char* code) {
-        const std::string w = std::string("M") + code;
-        for (size_t at = text.find(w); at != std::string::npos; at = text.find(w, at + 1)) {
-          const size_t e = at + w.size();
-          if ((at == 0 || !std::isalpha(static_cast<unsigned char>(text[at - 1]))) &&
-              (e == text.size() || !std::isdigit(static_cast<unsigned char>(text[e]))))
-            return true;
-        }
-        return false;
-      };
-      const std::string code = u.substr(0, u.find_first_of("(;"));
+      const std::string& u = c[k];
       if (!after_end) {
-        after_end = hasM(code, "30") || hasM(code, "2") || hasM(code, "02");
+        after_end = hasMWord(u, "30") || hasMWord(u, "2") || hasMWord(u, "02");
         continue;
       }
       if (u.empty() || (u[0] != 'O' && u[0] != 'N' && u[0] != ':')) continue;
       size_t j = 1;
       while (j < u.size() && std::isdigit(static_cast<unsigned char>(u[j]))) ++j;
-      if (j == 1) continue;
+      if (j == 1 || j > 10) continue;  // no number, or more digits than any control's
       const std::string key =
           std::string(1, u[0] == 'N' ? 'N' : 'O') + std::to_string(std::stol(u.substr(1, j - 1)));
       Sub sub;
       // An O line is the program's header; an N line is the subroutine's first block.
       size_t first = u[0] == 'N' ? k : k + 1;
       size_t e = first;
-      for (; e < lines.size(); ++e) {
-        const std::string ue = toUpper(std::string(trim(lines[e].text)));
-        if (hasM(ue.substr(0, ue.find_first_of("(;")), "99")) break;
-      }
+      while (e < lines.size() && !hasMWord(c[e], "99")) ++e;
       if (e == lines.size()) continue;  // no M99: not a subprogram
       sub.body.assign(lines.begin() + static_cast<long>(first),
                       lines.begin() + static_cast<long>(e));
       sub.end = lines[e];
       // The M99 block: M99 alone (and a block number). Another word there would be dropped with
       // it; a P returns elsewhere than to the call.
-      std::string rest = compactLine(lines[e].text);
+      std::string rest = c[e];
       for (const char* w : {"M99", "M099"})
         for (size_t at = rest.find(w); at != std::string::npos; at = rest.find(w))
           rest.erase(at, std::strlen(w));
@@ -1164,11 +1165,7 @@ class Reader {
   // Carries out lines[from, to); returns how control left them (a break, continue or return
   // goes to the construct it names).
   FlowResult runLines(const std::vector<SourceLine>& lines, size_t from, size_t to) {
-    struct Depth {
-      int& d;
-      explicit Depth(int& depth) : d(++depth) {}
-      ~Depth() { --d; }
-    } depth(flow_depth_);
+    const ScopedDepth depth(flow_depth_);
     if (flow_depth_ > kMaxFlowDepth)
       fail(from < lines.size() ? lines[from].line : line_, 0, "O",
            "subs and control flow nested deeper than " + std::to_string(kMaxFlowDepth));
@@ -2249,6 +2246,15 @@ class Reader {
     cycle_z_ = (dp ? *dp : *rfp - std::abs(*dpr)) * unit_;
   }
 
+  // A recursion's depth counted for as long as a call lasts (bounded by the caller's check).
+  struct ScopedDepth {
+    int& d;
+    explicit ScopedDepth(int& depth) : d(++depth) {}
+    ~ScopedDepth() { --d; }
+    ScopedDepth(const ScopedDepth&) = delete;
+    ScopedDepth& operator=(const ScopedDepth&) = delete;
+  };
+
   // ---------------------------------------------------------------- expressions
   double parameter(const std::string& text, size_t& i, int col_base) {
     // text[i] == '#'
@@ -2292,11 +2298,7 @@ class Reader {
   double primary(const std::string& text, size_t& i, int col_base) {
     // Signs, brackets and parameter references nest by recursion: bounded, so that a block of
     // thousands of '+' or '[' is an error, not a stack overflow.
-    struct Depth {
-      int& d;
-      explicit Depth(int& depth) : d(++depth) {}
-      ~Depth() { --d; }
-    } depth(nesting_);
+    const ScopedDepth depth(nesting_);
     if (nesting_ > kMaxNesting)
       fail(line_, col_base + i, "",
            "expression nested deeper than " + std::to_string(kMaxNesting) + " levels");
