@@ -91,6 +91,12 @@ void addProgramOptions(CLI::App* cmd, ProgramOptions& o) {
   cmd->add_option("--lines", o.lines,
                   "only the tool positions of these program lines, 'first-last' (a piece that "
                   "tolver setup split off)");
+  cmd->add_option("--cutter-comp", o.cutter_comp,
+                  "G-code under G41/G42: 'wear' reads the path as written, as the tool centre "
+                  "(the CAM's wear or reverse-wear compensation, the D registers holding only "
+                  "wear, taken as 0); without it G41/G42 are refused, since a path posted for the "
+                  "control's full radius compensation is the part's contour")
+      ->check(CLI::IsMember({"wear"}));
   cmd->add_flag("--absolute-msys", o.absolute_msys,
                 "NX CLSF: read every MSYS in the CAD's absolute frame (default: the first MSYS "
                 "is the part frame and later ones are 3+2 set-ups relative to it)");

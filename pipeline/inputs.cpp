@@ -168,6 +168,7 @@ ClProgram readProgram(LineSource& source, const std::string& path, bool gcode,
     go.chordal_tolerance_mm = o.chordal_tolerance;
     if (o.units == "inch") go.unit_mm = 25.4;
     if (o.units == "mm") go.unit_mm = 1.0;
+    go.cutter_comp_wear = o.cutter_comp == "wear";
     program =
         blocks ? readGcode(source, path, model, go, ranged) : readGcode(source, path, model, go);
   } else {

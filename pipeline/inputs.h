@@ -45,6 +45,9 @@ struct ProgramOptions {
   bool keep_motion_text = false;
   // NX MSYS in the CAD's absolute frame instead of relative to the first (AptReadOptions).
   bool absolute_msys = false;
+  // "wear": G-code's G41/G42 read as wear compensation, the path as written is the tool centre
+  // (GcodeReadOptions::cutter_comp_wear); "": refused.
+  std::string cutter_comp;
 };
 // Whether the program reads as G-code (--nc, a G-code extension, or content that reads as
 // G-code); FieldError "cl" when neither or both of --cl and --nc are given.

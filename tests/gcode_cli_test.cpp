@@ -509,6 +509,34 @@ TEST_F(GcodeCli, SetupOnARealClsfSplitsItIntoPiecesThatEachReach) {
   EXPECT_EQ(covered, program.path.size());
 }
 
+// A program posted with the CAM's wear compensation (Fusion, Mastercam: G41 D.. on a tool-centre
+// path): setup and predict refuse it naming the line and the option; with --cutter-comp wear both
+// read it as written and say so.
+TEST_F(GcodeCli, CutterCompensationNeedsTheUsersWord) {
+  const std::string m = src("resources/machines/vmc_3axis_iso.xml");
+  const std::string nc =
+      write("wear.nc",
+            "(T1 D=6 CR=0 - flat end mill)\nG21 G90 G54\nT1 M6\nG0 X-5 Y-5 Z10\nG1 Z-1 F100\n"
+            "G41 D1 X0 Y0\nX20\nG3 X30 Y10 J10\nG40 G1 X35 Y15\nG0 Z10\nM30\n");
+  auto s = test::runTolver("setup --machine " + m + " --nc " + nc + " -o " + path("s.txt"));
+  EXPECT_EQ(s.exit_code, 2) << s.output;
+  EXPECT_NE(s.output.find("wear.nc:6"), std::string::npos) << s.output;
+  EXPECT_NE(s.output.find("--cutter-comp wear"), std::string::npos) << s.output;
+  EXPECT_FALSE(fs::exists(path("s.txt")));
+  s = test::runTolver("setup --machine " + m + " --nc " + nc + " --cutter-comp wear -o " +
+                      path("s.txt"));
+  ASSERT_EQ(s.exit_code, 0) << s.output;
+  auto p = test::runTolver("predict --machine " + m + " --setup " + path("s.txt") + " --nc " + nc +
+                           " --cutter-comp wear -o " + path("p.apt"));
+  EXPECT_EQ(p.exit_code, 0) << p.output;
+  EXPECT_NE(p.output.find("G41/G42 (first at line 6) read as wear compensation"), std::string::npos)
+      << p.output;
+  auto bad = test::runTolver("predict --machine " + m + " --setup " + path("s.txt") + " --nc " +
+                             nc + " --cutter-comp full -o " + path("q.apt"));
+  EXPECT_EQ(bad.exit_code, 2) << bad.output;
+  EXPECT_FALSE(fs::exists(path("q.apt")));
+}
+
 // A CL without UNITS whose tool and extent look like inches: predict says so and names the
 // option; with --cl-units inch the points are scaled.
 TEST_F(GcodeCli, ClWithoutUnitsThatLooksLikeInches) {

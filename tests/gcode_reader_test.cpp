@@ -422,6 +422,46 @@ std::string refusal(const std::string& text, const MachineModel& model) {
   return "accepted";
 }
 
+// Cutter radius compensation: the file cannot say whether its D registers hold the tool's radius
+// (the path is the part's contour) or only its wear (the path is the tool centre, as Fusion's
+// and Mastercam's "wear" compensation post it). Refused by default, naming the way out; with the
+// user's word (--cutter-comp wear) the path is read as written, the same points as without the
+// G41/G40 words, said in a note. LinuxCNC's G41.1 (the diameter in the program) stays refused.
+TEST(GcodeReader, CutterCompensationReadAsWearOnlyByTheUsersWord) {
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  const std::string with_comp =
+      "G21 G90\nG0 X-5 Y-5 Z5\nG1 Z-1 F300\nG41 D1 G1 X0 Y0\nX20\nG3 X30 Y10 I0 J10\n"
+      "G40 G1 X35 Y15\nM30\n";
+  const std::string without =
+      "G21 G90\nG0 X-5 Y-5 Z5\nG1 Z-1 F300\nG1 X0 Y0\nX20\nG3 X30 Y10 I0 J10\n"
+      "G1 X35 Y15\nM30\n";
+  const std::string refused = refusal(with_comp, vmc.model);
+  EXPECT_NE(refused.find("r.nc:4"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("G41"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("--cutter-comp wear"), std::string::npos) << refused;
+  GcodeReadOptions wear;
+  wear.cutter_comp_wear = true;
+  const ClProgram a = parseGcode(with_comp, "wear.nc", vmc.model, wear);
+  const ClProgram b = parseGcode(without, "plain.nc", vmc.model);
+  ASSERT_EQ(a.path.size(), b.path.size());
+  ASSERT_GT(a.path.size(), 10u);  // the arc expanded
+  for (size_t i = 0; i < a.path.size(); ++i)
+    EXPECT_EQ((a.path[i].p_w - b.path[i].p_w).norm(), 0.0) << i;
+  EXPECT_TRUE(hasNote(a, "G41/G42 (first at line 4) read as wear compensation"));
+  EXPECT_FALSE(hasNote(b, "wear compensation"));
+  // G42 likewise; G41.1 (a diameter in the program) is refused even so.
+  const ClProgram right =
+      parseGcode("G21\nG0 X0 Y0 Z5\nG42 G1 X10 F100\nG40 X20\n", "r42.nc", vmc.model, wear);
+  EXPECT_TRUE(hasNote(right, "first at line 3"));
+  try {
+    parseGcode("G21\nG0 X0 Y0 Z5\nG41.1 D6 G1 X10 F100\n", "d.ngc", vmc.model, wear);
+    ADD_FAILURE() << "G41.1 read";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 3) << e.what();
+    EXPECT_NE(std::string(e.what()).find("G41.1"), std::string::npos) << e.what();
+  }
+}
+
 // Returns to a reference point: G30's second reference point is a setting of the control that no
 // machine file carries, so it is refused by name at its line (it was read as G28, machine zero);
 // a G28 without axis words homes every axis (HAAS, LinuxCNC), said in a note on an ISO control,

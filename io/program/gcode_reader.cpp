@@ -42,11 +42,15 @@ std::string codeOf(char letter, double value) {
 const std::map<std::string, const char*>& refusedG() {
   static const std::map<std::string, const char*> m = {
       {"G41",
-       "cutter radius compensation is not supported: post the program with compensation "
-       "in the CAM system (tool centre path)"},
+       "cutter radius compensation is not carried out: post the program with compensation "
+       "in the CAM system (tool centre path); if the path already is the tool centre (the "
+       "CAM's wear or reverse-wear compensation, D registers holding only wear), read it "
+       "with --cutter-comp wear"},
       {"G42",
-       "cutter radius compensation is not supported: post the program with compensation "
-       "in the CAM system (tool centre path)"},
+       "cutter radius compensation is not carried out: post the program with compensation "
+       "in the CAM system (tool centre path); if the path already is the tool centre (the "
+       "CAM's wear or reverse-wear compensation, D registers holding only wear), read it "
+       "with --cutter-comp wear"},
       {"G41.1", "cutter radius compensation is not supported"},
       {"G42.1", "cutter radius compensation is not supported"},
       {"G92", "G92 is the spindle speed limit on a SINUMERIK (G92 S...), not carried out"},
@@ -269,6 +273,10 @@ class Reader {
       prog_.notes.push_back("G92 offsets (first at line " + std::to_string(g92_line_) +
                             ") carried out: the points after them are where the offset puts "
                             "them, in the work offset in force");
+    if (wear_comp_line_ > 0)
+      prog_.notes.push_back("G41/G42 (first at line " + std::to_string(wear_comp_line_) +
+                            ") read as wear compensation (--cutter-comp wear): the path is the "
+                            "tool centre as written, the D registers' wear taken as 0");
     if (g75_line_ > 0)
       prog_.notes.push_back("G75 (first at line " + std::to_string(g75_line_) +
                             ") takes the axes it names to a fixed point of the control's machine "
@@ -3115,6 +3123,11 @@ class Reader {
       modes->g92 = &w;
       return;
     }
+    if ((c == "G41" || c == "G42") && opt_.cutter_comp_wear) {
+      // The path is the tool centre by the user's word (GcodeReadOptions::cutter_comp_wear).
+      if (wear_comp_line_ == 0) wear_comp_line_ = line_;
+      return;
+    }
     auto refused = refusedG().find(c);
     if (refused != refusedG().end() && !isDrillingCycle(c))
       fail(line_, w.column, c, refused->second);
@@ -3887,6 +3900,7 @@ class Reader {
   std::map<std::string, int> missing_offsets_;  // work offset -> first line that used it
   int bare_g28_line_ = 0;                       // the first G28 without axis words (ISO)
   int g75_line_ = 0;                            // the first Sinumerik G75 (fixed point)
+  int wear_comp_line_ = 0;                      // the first G41/G42 read as wear compensation
   int g92_line_ = 0;                            // the first G92..G92.3
   int stored_cycles_ = 0;                       // cycle blocks with L0/K0 (no hole)
   std::map<int, double> set_tool_lengths_;      // G10 L1 P Z: tool lengths the program sets (mm)

@@ -50,6 +50,13 @@ namespace tolver {
 struct GcodeReadOptions {
   double chordal_tolerance_mm = 0.001;  // for G2/G3 expansion
   double unit_mm = 0.0;  // forced unit (mm per program unit), 0: G20/G21 or the control's default
+  // G41/G42 read as wear compensation (the user's word: the file cannot say): the programmed path
+  // is already the tool centre (the CAM's "wear" or "reverse wear" compensation) and the control's
+  // D registers hold only the wear, taken as 0, so the path is read as written. Without it G41 and
+  // G42 are refused: a program posted for the control's full radius compensation is the part's
+  // contour, off the tool centre by the radius. G41.1/G42.1 (LinuxCNC: the diameter in the
+  // program) are refused either way.
+  bool cutter_comp_wear = false;
 };
 
 // Throws InputError naming file:line:column and the word on malformed or unsupported input.
