@@ -144,7 +144,15 @@ void printWorkOffset(const SetupInputs& o, const SetupRun& run) {
   std::printf("             gauge_length_mm = %.3f (tool length when the set-up gives none)\n",
               model.setup.gauge_length);
   printRanges(run.best, program, run.ranges_again);
-  if (r.found && run.margin_again >= -1e-9) {
+  if (r.found && run.margin_again >= -1e-9 && r.limited_by_machine_coordinates) {
+    // A G28/G53 move at a home position sits at the end of travel whatever the offset.
+    std::printf(
+        "  result     every point inside travel; the work-offset moves at least %.3f mm from "
+        "the travel's ends (exact: each axis's range centred), the %d move(s) in machine "
+        "coordinates (G53/G28/SUPA) where the control puts them, %.3f mm from %s's end\n",
+        r.work_offset_margin, run.fixed_moves, std::max(0.0, r.margin),
+        model.axes[r.limiting_axis].name.c_str());
+  } else if (r.found && run.margin_again >= -1e-9) {
     std::printf(
         "  result     every point inside travel, smallest margin %.3f mm (exact: each "
         "axis's range centred)\n",

@@ -172,7 +172,13 @@ SetupRun proposeSetup(const SetupInputs& in, const Progress& progress) {
         "the set-up's work offsets are set aside: the search puts G54... at the part zero it "
         "proposes");
   if (!in.output.empty()) checkOutputDir(in.output, "output");
-  for (const std::string& w : setupWarnings(model)) run.warnings.push_back(w);
+  // Of the defaults setupWarnings names, only the gauge length is not what setup proposes.
+  if (!model.setup.gauge_length_given && in.gauge_lengths.empty())
+    run.warnings.push_back(
+        "no gauge length given: 0 mm (the tool tip at the spindle gauge "
+        "point) was used; give the tool's with " +
+        inputName("gauge_length") + ", " + inputName("gauge_lengths") + " or " +
+        inputName("setup"));
   for (const std::string& w : unitWarnings(program, model, in.program.units))
     run.warnings.push_back(w);
   for (const std::string& w : programNotes(program)) run.notes.push_back(program.file + ": " + w);

@@ -509,6 +509,30 @@ TEST_F(GcodeCli, SetupOnARealClsfSplitsItIntoPiecesThatEachReach) {
   EXPECT_EQ(covered, program.path.size());
 }
 
+// A program that homes with G28 (every shop program does) has moves at the travel's ends
+// whatever the work offset: setup says the margin its proposal chose (the work-offset moves,
+// centred: Y's 0 .. 0 in 406 mm leaves 203 mm) and where the home moves are, not "smallest margin
+// 0.000 mm" alone; the defaults it proposes are not warned about, the gauge length is.
+TEST_F(GcodeCli, SetupSaysTheMarginOfTheWorkOffsetMovesBesideTheHomeMoves) {
+  const std::string m = src("resources/machines/vmc_3axis_iso.xml");
+  const std::string nc = write("home.nc",
+                               "G21 G90 G54\nG0 X0 Y0 Z10\nG1 Z-1 F100\nX20\nG0 Z10\n"
+                               "G91 G28 Z0\nG28 X0 Y0\nM30\n");
+  auto s = test::runTolver("setup --machine " + m + " --nc " + nc + " -o " + path("s.txt"));
+  ASSERT_EQ(s.exit_code, 0) << s.output;
+  EXPECT_NE(s.output.find("the work-offset moves at least 203.000 mm from the travel's ends"),
+            std::string::npos)
+      << s.output;
+  EXPECT_NE(s.output.find("in machine coordinates (G53/G28/SUPA) where the control puts them"),
+            std::string::npos)
+      << s.output;
+  EXPECT_EQ(s.output.find("no set-up given"), std::string::npos) << s.output;
+  EXPECT_NE(s.output.find("no gauge length given"), std::string::npos) << s.output;
+  s = test::runTolver("setup --machine " + m + " --nc " + nc + " --gauge-length 50 -o " +
+                      path("s2.txt"));
+  EXPECT_EQ(s.output.find("no gauge length given"), std::string::npos) << s.output;
+}
+
 // A program posted with the CAM's wear compensation (Fusion, Mastercam: G41 D.. on a tool-centre
 // path): setup and predict refuse it naming the line and the option; with --cutter-comp wear both
 // read it as written and say so.

@@ -681,10 +681,12 @@ WorkOffsetSetup proposeWorkOffset(const MachineModel& model, const std::vector<J
   // Centre each axis's range of the moving points in its travel.
   Eigen::Vector3d shift;
   out.margin = inf;
+  out.work_offset_margin = inf;
   for (int j = 0; j < 3; ++j) {
     const Axis& ax = model.axes[f.prismatic[j]];
     shift[j] = 0.5 * (ax.travel_min + ax.travel_max) - 0.5 * (lo_m[j] + hi_m[j]);
     const double m_moving = 0.5 * ((ax.travel_max - ax.travel_min) - (hi_m[j] - lo_m[j]));
+    out.work_offset_margin = std::min(out.work_offset_margin, m_moving);
     double m = m_moving;
     if (std::isfinite(lo_f[j])) m = std::min({m, lo_f[j] - ax.travel_min, ax.travel_max - hi_f[j]});
     if (m < out.margin) {

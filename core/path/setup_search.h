@@ -89,6 +89,10 @@ struct WorkOffsetSetup {
   double margin = -std::numeric_limits<double>::infinity();  // mm, smallest distance to a limit
   int limiting_axis = -1;                                    // the axis with that margin
   bool limited_by_machine_coordinates = false;  // by a G53/G28 move, which no offset moves
+  // mm, the smallest distance of the work-offset moves alone (each axis's range centred) to a
+  // limit: the margin the proposal chose; `margin` is smaller when a G53/G28 move sits nearer an
+  // end (a home position at the end of travel: 0).
+  double work_offset_margin = -std::numeric_limits<double>::infinity();
   Eigen::Vector3d part_zero_table = Eigen::Vector3d::Zero();  // proposed part zero, table frame
   // The work offset (G54...) the control needs for it: the machine coordinates (mm, X Y Z words
   // with the control's senses) of the program's origin.
