@@ -462,6 +462,68 @@ TEST(GcodeReader, CutterCompensationReadAsWearOnlyByTheUsersWord) {
   }
 }
 
+// Drilling cycles in G91 and repeats, by the documented formulas (Fanuc 0i-MF, HAAS, LinuxCNC's
+// interp_cycles.cc after NCMS p. 98): R from the initial level, Z from the R point, X Y from the
+// current position, L (or K on an ISO control) holes at the same increments. Hand values: from
+// Z100 at (10, 20), "G91 G81 X5 Y0 R-98 Z-12 L3" drills at X15, X20, X25, R plane 2, bottom -10,
+// back to the initial level 100 (G98).
+TEST(GcodeReader, DrillingCyclesInG91AndTheirRepeats) {
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  const std::string head = "G21 G90 G54\nG0 X10 Y20 Z100\nG98\n";
+  const ClProgram p =
+      parseGcode(head + "G91 G81 X5 Y0 R-98 Z-12 L3 F50\nG80\nM30\n", "inc.nc", vmc.model);
+  ASSERT_EQ(p.path.size(), 1u + 3u * 4u);
+  EXPECT_EQ(p.cycle_holes, 3);
+  for (int k = 0; k < 3; ++k) {
+    const double x = 15.0 + 5.0 * k;
+    EXPECT_LT((p.path[1 + 4 * k].p_w - Eigen::Vector3d(x, 20, 100)).norm(), 1e-9) << k;
+    EXPECT_LT((p.path[2 + 4 * k].p_w - Eigen::Vector3d(x, 20, 2)).norm(), 1e-9) << k;
+    EXPECT_LT((p.path[3 + 4 * k].p_w - Eigen::Vector3d(x, 20, -10)).norm(), 1e-9) << k;
+    EXPECT_FALSE(p.path[3 + 4 * k].rapid);
+    EXPECT_LT((p.path[4 + 4 * k].p_w - Eigen::Vector3d(x, 20, 100)).norm(), 1e-9) << k;
+  }
+  // Fanuc's K repeats on an ISO control; in G90 a repeat drills the same place again.
+  const ClProgram k =
+      parseGcode(head + "G91 G81 X0 Y-4 R-98 Z-12 K2 F50\nG80\n", "k.nc", vmc.model);
+  ASSERT_EQ(k.cycle_holes, 2);
+  EXPECT_LT((k.path[7].p_w - Eigen::Vector3d(10, 12, -10)).norm(), 1e-9);
+  const ClProgram same = parseGcode(head + "G81 X1 Y1 R2 Z-3 L2 F50\nG80\n", "s.nc", vmc.model);
+  ASSERT_EQ(same.cycle_holes, 2);
+  EXPECT_LT((same.path[7].p_w - Eigen::Vector3d(1, 1, -3)).norm(), 1e-9);
+  // Refused: R and Z kept from G91 and used in G90 (controls differ), a bottom above R.
+  const std::string mixed = refusal(head + "G91 G81 X5 R-98 Z-12 F50\nG90 X40\n", vmc.model);
+  EXPECT_NE(mixed.find("r.nc:5"), std::string::npos) << mixed;
+  EXPECT_NE(mixed.find("give R and Z again"), std::string::npos) << mixed;
+  EXPECT_EQ(refusal(head + "G91 G81 X5 R-98 Z-12 F50\nG90 X40 R2 Z-3\nG80\n", vmc.model),
+            "accepted");
+  EXPECT_NE(refusal(head + "G91 G81 X5 R-98 Z12 F50\n", vmc.model).find("above the R point"),
+            std::string::npos);
+  EXPECT_NE(refusal(head + "G81 X5 R2 Z-3 L2.5 F50\n", vmc.model).find("whole number"),
+            std::string::npos);
+}
+
+// An arc whose end is off its circle but on it with I J read as the centre's absolute
+// coordinates: the post wrote absolute centres (MaestroFusion360/easy_gcode_plot's
+// CONTOUR_ABS.NC, BOTTLE.NC). The refusal says so and names G90.1; with G90.1 the arc reads, and
+// an arc wrong either way gets no hint.
+TEST(GcodeReader, ArcRefusalSaysWhenTheCentresAreAbsolute) {
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  const std::string arc = "G0 X10 Y5 Z0\nG3 X5 Y10 I5 J5 F100\n";
+  const std::string e = refusal("G21\n" + arc, vmc.model);
+  EXPECT_NE(e.find("r.nc:3"), std::string::npos) << e;
+  EXPECT_NE(e.find("the post wrote absolute arc centres"), std::string::npos) << e;
+  EXPECT_NE(e.find("G90.1"), std::string::npos) << e;
+  const ClProgram p = parseGcode("G21 G90.1\n" + arc, "abs.nc", vmc.model);
+  EXPECT_LT((p.path.back().p_w - Eigen::Vector3d(5, 10, 0)).norm(), 1e-9);
+  EXPECT_EQ(p.arcs_expanded, 1);
+  const std::string neither = refusal("G21\nG0 X10 Y5 Z0\nG3 X5 Y10 I7 J5 F100\n", vmc.model);
+  EXPECT_NE(neither.find("not on the arc's circle"), std::string::npos) << neither;
+  EXPECT_EQ(neither.find("absolute arc centres"), std::string::npos) << neither;
+  // Under G90.1, centres written incremental get the other hint.
+  const std::string inc = refusal("G21 G90.1\nG0 X10 Y5 Z0\nG3 X5 Y10 I-5 J0 F100\n", vmc.model);
+  EXPECT_NE(inc.find("the post wrote incremental centres"), std::string::npos) << inc;
+}
+
 // Returns to a reference point: G30's second reference point is a setting of the control that no
 // machine file carries, so it is refused by name at its line (it was read as G28, machine zero);
 // a G28 without axis words homes every axis (HAAS, LinuxCNC), said in a note on an ISO control,

@@ -3536,6 +3536,9 @@ class Reader {
     n[plane_] = 1.0;
     const Eigen::Vector3d axis = motion == "G3" ? n : -n;
     Eigen::Vector3d centre;
+    // The centre read the other way (I J K absolute when the control reads them incremental, and
+    // back), for the refusal's hint when the end is off the circle (Sinumerik's AC/IC aside).
+    std::optional<Eigen::Vector3d> other_centre;
     if (aw.count('R')) {
       const double r = aw.at('R')->value * unit_;
       Eigen::Vector3d chord = end - start;
@@ -3560,13 +3563,20 @@ class Reader {
           any = true;
         }
       if (!any) fail(line_, 0, motion, "an arc needs I, J, K or R");
+      bool in_plane = true;  // both of the plane's letters given
       for (int k = 0; k < 3; ++k) {
         // I=AC(v): that coordinate of the centre is absolute (Sinumerik); the others relative.
         const auto dim = sin_dim_.find(ijk[k]);
         const bool abs = dim == sin_dim_.end() ? arc_absolute_ : dim->second == "AC";
         centre[k] = abs ? off[k] : start[k] + off[k];
+        in_plane = in_plane && (k == plane_ || aw.count(ijk[k]));
       }
       centre -= n * n.dot(centre - start);
+      if (in_plane && sin_dim_.empty()) {
+        Eigen::Vector3d c;
+        for (int k = 0; k < 3; ++k) c[k] = arc_absolute_ ? start[k] + off[k] : off[k];
+        other_centre = c - n * n.dot(c - start);
+      }
     }
     // Full turns before the end (LinuxCNC: P, the number of turns, 1 by default).
     int turns = 0;
@@ -3602,10 +3612,31 @@ class Reader {
                 : model_.control.arc_radius_tolerance_mm > 0
                     ? "the machine file's arc_radius_tolerance_mm"
                     : "RS274NGC's rule") +
-               ", or four steps of the program's " + std::to_string(max_decimals_) + " decimals)");
+               ", or four steps of the program's " + std::to_string(max_decimals_) + " decimals)" +
+               otherCentreHint(other_centre, start, end, n, radius_tol));
     }
     ++prog_.arcs_expanded;
     for (const Eigen::Vector3d& p : pts) emit(p, false);
+  }
+
+  // When the arc closes with I J K read the other way (absolute against incremental), the post
+  // most likely wrote them so: said, with the word that makes the control read them that way.
+  std::string otherCentreHint(const std::optional<Eigen::Vector3d>& c, const Eigen::Vector3d& start,
+                              const Eigen::Vector3d& end, const Eigen::Vector3d& n,
+                              double radius_tol) const {
+    if (!c) return "";
+    const double r0 = (start - *c - n * n.dot(start - *c)).norm();
+    const double r1 = (end - *c - n * n.dot(end - *c)).norm();
+    if (!(r0 > 1e-6) || std::abs(r1 - r0) > std::max(radius_tol, arcRadiusTolerance(r0))) return "";
+    return arc_absolute_
+               ? "; read incremental (from the start, G91.1) I J K put the end on the circle: "
+                 "the post wrote incremental centres"
+               : "; read as the centre's absolute coordinates, I J K put the end on the circle "
+                 "(within " +
+                     formatWith("%.2f", std::abs(r1 - r0) * 1000.0) +
+                     " um): the post wrote absolute arc centres, which LinuxCNC and Mach3 read "
+                     "so under G90.1 (other controls by a setting): if yours does, add G90.1 "
+                     "before the arcs";
   }
 
   std::string machineMove(const std::map<char, const Word*>& aw) {
@@ -3726,18 +3757,46 @@ class Reader {
     return g.code;
   }
 
+  // A drilling cycle's hole(s). In G91 (Fanuc 0i-MF "Canned cycle for drilling", HAAS, LinuxCNC
+  // interp_cycles.cc, which cites NCMS p. 98): X Y move from the current position, R is the
+  // distance from the initial level (the Z where the cycle began) to the R point and Z the
+  // distance from the R point to the bottom. Repeats (L; Fanuc's K on an ISO control where K is
+  // no peck depth): in G91 each at the next increment, in G90 at the same place. R and Z are kept
+  // as given; read in the other distance mode than they were given in, controls differ (LinuxCNC
+  // and Fanuc take the kept numbers in the new mode): refused until they are given again.
   std::string drillCycle(const std::map<char, const Word*>& aw) {
-    if (!absolute_) fail(line_, 0, cycle_code_, "drilling cycles in G91 are not expanded");
-    if (aw.count('L') && aw.at('L')->value > 1)
-      fail(line_, aw.at('L')->column, "L", "repeated drilling cycles (L) are not expanded");
     const bool sinumerik_cycle = cycle_code_.rfind("CYCLE", 0) == 0;  // planes from its values
-    if (aw.count('R') && !sinumerik_cycle) cycle_r_ = aw.at('R')->value * unit_;
-    if (aw.count('Z') && !sinumerik_cycle) cycle_z_ = aw.at('Z')->value * unit_;
+    const bool k_repeats = cycle_code_ != "G73" && cycle_code_ != "G83" && !sinumerik_cycle;
+    const Word* repeat = aw.count('L') ? aw.at('L')
+                         : k_repeats && model_.control.dialect == "iso" && aw.count('K')
+                             ? aw.at('K')
+                             : nullptr;
+    long repeats = 1;
+    if (repeat) {
+      const double v = repeat->value;
+      if (!(v >= 0 && v <= 9999 && v == std::floor(v)))
+        fail(line_, repeat->column, std::string(1, repeat->letter),
+             std::string(1, repeat->letter) + ": expected a whole number of holes, 0 to 9999");
+      repeats = static_cast<long>(v);
+    }
+    if (aw.count('R') && !sinumerik_cycle) {
+      cycle_r_ = aw.at('R')->value * unit_;
+      cycle_r_incremental_ = !absolute_;
+    }
+    if (aw.count('Z') && !sinumerik_cycle) {
+      cycle_z_ = aw.at('Z')->value * unit_;
+      cycle_z_incremental_ = !absolute_;
+    }
+    if (!sinumerik_cycle && ((!std::isnan(cycle_r_) && cycle_r_incremental_ == absolute_) ||
+                             (!std::isnan(cycle_z_) && cycle_z_incremental_ == absolute_)))
+      fail(line_, 0, cycle_code_,
+           cycle_code_ + "'s R and Z were given in " + (absolute_ ? "G91" : "G90") +
+               " and the cycle now runs in " + (absolute_ ? "G90" : "G91") +
+               ": controls differ on how they read the kept values; give R and Z again");
     // L0 (and Fanuc's K0 where K is no peck depth): the cycle's data is stored and no hole is
     // made at this block (Fanuc 0i-MF, "Canned cycle": "When K0 is specified, drilling data is
     // stored, but drilling is not performed"; HAAS L0 likewise). A position in that block is
     // refused: whether the control moves there is not said.
-    const bool k_repeats = cycle_code_ != "G73" && cycle_code_ != "G83" && !sinumerik_cycle;
     const Word* none = aw.count('L') && aw.at('L')->value == 0.0                ? aw.at('L')
                        : k_repeats && aw.count('K') && aw.at('K')->value == 0.0 ? aw.at('K')
                                                                                 : nullptr;
@@ -3753,21 +3812,36 @@ class Reader {
     }
     if (std::isnan(cycle_r_) || std::isnan(cycle_z_))
       fail(line_, 0, cycle_code_, "a drilling cycle needs R and Z");
+    if (!absolute_) {
+      for (int k = 0; k < 3; ++k)
+        if (coord_[k] == kUnknown)
+          fail(line_, 0, cycle_code_,
+               cycle_code_ + " in G91 with " + "XYZ"[k] +
+                   " not yet known: its holes are at increments from an unknown position");
+    }
+    const double r_plane = cycle_r_incremental_ ? cycle_initial_z_ + cycle_r_ : cycle_r_;
+    const double bottom = cycle_z_incremental_ ? r_plane + cycle_z_ : cycle_z_;
+    if (cycle_z_incremental_ && bottom > r_plane)
+      fail(line_, 0, cycle_code_,
+           cycle_code_ + " in G91: Z " + formatNumber(cycle_z_ / unit_) +
+               " puts the bottom above the R point");
     updateRotaryWords(aw);
-    Eigen::Vector3d xy = target(aw);
-    coordinatesGiven(aw, kInOffset);
-    const double z_before = coord_[2] == kInOffset ? cur_xyz_.z() : cycle_initial_z_;
-    coord_[2] = kInOffset;
-    const double clear = std::max(z_before, cycle_r_);
-    xy.z() = clear;
-    emit(xy, true);  // over the hole at the clearance height
-    xy.z() = cycle_r_;
-    emit(xy, true);
-    xy.z() = cycle_z_;
-    emit(xy, false);
-    xy.z() = cycle_return_initial_ ? std::max(cycle_initial_z_, cycle_r_) : cycle_r_;
-    emit(xy, true);
-    ++prog_.cycle_holes;
+    for (long k = 0; k < repeats; ++k) {
+      Eigen::Vector3d xy = target(aw);
+      coordinatesGiven(aw, kInOffset);
+      const double z_before = coord_[2] == kInOffset ? cur_xyz_.z() : cycle_initial_z_;
+      coord_[2] = kInOffset;
+      const double clear = std::max(z_before, r_plane);
+      xy.z() = clear;
+      emit(xy, true);  // over the hole at the clearance height
+      xy.z() = r_plane;
+      emit(xy, true);
+      xy.z() = bottom;
+      emit(xy, false);
+      xy.z() = cycle_return_initial_ ? std::max(cycle_initial_z_, r_plane) : r_plane;
+      emit(xy, true);
+      ++prog_.cycle_holes;
+    }
     return cycle_code_;
   }
 
@@ -3929,6 +4003,7 @@ class Reader {
   std::string cycle_code_;
   double cycle_r_ = std::numeric_limits<double>::quiet_NaN();
   double cycle_z_ = std::numeric_limits<double>::quiet_NaN();
+  bool cycle_r_incremental_ = false, cycle_z_incremental_ = false;  // given in G91
   double cycle_initial_z_ = 0.0;
   // Machine coordinates.
   Eigen::Vector3d g0_ = Eigen::Vector3d::Zero();
