@@ -249,6 +249,8 @@ TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
   const Case cases[] = {
       {"G21\nG0 X0 Y0 Z0\nG68 X0 Y0 R30\n", 3, "rotation"},
       {"G21\nG41 D1\n", 2, "cutter radius compensation"},
+      {"G21\nG0 X0 Y0 Z0\nG1 X10 ,R2 F100\n", 3, "corner rounding (,R"},
+      {"G21\nG0 X0 Y0 Z0\nG1 X10 ,C1 F100\n", 3, "chamfering (,C"},
       {"G21\nM98 P1000\n", 2, "subprogram"},
       {"G21\no100 call\n", 2, "no o100 sub defined above it"},
       {"G21\nG0 X0 Y0 Z0\nWHILE [#1 LT 3] DO1\n", 3, "WHILE: Fanuc macro B's"},

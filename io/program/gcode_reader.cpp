@@ -2946,6 +2946,15 @@ class Reader {
       if (c == '@' || c == '^')
         fail(line_, col[i], std::string(1, c),
              "polar coordinates (LinuxCNC @ distance, ^ angle) are not supported: post X and Y");
+      // Fanuc's (and HAAS's) optional chamfering and corner rounding between two straight or
+      // circular moves (Fanuc 0i-MF, "Optional Chamfering and Corner R": ",C" the chamfer's
+      // length, ",R" the corner's radius): the corner is cut off, so the path is not the one the
+      // end points give. Named.
+      if (c == ',' && i + 1 < upper.size() && (upper[i + 1] == 'R' || upper[i + 1] == 'C'))
+        fail(line_, col[i], std::string(",") + upper[i + 1],
+             std::string(upper[i + 1] == 'R' ? "corner rounding (,R" : "chamfering (,C") +
+                 ", Fanuc's optional chamfering and corner R) is not carried out: the corner is "
+                 "cut off where the program's end points do not say; post the corner as moves");
       if (!std::isalpha(static_cast<unsigned char>(c)))
         fail(line_, col[i], "", "expected a word letter, found '" + clip(text.substr(i, 12)) + "'");
       // Fanuc custom macro B's control flow (Fanuc 0i-MF, "Custom macro": WHILE [..] DOn ..
