@@ -250,6 +250,10 @@ TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
       {"G21\nG0 X0 Y0 Z0\nG68 X0 Y0 R30\n", 3, "rotation"},
       {"G21\nG41 D1\n", 2, "cutter radius compensation"},
       {"G21\nG0 X0 Y0 Z0\nG1 X10 ,R2 F100\n", 3, "corner rounding (,R"},
+      // A frame change with no axis words is refused, not noted as an unknown code.
+      {"G21\nG0 X0 Y0 Z0\nG68.3\nG0 X1\n", 3, "G68.3"},
+      {"G21\nG0 X0 Y0 Z0\nG54.2 P1\nG0 X1\n", 3, "dynamic fixture offset"},
+      {"G21\nG0 X0 Y0 Z0\nG43.8 H1\nG0 X1\n", 3, "cutting point"},
       {"G21\nG0 X0 Y0 Z0\nG1 X10 ,C1 F100\n", 3, "chamfering (,C"},
       {"G21\nM98 P1000\n", 2, "subprogram"},
       {"G21\no100 call\n", 2, "no o100 sub defined above it"},

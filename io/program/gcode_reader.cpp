@@ -51,8 +51,40 @@ const std::map<std::string, const char*>& refusedG() {
        "in the CAM system (tool centre path); if the path already is the tool centre (the "
        "CAM's wear or reverse-wear compensation, D registers holding only wear), read it "
        "with --cutter-comp wear"},
-      {"G41.1", "cutter radius compensation is not supported"},
-      {"G42.1", "cutter radius compensation is not supported"},
+      {"G41.1",
+       "G41.1 (LinuxCNC: cutter radius compensation with the diameter in the program; Fanuc: "
+       "normal direction control, a rotary axis kept normal to the path) is not carried out"},
+      {"G42.1",
+       "G42.1 (LinuxCNC: cutter radius compensation with the diameter in the program; Fanuc: "
+       "normal direction control, a rotary axis kept normal to the path) is not carried out"},
+      // Fanuc 30i codes that move the frame or the controlled point for the moves after them
+      // (Fanuc 30i-B operator's manual): with no axis words in their block they would otherwise
+      // be noted as unknown and the moves after them read in the wrong frame.
+      {"G68.3",
+       "tilted working plane by the tool axis direction (Fanuc G68.3: the frame follows the "
+       "rotary axes' position) is not carried out: post the plane with G68.2 or the moves in TCP "
+       "mode"},
+      {"G68.4", "incremental tilted working plane (Fanuc G68.4) is not carried out"},
+      {"G54.2",
+       "rotary table dynamic fixture offset (Fanuc G54.2: the work offset turns with the table) "
+       "is not carried out"},
+      {"G54.4", "workpiece setting error compensation (Fanuc G54.4) is not carried out"},
+      {"G43.8",
+       "cutting point command (Fanuc G43.8: X Y Z are the cutting point, not the tool tip) is "
+       "not carried out"},
+      {"G43.9",
+       "cutting point command (Fanuc G43.9: X Y Z are the cutting point, not the tool tip) is "
+       "not carried out"},
+      {"G41.2", "3-D cutter compensation (Fanuc G41.2-G42.6) is not carried out"},
+      {"G41.3", "3-D cutter compensation (Fanuc G41.2-G42.6) is not carried out"},
+      {"G41.4", "3-D cutter compensation (Fanuc G41.2-G42.6) is not carried out"},
+      {"G41.5", "3-D cutter compensation (Fanuc G41.2-G42.6) is not carried out"},
+      {"G41.6", "3-D cutter compensation (Fanuc G41.2-G42.6) is not carried out"},
+      {"G42.2", "3-D cutter compensation (Fanuc G41.2-G42.6) is not carried out"},
+      {"G42.4", "3-D cutter compensation (Fanuc G41.2-G42.6) is not carried out"},
+      {"G42.5", "3-D cutter compensation (Fanuc G41.2-G42.6) is not carried out"},
+      {"G42.6", "3-D cutter compensation (Fanuc G41.2-G42.6) is not carried out"},
+      {"G66.1", "modal macro calls (G66.1) are not supported"},
       {"G92", "G92 is the spindle speed limit on a SINUMERIK (G92 S...), not carried out"},
       {"G52", "local coordinate systems (G52) are not supported"},
       {"G68", "coordinate rotation (G68) is not supported"},
