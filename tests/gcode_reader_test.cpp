@@ -530,6 +530,33 @@ TEST(GcodeReader, ArcRefusalSaysWhenTheCentresAreAbsolute) {
   EXPECT_NE(inc.find("the post wrote incremental centres"), std::string::npos) << inc;
 }
 
+// HAAS's additional work offsets G154 Pn and G110-G129 (= G154 P1-P20, HAAS 96-8000) are Fanuc's
+// G54.1 Pn: one offset each, from the set-up's g54.1pN_mm or set by G10 L20 Pn (Fanuc 0i-MF; on
+// LinuxCNC L20 Pn is G54..G59.3). They were noted as unknown codes and the moves read in G54.
+// G10 L2 P0 (Fanuc's external offset) is refused on an ISO control.
+TEST(GcodeReader, HaasAdditionalWorkOffsetsAreFanucsG541) {
+  Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  vmc.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, -200, -250);
+  vmc.model.setup.work_offsets["G54.1P5"] = Eigen::Vector3d(-310, -190, -240);
+  vmc.model.setup.work_offsets["G54.1P2"] = Eigen::Vector3d(-320, -180, -230);
+  const auto p = [&](const std::string& text) {
+    return parseGcode("G21 G90\nG54 G0 X0 Y0 Z0\n" + text, "w.nc", vmc.model).path.back().p_w;
+  };
+  const Eigen::Vector3d g54 = p("");
+  const Eigen::Vector3d g541p5 = p("G54.1 P5 G0 X0 Y0 Z0\n");
+  // Work offset 5 (310, 190, 240 against 300, 200, 250) moves the point by 10 mm on each axis.
+  EXPECT_NEAR((g541p5 - g54).norm(), std::sqrt(300.0), 1e-9);
+  EXPECT_LT((p("G154 P5 G0 X0 Y0 Z0\n") - g541p5).norm(), 1e-12);
+  EXPECT_LT((p("G111 G0 X0 Y0 Z0\n") - p("G54.1 P2 G0 X0 Y0 Z0\n")).norm(), 1e-12);
+  EXPECT_NEAR((p("G111 G0 X0 Y0 Z0\n") - g54).norm(), std::sqrt(1200.0), 1e-9);
+  // G10 L20 P5 sets its values on an ISO control (as L2 sets G54's): given G54's values, the
+  // point lands where G54 puts it.
+  EXPECT_LT((p("G10 L20 P5 X-300 Y-200 Z-250\nG154 P5 G0 X0 Y0 Z0\n") - g54).norm(), 1e-9);
+  EXPECT_NE(refusal("G21\nG10 L2 P0 X1 Y1 Z1\n", vmc.model).find("external work offset"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG154 P0\n", vmc.model).find("P1 to P99"), std::string::npos);
+}
+
 // Returns to a reference point: G30's second reference point is a setting of the control that no
 // machine file carries, so it is refused by name at its line (it was read as G28, machine zero);
 // a G28 without axis words homes every axis (HAAS, LinuxCNC), said in a note on an ISO control,

@@ -69,6 +69,9 @@ const std::map<std::string, const char*>& refusedG() {
        "rotary table dynamic fixture offset (Fanuc G54.2: the work offset turns with the table) "
        "is not carried out"},
       {"G54.4", "workpiece setting error compensation (Fanuc G54.4) is not carried out"},
+      {"G44",
+       "tool length compensation in the negative direction (G44) is not carried out: post "
+       "G43"},
       {"G43.8",
        "cutting point command (Fanuc G43.8: X Y Z are the cutting point, not the tool tip) is "
        "not carried out"},
@@ -143,6 +146,13 @@ const char* refusedMotion(const std::string& c, const std::string& dialect) {
       return "general pocket milling (G150, HAAS) is not expanded: post it as motion";
   }
   return nullptr;
+}
+
+// HAAS's G110-G129: its additional work offsets G154 P1-P20.
+bool isHaasG110(const std::string& c) {
+  if (c.size() != 4 || c.compare(0, 2, "G1") != 0) return false;
+  const int n = std::atoi(c.c_str() + 1);
+  return n >= 110 && n <= 129;
 }
 
 // G words that do not change the tool path: accepted silently.
@@ -3232,6 +3242,22 @@ class Reader {
       if (!axis_words.count('P')) fail(line_, w.column, c, "G54.1 needs a P number");
       work_ = "G54.1P" + std::to_string(static_cast<int>(axis_words.at('P')->value));
       commanded_offsets_.insert(work_);
+    } else if (model_.control.dialect == "iso" && (c == "G154" || isHaasG110(c))) {
+      // HAAS's additional work offsets (mill operator's manual 96-8000, "G154 Select Work
+      // Coordinates P1-P99"; "G110-G129 ... the same as G154 P1-P20"), which are Fanuc's G54.1 Pn
+      // (additional workpiece coordinate systems): one offset, G54.1P<n> (set-up key
+      // g54.1p<n>_mm; G10 L20 Pn sets it on either control).
+      long n = 0;
+      if (c == "G154") {
+        const double p = axis_words.count('P') ? axis_words.at('P')->value : 0.0;
+        if (!(p >= 1 && p <= 99 && p == std::floor(p)))
+          fail(line_, w.column, c, "G154 needs P1 to P99 (HAAS's additional work offsets)");
+        n = static_cast<long>(p);
+      } else {
+        n = std::lround(w.value) - 109;
+      }
+      work_ = "G54.1P" + std::to_string(n);
+      commanded_offsets_.insert(work_);
     } else if (!harmlessG().count(c)) {
       // Read as not moving the tool, which holds only when no axis word rides with it: with
       // one, the code may be a motion of its own (a spline, a probe, a pocket) and the words
@@ -3915,8 +3941,24 @@ class Reader {
     const int P = aw.count('P') ? static_cast<int>(aw.at('P')->value) : 0;
     static const char* names[] = {"G54", "G55",   "G56",   "G57",  "G58",
                                   "G59", "G59.1", "G59.2", "G59.3"};
-    if (P < 0 || P > 9) fail(line_, aw.at('P')->column, "P", "expected P0 to P9");
-    const std::string name = P == 0 ? work_ : names[P - 1];
+    // L20 on an ISO control sets the additional work offsets' values (Fanuc 0i-MF, "G10 L20 Pn":
+    // G54.1 Pn, n 1 to 300; HAAS: G154 Pn, n 1 to 99), as L2 sets G54..G59's; on LinuxCNC, L20
+    // Pn makes the current point have the words' coordinates in G54..G59.3.
+    const bool additional = L == 20 && model_.control.dialect == "iso";
+    // P0 on an ISO control is the external offset that shifts every work offset (Fanuc; HAAS's
+    // G52), not LinuxCNC's "the one in force": refused, never applied to the wrong one.
+    if (P == 0 && aw.count('P') && model_.control.dialect == "iso")
+      fail(line_, aw.at('P')->column, "P",
+           "G10 L" + std::to_string(L) +
+               " P0 sets the external work offset that shifts every work offset (Fanuc; HAAS: "
+               "G52): not carried out (on LinuxCNC P0 is the offset in force: a LinuxCNC "
+               "machine file declares dialect=\"linuxcnc\" in its <control>)");
+    if (additional ? (P < 0 || P > 300) : (P < 0 || P > 9))
+      fail(line_, aw.at('P')->column, "P",
+           additional ? "expected P0 to P300" : "expected P0 to P9");
+    const std::string name = P == 0       ? work_
+                             : additional ? "G54.1P" + std::to_string(P)
+                                          : names[P - 1];
     // LinuxCNC's R (the coordinate system turned about Z) and offsets of rotary axes are not
     // carried out: refused unless zero, never dropped.
     for (const auto& [l, w] : aw) {
@@ -3940,7 +3982,7 @@ class Reader {
     const Eigen::Vector3d p_s = frame_ * p;
     for (int k = 0; k < 3; ++k) {
       if (!aw.count(xyz[k])) continue;
-      off[k] = L == 2 ? aw.at(xyz[k])->value * unit_ : here[k] - p_s[k];
+      off[k] = L == 2 || additional ? aw.at(xyz[k])->value * unit_ : here[k] - p_s[k];
     }
     set_offsets_[name] = off;
     missing_offsets_.erase(name);
