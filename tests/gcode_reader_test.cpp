@@ -530,6 +530,25 @@ TEST(GcodeReader, ArcRefusalSaysWhenTheCentresAreAbsolute) {
   EXPECT_NE(inc.find("the post wrote incremental centres"), std::string::npos) << inc;
 }
 
+// A new work offset moves no axis: the next block moves only the axes it names (Fanuc 0i-MF,
+// "Workpiece coordinate system"; LinuxCNC, "G54-G59.3"). "G55 G0 X10" after "G54 G0 X0 Y0 Z0"
+// keeps Y and Z where G54 put them (they were carried to G55's Y0 Z0: 10 mm moves nobody
+// programmed).
+TEST(GcodeReader, ANewWorkOffsetMovesOnlyTheAxesTheNextBlockNames) {
+  Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  vmc.model.setup.work_offsets["G54"] = Eigen::Vector3d(-300, -200, -250);
+  vmc.model.setup.work_offsets["G55"] = Eigen::Vector3d(-310, -190, -240);
+  const ClProgram p =
+      parseGcode("G21 G90\nG54 G0 X0 Y0 Z0\nG55 G0 X10\nG0 Y5\nM30\n", "w.nc", vmc.model);
+  ASSERT_EQ(p.path.size(), 3u);
+  // X10 in G55 is X0 in G54 (machine -300): the point does not move at all.
+  EXPECT_LT((p.path[1].p_w - p.path[0].p_w).norm(), 1e-9);
+  // Y5 in G55 is machine -185, 15 mm from G54's Y0; X and Z stay.
+  const Eigen::Vector3d d = p.path[2].p_w - p.path[1].p_w;
+  EXPECT_NEAR(d.norm(), 15.0, 1e-9);
+  EXPECT_NEAR(std::abs(d.y()), 15.0, 1e-9);
+}
+
 // HAAS's additional work offsets G154 Pn and G110-G129 (= G154 P1-P20, HAAS 96-8000) are Fanuc's
 // G54.1 Pn: one offset each, from the set-up's g54.1pN_mm or set by G10 L20 Pn (Fanuc 0i-MF; on
 // LinuxCNC L20 Pn is G54..G59.3). They were noted as unknown codes and the moves read in G54.

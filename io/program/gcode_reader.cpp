@@ -1434,6 +1434,17 @@ class Reader {
     default_offset_ = -Gm_inv_ * g0_;
   }
 
+  // A work offset selected: the axes stay where they are (a control moves only the axes a later
+  // block names: Fanuc 0i-MF "Workpiece coordinate system", LinuxCNC "G54-G59.3"), so the
+  // current position's program coordinates are those of the new offset.
+  void selectWorkOffset(const std::string& name) {
+    if (name != "G500") commanded_offsets_.insert(name);
+    if (name == work_) return;
+    work_ = name;
+    last_offset_ = workOffset(work_);
+    cur_xyz_ = currentProgramXyz();
+  }
+
   Eigen::Vector3d workOffset(const std::string& name) {
     if (name == "G500") return Eigen::Vector3d::Zero();  // Sinumerik: no settable offset
     auto set = set_offsets_.find(name);
@@ -1641,7 +1652,7 @@ class Reader {
     } else if (head == "SUPA") {
       b.out += " G53";
     } else if (head == "G500") {
-      work_ = "G500";
+      selectWorkOffset("G500");
     } else if (head == "T") {
       sinTool(eq == std::string::npos ? k.substr(1) : k.substr(eq + 1));
     } else if (head == "CYCLE800") {
@@ -3236,12 +3247,10 @@ class Reader {
       cycle_return_initial_ = c == "G98";
     } else if (c == "G54" || c == "G55" || c == "G56" || c == "G57" || c == "G58" || c == "G59" ||
                c == "G59.1" || c == "G59.2" || c == "G59.3") {
-      work_ = c;
-      commanded_offsets_.insert(work_);
+      selectWorkOffset(c);
     } else if (c == "G54.1") {
       if (!axis_words.count('P')) fail(line_, w.column, c, "G54.1 needs a P number");
-      work_ = "G54.1P" + std::to_string(static_cast<int>(axis_words.at('P')->value));
-      commanded_offsets_.insert(work_);
+      selectWorkOffset("G54.1P" + std::to_string(static_cast<int>(axis_words.at('P')->value)));
     } else if (model_.control.dialect == "iso" && (c == "G154" || isHaasG110(c))) {
       // HAAS's additional work offsets (mill operator's manual 96-8000, "G154 Select Work
       // Coordinates P1-P99"; "G110-G129 ... the same as G154 P1-P20"), which are Fanuc's G54.1 Pn
@@ -3256,8 +3265,7 @@ class Reader {
       } else {
         n = std::lround(w.value) - 109;
       }
-      work_ = "G54.1P" + std::to_string(n);
-      commanded_offsets_.insert(work_);
+      selectWorkOffset("G54.1P" + std::to_string(n));
     } else if (!harmlessG().count(c)) {
       // Read as not moving the tool, which holds only when no axis word rides with it: with
       // one, the code may be a motion of its own (a spline, a probe, a pocket) and the words
