@@ -549,6 +549,23 @@ TEST(GcodeReader, ANewWorkOffsetMovesOnlyTheAxesTheNextBlockNames) {
   EXPECT_NEAR(std::abs(d.y()), 15.0, 1e-9);
 }
 
+// LinuxCNC's M70/M72 (save, restore the modal state) and M73 (restore it when the sub returns):
+// they were ignored as harmless, so a sub that switched to G91 left the rest of the program
+// incremental. Hand values: X0, then the sub's G91 X5 (5), G90 X1 (1), G91 X1 (2), M72's G90 X10.
+TEST(GcodeReader, LinuxCncModalStateSavedAndRestored) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const ClProgram p = parseGcode(
+      "G21 G90\no100 sub\nM73\nG91\nG0 X5\no100 endsub\nG0 X0 Y0 Z0 A0 C0\no100 call\n"
+      "G0 X1\nM70\nG91\nG0 X1\nM72\nG0 X10\nM2\n",
+      "m7x.ngc", m.model);
+  ASSERT_EQ(p.path.size(), 5u);
+  const double x0 = p.path[0].p_w.x();
+  const double want[] = {0, 5, 1, 2, 10};
+  for (size_t k = 0; k < 5; ++k) EXPECT_NEAR(p.path[k].p_w.x() - x0, want[k], 1e-9) << k;
+  EXPECT_NE(refusal("G21\nM72\n", m.model).find("no M70 saved"), std::string::npos);
+  EXPECT_NE(refusal("G21\nM73\n", m.model).find("outside an o-word sub"), std::string::npos);
+}
+
 // HAAS's additional work offsets G154 Pn and G110-G129 (= G154 P1-P20, HAAS 96-8000) are Fanuc's
 // G54.1 Pn: one offset each, from the set-up's g54.1pN_mm or set by G10 L20 Pn (Fanuc 0i-MF; on
 // LinuxCNC L20 Pn is G54..G59.3). They were noted as unknown codes and the moves read in G54.

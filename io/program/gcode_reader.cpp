@@ -1343,6 +1343,8 @@ class Reader {
       numbered_[a + 1] = a < static_cast<int>(args.size()) ? args[static_cast<size_t>(a)] : 0.0;
     named_["_value_returned"] = 0.0;
     ++call_depth_;
+    autorestore_.resize(static_cast<size_t>(call_depth_));
+    autorestore_.back().reset();
     const Sub sub = it->second;  // a copy: the body may define subs again
     const FlowResult r = runLines(sub.body, 0, sub.body.size());
     if (r.exit == FlowExit::Break || r.exit == FlowExit::Continue)
@@ -1351,8 +1353,12 @@ class Reader {
       const auto end = parseOWord(sub.end.text);
       if (end && !end->rest.empty()) setReturnValue(flowValue(*end, sub.end.line));
     }
+    // M73 in the sub: its modal state back on the return (not when the program ended in it).
+    const std::optional<ModalState> restore = autorestore_.back();
+    autorestore_.pop_back();
     --call_depth_;
     line_ = line;
+    if (restore && !ended_) restoreModal(*restore);
     for (int n = 1; n <= 30; ++n) numbered_.erase(n);
     for (const auto& [n, v] : saved_numbered) numbered_[n] = v;
     for (auto s = named_.begin(); s != named_.end();)
@@ -3155,8 +3161,58 @@ class Reader {
       toolChange(selected_tool_);
     } else if (w.code == "M61" && axis_words.count('Q')) {
       tool_ = static_cast<int>(axis_words.at('Q')->value);
+    } else if (model_.control.dialect == "linuxcnc" &&
+               (w.code == "M70" || w.code == "M71" || w.code == "M72" || w.code == "M73")) {
+      modalState(w);
     } else if (!tcpWord(w.code) && !harmlessM().count(w.code)) {
       unknown_.emplace(w.code, line_);
+    }
+  }
+
+  // LinuxCNC's M70 (save the modal state), M71 (forget it), M72 (restore it), M73 (save it and
+  // restore it when the sub returns) (LinuxCNC M-code reference, "M70-M73"): of what they save,
+  // the modes that place points: units, plane, distance and arc distance modes, feed mode, work
+  // offset, tool length compensation (and its H), cycle return level.
+  struct ModalState {
+    double unit = 1.0;
+    bool units_seen = false;
+    int plane = 2;
+    bool absolute = true, arc_absolute = false, tlc = false, return_initial = true;
+    std::string feed_mode, work;
+    int h = 0;
+  };
+
+  ModalState modalNow() const {
+    return {unit_, units_seen_,           plane_,     absolute_, arc_absolute_,
+            tlc_,  cycle_return_initial_, feed_mode_, work_,     h_};
+  }
+
+  void restoreModal(const ModalState& m) {
+    if (m.unit != unit_ && m.units_seen) setUnits(m.unit);
+    plane_ = m.plane;
+    absolute_ = m.absolute;
+    arc_absolute_ = m.arc_absolute;
+    cycle_return_initial_ = m.return_initial;
+    feed_mode_ = m.feed_mode;
+    tlc_ = m.tlc;
+    h_ = m.h;
+    if (m.work != work_) selectWorkOffset(m.work);
+    cur_xyz_ = currentProgramXyz();  // the tool length in force may have changed
+  }
+
+  void modalState(const Word& w) {
+    if (w.code == "M70") {
+      saved_modal_ = modalNow();
+    } else if (w.code == "M71") {
+      saved_modal_.reset();
+    } else if (w.code == "M72") {
+      if (!saved_modal_) fail(line_, w.column, w.code, "M72 restores a modal state no M70 saved");
+      restoreModal(*saved_modal_);
+    } else {  // M73
+      if (call_depth_ == 0 || autorestore_.size() < static_cast<size_t>(call_depth_))
+        fail(line_, w.column, w.code,
+             "M73 (restore the modal state when the sub returns) outside an o-word sub");
+      autorestore_[static_cast<size_t>(call_depth_) - 1] = modalNow();
     }
   }
 
@@ -4056,7 +4112,9 @@ class Reader {
   std::string work_ = "G54";
   bool tlc_ = false, tcp_without_tlc_ = false;
   int h_ = 0, tool_ = 0;
-  std::string active_tool_, selected_tool_;  // "T1" or a Sinumerik tool name
+  std::optional<ModalState> saved_modal_;               // M70's
+  std::vector<std::optional<ModalState>> autorestore_;  // M73's, per o-word call
+  std::string active_tool_, selected_tool_;             // "T1" or a Sinumerik tool name
   bool seen_m6_ = false;
   std::map<std::string, std::pair<double, double>>
       tool_table_;  // "T1" -> diameter, corner radius (program unit: comments come before G20/G21)
