@@ -566,6 +566,23 @@ TEST(GcodeReader, LinuxCncModalStateSavedAndRestored) {
   EXPECT_NE(refusal("G21\nM73\n", m.model).find("outside an o-word sub"), std::string::npos);
 }
 
+// LinuxCNC's G28.1 and G30.1 store the current position as G28's and G30's home (#5161-#5166,
+// #5181-#5186; LinuxCNC G-code reference): G28 then goes there, not to machine zero (G28.1 was
+// noted as an unknown code), and G30 reads once G30.1 set its position. G43.2 is refused.
+TEST(GcodeReader, LinuxCncStoredHomePositions) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const ClProgram p = parseGcode(
+      "G21\nG0 X10 Y20 Z-5 A0 C0\nG28.1\nG0 X0 Y0 Z0\nG28\nG0 X3 Y4 Z-6\nG30.1\nG0 X0\n"
+      "G30\nM2\n",
+      "home.ngc", m.model);
+  ASSERT_EQ(p.path.size(), 6u);
+  EXPECT_LT((p.path[2].p_w - p.path[0].p_w).norm(), 1e-9);  // G28 to the G28.1 position
+  EXPECT_LT((p.path[5].p_w - p.path[3].p_w).norm(), 1e-9);  // G30 to the G30.1 position
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0 A0 C0\nG30\n", m.model).find("second reference point"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG43.2 H2\n", m.model).find("G43.2"), std::string::npos);
+}
+
 // HAAS's additional work offsets G154 Pn and G110-G129 (= G154 P1-P20, HAAS 96-8000) are Fanuc's
 // G54.1 Pn: one offset each, from the set-up's g54.1pN_mm or set by G10 L20 Pn (Fanuc 0i-MF; on
 // LinuxCNC L20 Pn is G54..G59.3). They were noted as unknown codes and the moves read in G54.

@@ -3062,6 +3062,7 @@ class Reader {
   struct BlockModes {
     std::string motion;  // G0-G3 or a drilling cycle, when the block has one
     bool g53 = false, g28 = false, g10 = false, g75 = false;
+    bool g30 = false;  // with g28: LinuxCNC's G30 to the position G30.1 stored
     const Word* g682 = nullptr;
     const Word* g92 = nullptr;  // G92, G92.1, G92.2 or G92.3
     const Word* g531 = nullptr;
@@ -3098,7 +3099,7 @@ class Reader {
       motion_ = modes.motion;
     }
     if (sin_mcall_) cycle_ = true;  // Sinumerik MCALL: modal until MCALL alone, whatever G0/G1
-    if (modes.g28) return homeMove(axis_words);
+    if (modes.g28) return homeMove(axis_words, modes.g30);
     if (modes.g75) return fixedPointMove(axis_words);
     if (modes.g53) return machineMove(axis_words);
     if (sin_cycle_here_) {  // Sinumerik CYCLE8x(...) without MCALL: once, where the block ends
@@ -3246,6 +3247,20 @@ class Reader {
       if (wear_comp_line_ == 0) wear_comp_line_ = line_;
       return;
     }
+    const bool linuxcnc = model_.control.dialect == "linuxcnc";
+    if (linuxcnc && (c == "G28.1" || c == "G30.1")) {
+      // LinuxCNC: the current position becomes G28's (G30's) home, #5161-#5166 (#5181-#5186).
+      (c == "G28.1" ? home28_ : home30_) = StoredHome{q_, rot_word_};
+      return;
+    }
+    if (linuxcnc && c == "G30" && home30_) {
+      modes->g28 = true;
+      modes->g30 = true;
+      return;
+    }
+    if (linuxcnc && c == "G43.2")
+      fail(line_, w.column, c,
+           "G43.2 (an additional tool length offset, LinuxCNC) is not carried out");
     auto refused = refusedG().find(c);
     if (refused != refusedG().end() && !isDrillingCycle(c))
       fail(line_, w.column, c, refused->second);
@@ -3789,7 +3804,10 @@ class Reader {
     return "G53";
   }
 
-  std::string homeMove(const std::map<char, const Word*>& aw) {
+  // G28 (and LinuxCNC's G30 once G30.1 stored its position): via the intermediate point to the
+  // home position, machine zero unless LinuxCNC's G28.1 stored another.
+  std::string homeMove(const std::map<char, const Word*>& aw, bool g30 = false) {
+    const std::optional<StoredHome>& stored = g30 ? home30_ : home28_;
     bool named = false;
     for (const auto& [l, w] : aw) named |= letter_axis_.count(l) > 0;
     // G28 without axis words: HAAS returns every axis to machine zero (Mill Operator's Manual,
@@ -3805,14 +3823,14 @@ class Reader {
     for (size_t a = 0; a < model_.axes.size(); ++a) {
       const std::string& n = model_.axes[a].name;
       if (!named || (n.size() == 1 && aw.count(static_cast<char>(std::toupper(n[0]))))) {
-        q[a] = 0.0;
-        if (model_.axes[a].isRotary()) rot_word_[a] = 0.0;
+        q[a] = stored ? stored->q[static_cast<int>(a)] : 0.0;
+        if (model_.axes[a].isRotary()) rot_word_[a] = stored ? stored->rot_word[a] : 0.0;
         for (int k = 0; k < 3; ++k)
           if (prismatic_[k] == static_cast<int>(a)) coord_[k] = kFixed;
       }
     }
     emitJoints(q);
-    return "G28";
+    return g30 ? "G30" : "G28";
   }
 
   // Sinumerik G75, fixed-point approach (SINUMERIK 840D sl Programming Manual, Fundamentals,
@@ -4112,6 +4130,11 @@ class Reader {
   std::string work_ = "G54";
   bool tlc_ = false, tcp_without_tlc_ = false;
   int h_ = 0, tool_ = 0;
+  struct StoredHome {
+    JointVector q;
+    std::array<double, kMaxAxes> rot_word{};
+  };
+  std::optional<StoredHome> home28_, home30_;           // LinuxCNC's G28.1, G30.1
   std::optional<ModalState> saved_modal_;               // M70's
   std::vector<std::optional<ModalState>> autorestore_;  // M73's, per o-word call
   std::string active_tool_, selected_tool_;             // "T1" or a Sinumerik tool name
