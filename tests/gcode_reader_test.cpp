@@ -1270,6 +1270,30 @@ TEST(GcodeReader, SinumerikJumpsAndControlStructures) {
             std::string::npos);
 }
 
+// Sinumerik's G153 (frames and base frame suppressed) is a move in machine coordinates, as SUPA
+// and G53: it was ignored and its block read in the work offset. G53/SUPA/G153 alone move
+// nothing (they added a point). G641's ADIS=/ADISPOS= (rounding distances) are ignored, G110-G112
+// (poles of polar coordinates) refused by name.
+TEST(GcodeReader, SinumerikFrameSuppressionAndRounding) {
+  const Machine m = sinumerikMachine();
+  const std::string head = "G710\nG54\nTRAFOOF\nG0 X0 Y0 Z-5 B0 C0\n";
+  const ClProgram g153 = parseGcode(head + "G153 G0 Z0\nM30\n", "g153.mpf", m.model);
+  const ClProgram supa = parseGcode(head + "SUPA G0 Z0\nM30\n", "supa.mpf", m.model);
+  ASSERT_EQ(g153.path.size(), 2u);
+  ASSERT_EQ(supa.path.size(), 2u);
+  EXPECT_EQ(g153.tcp[1], ClProgram::kMachineCoordinates);
+  EXPECT_EQ(g153.joints[1][2], supa.joints[1][2]);
+  for (const char* alone : {"G153\n", "SUPA\n"})
+    EXPECT_EQ(parseGcode(head + alone + "M30\n", "a.mpf", m.model).path.size(), 1u) << alone;
+  const ClProgram adis =
+      parseGcode(head + "G641 ADIS=0.5 ADISPOS=1\nG0 X1\nM30\n", "r.mpf", m.model);
+  EXPECT_TRUE(hasNote(adis, "ADIS="));
+  EXPECT_NE(refusal(head + "G111 X0 Y0\n", m.model).find("pole of polar coordinates"),
+            std::string::npos);
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  EXPECT_EQ(parseGcode("G21\nG0 X0 Y0 Z-5\nG53\nG0 X1\n", "g53.nc", vmc.model).path.size(), 2u);
+}
+
 // Sinumerik 840D as NX posts it: DEF, assignments, ADDR=expression, SUPA, TRAFOOF, T="name",
 // D0/D1, MSG, CYCLE832, MCALL CYCLE81: the real program reads, every construct carried out.
 TEST(GcodeReader, SinumerikProgramAsNxPostsIt) {

@@ -1620,13 +1620,13 @@ class Reader {
         "ENDWHILE", "LOOP",  "ENDLOOP", "FOR",   "ENDFOR", "REPEAT", "UNTIL", "CASE",
         "CALL",     "PCALL", "RET",     "M17",   "PROC",   "SAVE",   "EXTERN"};
     static const std::set<std::string> ignored = {
-        "FNORM",  "COMPOF",  "COMPON",  "COMPCURV", "COMPCAD", "SOFT",  "BRISK",    "SOFTA",
-        "BRISKA", "FFWON",   "FFWOF",   "CFC",      "CFTCP",   "CFIN",  "G60",      "G601",
-        "G602",   "G603",    "G64",     "G641",     "G642",    "G643",  "G644",     "G645",
-        "UPATH",  "SPATH",   "ORIAXES", "ORIVECT",  "STOPRE",  "G153",  "G40",      "DIAMOF",
-        "CUT2D",  "CUT2DF",  "CUT3DC",  "G450",     "G451",    "WAITM", "ORIAXPOS", "ORIEULER",
-        "ORIRPY", "ORIPATH", "TOFFOF",  "G93",      "G94",     "G95",   "M27",      "M29",
-        "M50",    "M51",     "M65",     "M7",       "M8",      "M9",    "CYCLE832"};
+        "FNORM",   "COMPOF", "COMPON",  "COMPCURV", "COMPCAD", "SOFT",     "BRISK",    "SOFTA",
+        "BRISKA",  "FFWON",  "FFWOF",   "CFC",      "CFTCP",   "CFIN",     "G60",      "G601",
+        "G602",    "G603",   "G64",     "G641",     "G642",    "G643",     "G644",     "G645",
+        "UPATH",   "SPATH",  "ORIAXES", "ORIVECT",  "STOPRE",  "G40",      "DIAMOF",   "CUT2D",
+        "CUT2DF",  "CUT3DC", "G450",    "G451",     "WAITM",   "ORIAXPOS", "ORIEULER", "ORIRPY",
+        "ORIPATH", "TOFFOF", "G93",     "G94",      "G95",     "M27",      "M29",      "M50",
+        "M51",     "M65",    "M7",      "M8",       "M9",      "CYCLE832"};
     static const std::set<std::string> carried = {"MSG",      "G710",  "G700", "SETMS", "WORKPIECE",
                                                   "CYCLE800", "MCALL", "SUPA", "G500",  "TRANS",
                                                   "ATRANS",   "ROT",   "AROT", "T",     "D"};
@@ -1649,13 +1649,21 @@ class Reader {
       ignored_.insert(head);
       return t;
     }
+    if (head == "G110" || head == "G111" || head == "G112")
+      sinRefuse(b, t,
+                "Sinumerik " + head +
+                    " sets the pole of polar coordinates (AP=, RP=), which are not supported");
     if (head == "ORIWKS" || head == "ORIMKS") {
       orimks_ = head == "ORIMKS";
     } else if (head == "MSG" || head == "SETMS" || head == "WORKPIECE") {
       ignored_.insert(head);
     } else if (head == "G710" || head == "G700") {
       b.out += (head == "G710" ? " G21" : " G20");
-    } else if (head == "SUPA") {
+    } else if (head == "SUPA" || head == "G153") {
+      // SUPA and G153 suppress the frames (G153 with the base frame, SUPA also the handwheel
+      // and external offsets, which a machine file does not carry): machine coordinates, as G53
+      // (SINUMERIK 840D sl Programming Manual, Fundamentals, "Frame suppression"). G153 was
+      // ignored, and its block read in the work offset.
       b.out += " G53";
     } else if (head == "G500") {
       selectWorkOffset("G500");
@@ -1768,6 +1776,12 @@ class Reader {
     if (name == "FP") {
       // G75's fixed point number (1 to 4): which one does not matter, none being known.
       ignored_.insert("FP=");
+      return;
+    }
+    if (name == "ADIS" || name == "ADISPOS") {
+      // G641's rounding distance for path (ADIS) and rapid (ADISPOS) blocks: how far from a
+      // corner the control may blend, as G64's tolerance; the programmed path is read.
+      ignored_.insert(name + "=");
       return;
     }
     if (name == "CR") {
@@ -3787,6 +3801,9 @@ class Reader {
 
   std::string machineMove(const std::map<char, const Word*>& aw) {
     JointVector q = q_;
+    bool named = false;  // G53 (SUPA, G153) alone moves nothing
+    for (const auto& [l, w] : aw) named |= letter_axis_.count(l) > 0;
+    if (!named) return "G53";
     for (const auto& [l, w] : aw) {
       auto it = letter_axis_.find(l);
       if (it == letter_axis_.end()) continue;
