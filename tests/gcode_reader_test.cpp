@@ -583,6 +583,47 @@ TEST(GcodeReader, LinuxCncStoredHomePositions) {
   EXPECT_NE(refusal("G21\nG43.2 H2\n", m.model).find("G43.2"), std::string::npos);
 }
 
+// Drilling cycles in the three planes, both retract modes, G90 and G91 with repeats, against
+// LinuxCNC's own interpreter: its tests/interp/g81/{g17,g18,g19}/{g98,g99} programs and the
+// canonical moves it printed (tests/fixtures/gcode/linuxcnc_g81). In G18 and G19 LinuxCNC drills
+// along Y and X; tolver drilled along Z there (the points off by the hole depth, unsaid).
+TEST(GcodeReader, LinuxCncDrillingCyclesInEveryPlaneAsItsInterpreterRunsThem) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  for (const char* plane : {"g17", "g18", "g19"})
+    for (const char* retract : {"g98", "g99"}) {
+      const std::string stem =
+          std::string("tests/fixtures/gcode/linuxcnc_g81/") + plane + "-" + retract + "-g81";
+      SCOPED_TRACE(stem);
+      // LinuxCNC's points (inches): every STRAIGHT_TRAVERSE and STRAIGHT_FEED.
+      std::vector<Eigen::Vector3d> want;
+      std::istringstream expected(test::readText(test::sourcePath(stem + "_expected.txt")));
+      for (std::string l; std::getline(expected, l);) {
+        const size_t at = l.find("STRAIGHT_");
+        if (at == std::string::npos) continue;
+        Eigen::Vector3d v;
+        ASSERT_EQ(
+            std::sscanf(l.c_str() + l.find('(', at) + 1, "%lf, %lf, %lf", &v.x(), &v.y(), &v.z()),
+            3)
+            << l;
+        if (want.empty() || (v - want.back()).norm() > 1e-9) want.push_back(v);
+      }
+      const ClProgram p = readGcodeFile(test::sourcePath(stem + ".ngc"), m.model);
+      std::vector<Eigen::Vector3d> got;
+      for (const ClPoint& c : p.path) {
+        const Eigen::Vector3d v = c.p_w / 25.4;
+        if (got.empty() || (v - got.back()).norm() > 1e-9) got.push_back(v);
+      }
+      ASSERT_EQ(got.size(), want.size());
+      ASSERT_GT(got.size(), 30u);
+      for (size_t i = 0; i < got.size(); ++i)
+        EXPECT_LT(((got[i] - got[0]) - (want[i] - want[0])).norm(), 1e-4) << i;
+    }
+  // Other controls: in G18/G19 the drilling axis is a setting (Fanuc 5101#0 FXY): refused.
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  EXPECT_NE(refusal("G21 G18\nG0 X0 Y0 Z0\nG81 X1 Z1 Y-1 R1 F10\n", vmc.model).find("FXY"),
+            std::string::npos);
+}
+
 // HAAS's additional work offsets G154 Pn and G110-G129 (= G154 P1-P20, HAAS 96-8000) are Fanuc's
 // G54.1 Pn: one offset each, from the set-up's g54.1pN_mm or set by G10 L20 Pn (Fanuc 0i-MF; on
 // LinuxCNC L20 Pn is G54..G59.3). They were noted as unknown codes and the moves read in G54.

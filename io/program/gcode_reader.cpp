@@ -3106,7 +3106,7 @@ class Reader {
         if (!cycle_ || cycle_code_ != modes.motion) ++prog_.cycles;
         cycle_ = true;
         cycle_code_ = modes.motion;
-        cycle_initial_z_ = cur_xyz_.z();
+        cycle_initial_z_ = cur_xyz_[plane_];  // along the drilling axis (drillCycle)
       } else {
         cycle_ = false;
       }
@@ -3930,8 +3930,19 @@ class Reader {
   // no peck depth): in G91 each at the next increment, in G90 at the same place. R and Z are kept
   // as given; read in the other distance mode than they were given in, controls differ (LinuxCNC
   // and Fanuc take the kept numbers in the new mode): refused until they are given again.
+  //
+  // The drilling axis: Z in G17; in G18 and G19 LinuxCNC drills along Y and X (G-code reference,
+  // "Canned cycles": "in the XZ plane ... Y"), a Fanuc control along Z or by the plane as its
+  // parameter 5101#0 FXY says, which a machine file does not carry: refused there.
   std::string drillCycle(const std::map<char, const Word*>& aw) {
     const bool sinumerik_cycle = cycle_code_.rfind("CYCLE", 0) == 0;  // planes from its values
+    if (plane_ != 2 && model_.control.dialect != "linuxcnc")
+      fail(line_, 0, cycle_code_,
+           cycle_code_ + " in " + (plane_ == 1 ? "G18" : "G19") +
+               ": whether the control drills along Z or along the plane's normal is a setting "
+               "(Fanuc parameter 5101#0 FXY); post the holes in G17");
+    const int d = plane_;                // the drilling axis
+    const char depth_letter = "XYZ"[d];  // its word: Z in G17, Y in G18, X in G19
     const bool k_repeats = cycle_code_ != "G73" && cycle_code_ != "G83" && !sinumerik_cycle;
     const Word* repeat = aw.count('L') ? aw.at('L')
                          : k_repeats && model_.control.dialect == "iso" && aw.count('K')
@@ -3949,8 +3960,8 @@ class Reader {
       cycle_r_ = aw.at('R')->value * unit_;
       cycle_r_incremental_ = !absolute_;
     }
-    if (aw.count('Z') && !sinumerik_cycle) {
-      cycle_z_ = aw.at('Z')->value * unit_;
+    if (aw.count(depth_letter) && !sinumerik_cycle) {
+      cycle_z_ = aw.at(depth_letter)->value * unit_;
       cycle_z_incremental_ = !absolute_;
     }
     if (!sinumerik_cycle && ((!std::isnan(cycle_r_) && cycle_r_incremental_ == absolute_) ||
@@ -3967,8 +3978,9 @@ class Reader {
                        : k_repeats && aw.count('K') && aw.at('K')->value == 0.0 ? aw.at('K')
                                                                                 : nullptr;
     if (none) {
-      for (char l : {'X', 'Y'})
-        if (aw.count(l) && std::abs(target(aw)[l - 'X'] - cur_xyz_[l - 'X']) > 1e-9)
+      for (char l : {'X', 'Y', 'Z'})
+        if (l != depth_letter && aw.count(l) &&
+            std::abs(target(aw)[l - 'X'] - cur_xyz_[l - 'X']) > 1e-9)
           fail(line_, none->column, std::string(1, none->letter),
                cycle_code_ + " " + none->letter +
                    "0 with a new position: the cycle makes no hole there, and whether the "
@@ -3989,22 +4001,30 @@ class Reader {
     const double bottom = cycle_z_incremental_ ? r_plane + cycle_z_ : cycle_z_;
     if (cycle_z_incremental_ && bottom > r_plane)
       fail(line_, 0, cycle_code_,
-           cycle_code_ + " in G91: Z " + formatNumber(cycle_z_ / unit_) +
+           cycle_code_ + " in G91: " + depth_letter + " " + formatNumber(cycle_z_ / unit_) +
                " puts the bottom above the R point");
     updateRotaryWords(aw);
     for (long k = 0; k < repeats; ++k) {
       Eigen::Vector3d xy = target(aw);
+      const bool known = coord_[d] == kInOffset;
+      const double z_before = known ? cur_xyz_[d] : cycle_initial_z_;
+      // Below the R point: straight up to it first, where the tool is (LinuxCNC
+      // interp_cycles.cc: "if we're below the R plane, rapid straight up to the R plane").
+      if (known && z_before < r_plane && positionKnown()) {
+        Eigen::Vector3d up = cur_xyz_;
+        up[d] = r_plane;
+        emit(up, true);
+      }
       coordinatesGiven(aw, kInOffset);
-      const double z_before = coord_[2] == kInOffset ? cur_xyz_.z() : cycle_initial_z_;
-      coord_[2] = kInOffset;
+      coord_[d] = kInOffset;
       const double clear = std::max(z_before, r_plane);
-      xy.z() = clear;
+      xy[d] = clear;
       emit(xy, true);  // over the hole at the clearance height
-      xy.z() = r_plane;
+      xy[d] = r_plane;
       emit(xy, true);
-      xy.z() = bottom;
+      xy[d] = bottom;
       emit(xy, false);
-      xy.z() = cycle_return_initial_ ? std::max(cycle_initial_z_, r_plane) : r_plane;
+      xy[d] = cycle_return_initial_ ? std::max(cycle_initial_z_, r_plane) : r_plane;
       emit(xy, true);
       ++prog_.cycle_holes;
     }
