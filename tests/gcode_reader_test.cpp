@@ -1071,6 +1071,12 @@ TEST(GcodeReader, G92OffsetsShiftEveryWorkOffset) {
 // and the end points its interpreter printed for it (the fixture's expected list).
 TEST(GcodeReader, LinuxCncOWordsAsItsInterpreterRunsThem) {
   const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  // #<_value> and #<_value_returned> are 0 before any sub returns (LinuxCNC's tests/interp/
+  // return-value: "test that #<_value> is accessible and is 0").
+  const ClProgram initial =
+      parseGcode("G21\nG0 X[#<_value> + 1] Y[#<_value_returned>] Z0 A0 C0\n", "v.ngc", m.model);
+  ASSERT_EQ(initial.path.size(), 1u);
+  EXPECT_NEAR(initial.joints[0][0], 1.0, 1e-12);
   const ClProgram snake =
       readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_flowsnake.ngc"), m.model);
   std::ifstream f(test::sourcePath("tests/fixtures/gcode/linuxcnc_flowsnake_expected.txt"));

@@ -184,6 +184,9 @@ class Reader {
     prog_.file = file;
     prog_.dialect = "G-code";
     prog_.multiax = true;
+    // LinuxCNC's predefined return values (G-code reference, "O Codes": "#<_value>" and
+    // "#<_value_returned>", 0 until a sub returns one).
+    if (model.control.dialect == "linuxcnc") named_["_value"] = named_["_value_returned"] = 0.0;
     source_ = &source;
     if (!blocks_)  // all the text is kept
       prog_.lines.reserve(source.sizeHint(), source.sizeHint() / 30);
