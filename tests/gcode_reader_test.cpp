@@ -624,6 +624,33 @@ TEST(GcodeReader, LinuxCncDrillingCyclesInEveryPlaneAsItsInterpreterRunsThem) {
             std::string::npos);
 }
 
+// Fanuc's G10 L10 P R (memory C: the tool length's geometry; HAAS alike) sets the length a later
+// G43 H applies, G91 adds to it; L12/L13 (radius) are noted, L1/L11 with R refused (memory A's
+// single offset or a wear, by the control's memory type). "G10 L1 P1 R100." was read as
+// LinuxCNC's radius and the length 100 dropped.
+TEST(GcodeReader, FanucToolLengthByG10L10) {
+  Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  Machine preset = vmc;
+  preset.model.setup.tool_lengths[1] = 100.0;
+  const std::string moves = "G0 X0 Y0 Z0\nG43 H1 Z10\n";
+  const ClProgram by_setup = parseGcode("G21\n" + moves, "a.nc", preset.model);
+  const ClProgram by_g10 = parseGcode("G21\nG10 L10 P1 R100.\n" + moves, "b.nc", vmc.model);
+  const ClProgram added =
+      parseGcode("G21\nG10 L10 P1 R90.\nG91 G10 L10 P1 R10.\nG90\n" + moves, "c.nc", vmc.model);
+  ASSERT_EQ(by_g10.path.size(), by_setup.path.size());
+  EXPECT_NE(parseGcode("G21\n" + moves, "e.nc", vmc.model).joints.back(), by_setup.joints.back());
+  for (size_t i = 0; i < by_setup.path.size(); ++i) {
+    EXPECT_EQ(by_g10.joints[i], by_setup.joints[i]) << i;
+    EXPECT_EQ(added.joints[i], by_setup.joints[i]) << i;
+  }
+  EXPECT_TRUE(hasNote(parseGcode("G21\nG10 L12 P1 R5.\n" + moves, "d.nc", vmc.model),
+                      "G10 L12 (tool radius)"));
+  EXPECT_NE(refusal("G21\nG10 L1 P1 R100.\n" + moves, vmc.model).find("memory type"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG10 L11 P1 R0.1\n" + moves, vmc.model).find("memory type"),
+            std::string::npos);
+}
+
 // HAAS's additional work offsets G154 Pn and G110-G129 (= G154 P1-P20, HAAS 96-8000) are Fanuc's
 // G54.1 Pn: one offset each, from the set-up's g54.1pN_mm or set by G10 L20 Pn (Fanuc 0i-MF; on
 // LinuxCNC L20 Pn is G54..G59.3). They were noted as unknown codes and the moves read in G54.

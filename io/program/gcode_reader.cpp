@@ -4053,13 +4053,50 @@ class Reader {
     return "G10";
   }
 
+  // Fanuc's tool offsets by program (Fanuc 0i-MF, "Changing of tool offset value (programmable
+  // data input) (G10)": memory C, L10 the length's geometry, L11 its wear, L12/L13 the radius's;
+  // memory A, L1 one offset for both), HAAS alike for L10 and L12/L13: L10 P R sets the length
+  // a later G43 H P applies (G91: adds to it); L12/L13 (radius, used only by G41/G42) are noted;
+  // L1 and L11 with R are refused (memory A's offset or a wear, by the control's memory type).
+  std::string setIsoToolOffsetByG10(int L, const std::map<char, const Word*>& aw) {
+    if (L == 12 || L == 13) {
+      ignored_.insert("G10 L" + std::to_string(L) + " (tool radius)");
+      return "G10";
+    }
+    if (!aw.count('P')) fail(line_, 0, "G10", "G10 L" + std::to_string(L) + " needs P");
+    if (!aw.count('R'))
+      fail(line_, 0, "G10", "G10 L" + std::to_string(L) + " needs R (the offset value)");
+    if (L != 10)
+      fail(line_, aw.at('R')->column, "R",
+           "G10 L" + std::to_string(L) +
+               " R: a tool offset whose meaning is the control's offset memory type (Fanuc "
+               "memory A: the one offset for H and D; L11: a wear) is not carried out");
+    const int P = static_cast<int>(aw.at('P')->value);
+    const double r = aw.at('R')->value * unit_;
+    if (absolute_) {
+      set_tool_lengths_[P] = r;
+    } else {
+      const int saved = h_;
+      h_ = P;
+      set_tool_lengths_[P] = toolLength() + r;
+      h_ = saved;
+    }
+    return "G10";
+  }
+
   std::string setOffsetByG10(const std::map<char, const Word*>& aw,
                              const std::vector<const Word*>& g) {
     const int L = aw.count('L') ? static_cast<int>(aw.at('L')->value) : -1;
+    if (model_.control.dialect == "iso" &&
+        (L == 10 || L == 11 || L == 12 || L == 13 || (L == 1 && aw.count('R') && !aw.count('Z'))))
+      return setIsoToolOffsetByG10(L, aw);
     if (L == 1) return setToolByG10(aw);
     if (L != 2 && L != 20)
       fail(line_, g.front()->column, "G10",
-           "only G10 L1 (tool length), L2 and L20 (work offsets) are supported");
+           model_.control.dialect == "iso"
+               ? "only G10 L2 and L20 (work offsets), L10 (tool length) and L12/L13 (radius) "
+                 "are supported"
+               : "only G10 L1 (tool length), L2 and L20 (work offsets) are supported");
     const int P = aw.count('P') ? static_cast<int>(aw.at('P')->value) : 0;
     static const char* names[] = {"G54", "G55",   "G56",   "G57",  "G58",
                                   "G59", "G59.1", "G59.2", "G59.3"};
