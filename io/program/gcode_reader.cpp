@@ -3807,6 +3807,12 @@ class Reader {
     bool named = false;  // G53 (SUPA, G153) alone moves nothing
     for (const auto& [l, w] : aw) named |= letter_axis_.count(l) > 0;
     if (!named) return "G53";
+    // In G91 controls differ: LinuxCNC refuses the block ("Cannot use g53 incremental",
+    // rs274ngc_return.hh), Fanuc documents G53 for G90 only. Refused, never guessed.
+    if (!absolute_)
+      fail(line_, 0, "G53",
+           "a move in machine coordinates (G53, SUPA, G153) in G91: controls differ (LinuxCNC "
+           "refuses it; Fanuc documents it for G90 only): write it in G90");
     for (const auto& [l, w] : aw) {
       auto it = letter_axis_.find(l);
       if (it == letter_axis_.end()) continue;
