@@ -311,6 +311,31 @@ TEST(AptReader, UnknownStatementsAreCountedNotFatal) {
   EXPECT_EQ(p.unknown_names, (std::vector<std::string>{"FOO", "BAR"}));
 }
 
+// Statements that change which points the CL holds or where they are (APT's COPY, TRACUT,
+// REFSYS, incremental MODE) are refused by name: skipped as unknown, the copies were missing and
+// the points untransformed. Post-processor words that do not (ORIGIN, ROTABL, MODE/ABSOL,
+// TRACUT/NOMORE) stay counted as unknown.
+TEST(AptReader, StatementsThatMoveThePointsAreRefusedByName) {
+  const std::string head = "UNITS/MM\nGOTO/0,0,10\n";
+  for (const char* st : {"COPY/1,SAME,5", "TRACUT/1,0,0,5,0,1,0,0,0,0,1,0",
+                         "REFSYS/1,0,0,0,0,1,0,0,0,0,1,0", "MODE/INCR", "SET/MODE,INCR"}) {
+    try {
+      parseApt(head + st + "\nGOTO/1,0,10\n", "m.apt");
+      ADD_FAILURE() << st;
+    } catch (const InputError& e) {
+      EXPECT_EQ(e.line(), 3) << st;
+      EXPECT_NE(std::string(e.what()).find(std::string(st).substr(0, std::string(st).find('/'))),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  for (const char* st : {"ORIGIN/1,2,3", "ROTABL/30,AAXIS", "MODE/ABSOL", "TRACUT/NOMORE"}) {
+    const ClProgram p = parseApt(head + st + "\nGOTO/1,0,10\n", "ok.apt");
+    EXPECT_EQ(p.path.size(), 2u) << st;
+    EXPECT_EQ(p.unknown_count, 1) << st;
+  }
+}
+
 struct BadCase {
   const char* text;
   int line;

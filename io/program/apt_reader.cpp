@@ -448,6 +448,22 @@ class Parser {
       fail(line, 0, major,
            "NURBS motion is not supported; post the operation with linear (GOTO) output "
            "(in NX: Output Contour Type = Linear)");
+    } else if (major == "COPY" || ((major == "TRACUT" || major == "REFSYS") &&
+                                   !(args.size() == 1 && toUpper(args[0].text) == "NOMORE"))) {
+      // APT's source-level repetition and transformation (ISO 4343: COPY repeats the CL data since
+      // its INDEX, TRACUT and REFSYS transform the points that follow until .../NOMORE), which
+      // the APT processor expands before it writes CL data: left in a CL file, the copies would
+      // be missing and the points untransformed.
+      fail(line, 0, major,
+           major + " (APT's " +
+               (major == "COPY" ? std::string("repetition of the CL data since its INDEX")
+                                : std::string("transformation of the points that follow")) +
+               ") is not carried out: write the CL data with it expanded");
+    } else if ((major == "MODE" || major == "SET") && incrementalMode(args)) {
+      fail(line, 0, major,
+           major +
+               "/...INCR: incremental coordinates are not supported: write the CL data "
+               "absolute");
     } else if (major == "FINI" || noOpStatements().count(major) || major.rfind("CSI_", 0) == 0) {
       // recognised; nothing to do for the tool positions
     } else {
@@ -666,6 +682,13 @@ class Parser {
                               " is the main MCS: the part frame (--absolute-msys reads the "
                               "points in the CAD's absolute frame instead)");
     }
+  }
+
+  // MODE/INCR, SET/MODE,INCR: incremental coordinates from here on.
+  static bool incrementalMode(const std::vector<Arg>& args) {
+    for (const Arg& a : args)
+      if (toUpper(a.text) == "INCR") return true;
+    return false;
   }
 
   // A statement tolver does not know: counted and named in the notes.
