@@ -456,6 +456,12 @@ TEST(GcodeReader, CutterCompensationReadAsWearOnlyByTheUsersWord) {
     EXPECT_EQ((a.path[i].p_w - b.path[i].p_w).norm(), 0.0) << i;
   EXPECT_TRUE(hasNote(a, "G41/G42 (first at line 4) read as wear compensation"));
   EXPECT_FALSE(hasNote(b, "wear compensation"));
+  // A block-delete line runs, as with the switch off, and is said.
+  const ClProgram slash =
+      parseGcode("G21\nG0 X0 Y0 Z0\n/G0 X9\n/G0 X8\nG0 X1\n", "bd.nc", vmc.model);
+  EXPECT_EQ(slash.path.size(), 4u);
+  EXPECT_TRUE(
+      hasNote(slash, "2 block(s) marked '/' (block delete, the first at line 3) read as run"));
   // G42 likewise; G41.1 (a diameter in the program) is refused even so.
   const ClProgram right =
       parseGcode("G21\nG0 X0 Y0 Z5\nG42 G1 X10 F100\nG40 X20\n", "r42.nc", vmc.model, wear);

@@ -318,6 +318,12 @@ class Reader {
       prog_.notes.push_back("G92 offsets (first at line " + std::to_string(g92_line_) +
                             ") carried out: the points after them are where the offset puts "
                             "them, in the work offset in force");
+    if (block_deletes_ > 0)
+      prog_.notes.push_back(std::to_string(block_deletes_) +
+                            " block(s) marked '/' (block delete, the first at line " +
+                            std::to_string(first_block_delete_) +
+                            ") read as run: with the control's block-delete switch on they are "
+                            "skipped");
     if (wear_comp_line_ > 0)
       prog_.notes.push_back("G41/G42 (first at line " + std::to_string(wear_comp_line_) +
                             ") read as wear compensation (--cutter-comp wear): the path is the "
@@ -2889,6 +2895,7 @@ class Reader {
     seen_block_ = true;
     if (text[0] == '/') {  // block delete: the control runs it unless the switch is on
       text[0] = ' ';
+      if (block_deletes_++ == 0) first_block_delete_ = line_;
     }
     std::string upper = toUpper(text);
     // TCP words that are names, not letter-number words (Siemens TRAORI / TRAFOOF): taken out
@@ -4226,13 +4233,14 @@ class Reader {
       tool_table_;  // "T1" -> diameter, corner radius (program unit: comments come before G20/G21)
   std::set<std::string> tcp_active_;
   std::set<std::string> ignored_;
-  std::map<std::string, int> missing_offsets_;  // work offset -> first line that used it
-  int bare_g28_line_ = 0;                       // the first G28 without axis words (ISO)
-  int g75_line_ = 0;                            // the first Sinumerik G75 (fixed point)
-  int wear_comp_line_ = 0;                      // the first G41/G42 read as wear compensation
-  int g92_line_ = 0;                            // the first G92..G92.3
-  int stored_cycles_ = 0;                       // cycle blocks with L0/K0 (no hole)
-  std::map<int, double> set_tool_lengths_;      // G10 L1 P Z: tool lengths the program sets (mm)
+  std::map<std::string, int> missing_offsets_;      // work offset -> first line that used it
+  int bare_g28_line_ = 0;                           // the first G28 without axis words (ISO)
+  int g75_line_ = 0;                                // the first Sinumerik G75 (fixed point)
+  int block_deletes_ = 0, first_block_delete_ = 0;  // blocks marked '/', read as run
+  int wear_comp_line_ = 0;                          // the first G41/G42 read as wear compensation
+  int g92_line_ = 0;                                // the first G92..G92.3
+  int stored_cycles_ = 0;                           // cycle blocks with L0/K0 (no hole)
+  std::map<int, double> set_tool_lengths_;  // G10 L1 P Z: tool lengths the program sets (mm)
   Eigen::Vector3d g92_offset_ = Eigen::Vector3d::Zero();  // G92's offset (mm, settable frame)
   bool g92_on_ = false;                                   // in force (not G92.1/G92.2)
   std::set<std::string> commanded_offsets_;               // work offsets a block selects (G54...)
