@@ -1373,6 +1373,24 @@ TEST(GcodeReader, SinumerikFrameSuppressionAndRounding) {
             std::string::npos);
   const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
   EXPECT_EQ(parseGcode("G21\nG0 X0 Y0 Z-5\nG53\nG0 X1\n", "g53.nc", vmc.model).path.size(), 2u);
+  // Spindle and bookkeeping words no path depends on are ignored (they were refused); TRAORI(1)
+  // is TRAORI, TRAORI(2) another kinematics, refused.
+  const ClProgram words =
+      parseGcode(head +
+                     "SPOS=0\nS1=1000 M1=3\nFGROUP(X,Y,Z)\nGROUP_BEGIN(0,\"x\",0,0)\nSETPIECE(1)\n"
+                     "GROUP_END(0,0)\nG0 X1\nM30\n",
+                 "w.mpf", m.model);
+  EXPECT_EQ(words.path.size(), 2u);
+  EXPECT_TRUE(hasNote(words, "SPOS="));
+  EXPECT_NE(refusal(head + "M1=6\n", m.model).find("M function of spindle 1"), std::string::npos);
+  const ClProgram traori =
+      parseGcode("G710\nG54\nTRAORI(1)\nG0 X0 Y0 Z10 B0 C0\nTRAFOOF\nM30\n", "t.mpf", m.model);
+  EXPECT_EQ(traori.tcp.front(), ClProgram::kTcpWords);
+  EXPECT_NE(refusal("G710\nTRAORI(2)\n", m.model).find("transformation data set 2"),
+            std::string::npos);
+  // A DEF'd variable named like a spindle word stays a variable.
+  const ClProgram var = parseGcode(head + "DEF REAL S1\nS1=7\nG0 X=S1\nM30\n", "v.mpf", m.model);
+  EXPECT_NEAR(var.joints.back()[0] - var.joints.front()[0], 7.0, 1e-9);
 }
 
 // Sinumerik 840D as NX posts it: DEF, assignments, ADDR=expression, SUPA, TRAFOOF, T="name",

@@ -1697,6 +1697,11 @@ class Reader {
       b.out += " " + k;
     } else if (eq != std::string::npos && (paren == std::string::npos || eq < paren)) {
       sinAssign(b, t, k.substr(0, eq), k.substr(eq + 1));
+    } else if (paren != std::string::npos && (head == "FGROUP" || head == "GROUP_BEGIN" ||
+                                              head == "GROUP_END" || head == "SETPIECE")) {
+      // The feed's reference axes, the program's grouping for the control's editor (Operate's
+      // program structure) and the piece counter: no effect on the path.
+      ignored_.insert(head);
     } else if (paren != std::string::npos) {
       sinRefuse(b, t,
                 "Sinumerik " + head +
@@ -1785,6 +1790,29 @@ class Reader {
     if (name == "FP") {
       // G75's fixed point number (1 to 4): which one does not matter, none being known.
       ignored_.insert("FP=");
+      return;
+    }
+    // Spindle words of a multi-spindle control: S<n>= spindle n's speed, SPOS=/SPOSA= its
+    // positioning (stopped, oriented), M<n>= its M function (3, 4, 5 turning and stopped, 19
+    // oriented, 40-45 gear ranges, 70 axis mode): no effect on the tool's path.
+    const bool spindle_number = !sin_vars_.count(name) && name.size() > 1 && name.size() < 4 &&
+                                std::all_of(name.begin() + 1, name.end(), [](char c) {
+                                  return std::isdigit(static_cast<unsigned char>(c)) != 0;
+                                });
+    if (name == "SPOS" || name == "SPOSA" || (spindle_number && name[0] == 'S') ||
+        name.rfind("SPOS[", 0) == 0) {
+      ignored_.insert(name[0] == 'S' && spindle_number ? "S<n>= (spindle speed)" : name + "=");
+      return;
+    }
+    if (spindle_number && name[0] == 'M') {
+      const double v = sinExpression(expr, b.col[t]);
+      static const std::set<double> harmless = {3, 4, 5, 19, 40, 41, 42, 43, 44, 45, 70};
+      if (!harmless.count(v))
+        sinRefuse(b, t,
+                  "Sinumerik " + name + "=" + formatNumber(v) + ": an M function of spindle " +
+                      name.substr(1) +
+                      " that tolver does not know (M3, M4, M5, M19, M40-M45, M70 are read)");
+      ignored_.insert("M<n>= (spindle functions)");
       return;
     }
     if (name == "ADIS" || name == "ADISPOS") {
@@ -2910,8 +2938,22 @@ class Reader {
             (at == 0 || !std::isalnum(static_cast<unsigned char>(upper[at - 1]))) &&
             (end == upper.size() || !std::isalnum(static_cast<unsigned char>(upper[end])));
         if (!alone) continue;
+        // Siemens's TRAORI(n): the n-th transformation data set; the machine file describes one,
+        // TRAORI(1) (or TRAORI()).
+        size_t stop = end;
+        if (end < upper.size() && upper[end] == '(') {
+          const size_t close = upper.find(')', end);
+          if (close == std::string::npos)
+            fail(line_, col.empty() ? 0 : col[at], *w, *w + "(: the ')' is missing");
+          const std::string n(trim(std::string_view(upper).substr(end + 1, close - end - 1)));
+          if (!n.empty() && n != "1")
+            fail(line_, col.empty() ? 0 : col[at], *w,
+                 *w + "(" + n + "): the control's transformation data set " + n +
+                     "; the machine file describes one kinematics (TRAORI, TRAORI(1))");
+          stop = close + 1;
+        }
         tcpWord(*w);
-        for (size_t k = at; k < end; ++k) upper[k] = ' ';
+        for (size_t k = at; k < stop; ++k) upper[k] = ' ';
       }
     if (sinumerik) {
       upper = sinumerikBlock(upper, col);
