@@ -251,6 +251,7 @@ TEST(GcodeReader, RefusesWhatItCannotCarryOutWithFileAndLine) {
       {"G21\nG41 D1\n", 2, "cutter radius compensation"},
       {"G21\nG0 X0 Y0 Z0\nG1 X10 ,R2 F100\n", 3, "corner rounding (,R"},
       {"G21\nG0 X0 Y0 Z0\nG91 G53 G0 Z10\n", 3, "in G91: controls differ"},
+      {"G21\nG0 X0 Y-5 Z0\nG91 G3 I-5 Z-1 L5 F100\n", 3, "L on an arc"},
       // A frame change with no axis words is refused, not noted as an unknown code.
       {"G21\nG0 X0 Y0 Z0\nG68.3\nG0 X1\n", 3, "G68.3"},
       {"G21\nG0 X0 Y0 Z0\nG54.2 P1\nG0 X1\n", 3, "dynamic fixture offset"},

@@ -3747,6 +3747,12 @@ class Reader {
     Eigen::Vector3d n = Eigen::Vector3d::Zero();
     n[plane_] = 1.0;
     const Eigen::Vector3d axis = motion == "G3" ? n : -n;
+    // L on an arc (HAAS: the full circle repeated L times, as its thread milling posts write
+    // G91 G03 I.. Z.. L..): not carried out, never dropped.
+    if (aw.count('L'))
+      fail(line_, aw.at('L')->column, "L",
+           "L on an arc (HAAS: the full circle repeated) is not carried out: post the turns as "
+           "arcs");
     Eigen::Vector3d centre;
     // The centre read the other way (I J K absolute when the control reads them incremental, and
     // back), for the refusal's hint when the end is off the circle (Sinumerik's AC/IC aside).
