@@ -715,6 +715,10 @@ TEST(GcodeReader, ReferencePointReturnsAsTheControlsDocumentThem) {
 // control) is harmless on an ISO control.
 TEST(GcodeReader, MotionCodesItCannotCarryOutAreRefusedByName) {
   const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  // LinuxCNC's O-words on an ISO machine: the refusal names the dialect that carries them out.
+  EXPECT_NE(refusal("G21\no100 sub\nG0 X1\no100 endsub\n", vmc.model)
+                .find("declares dialect=\"linuxcnc\""),
+            std::string::npos);
   const Machine lcnc = machine("resources/machines/linuxcnc_xyzbc_trt.xml", 0.0);
   try {
     readGcodeFile(test::sourcePath("tests/fixtures/gcode/linuxcnc_nurbs_butterfly-xy.ngc"),

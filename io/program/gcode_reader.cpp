@@ -2986,9 +2986,13 @@ class Reader {
       const std::string keyword = rest.substr(0, rest.find_first_of(" [#"));
       if (numbered && flow.count(keyword))
         fail(line_, col[0], "O",
-             "O-word " + toLower(keyword) + " ('" + clip(rest) +
-                 "'): subprograms and control flow are not supported: "
-                 "expand them in the post-processor");
+             "O-word " + toLower(keyword) + " ('" + clip(rest) + "'): " +
+                 (model_.control.dialect == "linuxcnc"
+                      ? std::string("not carried out here: expand it in the post-processor")
+                      : "LinuxCNC's subprograms and control flow, carried out on a machine "
+                        "whose file declares dialect=\"linuxcnc\" in its <control>; this one's "
+                        "control is " +
+                            model_.control.dialect + ": expand them in the post-processor"));
       if (!numbered && upper[0] == 'O' && !executed_block_) {
         prog_.part_name = std::string(trim(text.substr(1)));  // a name at the program start
         return "";
