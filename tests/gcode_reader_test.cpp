@@ -463,6 +463,15 @@ TEST(GcodeReader, CutterCompensationReadAsWearOnlyByTheUsersWord) {
   EXPECT_EQ(slash.path.size(), 4u);
   EXPECT_TRUE(
       hasNote(slash, "2 block(s) marked '/' (block delete, the first at line 3) read as run"));
+  // A program whose post writes "15." and which also writes "Z-1" (a hand edit): on a Fanuc
+  // with DPI = 0 the latter is 1 um, said on an ISO control; not for zeros, not on LinuxCNC,
+  // not when every number goes without a point.
+  const ClProgram mixed = parseGcode("G21\nG0 X0 Y0 Z15.\nG1 Z-1 F100\n", "dp.nc", vmc.model);
+  EXPECT_TRUE(hasNote(mixed,
+                      "(the first, Z-1, at line 3) read in mm: a Fanuc control with "
+                      "parameter 3401#0 DPI = 0"));
+  EXPECT_FALSE(hasNote(parseGcode("G21\nG0 X0 Y0 Z15\nG1 Z-1 F100\n", "i.nc", vmc.model), "DPI"));
+  EXPECT_FALSE(hasNote(parseGcode("G21\nG0 X0 Y0 Z15.\nG1 Z0 F100\n", "z.nc", vmc.model), "DPI"));
   // G42 likewise; G41.1 (a diameter in the program) is refused even so.
   const ClProgram right =
       parseGcode("G21\nG0 X0 Y0 Z5\nG42 G1 X10 F100\nG40 X20\n", "r42.nc", vmc.model, wear);

@@ -318,6 +318,16 @@ class Reader {
       prog_.notes.push_back("G92 offsets (first at line " + std::to_string(g92_line_) +
                             ") carried out: the points after them are where the offset puts "
                             "them, in the work offset in force");
+    if (model_.control.dialect == "iso" && bare_point_ && first_integer_line_ > 0)
+      prog_.notes.push_back(
+          "numbers without a decimal point beside numbers written as '10.' (the first, " +
+          first_integer_ + ", at line " + std::to_string(first_integer_line_) + ") read in " +
+          std::string(unit_ == 25.4 ? "inches" : "mm") +
+          ": a Fanuc control with parameter 3401#0 DPI = 0 reads them in least input "
+          "increments (" +
+          first_integer_ + " as " + first_integer_.substr(1) +
+          (unit_ == 25.4 ? " ten-thousandths of an inch)" : " um)") +
+          "; check the control's setting");
     if (block_deletes_ > 0)
       prog_.notes.push_back(std::to_string(block_deletes_) +
                             " block(s) marked '/' (block delete, the first at line " +
@@ -2747,6 +2757,27 @@ class Reader {
     max_decimals_ = std::max(max_decimals_, std::min(digits, 9));
   }
 
+  // Numbers with and without a decimal point (Fanuc 0i-MF, "Decimal point programming": with
+  // parameter 3401#0 DPI = 0 a dimension without a point is in least input increments, X10 =
+  // 0.010 mm; HAAS, LinuxCNC and posts for them read X10 as 10): a post that writes "10." (a
+  // point and no digits after it) writes for a control that needs the point, and a non-zero
+  // whole number without one in the same program is said, on an ISO control.
+  void noteDecimalPoint(std::string_view v, char letter) {
+    if (std::string_view("XYZIJKRABCUVW").find(letter) == std::string_view::npos) return;
+    while (!v.empty() && v.back() == ' ') v.remove_suffix(1);
+    if (v.empty() || v.find_first_not_of("+-0123456789.") != std::string_view::npos) return;
+    const size_t dot = v.find('.');
+    if (dot != std::string_view::npos) {
+      if (dot + 1 == v.size()) bare_point_ = true;  // "10.": the point written for its own sake
+      return;
+    }
+    if (v.find_first_not_of("+-0") == std::string_view::npos) return;  // zero reads the same
+    if (first_integer_line_ == 0) {
+      first_integer_line_ = line_;
+      first_integer_ = std::string(1, letter) + std::string(v);
+    }
+  }
+
   // The largest difference of an arc's start and end radius (mm) the control accepts, never
   // tighter than four steps of the program's printed resolution (the rounding of start, end and
   // centre adds up to 2.9 steps): LinuxCNC as its interpreter checks it (src/emc/rs274ngc/
@@ -3113,6 +3144,7 @@ class Reader {
       const size_t value_at = i;
       w.value = expression(upper, i, 0);
       noteResolution(std::string_view(upper).substr(value_at, i - value_at), c);
+      noteDecimalPoint(std::string_view(upper).substr(value_at, i - value_at), c);
       if (!std::isfinite(w.value) || std::abs(w.value) > 1e7)
         fail(line_, w.column, std::string(1, c),
              "value " + clip(formatNumber(w.value)) + " is beyond any plausible length or angle");
@@ -4289,9 +4321,12 @@ class Reader {
   int bare_g28_line_ = 0;                           // the first G28 without axis words (ISO)
   int g75_line_ = 0;                                // the first Sinumerik G75 (fixed point)
   int block_deletes_ = 0, first_block_delete_ = 0;  // blocks marked '/', read as run
-  int wear_comp_line_ = 0;                          // the first G41/G42 read as wear compensation
-  int g92_line_ = 0;                                // the first G92..G92.3
-  int stored_cycles_ = 0;                           // cycle blocks with L0/K0 (no hole)
+  bool bare_point_ = false;                         // a number written "10." (noteDecimalPoint)
+  int first_integer_line_ = 0;                      // a non-zero number without a point
+  std::string first_integer_;
+  int wear_comp_line_ = 0;                  // the first G41/G42 read as wear compensation
+  int g92_line_ = 0;                        // the first G92..G92.3
+  int stored_cycles_ = 0;                   // cycle blocks with L0/K0 (no hole)
   std::map<int, double> set_tool_lengths_;  // G10 L1 P Z: tool lengths the program sets (mm)
   Eigen::Vector3d g92_offset_ = Eigen::Vector3d::Zero();  // G92's offset (mm, settable frame)
   bool g92_on_ = false;                                   // in force (not G92.1/G92.2)
