@@ -256,6 +256,43 @@ TEST_F(CompensateCli, ARapidIsNeverGivenWordsItDidNotHave) {
   EXPECT_TRUE(seen);
 }
 
+// A block left as programmed because it is incremental (G91) or a drilling cycle moves from where
+// the block before it ends: that block is written back to its programmed position, as before an
+// arc, so the cycle's holes and the G91 moves are where the original put them (the holes moved by
+// the correction before them: the read-back check failed the program). A new work offset
+// (G55) makes the words in force unknown: a block that names one axis is not given the others'
+// old words.
+TEST_F(CompensateCli, BlocksLeftAsProgrammedStartWhereTheyWereProgrammed) {
+  const std::string m = withErrors("resources/machines/vmc_3axis_iso.xml", 7);
+  const std::string setup = path("s.txt");
+  {
+    std::ofstream f(setup);
+    f << "part_zero_mm = -380, -200, -300\ngauge_length_mm = 0\n";
+  }
+  const std::string prog = path("cyc.nc");
+  {
+    std::ofstream f(prog);
+    f << "G21 G90 G54\nG0 X10 Y20 Z30\nG1 X12 Y21 Z25 F500\nG98\n"
+         "G91 G81 X5 Y0 R-20 Z-12 L3 F50\nG80\nG90 G0 X40 Y30 Z30\nG1 X45 F500\n"
+         "G91 G1 X5\nG90 G55 G0 X1\nM30\n";
+  }
+  const nlohmann::json j = compensate(m, "--nc", prog, "--setup " + setup, path("cyc_c.nc"));
+  ASSERT_FALSE(j.is_null());
+  const auto out = linesOf(path("cyc_c.nc"));
+  auto line = [&](const std::string& start) {
+    for (const std::string& l : out)
+      if (l.rfind(start, 0) == 0) return l;
+    return std::string();
+  };
+  EXPECT_EQ(line("G1 X12"), "G1 X12.0000 Y21.0000 Z25.0000 F500");  // before the G91 cycle
+  EXPECT_EQ(line("G1 X45"), "G1 X45.0000 Y30.0000 Z30.0000 F500");  // before G91 G1 X5
+  EXPECT_EQ(line("G91 G81"), "G91 G81 X5 Y0 R-20 Z-12 L3 F50");
+  const std::string corrected = line("G90 G0 X40");  // corrected as usual
+  EXPECT_NE(corrected, "");
+  EXPECT_NE(corrected, "G90 G0 X40 Y30 Z30");
+  EXPECT_EQ(line("G90 G55"), "G90 G55 G0 X1");
+}
+
 // --table: one pitch and straightness table per linear axis, with its grid in the header; the
 // console says what they remove and what they cannot carry.
 TEST_F(CompensateCli, LinearAxisTables) {

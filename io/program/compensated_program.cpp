@@ -376,6 +376,9 @@ class GcodeEditor {
     note(arc_starts_,
          "blocks that start an arc (written back to their programmed position: the arc's start "
          "must stay on its circle)");
+    note(relative_starts_,
+         "blocks before an incremental (G91) or drilling-cycle block (written back to their "
+         "programmed position: that block, left as programmed, moves from it)");
     note(cycles_, "drilling-cycle blocks");
     note(incremental_, "incremental (G91) blocks");
     note(machine_moves_, "moves in machine coordinates (G53, G28, ...)");
@@ -459,6 +462,9 @@ class GcodeEditor {
           absolute_ = false;
         else if (g == 53 || g == 28 || g == 30 || g == 10 || g == 92)
           b.special = true;
+        else if ((g >= 54 && g <= 59.35) || g == 154 || (g >= 110 && g <= 129))
+          // Another work offset: the words in force were the last one's coordinates.
+          std::fill(known_.begin(), known_.end(), 0);
       }
       auto it = axis_of_.find(w.letter);
       if (it != axis_of_.end()) {
@@ -479,9 +485,10 @@ class GcodeEditor {
   // program's own position, all axes (the values in force may carry earlier corrections): the
   // arc starts where it was programmed.
   void judge(Block& b, size_t li) {
-    b.restore = b.write && arcs_.startsArc(static_cast<int>(li) + 1);
+    const int starts = arcs_.startsArc(static_cast<int>(li) + 1);
+    b.restore = b.write && starts > 0;
     if (b.restore) {
-      arc_starts_.push_back(b.line_no);
+      (starts == GcodeArcStarts::kArc ? arc_starts_ : relative_starts_).push_back(b.line_no);
     } else if (b.point != -1 && !b.write) {
       (motion_ == 2 || motion_ == 3)   ? arcs_list_.push_back(b.line_no)
       : motion_ >= 73 && motion_ != 80 ? cycles_.push_back(b.line_no)
@@ -521,7 +528,11 @@ class GcodeEditor {
     }
     if (!b.write) {
       expressions_.push_back(b.line_no);
-      if (b.restore) arc_starts_.pop_back();
+      if (b.restore) {
+        auto& list = !arc_starts_.empty() && arc_starts_.back() == b.line_no ? arc_starts_
+                                                                             : relative_starts_;
+        list.pop_back();
+      }
     }
   }
 
@@ -602,32 +613,39 @@ class GcodeEditor {
   std::vector<int> decimals_;
   int motion_ = 0;  // 0, 1, 2, 3, 80 (none), 81+ (cycles)
   bool absolute_ = true;
-  std::vector<int> arcs_list_, arc_starts_, cycles_, incremental_, machine_moves_, expressions_,
-      rapid_kept_;
+  std::vector<int> arcs_list_, arc_starts_, relative_starts_, cycles_, incremental_, machine_moves_,
+      expressions_, rapid_kept_;
 };
 
 }  // namespace
 
 void GcodeArcStarts::add(const ClProgram& block) {
   for (size_t li = block.lines.first(); li < block.lines.size(); ++li) {
-    for (const GWord& w : gcodeWords(std::string(block.lines[li])))
-      if (w.letter == 'G' && w.numeric &&
-          (w.value == 0 || w.value == 1 || w.value == 2 || w.value == 3))
+    for (const GWord& w : gcodeWords(std::string(block.lines[li]))) {
+      if (w.letter != 'G' || !w.numeric) continue;
+      if (w.value == 0 || w.value == 1 || w.value == 2 || w.value == 3 ||
+          (w.value >= 73 && w.value <= 89))
         mode_ = static_cast<int>(w.value);
+      else if (w.value == 90 || w.value == 91)
+        absolute_ = w.value == 90;
+    }
     const size_t k = li - block.lines.first();
     if (k >= block.statements.size() || block.statements[k].point_count <= 0) continue;
-    // A block with points: the previous one starts an arc when this is one.
-    const bool arc = mode_ == 2 || mode_ == 3;
-    if (last_point_line_ > 0 && arc) {
-      if (starts_.size() <= static_cast<size_t>(last_point_line_)) starts_.resize(li + 1, false);
-      starts_[last_point_line_] = true;
+    // A block with points: the previous one starts an arc when this is one, or an incremental
+    // or cycle block (left as programmed, it moves from where the previous one ends).
+    const char kind = mode_ == 2 || mode_ == 3                     ? kArc
+                      : !absolute_ || (mode_ >= 73 && mode_ != 80) ? kRelative
+                                                                   : 0;
+    if (last_point_line_ > 0 && kind) {
+      if (starts_.size() <= static_cast<size_t>(last_point_line_)) starts_.resize(li + 1, 0);
+      starts_[last_point_line_] = kind;
     }
     last_point_line_ = static_cast<int>(li) + 1;
   }
 }
 
-bool GcodeArcStarts::startsArc(int line) const {
-  return line > 0 && static_cast<size_t>(line) < starts_.size() && starts_[line];
+int GcodeArcStarts::startsArc(int line) const {
+  return line > 0 && static_cast<size_t>(line) < starts_.size() ? starts_[line] : 0;
 }
 
 struct CompensatedGcodeWriter::Editor : GcodeEditor {

@@ -73,13 +73,17 @@ CompensatedProgramText formatCompensatedGcode(const ClProgram& program, const Ma
 // line (1-based). One bit per line up to the last such block.
 class GcodeArcStarts {
  public:
+  static constexpr char kArc = 1;       // the next block with points is an arc
+  static constexpr char kRelative = 2;  // ... an incremental (G91) or drilling-cycle block
   void add(const ClProgram& block);
-  bool startsArc(int line) const;
+  // 0, kArc or kRelative: what the block after line `line` (1-based) needs of its end.
+  int startsArc(int line) const;
 
  private:
-  int mode_ = 0;             // the motion mode in force (G0 G1 G2 G3)
+  int mode_ = 0;             // the motion mode in force (G0 G1 G2 G3, G73-G89, G80)
+  bool absolute_ = true;     // G90
   int last_point_line_ = 0;  // the last line with a point so far
-  std::vector<bool> starts_;
+  std::vector<char> starts_;
 };
 
 // formatCompensatedGcode block by block (a program read in blocks): start() with the first block,
