@@ -2372,6 +2372,7 @@ class Reader {
     cycle_initial_z_ = *rtp * unit_;
     cycle_r_ = (*rfp + sdis.value_or(0.0)) * unit_;
     cycle_z_ = (dp ? *dp : *rfp - std::abs(*dpr)) * unit_;
+    cycle_r_incremental_ = cycle_z_incremental_ = false;  // the cycle's planes are absolute
   }
 
   // A recursion's depth counted for as long as a call lasts (bounded by the caller's check).
