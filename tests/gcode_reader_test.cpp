@@ -1204,9 +1204,21 @@ TEST(GcodeReader, LinuxCncOWordsAsItsInterpreterRunsThem) {
             std::string::npos);
   EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\no1 endif\n", m.model).find("outside the construct"),
             std::string::npos);
+  // A loop whose variables come back to an earlier pass's never ends: said at its first repeat
+  // (it ran a million passes first, seconds); one whose variables move on is bounded.
   EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\no1 while [1]\n(nothing)\no1 endwhile\n", m.model)
+                .find("o1 while: a loop that does not end (its variables come back"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\n#1=0\no1 while [1]\n#1=[#1+1]\no1 endwhile\n", m.model)
                 .find("ran 1000000 times"),
             std::string::npos);
+  // A sub's loop starts afresh at each call: the same variables at its first pass of two calls
+  // are no repeat.
+  const ClProgram twice = parseGcode(
+      "G21\nG0 X0 Y0 Z0 A0 C0\no2 sub\n#3=0\no3 while [#3 LT 2]\nG1 X[#3] F100\n#3=[#3+1]\n"
+      "o3 endwhile\no2 endsub\no2 call\no2 call\nM2\n",
+      "twice.ngc", m.model);
+  EXPECT_EQ(twice.path.size(), 5u);
   EXPECT_NE(refusal("G21\no1 sub\nG0 X1\no1 endsub\n", m.model).find("calls none"),
             std::string::npos);
   // Bounded: constructs nested 200 deep, loops within loops that would run 10^12 lines.
@@ -1357,7 +1369,8 @@ TEST(GcodeReader, SinumerikJumpsAndControlStructures) {
   EXPECT_NE(refusal(head + "ENDIF\n", m.model).find("ENDIF without its IF"), std::string::npos);
   EXPECT_NE(refusal(head + "CASE R1 OF 1 GOTOF A DEFAULT GOTOF B\n", m.model).find("CASE"),
             std::string::npos);
-  EXPECT_NE(refusal(head + "LOOP\nX1\nENDLOOP\n", m.model).find("ran 1000000 times"),
+  EXPECT_NE(refusal(head + "LOOP\nX1\nENDLOOP\n", m.model)
+                .find("LOOP: a loop that does not end (its variables come back"),
             std::string::npos);
   EXPECT_NE(refusal(head + "R1 = 6 B_AND 3\n", m.model).find("bit operator B_AND"),
             std::string::npos);

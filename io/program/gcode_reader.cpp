@@ -8,6 +8,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <unordered_set>
 
 #include "core/kinematics/forward_kinematics.h"
 #include "core/kinematics/inverse_kinematics.h"
@@ -886,7 +887,9 @@ class Reader {
     };
     std::map<size_t, std::pair<std::string, double>> for_end;  // FOR line -> variable, end
     std::map<size_t, long> iterations;
+    std::map<size_t, std::unordered_set<uint64_t>> passes;  // the variables at each pass
     auto iterate = [&](size_t at) {
+      checkLoopProgress(passes[at], L[at].line, f[at].column, f[at].keyword);
       if (++iterations[at] > kMaxIterations)
         fail(L[at].line, f[at].column, f[at].keyword,
              f[at].keyword + " ran " + std::to_string(kMaxIterations) +
@@ -1231,6 +1234,33 @@ class Reader {
                " times: a loop that does not end (or one too long to predict)");
   }
 
+  // The program's variables (LinuxCNC's parameters, Sinumerik's DEF variables and R
+  // parameters), hashed: a loop's conditions read nothing else (the controls' system variables of
+  // position and state are refused), so a loop head reached twice in one run of the loop with
+  // the same variables repeats forever. Said at once instead of after a million iterations
+  // (seconds; a fuzzed Sinumerik WHILE whose step was 0 took 11 s).
+  uint64_t variablesHash() const {
+    uint64_t h = 14695981039346656037ull;
+    auto mix = [&h](const void* p, size_t n) {
+      const auto* b = static_cast<const unsigned char*>(p);
+      for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+    };
+    for (const auto& [k, v] : sin_vars_) mix(k.data(), k.size()), mix(&v, sizeof v);
+    for (const auto& [k, v] : named_) mix(k.data(), k.size()), mix(&v, sizeof v);
+    for (const auto& [k, v] : numbered_) mix(&k, sizeof k), mix(&v, sizeof v);
+    return h;
+  }
+
+  // A loop's passes: refused when one starts with the variables of an earlier one.
+  void checkLoopProgress(std::unordered_set<uint64_t>& seen, int line, int column,
+                         const std::string& what) {
+    if (!seen.insert(variablesHash()).second)
+      fail(line, column, what,
+           what +
+               ": a loop that does not end (its variables come back to the values of an "
+               "earlier pass)");
+  }
+
   // Carries out lines[from, to); returns how control left them (a break, continue or return
   // goes to the construct it names).
   FlowResult runLines(const std::vector<SourceLine>& lines, size_t from, size_t to) {
@@ -1269,6 +1299,7 @@ class Reader {
         const size_t e = closing(lines, k, *o, closerOf(kw));
         const std::optional<OWord> end = parseOWord(lines[e].text);
         long n = 0;
+        std::unordered_set<uint64_t> passes;  // while/do: the variables at each pass
         const double count = kw == "repeat" ? flowValue(*o, line) : 0.0;
         if (kw == "repeat" && !(count >= 0 && count <= kMaxIterations))
           fail(line, o->column, "O", "o" + o->label + " repeat count " + formatNumber(count));
@@ -1276,6 +1307,7 @@ class Reader {
           if (kw == "while" && flowValue(*o, line) == 0.0) break;
           if (kw == "repeat" && n >= std::lround(count)) break;
           countIteration(n, *o, line);
+          if (kw != "repeat") checkLoopProgress(passes, line, o->column, "o" + o->label + " " + kw);
           const FlowResult r = runLines(lines, k + 1, e);
           if (ended_) return {};
           if (r.exit == FlowExit::Return || (r.exit != FlowExit::Next && r.label != o->label))
