@@ -402,6 +402,7 @@ class GcodeEditor {
     int point = -1;  // its program point when it has exactly one, else -1
     int line_no = 0;
     bool write = false, restore = false;
+    std::vector<int>* restored_in = nullptr;  // the list a restored block is named in
     std::vector<double> target;
   };
 
@@ -485,10 +486,11 @@ class GcodeEditor {
   // program's own position, all axes (the values in force may carry earlier corrections): the
   // arc starts where it was programmed.
   void judge(Block& b, size_t li) {
-    const int starts = arcs_.startsArc(static_cast<int>(li) + 1);
+    const int starts = arcs_.startKind(static_cast<int>(li) + 1);
     b.restore = b.write && starts > 0;
     if (b.restore) {
-      (starts == GcodeArcStarts::kArc ? arc_starts_ : relative_starts_).push_back(b.line_no);
+      b.restored_in = starts == GcodeArcStarts::kArc ? &arc_starts_ : &relative_starts_;
+      b.restored_in->push_back(b.line_no);
     } else if (b.point != -1 && !b.write) {
       (motion_ == 2 || motion_ == 3)   ? arcs_list_.push_back(b.line_no)
       : motion_ >= 73 && motion_ != 80 ? cycles_.push_back(b.line_no)
@@ -528,11 +530,7 @@ class GcodeEditor {
     }
     if (!b.write) {
       expressions_.push_back(b.line_no);
-      if (b.restore) {
-        auto& list = !arc_starts_.empty() && arc_starts_.back() == b.line_no ? arc_starts_
-                                                                             : relative_starts_;
-        list.pop_back();
-      }
+      if (b.restore) b.restored_in->pop_back();
     }
   }
 
@@ -644,7 +642,7 @@ void GcodeArcStarts::add(const ClProgram& block) {
   }
 }
 
-int GcodeArcStarts::startsArc(int line) const {
+int GcodeArcStarts::startKind(int line) const {
   return line > 0 && static_cast<size_t>(line) < starts_.size() ? starts_[line] : 0;
 }
 

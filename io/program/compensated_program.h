@@ -77,7 +77,7 @@ class GcodeArcStarts {
   static constexpr char kRelative = 2;  // ... an incremental (G91) or drilling-cycle block
   void add(const ClProgram& block);
   // 0, kArc or kRelative: what the block after line `line` (1-based) needs of its end.
-  int startsArc(int line) const;
+  int startKind(int line) const;
 
  private:
   int mode_ = 0;             // the motion mode in force (G0 G1 G2 G3, G73-G89, G80)

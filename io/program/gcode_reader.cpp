@@ -1512,10 +1512,12 @@ class Reader {
     return default_offset_;
   }
 
-  double toolLength() const {
-    const auto set = set_tool_lengths_.find(h_);  // the program's own G10 L1
+  // The length of tool offset h (default: the H in force).
+  double toolLength() const { return toolLength(h_); }
+  double toolLength(int h) const {
+    const auto set = set_tool_lengths_.find(h);  // the program's own G10 L1 / L10
     if (set != set_tool_lengths_.end()) return set->second;
-    auto it = model_.setup.tool_lengths.find(h_);
+    auto it = model_.setup.tool_lengths.find(h);
     return it != model_.setup.tool_lengths.end() ? it->second : model_.setup.gauge_length;
   }
 
@@ -4203,14 +4205,7 @@ class Reader {
                "memory A: the one offset for H and D; L11: a wear) is not carried out");
     const int P = static_cast<int>(aw.at('P')->value);
     const double r = aw.at('R')->value * unit_;
-    if (absolute_) {
-      set_tool_lengths_[P] = r;
-    } else {
-      const int saved = h_;
-      h_ = P;
-      set_tool_lengths_[P] = toolLength() + r;
-      h_ = saved;
-    }
+    set_tool_lengths_[P] = absolute_ ? r : toolLength(P) + r;
     return "G10";
   }
 
