@@ -15,7 +15,7 @@ names=("$@")
 out="$here/build/fuzz"
 # As for the sanitized suite (scripts/run_sanitized.sh): leaks are checked (LeakSanitizer), with
 # tests/lsan.supp naming the third-party libraries that keep allocations to the end by design.
-export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1}"
+export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_string_checks=1:intercept_tls_get_addr=0}"
 export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$here/tests/lsan.supp:print_suppressions=0}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
 mkdir -p "$out"
