@@ -97,6 +97,9 @@ void addProgramOptions(CLI::App* cmd, ProgramOptions& o) {
                   "wear, taken as 0); without it G41/G42 are refused, since a path posted for the "
                   "control's full radius compensation is the part's contour")
       ->check(CLI::IsMember({"wear"}));
+  cmd->add_option("--tool-table", o.tool_table,
+                  "LinuxCNC's tool table (T1 P1 D6 ...; the machine's units): the diameters "
+                  "G41/G42 compensate by; G41.1/G42.1 carry theirs in the program");
   cmd->add_flag("--absolute-msys", o.absolute_msys,
                 "NX CLSF: read every MSYS in the CAD's absolute frame (default: the first MSYS "
                 "is the part frame and later ones are 3+2 set-ups relative to it)");

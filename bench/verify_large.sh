@@ -16,7 +16,7 @@ work="$(mktemp -d)"; [ -n "${TOLVER_BENCH_KEEP:-}" ] && echo "files kept in $wor
 "$make_samples" --large "$work"
 cd "$here"
 timer=()
-[ -x /usr/bin/time ] && timer=(/usr/bin/time -f "%e s wall, %M kB peak" -o "$work/time.txt")
+[ -x /usr/bin/time ] && timer=(/usr/bin/time -f "%e s wall, %U s user, %S s sys, %M kB peak" -o "$work/time.txt")
 start=$(date +%s.%N)
 "${timer[@]}" "$tolver" verify --machine samples/machines/matsuura_mc760vx_measured.xml \
   --setup samples/matsuura_setup.txt --cl "$work/sculptured_finish_large.apt" \

@@ -15,6 +15,7 @@
 #include "io/program/gcode_reader.h"
 #include "io/program/probe_file.h"
 #include "io/program/setup_file.h"
+#include "io/program/tool_table.h"
 #include "pipeline/parallel_prediction.h"
 
 namespace tolver {
@@ -169,6 +170,8 @@ ClProgram readProgram(LineSource& source, const std::string& path, bool gcode,
     if (o.units == "inch") go.unit_mm = 25.4;
     if (o.units == "mm") go.unit_mm = 1.0;
     go.cutter_comp_wear = o.cutter_comp == "wear";
+    if (!o.tool_table.empty())
+      go.tool_diameter_mm = readLinuxCncToolTable(o.tool_table, model.control.default_unit_mm);
     program =
         blocks ? readGcode(source, path, model, go, ranged) : readGcode(source, path, model, go);
   } else {

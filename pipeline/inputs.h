@@ -48,6 +48,9 @@ struct ProgramOptions {
   // "wear": G-code's G41/G42 read as wear compensation, the path as written is the tool centre
   // (GcodeReadOptions::cutter_comp_wear); "": refused.
   std::string cutter_comp;
+  // LinuxCNC's tool table (io/program/tool_table.h), in the control's default units: the
+  // diameters G41/G42 compensate by on a LinuxCNC control; "": none.
+  std::string tool_table;
 };
 // Whether the program reads as G-code (--nc, a G-code extension, or content that reads as
 // G-code); FieldError "cl" when neither or both of --cl and --nc are given.

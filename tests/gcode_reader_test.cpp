@@ -15,6 +15,7 @@
 #include "core/path/tool_path_prediction.h"
 #include "io/common/io_error.h"
 #include "io/machine/machine_file.h"
+#include "io/program/tool_table.h"
 #include "test_support.h"
 
 namespace tolver {
@@ -639,6 +640,99 @@ TEST(GcodeReader, LinuxCncDrillingCyclesInEveryPlaneAsItsInterpreterRunsThem) {
   const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
   EXPECT_NE(refusal("G21 G18\nG0 X0 Y0 Z0\nG81 X1 Z1 Y-1 R1 F10\n", vmc.model).find("FXY"),
             std::string::npos);
+}
+
+// The canonical moves LinuxCNC's interpreter printed for a program (its tests' "expected"): the
+// end of every STRAIGHT_TRAVERSE, STRAIGHT_FEED and ARC_FEED (with the arc's centre), inches,
+// the G5x and G92 offsets it printed (SET_G5X_OFFSET, SET_G92_OFFSET) added.
+struct CanonMove {
+  Eigen::Vector3d end;
+  std::optional<Eigen::Vector2d> centre;
+};
+std::vector<CanonMove> canonMoves(const std::string& expected_path) {
+  std::vector<CanonMove> moves;
+  Eigen::Vector3d g5x = Eigen::Vector3d::Zero(), g92 = Eigen::Vector3d::Zero();
+  std::istringstream in(test::readText(test::sourcePath(expected_path)));
+  for (std::string l; std::getline(in, l);) {
+    const size_t s = l.find("STRAIGHT_"), a = l.find("ARC_FEED("), o5 = l.find("SET_G5X_OFFSET("),
+                 o92 = l.find("SET_G92_OFFSET(");
+    double v[6];
+    int index = 0;
+    const Eigen::Vector3d off = g5x + g92;
+    if (o5 != std::string::npos)
+      EXPECT_EQ(std::sscanf(l.c_str() + o5 + 15, "%d, %lf, %lf, %lf", &index, &g5x.x(), &g5x.y(),
+                            &g5x.z()),
+                4);
+    else if (o92 != std::string::npos)
+      EXPECT_EQ(std::sscanf(l.c_str() + o92 + 15, "%lf, %lf, %lf", &g92.x(), &g92.y(), &g92.z()),
+                3);
+    else if (s != std::string::npos &&
+             std::sscanf(l.c_str() + l.find('(', s) + 1, "%lf, %lf, %lf", &v[0], &v[1], &v[2]) == 3)
+      moves.push_back({Eigen::Vector3d(v[0], v[1], v[2]) + off, std::nullopt});
+    else if (a != std::string::npos &&
+             std::sscanf(l.c_str() + a + 9, "%lf, %lf, %lf, %lf, %lf, %lf", &v[0], &v[1], &v[2],
+                         &v[3], &v[4], &v[5]) == 6)
+      moves.push_back({Eigen::Vector3d(v[0], v[1], v[5]) + off,
+                       Eigen::Vector2d(v[2] + off.x(), v[3] + off.y())});
+  }
+  return moves;
+}
+
+// Whether the path (mm) runs through LinuxCNC's moves in order: every end point on it, and each
+// arc's points between its ends on the circle about the printed centre (to the printed four
+// decimals). Returns "" or what differs.
+std::string followsCanonMoves(const ClProgram& p, const std::vector<CanonMove>& want) {
+  std::vector<Eigen::Vector3d> got;
+  for (const ClPoint& c : p.path) {
+    const Eigen::Vector3d v = c.p_w / 25.4;
+    if (got.empty() || (v - got.back()).norm() > 1e-9) got.push_back(v);
+  }
+  const double tol = 1.5e-4;
+  size_t j = 0;
+  for (size_t i = 0; i < want.size(); ++i) {
+    const CanonMove& m = want[i];
+    if (j > 0 && (got[j - 1] - m.end).norm() < tol) continue;  // a move of no length
+    if (m.centre) {
+      const double r = (m.end.head<2>() - *m.centre).norm();
+      while (j < got.size() && (got[j] - m.end).norm() >= tol) {
+        if (std::abs((got[j].head<2>() - *m.centre).norm() - r) > tol)
+          return "move " + std::to_string(i) + " (arc): point " + std::to_string(j) +
+                 " off its circle";
+        ++j;
+      }
+    }
+    if (j >= got.size() || (got[j] - m.end).norm() >= tol) {
+      std::ostringstream o;
+      o << "move " << i << ": LinuxCNC ends at " << m.end.transpose() << ", tolver at ";
+      if (j < got.size()) o << got[j].transpose();
+      return o.str();
+    }
+    ++j;
+  }
+  if (j != got.size()) return std::to_string(got.size() - j) + " point(s) after LinuxCNC's last";
+  return "";
+}
+
+// Cutter radius compensation against LinuxCNC's own interpreter: its tests/ccomp programs (entry
+// by line and by arc, outside corners rounded, inside corners drawn back, Z moves held in a
+// corner, G90/G91/G92 mixed) and the canonical moves it printed for them
+// (tests/fixtures/gcode/linuxcnc_ccomp). Before, G41/G42 were refused.
+TEST(GcodeReader, LinuxCncCutterRadiusCompensationAsItsInterpreterRunsIt) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const std::string dir = "tests/fixtures/gcode/linuxcnc_ccomp/";
+  GcodeReadOptions o;
+  o.tool_diameter_mm = readLinuxCncToolTable(test::sourcePath(dir + "tool_mm.tbl"), 1.0);
+  for (const char* name : {"mill-line-arc-entry", "mill-zchanges", "mill-g90g91g92"}) {
+    SCOPED_TRACE(name);
+    // LinuxCNC starts at 0 0 0; a program that never names Z starts there too.
+    const std::string text = "G0 Z0\n" + test::readText(test::sourcePath(dir + name + ".ngc"));
+    const ClProgram p = parseGcode(text, name, m.model, o);
+    const std::vector<CanonMove> want = canonMoves(dir + name + "_expected.txt");
+    ASSERT_GT(want.size(), 8u);
+    EXPECT_EQ(followsCanonMoves(p, want), "");
+    EXPECT_TRUE(hasNote(p, "cutter radius compensation carried out"));
+    EXPECT_GT(p.radius_comp_line, 0);
+  }
 }
 
 // Fanuc's G10 L10 P R (memory C: the tool length's geometry; HAAS alike) sets the length a later

@@ -87,6 +87,9 @@ struct ClProgram {
   // G-code: the first line of an O-word construct carried out (LinuxCNC sub call, loop, if), 0
   // when none: its lines ran other than once, in place (its points belong to its first line).
   int flow_line = 0;
+  // G-code: the first G41/G42 carried out as cutter radius compensation (LinuxCNC), 0 when none:
+  // the points are the tool centre the control computes, off the programmed contour.
+  int radius_comp_line = 0;
   int unknown_count = 0;                   // statements skipped as unknown
   std::vector<std::string> unknown_names;  // their major words, each once
   bool units_declared = false;             // UNITS / G20 / G21 seen (else the default was used)

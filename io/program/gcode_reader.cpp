@@ -245,6 +245,7 @@ class Reader {
     }
     for (const std::string& h : held) processLine(h);
     if (tail_mode_) replayTail();
+    compOff();  // the held moves of a compensation the file leaves on
     if (!held_flow_.empty()) {
       const OWord& o = held_open_;
       fail(held_flow_.front().line, o.column, "O",
@@ -335,6 +336,12 @@ class Reader {
                             std::to_string(first_block_delete_) +
                             ") read as run: with the control's block-delete switch on they are "
                             "skipped");
+    if (radius_comp_blocks_ > 0)
+      prog_.notes.push_back(
+          "cutter radius compensation carried out as LinuxCNC's interpreter does (" +
+          std::to_string(radius_comp_blocks_) + " G41/G42 block(s), the first at line " +
+          std::to_string(prog_.radius_comp_line) +
+          "): the path is the tool centre offset from the programmed contour");
     if (wear_comp_line_ > 0)
       prog_.notes.push_back("G41/G42 (first at line " + std::to_string(wear_comp_line_) +
                             ") read as wear compensation (--cutter-comp wear): the path is the "
@@ -3247,6 +3254,7 @@ class Reader {
       return c;
     }
     if (!any_axis) return "";
+    if (cycle_ && comp_side_ != 0) compRefuse(0, cycle_code_, "a drilling cycle");
     if (cycle_) return drillCycle(axis_words);
     return move(axis_words, motion_);
   }
@@ -3255,7 +3263,12 @@ class Reader {
   // carried out here, N F S skipped.
   void sortWords(const std::vector<Word>& words, AxisWords* axis_words, std::vector<const Word*>* g,
                  std::vector<const Word*>* m) {
+    block_d_.reset();
     for (const Word& w : words) {
+      if (w.letter == 'D' && model_.control.dialect != "sinumerik") {
+        block_d_ = w.value;  // G41/G42's tool or G41.1/G42.1's diameter (compOn)
+        block_d_column_ = w.column;
+      }
       if (w.letter == 'G') {
         g->push_back(&w);
       } else if (w.letter == 'M') {
@@ -3291,7 +3304,13 @@ class Reader {
                : "subprogram calls are not supported: expand them in the post");
     if (w.code == "M98" || w.code == "M97")
       fail(line_, w.column, w.code, "subprogram calls are not supported: expand them in the post");
+    if (w.code == "M0" || w.code == "M1" || w.code == "M60") compStop();
+    if (comp_side_ != 0 && (w.code == "M6" || w.code == "M61"))
+      compRefuse(w.column, w.code, "a tool change");
+    if (comp_side_ != 0 && tcpWordName(w.code))
+      compRefuse(w.column, w.code, "a TCP switch (" + w.code + ")");
     if (w.code == "M2" || w.code == "M30") {
+      compOff();
       endAt(w.code);
       endModes(w.code);
     } else if (w.code == "M6") {
@@ -3363,6 +3382,7 @@ class Reader {
       return static_cast<int>(axis_words.at('H')->value);
     };
     endModes(c);
+    if (comp_side_ != 0 && tcpWordName(c)) compRefuse(w.column, c, "a TCP switch (" + c + ")");
     if (tcpWord(c)) {
       if (c == "G49") tlc_ = false;
       if (c.rfind("G43", 0) == 0 || c == "G234") {
@@ -3398,6 +3418,22 @@ class Reader {
     if (linuxcnc && c == "G43.2")
       fail(line_, w.column, c,
            "G43.2 (an additional tool length offset, LinuxCNC) is not carried out");
+    if (linuxcnc && (c == "G41" || c == "G42" || c == "G41.1" || c == "G42.1")) {
+      compOn(w, axis_words);
+      return;
+    }
+    if (c == "G40") {
+      compOff();
+      return;
+    }
+    // What LinuxCNC refuses while cutter radius compensation is on (interp_convert.cc).
+    if (comp_side_ != 0 &&
+        (c == "G17" || c == "G18" || c == "G19" || c == "G20" || c == "G21" || c == "G70" ||
+         c == "G71" || c.rfind("G54", 0) == 0 || c.rfind("G55", 0) == 0 || c == "G56" ||
+         c == "G57" || c == "G58" || c.rfind("G59", 0) == 0 || c == "G154" || isHaasG110(c) ||
+         c == "G10" || c.rfind("G92", 0) == 0 || c == "G28" || c == "G30" || c == "G53" ||
+         isDrillingCycle(c)))
+      compRefuse(w.column, c, c);
     auto refused = refusedG().find(c);
     if (refused != refusedG().end() && !isDrillingCycle(c))
       fail(line_, w.column, c, refused->second);
@@ -3808,13 +3844,444 @@ class Reader {
     if (sin_turns_ > 0)
       fail(line_, 0, "TURN",
            "TURN= (full circles of a helix) on a block that is not an arc (G2/G3)");
+    comp_arc_not_allowed_ = false;
+    if (compActive()) {
+      if (rotary_words) compRefuse(0, motion, "a move with rotary words");
+      compStraight(start, end, motion == "G0");
+      return motion;
+    }
     updateRotaryWords(aw);
     emit(end, motion == "G0");
     return motion;
   }
 
+  // ------------------------------------------------------- cutter radius compensation (LinuxCNC)
+  // G41/G42 (the radius from the tool table, --tool-table: the D word's tool, else the tool in the
+  // spindle) and G41.1/G42.1 D<diameter> (LinuxCNC G-code reference, "G41, G42" and "G41.1,
+  // G42.1"), carried out as LinuxCNC's interpreter does (src/emc/rs274ngc: convert_straight_comp1/
+  // comp2 and convert_arc_comp1/comp2 in interp_convert.cc, the queue of interp_queue.cc), in G17:
+  // - the entry move (the first after G41/G42) ends a radius from its programmed end, square to
+  //   it (a line) or on the arc offset to the tool's side (an arc), from the uncompensated start;
+  // - each later move is offset by the radius to the tool's side and held until the next: an
+  //   outside (convex) corner gets an arc of the tool radius about the programmed corner (a G0
+  //   a straight traverse to its end); at an inside (concave) corner the held move's end is drawn
+  //   back to where the two offset paths meet (line-line, line-arc, arc-line, arc-arc), Z-only
+  //   moves held with it; a corner the tool cannot reach without gouging is refused as LinuxCNC
+  //   refuses it (concave within 0.05 rad: TOLERANCE_CONCAVE_CORNER);
+  // - G40 ends it: the next move starts from the compensated point (a line; an arc is refused);
+  //   M0, M1, M2, M30, M60 and the end of the file let the held move go as it is.
+  // A negative radius swaps the side. With a zero radius the path is as programmed. Refused while
+  // it is on (as LinuxCNC refuses most of them): rotary words, drilling cycles, G28/G30/G53,
+  // work offset, G92, unit, plane, TCP and tool changes, arcs with P turns. Other controls' G41/G42
+  // stay refused (their corners differ: Fanuc's types A/B/C).
+  struct CompMove {
+    bool arc = false, rapid = false;
+    Eigen::Vector3d end = Eigen::Vector3d::Zero();  // the tool centre's end (program coordinates)
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();  // an arc's centre
+    int turn = 0;      // an arc's sense: +1 counter-clockwise, -1 clockwise
+    double sweep = 0;  // an arc's sweep as queued (rad; 0: a corner arc), for the gouge test
+    Eigen::Vector2d dir = Eigen::Vector2d::Zero();  // a line's programmed direction, XY
+    int line = 0;
+    double feed = 0;
+  };
+  static constexpr double kConcaveCorner = 0.05;  // rad, LinuxCNC's TOLERANCE_CONCAVE_CORNER
+
+  bool compActive() const { return comp_side_ != 0 && comp_radius_ > 0; }
+  bool toolInsideArc(int turn) const {
+    return (comp_side_ > 0 && turn > 0) || (comp_side_ < 0 && turn < 0);
+  }
+  [[noreturn]] void compRefuse(int column, const std::string& word, const std::string& what) {
+    fail(line_, column, word,
+         what + " under cutter radius compensation (G4" + (comp_side_ > 0 ? "1" : "2") +
+             " at line " + std::to_string(comp_line_) + ") is not carried out: end it (G40) first");
+  }
+  [[noreturn]] void compGouge(const std::string& what) {
+    fail(line_, 0, "G4" + std::string(comp_side_ > 0 ? "1" : "2"),
+         what + " (LinuxCNC refuses the program here: cutter radius compensation from line " +
+             std::to_string(comp_line_) + ", tool radius " + formatNumber(comp_radius_ / unit_) +
+             ")");
+  }
+
+  // G41/G42 (tool table) or G41.1/G42.1 (D: the diameter) on a LinuxCNC control.
+  void compOn(const Word& w, const AxisWords& aw) {
+    const bool by_diameter = w.code == "G41.1" || w.code == "G42.1";
+    int side = w.code.rfind("G41", 0) == 0 ? 1 : -1;
+    if (plane_ != 2)
+      fail(line_, w.column, w.code,
+           "cutter radius compensation outside G17 (LinuxCNC's G18 is for lathes) is not carried "
+           "out");
+    if (comp_side_ != 0)
+      fail(line_, w.column, w.code,
+           "cutter radius compensation is already on (line " + std::to_string(comp_line_) +
+               "): LinuxCNC refuses to turn it on again");
+    double radius = 0;
+    if (by_diameter) {
+      if (!block_d_) fail(line_, w.column, w.code, w.code + " without D (the tool's diameter)");
+      if (aw.count('L'))
+        fail(line_, aw.at('L')->column, "L",
+             w.code + " L (a lathe tool's orientation) is not carried out");
+      radius = *block_d_ * unit_ / 2.0;
+    } else {
+      int tool = tool_;
+      if (block_d_) {
+        if (*block_d_ != std::round(*block_d_) || *block_d_ < 0)
+          fail(line_, block_d_column_, "D", w.code + " D must be a tool number (whole, >= 0)");
+        tool = static_cast<int>(*block_d_);
+      }
+      const auto it = opt_.tool_diameter_mm.find(tool);
+      // LinuxCNC's tool 0 is no tool, of no diameter.
+      const bool no_tool = tool == 0 && !opt_.tool_diameter_mm.empty();
+      if (it == opt_.tool_diameter_mm.end() && !no_tool)
+        fail(line_, w.column, w.code,
+             opt_.tool_diameter_mm.empty()
+                 ? "cutter radius compensation needs the tool's diameter: give the control's "
+                   "tool table (--tool-table), or --cutter-comp wear if the path already is the "
+                   "tool centre (the CAM's wear compensation)"
+                 : "tool " + std::to_string(tool) + " is not in the tool table (--tool-table)");
+      radius = it == opt_.tool_diameter_mm.end() ? 0.0 : it->second / 2.0;
+    }
+    if (radius < 0) {
+      radius = -radius;
+      side = -side;
+    }
+    comp_side_ = side;
+    comp_radius_ = radius;
+    comp_first_ = true;
+    comp_line_ = line_;
+    comp_cur_ = cur_xyz_;
+    comp_emitted_ = cur_xyz_;
+    if (prog_.radius_comp_line == 0) prog_.radius_comp_line = line_;
+    ++radius_comp_blocks_;
+  }
+
+  // G40, and the program's stops and end: the held moves go as they are.
+  void compOff() {
+    if (compActive() && !comp_first_) {
+      compFlush();
+      cur_xyz_ = comp_programmed_;
+      comp_arc_not_allowed_ = true;
+    }
+    comp_side_ = 0;
+    comp_first_ = true;
+  }
+  void compStop() {
+    if (compActive()) compFlush();
+  }
+
+  void compSetEndpoint(const Eigen::Vector2d& e) {
+    comp_endpoint_ = e;
+    comp_endpoint_valid_ = true;
+  }
+  static double findTurn(const Eigen::Vector2d& p1, const Eigen::Vector2d& c, int turn,
+                         const Eigen::Vector2d& p2) {
+    if (turn == 0) return 0.0;
+    double alpha = std::atan2(p1.y() - c.y(), p1.x() - c.x());
+    double beta = std::atan2(p2.y() - c.y(), p2.x() - c.x());
+    if (turn > 0) {
+      if (beta <= alpha) beta += 2 * M_PI;
+      return beta - alpha + (turn - 1) * 2 * M_PI;
+    }
+    if (alpha <= beta) alpha += 2 * M_PI;
+    return beta - alpha + (turn + 1) * 2 * M_PI;
+  }
+
+  // LinuxCNC's move_endpoint_and_flush: the held moves' XY end moved to e, then let go.
+  void compMoveEndpointAndFlush(const Eigen::Vector2d& e) {
+    for (CompMove& q : comp_queue_) {
+      if (q.arc) {
+        const double r1 = (q.end.head<2>() - q.centre).norm(), r2 = (e - q.centre).norm();
+        const double l2 = findTurn(comp_endpoint_, q.centre, q.turn, e);
+        if (std::abs(r1 - r2) > 0.01 * unit_)
+          compGouge("the compensated arc's ends are " + formatNumber((r1 - r2) / unit_) +
+                    " apart in radius");
+        if (q.sweep != 0.0 && comp_endpoint_valid_ && std::abs(l2) > std::abs(q.sweep) + 0.0254)
+          compGouge("an arc in a concave corner the tool cannot reach without gouging");
+      } else if (comp_endpoint_valid_ && q.dir.dot(e - comp_endpoint_) < 0) {
+        compGouge(std::string(q.rapid ? "a straight traverse" : "a straight feed") +
+                  " in a concave corner the tool cannot reach without gouging");
+      }
+      q.end.head<2>() = e;
+    }
+    compFlush();
+    compSetEndpoint(e);
+  }
+
+  // The held moves emitted in order (their own line and feed), the queue emptied.
+  void compFlush() {
+    comp_endpoint_valid_ = false;
+    if (comp_queue_.empty()) return;
+    const Eigen::Vector3d programmed = cur_xyz_;
+    const int line = line_;
+    const double feed = feed_word_;
+    for (const CompMove& q : comp_queue_) {
+      line_ = q.line;
+      feed_word_ = q.feed;
+      if (q.arc) {
+        const Eigen::Vector3d c(q.centre.x(), q.centre.y(), comp_emitted_.z());
+        emitArc(q.turn > 0 ? "G3" : "G2", comp_emitted_, q.end, c, 0, std::nullopt);
+      } else {
+        emit(q.end, q.rapid);
+      }
+      comp_emitted_ = q.end;
+    }
+    comp_queue_.clear();
+    line_ = line;
+    feed_word_ = feed;
+    cur_xyz_ = programmed;
+  }
+
+  void compEnqueue(CompMove m) {
+    m.line = line_;
+    m.feed = feed_word_;
+    comp_queue_.push_back(m);
+  }
+
+  // A straight move (G0/G1) from the programmed start to the programmed end.
+  void compStraight(const Eigen::Vector3d& start, const Eigen::Vector3d& end, bool rapid) {
+    const double R = comp_radius_;
+    const Eigen::Vector2d c = comp_cur_.head<2>(), p = end.head<2>();
+    if (comp_first_) {  // convert_straight_comp1
+      if (!((p - c).norm() > R))
+        compGouge(
+            "the entry move of cutter radius compensation is not longer than the tool "
+            "radius");
+      const double alpha = std::atan2(p.y() - c.y(), p.x() - c.x()) + comp_side_ * M_PI / 2;
+      const Eigen::Vector2d e = p + R * Eigen::Vector2d(std::cos(alpha), std::sin(alpha));
+      compSetEndpoint(c);
+      CompMove m;
+      m.rapid = rapid;
+      m.end = Eigen::Vector3d(e.x(), e.y(), end.z());
+      m.dir = Eigen::Vector2d(std::cos(alpha), std::sin(alpha));
+      compEnqueue(m);
+      comp_first_ = false;
+      comp_cur_ = m.end;
+      compProgrammed(end);
+      return;
+    }
+    const Eigen::Vector2d op = start.head<2>();
+    CompMove m;
+    m.rapid = rapid;
+    if (p == op) {  // no XY motion: held with the move before it
+      m.end = Eigen::Vector3d(c.x(), c.y(), end.z());
+      m.dir = Eigen::Vector2d::Zero();
+      compEnqueue(m);
+      comp_cur_ = m.end;
+      compProgrammed(end);
+      return;
+    }
+    double theta = std::atan2(c.y() - op.y(), c.x() - op.x());
+    double alpha = std::atan2(p.y() - op.y(), p.x() - op.x());
+    double beta = 0, gamma = 0;
+    if (comp_side_ > 0) {
+      if (theta < alpha) theta += 2 * M_PI;
+      beta = theta - alpha - M_PI / 2;
+      gamma = M_PI / 2;
+    } else {
+      if (alpha < theta) alpha += 2 * M_PI;
+      beta = alpha - theta - M_PI / 2;
+      gamma = -M_PI / 2;
+    }
+    const Eigen::Vector2d to_side(std::cos(alpha + gamma), std::sin(alpha + gamma));
+    const Eigen::Vector2d e = p + R * to_side;
+    Eigen::Vector2d mid = op + R * to_side;
+    const double small = kConcaveCorner;
+    const CompMove* front = comp_queue_.empty() ? nullptr : &comp_queue_.front();
+    const bool front_arc = front != nullptr && front->arc;
+    bool concave = beta < -small || beta > M_PI + small;
+    if (!concave && beta > M_PI - small && front_arc &&
+        ((comp_side_ < 0 && front->turn > 0) || (comp_side_ > 0 && front->turn < 0)))
+      concave = true;                // an "h": kept above and to the side
+    if (!concave && beta > small) {  // an outside corner: an arc about it (a G0: a line)
+      compMoveEndpointAndFlush(c);
+      CompMove corner;
+      corner.arc = !rapid;
+      corner.rapid = rapid;
+      corner.end = Eigen::Vector3d(mid.x(), mid.y(), comp_cur_.z());
+      corner.centre = op;
+      corner.turn = comp_side_ > 0 ? -1 : 1;
+      corner.dir = Eigen::Vector2d::Zero();
+      compEnqueue(corner);
+      compFlush();
+      compSetEndpoint(mid);
+    } else if (concave) {
+      if (!front_arc) {  // line to line: the held line's end drawn back
+        const double halfcorner = (beta + M_PI) / 2.0;
+        if (halfcorner == 0.0) compGouge("a zero-degree inside corner");
+        const double retreat = R / std::tan(halfcorner);
+        mid = c + retreat * Eigen::Vector2d(std::cos(theta + gamma), std::sin(theta + gamma));
+        compMoveEndpointAndFlush(mid);
+      } else {  // arc to line: where the line's offset meets the held arc
+        const CompMove& prev = *front;
+        const double oldrad = (prev.centre - prev.end.head<2>()).norm();
+        const double base_dir = std::atan2(p.y() - op.y(), p.x() - op.x());
+        const double th = prev.turn > 0 ? base_dir + M_PI / 2 : base_dir - M_PI / 2;
+        const double phi = std::atan2(prev.centre.y() - op.y(), prev.centre.x() - op.x());
+        const bool inside = toolInsideArc(prev.turn);
+        const double oldrad_uncomp = inside ? oldrad + R : oldrad - R;
+        const double d = oldrad_uncomp * std::cos(th - phi);
+        const double l = (inside ? d - R : d + R) / oldrad;
+        if (l > 1.0 || l < -1.0)
+          compGouge(
+              "an arc to a line makes a corner the compensated tool cannot fit in "
+              "without gouging");
+        const double a = std::acos(l);
+        const double angle =
+            inside ? (prev.turn > 0 ? -a : a) + th + M_PI : (prev.turn > 0 ? a : -a) + th + M_PI;
+        mid = prev.centre + oldrad * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+        compMoveEndpointAndFlush(mid);
+      }
+    } else {  // straight on, or a tangent arc to a line
+      compFlush();
+      compSetEndpoint(c);
+    }
+    m.end = Eigen::Vector3d(e.x(), e.y(), end.z());
+    m.dir = p - op;
+    compEnqueue(m);
+    comp_cur_ = m.end;
+    compProgrammed(end);
+  }
+
+  // An arc (G2/G3) from the programmed start to the programmed end about its centre.
+  void compArc(const std::map<char, const Word*>& aw, const std::string& motion,
+               const Eigen::Vector3d& start, const Eigen::Vector3d& end,
+               const Eigen::Vector3d& centre3, int turns) {
+    if (turns != 0) compRefuse(aw.count('P') ? aw.at('P')->column : 0, "P", "an arc of P turns");
+    const double R = comp_radius_;
+    const int turn = motion == "G3" ? 1 : -1;
+    const Eigen::Vector2d c = comp_cur_.head<2>(), p = end.head<2>();
+    Eigen::Vector2d centre = centre3.head<2>();
+    const bool inside = toolInsideArc(turn);
+    const double arc_radius = (centre - p).norm();
+    CompMove m;
+    m.arc = true;
+    m.turn = turn;
+    if (comp_first_) {  // convert_arc_comp1
+      if (!((p - c).norm() > R))
+        compGouge(
+            "the entry arc of cutter radius compensation does not end farther than the "
+            "tool radius from its start");
+      if (inside && arc_radius <= R) compGouge("the tool radius is not less than the arc's");
+      const double gamma = inside ? std::atan2(centre.y() - p.y(), centre.x() - p.x())
+                                  : std::atan2(p.y() - centre.y(), p.x() - centre.x());
+      const Eigen::Vector2d e = p + R * Eigen::Vector2d(std::cos(gamma), std::sin(gamma));
+      // The compensated arc's centre: on the line from its end toward the programmed centre,
+      // as far from its start as from its end.
+      const double b_len = (c - e).norm() / 2.0;
+      const double ab_ang = std::atan2(centre.y() - e.y(), centre.x() - e.x());
+      const double a_ang = std::atan2(c.y() - e.y(), c.x() - e.x()) - ab_ang;
+      if (std::abs(std::cos(a_ang)) < 1e-7) compGouge("the tool radius is not less than the arc's");
+      const double c_len = b_len / std::cos(a_ang);
+      centre = e + c_len * Eigen::Vector2d(std::cos(ab_ang), std::sin(ab_ang));
+      m.end = Eigen::Vector3d(e.x(), e.y(), end.z());
+      m.centre = centre;
+      m.sweep = findTurn(c, centre, turn, e);
+      compEnqueue(m);
+      comp_first_ = false;
+      comp_cur_ = m.end;
+      compProgrammed(end);
+      return;
+    }
+    const Eigen::Vector2d op = start.head<2>();
+    double theta = std::atan2(c.y() - op.y(), c.x() - op.x());
+    theta = comp_side_ > 0 ? theta - M_PI / 2 : theta + M_PI / 2;
+    double delta = std::atan2(centre.y() - op.y(), centre.x() - op.x());
+    const double alpha = turn > 0 ? delta - M_PI / 2 : delta + M_PI / 2;
+    double beta = comp_side_ > 0 ? theta - alpha : alpha - theta;
+    beta = beta > 1.5 * M_PI ? beta - 2 * M_PI : beta < -M_PI / 2 ? beta + 2 * M_PI : beta;
+    double gamma = 0;
+    if (inside) {
+      gamma = std::atan2(centre.y() - p.y(), centre.x() - p.x());
+      if (arc_radius <= R) compGouge("the tool radius is not less than the arc's");
+    } else {
+      gamma = std::atan2(p.y() - centre.y(), p.x() - centre.x());
+      delta += M_PI;
+    }
+    const Eigen::Vector2d e = p + R * Eigen::Vector2d(std::cos(gamma), std::sin(gamma));
+    const double small = kConcaveCorner;
+    const CompMove* front = comp_queue_.empty() ? nullptr : &comp_queue_.front();
+    if (beta < -small || beta > M_PI + small || (std::abs(beta - M_PI) < small && !inside)) {
+      Eigen::Vector2d mid;
+      if (front == nullptr || !front->arc) {  // line to arc
+        const double cy = arc_radius * std::sin(beta - M_PI / 2);
+        const double dist = inside ? arc_radius - R : arc_radius + R;
+        const double l = (inside ? cy + R : cy - R) / dist;
+        if (l > 1.0 || l < -1.0)
+          compGouge("an arc in a concave corner the tool cannot reach without gouging");
+        const double a = std::asin(l);
+        const double angle = inside ? (turn > 0 ? theta + a : theta - a)
+                                    : (turn > 0 ? theta + M_PI - a : theta + M_PI + a);
+        mid = centre + dist * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+      } else {  // arc to arc
+        const CompMove& prev = *front;
+        const double oldrad = (prev.centre - prev.end.head<2>()).norm();
+        const double newrad = inside ? arc_radius - R : arc_radius + R;
+        const double arc_cc = (prev.centre - centre).norm();
+        if (oldrad == 0 || arc_cc == 0)
+          compGouge("an arc to an arc about the same centre at a corner");
+        const double a =
+            (oldrad * oldrad + arc_cc * arc_cc - newrad * newrad) / (2 * oldrad * arc_cc);
+        if (a > 1.0 || a < -1.0)
+          compGouge(
+              "an arc to an arc makes a corner the compensated tool cannot fit in "
+              "without gouging");
+        const double pullback = std::acos(a);
+        const double cc_dir =
+            std::atan2(centre.y() - prev.centre.y(), centre.x() - prev.centre.x());
+        const bool prev_inside = toolInsideArc(prev.turn);
+        const double dir = prev_inside == (turn > 0) ? cc_dir + pullback : cc_dir - pullback;
+        mid = prev.centre + oldrad * Eigen::Vector2d(std::cos(dir), std::sin(dir));
+      }
+      compMoveEndpointAndFlush(mid);
+    } else if (beta > small) {  // an outside corner: an arc about it first
+      const Eigen::Vector2d mid = op + R * Eigen::Vector2d(std::cos(delta), std::sin(delta));
+      compFlush();
+      CompMove corner;
+      corner.arc = true;
+      corner.end = Eigen::Vector3d(mid.x(), mid.y(), comp_cur_.z());
+      corner.centre = op;
+      corner.turn = comp_side_ > 0 ? -1 : 1;
+      compEnqueue(corner);
+      compFlush();
+      compSetEndpoint(mid);
+    } else {  // tangent
+      compFlush();
+      compSetEndpoint(c);
+    }
+    m.end = Eigen::Vector3d(e.x(), e.y(), end.z());
+    m.centre = centre;
+    m.sweep = findTurn(op, centre, turn, p);
+    compEnqueue(m);
+    comp_cur_ = m.end;
+    compProgrammed(end);
+  }
+
+  // The programmed point the next move starts from (what relative words and arc centres read).
+  void compProgrammed(const Eigen::Vector3d& end) {
+    comp_programmed_ = end;
+    cur_xyz_ = end;
+  }
+
   void arc(const std::map<char, const Word*>& aw, const std::string& motion,
            const Eigen::Vector3d& start, const Eigen::Vector3d& end) {
+    std::optional<Eigen::Vector3d> other_centre;
+    const Eigen::Vector3d centre = arcCentre(aw, motion, start, end, &other_centre);
+    const int turns = arcTurns(aw);
+    if (comp_arc_not_allowed_)
+      fail(line_, 0, motion,
+           "an arc as the first move after G40 (LinuxCNC refuses it: the move from the "
+           "compensated point must be a line)");
+    if (compActive()) {
+      compArc(aw, motion, start, end, centre, turns);
+      return;
+    }
+    emitArc(motion, start, end, centre, turns, other_centre);
+  }
+
+  // The centre of the block's arc from start to end (R, or I J K as the arc distance mode reads
+  // them); `other_centre`: I J K read the other way, for a refusal's hint.
+  Eigen::Vector3d arcCentre(const std::map<char, const Word*>& aw, const std::string& motion,
+                            const Eigen::Vector3d& start, const Eigen::Vector3d& end,
+                            std::optional<Eigen::Vector3d>* other_centre_out) {
     Eigen::Vector3d n = Eigen::Vector3d::Zero();
     n[plane_] = 1.0;
     const Eigen::Vector3d axis = motion == "G3" ? n : -n;
@@ -3867,7 +4334,13 @@ class Reader {
         other_centre = c - n * n.dot(c - start);
       }
     }
-    // Full turns before the end (LinuxCNC: P, the number of turns, 1 by default).
+    *other_centre_out = other_centre;
+    return centre;
+  }
+
+  // The full turns before the end: LinuxCNC's P (the number of turns, 1 by default) less one,
+  // Sinumerik's TURN=.
+  int arcTurns(const std::map<char, const Word*>& aw) {
     int turns = 0;
     if (aw.count('P')) {
       const Word& p = *aw.at('P');
@@ -3880,6 +4353,17 @@ class Reader {
       turns = static_cast<int>(p.value) - 1;
     }
     if (sin_turns_ >= 0) turns = sin_turns_;  // Sinumerik's TURN= on this block
+    return turns;
+  }
+
+  // The arc from start to end about centre (G2 clockwise, G3 counter-clockwise about the
+  // plane's normal), expanded within the chordal tolerance and emitted.
+  void emitArc(const std::string& motion, const Eigen::Vector3d& start, const Eigen::Vector3d& end,
+               const Eigen::Vector3d& centre, int turns,
+               const std::optional<Eigen::Vector3d>& other_centre) {
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    n[plane_] = 1.0;
+    const Eigen::Vector3d axis = motion == "G3" ? n : -n;
     std::vector<Eigen::Vector3d> pts;
     const double tol = opt_.chordal_tolerance_mm;
     const double r0 = (start - centre - n * n.dot(start - centre)).norm();
@@ -4352,7 +4836,22 @@ class Reader {
   bool bare_point_ = false;                         // a number written "10." (noteDecimalPoint)
   int first_integer_line_ = 0;                      // a non-zero number without a point
   std::string first_integer_;
-  int wear_comp_line_ = 0;                  // the first G41/G42 read as wear compensation
+  int wear_comp_line_ = 0;  // the first G41/G42 read as wear compensation
+  // Cutter radius compensation (compOn): +1 left (G41), -1 right (G42), 0 off; the radius (mm);
+  // the first move after it turned on still to come; the G41/G42 line; the tool centre's
+  // position, the last point emitted and the programmed point (program coordinates); the held
+  // moves and the start of the first (LinuxCNC's endpoint); a G40 just made (an arc refused).
+  int comp_side_ = 0;
+  double comp_radius_ = 0;
+  bool comp_first_ = true;
+  int comp_line_ = 0, radius_comp_blocks_ = 0;
+  Eigen::Vector3d comp_cur_ = Eigen::Vector3d::Zero(), comp_emitted_ = Eigen::Vector3d::Zero(),
+                  comp_programmed_ = Eigen::Vector3d::Zero();
+  std::vector<CompMove> comp_queue_;
+  Eigen::Vector2d comp_endpoint_ = Eigen::Vector2d::Zero();
+  bool comp_endpoint_valid_ = false, comp_arc_not_allowed_ = false;
+  std::optional<double> block_d_;  // the block's D word (LinuxCNC, ISO)
+  int block_d_column_ = 0;
   int g92_line_ = 0;                        // the first G92..G92.3
   int stored_cycles_ = 0;                   // cycle blocks with L0/K0 (no hole)
   std::map<int, double> set_tool_lengths_;  // G10 L1 P Z: tool lengths the program sets (mm)

@@ -34,11 +34,13 @@
 // every axis has a commanded position is not a point of the path. LinuxCNC (dialect
 // "linuxcnc"): O-word subs, calls, loops and conditions, carried out (ClProgram::flow_line);
 // ISO: M98/M97 subprograms after the main program; G92 offsets (not on a Sinumerik); Sinumerik:
-// jumps, IF/WHILE/LOOP/FOR/REPEAT. Refused with file:line and the construct: other subprograms,
-// macros and control flow (G65, Fanuc macro B, Sinumerik CASE and CALL), cutter radius
-// compensation (G41/G42), coordinate rotation and scaling (G68, G51), polar coordinates (G16),
-// G87, Sinumerik CYCLE800 with solid angles. Words that
-// do not change the path are listed once as ignored.
+// jumps, IF/WHILE/LOOP/FOR/REPEAT; LinuxCNC: cutter radius compensation (G41/G42 with the tool
+// table, G41.1/G42.1), as its interpreter does it. Refused with file:line and the construct: other
+// subprograms, macros and control flow (G65, Fanuc macro B, Sinumerik CASE and CALL), other
+// controls' cutter radius compensation (G41/G42), coordinate rotation and scaling (G68, G51), polar
+// coordinates (G16), G87, Sinumerik CYCLE800 with solid angles. Words that do not change the path
+// are listed once as ignored.
+#include <map>
 #include <string>
 #include <string_view>
 
@@ -57,6 +59,9 @@ struct GcodeReadOptions {
   // contour, off the tool centre by the radius. G41.1/G42.1 (LinuxCNC: the diameter in the
   // program) are refused either way.
   bool cutter_comp_wear = false;
+  // The control's tool table (LinuxCNC: --tool-table, io/program/tool_table.h): per tool number,
+  // the diameter (mm) that G41/G42 compensate by on a LinuxCNC control.
+  std::map<int, double> tool_diameter_mm;
 };
 
 // Throws InputError naming file:line:column and the word on malformed or unsupported input.
