@@ -643,17 +643,26 @@ TEST(GcodeReader, LinuxCncDrillingCyclesInEveryPlaneAsItsInterpreterRunsThem) {
 }
 
 // The canonical moves LinuxCNC's interpreter printed for a program (its tests' "expected"): the
-// end of every STRAIGHT_TRAVERSE, STRAIGHT_FEED and ARC_FEED (with the arc's centre), inches,
-// the G5x and G92 offsets it printed (SET_G5X_OFFSET, SET_G92_OFFSET) added.
+// end of every STRAIGHT_TRAVERSE, STRAIGHT_FEED and ARC_FEED (with the arc's centre) in mm, the
+// G5x and G92 offsets it printed (SET_G5X_OFFSET, SET_G92_OFFSET) added, in the units it printed
+// (USE_LENGTH_UNITS).
 struct CanonMove {
-  Eigen::Vector3d end;
-  std::optional<Eigen::Vector2d> centre;
+  Eigen::Vector3d end;                    // mm
+  std::optional<Eigen::Vector3d> centre;  // an arc's, its coordinate along `normal` 0
+  int normal = 2;                         // the arc's plane: its normal's index (XY: 2, XZ: 1)
+  double unit = 1.0;                      // mm per unit printed (the tolerance: its last digit)
 };
 std::vector<CanonMove> canonMoves(const std::string& expected_path) {
   std::vector<CanonMove> moves;
   Eigen::Vector3d g5x = Eigen::Vector3d::Zero(), g92 = Eigen::Vector3d::Zero();
+  double unit = 1.0;
+  int normal = 2;
   std::istringstream in(test::readText(test::sourcePath(expected_path)));
   for (std::string l; std::getline(in, l);) {
+    if (l.find("USE_LENGTH_UNITS(") != std::string::npos)
+      unit = l.find("INCHES") != std::string::npos ? 25.4 : 1.0;
+    if (l.find("SELECT_PLANE(") != std::string::npos)
+      normal = l.find("_XZ") != std::string::npos ? 1 : l.find("_YZ") != std::string::npos ? 0 : 2;
     const size_t s = l.find("STRAIGHT_"), a = l.find("ARC_FEED("), o5 = l.find("SET_G5X_OFFSET("),
                  o92 = l.find("SET_G92_OFFSET(");
     double v[6];
@@ -668,36 +677,52 @@ std::vector<CanonMove> canonMoves(const std::string& expected_path) {
                 3);
     else if (s != std::string::npos &&
              std::sscanf(l.c_str() + l.find('(', s) + 1, "%lf, %lf, %lf", &v[0], &v[1], &v[2]) == 3)
-      moves.push_back({Eigen::Vector3d(v[0], v[1], v[2]) + off, std::nullopt});
+      moves.push_back({unit * (Eigen::Vector3d(v[0], v[1], v[2]) + off), std::nullopt, 2, unit});
     else if (a != std::string::npos &&
              std::sscanf(l.c_str() + a + 9, "%lf, %lf, %lf, %lf, %lf, %lf", &v[0], &v[1], &v[2],
-                         &v[3], &v[4], &v[5]) == 6)
-      moves.push_back({Eigen::Vector3d(v[0], v[1], v[5]) + off,
-                       Eigen::Vector2d(v[2] + off.x(), v[3] + off.y())});
+                         &v[3], &v[4], &v[5]) == 6) {
+      // ARC_FEED(end1, end2, centre1, centre2, turn, end along the normal): X Y in XY, Z X in XZ.
+      const Eigen::Vector3d end =
+          normal == 2 ? Eigen::Vector3d(v[0], v[1], v[5]) : Eigen::Vector3d(v[1], v[5], v[0]);
+      Eigen::Vector3d centre =
+          normal == 2 ? Eigen::Vector3d(v[2], v[3], 0) : Eigen::Vector3d(v[3], 0, v[2]);
+      centre += off;
+      centre[normal] = 0;
+      moves.push_back({unit * (end + off), unit * centre, normal, unit});
+    }
   }
   return moves;
 }
 
 // Whether the path (mm) runs through LinuxCNC's moves in order: every end point on it, and each
 // arc's points between its ends on the circle about the printed centre (to the printed four
-// decimals). Returns "" or what differs.
+// decimals). The path starts at LinuxCNC's start, 0 0 0. Returns "" or what differs.
 std::string followsCanonMoves(const ClProgram& p, const std::vector<CanonMove>& want) {
   std::vector<Eigen::Vector3d> got;
-  for (const ClPoint& c : p.path) {
-    const Eigen::Vector3d v = c.p_w / 25.4;
-    if (got.empty() || (v - got.back()).norm() > 1e-9) got.push_back(v);
-  }
-  const double tol = 1.5e-4;
-  size_t j = 0;
+  for (const ClPoint& c : p.path)
+    if (got.empty() || (c.p_w - got.back()).norm() > 1e-9) got.push_back(c.p_w);
+  if (got.empty() || got[0].norm() > 1e-9) return "the path does not start at 0 0 0";
+  size_t j = 1;
   for (size_t i = 0; i < want.size(); ++i) {
     const CanonMove& m = want[i];
-    if (j > 0 && (got[j - 1] - m.end).norm() < tol) continue;  // a move of no length
+    const double tol = 1.5e-4 * m.unit;
+    // A straight move of no length (an arc back to its start is a full circle).
+    if (!m.centre && (got[j - 1] - m.end).norm() < tol) continue;
     if (m.centre) {
-      const double r = (m.end.head<2>() - *m.centre).norm();
+      auto radius = [&](Eigen::Vector3d q) {
+        q[m.normal] = 0;
+        return (q - *m.centre).norm();
+      };
+      const double r = radius(m.end);
       while (j < got.size() && (got[j] - m.end).norm() >= tol) {
-        if (std::abs((got[j].head<2>() - *m.centre).norm() - r) > tol)
-          return "move " + std::to_string(i) + " (arc): point " + std::to_string(j) +
-                 " off its circle";
+        // (the centre and the end both rounded to the last digit printed)
+        if (std::abs(radius(got[j]) - r) > 2 * tol) {
+          std::ostringstream o;
+          o << "move " << i << " (arc): point " << j << " (" << got[j].transpose()
+            << ") off its circle about " << m.centre->transpose() << ", radius " << r << " mm, by "
+            << radius(got[j]) - r << " mm";
+          return o.str();
+        }
         ++j;
       }
     }
@@ -722,10 +747,13 @@ TEST(GcodeReader, LinuxCncCutterRadiusCompensationAsItsInterpreterRunsIt) {
   const std::string dir = "tests/fixtures/gcode/linuxcnc_ccomp/";
   GcodeReadOptions o;
   o.tool_diameter_mm = readLinuxCncToolTable(test::sourcePath(dir + "tool_mm.tbl"), 1.0);
-  for (const char* name : {"mill-line-arc-entry", "mill-zchanges", "mill-g90g91g92"}) {
+  for (const char* name :
+       {"mill-line-arc-entry", "mill-zchanges", "mill-g90g91g92", "inside-corners", "cam-nisley",
+        "inverse-time-with-comp", "crazy-paths"}) {
     SCOPED_TRACE(name);
-    // LinuxCNC starts at 0 0 0; a program that never names Z starts there too.
-    const std::string text = "G0 Z0\n" + test::readText(test::sourcePath(dir + name + ".ngc"));
+    // LinuxCNC starts at 0 0 0 (these programs leave axes unnamed until they move them).
+    const std::string text =
+        "G21 G0 X0 Y0 Z0\n" + test::readText(test::sourcePath(dir + name + ".ngc"));
     const ClProgram p = parseGcode(text, name, m.model, o);
     const std::vector<CanonMove> want = canonMoves(dir + name + "_expected.txt");
     ASSERT_GT(want.size(), 8u);

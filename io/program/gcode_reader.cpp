@@ -3253,7 +3253,13 @@ class Reader {
       cycle_ = sin_mcall_;
       return c;
     }
-    if (!any_axis) return "";
+    // An arc with its centre words and no axis word ends where it starts: a full circle (RS274NGC
+    // and LinuxCNC: "G2 I1"; Fanuc and HAAS: "G02 I-10."), the hole-milling circle. It was read
+    // as no move.
+    const char* in_plane = plane_ == 2 ? "IJ" : plane_ == 1 ? "IK" : "JK";
+    const bool full_circle = !any_axis && !cycle_ && (motion_ == "G2" || motion_ == "G3") &&
+                             (axis_words.count(in_plane[0]) || axis_words.count(in_plane[1]));
+    if (!any_axis && !full_circle) return "";
     if (cycle_ && comp_side_ != 0) compRefuse(0, cycle_code_, "a drilling cycle");
     if (cycle_) return drillCycle(axis_words);
     return move(axis_words, motion_);
@@ -3859,7 +3865,8 @@ class Reader {
   // G41/G42 (the radius from the tool table, --tool-table: the D word's tool, else the tool in the
   // spindle) and G41.1/G42.1 D<diameter> (LinuxCNC G-code reference, "G41, G42" and "G41.1,
   // G42.1"), carried out as LinuxCNC's interpreter does (src/emc/rs274ngc: convert_straight_comp1/
-  // comp2 and convert_arc_comp1/comp2 in interp_convert.cc, the queue of interp_queue.cc), in G17:
+  // comp2 and convert_arc_comp1/comp2 in interp_convert.cc, the queue of interp_queue.cc), in G17
+  // (X Y) or G18 (Z X):
   // - the entry move (the first after G41/G42) ends a radius from its programmed end, square to
   //   it (a line) or on the arc offset to the tool's side (an arc), from the uncompensated start;
   // - each later move is offset by the radius to the tool's side and held until the next: an
@@ -3886,6 +3893,16 @@ class Reader {
   };
   static constexpr double kConcaveCorner = 0.05;  // rad, LinuxCNC's TOLERANCE_CONCAVE_CORNER
 
+  // The plane's coordinates (LinuxCNC: X Y in G17, Z X in G18), and back with the third
+  // coordinate of `w3` (the one along the plane's normal).
+  Eigen::Vector2d uv(const Eigen::Vector3d& p) const {
+    return plane_ == 2 ? Eigen::Vector2d(p.x(), p.y()) : Eigen::Vector2d(p.z(), p.x());
+  }
+  Eigen::Vector3d fromUv(const Eigen::Vector2d& q, const Eigen::Vector3d& w3) const {
+    return plane_ == 2 ? Eigen::Vector3d(q.x(), q.y(), w3.z())
+                       : Eigen::Vector3d(q.y(), w3.y(), q.x());
+  }
+
   bool compActive() const { return comp_side_ != 0 && comp_radius_ > 0; }
   bool toolInsideArc(int turn) const {
     return (comp_side_ > 0 && turn > 0) || (comp_side_ < 0 && turn < 0);
@@ -3906,10 +3923,9 @@ class Reader {
   void compOn(const Word& w, const AxisWords& aw) {
     const bool by_diameter = w.code == "G41.1" || w.code == "G42.1";
     int side = w.code.rfind("G41", 0) == 0 ? 1 : -1;
-    if (plane_ != 2)
+    if (plane_ == 0)
       fail(line_, w.column, w.code,
-           "cutter radius compensation outside G17 (LinuxCNC's G18 is for lathes) is not carried "
-           "out");
+           "cutter radius compensation in G19 (LinuxCNC refuses it: G17 or G18 only)");
     if (comp_side_ != 0)
       fail(line_, w.column, w.code,
            "cutter radius compensation is already on (line " + std::to_string(comp_line_) +
@@ -3939,6 +3955,11 @@ class Reader {
                    "tool centre (the CAM's wear compensation)"
                  : "tool " + std::to_string(tool) + " is not in the tool table (--tool-table)");
       radius = it == opt_.tool_diameter_mm.end() ? 0.0 : it->second / 2.0;
+      if (!std::isfinite(radius))
+        fail(line_, w.column, w.code,
+             "tool " + std::to_string(tool) +
+                 " is a lathe tool in the tool table (Q orientation): its compensation is not "
+                 "carried out");
     }
     if (radius < 0) {
       radius = -radius;
@@ -3989,7 +4010,7 @@ class Reader {
   void compMoveEndpointAndFlush(const Eigen::Vector2d& e) {
     for (CompMove& q : comp_queue_) {
       if (q.arc) {
-        const double r1 = (q.end.head<2>() - q.centre).norm(), r2 = (e - q.centre).norm();
+        const double r1 = (uv(q.end) - q.centre).norm(), r2 = (e - q.centre).norm();
         const double l2 = findTurn(comp_endpoint_, q.centre, q.turn, e);
         if (std::abs(r1 - r2) > 0.01 * unit_)
           compGouge("the compensated arc's ends are " + formatNumber((r1 - r2) / unit_) +
@@ -4000,7 +4021,7 @@ class Reader {
         compGouge(std::string(q.rapid ? "a straight traverse" : "a straight feed") +
                   " in a concave corner the tool cannot reach without gouging");
       }
-      q.end.head<2>() = e;
+      q.end = fromUv(e, q.end);
     }
     compFlush();
     compSetEndpoint(e);
@@ -4017,7 +4038,7 @@ class Reader {
       line_ = q.line;
       feed_word_ = q.feed;
       if (q.arc) {
-        const Eigen::Vector3d c(q.centre.x(), q.centre.y(), comp_emitted_.z());
+        const Eigen::Vector3d c = fromUv(q.centre, comp_emitted_);
         emitArc(q.turn > 0 ? "G3" : "G2", comp_emitted_, q.end, c, 0, std::nullopt);
       } else {
         emit(q.end, q.rapid);
@@ -4039,7 +4060,7 @@ class Reader {
   // A straight move (G0/G1) from the programmed start to the programmed end.
   void compStraight(const Eigen::Vector3d& start, const Eigen::Vector3d& end, bool rapid) {
     const double R = comp_radius_;
-    const Eigen::Vector2d c = comp_cur_.head<2>(), p = end.head<2>();
+    const Eigen::Vector2d c = uv(comp_cur_), p = uv(end);
     if (comp_first_) {  // convert_straight_comp1
       if (!((p - c).norm() > R))
         compGouge(
@@ -4050,7 +4071,7 @@ class Reader {
       compSetEndpoint(c);
       CompMove m;
       m.rapid = rapid;
-      m.end = Eigen::Vector3d(e.x(), e.y(), end.z());
+      m.end = fromUv(e, end);
       m.dir = Eigen::Vector2d(std::cos(alpha), std::sin(alpha));
       compEnqueue(m);
       comp_first_ = false;
@@ -4058,11 +4079,11 @@ class Reader {
       compProgrammed(end);
       return;
     }
-    const Eigen::Vector2d op = start.head<2>();
+    const Eigen::Vector2d op = uv(start);
     CompMove m;
     m.rapid = rapid;
     if (p == op) {  // no XY motion: held with the move before it
-      m.end = Eigen::Vector3d(c.x(), c.y(), end.z());
+      m.end = fromUv(c, end);
       m.dir = Eigen::Vector2d::Zero();
       compEnqueue(m);
       comp_cur_ = m.end;
@@ -4096,7 +4117,7 @@ class Reader {
       CompMove corner;
       corner.arc = !rapid;
       corner.rapid = rapid;
-      corner.end = Eigen::Vector3d(mid.x(), mid.y(), comp_cur_.z());
+      corner.end = fromUv(mid, comp_cur_);
       corner.centre = op;
       corner.turn = comp_side_ > 0 ? -1 : 1;
       corner.dir = Eigen::Vector2d::Zero();
@@ -4112,7 +4133,7 @@ class Reader {
         compMoveEndpointAndFlush(mid);
       } else {  // arc to line: where the line's offset meets the held arc
         const CompMove& prev = *front;
-        const double oldrad = (prev.centre - prev.end.head<2>()).norm();
+        const double oldrad = (prev.centre - uv(prev.end)).norm();
         const double base_dir = std::atan2(p.y() - op.y(), p.x() - op.x());
         const double th = prev.turn > 0 ? base_dir + M_PI / 2 : base_dir - M_PI / 2;
         const double phi = std::atan2(prev.centre.y() - op.y(), prev.centre.x() - op.x());
@@ -4134,7 +4155,7 @@ class Reader {
       compFlush();
       compSetEndpoint(c);
     }
-    m.end = Eigen::Vector3d(e.x(), e.y(), end.z());
+    m.end = fromUv(e, end);
     m.dir = p - op;
     compEnqueue(m);
     comp_cur_ = m.end;
@@ -4148,8 +4169,8 @@ class Reader {
     if (turns != 0) compRefuse(aw.count('P') ? aw.at('P')->column : 0, "P", "an arc of P turns");
     const double R = comp_radius_;
     const int turn = motion == "G3" ? 1 : -1;
-    const Eigen::Vector2d c = comp_cur_.head<2>(), p = end.head<2>();
-    Eigen::Vector2d centre = centre3.head<2>();
+    const Eigen::Vector2d c = uv(comp_cur_), p = uv(end);
+    Eigen::Vector2d centre = uv(centre3);
     const bool inside = toolInsideArc(turn);
     const double arc_radius = (centre - p).norm();
     CompMove m;
@@ -4172,7 +4193,7 @@ class Reader {
       if (std::abs(std::cos(a_ang)) < 1e-7) compGouge("the tool radius is not less than the arc's");
       const double c_len = b_len / std::cos(a_ang);
       centre = e + c_len * Eigen::Vector2d(std::cos(ab_ang), std::sin(ab_ang));
-      m.end = Eigen::Vector3d(e.x(), e.y(), end.z());
+      m.end = fromUv(e, end);
       m.centre = centre;
       m.sweep = findTurn(c, centre, turn, e);
       compEnqueue(m);
@@ -4181,7 +4202,7 @@ class Reader {
       compProgrammed(end);
       return;
     }
-    const Eigen::Vector2d op = start.head<2>();
+    const Eigen::Vector2d op = uv(start);
     double theta = std::atan2(c.y() - op.y(), c.x() - op.x());
     theta = comp_side_ > 0 ? theta - M_PI / 2 : theta + M_PI / 2;
     double delta = std::atan2(centre.y() - op.y(), centre.x() - op.x());
@@ -4213,7 +4234,7 @@ class Reader {
         mid = centre + dist * Eigen::Vector2d(std::cos(angle), std::sin(angle));
       } else {  // arc to arc
         const CompMove& prev = *front;
-        const double oldrad = (prev.centre - prev.end.head<2>()).norm();
+        const double oldrad = (prev.centre - uv(prev.end)).norm();
         const double newrad = inside ? arc_radius - R : arc_radius + R;
         const double arc_cc = (prev.centre - centre).norm();
         if (oldrad == 0 || arc_cc == 0)
@@ -4237,7 +4258,7 @@ class Reader {
       compFlush();
       CompMove corner;
       corner.arc = true;
-      corner.end = Eigen::Vector3d(mid.x(), mid.y(), comp_cur_.z());
+      corner.end = fromUv(mid, comp_cur_);
       corner.centre = op;
       corner.turn = comp_side_ > 0 ? -1 : 1;
       compEnqueue(corner);
@@ -4247,7 +4268,7 @@ class Reader {
       compFlush();
       compSetEndpoint(c);
     }
-    m.end = Eigen::Vector3d(e.x(), e.y(), end.z());
+    m.end = fromUv(e, end);
     m.centre = centre;
     m.sweep = findTurn(op, centre, turn, p);
     compEnqueue(m);

@@ -21,6 +21,7 @@ std::map<int, double> parseLinuxCncToolTable(const std::string& text, const std:
     const std::string body = raw.substr(0, raw.find(';'));
     std::optional<int> tool;
     double diameter = 0;
+    bool lathe = false;
     size_t i = 0;
     while (i < body.size()) {
       if (std::isspace(static_cast<unsigned char>(body[i]))) {
@@ -43,6 +44,8 @@ std::map<int, double> parseLinuxCncToolTable(const std::string& text, const std:
         if (*v < 0 || *v != std::floor(*v) || *v > 1e9)
           throw InputError(file, line, column, word, "the tool number must be a whole number");
         tool = static_cast<int>(*v);
+      } else if (letter == 'Q') {
+        lathe = *v != 0 && *v != 9;  // a lathe tool's orientation
       } else if (letter == 'D') {
         if (std::abs(*v) > 1e4)
           throw InputError(file, line, column, word, "implausible diameter '" + value + "'");
@@ -59,7 +62,7 @@ std::map<int, double> parseLinuxCncToolTable(const std::string& text, const std:
                        "tool " + std::to_string(*tool) + " is already on line " +
                            std::to_string(line_of[*tool]));
     line_of[*tool] = line;
-    diameters[*tool] = diameter * unit_mm;
+    diameters[*tool] = lathe ? NAN : diameter * unit_mm;
   }
   if (diameters.empty()) throw InputError(file, 0, 0, "", "no tools in the tool table");
   return diameters;

@@ -12,7 +12,8 @@
 
 namespace tolver {
 
-// Per tool number, the diameter in mm (unit_mm: mm per unit of the table). Throws InputError
+// Per tool number, the diameter in mm (unit_mm: mm per unit of the table); NaN for a lathe tool
+// (Q other than 0 and 9), whose compensation differs. Throws InputError
 // naming file, line, column and word.
 std::map<int, double> parseLinuxCncToolTable(const std::string& text, const std::string& file,
                                              double unit_mm);
