@@ -818,6 +818,14 @@ CompensationRun compensateStreamed(const CompensateInputs& in, const std::string
                        "Sinumerik GOTO/IF/WHILE...) run lines other than once, in another "
                        "order: a compensated program cannot be written line by line; expand "
                        "them in the post (predict and verify read it)");
+    // The control offsets the programmed contour itself (LinuxCNC's G41/G42): a corrected
+    // contour would be offset again, and its corners drawn back where the correction moves them.
+    if (program.radius_comp_line > 0)
+      throw InputError(program.file, program.radius_comp_line, 0, "cutter radius compensation",
+                       "the points from this line on are the tool centre the control offsets "
+                       "from the programmed contour: a compensated program cannot be written "
+                       "for it; post the tool centre path (compensation in the CAM system; "
+                       "predict and verify read it)");
   };
   auto unreachable = [&](const ClProgram& program, const PredictionResult& r) {
     if (!r.ok())

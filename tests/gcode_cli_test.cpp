@@ -317,6 +317,45 @@ TEST_F(GcodeCli, SetupProposesASetupThatReaches) {
   EXPECT_FALSE(fs::exists(path("q.apt")));
 }
 
+// A LinuxCNC program under G41 with the control's tool table (--tool-table): predict reads the
+// compensated path (the tool centre a radius off the contour), says so, and compensate refuses
+// to rewrite it at the G41's line; a program under G41 without the table is refused naming the
+// option; a bad table names its file, line and word.
+TEST_F(GcodeCli, CutterRadiusCompensationWithTheControlsToolTable) {
+  const std::string m = src("resources/machines/linuxcnc_xyzac_trt.xml");
+  std::ofstream(path("comp.ngc")) << "G21 G90 G17\nT2 M6\nG0 X-10 Y-10 Z5\nG1 Z-1 F300\n"
+                                     "G41 G1 X0 Y0\nG1 X40\nG1 Y30\nG1 X0\nG1 Y0\nG40 G1 X-10 "
+                                     "Y-10\nG0 Z5\nM2\n";
+  std::ofstream(path("tools.tbl")) << "T1 P1 Z10 D6 ;6 mm end mill\nT2 P2 Z20 D10\n";
+  auto r = test::runTolver("predict --machine " + m + " --nc " + path("comp.ngc") +
+                           " --tool-table " + path("tools.tbl") + " -o " + path("p.apt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cutter radius compensation carried out"), std::string::npos) << r.output;
+  // The square, run counter-clockwise with the tool on its left, is cut from inside: the tool
+  // centre's inside corners, 5 mm in from each side, are in the predicted CL.
+  const std::string cl = test::readText(path("p.apt"));
+  for (const char* corner : {"GOTO/35.000000,5.000000,-1.0", "GOTO/35.000000,25.000000,-1.0",
+                             "GOTO/5.000000,25.000000,-1.0"})
+    EXPECT_NE(cl.find(corner), std::string::npos) << corner;
+  r = test::runTolver("compensate --machine " + m + " --nc " + path("comp.ngc") + " --tool-table " +
+                      path("tools.tbl") + " -o " + path("c.ngc"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("comp.ngc:5"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("cutter radius compensation"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("c.ngc")));
+  r = test::runTolver("predict --machine " + m + " --nc " + path("comp.ngc") + " -o " +
+                      path("q.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("comp.ngc:5"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--tool-table"), std::string::npos) << r.output;
+  std::ofstream(path("bad.tbl")) << "T1 P1 D6\nT2 P2 D1O\n";
+  r = test::runTolver("predict --machine " + m + " --nc " + path("comp.ngc") + " --tool-table " +
+                      path("bad.tbl") + " -o " + path("b.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("bad.tbl:2:7: D"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(path("b.apt")));
+}
+
 TEST_F(GcodeCli, BadGcodeExitsWithCode2NamingTheLine) {
   std::ofstream(path("bad.nc")) << "G21 G90\nG0 X0 Y0 Z0\nG68 X0 Y0 R15\n";
   auto r = test::runTolver("predict --machine " + src("resources/machines/linuxcnc_xyzac_trt.xml") +

@@ -763,6 +763,109 @@ TEST(GcodeReader, LinuxCncCutterRadiusCompensationAsItsInterpreterRunsIt) {
   }
 }
 
+// What LinuxCNC refuses under cutter radius compensation is refused by name at its line; a
+// zero radius (tool 0, G41.1 D0) leaves the path as programmed; a negative diameter swaps the
+// side; other controls' G41/G42 stay refused; a table names its errors.
+TEST(GcodeReader, CutterRadiusCompensationRefusalsAndSides) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const std::string head = "G21 G90 G17\nG0 X-10 Y-10 Z5\n";
+  auto refused = [&](const std::string& body) {
+    try {
+      parseGcode(head + body, "c.ngc", m.model);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  const std::string on = "G41.1 D6 G1 X0 Y0 F100\n";
+  EXPECT_NE(refused(on + "G55\nG1 X10\n").find("c.ngc:4:1: G55: G55 under cutter radius"),
+            std::string::npos);
+  EXPECT_NE(refused(on + "T2 M6\n").find("c.ngc:4:4: M6: a tool change"), std::string::npos);
+  EXPECT_NE(refused(on + "G81 X5 Y5 Z-1 R1\n").find("c.ngc:4"), std::string::npos);
+  EXPECT_NE(refused(on + "G1 X10 A5\n").find("a move with rotary words"), std::string::npos);
+  EXPECT_NE(refused(on + "G19\n").find("G19 under cutter radius compensation"), std::string::npos);
+  EXPECT_NE(refused(on + "G41.1 D6\n").find("already on (line 3)"), std::string::npos);
+  EXPECT_NE(refused(on + "G1 X20\nG40\nG2 X30 I5\n").find("c.ngc:6: G2: an arc as the first"),
+            std::string::npos);
+  EXPECT_NE(refused("G41.1 D30 G1 X0 Y0 F100\n").find("entry move"), std::string::npos);
+  // A step into a corner narrower than the tool: LinuxCNC's gouge refusal.
+  EXPECT_NE(refused(on + "G1 X10\nG1 Y1\nG1 X20\nG1 Y-20\n").find("gouging"), std::string::npos);
+  EXPECT_NE(refused(on + "G1 X10\nG18\n").find("G18 under cutter radius"), std::string::npos);
+  EXPECT_NE(refused("G19 G41.1 D6\n").find("G19"), std::string::npos);
+  EXPECT_NE(refused("G41 G1 X0 Y0\n").find("--tool-table"), std::string::npos);
+  // D0: no radius, the path as programmed; D-6: the other side of the path (G42's).
+  const std::string square = "G1 X40\nG1 Y30\nG40 G1 X50 Y50\nM2\n";
+  const ClProgram none = parseGcode(head + "G41.1 D0 G1 X0 Y0 F100\n" + square, "a", m.model);
+  const ClProgram plain = parseGcode(head + "G1 X0 Y0 F100\n" + square, "b", m.model);
+  ASSERT_EQ(none.path.size(), plain.path.size());
+  for (size_t i = 0; i < none.path.size(); ++i)
+    EXPECT_LT((none.path[i].p_w - plain.path[i].p_w).norm(), 1e-12) << i;
+  const ClProgram right = parseGcode(head + "G42.1 D6 G1 X0 Y0 F100\n" + square, "c", m.model);
+  const ClProgram swapped = parseGcode(head + "G41.1 D-6 G1 X0 Y0 F100\n" + square, "d", m.model);
+  ASSERT_EQ(right.path.size(), swapped.path.size());
+  for (size_t i = 0; i < right.path.size(); ++i)
+    EXPECT_LT((right.path[i].p_w - swapped.path[i].p_w).norm(), 1e-12) << i;
+  // G42 going +X puts the tool at Y = -3.
+  bool below = false;
+  for (const ClPoint& c : right.path) below = below || std::abs(c.p_w.y() + 3.0) < 1e-9;
+  EXPECT_TRUE(below);
+  // On other controls G41/G42 stay refused, naming --cutter-comp wear; G41.1 is Fanuc's normal
+  // direction control there.
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\nG41 D1 G1 X10\n", vmc.model).find("--cutter-comp wear"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\nG41.1 G1 X10\n", vmc.model).find("normal direction"),
+            std::string::npos);
+  // The tool table: LinuxCNC's words, a comment, units; errors name the line and column.
+  const auto t =
+      parseLinuxCncToolTable("T1 P1 Z0.5 D0.25 ;a\n\n; only a comment\nt2 p2 d.5\n", "t.tbl", 25.4);
+  ASSERT_EQ(t.size(), 2u);
+  EXPECT_DOUBLE_EQ(t.at(1), 6.35);
+  EXPECT_DOUBLE_EQ(t.at(2), 12.7);
+  EXPECT_TRUE(std::isnan(parseLinuxCncToolTable("T5 P5 D1 Q2\n", "t.tbl", 1.0).at(5)));
+  auto tableError = [](const std::string& text) {
+    try {
+      parseLinuxCncToolTable(text, "t.tbl", 1.0);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(tableError("T1 P1 D6\nT2 P2 Dx\n").find("t.tbl:2:7: D"), std::string::npos);
+  EXPECT_NE(tableError("T1 P1 D6\nT1 P2 D6\n").find("already on line 1"), std::string::npos);
+  EXPECT_NE(tableError("P1 D6\n").find("t.tbl:1:1: T"), std::string::npos);
+  EXPECT_NE(tableError("T1 P1 K6\n").find("t.tbl:1:7: K"), std::string::npos);
+  EXPECT_NE(tableError("; nothing\n").find("no tools"), std::string::npos);
+}
+
+// An arc block with its centre words and no axis word is a full circle back to its start (the
+// hole-milling circle, "G2 I-5." on Fanuc and HAAS, "G2 I1" on LinuxCNC): it was read as no move.
+TEST(GcodeReader, AnArcWithOnlyItsCentreIsAFullCircle) {
+  for (const char* file :
+       {"resources/machines/linuxcnc_xyzac_trt.xml", "resources/machines/vmc_3axis_iso.xml"}) {
+    SCOPED_TRACE(file);
+    const Machine m = machine(file, 0.0);
+    const ClProgram p =
+        parseGcode("G21 G90 G17\nG0 X10 Y0 Z0\nG2 I-5. F100\nG1 X20\n", "f.nc", m.model);
+    double xmin = 1e9, ymax = -1e9;
+    int on_circle = 0;
+    for (const ClPoint& c : p.path) {
+      xmin = std::min(xmin, c.p_w.x());
+      ymax = std::max(ymax, c.p_w.y());
+      if (c.line == 3) {
+        ++on_circle;
+        EXPECT_NEAR((c.p_w - Eigen::Vector3d(5, 0, 0)).norm(), 5.0, 1e-9);
+      }
+    }
+    EXPECT_GT(on_circle, 20);
+    EXPECT_NEAR(xmin, 0.0, 1e-3);  // the far side of the circle
+    EXPECT_NEAR(ymax, 5.0, 1e-3);
+    // A lone centre word under a drilling cycle or G1 is still no move.
+    EXPECT_EQ(parseGcode("G21\nG0 X10 Y0 Z0\nG1 I-5. F100\nG1 X20\n", "g.nc", m.model).path.size(),
+              2u);
+  }
+}
+
 // Fanuc's G10 L10 P R (memory C: the tool length's geometry; HAAS alike) sets the length a later
 // G43 H applies, G91 adds to it; L12/L13 (radius) are noted, L1/L11 with R refused (memory A's
 // single offset or a wear, by the control's memory type). "G10 L1 P1 R100." was read as
