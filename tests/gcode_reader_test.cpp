@@ -763,6 +763,24 @@ TEST(GcodeReader, LinuxCncCutterRadiusCompensationAsItsInterpreterRunsIt) {
   }
 }
 
+// LinuxCNC reads Fanuc's M98 P L / M99 subprograms too (they were refused there): its
+// tests/interp/m98m99 programs against the moves its interpreter printed; M97 (HAAS's) refused.
+TEST(GcodeReader, LinuxCncM98SubprogramsAsItsInterpreterRunsThem) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const std::string dir = "tests/fixtures/gcode/linuxcnc_m98m99/";
+  for (const char* name : {"01-basics", "05-M98-loops"}) {
+    SCOPED_TRACE(name);
+    const std::string text =
+        "G21 G0 X0 Y0 Z0\n" + test::readText(test::sourcePath(dir + name + ".ngc"));
+    const ClProgram p = parseGcode(text, name, m.model);
+    const std::vector<CanonMove> want = canonMoves(dir + name + "_expected.txt");
+    ASSERT_GT(want.size(), 10u);
+    EXPECT_EQ(followsCanonMoves(p, want), "");
+  }
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\nM97 P10\nM30\nN10 G0 X1\nM99\n", m.model).find("HAAS"),
+            std::string::npos);
+}
+
 // What LinuxCNC refuses under cutter radius compensation is refused by name at its line; a
 // zero radius (tool 0, G41.1 D0) leaves the path as programmed; a negative diameter swaps the
 // side; other controls' G41/G42 stay refused; a table names its errors.

@@ -403,7 +403,7 @@ class Reader {
         return;
       }
     }
-    if (model_.control.dialect == "iso" && !ended_) {
+    if (isoSubprograms() && !ended_) {
       if (const auto call = parseIsoCall(text)) {
         isoCallLine(text, *call);
         return;
@@ -1062,7 +1062,17 @@ class Reader {
     sinkBlock();
   }
 
+  // LinuxCNC reads Fanuc's M98/M99 too (LinuxCNC M-code reference, "M98, M99"; its
+  // tests/interp/m98m99), its #1-#30 global in them as Fanuc's; not HAAS's M97.
+  bool isoSubprograms() const {
+    return model_.control.dialect == "iso" || model_.control.dialect == "linuxcnc";
+  }
+
   void runIsoCall(const IsoCall& call, int line) {
+    if (call.code.rfind("M97", 0) == 0 && model_.control.dialect == "linuxcnc")
+      fail(line, call.column, "M97",
+           "M97 (HAAS's local subprogram call) is not a LinuxCNC code: LinuxCNC calls "
+           "subprograms with M98 or o-word call");
     if (call.number == -1)
       fail(line, call.column, call.code.substr(0, 3),
            call.code +
@@ -1195,7 +1205,7 @@ class Reader {
     }
     // ISO: a file may hold the subprograms as programs of their own after the main one's tape
     // ("%" ... "%" "%" O1001 ... M99 "%"): a control loads them all.
-    if (model_.control.dialect == "iso") defineIsoSubs(all);
+    if (isoSubprograms()) defineIsoSubs(all);
     for (size_t k = 0; k < lines.size(); ++k) {
       const auto o = parseOWord(lines[k].text);
       if (!o || o->keyword != "sub") continue;
@@ -1281,7 +1291,7 @@ class Reader {
         fail(lines[k].line, 0, "O",
              "the program's subs and loops carried out " + std::to_string(kMaxFlowLines) +
                  " lines: too long to predict (or a loop that does not end)");
-      if (model_.control.dialect == "iso") {
+      if (isoSubprograms()) {
         if (const auto call = parseIsoCall(lines[k].text)) {
           line_ = lines[k].line;
           runIsoCall(*call, lines[k].line);
@@ -3234,9 +3244,13 @@ class Reader {
     if (!modes.motion.empty()) {
       if (isDrillingCycle(modes.motion)) {
         if (!cycle_ || cycle_code_ != modes.motion) ++prog_.cycles;
+        // The initial level: where the tool stood when the cycle mode began (Fanuc: "G81
+        // specified while not in canned cycle mode"; LinuxCNC's cycle_il, kept until a motion
+        // other than a cycle), not at each cycle block: a sub that repeats "G91 G81 X1 Z-1 R.25"
+        // keeps its R plane (LinuxCNC tests/interp/m98m99/05-M98-loops).
+        if (!cycle_) cycle_initial_z_ = cur_xyz_[plane_];  // along the drilling axis
         cycle_ = true;
         cycle_code_ = modes.motion;
-        cycle_initial_z_ = cur_xyz_[plane_];  // along the drilling axis (drillCycle)
       } else {
         cycle_ = false;
       }
