@@ -811,6 +811,14 @@ TEST(GcodeReader, CutterRadiusCompensationRefusalsAndSides) {
   EXPECT_NE(refused(on + "G1 X10\nG18\n").find("G18 under cutter radius"), std::string::npos);
   EXPECT_NE(refused("G19 G41.1 D6\n").find("G19"), std::string::npos);
   EXPECT_NE(refused("G41 G1 X0 Y0\n").find("--tool-table"), std::string::npos);
+  // The program's own G10 L1 P R sets the radius G41 compensates by (no table needed).
+  const ClProgram by_g10 = parseGcode(
+      head + "G10 L1 P3 R3\nT3 M6\nG41 G1 X0 Y0 F100\nG1 X40\nG40 G1 X50 Y50\n", "e", m.model);
+  const ClProgram by_d =
+      parseGcode(head + "G41.1 D6 G1 X0 Y0 F100\nG1 X40\nG40 G1 X50 Y50\n", "f", m.model);
+  ASSERT_EQ(by_g10.path.size(), by_d.path.size());
+  for (size_t i = 0; i < by_d.path.size(); ++i)
+    EXPECT_LT((by_g10.path[i].p_w - by_d.path[i].p_w).norm(), 1e-12) << i;
   // D0: no radius, the path as programmed; D-6: the other side of the path (G42's).
   const std::string square = "G1 X40\nG1 Y30\nG40 G1 X50 Y50\nM2\n";
   const ClProgram none = parseGcode(head + "G41.1 D0 G1 X0 Y0 F100\n" + square, "a", m.model);

@@ -3958,17 +3958,23 @@ class Reader {
           fail(line_, block_d_column_, "D", w.code + " D must be a tool number (whole, >= 0)");
         tool = static_cast<int>(*block_d_);
       }
-      const auto it = opt_.tool_diameter_mm.find(tool);
-      // LinuxCNC's tool 0 is no tool, of no diameter.
-      const bool no_tool = tool == 0 && !opt_.tool_diameter_mm.empty();
-      if (it == opt_.tool_diameter_mm.end() && !no_tool)
+      // The program's own G10 L1 R first, then the tool table; LinuxCNC's tool 0 is no tool,
+      // of no diameter.
+      std::optional<double> diameter;
+      if (const auto g10 = set_tool_diameters_.find(tool); g10 != set_tool_diameters_.end())
+        diameter = g10->second;
+      else if (const auto t = opt_.tool_diameter_mm.find(tool); t != opt_.tool_diameter_mm.end())
+        diameter = t->second;
+      else if (tool == 0 && !opt_.tool_diameter_mm.empty())
+        diameter = 0.0;
+      if (!diameter)
         fail(line_, w.column, w.code,
              opt_.tool_diameter_mm.empty()
                  ? "cutter radius compensation needs the tool's diameter: give the control's "
                    "tool table (--tool-table), or --cutter-comp wear if the path already is the "
                    "tool centre (the CAM's wear compensation)"
                  : "tool " + std::to_string(tool) + " is not in the tool table (--tool-table)");
-      radius = it == opt_.tool_diameter_mm.end() ? 0.0 : it->second / 2.0;
+      radius = *diameter / 2.0;
       if (!std::isfinite(radius))
         fail(line_, w.column, w.code,
              "tool " + std::to_string(tool) +
@@ -4700,7 +4706,8 @@ class Reader {
                  " (a tool offset other than its length) is not "
                  "supported");
     if (aw.count('Z')) set_tool_lengths_[P] = aw.at('Z')->value * unit_;
-    if (aw.count('R')) ignored_.insert("G10 L1 R (tool radius)");
+    // LinuxCNC's G10 L1 R: the tool's radius in the table, which G41/G42 compensate by.
+    if (aw.count('R')) set_tool_diameters_[P] = 2.0 * aw.at('R')->value * unit_;
     return "G10";
   }
 
@@ -4885,7 +4892,8 @@ class Reader {
   std::vector<CompMove> comp_queue_;
   Eigen::Vector2d comp_endpoint_ = Eigen::Vector2d::Zero();
   bool comp_endpoint_valid_ = false, comp_arc_not_allowed_ = false;
-  std::optional<double> block_d_;  // the block's D word (LinuxCNC, ISO)
+  std::optional<double> block_d_;             // the block's D word (LinuxCNC, ISO)
+  std::map<int, double> set_tool_diameters_;  // LinuxCNC's G10 L1 P R (mm), per tool
   int block_d_column_ = 0;
   int g92_line_ = 0;                        // the first G92..G92.3
   int stored_cycles_ = 0;                   // cycle blocks with L0/K0 (no hole)
