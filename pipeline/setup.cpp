@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <stdexcept>
 
 #include "core/numerics/quantities.h"
 #include "core/numerics/units.h"
@@ -17,6 +18,11 @@ namespace {
 // The set-up file's text for a proposed set-up (the format setup_file.h reads).
 std::string setupFileText(const ClProgram& program, const MachineModel& model, const PartSetup& b,
                           double margin, const std::string& what) {
+  // A set-up that is not a number is a defect upstream, never a file (it was written once, as
+  // "-nan", for a program whose Z no point moved in the work offset).
+  if (!b.part_zero_table.allFinite() || !std::isfinite(b.part_rotation) ||
+      !std::isfinite(b.gauge_length))
+    throw std::logic_error("setup: a proposed set-up that is not a number");
   char buf[768];
   std::snprintf(
       buf, sizeof buf,
@@ -112,6 +118,12 @@ void proposeWorkOffsetSetup(const SetupInputs& in, SetupRun& run) {
   for (char k : program.tcp) run.fixed_moves += k == ClProgram::kMachineCoordinates;
   run.offset = proposeWorkOffset(model, program.joints, program.tcp, program.fixed_axes);
   const WorkOffsetSetup& r = run.offset;
+  for (int j = 0; j < 3; ++j)
+    if (!r.placed[j])
+      run.notes.push_back(std::string("the program moves ") + "XYZ"[j] +
+                          " only in machine coordinates (G53, G28): it does not place the part "
+                          "zero along it, which stays at the set-up's (" +
+                          formatNumber(model.setup.part_zero_table[j]) + " mm)");
   if (!std::isfinite(r.margin)) {
     run.mode = SetupMode::Fixed;
     run.ranges_again =

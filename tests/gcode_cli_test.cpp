@@ -572,6 +572,24 @@ TEST_F(GcodeCli, SetupSaysTheMarginOfTheWorkOffsetMovesBesideTheHomeMoves) {
   EXPECT_EQ(s.output.find("no gauge length given"), std::string::npos) << s.output;
 }
 
+// A program that moves Z only in machine coordinates (G53 Z0, then X Y in the work offset; a
+// LinuxCNC test of M73): setup wrote "part_zero_mm = -nan, -nan, -nan", which predict then
+// refused. The part zero is placed along X and Y, left along Z, and said.
+TEST_F(GcodeCli, SetupLeavesAnAxisTheProgramNeverMovesInTheWorkOffset) {
+  const std::string m = src("resources/machines/linuxcnc_xyzac_trt.xml");
+  const std::string nc =
+      write("g53z.ngc", "G21 G90\nG53 G0 X0 Y0 Z0\nG91 G0 X10 Y10\nG0 X10\nM2\n");
+  auto s = test::runTolver("setup --machine " + m + " --nc " + nc + " -o " + path("s.txt"));
+  ASSERT_EQ(s.exit_code, 0) << s.output;
+  EXPECT_EQ(s.output.find("nan"), std::string::npos) << s.output;
+  EXPECT_NE(s.output.find("moves Z only in machine coordinates"), std::string::npos) << s.output;
+  const std::string text = test::readText(path("s.txt"));
+  EXPECT_EQ(text.find("nan"), std::string::npos) << text;
+  s = test::runTolver("predict --machine " + m + " --nc " + nc + " --setup " + path("s.txt") +
+                      " -o " + path("p.apt"));
+  EXPECT_EQ(s.exit_code, 0) << s.output;
+}
+
 // A program posted with the CAM's wear compensation (Fusion, Mastercam: G41 D.. on a tool-centre
 // path): setup and predict refuse it naming the line and the option; with --cutter-comp wear both
 // read it as written and say so.

@@ -660,7 +660,7 @@ WorkOffsetSetup proposeWorkOffset(const MachineModel& model, const std::vector<J
   const double inf = std::numeric_limits<double>::infinity();
   Eigen::Vector3d lo_m = Eigen::Vector3d::Constant(inf), hi_m = -lo_m;
   Eigen::Vector3d lo_f = lo_m, hi_f = hi_m;
-  bool any_moving = false;
+  std::array<bool, 3> moving = {false, false, false};
   auto isFixed = [&](size_t i, int j) {
     return i < fixed.size() ? ((fixed[i] >> j) & 1u) != 0 : (i < kind.size() && kind[i] == 2);
   };
@@ -673,19 +673,22 @@ WorkOffsetSetup proposeWorkOffset(const MachineModel& model, const std::vector<J
         lo_f[j] = std::min(lo_f[j], q), hi_f[j] = std::max(hi_f[j], q);
       } else {
         lo_m[j] = std::min(lo_m[j], q), hi_m[j] = std::max(hi_m[j], q);
-        any_moving = true;
+        moving[j] = true;
       }
     }
   }
-  if (!any_moving) return out;
-  // Centre each axis's range of the moving points in its travel.
+  if (!moving[0] && !moving[1] && !moving[2]) return out;
+  out.placed = moving;
+  // Centre each axis's range of the moving points in its travel; an axis no point moves in the
+  // work offset stays (its range empty: a shift of it would be NaN).
   Eigen::Vector3d shift;
   out.margin = inf;
   out.work_offset_margin = inf;
   for (int j = 0; j < 3; ++j) {
     const Axis& ax = model.axes[f.prismatic[j]];
-    shift[j] = 0.5 * (ax.travel_min + ax.travel_max) - 0.5 * (lo_m[j] + hi_m[j]);
-    const double m_moving = 0.5 * ((ax.travel_max - ax.travel_min) - (hi_m[j] - lo_m[j]));
+    shift[j] = moving[j] ? 0.5 * (ax.travel_min + ax.travel_max) - 0.5 * (lo_m[j] + hi_m[j]) : 0.0;
+    const double m_moving =
+        moving[j] ? 0.5 * ((ax.travel_max - ax.travel_min) - (hi_m[j] - lo_m[j])) : inf;
     out.work_offset_margin = std::min(out.work_offset_margin, m_moving);
     double m = m_moving;
     if (std::isfinite(lo_f[j])) m = std::min({m, lo_f[j] - ax.travel_min, ax.travel_max - hi_f[j]});

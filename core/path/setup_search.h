@@ -14,6 +14,7 @@
 // gauge length; the proposal is then checked on every point with the real inverse kinematics.
 // Rotary travel does not depend on x; a rotation whose rotary angles leave travel is rejected.
 #include <Eigen/Core>
+#include <array>
 #include <functional>
 #include <limits>
 #include <string>
@@ -98,6 +99,10 @@ struct WorkOffsetSetup {
   // with the control's senses) of the program's origin.
   Eigen::Vector3d work_offset_m = Eigen::Vector3d::Zero();
   std::vector<AxisRange> ranges;  // joint ranges with the proposal
+  // Per X Y Z (prismatic joint order): false when no point moves that coordinate in the work
+  // offset (only G53/G28 moves set it): the program does not place the part zero along it, and
+  // the proposal leaves it where the set-up had it.
+  std::array<bool, 3> placed = {true, true, true};
 };
 // joints, kind and fixed: ClProgram::joints, ::tcp (points of kind 1, in TCP mode, are left
 // out) and ::fixed_axes (bit k: X, Y, Z in machine coordinates; when empty, every coordinate of
