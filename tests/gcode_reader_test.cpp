@@ -864,6 +864,21 @@ TEST(GcodeReader, CutterRadiusCompensationRefusalsAndSides) {
   EXPECT_NE(tableError("; nothing\n").find("no tools"), std::string::npos);
 }
 
+// A feed beyond any machine's (LinuxCNC's trajectory tests write F1e9 for "as fast as it goes")
+// places no point: read as unknown, with a note, where the whole program was refused; a length
+// that large is still refused.
+TEST(GcodeReader, AHugeFeedIsTheControlsFastest) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const ClProgram p =
+      parseGcode("G21\nG0 X0 Y0 Z0\nG1 X10 F999999999\nG1 X20 F600\n", "f.ngc", m.model);
+  ASSERT_EQ(p.path.size(), 3u);
+  EXPECT_TRUE(std::isnan(p.path[1].feed_mm_min));  // unknown
+  EXPECT_EQ(p.path[2].feed_mm_min, 600.0f);
+  EXPECT_TRUE(hasNote(p, "feeds beyond any machine's (first at line 3)"));
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\nG1 X999999999\n", m.model).find("plausible length"),
+            std::string::npos);
+}
+
 // An arc block with its centre words and no axis word is a full circle back to its start (the
 // hole-milling circle, "G2 I-5." on Fanuc and HAAS, "G2 I1" on LinuxCNC): it was read as no move.
 TEST(GcodeReader, AnArcWithOnlyItsCentreIsAFullCircle) {

@@ -330,6 +330,11 @@ class Reader {
           first_integer_ + " as " + first_integer_.substr(1) +
           (unit_ == 25.4 ? " ten-thousandths of an inch)" : " um)") +
           "; check the control's setting");
+    if (huge_feed_line_ > 0)
+      prog_.notes.push_back("feeds beyond any machine's (first at line " +
+                            std::to_string(huge_feed_line_) +
+                            ") read as the control's fastest, not known: the control clamps them "
+                            "to its velocity limits");
     if (block_deletes_ > 0)
       prog_.notes.push_back(std::to_string(block_deletes_) +
                             " block(s) marked '/' (block delete, the first at line " +
@@ -3197,9 +3202,14 @@ class Reader {
       w.value = expression(upper, i, 0);
       noteResolution(std::string_view(upper).substr(value_at, i - value_at), c);
       noteDecimalPoint(std::string_view(upper).substr(value_at, i - value_at), c);
-      if (!std::isfinite(w.value) || std::abs(w.value) > 1e7)
+      // A feed or a speed places no point: "F1e9" is a program's way of asking for the
+      // control's fastest feed (LinuxCNC clamps it to its velocity limit); read as unknown.
+      const bool rate = c == 'F' || c == 'S';
+      if (!std::isfinite(w.value) || std::abs(w.value) > (rate ? 1e15 : 1e7))
         fail(line_, w.column, std::string(1, c),
-             "value " + clip(formatNumber(w.value)) + " is beyond any plausible length or angle");
+             "value " + clip(formatNumber(w.value)) + " is beyond any plausible " +
+                 (rate ? "feed or speed" : "length or angle"));
+      if (c == 'F' && std::abs(w.value) > 1e7 && huge_feed_line_ == 0) huge_feed_line_ = line_;
       if (c == 'G' || c == 'M') w.code = codeOf(c, w.value);
       words.push_back(w);
     }
@@ -3298,7 +3308,9 @@ class Reader {
         tlc_ = w.value != 0.0;
         if (tlc_) h_ = static_cast<int>(w.value);
       } else if (w.letter == 'F') {
-        feed_word_ = w.value;  // modal; its unit is the feed mode in force (G93/G94/G95)
+        // modal; its unit is the feed mode in force (G93/G94/G95); beyond any machine's feed
+        // (F1e9: "as fast as the control goes"), unknown
+        feed_word_ = std::abs(w.value) > 1e7 ? 0.0 : w.value;
       } else if (w.letter == 'N' || w.letter == 'S' || w.letter == 'D') {
         continue;
       } else if (w.letter == 'T') {
@@ -4855,6 +4867,7 @@ class Reader {
   std::string motion_ = "G0";
   std::string feed_mode_ = "G94";
   double feed_word_ = 0.0;  // the last F word, in the unit of the feed mode
+  int huge_feed_line_ = 0;  // the first F above 1e7 (read as the control's fastest)
   std::string work_ = "G54";
   bool tlc_ = false, tcp_without_tlc_ = false;
   int h_ = 0, tool_ = 0;
