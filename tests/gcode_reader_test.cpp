@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "core/kinematics/forward_kinematics.h"
+#include "core/numerics/units.h"
 #include "core/path/tool_path_prediction.h"
 #include "io/common/io_error.h"
 #include "io/machine/machine_file.h"
@@ -862,6 +863,38 @@ TEST(GcodeReader, CutterRadiusCompensationRefusalsAndSides) {
   EXPECT_NE(tableError("P1 D6\n").find("t.tbl:1:1: T"), std::string::npos);
   EXPECT_NE(tableError("T1 P1 K6\n").find("t.tbl:1:7: K"), std::string::npos);
   EXPECT_NE(tableError("; nothing\n").find("no tools"), std::string::npos);
+}
+
+// LinuxCNC's polar coordinates (were refused): @ the distance from the program origin, ^ the
+// angle from +X; in G91 each adds to the current point's distance or angle about the origin
+// (interp_find.cc find_ends). Six holes on a 20 mm circle by "G91 ^60"; the refusals LinuxCNC
+// makes; other controls name the dialect.
+TEST(GcodeReader, LinuxCncPolarCoordinates) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  std::string text = "G21 G90\nG0 X0 Y0 Z5\nG0 @20 ^0\nG91\n";
+  for (int k = 0; k < 5; ++k) text += "G0 ^60\n";
+  text += "G0 @-5\nG90 G0 ^90\nM2\n";
+  const ClProgram p = parseGcode(text, "p.ngc", m.model);
+  ASSERT_EQ(p.path.size(), 9u);
+  for (int k = 0; k < 6; ++k) {
+    const double a = degToRad(60.0 * k);
+    EXPECT_LT((p.path[1 + k].p_w - Eigen::Vector3d(20 * std::cos(a), 20 * std::sin(a), 5)).norm(),
+              1e-9)
+        << k;
+  }
+  const double a = degToRad(300.0);  // @-5 shortens the distance, keeps the angle
+  EXPECT_LT((p.path[7].p_w - Eigen::Vector3d(15 * std::cos(a), 15 * std::sin(a), 5)).norm(), 1e-9);
+  EXPECT_LT((p.path[8].p_w - Eigen::Vector3d(0, 15, 5)).norm(),
+            1e-9);  // G90 ^90: the distance kept
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\nG0 @5 ^0 X1\n", m.model).find("X or Y with polar"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\nG91 G0 ^30\n", m.model).find("at the origin"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\nG0 @5\n", m.model).find("angle is not known"),
+            std::string::npos);
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\nG0 @5 ^0\n", vmc.model).find("dialect=\"linuxcnc\""),
+            std::string::npos);
 }
 
 // A feed beyond any machine's (LinuxCNC's trajectory tests write F1e9 for "as fast as it goes")

@@ -3159,10 +3159,12 @@ class Reader {
                          "is not known here; remove it from the program"));
       }
       // LinuxCNC's polar coordinates (@ distance, ^ angle in the XY plane; G-code reference,
-      // "Polar Coordinates"): named, not "a stray character".
-      if (c == '@' || c == '^')
+      // "Polar Coordinates"): words on a LinuxCNC control (polarTarget), named on others.
+      const bool polar = c == '@' || c == '^';
+      if (polar && model_.control.dialect != "linuxcnc")
         fail(line_, col[i], std::string(1, c),
-             "polar coordinates (LinuxCNC @ distance, ^ angle) are not supported: post X and Y");
+             "polar coordinates (LinuxCNC's @ distance, ^ angle) on a control that is not "
+             "declared dialect=\"linuxcnc\": post X and Y");
       // Fanuc's (and HAAS's) optional chamfering and corner rounding between two straight or
       // circular moves (Fanuc 0i-MF, "Optional Chamfering and Corner R": ",C" the chamfer's
       // length, ",R" the corner's radius): the corner is cut off, so the path is not the one the
@@ -3172,7 +3174,7 @@ class Reader {
              std::string(upper[i + 1] == 'R' ? "corner rounding (,R" : "chamfering (,C") +
                  ", Fanuc's optional chamfering and corner R) is not carried out: the corner is "
                  "cut off where the program's end points do not say; post the corner as moves");
-      if (!std::isalpha(static_cast<unsigned char>(c)))
+      if (!std::isalpha(static_cast<unsigned char>(c)) && !polar)
         fail(line_, col[i], "", "expected a word letter, found '" + clip(text.substr(i, 12)) + "'");
       // Fanuc custom macro B's control flow (Fanuc 0i-MF, "Custom macro": WHILE [..] DOn ..
       // ENDn, IF [..] GOTOn, IF [..] THEN, GOTOn; HAAS likewise): named, not read as words.
@@ -3559,7 +3561,7 @@ class Reader {
   // an E word, or a rotary letter the machine lacks, is refused; other letters are noted.
   bool checkAxisWords(const AxisWords& axis_words) {
     bool any_axis = false;
-    for (char l : {'X', 'Y', 'Z'}) any_axis |= axis_words.count(l) > 0;
+    for (char l : {'X', 'Y', 'Z', '@', '^'}) any_axis |= axis_words.count(l) > 0;
     for (const auto& [l, w] : axis_words) {
       // G-code numbers have no exponent: "Y1e5" is Y1 and an E word, which no milling control
       // here reads (Fanuc's E is a thread lead). Refused, so that Y1e5 is never read as Y1.
@@ -3579,7 +3581,7 @@ class Reader {
                  "): G-code numbers have no exponent, so '1e5' reads "
                  "as 1 followed by E5; write the number out (100000)");
       if (l == 'X' || l == 'Y' || l == 'Z' || l == 'I' || l == 'J' || l == 'K' || l == 'R' ||
-          l == 'P' || l == 'Q' || l == 'L' || l == 'H')
+          l == 'P' || l == 'Q' || l == 'L' || l == 'H' || l == '@' || l == '^')
         continue;
       if (letter_axis_.count(l) && model_.axes[letter_axis_.at(l)].isRotary()) {
         any_axis = true;
@@ -3717,7 +3719,43 @@ class Reader {
       if (abs) frame_moved_[k] = false;
       t[k] = abs ? v : t[k] + v;
     }
+    if (aw.count('@') || aw.count('^')) polarTarget(aw, &t);
     return t;
+  }
+
+  // LinuxCNC's polar coordinates (G-code reference, "Polar Coordinates"; interp_find.cc
+  // find_ends): @ the distance from the program origin in XY, ^ the angle from +X (deg). In G90
+  // a word missing is the current point's; in G91 each adds to the current point's distance or
+  // angle (about the origin, not the current point). Refused as LinuxCNC refuses them: with X or
+  // Y, with G53, at the origin without the angle (G90) or at all (G91).
+  void polarTarget(const std::map<char, const Word*>& aw, Eigen::Vector3d* t) {
+    const Word* w = aw.count('@') ? aw.at('@') : aw.at('^');
+    if (aw.count('X') || aw.count('Y'))
+      fail(line_, w->column, std::string(1, w->letter),
+           "X or Y with polar coordinates (@ ^): LinuxCNC refuses it");
+    if (plane_ != 2 && !polar_plane_noted_) {
+      polar_plane_noted_ = true;
+      prog_.notes.push_back("polar coordinates (@ ^, line " + std::to_string(line_) +
+                            ") outside G17: LinuxCNC reads them in XY whatever the plane");
+    }
+    const Eigen::Vector2d now = cur_xyz_.head<2>();
+    const bool at_origin = now.x() == 0 && now.y() == 0;
+    double radius = now.norm(), theta = std::atan2(now.y(), now.x());
+    if (absolute_) {
+      if (aw.count('@') && !aw.count('^') && at_origin)
+        fail(line_, w->column, "@", "@ without ^ at the origin: the angle is not known");
+      if (aw.count('@')) radius = aw.at('@')->value * unit_;
+      if (aw.count('^')) theta = degToRad(aw.at('^')->value);
+    } else {
+      if (at_origin)
+        fail(line_, w->column, std::string(1, w->letter),
+             "G91 polar coordinates at the origin: the direction is not known (LinuxCNC refuses "
+             "it)");
+      if (aw.count('@')) radius += aw.at('@')->value * unit_;
+      if (aw.count('^')) theta += degToRad(aw.at('^')->value);
+    }
+    (*t)[0] = radius * std::cos(theta);
+    (*t)[1] = radius * std::sin(theta);
   }
 
   void updateRotaryWords(const std::map<char, const Word*>& aw) {
@@ -4868,6 +4906,7 @@ class Reader {
   std::string feed_mode_ = "G94";
   double feed_word_ = 0.0;  // the last F word, in the unit of the feed mode
   int huge_feed_line_ = 0;  // the first F above 1e7 (read as the control's fastest)
+  bool polar_plane_noted_ = false;
   std::string work_ = "G54";
   bool tlc_ = false, tcp_without_tlc_ = false;
   int h_ = 0, tool_ = 0;
