@@ -897,6 +897,35 @@ TEST(GcodeReader, LinuxCncPolarCoordinates) {
             std::string::npos);
 }
 
+// LinuxCNC's turned coordinate systems (G10 L2 Pn R, were refused): machine = Rz(R) program +
+// G5x (emccanon.cc rotate_and_offset_pos), arcs turned with them, each system its own rotation;
+// G92 and G10 L20 in a turned system refused.
+TEST(GcodeReader, LinuxCncTurnedCoordinateSystems) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  const ClProgram p = parseGcode(
+      "G21 G90\nG10 L2 P1 X10 Y5 Z0 R90\nG10 L2 P2 X10 Y5 Z0\nG54 G0 X2 Y0 Z0\nG3 X0 Y2 I-2\n"
+      "G55 G0 X2 Y0\nG54 G0 X1 Y1\nM2\n",
+      "r.ngc", m.model);
+  auto xyz = [&](size_t i) {
+    return Eigen::Vector3d(p.joints[i][0], p.joints[i][1], p.joints[i][2]);
+  };
+  ASSERT_GT(p.path.size(), 10u);
+  EXPECT_LT((xyz(0) - Eigen::Vector3d(10, 7, 0)).norm(), 1e-9);  // (2, 0) turned 90 deg
+  size_t k = 1;
+  for (; k < p.path.size() && p.path[k].line == 5; ++k)  // the arc, turned: about (10, 5)
+    EXPECT_NEAR((xyz(k) - Eigen::Vector3d(10, 5, 0)).norm(), 2.0, 1e-9) << k;
+  EXPECT_LT((xyz(k - 1) - Eigen::Vector3d(8, 5, 0)).norm(), 1e-9);  // (0, 2) turned
+  EXPECT_LT((xyz(k) - Eigen::Vector3d(12, 5, 0)).norm(), 1e-9);     // G55: not turned
+  EXPECT_LT((xyz(k + 1) - Eigen::Vector3d(9, 6, 0)).norm(), 1e-9);  // back in G54: (1, 1) turned
+  EXPECT_NE(refusal("G21\nG10 L2 P1 R30\nG54 G0 X0 Y0 Z0\nG92 X1\n", m.model).find("turned"),
+            std::string::npos);
+  EXPECT_NE(refusal("G21\nG10 L2 P1 R30\nG54 G0 X0 Y0 Z0\nG10 L20 P1 X0\n", m.model).find("turned"),
+            std::string::npos);
+  const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
+  EXPECT_NE(refusal("G21\nG10 L2 P1 R30\nG54 G0 X0 Y0 Z0\n", vmc.model).find("not supported"),
+            std::string::npos);
+}
+
 // A feed beyond any machine's (LinuxCNC's trajectory tests write F1e9 for "as fast as it goes")
 // places no point: read as unknown, with a note, where the whole program was refused; a length
 // that large is still refused.
@@ -1395,9 +1424,10 @@ TEST(GcodeReader, G92OffsetsShiftEveryWorkOffset) {
             std::string::npos);
   EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0 A0 C0\nG92 A5\n", m.model).find("rotary axis A"),
             std::string::npos);
-  // G10 L2 R turns the work coordinate system (LinuxCNC's tests/interp/g10/g10-with-g92):
-  // refused, not dropped.
-  EXPECT_NE(refusal("G21\nG10 L2 P1 X1 Y2 Z3 R10\n", m.model).find("turned about Z"),
+  // G10 L2 R turns the work coordinate system (LinuxCNC's tests/interp/g10/g10-with-g92): carried
+  // out (LinuxCncTurnedCoordinateSystems), but not with a G92 offset in force there.
+  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\nG92 X1\nG10 L2 P0 X1 Y2 Z3 R10\n", m.model)
+                .find("while a G92 offset is in force"),
             std::string::npos);
   // G10 L1 P Z sets the tool length a later G43 applies (as the HEMA programs of a LinuxCNC
   // shop write it, with R, the radius, beside it): 20 mm of length lifts the gauge point 20 mm

@@ -1519,8 +1519,10 @@ class Reader {
   void selectWorkOffset(const std::string& name) {
     if (name != "G500") commanded_offsets_.insert(name);
     if (name == work_) return;
+    const bool turned = rotationOf(work_) != rotationOf(name);
     work_ = name;
     last_offset_ = workOffset(work_);
+    if (turned) applyG92Frame();  // LinuxCNC: each system keeps its own rotation
     cur_xyz_ = currentProgramXyz();
   }
 
@@ -4604,6 +4606,9 @@ class Reader {
              g.code + " on the rotary axis " + std::string(1, l) +
                  " is not supported (an angle offset)");
     }
+    if (g.code == "G92" && rotationOf(work_) != 0.0)
+      fail(line_, g.column, "G92",
+           "G92 in a turned coordinate system (G10 L2 R) is not carried out");
     if (g.code == "G92") {
       Eigen::Vector3d o = g92_offset_;
       const Eigen::Vector3d settable = frame_ * cur_xyz_;
@@ -4629,7 +4634,10 @@ class Reader {
     if (g92_line_ == 0) g92_line_ = line_;
     Eigen::Isometry3d f = Eigen::Isometry3d::Identity();
     if (g92_on_) f.translation() = g92_offset_;
-    setFrame(f);
+    if (rotationOf(work_) != 0.0)
+      applyG92Frame();
+    else
+      setFrame(f);
     return g.code;
   }
 
@@ -4819,11 +4827,25 @@ class Reader {
     const std::string name = P == 0       ? work_
                              : additional ? "G54.1P" + std::to_string(P)
                                           : names[P - 1];
-    // LinuxCNC's R (the coordinate system turned about Z) and offsets of rotary axes are not
-    // carried out: refused unless zero, never dropped.
+    // LinuxCNC's R: the coordinate system turned about Z by R degrees (G-code reference, "G10 L2",
+    // "R: rotation about the Z axis"; emccanon.cc rotate_and_offset_pos: machine = Rz(R)
+    // (program + G92) + G5x), with L2; with L20 refused (the point that takes the words' values
+    // in a turned system), as are offsets of rotary axes: refused unless zero, never dropped.
+    const bool linuxcnc = model_.control.dialect == "linuxcnc";
+    if (linuxcnc && L == 2 && aw.count('R')) {
+      if (g92_on_ && name == work_ && !g92_offset_.isZero())
+        fail(line_, aw.at('R')->column, "R",
+             "G10 L2 R (a turned coordinate system) while a G92 offset is in force is not "
+             "carried out");
+      rotation_rad_[name] = degToRad(aw.at('R')->value);
+    }
+    if (linuxcnc && L == 20 && rotationOf(name) != 0.0)
+      fail(line_, g.front()->column, "G10",
+           "G10 L20 on a turned coordinate system (G10 L2 R) is not carried out");
     for (const auto& [l, w] : aw) {
       const auto ax = letter_axis_.find(l);
       const bool rotary = ax != letter_axis_.end() && model_.axes[ax->second].isRotary();
+      if (l == 'R' && linuxcnc && L == 2) continue;
       if ((l == 'R' || rotary) && w->value != 0.0)
         fail(line_, w->column, std::string(1, l),
              l == 'R' ? "G10 L" + std::to_string(L) +
@@ -4846,8 +4868,25 @@ class Reader {
     }
     set_offsets_[name] = off;
     missing_offsets_.erase(name);
+    if (name == work_ && linuxcnc) {
+      last_offset_ = off;
+      applyG92Frame();
+    }
     cur_xyz_ = currentProgramXyz();
     return "G10";
+  }
+
+  // LinuxCNC's turned coordinate systems (G10 L2 R) and G92: the settable frame Rz(R) (p + G92)
+  // of the system in force.
+  double rotationOf(const std::string& name) const {
+    const auto it = rotation_rad_.find(name);
+    return it == rotation_rad_.end() ? 0.0 : it->second;
+  }
+  void applyG92Frame() {
+    Eigen::Isometry3d f = Eigen::Isometry3d::Identity();
+    f.linear() = Eigen::AngleAxisd(rotationOf(work_), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    if (g92_on_) f.translation() = f.linear() * g92_offset_;
+    if (!f.isApprox(frame_, 0.0)) setFrame(f);
   }
 
   const MachineModel& model_;
@@ -4907,6 +4946,7 @@ class Reader {
   double feed_word_ = 0.0;  // the last F word, in the unit of the feed mode
   int huge_feed_line_ = 0;  // the first F above 1e7 (read as the control's fastest)
   bool polar_plane_noted_ = false;
+  std::map<std::string, double> rotation_rad_;  // LinuxCNC's G10 L2 R, per work offset (rad)
   std::string work_ = "G54";
   bool tlc_ = false, tcp_without_tlc_ = false;
   int h_ = 0, tool_ = 0;
