@@ -899,7 +899,7 @@ TEST(GcodeReader, LinuxCncPolarCoordinates) {
 
 // LinuxCNC's turned coordinate systems (G10 L2 Pn R, were refused): machine = Rz(R) program +
 // G5x (emccanon.cc rotate_and_offset_pos), arcs turned with them, each system its own rotation;
-// G92 and G10 L20 in a turned system refused.
+// G92 in a turned system as LinuxCNC takes it; G10 L20 there refused.
 TEST(GcodeReader, LinuxCncTurnedCoordinateSystems) {
   const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
   const ClProgram p = parseGcode(
@@ -917,8 +917,14 @@ TEST(GcodeReader, LinuxCncTurnedCoordinateSystems) {
   EXPECT_LT((xyz(k - 1) - Eigen::Vector3d(8, 5, 0)).norm(), 1e-9);  // (0, 2) turned
   EXPECT_LT((xyz(k) - Eigen::Vector3d(12, 5, 0)).norm(), 1e-9);     // G55: not turned
   EXPECT_LT((xyz(k + 1) - Eigen::Vector3d(9, 6, 0)).norm(), 1e-9);  // back in G54: (1, 1) turned
-  EXPECT_NE(refusal("G21\nG10 L2 P1 R30\nG54 G0 X0 Y0 Z0\nG92 X1\n", m.model).find("turned"),
-            std::string::npos);
+  // G92 in a turned system: its offset taken before the turn (convert_axis_offsets).
+  const ClProgram g92 = parseGcode(
+      "G21\nG10 L2 P1 X10 Y5 Z0 R90\nG54 G0 X1 Y0 Z0\nG92 X0 Y0\nG0 X0 Y1\nM2\n", "g.ngc", m.model);
+  ASSERT_EQ(g92.path.size(), 2u);
+  EXPECT_LT((Eigen::Vector3d(g92.joints[1][0], g92.joints[1][1], g92.joints[1][2]) -
+             Eigen::Vector3d(9, 6, 0))
+                .norm(),
+            1e-9);
   EXPECT_NE(refusal("G21\nG10 L2 P1 R30\nG54 G0 X0 Y0 Z0\nG10 L20 P1 X0\n", m.model).find("turned"),
             std::string::npos);
   const Machine vmc = machine("resources/machines/vmc_3axis_iso.xml", 0.0);
@@ -1424,11 +1430,14 @@ TEST(GcodeReader, G92OffsetsShiftEveryWorkOffset) {
             std::string::npos);
   EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0 A0 C0\nG92 A5\n", m.model).find("rotary axis A"),
             std::string::npos);
-  // G10 L2 R turns the work coordinate system (LinuxCNC's tests/interp/g10/g10-with-g92): carried
-  // out (LinuxCncTurnedCoordinateSystems), but not with a G92 offset in force there.
-  EXPECT_NE(refusal("G21\nG0 X0 Y0 Z0\nG92 X1\nG10 L2 P0 X1 Y2 Z3 R10\n", m.model)
-                .find("while a G92 offset is in force"),
-            std::string::npos);
+  // G10 L2 R turns the work coordinate system (LinuxCNC's tests/interp/g10/g10-with-g92),
+  // the G92 offset inside the turn: machine = Rz(R) (program + G92) + G5x.
+  const ClProgram turned =
+      parseGcode("G21\nG10 L2 P1 X0 Y0 Z0\nG54 G0 X0 Y0 Z0\nG92 X1\nG10 L2 P0 R90\nG0 X2 Y0\n",
+                 "r.ngc", m.model);
+  ASSERT_EQ(turned.path.size(), 2u);
+  EXPECT_NEAR(turned.joints[1][0], 0.0, 1e-9);
+  EXPECT_NEAR(turned.joints[1][1], 1.0, 1e-9);
   // G10 L1 P Z sets the tool length a later G43 applies (as the HEMA programs of a LinuxCNC
   // shop write it, with R, the radius, beside it): 20 mm of length lifts the gauge point 20 mm
   // over the tip.

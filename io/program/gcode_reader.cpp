@@ -4606,12 +4606,14 @@ class Reader {
              g.code + " on the rotary axis " + std::string(1, l) +
                  " is not supported (an angle offset)");
     }
-    if (g.code == "G92" && rotationOf(work_) != 0.0)
-      fail(line_, g.column, "G92",
-           "G92 in a turned coordinate system (G10 L2 R) is not carried out");
     if (g.code == "G92") {
       Eigen::Vector3d o = g92_offset_;
-      const Eigen::Vector3d settable = frame_ * cur_xyz_;
+      // In a LinuxCNC turned system the offset is taken before the turn (interp_convert.cc
+      // convert_axis_offsets: offset = current + offset - word, in program coordinates).
+      const Eigen::Vector3d settable =
+          rotationOf(work_) != 0.0
+              ? Eigen::Vector3d(cur_xyz_ + (g92_on_ ? g92_offset_ : Eigen::Vector3d::Zero()))
+              : Eigen::Vector3d(frame_ * cur_xyz_);
       bool any = false;
       for (int k = 0; k < 3; ++k) {
         const auto it = aw.find(L[k]);
@@ -4832,13 +4834,7 @@ class Reader {
     // (program + G92) + G5x), with L2; with L20 refused (the point that takes the words' values
     // in a turned system), as are offsets of rotary axes: refused unless zero, never dropped.
     const bool linuxcnc = model_.control.dialect == "linuxcnc";
-    if (linuxcnc && L == 2 && aw.count('R')) {
-      if (g92_on_ && name == work_ && !g92_offset_.isZero())
-        fail(line_, aw.at('R')->column, "R",
-             "G10 L2 R (a turned coordinate system) while a G92 offset is in force is not "
-             "carried out");
-      rotation_rad_[name] = degToRad(aw.at('R')->value);
-    }
+    if (linuxcnc && L == 2 && aw.count('R')) rotation_rad_[name] = degToRad(aw.at('R')->value);
     if (linuxcnc && L == 20 && rotationOf(name) != 0.0)
       fail(line_, g.front()->column, "G10",
            "G10 L20 on a turned coordinate system (G10 L2 R) is not carried out");
