@@ -810,6 +810,10 @@ TEST(GcodeReader, CutterRadiusCompensationRefusalsAndSides) {
   // A step into a corner narrower than the tool: LinuxCNC's gouge refusal.
   EXPECT_NE(refused(on + "G1 X10\nG1 Y1\nG1 X20\nG1 Y-20\n").find("gouging"), std::string::npos);
   EXPECT_NE(refused(on + "G1 X10\nG18\n").find("G18 under cutter radius"), std::string::npos);
+  EXPECT_NE(refused(on + "G64 P0.01\n").find("G64 under cutter radius"), std::string::npos);
+  EXPECT_NE(refused(on + "G43 H1\n").find("tool length offset change"), std::string::npos);
+  // The plane in force again, and a unit change, LinuxCNC allows under compensation.
+  EXPECT_EQ(refused(on + "G17 G1 X10\nG20 G1 X1\nG21 G40 G1 X30 Y-10\n"), "accepted");
   EXPECT_NE(refused("G19 G41.1 D6\n").find("G19"), std::string::npos);
   EXPECT_NE(refused("G41 G1 X0 Y0\n").find("--tool-table"), std::string::npos);
   // The program's own G10 L1 P R sets the radius G41 compensates by (no table needed).

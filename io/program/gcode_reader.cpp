@@ -3419,6 +3419,8 @@ class Reader {
     };
     endModes(c);
     if (comp_side_ != 0 && tcpWordName(c)) compRefuse(w.column, c, "a TCP switch (" + c + ")");
+    if (comp_side_ != 0 && (c == "G43" || c == "G43.1" || c == "G49"))
+      compRefuse(w.column, c, "a tool length offset change (" + c + ")");
     if (tcpWord(c)) {
       if (c == "G49") tlc_ = false;
       if (c.rfind("G43", 0) == 0 || c == "G234") {
@@ -3462,13 +3464,16 @@ class Reader {
       compOff();
       return;
     }
-    // What LinuxCNC refuses while cutter radius compensation is on (interp_convert.cc).
-    if (comp_side_ != 0 &&
-        (c == "G17" || c == "G18" || c == "G19" || c == "G20" || c == "G21" || c == "G70" ||
-         c == "G71" || c.rfind("G54", 0) == 0 || c.rfind("G55", 0) == 0 || c == "G56" ||
-         c == "G57" || c == "G58" || c.rfind("G59", 0) == 0 || c == "G154" || isHaasG110(c) ||
-         c == "G10" || c.rfind("G92", 0) == 0 || c == "G28" || c == "G30" || c == "G53" ||
-         isDrillingCycle(c)))
+    // What LinuxCNC refuses while cutter radius compensation is on (interp_convert.cc): a plane
+    // change (the plane in force again is fine), coordinate systems, axis offsets, homes, G53,
+    // the control mode (G61, G64), canned cycles. A unit change it allows (the queue scaled;
+    // here everything is in mm already).
+    const int plane_of = c == "G17" ? 2 : c == "G18" ? 1 : c == "G19" ? 0 : -1;
+    if (comp_side_ != 0 && ((plane_of >= 0 && plane_of != plane_) || c.rfind("G54", 0) == 0 ||
+                            c.rfind("G55", 0) == 0 || c == "G56" || c == "G57" || c == "G58" ||
+                            c.rfind("G59", 0) == 0 || c == "G154" || isHaasG110(c) || c == "G10" ||
+                            c.rfind("G92", 0) == 0 || c == "G28" || c == "G30" || c == "G53" ||
+                            c == "G61" || c == "G61.1" || c == "G64" || isDrillingCycle(c)))
       compRefuse(w.column, c, c);
     auto refused = refusedG().find(c);
     if (refused != refusedG().end() && !isDrillingCycle(c))
@@ -3944,9 +3949,10 @@ class Reader {
   // - G40 ends it: the next move starts from the compensated point (a line; an arc is refused);
   //   M0, M1, M2, M30, M60 and the end of the file let the held move go as it is.
   // A negative radius swaps the side. With a zero radius the path is as programmed. Refused while
-  // it is on (as LinuxCNC refuses most of them): rotary words, drilling cycles, G28/G30/G53,
-  // work offset, G92, unit, plane, TCP and tool changes, arcs with P turns. Other controls' G41/G42
-  // stay refused (their corners differ: Fanuc's types A/B/C).
+  // it is on (as LinuxCNC refuses them): drilling cycles, G28/G30/G53, work offset, G92, G10,
+  // plane, control mode (G61/G64), tool and tool length changes, TCP switches; and (LinuxCNC
+  // carries them out) rotary words and arcs with P turns. Other controls' G41/G42 stay refused
+  // (their corners differ: Fanuc's types A/B/C).
   struct CompMove {
     bool arc = false, rapid = false;
     Eigen::Vector3d end = Eigen::Vector3d::Zero();  // the tool centre's end (program coordinates)
