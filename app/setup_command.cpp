@@ -133,6 +133,11 @@ void printWorkOffset(const SetupInputs& o, const SetupRun& run) {
         "  result     every move is in machine coordinates or in a work offset the program "
         "sets itself (G10): the set-up does not change where the machine goes; %s\n",
         run.margin_again >= -1e-9 ? "every point is inside travel" : "points are outside travel");
+    if (!o.output.empty())
+      std::printf(
+          "  wrote      nothing: there is no part zero to propose (%s not written: the "
+          "program places every point itself)\n",
+          o.output.c_str());
     return;
   }
   std::printf("  proposed   part_zero_mm = %.3f, %.3f, %.3f (the program's origin)\n",

@@ -588,6 +588,13 @@ TEST_F(GcodeCli, SetupLeavesAnAxisTheProgramNeverMovesInTheWorkOffset) {
   s = test::runTolver("predict --machine " + m + " --nc " + nc + " --setup " + path("s.txt") +
                       " -o " + path("p.apt"));
   EXPECT_EQ(s.exit_code, 0) << s.output;
+  // Every point placed by the program itself (G10 L2): no set-up file, and setup says so (it
+  // was silent, and the next command's --setup could not be opened).
+  const std::string own = write("g10.ngc", "G21 G90\nG10 L2 P1 X5 Y5 Z0\nG54 G0 X0 Y0 Z0\nM2\n");
+  s = test::runTolver("setup --machine " + m + " --nc " + own + " -o " + path("o.txt"));
+  EXPECT_EQ(s.exit_code, 0) << s.output;
+  EXPECT_NE(s.output.find("o.txt not written"), std::string::npos) << s.output;
+  EXPECT_FALSE(fs::exists(path("o.txt")));
 }
 
 // A program posted with the CAM's wear compensation (Fusion, Mastercam: G41 D.. on a tool-centre
