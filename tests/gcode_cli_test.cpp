@@ -337,6 +337,8 @@ TEST_F(GcodeCli, CutterRadiusCompensationWithTheControlsToolTable) {
   for (const char* corner : {"GOTO/35.000000,5.000000,-1.0", "GOTO/35.000000,25.000000,-1.0",
                              "GOTO/5.000000,25.000000,-1.0"})
     EXPECT_NE(cl.find(corner), std::string::npos) << corner;
+  // The entry move's point under its own line (compensation held it until line 6 was read).
+  EXPECT_NE(cl.find("$$ line 5\nGOTO/-3.535534,3.535534"), std::string::npos) << cl;
   r = test::runTolver("compensate --machine " + m + " --nc " + path("comp.ngc") + " --tool-table " +
                       path("tools.tbl") + " -o " + path("c.ngc"));
   EXPECT_EQ(r.exit_code, 2) << r.output;

@@ -761,6 +761,12 @@ TEST(GcodeReader, LinuxCncCutterRadiusCompensationAsItsInterpreterRunsIt) {
     EXPECT_EQ(followsCanonMoves(p, want), "");
     EXPECT_TRUE(hasNote(p, "cutter radius compensation carried out"));
     EXPECT_GT(p.radius_comp_line, 0);
+    // A held move's points belong to the line that made them, not to the line read when they
+    // came (the written CL's "$$ line"), in a program without subs.
+    if (p.flow_line == 0)
+      for (const AptStatement& st : p.statements)
+        for (int k = st.first_point; k < st.first_point + st.point_count; ++k)
+          EXPECT_EQ(p.path[k].line, st.first_line) << k;
   }
 }
 

@@ -416,8 +416,37 @@ class Reader {
     }
     const int first_point = static_cast<int>(prog_.path.size());
     const std::string major = runLine(static_cast<int>(prog_.lines.size()) + 1, text);
-    pushStatement(text, first_point, major);
+    pushStatement(text, first_point + compLateToTheirLines(first_point), major);
     sinkBlock();
+  }
+
+  // Cutter radius compensation holds a move until the next (compMoveEndpointAndFlush): its points
+  // come while a later line is read. They go to their own line's statement (the written CL's
+  // "$$ line" is the line that made them), when it directly precedes them; returns how many of
+  // the points from `first` on were given away so.
+  int compLateToTheirLines(int first) {
+    int given = 0;
+    for (const CompLate& late : comp_late_) {
+      if (late.first != first + given) break;
+      AptStatement* st = nullptr;
+      for (auto it = prog_.statements.rbegin(); it != prog_.statements.rend(); ++it)
+        if (it->first_line == late.line) {
+          st = &*it;
+          break;
+        }
+      if (st == nullptr) break;
+      if (st->point_count <= 0) {
+        st->first_point = late.first;
+        st->point_count = late.count;
+      } else if (st->first_point + st->point_count == late.first) {
+        st->point_count += late.count;
+      } else {
+        break;
+      }
+      given += late.count;
+    }
+    comp_late_.clear();
+    return given;
   }
 
   // One line carried out as its own line number: the block, a '%', or a line after the end.
@@ -453,7 +482,8 @@ class Reader {
   }
 
   void sinkBlock() {
-    if (blocks_ && prog_.path.size() >= blocks_->points) {
+    // (not while compensation holds a move: its points still go to a statement of this block)
+    if (blocks_ && prog_.path.size() >= blocks_->points && comp_side_ == 0) {
       blocks_->sink(prog_, false);
       prog_.dropBlock();
     }
@@ -4115,6 +4145,7 @@ class Reader {
     for (const CompMove& q : comp_queue_) {
       line_ = q.line;
       feed_word_ = q.feed;
+      const int before = static_cast<int>(prog_.path.size());
       if (q.arc) {
         const Eigen::Vector3d c = fromUv(q.centre, comp_emitted_);
         emitArc(q.turn > 0 ? "G3" : "G2", comp_emitted_, q.end, c, 0, std::nullopt);
@@ -4122,6 +4153,16 @@ class Reader {
         emit(q.end, q.rapid);
       }
       comp_emitted_ = q.end;
+      // Points of an earlier line, at the top level (a sub's belong to its call): noted for
+      // compLateToTheirLines.
+      const int count = static_cast<int>(prog_.path.size()) - before;
+      if (q.line != line && count > 0 && flow_depth_ == 0 && call_depth_ == 0) {
+        if (!comp_late_.empty() && comp_late_.back().line == q.line &&
+            comp_late_.back().first + comp_late_.back().count == before)
+          comp_late_.back().count += count;
+        else
+          comp_late_.push_back({before, count, q.line});
+      }
     }
     comp_queue_.clear();
     line_ = line;
@@ -4986,7 +5027,11 @@ class Reader {
   std::vector<CompMove> comp_queue_;
   Eigen::Vector2d comp_endpoint_ = Eigen::Vector2d::Zero();
   bool comp_endpoint_valid_ = false, comp_arc_not_allowed_ = false;
-  std::optional<double> block_d_;             // the block's D word (LinuxCNC, ISO)
+  std::optional<double> block_d_;  // the block's D word (LinuxCNC, ISO)
+  struct CompLate {
+    int first, count, line;  // points (path indices) of a held move of an earlier line
+  };
+  std::vector<CompLate> comp_late_;
   std::map<int, double> set_tool_diameters_;  // LinuxCNC's G10 L1 P R (mm), per tool
   int block_d_column_ = 0;
   int g92_line_ = 0;                        // the first G92..G92.3
