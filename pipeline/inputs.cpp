@@ -170,8 +170,17 @@ ClProgram readProgram(LineSource& source, const std::string& path, bool gcode,
     if (o.units == "inch") go.unit_mm = 25.4;
     if (o.units == "mm") go.unit_mm = 1.0;
     go.cutter_comp_wear = o.cutter_comp == "wear";
-    if (!o.tool_table.empty())
+    if (!o.tool_table.empty()) {
+      // Only a LinuxCNC control's G41/G42 are carried out (io/program/gcode_reader.h): on another
+      // the table would be read and nothing done with it.
+      if (model.control.dialect != "linuxcnc")
+        throw FieldError("tool_table",
+                         "LinuxCNC's tool table, for its cutter radius compensation, on a "
+                         "machine whose control is not dialect=\"linuxcnc\" (there G41/G42 "
+                         "are refused, or read with " +
+                             inputName("cutter_comp") + " wear)");
       go.tool_diameter_mm = readLinuxCncToolTable(o.tool_table, model.control.default_unit_mm);
+    }
     program =
         blocks ? readGcode(source, path, model, go, ranged) : readGcode(source, path, model, go);
   } else {

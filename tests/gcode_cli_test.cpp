@@ -356,6 +356,12 @@ TEST_F(GcodeCli, CutterRadiusCompensationWithTheControlsToolTable) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("bad.tbl:2:7: D"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(path("b.apt")));
+  // On another control the table would do nothing: the option is refused by name.
+  r = test::runTolver("predict --machine " + src("resources/machines/vmc_3axis_iso.xml") +
+                      " --nc " + path("comp.ngc") + " --tool-table " + path("tools.tbl") + " -o " +
+                      path("v.apt"));
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("--tool-table: LinuxCNC's tool table"), std::string::npos) << r.output;
 }
 
 TEST_F(GcodeCli, BadGcodeExitsWithCode2NamingTheLine) {
