@@ -233,6 +233,24 @@ TEST_F(CompensateCli, RealGcodeInTcpModeAndJointMode) {
   }
 }
 
+// LinuxCNC's turned coordinate system (G10 L2 R) and polar words (@ ^): the corrected words are
+// in the turned frame (the read-back check holds them), and a polar block is written with X Y in
+// place of its @ ^ (LinuxCNC refuses both in one block).
+TEST_F(CompensateCli, LinuxCncTurnedSystemAndPolarWords) {
+  const std::string m = withErrors("resources/machines/linuxcnc_xyzac_trt.xml", 5);
+  const std::string prog = path("turned.ngc");
+  std::ofstream(prog) << "G21 G90\nG10 L2 P1 X10 Y5 Z0 R30\nG54 G0 X2 Y0 Z5\nG1 Z-1 F100\n"
+                         "G1 @10 ^45\nG1 X20 Y3\nG1 X15 Y-3\nG0 Z5\nM2\n";
+  const nlohmann::json j = compensate(
+      m, "--nc", prog, "--setup " + src("samples/gcode/linuxcnc_setup.txt"), path("turned_c.ngc"));
+  ASSERT_FALSE(j.is_null());
+  EXPECT_GT(j["before"]["tip_max_um"].get<double>(), 1.0) << j.dump(1);
+  EXPECT_LT(j["after_compensated_points"]["tip_max_um"].get<double>(), 0.2) << j.dump(1);
+  for (const std::string& l : linesOf(path("turned_c.ngc")))
+    if (l.find('@') != std::string::npos || l.find('^') != std::string::npos)
+      EXPECT_TRUE(l.find('X') == std::string::npos && l.find('Y') == std::string::npos) << l;
+}
+
 // A rapid keeps its kind: a rotary index after a cut is never given the linear words it did not
 // have (issue 32: "G00 B82.875 C-90. X-2.01280 Y-2.01190" after G53, a 234 mm move); it is left
 // as programmed and listed.

@@ -257,7 +257,8 @@ std::vector<GWord> gcodeWords(const std::string& s) {
       continue;
     }
     if (c == ';') break;
-    if (!std::isalpha(static_cast<unsigned char>(c))) {
+    // (LinuxCNC's polar words @ and ^ are words too: a block with them names no X Y)
+    if (!std::isalpha(static_cast<unsigned char>(c)) && c != '@' && c != '^') {
       ++i;
       continue;
     }
@@ -399,7 +400,8 @@ class GcodeEditor {
     std::vector<GWord> words;
     std::map<int, const GWord*> axis_words;
     bool special = false, expression = false;
-    int point = -1;  // its program point when it has exactly one, else -1
+    bool polar = false;  // LinuxCNC's @ ^: its X Y are not words of the block
+    int point = -1;      // its program point when it has exactly one, else -1
     int line_no = 0;
     bool write = false, restore = false;
     std::vector<int>* restored_in = nullptr;  // the list a restored block is named in
@@ -472,6 +474,9 @@ class GcodeEditor {
         b.axis_words[it->second] = &w;
         if (!w.numeric) b.expression = true;
       }
+      // A polar block: left as programmed (writing its X Y beside @ ^ is refused by LinuxCNC,
+      // and its words say nothing of X Y in force).
+      if (w.letter == '@' || w.letter == '^') b.polar = b.expression = true;
     }
     const size_t k = li - program_->lines.first();  // the block's statements: one per line
     const AptStatement* st = k < program_->statements.size() ? &program_->statements[k] : nullptr;
@@ -516,13 +521,29 @@ class GcodeEditor {
         dxyz = program_->frames[program_->point_frame[i]].T.linear().transpose() * dxyz;
     }
     const char L[3] = {'X', 'Y', 'Z'};
+    // Joint words under a turned frame (LinuxCNC's G10 L2 R, Sinumerik's ROT): the machine's
+    // X Y Z are the frame's turn of the words, so the joints' corrections are turned back.
+    bool turned = false;
+    if (!tcp && !b.restore && i < static_cast<int>(program_->point_frame.size())) {
+      const Eigen::Matrix3d R = program_->frames[program_->point_frame[i]].T.linear();
+      if (!R.isIdentity(1e-15)) {
+        Eigen::Vector3d dm = Eigen::Vector3d::Zero();
+        for (int k = 0; k < 3; ++k)
+          if (axis_of_.count(L[k])) {
+            const int a = axis_of_.at(L[k]);
+            dm[k] = model_.axes[a].nc_sign * dq[a] / unit_;
+          }
+        dxyz = R.transpose() * dm;
+        turned = true;
+      }
+    }
     b.target.assign(n_, 0.0);
     for (int a = 0; a < n_; ++a) {
       const Axis& ax = model_.axes[a];
       const auto w = b.axis_words.find(a);
       const double old = w != b.axis_words.end() ? w->second->value : old_word_[a];
       double delta = ax.isRotary() ? ax.nc_sign * radToDeg(dq[a]) : ax.nc_sign * dq[a] / unit_;
-      if (tcp && !ax.isRotary())
+      if ((tcp || turned) && !ax.isRotary())
         for (int k = 0; k < 3; ++k)
           if (axis_of_.count(L[k]) && axis_of_.at(L[k]) == a) delta = dxyz[k];
       b.target[a] = old + delta;
@@ -589,6 +610,9 @@ class GcodeEditor {
     }
     if (b.special)
       for (const auto& [a, w] : b.axis_words) known_[a] = 0;
+    if (b.polar)
+      for (const char l : {'X', 'Y'})
+        if (axis_of_.count(l)) known_[axis_of_.at(l)] = 0;
   }
 
   const MachineModel& model_;
