@@ -251,6 +251,20 @@ TEST_F(CompensateCli, LinuxCncTurnedSystemAndPolarWords) {
       EXPECT_TRUE(l.find('X') == std::string::npos && l.find('Y') == std::string::npos) << l;
 }
 
+// Sinumerik's ROT with joint words (no TRAORI), the same way: the corrections turned back into
+// the frame.
+TEST_F(CompensateCli, SinumerikRotWithJointWords) {
+  const std::string ms = withErrors("resources/machines/sinumerik_bc_table.xml", 11);
+  const std::string rot = path("rot.mpf"), setup = path("rot_setup.txt");
+  std::ofstream(rot) << "N10 G54 G0 X0 Y0 Z80 B0 C0 D1\nN20 ROT Z30\nN30 G0 X5 Y-15 Z40\n"
+                        "N40 G1 Z2 F500\nN50 X25 Y10\nN60 X25 Y-10\nN70 G0 Z40\nM30\n";
+  std::ofstream(setup) << "part_zero_mm = 0, 0, 0\ng54_mm = -310, 0, 200\ngauge_length_mm = 100\n";
+  const nlohmann::json js = compensate(ms, "--nc", rot, "--setup " + setup, path("rot_c.mpf"));
+  ASSERT_FALSE(js.is_null());
+  EXPECT_GT(js["before"]["tip_max_um"].get<double>(), 5.0);
+  EXPECT_LT(js["after_compensated_points"]["tip_max_um"].get<double>(), 0.5) << js.dump(1);
+}
+
 // A rapid keeps its kind: a rotary index after a cut is never given the linear words it did not
 // have (issue 32: "G00 B82.875 C-90. X-2.01280 Y-2.01190" after G53, a 234 mm move); it is left
 // as programmed and listed.
