@@ -502,7 +502,7 @@ class Reader {
   // value returned is #<_value>. Refused by name: a call of a sub not defined above it in the
   // file (LinuxCNC would also search its subroutine path, which no machine file gives), a
   // construct without its end or a word out of place, a loop that runs more than
-  // kMaxIterations times, calls nested deeper than kMaxCallDepth.
+  // opt_.max_loop_passes times, calls nested deeper than kMaxCallDepth.
   struct OWord {
     std::string label;    // "100" or "<name>" (lower case, no spaces)
     std::string keyword;  // lower case: sub, endsub, call, while, ...
@@ -523,10 +523,9 @@ class Reader {
     FlowExit exit = FlowExit::Next;
     std::string label;
   };
-  static constexpr long kMaxIterations = 1000000;
+  // (the bounds: GcodeReadOptions::max_loop_passes, max_flow_lines)
   static constexpr int kMaxCallDepth = 50;
-  static constexpr int kMaxFlowDepth = 100;        // constructs within constructs
-  static constexpr long kMaxFlowLines = 10000000;  // lines carried out within constructs
+  static constexpr int kMaxFlowDepth = 100;  // constructs within constructs
 
   // A line as LinuxCNC reads it: comments out ('(...)' and after ';'), every space out, upper
   // case; col (when given) the 1-based column of each character kept.
@@ -686,8 +685,8 @@ class Reader {
   // then carried out from there with a program counter (jumps go anywhere in it); its points
   // belong to the first held line's statement, each keeping its own line (flow_line). Refused by
   // name: CASE and subprogram calls, a jump to a label or block the held part does not hold
-  // (GOTOC goes on), a structure without its end, loops beyond kMaxIterations and
-  // kMaxFlowLines lines in all.
+  // (GOTOC goes on), a structure without its end, loops beyond opt_.max_loop_passes and
+  // opt_.max_flow_lines lines in all.
   struct SinFlowLine {
     std::string label;    // NAME when the line defines NAME: (else empty)
     long number = -1;     // its block number N..., -1 none
@@ -932,9 +931,9 @@ class Reader {
     std::map<size_t, std::unordered_set<uint64_t>> passes;  // the variables at each pass
     auto iterate = [&](size_t at) {
       checkLoopProgress(passes[at], L[at].line, f[at].column, f[at].keyword);
-      if (++iterations[at] > kMaxIterations)
+      if (++iterations[at] > opt_.max_loop_passes)
         fail(L[at].line, f[at].column, f[at].keyword,
-             f[at].keyword + " ran " + std::to_string(kMaxIterations) +
+             f[at].keyword + " ran " + std::to_string(opt_.max_loop_passes) +
                  " times: a loop that does not end (or one too long to predict)");
     };
     auto jump = [&](size_t pc, const std::string& how, const std::string& to) {
@@ -944,9 +943,9 @@ class Reader {
     };
     size_t pc = 0;
     while (pc < n && !ended_) {
-      if (++flow_lines_ > kMaxFlowLines)
+      if (++flow_lines_ > opt_.max_flow_lines)
         fail(L[pc].line, 0, "O",
-             "the program's loops and jumps carried out " + std::to_string(kMaxFlowLines) +
+             "the program's loops and jumps carried out " + std::to_string(opt_.max_flow_lines) +
                  " lines: too long to predict (or a loop that does not end)");
       const SinFlowLine& x = f[pc];
       const std::string& kw = x.keyword;
@@ -1280,9 +1279,9 @@ class Reader {
   }
 
   void countIteration(long& n, const OWord& o, int line) {
-    if (++n > kMaxIterations)
+    if (++n > opt_.max_loop_passes)
       fail(line, o.column, "O",
-           "o" + o.label + " " + o.keyword + " ran " + std::to_string(kMaxIterations) +
+           "o" + o.label + " " + o.keyword + " ran " + std::to_string(opt_.max_loop_passes) +
                " times: a loop that does not end (or one too long to predict)");
   }
 
@@ -1322,9 +1321,9 @@ class Reader {
            "subs and control flow nested deeper than " + std::to_string(kMaxFlowDepth));
     for (size_t k = from; k < to; ++k) {
       if (ended_) return {};
-      if (++flow_lines_ > kMaxFlowLines)
+      if (++flow_lines_ > opt_.max_flow_lines)
         fail(lines[k].line, 0, "O",
-             "the program's subs and loops carried out " + std::to_string(kMaxFlowLines) +
+             "the program's subs and loops carried out " + std::to_string(opt_.max_flow_lines) +
                  " lines: too long to predict (or a loop that does not end)");
       if (isoSubprograms()) {
         if (const auto call = parseIsoCall(lines[k].text)) {
@@ -1353,7 +1352,7 @@ class Reader {
         long n = 0;
         std::unordered_set<uint64_t> passes;  // while/do: the variables at each pass
         const double count = kw == "repeat" ? flowValue(*o, line) : 0.0;
-        if (kw == "repeat" && !(count >= 0 && count <= kMaxIterations))
+        if (kw == "repeat" && !(count >= 0 && count <= opt_.max_loop_passes))
           fail(line, o->column, "O", "o" + o->label + " repeat count " + formatNumber(count));
         for (;;) {
           if (kw == "while" && flowValue(*o, line) == 0.0) break;

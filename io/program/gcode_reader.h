@@ -62,6 +62,12 @@ struct GcodeReadOptions {
   // The control's tool table (LinuxCNC: --tool-table, io/program/tool_table.h): per tool number,
   // the diameter (mm) that G41/G42 compensate by on a LinuxCNC control.
   std::map<int, double> tool_diameter_mm;
+  // Bounds on control flow (LinuxCNC O-words, ISO subprograms, Sinumerik loops and jumps): passes
+  // of one loop, and lines carried out within constructs in all; beyond them the program is
+  // refused (a loop that moves on and never ends takes seconds to reach them: the fuzz harness
+  // sets smaller ones).
+  long max_loop_passes = 1000000;
+  long max_flow_lines = 10000000;
 };
 
 // Throws InputError naming file:line:column and the word on malformed or unsupported input.
