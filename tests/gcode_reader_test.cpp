@@ -830,6 +830,13 @@ TEST(GcodeReader, CutterRadiusCompensationRefusalsAndSides) {
   ASSERT_EQ(by_g10.path.size(), by_d.path.size());
   for (size_t i = 0; i < by_d.path.size(); ++i)
     EXPECT_LT((by_g10.path[i].p_w - by_d.path[i].p_w).norm(), 1e-12) << i;
+  // G41 without D takes the tool in the spindle, not one selected after it (T4 waits for M6).
+  const ClProgram loaded = parseGcode(
+      head + "G10 L1 P3 R3\nG10 L1 P4 R9\nT3 M6\nT4\nG41 G1 X0 Y0 F100\nG1 X40\nG40 G1 X50 Y50\n",
+      "h", m.model);
+  ASSERT_EQ(loaded.path.size(), by_d.path.size());
+  for (size_t i = 0; i < by_d.path.size(); ++i)
+    EXPECT_LT((loaded.path[i].p_w - by_d.path[i].p_w).norm(), 1e-12) << i;
   // D0: no radius, the path as programmed; D-6: the other side of the path (G42's).
   const std::string square = "G1 X40\nG1 Y30\nG40 G1 X50 Y50\nM2\n";
   const ClProgram none = parseGcode(head + "G41.1 D0 G1 X0 Y0 F100\n" + square, "a", m.model);

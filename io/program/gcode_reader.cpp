@@ -2967,6 +2967,8 @@ class Reader {
   void toolChange(const std::string& key) {
     if (key == active_tool_) return;
     active_tool_ = key;
+    if (key.size() > 1 && key[0] == 'T' && std::isdigit(static_cast<unsigned char>(key[1])))
+      loaded_tool_ = std::atoi(key.c_str() + 1);
     if (key.empty() || key == "T0") return;
     CutterSpec spec;
     spec.source = "TLDATA";
@@ -3383,6 +3385,7 @@ class Reader {
       toolChange(selected_tool_);
     } else if (w.code == "M61" && axis_words.count('Q')) {
       tool_ = static_cast<int>(axis_words.at('Q')->value);
+      loaded_tool_ = tool_;  // LinuxCNC: the tool in the spindle, without a change
     } else if (model_.control.dialect == "linuxcnc" &&
                (w.code == "M70" || w.code == "M71" || w.code == "M72" || w.code == "M73")) {
       modalState(w);
@@ -4039,7 +4042,7 @@ class Reader {
              w.code + " L (a lathe tool's orientation) is not carried out");
       radius = *block_d_ * unit_ / 2.0;
     } else {
-      int tool = tool_;
+      int tool = loaded_tool_;  // LinuxCNC: the tool in the spindle (not one selected since)
       if (block_d_) {
         if (*block_d_ != std::round(*block_d_) || *block_d_ < 0)
           fail(line_, block_d_column_, "D", w.code + " D must be a tool number (whole, >= 0)");
@@ -5032,6 +5035,7 @@ class Reader {
   };
   std::vector<CompLate> comp_late_;
   std::map<int, double> set_tool_diameters_;  // LinuxCNC's G10 L1 P R (mm), per tool
+  int loaded_tool_ = 0;                       // the tool in the spindle (M6, M61 Q), 0: none
   int block_d_column_ = 0;
   int g92_line_ = 0;                        // the first G92..G92.3
   int stored_cycles_ = 0;                   // cycle blocks with L0/K0 (no hole)
