@@ -72,8 +72,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // moves on for the million passes a program may run took 6 s released, minutes here, where
     // an input has 10 s); the bounds themselves are tested (GcodeReader tests).
     tolver::GcodeReadOptions bounded;
-    bounded.max_loop_passes = 20000;
-    bounded.max_flow_lines = 100000;
+    bounded.max_loop_passes = 5000;
+    bounded.max_flow_lines = 50000;
     try {
       tolver::parseGcode(text, "fuzz.nc", machine().model, bounded);
     } catch (const tolver::InputError&) {
