@@ -4178,6 +4178,30 @@ class Reader {
     comp_queue_.push_back(m);
   }
 
+  // The block's own move held until the next: the tool centre at its end, the programmed point
+  // the next move starts from (what relative words and arc centres read).
+  void compHold(const CompMove& m, const Eigen::Vector3d& programmed_end) {
+    compEnqueue(m);
+    comp_first_ = false;
+    comp_cur_ = m.end;
+    comp_programmed_ = programmed_end;
+    cur_xyz_ = programmed_end;
+  }
+
+  // An outside corner: an arc of the tool radius about the programmed corner to `mid` (a G0: a
+  // straight traverse), emitted at once.
+  void compCorner(const Eigen::Vector2d& mid, const Eigen::Vector2d& corner_at, bool rapid) {
+    CompMove corner;
+    corner.arc = !rapid;
+    corner.rapid = rapid;
+    corner.end = fromUv(mid, comp_cur_);
+    corner.centre = corner_at;
+    corner.turn = comp_side_ > 0 ? -1 : 1;
+    compEnqueue(corner);
+    compFlush();
+    compSetEndpoint(mid);
+  }
+
   // A straight move (G0/G1) from the programmed start to the programmed end.
   void compStraight(const Eigen::Vector3d& start, const Eigen::Vector3d& end, bool rapid) {
     const double R = comp_radius_;
@@ -4194,10 +4218,7 @@ class Reader {
       m.rapid = rapid;
       m.end = fromUv(e, end);
       m.dir = Eigen::Vector2d(std::cos(alpha), std::sin(alpha));
-      compEnqueue(m);
-      comp_first_ = false;
-      comp_cur_ = m.end;
-      compProgrammed(end);
+      compHold(m, end);
       return;
     }
     const Eigen::Vector2d op = uv(start);
@@ -4206,9 +4227,7 @@ class Reader {
     if (p == op) {  // no XY motion: held with the move before it
       m.end = fromUv(c, end);
       m.dir = Eigen::Vector2d::Zero();
-      compEnqueue(m);
-      comp_cur_ = m.end;
-      compProgrammed(end);
+      compHold(m, end);
       return;
     }
     double theta = std::atan2(c.y() - op.y(), c.x() - op.x());
@@ -4235,16 +4254,7 @@ class Reader {
       concave = true;                // an "h": kept above and to the side
     if (!concave && beta > small) {  // an outside corner: an arc about it (a G0: a line)
       compMoveEndpointAndFlush(c);
-      CompMove corner;
-      corner.arc = !rapid;
-      corner.rapid = rapid;
-      corner.end = fromUv(mid, comp_cur_);
-      corner.centre = op;
-      corner.turn = comp_side_ > 0 ? -1 : 1;
-      corner.dir = Eigen::Vector2d::Zero();
-      compEnqueue(corner);
-      compFlush();
-      compSetEndpoint(mid);
+      compCorner(mid, op, rapid);
     } else if (concave) {
       if (!front_arc) {  // line to line: the held line's end drawn back
         const double halfcorner = (beta + M_PI) / 2.0;
@@ -4278,9 +4288,7 @@ class Reader {
     }
     m.end = fromUv(e, end);
     m.dir = p - op;
-    compEnqueue(m);
-    comp_cur_ = m.end;
-    compProgrammed(end);
+    compHold(m, end);
   }
 
   // An arc (G2/G3) from the programmed start to the programmed end about its centre.
@@ -4317,10 +4325,7 @@ class Reader {
       m.end = fromUv(e, end);
       m.centre = centre;
       m.sweep = findTurn(c, centre, turn, e);
-      compEnqueue(m);
-      comp_first_ = false;
-      comp_cur_ = m.end;
-      compProgrammed(end);
+      compHold(m, end);
       return;
     }
     const Eigen::Vector2d op = uv(start);
@@ -4377,14 +4382,7 @@ class Reader {
     } else if (beta > small) {  // an outside corner: an arc about it first
       const Eigen::Vector2d mid = op + R * Eigen::Vector2d(std::cos(delta), std::sin(delta));
       compFlush();
-      CompMove corner;
-      corner.arc = true;
-      corner.end = fromUv(mid, comp_cur_);
-      corner.centre = op;
-      corner.turn = comp_side_ > 0 ? -1 : 1;
-      compEnqueue(corner);
-      compFlush();
-      compSetEndpoint(mid);
+      compCorner(mid, op, false);
     } else {  // tangent
       compFlush();
       compSetEndpoint(c);
@@ -4392,15 +4390,7 @@ class Reader {
     m.end = fromUv(e, end);
     m.centre = centre;
     m.sweep = findTurn(op, centre, turn, p);
-    compEnqueue(m);
-    comp_cur_ = m.end;
-    compProgrammed(end);
-  }
-
-  // The programmed point the next move starts from (what relative words and arc centres read).
-  void compProgrammed(const Eigen::Vector3d& end) {
-    comp_programmed_ = end;
-    cur_xyz_ = end;
+    compHold(m, end);
   }
 
   void arc(const std::map<char, const Word*>& aw, const std::string& motion,
