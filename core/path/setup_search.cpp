@@ -529,28 +529,36 @@ std::vector<SetupPiece> splitIntoSetups(const MachineModel& model, const std::ve
     if (options.progress) options.progress(static_cast<double>(first) / n);
     SetupPiece p;
     p.first = first;
-    if (reach(first, n, &p.result)) {
-      p.last = n - 1;
-    } else {
-      // Bisection: lo reachable (one point at least is tried), hi not.
-      int lo = first + 1, hi = n;
-      SetupSearchResult r;
-      if (!reach(first, lo, &r)) {
-        p.last = first;  // a point no set-up reaches on its own
-        p.result = r;
-      } else {
-        p.result = r;
-        while (hi - lo > 1) {
-          const int mid = lo + (hi - lo) / 2;
-          if (reach(first, mid, &r)) {
-            lo = mid;
-            p.result = r;
-          } else {
-            hi = mid;
-          }
-        }
-        p.last = lo - 1;
+    // Galloping from one point, then bisection: [first, lo) is reachable, [first, hi) not (hi
+    // = n + 1: the rest is reachable). A piece is found in searches of its own length or twice
+    // it, not of the whole rest: a program mostly outside travel, cut into short pieces, took
+    // minutes when every piece began with a search of the rest and bisected from its middle.
+    int lo = first, hi = n + 1;
+    SetupSearchResult r;
+    for (int len = 1; !spent; len *= 2) {
+      const int end = std::min(first + len, n);
+      if (!reach(first, end, &r)) {
+        hi = end;
+        break;
       }
+      lo = end;
+      p.result = r;
+      if (end == n) break;
+    }
+    if (lo == first) {
+      p.last = first;  // a point no set-up reaches on its own
+      p.result = r;
+    } else {
+      while (!spent && hi <= n && hi - lo > 1) {
+        const int mid = lo + (hi - lo) / 2;
+        if (reach(first, mid, &r)) {
+          lo = mid;
+          p.result = r;
+        } else {
+          hi = mid;
+        }
+      }
+      p.last = lo - 1;
     }
     if (spent) break;  // the piece is not known to be the longest: not given
     // The piece's set-up with the margin of the full search (not the first that reached); if
