@@ -28,7 +28,7 @@ awk -v s="$start" -v e="$end" 'BEGIN { printf "verify: %.1f s wall\n", e - s }'
 [ -f "$work/time.txt" ] && cat "$work/time.txt"
 # The phase table: the "timings_s" object of report.json, largest first.
 # (A phase named *_concurrent ran beside others and is not part of the sum.)
-sed -n '/"timings_s": {/,/}/p' "$work/report/report.json" | grep -E '^ +"[a-z_]+": [0-9]' | tr -d '",:' |
+sed -n '/"timings_s": {/,/}/p' "$work/report/report.json" | grep -E '^ +"[a-z0-9_]+": [0-9]' | tr -d '",:' |
   awk '{ t[$1] = $2; if ($1 !~ /concurrent/) total += $2 }
        END { for (k in t) printf "  %-26s %7.2f s  %5.1f %%\n", k, t[k], 100 * t[k] / total }' |
   sort -k2 -rn

@@ -145,6 +145,37 @@ TEST(AptReader, CreoPseudoCommentsContinuationsAndSpacesAroundSlash) {
   expectNear(d.path.back().p_w, Eigen::Vector3d(-16.7803891180, -23.0, 2.0));
 }
 
+// Pro/CLFILE 9.0 writes its pseudo-comments as `REMARK -> CUTTER / 6.000000` (version 8: `$$->`),
+// and APT's REMARK is a comment: the head and end of a real five-axis finish
+// (4r19415/5-axis-Rotation-tool-center-point-RTCP-, assets/finition.ncl: lines 1-101 and the last
+// three). The cutter came from nowhere before (every REMARK an unknown statement, the cutter
+// missing); its GPOST vocabulary table (PPWORD) declares words and moves nothing.
+TEST(AptReader, Creo9RemarkPseudoCommentsAndComments) {
+  AptReadOptions mm;
+  mm.unit_mm = 1.0;
+  mm.unit_given = true;  // the file says INCHES and holds mm (its extent: 332 mm)
+  const ClProgram p =
+      readAptFile(test::sourcePath("tests/fixtures/cl/creo9_finition_head.ncl"), mm);
+  ASSERT_EQ(p.cutters.size(), 1u);
+  EXPECT_EQ(p.cutters[0].line, 73);
+  EXPECT_DOUBLE_EQ(p.cutters[0].values[0], 6.0);
+  EXPECT_EQ(p.unknown_names, (std::vector<std::string>{"CAMERA"}));
+  ASSERT_FALSE(p.operations.empty());
+  EXPECT_EQ(p.operations[0].name, "feature 1014");  // REMARK -> FEATNO / 1014
+  ASSERT_EQ(p.path.size(), 9u);                     // the GOTOs of lines 82-101
+  EXPECT_TRUE(p.multiax);
+  expectNear(p.path.front().p_w, Eigen::Vector3d(245.1295775618, -22.7813938898, 43.5028538928));
+  expectNear(p.path.front().u_w, Eigen::Vector3d(0.9997838891, -0.0000009626, 0.0207888211));
+  // A plain REMARK is one line whatever it holds; `REMARK/` too; REMARKS is another word.
+  const std::string text =
+      "UNITS / MM\nREMARK MACHID=MACHIN / UNCX01, 1\nREMARK/ $\nREMARKS / 1\n"
+      "GOTO / 1, 2, 3\nFINI\n";
+  const ClProgram q = parseApt(text, "remarks.apt");
+  EXPECT_EQ(q.unknown_names, (std::vector<std::string>{"REMARKS"}));
+  ASSERT_EQ(q.path.size(), 1u);
+  EXPECT_EQ(q.path[0].line, 5);
+}
+
 // NX writes the GOTOs in the MCS the MSYS names; the first MSYS is the part frame. A three-axis
 // operation in an MCS whose z points down in the CAD's absolute frame (x = j, y = i) keeps its
 // vertical tool axis and its numbers (issue 32: read through the MSYS it needed A = 180 deg).

@@ -32,7 +32,7 @@ const std::set<std::string>& noOpStatements() {
   static const std::set<std::string> s = {
       "SPINDL",      "LOADTL", "LOAD",      "SELECT", "PPRINT", "INSERT", "COOLNT", "TOOL PATH",
       "END-OF-PATH", "END",    "PAINT",     "MACHIN", "DELAY",  "OPSTOP", "STOP",   "CLRSRF",
-      "FEATNO",      "MFGNO",  "OPERATION", "DISPLY", "AUTOPS", "PLABEL"};
+      "FEATNO",      "MFGNO",  "OPERATION", "DISPLY", "AUTOPS", "PLABEL", "PPWORD"};
   return s;
 }
 
@@ -71,6 +71,17 @@ class Parser {
         const Logical& lg = gather(i, 4 + (t.data() - raw.data()), /*pseudo=*/true);
         st.major = statement(lg, /*pseudo=*/true, st);
         st.major.clear();  // Creo pseudo-comments are copied verbatim, never rewritten
+      } else if (const size_t arrow = remarkArrow(t); arrow != 0) {
+        // APT's REMARK is a comment to the end of its line (ISO 4343); Pro/CLFILE 9 writes its
+        // pseudo-comments as `REMARK -> CUTTER / 6.0` where version 8 wrote `$$-> ...`: read
+        // the same way.
+        if (arrow != std::string_view::npos) {
+          const Logical& lg = gather(i, arrow + (t.data() - raw.data()), /*pseudo=*/true);
+          statement(lg, /*pseudo=*/true, st);
+        } else {
+          ++i;
+        }
+        st.major.clear();  // copied verbatim, never rewritten
       } else if (t.rfind("$$", 0) == 0 || t[0] == '$') {
         operation(static_cast<int>(i) + 1, operationName(t));
         ++i;
@@ -164,6 +175,16 @@ class Parser {
 
   [[noreturn]] void fail(int line, int column, const std::string& field, const std::string& msg) {
     throw InputError(prog_.file, line, column, field, msg);
+  }
+
+  // For a line that is an APT REMARK: npos for a plain remark, else the offset just past the
+  // `->` of a Creo pseudo-comment (`REMARK -> CUTTER / 6.0`); 0 for any other line.
+  static size_t remarkArrow(std::string_view t) {
+    if (t.size() < 6 || toUpper(std::string(t.substr(0, 6))) != "REMARK") return 0;
+    if (t.size() > 6 && !std::isspace(static_cast<unsigned char>(t[6])) && t[6] != '/') return 0;
+    size_t k = 6;
+    while (k < t.size() && std::isspace(static_cast<unsigned char>(t[k]))) ++k;
+    return t.substr(k, 2) == "->" ? k + 2 : std::string_view::npos;
   }
 
   // Collects a statement from line i on, following `$` continuations; strips `$$` comments.
