@@ -700,6 +700,14 @@ TEST(SurfaceFiles, VtpSurfaceReadsBackExactly) {
                             ("tolver_vtp_test_" + std::to_string(::getpid()) + ".vtp"))
                                .string();
   writeVtpWithScalars(path, points, faces, {{"total_um", &a}, {"state", &b}});
+  {
+    // The triangles in 32-bit arrays (VTK's default is 64-bit: a third of a verify's VTP bytes).
+    std::ifstream in(path, std::ios::binary);
+    std::string head(4096, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    EXPECT_NE(head.find("type=\"Int32\" Name=\"connectivity\""), std::string::npos);
+    EXPECT_NE(head.find("type=\"Int32\" Name=\"offsets\""), std::string::npos);
+  }
   vtkNew<vtkXMLPolyDataReader> reader;
   reader->SetFileName(path.c_str());
   reader->Update();
