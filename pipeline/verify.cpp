@@ -1150,26 +1150,33 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
     program_um[i] = mmToUm(result.program[i]);
     state[i] = static_cast<double>(result.conformance[i]);
   }
-  // The table and the PLY surfaces are written on a second thread while VTK writes the VTP
-  // surfaces and renders the images (VTK runs on one thread at a time, g_vtk_mutex).
-  auto tables = std::async(std::launch::async, [&] {
-    const auto start = std::chrono::steady_clock::now();
-    writeFileAtomically((dir / "deviations.csv").string(), formatDeviationsCsv(r));
-    writePlyWithScalar((dir / "swept_predicted.ply").string(), predicted_swept, samples.faces,
-                       total_um, "deviation_um");
-    writePlyWithScalar((dir / "swept_nominal.ply").string(), nominal_swept, samples.faces,
-                       program_um, "deviation_um");
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  });
+  // The table and the PLY surfaces are written on a second thread while VTK renders the images
+  // (VTK runs on one thread at a time, g_vtk_mutex): they fill the core the images leave. When
+  // the 3D view is decimated too, they wait for it (its slabs take both cores and the images
+  // wait for its mesh: at a million samples, started at once, the tables slowed it by 0.5 s of
+  // the command's wall time); else they start at once, beside the VTP files.
+  const bool decimating = view3d && !samples.faces.empty() && !r.zones.empty();
+  std::future<double> tables;
+  auto startTables = [&] {
+    tables = std::async(std::launch::async, [&] {
+      const auto start = std::chrono::steady_clock::now();
+      writeFileAtomically((dir / "deviations.csv").string(), formatDeviationsCsv(r));
+      writePlyWithScalar((dir / "swept_predicted.ply").string(), predicted_swept, samples.faces,
+                         total_um, "deviation_um");
+      writePlyWithScalar((dir / "swept_nominal.ply").string(), nominal_swept, samples.faces,
+                         program_um, "deviation_um");
+      return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    });
+  };
+  if (!(decimating && images)) startTables();
   // The 3D view's decimation, on a third thread (it reads only).
   double view_s = 0;
   std::atomic<double> view_done{-1};  // the decimation's fraction, -1 before it starts
   auto view = std::async(std::launch::async, [&] {
     const auto start = std::chrono::steady_clock::now();
-    DecimatedMesh m =
-        view3d && !samples.faces.empty() && !r.zones.empty()
-            ? viewMesh(samples, result, r.zones, r.spacing_mm, [&](double f) { view_done = f; })
-            : DecimatedMesh{};
+    DecimatedMesh m = decimating ? viewMesh(samples, result, r.zones, r.spacing_mm,
+                                            [&](double f) { view_done = f; })
+                                 : DecimatedMesh{};
     view_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return m;
   });
@@ -1196,17 +1203,18 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
     v.view_mesh = view.get();
     if (!v.view_mesh.vertex.empty()) r.view_mesh = &v.view_mesh;
     phase("wait_view3d");
+    if (!tables.valid()) startTables();
     if (images)
       r.images = renderImages(r.line_pass, dir.string(), samples, result, r.zones, r.line_profile,
                               title, &r.notes, &r.cl_lines, r.view_mesh);
     phase("images");
   } catch (...) {
-    tables.wait();  // it writes into the staging directory: let it finish before that goes
+    if (tables.valid()) tables.wait();  // it writes into the staging directory: let it finish
     if (view.valid()) view.wait();
     throw;
   }
-  // The table and PLY thread's own time (concurrent with the two phases above), then what was
-  // left of it to wait for.
+  // The table and PLY thread's own time (concurrent with the images, or with the VTP files and the
+  // view's wait), then what was left of it to wait for.
   const double tables_s = tables.get();
   phase("wait_tables");
   r.timings.push_back({"tables_and_ply_concurrent", tables_s});
