@@ -1429,6 +1429,31 @@ TEST(GcodeReader, IsoSubprogramsAfterTheMainProgram) {
             std::string::npos);
 }
 
+// A work offset the program sets itself fixes, in machine coordinates, only the axes its G10
+// names (LinuxCNC "G10 L2": axes not given are not changed; "G10 L20": the current point takes
+// the words' values): a touch-off `G10 L20 P1 Z0` fixes Z when the tool's Z is itself fixed, and
+// `G10 L2 P1 R90` (a turn alone, LinuxCNC's sam_vel_violation.ngc) fixes none. Every axis was
+// taken as fixed before: setup then wrote nothing ("the program places every point itself") for
+// a program whose X and Y came from the control's G54.
+TEST(GcodeReader, OwnWorkOffsetsFixOnlyTheAxesTheySet) {
+  const Machine m = machine("resources/machines/linuxcnc_xyzac_trt.xml", 0.0);
+  auto masks = [&](const std::string& text) {
+    const ClProgram p = parseGcode(text, "o.ngc", m.model);
+    return std::vector<int>(p.fixed_axes.begin(), p.fixed_axes.end());
+  };
+  EXPECT_EQ(masks("G21\nG10 L2 P1 X5 Y5 Z0\nG54 G0 X0 Y0 Z0\nG1 X1\n"), (std::vector<int>{7, 7}));
+  EXPECT_EQ(masks("G21\nG10 L2 P1 R90\nG54 G0 X0 Y0 Z0\nG1 X1\n"), (std::vector<int>{0, 0}));
+  EXPECT_EQ(masks("G21\nG10 L2 P1 Z-20\nG54 G0 X0 Y0 Z0\n"), (std::vector<int>{4}));
+  // L20 where the tool's Z is in the offset (moves with the set-up): nothing fixed; after a G53
+  // move (Z in machine coordinates), Z fixed; X given in the offset as before.
+  EXPECT_EQ(masks("G21\nG54 G0 X0 Y0 Z5\nG10 L20 P1 Z0\nG0 X1 Z2\n"), (std::vector<int>{0, 0}));
+  EXPECT_EQ(masks("G21\nG54 G0 X0 Y0\nG53 G0 Z-10\nG10 L20 P1 Z0\nG0 X1 Z2\n"),
+            (std::vector<int>{4, 4}));  // the G53 move's, then Z2 in the offset set there
+  // The offset's other axes still come from the set-up: its note stays.
+  const ClProgram turned = parseGcode("G21\nG10 L2 P1 R90\nG54 G0 X1 Y0 Z0\n", "r.ngc", m.model);
+  EXPECT_TRUE(hasNote(turned, "G54 (first used at line 2) is not in the set-up"));
+}
+
 // G92 (LinuxCNC and Fanuc "coordinate system setting"): the current point takes the words'
 // values; the offset holds in every work offset; G92.2 suspends it, G92.3 restores it, G92.1
 // clears it. Positions by hand: at (10, 10), G92 X0 Y0 puts X5 Y5 at (15, 15).

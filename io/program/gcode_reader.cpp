@@ -3895,10 +3895,11 @@ class Reader {
     prog_.cycle_orientation.push_back(swivel_on_ ? 1 : 0);
     prog_.joints.push_back(q);
     prog_.tcp.push_back(kind);
-    // A work offset the program sets itself (G10) is fixed in machine coordinates: the set-up
-    // does not move the points given in it.
-    const bool own_offset = kind == ClProgram::kJointWords && set_offsets_.count(work_) > 0;
-    prog_.fixed_axes.push_back(kind == ClProgram::kTcpWords ? 0 : own_offset ? 7 : fixedMask());
+    // The axes of a work offset the program sets itself (G10) are fixed in machine coordinates:
+    // the set-up does not move the points given in it along them. Only the axes the G10 named
+    // (a touch-off `G10 L20 P0 Z0` fixes Z; X and Y stay the set-up's).
+    const unsigned char own = kind == ClProgram::kJointWords ? ownAxes(work_) : 0;
+    prog_.fixed_axes.push_back(kind == ClProgram::kTcpWords ? 0 : own | fixedMask());
   }
 
   // Where each of X Y Z stands: given in the work offset (moves with it), in machine
@@ -3913,6 +3914,12 @@ class Reader {
     last_unknown_line_ = std::max(last_unknown_line_, line_);
     return false;
   }
+  // The axes (bit k: X, Y, Z) of work offset `name` that the program set itself (G10).
+  unsigned char ownAxes(const std::string& name) const {
+    const auto it = set_axes_.find(name);
+    return it == set_axes_.end() ? 0 : it->second;
+  }
+
   unsigned char fixedMask() const {
     unsigned char m = 0;
     for (int k = 0; k < 3; ++k)
@@ -4897,12 +4904,26 @@ class Reader {
     for (int k = 0; k < 3; ++k)
       if (aw.count(xyz[k])) p[k] = aw.at(xyz[k])->value * unit_;
     const Eigen::Vector3d p_s = frame_ * p;
+    unsigned char own = ownAxes(name);
     for (int k = 0; k < 3; ++k) {
       if (!aw.count(xyz[k])) continue;
       off[k] = L == 2 || additional ? aw.at(xyz[k])->value * unit_ : here[k] - p_s[k];
+      // L2 (and ISO L20) give the offset in machine coordinates: fixed. LinuxCNC's L20 takes it
+      // from where the tool is: fixed only where that position is (a G53 move, or an axis of an
+      // offset the program set).
+      const unsigned char bit = static_cast<unsigned char>(1u << k);
+      const bool here_fixed =
+          coord_[k] == kFixed || (coord_[k] == kInOffset && (ownAxes(work_) & bit));
+      if (L == 2 || additional || here_fixed)
+        own |= bit;
+      else
+        own &= static_cast<unsigned char>(~bit);
     }
     set_offsets_[name] = off;
-    missing_offsets_.erase(name);
+    set_axes_[name] = own;
+    // The axes it left keep the set-up's (or the part zero's): its note stays until all three
+    // are the program's.
+    if (own == 7) missing_offsets_.erase(name);
     if (name == work_ && linuxcnc) {
       last_offset_ = off;
       applyG92Frame();
@@ -5035,6 +5056,7 @@ class Reader {
   std::set<std::string> commanded_offsets_;               // work offsets a block selects (G54...)
   std::map<std::string, int> unknown_;  // G and M codes tolver does not know -> first line
   std::map<std::string, Eigen::Vector3d> set_offsets_;
+  std::map<std::string, unsigned char> set_axes_;  // of set_offsets_: the axes G10 set (bits XYZ)
   std::map<std::string, double> named_;
   std::map<int, double> numbered_;
   std::vector<SourceLine> held_flow_;  // a LinuxCNC O-word construct being read up to its end
