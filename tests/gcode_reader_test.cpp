@@ -2174,6 +2174,21 @@ TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {
   EXPECT_NEAR(mc.cutters[1].values.at(0), 2 * 25.4, 1e-12);
   EXPECT_NEAR(mc.cutters[2].values.at(0), 0.125 * 25.4, 1e-12);
   EXPECT_NEAR(mc.cutters[2].values.at(1), 0.0625 * 25.4, 1e-12);  // a ball
+  // CamBam's tool list "( T0 : 1.0 )" (the diameter alone), then "T0 M6": the head and end of a
+  // real CamBam program (winder/Universal-G-Code-Sender, test_files/enclosure.nc: lines 1-40 and
+  // its last three). T0 was taken as the empty spindle and the program had no cutter.
+  const ClProgram cb =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/cambam_enclosure_head.nc"), m.model);
+  ASSERT_EQ(cb.cutters.size(), 1u);
+  EXPECT_EQ(cb.cutters[0].kind, "T0");
+  EXPECT_EQ(cb.cutters[0].line, 7);
+  EXPECT_EQ(cb.cutters[0].values, (std::vector<double>{1.0, 0}));
+  EXPECT_TRUE(hasNote(cb, "T0 (line 7): the program's tool list gives its diameter only"));
+  // Without a tool list, T0 still empties the spindle; a CamBam tool of no diameter (the
+  // corpus's "( T0 : 0.0 )") gives no geometry.
+  EXPECT_TRUE(parseGcode("G21\nT0 M6\nG0 X0 Y0 Z1\n", "t0.nc", m.model).cutters.empty());
+  EXPECT_TRUE(readGcodeFile(test::sourcePath("tests/fixtures/gcode/cambam_contour1.nc"), m.model)
+                  .cutters.empty());
 }
 
 // Every shipped machine with a control: a program in tool-centre-point mode and its joint-space

@@ -2925,6 +2925,17 @@ class Reader {
           ++e;
         return parseNumber(std::string_view(c).substr(b, e - b));
       };
+      // CamBam's tool list "( T0 : 3.175 )": the number and the diameter alone (its posts'
+      // ToolTableItem, "T{$tool.index} : {$tool.diameter}"); the shape is not given.
+      size_t colon = k;
+      while (colon < c.size() && c[colon] == ' ') ++colon;
+      if (colon < c.size() && c[colon] == ':') {
+        const std::optional<double> d = numberAfter(":");
+        if (!d || !(*d > 0)) continue;
+        tool_table_["T" + std::to_string(number)] = {*d, 0.0};
+        diameter_only_.insert("T" + std::to_string(number));
+        continue;
+      }
       std::optional<double> d = numberAfter(" D=");
       if (!d) d = numberAfter("=");  // "T1 = 10.0 dia."
       if (!d || !(*d > 0)) continue;
@@ -2969,7 +2980,9 @@ class Reader {
     active_tool_ = key;
     if (key.size() > 1 && key[0] == 'T' && std::isdigit(static_cast<unsigned char>(key[1])))
       loaded_tool_ = std::atoi(key.c_str() + 1);
-    if (key.empty() || key == "T0") return;
+    // T0 empties the spindle (LinuxCNC), unless the program's own tool list names a T0 (CamBam
+    // numbers its tools from 0 and writes "T0 M6" for the tool that cuts).
+    if (key.empty() || (key == "T0" && !tool_table_.count(key))) return;
     CutterSpec spec;
     spec.source = "TLDATA";
     spec.kind = key;
@@ -2977,6 +2990,12 @@ class Reader {
     auto it = tool_table_.find(key);
     if (it != tool_table_.end())
       spec.values = {it->second.first * unit_, it->second.second * unit_};
+    if (diameter_only_.erase(key))
+      prog_.notes.push_back(key + " (line " + std::to_string(line_) +
+                            "): the program's tool list gives its diameter only (CamBam's \"( " +
+                            key +
+                            " : d )\"): a flat end is assumed; give --cutter d,r for "
+                            "another shape");
     prog_.cutters.push_back(spec);
   }
 
@@ -5017,6 +5036,7 @@ class Reader {
   bool seen_m6_ = false;
   std::map<std::string, std::pair<double, double>>
       tool_table_;  // "T1" -> diameter, corner radius (program unit: comments come before G20/G21)
+  std::set<std::string> diameter_only_;  // of tool_table_: tools whose shape the list does not give
   std::set<std::string> tcp_active_;
   std::set<std::string> ignored_;
   std::map<std::string, int> missing_offsets_;      // work offset -> first line that used it
