@@ -2189,6 +2189,28 @@ TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {
   EXPECT_TRUE(parseGcode("G21\nT0 M6\nG0 X0 Y0 Z1\n", "t0.nc", m.model).cutters.empty());
   EXPECT_TRUE(readGcodeFile(test::sourcePath("tests/fixtures/gcode/cambam_contour1.nc"), m.model)
                   .cutters.empty());
+  // Fabex: "T2M06" then "(Tool: D = 6.0 mm  type BALLNOSE flutes 2)" (the corpus program), or
+  // the comment alone (its grbl post, as in blendercam's tests/test_data), in the comment's own
+  // unit ('' is inches); a shape it does not give is named, with no geometry.
+  const ClProgram fx =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/fabex_Op_Plane_1.tap"), m.model);
+  ASSERT_EQ(fx.cutters.size(), 1u);
+  EXPECT_EQ(fx.cutters[0].kind, "T2");
+  EXPECT_EQ(fx.cutters[0].values, (std::vector<double>{6, 3}));
+  const ClProgram grbl = parseGcode(
+      "G21\n(G-code Generated with Fabex and NC library)\nG17G90\n"
+      "(Tool: D = 3.0 mm  type END flutes 2)\nS12000M03\nG00 Z2.0\nG0X0Y0Z2\nG1Z-1F500\n"
+      "(Tool: D = 3.0 mm  type END flutes 2)\nG1X5\n(Tool: D = 0.125'' type BALLNOSE flutes 2)\n"
+      "G1X6\n(Tool: D = 0.25'' type VCARVE flutes 2)\nG1X7\n",
+      "fabex.gcode", m.model);
+  ASSERT_EQ(grbl.cutters.size(), 3u);  // the repeated END is the same tool
+  EXPECT_EQ(grbl.cutters[0].line, 4);
+  EXPECT_EQ(grbl.cutters[0].values, (std::vector<double>{3, 0}));
+  EXPECT_NEAR(grbl.cutters[1].values.at(0), 3.175, 1e-12);
+  EXPECT_NEAR(grbl.cutters[1].values.at(1), 1.5875, 1e-12);
+  EXPECT_EQ(grbl.cutters[2].kind, "Fabex VCARVE");
+  EXPECT_TRUE(grbl.cutters[2].values.empty());
+  EXPECT_TRUE(hasNote(grbl, "line 13: Fabex's tool comment names a VCARVE cutter"));
 }
 
 // Every shipped machine with a control: a program in tool-centre-point mode and its joint-space

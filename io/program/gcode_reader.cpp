@@ -2909,6 +2909,10 @@ class Reader {
       std::string c(trim(std::string_view(u).substr(open + 1, close - open - 1)));
       if (mastercamToolComment(c)) continue;
       if (c.rfind("TOOL:", 0) == 0) c = std::string(trim(std::string_view(c).substr(5)));
+      if (c.rfind("D =", 0) == 0 || c.rfind("D=", 0) == 0) {
+        fabexToolComment(c);
+        continue;
+      }
       if (c.size() < 2 || c[0] != 'T' || !std::isdigit(static_cast<unsigned char>(c[1]))) continue;
       size_t k = 1;
       while (k < c.size() && std::isdigit(static_cast<unsigned char>(c[k]))) ++k;
@@ -2943,6 +2947,52 @@ class Reader {
           numberAfter(" CR=").value_or(c.find("BALL") != std::string::npos ? *d / 2 : 0.0);
       tool_table_["T" + std::to_string(number)] = {*d, std::clamp(r, 0.0, *d / 2)};
     }
+  }
+
+  // Fabex (BlenderCAM): "(Tool: D = 6.0 mm  type BALLNOSE flutes 2)" after its "T2M06", or alone
+  // (its grbl post writes no T): the tool that cuts from here on, its diameter in the unit the
+  // comment names (fabex/gcode/gcode_export.py: "Tool: D = %s type %s flutes %s", the diameter
+  // by unit_value_to_string: "mm" or '' for inches). END is a flat end, BALLNOSE a ball; another
+  // type (BULLNOSE, VCARVE, BALLCONE, ...) is named in a note and gives no geometry.
+  void fabexToolComment(const std::string& c) {
+    size_t b = c.find('=') + 1;
+    while (b < c.size() && c[b] == ' ') ++b;
+    size_t e = b;
+    while (e < c.size() && (std::isdigit(static_cast<unsigned char>(c[e])) || c[e] == '.')) ++e;
+    const std::optional<double> value = parseNumber(std::string_view(c).substr(b, e - b));
+    if (!value || !(*value > 0)) return;
+    const std::string rest(trim(std::string_view(c).substr(e)));
+    double mm_per_unit = 0;
+    if (rest.rfind("MM", 0) == 0) mm_per_unit = 1.0;
+    if (rest.rfind("''", 0) == 0 || rest.rfind("\"", 0) == 0) mm_per_unit = 25.4;
+    const size_t t = rest.find("TYPE ");
+    if (mm_per_unit == 0 || t == std::string::npos) return;
+    size_t te = t + 5;
+    while (te < rest.size() && rest[te] != ' ') ++te;
+    const std::string type = rest.substr(t + 5, te - t - 5);
+    const double d = *value * mm_per_unit;
+    std::vector<double> values;
+    if (type == "END") values = {d, 0.0};
+    if (type == "BALLNOSE") values = {d, d / 2};
+    if (values.empty())
+      prog_.notes.push_back("line " + std::to_string(line_) + ": Fabex's tool comment names a " +
+                            type +
+                            " cutter, whose shape the comment does not give: give --cutter "
+                            "d,r (or a --tools file)");
+    // The tool a T/M6 just loaded, still without geometry, gets it; else this is the tool from
+    // here on (a repeat of the last one changes nothing).
+    if (!prog_.cutters.empty() && !active_tool_.empty() &&
+        prog_.cutters.back().kind == active_tool_ && prog_.cutters.back().values.empty()) {
+      prog_.cutters.back().values = values;
+      return;
+    }
+    if (!prog_.cutters.empty() && prog_.cutters.back().values == values && !values.empty()) return;
+    CutterSpec spec;
+    spec.source = "TLDATA";
+    spec.kind = "Fabex " + type;
+    spec.line = line_;
+    spec.values = values;
+    prog_.cutters.push_back(spec);
   }
 
   // "TOOL - n ... DIA. - d" (Mastercam): true when read.
