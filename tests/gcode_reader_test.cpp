@@ -2211,6 +2211,18 @@ TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {
   EXPECT_EQ(grbl.cutters[2].kind, "Fabex VCARVE");
   EXPECT_TRUE(grbl.cutters[2].values.empty());
   EXPECT_TRUE(hasNote(grbl, "line 13: Fabex's tool comment names a VCARVE cutter"));
+  // Fusion's personal-use post for a hobby machine: the tool list "(T1  D=2 CR=0 - ...)" and no
+  // T word at all (shooshx/led_floor, cad/nc/6mm_1004.nc, whole): the only tool listed cuts.
+  const ClProgram one =
+      readGcodeFile(test::sourcePath("tests/fixtures/gcode/fusion_led-floor_6mm_1004.nc"), m.model);
+  ASSERT_EQ(one.cutters.size(), 1u);
+  EXPECT_EQ(one.cutters[0].kind, "T1");
+  EXPECT_EQ(one.cutters[0].line, 2);
+  EXPECT_EQ(one.cutters[0].values, (std::vector<double>{2, 0}));
+  EXPECT_TRUE(hasNote(one, "T1 (listed in a comment at line 2) is the only tool"));
+  // Two tools listed and none selected: which cuts is not known.
+  EXPECT_TRUE(parseGcode("(T1 D=2 CR=0)\n(T2 D=4 CR=0)\nG21\nG0 X0 Y0 Z1\n", "two.nc", m.model)
+                  .cutters.empty());
 }
 
 // Every shipped machine with a control: a program in tool-centre-point mode and its joint-space

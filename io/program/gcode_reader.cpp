@@ -370,6 +370,21 @@ class Reader {
           "what they do on the control): " +
           names);
     }
+    // A program that selects no tool at all (no T word: Fusion's personal-use posts for hobby
+    // machines) and lists exactly one in its comments: that tool cuts, and the note says so.
+    if (prog_.cutters.empty() && active_tool_.empty() && selected_tool_.empty() &&
+        tool_table_.size() == 1) {
+      const auto& [key, geometry] = *tool_table_.begin();
+      CutterSpec spec;
+      spec.source = "TLDATA";
+      spec.kind = key;
+      spec.line = tool_line_.count(key) ? tool_line_.at(key) : 0;
+      spec.values = {geometry.first * unit_, geometry.second * unit_};
+      prog_.cutters.push_back(spec);
+      prog_.notes.push_back(key + " (listed in a comment at line " + std::to_string(spec.line) +
+                            ") is the only tool the program names and it selects none (no T "
+                            "word): taken as the tool that cuts");
+    }
     if (tcp_without_tlc_)
       prog_.notes.push_back(
           "TCP mode without G43: LinuxCNC then drives the spindle gauge point; XYZ was taken as "
@@ -2937,6 +2952,7 @@ class Reader {
         const std::optional<double> d = numberAfter(":");
         if (!d || !(*d > 0)) continue;
         tool_table_["T" + std::to_string(number)] = {*d, 0.0};
+        tool_line_.emplace("T" + std::to_string(number), line_);
         diameter_only_.insert("T" + std::to_string(number));
         continue;
       }
@@ -2946,6 +2962,7 @@ class Reader {
       const double r =
           numberAfter(" CR=").value_or(c.find("BALL") != std::string::npos ? *d / 2 : 0.0);
       tool_table_["T" + std::to_string(number)] = {*d, std::clamp(r, 0.0, *d / 2)};
+      tool_line_.emplace("T" + std::to_string(number), line_);
     }
   }
 
@@ -3020,6 +3037,7 @@ class Reader {
     if (!d || !(*d > 0)) return false;
     const double r = c.find("BALL") != std::string::npos ? *d / 2 : 0.0;
     tool_table_["T" + std::to_string(static_cast<long>(*number))] = {*d, r};
+    tool_line_.emplace("T" + std::to_string(static_cast<long>(*number)), line_);
     return true;
   }
 
@@ -5087,6 +5105,7 @@ class Reader {
   std::map<std::string, std::pair<double, double>>
       tool_table_;  // "T1" -> diameter, corner radius (program unit: comments come before G20/G21)
   std::set<std::string> diameter_only_;  // of tool_table_: tools whose shape the list does not give
+  std::map<std::string, int> tool_line_;  // of tool_table_: the line that first listed each tool
   std::set<std::string> tcp_active_;
   std::set<std::string> ignored_;
   std::map<std::string, int> missing_offsets_;      // work offset -> first line that used it
