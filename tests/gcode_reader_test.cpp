@@ -2177,12 +2177,18 @@ TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {
   // CamBam's tool list "( T0 : 1.0 )" (the diameter alone), then "T0 M6": the head and end of a
   // real CamBam program (winder/Universal-G-Code-Sender, test_files/enclosure.nc: lines 1-40 and
   // its last three). T0 was taken as the empty spindle and the program had no cutter.
-  const ClProgram cb =
-      readGcodeFile(test::sourcePath("tests/fixtures/gcode/cambam_enclosure_head.nc"), m.model);
-  ASSERT_EQ(cb.cutters.size(), 1u);
-  EXPECT_EQ(cb.cutters[0].kind, "T0");
-  EXPECT_EQ(cb.cutters[0].line, 7);
-  EXPECT_EQ(cb.cutters[0].values, (std::vector<double>{1.0, 0}));
+  // A fixture's one cutter: its tool, line and geometry.
+  auto oneCutter = [&](const std::string& fixture, const std::string& kind, int line,
+                       const std::vector<double>& values) {
+    const ClProgram p = readGcodeFile(test::sourcePath("tests/fixtures/gcode/" + fixture), m.model);
+    EXPECT_EQ(p.cutters.size(), 1u) << fixture;
+    if (p.cutters.empty()) return p;
+    EXPECT_EQ(p.cutters[0].kind, kind) << fixture;
+    if (line > 0) EXPECT_EQ(p.cutters[0].line, line) << fixture;
+    EXPECT_EQ(p.cutters[0].values, values) << fixture;
+    return p;
+  };
+  const ClProgram cb = oneCutter("cambam_enclosure_head.nc", "T0", 7, {1.0, 0});
   EXPECT_TRUE(hasNote(cb, "T0 (line 7): the program's tool list gives its diameter only"));
   // Without a tool list, T0 still empties the spindle; a CamBam tool of no diameter (the
   // corpus's "( T0 : 0.0 )") gives no geometry.
@@ -2192,11 +2198,7 @@ TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {
   // Fabex: "T2M06" then "(Tool: D = 6.0 mm  type BALLNOSE flutes 2)" (the corpus program), or
   // the comment alone (its grbl post, as in blendercam's tests/test_data), in the comment's own
   // unit ('' is inches); a shape it does not give is named, with no geometry.
-  const ClProgram fx =
-      readGcodeFile(test::sourcePath("tests/fixtures/gcode/fabex_Op_Plane_1.tap"), m.model);
-  ASSERT_EQ(fx.cutters.size(), 1u);
-  EXPECT_EQ(fx.cutters[0].kind, "T2");
-  EXPECT_EQ(fx.cutters[0].values, (std::vector<double>{6, 3}));
+  oneCutter("fabex_Op_Plane_1.tap", "T2", 0, {6, 3});
   const ClProgram grbl = parseGcode(
       "G21\n(G-code Generated with Fabex and NC library)\nG17G90\n"
       "(Tool: D = 3.0 mm  type END flutes 2)\nS12000M03\nG00 Z2.0\nG0X0Y0Z2\nG1Z-1F500\n"
@@ -2213,12 +2215,7 @@ TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {
   EXPECT_TRUE(hasNote(grbl, "line 13: Fabex's tool comment names a VCARVE cutter"));
   // Fusion's personal-use post for a hobby machine: the tool list "(T1  D=2 CR=0 - ...)" and no
   // T word at all (shooshx/led_floor, cad/nc/6mm_1004.nc, whole): the only tool listed cuts.
-  const ClProgram one =
-      readGcodeFile(test::sourcePath("tests/fixtures/gcode/fusion_led-floor_6mm_1004.nc"), m.model);
-  ASSERT_EQ(one.cutters.size(), 1u);
-  EXPECT_EQ(one.cutters[0].kind, "T1");
-  EXPECT_EQ(one.cutters[0].line, 2);
-  EXPECT_EQ(one.cutters[0].values, (std::vector<double>{2, 0}));
+  const ClProgram one = oneCutter("fusion_led-floor_6mm_1004.nc", "T1", 2, {2, 0});
   EXPECT_TRUE(hasNote(one, "T1 (listed in a comment at line 2) is the only tool"));
   // Two tools listed and none selected: which cuts is not known.
   EXPECT_TRUE(parseGcode("(T1 D=2 CR=0)\n(T2 D=4 CR=0)\nG21\nG0 X0 Y0 Z1\n", "two.nc", m.model)
