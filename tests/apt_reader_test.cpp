@@ -176,6 +176,25 @@ TEST(AptReader, Creo9RemarkPseudoCommentsAndComments) {
   EXPECT_EQ(q.path[0].line, 5);
 }
 
+// NX's TLDATA/DRILL,MILL,d,r,length,point angle,flute length (HumMan/CLSFProcessor,
+// samples/_5_SVERL_63_N2_116.cls, whole: a 63 mm insert drill, 178 deg): the flat end of its
+// diameter and length, and a note with the height its point leaves, 31.5 / tan(89 deg). The
+// point angle was read as TLDATA/MILL's taper (178 deg) and the tool described no cutter.
+TEST(AptReader, NxDrillIsItsFlatEndWithThePointSaid) {
+  const ClProgram p = fixture("nx_5_SVERL_63_N2_116.cls");
+  ASSERT_EQ(p.cutters.size(), 1u);
+  EXPECT_EQ(p.cutters[0].kind, "DRILL");
+  EXPECT_EQ(p.cutters[0].values, (std::vector<double>{63, 0, 239}));
+  const std::string height = formatWith("%.3g", 31.5 / std::tan(89.0 * M_PI / 180.0));
+  EXPECT_EQ(height, "0.55");
+  bool said = false;
+  for (const std::string& n : p.notes)
+    said = said || (n.find("TLDATA/DRILL at line 2") != std::string::npos &&
+                    n.find("(178 deg)") != std::string::npos &&
+                    n.find(height + " mm") != std::string::npos);
+  EXPECT_TRUE(said);
+}
+
 // NX writes the GOTOs in the MCS the MSYS names; the first MSYS is the part frame. A three-axis
 // operation in an MCS whose z points down in the CAD's absolute frame (x = j, y = i) keeps its
 // vertical tool axis and its numbers (issue 32: read through the MSYS it needed A = 180 deg).

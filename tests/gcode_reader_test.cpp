@@ -763,10 +763,11 @@ TEST(GcodeReader, LinuxCncCutterRadiusCompensationAsItsInterpreterRunsIt) {
     EXPECT_GT(p.radius_comp_line, 0);
     // A held move's points belong to the line that made them, not to the line read when they
     // came (the written CL's "$$ line"), in a program without subs.
-    if (p.flow_line == 0)
+    if (p.flow_line == 0) {
       for (const AptStatement& st : p.statements)
         for (int k = st.first_point; k < st.first_point + st.point_count; ++k)
           EXPECT_EQ(p.path[k].line, st.first_line) << k;
+    }
   }
 }
 
@@ -2180,13 +2181,16 @@ TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {
   // A fixture's one cutter: its tool, line and geometry.
   auto oneCutter = [&](const std::string& fixture, const std::string& kind, int line,
                        const std::vector<double>& values) {
-    const ClProgram p = readGcodeFile(test::sourcePath("tests/fixtures/gcode/" + fixture), m.model);
-    EXPECT_EQ(p.cutters.size(), 1u) << fixture;
-    if (p.cutters.empty()) return p;
-    EXPECT_EQ(p.cutters[0].kind, kind) << fixture;
-    if (line > 0) EXPECT_EQ(p.cutters[0].line, line) << fixture;
-    EXPECT_EQ(p.cutters[0].values, values) << fixture;
-    return p;
+    const ClProgram read =
+        readGcodeFile(test::sourcePath("tests/fixtures/gcode/" + fixture), m.model);
+    EXPECT_EQ(read.cutters.size(), 1u) << fixture;
+    if (read.cutters.empty()) return read;
+    EXPECT_EQ(read.cutters[0].kind, kind) << fixture;
+    if (line > 0) {
+      EXPECT_EQ(read.cutters[0].line, line) << fixture;
+    }
+    EXPECT_EQ(read.cutters[0].values, values) << fixture;
+    return read;
   };
   const ClProgram cb = oneCutter("cambam_enclosure_head.nc", "T0", 7, {1.0, 0});
   EXPECT_TRUE(hasNote(cb, "T0 (line 7): the program's tool list gives its diameter only"));

@@ -7,6 +7,7 @@
 #include <optional>
 #include <set>
 
+#include "core/numerics/units.h"
 #include "core/path/arc_interpolation.h"
 #include "io/common/io_error.h"
 #include "io/common/line_source.h"
@@ -655,6 +656,20 @@ class Parser {
     CutterSpec c{"TLDATA", words.empty() ? "" : words[0], v, line};
     const double s = prog_.frames[frame_].scale;
     for (size_t k = 0; k < c.values.size() && k < 3; ++k) c.values[k] *= s;
+    // NX's TLDATA/DRILL,MILL,d,r,length,point angle,flute length (the HumMan samples' 63 mm
+    // insert drill: 178 deg): swept as the flat end of its diameter, said with the height its
+    // point leaves at a hole's bottom (the fifth value is not a taper, as TLDATA/MILL's is).
+    if (c.kind == "DRILL" && c.values.size() >= 4) {
+      const double point_deg = c.values[3];
+      c.values.resize(3);
+      if (point_deg > 0 && point_deg < 180)
+        prog_.notes.push_back(
+            "TLDATA/DRILL at line " + std::to_string(line) + ": the drill's point (" +
+            formatNumber(point_deg) +
+            " deg) is swept as a flat end, so the bottoms of its holes read as gouges up to the "
+            "point's height, " +
+            formatWith("%.3g", 0.5 * c.values[0] / std::tan(0.5 * degToRad(point_deg))) + " mm");
+    }
     prog_.cutters.push_back(c);
   }
 
