@@ -123,6 +123,40 @@ TEST(MeshDecimate, AFlatGridWithTwoValuesGoesDownToTheBudgetWithinTheBounds) {
   EXPECT_NEAR(area, (n - 1) * (n - 1), 1e-9);
 }
 
+// A hub, a vertex of far more neighbours than a sampled surface has (the CL-only surface of a
+// Fabex spiral program had one of 73 000 triangles, and its 3D view took more than 5 minutes in
+// OpenMesh's link test): the hub and its ring stay as they are, the rest goes down within the
+// bounds. A flat wheel: a hub of 200 spokes, then 20 rings of 200 vertices.
+TEST(MeshDecimate, AHubAndItsRingStayAsTheyAre) {
+  const int spokes = 200, rings = 21;
+  Grid g;
+  g.p.emplace_back(0, 0, 0);
+  for (int k = 0; k < rings; ++k)
+    for (int i = 0; i < spokes; ++i) {
+      const double a = 2 * M_PI * i / spokes, r = 10.0 + k;
+      g.p.emplace_back(r * std::cos(a), r * std::sin(a), 0);
+    }
+  auto at = [&](int k, int i) { return 1 + k * spokes + (i % spokes); };
+  for (int i = 0; i < spokes; ++i) g.faces.emplace_back(0, at(0, i), at(0, i + 1));
+  for (int k = 0; k + 1 < rings; ++k)
+    for (int i = 0; i < spokes; ++i) {
+      g.faces.emplace_back(at(k, i), at(k + 1, i), at(k + 1, i + 1));
+      g.faces.emplace_back(at(k, i), at(k + 1, i + 1), at(k, i + 1));
+    }
+  const std::vector<double> value(g.p.size(), 0.0);
+  const std::vector<int> category(g.p.size(), 0);
+  DecimateOptions o;
+  o.max_distance_mm = 1e-3;
+  o.max_value_difference = 1e-5;
+  o.max_vertices = 1500;
+  const DecimatedMesh m =
+      decimateForDisplay(g.p, g.faces, value, category, std::vector<char>(g.p.size(), 0), o);
+  EXPECT_LT(m.vertex.size(), g.p.size());  // the rest was decimated
+  for (int i = 0; i <= spokes; ++i)        // the hub (0) and its ring (1-200)
+    EXPECT_NE(std::find(m.vertex.begin(), m.vertex.end(), i), m.vertex.end()) << i;
+  checkBounds(g, value, category, m);
+}
+
 TEST(MeshDecimate, ABumpAndTwoCategoriesStayWithinBothBounds) {
   const int n = 41;
   // A cylinder's quarter (radius 30): the distance bound matters.
