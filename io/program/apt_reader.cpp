@@ -181,7 +181,8 @@ class Parser {
   // For a line that is an APT REMARK: npos for a plain remark, else the offset just past the
   // `->` of a Creo pseudo-comment (`REMARK -> CUTTER / 6.0`); 0 for any other line.
   static size_t remarkArrow(std::string_view t) {
-    if (t.size() < 6 || toUpper(std::string(t.substr(0, 6))) != "REMARK") return 0;
+    if (t.size() < 6 || (t[0] != 'R' && t[0] != 'r')) return 0;  // most lines: a GOTO
+    if (toUpper(std::string(t.substr(0, 6))) != "REMARK") return 0;
     if (t.size() > 6 && !std::isspace(static_cast<unsigned char>(t[6])) && t[6] != '/') return 0;
     size_t k = 6;
     while (k < t.size() && std::isspace(static_cast<unsigned char>(t[k]))) ++k;
@@ -658,7 +659,7 @@ class Parser {
     for (size_t k = 0; k < c.values.size() && k < 3; ++k) c.values[k] *= s;
     // NX's TLDATA/DRILL,MILL,d,r,length,point angle,flute length (the HumMan samples' 63 mm
     // insert drill: 178 deg): swept as the flat end of its diameter, said with the height its
-    // point leaves at a hole's bottom (the fifth value is not a taper, as TLDATA/MILL's is).
+    // point leaves at a hole's bottom (its fourth value is no taper, as TLDATA/MILL's is).
     if (c.kind == "DRILL" && c.values.size() >= 4) {
       const double point_deg = c.values[3];
       c.values.resize(3);
