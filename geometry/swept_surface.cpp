@@ -105,9 +105,9 @@ class BoxTree {
     node_count_.emplace(n, c);
     return c;
   }
-  // The node `index` over boxes_[first, last), its subtree's nodes after it. Depth stays below 64:
-  // each split halves. Halves of more than kParallel boxes are built in parallel (the nodes and
-  // the boxes they sort are their own).
+  // The node `index` over keys_[first, last) (boxes given, by their keys' index), its subtree's
+  // nodes after it. Depth stays below 64: each split halves. Halves of more than kParallel keys
+  // are built in parallel (the nodes and the keys they sort are their own).
   void build(const std::vector<Box>& boxes, int index, int first, int last) {
     Node& node = nodes_[index];
     if (last - first <= kLeaf) {

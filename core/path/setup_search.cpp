@@ -549,7 +549,7 @@ std::vector<SetupPiece> splitIntoSetups(const MachineModel& model, const std::ve
       p.last = first;  // a point no set-up reaches on its own
       p.result = r;
     } else {
-      while (!spent && hi <= n && hi - lo > 1) {
+      while (!spent && hi - lo > 1) {
         const int mid = lo + (hi - lo) / 2;
         if (reach(first, mid, &r)) {
           lo = mid;
