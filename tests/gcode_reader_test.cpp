@@ -2221,6 +2221,15 @@ TEST(GcodeReader, ToolChangesCarryTheCommentsGeometry) {
   // T word at all (shooshx/led_floor, cad/nc/6mm_1004.nc, whole): the only tool listed cuts.
   const ClProgram one = oneCutter("fusion_led-floor_6mm_1004.nc", "T1", 2, {2, 0});
   EXPECT_TRUE(hasNote(one, "T1 (listed in a comment at line 2) is the only tool"));
+  // Malformed tool comments give no geometry, never a part of their digits: an exponent
+  // ("1e999" read as 1 mm before), a negative or missing diameter, a Fabex size in no unit.
+  for (const char* bad : {"(T1 D=1e999 CR=0)\nT1 M6\n", "( T0 : nan )\nT0 M6\n",
+                          "(T1 D=-3 CR=0)\nT1 M6\n", "(Tool: D = -3 mm type END flutes 2)\n",
+                          "(Tool: D = 3 type END flutes 2)\n", "(Tool: D = 1e9 mm type END)\n"}) {
+    const ClProgram read =
+        parseGcode(std::string("G21\n") + bad + "G0 X0 Y0 Z1\n", "bad.nc", m.model);
+    for (const CutterSpec& c : read.cutters) EXPECT_TRUE(c.values.empty()) << bad;
+  }
   // Two tools listed and none selected: which cuts is not known.
   EXPECT_TRUE(parseGcode("(T1 D=2 CR=0)\n(T2 D=4 CR=0)\nG21\nG0 X0 Y0 Z1\n", "two.nc", m.model)
                   .cutters.empty());

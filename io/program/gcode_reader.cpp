@@ -2942,6 +2942,9 @@ class Reader {
         while (e < c.size() &&
                (std::isdigit(static_cast<unsigned char>(c[e])) || c[e] == '.' || c[e] == '-'))
           ++e;
+        // A number that runs on into letters ("1E999", "6MM") is not one the posts write: no
+        // geometry rather than its leading digits.
+        if (e < c.size() && std::isalpha(static_cast<unsigned char>(c[e]))) return std::nullopt;
         return parseNumber(std::string_view(c).substr(b, e - b));
       };
       // CamBam's tool list "( T0 : 3.175 )": the number and the diameter alone (its posts'
