@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "core/numerics/units.h"
+#include "geometry/nearest_point.h"
 
 namespace tolver {
 namespace {
@@ -237,63 +238,198 @@ std::vector<LineProfilePoint> lineProfile(const SurfaceSamples& samples, const V
   return out;
 }
 
+namespace {
+
+// The surface's pieces: the passes, each cut where it has turned a full turn about the tool
+// axis (the turns of a spiral and the loops of an offset contour lie side by side within one
+// pass, and are joined as neighbouring passes are).
+std::vector<ClPass> surfacePieces(const std::vector<ClPoint>& path,
+                                  const std::vector<ClPass>& passes) {
+  std::vector<ClPass> out;
+  for (const ClPass& p : passes) {
+    int first = p.first;
+    double turned = 0;
+    Eigen::Vector3d prev = Eigen::Vector3d::Zero();
+    for (int c = p.first + 1; c <= p.last; ++c) {
+      const Eigen::Vector3d u = path[c].u_w.normalized();
+      Eigen::Vector3d d = path[c].p_w - path[c - 1].p_w;
+      d -= d.dot(u) * u;
+      if (d.norm() < 1e-9) continue;
+      if (!prev.isZero()) {
+        turned += std::atan2(prev.cross(d).dot(u), prev.dot(d));
+        if (std::abs(turned) >= 2 * kPi && c - 1 > first) {
+          out.push_back({first, c - 1});
+          first = c - 1;
+          turned = 0;
+        }
+      }
+      prev = d;
+    }
+    if (p.last > first) out.push_back({first, p.last});
+  }
+  return out;
+}
+
+}  // namespace
+
 // Long by design: [AM01] 5.5.4-5.5.5 step by step (passes, the surfaces through the CL points,
 // the deviation per point), on shared per-pass arrays.
 void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPoint>& predicted,
-                     const std::vector<ToleranceZone>& zones, SurfaceSamples* samples,
-                     VerifyResult* result) {
+                     const std::vector<ToleranceZone>& zones, const std::vector<double>& width_mm,
+                     SurfaceSamples* samples, VerifyResult* result) {
   const std::vector<ClPass> passes = clPasses(nominal);
-  std::unordered_map<int, int> sample_of;  // CL index -> sample
+  // The surface's pieces (passes cut at each full turn), and the nodes along them: the CL points,
+  // and on a move longer than the typical gap between neighbouring pieces, points along it (a
+  // straight move has only its ends, too few to say what lies beside it). A node's nominal and
+  // predicted points are interpolated along its move (cl: the move's end; t: the fraction).
+  const std::vector<ClPass> pieces = surfacePieces(nominal, passes);
+  struct Node {
+    int cl = 0;
+    double t = 1;  // 1: the CL point itself
+  };
+  auto at = [&](const std::vector<ClPoint>& path, const Node& q) -> Eigen::Vector3d {
+    return q.t >= 1
+               ? path[q.cl].p_w
+               : Eigen::Vector3d(path[q.cl - 1].p_w + q.t * (path[q.cl].p_w - path[q.cl - 1].p_w));
+  };
+  std::vector<Node> node;
+  std::vector<int> label, start(pieces.size() + 1, 0);  // start: each piece's first node
+  auto makeNodes = [&](double spacing) {
+    node.clear();
+    label.clear();
+    for (size_t k = 0; k < pieces.size(); ++k) {
+      start[k] = static_cast<int>(node.size());
+      for (int c = pieces[k].first; c <= pieces[k].last; ++c) {
+        if (c > pieces[k].first && spacing > 0) {
+          const double want = (nominal[c].p_w - nominal[c - 1].p_w).norm() / spacing;
+          const int parts = want > 1 ? static_cast<int>(std::ceil(std::min(want, 1e6))) : 1;
+          for (int m = 1; m < parts; ++m) {
+            node.push_back({c, static_cast<double>(m) / parts});
+            label.push_back(static_cast<int>(k));
+          }
+        }
+        node.push_back({c, 1.0});
+        label.push_back(static_cast<int>(k));
+      }
+    }
+    start[pieces.size()] = static_cast<int>(node.size());
+  };
+  // Each node's side neighbour: the nearest node of an earlier piece (among its 512 nearest:
+  // its own piece's come first, as many as the gap holds), no farther than its cutter's width
+  // (the passes of a surface overlap; two sides of one contour do not).
+  std::vector<Eigen::Vector3d> points;
+  std::vector<int> side;
+  std::vector<double> gap;
+  double typical = 0;
+  // A neighbour beside the node, not ahead of it: their pieces run within 45 degrees of
+  // parallel (or antiparallel) there and neither along the tool axis, and when it ends its
+  // piece the node does not lie past that end (the next side of a contour, a pass after its
+  // link, the piece after a lift).
+  std::vector<Eigen::Vector3d> tangent;
+  auto beside = [&](int i, int j) {
+    const double cos45 = std::sqrt(0.5);
+    // A move along the tool axis (a plunge, a drilled hole) sweeps no surface beside another.
+    for (int q : {i, j})
+      if (std::abs(tangent[q].dot(nominal[node[q].cl].u_w.normalized())) > cos45) return false;
+    if (std::abs(tangent[i].dot(tangent[j])) < cos45 &&
+        !(tangent[i].isZero() || tangent[j].isZero()))
+      return false;
+    const int k = label[j];
+    const bool first = j == start[k], last = j == start[k + 1] - 1;
+    if (!first && !last) return true;
+    const Eigen::Vector3d out = first ? Eigen::Vector3d(-tangent[j]) : tangent[j];
+    const Eigen::Vector3d offset = points[i] - points[j];
+    return offset.dot(out) <= cos45 * offset.norm();
+  };
+  auto neighbours = [&] {
+    points.clear();
+    for (const Node& q : node) points.push_back(at(nominal, q));
+    tangent.assign(node.size(), Eigen::Vector3d::Zero());
+    for (size_t k = 0; k < pieces.size(); ++k)
+      for (int i = start[k]; i < start[k + 1]; ++i) {
+        const Eigen::Vector3d d =
+            points[std::min(i + 1, start[k + 1] - 1)] - points[std::max(i - 1, start[k])];
+        if (d.norm() > 0) tangent[i] = d.normalized();
+      }
+    std::vector<double> reach;
+    if (!width_mm.empty())
+      for (const Node& q : node) reach.push_back(width_mm[q.cl]);
+    side = nearestWithLowerLabel(points, label, 512, reach, beside);
+    gap.assign(node.size(), INFINITY);
+    std::vector<double> sorted;
+    for (size_t i = 0; i < node.size(); ++i)
+      if (side[i] >= 0 && points[side[i]] != points[i]) {
+        gap[i] = (points[side[i]] - points[i]).norm();
+        sorted.push_back(gap[i]);
+      }
+    std::sort(sorted.begin(), sorted.end());
+    typical = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
+  };
+  makeNodes(0);
+  neighbours();
+  {
+    // Moves longer than the typical gap get nodes a gap apart (about 2 million more at most).
+    double length = 0;
+    for (const ClPass& p : pieces)
+      for (int c = p.first + 1; c <= p.last; ++c)
+        length += (nominal[c].p_w - nominal[c - 1].p_w).norm();
+    const double spacing = std::max(typical, length / 2e6);
+    bool long_move = false;
+    for (const ClPass& p : pieces)
+      for (int c = p.first + 1; c <= p.last && !long_move; ++c)
+        long_move = (nominal[c].p_w - nominal[c - 1].p_w).norm() > 2 * spacing;
+    if (typical > 0 && long_move) {
+      makeNodes(spacing);
+      neighbours();
+    }
+  }
+
   SurfaceSamples& s = *samples;
   s = SurfaceSamples();
   s.group_names = {"cl"};
-  auto sampleOf = [&](int c) {
-    auto [it, fresh] = sample_of.try_emplace(c, static_cast<int>(s.p_w.size()));
+  std::vector<Node> node_of;                   // per sample
+  std::unordered_map<int64_t, int> sample_of;  // CL point, or a node along a move -> sample
+  auto sampleOf = [&](int i) {
+    const Node& q = node[i];
+    const int64_t key = q.t >= 1 ? q.cl : -1 - static_cast<int64_t>(i);
+    auto [it, fresh] = sample_of.try_emplace(key, static_cast<int>(s.p_w.size()));
     if (fresh) {
-      s.p_w.push_back(nominal[c].p_w);
+      s.p_w.push_back(at(nominal, q));
       s.n_w.push_back(Eigen::Vector3d::Zero());
       s.area.push_back(0.0);
       s.group.push_back(0);
+      node_of.push_back(q);
     }
     return it->second;
   };
-  for (const auto& p : passes)
-    for (int c = p.first; c <= p.last; ++c) sampleOf(c);
+  for (size_t i = 0; i < node.size(); ++i)
+    if (node[i].t >= 1) sampleOf(static_cast<int>(i));
 
-  // Gaps between consecutive passes, to join only neighbours.
-  auto gap = [&](const ClPass& a, const ClPass& b) {
-    const Eigen::Vector3d m = nominal[(b.first + b.last) / 2].p_w;
-    double best = INFINITY;
-    for (int c = a.first; c <= a.last; ++c) best = std::min(best, (nominal[c].p_w - m).norm());
-    return best;
-  };
-  std::vector<double> gaps;
-  for (size_t k = 1; k < passes.size(); ++k) gaps.push_back(gap(passes[k - 1], passes[k]));
-  std::vector<double> sorted = gaps;
-  std::sort(sorted.begin(), sorted.end());
-  const double median = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
-  for (size_t k = 1; k < passes.size(); ++k) {
-    if (gaps[k - 1] > 4.0 * median) continue;
-    std::vector<int> A, B;
-    for (int c = passes[k - 1].first; c <= passes[k - 1].last; ++c) A.push_back(c);
-    for (int c = passes[k].first; c <= passes[k].last; ++c) B.push_back(c);
-    auto P = [&](int c) { return nominal[c].p_w; };
-    if ((P(A.front()) - P(B.front())).norm() + (P(A.back()) - P(B.back())).norm() >
-        (P(A.front()) - P(B.back())).norm() + (P(A.back()) - P(B.front())).norm())
-      std::reverse(B.begin(), B.end());
+  // Each piece is joined to the pieces cut before it that it lies beside: each run of its nodes
+  // whose side neighbours lie in one earlier piece is zipped to the stretch of that piece they
+  // face. Not simply the pass before: the pieces of a spiral cut by lifts, or a pass and its
+  // link, follow each other end to end, and strips between them spanned the part (a 200 mm disc
+  // had 2.4 M mm2); a piece of a turn lies beside two pieces of the turn before.
+  auto P = [&](int i) -> const Eigen::Vector3d& { return points[i]; };
+  auto zip = [&](const std::vector<int>& A, const std::vector<int>& B, double width) {
     size_t i = 0, j = 0;
     while (i + 1 < A.size() || j + 1 < B.size()) {
-      int a = A[i], b = B[j], c;
-      if (i + 1 == A.size() ||
-          (j + 1 < B.size() && (P(A[i]) - P(B[j + 1])).norm() < (P(A[i + 1]) - P(B[j])).norm())) {
-        c = B[++j];
-      } else {
-        c = A[++i];
-      }
-      if (a == b || b == c || a == c) continue;
+      const int a = A[i], b = B[j];
+      const bool advance_b =
+          i + 1 == A.size() ||
+          (j + 1 < B.size() && (P(A[i]) - P(B[j + 1])).norm() < (P(A[i + 1]) - P(B[j])).norm());
+      const int c = advance_b ? B[++j] : A[++i];
+      if (P(a) == P(b) || P(b) == P(c) || P(a) == P(c)) continue;
+      // A side across the pieces longer than the side along one and a few gaps is no surface
+      // between neighbours (a safety net: the runs should leave none).
+      const double side_along = advance_b ? (P(b) - P(c)).norm() : (P(a) - P(c)).norm();
+      const double side_across = advance_b ? (P(a) - P(c)).norm() : (P(b) - P(c)).norm();
+      if (std::max(side_across, (P(a) - P(b)).norm()) > side_along + 4.0 * width + 1e-9) continue;
       Eigen::Vector3i t(sampleOf(a), sampleOf(b), sampleOf(c));
+      if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
       const Eigen::Vector3d fn = (s.p_w[t[1]] - s.p_w[t[0]]).cross(s.p_w[t[2]] - s.p_w[t[0]]);
-      const Eigen::Vector3d axis = nominal[a].u_w + nominal[b].u_w + nominal[c].u_w;
+      const Eigen::Vector3d axis =
+          nominal[node[a].cl].u_w + nominal[node[b].cl].u_w + nominal[node[c].cl].u_w;
       if (fn.dot(axis) < 0) std::swap(t[1], t[2]);
       s.faces.push_back(t);
       s.face_group.push_back(0);
@@ -303,13 +439,61 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
         s.area[t[q]] += area / 3.0;
       }
     }
+  };
+  // A piece's own gap: the median of its nodes' gaps to the pieces before it (infinite for the
+  // first of a feature). A node's neighbour is taken when its gap is within 2.5 times that of
+  // the neighbour's piece, or of the program's median when that is larger: a wall's levels 6 mm
+  // apart join, in a program whose holes' helices are 0.2 mm apart; the first pass of a level
+  // below, or of the next pocket, does not join the last pass before it (1 mm from its own).
+  std::vector<double> own(pieces.size(), INFINITY);
+  for (size_t k = 0; k < pieces.size(); ++k) {
+    std::vector<double> g;
+    for (int i = start[k]; i < start[k + 1]; ++i)
+      if (std::isfinite(gap[i])) g.push_back(gap[i]);
+    if (g.empty()) continue;
+    std::nth_element(g.begin(), g.begin() + g.size() / 2, g.end());
+    own[k] = g[g.size() / 2];
+  }
+  auto neighbourPiece = [&](int i) {
+    if (side[i] < 0) return -1;
+    const int j = label[side[i]];
+    const double limit = 2.5 * std::max(std::isfinite(own[j]) ? own[j] : 0.0, typical);
+    return gap[i] <= limit ? j : -1;
+  };
+  for (size_t k = 1; k < pieces.size(); ++k) {
+    const int first = start[k], last = start[k + 1] - 1;
+    for (int i = first; i <= last;) {
+      const int j = neighbourPiece(i);
+      int e = i;
+      while (e + 1 <= last && neighbourPiece(e + 1) == j) ++e;
+      if (j >= 0 && e > i) {  // a lone node is no stretch beside a piece
+        // The run, with the nodes either side (its seams with the runs beside it), against the
+        // stretch of piece j its nodes face.
+        const int lo = std::max(i - 1, first), hi = std::min(e + 1, last);
+        int a_lo = start[j + 1], a_hi = start[j] - 1;
+        double along = 0, width = 0;
+        for (int q = i; q <= e; ++q) {
+          a_lo = std::min(a_lo, std::max(side[q] - 1, start[j]));
+          a_hi = std::max(a_hi, std::min(side[q] + 1, start[j + 1] - 1));
+          const Eigen::Vector3d tb = P(std::min(q + 1, last)) - P(std::max(q - 1, first));
+          const Eigen::Vector3d ta =
+              P(std::min(side[q] + 1, start[j + 1] - 1)) - P(std::max(side[q] - 1, start[j]));
+          along += tb.dot(ta);
+          width = std::max(width, gap[q]);
+        }
+        std::vector<int> A, B;
+        for (int q = a_lo; q <= a_hi; ++q) A.push_back(q);
+        for (int q = lo; q <= hi; ++q) B.push_back(q);
+        if (along < 0) std::reverse(B.begin(), B.end());
+        if (A.size() >= 2 || B.size() >= 2) zip(A, B, width);
+      }
+      i = e + 1;
+    }
   }
   // Normals; a point on no strip (a lone pass) takes its tool axis.
-  std::vector<int> cl_of(s.p_w.size());
-  for (const auto& [c, i] : sample_of) cl_of[i] = c;
   for (size_t i = 0; i < s.p_w.size(); ++i) {
     const double len = s.n_w[i].norm();
-    s.n_w[i] = len > 0 ? Eigen::Vector3d(s.n_w[i] / len) : nominal[cl_of[i]].u_w.normalized();
+    s.n_w[i] = len > 0 ? Eigen::Vector3d(s.n_w[i] / len) : nominal[node_of[i].cl].u_w.normalized();
   }
   VerifyResult& r = *result;
   r = VerifyResult();
@@ -323,9 +507,8 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
   r.cl_index.assign(n, -1);
   r.contact_offset_w.assign(n, Eigen::Vector3f::Zero());  // the surface through the tips
   for (size_t i = 0; i < n; ++i) {
-    const int c = cl_of[i];
-    r.cl_index[i] = c;
-    r.total[i] = r.machine[i] = (predicted[c].p_w - nominal[c].p_w).dot(s.n_w[i]);
+    r.cl_index[i] = node_of[i].cl;
+    r.total[i] = r.machine[i] = (at(predicted, node_of[i]) - s.p_w[i]).dot(s.n_w[i]);
   }
   evaluateZones(s, zones, &r);
   r.machine_stats = r.total_stats;

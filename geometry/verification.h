@@ -118,13 +118,18 @@ std::vector<LineProfilePoint> lineProfile(const SurfaceSamples& samples, const V
                                           const ClPass& pass);
 
 // CL-only mode ([AM01] 5.5.4-5.5.5) when there is no CAD model: the nominal surface is the
-// surface through the CL points, pass after pass (neighbouring passes joined by triangle strips),
-// its normal turned towards the tool; the predicted one has the same connectivity through the
-// CL_predicted points. Deviation = (p_predicted - p_nominal) . n (the first-order distance along
-// the normal; the second-order term is below 1e-6 of it for micrometre errors). `program` is
-// zero. Fills `samples` (one per CL point used) and `result`.
+// surface through the CL points, each piece of a pass (passes cut at each full turn about the
+// tool axis) joined by triangle strips to the earlier pieces it lies beside (found from the
+// points, not from their order), its normal turned towards the tool; the predicted one has the
+// same connectivity through the CL_predicted points. A move longer than the typical gap between
+// neighbours has samples along it, its nominal and predicted points interpolated (cl_index: the
+// move's end). Deviation = (p_predicted - p_nominal) . n (the first-order distance along the
+// normal; the second-order term is below 1e-6 of it for micrometre errors). `program` is zero.
+// Fills `samples` (one per CL point used, and those along long moves) and `result`.
+// `width_mm`: per CL point, the width its cutter sweeps (its largest diameter), the farthest
+// apart two passes of one surface can lie; empty: no limit.
 void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPoint>& predicted,
-                     const std::vector<ToleranceZone>& zones, SurfaceSamples* samples,
-                     VerifyResult* result);
+                     const std::vector<ToleranceZone>& zones, const std::vector<double>& width_mm,
+                     SurfaceSamples* samples, VerifyResult* result);
 
 }  // namespace tolver

@@ -1007,10 +1007,24 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
       predicted[i].p_w = m.pred.points[i].p_pred_w;
       predicted[i].u_w = m.pred.points[i].u_pred_w;
     }
-    clOnlyDeviation(program.path, predicted, zones, &v->samples, &v->result);
+    std::vector<double> width(program.path.size(), 0.0);
+    for (size_t i = 0; i < width.size(); ++i) {
+      const int k = tools.tool_of_cl.empty() ? 0 : tools.tool_of_cl[i];
+      if (k >= 0 && k < static_cast<int>(tools.cutters.size()))
+        width[i] = 2.0 * tools.cutters[k].maxRadius();
+    }
+    clOnlyDeviation(program.path, predicted, zones, width, &v->samples, &v->result);
+    size_t along = 0;  // samples on a move between its CL points
+    for (size_t i = 0; i < v->samples.size(); ++i)
+      along += v->samples.p_w[i] != program.path[v->result.cl_index[i]].p_w;
     rep.notes.push_back(
         "CL-only mode: no part model; the surfaces are built through the CL points "
-        "(thesis 5.5.4-5.5.5) and the deviation is the machine's alone");
+        "(thesis 5.5.4-5.5.5) and the deviation is the machine's alone" +
+        (along == 0
+             ? std::string()
+             : "; " + std::to_string(along) + " of its " + std::to_string(v->samples.size()) +
+                   " points lie on moves longer than the gap between neighbouring passes, "
+                   "between their CL points (nominal and predicted interpolated)"));
   } else {
     checkPartUnits(o, program, part->mesh);
     checkSampleBudget(o, part->mesh);

@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/kinematics/forward_kinematics.h"
+#include "core/numerics/units.h"
 #include "core/path/tool_motion.h"
 #include "core/path/tool_path_prediction.h"
 #include "io/machine/machine_file.h"
@@ -225,6 +226,110 @@ TEST(Verification, BeyondTheSearchRangeIsFlagged) {
   }
   EXPECT_EQ(r.split_beyond, 10);
   EXPECT_FALSE(r.pass);
+}
+
+}  // namespace
+}  // namespace tolver
+
+namespace tolver {
+namespace {
+
+// CL-only surfaces ([AM01] 5.5.4): the area of the surface through the CL points against the
+// area the paths sweep, analytic. Tool axis vertical; a rapid marks the move to its point.
+double clOnlyArea(const std::vector<ClPoint>& path, double width = 6) {
+  SurfaceSamples s;
+  VerifyResult r;
+  clOnlyDeviation(path, path, {}, std::vector<double>(path.size(), width), &s, &r);
+  double area = 0;
+  for (double a : s.area) area += a;
+  return area;
+}
+
+ClPoint at(double x, double y, double z, bool rapid = false) {
+  ClPoint p;
+  p.p_w = Eigen::Vector3d(x, y, z);
+  p.rapid = rapid;
+  return p;
+}
+
+// An Archimedean spiral r = r0 + step theta / 2 pi, a point every 0.3 mm, out to r_end; with
+// `lift_deg`, cut into pieces by lifts (up 5 mm, over, down) every lift_deg of turn (Fabex's
+// spiral pattern). The strips between one turn and the next cover
+//   integral over theta in [0, theta_end - 2 pi] of (r step + step^2 / 2).
+std::vector<ClPoint> spiral(double r0, double step, double r_end, double lift_deg, double* area) {
+  std::vector<ClPoint> path{at(r0, 0, 5, true), at(r0, 0, 0, true)};
+  double last_lift = 0, theta = 0;
+  for (;; theta += 0.3 / (r0 + step * theta / (2 * kPi))) {
+    const double r = r0 + step * theta / (2 * kPi);
+    if (r > r_end) break;
+    const double x = r * std::cos(theta), y = r * std::sin(theta);
+    if (lift_deg > 0 && theta - last_lift > degToRad(lift_deg)) {
+      path.push_back(at(path.back().p_w.x(), path.back().p_w.y(), 5, true));
+      path.push_back(at(x, y, 5, true));
+      path.push_back(at(x, y, 0, true));
+      last_lift = theta;
+    } else {
+      path.push_back(at(x, y, 0));
+    }
+  }
+  const double end = theta - 2 * kPi;
+  *area = r0 * step * end + step * step * end * end / (4 * kPi) + step * step * end / 2;
+  return path;
+}
+
+TEST(ClOnlySurface, ASpiralInOnePassIsJoinedTurnToTurn) {
+  double area = 0;
+  const std::vector<ClPoint> path = spiral(1, 1, 30, 0, &area);
+  EXPECT_NEAR(clOnlyArea(path), area, 0.01 * area);  // a single pass had no strip at all
+}
+
+TEST(ClOnlySurface, ASpiralCutByLiftsIsJoinedSideBySideNotEndToEnd) {
+  double area = 0;
+  const std::vector<ClPoint> path = spiral(1, 1, 30, 250, &area);
+  // The pieces were joined end to end, each to the one before: strips across the part.
+  EXPECT_NEAR(clOnlyArea(path), area, 0.04 * area);
+}
+
+// Offset contours of a 40 x 20 mm rectangle 1 mm apart, corners only (straight moves): the
+// ring between the outer loop and the tenth covers 40 x 20 - 22 x 2 mm2 (less a little at the
+// corners, where one side's run ends and the next one's begins: 740 mm2; 5 548 before).
+TEST(ClOnlySurface, OffsetContoursOfStraightMovesAreJoinedLoopToLoop) {
+  std::vector<ClPoint> path{at(0, 0, 5, true), at(0, 0, 0, true)};
+  for (int k = 0; k < 10; ++k) {
+    const double a = k;
+    for (const auto& [x, y] : {std::pair{a, a}, {40 - a, a}, {40 - a, 20 - a}, {a, 20 - a}, {a, a}})
+      path.push_back(at(x, y, 0));
+  }
+  EXPECT_NEAR(clOnlyArea(path), 40 * 20 - 22 * 2, 0.03 * 756);
+}
+
+// A raster of 21 straight passes 1 mm apart at two depths 10 mm apart, rapids between: two
+// 40 x 20 mm faces, and nothing between the levels.
+TEST(ClOnlySurface, RasterLevelsAreJoinedWithinALevelOnly) {
+  std::vector<ClPoint> path;
+  for (double z : {0.0, -10.0})
+    for (int k = 0; k <= 20; ++k) {
+      path.push_back(at(0, k, 5, true));
+      path.push_back(at(0, k, z, true));
+      path.push_back(at(40, k, z));
+    }
+  EXPECT_NEAR(clOnlyArea(path), 2 * 40 * 20, 1e-6);
+}
+
+// What sweeps no surface between passes: a row of drilled holes (feed moves along the tool
+// axis), and a single contour whose sides meet at corners. Both had strips before (a vertical
+// wall between the holes; a fan across the contour's inside).
+TEST(ClOnlySurface, DrilledHolesAndASingleContourHaveNoSurfaceBetweenThem) {
+  std::vector<ClPoint> holes;
+  for (int k = 0; k < 6; ++k) {
+    holes.push_back(at(10.0 * k, 0, 5, true));
+    holes.push_back(at(10.0 * k, 0, 2, true));
+    holes.push_back(at(10.0 * k, 0, -20));
+  }
+  EXPECT_NEAR(clOnlyArea(holes), 0.0, 1e-9);
+  std::vector<ClPoint> contour{at(110, 212, 25, true), at(110, 212, 0, true), at(9, 110, 0),
+                               at(110, 8, 0), at(211, 110, 0)};
+  EXPECT_NEAR(clOnlyArea(contour), 0.0, 1e-9);
 }
 
 }  // namespace
