@@ -71,7 +71,7 @@ std::vector<int> nearestPointIndices(const std::vector<Eigen::Vector3d>& points,
 std::vector<int> nearestWithLowerLabel(const std::vector<Eigen::Vector3d>& points,
                                        const std::vector<int>& label, int visits,
                                        const std::vector<double>& reach,
-                                       const std::function<bool(int, int)>& accept) {
+                                       const std::function<double(int, int)>& cost) {
   if (label.size() != points.size() || (!reach.empty() && reach.size() != points.size()))
     throw std::invalid_argument("nearestWithLowerLabel: one label (and reach) per point");
   std::vector<int> out(points.size(), -1);
@@ -79,18 +79,22 @@ std::vector<int> nearestWithLowerLabel(const std::vector<Eigen::Vector3d>& point
   const PointTree t(points);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, points.size()), [&](const auto& range) {
     for (size_t i = range.begin(); i != range.end(); ++i) {
-      // In increasing distance; among equally near ones (a point two pieces share), the
-      // latest piece. The 32 nearest first (one cheap search), then on, incrementally, as far
-      // as `visits` points when they held none and did not reach past reach[i].
+      // In increasing distance, until no farther point can cost less than the best; among
+      // equal costs (a point two pieces share), the latest piece. The 32 nearest first (one
+      // cheap search), then on, incrementally, as far as `visits` points or reach[i].
       const double reach2 = reach.empty() ? INFINITY : reach[i] * reach[i];
-      double nearest = -1;
+      double best = INFINITY;  // the best cost so far
       int seen = 0;
       auto take = [&](size_t j, double d2) {  // false: stop
-        if (!(d2 <= reach2) || (nearest >= 0 && d2 > nearest * (1 + 1e-12))) return false;
+        if (!(d2 <= reach2) || d2 > best * best * (1 + 1e-12)) return false;
         if (label[j] >= label[i]) return true;
-        if (accept && !accept(static_cast<int>(i), static_cast<int>(j))) return true;
-        if (nearest < 0 || label[j] > label[out[i]]) out[i] = static_cast<int>(j);
-        nearest = d2;
+        const double c = cost ? cost(static_cast<int>(i), static_cast<int>(j)) : std::sqrt(d2);
+        if (c < 0) return true;
+        if (out[i] < 0 || c < best * (1 - 1e-12) ||
+            (c <= best * (1 + 1e-12) && label[j] > label[out[i]])) {
+          out[i] = static_cast<int>(j);
+          best = std::min(best, c);
+        }
         return true;
       };
       const int first = std::min(32, visits);
@@ -105,7 +109,7 @@ std::vector<int> nearestWithLowerLabel(const std::vector<Eigen::Vector3d>& point
           }
         }
       }
-      if (!more || nearest >= 0 || seen < first) continue;
+      if (!more || seen < first) continue;
       Incremental search(t.tree, t.pts[i], 0.0, true, t.distance);
       int k = 0;
       for (auto it = search.begin(); it != search.end() && k < visits; ++it, ++k)

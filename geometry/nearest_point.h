@@ -11,15 +11,16 @@ namespace tolver {
 std::vector<int> nearestPointIndices(const std::vector<Eigen::Vector3d>& points,
                                      const std::vector<Eigen::Vector3d>& queries);
 
-// For each point, the closest other point of a lower label (the label: the piece of a tool path
-// a point belongs to, in cutting order) among the `visits` nearest points, or -1 when none of
-// them has one and within reach[i] of it (empty: no bound); among equally near ones, the one of
-// the highest label. `accept(i, j)`, when
-// given, must also hold for j to be i's (called from several threads). The tree is built once
-// and searched in parallel, incrementally (CGAL's search only reads a built tree).
+// For each point, the other point of a lower label (the label: the piece of a tool path a point
+// belongs to, in cutting order) of least cost among the `visits` nearest points within reach[i]
+// of it (empty: no bound), or -1 when none of them has one. `cost(i, j)` is at least their
+// distance (the search stops where no farther point can cost less), negative when j cannot be
+// i's; without it, the distance. Among equal costs, the highest label. `cost` is called from
+// several threads. The tree is built once and searched in parallel, incrementally (CGAL's search
+// only reads a built tree).
 std::vector<int> nearestWithLowerLabel(const std::vector<Eigen::Vector3d>& points,
                                        const std::vector<int>& label, int visits,
                                        const std::vector<double>& reach = {},
-                                       const std::function<bool(int, int)>& accept = {});
+                                       const std::function<double(int, int)>& cost = {});
 
 }  // namespace tolver

@@ -293,15 +293,15 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
                : Eigen::Vector3d(path[q.cl - 1].p_w + q.t * (path[q.cl].p_w - path[q.cl - 1].p_w));
   };
   std::vector<Node> node;
-  std::vector<int> label, start(pieces.size() + 1, 0);  // start: each piece's first node
-  auto makeNodes = [&](double spacing) {
+  std::vector<int> label, start(pieces.size() + 1, 0);        // start: each piece's first node
+  auto makeNodes = [&](const std::vector<double>& spacing) {  // per piece; empty: none
     node.clear();
     label.clear();
     for (size_t k = 0; k < pieces.size(); ++k) {
       start[k] = static_cast<int>(node.size());
       for (int c = pieces[k].first; c <= pieces[k].last; ++c) {
-        if (c > pieces[k].first && spacing > 0) {
-          const double want = (nominal[c].p_w - nominal[c - 1].p_w).norm() / spacing;
+        if (c > pieces[k].first && !spacing.empty() && spacing[k] > 0) {
+          const double want = (nominal[c].p_w - nominal[c - 1].p_w).norm() / spacing[k];
           const int parts = want > 1 ? static_cast<int>(std::ceil(std::min(want, 1e6))) : 1;
           for (int m = 1; m < parts; ++m) {
             node.push_back({c, static_cast<double>(m) / parts});
@@ -314,7 +314,7 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
     }
     start[pieces.size()] = static_cast<int>(node.size());
   };
-  // Each node's side neighbour: the nearest node of an earlier piece (among its 512 nearest:
+  // Each node's side neighbour: the nearest node of an earlier piece (among its 256 nearest:
   // its own piece's come first, as many as the gap holds), no farther than its cutter's width
   // (the passes of a surface overlap; two sides of one contour do not).
   std::vector<Eigen::Vector3d> points;
@@ -325,6 +325,9 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
   // parallel (or antiparallel) there and neither along the tool axis, and when it ends its
   // piece the node does not lie past that end (the next side of a contour, a pass after its
   // link, the piece after a lift).
+  // Of those, one across the tool axis before one along it: the rows of a level join each
+  // other, not the row above (a level 0.1 mm below another, rows 1 mm apart); a wall's
+  // contours, with nothing across, join the level above.
   std::vector<Eigen::Vector3d> tangent;
   auto beside = [&](int i, int j) {
     const double cos45 = std::sqrt(0.5);
@@ -341,6 +344,13 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
     const Eigen::Vector3d offset = points[i] - points[j];
     return offset.dot(out) <= cos45 * offset.norm();
   };
+  auto cost = [&](int i, int j) {
+    if (!beside(i, j)) return -1.0;
+    const Eigen::Vector3d offset = points[i] - points[j];
+    const double d = offset.norm();
+    const double along = std::abs(offset.dot(nominal[node[i].cl].u_w.normalized()));
+    return along > std::sqrt(0.5) * d ? d + 1e9 : d;
+  };
   auto neighbours = [&] {
     points.clear();
     for (const Node& q : node) points.push_back(at(nominal, q));
@@ -354,7 +364,7 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
     std::vector<double> reach;
     if (!width_mm.empty())
       for (const Node& q : node) reach.push_back(width_mm[q.cl]);
-    side = nearestWithLowerLabel(points, label, 512, reach, beside);
+    side = nearestWithLowerLabel(points, label, 256, reach, cost);
     gap.assign(node.size(), INFINITY);
     std::vector<double> sorted;
     for (size_t i = 0; i < node.size(); ++i)
@@ -365,20 +375,36 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
     std::sort(sorted.begin(), sorted.end());
     typical = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
   };
-  makeNodes(0);
+  makeNodes({});
   neighbours();
   {
-    // Moves longer than the typical gap get nodes a gap apart (about 2 million more at most).
+    // A move longer than twice the gap between its piece and the pieces beside it gets nodes a
+    // gap apart (the median gap of the pairs its piece is in, else the program's), at most
+    // about 250 000 nodes more in all.
     double length = 0;
     for (const ClPass& p : pieces)
       for (int c = p.first + 1; c <= p.last; ++c)
         length += (nominal[c].p_w - nominal[c - 1].p_w).norm();
-    const double spacing = std::max(typical, length / 2e6);
+    std::vector<std::vector<double>> pair_gaps(pieces.size());
+    for (size_t i = 0; i < node.size(); ++i)
+      if (std::isfinite(gap[i])) {
+        pair_gaps[label[i]].push_back(gap[i]);
+        pair_gaps[label[side[i]]].push_back(gap[i]);
+      }
+    std::vector<double> spacing(pieces.size(), 0.0);
     bool long_move = false;
-    for (const ClPass& p : pieces)
-      for (int c = p.first + 1; c <= p.last && !long_move; ++c)
-        long_move = (nominal[c].p_w - nominal[c - 1].p_w).norm() > 2 * spacing;
-    if (typical > 0 && long_move) {
+    for (size_t k = 0; k < pieces.size(); ++k) {
+      std::vector<double>& g = pair_gaps[k];
+      double near = typical;
+      if (!g.empty()) {
+        std::nth_element(g.begin(), g.begin() + g.size() / 2, g.end());
+        near = g[g.size() / 2];
+      }
+      spacing[k] = near > 0 ? std::max(near, length / 2.5e5) : 0.0;
+      for (int c = pieces[k].first + 1; c <= pieces[k].last && !long_move && spacing[k] > 0; ++c)
+        long_move = (nominal[c].p_w - nominal[c - 1].p_w).norm() > 2 * spacing[k];
+    }
+    if (long_move) {
       makeNodes(spacing);
       neighbours();
     }

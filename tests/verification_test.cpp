@@ -305,15 +305,27 @@ TEST(ClOnlySurface, OffsetContoursOfStraightMovesAreJoinedLoopToLoop) {
 
 // A raster of 21 straight passes 1 mm apart at two depths 10 mm apart, rapids between: two
 // 40 x 20 mm faces, and nothing between the levels.
-TEST(ClOnlySurface, RasterLevelsAreJoinedWithinALevelOnly) {
+std::vector<ClPoint> rasterLevels(std::initializer_list<double> levels) {
   std::vector<ClPoint> path;
-  for (double z : {0.0, -10.0})
+  for (double z : levels)
     for (int k = 0; k <= 20; ++k) {
       path.push_back(at(0, k, 5, true));
       path.push_back(at(0, k, z, true));
       path.push_back(at(40, k, z));
     }
-  EXPECT_NEAR(clOnlyArea(path), 2 * 40 * 20, 1e-6);
+  return path;
+}
+
+TEST(ClOnlySurface, RasterLevelsAreJoinedWithinALevelOnly) {
+  EXPECT_NEAR(clOnlyArea(rasterLevels({0.0, -10.0})), 2 * 40 * 20, 1e-6);
+}
+
+// A raster stepping down 0.1 mm a level, its rows 1 mm apart (Fabex's parallel pattern): the
+// rows of each level join each other, not the row 0.1 mm above them (which gave the second
+// level a vertical sliver and no floor). The first row of the level below has only rows of the
+// level above beside it, and joins the one across: a strip of 40 x 1 mm2 more.
+TEST(ClOnlySurface, ALevelsRowsJoinEachOtherNotTheRowsAbove) {
+  EXPECT_NEAR(clOnlyArea(rasterLevels({0.0, -0.1})), 2 * 40 * 20 + 40, 1.0);
 }
 
 // What sweeps no surface between passes: a row of drilled holes (feed moves along the tool
