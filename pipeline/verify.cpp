@@ -1014,9 +1014,11 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
         width[i] = 2.0 * tools.cutters[k].maxRadius();
     }
     clOnlyDeviation(program.path, predicted, zones, width, &v->samples, &v->result);
-    size_t along = 0;  // samples on a move between its CL points
-    for (size_t i = 0; i < v->samples.size(); ++i)
+    size_t along = 0, lone = 0;  // samples on a move between its CL points; on no strip
+    for (size_t i = 0; i < v->samples.size(); ++i) {
       along += v->samples.p_w[i] != program.path[v->result.cl_index[i]].p_w;
+      lone += !(v->samples.area[i] > 0);
+    }
     rep.notes.push_back(
         "CL-only mode: no part model; the surfaces are built through the CL points "
         "(thesis 5.5.4-5.5.5) and the deviation is the machine's alone" +
@@ -1025,6 +1027,13 @@ std::unique_ptr<Verification> runVerification(const VerifyInputs& o, const std::
              : "; " + std::to_string(along) + " of its " + std::to_string(v->samples.size()) +
                    " points lie on moves longer than the gap between neighbouring passes, "
                    "between their CL points (nominal and predicted interpolated)"));
+    if (lone > 0)
+      rep.notes.push_back(
+          std::to_string(lone) + " of the " + std::to_string(v->samples.size()) +
+          " points lie on no surface through the CL points (no pass beside theirs within the "
+          "cutter's width: a single pass or contour, a drilled hole, a flank pass): their "
+          "deviation is taken along the tool axis" +
+          (lone == v->samples.size() ? "; give the part (--part) to check a surface" : ""));
   } else {
     checkPartUnits(o, program, part->mesh);
     checkSampleBudget(o, part->mesh);

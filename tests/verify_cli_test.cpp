@@ -262,18 +262,32 @@ TEST_F(VerifyCli, MalformedJobsFileExitsTwoNamingItsLine) {
 }
 
 TEST_F(VerifyCli, ClOnlyModeWithoutAPart) {
-  const auto r =
-      runTolver("verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
-                " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " +
-                sourcePath("samples/nas979_cone.apt") +
-                " --tolerance 0.05 --no-images --report-dir " + path("out"));
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  const auto j = nlohmann::json::parse(slurp(path("out/report.json")));
+  // verify on the measured Matsuura without a part: the report's JSON.
+  auto clOnly = [&](const std::string& program, const std::string& out) {
+    const auto r = runTolver(
+        "verify --machine " + sourcePath("samples/machines/matsuura_mc760vx_measured.xml") +
+        " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " + sourcePath(program) +
+        " --tolerance 0.05 --no-images --report-dir " + path(out));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return nlohmann::json::parse(slurp(path(out + "/report.json")));
+  };
+  const auto j = clOnly("samples/nas979_cone.apt", "out");
   EXPECT_EQ(j["mode"], "cl-only");
   // The machine moves the tool about 10 um (tolver predict's figure for this program).
   EXPECT_GT(j["deviation"]["machine"]["max_um"].get<double>() -
                 j["deviation"]["machine"]["min_um"].get<double>(),
             1.0);
+  // A flank pass once around the cone: its tips form no surface, and the report says how the
+  // deviation was taken instead (not a surface of strips to the approach move, as before).
+  EXPECT_EQ(j["area"]["total_mm2"].get<double>(), 0.0);
+  EXPECT_NE(j["notes"].dump().find("722 of the 722 points lie on no surface"), std::string::npos)
+      << j["notes"].dump();
+  // The sculptured finish's passes, 0.5 mm apart over the 80 x 60 mm top: a surface of about its
+  // area, every point on it.
+  const auto k = clOnly("samples/sculptured_finish.apt", "sculptured");
+  EXPECT_GT(k["area"]["total_mm2"].get<double>(), 80 * 60);
+  EXPECT_LT(k["area"]["total_mm2"].get<double>(), 1.1 * 80 * 60);
+  EXPECT_EQ(k["notes"].dump().find("on no surface"), std::string::npos) << k["notes"].dump();
 }
 
 TEST_F(VerifyCli, BatchVerifiesJobsInParallelAndSummarises) {
