@@ -468,9 +468,11 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
   };
   // A piece's own gap: the median of its nodes' gaps to the pieces before it (infinite for the
   // first of a feature). A node's neighbour is taken when its gap is within 2.5 times that of
-  // the neighbour's piece, or of the program's median when that is larger: a wall's levels 6 mm
-  // apart join, in a program whose holes' helices are 0.2 mm apart; the first pass of a level
-  // below, or of the next pocket, does not join the last pass before it (1 mm from its own).
+  // the neighbour's piece, or of the program's median when that is larger, or when that piece
+  // is the first of its feature (the search kept it within the cutter's width): a wall's levels
+  // 6.6 mm apart join, in a program whose holes' helices are 0.2 mm apart; the first pass of a
+  // level below, or of the next pocket, does not join the last pass before it (1 mm from its
+  // own).
   std::vector<double> own(pieces.size(), INFINITY);
   for (size_t k = 0; k < pieces.size(); ++k) {
     std::vector<double> g;
@@ -483,8 +485,8 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
   auto neighbourPiece = [&](int i) {
     if (side[i] < 0) return -1;
     const int j = label[side[i]];
-    const double limit = 2.5 * std::max(std::isfinite(own[j]) ? own[j] : 0.0, typical);
-    return gap[i] <= limit ? j : -1;
+    if (!std::isfinite(own[j])) return j;  // the first of its feature: the cutter's width bounds
+    return gap[i] <= 2.5 * std::max(own[j], typical) ? j : -1;
   };
   for (size_t k = 1; k < pieces.size(); ++k) {
     const int first = start[k], last = start[k + 1] - 1;

@@ -328,6 +328,21 @@ TEST(ClOnlySurface, ALevelsRowsJoinEachOtherNotTheRowsAbove) {
   EXPECT_NEAR(clOnlyArea(rasterLevels({0.0, -0.1})), 2 * 40 * 20 + 40, 1.0);
 }
 
+// A wall cut in Z-level contours 5 mm apart (a D10 cutter), in a program that also cuts a spiral
+// 0.2 mm a turn elsewhere: every level joins the one above, the first included (it was left
+// out: 2.5 times the program's median gap, 0.2 mm, was the limit beside a first contour).
+TEST(ClOnlySurface, AWallsContoursJoinLevelToLevel) {
+  double spiral_area = 0;
+  std::vector<ClPoint> path = spiral(1, 0.2, 4, 0, &spiral_area);
+  for (double z : {0.0, -5.0, -10.0, -15.0}) {
+    path.push_back(at(100, 0, 5, true));
+    path.push_back(at(100, 0, z, true));
+    for (const auto& [x, y] : {std::pair{140.0, 0.0}, {140.0, 20.0}, {100.0, 20.0}, {100.0, 0.0}})
+      path.push_back(at(x, y, z));
+  }
+  EXPECT_NEAR(clOnlyArea(path, 10), spiral_area + 120 * 15, 0.01 * (spiral_area + 1800));
+}
+
 // What sweeps no surface between passes: a row of drilled holes (feed moves along the tool
 // axis), and a single contour whose sides meet at corners. Both had strips before (a vertical
 // wall between the holes; a fan across the contour's inside).
