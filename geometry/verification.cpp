@@ -321,6 +321,12 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
   std::vector<int> side;
   std::vector<double> gap;
   double typical = 0;
+  // The median (the element nth_element puts in the middle); `otherwise` when there is none.
+  auto median = [](std::vector<double> v, double otherwise) {
+    if (v.empty()) return otherwise;
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+  };
   // A neighbour beside the node, not ahead of it: their pieces run within 45 degrees of
   // parallel (or antiparallel) there and neither along the tool axis, and when it ends its
   // piece the node does not lie past that end (the next side of a contour, a pass after its
@@ -328,12 +334,12 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
   // Of those, one across the tool axis before one along it: the rows of a level join each
   // other, not the row above (a level 0.1 mm below another, rows 1 mm apart); a wall's
   // contours, with nothing across, join the level above.
-  std::vector<Eigen::Vector3d> tangent;
+  constexpr double cos45 = 0.70710678118654752;
+  std::vector<Eigen::Vector3d> tangent, axis;  // per node: unit tangent (or zero), tool axis
   auto beside = [&](int i, int j) {
-    const double cos45 = std::sqrt(0.5);
     // A move along the tool axis (a plunge, a drilled hole) sweeps no surface beside another.
     for (int q : {i, j})
-      if (std::abs(tangent[q].dot(nominal[node[q].cl].u_w.normalized())) > cos45) return false;
+      if (std::abs(tangent[q].dot(axis[q])) > cos45) return false;
     if (std::abs(tangent[i].dot(tangent[j])) < cos45 &&
         !(tangent[i].isZero() || tangent[j].isZero()))
       return false;
@@ -348,8 +354,7 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
     if (!beside(i, j)) return -1.0;
     const Eigen::Vector3d offset = points[i] - points[j];
     const double d = offset.norm();
-    const double along = std::abs(offset.dot(nominal[node[i].cl].u_w.normalized()));
-    return along > std::sqrt(0.5) * d ? d + 1e9 : d;
+    return std::abs(offset.dot(axis[i])) > cos45 * d ? d + 1e9 : d;
   };
   auto neighbours = [&] {
     points.clear();
@@ -361,19 +366,20 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
             points[std::min(i + 1, start[k + 1] - 1)] - points[std::max(i - 1, start[k])];
         if (d.norm() > 0) tangent[i] = d.normalized();
       }
+    axis.clear();
+    for (const Node& q : node) axis.push_back(nominal[q.cl].u_w.normalized());
     std::vector<double> reach;
     if (!width_mm.empty())
       for (const Node& q : node) reach.push_back(width_mm[q.cl]);
     side = nearestWithLowerLabel(points, label, 256, reach, cost);
     gap.assign(node.size(), INFINITY);
-    std::vector<double> sorted;
+    std::vector<double> gaps;
     for (size_t i = 0; i < node.size(); ++i)
       if (side[i] >= 0 && points[side[i]] != points[i]) {
         gap[i] = (points[side[i]] - points[i]).norm();
-        sorted.push_back(gap[i]);
+        gaps.push_back(gap[i]);
       }
-    std::sort(sorted.begin(), sorted.end());
-    typical = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
+    typical = median(std::move(gaps), 0.0);
   };
   makeNodes({});
   neighbours();
@@ -394,12 +400,7 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
     std::vector<double> spacing(pieces.size(), 0.0);
     bool long_move = false;
     for (size_t k = 0; k < pieces.size(); ++k) {
-      std::vector<double>& g = pair_gaps[k];
-      double near = typical;
-      if (!g.empty()) {
-        std::nth_element(g.begin(), g.begin() + g.size() / 2, g.end());
-        near = g[g.size() / 2];
-      }
+      const double near = median(std::move(pair_gaps[k]), typical);
       spacing[k] = near > 0 ? std::max(near, length / 2.5e5) : 0.0;
       for (int c = pieces[k].first + 1; c <= pieces[k].last && !long_move && spacing[k] > 0; ++c)
         long_move = (nominal[c].p_w - nominal[c - 1].p_w).norm() > 2 * spacing[k];
@@ -454,14 +455,14 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
       Eigen::Vector3i t(sampleOf(a), sampleOf(b), sampleOf(c));
       if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
       const Eigen::Vector3d fn = (s.p_w[t[1]] - s.p_w[t[0]]).cross(s.p_w[t[2]] - s.p_w[t[0]]);
-      const Eigen::Vector3d axis =
+      const Eigen::Vector3d tool_side =
           nominal[node[a].cl].u_w + nominal[node[b].cl].u_w + nominal[node[c].cl].u_w;
-      if (fn.dot(axis) < 0) std::swap(t[1], t[2]);
+      if (fn.dot(tool_side) < 0) std::swap(t[1], t[2]);
       s.faces.push_back(t);
       s.face_group.push_back(0);
       const double area = 0.5 * fn.norm();
       for (int q = 0; q < 3; ++q) {
-        s.n_w[t[q]] += (fn.dot(axis) < 0 ? -fn : fn);  // area-weighted
+        s.n_w[t[q]] += (fn.dot(tool_side) < 0 ? -fn : fn);  // area-weighted
         s.area[t[q]] += area / 3.0;
       }
     }
@@ -478,9 +479,7 @@ void clOnlyDeviation(const std::vector<ClPoint>& nominal, const std::vector<ClPo
     std::vector<double> g;
     for (int i = start[k]; i < start[k + 1]; ++i)
       if (std::isfinite(gap[i])) g.push_back(gap[i]);
-    if (g.empty()) continue;
-    std::nth_element(g.begin(), g.begin() + g.size() / 2, g.end());
-    own[k] = g[g.size() / 2];
+    own[k] = median(std::move(g), INFINITY);
   }
   auto neighbourPiece = [&](int i) {
     if (side[i] < 0) return -1;
