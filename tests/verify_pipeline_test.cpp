@@ -2,6 +2,8 @@
 // on a machine without errors, the report written true of the result in memory, bad input.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -64,6 +66,50 @@ TEST_F(VerifyPipeline, TheWrittenReportIsTrueOfTheResult) {
   EXPECT_EQ(j["deviation"]["total"]["samples"].get<int>(), v->result.total_stats.samples);
   EXPECT_TRUE(std::filesystem::exists(path("report") + "/deviations.csv"));
   EXPECT_FALSE(std::filesystem::exists(path("report") + "/map_isometric.png"));  // no images asked
+}
+
+// CL-only mode: the area the report gives is that of the surface it writes. The nominal surface
+// read back from swept_nominal.ply (tolver's binary PLY: x, y, z, deviation as floats, faces as
+// a count byte and three ints), its triangles' areas summed, and its vertices counted against
+// deviations.csv's rows.
+TEST_F(VerifyPipeline, TheClOnlyAreaIsThatOfTheSurfaceWritten) {
+  VerifyInputs in = sculptured("samples/machines/matsuura_mc760vx_measured.xml");
+  in.part.clear();
+  const auto v = runVerification(in, "cl-only");
+  writeVerification(*v, path("cl"), false, false);
+  std::ifstream ply(path("cl") + "/swept_nominal.ply", std::ios::binary);
+  std::string line;
+  size_t vertices = 0, faces = 0;
+  while (std::getline(ply, line) && line != "end_header") {
+    if (line.rfind("element vertex ", 0) == 0) vertices = std::stoul(line.substr(15));
+    if (line.rfind("element face ", 0) == 0) faces = std::stoul(line.substr(13));
+  }
+  ASSERT_EQ(vertices, v->samples.size());
+  ASSERT_GT(faces, 1000u);
+  std::vector<Eigen::Vector3d> p(vertices);
+  for (auto& q : p) {
+    float xyzd[4];
+    ply.read(reinterpret_cast<char*>(xyzd), sizeof xyzd);
+    q = Eigen::Vector3d(xyzd[0], xyzd[1], xyzd[2]);
+  }
+  double area = 0;
+  for (size_t f = 0; f < faces; ++f) {
+    unsigned char count = 0;
+    int t[3];
+    ply.read(reinterpret_cast<char*>(&count), 1);
+    ply.read(reinterpret_cast<char*>(t), sizeof t);
+    ASSERT_EQ(count, 3);
+    area += 0.5 * (p[t[1]] - p[t[0]]).cross(p[t[2]] - p[t[0]]).norm();
+  }
+  ASSERT_TRUE(ply.good());
+  std::ifstream json(path("cl") + "/report.json");
+  const auto j = nlohmann::json::parse(json);
+  EXPECT_NEAR(j["area"]["total_mm2"].get<double>(), area, 1e-5 * area);
+  std::ifstream csv(path("cl") + "/deviations.csv");
+  size_t rows = 0;
+  while (std::getline(csv, line))
+    if (!line.empty() && std::isdigit(static_cast<unsigned char>(line[0]))) ++rows;
+  EXPECT_EQ(rows, vertices);
 }
 
 // Bad input is an InputError naming the file; nothing is written before the inputs are read.
