@@ -87,8 +87,8 @@ void printVerification(const Verification& v, const VerifyOptions& o, const std:
   if (result.regions.size() > 5)
     std::printf("  ...        %zu regions in all\n", result.regions.size());
   printNotes(r.notes);
-  std::printf("  report     %s (and report.json, deviations.csv, swept_*.ply/.vtp, *.png)\n",
-              report.c_str());
+  std::printf("  report     %s (and report.json, deviations.csv, swept_*.ply/.vtp%s)\n",
+              report.c_str(), r.images.empty() ? "" : ", *.png");
 }
 
 void printBatch(const VerifyOptions& o, const BatchRun& run) {

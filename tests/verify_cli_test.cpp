@@ -269,6 +269,9 @@ TEST_F(VerifyCli, ClOnlyModeWithoutAPart) {
         " --setup " + sourcePath("samples/matsuura_setup.txt") + " --cl " + sourcePath(program) +
         " --tolerance 0.05 --no-images --report-dir " + path(out));
     EXPECT_EQ(r.exit_code, 0) << r.output;
+    // --no-images: the files the report line lists are those written (it listed *.png).
+    EXPECT_NE(r.output.find("swept_*.ply/.vtp)"), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("*.png"), std::string::npos) << r.output;
     return nlohmann::json::parse(slurp(path(out + "/report.json")));
   };
   const auto j = clOnly("samples/nas979_cone.apt", "out");
