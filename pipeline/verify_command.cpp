@@ -10,6 +10,7 @@
 #include "io/common/io_error.h"
 #include "io/common/text_util.h"
 #include "io/program/jobs_file.h"
+#include "io/report/offscreen_display.h"
 #include "pipeline/verify.h"
 
 namespace tolver {
@@ -27,6 +28,7 @@ VerifyRun verifyPart(const VerifyInputs& in, const std::string& name_given,
       !name_given.empty()
           ? name_given
           : fs::path(in.program.cl.empty() ? in.program.nc : in.program.cl).stem().string();
+  if (in.images) startDisplay();  // the X server starts while the part is swept
   VerifyRun run;
   run.verification = runVerification(in, name, [&](double f) {
     if (progress) progress("sweeping " + name, f);

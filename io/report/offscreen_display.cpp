@@ -2,6 +2,7 @@
 
 #include <X11/Xlib.h>
 #include <dlfcn.h>
+#include <fcntl.h>
 #include <link.h>
 #include <poll.h>
 #include <signal.h>
@@ -59,9 +60,18 @@ std::string findXvfb() {
   return access("/usr/bin/Xvfb", X_OK) == 0 ? "/usr/bin/Xvfb" : "";
 }
 
-bool startXvfb(std::string* message) {
-  const std::string xvfb = findXvfb();
-  if (xvfb.empty()) {
+// The server forked and not yet waited for (startXvfb), or -1.
+struct Starting {
+  pid_t pid = -1;
+  int fd = -1;  // the read end of -displayfd's pipe
+  std::string xvfb;
+};
+
+// Forks Xvfb without waiting for it. The child calls only what is safe after a fork in a process
+// with threads (no allocation: its arguments are built before the fork).
+bool forkXvfb(Starting* s, std::string* message) {
+  s->xvfb = findXvfb();
+  if (s->xvfb.empty()) {
     *message =
         "cannot render images: no X display ($DISPLAY) and no Xvfb to start one; install "
         "it (sudo apt-get install xvfb, or scripts/install_deps.sh), or pass --no-images";
@@ -72,43 +82,53 @@ bool startXvfb(std::string* message) {
     *message = "cannot render images: pipe() failed";
     return false;
   }
+  const std::string fd = std::to_string(fds[1]);
   const pid_t pid = fork();
   if (pid < 0) {
+    close(fds[0]);
+    close(fds[1]);
     *message = "cannot render images: fork() failed";
     return false;
   }
   if (pid == 0) {
     prctl(PR_SET_PDEATHSIG, SIGTERM);  // the server dies with tolver
     close(fds[0]);
-    const std::string fd = std::to_string(fds[1]);
     // Xvfb's own messages go nowhere: they are not tolver's output.
-    FILE* devnull = std::fopen("/dev/null", "w");
-    if (devnull) {
-      dup2(fileno(devnull), 1);
-      dup2(fileno(devnull), 2);
+    const int devnull = open("/dev/null", O_WRONLY);
+    if (devnull >= 0) {
+      dup2(devnull, 1);
+      dup2(devnull, 2);
     }
-    execl(xvfb.c_str(), "Xvfb", "-displayfd", fd.c_str(), "-screen", "0", "1920x1200x24",
+    execl(s->xvfb.c_str(), "Xvfb", "-displayfd", fd.c_str(), "-screen", "0", "1920x1200x24",
           "-nolisten", "tcp", "-noreset", static_cast<char*>(nullptr));
     _exit(127);
   }
   close(fds[1]);
+  s->pid = pid;
+  s->fd = fds[0];
+  return true;
+}
+
+// Waits for the forked server's display number (at most 15 s) and points $DISPLAY at it.
+bool finishXvfb(Starting* s, std::string* message) {
   std::string number;
-  pollfd p{fds[0], POLLIN, 0};
+  pollfd p{s->fd, POLLIN, 0};
   while (true) {
     if (poll(&p, 1, 15000) <= 0) break;
     char c;
-    const ssize_t n = read(fds[0], &c, 1);
+    const ssize_t n = read(s->fd, &c, 1);
     if (n <= 0 || c == '\n') break;
     number += c;
   }
-  close(fds[0]);
+  close(s->fd);
+  s->fd = -1;
   if (number.empty()) {
-    kill(pid, SIGTERM);
-    waitpid(pid, nullptr, 0);
-    *message = "cannot render images: " + xvfb + " did not start";
+    kill(s->pid, SIGTERM);
+    waitpid(s->pid, nullptr, 0);
+    *message = "cannot render images: " + s->xvfb + " did not start";
     return false;
   }
-  g_server = pid;
+  g_server = s->pid;
   std::atexit(stopServer);
   const std::string display = ":" + number;
   setenv("DISPLAY", display.c_str(), 1);
@@ -119,21 +139,33 @@ bool startXvfb(std::string* message) {
   return true;
 }
 
+std::mutex g_mutex;
+int g_state = 0;  // 0 unknown, 2 starting, 1 ready, -1 failed
+Starting g_starting;
+std::string g_failure;
+
+// Under g_mutex: from unknown to starting (or to ready: $DISPLAY opens; or failed).
+void beginLocked() {
+  if (g_state != 0) return;
+  if (canOpen(std::getenv("DISPLAY")))
+    g_state = 1;
+  else
+    g_state = forkXvfb(&g_starting, &g_failure) ? 2 : -1;
+}
+
 }  // namespace
 
+void startDisplay() {
+  std::lock_guard<std::mutex> lock(g_mutex);
+  beginLocked();
+}
+
 bool ensureDisplay(std::string* message) {
-  static std::mutex mutex;
-  static int state = 0;  // 0 unknown, 1 ready, -1 failed
-  static std::string failure;
-  std::lock_guard<std::mutex> lock(mutex);
-  if (state == 0) {
-    if (canOpen(std::getenv("DISPLAY")))
-      state = 1;
-    else
-      state = startXvfb(&failure) ? 1 : -1;
-  }
-  if (state < 0 && message) *message = failure;
-  return state > 0;
+  std::lock_guard<std::mutex> lock(g_mutex);
+  beginLocked();
+  if (g_state == 2) g_state = finishXvfb(&g_starting, &g_failure) ? 1 : -1;
+  if (g_state < 0 && message) *message = g_failure;
+  return g_state > 0;
 }
 
 void keepGlDriverLoaded() {

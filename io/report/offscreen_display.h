@@ -11,6 +11,10 @@ namespace tolver {
 // Thread-safe; starts at most one server per process.
 bool ensureDisplay(std::string* message);
 
+// Starts what ensureDisplay() needs without waiting for it: a command that will render calls it
+// first, so that the server's start (0.1-0.2 s) overlaps its work. ensureDisplay() still decides.
+void startDisplay();
+
 // Keeps the GL driver Mesa loaded for the first render (its *_dri.so) in the process: Mesa's libGL
 // unloads it when a context ends and loads it again for the next image (each map, chart and view
 // of a report), and LeakSanitizer cannot name the allocations of a library that is gone. Call

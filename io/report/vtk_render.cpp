@@ -64,6 +64,9 @@ void writePng(vtkRenderWindow* window, const std::string& path) {
   vtkNew<vtkWindowToImageFilter> grab;
   grab->SetInput(window);
   grab->ReadFrontBufferOff();
+  // The window was just rendered: read it as it is (a render again cost 0.07 s a map at 120 000
+  // vertices in the software rasteriser; the pictures are byte-identical).
+  grab->ShouldRerenderOff();
   grab->Update();
   vtkNew<vtkPNGWriter> png;
   png->SetInputConnection(grab->GetOutputPort());
