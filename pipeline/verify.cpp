@@ -272,13 +272,15 @@ std::vector<std::pair<std::string, std::string>> renderImages(
         {s.p_w[worst],
          "largest " + formatWith("%+.1f um", mmToUm(r.total[worst])) + "\n" + where(s.p_w[worst])});
   }
+  std::vector<std::pair<std::string, MapView>> maps;
   for (const auto& v : views) {
     const std::string path = (fs::path(dir) / ("map_" + v.name + ".png")).string();
-    renderDeviationMap(path, map, v);
+    maps.push_back({path, v});
     images.push_back(
         {"deviation map, " + (v.focus ? v.name + " (along the region's normal)" : v.name) + " view",
          path});
   }
+  renderDeviationMaps(maps, map);
   std::vector<double> dev, w;
   for (size_t i = 0; i < s.size(); ++i)
     if (r.machined[i] && r.zone[i] >= 0) {

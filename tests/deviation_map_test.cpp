@@ -119,5 +119,70 @@ TEST_F(RenderTest, TopViewShowsAPlantedGougeRedOnGreen) {
   EXPECT_EQ(corner, (Rgb{255, 255, 255}));
 }
 
+// Several views in one window (renderDeviationMaps) draw what each view drew in its own window
+// (renderDeviationMap): a tilted plane with a gouge, an isometric view first, then the top and a
+// side view, with a callout. Same size; the pixels that differ (a text's anti-aliasing) are
+// fewer than 0.2 % of the picture, and the picture is not the previous view's.
+TEST_F(RenderTest, SeveralViewsInOneWindowDrawWhatEachDrawsAlone) {
+  std::string why;
+  ASSERT_TRUE(ensureDisplay(&why)) << why;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<Eigen::Vector3i> faces;
+  const int n = 40;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) points.emplace_back(-20.0 + i, -20.0 + j, 0.3 * (i - 20.0));
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i;
+      faces.emplace_back(a, a + 1, a + n + 2);
+      faces.emplace_back(a, a + n + 2, a + n + 1);
+    }
+  DeviationMap map;
+  map.points = &points;
+  map.faces = &faces;
+  for (const auto& p : points)
+    map.colours.push_back(deviationColour(p.head<2>().norm() < 6.0 ? -0.05 : 0.002, -0.01, 0.01));
+  map.title = "views";
+  map.callouts.push_back({Eigen::Vector3d(0, 0, 0), "R1 gouge -50.0 um"});
+  const std::vector<MapView> views = {
+      {"isometric", Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d::UnitZ(), false, {}},
+      {"top", Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::UnitY(), false, {}},
+      {"side", Eigen::Vector3d(0, 1, 0), Eigen::Vector3d::UnitZ(), false, {}}};
+  std::vector<std::pair<std::string, MapView>> together;
+  for (const auto& v : views) together.push_back({path("together_" + v.name + ".png"), v});
+  renderDeviationMaps(together, map, 600, 450);
+  auto pixels = [](const std::string& png) {
+    vtkNew<vtkPNGReader> reader;
+    reader->SetFileName(png.c_str());
+    reader->Update();
+    vtkImageData* img = reader->GetOutput();
+    int dims[3];
+    img->GetDimensions(dims);
+    std::vector<unsigned char> out;
+    for (int y = 0; y < dims[1]; ++y)
+      for (int x = 0; x < dims[0]; ++x)
+        for (int k = 0; k < 3; ++k)
+          out.push_back(static_cast<unsigned char>(img->GetScalarComponentAsDouble(x, y, 0, k)));
+    return out;
+  };
+  auto differing = [](const std::vector<unsigned char>& a, const std::vector<unsigned char>& b) {
+    size_t d = 0;
+    for (size_t k = 0; k + 2 < a.size(); k += 3)
+      d += a[k] != b[k] || a[k + 1] != b[k + 1] || a[k + 2] != b[k + 2];
+    return d;
+  };
+  std::vector<unsigned char> previous;
+  for (const auto& v : views) {
+    const std::string alone = path("alone_" + v.name + ".png");
+    renderDeviationMap(alone, map, v, 600, 450);
+    const auto a = pixels(alone), b = pixels(path("together_" + v.name + ".png"));
+    ASSERT_EQ(a.size(), size_t{600 * 450 * 3}) << v.name;
+    ASSERT_EQ(b.size(), a.size()) << v.name;
+    EXPECT_LT(differing(a, b), 600 * 450 / 500) << v.name;
+    if (!previous.empty()) EXPECT_GT(differing(b, previous), 600 * 450 / 20) << v.name;
+    previous = b;
+  }
+}
+
 }  // namespace
 }  // namespace tolver

@@ -96,6 +96,12 @@ void renderDeviationMap(const std::string& png_path, const DeviationMap& map, co
       png_path, map, view, width, height);
 }
 
+void renderDeviationMaps(const std::vector<std::pair<std::string, MapView>>& views,
+                         const DeviationMap& map, int width, int height) {
+  moduleFunction<decltype(renderDeviationMaps)>("tolver_vtk", "renderDeviationMaps")(views, map,
+                                                                                     width, height);
+}
+
 void renderHistogram(const std::string& png_path, const std::vector<double>& deviation,
                      const std::vector<double>& weight, double lower, double upper,
                      const std::string& title, int width, int height, const std::string& x_label,

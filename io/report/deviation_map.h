@@ -80,6 +80,10 @@ std::vector<MapView> deviationMapViews(const SurfaceSamples& s, const VerifyResu
 // cannot render or write; call ensureDisplay() first.
 void renderDeviationMap(const std::string& png_path, const DeviationMap& map, const MapView& view,
                         int width = 1200, int height = 900);
+// Several views of one map, each into its PNG (path, view), in one window: the same pictures as
+// renderDeviationMap's one by one, made faster.
+void renderDeviationMaps(const std::vector<std::pair<std::string, MapView>>& views,
+                         const DeviationMap& map, int width = 1200, int height = 900);
 
 // Histogram of deviations (mm, area-weighted) with the zone limits marked, as a PNG.
 // The axes' labels default to verify's (normal deviation, % of the machined area), the limits'
