@@ -316,6 +316,102 @@ class SampledDecimaterT : public OpenMesh::Decimater::DecimaterT<MeshT> {
 
 namespace {
 
+// The halfedge mesh of `faces` (each of three distinct vertices, all already in `mesh` as its
+// first vertices) built directly, without add_face: OpenMesh's add_face looks up and relinks the
+// halfedges around each corner (a fifth of a piece's decimation at a million samples went there).
+// The edges are made in add_face's order (faces in turn, a face's edges from its first corner),
+// so the mesh is the one add_face makes. False, the mesh untouched but for its reservation, when
+// the faces are not a manifold with a consistent orientation (an edge of three faces, or of two
+// the same way round, a vertex whose faces are not one fan): the caller then builds it with
+// add_face, which keeps what it cannot take aside.
+bool buildManifold(Mesh& mesh, const std::vector<Eigen::Vector3i>& faces, size_t vertices) {
+  const size_t nf = faces.size();
+  // The face edges out of each vertex (CSR): where each goes, and which it is (3 t + k: face
+  // t's edge k runs from its corner k to corner k + 1).
+  struct Out {
+    int to, edge;
+  };
+  std::vector<int> first(vertices + 1, 0);
+  std::vector<Out> out(3 * nf);
+  for (const Eigen::Vector3i& f : faces)
+    for (int k = 0; k < 3; ++k) ++first[f[k] + 1];
+  for (size_t v = 0; v < vertices; ++v) first[v + 1] += first[v];
+  {
+    std::vector<int> fill(first.begin(), first.end() - 1);
+    for (size_t t = 0; t < nf; ++t)
+      for (int k = 0; k < 3; ++k)
+        out[fill[faces[t][k]]++] = {faces[t][(k + 1) % 3], static_cast<int>(3 * t) + k};
+  }
+  // Each face edge's halfedge: a new edge's first halfedge, or the opposite of the face edge
+  // made before it that runs the other way.
+  std::vector<int> he(3 * nf, -1);
+  int edges = 0;
+  for (size_t t = 0; t < nf; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int a = faces[t][k], b = faces[t][(k + 1) % 3];
+      int opposite = -1, others = 0, same = 0;
+      for (int q = first[b]; q < first[b + 1]; ++q)
+        if (out[q].to == a) opposite = out[q].edge, ++others;
+      for (int q = first[a]; q < first[a + 1]; ++q) same += out[q].to == b;
+      if (others > 1 || same > 1) return false;  // an edge of three faces, or two the same way
+      if (opposite >= 0 && opposite < static_cast<int>(3 * t))
+        he[3 * t + k] = he[opposite] ^ 1;
+      else
+        he[3 * t + k] = 2 * edges++;
+    }
+  mesh.resize(vertices, static_cast<size_t>(edges), nf);
+  for (size_t t = 0; t < nf; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const int h = he[3 * t + k];
+      if (h % 2 == 0) {  // the edge's first halfedge runs a -> b
+        mesh.set_vertex_handle(Mesh::HalfedgeHandle(h), Mesh::VertexHandle(faces[t][(k + 1) % 3]));
+        mesh.set_vertex_handle(Mesh::HalfedgeHandle(h + 1), Mesh::VertexHandle(faces[t][k]));
+      }
+    }
+  for (size_t t = 0; t < nf; ++t) {
+    const Mesh::FaceHandle f(static_cast<int>(t));
+    for (int k = 0; k < 3; ++k) {
+      const Mesh::HalfedgeHandle h(he[3 * t + k]);
+      mesh.set_next_halfedge_handle(h, Mesh::HalfedgeHandle(he[3 * t + (k + 1) % 3]));
+      mesh.set_face_handle(h, f);
+    }
+    mesh.set_halfedge_handle(f, Mesh::HalfedgeHandle(he[3 * t + 2]));  // as add_face does
+  }
+  // The border: each vertex at most one halfedge out along it (else its faces are two fans), the
+  // next of a border halfedge the one out of its end.
+  std::vector<int> border_out(vertices, -1);
+  for (int h = 0; h < 2 * edges; ++h) {
+    const Mesh::HalfedgeHandle hh(h);
+    if (mesh.face_handle(hh).is_valid()) continue;
+    const int from = mesh.to_vertex_handle(mesh.opposite_halfedge_handle(hh)).idx();
+    if (border_out[from] >= 0) return false;
+    border_out[from] = h;
+  }
+  for (int h = 0; h < 2 * edges; ++h) {
+    const Mesh::HalfedgeHandle hh(h);
+    if (mesh.face_handle(hh).is_valid()) continue;
+    const int next = border_out[mesh.to_vertex_handle(hh).idx()];
+    if (next < 0) return false;
+    mesh.set_next_halfedge_handle(hh, Mesh::HalfedgeHandle(next));
+  }
+  // Each vertex's halfedge out: along the border when it is on it (OpenMesh's rule); then its
+  // faces, walked around it, must be all its faces (one fan).
+  for (size_t v = 0; v < vertices; ++v) {
+    const int count = first[v + 1] - first[v];
+    if (count == 0) continue;
+    const Mesh::HalfedgeHandle start(border_out[v] >= 0 ? border_out[v] : he[out[first[v]].edge]);
+    mesh.set_halfedge_handle(Mesh::VertexHandle(static_cast<int>(v)), start);
+    int seen = 0;
+    Mesh::HalfedgeHandle h = start;
+    do {
+      seen += mesh.face_handle(h).is_valid();
+      h = mesh.next_halfedge_handle(mesh.opposite_halfedge_handle(h));  // the next out of v
+    } while (h != start && seen <= count);
+    if (seen != count) return false;
+  }
+  return true;
+}
+
 // One piece, decimated by one OpenMesh decimater (the arrays are the piece's own).
 DecimatedMesh decimatePiece(const std::vector<Eigen::Vector3d>& p,
                             const std::vector<Eigen::Vector3i>& faces,
@@ -336,10 +432,17 @@ DecimatedMesh decimatePiece(const std::vector<Eigen::Vector3d>& p,
   std::vector<Mesh::VertexHandle> vh(p.size());
   for (size_t i = 0; i < p.size(); ++i)
     vh[i] = mesh.add_vertex(Mesh::Point(p[i].x(), p[i].y(), p[i].z()));
-  std::vector<Eigen::Vector3i> as_given;
-  {
+  std::vector<Eigen::Vector3i> as_given, proper;
+  proper.reserve(faces.size());
+  for (const Eigen::Vector3i& f : faces)
+    (f[0] == f[1] || f[1] == f[2] || f[0] == f[2] ? as_given : proper).push_back(f);
+  if (!buildManifold(mesh, proper, p.size())) {
     // OpenMesh reports a face it cannot add (a non-manifold edge): silenced (quietOpenMesh),
     // the face is kept as given and its vertices locked.
+    mesh.clear();
+    for (size_t i = 0; i < p.size(); ++i)
+      vh[i] = mesh.add_vertex(Mesh::Point(p[i].x(), p[i].y(), p[i].z()));
+    as_given.clear();
     quietOpenMesh();
     for (const Eigen::Vector3i& f : faces) {
       const bool repeated = f[0] == f[1] || f[1] == f[2] || f[0] == f[2];
