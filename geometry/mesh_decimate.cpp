@@ -594,12 +594,22 @@ DecimatedMesh decimateForDisplay(const std::vector<Eigen::Vector3d>& p,
   for (const Eigen::Vector3d& q : p) box.extend(q);
   int axis = 0;
   box.diagonal().maxCoeff(&axis);
-  std::vector<int> order(n);
-  for (size_t i = 0; i < n; ++i) order[i] = static_cast<int>(i);
-  std::stable_sort(order.begin(), order.end(),
-                   [&](int a, int b) { return p[a][axis] < p[b][axis]; });
+  // Piece j: the vertices of ranks [first(j), first(j + 1)) along the axis (ties by index), rank
+  // k's piece floor(k pieces / n); the ranks' boundaries selected, not the whole order sorted.
+  std::vector<std::pair<double, int>> key(n);
+  for (size_t i = 0; i < n; ++i) key[i] = {p[i][axis], static_cast<int>(i)};
+  auto first = [&](size_t j) { return (j * n + pieces - 1) / pieces; };
+  auto select = [&](auto&& self, size_t j0, size_t j1) -> void {  // the ranks of first(j0 .. j1)
+    if (j1 - j0 < 2) return;
+    const size_t jm = (j0 + j1) / 2;
+    std::nth_element(key.begin() + first(j0), key.begin() + first(jm), key.begin() + first(j1));
+    self(self, j0, jm);
+    self(self, jm, j1);
+  };
+  select(select, 0, pieces);
   std::vector<int> piece_of(n);
-  for (size_t k = 0; k < n; ++k) piece_of[order[k]] = static_cast<int>(k * pieces / n);
+  for (size_t j = 0; j < pieces; ++j)
+    for (size_t k = first(j); k < first(j + 1); ++k) piece_of[key[k].second] = static_cast<int>(j);
   std::vector<char> lock(locked);
   std::vector<Eigen::Vector3i> seam;
   std::vector<std::vector<Eigen::Vector3i>> piece_faces(pieces);

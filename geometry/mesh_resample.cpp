@@ -220,19 +220,29 @@ void resampleFaces(TriangleMesh* mesh, double spacing) {
     }
   });
 
-  // Assembly in face order.
-  std::vector<Eigen::Vector3i> faces;
-  std::vector<int> groups;
+  // Assembly in face order, in parallel: each face's points and triangles go where a prefix sum
+  // of the counts puts them (the same mesh as a loop over the faces in turn).
+  std::vector<size_t> point_at(static_cast<size_t>(nf) + 1, V.size()), face_at(nf + 1, 0);
   for (int f = 0; f < nf; ++f) {
-    const int base = static_cast<int>(V.size());
-    V.insert(V.end(), result[f].inner.begin(), result[f].inner.end());
-    for (Eigen::Vector3i tri : result[f].triangles) {
-      for (int k = 0; k < 3; ++k)
-        if (tri[k] < 0) tri[k] = base + (-1 - tri[k]);
-      faces.push_back(tri);
-      groups.push_back(mesh->face_group[f]);
-    }
+    point_at[f + 1] = point_at[f] + result[f].inner.size();
+    face_at[f + 1] = face_at[f] + result[f].triangles.size();
   }
+  V.resize(point_at[nf]);
+  std::vector<Eigen::Vector3i> faces(face_at[nf]);
+  std::vector<int> groups(face_at[nf]);
+  tbb::parallel_for(tbb::blocked_range<int>(0, nf, 64), [&](const tbb::blocked_range<int>& r) {
+    for (int f = r.begin(); f != r.end(); ++f) {
+      const int base = static_cast<int>(point_at[f]);
+      std::copy(result[f].inner.begin(), result[f].inner.end(), V.begin() + point_at[f]);
+      size_t at = face_at[f];
+      for (Eigen::Vector3i tri : result[f].triangles) {
+        for (int k = 0; k < 3; ++k)
+          if (tri[k] < 0) tri[k] = base + (-1 - tri[k]);
+        faces[at] = tri;
+        groups[at++] = mesh->face_group[f];
+      }
+    }
+  });
   mesh->faces = std::move(faces);
   mesh->face_group = std::move(groups);
 }

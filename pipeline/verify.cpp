@@ -1,6 +1,8 @@
 // The verify pipeline: see pipeline/verify.h.
 #include "pipeline/verify.h"
 
+#include <tbb/parallel_for.h>
+
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <atomic>
@@ -1166,7 +1168,7 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
   std::vector<Eigen::Vector3d> nominal_swept(samples.size()), predicted_swept(samples.size());
   std::vector<double> total_um(samples.size()), machine_um(samples.size()),
       program_um(samples.size()), state(samples.size());
-  for (size_t i = 0; i < samples.size(); ++i) {
+  tbb::parallel_for(size_t(0), samples.size(), [&](size_t i) {
     const bool cut = result.machined[i];
     predicted_swept[i] = samples.p_w[i] + (cut ? result.total[i] : 0.0) * samples.n_w[i];
     nominal_swept[i] = samples.p_w[i] + (cut ? result.program[i] : 0.0) * samples.n_w[i];
@@ -1174,7 +1176,7 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
     machine_um[i] = mmToUm(result.machine[i]);
     program_um[i] = mmToUm(result.program[i]);
     state[i] = static_cast<double>(result.conformance[i]);
-  }
+  });
   // The table and the PLY surfaces are written on a second thread while VTK renders the images
   // (VTK runs on one thread at a time, g_vtk_mutex): they fill the core the images leave. When
   // the 3D view is decimated too, they wait for it (its slabs take both cores and the images

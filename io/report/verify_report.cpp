@@ -231,6 +231,7 @@ std::string formatDeviationsCsv(const VerifyReport& r) {
   std::vector<std::string> region_field(s.group_names.size());
   for (size_t g = 0; g < region_field.size(); ++g) region_field[g] = csvField(s.group_names[g]);
   LineBuilder row;
+  out.reserve(out.size() + 112 * s.size());  // a row's usual length (no copy as the text grows)
   for (size_t i = 0; i < s.size(); ++i) {
     const int line = clLine(r, static_cast<int>(i));
     const bool split = attributable(v, static_cast<int>(i));
