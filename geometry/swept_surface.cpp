@@ -180,30 +180,36 @@ void sweepSurface(const SurfaceSamples& samples, const Cutter& cutter,
   // hold much empty space, and every blade inside it would test the tool for nothing.
   const int chunks =
       std::max(1, static_cast<int>(std::ceil((L - from) / std::max(2.0 * Rmax, 1e-6))));
-  std::vector<BoxTree::Box> boxes, centres;
-  boxes.reserve(placements.size() * chunks);
-  for (size_t k = 0; k < placements.size(); ++k) {
-    const Eigen::Vector3d& u = placements[k].axis_w;
-    if (ball) {
-      const Eigen::Array3d c = (placements[k].tip_w + rc * u).array();
-      centres.push_back({c, c, static_cast<int>(k)});
-    }
-    for (int c = 0; c < chunks; ++c) {
-      const double h0 = from + (L - from) * c / chunks, h1 = from + (L - from) * (c + 1) / chunks;
-      const Eigen::Vector3d p = placements[k].tip_w + h0 * u;
-      const Eigen::Vector3d q = placements[k].tip_w + h1 * u;
-      const double radius = std::max(cutter.radiusAt(h0), cutter.radiusAt(h1));
-      // Box of the cylinder of that radius around the axis segment: per coordinate the
-      // segment's extent plus radius sqrt(1 - u_i^2).
-      Eigen::Vector3d lo, hi;
-      for (int i = 0; i < 3; ++i) {
-        const double grow = radius * std::sqrt(std::max(0.0, 1.0 - u[i] * u[i])) + 1e-9;
-        lo[i] = std::min(p[i], q[i]) - grow;
-        hi[i] = std::max(p[i], q[i]) + grow;
-      }
-      boxes.push_back({lo.array(), hi.array(), static_cast<int>(k)});
-    }
-  }
+  // The boxes in parallel, placement by placement (box k * chunks + c: chunk c of placement k).
+  std::vector<BoxTree::Box> boxes(placements.size() * chunks),
+      centres(ball ? placements.size() : 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, placements.size(), 4096),
+                    [&](const tbb::blocked_range<size_t>& r) {
+                      for (size_t k = r.begin(); k != r.end(); ++k) {
+                        const Eigen::Vector3d& u = placements[k].axis_w;
+                        if (ball) {
+                          const Eigen::Array3d c = (placements[k].tip_w + rc * u).array();
+                          centres[k] = {c, c, static_cast<int>(k)};
+                        }
+                        for (int c = 0; c < chunks; ++c) {
+                          const double h0 = from + (L - from) * c / chunks,
+                                       h1 = from + (L - from) * (c + 1) / chunks;
+                          const Eigen::Vector3d p = placements[k].tip_w + h0 * u;
+                          const Eigen::Vector3d q = placements[k].tip_w + h1 * u;
+                          const double radius = std::max(cutter.radiusAt(h0), cutter.radiusAt(h1));
+                          // Box of the cylinder of that radius around the axis segment: per
+                          // coordinate the segment's extent plus radius sqrt(1 - u_i^2).
+                          Eigen::Vector3d lo, hi;
+                          for (int i = 0; i < 3; ++i) {
+                            const double grow =
+                                radius * std::sqrt(std::max(0.0, 1.0 - u[i] * u[i])) + 1e-9;
+                            lo[i] = std::min(p[i], q[i]) - grow;
+                            hi[i] = std::max(p[i], q[i]) + grow;
+                          }
+                          boxes[k * chunks + c] = {lo.array(), hi.array(), static_cast<int>(k)};
+                        }
+                      }
+                    });
   const BoxTree tree(boxes), centre_tree(centres);
   std::vector<BoxTree::Box>().swap(boxes);  // the trees hold their own, in their order
   std::vector<BoxTree::Box>().swap(centres);

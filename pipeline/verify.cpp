@@ -522,11 +522,23 @@ void sweepPart(const ProgramOnMachine& m, const ToolSet& tools, const ProcessCor
   std::vector<JointVector> q(m.pred.points.size());
   for (size_t i = 0; i < q.size(); ++i) q[i] = m.pred.points[i].q;
   std::vector<ToolPlacement> nominal, actual;
-  if (m.q_nominal.empty())
-    samplePlacements(fk_nominal, fk_actual, m.program.path, q, sampling, &nominal, &actual);
-  else
-    samplePlacements(fk_nominal, fk_actual, m.program.path, m.q_nominal, q, sampling, &nominal,
+  const std::vector<JointVector>& q_nominal = m.q_nominal.empty() ? q : m.q_nominal;
+  if (!fk_actual.model().effects.empty()) {
+    samplePlacements(fk_nominal, fk_actual, m.program.path, q_nominal, q, sampling, &nominal,
                      &actual);
+  } else {
+    // In pieces of the path on both cores, joined in order (the same placements).
+    const size_t n = m.program.path.size(), piece = 8192, pieces = (n + piece - 1) / piece;
+    std::vector<std::vector<ToolPlacement>> nom(pieces), act(pieces);
+    tbb::parallel_for(size_t(0), pieces, [&](size_t k) {
+      samplePlacementsOf(fk_nominal, fk_actual, m.program.path, q_nominal, q, sampling, k * piece,
+                         std::min(n, (k + 1) * piece), &nom[k], &act[k]);
+    });
+    for (size_t k = 0; k < pieces; ++k) {
+      nominal.insert(nominal.end(), nom[k].begin(), nom[k].end());
+      actual.insert(actual.end(), act[k].begin(), act[k].end());
+    }
+  }
   v.report.placements = static_cast<int>(nominal.size());
   // The tools as a measured part showed them: longer than preset (the tip further out along
   // the axis), radii off (the length preset to the tip: a ball's centre moves with its radius).

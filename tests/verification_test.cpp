@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/kinematics/forward_kinematics.h"
+#include "core/model/effects.h"
 #include "core/numerics/units.h"
 #include "core/path/tool_motion.h"
 #include "core/path/tool_path_prediction.h"
@@ -76,6 +77,54 @@ FacingRun verifyFacing(const Machine& m) {
   r.samples = sampleSurface(plane(), 1.0);
   r.result = verifyPart(r.samples, c, a, b, {bilateralZone(0.02)}, SweepOptions());
   return r;
+}
+
+// A path cut in pieces (samplePlacementsOf, the pieces in parallel in verify) gives, joined in
+// order, the placements of the whole (samplePlacements), bit for bit: pieces that start with a
+// rapid point, inside a move, and at point 0; a machine with a direction-dependent effect is
+// sampled whole (refused in pieces).
+TEST(Verification, APathSampledInPiecesIsTheWholePathsPlacements) {
+  Machine m = matsuura();
+  m.params[m.model.findParameter("EZX.c1")] = 0.019;
+  auto path = facing();
+  path[6].rapid = true;
+  const PredictionResult pred = predictToolPath(m.model, m.params, path);
+  ASSERT_TRUE(pred.ok());
+  std::vector<JointVector> q;
+  for (const auto& p : pred.points) q.push_back(p.q);
+  const ForwardKinematics nominal(m.model, Eigen::VectorXd::Zero(m.model.parameterCount()));
+  const ForwardKinematics actual(m.model, m.params);
+  MotionSampling sampling;
+  sampling.step = 0.5;
+  std::vector<ToolPlacement> a, b, pa, pb;
+  samplePlacements(nominal, actual, path, q, sampling, &a, &b);
+  for (const size_t cut : {size_t{6}, size_t{3}}) {
+    pa.clear();
+    pb.clear();
+    samplePlacementsOf(nominal, actual, path, q, q, sampling, 0, cut, &pa, &pb);
+    samplePlacementsOf(nominal, actual, path, q, q, sampling, cut, 11, &pa, &pb);
+    samplePlacementsOf(nominal, actual, path, q, q, sampling, 11, path.size() + 5, &pa, &pb);
+    ASSERT_EQ(pa.size(), a.size());
+    ASSERT_EQ(pb.size(), b.size());
+    ASSERT_GT(a.size(), path.size() * 10);
+    for (size_t k = 0; k < a.size(); ++k) {
+      EXPECT_EQ(pa[k].tip_w, a[k].tip_w) << k;
+      EXPECT_EQ(pa[k].axis_w, a[k].axis_w) << k;
+      EXPECT_EQ(pb[k].tip_w, b[k].tip_w) << k;
+      EXPECT_EQ(pb[k].cl_index, b[k].cl_index) << k;
+    }
+  }
+  Machine with_effect = m;
+  EffectSpec rev;
+  rev.type = EffectType::Reversal;
+  rev.axis = 0;
+  rev.component = 0;
+  with_effect.model.addEffect(rev);
+  with_effect.params.conservativeResize(with_effect.model.parameterCount());
+  with_effect.params[with_effect.model.parameterCount() - 1] = 4e-3;
+  const ForwardKinematics actual_effect(with_effect.model, with_effect.params);
+  EXPECT_THROW(samplePlacementsOf(nominal, actual_effect, path, q, q, sampling, 0, 3, &pa, &pb),
+               std::invalid_argument);
 }
 
 // An out-of-squareness of X to Z (ISO 230-1: the slope of X's vertical straightness, the linear

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "core/model/effects.h"
 
@@ -28,17 +29,15 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
   samplePlacements(nominal, actual, path, q, q, sampling, nominal_out, actual_out);
 }
 
-void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics& actual,
-                      const std::vector<ClPoint>& path, const std::vector<JointVector>& q,
-                      const std::vector<JointVector>& qa, const MotionSampling& sampling,
-                      std::vector<ToolPlacement>* nominal_out,
-                      std::vector<ToolPlacement>* actual_out) {
-  nominal_out->clear();
-  actual_out->clear();
-  const size_t n = std::min({path.size(), q.size(), qa.size()});
-  // Direction-dependent effects (reversal) see the approach directions of the joint moves.
-  MotionContext ctx;
-  const MotionContext* ctx_ptr = actual.model().effects.empty() ? nullptr : &ctx;
+namespace {
+
+// CL points [first, last) of samplePlacements, appended; ctx (or null) carries the approach
+// directions from point first - 1 on.
+void sampleRange(const ForwardKinematics& nominal, const ForwardKinematics& actual,
+                 const std::vector<ClPoint>& path, const std::vector<JointVector>& q,
+                 const std::vector<JointVector>& qa, const MotionSampling& sampling, size_t first,
+                 size_t last, MotionContext* ctx_ptr, std::vector<ToolPlacement>* nominal_out,
+                 std::vector<ToolPlacement>* actual_out) {
   auto emit = [&](const JointVector& qk, const JointVector& qak, int index) {
     ToolPlacement a, b;
     nominal.tipAndAxis(qk, &a.tip_w, &a.axis_w);
@@ -49,13 +48,13 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
   };
   JointVector qm, qam;
   Eigen::Vector3d p0, u0, pm, um, p1, u1;
-  for (size_t i = 0; i < n; ++i) {
+  for (size_t i = first; i < last; ++i) {
     if (i == 0 || path[i].rapid) {
-      if (ctx_ptr && i > 0) updateDirections(ctx, qa[i - 1], qa[i]);
+      if (ctx_ptr && i > 0) updateDirections(*ctx_ptr, qa[i - 1], qa[i]);
       emit(q[i], qa[i], static_cast<int>(i));
       continue;
     }
-    if (ctx_ptr) updateDirections(ctx, qa[i - 1], qa[i]);
+    if (ctx_ptr) updateDirections(*ctx_ptr, qa[i - 1], qa[i]);
     nominal.tipAndAxis(q[i - 1], &p0, &u0);
     qm = 0.5 * (q[i - 1] + q[i]);
     nominal.tipAndAxis(qm, &pm, &um);
@@ -70,6 +69,34 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
       emit(k == m ? q[i] : qm, k == m ? qa[i] : qam, static_cast<int>(i));
     }
   }
+}
+
+}  // namespace
+
+void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics& actual,
+                      const std::vector<ClPoint>& path, const std::vector<JointVector>& q,
+                      const std::vector<JointVector>& qa, const MotionSampling& sampling,
+                      std::vector<ToolPlacement>* nominal_out,
+                      std::vector<ToolPlacement>* actual_out) {
+  nominal_out->clear();
+  actual_out->clear();
+  const size_t n = std::min({path.size(), q.size(), qa.size()});
+  // Direction-dependent effects (reversal) see the approach directions of the joint moves.
+  MotionContext ctx;
+  MotionContext* ctx_ptr = actual.model().effects.empty() ? nullptr : &ctx;
+  sampleRange(nominal, actual, path, q, qa, sampling, 0, n, ctx_ptr, nominal_out, actual_out);
+}
+
+void samplePlacementsOf(const ForwardKinematics& nominal, const ForwardKinematics& actual,
+                        const std::vector<ClPoint>& path, const std::vector<JointVector>& q,
+                        const std::vector<JointVector>& qa, const MotionSampling& sampling,
+                        size_t first, size_t last, std::vector<ToolPlacement>* nominal_out,
+                        std::vector<ToolPlacement>* actual_out) {
+  if (!actual.model().effects.empty())
+    throw std::invalid_argument("samplePlacementsOf: a machine with effects is sampled whole");
+  last = std::min({last, path.size(), q.size(), qa.size()});
+  sampleRange(nominal, actual, path, q, qa, sampling, first, last, nullptr, nominal_out,
+              actual_out);
 }
 
 std::vector<double> programTimes(const std::vector<ClPoint>& path, double rapid_mm_min) {

@@ -45,6 +45,16 @@ void samplePlacements(const ForwardKinematics& nominal, const ForwardKinematics&
                       const std::vector<JointVector>& q_actual, const MotionSampling& sampling,
                       std::vector<ToolPlacement>* nominal_out,
                       std::vector<ToolPlacement>* actual_out);
+// The placements of CL points [first, last) alone, appended: point 0 and a rapid point's its
+// own, any other's the sub-steps of the move into it from the point before (which may lie
+// before `first`). Pieces of a path, joined in order, are samplePlacements' placements; only for
+// a machine without direction-dependent effects (`actual`'s model has no effect blocks: their
+// approach directions follow the whole path), else std::invalid_argument.
+void samplePlacementsOf(const ForwardKinematics& nominal, const ForwardKinematics& actual,
+                        const std::vector<ClPoint>& path, const std::vector<JointVector>& q_nominal,
+                        const std::vector<JointVector>& q_actual, const MotionSampling& sampling,
+                        size_t first, size_t last, std::vector<ToolPlacement>* nominal_out,
+                        std::vector<ToolPlacement>* actual_out);
 
 // The program's clock: the time (min, from the first point) at which the tool reaches each CL
 // point, each cutting move's tip path at its feed rate (ClPoint::feed_mm_min; TCP controls feed
