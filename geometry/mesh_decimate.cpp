@@ -3,6 +3,7 @@
 #include "geometry/openmesh_quiet.h"
 
 // OpenMesh is kept inside this file (and mesh_repair.cpp): no header of this layer includes it.
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Geometry>
@@ -680,6 +681,132 @@ DecimatedMesh decimateForDisplay(const std::vector<Eigen::Vector3d>& p,
   for (const Eigen::Vector3i& f : seam)
     if (f[0] != f[1] && f[1] != f[2] && f[0] != f[2])
       out.faces.emplace_back(index[f[0]], index[f[1]], index[f[2]]);
+  return out;
+}
+
+DecimatedMesh coarseForDisplay(const std::vector<Eigen::Vector3d>& p,
+                               const std::vector<Eigen::Vector3i>& faces,
+                               const std::vector<Eigen::Vector3i>& given_faces,
+                               const std::vector<int>& face_given, const std::vector<double>& value,
+                               const std::vector<int>& category, const std::vector<char>& locked,
+                               const DecimateOptions& options) {
+  const size_t n = p.size(), ng = given_faces.size();
+  if (ng == 0 || face_given.size() != faces.size() || value.size() != n || category.size() != n ||
+      (!locked.empty() && locked.size() != n))
+    return {};
+  // Each given face's faces: [first[g], first[g + 1]) of `order` (a counting sort).
+  std::vector<int> first(ng + 1, 0), order(faces.size());
+  for (const int g : face_given) {
+    if (g < 0 || g >= static_cast<int>(ng)) return {};
+    ++first[g + 1];
+  }
+  for (size_t g = 0; g < ng; ++g) first[g + 1] += first[g];
+  {
+    std::vector<int> fill(first.begin(), first.end() - 1);
+    for (size_t f = 0; f < faces.size(); ++f) order[fill[face_given[f]]++] = static_cast<int>(f);
+  }
+  // Whether each given face carries the map.
+  std::vector<char> whole(ng, 0);
+  const double dmax = options.max_distance_mm, vmax = options.max_value_difference;
+  tbb::parallel_for(
+      tbb::blocked_range<size_t>(0, ng, 256), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t g = r.begin(); g != r.end(); ++g) {
+          const Eigen::Vector3i& c = given_faces[g];
+          if ((c.array() < 0).any() || (c.array() >= static_cast<int>(n)).any()) continue;
+          if (category[c[0]] != category[c[1]] || category[c[0]] != category[c[2]]) continue;
+          const Eigen::Vector3d& a = p[c[0]];
+          const Eigen::Vector3d e1 = p[c[1]] - a, e2 = p[c[2]] - a;
+          const Eigen::Vector3d normal = e1.cross(e2);
+          const double area2 = normal.squaredNorm();
+          if (!(area2 > 1e-24 * std::max(e1.squaredNorm(), e2.squaredNorm()))) continue;  // no area
+          const Eigen::Vector3d unit = normal / std::sqrt(area2);
+          bool ok = true;
+          for (int q = first[g]; q < first[g + 1] && ok; ++q)
+            for (int k = 0; k < 3 && ok; ++k) {
+              const int i = faces[order[q]][k];
+              const Eigen::Vector3d d = p[i] - a;
+              // Barycentric weights of the point's projection (Ericson 3.4), its distance off the
+              // plane.
+              const double w1 = d.cross(e2).dot(normal) / area2,
+                           w2 = e1.cross(d).dot(normal) / area2;
+              const double w0 = 1.0 - w1 - w2;
+              const double inside = 1e-9;
+              ok = category[i] == category[c[0]] && std::abs(d.dot(unit)) <= dmax &&
+                   w0 >= -inside && w1 >= -inside && w2 >= -inside &&
+                   std::abs(w0 * value[c[0]] + w1 * value[c[1]] + w2 * value[c[2]] - value[i]) <=
+                       vmax;
+            }
+          whole[g] = ok;
+        }
+      });
+  // The given faces drawn as they are; the rest, as sampled, decimated to what the budget
+  // leaves (their own mesh: the samples they use; its border, where it meets a given face drawn
+  // whole, stays).
+  const size_t budget = static_cast<size_t>(std::max(options.max_vertices, 3));
+  std::vector<Eigen::Vector3i> given, rest;
+  for (size_t g = 0; g < ng; ++g) {
+    if (whole[g]) {
+      given.push_back(given_faces[g]);
+      continue;
+    }
+    for (int q = first[g]; q < first[g + 1]; ++q) rest.push_back(faces[order[q]]);
+  }
+  std::vector<int> local(n, -1);
+  std::vector<int> rest_vertex;  // the rest's samples, ascending
+  for (const Eigen::Vector3i& f : rest)
+    for (int k = 0; k < 3; ++k) local[f[k]] = 0;
+  for (size_t i = 0; i < n; ++i)
+    if (local[i] == 0) {
+      local[i] = static_cast<int>(rest_vertex.size());
+      rest_vertex.push_back(static_cast<int>(i));
+    }
+  std::vector<char> used(n, 0);
+  size_t given_only = 0;  // samples of the given faces drawn whole and of no other face
+  for (const Eigen::Vector3i& f : given)
+    for (int k = 0; k < 3; ++k)
+      if (local[f[k]] < 0 && !used[f[k]]) used[f[k]] = 1, ++given_only;
+  if (given_only + 3 > budget) return {};
+  DecimatedMesh rest_mesh;
+  if (!rest.empty()) {
+    std::vector<Eigen::Vector3d> pk(rest_vertex.size());
+    std::vector<double> vk(rest_vertex.size());
+    std::vector<int> ck(rest_vertex.size());
+    std::vector<char> lk(rest_vertex.size());
+    for (size_t j = 0; j < rest_vertex.size(); ++j) {
+      const int i = rest_vertex[j];
+      pk[j] = p[i];
+      vk[j] = value[i];
+      ck[j] = category[i];
+      lk[j] = locked.empty() ? 0 : locked[i];
+    }
+    for (Eigen::Vector3i& f : rest) f = Eigen::Vector3i(local[f[0]], local[f[1]], local[f[2]]);
+    DecimateOptions o = options;
+    o.max_vertices = static_cast<int>(budget - given_only);
+    rest_mesh = decimateForDisplay(pk, rest, vk, ck, lk, o);
+  }
+  // The samples used, in their order, and the faces in them.
+  DecimatedMesh out;
+  out.max_vertices = options.max_vertices;
+  for (const int j : rest_mesh.vertex) used[rest_vertex[j]] = 1;
+  std::vector<int> index(n, -1);
+  for (size_t i = 0; i < n; ++i)
+    if (used[i]) {
+      index[i] = static_cast<int>(out.vertex.size());
+      out.vertex.push_back(static_cast<int>(i));
+    }
+  out.faces.reserve(given.size() + rest_mesh.faces.size());
+  for (const Eigen::Vector3i& f : given)
+    out.faces.emplace_back(index[f[0]], index[f[1]], index[f[2]]);
+  for (const Eigen::Vector3i& f : rest_mesh.faces) {
+    Eigen::Vector3i t;
+    for (int k = 0; k < 3; ++k) t[k] = index[rest_vertex[rest_mesh.vertex[f[k]]]];
+    out.faces.push_back(t);
+  }
+  out.given_faces_drawn = static_cast<int>(given.size());
+  out.max_distance_mm = std::max(dmax, rest_mesh.max_distance_mm);
+  out.max_value_difference = std::max(vmax, rest_mesh.max_value_difference);
+  out.relaxed = rest_mesh.relaxed;
+  out.faces_kept_as_given = rest_mesh.faces_kept_as_given;
   return out;
 }
 

@@ -243,6 +243,11 @@ void resampleFaces(TriangleMesh* mesh, double spacing) {
       }
     }
   });
+  std::vector<int> given(face_at[nf]);
+  for (int f = 0; f < nf; ++f)
+    std::fill(given.begin() + face_at[f], given.begin() + face_at[f + 1], f);
+  mesh->given_faces = std::move(mesh->faces);
+  mesh->face_given = std::move(given);
   mesh->faces = std::move(faces);
   mesh->face_group = std::move(groups);
 }

@@ -32,6 +32,8 @@ double TriangleMesh::area() const {
 
 SurfaceSamples sampleSurface(const TriangleMesh& input, double spacing, double feature_angle) {
   TriangleMesh mesh = input;
+  mesh.given_faces.clear();  // resampleFaces' own, below
+  mesh.face_given.clear();
   const double target_vertices = mesh.area() / (std::sqrt(3.0) / 2.0 * spacing * spacing);
   if (static_cast<double>(mesh.vertices.size()) < 0.5 * target_vertices)
     resampleFaces(&mesh, spacing);
@@ -156,6 +158,17 @@ SurfaceSamples sampleSurface(const TriangleMesh& input, double spacing, double f
       }
     }
   });
+  // The given faces in samples: a corner's sample is the one its re-triangulated faces use there.
+  if (!mesh.given_faces.empty() && mesh.face_given.size() == mesh.faces.size()) {
+    s.given_faces.assign(mesh.given_faces.size(), Eigen::Vector3i::Constant(-1));
+    for (int f = 0; f < nf; ++f) {
+      const int g = mesh.face_given[f];
+      for (int k = 0; k < 3; ++k)
+        for (int j = 0; j < 3; ++j)
+          if (mesh.faces[f][k] == mesh.given_faces[g][j]) s.given_faces[g][j] = s.faces[f][k];
+    }
+    s.face_given = mesh.face_given;
+  }
   return s;
 }
 

@@ -18,6 +18,10 @@ struct TriangleMesh {
   // Empty, or #groups: further names a zone may use for the group (a CAD face's name and colour,
   // io/mesh/step_file.h), shared by as many groups as carry them.
   std::vector<std::vector<std::string>> group_aliases;
+  // Empty, or as resampleFaces leaves them: the faces as given (their vertices keep their
+  // indices), and for each face the given face it re-triangulates (non-decreasing).
+  std::vector<Eigen::Vector3i> given_faces;
+  std::vector<int> face_given;
 
   double area() const;
   Eigen::Vector3d faceNormal(int f) const;  // unit; zero for a degenerate face
@@ -55,6 +59,11 @@ struct SurfaceSamples {
   std::vector<int> face_group;
   std::vector<std::string> group_names;
   std::vector<std::vector<std::string>> group_aliases;  // as the mesh's
+  // Empty, or when the mesh was resampled (resampleFaces): the faces as given, in samples (each
+  // corner the sample of its side), and for each face of `faces` the given face it lies on. The
+  // 3D view draws a given face as it is where it carries the map (coarseForDisplay).
+  std::vector<Eigen::Vector3i> given_faces;
+  std::vector<int> face_given;
   size_t size() const { return p_w.size(); }
 };
 

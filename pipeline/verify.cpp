@@ -1157,6 +1157,12 @@ DecimatedMesh viewMesh(const SurfaceSamples& s, const VerifyResult& r,
   // Sharp edges stay (a CL-only surface has none marked).
   const std::vector<char> locked =
       s.on_edge.size() == s.size() ? s.on_edge : std::vector<char>(s.size(), 0);
+  // Over the budget, a resampled part's own faces where they carry the map, the rest decimated.
+  if (s.size() > static_cast<size_t>(o.max_vertices) && !s.given_faces.empty()) {
+    DecimatedMesh given =
+        coarseForDisplay(s.p_w, s.faces, s.given_faces, s.face_given, value, category, locked, o);
+    if (!given.vertex.empty()) return given;
+  }
   return decimateForDisplay(s.p_w, s.faces, value, category, locked, o);
 }
 

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <random>
 
+#include "geometry/triangle_mesh.h"
+
 namespace tolver {
 namespace {
 
@@ -284,6 +286,63 @@ TEST(MeshDecimate, ABowTieAndATurnedFaceDecimateAsTheyAre) {
       decimateForDisplay(p, faces, std::vector<double>(p.size(), 0), std::vector<int>(p.size(), 0),
                          std::vector<char>(p.size(), 0), DecimateOptions{0.01, 1e-3, 5, 1, {}});
   EXPECT_GE(m.faces_kept_as_given, 1);
+}
+
+// A resampled part's own faces where they carry the map (coarseForDisplay): an 80 x 80 mm plate
+// of 128 given triangles, sampled at 0.5 mm (about 30 000 samples), a budget of 5 000 vertices.
+// A linear field: every given face is drawn as it is (its 81 corners), within the bounds
+// (a linear field on a plane: exact). A bump of 20 um in one face's middle, and a second
+// category on another: those two (and only they, with their neighbours' common edges) are
+// decimated from their samples; every sample still lies on a face of the result, within the
+// bounds, of its category (the independent check of every decimation above). When the faces drawn
+// whole alone exceed the budget: empty (the caller decimates everything).
+TEST(MeshDecimate, AResampledPartsOwnFacesAreDrawnWhereTheyCarryTheMap) {
+  TriangleMesh plate;
+  for (int j = 0; j <= 8; ++j)
+    for (int i = 0; i <= 8; ++i) plate.vertices.emplace_back(10.0 * i, 10.0 * j, 0.0);
+  for (int j = 0; j < 8; ++j)
+    for (int i = 0; i < 8; ++i) {
+      const int a = j * 9 + i;
+      plate.faces.emplace_back(a, a + 1, a + 10);
+      plate.faces.emplace_back(a, a + 10, a + 9);
+    }
+  plate.face_group.assign(plate.faces.size(), 0);
+  plate.group_names = {"plate"};
+  const SurfaceSamples s = sampleSurface(plate, 0.5);
+  ASSERT_EQ(s.given_faces.size(), plate.faces.size());
+  ASSERT_EQ(s.face_given.size(), s.faces.size());
+  ASSERT_GT(s.size(), size_t{20000});
+  Grid g{s.p_w, s.faces};
+  DecimateOptions o;
+  o.max_distance_mm = 0.25;
+  o.max_value_difference = 2e-3;
+  o.max_vertices = 5000;
+  std::vector<double> value(s.size());
+  std::vector<int> category(s.size(), 0);
+  for (size_t i = 0; i < s.size(); ++i) value[i] = 1e-4 * s.p_w[i].x() - 2e-4 * s.p_w[i].y();
+  const DecimatedMesh linear =
+      coarseForDisplay(s.p_w, s.faces, s.given_faces, s.face_given, value, category, {}, o);
+  EXPECT_EQ(linear.given_faces_drawn, 128);
+  EXPECT_EQ(linear.faces.size(), size_t{128});
+  EXPECT_EQ(linear.vertex.size(), size_t{81});
+  checkBounds(g, value, category, linear, 7);
+  // The bump (in the face over (45, 43)) and the second category (the face over (15, 12)).
+  for (size_t i = 0; i < s.size(); ++i) {
+    const double r = (s.p_w[i] - Eigen::Vector3d(45, 43, 0)).norm();
+    if (r < 1.5) value[i] += 0.02 * (1.0 - r / 1.5);
+    if ((s.p_w[i] - Eigen::Vector3d(15, 12, 0)).norm() < 1.0) category[i] = 1;
+  }
+  const DecimatedMesh bumped =
+      coarseForDisplay(s.p_w, s.faces, s.given_faces, s.face_given, value, category, {}, o);
+  EXPECT_GE(bumped.given_faces_drawn, 120);
+  EXPECT_LE(bumped.given_faces_drawn, 126);
+  EXPECT_LE(bumped.vertex.size(), size_t{5000});
+  EXPECT_GT(bumped.vertex.size(), size_t{81});
+  EXPECT_FALSE(bumped.relaxed);
+  checkBounds(g, value, category, bumped, 7);
+  o.max_vertices = 60;
+  EXPECT_TRUE(coarseForDisplay(s.p_w, s.faces, s.given_faces, s.face_given, value, category, {}, o)
+                  .vertex.empty());
 }
 
 // In pieces (slabs decimated in parallel, seams kept whole): the surface is still covered once
