@@ -765,7 +765,9 @@ DecimatedMesh coarseForDisplay(const std::vector<Eigen::Vector3d>& p,
   for (const Eigen::Vector3i& f : given)
     for (int k = 0; k < 3; ++k)
       if (local[f[k]] < 0 && !used[f[k]]) used[f[k]] = 1, ++given_only;
-  if (given_only + 3 > budget) return {};
+  // At most half of the budget for the faces drawn whole: the rest keeps at least the other half
+  // (a part given as fine as the spacing is decimated whole, as before).
+  if (2 * given_only > budget) return {};
   DecimatedMesh rest_mesh;
   if (!rest.empty()) {
     std::vector<Eigen::Vector3d> pk(rest_vertex.size());

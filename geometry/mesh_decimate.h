@@ -65,7 +65,8 @@ DecimatedMesh decimateForDisplay(const std::vector<Eigen::Vector3d>& p,
 // geometry: where the field is smooth, their samples go without a collapse (the sculptured part's
 // top at a million samples: 9 048 of its 10 440 faces). Where a face drawn whole meets the rest,
 // the points on their common edge are vertices of the rest only (they lie on the edge). Empty
-// (vertex empty) when the faces drawn whole alone exceed the budget, or nothing is given.
+// (vertex empty) when the faces drawn whole would take more than half of the budget, or nothing
+// is given: then decimateForDisplay of the whole.
 // given_faces: in p's indices; face_given: for each face of `faces`, its given face; locked as
 // decimateForDisplay's (or empty).
 DecimatedMesh coarseForDisplay(const std::vector<Eigen::Vector3d>& p,

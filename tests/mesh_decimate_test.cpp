@@ -295,7 +295,7 @@ TEST(MeshDecimate, ABowTieAndATurnedFaceDecimateAsTheyAre) {
 // category on another: those two (and only they, with their neighbours' common edges) are
 // decimated from their samples; every sample still lies on a face of the result, within the
 // bounds, of its category (the independent check of every decimation above). When the faces drawn
-// whole alone exceed the budget: empty (the caller decimates everything).
+// whole would take more than half of the budget: empty (the caller decimates everything).
 TEST(MeshDecimate, AResampledPartsOwnFacesAreDrawnWhereTheyCarryTheMap) {
   TriangleMesh plate;
   for (int j = 0; j <= 8; ++j)
@@ -340,7 +340,7 @@ TEST(MeshDecimate, AResampledPartsOwnFacesAreDrawnWhereTheyCarryTheMap) {
   EXPECT_GT(bumped.vertex.size(), size_t{81});
   EXPECT_FALSE(bumped.relaxed);
   checkBounds(g, value, category, bumped, 7);
-  o.max_vertices = 60;
+  o.max_vertices = 100;  // about 77 corners alone: more than half
   EXPECT_TRUE(coarseForDisplay(s.p_w, s.faces, s.given_faces, s.face_given, value, category, {}, o)
                   .vertex.empty());
 }
