@@ -243,7 +243,11 @@ std::vector<std::pair<std::string, std::string>> renderImages(
                      " of " + std::to_string(s.size()) + " samples, every sample within " +
                      formatWith("%.3g", mesh->max_distance_mm) + " mm of it and within " +
                      formatWith("%.3g", mmToUm(mesh->max_value_difference)) +
-                     " um of the value drawn over it, one CAD face, zone and state per triangle");
+                     " um of the value drawn over it, one CAD face, zone and state per triangle" +
+                     (mesh->given_faces_drawn > 0
+                          ? "; " + std::to_string(mesh->given_faces_drawn) + " of the part's " +
+                                std::to_string(s.given_faces.size()) + " faces drawn as given"
+                          : std::string()));
   map.bar_lower = zones.front().lower;
   map.bar_upper = zones.front().upper;
   map.title = title;

@@ -216,9 +216,15 @@ std::string view3dSection(const VerifyReport& r) {
            ? "Shown: all " + std::to_string(n) +
                  " samples, as sampled (within the view's budget of " + budget +
                  " vertices, nothing is decimated)."
-           : "Shown: " + std::to_string(n) + " of " + std::to_string(s.size()) +
-                 " samples, decimated by OpenMesh down to the view's budget of " + budget +
-                 " vertices: every sample lies within " + formatWith("%.3g", m.max_distance_mm) +
+           : "Shown: " + std::to_string(n) + " of " + std::to_string(s.size()) + " samples, " +
+                 (m.given_faces_drawn > 0
+                      ? std::to_string(m.given_faces_drawn) + " of the part's " +
+                            std::to_string(s.given_faces.size()) +
+                            " faces as given (where they carry the map), the rest decimated by "
+                            "OpenMesh, within the view's budget of "
+                      : std::string("decimated by OpenMesh down to the view's budget of ")) +
+                 budget + " vertices: every sample lies within " +
+                 formatWith("%.3g", m.max_distance_mm) +
                  " mm of the surface shown, and every value interpolated on a triangle within " +
                  formatWith("%.3g", mmToUm(m.max_value_difference)) +
                  " &micro;m of the total deviation of each sample the triangle stands for, all "
