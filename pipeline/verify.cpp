@@ -1209,7 +1209,12 @@ std::string writeVerification(Verification& v, const std::string& report_dir_pat
   auto startTables = [&] {
     tables = std::async(std::launch::async, [&] {
       const auto start = std::chrono::steady_clock::now();
-      writeFileAtomically((dir / "deviations.csv").string(), formatDeviationsCsv(r));
+      {
+        OutputSet table;
+        table.addStreamed((dir / "deviations.csv").string(),
+                          [&](TextOut& out) { writeDeviationsCsv(r, out); });
+        table.commit();
+      }
       writePlyWithScalar((dir / "swept_predicted.ply").string(), predicted_swept, samples.faces,
                          total_um, "deviation_um");
       writePlyWithScalar((dir / "swept_nominal.ply").string(), nominal_swept, samples.faces,

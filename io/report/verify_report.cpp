@@ -212,10 +212,10 @@ std::string formatVerifyJson(const VerifyReport& r) {
   return jsonText(j);
 }
 
-std::string formatDeviationsCsv(const VerifyReport& r) {
+void writeDeviationsCsv(const VerifyReport& r, TextOut& out) {
   const SurfaceSamples& s = *r.samples;
   const VerifyResult& v = *r.result;
-  std::string out =
+  out +=
       "# tolver verify: signed normal deviation per surface sample, um (+ material left, - gouge); "
       "positions mm in the part frame\n"
       "# program_um and machine_um are empty where the deviation does not split (split: beyond "
@@ -231,7 +231,6 @@ std::string formatDeviationsCsv(const VerifyReport& r) {
   std::vector<std::string> region_field(s.group_names.size());
   for (size_t g = 0; g < region_field.size(); ++g) region_field[g] = csvField(s.group_names[g]);
   LineBuilder row;
-  out.reserve(out.size() + 112 * s.size());  // a row's usual length (no copy as the text grows)
   for (size_t i = 0; i < s.size(); ++i) {
     const int line = clLine(r, static_cast<int>(i));
     const bool split = attributable(v, static_cast<int>(i));
@@ -253,7 +252,12 @@ std::string formatDeviationsCsv(const VerifyReport& r) {
     row.character('\n');
     out += row.view();
   }
-  return out;
+}
+
+std::string formatDeviationsCsv(const VerifyReport& r) {
+  TextOut out;
+  writeDeviationsCsv(r, out);
+  return out.take();
 }
 
 // Long by design: the report's sections in the order the reader meets them, each a few lines.

@@ -9,6 +9,7 @@
 #include "geometry/mesh_decimate.h"
 #include "geometry/mesh_repair.h"
 #include "geometry/verification.h"
+#include "io/common/io_error.h"
 
 namespace tolver {
 
@@ -72,5 +73,8 @@ std::string worstDeviationText(const VerifyResult& v, const OutOfToleranceRegion
 std::string formatVerifyJson(const VerifyReport& r);
 std::string formatVerifyHtml(const VerifyReport& r);
 std::string formatDeviationsCsv(const VerifyReport& r);
+// The same, written in pieces (a file flushed every megabyte: a million samples' 112 MB never
+// held whole).
+void writeDeviationsCsv(const VerifyReport& r, TextOut& out);
 
 }  // namespace tolver
