@@ -814,26 +814,32 @@ ImportedPart readPartMesh(const std::string& path, const PartImportOptions& opti
 void writePlyWithScalar(const std::string& path, const std::vector<Eigen::Vector3d>& points,
                         const std::vector<Eigen::Vector3i>& faces,
                         const std::vector<double>& scalar, const std::string& scalar_name) {
-  std::string out;
-  out += "ply\nformat binary_little_endian 1.0\ncomment tolver swept surface, mm, part frame\n";
-  out += "element vertex " + std::to_string(points.size()) + "\n";
-  out += "property float x\nproperty float y\nproperty float z\n";
-  out += "property float " + scalar_name + "\n";
-  out += "element face " + std::to_string(faces.size()) + "\n";
-  out += "property list uchar int vertex_indices\nend_header\n";
-  auto put = [&](const void* p, size_t n) { out.append(static_cast<const char*>(p), n); };
-  for (size_t i = 0; i < points.size(); ++i) {
-    const float v[4] = {static_cast<float>(points[i].x()), static_cast<float>(points[i].y()),
-                        static_cast<float>(points[i].z()), static_cast<float>(scalar[i])};
-    put(v, sizeof v);
-  }
-  for (const auto& f : faces) {
-    const unsigned char three = 3;
-    put(&three, 1);
-    const int32_t idx[3] = {f[0], f[1], f[2]};
-    put(idx, sizeof idx);
-  }
-  writeFileAtomically(path, out);
+  // Written in pieces (a file flushed every megabyte), to a temporary renamed when complete.
+  OutputSet file;
+  file.addStreamed(path, [&](TextOut& out) {
+    out += "ply\nformat binary_little_endian 1.0\ncomment tolver swept surface, mm, part frame\n";
+    out += "element vertex " + std::to_string(points.size()) + "\n";
+    out += "property float x\nproperty float y\nproperty float z\n";
+    out += "property float " + scalar_name + "\n";
+    out += "element face " + std::to_string(faces.size()) + "\n";
+    out += "property list uchar int vertex_indices\nend_header\n";
+    auto put = [&](const void* p, size_t n) {
+      out += std::string_view(static_cast<const char*>(p), n);
+    };
+    for (size_t i = 0; i < points.size(); ++i) {
+      const float v[4] = {static_cast<float>(points[i].x()), static_cast<float>(points[i].y()),
+                          static_cast<float>(points[i].z()), static_cast<float>(scalar[i])};
+      put(v, sizeof v);
+    }
+    for (const auto& f : faces) {
+      char face[13];
+      face[0] = 3;
+      const int32_t idx[3] = {f[0], f[1], f[2]};
+      std::memcpy(face + 1, idx, sizeof idx);
+      put(face, sizeof face);
+    }
+  });
+  file.commit();
 }
 
 // Written by VTK's XML writer in the tolver_vtk module (io/report/vtk_render.cpp).
