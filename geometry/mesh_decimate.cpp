@@ -321,10 +321,10 @@ namespace {
 // first vertices) built directly, without add_face: OpenMesh's add_face looks up and relinks the
 // halfedges around each corner (a fifth of a piece's decimation at a million samples went there).
 // The edges are made in add_face's order (faces in turn, a face's edges from its first corner),
-// so the mesh is the one add_face makes. False, the mesh untouched but for its reservation, when
-// the faces are not a manifold with a consistent orientation (an edge of three faces, or of two
-// the same way round, a vertex whose faces are not one fan): the caller then builds it with
-// add_face, which keeps what it cannot take aside.
+// so the mesh is the one add_face makes. False when the faces are not a manifold with a
+// consistent orientation (an edge of three faces, or of two the same way round, a vertex whose
+// faces are not one fan): the caller then clears the mesh and builds it with add_face, which keeps
+// what it cannot take aside.
 bool buildManifold(Mesh& mesh, const std::vector<Eigen::Vector3i>& faces, size_t vertices) {
   const size_t nf = faces.size();
   // The face edges out of each vertex (CSR): where each goes, and which it is (3 t + k: face
@@ -790,6 +790,8 @@ DecimatedMesh coarseForDisplay(const std::vector<Eigen::Vector3d>& p,
   DecimatedMesh out;
   out.max_vertices = options.max_vertices;
   for (const int j : rest_mesh.vertex) used[rest_vertex[j]] = 1;
+  for (const Eigen::Vector3i& f : given)  // on the rest's border, which stays: and in any case
+    for (int k = 0; k < 3; ++k) used[f[k]] = 1;
   std::vector<int> index(n, -1);
   for (size_t i = 0; i < n; ++i)
     if (used[i]) {
