@@ -60,7 +60,7 @@ std::string findXvfb() {
   return access("/usr/bin/Xvfb", X_OK) == 0 ? "/usr/bin/Xvfb" : "";
 }
 
-// The server forked and not yet waited for (startXvfb), or -1.
+// The server forked and not yet waited for (forkXvfb).
 struct Starting {
   pid_t pid = -1;
   int fd = -1;  // the read end of -displayfd's pipe
