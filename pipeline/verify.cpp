@@ -538,6 +538,10 @@ void sweepPart(const ProgramOnMachine& m, const ToolSet& tools, const ProcessCor
       samplePlacementsOf(fk_nominal, fk_actual, m.program.path, q_nominal, q, sampling, k * piece,
                          std::min(n, (k + 1) * piece), &nom[k], &act[k]);
     });
+    size_t total = 0;
+    for (const auto& piece_placements : nom) total += piece_placements.size();
+    nominal.reserve(total);
+    actual.reserve(total);
     for (size_t k = 0; k < pieces; ++k) {
       nominal.insert(nominal.end(), nom[k].begin(), nom[k].end());
       actual.insert(actual.end(), act[k].begin(), act[k].end());

@@ -64,6 +64,21 @@ TEST(DeviationMap, CalloutsArePlacedWithoutOverlap) {
 
 class RenderTest : public test::TempDirTest {};
 
+// An n x n grid of squares of side `step` from (x0, x0), two triangles each, at height
+// slope * (x - x0 - n step / 2).
+void squareGrid(int n, double x0, double step, double slope, std::vector<Eigen::Vector3d>* points,
+                std::vector<Eigen::Vector3i>* faces) {
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i)
+      points->emplace_back(x0 + step * i, x0 + step * j, slope * step * (i - 0.5 * n));
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i;
+      faces->emplace_back(a, a + 1, a + n + 2);
+      faces->emplace_back(a, a + n + 2, a + n + 1);
+    }
+}
+
 // A 100 x 100 mm plane in tolerance with a planted gouge (-50 um) of radius 15 mm at its centre,
 // seen from the top: the centre pixel of the view is red, a pixel 30 mm away green.
 TEST_F(RenderTest, TopViewShowsAPlantedGougeRedOnGreen) {
@@ -71,15 +86,7 @@ TEST_F(RenderTest, TopViewShowsAPlantedGougeRedOnGreen) {
   ASSERT_TRUE(ensureDisplay(&why)) << why;
   std::vector<Eigen::Vector3d> points;
   std::vector<Eigen::Vector3i> faces;
-  const int n = 100;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) points.emplace_back(-50.0 + i, -50.0 + j, 0.0);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const int a = j * (n + 1) + i;
-      faces.emplace_back(a, a + 1, a + n + 2);
-      faces.emplace_back(a, a + n + 2, a + n + 1);
-    }
+  squareGrid(100, -50.0, 1.0, 0.0, &points, &faces);
   DeviationMap map;
   map.points = &points;
   map.faces = &faces;
@@ -128,15 +135,7 @@ TEST_F(RenderTest, SeveralViewsInOneWindowDrawWhatEachDrawsAlone) {
   ASSERT_TRUE(ensureDisplay(&why)) << why;
   std::vector<Eigen::Vector3d> points;
   std::vector<Eigen::Vector3i> faces;
-  const int n = 40;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) points.emplace_back(-20.0 + i, -20.0 + j, 0.3 * (i - 20.0));
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const int a = j * (n + 1) + i;
-      faces.emplace_back(a, a + 1, a + n + 2);
-      faces.emplace_back(a, a + n + 2, a + n + 1);
-    }
+  squareGrid(40, -20.0, 1.0, 0.3, &points, &faces);
   DeviationMap map;
   map.points = &points;
   map.faces = &faces;

@@ -52,6 +52,15 @@ std::vector<ClPoint> facing() {
   return path;
 }
 
+// The joints of `path` on machine m (inverse kinematics).
+std::vector<JointVector> jointsOf(const Machine& m, const std::vector<ClPoint>& path) {
+  const PredictionResult pred = predictToolPath(m.model, m.params, path);
+  EXPECT_TRUE(pred.ok());
+  std::vector<JointVector> q;
+  for (const auto& p : pred.points) q.push_back(p.q);
+  return q;
+}
+
 struct FacingRun {
   SurfaceSamples samples;
   VerifyResult result;
@@ -62,10 +71,7 @@ FacingRun verifyFacing(const Machine& m) {
   c.diameter = 10;
   c.length = 30;
   const auto path = facing();
-  const PredictionResult pred = predictToolPath(m.model, m.params, path);
-  EXPECT_TRUE(pred.ok());
-  std::vector<JointVector> q;
-  for (const auto& p : pred.points) q.push_back(p.q);
+  const std::vector<JointVector> q = jointsOf(m, path);
   const ForwardKinematics nominal(m.model, Eigen::VectorXd::Zero(m.model.parameterCount()));
   const ForwardKinematics actual(m.model, m.params);
   MotionSampling sampling;
@@ -88,10 +94,8 @@ TEST(Verification, APathSampledInPiecesIsTheWholePathsPlacements) {
   m.params[m.model.findParameter("EZX.c1")] = 0.019;
   auto path = facing();
   path[6].rapid = true;
-  const PredictionResult pred = predictToolPath(m.model, m.params, path);
-  ASSERT_TRUE(pred.ok());
-  std::vector<JointVector> q;
-  for (const auto& p : pred.points) q.push_back(p.q);
+  const std::vector<JointVector> q = jointsOf(m, path);
+  ASSERT_EQ(q.size(), path.size());
   const ForwardKinematics nominal(m.model, Eigen::VectorXd::Zero(m.model.parameterCount()));
   const ForwardKinematics actual(m.model, m.params);
   MotionSampling sampling;
