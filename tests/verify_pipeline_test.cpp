@@ -6,6 +6,7 @@
 #include <cctype>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <tuple>
 #include <unordered_map>
@@ -133,6 +134,15 @@ TEST_F(VerifyPipeline, TheViewOfALargePartDrawsItsOwnFacesWithinTheBounds) {
   EXPECT_LE(m.vertex.size(), size_t{120000});
   EXPECT_GT(m.given_faces_drawn, 0);
   EXPECT_FALSE(m.relaxed);
+  // The written report says what the view drew: its vertices and the faces drawn as given.
+  std::ifstream html_file(path("view") + "/report.html");
+  const std::string html((std::istreambuf_iterator<char>(html_file)),
+                         std::istreambuf_iterator<char>());
+  EXPECT_NE(
+      html.find("Shown: " + std::to_string(m.vertex.size()) + " of " + std::to_string(s.size()) +
+                " samples, " + std::to_string(m.given_faces_drawn) + " of the part's " +
+                std::to_string(s.given_faces.size()) + " faces as given"),
+      std::string::npos);
   const VerifyResult& r = v->result;
   auto value = [&](int i) {
     const bool beyond = !r.total_beyond.empty() && r.total_beyond[i];
